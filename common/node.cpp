@@ -1,0 +1,194 @@
+#include "common/node.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include <CLI/CLI.hpp>
+#include <chrono>
+#include <csignal>
+#include <cstdlib>
+#include <fstream>
+
+#include "common/params.hpp"
+
+namespace alight {
+
+namespace {
+std::atomic<bool> g_signalled{false};
+extern "C" void on_signal(int) { g_signalled = true; }
+
+int rmem_max_bytes() {
+  std::ifstream f("/proc/sys/net/core/rmem_max");
+  int v = -1;
+  f >> v;
+  return v;
+}
+}  // namespace
+
+void NodeArgs::add_to(CLI::App& app, bool config_required) {
+  auto* c = app.add_option("--config", config, "Parameter file (YAML)");
+  if (config_required) c->required()->check(CLI::ExistingFile);
+  app.add_option("--lcm-url", lcm_url, "LCM URL (default: $LCM_DEFAULT_URL, else " +
+                                           std::string(kDefaultLcmUrl) + ")");
+  app.add_option("--log-level", log_level, "trace, debug, info, warn, error")
+      ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error"}));
+}
+
+void NodeArgs::finalize() {
+  if (lcm_url.empty()) {
+    const char* env = std::getenv("LCM_DEFAULT_URL");
+    lcm_url = (env && *env) ? env : kDefaultLcmUrl;
+  }
+  spdlog::set_level(spdlog::level::from_str(log_level));
+}
+
+std::string with_receive_buffer(const std::string& url, int bytes) {
+  if (url.rfind("udpm://", 0) != 0 || url.find("recv_buf_size=") != std::string::npos) return url;
+  return url + (url.find('?') == std::string::npos ? "?" : "&") +
+         "recv_buf_size=" + std::to_string(bytes);
+}
+
+int64_t wall_utime() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+struct Node::Subscription {
+  Node* node = nullptr;
+  std::string channel;
+  bool latest = false;
+  std::function<void(const void*, uint32_t)> dispatch;
+  std::vector<uint8_t> pending;  // newest undispatched message (latest mode)
+  bool has_pending = false;
+  lcm::Subscription* handle = nullptr;
+
+  void on_message(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+    if (!latest) {
+      dispatch(rbuf->data, rbuf->data_size);
+      return;
+    }
+    if (has_pending) ++node->stats_[channel].skipped;
+    const auto* bytes = static_cast<const uint8_t*>(rbuf->data);
+    pending.assign(bytes, bytes + rbuf->data_size);
+    has_pending = true;
+  }
+};
+
+Node::Node(const std::string& lcm_url, std::string name) : name_(std::move(name)) {
+  install_signal_handlers();
+  const std::string url = with_receive_buffer(lcm_url);
+  lcm_ = std::make_unique<lcm::LCM>(url);
+  if (!lcm_->good())
+    throw std::runtime_error("cannot open LCM at '" + url +
+                             "' (is a multicast route set up? run scripts/setup)");
+  const int rmem = rmem_max_bytes();
+  if (url.rfind("udpm://", 0) == 0 && rmem > 0 && rmem < kDefaultRecvBufBytes)
+    spdlog::warn("{}: net.core.rmem_max is {} bytes (< {}); large messages may be lost. "
+                 "Run scripts/setup as root to raise it.",
+                 name_, rmem, kDefaultRecvBufBytes);
+}
+
+Node::~Node() {
+  for (auto& s : subs_)
+    if (s->handle) lcm_->unsubscribe(s->handle);
+}
+
+void Node::install_signal_handlers() {
+  struct sigaction sa {};
+  sa.sa_handler = on_signal;
+  sigemptyset(&sa.sa_mask);
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
+}
+
+bool Node::signalled() { return g_signalled; }
+bool Node::stopping() const { return stopping_ || g_signalled; }
+
+void Node::subscribe_raw(const std::string& channel, bool latest,
+                         std::function<void(const void*, uint32_t)> dispatch) {
+  auto sub = std::make_unique<Subscription>();
+  sub->node = this;
+  sub->channel = channel;
+  sub->latest = latest;
+  sub->dispatch = std::move(dispatch);
+  sub->handle = lcm_->subscribe(channel, &Subscription::on_message, sub.get());
+  // Deep enough for every message that arrives while a callback runs (e.g. 2 s of 200 Hz IMU,
+  // or a few seconds of camera frames behind a slow vision step).
+  sub->handle->setQueueCapacity(latest ? 256 : 2048);
+  stats_[channel];
+  subs_.push_back(std::move(sub));
+}
+
+void Node::report_decode_error(const std::string& channel, uint32_t size) {
+  const uint64_t n = ++stats_[channel].decode_errors;
+  // Every error is counted; the log says so for the first and then every 100th.
+  if (n == 1 || n % 100 == 0)
+    spdlog::error("{}: {} message(s) on channel {} failed to decode (last: {} bytes; wrong type "
+                  "or malformed)",
+                  name_, n, channel, size);
+}
+
+const ChannelStats& Node::stats(const std::string& channel) const {
+  static const ChannelStats kEmpty;
+  auto it = stats_.find(channel);
+  return it == stats_.end() ? kEmpty : it->second;
+}
+
+void Node::every(double period_s, std::function<void(int64_t)> fn) {
+  const auto period_us = static_cast<int64_t>(period_s * 1e6);
+  timers_.push_back({period_us, wall_utime() + period_us, std::move(fn)});
+}
+
+void Node::run_timers(int64_t now) {
+  for (auto& t : timers_) {
+    if (now < t.next_utime) continue;
+    t.fn(now);
+    t.next_utime += t.period_us;
+    if (t.next_utime <= now) t.next_utime = now + t.period_us;  // fell behind: skip, don't burst
+  }
+}
+
+int Node::spin_once(int timeout_ms) {
+  if (!timers_.empty()) {
+    int64_t next = timers_.front().next_utime;
+    for (const auto& t : timers_) next = std::min(next, t.next_utime);
+    const int64_t wait_ms = std::max<int64_t>(0, (next - wall_utime()) / 1000);
+    timeout_ms = static_cast<int>(std::min<int64_t>(timeout_ms, wait_ms));
+  }
+  int handled = 0;
+  int r = lcm_->handleTimeout(timeout_ms);
+  while (r > 0) {
+    ++handled;
+    r = lcm_->handleTimeout(0);  // drain everything already queued
+  }
+  if (r < 0) throw std::runtime_error(name_ + ": LCM handle failed");
+  for (auto& s : subs_) {
+    if (!s->has_pending) continue;
+    s->has_pending = false;
+    std::vector<uint8_t> msg;
+    msg.swap(s->pending);
+    s->dispatch(msg.data(), static_cast<uint32_t>(msg.size()));
+  }
+  run_timers(wall_utime());
+  return handled;
+}
+
+int Node::run() {
+  while (!stopping()) spin_once(100);
+  spdlog::info("{}: shutting down", name_);
+  return 0;
+}
+
+int run_node_main(const char* node_name, const std::function<int()>& body) {
+  try {
+    return body();
+  } catch (const ParamError& e) {
+    spdlog::error("{}: configuration error: {}", node_name, e.what());
+    return 2;
+  } catch (const std::exception& e) {
+    spdlog::error("{}: {}", node_name, e.what());
+    return 1;
+  }
+}
+
+}  // namespace alight

@@ -1,0 +1,140 @@
+#pragma once
+// The thin-node side of every process: owns the LCM handle, the command line, the wall clock
+// and the signals; libraries never see any of them (DESIGN.md "Processes and channels").
+//
+// Debian's LCM 1.3.1 needs three things done for it here:
+//  - a large UDP receive buffer (its default loses most of a burst of 300 KB images): the URL
+//    gets recv_buf_size unless it names one;
+//  - per-subscription queues hold 30 messages and silently drop the newest beyond that: every
+//    subscription gets a deep queue, and on_latest() drains all pending messages before
+//    calling back with the newest one, counting the ones it skipped;
+//  - a message that fails to decode is only printed by its typed handler: ours decode
+//    themselves and count and report decode errors per channel.
+
+#include <lcm/lcm-cpp.hpp>
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace CLI {
+class App;
+}
+
+namespace alight {
+
+/// Default LCM URL: multicast with ttl=0 (nothing leaves the machine unless asked).
+inline constexpr const char* kDefaultLcmUrl = "udpm://239.255.76.67:7667?ttl=0";
+/// Receive buffer requested when the URL names none [bytes].
+inline constexpr int kDefaultRecvBufBytes = 8 * 1024 * 1024;
+
+/// Command-line options every node shares.
+struct NodeArgs {
+  std::string config;   ///< --config FILE (component parameters)
+  std::string lcm_url;  ///< --lcm-url URL, else $LCM_DEFAULT_URL, else kDefaultLcmUrl
+  std::string log_level = "info";
+
+  /// Adds --config, --lcm-url and --log-level to an app that has options of its own.
+  void add_to(CLI::App& app, bool config_required);
+  /// Fills lcm_url from the environment when not given, and applies the log level.
+  void finalize();
+};
+
+/// URL with recv_buf_size added when absent (udpm only).
+std::string with_receive_buffer(const std::string& url, int bytes = kDefaultRecvBufBytes);
+/// Current wall-clock time [us since Unix epoch]. For nodes only; flight logic gets time passed in.
+int64_t wall_utime();
+
+/// Per-channel counters, for logs and tests.
+struct ChannelStats {
+  uint64_t received = 0;       ///< messages decoded
+  uint64_t decode_errors = 0;  ///< messages that failed to decode (malformed or wrong type)
+  uint64_t skipped = 0;        ///< on_latest(): older messages replaced by a newer one
+};
+
+class Node {
+ public:
+  /// Connects to LCM; throws std::runtime_error naming the URL when that fails.
+  explicit Node(const std::string& lcm_url, std::string name = "alight");
+  ~Node();
+  Node(const Node&) = delete;
+  Node& operator=(const Node&) = delete;
+
+  /// Calls `fn` for every message on `channel`, in arrival order.
+  template <class Msg>
+  void on(const std::string& channel, std::function<void(const Msg&)> fn) {
+    subscribe_raw(channel, false, [this, channel, fn](const void* data, uint32_t size) {
+      Msg msg;
+      if (decode(channel, msg, data, size)) fn(msg);
+    });
+  }
+  /// Calls `fn` with only the newest message on `channel` each time the node catches up, so a
+  /// slow consumer works on the newest frame instead of a backlog.
+  template <class Msg>
+  void on_latest(const std::string& channel, std::function<void(const Msg&)> fn) {
+    subscribe_raw(channel, true, [this, channel, fn](const void* data, uint32_t size) {
+      Msg msg;
+      if (decode(channel, msg, data, size)) fn(msg);
+    });
+  }
+  template <class Msg>
+  int publish(const std::string& channel, const Msg& msg) {
+    return lcm_->publish(channel, &msg);
+  }
+  /// Calls `fn(now_utime)` every `period_s` of wall time.
+  void every(double period_s, std::function<void(int64_t)> fn);
+
+  /// Handles messages and timers until SIGINT / SIGTERM or stop(). Returns 0.
+  int run();
+  /// Waits up to `timeout_ms` for messages, handles all that are pending, calls back the latest
+  /// ones, and runs due timers. Returns the number of messages handled.
+  int spin_once(int timeout_ms);
+  void stop() { stopping_ = true; }
+  bool stopping() const;
+
+  const ChannelStats& stats(const std::string& channel) const;
+  lcm::LCM& lcm() { return *lcm_; }
+  const std::string& name() const { return name_; }
+
+  /// Installs the SIGINT / SIGTERM handlers that make run() return (called by the constructor).
+  static void install_signal_handlers();
+  static bool signalled();
+
+ private:
+  struct Subscription;
+  void subscribe_raw(const std::string& channel, bool latest,
+                     std::function<void(const void*, uint32_t)> dispatch);
+  template <class Msg>
+  bool decode(const std::string& channel, Msg& msg, const void* data, uint32_t size) {
+    if (msg.decode(data, 0, size) != static_cast<int>(size)) {
+      report_decode_error(channel, size);
+      return false;
+    }
+    ++stats_[channel].received;
+    return true;
+  }
+  void report_decode_error(const std::string& channel, uint32_t size);
+  void run_timers(int64_t now);
+
+  std::string name_;
+  std::unique_ptr<lcm::LCM> lcm_;
+  std::vector<std::unique_ptr<Subscription>> subs_;
+  std::map<std::string, ChannelStats> stats_;
+  struct Timer {
+    int64_t period_us;
+    int64_t next_utime;
+    std::function<void(int64_t)> fn;
+  };
+  std::vector<Timer> timers_;
+  std::atomic<bool> stopping_{false};
+};
+
+/// Runs a node's body, turning exceptions into a message on stderr and an exit code: 2 for bad
+/// configuration (ParamError), 1 for anything else.
+int run_node_main(const char* node_name, const std::function<int()>& body);
+
+}  // namespace alight

@@ -1,0 +1,192 @@
+#pragma once
+// Parameter loading: YAML files into per-component parameter structs, with every error naming
+// the file, the dotted key and the offending value ("config/vehicles/pelican.yaml:
+// autonomy.refinement.n_min = -3: must be >= 1"). Only nodes load files; libraries receive the
+// filled structs.
+
+#include <yaml-cpp/yaml.h>
+
+#include <Eigen/Core>
+#include <array>
+#include <memory>
+#include <optional>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace alight {
+
+/// Bad configuration from outside: names where (file, key) and what (value, problem).
+class ParamError : public std::runtime_error {
+ public:
+  ParamError(std::string file, std::string key, std::string value, std::string problem);
+
+  const std::string& file() const { return file_; }
+  const std::string& key() const { return key_; }
+  const std::string& value() const { return value_; }
+  const std::string& problem() const { return problem_; }
+
+  /// The same error, located in `file` with `key_prefix` prepended to the key (used when a
+  /// struct's validate(), which knows neither, threw it).
+  ParamError located(const std::string& file, const std::string& key_prefix) const;
+
+ private:
+  std::string file_, key_, value_, problem_;
+};
+
+/// Throws ParamError (without file) when `ok` is false; for validate() methods.
+template <class T>
+void param_check(bool ok, const std::string& key, const T& value, const std::string& problem) {
+  if (!ok) {
+    std::ostringstream os;
+    os << value;
+    throw ParamError("", key, os.str(), problem);
+  }
+}
+
+/// One YAML mapping of a parameter file, with the file name and the dotted path to it. Reads
+/// typed values into fields that already hold their defaults; an absent optional key keeps the
+/// default, a present key of the wrong type is an error. `finish()` rejects keys nobody read, so
+/// a typo never silently leaves a default in place.
+class ParamNode {
+ public:
+  /// Loads a YAML file whose top level must be a mapping. Throws ParamError when the file is
+  /// missing, unreadable or not valid YAML.
+  static ParamNode load_file(const std::string& path);
+  /// Parses YAML text; `name` stands in for the file name in errors.
+  static ParamNode from_string(const std::string& yaml, const std::string& name = "<string>");
+
+  const std::string& file() const { return *file_; }
+  const std::string& path() const { return path_; }
+  std::string key_path(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
+  bool has(const std::string& key) const;
+  const YAML::Node& yaml() const { return node_; }
+
+  /// Required sub-mapping.
+  ParamNode child(const std::string& key) const;
+  /// Sub-mapping if present.
+  std::optional<ParamNode> optional_child(const std::string& key) const;
+  /// Elements of a required sequence of mappings (e.g. a list of processes).
+  std::vector<ParamNode> child_list(const std::string& key) const;
+
+  /// Reads `key` into `field` if present (keeps the default otherwise).
+  template <class T>
+  void read(const std::string& key, T& field) const {
+    if (has(key)) field = get<T>(key);
+  }
+  /// Reads `key`, which must be present.
+  template <class T>
+  void require(const std::string& key, T& field) const {
+    if (!has(key)) throw error(key, "<missing>", "required key is missing");
+    field = get<T>(key);
+  }
+  /// Converts the value at `key` (present) to T.
+  template <class T>
+  T get(const std::string& key) const;
+
+  /// Throws a ParamError naming `key` and its current value in this file when !ok.
+  void check(bool ok, const std::string& key, const std::string& problem) const;
+  ParamError error(const std::string& key, const std::string& value,
+                   const std::string& problem) const;
+  /// Runs a struct's validate() and locates any ParamError it throws in this file and section.
+  template <class P>
+  void validate(const P& params) const {
+    try {
+      params.validate();
+    } catch (const ParamError& e) {
+      throw e.located(file(), path_);
+    }
+  }
+  /// Throws on any key of this mapping that was never read (typos, stale keys). `ignored` lists
+  /// keys that belong to other components sharing the file.
+  void finish(const std::vector<std::string>& ignored = {}) const;
+
+  std::string value_text(const std::string& key) const;
+
+ private:
+  ParamNode(std::shared_ptr<const std::string> file, YAML::Node node, std::string path);
+  YAML::Node at(const std::string& key) const;  // marks the key as read
+
+  std::shared_ptr<const std::string> file_;
+  YAML::Node node_;
+  std::string path_;
+  std::shared_ptr<std::set<std::string>> read_keys_;
+};
+
+namespace detail {
+template <class T>
+struct ParamConvert {
+  static T from(const YAML::Node& n) { return n.as<T>(); }
+  static const char* expected() { return "a value of the expected type"; }
+};
+template <>
+struct ParamConvert<bool> {
+  static bool from(const YAML::Node& n) { return n.as<bool>(); }
+  static const char* expected() { return "true or false"; }
+};
+template <>
+struct ParamConvert<int> {
+  static int from(const YAML::Node& n) { return n.as<int>(); }
+  static const char* expected() { return "an integer"; }
+};
+template <>
+struct ParamConvert<int64_t> {
+  static int64_t from(const YAML::Node& n) { return n.as<int64_t>(); }
+  static const char* expected() { return "an integer"; }
+};
+template <>
+struct ParamConvert<double> {
+  static double from(const YAML::Node& n) { return n.as<double>(); }
+  static const char* expected() { return "a number"; }
+};
+template <>
+struct ParamConvert<std::string> {
+  static std::string from(const YAML::Node& n) {
+    if (!n.IsScalar()) throw YAML::BadConversion(n.Mark());
+    return n.as<std::string>();
+  }
+  static const char* expected() { return "a string"; }
+};
+template <class E, size_t N>
+struct ParamConvert<std::array<E, N>> {
+  static std::array<E, N> from(const YAML::Node& n) {
+    if (!n.IsSequence() || n.size() != N) throw YAML::BadConversion(n.Mark());
+    std::array<E, N> out{};
+    for (size_t i = 0; i < N; ++i) out[i] = ParamConvert<E>::from(n[i]);
+    return out;
+  }
+  static std::string expected() { return "a list of " + std::to_string(N) + " numbers"; }
+};
+template <class E>
+struct ParamConvert<std::vector<E>> {
+  static std::vector<E> from(const YAML::Node& n) {
+    if (!n.IsSequence()) throw YAML::BadConversion(n.Mark());
+    std::vector<E> out;
+    for (const auto& e : n) out.push_back(ParamConvert<E>::from(e));
+    return out;
+  }
+  static const char* expected() { return "a list"; }
+};
+template <>
+struct ParamConvert<Eigen::Vector3d> {
+  static Eigen::Vector3d from(const YAML::Node& n) {
+    const auto a = ParamConvert<std::array<double, 3>>::from(n);
+    return Eigen::Vector3d(a[0], a[1], a[2]);
+  }
+  static const char* expected() { return "a list of 3 numbers"; }
+};
+}  // namespace detail
+
+template <class T>
+T ParamNode::get(const std::string& key) const {
+  const YAML::Node n = at(key);
+  try {
+    return detail::ParamConvert<T>::from(n);
+  } catch (const YAML::Exception&) {
+    throw error(key, value_text(key), std::string("expected ") + detail::ParamConvert<T>::expected());
+  }
+}
+
+}  // namespace alight

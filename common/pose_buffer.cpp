@@ -1,0 +1,80 @@
+#include "common/pose_buffer.hpp"
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+
+#include "common/params.hpp"
+
+namespace alight {
+
+void PoseBufferParams::validate() const {
+  param_check(history_s > 0.0, "history_s", history_s, "must be > 0");
+  param_check(max_gap_s > 0.0, "max_gap_s", max_gap_s, "must be > 0");
+  param_check(max_extrapolation_s >= 0.0, "max_extrapolation_s", max_extrapolation_s,
+              "must be >= 0");
+}
+
+PoseBuffer::PoseBuffer(const PoseBufferParams& params) : params_(params) { params_.validate(); }
+
+bool PoseBuffer::add(const PoseSample& sample) {
+  const auto history_us = static_cast<int64_t>(params_.history_s * 1e6);
+  if (!samples_.empty() && sample.utime < samples_.back().utime - history_us) return false;
+  auto it = std::lower_bound(samples_.begin(), samples_.end(), sample.utime,
+                             [](const PoseSample& s, int64_t t) { return s.utime < t; });
+  if (it != samples_.end() && it->utime == sample.utime) {
+    *it = sample;
+  } else {
+    samples_.insert(it, sample);
+  }
+  while (samples_.front().utime < samples_.back().utime - history_us) samples_.pop_front();
+  return true;
+}
+
+PoseSample interpolate(const PoseSample& a, const PoseSample& b, double s) {
+  PoseSample out;
+  out.utime = a.utime + static_cast<int64_t>(std::llround(s * static_cast<double>(b.utime - a.utime)));
+  out.p_W_B = a.p_W_B + s * (b.p_W_B - a.p_W_B);
+  out.v_W_B = a.v_W_B + s * (b.v_W_B - a.v_W_B);
+  out.omega_B = a.omega_B + s * (b.omega_B - a.omega_B);
+  out.q_WB = a.q_WB.slerp(s, b.q_WB).normalized();
+  return out;
+}
+
+PoseBuffer::Status PoseBuffer::lookup(int64_t utime, PoseSample* out) const {
+  assert(out != nullptr);
+  if (samples_.empty()) return Status::kEmpty;
+  if (utime < samples_.front().utime) return Status::kBeforeHistory;
+  const PoseSample& newest = samples_.back();
+  if (utime > newest.utime) {
+    const double dt_s = 1e-6 * static_cast<double>(utime - newest.utime);
+    if (dt_s > params_.max_extrapolation_s) return Status::kAfterNewest;
+    *out = newest;
+    out->utime = utime;
+    out->p_W_B = newest.p_W_B + dt_s * newest.v_W_B;
+    const Vector3d rot = newest.omega_B * dt_s;
+    if (rot.norm() > 0) out->q_WB = (newest.q_WB * Quaterniond(Eigen::AngleAxisd(rot.norm(), rot.normalized()))).normalized();
+    return Status::kOk;
+  }
+  auto hi = std::lower_bound(samples_.begin(), samples_.end(), utime,
+                             [](const PoseSample& s, int64_t t) { return s.utime < t; });
+  if (hi->utime == utime) {
+    *out = *hi;
+    return Status::kOk;
+  }
+  const PoseSample& b = *hi;
+  const PoseSample& a = *(hi - 1);
+  if (1e-6 * static_cast<double>(b.utime - a.utime) > params_.max_gap_s) return Status::kGap;
+  const double s = static_cast<double>(utime - a.utime) / static_cast<double>(b.utime - a.utime);
+  *out = interpolate(a, b, s);
+  out->utime = utime;
+  return Status::kOk;
+}
+
+std::optional<PoseSample> PoseBuffer::at(int64_t utime) const {
+  PoseSample s;
+  if (lookup(utime, &s) != Status::kOk) return std::nullopt;
+  return s;
+}
+
+}  // namespace alight
