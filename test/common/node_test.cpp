@@ -1,0 +1,102 @@
+#include "common/node.hpp"
+
+#include <alight/imu_t.hpp>
+#include <alight/pose_t.hpp>
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <thread>
+
+namespace alight {
+namespace {
+
+// A private port per test binary so tests running in parallel never hear each other.
+constexpr const char* kUrl = "udpm://239.255.76.67:7711?ttl=0";
+
+// Spins until `done` or the deadline (LCM delivers asynchronously through the kernel).
+template <class Pred>
+bool spin_until(Node& node, Pred done, double timeout_s = 3.0) {
+  const int64_t end = wall_utime() + static_cast<int64_t>(timeout_s * 1e6);
+  while (!done() && wall_utime() < end) node.spin_once(20);
+  return done();
+}
+
+imu_t imu(int64_t seq) {
+  imu_t m{};
+  m.utime = 1000 + seq;
+  m.seq = seq;
+  return m;
+}
+
+TEST(NodeTest, ReceiveBufferIsAddedToUdpmUrlsOnly) {
+  EXPECT_EQ(with_receive_buffer("udpm://239.255.76.67:7667?ttl=0", 1000),
+            "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=1000");
+  EXPECT_EQ(with_receive_buffer("udpm://239.255.76.67:7667", 1000),
+            "udpm://239.255.76.67:7667?recv_buf_size=1000");
+  EXPECT_EQ(with_receive_buffer("udpm://x:1?recv_buf_size=5", 1000), "udpm://x:1?recv_buf_size=5");
+  EXPECT_EQ(with_receive_buffer("file:///tmp/a.lcmlog?mode=r", 1000), "file:///tmp/a.lcmlog?mode=r");
+}
+
+TEST(NodeTest, OnDeliversEveryMessageInOrder) {
+  Node pub(kUrl, "pub"), sub(kUrl, "sub");
+  std::vector<int64_t> seen;
+  sub.on<imu_t>("NODE_TEST_ALL", [&](const imu_t& m) { seen.push_back(m.seq); });
+  // A burst larger than LCM 1.3.1's default 30-message queue, published before any handling.
+  for (int i = 0; i < 500; ++i) pub.publish("NODE_TEST_ALL", imu(i));
+  ASSERT_TRUE(spin_until(sub, [&] { return seen.size() >= 500; })) << seen.size();
+  for (int i = 0; i < 500; ++i) EXPECT_EQ(seen[i], i);
+  EXPECT_EQ(sub.stats("NODE_TEST_ALL").received, 500u);
+}
+
+TEST(NodeTest, OnLatestCallsBackWithTheNewestAndCountsSkipped) {
+  Node pub(kUrl, "pub"), sub(kUrl, "sub");
+  std::vector<int64_t> seen;
+  sub.on_latest<imu_t>("NODE_TEST_LATEST", [&](const imu_t& m) { seen.push_back(m.seq); });
+  for (int i = 0; i < 50; ++i) pub.publish("NODE_TEST_LATEST", imu(i));
+  // Let everything arrive in the socket, then handle it all in one spin.
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  ASSERT_TRUE(spin_until(sub, [&] { return !seen.empty() && seen.back() == 49; }));
+  EXPECT_LT(seen.size(), 50u);  // older ones were replaced, not queued
+  EXPECT_EQ(sub.stats("NODE_TEST_LATEST").received, seen.size());
+  EXPECT_EQ(sub.stats("NODE_TEST_LATEST").skipped + seen.size(), 50u);
+}
+
+TEST(NodeTest, MalformedMessagesAreCountedNotDelivered) {
+  Node pub(kUrl, "pub"), sub(kUrl, "sub");
+  int delivered = 0;
+  sub.on<pose_t>("NODE_TEST_BAD", [&](const pose_t&) { ++delivered; });
+  const std::vector<uint8_t> junk(37, 0xAB);  // wrong fingerprint and length
+  pub.lcm().publish("NODE_TEST_BAD", junk.data(), static_cast<unsigned>(junk.size()));
+  pub.publish("NODE_TEST_BAD", imu(1));  // a valid message of another type
+  pose_t good{};
+  good.orientation[0] = 1;
+  pub.publish("NODE_TEST_BAD", good);
+  ASSERT_TRUE(spin_until(sub, [&] { return delivered == 1 && sub.stats("NODE_TEST_BAD").decode_errors == 2; }));
+  EXPECT_EQ(sub.stats("NODE_TEST_BAD").received, 1u);
+}
+
+TEST(NodeTest, TimersRunAtTheirPeriodAndStopEndsRun) {
+  Node node(kUrl, "timer");
+  int ticks = 0;
+  node.every(0.01, [&](int64_t) {
+    if (++ticks == 10) node.stop();
+  });
+  const int64_t t0 = wall_utime();
+  EXPECT_EQ(node.run(), 0);
+  const double elapsed_s = 1e-6 * static_cast<double>(wall_utime() - t0);
+  EXPECT_EQ(ticks, 10);
+  EXPECT_GT(elapsed_s, 0.08);
+  EXPECT_LT(elapsed_s, 1.0);
+}
+
+TEST(NodeTest, BadUrlThrowsNamingIt) {
+  try {
+    Node node("nosuchprovider://foo", "bad");
+    FAIL() << "no exception";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("nosuchprovider://foo"), std::string::npos);
+  }
+}
+
+}  // namespace
+}  // namespace alight
