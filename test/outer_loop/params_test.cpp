@@ -1,0 +1,39 @@
+// The outer_loop: sections of the vehicle files load and validate; errors name file and key.
+
+#include <gtest/gtest.h>
+
+#include "outer_loop/params.hpp"
+
+namespace alight::outer_loop {
+namespace {
+
+TEST(OuterLoopParamsTest, VehicleFilesLoad) {
+  for (const char* v : {"starmac", "pelican"}) {
+    const std::string path = std::string(ALIGHT_SOURCE_DIR) + "/config/vehicles/" + v + ".yaml";
+    const auto p = load_params(path);
+    EXPECT_GT(p.mass_kg, 0.0) << v;
+    EXPECT_DOUBLE_EQ(p.pose_stale_s, 0.3) << v;
+    EXPECT_DOUBLE_EQ(p.pose_lost_s, 1.0) << v;
+  }
+}
+
+TEST(OuterLoopParamsTest, BadValueAndUnknownKeyNameTheKey) {
+  try {
+    load_params(ParamNode::from_string("outer_loop: {mass_kg: 1.0, max_tilt_deg: 70}", "v.yaml"));
+    FAIL();
+  } catch (const ParamError& e) {
+    EXPECT_EQ(e.key(), "outer_loop.max_tilt_deg");
+    EXPECT_EQ(e.file(), "v.yaml");
+  }
+  try {
+    load_params(ParamNode::from_string("outer_loop: {mass_kg: 1.0, kp_xy: 3}", "v.yaml"));
+    FAIL();
+  } catch (const ParamError& e) {
+    EXPECT_NE(std::string(e.what()).find("kp_xy"), std::string::npos);
+  }
+  EXPECT_THROW(load_params(ParamNode::from_string("outer_loop: {kp_xy_per_s2: 3}", "v.yaml")),
+               ParamError);  // mass_kg is required
+}
+
+}  // namespace
+}  // namespace alight::outer_loop

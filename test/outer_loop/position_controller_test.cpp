@@ -1,0 +1,246 @@
+// Known answers and stale-input modes of the outer-loop position controller.
+
+#include "outer_loop/position_controller.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "lag_model.hpp"
+
+namespace alight::outer_loop {
+namespace {
+
+constexpr int64_t kT0 = 1'700'000'000'000'000;
+constexpr int64_t kMs = 1000;
+
+OuterLoopParams params() {
+  OuterLoopParams p;
+  p.mass_kg = 1.2;
+  return p;
+}
+
+PoseSample pose_at(const Vector3d& p, double yaw, int64_t utime) {
+  PoseSample s;
+  s.utime = utime;
+  s.p_W_B = p;
+  s.q_WB = Quaterniond(rotation_from_rpy(0, 0, yaw));
+  return s;
+}
+
+PositionSetpoint setpoint_at(const Vector3d& p, double yaw, int64_t utime) {
+  PositionSetpoint sp;
+  sp.utime = utime;
+  sp.p_W = p;
+  sp.yaw_rad = yaw;
+  sp.motors_on = true;
+  return sp;
+}
+
+TEST(PositionControllerTest, AtTheSetpointCommandsLevelHoverThrust) {
+  PositionController c(params());
+  const auto cmd = c.update(setpoint_at({1, 2, 1}, 0.3, kT0), pose_at({1, 2, 1}, 0.3, kT0), kT0);
+  EXPECT_EQ(cmd.mode, Mode::kNormal);
+  EXPECT_TRUE(cmd.armed);
+  EXPECT_NEAR(cmd.roll_rad, 0, 1e-12);
+  EXPECT_NEAR(cmd.pitch_rad, 0, 1e-12);
+  EXPECT_NEAR(cmd.yaw_rate_radps, 0, 1e-12);
+  EXPECT_NEAR(cmd.thrust_N, 1.2 * 9.81, 1e-9);
+}
+
+TEST(PositionControllerTest, ForwardErrorPitchesNoseDownAndLeftErrorRollsLeft) {
+  PositionController c(params());
+  // Setpoint 0.1 m ahead (+x): accelerate along +x_B: positive pitch, no roll.
+  auto cmd = c.update(setpoint_at({0.1, 0, 1}, 0, kT0), pose_at({0, 0, 1}, 0, kT0), kT0);
+  EXPECT_NEAR(cmd.pitch_rad, std::atan2(0.4, 9.81), 1e-9);  // kp 4 * 0.1 m
+  EXPECT_NEAR(cmd.roll_rad, 0, 1e-12);
+  // Setpoint 0.1 m to the left (+y_B): body z must lean to +y, which is negative roll.
+  PositionController c2(params());
+  cmd = c2.update(setpoint_at({0, 0.1, 1}, 0, kT0), pose_at({0, 0, 1}, 0, kT0), kT0);
+  EXPECT_LT(cmd.roll_rad, 0);
+  EXPECT_NEAR(cmd.pitch_rad, 0, 1e-12);
+  // The thrust vector of the command points along the desired specific force.
+  const Vector3d z_B = rotation_from_rpy(cmd.roll_rad, cmd.pitch_rad, 0) * Vector3d::UnitZ();
+  EXPECT_NEAR(z_B.y() / z_B.z(), 0.4 / 9.81, 1e-9);
+  EXPECT_NEAR(cmd.thrust_N, 1.2 * std::hypot(0.4, 9.81), 1e-9);
+}
+
+TEST(PositionControllerTest, LateralCommandIsInTheHeadingFrame) {
+  // Facing +y (yaw 90 deg), an error along world +x is to the vehicle's right (-y_B): roll right.
+  PositionController c(params());
+  const auto cmd =
+      c.update(setpoint_at({0.1, 0, 1}, M_PI / 2, kT0), pose_at({0, 0, 1}, M_PI / 2, kT0), kT0);
+  EXPECT_GT(cmd.roll_rad, 0);
+  EXPECT_NEAR(cmd.pitch_rad, 0, 1e-9);
+}
+
+TEST(PositionControllerTest, TiltAndThrustAreLimited) {
+  auto p = params();
+  PositionController c(p);
+  const auto cmd = c.update(setpoint_at({50, -50, 30}, 0, kT0), pose_at({0, 0, 1}, 0, kT0), kT0);
+  const double max_tilt = p.max_tilt_deg * M_PI / 180;
+  EXPECT_LE(std::abs(cmd.roll_rad), max_tilt + 1e-12);
+  EXPECT_LE(std::abs(cmd.pitch_rad), max_tilt + 1e-12);
+  const Vector3d z_B = rotation_from_rpy(cmd.roll_rad, cmd.pitch_rad, 0) * Vector3d::UnitZ();
+  EXPECT_LE(std::acos(z_B.z()), max_tilt + 1e-9);
+  EXPECT_LE(cmd.thrust_N, p.thrust_max_N);
+  PositionController c2(p);
+  const auto down = c2.update(setpoint_at({0, 0, -30}, 0, kT0), pose_at({0, 0, 1}, 0, kT0), kT0);
+  EXPECT_GE(down.thrust_N, p.thrust_min_N);
+  EXPECT_NEAR(down.thrust_N, 1.2 * (9.81 - p.max_accel_z_mps2), 1e-9);
+}
+
+TEST(PositionControllerTest, YawRateFollowsTheHeadingErrorWithinItsLimit) {
+  auto p = params();
+  PositionController c(p);
+  auto cmd = c.update(setpoint_at({0, 0, 1}, 0.1, kT0), pose_at({0, 0, 1}, 0, kT0), kT0);
+  EXPECT_NEAR(cmd.yaw_rate_radps, p.yaw_kp_per_s * 0.1, 1e-9);
+  // Across the +-pi seam the short way round.
+  cmd = c.update(setpoint_at({0, 0, 1}, M_PI - 0.1, kT0), pose_at({0, 0, 1}, -M_PI + 0.1, kT0),
+                 kT0);
+  EXPECT_LT(cmd.yaw_rate_radps, 0);
+  cmd = c.update(setpoint_at({0, 0, 1}, 3.0, kT0), pose_at({0, 0, 1}, 0, kT0), kT0);
+  EXPECT_NEAR(cmd.yaw_rate_radps, p.max_yaw_rate_dps * M_PI / 180, 1e-9);
+}
+
+TEST(PositionControllerTest, RefusesToArmWithoutSetpointOrPoseOrWhenMotorsOff) {
+  PositionController c(params());
+  auto cmd = c.update(std::nullopt, pose_at({0, 0, 0}, 0, kT0), kT0);
+  EXPECT_FALSE(cmd.armed);
+  EXPECT_EQ(cmd.mode, Mode::kDisarmed);
+  cmd = c.update(setpoint_at({0, 0, 1}, 0, kT0), std::nullopt, kT0);
+  EXPECT_FALSE(cmd.armed);
+  auto sp = setpoint_at({0, 0, 1}, 0, kT0);
+  sp.motors_on = false;
+  cmd = c.update(sp, pose_at({0, 0, 1}, 0, kT0), kT0);
+  EXPECT_FALSE(cmd.armed);
+  EXPECT_EQ(cmd.thrust_N, 0.0);
+}
+
+TEST(PositionControllerTest, IdleSetpointSpinsAtMinimumThrustLevel) {
+  auto p = params();
+  PositionController c(p);
+  auto sp = setpoint_at({0, 0, 1}, 0, kT0);
+  sp.idle = true;
+  const auto cmd = c.update(sp, pose_at({0.5, 0, 0}, 0, kT0), kT0);
+  EXPECT_TRUE(cmd.armed);
+  EXPECT_EQ(cmd.thrust_N, p.thrust_min_N);
+  EXPECT_EQ(cmd.roll_rad, 0.0);
+  EXPECT_EQ(cmd.pitch_rad, 0.0);
+}
+
+TEST(PositionControllerTest, StalePoseGivesLevelHoverThrustAndNoLateralCommand) {
+  auto p = params();
+  PositionController c(p);
+  const auto pose = pose_at({0, 0, 1}, 0, kT0);
+  // Fresh enough (0.29 s): still tracking, with a lateral command.
+  int64_t now = kT0 + 290 * kMs;
+  auto cmd = c.update(setpoint_at({1, 0, 1}, 0, now), pose, now);
+  EXPECT_EQ(cmd.mode, Mode::kNormal);
+  EXPECT_GT(cmd.pitch_rad, 0);
+  now = kT0 + 310 * kMs;
+  cmd = c.update(setpoint_at({1, 0, 1}, 0, now), pose, now);
+  EXPECT_EQ(cmd.mode, Mode::kHoldLevel);
+  EXPECT_TRUE(cmd.armed);
+  EXPECT_EQ(cmd.roll_rad, 0.0);
+  EXPECT_EQ(cmd.pitch_rad, 0.0);
+  EXPECT_EQ(cmd.yaw_rate_radps, 0.0);
+  EXPECT_NEAR(cmd.thrust_N, 1.2 * (9.81 + c.integral().z()), 1e-9);
+}
+
+TEST(PositionControllerTest, LostPoseDescendsSlowlyOpenLoopThenDisarmsAndLatches) {
+  auto p = params();
+  PositionController c(p);
+  test::LagModel model;
+  model.hover_at({0, 0, 3});
+  const auto last_pose = model.pose(kT0);
+  c.update(setpoint_at({0, 0, 3}, 0, kT0), last_pose, kT0);
+  AttitudeCommand cmd;
+  double max_descent = 0;
+  int64_t t = kT0;
+  // Fly without pose; autonomy keeps sending setpoints (stepped on the IMU).
+  for (; t < kT0 + static_cast<int64_t>((p.failsafe_disarm_after_s + 2.0) * 1e6); t += 10 * kMs) {
+    cmd = c.update(setpoint_at({0, 0, 3}, 0, t), last_pose, t);
+    const double age = (t - kT0) * 1e-6;
+    if (age > p.pose_lost_s && age < p.pose_lost_s + p.failsafe_disarm_after_s) {
+      ASSERT_EQ(cmd.mode, Mode::kFailsafeDescent) << age;
+      ASSERT_EQ(cmd.roll_rad, 0.0);
+      ASSERT_TRUE(cmd.armed);
+    }
+    for (int k = 0; k < 10; ++k) model.step(cmd, 0.001);
+    if (model.p.z() > 0) max_descent = std::max(max_descent, -model.v.z());
+  }
+  EXPECT_LT(model.p.z(), 1e-9) << "reached the ground";
+  EXPECT_LE(max_descent, p.failsafe_descent_mps * 1.1) << "slow descent";
+  EXPECT_GT(max_descent, p.failsafe_descent_mps * 0.7);
+  EXPECT_FALSE(cmd.armed) << "disarmed after failsafe_disarm_after_s";
+  // Pose back and a motors-on setpoint: stays disarmed until autonomy acknowledges with motors off.
+  cmd = c.update(setpoint_at({0, 0, 3}, 0, t), model.pose(t), t);
+  EXPECT_FALSE(cmd.armed);
+  auto off = setpoint_at({0, 0, 0}, 0, t);
+  off.motors_on = false;
+  c.update(off, model.pose(t), t);
+  cmd = c.update(setpoint_at({0, 0, 1}, 0, t), model.pose(t), t);
+  EXPECT_TRUE(cmd.armed);
+}
+
+TEST(PositionControllerTest, StaleSetpointHoldsWhereItWentStaleNotTheOldSetpoint) {
+  auto p = params();
+  PositionController c(p);
+  test::LagModel model;
+  model.hover_at({0, 0, 1});
+  const auto sp = setpoint_at({2, 0, 1}, 0, kT0);  // flying towards x = 2 when autonomy dies
+  AttitudeCommand cmd;
+  Vector3d p_stale = Vector3d::Zero();
+  for (int64_t t = kT0; t < kT0 + 2'500 * kMs; t += 10 * kMs) {
+    cmd = c.update(sp, model.pose(t), t);
+    if (t - kT0 <= 500 * kMs) {
+      EXPECT_EQ(cmd.mode, Mode::kNormal);
+      p_stale = model.p;
+    } else {
+      EXPECT_EQ(cmd.mode, Mode::kHoldPosition);
+    }
+    for (int k = 0; k < 10; ++k) model.step(cmd, 0.001);
+  }
+  EXPECT_LT(model.p.x(), 1.5) << "did not keep flying to the stale setpoint";
+  EXPECT_LT((model.p - p_stale).norm(), 0.3);
+  EXPECT_LT(model.v.norm(), 0.2);
+}
+
+TEST(PositionControllerTest, LostSetpointDescendsOnThePoseAndDisarmsOnTheGround) {
+  auto p = params();
+  PositionController c(p);
+  test::LagModel model;
+  model.hover_at({0.5, 0.5, 1.0});
+  const auto sp = setpoint_at({0.5, 0.5, 1.0}, 0, kT0);
+  AttitudeCommand cmd;
+  bool saw_descent = false;
+  for (int64_t t = kT0; t < kT0 + 15'000 * kMs; t += 10 * kMs) {
+    cmd = c.update(sp, model.pose(t), t);
+    saw_descent |= cmd.mode == Mode::kSetpointLostDescent;
+    if (saw_descent && model.p.z() > 0.05) {
+      EXPECT_LT(-model.v.z(), p.setpoint_lost_descent_mps * 1.5);
+    }
+    for (int k = 0; k < 10; ++k) model.step(cmd, 0.001);
+  }
+  EXPECT_TRUE(saw_descent);
+  EXPECT_NEAR(model.p.z(), 0.0, 1e-9);
+  EXPECT_NEAR(model.p.x(), 0.5, 0.05);
+  EXPECT_FALSE(cmd.armed);
+  EXPECT_EQ(cmd.mode, Mode::kDisarmed);
+}
+
+TEST(PositionControllerTest, ParamsValidateRejectsNonsense) {
+  auto p = params();
+  p.max_tilt_deg = 80;
+  EXPECT_THROW(p.validate(), ParamError);
+  p = params();
+  p.pose_lost_s = 0.1;  // below pose_stale_s
+  EXPECT_THROW(p.validate(), ParamError);
+  p = params();
+  p.thrust_max_N = 1.0;  // cannot hover
+  EXPECT_THROW(p.validate(), ParamError);
+}
+
+}  // namespace
+}  // namespace alight::outer_loop
