@@ -1,0 +1,61 @@
+#pragma once
+// Runtime outcomes of the vision library (STYLE.md "Errors: three tiers"): a stage that cannot
+// give a trustworthy answer returns a Reason instead of a value, never garbage. The numeric values
+// of Reason equal target_t's REASON_* constants (lcmtypes/target_t.lcm), so the node copies them
+// without a table; test/vision/status_test.cpp pins the correspondence.
+
+#include <cassert>
+#include <cstdint>
+#include <optional>
+#include <utility>
+
+namespace alight::vision {
+
+enum class Reason : int8_t {
+  kOk = 0,
+  kNoPose = 1,               ///< no motion-capture pose at the image time
+  kNoReference = 2,          ///< no reference frame yet (first frames, after a reset)
+  kTooFewFeatures = 3,       ///< blank / textureless image
+  kTooFewMatches = 4,        ///< fewer than 4 correspondences (or fewer than the minimum)
+  kSmallBaseline = 5,        ///< camera moved too little for a usable scale / decomposition
+  kNoDominantPlane = 6,      ///< no homography with enough inliers (all outliers)
+  kNoTargetPlane = 7,        ///< only one plane in view
+  kNoOpening = 8,            ///< ingress (issue 6)
+  kDecompositionFailed = 9,  ///< no physically valid decomposition, or planes disagree
+  kBadImage = 10,            ///< empty, wrong type or too small
+};
+
+const char* to_string(Reason r);
+
+/// A value or the reason there is none.
+template <class T>
+class Result {
+ public:
+  static Result ok(T value) { return Result(std::move(value)); }
+  static Result fail(Reason reason) {
+    assert(reason != Reason::kOk);
+    return Result(reason);
+  }
+
+  bool has_value() const { return value_.has_value(); }
+  explicit operator bool() const { return has_value(); }
+  Reason reason() const { return reason_; }
+  const T& value() const {
+    assert(has_value());
+    return *value_;
+  }
+  T& value() {
+    assert(has_value());
+    return *value_;
+  }
+  const T& operator*() const { return value(); }
+  const T* operator->() const { return &value(); }
+
+ private:
+  explicit Result(T value) : value_(std::move(value)), reason_(Reason::kOk) {}
+  explicit Result(Reason reason) : reason_(reason) {}
+  std::optional<T> value_;
+  Reason reason_;
+};
+
+}  // namespace alight::vision
