@@ -74,10 +74,12 @@ std::vector<double> matrix_data(const ParamNode& root, const std::string& key, i
   std::vector<double> data;
   m.require("data", data);
   if (r * c != static_cast<int>(data.size()))
-    throw m.error("data", m.value_text("data"), "has " + std::to_string(data.size()) +
-                                                    " numbers, rows x cols = " + std::to_string(r * c));
+    throw m.error(
+        "data", m.value_text("data"),
+        "has " + std::to_string(data.size()) + " numbers, rows x cols = " + std::to_string(r * c));
   if (rows > 0 && (r != rows || c != cols))
-    throw root.error(key, root.value_text(key), "must be " + std::to_string(rows) + "x" + std::to_string(cols));
+    throw root.error(key, root.value_text(key),
+                     "must be " + std::to_string(rows) + "x" + std::to_string(cols));
   m.finish();
   return data;
 }
@@ -120,8 +122,8 @@ std::string camera_info_yaml(const CameraModel& cam) {
   out.SetDoublePrecision(10);
   auto matrix = [&](const char* key, int rows, int cols, const std::vector<double>& data) {
     out << YAML::Key << key << YAML::Value << YAML::BeginMap << YAML::Key << "rows" << YAML::Value
-        << rows << YAML::Key << "cols" << YAML::Value << cols << YAML::Key << "data"
-        << YAML::Value << YAML::Flow << data << YAML::EndMap;
+        << rows << YAML::Key << "cols" << YAML::Value << cols << YAML::Key << "data" << YAML::Value
+        << YAML::Flow << data << YAML::EndMap;
   };
   out << YAML::BeginMap;
   out << YAML::Key << "image_width" << YAML::Value << cam.width;

@@ -13,8 +13,8 @@ namespace alight {
 
 struct CameraModel {
   std::string name = "firefly_mv_4mm";
-  int width = 640;   ///< [px]
-  int height = 480;  ///< [px]
+  int width = 640;                    ///< [px]
+  int height = 480;                   ///< [px]
   double fx = 666.667, fy = 666.667;  ///< focal length [px]; 4 mm lens / 6 um pixels
   double cx = 319.5, cy = 239.5;      ///< principal point [px]
   std::array<double, 5> D{};          ///< plumb_bob k1, k2, p1, p2, k3 (all zero: no distortion)

@@ -29,8 +29,10 @@ CameraMount load_camera_mount(const ParamNode& vehicle_root, const std::string& 
   }
   std::array<double, 3> rpy{0, 0, 0};
   cam.read("rpy_offset_deg", rpy);
-  for (double a : rpy) cam.check(std::abs(a) <= 45.0, "rpy_offset_deg", "offsets must be within 45 deg");
-  m.R_BC = m.R_BC * rotation_from_rpy(rpy[0] * M_PI / 180, rpy[1] * M_PI / 180, rpy[2] * M_PI / 180);
+  for (double a : rpy)
+    cam.check(std::abs(a) <= 45.0, "rpy_offset_deg", "offsets must be within 45 deg");
+  m.R_BC =
+      m.R_BC * rotation_from_rpy(rpy[0] * M_PI / 180, rpy[1] * M_PI / 180, rpy[2] * M_PI / 180);
   cam.require("t_B_C_m", m.t_B_C);
   cam.check(m.t_B_C.norm() < 1.0, "t_B_C_m", "camera more than 1 m from the body origin");
   cam.finish();

@@ -62,11 +62,21 @@ std::optional<Image> image_from_msg(const image_t& m, bool mono, std::string* er
   };
   Raw raw{};
   switch (m.pixelformat) {
-    case image_t::PIXEL_FORMAT_GRAY: raw = {1, cv::COLOR_GRAY2BGR, -1}; break;
-    case image_t::PIXEL_FORMAT_BGR: raw = {3, -1, cv::COLOR_BGR2GRAY}; break;
-    case image_t::PIXEL_FORMAT_RGB: raw = {3, cv::COLOR_RGB2BGR, cv::COLOR_RGB2GRAY}; break;
-    case image_t::PIXEL_FORMAT_BGRA: raw = {4, cv::COLOR_BGRA2BGR, cv::COLOR_BGRA2GRAY}; break;
-    case image_t::PIXEL_FORMAT_RGBA: raw = {4, cv::COLOR_RGBA2BGR, cv::COLOR_RGBA2GRAY}; break;
+    case image_t::PIXEL_FORMAT_GRAY:
+      raw = {1, cv::COLOR_GRAY2BGR, -1};
+      break;
+    case image_t::PIXEL_FORMAT_BGR:
+      raw = {3, -1, cv::COLOR_BGR2GRAY};
+      break;
+    case image_t::PIXEL_FORMAT_RGB:
+      raw = {3, cv::COLOR_RGB2BGR, cv::COLOR_RGB2GRAY};
+      break;
+    case image_t::PIXEL_FORMAT_BGRA:
+      raw = {4, cv::COLOR_BGRA2BGR, cv::COLOR_BGRA2GRAY};
+      break;
+    case image_t::PIXEL_FORMAT_RGBA:
+      raw = {4, cv::COLOR_RGBA2BGR, cv::COLOR_RGBA2GRAY};
+      break;
     case image_t::PIXEL_FORMAT_MJPEG: {
       if (m.size != static_cast<int32_t>(m.data.size()) || m.data.empty()) {
         fail(error, "JPEG frame with size field " + std::to_string(m.size) + " and " +
@@ -152,7 +162,8 @@ const image_metadata_t* find_entry(const image_t& m, const std::string& key) {
 void set_metadata_int(image_t& m, const std::string& key, int64_t value) {
   image_metadata_t* e = find_entry(m, key);
   e->value.resize(8);
-  for (int i = 0; i < 8; ++i) e->value[i] = static_cast<uint8_t>((static_cast<uint64_t>(value) >> (8 * i)) & 0xff);
+  for (int i = 0; i < 8; ++i)
+    e->value[i] = static_cast<uint8_t>((static_cast<uint64_t>(value) >> (8 * i)) & 0xff);
   e->n = 8;
 }
 

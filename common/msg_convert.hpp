@@ -4,7 +4,6 @@
 
 #include <alight/image_t.hpp>
 #include <alight/pose_t.hpp>
-
 #include <opencv2/core.hpp>
 #include <optional>
 #include <string>

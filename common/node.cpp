@@ -27,8 +27,8 @@ int rmem_max_bytes() {
 void NodeArgs::add_to(CLI::App& app, bool config_required) {
   auto* c = app.add_option("--config", config, "Parameter file (YAML)");
   if (config_required) c->required()->check(CLI::ExistingFile);
-  app.add_option("--lcm-url", lcm_url, "LCM URL (default: $LCM_DEFAULT_URL, else " +
-                                           std::string(kDefaultLcmUrl) + ")");
+  app.add_option("--lcm-url", lcm_url,
+                 "LCM URL (default: $LCM_DEFAULT_URL, else " + std::string(kDefaultLcmUrl) + ")");
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error")
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error"}));
 }
@@ -83,9 +83,10 @@ Node::Node(const std::string& lcm_url, std::string name) : name_(std::move(name)
                              "' (is a multicast route set up? run scripts/setup)");
   const int rmem = rmem_max_bytes();
   if (url.rfind("udpm://", 0) == 0 && rmem > 0 && rmem < kDefaultRecvBufBytes)
-    spdlog::warn("{}: net.core.rmem_max is {} bytes (< {}); large messages may be lost. "
-                 "Run scripts/setup as root to raise it.",
-                 name_, rmem, kDefaultRecvBufBytes);
+    spdlog::warn(
+        "{}: net.core.rmem_max is {} bytes (< {}); large messages may be lost. "
+        "Run scripts/setup as root to raise it.",
+        name_, rmem, kDefaultRecvBufBytes);
 }
 
 Node::~Node() {
@@ -123,9 +124,10 @@ void Node::report_decode_error(const std::string& channel, uint32_t size) {
   const uint64_t n = ++stats_[channel].decode_errors;
   // Every error is counted; the log says so for the first and then every 100th.
   if (n == 1 || n % 100 == 0)
-    spdlog::error("{}: {} message(s) on channel {} failed to decode (last: {} bytes; wrong type "
-                  "or malformed)",
-                  name_, n, channel, size);
+    spdlog::error(
+        "{}: {} message(s) on channel {} failed to decode (last: {} bytes; wrong type "
+        "or malformed)",
+        name_, n, channel, size);
 }
 
 const ChannelStats& Node::stats(const std::string& channel) const {

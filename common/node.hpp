@@ -11,11 +11,10 @@
 //  - a message that fails to decode is only printed by its typed handler: ours decode
 //    themselves and count and report decode errors per channel.
 
-#include <lcm/lcm-cpp.hpp>
-
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <lcm/lcm-cpp.hpp>
 #include <map>
 #include <memory>
 #include <string>

@@ -21,7 +21,8 @@ ParamError::ParamError(std::string file, std::string key, std::string value, std
       problem_(std::move(problem)) {}
 
 ParamError ParamError::located(const std::string& file, const std::string& key_prefix) const {
-  const std::string key = key_prefix.empty() ? key_ : (key_.empty() ? key_prefix : key_prefix + "." + key_);
+  const std::string key =
+      key_prefix.empty() ? key_ : (key_.empty() ? key_prefix : key_prefix + "." + key_);
   return ParamError(file_.empty() ? file : file_, key, value_, problem_);
 }
 
@@ -44,8 +45,8 @@ ParamNode ParamNode::from_string(const std::string& yaml, const std::string& nam
   try {
     root = YAML::Load(yaml);
   } catch (const YAML::Exception& e) {
-    throw ParamError(name, "", "", "invalid YAML at line " + std::to_string(e.mark.line + 1) +
-                                       ": " + e.msg);
+    throw ParamError(name, "", "",
+                     "invalid YAML at line " + std::to_string(e.mark.line + 1) + ": " + e.msg);
   }
   if (!root.IsMap()) throw ParamError(name, "", "", "the top level must be a mapping of keys");
   return ParamNode(std::make_shared<const std::string>(name), root, "");

@@ -60,7 +60,9 @@ class ParamNode {
 
   const std::string& file() const { return *file_; }
   const std::string& path() const { return path_; }
-  std::string key_path(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
+  std::string key_path(const std::string& key) const {
+    return path_.empty() ? key : path_ + "." + key;
+  }
   bool has(const std::string& key) const;
   const YAML::Node& yaml() const { return node_; }
 
@@ -185,7 +187,8 @@ T ParamNode::get(const std::string& key) const {
   try {
     return detail::ParamConvert<T>::from(n);
   } catch (const YAML::Exception&) {
-    throw error(key, value_text(key), std::string("expected ") + detail::ParamConvert<T>::expected());
+    throw error(key, value_text(key),
+                std::string("expected ") + detail::ParamConvert<T>::expected());
   }
 }
 

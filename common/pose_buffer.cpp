@@ -33,7 +33,8 @@ bool PoseBuffer::add(const PoseSample& sample) {
 
 PoseSample interpolate(const PoseSample& a, const PoseSample& b, double s) {
   PoseSample out;
-  out.utime = a.utime + static_cast<int64_t>(std::llround(s * static_cast<double>(b.utime - a.utime)));
+  out.utime =
+      a.utime + static_cast<int64_t>(std::llround(s * static_cast<double>(b.utime - a.utime)));
   out.p_W_B = a.p_W_B + s * (b.p_W_B - a.p_W_B);
   out.v_W_B = a.v_W_B + s * (b.v_W_B - a.v_W_B);
   out.omega_B = a.omega_B + s * (b.omega_B - a.omega_B);
@@ -53,7 +54,9 @@ PoseBuffer::Status PoseBuffer::lookup(int64_t utime, PoseSample* out) const {
     out->utime = utime;
     out->p_W_B = newest.p_W_B + dt_s * newest.v_W_B;
     const Vector3d rot = newest.omega_B * dt_s;
-    if (rot.norm() > 0) out->q_WB = (newest.q_WB * Quaterniond(Eigen::AngleAxisd(rot.norm(), rot.normalized()))).normalized();
+    if (rot.norm() > 0)
+      out->q_WB =
+          (newest.q_WB * Quaterniond(Eigen::AngleAxisd(rot.norm(), rot.normalized()))).normalized();
     return Status::kOk;
   }
   auto hi = std::lower_bound(samples_.begin(), samples_.end(), utime,

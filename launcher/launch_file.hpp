@@ -31,19 +31,19 @@ namespace alight::launcher {
 enum class RestartPolicy { kNever, kOnFailure, kAlways };
 
 struct BackoffParams {
-  double initial_s = 0.01;     ///< first restart delay [s] (bot-procman: 10 ms)
-  double max_s = 1.0;          ///< the delay doubles up to this [s] (bot-procman: 1 s)
-  double reset_after_s = 10.0; ///< a process that ran this long starts again from initial_s [s]
+  double initial_s = 0.01;      ///< first restart delay [s] (bot-procman: 10 ms)
+  double max_s = 1.0;           ///< the delay doubles up to this [s] (bot-procman: 1 s)
+  double reset_after_s = 10.0;  ///< a process that ran this long starts again from initial_s [s]
   void validate() const;
 };
 
 struct ProcessSpec {
   std::string name;
-  std::vector<std::string> command;     ///< argv; command[0] is the program
+  std::vector<std::string> command;  ///< argv; command[0] is the program
   RestartPolicy restart = RestartPolicy::kOnFailure;
-  int max_restarts = -1;                ///< restarts allowed before FAILED; -1 = unlimited
-  double start_delay_s = 0.0;           ///< delay after the previous process's start [s]
-  bool shutdown_on_exit = false;        ///< its exit (any code) stops the whole session
+  int max_restarts = -1;          ///< restarts allowed before FAILED; -1 = unlimited
+  double start_delay_s = 0.0;     ///< delay after the previous process's start [s]
+  bool shutdown_on_exit = false;  ///< its exit (any code) stops the whole session
   std::map<std::string, std::string> env;
 };
 
@@ -51,9 +51,9 @@ struct LaunchFile {
   std::string name;
   std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
   bool record = true;
-  std::string record_channels = ".*";   ///< lcm-logger channel regex
-  double stop_timeout_s = 3.0;          ///< grace between SIGINT and SIGKILL [s]
-  double status_period_s = 1.0;         ///< PROCESS_STATUS period [s]
+  std::string record_channels = ".*";  ///< lcm-logger channel regex
+  double stop_timeout_s = 3.0;         ///< grace between SIGINT and SIGKILL [s]
+  double status_period_s = 1.0;        ///< PROCESS_STATUS period [s]
   std::string status_channel = "PROCESS_STATUS";
   BackoffParams backoff;
   std::vector<ProcessSpec> processes;

@@ -3,15 +3,14 @@
 // the session with lcm-logger, reports every process's state on stdout and PROCESS_STATUS, and on
 // SIGINT / SIGTERM stops everything in reverse order (SIGINT, then SIGKILL after a timeout).
 // The anchor is libbot's bot-procman deputy.
-#include <alight/process_status_t.hpp>
 #include <fcntl.h>
-#include <lcm/lcm-cpp.hpp>
 #include <sys/prctl.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <alight/process_status_t.hpp>
 #include <atomic>
 #include <cerrno>
 #include <chrono>
@@ -21,6 +20,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <lcm/lcm-cpp.hpp>
 #include <memory>
 #include <thread>
 
@@ -43,7 +43,8 @@ extern "C" void on_stop_signal(int sig) { g_stop_signal = sig; }
 std::string clock_text() {
   const auto now = std::chrono::system_clock::now();
   const std::time_t t = std::chrono::system_clock::to_time_t(now);
-  const auto ms = std::chrono::duration_cast<std::chrono::milliseconds>(now.time_since_epoch()).count() % 1000;
+  const auto ms =
+      std::chrono::duration_cast<std::chrono::milliseconds>(now.time_since_epoch()).count() % 1000;
   char buf[32];
   std::strftime(buf, sizeof buf, "%H:%M:%S", std::localtime(&t));
   char out[48];
@@ -54,15 +55,18 @@ std::string clock_text() {
 class Launcher {
  public:
   Launcher(LaunchFile lf, fs::path session_dir, fs::path bin_dir, std::string root)
-      : lf_(std::move(lf)), session_(std::move(session_dir)), bin_dir_(std::move(bin_dir)),
+      : lf_(std::move(lf)),
+        session_(std::move(session_dir)),
+        bin_dir_(std::move(bin_dir)),
         root_(std::move(root)) {
     log_.open(session_ / "launcher.log", std::ios::app);
     vars_ = {{"ALIGHT_ROOT", root_}, {"SESSION_DIR", session_.string()}, {"LCM_URL", lf_.lcm_url}};
     if (lf_.record) {
       ProcessSpec logger;
       logger.name = "lcm-logger";
-      logger.command = {"lcm-logger", "--lcm-url=" + lf_.lcm_url, "-q", "-c", lf_.record_channels,
-                        (session_ / "session.lcmlog").string()};
+      logger.command = {
+          "lcm-logger", "--lcm-url=" + lf_.lcm_url, "-q",
+          "-c",         lf_.record_channels,        (session_ / "session.lcmlog").string()};
       logger.restart = alight::launcher::RestartPolicy::kAlways;
       trackers_.push_back(std::make_unique<ProcessTracker>(logger, lf_.backoff));
     }
@@ -276,7 +280,8 @@ class Launcher {
       if (lf_.record && &t == trackers_.front().get())
         std::this_thread::sleep_for(std::chrono::milliseconds(200));
       kill(-pid, SIGINT);
-      const int64_t deadline = alight::wall_utime() + static_cast<int64_t>(lf_.stop_timeout_s * 1e6);
+      const int64_t deadline =
+          alight::wall_utime() + static_cast<int64_t>(lf_.stop_timeout_s * 1e6);
       while (t.pid() == pid && alight::wall_utime() < deadline) {
         reap();
         std::this_thread::sleep_for(std::chrono::milliseconds(5));
@@ -299,7 +304,8 @@ class Launcher {
     for (const auto& t : trackers_) {
       const auto i = t->info();
       say("  " + t->spec().name + ": " + to_string(t->state()) + ", restarts " +
-          std::to_string(i.restarts) + (t->last_reason().empty() ? "" : ", last: " + t->last_reason()));
+          std::to_string(i.restarts) +
+          (t->last_reason().empty() ? "" : ", last: " + t->last_reason()));
     }
     if (lf_.record) say("log: " + (session_ / "session.lcmlog").string());
   }
@@ -322,7 +328,8 @@ fs::path make_session_dir(const fs::path& root, const std::string& name) {
   char stamp[32];
   std::strftime(stamp, sizeof stamp, "%Y%m%d-%H%M%S", std::localtime(&t));
   fs::path dir = root / (std::string(stamp) + "-" + name);
-  for (int i = 2; fs::exists(dir); ++i) dir = root / (std::string(stamp) + "-" + name + "-" + std::to_string(i));
+  for (int i = 2; fs::exists(dir); ++i)
+    dir = root / (std::string(stamp) + "-" + name + "-" + std::to_string(i));
   fs::create_directories(dir);
   return dir;
 }
@@ -333,8 +340,11 @@ int main(int argc, char** argv) {
   CLI::App app{"alight-launch: start, supervise, record and stop the onboard processes"};
   std::string launch_path, log_root, lcm_url;
   bool no_record = false;
-  app.add_option("launchfile", launch_path, "Launch file (YAML)")->required()->check(CLI::ExistingFile);
-  app.add_option("--log-root", log_root, "Folder for session folders (default: $ALIGHT_LOG_ROOT, else <source>/logs)");
+  app.add_option("launchfile", launch_path, "Launch file (YAML)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  app.add_option("--log-root", log_root,
+                 "Folder for session folders (default: $ALIGHT_LOG_ROOT, else <source>/logs)");
   app.add_option("--lcm-url", lcm_url, "Override the launch file's LCM URL");
   app.add_flag("--no-record", no_record, "Do not run lcm-logger");
   CLI11_PARSE(app, argc, argv);

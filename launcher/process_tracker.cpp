@@ -8,12 +8,18 @@ namespace alight::launcher {
 
 const char* to_string(ProcState s) {
   switch (s) {
-    case ProcState::kWaiting: return "waiting";
-    case ProcState::kRunning: return "running";
-    case ProcState::kBackoff: return "backoff";
-    case ProcState::kExited: return "exited";
-    case ProcState::kStopped: return "stopped";
-    case ProcState::kFailed: return "failed";
+    case ProcState::kWaiting:
+      return "waiting";
+    case ProcState::kRunning:
+      return "running";
+    case ProcState::kBackoff:
+      return "backoff";
+    case ProcState::kExited:
+      return "exited";
+    case ProcState::kStopped:
+      return "stopped";
+    case ProcState::kFailed:
+      return "failed";
   }
   return "?";
 }
@@ -91,12 +97,24 @@ process_info_t ProcessTracker::info() const {
   i.name = spec_.name;
   i.pid = pid_;
   switch (state_) {
-    case ProcState::kWaiting: i.state = process_info_t::STATE_WAITING; break;
-    case ProcState::kRunning: i.state = process_info_t::STATE_RUNNING; break;
-    case ProcState::kBackoff: i.state = process_info_t::STATE_BACKOFF; break;
-    case ProcState::kExited: i.state = process_info_t::STATE_EXITED; break;
-    case ProcState::kStopped: i.state = process_info_t::STATE_STOPPED; break;
-    case ProcState::kFailed: i.state = process_info_t::STATE_FAILED; break;
+    case ProcState::kWaiting:
+      i.state = process_info_t::STATE_WAITING;
+      break;
+    case ProcState::kRunning:
+      i.state = process_info_t::STATE_RUNNING;
+      break;
+    case ProcState::kBackoff:
+      i.state = process_info_t::STATE_BACKOFF;
+      break;
+    case ProcState::kExited:
+      i.state = process_info_t::STATE_EXITED;
+      break;
+    case ProcState::kStopped:
+      i.state = process_info_t::STATE_STOPPED;
+      break;
+    case ProcState::kFailed:
+      i.state = process_info_t::STATE_FAILED;
+      break;
   }
   i.exit_code = exit_code_;
   i.signal = signal_;

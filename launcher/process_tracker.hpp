@@ -5,7 +5,6 @@
 // fork / exec / wait / kill and tells the tracker what happened, with the time.
 
 #include <alight/process_info_t.hpp>
-
 #include <cstdint>
 #include <string>
 

@@ -14,7 +14,9 @@ using alight::testing::Receiver;
 using alight::testing::run_image_stream;
 
 namespace {
-const char* name(Receiver r) { return r == Receiver::kAlightNode ? "alight Node" : "plain LCM 1.3.1"; }
+const char* name(Receiver r) {
+  return r == Receiver::kAlightNode ? "alight Node" : "plain LCM 1.3.1";
+}
 
 bool lossless(const std::string& url, double fps, double seconds, Receiver rx) {
   const auto r = run_image_stream(url, "BENCH_IMAGES", fps, static_cast<int>(fps * seconds), rx);

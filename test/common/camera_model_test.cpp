@@ -79,7 +79,8 @@ TEST(CameraModelTest, CameraInfoRoundTripsThroughYaml) {
 }
 
 TEST(CameraModelTest, ShippedFireflyFileLoads) {
-  const auto c = load_camera_info(std::string(ALIGHT_SOURCE_DIR) + "/config/cameras/firefly_mv_4mm.yaml");
+  const auto c =
+      load_camera_info(std::string(ALIGHT_SOURCE_DIR) + "/config/cameras/firefly_mv_4mm.yaml");
   EXPECT_EQ(c.width, 640);
   EXPECT_NEAR(c.fx, 666.667, 1e-9);
 }

@@ -1,9 +1,9 @@
 #include "common/node.hpp"
 
-#include <alight/imu_t.hpp>
-#include <alight/pose_t.hpp>
 #include <gtest/gtest.h>
 
+#include <alight/imu_t.hpp>
+#include <alight/pose_t.hpp>
 #include <chrono>
 #include <thread>
 
@@ -34,7 +34,8 @@ TEST(NodeTest, ReceiveBufferIsAddedToUdpmUrlsOnly) {
   EXPECT_EQ(with_receive_buffer("udpm://239.255.76.67:7667", 1000),
             "udpm://239.255.76.67:7667?recv_buf_size=1000");
   EXPECT_EQ(with_receive_buffer("udpm://x:1?recv_buf_size=5", 1000), "udpm://x:1?recv_buf_size=5");
-  EXPECT_EQ(with_receive_buffer("file:///tmp/a.lcmlog?mode=r", 1000), "file:///tmp/a.lcmlog?mode=r");
+  EXPECT_EQ(with_receive_buffer("file:///tmp/a.lcmlog?mode=r", 1000),
+            "file:///tmp/a.lcmlog?mode=r");
 }
 
 TEST(NodeTest, OnDeliversEveryMessageInOrder) {
@@ -71,7 +72,8 @@ TEST(NodeTest, MalformedMessagesAreCountedNotDelivered) {
   pose_t good{};
   good.orientation[0] = 1;
   pub.publish("NODE_TEST_BAD", good);
-  ASSERT_TRUE(spin_until(sub, [&] { return delivered == 1 && sub.stats("NODE_TEST_BAD").decode_errors == 2; }));
+  ASSERT_TRUE(spin_until(
+      sub, [&] { return delivered == 1 && sub.stats("NODE_TEST_BAD").decode_errors == 2; }));
   EXPECT_EQ(sub.stats("NODE_TEST_BAD").received, 1u);
 }
 

@@ -66,8 +66,7 @@ TEST(ParamsTest, WrongTypeNamesTheExpectedType) {
 }
 
 TEST(ParamsTest, MisspeltKeyIsRejected) {
-  const auto e =
-      expect_param_error([] { load("autonomy:\n  refinement:\n    n_mim: 4\n"); });
+  const auto e = expect_param_error([] { load("autonomy:\n  refinement:\n    n_mim: 4\n"); });
   EXPECT_EQ(e.key(), "autonomy.refinement.n_mim");
   EXPECT_NE(e.problem().find("unknown key"), std::string::npos);
 }

@@ -55,16 +55,19 @@ TEST(LaunchFileTest, BadValuesNameFileKeyAndValue) {
             "bad.yaml: processes = []: must list at least one process");
   EXPECT_EQ(error_of("name: x\nstop_timeout_s: 0\nprocesses:\n  - {name: a, command: [a]}\n"),
             "bad.yaml: stop_timeout_s = 0: must be > 0");
-  EXPECT_NE(error_of("name: x\nprocesses:\n  - {name: a, command: [a]}\n  - {name: a, command: [b]}\n")
-                .find("two processes have this name"),
-            std::string::npos);
+  EXPECT_NE(
+      error_of("name: x\nprocesses:\n  - {name: a, command: [a]}\n  - {name: a, command: [b]}\n")
+          .find("two processes have this name"),
+      std::string::npos);
   EXPECT_NE(error_of("name: x\nprocesess: []\n").find("processes = <missing>"), std::string::npos);
   EXPECT_NE(error_of("name: x\nprocesses:\n  - {name: a, command: [a], restrat: never}\n")
                 .find("processes[0].restrat = never: unknown key"),
             std::string::npos);
-  EXPECT_NE(error_of("name: x\nbackoff: {initial_s: 1, max_s: 0.5}\nprocesses:\n  - {name: a, command: [a]}\n")
-                .find("backoff.max_s = 0.5"),
-            std::string::npos);
+  EXPECT_NE(
+      error_of(
+          "name: x\nbackoff: {initial_s: 1, max_s: 0.5}\nprocesses:\n  - {name: a, command: [a]}\n")
+          .find("backoff.max_s = 0.5"),
+      std::string::npos);
 }
 
 TEST(LaunchFileTest, SubstitutesKnownVariablesOnly) {

@@ -1,16 +1,16 @@
 // alight-launch run for real: a crash loop restarted with backoff, a process with a grandchild,
 // and one that ignores SIGINT; SIGTERM to the launcher must leave no process behind (checked by
 // pid), and the session log must exist and replay.
-#include <alight/process_status_t.hpp>
 #include <gtest/gtest.h>
-#include <lcm/lcm-cpp.hpp>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <alight/process_status_t.hpp>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <lcm/lcm-cpp.hpp>
 #include <regex>
 #include <sstream>
 #include <thread>
@@ -77,9 +77,7 @@ class LauncherIntegrationTest : public ::testing::Test {
     fs::remove_all(dir_);
   }
 
-  void write_launch_file(const std::string& text) {
-    std::ofstream(dir_ / "test.yaml") << text;
-  }
+  void write_launch_file(const std::string& text) { std::ofstream(dir_ / "test.yaml") << text; }
 
   void start_launcher() {
     launcher_pid_ = fork();
@@ -131,7 +129,8 @@ class LauncherIntegrationTest : public ::testing::Test {
 TEST_F(LauncherIntegrationTest, RestartsWithBackoffStopsEverythingAndRecordsAReplayableLog) {
   write_launch_file(std::string(R"(
 name: itest
-lcm_url: )") + kUrl + R"(
+lcm_url: )") + kUrl +
+                    R"(
 record: true
 stop_timeout_s: 0.5
 status_period_s: 0.1
@@ -162,7 +161,9 @@ processes:
 
   const std::string out = output();
   // Backoff as bot-procman: 10 ms doubling.
-  EXPECT_NE(out.find("crasher: backoff, exited with code 3; restart 1 in 0.010 s"), std::string::npos) << out;
+  EXPECT_NE(out.find("crasher: backoff, exited with code 3; restart 1 in 0.010 s"),
+            std::string::npos)
+      << out;
   EXPECT_NE(out.find("restart 2 in 0.020 s"), std::string::npos) << out;
   EXPECT_NE(out.find("restart 4 in 0.080 s"), std::string::npos) << out;
   EXPECT_NE(out.find("stubborn: did not stop within"), std::string::npos) << out;
@@ -170,7 +171,8 @@ processes:
   const fs::path session = session_dir();
   ASSERT_FALSE(session.empty());
   EXPECT_TRUE(std::regex_match(session.filename().string(), std::regex("[0-9]{8}-[0-9]{6}-itest")));
-  for (const char* f : {"session.lcmlog", "launch.yaml", "launcher.log", "crasher.log", "family.log"})
+  for (const char* f :
+       {"session.lcmlog", "launch.yaml", "launcher.log", "crasher.log", "family.log"})
     EXPECT_TRUE(fs::exists(session / f)) << f;
   EXPECT_NE(slurp(session / "crasher.log").find("crashing"), std::string::npos);
 

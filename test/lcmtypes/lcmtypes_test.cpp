@@ -1,5 +1,7 @@
 // Every alight type survives encode -> decode -> encode byte for byte with all fields set, and
 // image_t has bot_core.image_t's fingerprint (computed by lcm-gen from bot_core's layout).
+#include <gtest/gtest.h>
+
 #include <alight/attitude_cmd_t.hpp>
 #include <alight/autonomy_status_t.hpp>
 #include <alight/image_t.hpp>
@@ -11,8 +13,6 @@
 #include <alight/sim_truth_t.hpp>
 #include <alight/target_t.hpp>
 #include <bot_core/image_t.hpp>
-#include <gtest/gtest.h>
-
 #include <random>
 #include <set>
 
@@ -209,16 +209,22 @@ TEST(LcmTypesTest, ImageFingerprintEqualsBotCoreImage) {
   b.nmetadata = 0;
   const auto bytes = encode(b);
   image_t ours;
-  ASSERT_EQ(ours.decode(bytes.data(), 0, static_cast<int>(bytes.size())), static_cast<int>(bytes.size()));
+  ASSERT_EQ(ours.decode(bytes.data(), 0, static_cast<int>(bytes.size())),
+            static_cast<int>(bytes.size()));
   EXPECT_EQ(ours.data, b.data);
 }
 
 TEST(LcmTypesTest, DistinctTypesHaveDistinctFingerprints) {
-  const std::vector<int64_t> hashes = {
-      image_t::getHash(),           pose_t::getHash(),          imu_t::getHash(),
-      target_t::getHash(),          operator_cmd_t::getHash(),  autonomy_status_t::getHash(),
-      position_setpoint_t::getHash(), attitude_cmd_t::getHash(), sim_truth_t::getHash(),
-      process_status_t::getHash()};
+  const std::vector<int64_t> hashes = {image_t::getHash(),
+                                       pose_t::getHash(),
+                                       imu_t::getHash(),
+                                       target_t::getHash(),
+                                       operator_cmd_t::getHash(),
+                                       autonomy_status_t::getHash(),
+                                       position_setpoint_t::getHash(),
+                                       attitude_cmd_t::getHash(),
+                                       sim_truth_t::getHash(),
+                                       process_status_t::getHash()};
   std::set<int64_t> unique(hashes.begin(), hashes.end());
   EXPECT_EQ(unique.size(), hashes.size());
 }

@@ -4,9 +4,8 @@
 #include <alight/pose_t.hpp>
 #include <alight/process_status_t.hpp>
 #include <alight/target_t.hpp>
-#include <lcm/lcm-cpp.hpp>
-
 #include <cstdio>
+#include <lcm/lcm-cpp.hpp>
 #include <opencv2/core.hpp>
 
 #include "common/msg_convert.hpp"

@@ -2,15 +2,15 @@
 // Streams 640x480 mono8 CAMERA-like images from a forked publisher process to this process over
 // LCM and counts what arrives by sequence number, with publish -> receive latency. Shared by
 // the transport test (test/integration) and the transport benchmark (bench/lcm).
-#include <alight/image_t.hpp>
-#include <lcm/lcm-cpp.hpp>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <alight/image_t.hpp>
 #include <chrono>
 #include <cmath>
+#include <lcm/lcm-cpp.hpp>
 #include <opencv2/core.hpp>
 #include <set>
 #include <string>
@@ -24,7 +24,7 @@ namespace alight::testing {
 
 struct StreamResult {
   int sent = 0;
-  int received = 0;   ///< distinct sequence numbers received
+  int received = 0;  ///< distinct sequence numbers received
   int duplicates = 0;
   std::vector<double> latency_ms;  ///< per received image, publish -> callback
   int lost() const { return sent - received; }
@@ -78,9 +78,8 @@ struct PlainHandler {
 
 /// Publishes `count` images at `fps` (<= 0: as fast as possible) from a child process and
 /// receives them here. Ends `settle_s` after the last image arrived or the publisher finished.
-inline StreamResult run_image_stream(const std::string& url, const std::string& channel,
-                                     double fps, int count, Receiver receiver,
-                                     double settle_s = 0.5) {
+inline StreamResult run_image_stream(const std::string& url, const std::string& channel, double fps,
+                                     int count, Receiver receiver, double settle_s = 0.5) {
   StreamResult r;
   r.sent = count;
   std::set<int64_t> seen;
