@@ -1,0 +1,168 @@
+// Paper 3.1.1: sub-pixel STAR (CenSurE, Agrawal et al. 2008); see star_detector.hpp.
+#include "vision/star_detector.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+
+#include "vision/simd.hpp"
+
+namespace alight::vision {
+namespace {
+
+/// One row of the response at filter index n: mean(inner (2n+1)^2) - mean(ring).
+ALIGHT_MULTIVERSION
+void response_row(const int* __restrict o0, const int* __restrict o1, const int* __restrict i0,
+                  const int* __restrict i1, int n, int x_begin, int x_end,
+                  float* __restrict out) {
+  const int a = n, b = 2 * n;
+  const float in_area = float((2 * a + 1) * (2 * a + 1));
+  const float out_area = float((2 * b + 1) * (2 * b + 1));
+  const float w_in = 1.f / in_area + 1.f / (out_area - in_area);
+  const float w_out = 1.f / (out_area - in_area);
+  for (int x = x_begin; x < x_end; ++x) {
+    const int inner = i1[x + a + 1] - i1[x - a] - i0[x + a + 1] + i0[x - a];
+    const int outer = o1[x + b + 1] - o1[x - b] - o0[x + b + 1] + o0[x - b];
+    out[x] = w_in * float(inner) - w_out * float(outer);
+  }
+}
+
+/// Keeps per pixel the response of the largest magnitude over the scales seen so far.
+ALIGHT_MULTIVERSION
+void merge_row(const float* __restrict r, float n, int x_begin, int x_end, float* __restrict best,
+               float* __restrict best_abs, float* __restrict best_n) {
+  for (int x = x_begin; x < x_end; ++x) {
+    const float m = std::abs(r[x]);
+    const bool better = m > best_abs[x];
+    best[x] = better ? r[x] : best[x];
+    best_abs[x] = better ? m : best_abs[x];
+    best_n[x] = better ? n : best_n[x];
+  }
+}
+
+/// Quadratic peak offset from three samples, clamped to half a sample.
+float parabola_offset(float m, float c, float p) {
+  const float d2 = m - 2 * c + p;
+  if (!(std::abs(d2) > 1e-12f)) return 0.f;
+  return std::clamp(0.5f * (m - p) / d2, -0.5f, 0.5f);
+}
+
+}  // namespace
+
+cv::Mat integral_image(const cv::Mat& gray) {
+  cv::Mat sum;
+  cv::integral(gray, sum, CV_32S);
+  return sum;
+}
+
+float star_response(const cv::Mat& integral, int x, int y, int n) {
+  const int a = n, b = 2 * n;
+  auto box = [&](int h) {
+    return integral.at<int>(y + h + 1, x + h + 1) - integral.at<int>(y - h, x + h + 1) -
+           integral.at<int>(y + h + 1, x - h) + integral.at<int>(y - h, x - h);
+  };
+  const float in_area = float((2 * a + 1) * (2 * a + 1));
+  const float out_area = float((2 * b + 1) * (2 * b + 1));
+  const int inner = box(a), outer = box(b);
+  return float(inner) / in_area - float(outer - inner) / (out_area - in_area);
+}
+
+Result<std::vector<Keypoint>> detect_star(const cv::Mat& gray, const cv::Mat& integral,
+                                          const StarParams& params) {
+  using R = Result<std::vector<Keypoint>>;
+  const int margin = 2 * params.max_size + 2;  // outer box + one pixel for the 3x3 refinement
+  if (gray.empty() || gray.type() != CV_8UC1 || integral.type() != CV_32S ||
+      integral.rows != gray.rows + 1 || integral.cols != gray.cols + 1 ||
+      gray.cols < 2 * margin + 3 || gray.rows < 2 * margin + 3)
+    return R::fail(Reason::kBadImage);
+  const int w = gray.cols, h = gray.rows;
+  const int x0 = margin, x1 = w - margin, y0 = margin, y1 = h - margin;
+
+  cv::Mat best(h, w, CV_32F, cv::Scalar(0)), best_abs(h, w, CV_32F, cv::Scalar(0)),
+      best_n(h, w, CV_32F, cv::Scalar(0));
+  std::vector<float> row(w);
+  for (int y = y0; y < y1; ++y) {
+    float* b = best.ptr<float>(y);
+    float* ba = best_abs.ptr<float>(y);
+    float* bn = best_n.ptr<float>(y);
+    for (int n = params.min_size; n <= params.max_size; ++n) {
+      response_row(integral.ptr<int>(y - 2 * n), integral.ptr<int>(y + 2 * n + 1),
+                   integral.ptr<int>(y - n), integral.ptr<int>(y + n + 1), n, x0, x1, row.data());
+      merge_row(row.data(), float(n), x0, x1, b, ba, bn);
+    }
+  }
+
+  // Spatial non-maximum suppression of the per-pixel best-over-scale magnitude.
+  cv::Mat dilated;
+  const int k = 2 * params.nms_radius_px + 1;
+  cv::dilate(best_abs, dilated, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(k, k)));
+  const float thr = float(params.response_threshold);
+  // Harris ratio test: reject when tr^2 / det > (r + 1)^2 / r.
+  const double r = params.line_threshold;
+  const double max_ratio = (r + 1) * (r + 1) / r;
+  std::vector<Keypoint> kps;
+  for (int y = y0 + 1; y < y1 - 1; ++y) {
+    const float* ba = best_abs.ptr<float>(y);
+    const float* d = dilated.ptr<float>(y);
+    for (int x = x0 + 1; x < x1 - 1; ++x) {
+      if (!(ba[x] > thr) || ba[x] < d[x]) continue;
+      const int n = int(best_n.at<float>(y, x));
+      // Second-moment matrix of the response around the peak, over a window of the blob size.
+      const int rad = std::max(2, n + 1);
+      double sxx = 0, syy = 0, sxy = 0;
+      for (int v = std::max(y0 + 1, y - rad); v <= std::min(y1 - 2, y + rad); ++v) {
+        const float* br = best.ptr<float>(v);
+        const float* bu = best.ptr<float>(v - 1);
+        const float* bd = best.ptr<float>(v + 1);
+        for (int u = std::max(x0 + 1, x - rad); u <= std::min(x1 - 2, x + rad); ++u) {
+          const double gx = 0.5 * (br[u + 1] - br[u - 1]);
+          const double gy = 0.5 * (bd[u] - bu[u]);
+          sxx += gx * gx, syy += gy * gy, sxy += gx * gy;
+        }
+      }
+      const double det = sxx * syy - sxy * sxy;
+      if (!(det > 0) || (sxx + syy) * (sxx + syy) > max_ratio * det) continue;
+      kps.push_back({float(x), float(y), float(n), best.at<float>(y, x)});
+    }
+  }
+  if (kps.size() < 4) return R::fail(Reason::kTooFewFeatures);
+  if (params.max_features > 0 && int(kps.size()) > params.max_features) {
+    std::nth_element(kps.begin(), kps.begin() + params.max_features, kps.end(),
+                     [](const Keypoint& a, const Keypoint& b) {
+                       return std::abs(a.response) > std::abs(b.response);
+                     });
+    kps.resize(params.max_features);
+  }
+  if (params.subpixel) {
+    for (auto& kp : kps) {
+      const int x = int(kp.x), y = int(kp.y), n = int(kp.size);
+      float f[3][3];
+      for (int j = -1; j <= 1; ++j)
+        for (int i = -1; i <= 1; ++i) f[j + 1][i + 1] = star_response(integral, x + i, y + j, n);
+      // Newton step on the 2-D quadratic through the 3x3 neighbourhood.
+      const double gx = 0.5 * (f[1][2] - f[1][0]), gy = 0.5 * (f[2][1] - f[0][1]);
+      const double hxx = f[1][2] - 2 * f[1][1] + f[1][0];
+      const double hyy = f[2][1] - 2 * f[1][1] + f[0][1];
+      const double hxy = 0.25 * (f[2][2] - f[2][0] - f[0][2] + f[0][0]);
+      const double det = hxx * hyy - hxy * hxy;
+      if (std::abs(det) > 1e-12) {
+        const double dx = -(hyy * gx - hxy * gy) / det;
+        const double dy = -(hxx * gy - hxy * gx) / det;
+        if (std::abs(dx) <= 1.0 && std::abs(dy) <= 1.0) {
+          kp.x += float(std::clamp(dx, -0.5, 0.5));
+          kp.y += float(std::clamp(dy, -0.5, 0.5));
+        } else {  // not a clean peak: fall back to the separable 1-D fits
+          kp.x += parabola_offset(f[1][0], f[1][1], f[1][2]);
+          kp.y += parabola_offset(f[0][1], f[1][1], f[2][1]);
+        }
+      }
+      if (n > params.min_size && n < params.max_size)
+        kp.size += parabola_offset(std::abs(star_response(integral, x, y, n - 1)),
+                                   std::abs(f[1][1]),
+                                   std::abs(star_response(integral, x, y, n + 1)));
+    }
+  }
+  return R::ok(std::move(kps));
+}
+
+}  // namespace alight::vision
