@@ -38,8 +38,10 @@ struct StreamResult {
 };
 
 /// How the receiving side is set up: alight's Node (large receive buffer, deep queue), or
-/// LCM 1.3.1 as it comes (default socket buffer, 30-message queue).
+/// LCM 1.3.1 as it comes on Debian (the kernel's default 208 KiB socket buffer, asked for
+/// explicitly so a raised rmem_default does not hide it, and the 30-message queue).
 enum class Receiver { kAlightNode, kPlainLcm };
+inline constexpr int kStockRecvBufBytes = 212992;  // Debian's net.core.rmem_default
 
 namespace detail {
 inline void publish_stream(const std::string& url, const std::string& channel, double fps,
@@ -96,7 +98,7 @@ inline StreamResult run_image_stream(const std::string& url, const std::string& 
       last_utime = now;
     });
   } else {
-    plain = std::make_unique<lcm::LCM>(url);
+    plain = std::make_unique<lcm::LCM>(with_receive_buffer(url, kStockRecvBufBytes));
     plain->subscribe(channel, &detail::PlainHandler::on, &handler);
   }
   const pid_t child = fork();
