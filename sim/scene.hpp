@@ -1,0 +1,63 @@
+#pragma once
+// The simulated world: a textured floor (plane z = 0) and boxes standing on it (the landing
+// platform; the wall pieces around an opening and the room behind it). One description serves
+// both the renderer and the contact model, so what the camera sees is what the vehicle hits.
+
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "sim/params.hpp"
+#include "sim/texture.hpp"
+
+namespace alight::sim {
+
+struct Box {
+  enum class Kind { kPlatform, kWall, kRoom };
+  Kind kind = Kind::kPlatform;
+  Vector3d center_W = Vector3d::Zero();
+  Vector3d half_size_m = Vector3d::Constant(0.5);
+  double yaw_rad = 0.0;  ///< rotation about world z
+  int texture = 0;       ///< index into Scene::textures
+
+  Matrix3d R_WO() const { return rotation_from_rpy(0, 0, yaw_rad); }
+  /// Point in the box frame (axes along its sides, origin at its centre).
+  Vector3d to_local(const Vector3d& p_W) const { return R_WO().transpose() * (p_W - center_W); }
+  bool contains(const Vector3d& p_W) const {
+    const Vector3d q = to_local(p_W);
+    return (q.cwiseAbs() - half_size_m).maxCoeff() < 0.0;
+  }
+};
+
+/// True geometry of the targets, for SIM_TRUTH and scoring.
+struct PlatformTruth {
+  Vector3d top_center_W = Vector3d::Zero();  ///< centre of the top face [m]
+  Vector3d size_m = Vector3d::Zero();        ///< length (its x), width (its y), height [m]
+  double yaw_rad = 0.0;
+};
+struct OpeningTruth {
+  Vector3d center_W = Vector3d::Zero();  ///< centre of the opening in the wall's approach face [m]
+  Vector2d size_m = Vector2d::Zero();    ///< width, height [m]
+  Vector3d wall_normal_W = -Vector3d::UnitX();  ///< towards the approach side
+};
+
+struct Scene {
+  std::vector<Texture> textures;
+  int floor_texture = 0;
+  std::vector<Box> boxes;
+  LightingParams lighting;  ///< after randomisation
+  std::optional<PlatformTruth> platform;
+  std::optional<OpeningTruth> opening;
+  bool has_wall = false;
+  /// Wall pieces within this distance of the opening's edge count as its frame [m].
+  double frame_margin_m = 0.05;
+
+  /// Where a wall contact at `p_W` counts as the opening's frame.
+  bool near_opening_frame(const Vector3d& p_W) const;
+};
+
+/// Builds the scene of a scenario: textures from the seed, platform pose and lighting
+/// randomised by the seed within the scenario's `randomize:` ranges.
+Scene build_scene(const Scenario& scenario, uint64_t seed);
+
+}  // namespace alight::sim

@@ -1,0 +1,76 @@
+#include "sim/sim_msgs.hpp"
+
+#include "common/msg_convert.hpp"
+
+namespace alight::sim {
+
+pose_t to_msg(const MocapSample& sample) {
+  pose_t m = alight::to_msg(sample.pose, sample.seq);
+  m.status = pose_t::STATUS_OK;
+  return m;
+}
+
+imu_t to_msg(const ImuSample& s) {
+  imu_t m{};
+  m.utime = s.utime;
+  m.seq = s.seq;
+  for (int i = 0; i < 3; ++i) {
+    m.accel_B[i] = s.accel_B[i];
+    m.gyro_B[i] = s.gyro_B[i];
+  }
+  return m;
+}
+
+image_t to_msg(const CameraFrame& frame) {
+  image_t m = image_to_msg(frame.pixels, frame.utime, frame.seq);
+  set_metadata_int(m, "exposure_us", static_cast<int64_t>(frame.exposure_s * 1e6 + 0.5));
+  return m;
+}
+
+sim_truth_t to_msg(const Truth& t) {
+  sim_truth_t m{};
+  m.utime = t.utime;
+  m.scenario = t.scenario;
+  for (int i = 0; i < 3; ++i) {
+    m.pos[i] = t.state.p_W_B[i];
+    m.vel[i] = t.state.v_W_B[i];
+  }
+  quat_to_wxyz(t.state.q_WB, m.orientation);
+  m.has_platform = t.platform.has_value();
+  if (t.platform) {
+    for (int i = 0; i < 3; ++i) {
+      m.platform_center_W[i] = t.platform->top_center_W[i];
+      m.platform_size_m[i] = t.platform->size_m[i];
+    }
+    m.platform_yaw_rad = t.platform->yaw_rad;
+  }
+  m.has_opening = t.opening.has_value();
+  if (t.opening) {
+    for (int i = 0; i < 3; ++i) {
+      m.opening_center_W[i] = t.opening->center_W[i];
+      m.wall_normal_W[i] = t.opening->wall_normal_W[i];
+    }
+    m.opening_size_m[0] = t.opening->size_m.x();
+    m.opening_size_m[1] = t.opening->size_m.y();
+  }
+  m.contact = static_cast<int8_t>(t.contact);
+  m.armed = t.state.armed;
+  m.landed = t.landed;
+  m.tipped = t.tipped;
+  m.collided = t.collided;
+  m.n_collisions = t.n_collisions;
+  return m;
+}
+
+AttitudeCommand from_msg(const attitude_cmd_t& msg) {
+  AttitudeCommand c;
+  c.utime = msg.utime;
+  c.roll_rad = msg.roll_rad;
+  c.pitch_rad = msg.pitch_rad;
+  c.yaw_rate_radps = msg.yaw_rate_radps;
+  c.thrust_N = msg.thrust_N;
+  c.armed = msg.armed;
+  return c;
+}
+
+}  // namespace alight::sim

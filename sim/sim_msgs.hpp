@@ -1,0 +1,22 @@
+#pragma once
+// Conversions between the simulator's domain structs and the LCM messages the node publishes
+// (MOCAP_POSE, IMU, CAMERA, SIM_TRUTH) and consumes (ATTITUDE_CMD).
+
+#include <alight/attitude_cmd_t.hpp>
+#include <alight/image_t.hpp>
+#include <alight/imu_t.hpp>
+#include <alight/pose_t.hpp>
+#include <alight/sim_truth_t.hpp>
+
+#include "sim/simulator.hpp"
+
+namespace alight::sim {
+
+pose_t to_msg(const MocapSample& sample);
+imu_t to_msg(const ImuSample& sample);
+/// mono8 frame stamped at mid-exposure, with "seq" and "exposure_us" metadata.
+image_t to_msg(const CameraFrame& frame);
+sim_truth_t to_msg(const Truth& truth);
+AttitudeCommand from_msg(const attitude_cmd_t& msg);
+
+}  // namespace alight::sim

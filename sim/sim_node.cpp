@@ -1,0 +1,107 @@
+// alight-sim: the simulated vehicle, motion-capture room, IMU and camera on LCM. The only file
+// of sim/ that knows LCM, files or the wall clock; the simulation itself is the Simulator.
+//
+//   alight-sim --scenario config/scenarios/landing_a.yaml [--vehicle FILE] [--seed N]
+//              [--rate X] [--duration S] [--lcm-url URL]
+
+#include <CLI/CLI.hpp>
+#include <spdlog/spdlog.h>
+
+#include <alight/attitude_cmd_t.hpp>
+
+#include <chrono>
+#include <filesystem>
+#include <thread>
+
+#include "common/node.hpp"
+#include "common/params.hpp"
+#include "sim/params.hpp"
+#include "sim/sim_msgs.hpp"
+#include "sim/simulator.hpp"
+
+namespace {
+constexpr int64_t kChunkUs = 1000;         // commands are picked up at this sim-time granularity
+constexpr int64_t kTruthPeriodUs = 20000;  // SIM_TRUTH at 50 Hz
+}  // namespace
+
+int main(int argc, char** argv) {
+  return alight::run_node_main("alight-sim", [&]() -> int {
+    using namespace alight;
+    CLI::App app("alight-sim: quadrotor, motion capture, IMU and camera, simulated");
+    std::string scenario_file, vehicle_file;
+    uint64_t seed = 0;
+    double rate = 1.0, duration_s = 0.0;
+    bool start_now = false;
+    int threads = 1;
+    NodeArgs args;
+    app.add_option("--scenario", scenario_file, "Scenario file (config/scenarios/*.yaml)")
+        ->required();
+    app.add_option("--vehicle", vehicle_file,
+                   "Vehicle file (default: ../vehicles/starmac.yaml beside the scenario)");
+    app.add_option("--seed", seed, "Randomises platform pose, textures, lighting and noise");
+    app.add_option("--rate", rate, "Real-time factor (0: as fast as possible)")
+        ->check(CLI::Range(0.0, 1000.0));
+    app.add_option("--duration", duration_s, "Stop after this much sim time [s] (0: never)")
+        ->check(CLI::NonNegativeNumber);
+    app.add_flag("--start-now", start_now, "Start the sim clock at the wall clock, not the scenario's start_utime");
+    app.add_option("--render-threads", threads, "Threads for the camera renderer")
+        ->check(CLI::Range(1, 16));
+    args.add_to(app, false);
+    try {
+      app.parse(argc, argv);
+    } catch (const CLI::ParseError& e) {
+      return app.exit(e);
+    }
+    args.finalize();
+
+    sim::Scenario scenario = sim::load_scenario(scenario_file);
+    if (vehicle_file.empty())
+      vehicle_file = resolve_relative(scenario_file, "../vehicles/starmac.yaml");
+    const sim::VehicleParams vehicle = sim::load_vehicle_params(vehicle_file);
+    std::optional<sim::CameraRig> rig;
+    if (scenario.camera.enabled) rig = sim::load_camera_rig(vehicle_file, scenario.camera.mount);
+    if (start_now) scenario.start_utime = wall_utime();
+
+    sim::Simulator simulator(scenario, vehicle, seed, rig);
+    simulator.set_render_threads(threads);
+    Node node(with_receive_buffer(args.lcm_url), "alight-sim");
+    sim::AttitudeCommand cmd;  // disarmed until the outer loop says otherwise
+    node.on<attitude_cmd_t>("ATTITUDE_CMD",
+                            [&](const attitude_cmd_t& m) { cmd = sim::from_msg(m); });
+
+    spdlog::info("alight-sim: scenario {} ({}), vehicle {} ({}), seed {}, rate {}", scenario.name,
+                 scenario_file, vehicle.name, vehicle_file, seed, rate);
+    const int64_t sim0 = simulator.now_utime();
+    const int64_t end_utime = duration_s > 0 ? sim0 + static_cast<int64_t>(duration_s * 1e6) : INT64_MAX;
+    const int64_t wall0 = wall_utime();
+    int64_t next_truth = sim0;
+    int64_t late_warned_at = wall0;
+    while (!node.stopping() && simulator.now_utime() < end_utime) {
+      node.spin_once(0);
+      const int64_t wall = wall_utime();
+      const int64_t target =
+          rate > 0 ? sim0 + static_cast<int64_t>(static_cast<double>(wall - wall0) * rate) : INT64_MAX;
+      if (simulator.now_utime() + kChunkUs > target) {
+        node.spin_once(1);  // ahead of the wall clock: wait for commands
+        continue;
+      }
+      if (rate > 0 && target - simulator.now_utime() > 200000 && wall - late_warned_at > 5000000) {
+        spdlog::warn("alight-sim: running {:.0f} ms behind real time x {}",
+                     (target - simulator.now_utime()) / 1e3, rate);
+        late_warned_at = wall;
+      }
+      simulator.step(cmd, std::min(end_utime, simulator.now_utime() + kChunkUs));
+      for (const auto& m : simulator.take_mocap()) node.publish("MOCAP_POSE", sim::to_msg(m));
+      for (const auto& m : simulator.take_imu()) node.publish("IMU", sim::to_msg(m));
+      if (auto frame = simulator.take_camera()) node.publish("CAMERA", sim::to_msg(*frame));
+      if (simulator.now_utime() >= next_truth) {
+        node.publish("SIM_TRUTH", sim::to_msg(simulator.truth()));
+        next_truth += kTruthPeriodUs;
+      }
+    }
+    const sim::Truth t = simulator.truth();
+    spdlog::info("alight-sim: stopped at {:.3f} s sim time; landed {}, tipped {}, collided {}",
+                 (t.utime - sim0) * 1e-6, t.landed, t.tipped, t.collided);
+    return 0;
+  });
+}

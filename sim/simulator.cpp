@@ -1,0 +1,228 @@
+#include "sim/simulator.hpp"
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+
+namespace alight::sim {
+
+namespace {
+// Independent streams per purpose, so e.g. rendering or not never changes the mocap noise.
+uint64_t substream(uint64_t seed, uint64_t k) {
+  uint64_t z = seed + 0x9E3779B97F4A7C15ULL * (k + 1);
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+  return z ^ (z >> 31);
+}
+
+PoseBufferParams history_params() {
+  PoseBufferParams p;
+  p.history_s = 0.5;
+  p.max_gap_s = 0.05;
+  return p;
+}
+
+PoseSample to_pose(const VehicleState& s, int64_t utime) {
+  PoseSample p;
+  p.utime = utime;
+  p.p_W_B = s.p_W_B;
+  p.q_WB = s.q_WB;
+  p.v_W_B = s.v_W_B;
+  p.omega_B = s.omega_B;
+  return p;
+}
+}  // namespace
+
+Simulator::Simulator(const Scenario& scenario, const VehicleParams& vehicle, uint64_t seed,
+                     std::optional<CameraRig> camera)
+    : scenario_(scenario),
+      vehicle_(vehicle),
+      scene_(std::make_unique<Scene>(build_scene(scenario, substream(seed, 0)))),
+      dynamics_(std::make_unique<Dynamics>(vehicle, *scene_)),
+      now_utime_(scenario.start_utime),
+      dt_us_(std::max<int64_t>(1, std::llround(scenario.physics_dt_s * 1e6))),
+      wind_rng_(substream(seed, 1)),
+      mocap_(scenario.mocap, scenario.start_utime, substream(seed, 2)),
+      imu_(scenario.imu, scenario.start_utime, substream(seed, 3)),
+      camera_(std::move(camera)),
+      history_(history_params()),
+      camera_rng_(substream(seed, 4)) {
+  const Vector3d& p0 = scenario.start_position_m;
+  state_.p_W_B = Vector3d(p0.x(), p0.y(), p0.z() > 0 ? p0.z() : dynamics_->resting_height(0.0));
+  state_.q_WB = Quaterniond(rotation_from_rpy(0, 0, scenario.start_yaw_deg * M_PI / 180.0));
+  state_.yaw_des_rad = scenario.start_yaw_deg * M_PI / 180.0;
+  if (scenario.wind.gust_sigma_mps > 0) {
+    std::normal_distribution<double> n(0.0, scenario.wind.gust_sigma_mps);
+    gust_W_ = Vector3d(n(wind_rng_), n(wind_rng_), 0.3 * n(wind_rng_));
+  }
+  history_.add(to_pose(state_, now_utime_));
+  mocap_.update(now_utime_, to_pose(state_, now_utime_));
+  if (camera_ && scenario.camera.enabled) {
+    renderer_ = std::make_unique<Renderer>(camera_->model, scenario.camera.supersample);
+    camera_period_us_ = std::llround(1e6 / scenario.camera.rate_hz);
+    next_frame_utime_ = now_utime_ + camera_period_us_;
+    // A table of unit normal noise, read at a random offset per frame: per-pixel Gaussian draws
+    // would cost more than the rendering.
+    const size_t n = static_cast<size_t>(camera_->model.width) * camera_->model.height;
+    noise_.resize(2 * n);
+    std::normal_distribution<float> g(0.f, 1.f);
+    for (auto& v : noise_) v = g(camera_rng_);
+  }
+}
+
+void Simulator::set_state(const VehicleState& state) {
+  state_ = state;
+  history_ = PoseBuffer(history_params());
+  history_.add(to_pose(state_, now_utime_));
+  rest_s_ = 0.0;
+}
+
+void Simulator::set_render_threads(int n) {
+  render_threads_ = std::max(1, n);
+  if (renderer_) renderer_->set_threads(render_threads_);
+}
+
+void Simulator::inject_mocap_dropout(int64_t from_utime, int64_t to_utime) {
+  mocap_.add_dropout(from_utime, to_utime);
+}
+
+void Simulator::step(const AttitudeCommand& cmd, int64_t until_utime) {
+  cmd_ = cmd;
+  advance_to(until_utime);
+}
+
+void Simulator::advance_to(int64_t until_utime) {
+  while (now_utime_ + dt_us_ <= until_utime) physics_step();
+}
+
+void Simulator::physics_step() {
+  const double dt = dt_us_ * 1e-6;
+  // Gusts: first-order Gauss-Markov per axis (the vertical weaker), steady mean added.
+  const WindParams& w = scenario_.wind;
+  if (w.gust_sigma_mps > 0) {
+    std::normal_distribution<double> n(0.0, 1.0);
+    const double a = std::exp(-dt / w.gust_tau_s);
+    const double b = w.gust_sigma_mps * std::sqrt(1 - a * a);
+    const double nx = n(wind_rng_), ny = n(wind_rng_), nz = n(wind_rng_);
+    gust_W_ = a * gust_W_ + b * Vector3d(nx, ny, 0.3 * nz);
+  }
+  const Vector3d wind = w.steady_mps + gust_W_;
+
+  last_ = dynamics_->step(state_, cmd_, wind, dt);
+  now_utime_ += dt_us_;
+
+  // Outcome flags.
+  const Matrix3d R = state_.q_WB.toRotationMatrix();
+  const double tilt = std::acos(std::clamp(R(2, 2), -1.0, 1.0));
+  const bool touching_ground = last_.contact != Contact::kNone;
+  if (last_.rim_touch || (touching_ground && tilt > 35.0 * M_PI / 180.0)) tipped_ = true;
+  const bool wall = last_.contact == Contact::kWall || last_.contact == Contact::kFrame;
+  if (wall) {
+    collided_ = true;
+    if (!wall_contact_) ++n_collisions_;
+  }
+  wall_contact_ = wall;
+  const bool at_rest = !state_.armed && last_.feet_on_platform_top == 4 &&
+                       state_.v_W_B.norm() < 0.05 && state_.omega_B.norm() < 0.2;
+  rest_s_ = at_rest ? rest_s_ + dt : 0.0;
+  landed_ = rest_s_ >= 0.3 && !tipped_;
+
+  const PoseSample truth = to_pose(state_, now_utime_);
+  history_.add(truth);
+  mocap_.update(now_utime_, truth);
+  imu_.update(now_utime_, dt_us_, last_.specific_force_B, state_.omega_B);
+  if (renderer_) schedule_camera();
+}
+
+void Simulator::schedule_camera() {
+  const CameraParams& c = scenario_.camera;
+  const int64_t half_exposure = std::llround(0.5 * c.exposure_s * 1e6);
+  if (now_utime_ < next_frame_utime_ + half_exposure) return;
+  PendingFrame f;
+  f.utime = next_frame_utime_;
+  f.seq = ++frame_seq_;
+  next_frame_utime_ += camera_period_us_;
+  std::normal_distribution<double> g(0.0, 1.0);
+  f.gain = std::clamp(1.0 + c.gain_jitter * g(camera_rng_), 0.2, 3.0);
+  f.noise_offset = std::uniform_int_distribution<size_t>(0, noise_.size() / 2)(camera_rng_);
+  const int k = c.motion_blur_samples;
+  const Isometry3d X_BC = camera_->mount.X_BC();
+  for (int i = 0; i < k; ++i) {
+    const int64_t t = k == 1 ? f.utime
+                             : f.utime - half_exposure + (2 * half_exposure * i) / (k - 1);
+    const auto pose = history_.at(t);
+    const Isometry3d X_WB = pose ? pose->X_WB() : make_transform(state_.q_WB.toRotationMatrix(), state_.p_W_B);
+    f.X_WC.push_back(camera_in_world(X_WB, X_BC));
+  }
+  if (pending_) ++frames_skipped_;
+  pending_ = std::move(f);
+}
+
+std::vector<MocapSample> Simulator::take_mocap() { return mocap_.take(now_utime_); }
+
+std::vector<ImuSample> Simulator::take_imu() { return imu_.take(); }
+
+std::optional<CameraFrame> Simulator::take_camera() {
+  if (!pending_) return std::nullopt;
+  const int64_t latency = std::llround(scenario_.camera.latency_s * 1e6);
+  const int64_t half_exposure = std::llround(0.5 * scenario_.camera.exposure_s * 1e6);
+  if (now_utime_ < pending_->utime + half_exposure + latency) return std::nullopt;
+  const PendingFrame f = std::move(*pending_);
+  pending_.reset();
+  const CameraModel& model = camera_->model;
+  cv::Mat acc(model.height, model.width, CV_32F, cv::Scalar(0));
+  const float w = static_cast<float>(f.gain / f.X_WC.size());
+  for (const auto& X_WC : f.X_WC) renderer_->accumulate(*scene_, X_WC, w, acc);
+  const float sigma = static_cast<float>(scenario_.camera.noise_sigma);
+  CameraFrame out;
+  out.utime = f.utime;
+  out.seq = f.seq;
+  out.exposure_s = scenario_.camera.exposure_s;
+  out.gain = f.gain;
+  out.X_WC = f.X_WC[f.X_WC.size() / 2];
+  out.pixels.create(model.height, model.width, CV_8U);
+  const float* noise = noise_.data() + f.noise_offset;
+  for (int v = 0; v < model.height; ++v) {
+    const float* a = acc.ptr<float>(v);
+    uchar* o = out.pixels.ptr<uchar>(v);
+    const float* nz = noise + static_cast<size_t>(v) * model.width;
+    for (int u = 0; u < model.width; ++u) o[u] = cv::saturate_cast<uchar>(a[u] + sigma * nz[u]);
+  }
+  return out;
+}
+
+cv::Mat Simulator::render(const CameraMount& mount, const CameraModel& model,
+                          const Isometry3d& X_WB) const {
+  const Renderer* r = nullptr;
+  auto same = [&](const CameraModel& m) {
+    return m.width == model.width && m.height == model.height && m.fx == model.fx &&
+           m.fy == model.fy && m.cx == model.cx && m.cy == model.cy && m.D == model.D;
+  };
+  if (renderer_ && same(renderer_->model()) && scenario_.camera.supersample == 1) {
+    r = renderer_.get();
+  } else {
+    if (!adhoc_renderer_ || !same(adhoc_renderer_->model()))
+      adhoc_renderer_ = std::make_unique<Renderer>(model, 1);
+    adhoc_renderer_->set_threads(render_threads_);
+    r = adhoc_renderer_.get();
+  }
+  return r->render(*scene_, camera_in_world(X_WB, mount.X_BC()));
+}
+
+Truth Simulator::truth() const {
+  Truth t;
+  t.utime = now_utime_;
+  t.scenario = scenario_.name;
+  t.state = state_;
+  t.platform = scene_->platform;
+  t.opening = scene_->opening;
+  t.contact = last_.contact;
+  t.landed = landed_;
+  t.tipped = tipped_;
+  t.collided = collided_;
+  t.n_collisions = n_collisions_;
+  t.wind_W = scenario_.wind.steady_mps + gust_W_;
+  return t;
+}
+
+}  // namespace alight::sim

@@ -1,0 +1,135 @@
+#pragma once
+// alight-sim's pure library: the quadrotor (dynamics.hpp), the motion-capture room and the IMU
+// (sensors.hpp) and the camera (renderer.hpp) in one deterministic simulation. No LCM, no clock,
+// no files: the caller passes commands and the utime to advance to, and takes the sensor samples
+// that became due. Same scenario, seed and command sequence give identical outputs.
+//
+//   Simulator sim(scenario, vehicle, seed, camera_rig);
+//   sim.step(cmd, sim.now_utime() + 10000);   // 10 ms under cmd
+//   for (const auto& m : sim.take_mocap()) ...;
+//   if (auto frame = sim.take_camera()) ...;
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "common/pose_buffer.hpp"
+#include "sim/dynamics.hpp"
+#include "sim/params.hpp"
+#include "sim/renderer.hpp"
+#include "sim/scene.hpp"
+#include "sim/sensors.hpp"
+
+namespace alight::sim {
+
+/// Ground truth (what SIM_TRUTH carries).
+struct Truth {
+  int64_t utime = 0;
+  std::string scenario;
+  VehicleState state;
+  std::optional<PlatformTruth> platform;
+  std::optional<OpeningTruth> opening;
+  Contact contact = Contact::kNone;
+  bool landed = false;    ///< at rest with all gear on the platform top and motors off
+  bool tipped = false;    ///< tilted past 35 deg while touching the floor or platform (sticky)
+  bool collided = false;  ///< touched the wall or the opening's frame (sticky)
+  int n_collisions = 0;   ///< distinct wall / frame contacts
+  Vector3d wind_W = Vector3d::Zero();  ///< wind at the vehicle [m/s]
+};
+
+/// One camera frame.
+struct CameraFrame {
+  int64_t utime = 0;        ///< middle of the exposure [us]
+  int64_t seq = 0;          ///< frame counter
+  double exposure_s = 0.0;
+  double gain = 1.0;        ///< exposure / gain factor applied to this frame
+  Isometry3d X_WC = Isometry3d::Identity();  ///< camera pose at mid-exposure
+  cv::Mat pixels;           ///< mono8
+};
+
+class Simulator {
+ public:
+  /// `camera`: the camera to render (extrinsics and intrinsics); without it take_camera()
+  /// returns nothing.
+  Simulator(const Scenario& scenario, const VehicleParams& vehicle, uint64_t seed,
+            std::optional<CameraRig> camera = std::nullopt);
+
+  /// Holds `cmd` from now until `until_utime` (fixed physics steps; time never goes back).
+  void step(const AttitudeCommand& cmd, int64_t until_utime);
+  /// Advances under the last command given.
+  void advance_to(int64_t until_utime);
+
+  int64_t now_utime() const { return now_utime_; }
+  const VehicleState& state() const { return state_; }
+  /// Places the vehicle (tests: start in a hover, above a platform...).
+  void set_state(const VehicleState& state);
+  Truth truth() const;
+  const Scene& scene() const { return *scene_; }
+  const Scenario& scenario() const { return scenario_; }
+  const Dynamics& dynamics() const { return *dynamics_; }
+  /// Specific force of the last physics step in body (noise-free IMU) [m/s^2].
+  const Vector3d& specific_force_B() const { return last_.specific_force_B; }
+
+  /// Motion-capture samples whose latency has elapsed, oldest first.
+  std::vector<MocapSample> take_mocap();
+  /// IMU samples taken since the last call, oldest first.
+  std::vector<ImuSample> take_imu();
+  /// The newest camera frame completed since the last call, rendered now (older unrendered
+  /// frames are skipped: rendering is what costs). Nothing without a camera.
+  std::optional<CameraFrame> take_camera();
+  /// Number of frames skipped by take_camera() so far.
+  int64_t camera_frames_skipped() const { return frames_skipped_; }
+  /// Motion capture delivers nothing sampled in [from, to) (failsafe tests).
+  void inject_mocap_dropout(int64_t from_utime, int64_t to_utime);
+
+  /// Noise-free image of the scene from any camera on a vehicle at X_WB.
+  cv::Mat render(const CameraMount& mount, const CameraModel& model, const Isometry3d& X_WB) const;
+  /// Threads the camera renderer may use (default 1).
+  void set_render_threads(int n);
+
+ private:
+  struct PendingFrame {
+    int64_t utime = 0, seq = 0;
+    double gain = 1.0;
+    size_t noise_offset = 0;
+    std::vector<Isometry3d> X_WC;  // over the exposure
+  };
+  void physics_step();
+  void schedule_camera();
+
+  Scenario scenario_;
+  VehicleParams vehicle_;
+  std::unique_ptr<Scene> scene_;  // stable address: Dynamics refers to it
+  std::unique_ptr<Dynamics> dynamics_;
+  VehicleState state_;
+  AttitudeCommand cmd_;
+  int64_t now_utime_;
+  int64_t dt_us_;
+  StepResult last_;
+
+  std::mt19937_64 wind_rng_;
+  Vector3d gust_W_ = Vector3d::Zero();
+  MocapEmulator mocap_;
+  ImuEmulator imu_;
+
+  bool landed_ = false, tipped_ = false, collided_ = false, wall_contact_ = false;
+  int n_collisions_ = 0;
+  double rest_s_ = 0.0;
+
+  std::optional<CameraRig> camera_;
+  std::unique_ptr<Renderer> renderer_;
+  mutable std::unique_ptr<Renderer> adhoc_renderer_;  // for render() with another model
+  PoseBuffer history_;
+  std::mt19937_64 camera_rng_;
+  std::vector<float> noise_;
+  int64_t camera_period_us_ = 0, next_frame_utime_ = 0, frame_seq_ = 0, frames_skipped_ = 0;
+  std::optional<PendingFrame> pending_;
+  int render_threads_ = 1;
+};
+
+}  // namespace alight::sim
