@@ -1,0 +1,174 @@
+#include "common/operator_auth.hpp"
+
+#include <openssl/crypto.h>
+#include <openssl/evp.h>
+#include <openssl/hmac.h>
+#include <sys/stat.h>
+
+#include <cassert>
+#include <cctype>
+#include <climits>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+namespace alight {
+
+namespace {
+
+int hex_value(char c) {
+  if (c >= '0' && c <= '9') return c - '0';
+  if (c >= 'a' && c <= 'f') return c - 'a' + 10;
+  if (c >= 'A' && c <= 'F') return c - 'A' + 10;
+  return -1;
+}
+
+void put_be(std::vector<uint8_t>& out, uint64_t v, int n_bytes) {
+  for (int i = n_bytes - 1; i >= 0; --i) out.push_back(static_cast<uint8_t>(v >> (8 * i)));
+}
+
+}  // namespace
+
+OperatorKey parse_key(const std::string& contents, const std::string& origin) {
+  size_t begin = 0, end = contents.size();
+  while (begin < end && std::isspace(static_cast<unsigned char>(contents[begin]))) ++begin;
+  while (end > begin && std::isspace(static_cast<unsigned char>(contents[end - 1]))) --end;
+  bool all_hex = end > begin;
+  for (size_t i = begin; i < end && all_hex; ++i) all_hex = hex_value(contents[i]) >= 0;
+
+  OperatorKey key;
+  if (all_hex) {
+    const size_t n_digits = end - begin;
+    if (n_digits % 2 != 0)
+      throw KeyFileError(origin + ": hex key has an odd number of digits (" +
+                         std::to_string(n_digits) + ")");
+    if (n_digits < 2 * kMinKeyBytes)
+      throw KeyFileError(origin + ": key too short: " + std::to_string(n_digits / 2) +
+                         " bytes in hex, need at least " + std::to_string(kMinKeyBytes) +
+                         " (e.g. `openssl rand -hex 32 > KEYFILE`)");
+    for (size_t i = begin; i < end; i += 2)
+      key.bytes.push_back(static_cast<uint8_t>(16 * hex_value(contents[i]) +
+                                               hex_value(contents[i + 1])));
+    return key;
+  }
+  if (contents.size() < kMinKeyBytes)
+    throw KeyFileError(origin + ": key too short: " + std::to_string(contents.size()) +
+                       " bytes, need at least " + std::to_string(kMinKeyBytes) +
+                       " raw bytes or " + std::to_string(2 * kMinKeyBytes) + " hex digits");
+  key.bytes.assign(contents.begin(), contents.end());
+  return key;
+}
+
+LoadedKey load_key_file(const std::string& path) {
+  struct stat st{};
+  if (::stat(path.c_str(), &st) != 0)
+    throw KeyFileError(path + ": key file missing or unreadable: " + std::strerror(errno));
+  if (!S_ISREG(st.st_mode)) throw KeyFileError(path + ": key file is not a regular file");
+  std::ifstream f(path, std::ios::binary);
+  if (!f) throw KeyFileError(path + ": cannot open key file: " + std::strerror(errno));
+  std::ostringstream ss;
+  ss << f.rdbuf();
+  LoadedKey loaded;
+  loaded.key = parse_key(ss.str(), path);
+  if (st.st_mode & (S_IRWXG | S_IRWXO)) {
+    char mode[8];
+    std::snprintf(mode, sizeof mode, "%03o", static_cast<unsigned>(st.st_mode & 0777));
+    loaded.warnings.push_back(path + ": key file has mode " + mode +
+                              ": other users can read or change it (chmod 600 " + path + ")");
+  }
+  return loaded;
+}
+
+HmacTag hmac_sha256(const uint8_t* key, size_t key_len, const uint8_t* data, size_t data_len) {
+  HmacTag tag{};
+  unsigned int len = 0;
+  const uint8_t* out = HMAC(EVP_sha256(), key, static_cast<int>(key_len), data, data_len,
+                            tag.data(), &len);
+  // Only fails on allocation failure or a broken OpenSSL; a zero tag must never leave here.
+  if (out == nullptr || len != tag.size()) throw std::runtime_error("HMAC-SHA256 failed (OpenSSL)");
+  return tag;
+}
+
+HmacTag hmac_sha256(const std::vector<uint8_t>& key, const std::vector<uint8_t>& data) {
+  return hmac_sha256(key.data(), key.size(), data.data(), data.size());
+}
+
+std::vector<uint8_t> canonical_bytes(const operator_cmd_t& cmd) {
+  std::vector<uint8_t> out;
+  out.reserve(46 + cmd.sender.size() + 1);
+  put_be(out, static_cast<uint64_t>(cmd.utime), 8);
+  put_be(out, static_cast<uint64_t>(cmd.seq), 8);
+  put_be(out, static_cast<uint32_t>(cmd.sender.size() + 1), 4);
+  out.insert(out.end(), cmd.sender.begin(), cmd.sender.end());
+  out.push_back(0);
+  out.push_back(static_cast<uint8_t>(cmd.command));
+  out.push_back(static_cast<uint8_t>(cmd.mission));
+  for (double d : cmd.nudge_W) {
+    uint64_t bits = 0;
+    static_assert(sizeof bits == sizeof d);
+    std::memcpy(&bits, &d, sizeof bits);
+    put_be(out, bits, 8);
+  }
+  return out;
+}
+
+void sign(operator_cmd_t& cmd, const OperatorKey& key) {
+  assert(key.bytes.size() >= kMinKeyBytes);
+  const HmacTag tag = hmac_sha256(key.bytes, canonical_bytes(cmd));
+  cmd.auth = operator_cmd_t::AUTH_HMAC_SHA256;
+  std::memcpy(cmd.hmac, tag.data(), tag.size());
+}
+
+bool signature_valid(const operator_cmd_t& cmd, const OperatorKey& key) {
+  if (cmd.auth != operator_cmd_t::AUTH_HMAC_SHA256) return false;
+  const HmacTag tag = hmac_sha256(key.bytes, canonical_bytes(cmd));
+  static_assert(sizeof(cmd.hmac) == std::tuple_size_v<HmacTag>);
+  // Constant time: an early-exit comparison would leak how many leading bytes of a forged tag
+  // are right.
+  return CRYPTO_memcmp(tag.data(), cmd.hmac, tag.size()) == 0;
+}
+
+const char* reason_name(CommandVerdict::Reason reason) {
+  switch (reason) {
+    case CommandVerdict::Reason::kAccepted: return "accepted";
+    case CommandVerdict::Reason::kUnsigned: return "unsigned";
+    case CommandVerdict::Reason::kBadSignature: return "bad_signature";
+    case CommandVerdict::Reason::kStale: return "stale";
+    case CommandVerdict::Reason::kReplayed: return "replayed";
+  }
+  return "unknown";
+}
+
+CommandVerifier::CommandVerifier(OperatorKey key, int64_t max_age_us)
+    : key_(std::move(key)), max_age_us_(max_age_us) {
+  if (key_.bytes.size() < kMinKeyBytes)
+    throw KeyFileError("CommandVerifier: key of " + std::to_string(key_.bytes.size()) +
+                       " bytes, need at least " + std::to_string(kMinKeyBytes));
+  assert(max_age_us_ > 0);
+}
+
+CommandVerdict CommandVerifier::check(const operator_cmd_t& cmd, int64_t now_utime) {
+  using R = CommandVerdict::Reason;
+  auto reject = [this](R r) {
+    ++n_rejected_;
+    return CommandVerdict{r};
+  };
+  if (cmd.auth != operator_cmd_t::AUTH_HMAC_SHA256) return reject(R::kUnsigned);
+  if (!signature_valid(cmd, key_)) return reject(R::kBadSignature);
+  // Written to avoid overflow of now - utime for adversarial utime values (they are signed, so
+  // only a key holder could send them, but a buggy ground station could).
+  const bool too_old = cmd.utime < now_utime && now_utime - max_age_us_ > cmd.utime;
+  const bool too_new = cmd.utime > now_utime && cmd.utime - max_age_us_ > now_utime;
+  if (too_old || too_new) return reject(R::kStale);
+  auto it = last_seq_.find(cmd.sender);
+  if (it != last_seq_.end() && cmd.seq <= it->second) return reject(R::kReplayed);
+  last_seq_[cmd.sender] = cmd.seq;
+  return CommandVerdict{R::kAccepted};
+}
+
+int64_t CommandVerifier::last_seq(const std::string& sender) const {
+  auto it = last_seq_.find(sender);
+  return it == last_seq_.end() ? INT64_MIN : it->second;
+}
+
+}  // namespace alight

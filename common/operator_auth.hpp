@@ -1,0 +1,105 @@
+#pragma once
+// Authentication of operator commands (channel OPERATOR_CMD): LCM itself has none, so anything on
+// the network could otherwise command the vehicle. Shared by the ground station (sign) and
+// autonomy (verify); pure except load_key_file(), which reads the key file.
+//
+// Tag: HMAC-SHA256 (RFC 2104 / FIPS 198-1 with SHA-256, test vectors RFC 4231) computed with
+// OpenSSL over canonical_bytes(cmd), keyed with a secret shared by the ground station and the
+// vehicle (a key file of >= 32 bytes).
+//
+// Canonical byte string: exactly the LCM wire encoding of the fields utime .. nudge_W of
+// operator_cmd_t, in declaration order, big-endian, without the 8-byte type fingerprint:
+//   offset 0   int64  utime           8 bytes, big-endian two's complement
+//   offset 8   int64  seq             8 bytes, big-endian two's complement
+//   offset 16  int32  L = len(sender) + 1, big-endian
+//   offset 20  sender bytes (L - 1), then one 0x00
+//   20 + L     int8   command
+//   21 + L     int8   mission
+//   22 + L     3 x IEEE-754 binary64 nudge_W[0..2], big-endian each (24 bytes)
+//   total      46 + L bytes
+// `auth` and `hmac` are not covered (auth must be AUTH_HMAC_SHA256 for a command to be
+// accepted at all). Because it equals LCM's own encoding, a verifier in any language can take
+// the bytes straight from the received message.
+//
+// Replay protection: seq must be strictly greater than the last accepted seq of the same sender,
+// and utime within a window of the verifier's clock. A vehicle that restarts forgets the last
+// seqs; the staleness window bounds what can be replayed then, and the ground station starts its
+// seq at the wall time in microseconds so it increases across ground-station restarts too.
+
+#include <alight/operator_cmd_t.hpp>
+#include <array>
+#include <cstdint>
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace alight {
+
+/// Shared secret. At least kMinKeyBytes long.
+struct OperatorKey {
+  std::vector<uint8_t> bytes;
+};
+inline constexpr size_t kMinKeyBytes = 32;
+using HmacTag = std::array<uint8_t, 32>;
+
+/// Bad key file: missing, unreadable, too short, malformed. The message names the file.
+class KeyFileError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct LoadedKey {
+  OperatorKey key;
+  std::vector<std::string> warnings;  ///< e.g. "readable by other users"; the node logs them
+};
+
+/// Key from a file's contents: hex (>= 64 hex digits, optional surrounding whitespace) when the
+/// contents are hex digits only, else the raw bytes (>= 32). `origin` names the source in errors.
+OperatorKey parse_key(const std::string& contents, const std::string& origin);
+/// Reads and parses a key file; warns when the file is readable or writable by group or others.
+LoadedKey load_key_file(const std::string& path);
+
+/// HMAC-SHA256 of `data` with `key` (any length; RFC 4231 uses 4 to 131 bytes).
+HmacTag hmac_sha256(const uint8_t* key, size_t key_len, const uint8_t* data, size_t data_len);
+HmacTag hmac_sha256(const std::vector<uint8_t>& key, const std::vector<uint8_t>& data);
+
+/// The bytes the tag covers (layout above).
+std::vector<uint8_t> canonical_bytes(const operator_cmd_t& cmd);
+/// Sets auth = AUTH_HMAC_SHA256 and hmac = tag over canonical_bytes(cmd).
+void sign(operator_cmd_t& cmd, const OperatorKey& key);
+/// True when auth = AUTH_HMAC_SHA256 and the tag matches (constant-time comparison).
+bool signature_valid(const operator_cmd_t& cmd, const OperatorKey& key);
+
+/// Outcome of CommandVerifier::check.
+struct CommandVerdict {
+  enum class Reason : int8_t { kAccepted = 0, kUnsigned, kBadSignature, kStale, kReplayed };
+  Reason reason = Reason::kAccepted;
+  bool accepted() const { return reason == Reason::kAccepted; }
+};
+const char* reason_name(CommandVerdict::Reason reason);
+
+/// Accepts an operator command only when it is signed with the shared key, fresh and new.
+/// Used by autonomy on every OPERATOR_CMD; the node passes its current time in.
+class CommandVerifier {
+ public:
+  /// `max_age_us`: largest |now - cmd.utime| accepted (covers clock offset between the ground
+  /// station and the vehicle plus link delay).
+  explicit CommandVerifier(OperatorKey key, int64_t max_age_us = 2'000'000);
+
+  /// Checks in order unsigned, bad signature, stale, replayed; remembers seq only when accepted,
+  /// so a rejected message cannot block later genuine ones.
+  CommandVerdict check(const operator_cmd_t& cmd, int64_t now_utime);
+
+  uint64_t n_rejected() const { return n_rejected_; }
+  /// Last accepted seq of `sender`, or INT64_MIN when none was accepted.
+  int64_t last_seq(const std::string& sender) const;
+
+ private:
+  OperatorKey key_;
+  int64_t max_age_us_;
+  std::map<std::string, int64_t> last_seq_;  // per sender; only signed senders get an entry
+  uint64_t n_rejected_ = 0;
+};
+
+}  // namespace alight

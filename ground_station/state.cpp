@@ -1,0 +1,313 @@
+#include "ground_station/state.hpp"
+
+#include <cassert>
+#include <cmath>
+#include <limits>
+
+#include "ground_station/json_writer.hpp"
+
+namespace alight::ground_station {
+
+namespace {
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr size_t kSentCommandsKept = 20;
+
+template <class T>
+void push_bounded(std::deque<T>& q, T v, size_t max) {
+  q.push_back(std::move(v));
+  while (q.size() > max) q.pop_front();
+}
+}  // namespace
+
+void RateMeter::add(int64_t now_utime) {
+  ++count_;
+  last_utime_ = now_utime;
+  arrivals_.push_back(now_utime);
+  while (!arrivals_.empty() && arrivals_.front() < now_utime - window_us_) arrivals_.pop_front();
+}
+
+double RateMeter::rate_hz(int64_t now_utime) const {
+  while (!arrivals_.empty() && arrivals_.front() < now_utime - window_us_) arrivals_.pop_front();
+  if (arrivals_.size() < 2) return 0.0;
+  // Intervals within the window over the window, so a channel that stopped decays to 0 instead
+  // of showing its last rate forever.
+  const double span_s = std::max(arrivals_.back() - arrivals_.front(),
+                                 now_utime - arrivals_.front()) * 1e-6;
+  return span_s > 0.0 ? (arrivals_.size() - 1) / span_s : 0.0;
+}
+
+std::optional<double> RateMeter::age_s(int64_t now_utime) const {
+  if (count_ == 0) return std::nullopt;
+  return (now_utime - last_utime_) * 1e-6;
+}
+
+const char* phase_name(int8_t phase) {
+  switch (phase) {
+    case autonomy_status_t::PHASE_IDLE: return "IDLE";
+    case autonomy_status_t::PHASE_TAKEOFF: return "TAKEOFF";
+    case autonomy_status_t::PHASE_HOVER: return "HOVER";
+    case autonomy_status_t::PHASE_DETECTION: return "DETECTION";
+    case autonomy_status_t::PHASE_REFINEMENT: return "REFINEMENT";
+    case autonomy_status_t::PHASE_APPROACH: return "APPROACH";
+    case autonomy_status_t::PHASE_FINAL_DESCENT: return "FINAL_DESCENT";
+    case autonomy_status_t::PHASE_LANDED: return "LANDED";
+    case autonomy_status_t::PHASE_DONE: return "DONE";
+    case autonomy_status_t::PHASE_HOLD: return "HOLD";
+    case autonomy_status_t::PHASE_FAILSAFE: return "FAILSAFE";
+    case autonomy_status_t::PHASE_KILLED: return "KILLED";
+  }
+  return "UNKNOWN";
+}
+
+const char* process_state_name(int8_t state) {
+  switch (state) {
+    case process_info_t::STATE_WAITING: return "waiting";
+    case process_info_t::STATE_RUNNING: return "running";
+    case process_info_t::STATE_BACKOFF: return "backoff";
+    case process_info_t::STATE_EXITED: return "exited";
+    case process_info_t::STATE_STOPPED: return "stopped";
+    case process_info_t::STATE_FAILED: return "failed";
+  }
+  return "unknown";
+}
+
+const char* target_reason_name(int8_t reason) {
+  switch (reason) {
+    case target_t::REASON_OK: return "ok";
+    case target_t::REASON_NO_POSE: return "no pose";
+    case target_t::REASON_NO_REFERENCE: return "no reference";
+    case target_t::REASON_TOO_FEW_FEATURES: return "too few features";
+    case target_t::REASON_TOO_FEW_MATCHES: return "too few matches";
+    case target_t::REASON_SMALL_BASELINE: return "small baseline";
+    case target_t::REASON_NO_DOMINANT_PLANE: return "no dominant plane";
+    case target_t::REASON_NO_TARGET_PLANE: return "no target plane";
+    case target_t::REASON_NO_OPENING: return "no opening";
+    case target_t::REASON_DECOMPOSITION_FAILED: return "decomposition failed";
+    case target_t::REASON_BAD_IMAGE: return "bad image";
+  }
+  return "unknown";
+}
+
+StationState::StationState(const GroundStationParams& params) : params_(params) {
+  params_.validate();
+}
+
+double StationState::t_s(int64_t utime) {
+  if (!t0_utime_) t0_utime_ = utime;
+  return (utime - *t0_utime_) * 1e-6;
+}
+
+void StationState::arrived(const std::string& channel, int64_t now_utime) {
+  channels_[channel].add(now_utime);
+}
+
+void StationState::on_status(const autonomy_status_t& msg, int64_t now_utime) {
+  arrived(params_.status_channel, now_utime);
+  status_ = msg;
+  sample_height(msg.utime);
+}
+
+void StationState::on_pose(const pose_t& msg, int64_t now_utime) {
+  arrived(params_.pose_channel, now_utime);
+  pose_ = msg;
+  const int64_t period_us = static_cast<int64_t>(params_.track_period_s * 1e6);
+  // A time jump backwards (log replayed again, simulator restarted) starts a new track.
+  if (last_track_utime_ != INT64_MIN && msg.utime < last_track_utime_) {
+    track_.clear();
+    heights_.clear();
+    measurements_.clear();
+    t0_utime_.reset();
+    last_height_utime_ = INT64_MIN;
+    last_track_utime_ = INT64_MIN;
+  }
+  if (last_track_utime_ == INT64_MIN || msg.utime - last_track_utime_ >= period_us) {
+    last_track_utime_ = msg.utime;
+    TrackPoint p{t_s(msg.utime), {msg.pos[0], msg.pos[1], msg.pos[2]}};
+    push_bounded(track_, p, params_.track_max_points);
+  }
+  sample_height(msg.utime);
+}
+
+void StationState::sample_height(int64_t utime) {
+  const int64_t period_us = static_cast<int64_t>(params_.track_period_s * 1e6);
+  if (last_height_utime_ != INT64_MIN && utime - last_height_utime_ < period_us &&
+      utime >= last_height_utime_)
+    return;
+  last_height_utime_ = utime;
+  HeightPoint h{t_s(utime), kNaN, kNaN, kNaN};
+  if (pose_) h.vehicle_z_m = pose_->pos[2];
+  if (status_ && status_->has_estimate) {
+    h.estimate_z_m = status_->estimate_W[2];
+    h.sigma_z_m = std::sqrt(std::max(0.0, status_->covariance[8]));
+  }
+  push_bounded(heights_, h, params_.track_max_points);
+}
+
+void StationState::on_target(const target_t& msg, int64_t now_utime) {
+  arrived(params_.target_channel, now_utime);
+  target_ = msg;
+  if (msg.found) {
+    Measurement m{t_s(msg.utime), {msg.p_W_target[0], msg.p_W_target[1], msg.p_W_target[2]}};
+    push_bounded(measurements_, m, params_.measurements_max);
+  }
+}
+
+void StationState::on_process_status(const process_status_t& msg, int64_t now_utime) {
+  arrived(params_.process_channel, now_utime);
+  processes_ = msg;
+}
+
+void StationState::on_frame(const std::string& channel, int64_t frame_utime, int64_t now_utime) {
+  arrived(channel, now_utime);
+  frame_utime_[channel] = frame_utime;
+}
+
+void StationState::on_command_sent(const std::string& name, int64_t seq, int64_t now_utime) {
+  push_bounded(sent_, SentCommand{name, seq, now_utime}, kSentCommandsKept);
+}
+
+double StationState::channel_rate_hz(const std::string& channel, int64_t now_utime) const {
+  auto it = channels_.find(channel);
+  return it == channels_.end() ? 0.0 : it->second.rate_hz(now_utime);
+}
+
+std::optional<double> StationState::channel_age_s(const std::string& channel,
+                                                  int64_t now_utime) const {
+  auto it = channels_.find(channel);
+  return it == channels_.end() ? std::nullopt : it->second.age_s(now_utime);
+}
+
+std::string StationState::to_json(int64_t now_utime, const std::string& extra) const {
+  JsonWriter w;
+  w.begin_object();
+  w.field("now_utime", now_utime);
+
+  w.key("status");
+  if (!status_) {
+    w.value(std::string("none"));
+  } else {
+    const auto& s = *status_;
+    w.begin_object();
+    w.field("utime", s.utime);
+    w.field("phase", static_cast<int>(s.phase));
+    w.field("phase_name", s.phase_name.empty() ? std::string(phase_name(s.phase)) : s.phase_name);
+    w.field("mission", static_cast<int>(s.mission));
+    w.field("reason", s.reason);
+    w.field("n_measurements", static_cast<int>(s.n_measurements));
+    w.field("n_rejected", static_cast<int>(s.n_rejected));
+    w.field("retries", static_cast<int>(s.retries));
+    w.field("has_estimate", s.has_estimate);
+    w.key("estimate_W").begin_array();
+    for (double v : s.estimate_W) w.value(v);
+    w.end_array();
+    w.key("covariance").begin_array();
+    for (double v : s.covariance) w.value(v);
+    w.end_array();
+    w.key("setpoint_W").begin_array();
+    for (double v : s.setpoint_W) w.value(v);
+    w.end_array();
+    w.field("failsafe", static_cast<int>(s.failsafe));
+    w.field("cmds_rejected", static_cast<int>(s.cmds_rejected));
+    w.field("last_cmd_seq", s.last_cmd_seq);
+    w.field("geofence_clamped", s.geofence_clamped);
+    w.field("mission_time_s", s.mission_time_s);
+    w.end_object();
+  }
+
+  w.key("pose");
+  if (!pose_) {
+    w.value(std::string("none"));
+  } else {
+    w.begin_object().key("p_W").begin_array();
+    for (double v : pose_->pos) w.value(v);
+    w.end_array().key("v_W").begin_array();
+    for (double v : pose_->vel) w.value(v);
+    w.end_array().end_object();
+  }
+
+  w.key("target");
+  if (!target_) {
+    w.value(std::string("none"));
+  } else {
+    const auto& t = *target_;
+    w.begin_object();
+    w.field("utime", t.utime);
+    w.field("seq", t.seq);
+    w.field("mission", static_cast<int>(t.mission));
+    w.field("found", t.found);
+    w.field("reason", std::string(target_reason_name(t.reason)));
+    w.key("p_W_target").begin_array();
+    for (double v : t.p_W_target) w.value(v);
+    w.end_array();
+    w.field("target_height_m", t.target_height_m);
+    w.key("size_m").begin_array().value(t.size_m[0]).value(t.size_m[1]).end_array();
+    w.field("baseline_m", t.baseline_m);
+    w.field("n_features", static_cast<int>(t.n_features));
+    w.field("n_matches", static_cast<int>(t.n_matches));
+    w.field("n_inliers_dominant", static_cast<int>(t.n_inliers_dominant));
+    w.field("n_inliers_target", static_cast<int>(t.n_inliers_target));
+    w.end_object();
+  }
+
+  w.key("channels").begin_object();
+  for (const auto& [name, meter] : channels_) {
+    const auto age = meter.age_s(now_utime);
+    w.key(name).begin_object();
+    w.field("count", static_cast<uint64_t>(meter.count()));
+    w.field("rate_hz", meter.rate_hz(now_utime));
+    w.field("age_s", age ? *age : kNaN);
+    w.field("stale", !age || *age > params_.channel_stale_s);
+    auto f = frame_utime_.find(name);
+    if (f != frame_utime_.end()) w.field("frame_latency_s", (now_utime - f->second) * 1e-6);
+    w.end_object();
+  }
+  w.end_object();
+
+  w.key("processes");
+  if (!processes_) {
+    w.value(std::string("none"));
+  } else {
+    w.begin_object();
+    w.field("launch_name", processes_->launch_name);
+    w.field("age_s", (now_utime - processes_->utime) * 1e-6);
+    w.key("list").begin_array();
+    for (const auto& p : processes_->processes) {
+      w.begin_object();
+      w.field("name", p.name);
+      w.field("pid", static_cast<int>(p.pid));
+      w.field("state", std::string(process_state_name(p.state)));
+      w.field("exit_code", static_cast<int>(p.exit_code));
+      w.field("signal", static_cast<int>(p.signal));
+      w.field("restarts", static_cast<int>(p.restarts));
+      w.end_object();
+    }
+    w.end_array().end_object();
+  }
+
+  // Plot series as flat arrays [t, x, y, z, ...] to keep the document small.
+  w.key("track").begin_array();
+  for (const auto& p : track_) w.value(p.t_s).value(p.p_W[0]).value(p.p_W[1]).value(p.p_W[2]);
+  w.end_array();
+  w.key("heights").begin_array();
+  for (const auto& h : heights_)
+    w.value(h.t_s).value(h.vehicle_z_m).value(h.estimate_z_m).value(h.sigma_z_m);
+  w.end_array();
+  w.key("measurements").begin_array();
+  for (const auto& m : measurements_)
+    w.value(m.t_s).value(m.p_W[0]).value(m.p_W[1]).value(m.p_W[2]);
+  w.end_array();
+
+  w.key("sent").begin_array();
+  for (const auto& c : sent_)
+    w.begin_object().field("name", c.name).field("seq", c.seq).field("age_s",
+        (now_utime - c.utime) * 1e-6).end_object();
+  w.end_array();
+
+  std::string out = w.str();
+  out += ",\"station\":";
+  out += extra;
+  out += '}';
+  return out;
+}
+
+}  // namespace alight::ground_station

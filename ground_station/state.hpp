@@ -1,0 +1,109 @@
+#pragma once
+// What the operator sees, aggregated from the vehicle's channels: the mission state of autonomy
+// (phase, measurement count n of eq. 7, the waypoint estimate and its spread, paper 3.4), the
+// vehicle track and waypoint measurements for a top-down plot like the paper's Fig. 10, the
+// height estimate over time like Fig. 11, the latest VISION_TARGET, the age and rate of every
+// channel (link health), and the launcher's process table. Pure: time is passed in.
+
+#include <alight/autonomy_status_t.hpp>
+#include <alight/pose_t.hpp>
+#include <alight/process_status_t.hpp>
+#include <alight/target_t.hpp>
+#include <cstdint>
+#include <deque>
+#include <map>
+#include <optional>
+#include <string>
+
+#include "ground_station/params.hpp"
+
+namespace alight::ground_station {
+
+/// Arrival statistics of one channel.
+class RateMeter {
+ public:
+  explicit RateMeter(int64_t window_us = 2'000'000) : window_us_(window_us) {}
+  void add(int64_t now_utime);
+  /// Messages per second over the last window (0 when fewer than two arrivals in it).
+  double rate_hz(int64_t now_utime) const;
+  /// Seconds since the last arrival, nullopt when nothing arrived.
+  std::optional<double> age_s(int64_t now_utime) const;
+  uint64_t count() const { return count_; }
+
+ private:
+  int64_t window_us_;
+  mutable std::deque<int64_t> arrivals_;
+  uint64_t count_ = 0;
+  int64_t last_utime_ = 0;
+};
+
+/// Names of autonomy's phases (autonomy_status_t.PHASE_*), for messages without phase_name.
+const char* phase_name(int8_t phase);
+const char* process_state_name(int8_t state);
+const char* target_reason_name(int8_t reason);
+
+struct TrackPoint {
+  double t_s;       ///< since the first sample [s]
+  double p_W[3];    ///< vehicle position [m]
+};
+struct HeightPoint {
+  double t_s;             ///< since the first sample [s]
+  double vehicle_z_m;     ///< vehicle height (NaN before a pose)
+  double estimate_z_m;    ///< estimate z (NaN without an estimate)
+  double sigma_z_m;       ///< sqrt of the estimate's z variance (NaN without an estimate)
+};
+struct Measurement {
+  double t_s;
+  double p_W[3];
+};
+
+class StationState {
+ public:
+  explicit StationState(const GroundStationParams& params);
+
+  void on_status(const autonomy_status_t& msg, int64_t now_utime);
+  void on_target(const target_t& msg, int64_t now_utime);
+  void on_process_status(const process_status_t& msg, int64_t now_utime);
+  void on_pose(const pose_t& msg, int64_t now_utime);
+  /// A frame arrived on a video channel; `frame_utime` is its exposure time.
+  void on_frame(const std::string& channel, int64_t frame_utime, int64_t now_utime);
+  /// A command was handed to LCM (shown in the page's command log).
+  void on_command_sent(const std::string& name, int64_t seq, int64_t now_utime);
+
+  /// The page's state document (JSON). `extra` is spliced in verbatim as `"station": extra`.
+  std::string to_json(int64_t now_utime, const std::string& extra = "{}") const;
+
+  const std::optional<autonomy_status_t>& status() const { return status_; }
+  const std::deque<TrackPoint>& track() const { return track_; }
+  const std::deque<HeightPoint>& heights() const { return heights_; }
+  const std::deque<Measurement>& measurements() const { return measurements_; }
+  double channel_rate_hz(const std::string& channel, int64_t now_utime) const;
+  std::optional<double> channel_age_s(const std::string& channel, int64_t now_utime) const;
+
+ private:
+  double t_s(int64_t utime);
+  void arrived(const std::string& channel, int64_t now_utime);
+  void sample_height(int64_t utime);
+
+  GroundStationParams params_;
+  std::optional<int64_t> t0_utime_;
+  std::optional<autonomy_status_t> status_;
+  std::optional<target_t> target_;
+  std::optional<process_status_t> processes_;
+  std::optional<pose_t> pose_;
+  std::map<std::string, RateMeter> channels_;
+  std::map<std::string, int64_t> frame_utime_;  // exposure time of the newest frame per channel
+  std::deque<TrackPoint> track_;
+  std::deque<HeightPoint> heights_;
+  std::deque<Measurement> measurements_;
+  int64_t last_track_utime_ = INT64_MIN;
+  int64_t last_height_utime_ = INT64_MIN;
+  struct SentCommand {
+    std::string name;
+    int64_t seq;
+    int64_t utime;
+  };
+  std::deque<SentCommand> sent_;
+};
+
+}  // namespace alight::ground_station

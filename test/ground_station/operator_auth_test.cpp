@@ -1,0 +1,275 @@
+// Operator command authentication: HMAC-SHA256 known answers (RFC 4231), the canonical byte
+// layout, key files, and every path by which CommandVerifier rejects a command.
+
+#include "common/operator_auth.hpp"
+
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+
+namespace alight {
+namespace {
+
+std::string hex(const HmacTag& tag) {
+  static const char* digits = "0123456789abcdef";
+  std::string s;
+  for (uint8_t b : tag) {
+    s += digits[b >> 4];
+    s += digits[b & 15];
+  }
+  return s;
+}
+
+std::vector<uint8_t> bytes(const std::string& s) { return {s.begin(), s.end()}; }
+
+// RFC 4231 section 4: HMAC-SHA-256 test cases 1, 2, 3, 4, 6 and 7.
+TEST(HmacSha256Test, MatchesRfc4231TestVectors) {
+  EXPECT_EQ(hex(hmac_sha256(std::vector<uint8_t>(20, 0x0b), bytes("Hi There"))),
+            "b0344c61d8db38535ca8afceaf0bf12b881dc200c9833da726e9376c2e32cff7");
+  EXPECT_EQ(hex(hmac_sha256(bytes("Jefe"), bytes("what do ya want for nothing?"))),
+            "5bdcc146bf60754e6a042426089575c75a003f089d2739839dec58b964ec3843");
+  EXPECT_EQ(hex(hmac_sha256(std::vector<uint8_t>(20, 0xaa), std::vector<uint8_t>(50, 0xdd))),
+            "773ea91e36800e46854db8ebd09181a72959098b3ef8c122d9635514ced565fe");
+  std::vector<uint8_t> key4;
+  for (int i = 1; i <= 25; ++i) key4.push_back(static_cast<uint8_t>(i));
+  EXPECT_EQ(hex(hmac_sha256(key4, std::vector<uint8_t>(50, 0xcd))),
+            "82558a389a443c0ea4cc819899f2083a85f0faa3e578f8077a2e3ff46729665b");
+  EXPECT_EQ(hex(hmac_sha256(std::vector<uint8_t>(131, 0xaa),
+                            bytes("Test Using Larger Than Block-Size Key - Hash Key First"))),
+            "60e431591ee0b67f0d8a26aacbf5b77f8e0bc6213728c5140546040f0ee37f54");
+  EXPECT_EQ(hex(hmac_sha256(std::vector<uint8_t>(131, 0xaa),
+                            bytes("This is a test using a larger than block-size key and a "
+                                  "larger than block-size data. The key needs to be hashed "
+                                  "before being used by the HMAC algorithm."))),
+            "9b09ffa71b942fcb27635fbcd5b0e944bfdc63644f0713938a7f51535c3a35e2");
+}
+
+OperatorKey test_key(uint8_t fill = 0x42) { return OperatorKey{std::vector<uint8_t>(32, fill)}; }
+
+operator_cmd_t make_cmd(int64_t utime, int64_t seq, const std::string& sender = "gs-test") {
+  operator_cmd_t cmd{};
+  cmd.utime = utime;
+  cmd.seq = seq;
+  cmd.sender = sender;
+  cmd.command = operator_cmd_t::CMD_GO;
+  cmd.mission = 1;
+  cmd.nudge_W[0] = 0.25;
+  cmd.nudge_W[1] = -1.0;
+  cmd.nudge_W[2] = 0.0;
+  cmd.auth = operator_cmd_t::AUTH_NONE;
+  std::memset(cmd.hmac, 0, sizeof cmd.hmac);
+  return cmd;
+}
+
+TEST(CanonicalBytesTest, HasTheDocumentedLayout) {
+  operator_cmd_t cmd = make_cmd(0x0102030405060708, 0x1112131415161718, "ab");
+  const std::vector<uint8_t> expected = {
+      0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07, 0x08,  // utime
+      0x11, 0x12, 0x13, 0x14, 0x15, 0x16, 0x17, 0x18,  // seq
+      0x00, 0x00, 0x00, 0x03, 'a', 'b', 0x00,          // sender: length incl. NUL, bytes, NUL
+      0x02, 0x01,                                      // command GO, mission LANDING
+      0x3f, 0xd0, 0, 0, 0, 0, 0, 0,                    // 0.25
+      0xbf, 0xf0, 0, 0, 0, 0, 0, 0,                    // -1.0
+      0x00, 0x00, 0, 0, 0, 0, 0, 0};                   // 0.0
+  EXPECT_EQ(canonical_bytes(cmd), expected);
+  EXPECT_EQ(expected.size(), 46u + 3u);
+}
+
+TEST(CanonicalBytesTest, EqualsTheLcmEncodingOfTheCoveredFields) {
+  operator_cmd_t cmd = make_cmd(1700000000123456, 99, "ground-station-7");
+  sign(cmd, test_key());
+  std::vector<uint8_t> wire(cmd.getEncodedSize());
+  ASSERT_EQ(cmd.encode(wire.data(), 0, static_cast<int>(wire.size())),
+            static_cast<int>(wire.size()));
+  const std::vector<uint8_t> canon = canonical_bytes(cmd);
+  ASSERT_GT(wire.size(), 8 + canon.size());
+  EXPECT_TRUE(std::equal(canon.begin(), canon.end(), wire.begin() + 8));  // after fingerprint
+}
+
+TEST(SignTest, SignedCommandCarriesTheHmacOfItsCanonicalBytes) {
+  operator_cmd_t cmd = make_cmd(1000, 1);
+  sign(cmd, test_key());
+  EXPECT_EQ(cmd.auth, operator_cmd_t::AUTH_HMAC_SHA256);
+  const HmacTag expected = hmac_sha256(test_key().bytes, canonical_bytes(cmd));
+  EXPECT_EQ(0, std::memcmp(expected.data(), cmd.hmac, 32));
+  EXPECT_TRUE(signature_valid(cmd, test_key()));
+  EXPECT_FALSE(signature_valid(cmd, test_key(0x43)));
+}
+
+class VerifierTest : public ::testing::Test {
+ protected:
+  static constexpr int64_t kNow = 1'700'000'000'000'000;
+  CommandVerifier verifier{test_key(), 2'000'000};
+  operator_cmd_t signed_cmd(int64_t utime, int64_t seq, const std::string& sender = "gs-test") {
+    operator_cmd_t c = make_cmd(utime, seq, sender);
+    sign(c, test_key());
+    return c;
+  }
+  CommandVerdict::Reason check(const operator_cmd_t& c, int64_t now = kNow) {
+    return verifier.check(c, now).reason;
+  }
+};
+
+using R = CommandVerdict::Reason;
+
+TEST_F(VerifierTest, AcceptsAFreshCorrectlySignedCommand) {
+  EXPECT_EQ(check(signed_cmd(kNow, 1)), R::kAccepted);
+  EXPECT_EQ(verifier.last_seq("gs-test"), 1);
+  EXPECT_EQ(verifier.n_rejected(), 0u);
+}
+
+TEST_F(VerifierTest, RejectsUnsignedEvenWithAValidTagInside) {
+  operator_cmd_t c = signed_cmd(kNow, 1);
+  c.auth = operator_cmd_t::AUTH_NONE;
+  EXPECT_EQ(check(c), R::kUnsigned);
+  operator_cmd_t zero = make_cmd(kNow, 2);
+  EXPECT_EQ(check(zero), R::kUnsigned);
+  c.auth = 7;  // unknown scheme
+  EXPECT_EQ(check(c), R::kUnsigned);
+  EXPECT_EQ(verifier.n_rejected(), 3u);
+}
+
+TEST_F(VerifierTest, RejectsForgedCommands) {
+  // Signed with another key.
+  operator_cmd_t wrong_key = make_cmd(kNow, 1);
+  sign(wrong_key, test_key(0x99));
+  EXPECT_EQ(check(wrong_key), R::kBadSignature);
+  // Claims HMAC but carries a zero tag.
+  operator_cmd_t zero_tag = make_cmd(kNow, 2);
+  zero_tag.auth = operator_cmd_t::AUTH_HMAC_SHA256;
+  EXPECT_EQ(check(zero_tag), R::kBadSignature);
+  // A correctly signed GO altered after signing: every covered field is protected.
+  auto tampered = [&](auto&& change) {
+    operator_cmd_t c = signed_cmd(kNow, 3);
+    change(c);
+    return check(c);
+  };
+  EXPECT_EQ(tampered([](operator_cmd_t& c) { c.command = operator_cmd_t::CMD_KILL; }),
+            R::kBadSignature);
+  EXPECT_EQ(tampered([](operator_cmd_t& c) { c.mission = 2; }), R::kBadSignature);
+  EXPECT_EQ(tampered([](operator_cmd_t& c) { c.seq += 1; }), R::kBadSignature);
+  EXPECT_EQ(tampered([](operator_cmd_t& c) { c.utime += 1; }), R::kBadSignature);
+  EXPECT_EQ(tampered([](operator_cmd_t& c) { c.sender = "gs-tesu"; }), R::kBadSignature);
+  EXPECT_EQ(tampered([](operator_cmd_t& c) { c.nudge_W[2] = 1e-300; }), R::kBadSignature);
+  EXPECT_EQ(tampered([](operator_cmd_t& c) { c.hmac[31] ^= 1; }), R::kBadSignature);
+  EXPECT_EQ(verifier.last_seq("gs-test"), INT64_MIN);  // nothing was accepted
+}
+
+TEST_F(VerifierTest, RejectsStaleAndFutureCommands) {
+  EXPECT_EQ(check(signed_cmd(kNow - 2'000'001, 1)), R::kStale);
+  EXPECT_EQ(check(signed_cmd(kNow + 2'000'001, 2)), R::kStale);
+  EXPECT_EQ(check(signed_cmd(INT64_MIN, 3)), R::kStale);
+  EXPECT_EQ(check(signed_cmd(INT64_MAX, 4)), R::kStale);
+  // The window's edges are inside.
+  EXPECT_EQ(check(signed_cmd(kNow - 2'000'000, 5)), R::kAccepted);
+  EXPECT_EQ(check(signed_cmd(kNow + 2'000'000, 6)), R::kAccepted);
+}
+
+TEST_F(VerifierTest, RejectsReplayedAndOlderSequenceNumbers) {
+  const operator_cmd_t first = signed_cmd(kNow, 10);
+  EXPECT_EQ(check(first), R::kAccepted);
+  EXPECT_EQ(check(first), R::kReplayed);               // the very same message again
+  EXPECT_EQ(check(signed_cmd(kNow, 9)), R::kReplayed);  // an older one
+  EXPECT_EQ(check(signed_cmd(kNow, 11)), R::kAccepted);
+  EXPECT_EQ(verifier.last_seq("gs-test"), 11);
+  EXPECT_EQ(verifier.n_rejected(), 2u);
+}
+
+TEST_F(VerifierTest, SequenceNumbersArePerSender) {
+  EXPECT_EQ(check(signed_cmd(kNow, 100, "gs-a")), R::kAccepted);
+  EXPECT_EQ(check(signed_cmd(kNow, 5, "gs-b")), R::kAccepted);
+  EXPECT_EQ(check(signed_cmd(kNow, 100, "gs-a")), R::kReplayed);
+}
+
+TEST_F(VerifierTest, RejectedCommandsDoNotAdvanceTheSequence) {
+  // A forged command with a huge seq must not lock out the genuine station.
+  operator_cmd_t forged = make_cmd(kNow, INT64_MAX);
+  sign(forged, test_key(0x01));
+  EXPECT_EQ(check(forged), R::kBadSignature);
+  // A stale one (e.g. a recording replayed later) neither.
+  EXPECT_EQ(check(signed_cmd(kNow - 60'000'000, 1000)), R::kStale);
+  EXPECT_EQ(check(signed_cmd(kNow, 1)), R::kAccepted);
+}
+
+TEST(VerifierConstructionTest, RefusesShortKeys) {
+  EXPECT_THROW(CommandVerifier(OperatorKey{std::vector<uint8_t>(31, 1)}), KeyFileError);
+}
+
+TEST(ReasonNameTest, NamesEveryReason) {
+  EXPECT_STREQ(reason_name(R::kAccepted), "accepted");
+  EXPECT_STREQ(reason_name(R::kUnsigned), "unsigned");
+  EXPECT_STREQ(reason_name(R::kBadSignature), "bad_signature");
+  EXPECT_STREQ(reason_name(R::kStale), "stale");
+  EXPECT_STREQ(reason_name(R::kReplayed), "replayed");
+}
+
+class KeyFileTest : public ::testing::Test {
+ protected:
+  std::filesystem::path dir = std::filesystem::temp_directory_path() /
+                              ("alight_keyfile_test_" + std::to_string(::getpid()));
+  void SetUp() override { std::filesystem::create_directories(dir); }
+  void TearDown() override { std::filesystem::remove_all(dir); }
+  std::string write(const std::string& name, const std::string& contents, mode_t mode = 0600) {
+    const auto path = (dir / name).string();
+    std::ofstream(path, std::ios::binary) << contents;
+    ::chmod(path.c_str(), mode);
+    return path;
+  }
+};
+
+TEST_F(KeyFileTest, ReadsHexKeysWithSurroundingWhitespace) {
+  const std::string hex64 = "000102030405060708090a0b0c0d0e0f101112131415161718191A1B1C1D1E1F";
+  const LoadedKey k = load_key_file(write("hex", "  " + hex64 + "\n"));
+  ASSERT_EQ(k.key.bytes.size(), 32u);
+  for (int i = 0; i < 32; ++i) EXPECT_EQ(k.key.bytes[i], i);
+  EXPECT_TRUE(k.warnings.empty());
+}
+
+TEST_F(KeyFileTest, ReadsRawKeys) {
+  std::string raw(32, '\0');
+  for (int i = 0; i < 32; ++i) raw[i] = static_cast<char>(0xe0 + (i % 16));  // not all hex
+  const LoadedKey k = load_key_file(write("raw", raw));
+  ASSERT_EQ(k.key.bytes.size(), 32u);
+  EXPECT_EQ(k.key.bytes[0], 0xe0);
+  EXPECT_EQ(k.key.bytes[31], 0xef);
+}
+
+TEST_F(KeyFileTest, MissingFileIsAClearError) {
+  try {
+    load_key_file((dir / "nope").string());
+    FAIL() << "no exception";
+  } catch (const KeyFileError& e) {
+    EXPECT_NE(std::string(e.what()).find("nope"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("missing"), std::string::npos);
+  }
+}
+
+TEST_F(KeyFileTest, ShortKeysAreRefused) {
+  try {
+    load_key_file(write("short_hex", "00112233445566778899aabbccddeeff\n"));  // 16 bytes
+    FAIL() << "no exception";
+  } catch (const KeyFileError& e) {
+    EXPECT_NE(std::string(e.what()).find("too short: 16 bytes"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(load_key_file(write("short_raw", std::string(31, '\x80'))), KeyFileError);
+  EXPECT_THROW(load_key_file(write("empty", "")), KeyFileError);
+  EXPECT_THROW(load_key_file(write("odd", std::string(65, 'a'))), KeyFileError);
+}
+
+TEST_F(KeyFileTest, WarnsWhenOthersCanReadTheKey) {
+  const LoadedKey k = load_key_file(write("open", std::string(64, 'a'), 0644));
+  ASSERT_EQ(k.warnings.size(), 1u);
+  EXPECT_NE(k.warnings[0].find("644"), std::string::npos) << k.warnings[0];
+  EXPECT_NE(k.warnings[0].find("chmod 600"), std::string::npos);
+}
+
+TEST_F(KeyFileTest, DirectoryIsNotAKeyFile) {
+  EXPECT_THROW(load_key_file(dir.string()), KeyFileError);
+}
+
+}  // namespace
+}  // namespace alight
