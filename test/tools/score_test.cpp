@@ -1,0 +1,191 @@
+#include "tools/score.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <lcm/lcm-cpp.hpp>
+
+namespace alight::tools {
+namespace {
+
+constexpr int64_t kT0 = 1'790'000'000'000'000;
+
+sim_truth_t landing_truth(int64_t utime, double x, double y, double z, bool landed) {
+  sim_truth_t t{};
+  t.utime = utime;
+  t.scenario = "landing_b";
+  t.pos[0] = x;
+  t.pos[1] = y;
+  t.pos[2] = z;
+  t.orientation[0] = 1;
+  t.has_platform = true;
+  t.platform_center_W[0] = 1.0;
+  t.platform_center_W[1] = -0.5;
+  t.platform_center_W[2] = 0.219;
+  t.platform_size_m[0] = 0.432;
+  t.platform_size_m[1] = 0.279;
+  t.platform_size_m[2] = 0.219;
+  t.landed = landed;
+  return t;
+}
+
+autonomy_status_t status(int64_t utime, int8_t phase, const char* name, double est_z = 0) {
+  autonomy_status_t s{};
+  s.utime = utime;
+  s.mission = target_t::MISSION_LANDING;
+  s.phase = phase;
+  s.phase_name = name;
+  s.has_estimate = phase >= autonomy_status_t::PHASE_REFINEMENT;
+  s.estimate_W[0] = 1.01;
+  s.estimate_W[1] = -0.5;
+  s.estimate_W[2] = est_z;
+  s.n_measurements = 12;
+  return s;
+}
+
+Scorer landing_session(bool tip) {
+  Scorer sc;
+  sc.add(landing_truth(kT0, 0, 0, 1.5, false));
+  sc.add(status(kT0 + 1'000'000, autonomy_status_t::PHASE_DETECTION, "DETECTION"));
+  for (int i = 0; i < 5; ++i) {
+    target_t t{};
+    t.mission = target_t::MISSION_LANDING;
+    t.found = i != 2;
+    t.target_height_m = 0.22 + 0.002 * i;
+    sc.add(t);
+  }
+  sc.add(status(kT0 + 5'000'000, autonomy_status_t::PHASE_REFINEMENT, "REFINEMENT", 0.25));
+  sc.add(status(kT0 + 9'000'000, autonomy_status_t::PHASE_APPROACH, "APPROACH", 0.229));
+  sc.add(status(kT0 + 10'000'000, autonomy_status_t::PHASE_APPROACH, "APPROACH", 0.3));
+  sc.add(landing_truth(kT0 + 12'000'000, 1.03, -0.46, 0.25, false));
+  auto touch = landing_truth(kT0 + 13'000'000, 1.03, -0.46, 0.24, !tip);
+  touch.tipped = tip;
+  sc.add(touch);
+  // Later motion is not the touchdown; a tip, once seen, stays a failure.
+  sc.add(landing_truth(kT0 + 14'000'000, 1.2, -0.46, 0.24, !tip));
+  sc.add(status(kT0 + 13'500'000, autonomy_status_t::PHASE_LANDED, "LANDED", 0.3));
+  return sc;
+}
+
+TEST(ScoreTest, LandingFiguresAgainstTruth) {
+  const Score s = landing_session(false).result();
+  EXPECT_TRUE(s.success);
+  EXPECT_EQ(s.outcome, "landed");
+  EXPECT_EQ(s.final_phase, "LANDED");
+  ASSERT_TRUE(s.touchdown_lateral_error_m);
+  EXPECT_NEAR(*s.touchdown_lateral_error_m, 0.05, 1e-9);  // (0.03, 0.04) from the centre
+  ASSERT_TRUE(s.platform_height_error_m);
+  EXPECT_NEAR(*s.platform_height_error_m, 0.229 - 0.219, 1e-9);  // estimate at convergence
+  ASSERT_TRUE(s.vision_height_error_m);
+  EXPECT_NEAR(*s.vision_height_error_m, 0.224 - 0.219, 1e-9);  // median of the found ones
+  ASSERT_TRUE(s.mission_time_s);
+  EXPECT_NEAR(*s.mission_time_s, 12.5, 1e-9);
+  EXPECT_EQ(s.vision_frames, 5);
+  EXPECT_EQ(s.vision_found, 4);
+  EXPECT_FALSE(s.opening_width_error_m.has_value());
+}
+
+TEST(ScoreTest, TippedLandingFails) {
+  const Score s = landing_session(true).result();
+  EXPECT_FALSE(s.success);
+  EXPECT_EQ(s.outcome, "tipped");
+}
+
+TEST(ScoreTest, IngressThroughTheOpening) {
+  Scorer sc;
+  auto truth = [&](int64_t utime, double x, bool collided) {
+    sim_truth_t t{};
+    t.utime = utime;
+    t.scenario = "ingress";
+    t.pos[0] = x;
+    t.pos[1] = 0.02;
+    t.pos[2] = 1.21;
+    t.has_opening = true;
+    t.opening_center_W[0] = 3.0;
+    t.opening_center_W[2] = 1.2;
+    t.opening_size_m[0] = 0.6;
+    t.opening_size_m[1] = 0.6;
+    t.wall_normal_W[0] = -1;  // approach from -x
+    t.collided = collided;
+    return t;
+  };
+  for (double w : {0.59, 0.61, 0.605, 0.9}) {
+    target_t t{};
+    t.mission = target_t::MISSION_INGRESS;
+    t.found = true;
+    t.size_m[0] = w;
+    sc.add(t);
+  }
+  autonomy_status_t st{};
+  st.mission = target_t::MISSION_INGRESS;
+  st.phase = autonomy_status_t::PHASE_DETECTION;
+  sc.add(st);
+  st.phase = autonomy_status_t::PHASE_APPROACH;
+  st.has_estimate = true;
+  st.estimate_W[0] = 3.0;
+  st.estimate_W[1] = 0.03;
+  st.estimate_W[2] = 1.2;
+  sc.add(st);
+  sc.add(truth(kT0, 2.9, false));
+  sc.add(truth(kT0 + 100'000, 3.1, false));  // crosses x = 3 halfway
+  st.phase = autonomy_status_t::PHASE_DONE;
+  st.phase_name = "DONE";
+  sc.add(st);
+  const Score s = sc.result();
+  EXPECT_TRUE(s.success);
+  EXPECT_EQ(s.outcome, "through");
+  ASSERT_TRUE(s.opening_width_error_m);
+  EXPECT_NEAR(*s.opening_width_error_m, 0.6075 - 0.6, 1e-9);  // median, the 0.9 outlier ignored
+  ASSERT_TRUE(s.crossing_offset_m);
+  EXPECT_NEAR(*s.crossing_offset_m, std::hypot(0.02, 0.01), 1e-9);
+  ASSERT_TRUE(s.opening_center_error_m);
+  EXPECT_NEAR(*s.opening_center_error_m, 0.03, 1e-9);
+
+  sc.add(truth(kT0 + 200'000, 3.3, true));
+  EXPECT_FALSE(sc.result().success);
+  EXPECT_EQ(sc.result().outcome, "collided");
+}
+
+TEST(ScoreTest, JsonQuotesStringsAndNotNumbers) {
+  const std::string j = landing_session(false).result().to_json();
+  EXPECT_NE(j.find("\"success\": true"), std::string::npos) << j;
+  EXPECT_NE(j.find("\"scenario\": \"landing_b\""), std::string::npos) << j;
+  EXPECT_NE(j.find("\"touchdown_lateral_error_m\": 0.0500"), std::string::npos) << j;
+}
+
+// The command line on a log written by LCM's writer: text, JSON and exit codes.
+TEST(ScoreTest, CommandLineReadsASessionLog) {
+  const auto path = std::filesystem::temp_directory_path() / "alight_score_test.lcmlog";
+  {
+    lcm::LogFile log(path.string(), "w");
+    auto write = [&](const char* ch, const auto& msg) {
+      std::vector<uint8_t> buf(msg.getEncodedSize());
+      msg.encode(buf.data(), 0, static_cast<int>(buf.size()));
+      lcm::LogEvent ev{0, msg.utime, ch, static_cast<int32_t>(buf.size()), buf.data()};
+      log.writeEvent(&ev);
+    };
+    write("SIM_TRUTH", landing_truth(kT0, 0, 0, 1.5, false));
+    write("AUTONOMY_STATUS", status(kT0 + 1, autonomy_status_t::PHASE_DETECTION, "DETECTION"));
+    write("SIM_TRUTH", landing_truth(kT0 + 2, 1.0, -0.5, 0.24, true));
+  }
+  const std::string bin = std::string(ALIGHT_BINARY_DIR) + "/bin/alight-score ";
+  auto run = [&](const std::string& args, std::string* out) {
+    FILE* p = popen((bin + args + " 2>&1").c_str(), "r");
+    char buf[512];
+    while (fgets(buf, sizeof buf, p)) *out += buf;
+    return WEXITSTATUS(pclose(p));
+  };
+  std::string text, json, missing;
+  EXPECT_EQ(run(path.string(), &text), 0) << text;
+  EXPECT_NE(text.find("outcome: landed\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("touchdown_lateral_error_m: 0.0000\n"), std::string::npos) << text;
+  EXPECT_EQ(run(path.string() + " --json", &json), 0);
+  EXPECT_EQ(json.front(), '{');
+  EXPECT_EQ(run("/nonexistent.lcmlog", &missing), 105);  // CLI11: the file does not exist
+  std::filesystem::remove(path);
+}
+
+}  // namespace
+}  // namespace alight::tools

@@ -1,0 +1,187 @@
+#include "tools/score.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+namespace alight::tools {
+
+namespace {
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+double dist_xy(const double a[3], const double b[3]) {
+  return std::hypot(a[0] - b[0], a[1] - b[1]);
+}
+// Signed distance of the vehicle from the wall plane, positive on the approach side.
+double wall_side(const sim_truth_t& t) {
+  double s = 0;
+  for (int i = 0; i < 3; ++i) s += (t.pos[i] - t.opening_center_W[i]) * t.wall_normal_W[i];
+  return s;
+}
+std::string fmt(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.4f", v);
+  return buf;
+}
+}  // namespace
+
+void Scorer::add(const sim_truth_t& t) {
+  tipped_ = tipped_ || t.tipped;
+  if (t.has_platform && !touchdown_truth_ && (t.landed || t.tipped)) touchdown_truth_ = t;
+  if (t.has_opening && !after_crossing_) {
+    if (wall_side(t) >= 0) {
+      before_crossing_ = t;
+    } else if (before_crossing_) {
+      after_crossing_ = t;
+    }
+  }
+  last_truth_ = t;
+}
+
+void Scorer::add(const autonomy_status_t& s) {
+  if (s.mission != 0) mission_ = s.mission;
+  if (!go_utime_ && s.phase == autonomy_status_t::PHASE_DETECTION) go_utime_ = s.utime;
+  // The estimate at convergence: the first status after refinement that carries it.
+  if (!converged_status_ && s.has_estimate &&
+      (s.phase == autonomy_status_t::PHASE_APPROACH ||
+       s.phase == autonomy_status_t::PHASE_FINAL_DESCENT))
+    converged_status_ = s;
+  if (!end_utime_ &&
+      (s.phase == autonomy_status_t::PHASE_LANDED || s.phase == autonomy_status_t::PHASE_DONE))
+    end_utime_ = s.utime;
+  last_status_ = s;
+}
+
+void Scorer::add(const target_t& t) {
+  ++vision_frames_;
+  if (!t.found) return;
+  ++vision_found_;
+  if (t.mission != 0) mission_ = t.mission;
+  if (t.mission == target_t::MISSION_INGRESS && t.size_m[0] > 0) widths_m_.push_back(t.size_m[0]);
+  if (t.mission == target_t::MISSION_LANDING && t.target_height_m > 0)
+    heights_m_.push_back(t.target_height_m);
+}
+
+Score Scorer::result() const {
+  Score s;
+  s.vision_frames = vision_frames_;
+  s.vision_found = vision_found_;
+  if (last_status_) {
+    s.final_phase = last_status_->phase_name;
+    s.n_measurements = last_status_->n_measurements;
+  }
+  if (go_utime_ && end_utime_)
+    s.mission_time_s = 1e-6 * static_cast<double>(*end_utime_ - *go_utime_);
+  if (!last_truth_) {
+    s.outcome = "incomplete";
+    return s;
+  }
+  const sim_truth_t& truth = *last_truth_;
+  s.scenario = truth.scenario;
+  s.collided = truth.collided;
+  s.n_collisions = truth.n_collisions;
+  s.mission = mission_ ? mission_
+                       : (truth.has_platform ? target_t::MISSION_LANDING
+                                             : (truth.has_opening ? target_t::MISSION_INGRESS : 0));
+  if (truth.has_platform) {
+    if (touchdown_truth_)
+      s.touchdown_lateral_error_m = dist_xy(touchdown_truth_->pos, truth.platform_center_W);
+    if (converged_status_)
+      s.platform_height_error_m = converged_status_->estimate_W[2] - truth.platform_center_W[2];
+    if (!heights_m_.empty())
+      s.vision_height_error_m = median(heights_m_) - truth.platform_size_m[2];
+  }
+  if (truth.has_opening) {
+    if (!widths_m_.empty()) s.opening_width_error_m = median(widths_m_) - truth.opening_size_m[0];
+    if (converged_status_) {
+      double d2 = 0;
+      for (int i = 0; i < 3; ++i)
+        d2 += std::pow(converged_status_->estimate_W[i] - truth.opening_center_W[i], 2);
+      s.opening_center_error_m = std::sqrt(d2);
+    }
+    if (after_crossing_) {
+      // Interpolate the crossing point between the samples either side of the wall plane.
+      const double a = wall_side(*before_crossing_), b = wall_side(*after_crossing_);
+      const double f = a / (a - b);
+      double off2 = 0;
+      for (int i = 0; i < 3; ++i) {
+        const double p =
+            before_crossing_->pos[i] + f * (after_crossing_->pos[i] - before_crossing_->pos[i]);
+        const double d = p - truth.opening_center_W[i];
+        off2 += d * d;
+      }
+      s.crossing_offset_m = std::sqrt(off2);
+    }
+  }
+  if (s.mission == target_t::MISSION_LANDING) {
+    s.outcome = tipped_ ? "tipped" : (truth.landed ? "landed" : "not_landed");
+    s.success = truth.landed && !tipped_;
+  } else if (s.mission == target_t::MISSION_INGRESS) {
+    const bool done = last_status_ && last_status_->phase == autonomy_status_t::PHASE_DONE;
+    s.outcome = truth.collided ? "collided" : (after_crossing_ ? "through" : "incomplete");
+    s.success = !truth.collided && after_crossing_.has_value() && done;
+  } else {
+    s.outcome = "incomplete";
+  }
+  return s;
+}
+
+std::vector<std::pair<std::string, std::string>> Score::fields() const {
+  std::vector<std::pair<std::string, std::string>> f;
+  f.emplace_back("scenario", scenario);
+  f.emplace_back("mission", mission == target_t::MISSION_LANDING   ? "landing"
+                            : mission == target_t::MISSION_INGRESS ? "ingress"
+                                                                   : "none");
+  f.emplace_back("success", success ? "true" : "false");
+  f.emplace_back("outcome", outcome);
+  f.emplace_back("final_phase", final_phase);
+  auto opt = [&](const char* key, const std::optional<double>& v) {
+    if (v) f.emplace_back(key, fmt(*v));
+  };
+  opt("mission_time_s", mission_time_s);
+  opt("touchdown_lateral_error_m", touchdown_lateral_error_m);
+  opt("platform_height_error_m", platform_height_error_m);
+  opt("vision_height_error_m", vision_height_error_m);
+  opt("opening_width_error_m", opening_width_error_m);
+  opt("opening_center_error_m", opening_center_error_m);
+  opt("crossing_offset_m", crossing_offset_m);
+  f.emplace_back("n_measurements", std::to_string(n_measurements));
+  f.emplace_back("vision_frames", std::to_string(vision_frames));
+  f.emplace_back("vision_found", std::to_string(vision_found));
+  f.emplace_back("collided", collided ? "true" : "false");
+  f.emplace_back("n_collisions", std::to_string(n_collisions));
+  return f;
+}
+
+std::string Score::to_text() const {
+  std::ostringstream os;
+  for (const auto& [k, v] : fields()) os << k << ": " << v << "\n";
+  return os.str();
+}
+
+std::string Score::to_json() const {
+  std::ostringstream os;
+  os << "{";
+  bool first = true;
+  for (const auto& [k, v] : fields()) {
+    const bool raw = v == "true" || v == "false" ||
+                     (!v.empty() && v.find_first_not_of("-0123456789.") == std::string::npos);
+    os << (first ? "" : ", ") << "\"" << k << "\": ";
+    if (raw) {
+      os << v;
+    } else {
+      os << "\"";
+      for (char c : v) os << (c == '"' || c == '\\' ? "\\" : "") << c;
+      os << "\"";
+    }
+    first = false;
+  }
+  os << "}\n";
+  return os.str();
+}
+
+}  // namespace alight::tools

@@ -1,0 +1,64 @@
+// alight-score LOG [--json]: the mission's figures from a session log, as `key: value` lines
+// (or one JSON object), for people and scripts. Exit status: 0 when the mission succeeded,
+// 1 when it did not, 2 when the log cannot be read or holds no SIM_TRUTH.
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <iostream>
+#include <lcm/lcm-cpp.hpp>
+
+#include "tools/score.hpp"
+
+namespace {
+template <class T>
+bool decode(const lcm::LogEvent& ev, T& msg) {
+  return msg.decode(ev.data, 0, ev.datalen) == ev.datalen;
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"alight-score: score a mission from its session log against the simulator's truth"};
+  std::string log_path, truth_ch = "SIM_TRUTH", status_ch = "AUTONOMY_STATUS",
+                        target_ch = "VISION_TARGET";
+  bool json = false;
+  app.add_option("log", log_path, "Session log (.lcmlog)")->required()->check(CLI::ExistingFile);
+  app.add_flag("--json", json, "Print one JSON object instead of key: value lines");
+  app.add_option("--truth-channel", truth_ch, "Channel of sim_truth_t");
+  app.add_option("--status-channel", status_ch, "Channel of autonomy_status_t");
+  app.add_option("--target-channel", target_ch, "Channel of target_t");
+  CLI11_PARSE(app, argc, argv);
+
+  lcm::LogFile log(log_path, "r");
+  if (!log.good()) {
+    std::fprintf(stderr, "alight-score: cannot read %s\n", log_path.c_str());
+    return 2;
+  }
+  alight::tools::Scorer scorer;
+  int truths = 0, bad = 0;
+  for (const lcm::LogEvent* ev = log.readNextEvent(); ev; ev = log.readNextEvent()) {
+    if (ev->channel == truth_ch) {
+      alight::sim_truth_t m;
+      if (decode(*ev, m)) {
+        scorer.add(m);
+        ++truths;
+      } else {
+        ++bad;
+      }
+    } else if (ev->channel == status_ch) {
+      alight::autonomy_status_t m;
+      decode(*ev, m) ? scorer.add(m) : void(++bad);
+    } else if (ev->channel == target_ch) {
+      alight::target_t m;
+      decode(*ev, m) ? scorer.add(m) : void(++bad);
+    }
+  }
+  if (bad > 0)
+    std::fprintf(stderr, "alight-score: %d message(s) failed to decode (skipped)\n", bad);
+  if (truths == 0) {
+    std::fprintf(stderr, "alight-score: %s holds no %s messages (not a simulated session?)\n",
+                 log_path.c_str(), truth_ch.c_str());
+    return 2;
+  }
+  const auto score = scorer.result();
+  std::cout << (json ? score.to_json() : score.to_text());
+  return score.success ? 0 : 1;
+}
