@@ -50,7 +50,7 @@ struct Scene {
   std::optional<OpeningTruth> opening;
   bool has_wall = false;
   /// Wall pieces within this distance of the opening's edge count as its frame [m].
-  double frame_margin_m = 0.05;
+  double frame_margin_m = 0.10;
 
   /// Where a wall contact at `p_W` counts as the opening's frame.
   bool near_opening_frame(const Vector3d& p_W) const;
