@@ -1,0 +1,122 @@
+// alight-autonomy: MOCAP_POSE, IMU, VISION_TARGET, OPERATOR_CMD -> POSITION_SETPOINT,
+// AUTONOMY_STATUS (paper 3.4). Time comes from the sensors: pose and IMU messages advance the
+// autonomy's clock to their utime; vision measurements (stamped at exposure, in the past) and
+// operator commands (stamped by the ground station's clock) are handled at the current sensor
+// time and never move it, so a replayed log gives the same setpoints.
+
+#include <spdlog/spdlog.h>
+
+#include <CLI/CLI.hpp>
+#include <optional>
+
+#include "autonomy/autonomy.hpp"
+#include "autonomy/convert.hpp"
+#include "autonomy/params.hpp"
+#include "common/msg_convert.hpp"
+#include "common/node.hpp"
+#include "outer_loop/convert.hpp"
+
+int main(int argc, char** argv) {
+  return alight::run_node_main("alight-autonomy", [&]() -> int {
+    namespace au = alight::autonomy;
+    CLI::App app{"alight autonomy loop: detection, refinement and approach for landing / ingress"};
+    alight::NodeArgs args;
+    args.add_to(app, true);
+    std::string auto_go;
+    app.add_option("--auto-go", auto_go,
+                   "simulation only: issue TAKEOFF, then GO with this mission, once a pose "
+                   "arrives (landing | ingress)")
+        ->check(CLI::IsMember({"landing", "ingress"}));
+    try {
+      app.parse(argc, argv);
+    } catch (const CLI::ParseError& e) {
+      return app.exit(e);
+    }
+    args.finalize();
+
+    const au::AutonomyParams params = au::load_params(args.config);
+    au::Autonomy autonomy(params);
+    alight::Node node(args.lcm_url, "alight-autonomy");
+
+    int64_t now_utime = 0;
+    int64_t last_status_utime = 0;
+    int64_t last_status_wall = 0;
+    std::string last_phase_reason;
+    alight::autonomy_status_t last_status{};
+    int64_t internal_seq = 0;
+    bool takeoff_sent = false, go_sent = false;
+
+    const auto step = [&](au::Inputs in) {
+      if (now_utime == 0) return;  // no sensor time yet
+      if (!auto_go.empty() && in.pose && !takeoff_sent) {
+        in.command = au::OperatorCommand{now_utime, ++internal_seq, "auto-go",
+                                         au::Command::kTakeoff, au::Mission::kNone,
+                                         alight::Vector3d::Zero(), au::CommandAuth::kInternal};
+        takeoff_sent = true;
+      } else if (!auto_go.empty() && !go_sent && autonomy.phase() == au::Phase::kHover &&
+                 !in.command) {
+        in.command = au::OperatorCommand{
+            now_utime, ++internal_seq, "auto-go", au::Command::kGo,
+            auto_go == "landing" ? au::Mission::kLanding : au::Mission::kIngress,
+            alight::Vector3d::Zero(), au::CommandAuth::kInternal};
+        go_sent = true;
+      }
+      const au::Output out = autonomy.update(in, now_utime);
+      node.publish("POSITION_SETPOINT", alight::outer_loop::to_msg(out.setpoint));
+      const std::string phase_reason =
+          std::string(au::phase_name(out.status.phase)) + ": " + out.status.reason;
+      const bool changed = phase_reason != last_phase_reason;
+      if (changed) {
+        spdlog::info("{}", phase_reason);
+        last_phase_reason = phase_reason;
+      }
+      if (changed ||
+          (now_utime - last_status_utime) * 1e-6 >= params.status_period_s * 0.5) {
+        last_status = au::to_msg(out.status);
+        node.publish("AUTONOMY_STATUS", last_status);
+        last_status_utime = now_utime;
+        last_status_wall = alight::wall_utime();
+      }
+    };
+
+    node.on<alight::pose_t>("MOCAP_POSE", [&](const alight::pose_t& m) {
+      now_utime = std::max(now_utime, m.utime);
+      au::Inputs in;
+      in.pose = alight::from_msg(m);
+      step(in);
+    });
+    node.on<alight::imu_t>("IMU", [&](const alight::imu_t& m) {
+      now_utime = std::max(now_utime, m.utime);
+      au::Inputs in;
+      in.imu = au::from_msg(m);
+      step(in);
+    });
+    node.on<alight::target_t>("VISION_TARGET", [&](const alight::target_t& m) {
+      au::Inputs in;
+      in.target = au::from_msg(m);
+      step(in);
+    });
+    node.on<alight::operator_cmd_t>("OPERATOR_CMD", [&](const alight::operator_cmd_t& m) {
+      au::Inputs in;
+      in.command = au::from_msg(m);
+      if (now_utime == 0) {
+        spdlog::warn("operator command before any sensor time: ignored");
+        return;
+      }
+      step(in);
+    });
+    // Without sensor input the autonomy cannot step; keep the ground station informed anyway.
+    node.every(params.status_period_s, [&](int64_t wall) {
+      if (last_status_utime != 0 && (wall - last_status_wall) * 1e-6 >= params.status_period_s) {
+        alight::autonomy_status_t st = last_status;
+        st.reason = "no sensor input: " + st.reason;
+        node.publish("AUTONOMY_STATUS", st);
+        last_status_wall = wall;
+      }
+    });
+    spdlog::info("alight-autonomy: seed {}, unsigned commands {}{}", params.seed,
+                 params.accept_unsigned_commands ? "accepted" : "refused",
+                 auto_go.empty() ? "" : ", auto-go " + auto_go);
+    return node.run();
+  });
+}

@@ -1,0 +1,143 @@
+#include "autonomy/convert.hpp"
+
+namespace alight::autonomy {
+
+int8_t mission_to_msg(Mission m) {
+  switch (m) {
+    case Mission::kLanding: return target_t::MISSION_LANDING;
+    case Mission::kIngress: return target_t::MISSION_INGRESS;
+    case Mission::kNone: break;
+  }
+  return target_t::MISSION_NONE;
+}
+
+Mission mission_from_msg(int8_t m) {
+  if (m == target_t::MISSION_LANDING) return Mission::kLanding;
+  if (m == target_t::MISSION_INGRESS) return Mission::kIngress;
+  return Mission::kNone;
+}
+
+int8_t phase_to_msg(Phase p) {
+  using S = autonomy_status_t;
+  switch (p) {
+    case Phase::kIdle: return S::PHASE_IDLE;
+    case Phase::kTakeoff: return S::PHASE_TAKEOFF;
+    case Phase::kHover: return S::PHASE_HOVER;
+    case Phase::kDetection: return S::PHASE_DETECTION;
+    case Phase::kRefinement: return S::PHASE_REFINEMENT;
+    case Phase::kApproach: return S::PHASE_APPROACH;
+    case Phase::kFinalDescent: return S::PHASE_FINAL_DESCENT;
+    case Phase::kLanded: return S::PHASE_LANDED;
+    case Phase::kDone: return S::PHASE_DONE;
+    case Phase::kHold: return S::PHASE_HOLD;
+    case Phase::kFailsafe: return S::PHASE_FAILSAFE;
+    case Phase::kKilled: return S::PHASE_KILLED;
+  }
+  return S::PHASE_IDLE;
+}
+
+int8_t failsafe_to_msg(Failsafe f) {
+  using S = autonomy_status_t;
+  switch (f) {
+    case Failsafe::kNone: return S::FAILSAFE_NONE;
+    case Failsafe::kPoseStale: return S::FAILSAFE_POSE_STALE;
+    case Failsafe::kPoseLost: return S::FAILSAFE_POSE_LOST;
+    case Failsafe::kOperatorAbort: return S::FAILSAFE_OPERATOR_ABORT;
+    case Failsafe::kKill: return S::FAILSAFE_KILL;
+  }
+  return S::FAILSAFE_NONE;
+}
+
+ImuSample from_msg(const imu_t& msg) {
+  ImuSample s;
+  s.utime = msg.utime;
+  s.accel_B = Vector3d(msg.accel_B[0], msg.accel_B[1], msg.accel_B[2]);
+  s.gyro_B = Vector3d(msg.gyro_B[0], msg.gyro_B[1], msg.gyro_B[2]);
+  return s;
+}
+
+imu_t to_msg(const ImuSample& imu, int64_t seq) {
+  imu_t m{};
+  m.utime = imu.utime;
+  m.seq = seq;
+  for (int i = 0; i < 3; ++i) {
+    m.accel_B[i] = imu.accel_B[i];
+    m.gyro_B[i] = imu.gyro_B[i];
+  }
+  return m;
+}
+
+TargetMeasurement from_msg(const target_t& msg) {
+  TargetMeasurement t;
+  t.utime = msg.utime;
+  t.mission = mission_from_msg(msg.mission);
+  t.found = msg.found;
+  t.p_W_target = Vector3d(msg.p_W_target[0], msg.p_W_target[1], msg.p_W_target[2]);
+  t.n_W = Vector3d(msg.n_W[0], msg.n_W[1], msg.n_W[2]);
+  t.size_m = Vector2d(msg.size_m[0], msg.size_m[1]);
+  return t;
+}
+
+target_t to_msg(const TargetMeasurement& t, int64_t seq) {
+  target_t m{};
+  m.utime = t.utime;
+  m.ref_utime = t.utime;
+  m.seq = seq;
+  m.mission = mission_to_msg(t.mission);
+  m.found = t.found;
+  m.reason = t.found ? target_t::REASON_OK : target_t::REASON_NO_TARGET_PLANE;
+  for (int i = 0; i < 3; ++i) {
+    m.p_W_target[i] = t.p_W_target[i];
+    m.n_W[i] = t.n_W[i];
+  }
+  m.size_m[0] = t.size_m.x();
+  m.size_m[1] = t.size_m.y();
+  return m;
+}
+
+OperatorCommand from_msg(const operator_cmd_t& msg) {
+  OperatorCommand c;
+  c.utime = msg.utime;
+  c.seq = msg.seq;
+  c.sender = msg.sender;
+  switch (msg.command) {
+    case operator_cmd_t::CMD_TAKEOFF: c.command = Command::kTakeoff; break;
+    case operator_cmd_t::CMD_GO: c.command = Command::kGo; break;
+    case operator_cmd_t::CMD_ABORT: c.command = Command::kAbort; break;
+    case operator_cmd_t::CMD_LAND_HERE: c.command = Command::kLandHere; break;
+    case operator_cmd_t::CMD_KILL: c.command = Command::kKill; break;
+    case operator_cmd_t::CMD_NUDGE: c.command = Command::kNudge; break;
+    default: c.command = Command::kNone; break;
+  }
+  c.mission = mission_from_msg(msg.mission);
+  c.nudge_W = Vector3d(msg.nudge_W[0], msg.nudge_W[1], msg.nudge_W[2]);
+  // Never kInternal from the wire: only the node itself issues internal commands.
+  c.auth = msg.auth == operator_cmd_t::AUTH_NONE ? CommandAuth::kNone : CommandAuth::kHmacSha256;
+  return c;
+}
+
+autonomy_status_t to_msg(const Status& s) {
+  autonomy_status_t m{};
+  m.utime = s.utime;
+  m.mission = mission_to_msg(s.mission);
+  m.phase = phase_to_msg(s.phase);
+  m.phase_name = phase_name(s.phase);
+  m.reason = s.reason;
+  m.n_measurements = s.n_measurements;
+  m.n_rejected = s.n_rejected;
+  m.retries = s.retries;
+  m.has_estimate = s.has_estimate;
+  for (int i = 0; i < 3; ++i) {
+    m.estimate_W[i] = s.estimate_W[i];
+    m.setpoint_W[i] = s.setpoint_W[i];
+    for (int j = 0; j < 3; ++j) m.covariance[3 * i + j] = s.covariance(i, j);
+  }
+  m.failsafe = failsafe_to_msg(s.failsafe);
+  m.cmds_rejected = s.cmds_rejected;
+  m.last_cmd_seq = s.last_cmd_seq;
+  m.geofence_clamped = s.geofence_clamped;
+  m.mission_time_s = s.mission_time_s;
+  return m;
+}
+
+}  // namespace alight::autonomy

@@ -1,0 +1,110 @@
+#include "autonomy/refinement.hpp"
+
+#include <Eigen/Cholesky>
+#include <cassert>
+
+namespace alight::autonomy {
+
+Vector3d RefinementEstimator::mean_of(const std::vector<Vector3d>& s, int skip) {
+  Vector3d sum = Vector3d::Zero();
+  int n = 0;
+  for (int i = 0; i < static_cast<int>(s.size()); ++i) {
+    if (i == skip) continue;
+    sum += s[i];
+    ++n;
+  }
+  return n > 0 ? Vector3d(sum / n) : Vector3d::Zero();
+}
+
+Matrix3d RefinementEstimator::cov_of(const std::vector<Vector3d>& s, const Vector3d& mu, int skip) {
+  Matrix3d C = Matrix3d::Zero();
+  int n = 0;
+  for (int i = 0; i < static_cast<int>(s.size()); ++i) {
+    if (i == skip) continue;
+    const Vector3d d = s[i] - mu;
+    C += d * d.transpose();
+    ++n;
+  }
+  return n > 1 ? Matrix3d(C / (n - 1)) : Matrix3d::Zero();
+}
+
+Vector3d RefinementEstimator::mean() const { return mean_of(samples_, -1); }
+Matrix3d RefinementEstimator::covariance() const { return cov_of(samples_, mean(), -1); }
+
+double RefinementEstimator::mahalanobis2(const Vector3d& X_W) const {
+  const Vector3d mu = mean();
+  const Matrix3d S = covariance() + params_.gate_floor_sigma_m * params_.gate_floor_sigma_m *
+                                        Matrix3d::Identity();
+  const Vector3d d = X_W - mu;
+  return d.dot(S.ldlt().solve(d));
+}
+
+void RefinementEstimator::reset() {
+  samples_.clear();
+  consecutive_rejections_ = 0;
+  have_change_ = false;
+  last_change_.setZero();
+}
+
+void RefinementEstimator::prune_outliers() {
+  const double floor2 = params_.gate_floor_sigma_m * params_.gate_floor_sigma_m;
+  while (n() > params_.gate_min_n) {
+    int worst = -1;
+    double worst_d2 = params_.gate_chi2;
+    for (int i = 0; i < n(); ++i) {
+      const Vector3d mu = mean_of(samples_, i);
+      const Matrix3d S = cov_of(samples_, mu, i) + floor2 * Matrix3d::Identity();
+      const Vector3d d = samples_[i] - mu;
+      const double d2 = d.dot(S.ldlt().solve(d));
+      if (d2 > worst_d2) {
+        worst_d2 = d2;
+        worst = i;
+      }
+    }
+    if (worst < 0) return;
+    samples_.erase(samples_.begin() + worst);
+    ++n_rejected_;
+  }
+}
+
+RefinementEstimator::Verdict RefinementEstimator::add(const Vector3d& X_W) {
+  assert(X_W.allFinite());
+  if (n() >= params_.gate_min_n && mahalanobis2(X_W) > params_.gate_chi2) {
+    ++n_rejected_;
+    if (++consecutive_rejections_ < params_.max_consecutive_rejections) return Verdict::kRejected;
+    reset();
+    samples_.push_back(X_W);
+    return Verdict::kRestarted;
+  }
+  consecutive_rejections_ = 0;
+  const Vector3d before = mean();
+  const bool had = n() > 0;
+  samples_.push_back(X_W);
+  if (n() > params_.gate_min_n) prune_outliers();
+  last_change_ = mean() - before;
+  have_change_ = had;
+  return Verdict::kAccepted;
+}
+
+bool RefinementEstimator::converged() const {
+  return have_change_ && n() >= params_.n_min &&                       // eq. 7
+         last_change_.head<2>().norm() <= params_.eps_horz_m &&        // eq. 8
+         std::abs(last_change_.z()) <= params_.eps_vert_m;             // eq. 9
+}
+
+Vector2d VantageSampler::draw(const Vector2d& mu_2, const Eigen::Matrix2d& Sigma_2, int n) {
+  const double floor2 = params_.vantage_sigma_floor_m * params_.vantage_sigma_floor_m;
+  const double prior2 = params_.prior_sigma_m * params_.prior_sigma_m;
+  const Eigen::Matrix2d S =
+      (n < 2 ? Eigen::Matrix2d(prior2 * Eigen::Matrix2d::Identity()) : Sigma_2) +
+      floor2 * Eigen::Matrix2d::Identity();
+  const Eigen::Matrix2d L = S.llt().matrixL();
+  for (int attempt = 0; attempt < 100; ++attempt) {
+    const Vector2d z(normal_(rng_), normal_(rng_));
+    const Vector2d x = mu_2 + L * z;
+    if ((x - mu_2).norm() <= params_.cutoff_m) return x;
+  }
+  return mu_2;  // only reachable with a cutoff far inside the distribution
+}
+
+}  // namespace alight::autonomy

@@ -1,0 +1,40 @@
+#include "autonomy/touchdown.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace alight::autonomy {
+
+void TouchdownDetector::arm(int64_t /*now_utime*/) {
+  armed_ = true;
+  detected_ = false;
+  cue_ = "";
+  peak_excess_mps2_ = 0.0;
+  still_since_.reset();
+}
+
+void TouchdownDetector::add_imu(const ImuSample& imu) {
+  if (!armed_ || detected_) return;
+  const double excess = imu.accel_B.norm() - g_;
+  peak_excess_mps2_ = std::max(peak_excess_mps2_, excess);
+  if (excess > params_.touchdown_accel_mps2) {
+    detected_ = true;
+    cue_ = "impact";
+  }
+}
+
+void TouchdownDetector::add_pose(const PoseSample& pose, double z_setpoint_m, int64_t now_utime) {
+  if (!armed_ || detected_) return;
+  const bool blocked = z_setpoint_m < pose.p_W_B.z() - 0.1 && std::abs(pose.v_W_B.z()) < 0.05;
+  if (!blocked) {
+    still_since_.reset();
+    return;
+  }
+  if (!still_since_) still_since_ = now_utime;
+  if ((now_utime - *still_since_) * 1e-6 >= params_.touchdown_still_s) {
+    detected_ = true;
+    cue_ = "resting";
+  }
+}
+
+}  // namespace alight::autonomy

@@ -1,0 +1,104 @@
+#pragma once
+// Domain inputs and outputs of the autonomy loop (paper 3.4): middleware-free forms of imu_t,
+// target_t, operator_cmd_t and autonomy_status_t (conversions in autonomy/convert.hpp).
+
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include "common/geometry.hpp"
+#include "common/pose_buffer.hpp"
+#include "outer_loop/setpoint.hpp"
+
+namespace alight::autonomy {
+
+enum class Mission { kNone, kLanding, kIngress };
+
+/// Phases of Fig. 4 (detection, refinement, approach) with the operator's phases around them.
+enum class Phase {
+  kIdle,
+  kTakeoff,
+  kHover,
+  kDetection,
+  kRefinement,
+  kApproach,
+  kFinalDescent,
+  kLanded,
+  kDone,
+  kHold,      ///< mission suspended: retries exhausted, refusal, abort; hovering
+  kFailsafe,  ///< motion capture lost: controlled descent, disarm on touch-down
+  kKilled,
+};
+
+enum class Failsafe { kNone, kPoseStale, kPoseLost, kOperatorAbort, kKill };
+
+const char* mission_name(Mission m);
+const char* phase_name(Phase p);
+
+struct ImuSample {
+  int64_t utime = 0;
+  Vector3d accel_B = Vector3d(0, 0, 9.81);  ///< specific force in body [m/s^2]
+  Vector3d gyro_B = Vector3d::Zero();       ///< [rad/s]
+};
+
+/// One waypoint measurement of the vision system (paper 3.1.3, X_V,i).
+struct TargetMeasurement {
+  int64_t utime = 0;  ///< exposure time of the image [us]
+  Mission mission = Mission::kNone;
+  bool found = false;
+  Vector3d p_W_target = Vector3d::Zero();  ///< platform centre / opening centre [m]
+  Vector3d n_W = Vector3d::UnitZ();        ///< target plane normal, towards the camera
+  Vector2d size_m = Vector2d::Zero();      ///< landing: platform extent (long, short);
+                                           ///< ingress: opening width, height [m]
+};
+
+enum class Command { kNone, kTakeoff, kGo, kAbort, kLandHere, kKill, kNudge };
+enum class CommandAuth {
+  kNone,        ///< unsigned (accepted only with accept_unsigned_commands)
+  kHmacSha256,  ///< signed by the ground station (verified by issue 8; rejected until then)
+  kInternal,    ///< issued by the node itself (--auto-go in simulation launch files)
+};
+
+struct OperatorCommand {
+  int64_t utime = 0;
+  int64_t seq = 0;
+  std::string sender;
+  Command command = Command::kNone;
+  Mission mission = Mission::kNone;  ///< for kGo
+  Vector3d nudge_W = Vector3d::Zero();
+  CommandAuth auth = CommandAuth::kNone;
+};
+
+/// What arrived since the last step (each optional is a new message, consumed by the step).
+struct Inputs {
+  std::optional<PoseSample> pose;
+  std::optional<ImuSample> imu;
+  std::optional<TargetMeasurement> target;
+  std::optional<OperatorCommand> command;
+};
+
+struct Status {
+  int64_t utime = 0;
+  Mission mission = Mission::kNone;
+  Phase phase = Phase::kIdle;
+  std::string reason;
+  int n_measurements = 0;  ///< n of eq. 7
+  int n_rejected = 0;      ///< waypoints rejected by the outlier gate
+  int retries = 0;
+  bool has_estimate = false;
+  Vector3d estimate_W = Vector3d::Zero();  ///< sample mean of the waypoints (X^_n)
+  Matrix3d covariance = Matrix3d::Zero();  ///< sample covariance of the waypoints
+  Vector3d setpoint_W = Vector3d::Zero();
+  Failsafe failsafe = Failsafe::kNone;
+  int cmds_rejected = 0;
+  int64_t last_cmd_seq = -1;
+  bool geofence_clamped = false;
+  double mission_time_s = 0.0;
+};
+
+struct Output {
+  outer_loop::PositionSetpoint setpoint;
+  Status status;
+};
+
+}  // namespace alight::autonomy
