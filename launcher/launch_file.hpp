@@ -16,8 +16,9 @@
 //       on_exit: shutdown        # restart (default) | shutdown: its exit ends the session
 //       env: {ALIGHT_SEED: "3"}
 //
-// In command arguments, ${ALIGHT_ROOT} (the source tree), ${SESSION_DIR} and ${LCM_URL} are
-// replaced. A command without a slash is looked up next to alight-launch first (build/bin),
+// In command arguments and env values, ${ALIGHT_ROOT} (the source tree), ${SESSION_DIR},
+// ${LCM_URL} and ${NAME} for any variable in the launcher's environment are replaced (so a
+// script can pick the scenario: ALIGHT_SCENARIO=... scripts/alight-launch FILE). A command without a slash is looked up next to alight-launch first (build/bin),
 // then on PATH.
 
 #include <map>

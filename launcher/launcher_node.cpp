@@ -60,7 +60,16 @@ class Launcher {
         bin_dir_(std::move(bin_dir)),
         root_(std::move(root)) {
     log_.open(session_ / "launcher.log", std::ios::app);
-    vars_ = {{"ALIGHT_ROOT", root_}, {"SESSION_DIR", session_.string()}, {"LCM_URL", lf_.lcm_url}};
+    // The launcher's environment first (e.g. ALIGHT_SCENARIO from scripts/demo), then the
+    // built-in variables, which win.
+    for (char** e = environ; *e; ++e) {
+      const std::string kv = *e;
+      const size_t eq = kv.find('=');
+      if (eq != std::string::npos) vars_[kv.substr(0, eq)] = kv.substr(eq + 1);
+    }
+    vars_["ALIGHT_ROOT"] = root_;
+    vars_["SESSION_DIR"] = session_.string();
+    vars_["LCM_URL"] = lf_.lcm_url;
     if (lf_.record) {
       ProcessSpec logger;
       logger.name = "lcm-logger";

@@ -209,13 +209,15 @@ processes:
 }
 
 TEST_F(LauncherIntegrationTest, ShutdownOnExitEndsTheSessionWithItsExitCode) {
+  // The exit code comes through the launcher's environment into the command line.
+  setenv("ALIGHT_TEST_EXIT_CODE", "4", 1);
   write_launch_file(std::string("name: oneshot\nlcm_url: ") + kUrl + R"(
 record: false
 processes:
   - name: long
     command: [sleep, "300"]
   - name: job
-    command: [sh, -c, "sleep 0.2; exit 4"]
+    command: [sh, -c, "sleep 0.2; exit ${ALIGHT_TEST_EXIT_CODE}"]
     on_exit: shutdown
 )");
   start_launcher();
