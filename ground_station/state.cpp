@@ -196,7 +196,7 @@ std::string StationState::to_json(int64_t now_utime, const std::string& extra) c
     w.field("n_measurements", static_cast<int>(s.n_measurements));
     w.field("n_rejected", static_cast<int>(s.n_rejected));
     w.field("retries", static_cast<int>(s.retries));
-    w.field("has_estimate", s.has_estimate);
+    w.field("has_estimate", s.has_estimate != 0);
     w.key("estimate_W").begin_array();
     for (double v : s.estimate_W) w.value(v);
     w.end_array();
@@ -209,7 +209,7 @@ std::string StationState::to_json(int64_t now_utime, const std::string& extra) c
     w.field("failsafe", static_cast<int>(s.failsafe));
     w.field("cmds_rejected", static_cast<int>(s.cmds_rejected));
     w.field("last_cmd_seq", s.last_cmd_seq);
-    w.field("geofence_clamped", s.geofence_clamped);
+    w.field("geofence_clamped", s.geofence_clamped != 0);
     w.field("mission_time_s", s.mission_time_s);
     w.end_object();
   }
@@ -234,7 +234,7 @@ std::string StationState::to_json(int64_t now_utime, const std::string& extra) c
     w.field("utime", t.utime);
     w.field("seq", t.seq);
     w.field("mission", static_cast<int>(t.mission));
-    w.field("found", t.found);
+    w.field("found", t.found != 0);
     w.field("reason", std::string(target_reason_name(t.reason)));
     w.key("p_W_target").begin_array();
     for (double v : t.p_W_target) w.value(v);
