@@ -27,17 +27,10 @@ void response_row(const int* __restrict o0, const int* __restrict o1, const int*
   }
 }
 
-/// Keeps per pixel the response of the largest magnitude over the scales seen so far.
+/// Keeps per pixel the largest response magnitude over the scales seen so far.
 ALIGHT_MULTIVERSION
-void merge_row(const float* __restrict r, float n, int x_begin, int x_end, float* __restrict best,
-               float* __restrict best_abs, float* __restrict best_n) {
-  for (int x = x_begin; x < x_end; ++x) {
-    const float m = std::abs(r[x]);
-    const bool better = m > best_abs[x];
-    best[x] = better ? r[x] : best[x];
-    best_abs[x] = better ? m : best_abs[x];
-    best_n[x] = better ? n : best_n[x];
-  }
+void merge_row(const float* __restrict r, int x_begin, int x_end, float* __restrict best_abs) {
+  for (int x = x_begin; x < x_end; ++x) best_abs[x] = std::max(best_abs[x], std::abs(r[x]));
 }
 
 /// Quadratic peak offset from three samples, clamped to half a sample.
@@ -78,61 +71,64 @@ Result<std::vector<Keypoint>> detect_star(const cv::Mat& gray, const cv::Mat& in
   const int w = gray.cols, h = gray.rows;
   const int x0 = margin, x1 = w - margin, y0 = margin, y1 = h - margin;
 
-  cv::Mat best(h, w, CV_32F, cv::Scalar(0)), best_abs(h, w, CV_32F, cv::Scalar(0)),
-      best_n(h, w, CV_32F, cv::Scalar(0));
+  // Non-maximum suppression over scale: each pixel keeps its largest |response|.
+  cv::Mat best_abs(h, w, CV_32F, cv::Scalar(0));
   std::vector<float> row(w);
   for (int y = y0; y < y1; ++y) {
-    float* b = best.ptr<float>(y);
     float* ba = best_abs.ptr<float>(y);
-    float* bn = best_n.ptr<float>(y);
     for (int n = params.min_size; n <= params.max_size; ++n) {
       response_row(integral.ptr<int>(y - 2 * n), integral.ptr<int>(y + 2 * n + 1),
                    integral.ptr<int>(y - n), integral.ptr<int>(y + n + 1), n, x0, x1, row.data());
-      merge_row(row.data(), float(n), x0, x1, b, ba, bn);
+      merge_row(row.data(), x0, x1, ba);
     }
   }
 
-  // Spatial non-maximum suppression of the per-pixel best-over-scale magnitude.
+  // Over space: peaks of |response| in a (2r+1)^2 window, above the threshold.
   cv::Mat dilated;
   const int k = 2 * params.nms_radius_px + 1;
   cv::dilate(best_abs, dilated, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(k, k)));
   const float thr = float(params.response_threshold);
-  // Harris ratio test: reject when tr^2 / det > (r + 1)^2 / r.
-  const double r = params.line_threshold;
-  const double max_ratio = (r + 1) * (r + 1) / r;
-  std::vector<Keypoint> kps;
+  std::vector<Keypoint> peaks;
   for (int y = y0 + 1; y < y1 - 1; ++y) {
     const float* ba = best_abs.ptr<float>(y);
     const float* d = dilated.ptr<float>(y);
-    for (int x = x0 + 1; x < x1 - 1; ++x) {
-      if (!(ba[x] > thr) || ba[x] < d[x]) continue;
-      const int n = int(best_n.at<float>(y, x));
-      // Second-moment matrix of the response around the peak, over a window of the blob size.
-      const int rad = std::max(2, n + 1);
-      double sxx = 0, syy = 0, sxy = 0;
-      for (int v = std::max(y0 + 1, y - rad); v <= std::min(y1 - 2, y + rad); ++v) {
-        const float* br = best.ptr<float>(v);
-        const float* bu = best.ptr<float>(v - 1);
-        const float* bd = best.ptr<float>(v + 1);
-        for (int u = std::max(x0 + 1, x - rad); u <= std::min(x1 - 2, x + rad); ++u) {
-          const double gx = 0.5 * (br[u + 1] - br[u - 1]);
-          const double gy = 0.5 * (bd[u] - bu[u]);
-          sxx += gx * gx, syy += gy * gy, sxy += gx * gy;
-        }
-      }
-      const double det = sxx * syy - sxy * sxy;
-      if (!(det > 0) || (sxx + syy) * (sxx + syy) > max_ratio * det) continue;
-      kps.push_back({float(x), float(y), float(n), best.at<float>(y, x)});
+    for (int x = x0 + 1; x < x1 - 1; ++x)
+      if (ba[x] > thr && ba[x] >= d[x]) peaks.push_back({float(x), float(y), 0.f, ba[x]});
+  }
+  // Strongest first; the line test runs only until max_features peaks have passed it.
+  std::sort(peaks.begin(), peaks.end(),
+            [](const Keypoint& a, const Keypoint& b) { return a.response > b.response; });
+  const double r = params.line_threshold;
+  const double max_ratio = (r + 1) * (r + 1) / r;  // Harris: reject tr^2 / det > (r + 1)^2 / r
+  std::vector<Keypoint> kps;
+  for (const Keypoint& p : peaks) {
+    if (params.max_features > 0 && int(kps.size()) >= params.max_features) break;
+    const int x = int(p.x), y = int(p.y);
+    // The scale of the peak and its signed response.
+    int n_best = params.min_size;
+    float r_best = 0.f;
+    for (int n = params.min_size; n <= params.max_size; ++n) {
+      const float v = star_response(integral, x, y, n);
+      if (std::abs(v) > std::abs(r_best)) r_best = v, n_best = n;
     }
+    // Second-moment matrix of |response| around the peak, over a window of the blob size.
+    const int rad = std::max(2, n_best + 1);
+    double sxx = 0, syy = 0, sxy = 0;
+    for (int v = std::max(y0 + 1, y - rad); v <= std::min(y1 - 2, y + rad); ++v) {
+      const float* br = best_abs.ptr<float>(v);
+      const float* bu = best_abs.ptr<float>(v - 1);
+      const float* bd = best_abs.ptr<float>(v + 1);
+      for (int u = std::max(x0 + 1, x - rad); u <= std::min(x1 - 2, x + rad); ++u) {
+        const double gx = 0.5 * (br[u + 1] - br[u - 1]);
+        const double gy = 0.5 * (bd[u] - bu[u]);
+        sxx += gx * gx, syy += gy * gy, sxy += gx * gy;
+      }
+    }
+    const double det = sxx * syy - sxy * sxy;
+    if (!(det > 0) || (sxx + syy) * (sxx + syy) > max_ratio * det) continue;
+    kps.push_back({p.x, p.y, float(n_best), r_best});
   }
   if (kps.size() < 4) return R::fail(Reason::kTooFewFeatures);
-  if (params.max_features > 0 && int(kps.size()) > params.max_features) {
-    std::nth_element(kps.begin(), kps.begin() + params.max_features, kps.end(),
-                     [](const Keypoint& a, const Keypoint& b) {
-                       return std::abs(a.response) > std::abs(b.response);
-                     });
-    kps.resize(params.max_features);
-  }
   if (params.subpixel) {
     for (auto& kp : kps) {
       const int x = int(kp.x), y = int(kp.y), n = int(kp.size);

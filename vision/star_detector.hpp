@@ -7,7 +7,8 @@
 // the scales n = min_size..max_size, all from one integral image. Each pixel keeps its strongest
 // scale (non-maximum suppression over scale), then peaks are kept where they are the maximum of
 // |response| in a (2r+1)^2 window (over space) and above the threshold. Line-like peaks are
-// rejected with the Harris ratio of the response's second-moment matrix (CenSurE sec. 3.3).
+// rejected with the Harris ratio of the |response| second-moment matrix (CenSurE sec. 3.3),
+// strongest peak first until max_features have passed.
 // The paper's sub-pixel step refines each peak by a quadratic fit to the 3x3 responses at its
 // scale (x, y) and a parabola through the responses at n-1, n, n+1 (scale).
 

@@ -38,37 +38,48 @@ cv::Mat describe_surf(const cv::Mat& integral, const std::vector<Keypoint>& keyp
   const auto& gw = gaussian_weights();
   const int stride = int(integral.step1());
   const int* S = integral.ptr<int>(0);
+  // Nearest pixel without a libm call (valid for coordinates > -4096).
+  auto round_px = [](float v) { return int(v + 4096.5f) - 4096; };
   for (size_t k = 0; k < keypoints.size(); ++k) {
     const Keypoint& kp = keypoints[k];
     const float s = float(surf_scale(kp, params));
     const int h = std::max(1, int(std::lround(s)));  // Haar wavelet half-size
     float* d = desc.ptr<float>(int(k));
     float acc[16][4] = {};
+    // Sample pixels; the pattern is rotated by the known angle (identity when upright).
+    int px[400], py[400];
     for (int j = 0; j < 20; ++j) {
       const float v = (float(j) - 9.5f) * s;
       for (int i = 0; i < 20; ++i) {
         const float u = (float(i) - 9.5f) * s;
-        const int px = int(std::lround(kp.x + c * u - sn * v));
-        const int py = int(std::lround(kp.y + sn * u + c * v));
-        // Integral corners, clamped so samples past the border see a truncated wavelet.
-        const int xl = std::clamp(px - h, 0, W), xm = std::clamp(px, 0, W),
-                  xr = std::clamp(px + h, 0, W);
-        const int yt = std::clamp(py - h, 0, H), ym = std::clamp(py, 0, H),
-                  yb = std::clamp(py + h, 0, H);
-        const int* rt = S + yt * stride;
-        const int* rm = S + ym * stride;
-        const int* rb = S + yb * stride;
-        const int right = rb[xr] - rt[xr] - rb[xm] + rt[xm];
-        const int left = rb[xm] - rt[xm] - rb[xl] + rt[xl];
-        const int bottom = rb[xr] - rm[xr] - rb[xl] + rm[xl];
-        const int top = rm[xr] - rt[xr] - rm[xl] + rt[xl];
-        const float gx = float(right - left), gy = float(bottom - top);
-        const float wt = gw[j * 20 + i];
-        const float du = wt * (c * gx + sn * gy);  // wavelet responses in the pattern axes
-        const float dv = wt * (-sn * gx + c * gy);
-        float* a = acc[(j / 5) * 4 + i / 5];
-        a[0] += du, a[1] += dv, a[2] += std::abs(du), a[3] += std::abs(dv);
+        px[j * 20 + i] = round_px(kp.x + c * u - sn * v);
+        py[j * 20 + i] = round_px(kp.y + sn * u + c * v);
       }
+    }
+    // Clamping is needed only when the window reaches the border.
+    const float reach = 10.f * s * 1.415f + float(h) + 2.f;
+    const bool inside = kp.x - reach >= 0 && kp.y - reach >= 0 && kp.x + reach <= float(W) &&
+                        kp.y + reach <= float(H);
+    for (int q = 0; q < 400; ++q) {
+      int xl = px[q] - h, xm = px[q], xr = px[q] + h;
+      int yt = py[q] - h, ym = py[q], yb = py[q] + h;
+      if (!inside) {  // samples past the border see a truncated wavelet
+        xl = std::clamp(xl, 0, W), xm = std::clamp(xm, 0, W), xr = std::clamp(xr, 0, W);
+        yt = std::clamp(yt, 0, H), ym = std::clamp(ym, 0, H), yb = std::clamp(yb, 0, H);
+      }
+      const int* rt = S + yt * stride;
+      const int* rm = S + ym * stride;
+      const int* rb = S + yb * stride;
+      const int right = rb[xr] - rt[xr] - rb[xm] + rt[xm];
+      const int left = rb[xm] - rt[xm] - rb[xl] + rt[xl];
+      const int bottom = rb[xr] - rm[xr] - rb[xl] + rm[xl];
+      const int top = rm[xr] - rt[xr] - rm[xl] + rt[xl];
+      const float gx = float(right - left), gy = float(bottom - top);
+      const float wt = gw[q];
+      const float du = wt * (c * gx + sn * gy);  // wavelet responses in the pattern axes
+      const float dv = wt * (-sn * gx + c * gy);
+      float* a = acc[((q / 20) / 5) * 4 + (q % 20) / 5];
+      a[0] += du, a[1] += dv, a[2] += std::abs(du), a[3] += std::abs(dv);
     }
     double norm2 = 0;
     for (int r = 0; r < 16; ++r)

@@ -100,3 +100,50 @@ inline Matrix3d view_homography(double src_w, double src_h, double angle_rad, do
 }
 
 }  // namespace alight::vision::testing
+
+namespace alight::vision::testing {
+
+/// Two views of a textured floor with a textured box top (a platform) above it: camera 1 looks
+/// down at the floor from d_floor_m, the platform top is a rectangle of the first image at
+/// distance d_top_m; camera 2 is moved by (R_21, t_12_m). Each plane is warped by its own
+/// homography (side faces and occlusion by the box are ignored: the box is seen from above).
+struct TwoPlaneScene {
+  cv::Mat image_1, image_2;
+  Matrix3d K, H_floor, H_top;  ///< pixel homographies image 1 -> image 2
+  cv::Rect top_in_1;           ///< platform top in image 1
+  Matrix3d R_21;
+  Vector3d t_12_m, n_1;  ///< n_1: unit normal (camera to plane), shared by both planes
+  double d_floor_m = 0, d_top_m = 0;
+};
+
+inline TwoPlaneScene two_plane_scene(uint64_t seed, const Matrix3d& R_21, const Vector3d& t_12_m,
+                                     double d_floor_m = 1.5, double d_top_m = 1.2,
+                                     cv::Rect top = cv::Rect(250, 170, 150, 120)) {
+  TwoPlaneScene s;
+  s.K << 666.667, 0, 319.5, 0, 666.667, 239.5, 0, 0, 1;
+  s.R_21 = R_21, s.t_12_m = t_12_m, s.n_1 = Vector3d::UnitZ();
+  s.d_floor_m = d_floor_m, s.d_top_m = d_top_m, s.top_in_1 = top;
+  auto H_of = [&](double d) {
+    return Matrix3d(s.K * R_21 * (Matrix3d::Identity() - t_12_m * s.n_1.transpose() / d) *
+                    s.K.inverse());
+  };
+  s.H_floor = H_of(d_floor_m);
+  s.H_top = H_of(d_top_m);
+  const cv::Mat floor_tex = procedural_photo(640, 480, seed);
+  const cv::Mat top_tex = procedural_photo(640, 480, seed + 1000);
+  s.image_1 = floor_tex.clone();
+  top_tex(top).copyTo(s.image_1(top));
+  cv::Mat floor_2, top_2, mask_2;
+  cv::warpPerspective(floor_tex, floor_2, to_cv(s.H_floor), cv::Size(640, 480), cv::INTER_LINEAR,
+                      cv::BORDER_REFLECT101);
+  cv::Mat top_only(480, 640, CV_8U, cv::Scalar(0)), mask(480, 640, CV_8U, cv::Scalar(0));
+  top_tex(top).copyTo(top_only(top));
+  mask(top).setTo(255);
+  cv::warpPerspective(top_only, top_2, to_cv(s.H_top), cv::Size(640, 480));
+  cv::warpPerspective(mask, mask_2, to_cv(s.H_top), cv::Size(640, 480), cv::INTER_NEAREST);
+  s.image_2 = floor_2;
+  top_2.copyTo(s.image_2, mask_2);
+  return s;
+}
+
+}  // namespace alight::vision::testing
