@@ -199,6 +199,10 @@ int run_stored(const Options& o, const CameraParams& p, const SourceSpec& spec) 
       for (int64_t i = 0; i < plan.skip && src->skip(); ++i) ++skipped, ++seq;
       sleep_us(plan.wait_us);
     }
+    // The stored frame's "buffer timestamp" is taken before it is decoded, as a kernel buffer
+    // is stamped before the driver's frame is converted: latency measured from it includes
+    // the decoding, as it would for an MJPEG camera.
+    const int64_t mono = mono_now_us();
     std::optional<cv::Mat> frame = src->next(&err);
     if (!frame) {
       if (!err.empty()) {
@@ -212,9 +216,6 @@ int run_stored(const Options& o, const CameraParams& p, const SourceSpec& spec) 
       spdlog::info("alight-camera: end of {} after {} frames", spec.path, pub.published);
       return kExitOk;
     }
-    // The stored frame's "buffer timestamp" is the moment it became available, as a kernel
-    // buffer's is the moment the driver filled it.
-    const int64_t mono = mono_now_us();
     if (first_check) {
       check_camera_info(p, frame->cols, frame->rows);
       first_check = false;
