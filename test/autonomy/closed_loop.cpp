@@ -1,0 +1,170 @@
+#include "closed_loop.hpp"
+
+#include <cmath>
+
+#include "autonomy/params.hpp"
+#include "outer_loop/params.hpp"
+#include "outer_loop/position_controller.hpp"
+#include "sim/params.hpp"
+#include "sim/simulator.hpp"
+
+namespace alight::autonomy::test {
+
+ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
+  const auto root = ParamNode::load_file(config.vehicle_file);
+  const outer_loop::OuterLoopParams ol_params = outer_loop::load_params(root);
+  AutonomyParams au_params = load_params(root);
+  au_params.seed = config.seed;
+  const sim::VehicleParams vehicle = sim::load_vehicle_params(config.vehicle_file);
+  sim::Scenario scenario = sim::load_scenario(config.scenario_file);
+  if (config.opening_size_m && scenario.wall) scenario.wall->opening_size_m = *config.opening_size_m;
+  const CameraMount mount =
+      load_camera_mount(root, config.mission == Mission::kLanding ? "downward" : "forward");
+
+  sim::Simulator simulator(scenario, vehicle, config.seed);
+  outer_loop::PositionController controller(ol_params);
+  Autonomy autonomy(au_params);
+  OracleVisionParams vp = config.vision;
+  vp.mission = config.mission;
+  vp.R_BC = mount.R_BC;
+  vp.t_B_C = mount.t_B_C;
+  vp.seed = config.seed * 7919 + 11;
+  OracleVision vision(vp);
+
+  const int64_t t0 = scenario.start_utime;
+  const int64_t t_end = t0 + static_cast<int64_t>(config.time_limit_s * 1e6);
+  std::optional<PoseSample> pose;
+  std::optional<outer_loop::PositionSetpoint> setpoint;
+  outer_loop::AttitudeCommand att;
+  int64_t now = t0;
+  int64_t seq = 0;
+  bool takeoff_sent = false, go_sent = false;
+  int64_t terminal_since = -1;
+  bool event = false;  // a scripted action happened  // first time a terminal phase was seen
+  ClosedLoopResult r;
+
+  const auto step_autonomy = [&](Inputs in) {
+    if (!takeoff_sent && pose) {
+      in.command = OperatorCommand{now, ++seq, "test", Command::kTakeoff, Mission::kNone,
+                                   Vector3d::Zero(), CommandAuth::kInternal};
+      takeoff_sent = true;
+    } else if (!go_sent && autonomy.phase() == Phase::kHover && !in.command) {
+      in.command = OperatorCommand{now, ++seq, "test", Command::kGo, config.mission,
+                                   Vector3d::Zero(), CommandAuth::kInternal};
+      go_sent = true;
+    }
+    const Output out = autonomy.update(in, now);
+    setpoint = out.setpoint;
+    r.mission_time_s = out.status.mission_time_s;
+    r.reason = out.status.reason;
+  };
+
+  while (now < t_end) {
+    const int64_t until = now + 5000;
+    const sim::AttitudeCommand cmd{att.utime,      att.roll_rad, att.pitch_rad,
+                                   att.yaw_rate_radps, att.thrust_N, att.armed};
+    simulator.step(cmd, until);
+    for (const auto& m : simulator.take_mocap()) {
+      now = std::max(now, m.pose.utime);
+      pose = m.pose;
+      Inputs in;
+      in.pose = m.pose;
+      step_autonomy(in);
+      att = controller.update(setpoint, pose, now);
+    }
+    for (const auto& s : simulator.take_imu()) {
+      now = std::max(now, s.utime);
+      Inputs in;
+      in.imu = ImuSample{s.utime, s.accel_B, s.gyro_B};
+      step_autonomy(in);
+    }
+    now = std::max(now, until);
+    // The outer loop also steps on setpoints (the node does), so the pose-lost failsafe runs.
+    att = controller.update(setpoint, pose, now);
+
+    const sim::Truth truth = simulator.truth();
+    OracleTruth ot;
+    ot.vehicle.utime = truth.utime;
+    ot.vehicle.p_W_B = truth.state.p_W_B;
+    ot.vehicle.q_WB = truth.state.q_WB;
+    ot.vehicle.v_W_B = truth.state.v_W_B;
+    if (truth.platform) {
+      ot.has_platform = true;
+      ot.platform_center_W = truth.platform->top_center_W;
+      ot.platform_size_m = truth.platform->size_m;
+      ot.platform_yaw_rad = truth.platform->yaw_rad;
+    }
+    if (truth.opening) {
+      ot.has_opening = true;
+      ot.opening_center_W = truth.opening->center_W;
+      ot.opening_size_m = truth.opening->size_m;
+      ot.wall_normal_W = truth.opening->wall_normal_W;
+      const Vector3d d = truth.state.p_W_B - truth.opening->center_W;
+      if (std::abs(d.dot(truth.opening->wall_normal_W)) < 0.1) {
+        r.crossed_wall = true;
+        const Vector3d t = Vector3d::UnitZ().cross(truth.opening->wall_normal_W).normalized();
+        r.max_lateral_in_wall_m =
+            std::max({r.max_lateral_in_wall_m, std::abs(d.dot(t)), std::abs(d.z())});
+      }
+    }
+    if (auto m = vision.update(ot, until)) {
+      Inputs in;
+      in.target = *m;
+      step_autonomy(in);
+    }
+    if (config.script) {
+      ScriptActions act;
+      act.vision_silent = vision.silent;
+      config.script(autonomy, (now - t0) * 1e-6, act);
+      if (act.vision_silent && !vision.silent) event = true;
+      vision.silent = act.vision_silent;
+      if (act.drop_mocap_for_s) {
+        simulator.inject_mocap_dropout(now, now + static_cast<int64_t>(*act.drop_mocap_for_s * 1e6));
+        event = true;
+      }
+      if (act.command) {
+        Inputs in;
+        in.command = act.command;
+        in.command->utime = now;
+        in.command->seq = ++seq;
+        step_autonomy(in);
+        event = true;
+      }
+    }
+    if (event) r.min_z_after_event_m = std::min(r.min_z_after_event_m, truth.state.p_W_B.z());
+    const Phase ph = autonomy.phase();
+    const bool terminal = ph == Phase::kLanded || ph == Phase::kDone || ph == Phase::kKilled ||
+                          (ph == Phase::kFailsafe && setpoint && !setpoint->motors_on) ||
+                          ph == Phase::kHold;
+    if (!terminal) {
+      terminal_since = -1;
+    } else if (terminal_since < 0) {
+      terminal_since = now;
+    } else if ((ph == Phase::kLanded && truth.landed) || now - terminal_since > 3'000'000) {
+      break;  // settled (the sim's "landed" needs the vehicle at rest)
+    }
+  }
+
+  const sim::Truth truth = simulator.truth();
+  r.phase = autonomy.phase();
+  r.landed = truth.landed;
+  r.tipped = truth.tipped;
+  r.collided = truth.collided;
+  r.n_collisions = truth.n_collisions;
+  r.armed = truth.state.armed;
+  r.final_p_W = truth.state.p_W_B;
+  r.final_z_m = truth.state.p_W_B.z();
+  r.sim_time_s = (now - t0) * 1e-6;
+  r.n_measurements = autonomy.estimator().n();
+  r.n_rejected = autonomy.estimator().n_rejected();
+  r.retries = autonomy.retries();
+  if (truth.platform) {
+    r.touchdown_error_m = (truth.state.p_W_B.head<2>() - truth.platform->top_center_W.head<2>()).norm();
+    r.estimate_error_W = autonomy.final_estimate() - truth.platform->top_center_W;
+  } else if (truth.opening) {
+    r.estimate_error_W = autonomy.final_estimate() - truth.opening->center_W;
+  }
+  return r;
+}
+
+}  // namespace alight::autonomy::test

@@ -1,0 +1,61 @@
+#pragma once
+// Closed-loop flights composed in-process, deterministic: alight_sim (vehicle, motion capture,
+// IMU; no camera rendering) + outer_loop::PositionController + autonomy::Autonomy + ORACLE
+// VISION (the test fixture standing in for the vision process). Used by the ctest closed-loop
+// tests (a few seeds) and by bench/autonomy (20 seeds per platform). Commands are issued as the
+// node's --auto-go does: TAKEOFF once a pose arrived, GO once hovering.
+
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+
+#include "autonomy/autonomy.hpp"
+#include "oracle_vision.hpp"
+
+namespace alight::autonomy::test {
+
+struct ClosedLoopConfig {
+  std::string vehicle_file;   ///< config/vehicles/*.yaml
+  std::string scenario_file;  ///< config/scenarios/*.yaml
+  Mission mission = Mission::kLanding;
+  uint64_t seed = 1;          ///< sim seed (platform placement, noise) and oracle / autonomy seed
+  double time_limit_s = 240;  ///< sim time limit after the start [s]
+  OracleVisionParams vision;  ///< mission, mount and seed are filled in from the above
+  /// Called every 5 ms of sim time; may issue an operator command (ABORT, KILL), silence the
+  /// vision or cut motion capture.
+  std::function<void(const Autonomy&, double t_s, struct ScriptActions&)> script;
+  /// Overrides the scenario's opening size (width, height) [m].
+  std::optional<Vector2d> opening_size_m;
+};
+
+struct ScriptActions {
+  std::optional<OperatorCommand> command;  ///< sent to autonomy now
+  bool vision_silent = false;              ///< sticky: the oracle stops publishing
+  std::optional<double> drop_mocap_for_s;  ///< motion capture lost from now on for this long
+};
+
+struct ClosedLoopResult {
+  Phase phase = Phase::kIdle;   ///< final autonomy phase
+  std::string reason;
+  bool landed = false;          ///< sim: at rest on the platform top, motors off
+  bool tipped = false;
+  bool collided = false;
+  int n_collisions = 0;
+  bool armed = true;            ///< sim: motors armed at the end
+  double touchdown_error_m = -1;  ///< lateral distance body origin - platform top centre [m]
+  double mission_time_s = 0;    ///< GO to LANDED / DONE [s]
+  double sim_time_s = 0;
+  Vector3d final_p_W = Vector3d::Zero();
+  Vector3d estimate_error_W = Vector3d::Zero();  ///< final estimate - true target [m]
+  int n_measurements = 0, n_rejected = 0, retries = 0;
+  double max_lateral_in_wall_m = 0;  ///< ingress: largest offset from the opening centre while
+                                     ///< the body crossed the wall plane [m]
+  bool crossed_wall = false;
+  double min_z_after_event_m = 1e9;  ///< lowest body z after the first scripted action [m]
+  double final_z_m = 0;
+};
+
+ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config);
+
+}  // namespace alight::autonomy::test

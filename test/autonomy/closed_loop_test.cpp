@@ -1,0 +1,167 @@
+// Closed loop in-process: alight_sim + outer loop + autonomy + oracle vision (test fixture).
+// A few seeds per case to keep ctest short; bench/autonomy runs 20 seeds per platform and
+// prints the touchdown error distribution and mission times.
+
+#include "closed_loop.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+
+namespace alight::autonomy::test {
+namespace {
+
+std::string path(const std::string& rel) { return std::string(ALIGHT_SOURCE_DIR) + "/" + rel; }
+
+ClosedLoopConfig landing(const std::string& vehicle, const std::string& platform, uint64_t seed) {
+  ClosedLoopConfig c;
+  c.vehicle_file = path("config/vehicles/" + vehicle + ".yaml");
+  c.scenario_file = path("config/scenarios/landing_" + platform + ".yaml");
+  c.mission = Mission::kLanding;
+  c.seed = seed;
+  return c;
+}
+
+void expect_landed(const ClosedLoopResult& r, const std::string& what) {
+  EXPECT_EQ(r.phase, Phase::kLanded) << what << ": " << r.reason;
+  EXPECT_TRUE(r.landed) << what << ": " << r.reason;
+  EXPECT_FALSE(r.tipped) << what;
+  EXPECT_FALSE(r.armed) << what;
+  EXPECT_LT(r.touchdown_error_m, 0.05) << what;
+}
+
+class ClosedLoopLandingTest
+    : public ::testing::TestWithParam<std::tuple<std::string, std::string>> {};
+
+TEST_P(ClosedLoopLandingTest, LandsOnThePlatformWithinCentimetres) {
+  const auto& [vehicle, platform] = GetParam();
+  std::vector<double> errors;
+  for (uint64_t seed : {1, 2, 3}) {
+    const auto r = fly_closed_loop(landing(vehicle, platform, seed));
+    expect_landed(r, vehicle + "/" + platform + " seed " + std::to_string(seed));
+    errors.push_back(r.touchdown_error_m);
+  }
+  std::sort(errors.begin(), errors.end());
+  EXPECT_LE(errors[1], 0.03) << "median touchdown lateral error";
+}
+
+INSTANTIATE_TEST_SUITE_P(PapersPlatforms, ClosedLoopLandingTest,
+                         ::testing::Combine(::testing::Values("starmac", "pelican"),
+                                            ::testing::Values("a", "b", "c")));
+
+}  // namespace
+}  // namespace alight::autonomy::test
+
+namespace alight::autonomy::test {
+namespace {
+
+ClosedLoopConfig ingress(const std::string& vehicle, uint64_t seed) {
+  ClosedLoopConfig c;
+  c.vehicle_file = path("config/vehicles/" + vehicle + ".yaml");
+  c.scenario_file = path("config/scenarios/ingress.yaml");
+  c.mission = Mission::kIngress;
+  c.seed = seed;
+  return c;
+}
+
+OperatorCommand operator_command(Command command) {
+  OperatorCommand c;
+  c.command = command;
+  c.sender = "gs";
+  c.auth = CommandAuth::kNone;  // accepted: the vehicle files allow unsigned commands (issue 8)
+  return c;
+}
+
+TEST(ClosedLoopIngressTest, FliesThroughAnOpeningThatFitsWithoutContact) {
+  // Both simulated vehicles span more than 60 cm rotor tip to rotor tip (STARMAC 0.75 m,
+  // Pelican 0.67 m), so the paper's 60 x 60 cm opening is refused (next test); a 1.0 x 0.6 m
+  // window fits with 5 cm clearance per side for the STARMAC.
+  for (uint64_t seed : {1, 2, 3}) {
+    auto c = ingress("starmac", seed);
+    c.opening_size_m = Vector2d(1.0, 0.6);
+    const auto r = fly_closed_loop(c);
+    const std::string what = "seed " + std::to_string(seed);
+    EXPECT_EQ(r.phase, Phase::kDone) << what << ": " << r.reason;
+    EXPECT_TRUE(r.crossed_wall) << what;
+    EXPECT_FALSE(r.collided) << what << ": " << r.n_collisions << " contacts";
+    EXPECT_GT(r.final_p_W.x(), 3.5) << what;
+    EXPECT_LT(r.max_lateral_in_wall_m, 0.06) << what;
+  }
+}
+
+TEST(ClosedLoopIngressTest, RefusesThePapers60cmOpeningForAVehicleThatDoesNotFit) {
+  const auto r = fly_closed_loop(ingress("pelican", 1));
+  EXPECT_EQ(r.phase, Phase::kHold) << r.reason;
+  EXPECT_NE(r.reason.find("refused ingress"), std::string::npos) << r.reason;
+  EXPECT_FALSE(r.collided);
+  EXPECT_FALSE(r.crossed_wall);
+}
+
+TEST(ClosedLoopFailsafeTest, MocapDropoutMidDescentDescendsAndDisarmsOnTouchdown) {
+  auto c = landing("starmac", "b", 4);
+  bool dropped = false;
+  double approach_t = -1;
+  c.script = [&](const Autonomy& a, double t, ScriptActions& act) {
+    if (a.phase() == Phase::kApproach && approach_t < 0) approach_t = t;
+    if (!dropped && approach_t > 0 && t > approach_t + 2.5) {  // descending by then
+      act.drop_mocap_for_s = 1000.0;
+      dropped = true;
+    }
+  };
+  const auto r = fly_closed_loop(c);
+  EXPECT_TRUE(dropped);
+  EXPECT_EQ(r.phase, Phase::kFailsafe) << r.reason;
+  EXPECT_NE(r.reason.find("touch-down"), std::string::npos) << r.reason;
+  EXPECT_FALSE(r.armed) << "disarmed on touch-down";
+  EXPECT_FALSE(r.tipped);
+  EXPECT_LT(r.final_z_m, 0.5) << "on the platform or the floor";
+}
+
+TEST(ClosedLoopFailsafeTest, AbortMidDescentClimbsToTheSafeHeightAndHovers) {
+  auto c = landing("pelican", "a", 5);
+  bool sent = false;
+  double approach_t = -1;
+  c.script = [&](const Autonomy& a, double t, ScriptActions& act) {
+    if (a.phase() == Phase::kApproach && approach_t < 0) approach_t = t;
+    if (!sent && approach_t > 0 && t > approach_t + 2.5) {
+      act.command = operator_command(Command::kAbort);
+      sent = true;
+    }
+  };
+  const auto r = fly_closed_loop(c);
+  EXPECT_TRUE(sent);
+  EXPECT_EQ(r.phase, Phase::kHold) << r.reason;
+  EXPECT_TRUE(r.armed);
+  EXPECT_LT(r.min_z_after_event_m, 1.1) << "it was descending";
+  EXPECT_NEAR(r.final_z_m, 1.5, 0.1) << "abort_height_m";
+}
+
+TEST(ClosedLoopFailsafeTest, VisionSilenceInRefinementRetriesThenHolds) {
+  auto c = landing("starmac", "c", 6);
+  c.script = [&](const Autonomy& a, double, ScriptActions& act) {
+    if (a.phase() == Phase::kRefinement) act.vision_silent = true;
+  };
+  const auto r = fly_closed_loop(c);
+  EXPECT_EQ(r.phase, Phase::kHold) << r.reason;
+  EXPECT_NE(r.reason.find("retries exhausted"), std::string::npos) << r.reason;
+  EXPECT_TRUE(r.armed);
+  EXPECT_GT(r.final_z_m, 1.0);
+}
+
+TEST(ClosedLoopFailsafeTest, KillStopsTheMotorsAtOnce) {
+  auto c = landing("pelican", "b", 7);
+  bool sent = false;
+  c.script = [&](const Autonomy& a, double, ScriptActions& act) {
+    if (!sent && a.phase() == Phase::kRefinement) {
+      act.command = operator_command(Command::kKill);
+      sent = true;
+    }
+  };
+  const auto r = fly_closed_loop(c);
+  EXPECT_EQ(r.phase, Phase::kKilled);
+  EXPECT_FALSE(r.armed);
+  EXPECT_LT(r.final_z_m, 0.3) << "fell";
+}
+
+}  // namespace
+}  // namespace alight::autonomy::test
