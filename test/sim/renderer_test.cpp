@@ -1,0 +1,310 @@
+#include <gtest/gtest.h>
+
+#include <opencv2/calib3d.hpp>
+#include <opencv2/features2d.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <cmath>
+
+#include "sim/renderer.hpp"
+#include "sim/simulator.hpp"
+#include "sim_test_util.hpp"
+
+namespace alight::sim {
+namespace {
+
+// Scenes of flat grey surfaces, lit so that adjacent faces differ: edges are the only structure.
+Scenario flat(Scenario s) {
+  s = test::quiet(s);
+  auto grey = [](TextureSpec& t, double mean) {
+    t.kind = "noise";
+    t.size_px = 64;
+    t.mean = mean;
+    t.contrast = 0.0;
+  };
+  grey(s.floor_texture, 60);
+  if (s.platform) grey(s.platform->texture, 200);
+  if (s.wall) {
+    grey(s.wall->texture, 200);
+    grey(s.wall->room_texture, 40);
+  }
+  s.lighting.ambient = 0.0;
+  s.lighting.diffuse = 1.0;
+  return s;
+}
+
+float bilinear(const cv::Mat& img, const Vector2d& p) {
+  cv::Mat patch;
+  cv::getRectSubPix(img, cv::Size(1, 1), cv::Point2f(float(p.x()), float(p.y())), patch, CV_32F);
+  return patch.at<float>(0, 0);
+}
+
+// A straight image edge through points measured where the intensity crosses half-way between
+// the two sides, on profiles across the edge at 4-16 px from `corner` towards `along`.
+cv::Vec4f measure_edge(const cv::Mat& img, const Vector2d& corner, const Vector2d& along) {
+  const Vector2d e = (along - corner).normalized();
+  const Vector2d nrm(-e.y(), e.x());
+  std::vector<cv::Point2f> pts;
+  for (double s = 4; s <= 16; s += 1.0) {
+    const Vector2d c = corner + s * e;
+    std::vector<float> prof;
+    for (double k = -4; k <= 4.001; k += 0.125) prof.push_back(bilinear(img, c + k * nrm));
+    const float mid = 0.5f * (prof.front() + prof.back());
+    for (size_t i = 0; i + 1 < prof.size(); ++i) {
+      if ((prof[i] - mid) * (prof[i + 1] - mid) <= 0 && prof[i] != prof[i + 1]) {
+        const double k = -4 + 0.125 * (i + (mid - prof[i]) / (prof[i + 1] - prof[i]));
+        const Vector2d q = c + k * nrm;
+        pts.emplace_back(float(q.x()), float(q.y()));
+        break;
+      }
+    }
+  }
+  EXPECT_GE(pts.size(), 10u);
+  cv::Vec4f line;
+  cv::fitLine(pts, line, cv::DIST_L2, 0, 1e-4, 1e-4);
+  return line;
+}
+
+Vector2d intersect(const cv::Vec4f& a, const cv::Vec4f& b) {
+  // p = pa + s da = pb + t db
+  Eigen::Matrix2d A;
+  A << a[0], -b[0], a[1], -b[1];
+  const Vector2d s = A.colPivHouseholderQr().solve(Vector2d(b[2] - a[2], b[3] - a[3]));
+  return Vector2d(a[2] + s[0] * a[0], a[3] + s[0] * a[1]);
+}
+
+Vector2d project(const CameraModel& m, const Isometry3d& X_WC, const Vector3d& p_W) {
+  const auto px = m.project(X_WC.inverse() * p_W);
+  EXPECT_TRUE(px.has_value());
+  return px.value_or(Vector2d(-1, -1));
+}
+
+// Corner c of a polygon whose neighbours are a and b: the rendered corner, from its two edges.
+double corner_error(const cv::Mat& img, const CameraModel& m, const Isometry3d& X_WC,
+                    const Vector3d& c, const Vector3d& a, const Vector3d& b) {
+  const Vector2d pc = project(m, X_WC, c);
+  const Vector2d measured = intersect(measure_edge(img, pc, project(m, X_WC, a)),
+                                      measure_edge(img, pc, project(m, X_WC, b)));
+  return (measured - pc).norm();
+}
+
+TEST(SimRendererTest, PlatformCornersProjectOntoTheRenderedCorners) {
+  Scenario sc = flat(test::scenario("landing_a"));
+  sc.lighting.light_dir_W = Vector3d(0, 0, 1);
+  sc.platform->yaw_deg = 17.0;
+  const Scene scene = build_scene(sc, 1);
+  const Box& box = scene.boxes.at(0);
+  for (const bool distorted : {false, true}) {
+    SCOPED_TRACE(distorted ? "with distortion" : "ideal lens");
+    CameraModel model = CameraModel::firefly_mv_4mm();
+    if (distorted) model.D = {-0.25, 0.08, 0.001, -0.001, 0.0};
+    Renderer renderer(model, 4);
+    // Above the platform's top (no side faces in view), tilted and turned a little.
+    const Vector3d C_W = box.center_W + Vector3d(0.04, -0.03, 1.0);
+    const Isometry3d X_WC = make_transform(rotation_from_rpy(0.06, -0.04, 0.4) * R_BC_downward(), C_W);
+    const cv::Mat img = renderer.render(scene, X_WC);
+    std::vector<Vector3d> top;
+    for (const auto& [sx, sy] : {std::pair{1, 1}, {-1, 1}, {-1, -1}, {1, -1}})
+      top.push_back(box.center_W + box.R_WO() * Vector3d(sx * box.half_size_m.x(), sy * box.half_size_m.y(),
+                                                         box.half_size_m.z()));
+    for (int i = 0; i < 4; ++i) {
+      const double err = corner_error(img, model, X_WC, top[i], top[(i + 1) % 4], top[(i + 3) % 4]);
+      EXPECT_LT(err, 0.5) << "corner " << i;
+    }
+  }
+}
+
+TEST(SimRendererTest, OpeningCornersProjectOntoTheRenderedCorners) {
+  Scenario sc = flat(test::scenario("ingress"));
+  sc.lighting.light_dir_W = Vector3d(-1, 0, 0);  // the wall's face lit, the opening's sides dark
+  const Scene scene = build_scene(sc, 1);
+  const OpeningTruth o = *scene.opening;
+  const CameraModel model = CameraModel::firefly_mv_4mm();
+  Renderer renderer(model, 4);
+  const Vector3d C_W = o.center_W + Vector3d(-1.3, 0.05, 0.03);
+  const Isometry3d X_WC = make_transform(rotation_from_rpy(0.03, 0.05, -0.06) * R_BC_forward(), C_W);
+  const cv::Mat img = renderer.render(scene, X_WC);
+  const double w = 0.5 * o.size_m.x(), h = 0.5 * o.size_m.y();
+  std::vector<Vector3d> c;
+  for (const auto& [sy, sz] : {std::pair{1, 1}, {-1, 1}, {-1, -1}, {1, -1}})
+    c.push_back(o.center_W + Vector3d(0, sy * w, sz * h));
+  for (int i = 0; i < 4; ++i)
+    EXPECT_LT(corner_error(img, model, X_WC, c[i], c[(i + 1) % 4], c[(i + 3) % 4]), 0.5) << i;
+}
+
+TEST(SimRendererTest, TwoViewsOfTheFloorAreRelatedByThePlaneHomography) {
+  const Scenario sc = test::quiet(test::scenario("landing_none"));
+  const Scene scene = build_scene(sc, 3);
+  const CameraModel model = CameraModel::firefly_mv_4mm();
+  const Renderer renderer(model, 1);
+  const Isometry3d X_WC1 = make_transform(rotation_from_rpy(0.02, 0.03, 0.1) * R_BC_downward(),
+                                          Vector3d(0.3, -0.2, 1.4));
+  const Isometry3d X_WC2 = make_transform(rotation_from_rpy(-0.03, 0.05, 0.16) * R_BC_downward(),
+                                          Vector3d(0.45, -0.12, 1.3));
+  const cv::Mat img1 = renderer.render(scene, X_WC1), img2 = renderer.render(scene, X_WC2);
+
+  // X_C2 = R X_C1 + t; the floor is n^T X_C1 = -d with n its upward normal in C1 and d the
+  // height of C1: H = K (R - t n^T / d) K^-1.
+  const Matrix3d R = X_WC2.linear().transpose() * X_WC1.linear();
+  const Vector3d t = X_WC2.linear().transpose() * (X_WC1.translation() - X_WC2.translation());
+  const Vector3d n = X_WC1.linear().transpose() * Vector3d::UnitZ();
+  const double d = X_WC1.translation().z();
+  const Matrix3d K = model.K();
+  const Matrix3d H = K * (R - t * n.transpose() / d) * K.inverse();
+  auto apply = [](const Matrix3d& M, const Vector2d& p) { return (M * p.homogeneous()).hnormalized(); };
+
+  // Measured correspondences: template matching with sub-pixel peaks around the prediction.
+  std::vector<cv::Point2f> p1, p2;
+  const int half = 12, search = 6;
+  for (int v = 60; v <= 420; v += 40) {
+    for (int u = 60; u <= 580; u += 40) {
+      const Vector2d q = apply(H, Vector2d(u, v));
+      const cv::Rect tpl_rect(u - half, v - half, 2 * half + 1, 2 * half + 1);
+      const cv::Rect win(int(std::lround(q.x())) - half - search, int(std::lround(q.y())) - half - search,
+                         2 * (half + search) + 1, 2 * (half + search) + 1);
+      if ((win & cv::Rect(0, 0, 640, 480)) != win) continue;
+      cv::Mat score;
+      cv::matchTemplate(img2(win), img1(tpl_rect), score, cv::TM_CCOEFF_NORMED);
+      double best;
+      cv::Point at;
+      cv::minMaxLoc(score, nullptr, &best, nullptr, &at);
+      if (best < 0.9 || at.x < 1 || at.y < 1 || at.x >= score.cols - 1 || at.y >= score.rows - 1) continue;
+      auto peak = [](float a, float b, float c) { return 0.5f * (a - c) / (a - 2 * b + c); };
+      const float dx = peak(score.at<float>(at.y, at.x - 1), score.at<float>(at.y, at.x), score.at<float>(at.y, at.x + 1));
+      const float dy = peak(score.at<float>(at.y - 1, at.x), score.at<float>(at.y, at.x), score.at<float>(at.y + 1, at.x));
+      p1.emplace_back(float(u), float(v));
+      p2.emplace_back(float(win.x + half + at.x + dx), float(win.y + half + at.y + dy));
+    }
+  }
+  ASSERT_GT(p1.size(), 60u);
+  const cv::Mat Hm = cv::findHomography(p1, p2, 0);
+  ASSERT_FALSE(Hm.empty());
+  Matrix3d H_est;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) H_est(r, c) = Hm.at<double>(r, c);
+  double worst = 0;
+  for (const Vector2d& corner : {Vector2d(0, 0), Vector2d(639, 0), Vector2d(639, 479), Vector2d(0, 479)})
+    worst = std::max(worst, (apply(H_est, corner) - apply(H, corner)).norm());
+  EXPECT_LT(worst, 0.3);
+}
+
+TEST(SimRendererTest, TexturesGiveHundredsOfFeaturesOnFloorPlatformAndWall) {
+  const CameraModel model = CameraModel::firefly_mv_4mm();
+  const Renderer renderer(model, 1);
+  auto corners = [&](const cv::Mat& img, const cv::Mat& mask = cv::Mat()) {
+    std::vector<cv::Point2f> pts;
+    cv::goodFeaturesToTrack(img, pts, 2000, 0.01, 5, mask);
+    return pts.size();
+  };
+  {
+    const Scene scene = build_scene(test::quiet(test::scenario("landing_a")), 1);
+    const Box& box = scene.boxes.at(0);
+    const Isometry3d X_WC = make_transform(rotation_from_rpy(0, 0, 0.3) * R_BC_downward(),
+                                           box.center_W + Vector3d(0.2, 0.1, 1.4));
+    const cv::Mat img = renderer.render(scene, X_WC);
+    EXPECT_GT(corners(img), 300u);
+    // On the platform's top alone.
+    cv::Mat mask = cv::Mat::zeros(img.size(), CV_8U);
+    std::vector<cv::Point> poly;
+    for (const auto& [sx, sy] : {std::pair{1, 1}, {-1, 1}, {-1, -1}, {1, -1}}) {
+      const Vector3d p = box.center_W + box.R_WO() * Vector3d(0.9 * sx * box.half_size_m.x(),
+                                                              0.9 * sy * box.half_size_m.y(), box.half_size_m.z());
+      const Vector2d px = project(model, X_WC, p);
+      poly.emplace_back(int(px.x()), int(px.y()));
+    }
+    cv::fillConvexPoly(mask, poly, 255);
+    EXPECT_GT(corners(img, mask), 30u);
+  }
+  {
+    const Scene scene = build_scene(test::quiet(test::scenario("ingress_solid")), 1);
+    const Isometry3d X_WC = make_transform(R_BC_forward(), Vector3d(1.5, 0.0, 1.2));
+    EXPECT_GT(corners(renderer.render(scene, X_WC)), 300u);
+  }
+}
+
+TEST(SimRendererTest, DistantFloorIsFilteredLikeASupersampledReference) {
+  // Far, oblique floor: many texels per pixel. Mip-mapping must give what 16 rays per pixel
+  // average to, not the aliased value of one texel.
+  const Scene scene = build_scene(test::quiet(test::scenario("landing_none")), 2);
+  const CameraModel model = CameraModel::firefly_mv_4mm();
+  const Renderer fast(model, 1), reference(model, 4);
+  const Isometry3d X_WC = make_transform(rotation_from_rpy(0, 0.6, 0) * R_BC_forward(), Vector3d(0, 0, 2.5));
+  cv::Mat a, b;
+  fast.render(scene, X_WC).convertTo(a, CV_32F);
+  reference.render(scene, X_WC).convertTo(b, CV_32F);
+  const cv::Rect far_rows(0, 260, 640, 120);  // floor 3-6 m away
+  cv::Mat diff = a(far_rows) - b(far_rows);
+  cv::Scalar mu, sd, ref_mu, ref_sd;
+  cv::meanStdDev(diff, mu, sd);
+  cv::meanStdDev(b(far_rows), ref_mu, ref_sd);
+  EXPECT_LT(sd[0], 0.35 * ref_sd[0]) << "difference " << sd[0] << " of contrast " << ref_sd[0];
+  // And moving by a fraction of a texel changes the image only a little (no shimmer).
+  const Isometry3d X_WC_moved = make_transform(X_WC.linear(), X_WC.translation() + Vector3d(0.0011, 0.0007, 0));
+  cv::Mat c;
+  fast.render(scene, X_WC_moved).convertTo(c, CV_32F);
+  cv::meanStdDev(c(far_rows) - a(far_rows), mu, sd);
+  EXPECT_LT(sd[0], 0.2 * ref_sd[0]);
+}
+
+TEST(SimRendererTest, CameraFramesArriveAtTheirRateStampedAtMidExposureWithNoise) {
+  Scenario sc = test::quiet(test::scenario("landing_none"));
+  sc.camera.enabled = true;
+  sc.camera.rate_hz = 30;
+  sc.camera.exposure_s = 0.006;
+  sc.camera.noise_sigma = 3.0;
+  const CameraRig rig = load_camera_rig(test::config_path("vehicles/starmac.yaml"), "downward");
+  Simulator sim(sc, test::starmac(), 4, rig);
+  test::place(sim, Vector3d(0, 0, 1.0));
+  std::vector<CameraFrame> frames;
+  for (int i = 0; i < 100; ++i) {  // 1 s, polled every 10 ms
+    sim.step(test::hover(test::starmac()), sim.now_utime() + 10000);
+    if (auto f = sim.take_camera()) frames.push_back(*f);
+  }
+  ASSERT_GE(frames.size(), 29u);
+  for (size_t i = 1; i < frames.size(); ++i) {
+    EXPECT_EQ(frames[i].seq, frames[i - 1].seq + 1);
+    EXPECT_NEAR(frames[i].utime - frames[i - 1].utime, 33333, 1);
+  }
+  EXPECT_EQ((frames[0].utime - sc.start_utime) % 33333, 0);  // t_k = start + k / rate
+  EXPECT_EQ(frames[0].pixels.type(), CV_8UC1);
+  EXPECT_EQ(frames[0].pixels.size(), cv::Size(640, 480));
+  // The vehicle hovers still: two frames differ by noise alone (sqrt(2) sigma).
+  cv::Mat d;
+  cv::subtract(frames[10].pixels, frames[11].pixels, d, cv::noArray(), CV_32F);
+  cv::Scalar mu, sd;
+  cv::meanStdDev(d, mu, sd);
+  EXPECT_NEAR(sd[0], std::sqrt(2.0) * 3.0, 0.4);
+  // Frames rendered agree with render() from the mid-exposure pose.
+  const cv::Mat clean = sim.render(rig.mount, rig.model, make_transform(sim.state().q_WB.toRotationMatrix(), sim.state().p_W_B));
+  cv::subtract(frames.back().pixels, clean, d, cv::noArray(), CV_32F);
+  cv::meanStdDev(d, mu, sd);
+  EXPECT_NEAR(sd[0], 3.0, 0.4);
+}
+
+TEST(SimRendererTest, MotionBlurSmearsAFastMovingView) {
+  Scenario sc = test::quiet(test::scenario("landing_none"));
+  sc.camera.enabled = true;
+  sc.camera.noise_sigma = 0.0;
+  sc.camera.exposure_s = 0.02;
+  const CameraRig rig = load_camera_rig(test::config_path("vehicles/starmac.yaml"), "downward");
+  auto sharpness = [&](int samples) {
+    sc.camera.motion_blur_samples = samples;
+    Simulator sim(sc, test::starmac(), 4, rig);
+    test::place(sim, Vector3d(0, 0, 1.0));
+    VehicleState s = sim.state();
+    s.v_W_B = Vector3d(2.0, 0, 0);  // 2 m/s at 1 m: ~27 px during the exposure
+    sim.set_state(s);
+    std::optional<CameraFrame> f;
+    while (!f) {
+      sim.step(test::hover(test::starmac()), sim.now_utime() + 1000);
+      f = sim.take_camera();
+    }
+    cv::Mat gx;
+    cv::Sobel(f->pixels, gx, CV_32F, 0, 1);  // image v runs along body x (downward camera)
+    return cv::norm(gx);
+  };
+  EXPECT_LT(sharpness(8), 0.7 * sharpness(1));
+}
+
+}  // namespace
+}  // namespace alight::sim
