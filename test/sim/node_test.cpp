@@ -1,0 +1,110 @@
+#include <gtest/gtest.h>
+
+#include <lcm/lcm-cpp.hpp>
+#include <sys/wait.h>
+
+#include <alight/attitude_cmd_t.hpp>
+#include <alight/image_t.hpp>
+#include <alight/imu_t.hpp>
+#include <alight/pose_t.hpp>
+#include <alight/sim_truth_t.hpp>
+
+#include <atomic>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+#include "common/msg_convert.hpp"
+
+namespace alight {
+namespace {
+
+const std::string kUrl = "udpm://239.255.76.67:7893?ttl=0";
+
+std::string bin() { return std::string(ALIGHT_BINARY_DIR) + "/bin/alight-sim"; }
+std::string scenario(const std::string& name) {
+  return std::string(ALIGHT_SOURCE_DIR) + "/config/scenarios/" + name + ".yaml";
+}
+
+int run(const std::string& args, std::string* stderr_text = nullptr) {
+  const auto err = std::filesystem::path(ALIGHT_BINARY_DIR) / "test_tmp" / "sim_node_output.txt";
+  std::filesystem::create_directories(err.parent_path());
+  const int status = std::system((bin() + " " + args + " > " + err.string() + " 2>&1").c_str());
+  if (stderr_text) {
+    std::stringstream ss;
+    ss << std::ifstream(err).rdbuf();
+    *stderr_text = ss.str();
+  }
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+struct Counter {
+  std::atomic<int> mocap{0}, imu{0}, camera{0}, truth{0};
+  sim_truth_t last_truth{};
+  image_t last_image{};
+  void on_pose(const lcm::ReceiveBuffer*, const std::string&, const pose_t*) { ++mocap; }
+  void on_imu(const lcm::ReceiveBuffer*, const std::string&, const imu_t*) { ++imu; }
+  void on_image(const lcm::ReceiveBuffer*, const std::string&, const image_t* m) {
+    last_image = *m;
+    ++camera;
+  }
+  void on_truth(const lcm::ReceiveBuffer*, const std::string&, const sim_truth_t* m) {
+    last_truth = *m;
+    ++truth;
+  }
+};
+
+TEST(SimNodeTest, PublishesEveryChannelAndFollowsAttitudeCommands) {
+  lcm::LCM lcm(kUrl + "&recv_buf_size=8388608");
+  ASSERT_TRUE(lcm.good());
+  Counter c;
+  lcm.subscribe("MOCAP_POSE", &Counter::on_pose, &c);
+  lcm.subscribe("IMU", &Counter::on_imu, &c);
+  lcm.subscribe("CAMERA", &Counter::on_image, &c)->setQueueCapacity(100);
+  lcm.subscribe("SIM_TRUTH", &Counter::on_truth, &c);
+  int code = -1;
+  std::thread node([&] {
+    code = run("--scenario " + scenario("landing_a") + " --seed 3 --duration 1.5 --lcm-url '" + kUrl + "'");
+  });
+  // Full thrust, armed: the vehicle must climb off the floor.
+  const auto t_end = std::chrono::steady_clock::now() + std::chrono::seconds(4);
+  while (std::chrono::steady_clock::now() < t_end) {
+    attitude_cmd_t cmd{};
+    cmd.thrust_N = 1.5 * 1.2 * 9.81;
+    cmd.armed = true;
+    lcm.publish("ATTITUDE_CMD", &cmd);
+    lcm.handleTimeout(5);
+    if (code != -1 && c.truth > 0) break;
+  }
+  node.join();
+  while (lcm.handleTimeout(50) > 0) {
+  }
+  EXPECT_EQ(code, 0);
+  EXPECT_GE(c.mocap, 130);   // 100 Hz
+  EXPECT_GE(c.imu, 270);     // 200 Hz
+  EXPECT_GE(c.camera, 40);   // 30 Hz
+  EXPECT_GE(c.truth, 65);    // 50 Hz
+  EXPECT_EQ(c.last_truth.scenario, "landing_a");
+  EXPECT_TRUE(c.last_truth.has_platform);
+  EXPECT_TRUE(c.last_truth.armed);
+  EXPECT_GT(c.last_truth.pos[2], 0.5);
+  EXPECT_EQ(c.last_image.width, 640);
+  EXPECT_EQ(c.last_image.height, 480);
+  EXPECT_EQ(c.last_image.pixelformat, image_t::PIXEL_FORMAT_GRAY);
+  EXPECT_TRUE(metadata_int(c.last_image, "seq").has_value());
+}
+
+TEST(SimNodeTest, ABadScenarioExitsWithCode2NamingFileKeyAndValue) {
+  const auto path = std::filesystem::path(ALIGHT_BINARY_DIR) / "test_tmp" / "sim_bad_scenario.yaml";
+  std::filesystem::create_directories(path.parent_path());
+  std::ofstream(path) << "name: bad\ncamera:\n  rate_hz: 500\n";
+  std::string err;
+  EXPECT_EQ(run("--scenario " + path.string() + " --lcm-url '" + kUrl + "'", &err), 2);
+  EXPECT_NE(err.find(path.string()), std::string::npos) << err;
+  EXPECT_NE(err.find("camera.rate_hz"), std::string::npos) << err;
+  EXPECT_NE(err.find("500"), std::string::npos) << err;
+}
+
+}  // namespace
+}  // namespace alight
