@@ -42,6 +42,10 @@ struct TrackerParams {
   double max_frame_gap_s = 1.0;   ///< a larger gap between frames resets the history [s]
   double max_reference_age_s = 10.0;  ///< older frames are never the reference [s]
   MatchParams match{};            ///< frame-to-frame matching
+  /// Frame-to-frame matches must fit one homography within this; consecutive frames are close,
+  /// so off-plane parallax stays below it while wrong matches do not (0: no check) [px].
+  double frame_threshold_px = 8.0;
+  uint64_t seed = 1;              ///< RANSAC seed of the frame-to-frame check [-]
   void validate() const;
 };
 
