@@ -264,6 +264,7 @@ int run_camera(const Options& o, const CameraParams& p) {
   RateLimitedLog log;
   int64_t seq_base = 0, last_seq = -1;
   uint64_t reconnects = 0;
+  bool warned_clock = false;
   while (!node.stopping() &&
          (o.max_frames <= 0 || static_cast<int64_t>(pub.published) < o.max_frames)) {
     const int64_t now = mono_now_us();
@@ -277,8 +278,18 @@ int run_camera(const Options& o, const CameraParams& p) {
     if (step.frame) {
       const Frame& fr = *step.frame;
       last_seq = seq_base + fr.sequence;
-      const int64_t utime =
-          exposure_utime(fr.buffer_mono_us, offset_us, fr.stamp_source, p.exposure_us);
+      // A driver without monotonic buffer stamps (TIMESTAMP_COPY / UNKNOWN) gets the dequeue
+      // time instead: later than the exposure, but on the right clock.
+      if (!fr.monotonic_clock && !warned_clock) {
+        spdlog::warn(
+            "alight-camera: {} does not stamp buffers with CLOCK_MONOTONIC; frames are "
+            "stamped when dequeued (later than the exposure)",
+            f.path);
+        warned_clock = true;
+      }
+      const int64_t utime = fr.monotonic_clock ? exposure_utime(fr.buffer_mono_us, offset_us,
+                                                                fr.stamp_source, p.exposure_us)
+                                               : mono_now_us() + offset_us;
       const CaptureCounters& c = sup.capture().counters();
       pub.publish(fr.pixels, utime, last_seq, c.dropped, c.skipped);
       pub.report(now, c.dropped, c.skipped);

@@ -418,6 +418,8 @@ GrabResult V4l2Capture::grab(int timeout_ms) {
   }
   frame.buffer_mono_us = timeval_us(b.timestamp);
   frame.stamp_source = stamp_source_from_flags(b.flags);
+  frame.monotonic_clock =
+      (b.flags & V4L2_BUF_FLAG_TIMESTAMP_MASK) == V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC;
   frame.sequence = b.sequence;
   frame.dropped = dropped;
   frame.skipped = skipped;

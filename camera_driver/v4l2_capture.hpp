@@ -68,9 +68,10 @@ struct Frame {
   cv::Mat pixels;              ///< converted, owned (the kernel buffer is already requeued)
   int64_t buffer_mono_us = 0;  ///< the V4L2 buffer timestamp (CLOCK_MONOTONIC) [us]
   StampSource stamp_source = StampSource::kEndOfFrame;
-  uint32_t sequence = 0;  ///< the kernel's buffer sequence number
-  uint32_t dropped = 0;   ///< kernel-dropped frames just before this one (sequence gap)
-  uint32_t skipped = 0;   ///< newer-frame-wins: completed frames not returned before it
+  bool monotonic_clock = true;  ///< false: the driver's timestamps are not CLOCK_MONOTONIC
+  uint32_t sequence = 0;        ///< the kernel's buffer sequence number
+  uint32_t dropped = 0;         ///< kernel-dropped frames just before this one (sequence gap)
+  uint32_t skipped = 0;         ///< newer-frame-wins: completed frames not returned before it
 };
 
 enum class GrabStatus {

@@ -49,6 +49,7 @@ TEST_F(CaptureTest, StreamsFramesInOrderWithKernelTimestampsAndSequence) {
     EXPECT_EQ(g.frame->sequence, static_cast<uint32_t>(i));
     EXPECT_EQ(g.frame->buffer_mono_us, 1'000'000 + i * 33'333);
     EXPECT_EQ(g.frame->stamp_source, StampSource::kStartOfExposure);
+    EXPECT_TRUE(g.frame->monotonic_clock);
     EXPECT_EQ(g.frame->dropped, 0u);
     EXPECT_EQ(g.frame->pixels.at<uint8_t>(240, 320), i);
     EXPECT_EQ(io.queued(dev), 4);  // the buffer went straight back to the driver

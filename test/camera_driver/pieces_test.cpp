@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <opencv2/videoio.hpp>
 
 #include "camera_driver/device_list.hpp"
 #include "camera_driver/device_select.hpp"
@@ -153,6 +154,41 @@ TEST(FramePacerTest, PlaysAtItsRateAndSkipsToTheNewestWhenBehind) {
   EXPECT_EQ(pacer.index(), 5);
   p = pacer.plan(1'460'000);
   EXPECT_EQ(p.wait_us, 40'000);
+}
+
+TEST(StoredSourceTest, VideoFileFramesComeBackInOrderAtTheFilesRate) {
+  const std::string dir = std::string(ALIGHT_BINARY_DIR) + "/test_tmp/camera_stored";
+  std::filesystem::create_directories(dir);
+  const std::string path = dir + "/clip.avi";
+  {
+    cv::VideoWriter w(path, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 25.0, cv::Size(64, 48));
+    ASSERT_TRUE(w.isOpened());
+    for (int i = 0; i < 5; ++i) w.write(cv::Mat(48, 64, CV_8UC3, cv::Scalar::all(40 * i + 20)));
+  }
+  std::string err;
+  const auto spec = parse_source("file:" + path, &err);
+  ASSERT_TRUE(spec) << err;
+  auto src = StoredSource::open(*spec, OutputEncoding::kMono8, &err);
+  ASSERT_TRUE(src) << err;
+  EXPECT_DOUBLE_EQ(src->fps(), 25.0);
+  EXPECT_EQ(src->frame_count(), 5);
+  for (int i = 0; i < 5; ++i) {
+    if (i == 2) {
+      ASSERT_TRUE(src->skip());
+      continue;
+    }
+    const auto f = src->next(&err);
+    ASSERT_TRUE(f) << i;
+    EXPECT_EQ(f->type(), CV_8UC1);
+    EXPECT_NEAR(f->at<uint8_t>(24, 32), 40 * i + 20, 3) << i;  // JPEG quantisation
+  }
+  EXPECT_FALSE(src->next(&err));
+  EXPECT_TRUE(err.empty());
+  ASSERT_TRUE(src->rewind());
+  EXPECT_NEAR(src->next(&err)->at<uint8_t>(0, 0), 20, 3);
+  EXPECT_FALSE(StoredSource::open(SourceSpec{SourceSpec::Kind::kVideoFile, dir + "/none.avi"},
+                                  OutputEncoding::kMono8, &err));
+  EXPECT_NE(err.find("no such video file"), std::string::npos);
 }
 
 TEST(DeviceListTest, SaysSoWhenThereIsNoCamera) {
