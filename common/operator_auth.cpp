@@ -47,20 +47,20 @@ OperatorKey parse_key(const std::string& contents, const std::string& origin) {
                          " bytes in hex, need at least " + std::to_string(kMinKeyBytes) +
                          " (e.g. `openssl rand -hex 32 > KEYFILE`)");
     for (size_t i = begin; i < end; i += 2)
-      key.bytes.push_back(static_cast<uint8_t>(16 * hex_value(contents[i]) +
-                                               hex_value(contents[i + 1])));
+      key.bytes.push_back(
+          static_cast<uint8_t>(16 * hex_value(contents[i]) + hex_value(contents[i + 1])));
     return key;
   }
   if (contents.size() < kMinKeyBytes)
     throw KeyFileError(origin + ": key too short: " + std::to_string(contents.size()) +
-                       " bytes, need at least " + std::to_string(kMinKeyBytes) +
-                       " raw bytes or " + std::to_string(2 * kMinKeyBytes) + " hex digits");
+                       " bytes, need at least " + std::to_string(kMinKeyBytes) + " raw bytes or " +
+                       std::to_string(2 * kMinKeyBytes) + " hex digits");
   key.bytes.assign(contents.begin(), contents.end());
   return key;
 }
 
 LoadedKey load_key_file(const std::string& path) {
-  struct stat st{};
+  struct stat st {};
   if (::stat(path.c_str(), &st) != 0)
     throw KeyFileError(path + ": key file missing or unreadable: " + std::strerror(errno));
   if (!S_ISREG(st.st_mode)) throw KeyFileError(path + ": key file is not a regular file");
@@ -82,8 +82,8 @@ LoadedKey load_key_file(const std::string& path) {
 HmacTag hmac_sha256(const uint8_t* key, size_t key_len, const uint8_t* data, size_t data_len) {
   HmacTag tag{};
   unsigned int len = 0;
-  const uint8_t* out = HMAC(EVP_sha256(), key, static_cast<int>(key_len), data, data_len,
-                            tag.data(), &len);
+  const uint8_t* out =
+      HMAC(EVP_sha256(), key, static_cast<int>(key_len), data, data_len, tag.data(), &len);
   // Only fails on allocation failure or a broken OpenSSL; a zero tag must never leave here.
   if (out == nullptr || len != tag.size()) throw std::runtime_error("HMAC-SHA256 failed (OpenSSL)");
   return tag;
@@ -130,11 +130,16 @@ bool signature_valid(const operator_cmd_t& cmd, const OperatorKey& key) {
 
 const char* reason_name(CommandVerdict::Reason reason) {
   switch (reason) {
-    case CommandVerdict::Reason::kAccepted: return "accepted";
-    case CommandVerdict::Reason::kUnsigned: return "unsigned";
-    case CommandVerdict::Reason::kBadSignature: return "bad_signature";
-    case CommandVerdict::Reason::kStale: return "stale";
-    case CommandVerdict::Reason::kReplayed: return "replayed";
+    case CommandVerdict::Reason::kAccepted:
+      return "accepted";
+    case CommandVerdict::Reason::kUnsigned:
+      return "unsigned";
+    case CommandVerdict::Reason::kBadSignature:
+      return "bad_signature";
+    case CommandVerdict::Reason::kStale:
+      return "stale";
+    case CommandVerdict::Reason::kReplayed:
+      return "replayed";
   }
   return "unknown";
 }

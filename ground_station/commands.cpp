@@ -139,8 +139,8 @@ bool is_loopback_address(const std::string& address) {
   // 127.0.0.0/8, dotted quad only.
   int parts[4];
   char tail;
-  if (std::sscanf(a.c_str(), "%d.%d.%d.%d%c", &parts[0], &parts[1], &parts[2], &parts[3],
-                  &tail) != 4)
+  if (std::sscanf(a.c_str(), "%d.%d.%d.%d%c", &parts[0], &parts[1], &parts[2], &parts[3], &tail) !=
+      4)
     return false;
   for (int p : parts)
     if (p < 0 || p > 255) return false;
@@ -157,11 +157,16 @@ AccessPolicy policy_for_bind(const std::string& bind_address, std::string token)
 
 const char* access_name(Access a) {
   switch (a) {
-    case Access::kAllowed: return "allowed";
-    case Access::kMissingToken: return "missing session token";
-    case Access::kBadToken: return "wrong session token";
-    case Access::kCrossOrigin: return "cross-origin request";
-    case Access::kBadHost: return "Host is not a loopback name";
+    case Access::kAllowed:
+      return "allowed";
+    case Access::kMissingToken:
+      return "missing session token";
+    case Access::kBadToken:
+      return "wrong session token";
+    case Access::kCrossOrigin:
+      return "cross-origin request";
+    case Access::kBadHost:
+      return "Host is not a loopback name";
   }
   return "unknown";
 }

@@ -17,7 +17,7 @@ namespace alight::ground_station {
 /// One command as the page asks for it.
 struct CommandRequest {
   int8_t command = operator_cmd_t::CMD_NONE;
-  int8_t mission = 0;                   ///< target_t.MISSION_* (CMD_GO only)
+  int8_t mission = 0;                      ///< target_t.MISSION_* (CMD_GO only)
   std::array<double, 3> nudge_W{0, 0, 0};  ///< CMD_NUDGE only [m]
 };
 

@@ -23,8 +23,8 @@ class FrameStore {
 
   struct Jpeg {
     std::shared_ptr<const std::string> bytes;
-    uint64_t seq = 0;      ///< 1 for the first frame put, counting up
-    int64_t utime = 0;     ///< exposure time of the frame
+    uint64_t seq = 0;   ///< 1 for the first frame put, counting up
+    int64_t utime = 0;  ///< exposure time of the frame
     int width = 0, height = 0;
   };
   /// Client threads: the newest frame as JPEG, waiting up to `wait_s` for one newer than

@@ -37,6 +37,10 @@ int main(int argc, char** argv) {
                    "the station is view-only");
     app.add_option("--web-dir", web_dir, "Folder of the page (index.html, app.js, style.css)")
         ->check(CLI::ExistingDirectory);
+    bool require_token = false;
+    app.add_flag("--require-token", require_token,
+                 "Require the session token also on loopback (e.g. when reached through an SSH "
+                 "tunnel or a proxy)");
     app.add_option("--sender", sender, "Sender id in OPERATOR_CMD (default gs-<hostname>)");
     try {
       app.parse(argc, argv);
@@ -64,6 +68,7 @@ int main(int argc, char** argv) {
       spdlog::warn("no --key-file: view-only, command buttons are disabled");
     }
     options.token = gs::make_session_token();
+    options.require_token = require_token;
 
     alight::Node node(args.lcm_url, "alight-ground-station");
     gs::Station station(params, options);

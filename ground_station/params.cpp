@@ -8,15 +8,16 @@ void GroundStationParams::validate() const {
   for (const auto* c : {&camera_channel, &diag_channel, &status_channel, &target_channel,
                         &process_channel, &pose_channel, &command_channel})
     param_check(!c->empty(), "*_channel", *c, "channel names must not be empty");
-  param_check(http_port >= 0 && http_port <= 65535, "http_port", http_port, "must be in [0, 65535]");
+  param_check(http_port >= 0 && http_port <= 65535, "http_port", http_port,
+              "must be in [0, 65535]");
   param_check(http_threads >= 2 && http_threads <= 256, "http_threads", http_threads,
               "must be in [2, 256]");
   param_check(max_queued_connections >= 1, "max_queued_connections", max_queued_connections,
               "must be >= 1");
   param_check(client_timeout_s > 0.0 && client_timeout_s <= 60.0, "client_timeout_s",
               client_timeout_s, "must be in (0, 60] s");
-  param_check(frame_wait_s >= 0.0 && frame_wait_s < client_timeout_s, "frame_wait_s",
-              frame_wait_s, "must be in [0, client_timeout_s)");
+  param_check(frame_wait_s >= 0.0 && frame_wait_s < client_timeout_s, "frame_wait_s", frame_wait_s,
+              "must be in [0, client_timeout_s)");
   param_check(jpeg_quality >= 1 && jpeg_quality <= 100, "jpeg_quality", jpeg_quality,
               "must be in [1, 100]");
   param_check(track_period_s > 0.0, "track_period_s", track_period_s, "must be > 0");

@@ -31,8 +31,8 @@ double RateMeter::rate_hz(int64_t now_utime) const {
   if (arrivals_.size() < 2) return 0.0;
   // Intervals within the window over the window, so a channel that stopped decays to 0 instead
   // of showing its last rate forever.
-  const double span_s = std::max(arrivals_.back() - arrivals_.front(),
-                                 now_utime - arrivals_.front()) * 1e-6;
+  const double span_s =
+      std::max(arrivals_.back() - arrivals_.front(), now_utime - arrivals_.front()) * 1e-6;
   return span_s > 0.0 ? (arrivals_.size() - 1) / span_s : 0.0;
 }
 
@@ -43,47 +43,76 @@ std::optional<double> RateMeter::age_s(int64_t now_utime) const {
 
 const char* phase_name(int8_t phase) {
   switch (phase) {
-    case autonomy_status_t::PHASE_IDLE: return "IDLE";
-    case autonomy_status_t::PHASE_TAKEOFF: return "TAKEOFF";
-    case autonomy_status_t::PHASE_HOVER: return "HOVER";
-    case autonomy_status_t::PHASE_DETECTION: return "DETECTION";
-    case autonomy_status_t::PHASE_REFINEMENT: return "REFINEMENT";
-    case autonomy_status_t::PHASE_APPROACH: return "APPROACH";
-    case autonomy_status_t::PHASE_FINAL_DESCENT: return "FINAL_DESCENT";
-    case autonomy_status_t::PHASE_LANDED: return "LANDED";
-    case autonomy_status_t::PHASE_DONE: return "DONE";
-    case autonomy_status_t::PHASE_HOLD: return "HOLD";
-    case autonomy_status_t::PHASE_FAILSAFE: return "FAILSAFE";
-    case autonomy_status_t::PHASE_KILLED: return "KILLED";
+    case autonomy_status_t::PHASE_IDLE:
+      return "IDLE";
+    case autonomy_status_t::PHASE_TAKEOFF:
+      return "TAKEOFF";
+    case autonomy_status_t::PHASE_HOVER:
+      return "HOVER";
+    case autonomy_status_t::PHASE_DETECTION:
+      return "DETECTION";
+    case autonomy_status_t::PHASE_REFINEMENT:
+      return "REFINEMENT";
+    case autonomy_status_t::PHASE_APPROACH:
+      return "APPROACH";
+    case autonomy_status_t::PHASE_FINAL_DESCENT:
+      return "FINAL_DESCENT";
+    case autonomy_status_t::PHASE_LANDED:
+      return "LANDED";
+    case autonomy_status_t::PHASE_DONE:
+      return "DONE";
+    case autonomy_status_t::PHASE_HOLD:
+      return "HOLD";
+    case autonomy_status_t::PHASE_FAILSAFE:
+      return "FAILSAFE";
+    case autonomy_status_t::PHASE_KILLED:
+      return "KILLED";
   }
   return "UNKNOWN";
 }
 
 const char* process_state_name(int8_t state) {
   switch (state) {
-    case process_info_t::STATE_WAITING: return "waiting";
-    case process_info_t::STATE_RUNNING: return "running";
-    case process_info_t::STATE_BACKOFF: return "backoff";
-    case process_info_t::STATE_EXITED: return "exited";
-    case process_info_t::STATE_STOPPED: return "stopped";
-    case process_info_t::STATE_FAILED: return "failed";
+    case process_info_t::STATE_WAITING:
+      return "waiting";
+    case process_info_t::STATE_RUNNING:
+      return "running";
+    case process_info_t::STATE_BACKOFF:
+      return "backoff";
+    case process_info_t::STATE_EXITED:
+      return "exited";
+    case process_info_t::STATE_STOPPED:
+      return "stopped";
+    case process_info_t::STATE_FAILED:
+      return "failed";
   }
   return "unknown";
 }
 
 const char* target_reason_name(int8_t reason) {
   switch (reason) {
-    case target_t::REASON_OK: return "ok";
-    case target_t::REASON_NO_POSE: return "no pose";
-    case target_t::REASON_NO_REFERENCE: return "no reference";
-    case target_t::REASON_TOO_FEW_FEATURES: return "too few features";
-    case target_t::REASON_TOO_FEW_MATCHES: return "too few matches";
-    case target_t::REASON_SMALL_BASELINE: return "small baseline";
-    case target_t::REASON_NO_DOMINANT_PLANE: return "no dominant plane";
-    case target_t::REASON_NO_TARGET_PLANE: return "no target plane";
-    case target_t::REASON_NO_OPENING: return "no opening";
-    case target_t::REASON_DECOMPOSITION_FAILED: return "decomposition failed";
-    case target_t::REASON_BAD_IMAGE: return "bad image";
+    case target_t::REASON_OK:
+      return "ok";
+    case target_t::REASON_NO_POSE:
+      return "no pose";
+    case target_t::REASON_NO_REFERENCE:
+      return "no reference";
+    case target_t::REASON_TOO_FEW_FEATURES:
+      return "too few features";
+    case target_t::REASON_TOO_FEW_MATCHES:
+      return "too few matches";
+    case target_t::REASON_SMALL_BASELINE:
+      return "small baseline";
+    case target_t::REASON_NO_DOMINANT_PLANE:
+      return "no dominant plane";
+    case target_t::REASON_NO_TARGET_PLANE:
+      return "no target plane";
+    case target_t::REASON_NO_OPENING:
+      return "no opening";
+    case target_t::REASON_DECOMPOSITION_FAILED:
+      return "decomposition failed";
+    case target_t::REASON_BAD_IMAGE:
+      return "bad image";
   }
   return "unknown";
 }
@@ -299,8 +328,11 @@ std::string StationState::to_json(int64_t now_utime, const std::string& extra) c
 
   w.key("sent").begin_array();
   for (const auto& c : sent_)
-    w.begin_object().field("name", c.name).field("seq", c.seq).field("age_s",
-        (now_utime - c.utime) * 1e-6).end_object();
+    w.begin_object()
+        .field("name", c.name)
+        .field("seq", c.seq)
+        .field("age_s", (now_utime - c.utime) * 1e-6)
+        .end_object();
   w.end_array();
 
   std::string out = w.str();

@@ -43,14 +43,14 @@ const char* process_state_name(int8_t state);
 const char* target_reason_name(int8_t reason);
 
 struct TrackPoint {
-  double t_s;       ///< since the first sample [s]
-  double p_W[3];    ///< vehicle position [m]
+  double t_s;     ///< since the first sample [s]
+  double p_W[3];  ///< vehicle position [m]
 };
 struct HeightPoint {
-  double t_s;             ///< since the first sample [s]
-  double vehicle_z_m;     ///< vehicle height (NaN before a pose)
-  double estimate_z_m;    ///< estimate z (NaN without an estimate)
-  double sigma_z_m;       ///< sqrt of the estimate's z variance (NaN without an estimate)
+  double t_s;           ///< since the first sample [s]
+  double vehicle_z_m;   ///< vehicle height (NaN before a pose)
+  double estimate_z_m;  ///< estimate z (NaN without an estimate)
+  double sigma_z_m;     ///< sqrt of the estimate's z variance (NaN without an estimate)
 };
 struct Measurement {
   double t_s;

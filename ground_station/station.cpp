@@ -1,6 +1,5 @@
 #include "ground_station/station.hpp"
 
-#include <httplib.h>
 #include <openssl/rand.h>
 #include <spdlog/spdlog.h>
 
@@ -12,6 +11,7 @@
 #include <condition_variable>
 #include <filesystem>
 
+#include "ground_station/http.hpp"
 #include "ground_station/json_writer.hpp"
 
 namespace alight::ground_station {
@@ -109,6 +109,7 @@ Station::Station(const GroundStationParams& params, StationOptions options)
       state_(params),
       camera_(params.jpeg_quality),
       diag_(params.jpeg_quality) {
+  if (options_.require_token) policy_.require_token = true;
   if (policy_.require_token && policy_.token.size() < 16)
     throw std::runtime_error("serving " + options_.bind_address +
                              " needs a session token of at least 16 characters");
@@ -209,8 +210,8 @@ void Station::setup_routes() {
   auto frame_route = [this](FrameStore& store) {
     return [this, &store](const httplib::Request& req, httplib::Response& res) {
       uint64_t after = 0;
-      if (req.has_param("after")) after = std::strtoull(req.get_param_value("after").c_str(),
-                                                        nullptr, 10);
+      if (req.has_param("after"))
+        after = std::strtoull(req.get_param_value("after").c_str(), nullptr, 10);
       std::string error;
       const auto jpeg = store.jpeg_after(after, params_.frame_wait_s, &error);
       res.set_header("Cache-Control", "no-store");
@@ -224,11 +225,10 @@ void Station::setup_routes() {
       // The JPEG is shared by all clients; the response holds a reference, not a copy per
       // client queue.
       const auto bytes = jpeg->bytes;
-      res.set_content_provider(
-          bytes->size(), "image/jpeg",
-          [bytes](size_t offset, size_t length, httplib::DataSink& sink) {
-            return sink.write(bytes->data() + offset, length);
-          });
+      res.set_content_provider(bytes->size(), "image/jpeg",
+                               [bytes](size_t offset, size_t length, httplib::DataSink& sink) {
+                                 return sink.write(bytes->data() + offset, length);
+                               });
     };
   };
   svr.Get("/api/frame/camera", frame_route(camera_));
@@ -291,7 +291,8 @@ int Station::start() {
   const auto timeout_us = std::chrono::duration_cast<std::chrono::microseconds>(timeout);
   server_->set_read_timeout(timeout_us);
   server_->set_write_timeout(timeout_us);
-  server_->set_keep_alive_timeout(std::max<time_t>(1, static_cast<time_t>(params_.client_timeout_s)));
+  server_->set_keep_alive_timeout(
+      std::max<time_t>(1, static_cast<time_t>(params_.client_timeout_s)));
   server_->set_keep_alive_max_count(100);
   server_->set_payload_max_length(64 * 1024);
   setup_routes();

@@ -29,19 +29,20 @@ namespace alight::ground_station {
 
 struct StationOptions {
   std::string bind_address = "127.0.0.1";
-  int port = -1;                       ///< -1: params.http_port; 0: any free port
-  std::string web_dir;                 ///< folder with index.html, app.js, style.css
-  std::optional<OperatorKey> key;      ///< without a key the station is view-only
+  int port = -1;                   ///< -1: params.http_port; 0: any free port
+  std::string web_dir;             ///< folder with index.html, app.js, style.css
+  std::optional<OperatorKey> key;  ///< without a key the station is view-only
   std::string sender = "ground-station";
-  std::string token;                   ///< session token (required when not on loopback)
+  std::string token;           ///< session token (required when not on loopback)
+  bool require_token = false;  ///< require it on loopback too (e.g. behind an SSH tunnel)
 };
 
 /// Counters for tests and the page.
 struct StationCounters {
   uint64_t http_requests = 0;
   uint64_t commands_published = 0;
-  uint64_t commands_refused = 0;       ///< access or parse errors
-  uint64_t connections_over_limit = 0; ///< served by the accept thread (queue full)
+  uint64_t commands_refused = 0;        ///< access or parse errors
+  uint64_t connections_over_limit = 0;  ///< served by the accept thread (queue full)
 };
 
 class Station {

@@ -3,13 +3,12 @@
 // the phase given on stdin ("phase N"), VISION_TARGET and PROCESS_STATUS, and checks every
 // OPERATOR_CMD with CommandVerifier, printing one JSON line per command on stdout.
 
+#include <CLI/CLI.hpp>
 #include <alight/autonomy_status_t.hpp>
 #include <alight/operator_cmd_t.hpp>
 #include <alight/pose_t.hpp>
 #include <alight/process_status_t.hpp>
 #include <alight/target_t.hpp>
-
-#include <CLI/CLI.hpp>
 #include <atomic>
 #include <cmath>
 #include <cstdio>

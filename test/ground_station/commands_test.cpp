@@ -16,9 +16,8 @@ TEST(ParseCommandTest, AcceptsEveryCommandWithItsFields) {
   ASSERT_TRUE(go.request) << go.error;
   EXPECT_EQ(go.request->command, operator_cmd_t::CMD_GO);
   EXPECT_EQ(go.request->mission, 2);
-  EXPECT_EQ(parse_command_request({{"command", "go"}, {"mission", "landing"}}, 1.0)
-                .request->mission,
-            1);
+  EXPECT_EQ(
+      parse_command_request({{"command", "go"}, {"mission", "landing"}}, 1.0).request->mission, 1);
   for (const char* name : {"takeoff", "abort", "land_here"}) {
     auto p = parse_command_request({{"command", name}}, 1.0);
     ASSERT_TRUE(p.request) << name << ": " << p.error;
@@ -73,13 +72,14 @@ TEST(CommandBuilderTest, SeqIncreasesAcrossGroundStationRestarts) {
   CommandVerifier verifier(key());
   CommandBuilder first("gs", key());
   for (int i = 0; i < 5; ++i)
-    ASSERT_TRUE(verifier.check(first.build({operator_cmd_t::CMD_ABORT, 0, {}}, t0), t0 + 10)
-                    .accepted());
+    ASSERT_TRUE(
+        verifier.check(first.build({operator_cmd_t::CMD_ABORT, 0, {}}, t0), t0 + 10).accepted());
   // A restarted station (fresh builder) one second later is not taken for a replay.
   CommandBuilder second("gs", key());
-  EXPECT_TRUE(verifier.check(second.build({operator_cmd_t::CMD_ABORT, 0, {}}, t0 + 1'000'000),
-                             t0 + 1'000'000)
-                  .accepted());
+  EXPECT_TRUE(
+      verifier
+          .check(second.build({operator_cmd_t::CMD_ABORT, 0, {}}, t0 + 1'000'000), t0 + 1'000'000)
+          .accepted());
 }
 
 TEST(LoopbackTest, RecognisesLoopbackAddresses) {
@@ -96,16 +96,16 @@ TEST(AccessTest, LoopbackNeedsNoTokenButALoopbackHost) {
   const AccessPolicy p = policy_for_bind("127.0.0.1", "0123456789abcdef0123456789abcdef");
   EXPECT_FALSE(p.require_token);
   EXPECT_EQ(check_command_access(p, {{"Host", "127.0.0.1:8080"}}), Access::kAllowed);
-  EXPECT_EQ(check_command_access(p, {{"host", "localhost:8080"},
-                                     {"Origin", "http://localhost:8080"}}),
-            Access::kAllowed);
+  EXPECT_EQ(
+      check_command_access(p, {{"host", "localhost:8080"}, {"Origin", "http://localhost:8080"}}),
+      Access::kAllowed);
   // DNS rebinding: a name that resolves to 127.0.0.1 but is not ours.
   EXPECT_EQ(check_command_access(p, {{"Host", "evil.example:8080"}}), Access::kBadHost);
   EXPECT_EQ(check_command_access(p, {}), Access::kBadHost);
   // A page from another site posting to the station (CSRF).
-  EXPECT_EQ(check_command_access(p, {{"Host", "127.0.0.1:8080"},
-                                     {"Origin", "https://evil.example"}}),
-            Access::kCrossOrigin);
+  EXPECT_EQ(
+      check_command_access(p, {{"Host", "127.0.0.1:8080"}, {"Origin", "https://evil.example"}}),
+      Access::kCrossOrigin);
 }
 
 TEST(AccessTest, NonLoopbackBindRefusesRequestsWithoutTheToken) {

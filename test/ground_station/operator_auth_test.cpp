@@ -70,11 +70,11 @@ TEST(CanonicalBytesTest, HasTheDocumentedLayout) {
   const std::vector<uint8_t> expected = {
       0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07, 0x08,  // utime
       0x11, 0x12, 0x13, 0x14, 0x15, 0x16, 0x17, 0x18,  // seq
-      0x00, 0x00, 0x00, 0x03, 'a', 'b', 0x00,          // sender: length incl. NUL, bytes, NUL
+      0x00, 0x00, 0x00, 0x03, 'a',  'b',  0x00,        // sender: length incl. NUL, bytes, NUL
       0x02, 0x01,                                      // command GO, mission LANDING
-      0x3f, 0xd0, 0, 0, 0, 0, 0, 0,                    // 0.25
-      0xbf, 0xf0, 0, 0, 0, 0, 0, 0,                    // -1.0
-      0x00, 0x00, 0, 0, 0, 0, 0, 0};                   // 0.0
+      0x3f, 0xd0, 0,    0,    0,    0,    0,    0,     // 0.25
+      0xbf, 0xf0, 0,    0,    0,    0,    0,    0,     // -1.0
+      0x00, 0x00, 0,    0,    0,    0,    0,    0};    // 0.0
   EXPECT_EQ(canonical_bytes(cmd), expected);
   EXPECT_EQ(expected.size(), 46u + 3u);
 }
@@ -172,7 +172,7 @@ TEST_F(VerifierTest, RejectsStaleAndFutureCommands) {
 TEST_F(VerifierTest, RejectsReplayedAndOlderSequenceNumbers) {
   const operator_cmd_t first = signed_cmd(kNow, 10);
   EXPECT_EQ(check(first), R::kAccepted);
-  EXPECT_EQ(check(first), R::kReplayed);               // the very same message again
+  EXPECT_EQ(check(first), R::kReplayed);                // the very same message again
   EXPECT_EQ(check(signed_cmd(kNow, 9)), R::kReplayed);  // an older one
   EXPECT_EQ(check(signed_cmd(kNow, 11)), R::kAccepted);
   EXPECT_EQ(verifier.last_seq("gs-test"), 11);

@@ -6,9 +6,9 @@
 
 #include <cmath>
 
+#include "common/msg_convert.hpp"
 #include "ground_station/frame_store.hpp"
 #include "ground_station/json_writer.hpp"
-#include "common/msg_convert.hpp"
 
 namespace alight::ground_station {
 namespace {

@@ -1,0 +1,58 @@
+// Ground-station parameters: defaults valid, file overrides, errors naming file, key and value.
+
+#include "ground_station/params.hpp"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "common/params.hpp"
+
+namespace alight::ground_station {
+namespace {
+
+std::string write_yaml(const std::string& name, const std::string& text) {
+  const auto path = std::filesystem::temp_directory_path() /
+                    ("alight_gs_" + std::to_string(::getpid()) + "_" + name + ".yaml");
+  std::ofstream(path) << text;
+  return path.string();
+}
+
+TEST(GroundStationParamsTest, DefaultsAreValidWithoutAFile) {
+  const GroundStationParams p = load_params("");
+  EXPECT_EQ(p.http_port, 8080);
+  EXPECT_EQ(p.command_channel, "OPERATOR_CMD");
+}
+
+TEST(GroundStationParamsTest, FileOverridesDefaults) {
+  const auto path =
+      write_yaml("ok", "ground_station:\n  http_port: 9000\n  camera_channel: CAM2\n");
+  const GroundStationParams p = load_params(path);
+  EXPECT_EQ(p.http_port, 9000);
+  EXPECT_EQ(p.camera_channel, "CAM2");
+  std::filesystem::remove(path);
+}
+
+TEST(GroundStationParamsTest, BadValuesNameFileKeyAndValue) {
+  const auto path = write_yaml("bad", "ground_station:\n  jpeg_quality: 0\n");
+  try {
+    load_params(path);
+    FAIL() << "no exception";
+  } catch (const ParamError& e) {
+    EXPECT_EQ(e.file(), path);
+    EXPECT_EQ(e.key(), "ground_station.jpeg_quality");
+    EXPECT_EQ(e.value(), "0");
+  }
+  std::filesystem::remove(path);
+}
+
+TEST(GroundStationParamsTest, UnknownKeysAreRejected) {
+  const auto path = write_yaml("typo", "ground_station:\n  http_prot: 9000\n");
+  EXPECT_THROW(load_params(path), ParamError);
+  std::filesystem::remove(path);
+}
+
+}  // namespace
+}  // namespace alight::ground_station
