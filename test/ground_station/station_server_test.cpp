@@ -205,7 +205,8 @@ TEST_F(StationServerTest, ManyClientsDoNotStallTheLcmLoopOrGrowMemory) {
       http.Post("/api/command", "command=go&mission=landing", "application/x-www-form-urlencoded");
   ASSERT_TRUE(go);
   EXPECT_EQ(go->status, 200) << go->body;
-  for (int i = 0; i < 100 && !published; ++i) node.spin_once(20);
+  const auto t_cmd = std::chrono::steady_clock::now();
+  while (!published && seconds_since(t_cmd) < 3.0) node.spin_once(20);
   done = true;
   vehicle.join();
   station.stop();
@@ -234,6 +235,74 @@ TEST_F(StationServerTest, ManyClientsDoNotStallTheLcmLoopOrGrowMemory) {
   // Thousands of connections after warm-up, and memory stays flat (a leak of even 1 KiB per
   // connection would show as several MiB).
   EXPECT_LT(rss_end - rss_after_warmup, 4 * 1024);
+}
+
+TEST_F(StationServerTest, ForgedReplayedStaleAndUnsignedCommandsOnLcmAreRejected) {
+  // The vehicle side as autonomy runs it: a CommandVerifier on every OPERATOR_CMD.
+  StationOptions opt;
+  opt.key = key();
+  opt.port = 0;
+  opt.sender = "gs-security-test";
+  Station station(params(), opt);
+  Node node("udpm://239.255.76.67:7863?ttl=0", "gs-security-test");
+  station.attach(node);
+  CommandVerifier verifier(key());
+  std::vector<std::pair<operator_cmd_t, CommandVerdict::Reason>> seen;
+  node.on<operator_cmd_t>("OPERATOR_CMD", [&](const operator_cmd_t& m) {
+    seen.emplace_back(m, verifier.check(m, wall_utime()).reason);
+  });
+  const int port = station.start();
+  // Bounded by time, not iterations: spin_once returns at once when a timer is < 1 ms away.
+  auto spin_until = [&](size_t n) {
+    const auto t0 = std::chrono::steady_clock::now();
+    while (seen.size() < n && seconds_since(t0) < 3.0) node.spin_once(20);
+    return seen.size() >= n;
+  };
+
+  using R = CommandVerdict::Reason;
+
+  // A genuine command from the page.
+  httplib::Client http("127.0.0.1", port);
+  auto r =
+      http.Post("/api/command", "command=go&mission=ingress", "application/x-www-form-urlencoded");
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200) << r->body;
+  ASSERT_TRUE(spin_until(1));
+  EXPECT_EQ(seen[0].second, R::kAccepted);
+  const operator_cmd_t genuine = seen[0].first;
+  EXPECT_EQ(genuine.sender, "gs-security-test");
+  EXPECT_EQ(genuine.mission, 2);
+
+  // An attacker on the network replays it as captured,
+  node.publish("OPERATOR_CMD", genuine);
+  // turns it into a kill with a newer seq (keeping the tag),
+  operator_cmd_t forged = genuine;
+  forged.command = operator_cmd_t::CMD_KILL;
+  forged.seq += 1;
+  node.publish("OPERATOR_CMD", forged);
+  // sends a kill without any signature,
+  operator_cmd_t unsigned_kill = forged;
+  unsigned_kill.auth = operator_cmd_t::AUTH_NONE;
+  std::fill(std::begin(unsigned_kill.hmac), std::end(unsigned_kill.hmac), 0);
+  node.publish("OPERATOR_CMD", unsigned_kill);
+  // and replays a genuinely signed command recorded 10 s ago (new seq, old time).
+  CommandBuilder recorder("gs-security-test", key());
+  const operator_cmd_t old =
+      recorder.build({operator_cmd_t::CMD_ABORT, 0, {}}, wall_utime() - 10'000'000);
+  node.publish("OPERATOR_CMD", old);
+  ASSERT_TRUE(spin_until(5));
+  EXPECT_EQ(seen[1].second, R::kReplayed);
+  EXPECT_EQ(seen[2].second, R::kBadSignature);
+  EXPECT_EQ(seen[3].second, R::kUnsigned);
+  EXPECT_EQ(seen[4].second, R::kStale);
+  EXPECT_EQ(verifier.n_rejected(), 4u);
+
+  // The station's next command still goes through.
+  r = http.Post("/api/command", "command=abort", "application/x-www-form-urlencoded");
+  ASSERT_TRUE(r);
+  ASSERT_TRUE(spin_until(6));
+  EXPECT_EQ(seen[5].second, R::kAccepted);
+  station.stop();
 }
 
 TEST_F(StationServerTest, CommandsNeedTheTokenWhenRequired) {

@@ -100,6 +100,14 @@ async function main() {
   const pageErrors = [];
   page.on('pageerror', (e) => pageErrors.push(String(e)));
   page.on('console', (m) => { if (m.type() === 'error') pageErrors.push(m.text()); });
+  // A stand-in gamepad behind the Gamepad API (headless Chromium has no real one).
+  await page.addInitScript(() => {
+    window.__pad = {
+      id: 'test pad (standard)', connected: true, mapping: 'standard', axes: [0, 0, 0, 0],
+      buttons: Array.from({ length: 17 }, () => ({ pressed: false, value: 0 })),
+    };
+    navigator.getGamepads = () => [window.__pad];
+  });
   await page.goto(url, { timeout: 15_000 });
 
   // 1. The page loads and shows the state.
@@ -167,6 +175,20 @@ async function main() {
   const kill = await waitFor('confirmed kill', () => commands().find((c) => c.command === 5));
   if (kill.verdict !== 'accepted') fail(`kill ${kill.verdict}`);
   console.log('ok: keyboard abort, nudge, and kill only after confirmation, all accepted');
+
+  // Gamepad: Y takes off; the left stick pushed forward nudges +x.
+  const seqBefore = Math.max(...commands().map((c) => c.seq));
+  await page.evaluate(() => { window.__pad.buttons[3] = { pressed: true, value: 1 }; });
+  const takeoff = await waitFor('takeoff from the gamepad', () => commands().find((c) => c.command === 1));
+  await page.evaluate(() => { window.__pad.buttons[3] = { pressed: false, value: 0 }; });
+  if (takeoff.verdict !== 'accepted' || takeoff.seq <= seqBefore) fail(`takeoff ${JSON.stringify(takeoff)}`);
+  await page.evaluate(() => { window.__pad.axes[1] = -1; });
+  const padNudge = await waitFor('nudge from the gamepad stick',
+    () => commands().find((c) => c.command === 6 && c.seq > takeoff.seq));
+  await page.evaluate(() => { window.__pad.axes[1] = 0; });
+  if (padNudge.verdict !== 'accepted' || Math.abs(padNudge.nudge[0] - 0.1) > 1e-9 || padNudge.nudge[1] !== 0)
+    fail(`gamepad nudge ${JSON.stringify(padNudge)}`);
+  console.log('ok: gamepad Y -> takeoff, left stick forward -> nudge +x, accepted');
 
   // 5. Screenshot artifact, after the plots have some history.
   await page.waitForTimeout(1000);
