@@ -84,8 +84,17 @@ int main(int argc, char** argv) {
       std::printf("alight-ground-station: serving http://%s:%d/\n", host.c_str(), bound);
     }
     std::fflush(stdout);
-    const int rc = node.run();
+    // Node::run() throws "LCM handle failed" when SIGINT interrupts LCM's select() (Debian LCM
+    // 1.3.1 returns -1 on EINTR); a signal that asked us to stop is a clean exit.
+    while (!node.stopping()) {
+      try {
+        node.spin_once(100);
+      } catch (const std::runtime_error&) {
+        if (!node.stopping()) throw;
+      }
+    }
+    spdlog::info("alight-ground-station: shutting down");
     station.stop();
-    return rc;
+    return 0;
   });
 }
