@@ -280,6 +280,10 @@ function drawHeight(s) {
     g.fillText(`${z} m`, 2, Y(z) + 3);
   }
   g.fillText(`${(t1 - t0).toFixed(0)} s`, c.width - 30, c.height - 3);
+  g.fillStyle = '#58a6ff';
+  g.fillText('vehicle z', pad + 4, 12);
+  g.fillStyle = '#3fb950';
+  g.fillText('estimate z ± 2σ', pad + 64, 12);
   // estimate band and line
   const est = h.filter((p) => p[2] !== null);
   if (est.length) {
