@@ -1,6 +1,8 @@
 #include "closed_loop.hpp"
 
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 
 #include "autonomy/params.hpp"
 #include "outer_loop/params.hpp"
@@ -40,6 +42,7 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
   int64_t seq = 0;
   bool takeoff_sent = false, go_sent = false;
   int64_t terminal_since = -1;
+  const bool trace = std::getenv("CLOSED_LOOP_TRACE") != nullptr;  // touch-down trace on stderr
   bool event = false;  // a scripted action happened  // first time a terminal phase was seen
   ClosedLoopResult r;
 
@@ -52,6 +55,7 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
       in.command = OperatorCommand{now, ++seq, "test", Command::kGo, config.mission,
                                    Vector3d::Zero(), CommandAuth::kInternal};
       go_sent = true;
+      r.tipped_before_go = simulator.truth().tipped;
     }
     const Output out = autonomy.update(in, now);
     setpoint = out.setpoint;
@@ -115,6 +119,7 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
     if (config.script) {
       ScriptActions act;
       act.vision_silent = vision.silent;
+      act.p_W_true = truth.state.p_W_B;
       config.script(autonomy, (now - t0) * 1e-6, act);
       if (act.vision_silent && !vision.silent) event = true;
       vision.silent = act.vision_silent;
@@ -133,6 +138,20 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
     }
     if (event) r.min_z_after_event_m = std::min(r.min_z_after_event_m, truth.state.p_W_B.z());
     const Phase ph = autonomy.phase();
+    if (trace && (truth.contact != sim::Contact::kNone || truth.tipped) && truth.utime % 50000 == 0) {
+      const Vector3d rpy = rpy_from_rotation(truth.state.q_WB.toRotationMatrix());
+      std::fprintf(stderr, "%.3f %s p %.3f %.3f %.3f v %.2f %.2f %.2f rpy %.1f %.1f %.1f thr %.2f contact %d armed %d tipped %d\n",
+                   (now - t0) * 1e-6, phase_name(ph), truth.state.p_W_B.x(), truth.state.p_W_B.y(),
+                   truth.state.p_W_B.z(), truth.state.v_W_B.x(), truth.state.v_W_B.y(),
+                   truth.state.v_W_B.z(), rpy.x() * 57.3, rpy.y() * 57.3, rpy.z() * 57.3,
+                   truth.state.thrust_N, static_cast<int>(truth.contact), truth.state.armed, truth.tipped);
+    }
+    if (truth.platform) {
+      const double e = (truth.state.p_W_B.head<2>() - truth.platform->top_center_W.head<2>()).norm();
+      if (ph == Phase::kFinalDescent && r.error_at_final_descent_m < 0) r.error_at_final_descent_m = e;
+      if (ph == Phase::kLanded && r.error_at_touchdown_m < 0) r.error_at_touchdown_m = e;
+      r.platform_yaw_rad = truth.platform->yaw_rad;
+    }
     const bool terminal = ph == Phase::kLanded || ph == Phase::kDone || ph == Phase::kKilled ||
                           (ph == Phase::kFailsafe && setpoint && !setpoint->motors_on) ||
                           ph == Phase::kHold;
@@ -149,6 +168,7 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
   r.phase = autonomy.phase();
   r.landed = truth.landed;
   r.tipped = truth.tipped;
+  r.on_platform_top = truth.contact == sim::Contact::kPlatformTop;
   r.collided = truth.collided;
   r.n_collisions = truth.n_collisions;
   r.armed = truth.state.armed;

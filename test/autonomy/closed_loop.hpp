@@ -30,6 +30,7 @@ struct ClosedLoopConfig {
 };
 
 struct ScriptActions {
+  Vector3d p_W_true = Vector3d::Zero();    ///< in: true vehicle position now
   std::optional<OperatorCommand> command;  ///< sent to autonomy now
   bool vision_silent = false;              ///< sticky: the oracle stops publishing
   std::optional<double> drop_mocap_for_s;  ///< motion capture lost from now on for this long
@@ -54,6 +55,12 @@ struct ClosedLoopResult {
   bool crossed_wall = false;
   double min_z_after_event_m = 1e9;  ///< lowest body z after the first scripted action [m]
   double final_z_m = 0;
+  double error_at_final_descent_m = -1;  ///< lateral body - platform centre entering FINAL_DESCENT
+  double error_at_touchdown_m = -1;      ///< ... when autonomy detected the touch-down
+  double platform_yaw_rad = 0;
+  bool tipped_before_go = false;  ///< sim's sticky "tipped" already set when GO was issued (a
+                                  ///< scenario whose random platform overlaps the start spot)
+  bool on_platform_top = false;   ///< sim contact at the end is the platform top
 };
 
 ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config);
