@@ -1,0 +1,138 @@
+// alight-autonomy and alight-outer-loop as processes over LCM (private UDP multicast port):
+// --auto-go takes off once a pose arrives, AUTONOMY_STATUS comes at >= 10 Hz of sensor time,
+// the outer loop arms and commands thrust, an unsigned KILL (accepted: vehicle file) stops both.
+
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+
+#include <alight/attitude_cmd_t.hpp>
+#include <alight/autonomy_status_t.hpp>
+#include <alight/imu_t.hpp>
+#include <alight/operator_cmd_t.hpp>
+#include <alight/pose_t.hpp>
+#include <alight/position_setpoint_t.hpp>
+#include <chrono>
+#include <lcm/lcm-cpp.hpp>
+#include <string>
+#include <thread>
+#include <vector>
+
+extern char** environ;
+
+namespace {
+
+constexpr const char* kUrl = "udpm://239.255.76.67:7947?ttl=0";
+
+class Process {
+ public:
+  explicit Process(std::vector<std::string> args) {
+    std::vector<char*> argv;
+    for (auto& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    if (posix_spawn(&pid_, argv[0], nullptr, nullptr, argv.data(), environ) != 0) pid_ = -1;
+  }
+  ~Process() {
+    if (pid_ > 0) {
+      kill(pid_, SIGTERM);
+      int status = 0;
+      waitpid(pid_, &status, 0);
+    }
+  }
+  bool ok() const { return pid_ > 0; }
+
+ private:
+  pid_t pid_ = -1;
+};
+
+struct Recorder {
+  std::vector<alight::autonomy_status_t> status;
+  std::vector<alight::position_setpoint_t> setpoints;
+  std::vector<alight::attitude_cmd_t> cmds;
+  void on_status(const lcm::ReceiveBuffer*, const std::string&, const alight::autonomy_status_t* m) {
+    status.push_back(*m);
+  }
+  void on_sp(const lcm::ReceiveBuffer*, const std::string&, const alight::position_setpoint_t* m) {
+    setpoints.push_back(*m);
+  }
+  void on_cmd(const lcm::ReceiveBuffer*, const std::string&, const alight::attitude_cmd_t* m) {
+    cmds.push_back(*m);
+  }
+};
+
+TEST(AutonomyNodeTest, AutoGoTakesOffStatusAtTenHertzAndKillStopsEverything) {
+  const std::string bin = std::string(ALIGHT_BINARY_DIR) + "/bin/";
+  const std::string config = std::string(ALIGHT_SOURCE_DIR) + "/config/vehicles/starmac.yaml";
+  lcm::LCM lcm(kUrl);
+  ASSERT_TRUE(lcm.good());
+  Recorder rec;
+  lcm.subscribe("AUTONOMY_STATUS", &Recorder::on_status, &rec);
+  lcm.subscribe("POSITION_SETPOINT", &Recorder::on_sp, &rec);
+  lcm.subscribe("ATTITUDE_CMD", &Recorder::on_cmd, &rec);
+  Process autonomy({bin + "alight-autonomy", "--config", config, "--lcm-url", kUrl, "--auto-go",
+                    "landing", "--log-level", "warn"});
+  Process outer({bin + "alight-outer-loop", "--config", config, "--lcm-url", kUrl, "--log-level",
+                 "warn"});
+  ASSERT_TRUE(autonomy.ok());
+  ASSERT_TRUE(outer.ok());
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));  // subscriptions up
+
+  const int64_t t0 = 1'700'000'000'000'000;
+  int64_t t = t0;
+  const auto publish_sensors = [&](int n) {
+    for (int i = 0; i < n; ++i) {
+      t += 10'000;
+      alight::pose_t pose{};
+      pose.utime = t;
+      pose.seq = (t - t0) / 10'000;
+      pose.pos[2] = 0.12;
+      pose.orientation[0] = 1.0;
+      lcm.publish("MOCAP_POSE", &pose);
+      alight::imu_t imu{};
+      imu.utime = t;
+      imu.seq = pose.seq;
+      imu.accel_B[2] = 9.81;
+      lcm.publish("IMU", &imu);
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+      while (lcm.handleTimeout(0) > 0) {
+      }
+    }
+  };
+  publish_sensors(200);  // 2 s of sensor time
+  for (int i = 0; i < 20; ++i) lcm.handleTimeout(10);
+
+  ASSERT_FALSE(rec.status.empty());
+  EXPECT_EQ(rec.status.back().phase, alight::autonomy_status_t::PHASE_TAKEOFF)
+      << rec.status.back().phase_name << ": " << rec.status.back().reason;
+  // >= 10 Hz in sensor time: no gap longer than 0.1 s between statuses.
+  for (size_t i = 1; i < rec.status.size(); ++i) {
+    EXPECT_LE(rec.status[i].utime - rec.status[i - 1].utime, 100'000) << i;
+  }
+  EXPECT_GE(rec.status.size(), 19u);
+  ASSERT_FALSE(rec.setpoints.empty());
+  EXPECT_EQ(rec.setpoints.back().motors, alight::position_setpoint_t::MOTORS_ON);
+  EXPECT_GT(rec.setpoints.back().p_W[2], 0.12) << "climbing";
+  ASSERT_FALSE(rec.cmds.empty());
+  EXPECT_TRUE(rec.cmds.back().armed);
+  EXPECT_GT(rec.cmds.back().thrust_N, 9.81) << "thrust to climb";
+
+  alight::operator_cmd_t kill{};
+  kill.utime = t;
+  kill.seq = 1;
+  kill.sender = "test";
+  kill.command = alight::operator_cmd_t::CMD_KILL;
+  kill.auth = alight::operator_cmd_t::AUTH_NONE;
+  lcm.publish("OPERATOR_CMD", &kill);
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  publish_sensors(30);
+  for (int i = 0; i < 20; ++i) lcm.handleTimeout(10);
+  EXPECT_EQ(rec.status.back().phase, alight::autonomy_status_t::PHASE_KILLED)
+      << rec.status.back().reason;
+  EXPECT_EQ(rec.status.back().failsafe, alight::autonomy_status_t::FAILSAFE_KILL);
+  EXPECT_EQ(rec.setpoints.back().motors, alight::position_setpoint_t::MOTORS_OFF);
+  EXPECT_FALSE(rec.cmds.back().armed);
+  EXPECT_EQ(rec.cmds.back().thrust_N, 0.0);
+}
+
+}  // namespace
