@@ -9,6 +9,7 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <alight/autonomy_status_t.hpp>
 #include <alight/operator_cmd_t.hpp>
 #include <atomic>
@@ -127,8 +128,11 @@ TEST_F(StationServerTest, ManyClientsDoNotStallTheLcmLoopOrGrowMemory) {
   Node node(kLcmUrl, "gs-server-test");
   station.attach(node);
   std::atomic<int> status_received{0};
-  node.on<autonomy_status_t>("AUTONOMY_STATUS",
-                             [&](const autonomy_status_t&) { ++status_received; });
+  std::vector<double> latencies_s;  // publish (vehicle) to handler (LCM loop) of each status
+  node.on<autonomy_status_t>("AUTONOMY_STATUS", [&](const autonomy_status_t& m) {
+    ++status_received;
+    latencies_s.push_back((wall_utime() - m.utime) * 1e-6);
+  });
   const int port = station.start();
   ASSERT_GT(port, 0);
 
@@ -188,6 +192,8 @@ TEST_F(StationServerTest, ManyClientsDoNotStallTheLcmLoopOrGrowMemory) {
     }
   }
   const long rss_end = rss_kib();
+  // Only while the loop ran: below, the test itself stops spinning while it joins the clients.
+  const std::vector<double> loop_latencies_s = latencies_s;
   const uint64_t steps_end = client_steps;
   clients_stop = true;
   for (auto& t : clients) t.join();
@@ -215,22 +221,33 @@ TEST_F(StationServerTest, ManyClientsDoNotStallTheLcmLoopOrGrowMemory) {
   CommandVerifier verifier(key());
   EXPECT_TRUE(verifier.check(*published, wall_utime()).accepted());
 
+  std::vector<double> sorted_s = loop_latencies_s;
+  ASSERT_FALSE(sorted_s.empty());
+  std::sort(sorted_s.begin(), sorted_s.end());
+  const double p50_latency_s = sorted_s[sorted_s.size() / 2];
+  const double p99_latency_s = sorted_s[sorted_s.size() * 99 / 100];
   const auto counters = station.counters();
   std::printf(
       "clients: %d, connections: %llu (%llu after warm-up), http requests: %llu, served by the "
       "accept thread (queue full): %llu\n"
-      "LCM loop: longest iteration %.1f ms, status %d received of %d sent\n"
+      "LCM loop: longest iteration %.1f ms; status latency median %.1f ms, 99th percentile "
+      "%.1f ms, max %.1f ms; %d received of %d sent\n"
       "RSS: %ld KiB after warm-up, %ld KiB at end (%+ld KiB)\n",
       kClients, static_cast<unsigned long long>(steps_end),
       static_cast<unsigned long long>(steps_end - steps_after_warmup),
       static_cast<unsigned long long>(counters.http_requests),
       static_cast<unsigned long long>(counters.connections_over_limit), max_iteration_s * 1e3,
-      status_received.load(), status_sent.load(), rss_after_warmup, rss_end,
-      rss_end - rss_after_warmup);
+      p50_latency_s * 1e3, p99_latency_s * 1e3, sorted_s.back() * 1e3, status_received.load(),
+      status_sent.load(), rss_after_warmup, rss_end, rss_end - rss_after_warmup);
 
   EXPECT_GT(steps_end - steps_after_warmup, 500u) << "the clients did not exercise the server";
-  // The LCM loop never waited for a client: no iteration much longer than its 20 ms timeout.
-  EXPECT_LT(max_iteration_s, 0.1);
+  // The LCM loop never waited for a client. A loop blocked by a client would stall for a client
+  // timeout (1 s) or forever; on a loaded 2-core machine (30 threads here, Chromium and other
+  // tests beside) the scheduler alone delays single iterations by up to a few hundred ms
+  // (measured: longest iteration 60-220 ms, 99% of messages within 20-160 ms). The bounds sit
+  // between the two.
+  EXPECT_LT(p99_latency_s, 0.25);
+  EXPECT_LT(max_iteration_s, 0.75);
   EXPECT_GE(status_received.load(), status_sent.load() * 95 / 100);
   // Thousands of connections after warm-up, and memory stays flat (a leak of even 1 KiB per
   // connection would show as several MiB).
