@@ -64,7 +64,7 @@ int main(int argc, char** argv) {
   CLI::App app{"closed-loop Monte Carlo of landing and ingress with oracle vision"};
   int seeds = 20;
   double rate_hz = 5.0, outliers = 0.05, sigma_xy = 0.01, sigma_z = 0.03;
-  double ingress_width = 1.0, ingress_height = 0.6;
+  double ingress_width = 1.0, ingress_height = 0.6, ingress_span = 0.0;
   app.add_option("--seeds", seeds, "runs per case");
   app.add_option("--vision-rate", rate_hz, "oracle measurements per second (paper: ~5 STARMAC, ~2 Pelican)");
   app.add_option("--outliers", outliers, "oracle outlier probability");
@@ -72,6 +72,10 @@ int main(int argc, char** argv) {
   app.add_option("--sigma-z", sigma_z, "oracle vertical noise [m]");
   app.add_option("--ingress-width", ingress_width, "opening width for the ingress runs [m]");
   app.add_option("--ingress-height", ingress_height, "opening height [m]");
+  app.add_option("--ingress-span", ingress_span,
+                 "override the STARMAC's rotor tip span for the ingress runs [m] (0: the file's)");
+  bool ingress_only = false;
+  app.add_flag("--ingress-only", ingress_only, "skip the landings");
   CLI11_PARSE(app, argc, argv);
 
   const std::string root = ALIGHT_SOURCE_DIR;
@@ -80,7 +84,7 @@ int main(int argc, char** argv) {
   const char* only = std::getenv("BENCH_ONLY");  // e.g. "starmac/c" for a quick look
   for (const std::string vehicle : {"starmac", "pelican"}) {
     for (const std::string platform : {"a", "b", "c"}) {
-      if (only && vehicle + "/" + platform != only) continue;
+      if ((only && vehicle + "/" + platform != only) || ingress_only) continue;
       Summary s;
       for (int seed = 1; seed <= seeds; ++seed) {
         ClosedLoopConfig c;
@@ -141,6 +145,7 @@ int main(int argc, char** argv) {
     c.vision.sigma_xy_m = sigma_xy;
     c.vision.sigma_z_m = sigma_z;
     c.opening_size_m = Vector2d(ingress_width, ingress_height);
+    if (ingress_span > 0) c.rotor_span_m = ingress_span;
     const auto r = fly_closed_loop(c);
     ++s.n;
     const bool ok = r.phase == Phase::kDone && !r.collided && r.crossed_wall;
@@ -159,7 +164,9 @@ int main(int argc, char** argv) {
     s.retries += r.retries;
   }
   char name[64];
-  std::snprintf(name, sizeof name, "starmac ingress %.2fx%.2f", ingress_width, ingress_height);
+  std::snprintf(name, sizeof name, "starmac%s ingress %.2fx%.2f",
+                ingress_span > 0 ? ("(span " + std::to_string(ingress_span).substr(0, 4) + ")").c_str() : "",
+                ingress_width, ingress_height);
   print(name, s, false);
   return 0;
 }

@@ -17,7 +17,13 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
   const outer_loop::OuterLoopParams ol_params = outer_loop::load_params(root);
   AutonomyParams au_params = load_params(root);
   au_params.seed = config.seed;
-  const sim::VehicleParams vehicle = sim::load_vehicle_params(config.vehicle_file);
+  sim::VehicleParams vehicle = sim::load_vehicle_params(config.vehicle_file);
+  if (config.rotor_span_m) {
+    // Scale the arms with the span so the rotor discs keep their size relative to the arms.
+    vehicle.arm_length_m *= *config.rotor_span_m / vehicle.rotor_tip_span_m;
+    vehicle.rotor_tip_span_m = *config.rotor_span_m;
+    au_params.ingress.vehicle_span_m = *config.rotor_span_m;
+  }
   sim::Scenario scenario = sim::load_scenario(config.scenario_file);
   if (config.opening_size_m && scenario.wall) scenario.wall->opening_size_m = *config.opening_size_m;
   const CameraMount mount =

@@ -27,6 +27,8 @@ struct ClosedLoopConfig {
   std::function<void(const Autonomy&, double t_s, struct ScriptActions&)> script;
   /// Overrides the scenario's opening size (width, height) [m].
   std::optional<Vector2d> opening_size_m;
+  /// Overrides the vehicle's rotor tip span (sim model and autonomy's fit check alike) [m].
+  std::optional<double> rotor_span_m;
 };
 
 struct ScriptActions {

@@ -89,6 +89,20 @@ TEST(ClosedLoopIngressTest, FliesThroughAnOpeningThatFitsWithoutContact) {
   }
 }
 
+TEST(ClosedLoopIngressTest, FliesThroughThePapers60cmOpeningWithASmallerVehicle) {
+  // The STARMAC model with its rotor span cut to 0.45 m (7.5 cm clearance per side).
+  for (uint64_t seed : {1, 2, 3}) {
+    auto c = ingress("starmac", seed);
+    c.rotor_span_m = 0.45;
+    const auto r = fly_closed_loop(c);
+    const std::string what = "seed " + std::to_string(seed);
+    EXPECT_EQ(r.phase, Phase::kDone) << what << ": " << r.reason;
+    EXPECT_TRUE(r.crossed_wall) << what;
+    EXPECT_FALSE(r.collided) << what << ": " << r.n_collisions << " contacts";
+    EXPECT_LT(r.max_lateral_in_wall_m, 0.05) << what;
+  }
+}
+
 TEST(ClosedLoopIngressTest, RefusesThePapers60cmOpeningForAVehicleThatDoesNotFit) {
   const auto r = fly_closed_loop(ingress("pelican", 1));
   EXPECT_EQ(r.phase, Phase::kHold) << r.reason;
