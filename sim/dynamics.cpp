@@ -105,6 +105,7 @@ StepResult Dynamics::step(VehicleState& s, const AttitudeCommand& cmd, const Vec
       ground = true;
     }
     for (const Box& b : scene_.boxes) {
+      if ((p_W - b.center_W).cwiseAbs().maxCoeff() > b.half_size_m.maxCoeff() * 1.7321) continue;
       const Vector3d q = b.to_local(p_W);
       const Vector3d depth = b.half_size_m - q.cwiseAbs();
       if (depth.minCoeff() <= 0.0) continue;

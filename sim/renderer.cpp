@@ -1,6 +1,7 @@
 #include "sim/renderer.hpp"
 
 #include <opencv2/core/utility.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include <algorithm>
 #include <cassert>
@@ -23,7 +24,29 @@ struct BoxFrame {  // one box, prepared for one frame
   bool visible;
   bool straddles;    // has corners behind the camera: may cover any tile
   float x0, y0, x1, y1;  // bounds of its projection on the z = 1 plane
+  std::vector<cv::Point2f> hull;  // its silhouette on the z = 1 plane (convex), when not straddling
 };
+
+// Whether the axis-aligned rectangle b = (x0, y0, x1, y1) meets the convex polygon `hull`
+// (counter-clockwise or clockwise): separating axes of the polygon's edges; the rectangle's own
+// axes were checked with the bounds.
+bool rect_meets_hull(const cv::Vec4f& b, const std::vector<cv::Point2f>& hull, float orientation) {
+  const cv::Point2f corners[4] = {{b[0], b[1]}, {b[2], b[1]}, {b[2], b[3]}, {b[0], b[3]}};
+  for (size_t i = 0; i < hull.size(); ++i) {
+    const cv::Point2f& p = hull[i];
+    const cv::Point2f e = hull[(i + 1) % hull.size()] - p;
+    bool all_outside = true;
+    for (const auto& c : corners) {
+      const float cross = e.x * (c.y - p.y) - e.y * (c.x - p.x);
+      if (cross * orientation >= 0.f) {
+        all_outside = false;
+        break;
+      }
+    }
+    if (all_outside) return false;
+  }
+  return true;
+}
 }  // namespace
 
 Renderer::Renderer(const CameraModel& model, int supersample) : model_(model), ss_(supersample) {
@@ -132,6 +155,7 @@ void Renderer::render_rows(const Scene& scene, const Isometry3d& X_WC, float wei
     f.straddles = false;
     f.x0 = f.y0 = 1e30f;
     f.x1 = f.y1 = -1e30f;
+    std::vector<cv::Point2f> projected;
     for (int k = 0; k < 8; ++k) {
       const Vector3d corner_O((k & 1 ? 1 : -1) * b.half_size_m.x(), (k & 2 ? 1 : -1) * b.half_size_m.y(),
                               (k & 4 ? 1 : -1) * b.half_size_m.z());
@@ -142,11 +166,13 @@ void Renderer::render_rows(const Scene& scene, const Isometry3d& X_WC, float wei
         f.x1 = std::max(f.x1, float(p_C.x() / p_C.z()));
         f.y0 = std::min(f.y0, float(p_C.y() / p_C.z()));
         f.y1 = std::max(f.y1, float(p_C.y() / p_C.z()));
+        projected.emplace_back(float(p_C.x() / p_C.z()), float(p_C.y() / p_C.z()));
       } else {
         f.straddles = true;
       }
     }
     f.visible = !behind_all;
+    if (f.visible && !f.straddles) cv::convexHull(projected, f.hull, /*clockwise=*/false);
   }
   // Nearest first, so a pixel stops testing boxes once its hit is nearer than the next box.
   std::sort(boxes.begin(), boxes.end(),
@@ -156,10 +182,18 @@ void Renderer::render_rows(const Scene& scene, const Isometry3d& X_WC, float wei
     const BoxFrame& f = boxes[bi];
     if (!f.visible) continue;
     const uint32_t bit = 1u << bi;
+    float orientation = 0.f;  // sign of the hull's winding
+    if (f.hull.size() >= 3) {
+      const cv::Point2f a = f.hull[1] - f.hull[0], b = f.hull[2] - f.hull[1];
+      orientation = a.x * b.y - a.y * b.x > 0 ? 1.f : -1.f;
+    }
     for (size_t t = 0; t < tile_mask.size(); ++t) {
       const cv::Vec4f& tb = tile_bounds_[t];
-      if (f.straddles || (tb[2] >= f.x0 && tb[0] <= f.x1 && tb[3] >= f.y0 && tb[1] <= f.y1))
+      if (f.straddles) {
         tile_mask[t] |= bit;
+      } else if (tb[2] >= f.x0 && tb[0] <= f.x1 && tb[3] >= f.y0 && tb[1] <= f.y1) {
+        if (f.hull.size() < 3 || rect_meets_hull(tb, f.hull, orientation)) tile_mask[t] |= bit;
+      }
     }
   }
 
@@ -188,15 +222,20 @@ void Renderer::render_rows(const Scene& scene, const Isometry3d& X_WC, float wei
           const int bi = __builtin_ctz(m);
           const BoxFrame& f = boxes[bi];
           if (f.near_range > best_t * dlen) break;  // this and all later boxes are farther
-          const float d0 = f.M[0] * dx + f.M[1] * dy + f.M[2];
-          const float d1 = f.M[3] * dx + f.M[4] * dy + f.M[5];
-          const float d2 = f.M[6] * dx + f.M[7] * dy + f.M[8];
+          // A component of exactly zero would turn the shared reciprocal below into NaN.
+          auto nonzero = [](float d) { return std::abs(d) < 1e-12f ? 1e-12f : d; };
+          const float d0 = nonzero(f.M[0] * dx + f.M[1] * dy + f.M[2]);
+          const float d1 = nonzero(f.M[3] * dx + f.M[4] * dy + f.M[5]);
+          const float d2 = nonzero(f.M[6] * dx + f.M[7] * dy + f.M[8]);
           const float dl[3] = {d0, d1, d2};
           float tmin = -std::numeric_limits<float>::infinity();
           float tmax = std::numeric_limits<float>::infinity();
           int axis = 0;
+          // One division for the three reciprocals (1/d0 = d1 d2 / (d0 d1 d2), ...).
+          const float p01 = d0 * d1, inv_all = 1.f / (p01 * d2);
+          const float invs[3] = {d1 * d2 * inv_all, d0 * d2 * inv_all, p01 * inv_all};
           for (int a = 0; a < 3; ++a) {
-            const float inv = 1.f / dl[a];
+            const float inv = invs[a];
             float ta = (-f.h[a] - f.o[a]) * inv, tb = (f.h[a] - f.o[a]) * inv;
             if (ta > tb) std::swap(ta, tb);
             if (ta > tmin) {

@@ -30,13 +30,13 @@ Scene build_scene(const Scenario& sc, uint64_t seed) {
     Box b;
     b.kind = Box::Kind::kPlatform;
     const Vector2d xy = p.center_xy_m + sc.randomize.platform_xy_m * Vector2d(sym(rng), sym(rng));
-    b.yaw_rad = (p.yaw_deg + sc.randomize.platform_yaw_deg * sym(rng)) * M_PI / 180.0;
+    b.set_yaw((p.yaw_deg + sc.randomize.platform_yaw_deg * sym(rng)) * M_PI / 180.0);
     b.half_size_m = 0.5 * p.size_m;
     b.center_W = Vector3d(xy.x(), xy.y(), 0.5 * p.size_m.z());
     b.texture = static_cast<int>(scene.textures.size());
     scene.textures.push_back(Texture::make(p.texture, seed));
     scene.boxes.push_back(b);
-    scene.platform = PlatformTruth{Vector3d(xy.x(), xy.y(), p.size_m.z()), p.size_m, b.yaw_rad};
+    scene.platform = PlatformTruth{Vector3d(xy.x(), xy.y(), p.size_m.z()), p.size_m, b.yaw_rad()};
   }
 
   if (sc.wall) {

@@ -17,16 +17,25 @@ struct Box {
   Kind kind = Kind::kPlatform;
   Vector3d center_W = Vector3d::Zero();
   Vector3d half_size_m = Vector3d::Constant(0.5);
-  double yaw_rad = 0.0;  ///< rotation about world z
   int texture = 0;       ///< index into Scene::textures
 
-  Matrix3d R_WO() const { return rotation_from_rpy(0, 0, yaw_rad); }
+  /// Turns the box about world z (its frame O: axes along its sides, origin at its centre).
+  void set_yaw(double yaw_rad) {
+    yaw_rad_ = yaw_rad;
+    R_WO_ = rotation_from_rpy(0, 0, yaw_rad);
+  }
+  double yaw_rad() const { return yaw_rad_; }
+  const Matrix3d& R_WO() const { return R_WO_; }
   /// Point in the box frame (axes along its sides, origin at its centre).
   Vector3d to_local(const Vector3d& p_W) const { return R_WO().transpose() * (p_W - center_W); }
   bool contains(const Vector3d& p_W) const {
     const Vector3d q = to_local(p_W);
     return (q.cwiseAbs() - half_size_m).maxCoeff() < 0.0;
   }
+
+ private:
+  double yaw_rad_ = 0.0;
+  Matrix3d R_WO_ = Matrix3d::Identity();
 };
 
 /// True geometry of the targets, for SIM_TRUTH and scoring.
