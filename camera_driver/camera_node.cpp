@@ -35,6 +35,7 @@
 #include <thread>
 
 #include "camera_driver/device_list.hpp"
+#include "camera_driver/frame_label.hpp"
 #include "camera_driver/params.hpp"
 #include "camera_driver/stored_source.hpp"
 #include "camera_driver/supervisor.hpp"
@@ -262,7 +263,7 @@ int run_camera(const Options& o, const CameraParams& p) {
   Node node(o.args.lcm_url, "alight-camera");
   Publisher pub{node, p.channel, *parse_output_encoding(p.output_encoding)};
   RateLimitedLog log;
-  int64_t seq_base = 0, last_seq = -1;
+  FrameLabeler labeler(offset_us, p.exposure_us);
   uint64_t reconnects = 0;
   bool warned_clock = false;
   while (!node.stopping() &&
@@ -270,28 +271,21 @@ int run_camera(const Options& o, const CameraParams& p) {
     const int64_t now = mono_now_us();
     CameraSupervisor::Step step = sup.step(now);
     for (const auto& e : step.events) log.warn(now, e);
-    if (sup.reconnects() != reconnects) {  // the kernel numbers frames from 0 again
+    if (sup.reconnects() != reconnects) {
       reconnects = sup.reconnects();
-      seq_base = last_seq + 1;
       for (const auto& w : sup.capture().warnings()) spdlog::warn("alight-camera: {}", w);
     }
     if (step.frame) {
-      const Frame& fr = *step.frame;
-      last_seq = seq_base + fr.sequence;
-      // A driver without monotonic buffer stamps (TIMESTAMP_COPY / UNKNOWN) gets the dequeue
-      // time instead: later than the exposure, but on the right clock.
-      if (!fr.monotonic_clock && !warned_clock) {
+      const FrameLabel label = labeler.label(*step.frame, sup.reconnects(), mono_now_us());
+      if (labeler.used_dequeue_time() && !warned_clock) {
         spdlog::warn(
             "alight-camera: {} does not stamp buffers with CLOCK_MONOTONIC; frames are "
             "stamped when dequeued (later than the exposure)",
             f.path);
         warned_clock = true;
       }
-      const int64_t utime = fr.monotonic_clock ? exposure_utime(fr.buffer_mono_us, offset_us,
-                                                                fr.stamp_source, p.exposure_us)
-                                               : mono_now_us() + offset_us;
       const CaptureCounters& c = sup.capture().counters();
-      pub.publish(fr.pixels, utime, last_seq, c.dropped, c.skipped);
+      pub.publish(step.frame->pixels, label.utime, label.seq, c.dropped, c.skipped);
       pub.report(now, c.dropped, c.skipped);
     }
     sleep_us(std::min<int64_t>(step.sleep_us, 100'000));

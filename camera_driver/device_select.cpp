@@ -94,6 +94,7 @@ Candidates candidate_nodes(const DeviceSpec& spec, const std::vector<VideoNode>&
     for (const auto& s : serials) out.error += " " + s;
     out.error += "); add the serial to the device spec";
     out.nodes.clear();
+    out.ambiguous = true;
   }
   return out;
 }

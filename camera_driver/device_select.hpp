@@ -30,6 +30,7 @@ std::optional<DeviceSpec> parse_device_spec(const std::string& text, std::string
 struct Candidates {
   std::vector<VideoNode> nodes;  ///< in node order; empty when nothing matched
   std::string error;             ///< why there is no choice (not found, or ambiguous)
+  bool ambiguous = false;        ///< several cameras match (else: nothing matched)
 };
 
 /// The video nodes a spec may mean. Two distinct USB devices matching a spec without serial is

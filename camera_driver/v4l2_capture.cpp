@@ -142,8 +142,7 @@ Status V4l2Capture::open() {
   warnings_.clear();
   const Candidates candidates = candidate_nodes(config_.device, io_.video_nodes());
   if (candidates.nodes.empty())
-    return Status{candidates.error.rfind("no V4L2", 0) == 0 ? CaptureError::kNotFound
-                                                            : CaptureError::kAmbiguous,
+    return Status{candidates.ambiguous ? CaptureError::kAmbiguous : CaptureError::kNotFound,
                   candidates.error};
   // A USB camera's first node that streams video wins; for a path the one candidate decides.
   Status last;

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include "camera_driver/frame_label.hpp"
 #include "fake_v4l2.hpp"
 
 namespace alight::camera {
@@ -121,6 +122,48 @@ TEST_F(SupervisorTest, APathDeviceIsNotResetOnStallButReopened) {
   EXPECT_EQ(sup.state(), CameraSupervisor::State::kStreaming);
   plain.emit_frame(d, 3'000'000, frame);
   EXPECT_TRUE(sup.step(2'600'000).frame);
+}
+
+TEST_F(SupervisorTest, PublishedSequenceKeepsIncreasingAcrossAReconnect) {
+  CameraSupervisor sup(io, config, params);
+  const int64_t offset = 1'700'000'000'000'000;
+  FrameLabeler labeler(offset, /*exposure_us=*/-1);
+  ASSERT_TRUE(sup.start(0).ok());
+  std::vector<int64_t> seqs, utimes;
+  auto take = [&](int64_t t_us) {
+    io.emit_frame(dev, t_us, frame);
+    auto s = sup.step(t_us);
+    ASSERT_TRUE(s.frame);
+    const FrameLabel l = labeler.label(*s.frame, sup.reconnects(), t_us);
+    seqs.push_back(l.seq);
+    utimes.push_back(l.utime);
+  };
+  take(1'000'000);
+  take(1'033'000);
+  io.lose_frames(dev, 2);
+  take(1'133'000);  // kernel sequence 4: two lost
+  io.unplug(dev);
+  sup.step(1'200'000);
+  io.replug(dev);
+  sup.step(1'200'000);
+  ASSERT_EQ(sup.state(), CameraSupervisor::State::kStreaming);
+  take(1'500'000);  // kernel sequence 0 again
+  take(1'533'000);
+  EXPECT_EQ(seqs, (std::vector<int64_t>{0, 1, 4, 5, 6}));
+  EXPECT_EQ(utimes.front(), offset + 1'000'000);
+  EXPECT_EQ(utimes.back(), offset + 1'533'000);
+  EXPECT_FALSE(labeler.used_dequeue_time());
+}
+
+TEST(FrameLabelerTest, MidExposureStampAndDequeueTimeFallback) {
+  FrameLabeler labeler(1000, /*exposure_us=*/8000);
+  Frame f;
+  f.buffer_mono_us = 50'000;
+  f.stamp_source = StampSource::kStartOfExposure;
+  EXPECT_EQ(labeler.label(f, 0, 99'000).utime, 1000 + 54'000);
+  f.monotonic_clock = false;  // e.g. V4L2_BUF_FLAG_TIMESTAMP_COPY from a capture card
+  EXPECT_EQ(labeler.label(f, 0, 99'000).utime, 1000 + 99'000);
+  EXPECT_TRUE(labeler.used_dequeue_time());
 }
 
 TEST(ReconnectBackoffTest, DoublesUpToTheCapAndResets) {
