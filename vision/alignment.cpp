@@ -58,10 +58,14 @@ double refine(State& s, double cost, int iterations, const std::vector<Vector3d>
     for (int k = 0; k < 12; ++k) {
       shifted[k] = s;
       // Without the gauge renormalisation, so each column is a clean partial derivative.
-      if (k < 3) shifted[k].R = s.R * Eigen::AngleAxisd(h, Vector3d::Unit(k)).toRotationMatrix();
-      else if (k < 6) shifted[k].t(k - 3) += h;
-      else if (k < 9) shifted[k].na(k - 6) += h;
-      else shifted[k].nb(k - 9) += h;
+      if (k < 3)
+        shifted[k].R = s.R * Eigen::AngleAxisd(h, Vector3d::Unit(k)).toRotationMatrix();
+      else if (k < 6)
+        shifted[k].t(k - 3) += h;
+      else if (k < 9)
+        shifted[k].na(k - 6) += h;
+      else
+        shifted[k].nb(k - 9) += h;
     }
     auto accumulate = [&](const std::vector<Vector3d>& r1, const std::vector<Vector3d>& r2,
                           bool plane_a) {
@@ -141,8 +145,8 @@ Result<TwoPlaneMotion> align_two_planes(const Matrix3d& H_a, const std::vector<V
       x.t = (a.t_12 + b.t_12).normalized();
       x.na = a.n_1, x.nb = b.n_1;
       const double c0 = cost_of(x);
-      const double c = refine(x, c0, std::min(3, params.max_iterations), rays_1a, rays_2a,
-                              rays_1b, rays_2b, cost_of);
+      const double c = refine(x, c0, std::min(3, params.max_iterations), rays_1a, rays_2a, rays_1b,
+                              rays_2b, cost_of);
       if (c < cost) {
         s = x, cost = c, any = true;
         out.rotation_disagreement_rad = dr, out.translation_disagreement_rad = dt;

@@ -20,11 +20,11 @@ namespace alight::vision {
 
 struct TwoPlaneMotion {
   Matrix3d R_21 = Matrix3d::Identity();
-  Vector3d t_12 = Vector3d::UnitX();  ///< unit length
-  Vector3d n_a = Vector3d::UnitZ();   ///< n~ of plane a in camera 1 [1/baseline]
-  Vector3d n_b = Vector3d::UnitZ();   ///< n~ of plane b in camera 1 [1/baseline]
+  Vector3d t_12 = Vector3d::UnitX();     ///< unit length
+  Vector3d n_a = Vector3d::UnitZ();      ///< n~ of plane a in camera 1 [1/baseline]
+  Vector3d n_b = Vector3d::UnitZ();      ///< n~ of plane b in camera 1 [1/baseline]
   double rms_before = 0, rms_after = 0;  ///< transfer error of both sets [normalised units]
-  double rotation_disagreement_rad = 0;     ///< between the two separate decompositions
+  double rotation_disagreement_rad = 0;  ///< between the two separate decompositions
   double translation_disagreement_rad = 0;
 
   PlaneMotion plane_a() const { return {R_21, t_12, n_a}; }

@@ -95,9 +95,8 @@ Result<PlaneMotion> decompose(const Matrix3d& H_cal, const std::vector<Vector3d>
   if (front.empty()) return Result<PlaneMotion>::fail(Reason::kDecompositionFailed);
   if (front.size() == 1) return Result<PlaneMotion>::ok(front[0]);
   auto best_by = [&](auto cost) {
-    return *std::min_element(front.begin(), front.end(), [&](const auto& p, const auto& q) {
-      return cost(p) < cost(q);
-    });
+    return *std::min_element(front.begin(), front.end(),
+                             [&](const auto& p, const auto& q) { return cost(p) < cost(q); });
   };
   if (prior.R_21)
     return Result<PlaneMotion>::ok(

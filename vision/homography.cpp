@@ -100,10 +100,10 @@ bool degenerate_sample(const Vector2d* a, const Vector2d* b, double min_height_a
     const double ca = cross2(a[t[0]], a[t[1]], a[t[2]]);
     const double cb = cross2(b[t[0]], b[t[1]], b[t[2]]);
     if ((ca > 0) != (cb > 0)) return true;
-    const double la = std::max({(a[t[1]] - a[t[0]]).norm(), (a[t[2]] - a[t[0]]).norm(),
-                                (a[t[2]] - a[t[1]]).norm()});
-    const double lb = std::max({(b[t[1]] - b[t[0]]).norm(), (b[t[2]] - b[t[0]]).norm(),
-                                (b[t[2]] - b[t[1]]).norm()});
+    const double la = std::max(
+        {(a[t[1]] - a[t[0]]).norm(), (a[t[2]] - a[t[0]]).norm(), (a[t[2]] - a[t[1]]).norm()});
+    const double lb = std::max(
+        {(b[t[1]] - b[t[0]]).norm(), (b[t[2]] - b[t[0]]).norm(), (b[t[2]] - b[t[1]]).norm()});
     if (std::abs(ca) < min_height_a * la || std::abs(cb) < min_height_b * lb) return true;
   }
   return false;
@@ -271,8 +271,8 @@ Result<HomographyFit> fit_homography(const std::vector<Vector2d>& x1,
     return eps * q * q * q;
   };
   // Early exit: stop once the smallest plane worth reporting would have been found.
-  double needed = log_ratio_iterations(params.confidence, p_sample(params.min_inliers),
-                                       params.max_iterations);
+  double needed =
+      log_ratio_iterations(params.confidence, p_sample(params.min_inliers), params.max_iterations);
 
   std::mt19937_64 rng(params.seed);
   std::uniform_int_distribution<int> pick(0, n - 1);
@@ -320,8 +320,7 @@ Result<HomographyFit> fit_homography(const std::vector<Vector2d>& x1,
                                                      params.max_iterations));
   }
   if (iterations) *iterations = it;
-  if (best_count < params.min_inliers)
-    return Result<HomographyFit>::fail(Reason::kNoDominantPlane);
+  if (best_count < params.min_inliers) return Result<HomographyFit>::fail(Reason::kNoDominantPlane);
 
   // Final least squares on the inliers in pixels: DLT until the inlier set settles, then
   // Gauss-Newton on the transfer error.

@@ -25,8 +25,8 @@ struct HomographyFit {
   Matrix3d H = Matrix3d::Identity();  ///< x2 ~ H x1 in the coordinates of the input points
   std::vector<uint8_t> inlier;        ///< per correspondence: 1 when an inlier
   int n_inliers = 0;
-  double rms_px = 0.0;                ///< RMS transfer error of the inliers [input units]
-  int iterations = 0;                 ///< RANSAC samples drawn
+  double rms_px = 0.0;  ///< RMS transfer error of the inliers [input units]
+  int iterations = 0;   ///< RANSAC samples drawn
 };
 
 enum class Sampling { kUniform, kLocal };

@@ -12,8 +12,8 @@ namespace {
 
 /// dot[j] = sum_k a[k] * bt[k][j] for j < n: the row of a . B^T with B stored transposed.
 ALIGHT_MULTIVERSION
-void dot_row(const float* __restrict a, const float* __restrict bt, int len, int n,
-             int stride, float* __restrict dot) {
+void dot_row(const float* __restrict a, const float* __restrict bt, int len, int n, int stride,
+             float* __restrict dot) {
   for (int j = 0; j < n; ++j) dot[j] = 0.f;
   for (int k = 0; k < len; ++k) {
     const float ak = a[k];
@@ -42,8 +42,7 @@ float distance_of(float dot) { return std::sqrt(std::max(0.f, 2.f - 2.f * dot));
 
 /// Matches rows idx1 of d1 against rows idx2 of d2, appending to out (indices in d1, d2).
 void match_group(const cv::Mat& d1, const cv::Mat& d2, const std::vector<int>& idx1,
-                 const std::vector<int>& idx2, const MatchParams& params,
-                 std::vector<Match>& out) {
+                 const std::vector<int>& idx2, const MatchParams& params, std::vector<Match>& out) {
   const int n1 = int(idx1.size()), n2 = int(idx2.size()), len = d1.cols;
   if (n1 == 0 || n2 == 0) return;
   const int stride = (n2 + 7) & ~7;

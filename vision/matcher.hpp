@@ -15,8 +15,8 @@
 namespace alight::vision {
 
 struct Match {
-  int i1 = -1;  ///< row in the first descriptor set
-  int i2 = -1;  ///< row in the second
+  int i1 = -1;         ///< row in the first descriptor set
+  int i2 = -1;         ///< row in the second
   float distance = 0;  ///< Euclidean distance of the unit descriptors
 };
 

@@ -9,13 +9,13 @@ namespace alight::vision {
 
 /// STAR / CenSurE detector (paper 3.1.1; Agrawal, Konolige & Blas, ECCV 2008).
 struct StarParams {
-  int min_size = 1;                  ///< smallest filter index n: inner box 2n+1, outer 4n+1 [px]
-  int max_size = 6;                  ///< largest filter index n (border 2n+1 px is skipped)
-  double response_threshold = 6.0;   ///< |mean(inner) - mean(ring)| to keep a peak [grey levels]
-  double line_threshold = 10.0;      ///< Harris ratio r: reject edges with tr^2/det > (r+1)^2/r
-  int nms_radius_px = 2;             ///< spatial non-maximum suppression radius [px]
-  int max_features = 600;            ///< strongest peaks kept (0: all)
-  bool subpixel = true;              ///< paper 3.1.1: quadratic refinement of x, y and scale
+  int min_size = 1;                 ///< smallest filter index n: inner box 2n+1, outer 4n+1 [px]
+  int max_size = 6;                 ///< largest filter index n (border 2n+1 px is skipped)
+  double response_threshold = 6.0;  ///< |mean(inner) - mean(ring)| to keep a peak [grey levels]
+  double line_threshold = 10.0;     ///< Harris ratio r: reject edges with tr^2/det > (r+1)^2/r
+  int nms_radius_px = 2;            ///< spatial non-maximum suppression radius [px]
+  int max_features = 600;           ///< strongest peaks kept (0: all)
+  bool subpixel = true;             ///< paper 3.1.1: quadratic refinement of x, y and scale
   void validate() const;
 };
 
@@ -28,40 +28,40 @@ struct SurfParams {
 
 /// Descriptor matching: nearest neighbour, Lowe's ratio test, mutual check.
 struct MatchParams {
-  double ratio = 0.8;            ///< best / second-best distance must be below this [-]
-  bool mutual = true;            ///< keep a match only if it is also the reverse best match
-  double max_distance = 0.6;     ///< Euclidean distance of unit descriptors above which no match [-]
-  bool same_sign_only = true;    ///< match bright blobs with bright, dark with dark (SURF's trick)
+  double ratio = 0.8;          ///< best / second-best distance must be below this [-]
+  bool mutual = true;          ///< keep a match only if it is also the reverse best match
+  double max_distance = 0.6;   ///< Euclidean distance of unit descriptors above which no match [-]
+  bool same_sign_only = true;  ///< match bright blobs with bright, dark with dark (SURF's trick)
   void validate() const;
 };
 
 /// Reference frame selection by continuous tracking (paper 3.1.1).
 struct TrackerParams {
-  int min_tracked = 40;           ///< N: features that must be tracked from reference to now [-]
-  int max_history = 60;           ///< frames kept (bounds the reference age in frames) [-]
-  double max_frame_gap_s = 1.0;   ///< a larger gap between frames resets the history [s]
+  int min_tracked = 40;          ///< N: features that must be tracked from reference to now [-]
+  int max_history = 60;          ///< frames kept (bounds the reference age in frames) [-]
+  double max_frame_gap_s = 1.0;  ///< a larger gap between frames resets the history [s]
   double max_reference_age_s = 10.0;  ///< older frames are never the reference [s]
-  MatchParams match{};            ///< frame-to-frame matching
+  MatchParams match{};                ///< frame-to-frame matching
   /// Frame-to-frame matches must fit one homography within this; consecutive frames are close,
   /// so off-plane parallax stays below it while wrong matches do not (0: no check) [px].
   double frame_threshold_px = 8.0;
-  uint64_t seed = 1;              ///< RANSAC seed of the frame-to-frame check [-]
+  uint64_t seed = 1;  ///< RANSAC seed of the frame-to-frame check [-]
   void validate() const;
 };
 
 /// Robust homography (paper 3.1.2; Fischler & Bolles 1981 RANSAC, Hartley 1997 normalisation,
 /// Chum, Matas & Kittler 2003 LO-RANSAC refinement).
 struct HomographyParams {
-  double threshold_px = 2.0;     ///< inlier if the transfer error in image 2 is below [px]
-  double confidence = 0.995;     ///< adaptive stopping: probability of one all-inlier sample [-]
-  int max_iterations = 2000;     ///< hard cap of RANSAC samples [-]
-  int min_inliers = 12;          ///< fewer inliers: no plane [-]
-  int refine_iterations = 5;     ///< Gauss-Newton steps on the inliers' transfer error [-]
+  double threshold_px = 2.0;  ///< inlier if the transfer error in image 2 is below [px]
+  double confidence = 0.995;  ///< adaptive stopping: probability of one all-inlier sample [-]
+  int max_iterations = 2000;  ///< hard cap of RANSAC samples [-]
+  int min_inliers = 12;       ///< fewer inliers: no plane [-]
+  int refine_iterations = 5;  ///< Gauss-Newton steps on the inliers' transfer error [-]
   /// Second plane (3.2): draw the 3 other points of a sample among the k nearest neighbours of
   /// the first in image 1 (a platform is compact), which also bounds the work when no second
   /// plane exists: stop once a plane of min_inliers would have been sampled with `confidence`.
-  int local_neighbours = 16;     ///< k [-]
-  uint64_t seed = 1;             ///< RANSAC random seed [-]
+  int local_neighbours = 16;  ///< k [-]
+  uint64_t seed = 1;          ///< RANSAC random seed [-]
   void validate() const;
 };
 
@@ -74,15 +74,15 @@ struct DecompositionParams {
 
 /// Two-plane alignment (paper 3.2).
 struct AlignParams {
-  double max_rotation_disagreement_deg = 5.0;   ///< planes' R21 must agree within [deg]
+  double max_rotation_disagreement_deg = 5.0;      ///< planes' R21 must agree within [deg]
   double max_translation_disagreement_deg = 20.0;  ///< planes' t12 directions agree within [deg]
-  int max_iterations = 15;      ///< Levenberg-Marquardt iterations of the joint refinement [-]
+  int max_iterations = 15;  ///< Levenberg-Marquardt iterations of the joint refinement [-]
   void validate() const;
 };
 
 /// Waypoint geometry (paper 3.1.3, eqs. 3-6).
 struct WaypointParams {
-  double min_baseline_m = 0.03;   ///< smaller camera translation: no usable scale [m]
+  double min_baseline_m = 0.03;             ///< smaller camera translation: no usable scale [m]
   double max_translation_angle_deg = 30.0;  ///< vision vs motion-capture t12 direction [deg]
   double max_rotation_error_deg = 5.0;      ///< vision vs motion-capture R21 [deg]
   void validate() const;

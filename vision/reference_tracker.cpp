@@ -50,8 +50,10 @@ ReferenceTracker::Update ReferenceTracker::add(TrackedFrame frame) {
       hp.seed = params_.seed;
       hp.refine_iterations = 0;
       const auto fit = fit_homography(a, b, hp);
-      if (fit) keep = fit->inlier;
-      else keep.assign(m.size(), 0);
+      if (fit)
+        keep = fit->inlier;
+      else
+        keep.assign(m.size(), 0);
     }
     for (size_t k = 0; k < m.size(); ++k) {
       if (!keep[k]) continue;

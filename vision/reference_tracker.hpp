@@ -5,8 +5,8 @@
 //
 // Each new frame is matched to the previous one (matcher.hpp), the matches checked against one
 // loose frame-to-frame homography (wrong matches would make false tracks); a matched keypoint
-// inherits the previous keypoint's track id, an unmatched one starts a new track. A track therefore links a
-// feature through every frame since it started, and the number of features tracked
+// inherits the previous keypoint's track id, an unmatched one starts a new track. A track therefore
+// links a feature through every frame since it started, and the number of features tracked
 // continuously from a past frame f to now is |ids(f) & ids(now)|. That count can only fall as
 // time goes on, so the reference is the oldest kept frame where it is still >= min_tracked, and
 // older frames are dropped for good. The longest baseline with enough common features is what
@@ -34,11 +34,11 @@ namespace alight::vision {
 
 /// One processed image: its features and their track ids.
 struct TrackedFrame {
-  int64_t utime = 0;                ///< exposure time [us]
+  int64_t utime = 0;  ///< exposure time [us]
   std::vector<Keypoint> keypoints;
-  cv::Mat descriptors;              ///< CV_32F, one row per keypoint
-  double pattern_angle_rad = 0.0;   ///< SURF pattern rotation used for the descriptors
-  std::vector<int64_t> track_id;    ///< filled by ReferenceTracker::add
+  cv::Mat descriptors;             ///< CV_32F, one row per keypoint
+  double pattern_angle_rad = 0.0;  ///< SURF pattern rotation used for the descriptors
+  std::vector<int64_t> track_id;   ///< filled by ReferenceTracker::add
 };
 
 class ReferenceTracker {

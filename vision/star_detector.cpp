@@ -13,8 +13,7 @@ namespace {
 /// One row of the response at filter index n: mean(inner (2n+1)^2) - mean(ring).
 ALIGHT_MULTIVERSION
 void response_row(const int* __restrict o0, const int* __restrict o1, const int* __restrict i0,
-                  const int* __restrict i1, int n, int x_begin, int x_end,
-                  float* __restrict out) {
+                  const int* __restrict i1, int n, int x_begin, int x_end, float* __restrict out) {
   const int a = n, b = 2 * n;
   const float in_area = float((2 * a + 1) * (2 * a + 1));
   const float out_area = float((2 * b + 1) * (2 * b + 1));
@@ -153,9 +152,9 @@ Result<std::vector<Keypoint>> detect_star(const cv::Mat& gray, const cv::Mat& in
         }
       }
       if (n > params.min_size && n < params.max_size)
-        kp.size += parabola_offset(std::abs(star_response(integral, x, y, n - 1)),
-                                   std::abs(f[1][1]),
-                                   std::abs(star_response(integral, x, y, n + 1)));
+        kp.size +=
+            parabola_offset(std::abs(star_response(integral, x, y, n - 1)), std::abs(f[1][1]),
+                            std::abs(star_response(integral, x, y, n + 1)));
     }
   }
   return R::ok(std::move(kps));

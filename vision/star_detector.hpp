@@ -21,9 +21,9 @@
 namespace alight::vision {
 
 struct Keypoint {
-  float x = 0, y = 0;     ///< position [px] (pixel centres at integers, u right, v down)
-  float size = 1;         ///< filter index n, continuous after refinement (blob radius ~ n + 0.5 px)
-  float response = 0;     ///< mean(inner) - mean(ring) [grey levels]; > 0: bright blob
+  float x = 0, y = 0;  ///< position [px] (pixel centres at integers, u right, v down)
+  float size = 1;      ///< filter index n, continuous after refinement (blob radius ~ n + 0.5 px)
+  float response = 0;  ///< mean(inner) - mean(ring) [grey levels]; > 0: bright blob
 };
 
 /// Integral image (CV_32S, (h+1) x (w+1)) of an 8-bit grey image, shared by STAR and SURF.

@@ -26,11 +26,11 @@ MocapMotion mocap_motion(const PoseSample& pose_1, const PoseSample& pose_2,
                          const CameraMount& mount);
 
 struct Waypoint {
-  Vector3d p_W = Vector3d::Zero();  ///< X_V of eq. 6: the point on the plane in world [m]
-  Vector3d p_C2 = Vector3d::Zero(); ///< X_c of eq. 5: the point in the current camera [m]
-  Vector3d n_W = Vector3d::UnitZ(); ///< unit plane normal in world, pointing towards the camera
-  double distance_m = 0.0;          ///< current camera centre to the plane [m]
-  double scale_m = 0.0;             ///< s of eq. 3 [m per baseline unit]
+  Vector3d p_W = Vector3d::Zero();     ///< X_V of eq. 6: the point on the plane in world [m]
+  Vector3d p_C2 = Vector3d::Zero();    ///< X_c of eq. 5: the point in the current camera [m]
+  Vector3d n_W = Vector3d::UnitZ();    ///< unit plane normal in world, pointing towards the camera
+  double distance_m = 0.0;             ///< current camera centre to the plane [m]
+  double scale_m = 0.0;                ///< s of eq. 3 [m per baseline unit]
   double translation_angle_rad = 0.0;  ///< vision vs motion-capture t12 direction
   double rotation_error_rad = 0.0;     ///< vision vs motion-capture R21
 };

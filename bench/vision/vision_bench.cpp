@@ -5,9 +5,9 @@
 //
 //   build-<you>/bin/vision_bench [frames=40] [repeats=3]
 #include <algorithm>
-#include <ctime>
 #include <cstdio>
 #include <cstdlib>
+#include <ctime>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/features2d.hpp>
@@ -78,9 +78,9 @@ int main(int argc, char** argv) {
   cv::BFMatcher bf(cv::NORM_HAMMING, true);
 
   for (int f = 0; f < frames; ++f) {
-    const Matrix3d R_21 = Eigen::AngleAxisd(3 * M_PI / 180 * u(rng),
-                                            Vector3d(u(rng), u(rng), u(rng)).normalized())
-                              .toRotationMatrix();
+    const Matrix3d R_21 =
+        Eigen::AngleAxisd(3 * M_PI / 180 * u(rng), Vector3d(u(rng), u(rng), u(rng)).normalized())
+            .toRotationMatrix();
     const Vector3d t_12 = 0.2 * Vector3d(u(rng), u(rng), 0.2 * u(rng)).normalized();
     const auto scene = testing::two_plane_scene(500 + f, R_21, t_12);
     const Matrix3d K = scene.K, K_inv = K.inverse();
@@ -201,10 +201,12 @@ int main(int argc, char** argv) {
       bf.match(orb_ref_desc, odesc, om);
       orb.match.push_back(ms_since(t0));
       std::vector<cv::Point2f> p1, p2;
-      for (const auto& mm : om) p1.push_back(orb_ref_kp[mm.queryIdx].pt), p2.push_back(okp[mm.trainIdx].pt);
+      for (const auto& mm : om)
+        p1.push_back(orb_ref_kp[mm.queryIdx].pt), p2.push_back(okp[mm.trainIdx].pt);
       t0 = Clock::now();
       cv::Mat mask;
-      const cv::Mat H1 = p1.size() >= 4 ? cv::findHomography(p1, p2, cv::RANSAC, 2.0, mask) : cv::Mat();
+      const cv::Mat H1 =
+          p1.size() >= 4 ? cv::findHomography(p1, p2, cv::RANSAC, 2.0, mask) : cv::Mat();
       orb.h1.push_back(ms_since(t0));
       cv::Mat H2;
       t0 = Clock::now();
@@ -233,9 +235,10 @@ int main(int argc, char** argv) {
     }
   }
 
-  std::printf("vision_bench: %d frames x %d repeats, 640x480, 1 thread, median thread-CPU ms "
-              "per frame\n",
-              frames, repeats);
+  std::printf(
+      "vision_bench: %d frames x %d repeats, 640x480, 1 thread, median thread-CPU ms "
+      "per frame\n",
+      frames, repeats);
   std::printf("%-12s %10s %10s\n", "stage", "ours", "ORB+BF+H");
   auto row = [](const char* name, const std::vector<double>& a, const std::vector<double>* b) {
     if (b)
@@ -253,14 +256,16 @@ int main(int argc, char** argv) {
   row("waypoint", ours.waypoint, nullptr);
   row("total", ours.total, &orb.total);
   std::printf("(ORB's detect column is detectAndCompute: detection and description)\n");
-  std::printf("floor H found: ours %d/%d, ORB %d/%d; median floor corner error: ours %.3f px, "
-              "ORB %.3f px\n",
-              ours.n_floor, ours.n_frames, orb.n_floor, orb.n_frames, median(ours.err_floor),
-              median(orb.err_floor));
-  std::printf("platform H found: ours %d/%d, ORB %d/%d; median platform-corner error: ours %.3f "
-              "px, ORB %.3f px\n",
-              ours.n_top, ours.n_frames, orb.n_top, orb.n_frames, median(ours.err_top),
-              median(orb.err_top));
+  std::printf(
+      "floor H found: ours %d/%d, ORB %d/%d; median floor corner error: ours %.3f px, "
+      "ORB %.3f px\n",
+      ours.n_floor, ours.n_frames, orb.n_floor, orb.n_frames, median(ours.err_floor),
+      median(orb.err_floor));
+  std::printf(
+      "platform H found: ours %d/%d, ORB %d/%d; median platform-corner error: ours %.3f "
+      "px, ORB %.3f px\n",
+      ours.n_top, ours.n_frames, orb.n_top, orb.n_frames, median(ours.err_top),
+      median(orb.err_top));
   std::printf("aligned %d/%d; waypoint of the platform centre: %d, median error %.4f m\n",
               ours.n_aligned, ours.n_frames, ours.n_waypoint, median(ours.waypoint_err_m));
   return 0;

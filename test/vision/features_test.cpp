@@ -78,8 +78,8 @@ TEST(StarDetectorTest, FindsABlobAtItsSubPixelCentreAndSignAndScale) {
   const double cx = 70.3, cy = 55.7, sigma = 2.5;
   for (int y = 0; y < img.rows; ++y)
     for (int x = 0; x < img.cols; ++x)
-      img.at<float>(y, x) += float(
-          120 * std::exp(-((x - cx) * (x - cx) + (y - cy) * (y - cy)) / (2 * sigma * sigma)));
+      img.at<float>(y, x) +=
+          float(120 * std::exp(-((x - cx) * (x - cx) + (y - cy) * (y - cy)) / (2 * sigma * sigma)));
   cv::Mat g;
   img.convertTo(g, CV_8U);
   StarParams p;
@@ -111,7 +111,8 @@ TEST(StarDetectorTest, FindsABlobAtItsSubPixelCentreAndSignAndScale) {
 }
 
 TEST(StarDetectorTest, KeepsAtMostMaxFeaturesStrongestFirst) {
-  const cv::Mat img = view_of(procedural_photo(900, 700, 1), view_homography(900, 700, 0, 1, 0, 0, 0, 0));
+  const cv::Mat img =
+      view_of(procedural_photo(900, 700, 1), view_homography(900, 700, 0, 1, 0, 0, 0, 0));
   StarParams p;
   p.max_features = 100;
   const auto k = detect_star(img, integral_image(img), p);
@@ -172,8 +173,8 @@ TEST(FeaturesTest, WarpedPhotoCornerErrorIsBelowHalfAPixel) {
   };
   for (const Case c : {Case{5, 1.0, 0, 0, 0, 2}, Case{-10, 1.1, 1e-4, 0, 0.5, 2},
                        Case{12, 0.9, 0, -1.5e-4, 0.8, 3}, Case{0, 1.2, 1e-4, 1e-4, 0, 4}}) {
-    const Matrix3d H2 = view_homography(1000, 800, c.angle_deg * kDeg, c.scale, 15, -10, c.tilt_x,
-                                        c.tilt_y);
+    const Matrix3d H2 =
+        view_homography(1000, 800, c.angle_deg * kDeg, c.scale, 15, -10, c.tilt_x, c.tilt_y);
     const cv::Mat b = view_of(src, H2, c.blur, c.noise, 2);
     const PairResult r = run_pair(a, b, H2 * H1.inverse(), StarParams{});
     ASSERT_TRUE(r.ok) << c.angle_deg;
@@ -191,8 +192,8 @@ TEST(FeaturesTest, SubPixelStarImprovesCornerErrorAndInliers) {
   double err_sub = 0, err_int = 0;
   int in_sub = 0, in_int = 0;
   for (int k = 0; k < 6; ++k) {
-    const Matrix3d H2 = view_homography(1000, 800, (k - 3) * 2.5 * kDeg, 0.95 + 0.02 * k,
-                                        3.3 * k, -2.7 * k, 5e-5 * k, -4e-5 * k);
+    const Matrix3d H2 = view_homography(1000, 800, (k - 3) * 2.5 * kDeg, 0.95 + 0.02 * k, 3.3 * k,
+                                        -2.7 * k, 5e-5 * k, -4e-5 * k);
     const cv::Mat b = view_of(src, H2, 0.3, 1.5, 10 + k);
     StarParams p;
     const PairResult s = run_pair(a, b, H2 * H1.inverse(), p);
@@ -202,10 +203,10 @@ TEST(FeaturesTest, SubPixelStarImprovesCornerErrorAndInliers) {
     err_sub += s.corner_error_px, err_int += i.corner_error_px;
     in_sub += s.n_inliers, in_int += i.n_inliers;
   }
-  std::printf("sub-pixel: %.3f px %d inliers; integer: %.3f px %d inliers\n", err_sub / 6,
-              in_sub, err_int / 6, in_int);
-  EXPECT_LT(err_sub, 0.95 * err_int) << "sub-pixel " << err_sub / 6 << " px, integer "
-                                    << err_int / 6 << " px";
+  std::printf("sub-pixel: %.3f px %d inliers; integer: %.3f px %d inliers\n", err_sub / 6, in_sub,
+              err_int / 6, in_int);
+  EXPECT_LT(err_sub, 0.95 * err_int)
+      << "sub-pixel " << err_sub / 6 << " px, integer " << err_int / 6 << " px";
   EXPECT_GT(in_sub, in_int);
 }
 
@@ -216,8 +217,8 @@ TEST(FeaturesTest, KnownYawRotationKeepsLargeRotationsMatchable) {
   const cv::Mat a = view_of(src, H1), b = view_of(src, H2, 0, 1.0, 4);
   const PairResult upright = run_pair(a, b, H2 * H1.inverse(), StarParams{});
   const PairResult rotated = run_pair(a, b, H2 * H1.inverse(), StarParams{}, 0.0, 60 * kDeg);
-  std::printf("60 deg: upright %d inliers, rotated pattern %d inliers %.3f px\n",
-              upright.n_inliers, rotated.n_inliers, rotated.corner_error_px);
+  std::printf("60 deg: upright %d inliers, rotated pattern %d inliers %.3f px\n", upright.n_inliers,
+              rotated.n_inliers, rotated.corner_error_px);
   EXPECT_LT(upright.n_inliers, 30);  // upright SURF fails beyond about 15 deg
   ASSERT_TRUE(rotated.ok);
   EXPECT_GT(rotated.n_inliers, 150);

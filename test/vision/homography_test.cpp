@@ -38,7 +38,7 @@ TEST(HomographyTest, RecoversTheExactHomographyFromNoiseFreePointsAmongOutliers)
       EXPECT_TRUE(fit->inlier[i]) << i;
     }
   EXPECT_GE(fit->n_inliers, 200);
-  EXPECT_LE(fit->n_inliers, 203);  // a random pair may fall within 2 px by chance
+  EXPECT_LE(fit->n_inliers, 203);   // a random pair may fall within 2 px by chance
   EXPECT_LT(fit->iterations, 200);  // adaptive stopping at 67 % inliers
 }
 

@@ -63,7 +63,7 @@ TEST(ReferenceTrackerTest, ReferenceIsTheOldestFrameWithEnoughContinuousTracks) 
     }
     EXPECT_GT(good, 0.9 * m.size()) << k;
   }
-  EXPECT_TRUE(advanced);       // overlap shrinks: the reference had to move
+  EXPECT_TRUE(advanced);  // overlap shrinks: the reference had to move
   EXPECT_GT(last_ref, 1'000'000);
   EXPECT_LT(tracker.history_size(), 26u);
 }

@@ -106,8 +106,8 @@ TEST(WaypointTest, NoisyCorrespondencesGiveCentimetreAccuracyAtOnePointFiveMetre
   ASSERT_TRUE(fit);
   DecompositionPrior prior;
   prior.R_21 = mocap_motion(s.pose_1, s.pose_2, s.mount).R_21;
-  const auto d = decompose(calibrate_homography(fit->H, K), testing::rays(K, x1),
-                           testing::rays(K, x2), prior);
+  const auto d =
+      decompose(calibrate_homography(fit->H, K), testing::rays(K, x1), testing::rays(K, x2), prior);
   ASSERT_TRUE(d);
   const Vector3d p_W_target(0.1, -0.1, s.plane_z_m);
   const auto w = compute_waypoint(*d, s.ray_2(p_W_target), s.pose_1, s.pose_2, s.mount);
@@ -147,8 +147,8 @@ TEST(WaypointTest, PatternAngleFollowsTheCameraYaw) {
   // angle changes by exactly the yaw difference.
   const Matrix3d R_a = rotation_from_rpy(0, 0, 0.1) * R_BC_downward();
   const Matrix3d R_b = rotation_from_rpy(0, 0, 0.6) * R_BC_downward();
-  const double d = wrap_angle(pattern_angle(R_b, Vector3d::UnitX()) -
-                              pattern_angle(R_a, Vector3d::UnitX()));
+  const double d =
+      wrap_angle(pattern_angle(R_b, Vector3d::UnitX()) - pattern_angle(R_a, Vector3d::UnitX()));
   EXPECT_NEAR(std::abs(d), 0.5, 1e-12);
 }
 
