@@ -55,6 +55,7 @@ Renderer::Renderer(const CameraModel& model, int supersample) : model_(model), s
   ray_x_.resize(static_cast<size_t>(W) * H * n);
   ray_y_.resize(ray_x_.size());
   ray_scale_.resize(ray_x_.size());
+  ray_len_.resize(ray_x_.size());
   tiles_x_ = (W + kTile - 1) / kTile;
   tiles_y_ = (H + kTile - 1) / kTile;
   const float inf = std::numeric_limits<float>::infinity();
@@ -75,7 +76,8 @@ Renderer::Renderer(const CameraModel& model, int supersample) : model_(model), s
           const size_t k = (static_cast<size_t>(v) * W + u) * n + j * ss_ + i;
           ray_x_[k] = static_cast<float>(r.x());
           ray_y_[k] = static_cast<float>(r.y());
-          ray_scale_[k] = scale;
+          ray_len_[k] = static_cast<float>(r.norm());
+          ray_scale_[k] = scale * ray_len_[k];
           b[0] = std::min(b[0], ray_x_[k]);
           b[1] = std::min(b[1], ray_y_[k]);
           b[2] = std::max(b[2], ray_x_[k]);
@@ -207,7 +209,7 @@ void Renderer::render_rows(const Scene& scene, const Isometry3d& X_WC, float wei
       for (int s = 0; s < n; ++s) {
         const size_t k = (static_cast<size_t>(v) * W + u) * n + s;
         const float dx = ray_x_[k], dy = ray_y_[k];
-        const float dlen = std::sqrt(dx * dx + dy * dy + 1.f);
+        const float dlen = ray_len_[k];
         float best_t = std::numeric_limits<float>::infinity();
         float value = kBackground;
         // Floor (z = 0), seen from above.
@@ -269,14 +271,14 @@ void Renderer::render_rows(const Scene& scene, const Isometry3d& X_WC, float wei
             tv = hq[2] + (hit_d_axis < 0 ? 0.4f : 1.3f);
           }
           const float cosi = std::max(0.05f, std::abs(hit_d_axis) / dlen);
-          const float fp = best_t * ray_scale_[k] * dlen / std::sqrt(cosi);
+          const float fp = best_t * ray_scale_[k] / std::sqrt(cosi);
           const int face = hit_axis * 2 + (hit_d_axis < 0 ? 1 : 0);  // the face the ray enters
           value = f.tex->sample(tu, tv, fp) * f.shade[face];
         } else if (std::isfinite(best_t)) {
           const float px = Cx + best_t * (Rw[0] * dx + Rw[1] * dy + Rw[2]);
           const float py = Cy + best_t * (Rw[3] * dx + Rw[4] * dy + Rw[5]);
           const float cosi = std::max(0.05f, -dwz / dlen);
-          const float fp = best_t * ray_scale_[k] * dlen / std::sqrt(cosi);
+          const float fp = best_t * ray_scale_[k] / std::sqrt(cosi);
           value = floor_tex.sample(px, py, fp) * floor_shade;
         }
         sum += value;

@@ -41,8 +41,8 @@ class Renderer {
   int threads_ = 1;
   int tiles_x_ = 0, tiles_y_ = 0;
   // Per sub-ray: direction (x, y, 1) in camera coordinates and the footprint of a (sub-)pixel
-  // at unit depth [normalised image units].
-  std::vector<float> ray_x_, ray_y_, ray_scale_;
+  // at unit depth times the ray's length, and that length |(x, y, 1)|.
+  std::vector<float> ray_x_, ray_y_, ray_scale_, ray_len_;
   // Per tile: bounds of its rays' (x, y) for culling.
   std::vector<cv::Vec4f> tile_bounds_;
 };
