@@ -362,4 +362,28 @@ Result<HomographyFit> fit_homography(const std::vector<Vector2d>& x1,
   return Result<HomographyFit>::ok(std::move(fit));
 }
 
+Result<PlanePair> fit_two_homographies(const std::vector<Vector2d>& x1,
+                                       const std::vector<Vector2d>& x2,
+                                       const HomographyParams& params) {
+  auto first = fit_homography(x1, x2, params, Sampling::kUniform);
+  if (!first) return Result<PlanePair>::fail(first.reason());
+  PlanePair pair;
+  pair.first = std::move(first.value());
+  std::vector<Vector2d> o1, o2;
+  std::vector<int> index;
+  for (size_t i = 0; i < x1.size(); ++i)
+    if (!pair.first.inlier[i]) o1.push_back(x1[i]), o2.push_back(x2[i]), index.push_back(int(i));
+  auto second = fit_homography(o1, o2, params, Sampling::kLocal, &pair.second_iterations);
+  if (second) {
+    HomographyFit fit = std::move(second.value());
+    std::vector<uint8_t> mask(x1.size(), 0);
+    for (size_t k = 0; k < index.size(); ++k) mask[index[k]] = fit.inlier[k];
+    fit.inlier = std::move(mask);
+    pair.second = std::move(fit);
+  } else {
+    pair.second_reason = Reason::kNoTargetPlane;
+  }
+  return Result<PlanePair>::ok(std::move(pair));
+}
+
 }  // namespace alight::vision

@@ -39,6 +39,21 @@ Result<HomographyFit> fit_homography(const std::vector<Vector2d>& x1,
                                      Sampling sampling = Sampling::kUniform,
                                      int* iterations = nullptr);
 
+/// The landing's two planes (paper 3.2): the dominant homography over all correspondences, then
+/// a second one, locally sampled, over the dominant plane's outliers.
+struct PlanePair {
+  HomographyFit first;
+  std::optional<HomographyFit> second;  ///< inlier mask indexes the ORIGINAL correspondences
+  Reason second_reason = Reason::kOk;   ///< kNoTargetPlane when there is no second plane
+  int second_iterations = 0;            ///< samples the second search drew
+};
+
+/// Fails (kTooFewMatches, kNoDominantPlane) only when there is no first plane; a missing second
+/// plane is reported in the result (second empty, second_reason = kNoTargetPlane).
+Result<PlanePair> fit_two_homographies(const std::vector<Vector2d>& x1,
+                                       const std::vector<Vector2d>& x2,
+                                       const HomographyParams& params);
+
 /// Exact homography through 4 correspondences (DLT with h33 = 1); nullopt when degenerate.
 std::optional<Matrix3d> homography_from_4(const Vector2d* x1, const Vector2d* x2);
 

@@ -162,5 +162,49 @@ TEST(HomographyTest, LocalSamplingFindsACompactSecondPlaneAmongOutliers) {
   EXPECT_LT(corner_error(fit->H * T, v.H_px(Vector3d::UnitZ(), 1.2) * T, 120, 120), 0.5);
 }
 
+TEST(HomographyTest, OnePlaneOnlyGivesTheFirstPlaneAndNoTargetPlaneCheaply) {
+  const TwoViews v = floor_views();
+  std::mt19937_64 rng(31);
+  Correspondences c;
+  add_plane(v, Vector3d::UnitZ(), 1.5, 250, 0.3, rng, c, 0);
+  add_outliers(60, rng, c);
+  HomographyParams p;
+  const auto pair = fit_two_homographies(c.x1, c.x2, p);
+  ASSERT_TRUE(pair);
+  EXPECT_GE(pair->first.n_inliers, 245);
+  EXPECT_FALSE(pair->second.has_value());
+  EXPECT_EQ(pair->second_reason, Reason::kNoTargetPlane);
+  EXPECT_LT(pair->second_iterations, p.max_iterations / 4);
+}
+
+TEST(HomographyTest, TwoPlanesGiveBothWithMasksOverTheOriginalCorrespondences) {
+  const TwoViews v = floor_views();
+  std::mt19937_64 rng(32);
+  Correspondences c;
+  add_plane(v, Vector3d::UnitZ(), 1.5, 200, 0.3, rng, c, 0);
+  add_plane(v, Vector3d::UnitZ(), 1.2, 50, 0.3, rng, c, 1, {250, 180, 400, 300});
+  add_outliers(40, rng, c);
+  const auto pair = fit_two_homographies(c.x1, c.x2, HomographyParams{});
+  ASSERT_TRUE(pair);
+  ASSERT_TRUE(pair->second.has_value());
+  ASSERT_EQ(pair->second->inlier.size(), c.x1.size());
+  int on_top = 0, on_floor = 0;
+  for (size_t i = 0; i < c.label.size(); ++i) {
+    on_top += pair->second->inlier[i] && c.label[i] == 1;
+    on_floor += pair->second->inlier[i] && c.label[i] == 0;
+  }
+  EXPECT_GE(on_top, 47);
+  EXPECT_EQ(on_floor, 0);
+}
+
+TEST(HomographyTest, NoFirstPlaneFailsTheWholePair) {
+  std::mt19937_64 rng(33);
+  Correspondences c;
+  add_outliers(100, rng, c);
+  EXPECT_EQ(fit_two_homographies(c.x1, c.x2, HomographyParams{}).reason(),
+            Reason::kNoDominantPlane);
+  EXPECT_EQ(fit_two_homographies({}, {}, HomographyParams{}).reason(), Reason::kTooFewMatches);
+}
+
 }  // namespace
 }  // namespace alight::vision
