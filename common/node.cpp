@@ -4,6 +4,7 @@
 
 #include <CLI/CLI.hpp>
 #include <chrono>
+#include <cerrno>
 #include <csignal>
 #include <cstdlib>
 #include <fstream>
@@ -163,7 +164,8 @@ int Node::spin_once(int timeout_ms) {
     ++handled;
     r = lcm_->handleTimeout(0);  // drain everything already queued
   }
-  if (r < 0) throw std::runtime_error(name_ + ": LCM handle failed");
+  // A signal (ours, or SIGCHLD) interrupting the wait is not an LCM failure.
+  if (r < 0 && errno != EINTR) throw std::runtime_error(name_ + ": LCM handle failed");
   for (auto& s : subs_) {
     if (!s->has_pending) continue;
     s->has_pending = false;

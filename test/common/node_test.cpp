@@ -5,6 +5,7 @@
 #include <alight/imu_t.hpp>
 #include <alight/pose_t.hpp>
 #include <chrono>
+#include <csignal>
 #include <thread>
 
 namespace alight {
@@ -89,6 +90,18 @@ TEST(NodeTest, TimersRunAtTheirPeriodAndStopEndsRun) {
   EXPECT_EQ(ticks, 10);
   EXPECT_GT(elapsed_s, 0.08);
   EXPECT_LT(elapsed_s, 1.0);
+}
+
+TEST(NodeTest, RegressionSignalDuringWaitEndsRunCleanly) {
+  // SIGTERM arriving while LCM waited in select() used to throw "LCM handle failed".
+  Node node(kUrl, "signalled");
+  std::thread killer([] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(150));
+    kill(getpid(), SIGTERM);
+  });
+  EXPECT_EQ(node.run(), 0);
+  killer.join();
+  EXPECT_TRUE(Node::signalled());
 }
 
 TEST(NodeTest, BadUrlThrowsNamingIt) {
