@@ -132,7 +132,7 @@ function setupControls() {
 // ---- gamepad (standard mapping): left stick x/y and right stick y nudge at 5 Hz; A go,
 // B abort, X land here, Y take off; LB+RB held 1 s asks to kill, then A confirms, B cancels.
 function setupGamepad() {
-  const pressed = {};
+  let pressed = null;  // button states at the previous poll; null until a pad is first seen
   let lastNudge = 0;
   let killHoldSince = null;
   const edge = (pad, i) => {
@@ -145,6 +145,8 @@ function setupGamepad() {
   function poll(ts) {
     const pads = navigator.getGamepads ? navigator.getGamepads() : [];
     const pad = Array.from(pads).find((p) => p && p.connected);
+    // A button already held when the pad appears (or the page loads) must not fire.
+    if (pad && !pressed) pressed = pad.buttons.map((b) => b.pressed);
     if (pad) {
       $('gamepad').textContent = `gamepad: ${pad.id.slice(0, 40)}`;
       const killOpen = !$('kill-dialog').hidden;
