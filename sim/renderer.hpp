@@ -1,5 +1,6 @@
 #pragma once
-// Camera image of a Scene by exact per-pixel ray casting: each pixel's ray (undistorted through
+// Camera image of a Scene by exact per-pixel ray casting (Appel 1968; ray-box slab test of Kay and
+// Kajiya, SIGGRAPH 1986) for the paper's camera (section 4.1): each pixel's ray (undistorted through
 // the camera model, so lens distortion is rendered exactly) is intersected analytically with
 // the floor plane and the boxes; the nearest hit is textured with trilinear mip-mapping, the
 // level chosen from the pixel's footprint on the surface (distance and incidence), and shaded by
