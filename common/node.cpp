@@ -155,7 +155,8 @@ int Node::spin_once(int timeout_ms) {
   if (!timers_.empty()) {
     int64_t next = timers_.front().next_utime;
     for (const auto& t : timers_) next = std::min(next, t.next_utime);
-    const int64_t wait_ms = std::max<int64_t>(0, (next - wall_utime()) / 1000);
+    // Rounded up: waking early would spin until the timer is due.
+    const int64_t wait_ms = std::max<int64_t>(0, (next - wall_utime() + 999) / 1000);
     timeout_ms = static_cast<int>(std::min<int64_t>(timeout_ms, wait_ms));
   }
   int handled = 0;
