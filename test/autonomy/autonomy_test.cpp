@@ -133,6 +133,38 @@ TEST(AutonomyTest, VisionSilenceInRefinementRetriesDetectionThenHolds) {
   EXPECT_GE(w.out.setpoint.p_W.z(), w.autonomy.params().detection.landing_height_m - 1e-9);
 }
 
+TEST(AutonomyTest, TargetLostDuringApproachGoesBackToDetection) {
+  KinematicWorld w;
+  w.takeoff_and_hover();
+  w.send(Command::kGo, Mission::kLanding);
+  ASSERT_TRUE(w.run_until_phase(Phase::kApproach, 120));
+  // Still high above the platform (held off the estimate, e.g. by wind, so it does not descend):
+  // the camera should see it, but vision is silent.
+  w.vision.silent = true;
+  const Vector3d est = w.autonomy.final_estimate();
+  for (int i = 0; i < 500 && w.autonomy.phase() == Phase::kApproach; ++i) {
+    w.p.head<2>() = est.head<2>() + Vector2d(0.1, 0);
+    w.step();
+  }
+  ASSERT_EQ(w.autonomy.phase(), Phase::kDetection) << w.out.status.reason;
+  EXPECT_EQ(w.autonomy.retries(), 1);
+  EXPECT_NE(w.out.status.reason.find("in approach"), std::string::npos) << w.out.status.reason;
+  EXPECT_GE(w.p.z(), 1.0) << "lost above lost_check_height_m, not during the final metres";
+}
+
+TEST(AutonomyTest, VisionNotNeededBelowTheLostCheckHeight) {
+  KinematicWorld w;
+  w.takeoff_and_hover();
+  w.send(Command::kGo, Mission::kLanding);
+  ASSERT_TRUE(w.run_until_phase(Phase::kApproach, 120));
+  const double z_touch = w.autonomy.final_estimate().z() + w.gear_height_m;
+  ASSERT_TRUE(w.run_until(
+      [&] { return w.p.z() - z_touch < w.autonomy.params().landing.lost_check_height_m; }, 30));
+  w.vision.silent = true;  // too close for the camera: the final estimate is flown blind
+  ASSERT_TRUE(w.run_until_phase(Phase::kLanded, 30)) << w.out.status.reason;
+  EXPECT_EQ(w.autonomy.retries(), 0);
+}
+
 TEST(AutonomyTest, SearchPathWithoutDetectionIsRetriedThenHolds) {
   KinematicWorld w;
   w.vision.blind = true;
