@@ -9,7 +9,7 @@
 // opposite x and y changes cancel.
 //
 // Outliers (the paper: "measurements are subject to noise and outliers") are gated by the squared
-// Mahalanobis distance d^2 = (X - mu)^T (S + s0^2 I)^-1 (X - mu) against the sample mean mu and
+// Mahalanobis distance (P. C. Mahalanobis, "On the generalised distance in statistics", 1936) d^2 = (X - mu)^T (S + s0^2 I)^-1 (X - mu) against the sample mean mu and
 // sample covariance S of the accepted waypoints, with an isotropic floor s0 so that a few
 // identical early waypoints do not make the gate infinitely tight; d^2 > gate_chi2 (chi^2 with 3
 // degrees of freedom) rejects. The gate starts at gate_min_n waypoints. Because an outlier among

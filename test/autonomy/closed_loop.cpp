@@ -48,7 +48,7 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
   int64_t seq = 0;
   bool takeoff_sent = false, go_sent = false;
   int64_t terminal_since = -1;
-  const bool trace = std::getenv("CLOSED_LOOP_TRACE") != nullptr;  // touch-down trace on stderr
+  const bool trace = std::getenv("CLOSED_LOOP_TRACE") != nullptr;  // contact trace on stderr
   bool event = false;  // a scripted action happened  // first time a terminal phase was seen
   ClosedLoopResult r;
 
