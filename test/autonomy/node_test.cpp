@@ -76,8 +76,6 @@ TEST(AutonomyNodeTest, AutoGoTakesOffStatusAtTenHertzAndKillStopsEverything) {
                  "warn"});
   ASSERT_TRUE(autonomy.ok());
   ASSERT_TRUE(outer.ok());
-  std::this_thread::sleep_for(std::chrono::milliseconds(500));  // subscriptions up
-
   const int64_t t0 = 1'700'000'000'000'000;
   int64_t t = t0;
   const auto publish_sensors = [&](int n) {
@@ -99,8 +97,18 @@ TEST(AutonomyNodeTest, AutoGoTakesOffStatusAtTenHertzAndKillStopsEverything) {
       }
     }
   };
+  // Until both nodes are up (a loaded machine may take a while to start them): sensor messages
+  // at rest until the first status and attitude command arrive, then forget what came so far.
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while ((rec.status.empty() || rec.cmds.empty()) && std::chrono::steady_clock::now() < deadline) {
+    publish_sensors(5);
+    lcm.handleTimeout(20);
+  }
+  ASSERT_FALSE(rec.status.empty()) << "alight-autonomy never answered";
+  ASSERT_FALSE(rec.cmds.empty()) << "alight-outer-loop never answered";
   publish_sensors(200);  // 2 s of sensor time
   for (int i = 0; i < 20; ++i) lcm.handleTimeout(10);
+  rec.status.erase(rec.status.begin(), rec.status.begin() + 1);
 
   ASSERT_FALSE(rec.status.empty());
   EXPECT_EQ(rec.status.back().phase, alight::autonomy_status_t::PHASE_TAKEOFF)
@@ -109,7 +117,7 @@ TEST(AutonomyNodeTest, AutoGoTakesOffStatusAtTenHertzAndKillStopsEverything) {
   for (size_t i = 1; i < rec.status.size(); ++i) {
     EXPECT_LE(rec.status[i].utime - rec.status[i - 1].utime, 100'000) << i;
   }
-  EXPECT_GE(rec.status.size(), 19u);
+  EXPECT_GE(rec.status.size(), 35u) << "2 s of sensor time at >= 10 Hz (20 Hz here)";
   ASSERT_FALSE(rec.setpoints.empty());
   EXPECT_EQ(rec.setpoints.back().motors, alight::position_setpoint_t::MOTORS_ON);
   EXPECT_GT(rec.setpoints.back().p_W[2], 0.12) << "climbing";
@@ -124,9 +132,13 @@ TEST(AutonomyNodeTest, AutoGoTakesOffStatusAtTenHertzAndKillStopsEverything) {
   kill.command = alight::operator_cmd_t::CMD_KILL;
   kill.auth = alight::operator_cmd_t::AUTH_NONE;
   lcm.publish("OPERATOR_CMD", &kill);
-  std::this_thread::sleep_for(std::chrono::milliseconds(200));
-  publish_sensors(30);
-  for (int i = 0; i < 20; ++i) lcm.handleTimeout(10);
+  const auto kill_deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  do {
+    publish_sensors(5);
+    for (int i = 0; i < 5; ++i) lcm.handleTimeout(10);
+  } while ((rec.status.back().phase != alight::autonomy_status_t::PHASE_KILLED ||
+            rec.cmds.back().armed) &&
+           std::chrono::steady_clock::now() < kill_deadline);
   EXPECT_EQ(rec.status.back().phase, alight::autonomy_status_t::PHASE_KILLED)
       << rec.status.back().reason;
   EXPECT_EQ(rec.status.back().failsafe, alight::autonomy_status_t::FAILSAFE_KILL);
