@@ -117,7 +117,8 @@ TEST(AutonomyNodeTest, AutoGoTakesOffStatusAtTenHertzAndKillStopsEverything) {
   for (size_t i = 1; i < rec.status.size(); ++i) {
     EXPECT_LE(rec.status[i].utime - rec.status[i - 1].utime, 100'000) << i;
   }
-  EXPECT_GE(rec.status.size(), 35u) << "2 s of sensor time at >= 10 Hz (20 Hz here)";
+  // (the newest ones may still be in flight on a loaded machine)
+  EXPECT_GE(rec.status.back().utime - rec.status.front().utime, 1'500'000);
   ASSERT_FALSE(rec.setpoints.empty());
   EXPECT_EQ(rec.setpoints.back().motors, alight::position_setpoint_t::MOTORS_ON);
   EXPECT_GT(rec.setpoints.back().p_W[2], 0.12) << "climbing";
