@@ -1,0 +1,155 @@
+// Landing target, paper 3.2 (see landing_target.hpp).
+#include "vision/landing_target.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+
+#include "vision/alignment.hpp"
+#include "vision/homography.hpp"
+#include "vision/waypoint.hpp"
+
+namespace alight::vision {
+namespace {
+
+std::vector<Vector3d> rays_of(const std::vector<Vector2d>& x, const std::vector<uint8_t>& mask,
+                              const Matrix3d& K_inv) {
+  std::vector<Vector3d> r;
+  for (size_t i = 0; i < x.size(); ++i)
+    if (mask[i]) r.push_back(K_inv * x[i].homogeneous());
+  return r;
+}
+
+}  // namespace
+
+TargetOutcome find_landing_target(const Correspondences& c, const PipelineParams& params) {
+  assert(c.camera && c.mount);
+  TargetOutcome out;
+  out.labels.assign(c.size(), Label::kOutlier);
+  const auto pair = fit_two_homographies(c.x1, c.x2, params.homography);
+  if (!pair) {
+    out.reason = pair.reason();
+    return out;
+  }
+  const HomographyFit& first = pair->first;
+  for (size_t i = 0; i < c.size(); ++i)
+    if (first.inlier[i]) out.labels[i] = Label::kDominant;
+  out.estimate.n_inliers_dominant = first.n_inliers;
+  if (!pair->second || pair->second->n_inliers < params.landing.min_platform_inliers) {
+    out.reason = Reason::kNoTargetPlane;
+    return out;
+  }
+  const HomographyFit& second = *pair->second;
+
+  const Matrix3d K = c.camera->K();
+  const Matrix3d K_inv = K.inverse();
+  const auto al =
+      align_two_planes(calibrate_homography(first.H, K), rays_of(c.x1, first.inlier, K_inv),
+                       rays_of(c.x2, first.inlier, K_inv), calibrate_homography(second.H, K),
+                       rays_of(c.x1, second.inlier, K_inv), rays_of(c.x2, second.inlier, K_inv),
+                       params.align, params.decomposition);
+  if (!al) {
+    out.reason = al.reason();
+    return out;
+  }
+  // The nearer of the two planes is the platform top.
+  const bool first_is_top = al->plane_a().distance_1() < al->plane_b().distance_1();
+  const PlaneMotion top = first_is_top ? al->plane_a() : al->plane_b();
+  const PlaneMotion floor = first_is_top ? al->plane_b() : al->plane_a();
+  const HomographyFit& top_fit = first_is_top ? first : second;
+  const HomographyFit& floor_fit = first_is_top ? second : first;
+  for (size_t i = 0; i < c.size(); ++i)
+    out.labels[i] = top_fit.inlier[i]     ? Label::kTarget
+                    : floor_fit.inlier[i] ? Label::kDominant
+                                          : Label::kOutlier;
+  out.estimate.n_inliers_dominant = floor_fit.n_inliers;
+  out.estimate.n_inliers_target = top_fit.n_inliers;
+  if (direction_angle(top.unit_normal_1(), floor.unit_normal_1()) >
+      params.landing.max_normal_angle_deg * M_PI / 180.0) {
+    out.reason = Reason::kNoTargetPlane;
+    return out;
+  }
+
+  // Platform features on the platform plane, in world (eqs. 4-6 with the motion-capture scale).
+  const MocapMotion mocap = mocap_motion(c.pose_1, c.pose_2, *c.mount);
+  if (mocap.baseline_m < params.waypoint.min_baseline_m) {
+    out.reason = Reason::kSmallBaseline;
+    return out;
+  }
+  const Isometry3d X_WC2 = camera_in_world(c.pose_2.X_WB(), c.mount->X_BC());
+  const Vector3d n2 = top.n_2() / mocap.baseline_m;  // n2~ in [1/m]
+  std::vector<Vector3d> pts_W;
+  for (size_t i = 0; i < c.size(); ++i) {
+    if (!top_fit.inlier[i]) continue;
+    const Vector3d ray = K_inv * c.x2[i].homogeneous();
+    const double denom = n2.dot(ray);
+    if (denom <= 0) continue;
+    pts_W.push_back(X_WC2 * (ray / denom));
+  }
+  if (pts_W.size() < 4) {
+    out.reason = Reason::kDecompositionFailed;
+    return out;
+  }
+  // Principal axes of the features in the plane; the centre of their extent is the aim point
+  // (the mean would follow the texture's feature density, the extent follows the edges).
+  Vector3d mean = Vector3d::Zero();
+  for (const auto& p : pts_W) mean += p;
+  mean /= static_cast<double>(pts_W.size());
+  const Vector3d n_W = (X_WC2.linear() * -top.n_2()).normalized();  // towards camera 2
+  Vector3d e1 = n_W.unitOrthogonal();
+  Vector3d e2 = n_W.cross(e1);
+  Eigen::Matrix2d C = Eigen::Matrix2d::Zero();
+  for (const auto& p : pts_W) {
+    const Eigen::Vector2d q((p - mean).dot(e1), (p - mean).dot(e2));
+    C += q * q.transpose();
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(C);
+  const Eigen::Vector2d a_long = eig.eigenvectors().col(1), a_short = eig.eigenvectors().col(0);
+  const Vector3d ax_long = a_long.x() * e1 + a_long.y() * e2;
+  const Vector3d ax_short = a_short.x() * e1 + a_short.y() * e2;
+  double lo[2] = {1e9, 1e9}, hi[2] = {-1e9, -1e9};
+  for (const auto& p : pts_W) {
+    const double s[2] = {(p - mean).dot(ax_long), (p - mean).dot(ax_short)};
+    for (int k = 0; k < 2; ++k) lo[k] = std::min(lo[k], s[k]), hi[k] = std::max(hi[k], s[k]);
+  }
+  const Vector3d centre_W =
+      mean + 0.5 * (lo[0] + hi[0]) * ax_long + 0.5 * (lo[1] + hi[1]) * ax_short;
+  const Vector3d centre_C2 = X_WC2.inverse() * centre_W;
+  if (centre_C2.z() <= 0) {
+    out.reason = Reason::kDecompositionFailed;
+    return out;
+  }
+  const Vector3d aim_ray = centre_C2 / centre_C2.z();
+  const auto w_top = compute_waypoint(top, aim_ray, c.pose_1, c.pose_2, *c.mount, params.waypoint);
+  if (!w_top) {
+    out.reason = w_top.reason();
+    return out;
+  }
+  const auto w_floor =
+      compute_waypoint(floor, aim_ray, c.pose_1, c.pose_2, *c.mount, params.waypoint);
+  if (!w_floor) {
+    out.reason = w_floor.reason();
+    return out;
+  }
+  TargetEstimate& e = out.estimate;
+  e.p_W = w_top->p_W;
+  e.n_W = w_top->n_W;
+  e.height_m = w_floor->distance_m - w_top->distance_m;
+  e.size_m[0] = hi[0] - lo[0];
+  e.size_m[1] = hi[1] - lo[1];
+  const auto px = c.camera->project(w_top->p_C2);
+  e.pixel = px ? *px : (K * aim_ray).hnormalized();
+  for (int k = 0; k < 4; ++k) {  // the extent's rectangle, for the diagnostic image
+    const double s0 = (k == 0 || k == 3) ? lo[0] : hi[0], s1 = k < 2 ? lo[1] : hi[1];
+    const Vector3d corner_C2 = X_WC2.inverse() * (mean + s0 * ax_long + s1 * ax_short);
+    if (const auto q = c.camera->project(corner_C2)) e.outline.push_back(*q);
+  }
+  if (e.height_m < params.landing.min_height_m || e.height_m > params.landing.max_height_m) {
+    out.reason = Reason::kNoTargetPlane;
+    return out;
+  }
+  out.reason = Reason::kOk;
+  return out;
+}
+
+}  // namespace alight::vision

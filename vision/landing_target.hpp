@@ -1,0 +1,22 @@
+#pragma once
+// Landing target (paper 3.2, Fig. 5): the dominant homography of the matches is one plane, a
+// second, locally sampled homography on its outliers another (homography.hpp
+// fit_two_homographies); both are aligned and decomposed together (alignment.hpp). The nearer
+// plane, parallel to the other and above it by a plausible step, is the elevated platform. Its
+// inliers in the current image, intersected with its plane (paper 3.1.3, eqs. 4-6), give the
+// platform's visible extent; the centre of that extent is the aiming point and its 3D waypoint.
+// The platform height is the difference of the two planes' distances along the aiming ray.
+//
+// The paper takes the first homography as the floor; here the roles follow the geometry,
+// because a richly textured platform top can hold more matches than the floor in view.
+
+#include "vision/mission_params.hpp"
+#include "vision/target.hpp"
+
+namespace alight::vision {
+
+/// Fails with kTooFewMatches / kNoDominantPlane (no first plane), kNoTargetPlane (no second
+/// plane, or it is no platform), kSmallBaseline / kDecompositionFailed.
+TargetOutcome find_landing_target(const Correspondences& c, const PipelineParams& params);
+
+}  // namespace alight::vision

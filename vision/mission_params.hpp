@@ -1,0 +1,73 @@
+#pragma once
+// Parameters of the landing / ingress targets, the per-frame pipeline and the alight-vision
+// node (issue 6), read from the `vision:` section of a vehicle file. Defaults and units at each
+// field; validate() throws ParamError naming the field and its value.
+
+#include <cstdint>
+#include <string>
+
+#include "common/params.hpp"
+#include "common/pose_buffer.hpp"
+#include "vision/params.hpp"
+
+namespace alight::vision {
+
+enum class Mission : int8_t { kNone = 0, kLanding = 1, kIngress = 2 };  // = target_t MISSION_*
+
+/// Landing target (paper 3.2): the second plane is the platform when it is nearer than the
+/// floor by more than min_height_m, roughly parallel to it, and has enough inliers.
+struct LandingParams {
+  int min_platform_inliers = 12;     ///< fewer second-plane inliers: no platform [-]
+  double min_height_m = 0.03;        ///< platform top above the floor, at least [m]
+  double max_height_m = 1.0;         ///< and at most (a larger step is no landing platform) [m]
+  double max_normal_angle_deg = 15;  ///< floor and platform normals agree within [deg]
+  void validate() const;
+};
+
+/// Ingress target (paper 3.3): Hough lines split the image into cells; the block of cells
+/// with no wall inliers and the most off-wall features is the opening.
+struct IngressParams {
+  double canny_low = 50, canny_high = 150;  ///< Canny hysteresis thresholds [grey levels]
+  int hough_threshold = 60;                 ///< accumulator votes for a segment [-]
+  double hough_min_length_frac = 0.12;      ///< shortest segment, share of the image width [-]
+  double hough_max_gap_px = 6;              ///< largest gap joined within a segment [px]
+  double max_line_tilt_deg = 8;             ///< near-vertical / near-horizontal within [deg]
+  double merge_px = 6;                      ///< cuts closer than this are one cut [px]
+  int min_outliers = 8;                     ///< fewer off-wall features in the block: no opening
+  double min_size_m = 0.1;                  ///< smaller width or height: no opening [m]
+  void validate() const;
+};
+
+/// Everything the pipeline uses, one struct per stage.
+struct PipelineParams {
+  StarParams star{};
+  SurfParams surf{};
+  TrackerParams tracker{};
+  MatchParams match{};  ///< reference-to-current matching
+  HomographyParams homography{};
+  DecompositionParams decomposition{};
+  AlignParams align{};
+  WaypointParams waypoint{};
+  LandingParams landing{};
+  IngressParams ingress{};
+  void validate() const;
+};
+
+/// The node's own settings on top of the pipeline.
+struct NodeParams {
+  PipelineParams pipeline{};
+  PoseBufferParams poses{};
+  double max_pose_wait_s = 0.2;  ///< a frame waits this long (wall clock) for its pose [s]
+  double diag_rate_hz = 2.0;     ///< VISION_DIAG images per second (0: none) [Hz]
+  int diag_jpeg_quality = 75;    ///< [1..100]
+  void validate() const;
+};
+
+/// Reads the `vision:` section of a vehicle file (missing keys keep their defaults; unknown
+/// keys are an error).
+NodeParams load_node_params(const ParamNode& vehicle_root);
+NodeParams load_node_params(const std::string& vehicle_file);
+
+Mission mission_from_string(const std::string& s);  ///< "landing" | "ingress", else ParamError
+
+}  // namespace alight::vision

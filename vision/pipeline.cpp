@@ -1,0 +1,103 @@
+// Per-frame pipeline, paper 3.1-3.3 (see pipeline.hpp).
+#include "vision/pipeline.hpp"
+
+#include <algorithm>
+
+#include "vision/ingress_target.hpp"
+#include "vision/landing_target.hpp"
+#include "vision/matcher.hpp"
+#include "vision/star_detector.hpp"
+#include "vision/surf_descriptor.hpp"
+#include "vision/waypoint.hpp"
+
+namespace alight::vision {
+
+Pipeline::Pipeline(Mission mission, const PipelineParams& params, const CameraModel& camera,
+                   const CameraMount& mount)
+    : mission_(mission), params_(params), camera_(camera), mount_(mount), tracker_(params.tracker) {
+  assert(mission != Mission::kNone);
+  params_.validate();
+}
+
+void Pipeline::reset() {
+  tracker_.reset();
+  poses_.clear();
+}
+
+FrameResult Pipeline::process(const cv::Mat& gray, int64_t utime,
+                              const std::optional<PoseSample>& pose) {
+  FrameResult r;
+  r.utime = utime;
+  r.seq = ++seq_;
+  r.mission = mission_;
+  auto fail = [&](Reason reason) {
+    r.reason = reason;
+    return r;
+  };
+  if (!pose) return fail(Reason::kNoPose);
+  if (gray.empty() || gray.type() != CV_8UC1 || gray.cols != camera_.width ||
+      gray.rows != camera_.height)
+    return fail(Reason::kBadImage);
+
+  const cv::Mat integral = integral_image(gray);
+  auto kps = detect_star(gray, integral, params_.star);
+  if (!kps) return fail(kps.reason());
+  r.n_features = static_cast<int>(kps->size());
+  for (const auto& k : *kps) r.features_px.emplace_back(k.x, k.y);
+
+  // Descriptors of every frame share one world-fixed pattern orientation, so yaw between the
+  // reference and now does not break matching: world x for the downward camera, world up for
+  // the forward one (world x is near its optical axis).
+  const Isometry3d X_WC = camera_in_world(pose->X_WB(), mount_.X_BC());
+  const Vector3d d_W = mission_ == Mission::kIngress ? Vector3d::UnitZ() : Vector3d::UnitX();
+  TrackedFrame frame;
+  frame.utime = utime;
+  frame.pattern_angle_rad = pattern_angle(X_WC.linear(), d_W);
+  frame.descriptors = describe_surf(integral, *kps, params_.surf, frame.pattern_angle_rad);
+  frame.keypoints = std::move(*kps);
+
+  const auto up = tracker_.add(std::move(frame));
+  if (up.reset) poses_.clear();
+  if (up.current) poses_.emplace_back(utime, *pose);
+  // Keep only the poses of frames the tracker can still pick.
+  const int64_t oldest = up.reference ? up.reference->utime : utime;
+  while (!poses_.empty() && poses_.front().first < oldest) poses_.pop_front();
+  r.n_tracked = up.n_tracked;
+  if (up.status != Reason::kOk) return fail(up.status);
+  r.ref_utime = up.reference->utime;
+  const auto ref_pose = std::find_if(poses_.begin(), poses_.end(),
+                                     [&](const auto& e) { return e.first == r.ref_utime; });
+  assert(ref_pose != poses_.end());
+
+  Correspondences c;
+  c.camera = &camera_;
+  c.mount = &mount_;
+  c.pose_1 = ref_pose->second;
+  c.pose_2 = *pose;
+  r.baseline_m = mocap_motion(c.pose_1, c.pose_2, mount_).baseline_m;
+  if (r.baseline_m < params_.waypoint.min_baseline_m) return fail(Reason::kSmallBaseline);
+
+  const TrackedFrame& a = *up.reference;
+  const TrackedFrame& b = *up.current;
+  const auto sa = response_signs(a.keypoints), sb = response_signs(b.keypoints);
+  const auto matches = match_descriptors(a.descriptors, b.descriptors, params_.match, &sa, &sb);
+  r.n_matches = static_cast<int>(matches.size());
+  const Matrix3d K = camera_.K();
+  for (const auto& m : matches) {
+    const auto& k1 = a.keypoints[m.i1];
+    const auto& k2 = b.keypoints[m.i2];
+    c.x1.push_back((K * camera_.ray({k1.x, k1.y})).hnormalized());
+    c.x2.push_back((K * camera_.ray({k2.x, k2.y})).hnormalized());
+    c.u2.emplace_back(k2.x, k2.y);
+  }
+  r.matched_px = c.u2;
+  const TargetOutcome t = mission_ == Mission::kLanding ? find_landing_target(c, params_)
+                                                        : find_ingress_target(c, gray, params_);
+  r.target = t.estimate;
+  r.labels = t.labels;
+  r.lines = t.lines;
+  r.reason = t.reason;
+  return r;
+}
+
+}  // namespace alight::vision
