@@ -259,7 +259,7 @@ Result<HomographyFit> fit_homography(const std::vector<Vector2d>& x1,
     std::vector<std::pair<double, int>> d(n);
     for (int i = 0; i < n; ++i) {
       for (int j = 0; j < n; ++j) d[j] = {j == i ? 1e300 : (a[j] - a[i]).squaredNorm(), j};
-      std::partial_sort(d.begin(), d.begin() + k, d.end());
+      std::nth_element(d.begin(), d.begin() + (k - 1), d.end());  // the k nearest, any order
       for (int j = 0; j < k; ++j) knn[size_t(i) * k + j] = d[j].second;
     }
   }

@@ -87,12 +87,19 @@ Result<std::vector<Keypoint>> detect_star(const cv::Mat& gray, const cv::Mat& in
   const int k = 2 * params.nms_radius_px + 1;
   cv::dilate(best_abs, dilated, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(k, k)));
   const float thr = float(params.response_threshold);
+  // (SIMD comparisons in OpenCV, then the few survivors are collected.)
+  const cv::Rect inner(x0 + 1, y0 + 1, x1 - x0 - 2, y1 - y0 - 2);
+  cv::Mat is_max, above;
+  cv::compare(best_abs(inner), dilated(inner), is_max, cv::CMP_GE);
+  cv::compare(best_abs(inner), thr, above, cv::CMP_GT);
+  cv::bitwise_and(is_max, above, is_max);
+  std::vector<cv::Point> where;
+  cv::findNonZero(is_max, where);
   std::vector<Keypoint> peaks;
-  for (int y = y0 + 1; y < y1 - 1; ++y) {
-    const float* ba = best_abs.ptr<float>(y);
-    const float* d = dilated.ptr<float>(y);
-    for (int x = x0 + 1; x < x1 - 1; ++x)
-      if (ba[x] > thr && ba[x] >= d[x]) peaks.push_back({float(x), float(y), 0.f, ba[x]});
+  peaks.reserve(where.size());
+  for (const cv::Point& q : where) {
+    const int x = q.x + inner.x, y = q.y + inner.y;
+    peaks.push_back({float(x), float(y), 0.f, best_abs.at<float>(y, x)});
   }
   // Strongest first; the line test runs only until max_features peaks have passed it.
   std::sort(peaks.begin(), peaks.end(),
