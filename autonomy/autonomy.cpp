@@ -104,7 +104,9 @@ bool Autonomy::accept(const OperatorCommand& cmd) {
   std::string why;
   if (cmd.auth == CommandAuth::kInternal) return true;
   if (cmd.auth == CommandAuth::kHmacSha256) {
-    why = "signed commands cannot be verified yet (HMAC verification: issue 8)";
+    why = "signed command, but no operator key to verify it (autonomy.operator_key_file)";
+  } else if (cmd.auth == CommandAuth::kVerified) {
+    // Signature, freshness and replay were checked by the node's CommandVerifier.
   } else if (!params_.accept_unsigned_commands) {
     why = "unsigned command refused (autonomy.accept_unsigned_commands is false)";
   } else {

@@ -14,6 +14,7 @@
 #include "autonomy/params.hpp"
 #include "common/msg_convert.hpp"
 #include "common/node.hpp"
+#include "common/operator_auth.hpp"
 #include "outer_loop/convert.hpp"
 
 int main(int argc, char** argv) {
@@ -27,6 +28,10 @@ int main(int argc, char** argv) {
                    "simulation only: issue TAKEOFF, then GO with this mission, once a pose "
                    "arrives (landing | ingress)")
         ->check(CLI::IsMember({"landing", "ingress"}));
+    std::string key_file;
+    app.add_option(
+        "--key-file", key_file,
+        "HMAC key shared with the ground station (overrides autonomy.operator_key_file)");
     try {
       app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
@@ -36,6 +41,17 @@ int main(int argc, char** argv) {
 
     const au::AutonomyParams params = au::load_params(args.config);
     au::Autonomy autonomy(params);
+    // Signed operator commands (issue 8) are verified here, at the link: the pure autonomy only
+    // sees commands the verifier accepted. Freshness is judged on the wall clock because the
+    // command's utime comes from the ground station's clock, not from the sensors.
+    if (key_file.empty()) key_file = params.operator_key_file;
+    std::optional<alight::CommandVerifier> verifier;
+    if (!key_file.empty()) {
+      auto loaded = alight::load_key_file(key_file);
+      for (const auto& w : loaded.warnings) spdlog::warn("{}", w);
+      verifier.emplace(std::move(loaded.key),
+                       static_cast<int64_t>(std::llround(params.command_max_age_s * 1e6)));
+    }
     alight::Node node(args.lcm_url, "alight-autonomy");
 
     int64_t now_utime = 0;
@@ -49,16 +65,24 @@ int main(int argc, char** argv) {
     const auto step = [&](au::Inputs in) {
       if (now_utime == 0) return;  // no sensor time yet
       if (!auto_go.empty() && in.pose && !takeoff_sent) {
-        in.command = au::OperatorCommand{now_utime, ++internal_seq, "auto-go",
-                                         au::Command::kTakeoff, au::Mission::kNone,
-                                         alight::Vector3d::Zero(), au::CommandAuth::kInternal};
+        in.command = au::OperatorCommand{now_utime,
+                                         ++internal_seq,
+                                         "auto-go",
+                                         au::Command::kTakeoff,
+                                         au::Mission::kNone,
+                                         alight::Vector3d::Zero(),
+                                         au::CommandAuth::kInternal};
         takeoff_sent = true;
       } else if (!auto_go.empty() && !go_sent && autonomy.phase() == au::Phase::kHover &&
                  !in.command) {
         in.command = au::OperatorCommand{
-            now_utime, ++internal_seq, "auto-go", au::Command::kGo,
+            now_utime,
+            ++internal_seq,
+            "auto-go",
+            au::Command::kGo,
             auto_go == "landing" ? au::Mission::kLanding : au::Mission::kIngress,
-            alight::Vector3d::Zero(), au::CommandAuth::kInternal};
+            alight::Vector3d::Zero(),
+            au::CommandAuth::kInternal};
         go_sent = true;
       }
       const au::Output out = autonomy.update(in, now_utime);
@@ -70,9 +94,9 @@ int main(int argc, char** argv) {
         spdlog::info("{}", phase_reason);
         last_phase_reason = phase_reason;
       }
-      if (changed ||
-          (now_utime - last_status_utime) * 1e-6 >= params.status_period_s * 0.5) {
+      if (changed || (now_utime - last_status_utime) * 1e-6 >= params.status_period_s * 0.5) {
         last_status = au::to_msg(out.status);
+        if (verifier) last_status.cmds_rejected += static_cast<int32_t>(verifier->n_rejected());
         node.publish("AUTONOMY_STATUS", last_status);
         last_status_utime = now_utime;
         last_status_wall = alight::wall_utime();
@@ -99,6 +123,15 @@ int main(int argc, char** argv) {
     node.on<alight::operator_cmd_t>("OPERATOR_CMD", [&](const alight::operator_cmd_t& m) {
       au::Inputs in;
       in.command = au::from_msg(m);
+      if (m.auth != alight::operator_cmd_t::AUTH_NONE && verifier) {
+        const auto verdict = verifier->check(m, alight::wall_utime());
+        if (!verdict.accepted()) {
+          spdlog::warn("OPERATOR_CMD from '{}' seq {} rejected: {}", m.sender, m.seq,
+                       alight::reason_name(verdict.reason));
+          return;
+        }
+        in.command->auth = au::CommandAuth::kVerified;
+      }
       if (now_utime == 0) {
         spdlog::warn("operator command before any sensor time: ignored");
         return;
@@ -114,7 +147,9 @@ int main(int argc, char** argv) {
         last_status_wall = wall;
       }
     });
-    spdlog::info("alight-autonomy: seed {}, unsigned commands {}{}", params.seed,
+    spdlog::info("alight-autonomy: seed {}, signed commands {}, unsigned commands {}{}",
+                 params.seed,
+                 verifier ? "verified with " + key_file : std::string("refused (no key)"),
                  params.accept_unsigned_commands ? "accepted" : "refused",
                  auto_go.empty() ? "" : ", auto-go " + auto_go);
     return node.run();

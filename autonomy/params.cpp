@@ -2,6 +2,8 @@
 
 #include <array>
 
+#include "common/camera_mount.hpp"  // resolve_relative
+
 namespace alight::autonomy {
 
 namespace {
@@ -37,9 +39,8 @@ void GeofenceParams::validate() const {
 
 void DetectionParams::validate() const {
   param_check(speed_mps > 0 && speed_mps <= 2, "speed_mps", speed_mps, "must be in (0, 2] m/s");
-  param_check((landing_area_max_W_m - landing_area_min_W_m).minCoeff() >= 0,
-              "landing_area_max_W_m", landing_area_max_W_m.transpose(),
-              "must not be below landing_area_min_W_m");
+  param_check((landing_area_max_W_m - landing_area_min_W_m).minCoeff() >= 0, "landing_area_max_W_m",
+              landing_area_max_W_m.transpose(), "must not be below landing_area_min_W_m");
   param_check(lane_spacing_m > 0.05, "lane_spacing_m", lane_spacing_m, "must be > 0.05 m");
   param_check(landing_height_m > 0.3, "landing_height_m", landing_height_m, "must be > 0.3 m");
   param_check((ingress_end_W_m - ingress_start_W_m).norm() > 0.1, "ingress_end_W_m",
@@ -67,7 +68,8 @@ void RefinementParams::validate() const {
               max_consecutive_rejections, "must be >= 1");
   param_check(lost_timeout_s > 0, "lost_timeout_s", lost_timeout_s, "must be > 0");
   param_check(max_time_s > 0, "max_time_s", max_time_s, "must be > 0");
-  param_check(ingress_standoff_m > 0.3, "ingress_standoff_m", ingress_standoff_m, "must be > 0.3 m");
+  param_check(ingress_standoff_m > 0.3, "ingress_standoff_m", ingress_standoff_m,
+              "must be > 0.3 m");
 }
 
 void LandingParams::validate() const {
@@ -134,6 +136,11 @@ AutonomyParams load_params(const ParamNode& root) {
   n.check(seed >= 0, "seed", "must be >= 0");
   p.seed = static_cast<uint64_t>(seed);
   n.read("accept_unsigned_commands", p.accept_unsigned_commands);
+  n.read("operator_key_file", p.operator_key_file);
+  if (!p.operator_key_file.empty())
+    p.operator_key_file = resolve_relative(n.file(), p.operator_key_file);
+  n.read("command_max_age_s", p.command_max_age_s);
+  n.check(p.command_max_age_s > 0, "command_max_age_s", "must be > 0");
   n.read("status_period_s", p.status_period_s);
   n.read("hover_tol_m", p.hover_tol_m);
   if (auto c = n.optional_child("takeoff")) {

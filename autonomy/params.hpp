@@ -104,9 +104,10 @@ struct FailsafeParams {
 
 struct AutonomyParams {
   uint64_t seed = 1;                    ///< RNG seed of the vantage draws
-  bool accept_unsigned_commands = false;  ///< accept operator_cmd_t with AUTH_NONE (issue 8 adds
-                                          ///< HMAC verification; until then the vehicle files
-                                          ///< set this true)
+  bool accept_unsigned_commands = false;  ///< accept operator_cmd_t with AUTH_NONE (testing only)
+  std::string operator_key_file;          ///< HMAC key shared with the ground station (relative
+                                          ///< to the vehicle file; empty: no signed commands)
+  double command_max_age_s = 2.0;         ///< signed commands older / newer than this are stale [s]
   double status_period_s = 0.1;         ///< AUTONOMY_STATUS at least this often [s]
   double hover_tol_m = 0.1;             ///< "arrived" for path and hold points [m]
   TakeoffParams takeoff;

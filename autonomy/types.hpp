@@ -55,7 +55,8 @@ struct TargetMeasurement {
 enum class Command { kNone, kTakeoff, kGo, kAbort, kLandHere, kKill, kNudge };
 enum class CommandAuth {
   kNone,        ///< unsigned (accepted only with accept_unsigned_commands)
-  kHmacSha256,  ///< signed by the ground station (verified by issue 8; rejected until then)
+  kHmacSha256,  ///< signed, but not verified by the node (no key configured): refused
+  kVerified,    ///< HMAC-SHA256 verified by the node (common/operator_auth CommandVerifier)
   kInternal,    ///< issued by the node itself (--auto-go in simulation launch files)
 };
 

@@ -285,15 +285,22 @@ TEST(AutonomyTest, UnsignedCommandsRefusedUnlessAllowed) {
   EXPECT_EQ(w.autonomy.phase(), Phase::kTakeoff);
 }
 
-TEST(AutonomyTest, SignedCommandsRejectedUntilHmacExistsAndReplaysRejected) {
+TEST(AutonomyTest, SignedButUnverifiedRejectedVerifiedAcceptedAndReplaysRejected) {
   KinematicWorld w;
   w.step();
+  // Signed, but the node had no key to verify it with: refused.
   auto signed_cmd = command(Command::kTakeoff, 1);
   signed_cmd.auth = CommandAuth::kHmacSha256;
   w.step(signed_cmd);
   EXPECT_EQ(w.autonomy.phase(), Phase::kIdle);
   EXPECT_EQ(w.out.status.cmds_rejected, 1);
-  EXPECT_NE(w.out.status.reason.find("issue 8"), std::string::npos);
+  EXPECT_NE(w.out.status.reason.find("no operator key"), std::string::npos);
+  // Verified by the node's CommandVerifier: obeyed, even where unsigned ones are not.
+  auto verified = command(Command::kTakeoff, 2);
+  verified.auth = CommandAuth::kVerified;
+  w.step(verified);
+  EXPECT_EQ(w.autonomy.phase(), Phase::kTakeoff);
+  EXPECT_EQ(w.out.status.last_cmd_seq, 2);
   w.step(command(Command::kTakeoff, 5));
   EXPECT_EQ(w.autonomy.phase(), Phase::kTakeoff);
   EXPECT_EQ(w.out.status.last_cmd_seq, 5);

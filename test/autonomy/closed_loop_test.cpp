@@ -68,7 +68,8 @@ OperatorCommand operator_command(Command command) {
   OperatorCommand c;
   c.command = command;
   c.sender = "gs";
-  c.auth = CommandAuth::kNone;  // accepted: the vehicle files allow unsigned commands (issue 8)
+  // As the node passes it on once CommandVerifier accepted the ground station's signature.
+  c.auth = CommandAuth::kVerified;
   return c;
 }
 

@@ -1,6 +1,9 @@
 // alight-autonomy and alight-outer-loop as processes over LCM (private UDP multicast port):
 // --auto-go takes off once a pose arrives, AUTONOMY_STATUS comes at >= 10 Hz of sensor time,
-// the outer loop arms and commands thrust, an unsigned KILL (accepted: vehicle file) stops both.
+// the outer loop arms and commands thrust; unsigned, forged, stale and replayed OPERATOR_CMDs are
+// rejected and counted (issue 8), and a correctly signed KILL stops both.
+
+#include "common/node.hpp"
 
 #include <gtest/gtest.h>
 #include <signal.h>
@@ -14,10 +17,14 @@
 #include <alight/pose_t.hpp>
 #include <alight/position_setpoint_t.hpp>
 #include <chrono>
+#include <filesystem>
+#include <fstream>
 #include <lcm/lcm-cpp.hpp>
 #include <string>
 #include <thread>
 #include <vector>
+
+#include "common/operator_auth.hpp"
 
 extern char** environ;
 
@@ -50,7 +57,8 @@ struct Recorder {
   std::vector<alight::autonomy_status_t> status;
   std::vector<alight::position_setpoint_t> setpoints;
   std::vector<alight::attitude_cmd_t> cmds;
-  void on_status(const lcm::ReceiveBuffer*, const std::string&, const alight::autonomy_status_t* m) {
+  void on_status(const lcm::ReceiveBuffer*, const std::string&,
+                 const alight::autonomy_status_t* m) {
     status.push_back(*m);
   }
   void on_sp(const lcm::ReceiveBuffer*, const std::string&, const alight::position_setpoint_t* m) {
@@ -70,10 +78,20 @@ TEST(AutonomyNodeTest, AutoGoTakesOffStatusAtTenHertzAndKillStopsEverything) {
   lcm.subscribe("AUTONOMY_STATUS", &Recorder::on_status, &rec);
   lcm.subscribe("POSITION_SETPOINT", &Recorder::on_sp, &rec);
   lcm.subscribe("ATTITUDE_CMD", &Recorder::on_cmd, &rec);
+  // The key the ground station and the vehicle share.
+  const auto key_path = std::filesystem::temp_directory_path() / "alight_autonomy_node_test.key";
+  const std::string key_hex(64, 'a');
+  {
+    std::ofstream f(key_path);
+    f << key_hex << "\n";
+  }
+  std::filesystem::permissions(
+      key_path, std::filesystem::perms::owner_read | std::filesystem::perms::owner_write);
+  const alight::OperatorKey key = alight::parse_key(key_hex, "test key");
   Process autonomy({bin + "alight-autonomy", "--config", config, "--lcm-url", kUrl, "--auto-go",
-                    "landing", "--log-level", "warn"});
-  Process outer({bin + "alight-outer-loop", "--config", config, "--lcm-url", kUrl, "--log-level",
-                 "warn"});
+                    "landing", "--log-level", "warn", "--key-file", key_path.string()});
+  Process outer(
+      {bin + "alight-outer-loop", "--config", config, "--lcm-url", kUrl, "--log-level", "warn"});
   ASSERT_TRUE(autonomy.ok());
   ASSERT_TRUE(outer.ok());
   const int64_t t0 = 1'700'000'000'000'000;
@@ -126,12 +144,38 @@ TEST(AutonomyNodeTest, AutoGoTakesOffStatusAtTenHertzAndKillStopsEverything) {
   EXPECT_TRUE(rec.cmds.back().armed);
   EXPECT_GT(rec.cmds.back().thrust_N, 9.81) << "thrust to climb";
 
-  alight::operator_cmd_t kill{};
-  kill.utime = t;
-  kill.seq = 1;
-  kill.sender = "test";
-  kill.command = alight::operator_cmd_t::CMD_KILL;
-  kill.auth = alight::operator_cmd_t::AUTH_NONE;
+  // Four KILLs that must not be obeyed: unsigned (the vehicle file refuses those), signed with
+  // another key, signed but 10 s old, and (after the genuine one) the genuine one replayed.
+  const auto kill_cmd = [&](int64_t seq, int64_t utime) {
+    alight::operator_cmd_t c{};
+    c.utime = utime;
+    c.seq = seq;
+    c.sender = "test-station";
+    c.command = alight::operator_cmd_t::CMD_KILL;
+    c.auth = alight::operator_cmd_t::AUTH_NONE;
+    return c;
+  };
+  alight::operator_cmd_t unsigned_kill = kill_cmd(1, alight::wall_utime());
+  lcm.publish("OPERATOR_CMD", &unsigned_kill);
+  alight::operator_cmd_t forged = kill_cmd(2, alight::wall_utime());
+  alight::sign(forged, alight::parse_key(std::string(64, 'b'), "wrong key"));
+  lcm.publish("OPERATOR_CMD", &forged);
+  alight::operator_cmd_t stale = kill_cmd(3, alight::wall_utime() - 10'000'000);
+  alight::sign(stale, key);
+  lcm.publish("OPERATOR_CMD", &stale);
+  const auto reject_deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  do {
+    publish_sensors(5);
+    for (int i = 0; i < 5; ++i) lcm.handleTimeout(10);
+  } while (rec.status.back().cmds_rejected < 3 &&
+           std::chrono::steady_clock::now() < reject_deadline);
+  EXPECT_EQ(rec.status.back().cmds_rejected, 3);
+  EXPECT_EQ(rec.status.back().phase, alight::autonomy_status_t::PHASE_TAKEOFF)
+      << "a rejected command was obeyed: " << rec.status.back().reason;
+  EXPECT_TRUE(rec.cmds.back().armed);
+
+  alight::operator_cmd_t kill = kill_cmd(4, alight::wall_utime());
+  alight::sign(kill, key);
   lcm.publish("OPERATOR_CMD", &kill);
   const auto kill_deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
   do {
@@ -146,6 +190,17 @@ TEST(AutonomyNodeTest, AutoGoTakesOffStatusAtTenHertzAndKillStopsEverything) {
   EXPECT_EQ(rec.setpoints.back().motors, alight::position_setpoint_t::MOTORS_OFF);
   EXPECT_FALSE(rec.cmds.back().armed);
   EXPECT_EQ(rec.cmds.back().thrust_N, 0.0);
+  EXPECT_EQ(rec.status.back().last_cmd_seq, 4);
+
+  lcm.publish("OPERATOR_CMD", &kill);  // replayed
+  const auto replay_deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  do {
+    publish_sensors(5);
+    for (int i = 0; i < 5; ++i) lcm.handleTimeout(10);
+  } while (rec.status.back().cmds_rejected < 4 &&
+           std::chrono::steady_clock::now() < replay_deadline);
+  EXPECT_EQ(rec.status.back().cmds_rejected, 4);
+  std::filesystem::remove(key_path);
 }
 
 }  // namespace

@@ -11,7 +11,9 @@ TEST(AutonomyParamsTest, VehicleFilesLoadWithThePapersThresholds) {
   for (const char* v : {"starmac", "pelican"}) {
     const std::string path = std::string(ALIGHT_SOURCE_DIR) + "/config/vehicles/" + v + ".yaml";
     const auto p = load_params(path);
-    EXPECT_TRUE(p.accept_unsigned_commands) << v << ": until issue 8";
+    EXPECT_FALSE(p.accept_unsigned_commands) << v << ": anyone on the LAN could command it";
+    EXPECT_TRUE(p.operator_key_file.empty()) << v << ": keys are made per vehicle, not shipped";
+    EXPECT_DOUBLE_EQ(p.command_max_age_s, 2.0) << v;
     EXPECT_DOUBLE_EQ(p.failsafe.pose_stale_s, 0.3) << v;
     EXPECT_DOUBLE_EQ(p.failsafe.pose_lost_s, 1.0) << v;
     EXPECT_DOUBLE_EQ(p.landing.gear_footprint_m, 0.15) << v;
