@@ -5,6 +5,7 @@
 
 #include <cstdio>
 #include <numeric>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "test/vision/test_images.hpp"
@@ -182,6 +183,36 @@ TEST(FeaturesTest, WarpedPhotoCornerErrorIsBelowHalfAPixel) {
     std::printf("warp %+5.1f deg x%.2f: corner error %.3f px, %d matches, %d inliers\n",
                 c.angle_deg, c.scale, r.corner_error_px, r.n_matches, r.n_inliers);
     EXPECT_GT(r.n_inliers, 100) << c.angle_deg;
+  }
+}
+
+// Real photographs (OpenCV's sample images, Debian package opencv-doc, installed by
+// scripts/setup): aerial views like the paper's downward camera and a building facade like its
+// ingress wall, warped by the same known homographies.
+// Not yet met (issue 5 stays open for them): graf1.png at +12 deg x0.9 with blur gives 0.52 px,
+// and baboon.jpg (fur) loses the homography at +12 deg x0.9 (43 inliers at -10 deg x1.1).
+TEST(FeaturesTest, WarpedRealPhotographsCornerErrorIsBelowHalfAPixel) {
+  const std::string dir = "/usr/share/doc/opencv-doc/examples/data/";
+  struct Case {
+    double angle_deg, scale, tilt_x, tilt_y, blur, noise;
+  };
+  for (const char* name : {"aero1.jpg", "aero3.jpg", "building.jpg"}) {
+    const cv::Mat src = cv::imread(dir + name, cv::IMREAD_GRAYSCALE);
+    ASSERT_FALSE(src.empty()) << dir << name << " missing: scripts/setup installs opencv-doc";
+    const Matrix3d H1 = view_homography(src.cols, src.rows, 0.0, 1.0, 0, 0, 0, 0);
+    const cv::Mat a = view_of(src, H1, 0, 2.0, 1);
+    for (const Case c : {Case{5, 1.0, 0, 0, 0, 2}, Case{-10, 1.1, 1e-4, 0, 0.5, 2},
+                         Case{12, 0.9, 0, -1.5e-4, 0.8, 3}, Case{0, 1.2, 1e-4, 1e-4, 0, 4}}) {
+      const Matrix3d H2 = view_homography(src.cols, src.rows, c.angle_deg * kDeg, c.scale, 15,
+                                          -10, c.tilt_x, c.tilt_y);
+      const cv::Mat b = view_of(src, H2, c.blur, c.noise, 2);
+      const PairResult r = run_pair(a, b, H2 * H1.inverse(), StarParams{});
+      ASSERT_TRUE(r.ok) << name << " " << c.angle_deg;
+      EXPECT_LT(r.corner_error_px, 0.5) << name << " angle " << c.angle_deg << " scale " << c.scale;
+      EXPECT_GT(r.n_inliers, 50) << name << " " << c.angle_deg;
+      std::printf("%-13s %+5.1f deg x%.2f: corner error %.3f px, %d matches, %d inliers\n", name,
+                  c.angle_deg, c.scale, r.corner_error_px, r.n_matches, r.n_inliers);
+    }
   }
 }
 
