@@ -6,3 +6,9 @@ if(TARGET alight_vision_mission AND TARGET alight_sim AND TARGET alight_sim_para
     LIBS alight_vision_mission alight_sim alight_sim_params
     LABELS vision TIMEOUT 120)
 endif()
+if(TARGET alight_vision_mission AND TARGET alight_sim AND TARGET alight_sim_params)
+  alight_add_gtest(vision_ingress_mission_test
+    SOURCES ${CMAKE_CURRENT_LIST_DIR}/ingress_mission_test.cpp
+    LIBS alight_vision_mission alight_sim alight_sim_params opencv_imgcodecs
+    LABELS vision TIMEOUT 120)
+endif()
