@@ -76,8 +76,11 @@ TEST(DeviceSpecTest, UnknownUsbCameraIsNotFound) {
   EXPECT_TRUE(wrong_serial.nodes.empty());
 }
 
+// One folder per test: CTest runs the cases of this file in parallel, and a shared cam.yaml let
+// one case read the file another was writing (a CI failure of ErrorsNameFileKeyAndValue).
 struct ParamsTest : ::testing::Test {
-  std::string dir = std::string(ALIGHT_BINARY_DIR) + "/test_tmp/camera_params";
+  std::string dir = std::string(ALIGHT_BINARY_DIR) + "/test_tmp/camera_params/" +
+                    ::testing::UnitTest::GetInstance()->current_test_info()->name();
   std::string write(const std::string& text) {
     std::filesystem::create_directories(dir);
     const std::string path = dir + "/cam.yaml";

@@ -28,7 +28,10 @@ std::string scenario(const std::string& name) {
 }
 
 int run(const std::string& args, std::string* stderr_text = nullptr) {
-  const auto err = std::filesystem::path(ALIGHT_BINARY_DIR) / "test_tmp" / "sim_node_output.txt";
+  // One file per test: CTest runs this file's cases in parallel.
+  const auto err = std::filesystem::path(ALIGHT_BINARY_DIR) / "test_tmp" /
+                   (std::string("sim_node_output_") +
+                    ::testing::UnitTest::GetInstance()->current_test_info()->name() + ".txt");
   std::filesystem::create_directories(err.parent_path());
   const int status = std::system((bin() + " " + args + " > " + err.string() + " 2>&1").c_str());
   if (stderr_text) {
