@@ -235,16 +235,24 @@ void Autonomy::start_refinement(const TargetMeasurement& m) {
   estimator_.reset();
   sizes_m_.clear();
   normal_sum_W_.setZero();
-  estimator_.add(m.p_W_target);
-  sizes_m_.push_back(m.size_m);
-  normal_sum_W_ += m.n_W;
-  enter(Phase::kRefinement, "first waypoint X_V,1 at (" + fmt(m.p_W_target.x()) + ", " +
-                                fmt(m.p_W_target.y()) + ", " + fmt(m.p_W_target.z()) + ")");
+  first_sighting_W_ = m.p_W_target;
+  if (m.found) {
+    estimator_.add(m.p_W_target);
+    sizes_m_.push_back(m.size_m);
+    normal_sum_W_ += m.n_W;
+  } else {
+    normal_sum_W_ += m.n_W;  // the plane's orientation is measured also from a part of it
+  }
+  enter(Phase::kRefinement,
+        std::string(m.found ? "first waypoint X_V,1" : "first sighting (partly in view)") +
+            " at (" + fmt(m.p_W_target.x()) + ", " + fmt(m.p_W_target.y()) + ", " +
+            fmt(m.p_W_target.z()) + ")");
   next_vantage();
 }
 
 void Autonomy::next_vantage() {
-  const Vector3d mu = estimator_.mean();
+  // Around the first sighting until the first full-view waypoint.
+  const Vector3d mu = estimator_.n() > 0 ? estimator_.mean() : first_sighting_W_;
   const Matrix3d S = estimator_.covariance();
   if (mission_ == Mission::kLanding) {
     const Vector2d xy = sampler_.draw(mu.head<2>(), S.topLeftCorner<2, 2>(), estimator_.n());
@@ -266,6 +274,7 @@ void Autonomy::next_vantage() {
   }
   vantage_since_utime_ = now_utime_;
   at_vantage_since_.reset();
+  at_vantage_W_.clear();
 }
 
 void Autonomy::finish_refinement() {
@@ -328,20 +337,30 @@ void Autonomy::target_lost(const std::string& what) {
 }
 
 void Autonomy::handle_target(const TargetMeasurement& m) {
-  if (!m.found || m.mission != mission_ || !m.p_W_target.allFinite()) return;
+  if (!(m.found || m.partial) || m.mission != mission_ || !m.p_W_target.allFinite()) return;
+  // A target cut by the image border is in sight (not lost) and locates it well enough to fly
+  // the vantages around; it is never averaged into the estimate.
   last_found_utime_ = std::max(m.utime, last_found_utime_.value_or(m.utime));
   if (phase_ == Phase::kDetection) {
     start_refinement(m);
-  } else if (phase_ == Phase::kRefinement) {
+  } else if (phase_ == Phase::kRefinement && m.found) {
     sizes_m_.push_back(m.size_m);
     normal_sum_W_ += m.n_W;
-    const auto verdict = estimator_.add(m.p_W_target);
-    if (verdict == RefinementEstimator::Verdict::kRestarted) {
-      reason_ = "estimate restarted: " + std::to_string(params_.refinement.max_consecutive_rejections) +
-                " waypoints in a row outside the gate";
+    if (params_.refinement.one_waypoint_per_vantage) {
+      if (at_vantage_since_) at_vantage_W_.push_back(m.p_W_target);  // added when the dwell ends
+      return;
     }
-    if (estimator_.converged()) finish_refinement();
+    add_waypoint(m.p_W_target);
   }
+}
+
+void Autonomy::add_waypoint(const Vector3d& X_W) {
+  const auto verdict = estimator_.add(X_W);
+  if (verdict == RefinementEstimator::Verdict::kRestarted) {
+    reason_ = "estimate restarted: " + std::to_string(params_.refinement.max_consecutive_rejections) +
+              " waypoints in a row outside the gate";
+  }
+  if (estimator_.converged()) finish_refinement();
 }
 
 void Autonomy::step_phase(double dt_s) {
@@ -400,7 +419,23 @@ void Autonomy::step_phase(double dt_s) {
       }
       if ((p - vantage_W_).norm() < R.vantage_reach_tol_m) {
         if (!at_vantage_since_) at_vantage_since_ = now_utime_;
-        if (seconds(now_utime_ - *at_vantage_since_) >= R.vantage_dwell_s) next_vantage();
+        if (seconds(now_utime_ - *at_vantage_since_) >= R.vantage_dwell_s) {
+          if (!R.one_waypoint_per_vantage) {
+            next_vantage();
+          } else if (!at_vantage_W_.empty()) {
+            // The vantage's waypoint: the median is robust to a stray frame among few.
+            Vector3d X_W;
+            for (int k = 0; k < 3; ++k) {
+              std::vector<double> v;
+              for (const auto& w : at_vantage_W_) v.push_back(w[k]);
+              X_W[k] = median(v);
+            }
+            add_waypoint(X_W);
+            if (phase_ != Phase::kRefinement) return;  // converged (or held)
+            next_vantage();
+          }
+          // else: stay until a frame comes (lost_timeout_s applies)
+        }
       } else if (seconds(now_utime_ - vantage_since_utime_) > R.vantage_timeout_s) {
         next_vantage();
       }

@@ -67,6 +67,7 @@ class Autonomy {
   void start_refinement(const TargetMeasurement& m);
   void finish_refinement();
   void next_vantage();
+  void add_waypoint(const Vector3d& X_W);
   void target_lost(const std::string& what);
   void hold(const std::string& reason, Failsafe failsafe, double min_z_m);
   void enter_pose_lost();
@@ -110,6 +111,8 @@ class Autonomy {
   int64_t vantage_since_utime_ = 0;
   std::optional<int64_t> at_vantage_since_;
   std::vector<Vector2d> sizes_m_;
+  std::vector<Vector3d> at_vantage_W_;
+  Vector3d first_sighting_W_ = Vector3d::Zero();  // X_V,1, possibly from a partial view  // waypoints seen while dwelling at the current vantage
   Vector3d normal_sum_W_ = Vector3d::Zero();
 
   // Approach.

@@ -72,6 +72,7 @@ TargetMeasurement from_msg(const target_t& msg) {
   t.utime = msg.utime;
   t.mission = mission_from_msg(msg.mission);
   t.found = msg.found;
+  t.partial = !msg.found && msg.reason == target_t::REASON_PARTIAL_VIEW;
   t.p_W_target = Vector3d(msg.p_W_target[0], msg.p_W_target[1], msg.p_W_target[2]);
   t.n_W = Vector3d(msg.n_W[0], msg.n_W[1], msg.n_W[2]);
   t.size_m = Vector2d(msg.size_m[0], msg.size_m[1]);
@@ -85,7 +86,9 @@ target_t to_msg(const TargetMeasurement& t, int64_t seq) {
   m.seq = seq;
   m.mission = mission_to_msg(t.mission);
   m.found = t.found;
-  m.reason = t.found ? target_t::REASON_OK : target_t::REASON_NO_TARGET_PLANE;
+  m.reason = t.found     ? target_t::REASON_OK
+             : t.partial ? target_t::REASON_PARTIAL_VIEW
+                         : target_t::REASON_NO_TARGET_PLANE;
   for (int i = 0; i < 3; ++i) {
     m.p_W_target[i] = t.p_W_target[i];
     m.n_W[i] = t.n_W[i];

@@ -177,6 +177,7 @@ AutonomyParams load_params(const ParamNode& root) {
     c->read("vantage_sigma_floor_m", r.vantage_sigma_floor_m);
     c->read("vantage_reach_tol_m", r.vantage_reach_tol_m);
     c->read("vantage_dwell_s", r.vantage_dwell_s);
+    c->read("one_waypoint_per_vantage", r.one_waypoint_per_vantage);
     c->read("vantage_timeout_s", r.vantage_timeout_s);
     c->read("gate_chi2", r.gate_chi2);
     c->read("gate_min_n", r.gate_min_n);

@@ -113,6 +113,8 @@ const char* target_reason_name(int8_t reason) {
       return "decomposition failed";
     case target_t::REASON_BAD_IMAGE:
       return "bad image";
+    case target_t::REASON_PARTIAL_VIEW:
+      return "target partly out of view";
   }
   return "unknown";
 }

@@ -39,6 +39,19 @@ void MissionMonitor::finish(End end, const std::string& reason, std::vector<std:
                 reason);
 }
 
+void MissionMonitor::check_landed(int64_t utime, std::vector<std::string>& out) {
+  if (end_ != End::kNone) return;
+  if (!truth_) {  // no simulator (a real flight): the autonomy's touch-down detection stands
+    finish(End::kSuccess, "landed", out);
+  } else if (truth_->tipped) {
+    finish(End::kFailure, "landed but tipped off the edge", out);
+  } else if (truth_->landed) {
+    finish(End::kSuccess, "landed", out);
+  } else if (utime - *landed_utime_ > params_.settle_s * 1e6) {
+    finish(End::kFailure, "motors off, but not at rest on the platform top", out);
+  }
+}
+
 std::vector<std::string> MissionMonitor::add(const autonomy_status_t& s) {
   std::vector<std::string> out;
   if (end_ != End::kNone) return out;
@@ -62,8 +75,8 @@ std::vector<std::string> MissionMonitor::add(const autonomy_status_t& s) {
   last_ = s;
   switch (s.phase) {
     case autonomy_status_t::PHASE_LANDED:
-      finish(truth_ && truth_->tipped ? End::kFailure : End::kSuccess,
-             truth_ && truth_->tipped ? "landed but tipped off the edge" : "landed", out);
+      if (!landed_utime_) landed_utime_ = s.utime;
+      check_landed(s.utime, out);
       break;
     case autonomy_status_t::PHASE_DONE:
       finish(
@@ -94,6 +107,7 @@ std::vector<std::string> MissionMonitor::add(const sim_truth_t& t) {
   if (end_ != End::kNone) return out;
   if (!t0_) t0_ = t.utime;
   if (newly_tipped) finish(End::kFailure, "the vehicle tipped off the platform edge", out);
+  if (end_ == End::kNone && landed_utime_) check_landed(t.utime, out);
   if (newly_collided)
     out.push_back(stamp(t.utime) + "contact with the wall or the opening's frame");
   return out;

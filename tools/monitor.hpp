@@ -15,6 +15,9 @@ namespace alight::tools {
 struct MonitorParams {
   double timeout_s = 300.0;        ///< mission time after which the run counts as failed [s]
   double progress_period_s = 2.0;  ///< at most one progress line per this long [s]
+  /// After autonomy reports LANDED, the simulator's verdict (at rest on the platform top, or
+  /// tipped) is awaited this long in sim time; without SIM_TRUTH the autonomy's word stands [s].
+  double settle_s = 3.0;
 };
 
 class MissionMonitor {
@@ -39,6 +42,8 @@ class MissionMonitor {
   std::optional<int64_t> t0_;
   std::optional<autonomy_status_t> last_;
   std::optional<sim_truth_t> truth_;
+  std::optional<int64_t> landed_utime_;  // autonomy reported LANDED; the sim's verdict pending
+  void check_landed(int64_t utime, std::vector<std::string>& out);
   int64_t last_progress_utime_ = 0;
   int last_count_ = 0;
   End end_ = End::kNone;

@@ -96,6 +96,10 @@ TargetOutcome find_landing_target(const Correspondences& c, const PipelineParams
   for (const auto& p : pts_W) mean += p;
   mean /= static_cast<double>(pts_W.size());
   const Vector3d n_W = (X_WC2.linear() * -top.n_2()).normalized();  // towards camera 2
+  if (std::acos(std::clamp(n_W.z(), -1.0, 1.0)) > params.landing.max_tilt_deg * M_PI / 180.0) {
+    out.reason = Reason::kNoTargetPlane;
+    return out;
+  }
   Vector3d e1 = n_W.unitOrthogonal();
   Vector3d e2 = n_W.cross(e1);
   Eigen::Matrix2d C = Eigen::Matrix2d::Zero();
@@ -148,7 +152,17 @@ TargetOutcome find_landing_target(const Correspondences& c, const PipelineParams
     out.reason = Reason::kNoTargetPlane;
     return out;
   }
-  out.reason = Reason::kOk;
+  // A platform cut by the border of either image: only features seen in both are matched, so
+  // the extent is that of the part visible in both.
+  const double m = params.landing.edge_margin_px;
+  const auto near_border = [&](const Vector2d& u) {
+    return u.x() < m || u.y() < m || u.x() > c.camera->width - 1 - m ||
+           u.y() > c.camera->height - 1 - m;
+  };
+  bool cut = false;
+  for (size_t i = 0; i < c.size(); ++i)
+    if (top_fit.inlier[i]) cut = cut || near_border(c.u2[i]) || (!c.u1.empty() && near_border(c.u1[i]));
+  out.reason = cut ? Reason::kPartialView : Reason::kOk;
   return out;
 }
 

@@ -10,6 +10,9 @@ void LandingParams::validate() const {
               "must be > min_height_m");
   param_check(max_normal_angle_deg > 0 && max_normal_angle_deg < 90, "landing.max_normal_angle_deg",
               max_normal_angle_deg, "must be in (0, 90)");
+  param_check(max_tilt_deg > 0 && max_tilt_deg < 90, "landing.max_tilt_deg", max_tilt_deg,
+              "must be in (0, 90)");
+  param_check(edge_margin_px >= 0, "landing.edge_margin_px", edge_margin_px, "must be >= 0");
 }
 
 void IngressParams::validate() const {
@@ -37,6 +40,8 @@ void PipelineParams::validate() const {
   waypoint.validate();
   landing.validate();
   ingress.validate();
+  param_check(max_reference_baseline_m > waypoint.min_baseline_m, "max_reference_baseline_m",
+              max_reference_baseline_m, "must exceed waypoint.min_baseline_m");
 }
 
 void NodeParams::validate() const {
@@ -68,6 +73,7 @@ NodeParams load_node_params(const ParamNode& root) {
   n.read("max_pose_wait_s", p.max_pose_wait_s);
   n.read("diag_rate_hz", p.diag_rate_hz);
   n.read("diag_jpeg_quality", p.diag_jpeg_quality);
+  n.read("max_reference_baseline_m", q.max_reference_baseline_m);
   if (auto c = n.optional_child("poses")) {
     c->read("history_s", p.poses.history_s);
     c->read("max_gap_s", p.poses.max_gap_s);
@@ -77,6 +83,8 @@ NodeParams load_node_params(const ParamNode& root) {
     c->read("response_threshold", q.star.response_threshold);
     c->read("max_size", q.star.max_size);
     c->read("max_features", q.star.max_features);
+    c->read("grid_cols", q.star.grid_cols);
+    c->read("grid_rows", q.star.grid_rows);
     c->finish();
   }
   if (auto c = n.optional_child("tracker")) {
@@ -110,6 +118,8 @@ NodeParams load_node_params(const ParamNode& root) {
     c->read("min_height_m", q.landing.min_height_m);
     c->read("max_height_m", q.landing.max_height_m);
     c->read("max_normal_angle_deg", q.landing.max_normal_angle_deg);
+    c->read("max_tilt_deg", q.landing.max_tilt_deg);
+    c->read("edge_margin_px", q.landing.edge_margin_px);
     c->finish();
   }
   if (auto c = n.optional_child("ingress")) {

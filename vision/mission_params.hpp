@@ -21,6 +21,14 @@ struct LandingParams {
   double min_height_m = 0.03;        ///< platform top above the floor, at least [m]
   double max_height_m = 1.0;         ///< and at most (a larger step is no landing platform) [m]
   double max_normal_angle_deg = 15;  ///< floor and platform normals agree within [deg]
+  /// The platform top is level: its normal within this of world up (motion capture). A second
+  /// "plane" through the platform's edge and the floor beyond is tilted by atan(h / d); in flight
+  /// such false planes came out 3-12 deg, true tops within 1 deg. [deg]
+  double max_tilt_deg = 3.0;
+  /// Platform inliers this close to the image border: the platform may extend out of view, the
+  /// centre of its visible features is not its centre (REASON_PARTIAL_VIEW). Features are found
+  /// up to the STAR border (2 max_size + 1 px) from the edge. [px]
+  double edge_margin_px = 24.0;
   void validate() const;
 };
 
@@ -40,7 +48,14 @@ struct IngressParams {
 
 /// Everything the pipeline uses, one struct per stage.
 struct PipelineParams {
-  StarParams star{};
+  /// Features spread over a 4 x 3 grid: the floor keeps enough for its homography when the
+  /// platform top (richer texture) fills part of the view (star_detector.hpp).
+  StarParams star = [] {
+    StarParams s;
+    s.grid_cols = 4;
+    s.grid_rows = 3;
+    return s;
+  }();
   SurfParams surf{};
   TrackerParams tracker{};
   MatchParams match{};  ///< reference-to-current matching
@@ -50,6 +65,10 @@ struct PipelineParams {
   WaypointParams waypoint{};
   LandingParams landing{};
   IngressParams ingress{};
+  /// The reference is the oldest tracked frame (3.1.1) no farther than this from the current
+  /// camera: a target must be in view in both images, and a 0.6 m baseline (a search pass at
+  /// 0.4 m/s) leaves a 43 cm platform wholly in neither. [m]
+  double max_reference_baseline_m = 0.3;
   void validate() const;
 };
 

@@ -13,6 +13,10 @@ void StarParams::validate() const {
   param_check(nms_radius_px >= 1 && nms_radius_px <= 8, "nms_radius_px", nms_radius_px,
               "must be in [1, 8]");
   param_check(max_features >= 0, "max_features", max_features, "must be >= 0");
+  param_check(grid_cols >= 0 && grid_cols <= 64, "grid_cols", grid_cols, "must be in [0, 64]");
+  param_check(grid_rows >= 0 && grid_rows <= 64, "grid_rows", grid_rows, "must be in [0, 64]");
+  param_check((grid_cols == 0) == (grid_rows == 0), "grid_rows", grid_rows,
+              "grid_cols and grid_rows are both 0 (off) or both > 0");
 }
 
 void SurfParams::validate() const {

@@ -15,6 +15,11 @@ struct StarParams {
   double line_threshold = 10.0;     ///< Harris ratio r: reject edges with tr^2/det > (r+1)^2/r
   int nms_radius_px = 2;            ///< spatial non-maximum suppression radius [px]
   int max_features = 600;           ///< strongest peaks kept (0: all)
+  /// Spread over the image (0: off): first at most max_features / (grid_cols * grid_rows)
+  /// strongest per cell, then the strongest of the rest. A richly textured patch (a printed
+  /// platform top) otherwise takes nearly all features and leaves the floor too few for its
+  /// homography. [cells]
+  int grid_cols = 0, grid_rows = 0;
   bool subpixel = true;             ///< paper 3.1.1: quadratic refinement of x, y and scale
   void validate() const;
 };

@@ -64,7 +64,23 @@ FrameResult Pipeline::process(const cv::Mat& gray, int64_t utime,
   while (!poses_.empty() && poses_.front().first < oldest) poses_.pop_front();
   r.n_tracked = up.n_tracked;
   if (up.status != Reason::kOk) return fail(up.status);
-  r.ref_utime = up.reference->utime;
+  // The oldest qualifying frame within max_reference_baseline_m of the current camera (the
+  // newest previous frame when even that one is farther).
+  std::shared_ptr<const TrackedFrame> ref = up.reference;
+  {
+    const auto& h = tracker_.history();
+    const Vector3d c_now = X_WC.translation();
+    for (size_t k = 0; k + 1 < h.size(); ++k) {
+      const auto pose_k = std::find_if(poses_.begin(), poses_.end(),
+                                       [&](const auto& e) { return e.first == h[k]->utime; });
+      if (pose_k == poses_.end()) continue;
+      ref = h[k];
+      if ((camera_in_world(pose_k->second.X_WB(), mount_.X_BC()).translation() - c_now).norm() <=
+          params_.max_reference_baseline_m)
+        break;
+    }
+  }
+  r.ref_utime = ref->utime;
   const auto ref_pose = std::find_if(poses_.begin(), poses_.end(),
                                      [&](const auto& e) { return e.first == r.ref_utime; });
   assert(ref_pose != poses_.end());
@@ -77,7 +93,7 @@ FrameResult Pipeline::process(const cv::Mat& gray, int64_t utime,
   r.baseline_m = mocap_motion(c.pose_1, c.pose_2, mount_).baseline_m;
   if (r.baseline_m < params_.waypoint.min_baseline_m) return fail(Reason::kSmallBaseline);
 
-  const TrackedFrame& a = *up.reference;
+  const TrackedFrame& a = *ref;
   const TrackedFrame& b = *up.current;
   const auto sa = response_signs(a.keypoints), sb = response_signs(b.keypoints);
   const auto matches = match_descriptors(a.descriptors, b.descriptors, params_.match, &sa, &sb);
@@ -88,6 +104,7 @@ FrameResult Pipeline::process(const cv::Mat& gray, int64_t utime,
     const auto& k2 = b.keypoints[m.i2];
     c.x1.push_back((K * camera_.ray({k1.x, k1.y})).hnormalized());
     c.x2.push_back((K * camera_.ray({k2.x, k2.y})).hnormalized());
+    c.u1.emplace_back(k1.x, k1.y);
     c.u2.emplace_back(k2.x, k2.y);
   }
   r.matched_px = c.u2;

@@ -59,6 +59,9 @@ class ReferenceTracker {
   void reset();
 
   size_t history_size() const { return history_.size(); }
+  /// The kept frames, oldest first (the newest is the last one added). Every frame from the
+  /// reference on shares at least min_tracked tracks with the newest.
+  const std::deque<std::shared_ptr<TrackedFrame>>& history() const { return history_; }
 
  private:
   TrackerParams params_;

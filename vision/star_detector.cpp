@@ -106,9 +106,26 @@ Result<std::vector<Keypoint>> detect_star(const cv::Mat& gray, const cv::Mat& in
             [](const Keypoint& a, const Keypoint& b) { return a.response > b.response; });
   const double r = params.line_threshold;
   const double max_ratio = (r + 1) * (r + 1) / r;  // Harris: reject tr^2 / det > (r + 1)^2 / r
+  // Spread (params.grid_*): the first pass keeps at most `cap` per cell, the second fills up
+  // with the strongest peaks the first pass left.
+  const bool grid = params.grid_cols > 0 && params.max_features > 0;
+  const int cells = grid ? params.grid_cols * params.grid_rows : 1;
+  const int cap = grid ? std::max(1, params.max_features / cells) : 0;
+  std::vector<int> per_cell(cells, 0);
+  std::vector<uint8_t> taken(grid ? peaks.size() : 0, 0);
   std::vector<Keypoint> kps;
-  for (const Keypoint& p : peaks) {
+  for (int pass = grid ? 0 : 1; pass < 2; ++pass)
+  for (size_t pi = 0; pi < peaks.size(); ++pi) {
+    const Keypoint& p = peaks[pi];
     if (params.max_features > 0 && int(kps.size()) >= params.max_features) break;
+    int cell = 0;
+    if (grid) {
+      if (taken[pi]) continue;
+      cell = std::min(params.grid_cols - 1, int(p.x) * params.grid_cols / w) +
+             params.grid_cols * std::min(params.grid_rows - 1, int(p.y) * params.grid_rows / h);
+      if (pass == 0 && per_cell[cell] >= cap) continue;
+      taken[pi] = 1;  // tested once: kept, or rejected as a line
+    }
     const int x = int(p.x), y = int(p.y);
     // The scale of the peak and its signed response.
     int n_best = params.min_size;
@@ -133,7 +150,12 @@ Result<std::vector<Keypoint>> detect_star(const cv::Mat& gray, const cv::Mat& in
     const double det = sxx * syy - sxy * sxy;
     if (!(det > 0) || (sxx + syy) * (sxx + syy) > max_ratio * det) continue;
     kps.push_back({p.x, p.y, float(n_best), r_best});
+    ++per_cell[cell];
   }
+  if (grid)  // strongest first, as without the grid
+    std::sort(kps.begin(), kps.end(), [](const Keypoint& a, const Keypoint& b) {
+      return std::abs(a.response) > std::abs(b.response);
+    });
   if (kps.size() < 4) return R::fail(Reason::kTooFewFeatures);
   if (params.subpixel) {
     for (auto& kp : kps) {

@@ -26,6 +26,8 @@ const char* to_string(Reason r) {
       return "decomposition failed";
     case Reason::kBadImage:
       return "bad image";
+    case Reason::kPartialView:
+      return "target partly out of view";
   }
   return "unknown";
 }

@@ -23,6 +23,7 @@ enum class Reason : int8_t {
   kNoOpening = 8,            ///< ingress (issue 6)
   kDecompositionFailed = 9,  ///< no physically valid decomposition, or planes disagree
   kBadImage = 10,            ///< empty, wrong type or too small
+  kPartialView = 11,         ///< target found but cut by the image border: its centre is unknown
 };
 
 const char* to_string(Reason r);

@@ -17,7 +17,7 @@ namespace alight::vision {
 /// Matched features between the reference and the current image.
 struct Correspondences {
   std::vector<Vector2d> x1, x2;  ///< undistorted pixels (K * ray) in the reference / current image
-  std::vector<Vector2d> u2;      ///< raw (distorted) pixels in the current image
+  std::vector<Vector2d> u1, u2;  ///< raw (distorted) pixels in the reference / current image
   PoseSample pose_1, pose_2;     ///< motion-capture poses at the two exposures
   const CameraModel* camera = nullptr;
   const CameraMount* mount = nullptr;

@@ -34,15 +34,17 @@ target_t to_msg(const FrameResult& r) {
   m.mission = static_cast<int8_t>(r.mission);
   m.found = r.found();
   m.reason = static_cast<int8_t>(r.reason);
+  // A target cut by the image border still says where to look (REASON_PARTIAL_VIEW).
+  const bool has = r.found() || r.reason == Reason::kPartialView;
   for (int i = 0; i < 3; ++i) {
-    m.p_W_target[i] = r.found() ? r.target.p_W[i] : 0.0;
-    m.n_W[i] = r.found() ? r.target.n_W[i] : 0.0;
+    m.p_W_target[i] = has ? r.target.p_W[i] : 0.0;
+    m.n_W[i] = has ? r.target.n_W[i] : 0.0;
   }
-  m.pixel[0] = r.found() ? r.target.pixel.x() : 0.0;
-  m.pixel[1] = r.found() ? r.target.pixel.y() : 0.0;
-  m.target_height_m = r.found() ? r.target.height_m : 0.0;
-  m.size_m[0] = r.found() ? r.target.size_m[0] : 0.0;
-  m.size_m[1] = r.found() ? r.target.size_m[1] : 0.0;
+  m.pixel[0] = has ? r.target.pixel.x() : 0.0;
+  m.pixel[1] = has ? r.target.pixel.y() : 0.0;
+  m.target_height_m = has ? r.target.height_m : 0.0;
+  m.size_m[0] = has ? r.target.size_m[0] : 0.0;
+  m.size_m[1] = has ? r.target.size_m[1] : 0.0;
   m.baseline_m = r.baseline_m;
   m.n_features = r.n_features;
   m.n_matches = r.n_matches;

@@ -47,10 +47,35 @@ TEST(MonitorTest, ReportsPhasesProgressAndTheLanding) {
   EXPECT_TRUE(m.add(st(6, autonomy_status_t::PHASE_REFINEMENT, "REFINEMENT", 2)).empty());
   EXPECT_EQ(m.add(st(7.5, autonomy_status_t::PHASE_REFINEMENT, "REFINEMENT", 3)).size(), 1u);
   lines = m.add(st(20, autonomy_status_t::PHASE_LANDED, "LANDED", 12));
-  ASSERT_EQ(lines.size(), 2u);
-  EXPECT_EQ(lines[1], "mission complete: landed");
+  ASSERT_EQ(lines.size(), 1u);  // motors off; the simulator's verdict follows
+  EXPECT_EQ(m.end(), MissionMonitor::End::kNone);
+  sim_truth_t at_rest = truth();
+  at_rest.utime = kT0 + 20'400'000;
+  at_rest.landed = true;
+  lines = m.add(at_rest);
+  ASSERT_EQ(lines.size(), 1u);
+  EXPECT_EQ(lines[0], "mission complete: landed");
   EXPECT_EQ(m.end(), MissionMonitor::End::kSuccess);
   EXPECT_TRUE(m.add(st(21, autonomy_status_t::PHASE_LANDED, "LANDED", 12)).empty());
+}
+
+// The demo stopped the processes the moment autonomy said LANDED, before the simulator had
+// seen the vehicle at rest, and the score said not_landed after a good landing.
+TEST(MonitorTest, RegressionLandedWaitsForTheSimulatorsVerdict) {
+  MissionMonitor m;
+  m.add(truth());
+  m.add(st(20, autonomy_status_t::PHASE_LANDED, "LANDED", 12));
+  EXPECT_EQ(m.end(), MissionMonitor::End::kNone);
+  m.add(st(22, autonomy_status_t::PHASE_LANDED, "LANDED", 12));
+  EXPECT_EQ(m.end(), MissionMonitor::End::kNone);
+  const auto lines = m.add(st(23.5, autonomy_status_t::PHASE_LANDED, "LANDED", 12));
+  EXPECT_EQ(m.end(), MissionMonitor::End::kFailure);  // never at rest on the platform top
+  ASSERT_EQ(lines.size(), 1u);
+  EXPECT_EQ(lines[0], "mission failed: motors off, but not at rest on the platform top");
+
+  MissionMonitor real;  // no simulator: autonomy's touch-down detection stands
+  real.add(st(20, autonomy_status_t::PHASE_LANDED, "LANDED", 12));
+  EXPECT_EQ(real.end(), MissionMonitor::End::kSuccess);
 }
 
 TEST(MonitorTest, TipOffTheEdgeIsAFailure) {

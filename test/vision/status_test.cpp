@@ -21,6 +21,7 @@ TEST(StatusTest, ReasonValuesAreTheTargetMessageConstants) {
   EXPECT_EQ(int(Reason::kNoOpening), T::REASON_NO_OPENING);
   EXPECT_EQ(int(Reason::kDecompositionFailed), T::REASON_DECOMPOSITION_FAILED);
   EXPECT_EQ(int(Reason::kBadImage), T::REASON_BAD_IMAGE);
+  EXPECT_EQ(int(Reason::kPartialView), T::REASON_PARTIAL_VIEW);
 }
 
 TEST(StatusTest, ResultCarriesEitherAValueOrAReason) {

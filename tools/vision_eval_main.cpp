@@ -1,0 +1,159 @@
+// alight-vision-eval LOG --config VEHICLE [--mission landing|ingress]: runs the vision pipeline
+// (paper 3.1-3.3) offline over the CAMERA frames of a session log, each with the motion-capture
+// pose interpolated at its exposure time, and scores every waypoint against the simulator's truth
+// (SIM_TRUTH). Unlike the live node it never drops a frame, so it measures the pipeline alone:
+// per-frame reasons, waypoint and height errors (median, p90), and the processing time per frame
+// on this machine (which bounds the waypoint rate the node can reach).
+//
+// Exit status: 0 when the log was read, 2 when it cannot be read or holds no CAMERA frames.
+#include <alight/image_t.hpp>
+#include <alight/pose_t.hpp>
+#include <alight/sim_truth_t.hpp>
+
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <lcm/lcm-cpp.hpp>
+#include <map>
+#include <optional>
+#include <vector>
+
+#include "common/camera_mount.hpp"
+#include "common/msg_convert.hpp"
+#include "common/params.hpp"
+#include "vision/pipeline.hpp"
+
+namespace {
+
+using namespace alight;
+using namespace alight::vision;
+
+template <class T>
+bool decode(const lcm::LogEvent& ev, T& msg) {
+  return msg.decode(ev.data, 0, ev.datalen) == ev.datalen;
+}
+
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const size_t i = std::min(v.size() - 1, static_cast<size_t>(q * (v.size() - 1) + 0.5));
+  return v[i];
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"alight-vision-eval: the vision pipeline over a session log, scored against truth"};
+  std::string log_path, config, mission_name = "landing";
+  bool verbose = false;
+  app.add_option("log", log_path, "Session log (.lcmlog) with CAMERA, MOCAP_POSE, SIM_TRUTH")
+      ->required()
+      ->check(CLI::ExistingFile);
+  app.add_option("--config", config, "Vehicle file (camera mount, vision section)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  app.add_option("--mission", mission_name, "landing | ingress")
+      ->check(CLI::IsMember({"landing", "ingress"}));
+  app.add_flag("-v,--verbose", verbose, "One line per frame");
+  CLI11_PARSE(app, argc, argv);
+
+  try {
+    const Mission mission = mission_from_string(mission_name);
+    const ParamNode root = ParamNode::load_file(config);
+    const NodeParams params = load_node_params(root);
+    const CameraMount mount =
+        load_camera_mount(root, mission == Mission::kLanding ? "downward" : "forward");
+    const CameraModel camera = load_camera_info(mount.camera_info_path);
+
+    // Pass 1: every pose (a frame may need one logged after it) and the truth.
+    lcm::LogFile log(log_path, "r");
+    if (!log.good()) {
+      std::fprintf(stderr, "alight-vision-eval: cannot read %s\n", log_path.c_str());
+      return 2;
+    }
+    PoseBufferParams pb = params.poses;
+    pb.history_s = 1e6;
+    PoseBuffer poses(pb);
+    std::optional<sim_truth_t> truth;
+    std::vector<int64_t> frame_offsets;
+    for (const lcm::LogEvent* ev = log.readNextEvent(); ev; ev = log.readNextEvent()) {
+      if (ev->channel == "MOCAP_POSE") {
+        pose_t m;
+        if (decode(*ev, m)) poses.add(from_msg(m));
+      } else if (ev->channel == "SIM_TRUTH" && !truth) {
+        sim_truth_t m;
+        if (decode(*ev, m)) truth = m;
+      }
+    }
+
+    // Pass 2: the frames in log order.
+    lcm::LogFile log2(log_path, "r");
+    Pipeline pipeline(mission, params.pipeline, camera, mount);
+    std::map<Reason, int> reasons;
+    std::vector<double> lateral_m, height_m, size_err_m, ms;
+    int frames = 0;
+    for (const lcm::LogEvent* ev = log2.readNextEvent(); ev; ev = log2.readNextEvent()) {
+      if (ev->channel != "CAMERA") continue;
+      image_t msg;
+      if (!decode(*ev, msg)) continue;
+      std::string error;
+      const auto img = image_from_msg(msg, true, &error);
+      if (!img) continue;
+      ++frames;
+      const auto t0 = std::chrono::steady_clock::now();
+      const FrameResult r = pipeline.process(img->pixels, img->utime, poses.at(img->utime));
+      ms.push_back(
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+      ++reasons[r.reason];
+      double lat = -1, dh = 0;
+      if (truth && (r.found() || r.reason == Reason::kPartialView)) {
+        const double* c = mission == Mission::kLanding ? truth->platform_center_W
+                                                       : truth->opening_center_W;
+        const Vector3d c_W(c[0], c[1], c[2]);
+        lat = mission == Mission::kLanding ? (r.target.p_W - c_W).head<2>().norm()
+                                           : (r.target.p_W - c_W).tail<2>().norm();
+        dh = mission == Mission::kLanding ? r.target.height_m - truth->platform_size_m[2]
+                                          : r.target.size_m[0] - truth->opening_size_m[0];
+        if (r.found()) {
+          lateral_m.push_back(lat);
+          (mission == Mission::kLanding ? height_m : size_err_m).push_back(dh);
+        }
+      }
+      if (verbose) {
+        const PoseSample p = poses.at(img->utime).value_or(PoseSample{});
+        std::printf("%lld %-26s feat %3d match %3d in %3d/%3d base %.3f", (long long)r.utime,
+                    to_string(r.reason), r.n_features, r.n_matches, r.target.n_inliers_dominant,
+                    r.target.n_inliers_target, r.baseline_m);
+        if (lat >= 0)
+          std::printf(" err %.3f d%s %+.3f size %.2fx%.2f px (%.0f, %.0f)", lat,
+                      mission == Mission::kLanding ? "h" : "w", dh, r.target.size_m[0],
+                      r.target.size_m[1], r.target.pixel.x(), r.target.pixel.y());
+        std::printf(" body (%.2f, %.2f, %.2f) %.1f ms\n", p.p_W_B.x(), p.p_W_B.y(), p.p_W_B.z(),
+                    ms.back());
+      }
+    }
+    if (frames == 0) {
+      std::fprintf(stderr, "alight-vision-eval: no CAMERA frames in %s\n", log_path.c_str());
+      return 2;
+    }
+    std::printf("frames: %d\n", frames);
+    for (const auto& [reason, n] : reasons) std::printf("reason %s: %d\n", to_string(reason), n);
+    std::printf("frame_time_ms: median %.2f p99 %.2f\n", percentile(ms, 0.5), percentile(ms, 0.99));
+    if (!lateral_m.empty()) {
+      std::printf("waypoint_error_m: median %.4f p90 %.4f max %.4f (n %zu)\n",
+                  percentile(lateral_m, 0.5), percentile(lateral_m, 0.9),
+                  percentile(lateral_m, 1.0), lateral_m.size());
+      const auto& e = mission == Mission::kLanding ? height_m : size_err_m;
+      std::vector<double> a;
+      for (double x : e) a.push_back(std::abs(x));
+      std::printf("%s: median %+.4f |p90| %.4f\n",
+                  mission == Mission::kLanding ? "height_error_m" : "width_error_m",
+                  percentile(e, 0.5), percentile(a, 0.9));
+    }
+    return 0;
+  } catch (const ParamError& e) {
+    std::fprintf(stderr, "alight-vision-eval: %s\n", e.what());
+    return 2;
+  }
+}
