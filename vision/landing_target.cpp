@@ -153,15 +153,18 @@ TargetOutcome find_landing_target(const Correspondences& c, const PipelineParams
     return out;
   }
   // A platform cut by the border of either image: only features seen in both are matched, so
-  // the extent is that of the part visible in both.
+  // the extent is that of the part visible in both. A cut platform has a row of features along
+  // the border; one stray inlier there is no cut.
   const double m = params.landing.edge_margin_px;
   const auto near_border = [&](const Vector2d& u) {
     return u.x() < m || u.y() < m || u.x() > c.camera->width - 1 - m ||
            u.y() > c.camera->height - 1 - m;
   };
-  bool cut = false;
+  int at_border = 0;
   for (size_t i = 0; i < c.size(); ++i)
-    if (top_fit.inlier[i]) cut = cut || near_border(c.u2[i]) || (!c.u1.empty() && near_border(c.u1[i]));
+    if (top_fit.inlier[i] && (near_border(c.u2[i]) || (!c.u1.empty() && near_border(c.u1[i]))))
+      ++at_border;
+  const bool cut = at_border >= 2;
   out.reason = cut ? Reason::kPartialView : Reason::kOk;
   return out;
 }

@@ -25,10 +25,11 @@ struct LandingParams {
   /// "plane" through the platform's edge and the floor beyond is tilted by atan(h / d); in flight
   /// such false planes came out 3-12 deg, true tops within 1 deg. [deg]
   double max_tilt_deg = 3.0;
-  /// Platform inliers this close to the image border: the platform may extend out of view, the
-  /// centre of its visible features is not its centre (REASON_PARTIAL_VIEW). Features are found
-  /// up to the STAR border (2 max_size + 1 px) from the edge. [px]
-  double edge_margin_px = 24.0;
+  /// Platform inliers this close to the border of either image: the platform may extend out of
+  /// view, the centre of its visible features is not its centre (REASON_PARTIAL_VIEW). Matched
+  /// features thin out well inside the STAR border (2 max_size + 1 px): in flight logs a 24 px
+  /// band let cut platforms through (waypoints 5-17 cm off), 40 px none beyond 5 cm. [px]
+  double edge_margin_px = 40.0;
   void validate() const;
 };
 
