@@ -19,6 +19,7 @@ struct BoxFrame {  // one box, prepared for one frame
   float o[3];      // camera centre in the box frame
   float h[3];      // half sizes
   float shade[6];  // per face: axis * 2 + (positive side)
+  float lamp[3];   // the lamp in the box frame
   float near_range;  // no point of the box is closer to the camera [m]
   const Texture* tex;
   bool visible;
@@ -131,6 +132,14 @@ void Renderer::render_rows(const Scene& scene, const Isometry3d& X_WC, float wei
   const float Cz = static_cast<float>(C_W.z());
   const float Cx = static_cast<float>(C_W.x()), Cy = static_cast<float>(C_W.y());
   const float floor_shade = shade_of(Vector3d::UnitZ());
+  // The lamp's falloff (Scene::illumination) as lamp_b + lamp_a / (r^2 + d^2).
+  const LightingParams& lit = scene.lighting;
+  const bool lamp_on = lit.falloff > 0;
+  const float lamp_r2 = static_cast<float>(lit.lamp_radius_m * lit.lamp_radius_m);
+  const float lamp_a = static_cast<float>(2.0 * lit.falloff * lit.lamp_radius_m * lit.lamp_radius_m);
+  const float lamp_b = static_cast<float>(1.0 - lit.falloff);
+  const float Lx = static_cast<float>(lit.lamp_W.x()), Ly = static_cast<float>(lit.lamp_W.y());
+  const float Lz2 = static_cast<float>(lit.lamp_W.z() * lit.lamp_W.z());
   const Texture& floor_tex = scene.textures[scene.floor_texture];
 
   assert(scene.boxes.size() <= 32);
@@ -150,6 +159,8 @@ void Renderer::render_rows(const Scene& scene, const Isometry3d& X_WC, float wei
       f.shade[a * 2 + 0] = shade_of(-R_WO.col(a));
       f.shade[a * 2 + 1] = shade_of(R_WO.col(a));
     }
+    const Vector3d lamp_O = R_WO.transpose() * (lit.lamp_W - b.center_W);
+    for (int a = 0; a < 3; ++a) f.lamp[a] = static_cast<float>(lamp_O[a]);
     f.near_range = static_cast<float>((o.cwiseAbs() - b.half_size_m).cwiseMax(0.0).norm());
     f.tex = &scene.textures[b.texture];
     // Cull: bounds of the projected corners on the z = 1 plane.
@@ -274,12 +285,20 @@ void Renderer::render_rows(const Scene& scene, const Isometry3d& X_WC, float wei
           const float fp = best_t * ray_scale_[k] / std::sqrt(cosi);
           const int face = hit_axis * 2 + (hit_d_axis < 0 ? 1 : 0);  // the face the ray enters
           value = f.tex->sample(tu, tv, fp) * f.shade[face];
+          if (lamp_on) {
+            const float ex = hq[0] - f.lamp[0], ey = hq[1] - f.lamp[1], ez = hq[2] - f.lamp[2];
+            value *= lamp_b + lamp_a / (lamp_r2 + ex * ex + ey * ey + ez * ez);
+          }
         } else if (std::isfinite(best_t)) {
           const float px = Cx + best_t * (Rw[0] * dx + Rw[1] * dy + Rw[2]);
           const float py = Cy + best_t * (Rw[3] * dx + Rw[4] * dy + Rw[5]);
           const float cosi = std::max(0.05f, -dwz / dlen);
           const float fp = best_t * ray_scale_[k] / std::sqrt(cosi);
           value = floor_tex.sample(px, py, fp) * floor_shade;
+          if (lamp_on) {
+            const float ex = px - Lx, ey = py - Ly;
+            value *= lamp_b + lamp_a / (lamp_r2 + ex * ex + ey * ey + Lz2);
+          }
         }
         sum += value;
       }
