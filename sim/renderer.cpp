@@ -15,6 +15,7 @@ namespace {
 constexpr int kTile = 16;
 constexpr float kNear = 1e-3f;  // [m] along the optical axis
 constexpr int kMaxRun = kTile * 4 * 4;  // rays of a tile's row at the largest supersampling
+constexpr int kMaxLevels = 32;          // of a texture's mip-map pyramid
 
 struct BoxFrame {  // one box, prepared for one frame
   float M[9];      // camera direction -> box frame
@@ -62,11 +63,11 @@ struct SurfaceTex {
 // The passes over a row's rays below are plain loops over arrays, written so that the compiler
 // turns them into SIMD code: selects instead of branches, integer results blended with
 // bit masks (a float comparison selecting an int does not vectorise with GCC 12 on SSE2).
-// On x86-64 each is also built for AVX2 (x86-64-v3), picked at load time where the processor
-// has it: twice the lanes. Floating-point contraction is off (ISO C++ mode), so both versions
-// give bit-identical images.
+// On x86-64 each is also built for AVX2 (x86-64-v3) and AVX-512 (x86-64-v4), picked at load
+// time by what the processor has: two and four times the lanes. Floating-point contraction is
+// off for this file (sim/CMakeLists.txt), so every version renders bit-identical images.
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-#define ALIGHT_SIMD_PASS [[gnu::target_clones("arch=x86-64-v3", "default")]]
+#define ALIGHT_SIMD_PASS [[gnu::target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")]]
 #else
 #define ALIGHT_SIMD_PASS
 #endif
@@ -160,6 +161,15 @@ ALIGHT_SIMD_PASS void floor_coords_pass(int count, const float* __restrict rx, c
   }
 }
 
+// The largest range along the rays [k0, k1) to what they hit so far [m]. Ranges are >= 0 (or
+// infinite), so their bit patterns order like them: an integer maximum, which vectorises.
+ALIGHT_SIMD_PASS float farthest_range(int k0, int k1, const float* __restrict th,
+                                      const float* __restrict rlen) {
+  int m = 0;
+  for (int k = k0; k < k1; ++k) m = std::max(m, std::bit_cast<int>(th[k] * rlen[k]));
+  return std::bit_cast<float>(m);
+}
+
 // Face coordinates, footprint and shade of the rays [k0, k1) that hit box `id` (the others are
 // left as they are).
 ALIGHT_SIMD_PASS void box_coords_pass(int k0, int k1, const float* __restrict rx, const float* __restrict ry,
@@ -233,7 +243,7 @@ struct Taps {  // per ray
   std::vector<int> level, offset_a, dx_a, dy_a, offset_b, dx_b, dy_b;
   std::vector<float> w, fx_a, fy_a, fx_b, fy_b;
   std::vector<uint8_t> t_a[4], t_b[4];  // texels 00, 01, 10, 11 (converted in filter_pass)
-  explicit Taps(int n) {
+  void resize(int n) {
     for (auto* v : {&level, &offset_a, &dx_a, &dy_a, &offset_b, &dx_b, &dy_b}) v->resize(n);
     for (auto* v : {&w, &fx_a, &fy_a, &fx_b, &fy_b}) v->resize(n);
     for (int i = 0; i < 4; ++i) {
@@ -298,10 +308,9 @@ ALIGHT_SIMD_PASS [[gnu::noinline]] void taps_pass(int count, const float* __rest
 }
 
 // The texel reads: level a always, level b only where it is blended in.
-void fetch_pass(int count, const int* __restrict tid, const std::vector<const uint8_t*>* levels,
-                Taps& taps) {
+void fetch_pass(int count, const int* __restrict tid, const uint8_t* const* levels, Taps& taps) {
   for (int k = 0; k < count; ++k) {
-    const uint8_t* const* lv = levels[tid[k]].data();
+    const uint8_t* const* lv = levels + tid[k] * kMaxLevels;
     const int l = taps.level[k];
     const uint8_t* a = lv[l] + taps.offset_a[k];
     const int dx = taps.dx_a[k], dy = taps.dy_a[k];
@@ -522,15 +531,17 @@ void Renderer::render_rows(const Scene& scene, const Isometry3d& X_WC, float wei
   std::vector<float> t_hit(N), tex_u(N), tex_v(N), foot(N), shade(N), value(N);
   std::vector<float> tex_inv(N), tex_cols(N), tex_rows(N), tex_max(N);
   std::vector<int> hit_box(N), hit_axis(N), tex_id(N);
-  Taps taps(N);
-  // Each texture's levels as arrays, and its parameters.
-  std::vector<std::vector<const uint8_t*>> levels(scene.textures.size());
+  Taps taps;
+  taps.resize(N);
+  // Each texture's levels as arrays (kMaxLevels slots per texture), and its parameters.
+  std::vector<const uint8_t*> levels(scene.textures.size() * kMaxLevels, nullptr);
   std::vector<SurfaceTex> surface_tex(scene.textures.size());
   for (size_t i = 0; i < scene.textures.size(); ++i) {
     const Texture& tex = scene.textures[i];
+    assert(tex.n_levels() <= kMaxLevels);
     for (int l = 0; l < tex.n_levels(); ++l) {
       assert(tex.level(l).isContinuous());
-      levels[i].push_back(tex.level(l).ptr<uint8_t>());
+      levels[i * kMaxLevels + l] = tex.level(l).ptr<uint8_t>();
     }
     surface_tex[i] = SurfaceTex{tex.inv_texel_m(), static_cast<float>(tex.level(0).cols),
                                 static_cast<float>(tex.level(0).rows),
@@ -564,9 +575,7 @@ void Renderer::render_rows(const Scene& scene, const Isometry3d& X_WC, float wei
         const int k0 = tx * kTile * n, k1 = std::min(W, (tx + 1) * kTile) * n;
         // The whole tile already sees something nearer than any point of this box (and so of
         // every later box: they are sorted by that bound).
-        float farthest = 0.f;
-        for (int k = k0; k < k1; ++k) farthest = std::max(farthest, th[k] * rlen[k]);
-        if (f.near_range > farthest) continue;
+        if (f.near_range > farthest_range(k0, k1, th, rlen)) continue;
         if (box_pass(k0, k1, rx, ry, f.M, f.o, f.h, static_cast<int>(bi), th, hb, ha))
           box_runs.push_back({static_cast<int>(bi), k0, k1});
       }
@@ -578,11 +587,16 @@ void Renderer::render_rows(const Scene& scene, const Isometry3d& X_WC, float wei
                       shade.data(), tex_inv.data(), tex_cols.data(), tex_rows.data(),
                       tex_max.data(), tex_id.data());
     // ...then, on the tiles each box was tested on, the rays that hit it instead.
-    for (const auto& [bi, k0, k1] : box_runs)
+    for (auto [bi, k0, k1] : box_runs) {
+      // Only the span of rays still seeing this box after the nearer ones were tested.
+      while (k0 < k1 && hb[k0] != bi) ++k0;
+      while (k1 > k0 && hb[k1 - 1] != bi) --k1;
+      if (k0 == k1) continue;
       box_coords_pass(k0, k1, rx, ry, rlen, rscale, th, hb, ha, boxes[bi], bi, lamp,
                       surface_tex[boxes[bi].texture], tex_u.data(), tex_v.data(), foot.data(),
                       shade.data(), tex_inv.data(), tex_cols.data(), tex_rows.data(),
                       tex_max.data(), tex_id.data());
+    }
 
     taps_pass(N, tex_u.data(), tex_v.data(), foot.data(), tex_inv.data(), tex_cols.data(),
               tex_rows.data(), tex_max.data(), taps.level.data(), taps.w.data(),
@@ -591,11 +605,15 @@ void Renderer::render_rows(const Scene& scene, const Isometry3d& X_WC, float wei
               taps.fx_b.data(), taps.fy_b.data());
     fetch_pass(N, tex_id.data(), levels.data(), taps);
     filter_pass(N, taps, th, shade.data(), kBackground, value.data());
-    float* row = out + static_cast<size_t>(v) * out_step;
-    for (int u = 0; u < W; ++u) {
-      float sum = 0.f;
-      for (int s = 0; s < n; ++s) sum += value[u * n + s];
-      row[u] += sum * inv_n;
+    float* __restrict row = out + static_cast<size_t>(v) * out_step;
+    if (n == 1) {  // the common case, as SIMD code
+      for (int u = 0; u < W; ++u) row[u] += value[u] * inv_n;
+    } else {
+      for (int u = 0; u < W; ++u) {
+        float sum = 0.f;
+        for (int s = 0; s < n; ++s) sum += value[u * n + s];
+        row[u] += sum * inv_n;
+      }
     }
   }
 }
