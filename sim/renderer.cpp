@@ -307,27 +307,40 @@ ALIGHT_SIMD_PASS [[gnu::noinline]] void taps_pass(int count, const float* __rest
   }
 }
 
-// The texel reads: level a always, level b only where it is blended in.
-void fetch_pass(int count, const int* __restrict tid, const uint8_t* const* levels, Taps& taps) {
+// The texel reads: level a always, level b only where it is blended in. (Restrict parameters:
+// the texels are bytes, and a byte store may alias anything, so through the Taps' vectors the
+// compiler would reload every array's address after each store.)
+[[gnu::noinline]] void fetch_pass(int count, const int* __restrict tid, const int* __restrict level,
+                                  const uint8_t* const* __restrict levels,
+                                  const int* __restrict oa, const int* __restrict xa,
+                                  const int* __restrict ya, const int* __restrict ob,
+                                  const int* __restrict xb, const int* __restrict yb,
+                                  const float* __restrict w, uint8_t* __restrict a00,
+                                  uint8_t* __restrict a01, uint8_t* __restrict a10,
+                                  uint8_t* __restrict a11, uint8_t* __restrict b00,
+                                  uint8_t* __restrict b01, uint8_t* __restrict b10,
+                                  uint8_t* __restrict b11) {
   for (int k = 0; k < count; ++k) {
-    const uint8_t* const* lv = levels + tid[k] * kMaxLevels;
-    const int l = taps.level[k];
-    const uint8_t* a = lv[l] + taps.offset_a[k];
-    const int dx = taps.dx_a[k], dy = taps.dy_a[k];
-    taps.t_a[0][k] = a[0];
-    taps.t_a[1][k] = a[dx];
-    taps.t_a[2][k] = a[dy];
-    taps.t_a[3][k] = a[dx + dy];
-    if (taps.w[k] != 0.f) {
-      const uint8_t* b = lv[l + 1] + taps.offset_b[k];
-      const int ex = taps.dx_b[k], ey = taps.dy_b[k];
-      taps.t_b[0][k] = b[0];
-      taps.t_b[1][k] = b[ex];
-      taps.t_b[2][k] = b[ey];
-      taps.t_b[3][k] = b[ex + ey];
-    } else {
-      for (int i = 0; i < 4; ++i) taps.t_b[i][k] = 0;
+    const uint8_t* const* lv = levels + tid[k] * kMaxLevels + level[k];
+    const uint8_t* a = lv[0] + oa[k];
+    const int dx = xa[k], dy = ya[k];
+    a00[k] = a[0];
+    a01[k] = a[dx];
+    a10[k] = a[dy];
+    a11[k] = a[dx + dy];
+    uint8_t q00 = 0, q01 = 0, q10 = 0, q11 = 0;
+    if (w[k] != 0.f) {
+      const uint8_t* b = lv[1] + ob[k];
+      const int ex = xb[k], ey = yb[k];
+      q00 = b[0];
+      q01 = b[ex];
+      q10 = b[ey];
+      q11 = b[ex + ey];
     }
+    b00[k] = q00;
+    b01[k] = q01;
+    b10[k] = q10;
+    b11[k] = q11;
   }
 }
 
@@ -603,7 +616,11 @@ void Renderer::render_rows(const Scene& scene, const Isometry3d& X_WC, float wei
               taps.offset_a.data(), taps.dx_a.data(), taps.dy_a.data(), taps.offset_b.data(),
               taps.dx_b.data(), taps.dy_b.data(), taps.fx_a.data(), taps.fy_a.data(),
               taps.fx_b.data(), taps.fy_b.data());
-    fetch_pass(N, tex_id.data(), levels.data(), taps);
+    fetch_pass(N, tex_id.data(), taps.level.data(), levels.data(), taps.offset_a.data(),
+               taps.dx_a.data(), taps.dy_a.data(), taps.offset_b.data(), taps.dx_b.data(),
+               taps.dy_b.data(), taps.w.data(), taps.t_a[0].data(), taps.t_a[1].data(),
+               taps.t_a[2].data(), taps.t_a[3].data(), taps.t_b[0].data(), taps.t_b[1].data(),
+               taps.t_b[2].data(), taps.t_b[3].data());
     filter_pass(N, taps, th, shade.data(), kBackground, value.data());
     float* __restrict row = out + static_cast<size_t>(v) * out_step;
     if (n == 1) {  // the common case, as SIMD code
