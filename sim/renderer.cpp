@@ -1,33 +1,32 @@
 #include "sim/renderer.hpp"
 
-#include <opencv2/core/utility.hpp>
-#include <opencv2/imgproc.hpp>
-
 #include <algorithm>
 #include <bit>
 #include <cassert>
 #include <cmath>
 #include <limits>
+#include <opencv2/core/utility.hpp>
+#include <opencv2/imgproc.hpp>
 
 namespace alight::sim {
 
 namespace {
 constexpr int kTile = 16;
-constexpr float kNear = 1e-3f;  // [m] along the optical axis
+constexpr float kNear = 1e-3f;          // [m] along the optical axis
 constexpr int kMaxRun = kTile * 4 * 4;  // rays of a tile's row at the largest supersampling
 constexpr int kMaxLevels = 32;          // of a texture's mip-map pyramid
 
-struct BoxFrame {  // one box, prepared for one frame
-  float M[9];      // camera direction -> box frame
-  float o[3];      // camera centre in the box frame
-  float h[3];      // half sizes
-  float shade[6];  // per face: axis * 2 + (positive side)
-  float lamp[3];   // the lamp in the box frame
+struct BoxFrame {    // one box, prepared for one frame
+  float M[9];        // camera direction -> box frame
+  float o[3];        // camera centre in the box frame
+  float h[3];        // half sizes
+  float shade[6];    // per face: axis * 2 + (positive side)
+  float lamp[3];     // the lamp in the box frame
   float near_range;  // no point of the box is closer to the camera [m]
-  int texture;  // index into Scene::textures
+  int texture;       // index into Scene::textures
   bool visible;
-  bool straddles;    // has corners behind the camera: may cover any tile
-  float x0, y0, x1, y1;  // bounds of its projection on the z = 1 plane
+  bool straddles;                 // has corners behind the camera: may cover any tile
+  float x0, y0, x1, y1;           // bounds of its projection on the z = 1 plane
   std::vector<cv::Point2f> hull;  // its silhouette on the z = 1 plane (convex), when not straddling
 };
 
@@ -54,10 +53,10 @@ bool rect_meets_hull(const cv::Vec4f& b, const std::vector<cv::Point2f>& hull, f
 
 // A texture as the batched sampling below sees it: the parameters of Texture::sample().
 struct SurfaceTex {
-  float inv_texel;  // texels per metre
+  float inv_texel;   // texels per metre
   float cols, rows;  // of level 0 (powers of two)
   float max_level;
-  int id;           // index into the frame's level pointers
+  int id;  // index into the frame's level pointers
 };
 
 // The passes over a row's rays below are plain loops over arrays, written so that the compiler
@@ -73,8 +72,9 @@ struct SurfaceTex {
 #endif
 
 // Ray parameter of the floor (z = 0) seen from above, infinity for rays that miss it.
-ALIGHT_SIMD_PASS void floor_pass(int count, const float* __restrict rx, const float* __restrict ry, const float* Rw,
-                float Cz, float* __restrict th, int* __restrict hb, int* __restrict ha) {
+ALIGHT_SIMD_PASS void floor_pass(int count, const float* __restrict rx, const float* __restrict ry,
+                                 const float* Rw, float Cz, float* __restrict th,
+                                 int* __restrict hb, int* __restrict ha) {
   const float inf = std::numeric_limits<float>::infinity();
   const float num = Cz > 0.f ? -Cz : 0.f;
   const float R6 = Rw[6], R7 = Rw[7], R8 = Rw[8];
@@ -90,9 +90,10 @@ ALIGHT_SIMD_PASS void floor_pass(int count, const float* __restrict rx, const fl
 // Slab test of one box (Kay and Kajiya) for the rays [k0, k1): where it is hit nearer than th,
 // th, hb (the box's index) and ha (the axis of the face the ray enters) are replaced. Returns
 // whether any ray hit it.
-ALIGHT_SIMD_PASS bool box_pass(int k0, int k1, const float* __restrict rx, const float* __restrict ry,
-              const float* M, const float* o, const float* h, int id, float* __restrict th,
-              int* __restrict hb, int* __restrict ha) {
+ALIGHT_SIMD_PASS bool box_pass(int k0, int k1, const float* __restrict rx,
+                               const float* __restrict ry, const float* M, const float* o,
+                               const float* h, int id, float* __restrict th, int* __restrict hb,
+                               int* __restrict ha) {
   const float M0 = M[0], M1 = M[1], M2 = M[2], M3 = M[3], M4 = M[4], M5 = M[5], M6 = M[6],
               M7 = M[7], M8 = M[8];
   const float lo0 = -h[0] - o[0], hi0 = h[0] - o[0];
@@ -131,15 +132,14 @@ ALIGHT_SIMD_PASS bool box_pass(int k0, int k1, const float* __restrict rx, const
 }
 
 // Floor coordinates, footprint and shade (with the lamp's falloff) of every ray.
-ALIGHT_SIMD_PASS void floor_coords_pass(int count, const float* __restrict rx, const float* __restrict ry,
-                       const float* __restrict rlen, const float* __restrict rscale,
-                       const float* __restrict th, const float* Rw, float Cx, float Cy,
-                       float floor_shade, const float* lamp, const SurfaceTex& tex,
-                       float* __restrict tu, float* __restrict tv, float* __restrict fp,
-                       float* __restrict sh, float* __restrict tinv, float* __restrict tcols,
-                       float* __restrict trows, float* __restrict tmax, int* __restrict tid) {
-  const float R0 = Rw[0], R1 = Rw[1], R2 = Rw[2], R3 = Rw[3], R4 = Rw[4], R5 = Rw[5],
-              R6 = Rw[6], R7 = Rw[7], R8 = Rw[8];
+ALIGHT_SIMD_PASS void floor_coords_pass(
+    int count, const float* __restrict rx, const float* __restrict ry, const float* __restrict rlen,
+    const float* __restrict rscale, const float* __restrict th, const float* Rw, float Cx, float Cy,
+    float floor_shade, const float* lamp, const SurfaceTex& tex, float* __restrict tu,
+    float* __restrict tv, float* __restrict fp, float* __restrict sh, float* __restrict tinv,
+    float* __restrict tcols, float* __restrict trows, float* __restrict tmax, int* __restrict tid) {
+  const float R0 = Rw[0], R1 = Rw[1], R2 = Rw[2], R3 = Rw[3], R4 = Rw[4], R5 = Rw[5], R6 = Rw[6],
+              R7 = Rw[7], R8 = Rw[8];
   // lamp: x, y, z^2 of the lamp, r^2, a, b of Renderer::render_rows.
   const float Lx = lamp[0], Ly = lamp[1], Lz2 = lamp[2], r2 = lamp[3], la = lamp[4], lb = lamp[5];
   for (int k = 0; k < count; ++k) {
@@ -172,17 +172,15 @@ ALIGHT_SIMD_PASS float farthest_range(int k0, int k1, const float* __restrict th
 
 // Face coordinates, footprint and shade of the rays [k0, k1) that hit box `id` (the others are
 // left as they are).
-ALIGHT_SIMD_PASS void box_coords_pass(int k0, int k1, const float* __restrict rx, const float* __restrict ry,
-                     const float* __restrict rlen, const float* __restrict rscale,
-                     const float* __restrict th, const int* __restrict hb,
-                     const int* __restrict ha, const BoxFrame& f, int id, const float* lamp,
-                     const SurfaceTex& tex, float* __restrict tu, float* __restrict tv,
-                     float* __restrict fp, float* __restrict sh, float* __restrict tinv,
-                     float* __restrict tcols, float* __restrict trows, float* __restrict tmax,
-                     int* __restrict tid) {
-  // This box's values for every ray of the run, then taken where it is the one hit.
+ALIGHT_SIMD_PASS void box_coords_pass(
+    int k0, int k1, const float* __restrict rx, const float* __restrict ry,
+    const float* __restrict rlen, const float* __restrict rscale, const float* __restrict th,
+    const int* __restrict hb, const int* __restrict ha, const BoxFrame& f, int id,
+    const float* lamp, const SurfaceTex& tex, float* __restrict tu, float* __restrict tv,
+    float* __restrict fp, float* __restrict sh, float* __restrict tinv, float* __restrict tcols,
+    float* __restrict trows, float* __restrict tmax, int* __restrict tid) {
+  // This box's values for every ray of a chunk, then taken where it is the one hit.
   float cu[kMaxRun], cv[kMaxRun], cf[kMaxRun], cs[kMaxRun];
-  assert(k1 - k0 <= kMaxRun);
   const float M0 = f.M[0], M1 = f.M[1], M2 = f.M[2], M3 = f.M[3], M4 = f.M[4], M5 = f.M[5],
               M6 = f.M[6], M7 = f.M[7], M8 = f.M[8];
   const float o0 = f.o[0], o1 = f.o[1], o2 = f.o[2];
@@ -190,49 +188,53 @@ ALIGHT_SIMD_PASS void box_coords_pass(int k0, int k1, const float* __restrict rx
   const float r2 = lamp[3], la = lamp[4], lb = lamp[5];
   const float s0n = f.shade[0], s0p = f.shade[1], s1n = f.shade[2], s1p = f.shade[3],
               s2n = f.shade[4], s2p = f.shade[5];
-  for (int k = k0; k < k1; ++k) {
-    const float t = th[k];
-    const float d0 = M0 * rx[k] + M1 * ry[k] + M2;
-    const float d1 = M3 * rx[k] + M4 * ry[k] + M5;
-    const float d2 = M6 * rx[k] + M7 * ry[k] + M8;
-    const float q0 = o0 + t * d0, q1 = o1 + t * d1, q2 = o2 + t * d2;
-    // Weights of 0 or 1 per face axis and side instead of nested selects, which GCC 12 does
-    // not vectorise; each sum below has a single non-zero term, so it is exact.
-    const float wx = ha[k] == 0 ? 1.f : 0.f, wy = ha[k] == 1 ? 1.f : 0.f, wz = 1.f - wx - wy;
-    const float d_axis = wx * d0 + wy * d1 + wz * d2;
-    const float pos = d_axis < 0 ? 1.f : 0.f, neg = 1.f - pos;  // entering the + / - side
-    // Face coordinates; each face gets its own offset into the tile so faces differ.
-    const float u = wx * (q1 + 1.7f) + wy * (q0 + 3.1f) + wz * q0;
-    const float v = wx * (q2 + pos * 0.9f + neg * 2.3f) + wy * (q2 + pos * 0.4f + neg * 1.3f) + wz * q1;
-    const float cosi = std::max(0.05f, std::abs(d_axis) / rlen[k]);
-    const float face_shade = wx * (pos * s0p + neg * s0n) + wy * (pos * s1p + neg * s1n) +
-                             wz * (pos * s2p + neg * s2n);
-    const float e0 = q0 - L0, e1 = q1 - L1, e2 = q2 - L2;
-    const float shade = face_shade * (lb + la / (r2 + e0 * e0 + e1 * e1 + e2 * e2));
-    const float foot = t * rscale[k] / std::sqrt(cosi);
-    const int j = k - k0;
-    cu[j] = u;
-    cv[j] = v;
-    cf[j] = foot;
-    cs[j] = shade;
-  }
-  // Kept apart from the loop above, and blended as bits: with float selects on an integer
-  // condition in it GCC 12 vectorises neither loop.
-  auto blend = [](int mask, float a, float b) {
-    return std::bit_cast<float>((std::bit_cast<int>(a) & mask) | (std::bit_cast<int>(b) & ~mask));
-  };
-  for (int k = k0; k < k1; ++k) {
-    const int j = k - k0;
-    const int mine = -static_cast<int>(hb[k] == id);
-    tu[k] = blend(mine, cu[j], tu[k]);
-    tv[k] = blend(mine, cv[j], tv[k]);
-    fp[k] = blend(mine, cf[j], fp[k]);
-    sh[k] = blend(mine, cs[j], sh[k]);
-    tinv[k] = blend(mine, tex.inv_texel, tinv[k]);
-    tcols[k] = blend(mine, tex.cols, tcols[k]);
-    trows[k] = blend(mine, tex.rows, trows[k]);
-    tmax[k] = blend(mine, tex.max_level, tmax[k]);
-    tid[k] = (tex.id & mine) | (tid[k] & ~mine);
+  for (int c0 = k0; c0 < k1; c0 += kMaxRun) {
+    const int c1 = std::min(k1, c0 + kMaxRun);
+    for (int k = c0; k < c1; ++k) {
+      const float t = th[k];
+      const float d0 = M0 * rx[k] + M1 * ry[k] + M2;
+      const float d1 = M3 * rx[k] + M4 * ry[k] + M5;
+      const float d2 = M6 * rx[k] + M7 * ry[k] + M8;
+      const float q0 = o0 + t * d0, q1 = o1 + t * d1, q2 = o2 + t * d2;
+      // Weights of 0 or 1 per face axis and side instead of nested selects, which GCC 12 does
+      // not vectorise; each sum below has a single non-zero term, so it is exact.
+      const float wx = ha[k] == 0 ? 1.f : 0.f, wy = ha[k] == 1 ? 1.f : 0.f, wz = 1.f - wx - wy;
+      const float d_axis = wx * d0 + wy * d1 + wz * d2;
+      const float pos = d_axis < 0 ? 1.f : 0.f, neg = 1.f - pos;  // entering the + / - side
+      // Face coordinates; each face gets its own offset into the tile so faces differ.
+      const float u = wx * (q1 + 1.7f) + wy * (q0 + 3.1f) + wz * q0;
+      const float v =
+          wx * (q2 + pos * 0.9f + neg * 2.3f) + wy * (q2 + pos * 0.4f + neg * 1.3f) + wz * q1;
+      const float cosi = std::max(0.05f, std::abs(d_axis) / rlen[k]);
+      const float face_shade = wx * (pos * s0p + neg * s0n) + wy * (pos * s1p + neg * s1n) +
+                               wz * (pos * s2p + neg * s2n);
+      const float e0 = q0 - L0, e1 = q1 - L1, e2 = q2 - L2;
+      const float shade = face_shade * (lb + la / (r2 + e0 * e0 + e1 * e1 + e2 * e2));
+      const float foot = t * rscale[k] / std::sqrt(cosi);
+      const int j = k - c0;
+      cu[j] = u;
+      cv[j] = v;
+      cf[j] = foot;
+      cs[j] = shade;
+    }
+    // Kept apart from the loop above, and blended as bits: with float selects on an integer
+    // condition in it GCC 12 vectorises neither loop.
+    auto blend = [](int mask, float a, float b) {
+      return std::bit_cast<float>((std::bit_cast<int>(a) & mask) | (std::bit_cast<int>(b) & ~mask));
+    };
+    for (int k = c0; k < c1; ++k) {
+      const int j = k - c0;
+      const int mine = -static_cast<int>(hb[k] == id);
+      tu[k] = blend(mine, cu[j], tu[k]);
+      tv[k] = blend(mine, cv[j], tv[k]);
+      fp[k] = blend(mine, cf[j], fp[k]);
+      sh[k] = blend(mine, cs[j], sh[k]);
+      tinv[k] = blend(mine, tex.inv_texel, tinv[k]);
+      tcols[k] = blend(mine, tex.cols, tcols[k]);
+      trows[k] = blend(mine, tex.rows, trows[k]);
+      tmax[k] = blend(mine, tex.max_level, tmax[k]);
+      tid[k] = (tex.id & mine) | (tid[k] & ~mine);
+    }
   }
 }
 
@@ -254,9 +256,7 @@ struct Taps {  // per ray
 };
 
 // 2^-l for an integer-valued l in [0, 126], exactly.
-inline float exp2_neg(float l) {
-  return std::bit_cast<float>((127 - static_cast<int>(l)) << 23);
-}
+inline float exp2_neg(float l) { return std::bit_cast<float>((127 - static_cast<int>(l)) << 23); }
 
 // Bilinear taps on a level `scale` = 2^-l times the size of level 0: the offset of texel 00 in
 // the level's array, the steps to texel 01 and 10 (wrapping), and the weights.
@@ -281,13 +281,13 @@ inline void bilinear_taps(float x0, float y0, float scale, float cols0, float ro
 
 // (Restrict parameters of a function not inlined: GCC otherwise checks the aliasing of these
 // arrays at run time, and gives up beyond ten pairs.)
-ALIGHT_SIMD_PASS [[gnu::noinline]] void taps_pass(int count, const float* __restrict tu, const float* __restrict tv,
-               const float* __restrict fp, const float* __restrict tinv,
-               const float* __restrict tcols, const float* __restrict trows,
-               const float* __restrict tmax, int* __restrict lv, float* __restrict w,
-               int* __restrict oa, int* __restrict xa, int* __restrict ya, int* __restrict ob,
-               int* __restrict xb, int* __restrict yb, float* __restrict fxa,
-               float* __restrict fya, float* __restrict fxb, float* __restrict fyb) {
+ALIGHT_SIMD_PASS [[gnu::noinline]] void taps_pass(
+    int count, const float* __restrict tu, const float* __restrict tv, const float* __restrict fp,
+    const float* __restrict tinv, const float* __restrict tcols, const float* __restrict trows,
+    const float* __restrict tmax, int* __restrict lv, float* __restrict w, int* __restrict oa,
+    int* __restrict xa, int* __restrict ya, int* __restrict ob, int* __restrict xb,
+    int* __restrict yb, float* __restrict fxa, float* __restrict fya, float* __restrict fxb,
+    float* __restrict fyb) {
   for (int k = 0; k < count; ++k) {
     const float inv = tinv[k], max_level = tmax[k];
     const float level = Texture::fast_log2(fp[k] * inv);
@@ -311,15 +311,14 @@ ALIGHT_SIMD_PASS [[gnu::noinline]] void taps_pass(int count, const float* __rest
 // the texels are bytes, and a byte store may alias anything, so through the Taps' vectors the
 // compiler would reload every array's address after each store.)
 [[gnu::noinline]] void fetch_pass(int count, const int* __restrict tid, const int* __restrict level,
-                                  const uint8_t* const* __restrict levels,
-                                  const int* __restrict oa, const int* __restrict xa,
-                                  const int* __restrict ya, const int* __restrict ob,
-                                  const int* __restrict xb, const int* __restrict yb,
-                                  const float* __restrict w, uint8_t* __restrict a00,
-                                  uint8_t* __restrict a01, uint8_t* __restrict a10,
-                                  uint8_t* __restrict a11, uint8_t* __restrict b00,
-                                  uint8_t* __restrict b01, uint8_t* __restrict b10,
-                                  uint8_t* __restrict b11) {
+                                  const uint8_t* const* __restrict levels, const int* __restrict oa,
+                                  const int* __restrict xa, const int* __restrict ya,
+                                  const int* __restrict ob, const int* __restrict xb,
+                                  const int* __restrict yb, const float* __restrict w,
+                                  uint8_t* __restrict a00, uint8_t* __restrict a01,
+                                  uint8_t* __restrict a10, uint8_t* __restrict a11,
+                                  uint8_t* __restrict b00, uint8_t* __restrict b01,
+                                  uint8_t* __restrict b10, uint8_t* __restrict b11) {
   for (int k = 0; k < count; ++k) {
     const uint8_t* const* lv = levels + tid[k] * kMaxLevels + level[k];
     const uint8_t* a = lv[0] + oa[k];
@@ -345,8 +344,10 @@ ALIGHT_SIMD_PASS [[gnu::noinline]] void taps_pass(int count, const float* __rest
 }
 
 // Filtered, shaded values; kBackground where nothing was hit. (Not inlined: see taps_pass.)
-ALIGHT_SIMD_PASS [[gnu::noinline]] void filter_pass(int count, const Taps& taps, const float* __restrict th,
-                 const float* __restrict sh, float background, float* __restrict value) {
+ALIGHT_SIMD_PASS [[gnu::noinline]] void filter_pass(int count, const Taps& taps,
+                                                    const float* __restrict th,
+                                                    const float* __restrict sh, float background,
+                                                    float* __restrict value) {
   const uint8_t* __restrict a00 = taps.t_a[0].data();
   const uint8_t* __restrict a01 = taps.t_a[1].data();
   const uint8_t* __restrict a10 = taps.t_a[2].data();
@@ -446,8 +447,9 @@ void Renderer::render_rows(const Scene& scene, const Isometry3d& X_WC, float wei
   const Vector3d C_W = X_WC.translation();
   const Vector3d light = scene.lighting.light_dir_W.normalized();
   auto shade_of = [&](const Vector3d& n_W) {
-    return static_cast<float>(scene.lighting.gain *
-                              (scene.lighting.ambient + scene.lighting.diffuse * std::max(0.0, n_W.dot(light))));
+    return static_cast<float>(
+        scene.lighting.gain *
+        (scene.lighting.ambient + scene.lighting.diffuse * std::max(0.0, n_W.dot(light))));
   };
 
   // Per-frame preparation: world->camera, boxes in camera terms, and which tiles each box may
@@ -461,10 +463,14 @@ void Renderer::render_rows(const Scene& scene, const Isometry3d& X_WC, float wei
   // The lamp's falloff (Scene::illumination) as lamp_b + lamp_a / (r^2 + d^2).
   const LightingParams& lit = scene.lighting;
   const float lamp_r2 = static_cast<float>(lit.lamp_radius_m * lit.lamp_radius_m);
-  const float lamp_a = static_cast<float>(2.0 * lit.falloff * lit.lamp_radius_m * lit.lamp_radius_m);
+  const float lamp_a =
+      static_cast<float>(2.0 * lit.falloff * lit.lamp_radius_m * lit.lamp_radius_m);
   const float lamp_b = static_cast<float>(1.0 - lit.falloff);
-  const float lamp[6] = {static_cast<float>(lit.lamp_W.x()), static_cast<float>(lit.lamp_W.y()),
-                         static_cast<float>(lit.lamp_W.z() * lit.lamp_W.z()), lamp_r2, lamp_a,
+  const float lamp[6] = {static_cast<float>(lit.lamp_W.x()),
+                         static_cast<float>(lit.lamp_W.y()),
+                         static_cast<float>(lit.lamp_W.z() * lit.lamp_W.z()),
+                         lamp_r2,
+                         lamp_a,
                          lamp_b};
 
   assert(scene.boxes.size() <= 32);
@@ -495,7 +501,8 @@ void Renderer::render_rows(const Scene& scene, const Isometry3d& X_WC, float wei
     f.x1 = f.y1 = -1e30f;
     std::vector<cv::Point2f> projected;
     for (int k = 0; k < 8; ++k) {
-      const Vector3d corner_O((k & 1 ? 1 : -1) * b.half_size_m.x(), (k & 2 ? 1 : -1) * b.half_size_m.y(),
+      const Vector3d corner_O((k & 1 ? 1 : -1) * b.half_size_m.x(),
+                              (k & 2 ? 1 : -1) * b.half_size_m.y(),
                               (k & 4 ? 1 : -1) * b.half_size_m.z());
       const Vector3d p_C = R_CW * (b.center_W + R_WO * corner_O - C_W);
       if (p_C.z() > kNear) {
@@ -560,10 +567,8 @@ void Renderer::render_rows(const Scene& scene, const Isometry3d& X_WC, float wei
                                 static_cast<float>(tex.level(0).rows),
                                 static_cast<float>(tex.n_levels() - 1), static_cast<int>(i)};
   }
-  struct Run {
-    int box, k0, k1;
-  };
-  std::vector<Run> box_runs;  // per row: which box was tested on which rays
+  // Per row and box: the rays [first, second) it was hit on, when tested.
+  std::vector<std::pair<int, int>> box_span(boxes.size());
   const float inv_n = weight / static_cast<float>(n);
   for (int v = row0; v < row1; ++v) {
     const size_t base = static_cast<size_t>(v) * N;
@@ -577,20 +582,28 @@ void Renderer::render_rows(const Scene& scene, const Isometry3d& X_WC, float wei
 
     floor_pass(N, rx, ry, Rw, Cz, th, hb, ha);
 
-    // Boxes, nearest first, on the tiles of this row that they may cover.
-    box_runs.clear();
+    // Boxes, nearest first, on the tiles of this row that they may cover, consecutive tiles in
+    // one run (each call sets up its constants: per tile that cost as much as the tests).
     const uint32_t* masks = &tile_mask[(v / kTile) * tiles_x_];
     for (size_t bi = 0; bi < boxes.size(); ++bi) {
       const BoxFrame& f = boxes[bi];
       const uint32_t bit = 1u << bi;
-      for (int tx = 0; tx < tiles_x_; ++tx) {
-        if (!(masks[tx] & bit)) continue;
+      box_span[bi] = {N, 0};
+      int run0 = -1;  // first ray of the open run
+      for (int tx = 0; tx <= tiles_x_; ++tx) {
         const int k0 = tx * kTile * n, k1 = std::min(W, (tx + 1) * kTile) * n;
-        // The whole tile already sees something nearer than any point of this box (and so of
-        // every later box: they are sorted by that bound).
-        if (f.near_range > farthest_range(k0, k1, th, rlen)) continue;
-        if (box_pass(k0, k1, rx, ry, f.M, f.o, f.h, static_cast<int>(bi), th, hb, ha))
-          box_runs.push_back({static_cast<int>(bi), k0, k1});
+        // A tile whose every ray already sees something nearer than any point of this box (and
+        // so of every later box: they are sorted by that bound) is skipped.
+        const bool test =
+            tx < tiles_x_ && (masks[tx] & bit) && f.near_range <= farthest_range(k0, k1, th, rlen);
+        if (test && run0 < 0) run0 = k0;
+        if (!test && run0 >= 0) {
+          if (box_pass(run0, k0, rx, ry, f.M, f.o, f.h, static_cast<int>(bi), th, hb, ha)) {
+            box_span[bi].first = std::min(box_span[bi].first, run0);
+            box_span[bi].second = std::max(box_span[bi].second, k0);
+          }
+          run0 = -1;
+        }
       }
     }
 
@@ -600,11 +613,12 @@ void Renderer::render_rows(const Scene& scene, const Isometry3d& X_WC, float wei
                       shade.data(), tex_inv.data(), tex_cols.data(), tex_rows.data(),
                       tex_max.data(), tex_id.data());
     // ...then, on the tiles each box was tested on, the rays that hit it instead.
-    for (auto [bi, k0, k1] : box_runs) {
-      // Only the span of rays still seeing this box after the nearer ones were tested.
+    for (int bi = 0; bi < static_cast<int>(boxes.size()); ++bi) {
+      // Only the span of rays still seeing this box after all were tested.
+      auto [k0, k1] = box_span[bi];
       while (k0 < k1 && hb[k0] != bi) ++k0;
       while (k1 > k0 && hb[k1 - 1] != bi) --k1;
-      if (k0 == k1) continue;
+      if (k0 >= k1) continue;
       box_coords_pass(k0, k1, rx, ry, rlen, rscale, th, hb, ha, boxes[bi], bi, lamp,
                       surface_tex[boxes[bi].texture], tex_u.data(), tex_v.data(), foot.data(),
                       shade.data(), tex_inv.data(), tex_cols.data(), tex_rows.data(),
