@@ -83,6 +83,8 @@ Scenario load_scenario(const std::string& scenario_file) {
   }
   if (auto n = root.optional_child("area")) {
     s.area_size_m = read_vec2(*n, "size_m", s.area_size_m);
+    s.area_center_xy_m = read_vec2(*n, "center_xy_m", s.area_center_xy_m);
+    n->read("height_m", s.area_height_m);
     if (auto t = n->optional_child("floor_texture")) read_texture(*t, s.floor_texture);
     n->finish();
   }
@@ -171,6 +173,9 @@ Scenario load_scenario(const std::string& scenario_file) {
     n->read("diffuse", l.diffuse);
     n->read("light_dir_W", l.light_dir_W);
     n->read("gain", l.gain);
+    n->read("falloff", l.falloff);
+    n->read("lamp_W", l.lamp_W);
+    n->read("lamp_radius_m", l.lamp_radius_m);
     n->validate(l);
     n->finish();
   }
@@ -178,7 +183,10 @@ Scenario load_scenario(const std::string& scenario_file) {
     auto& r = s.randomize;
     n->read("platform_xy_m", r.platform_xy_m);
     n->read("platform_yaw_deg", r.platform_yaw_deg);
+    n->read("start_clearance_m", r.start_clearance_m);
     n->read("light_gain", r.light_gain);
+    n->read("light_dir_deg", r.light_dir_deg);
+    n->read("light_falloff", r.light_falloff);
     n->validate(r);
     n->finish();
   }

@@ -70,6 +70,11 @@ struct PlatformParams {
   void validate() const;
 };
 
+/// Distance in the floor plane from `p_xy` to the footprint of a platform whose footprint is
+/// centred at `center_xy` and turned by `yaw_rad`; 0 inside it [m].
+double footprint_distance_m(const PlatformParams& platform, const Vector2d& center_xy,
+                            double yaw_rad, const Vector2d& p_xy);
+
 /// A wall facing -x (approached from smaller x), optionally with a rectangular opening (paper
 /// 4.1: 60 x 60 cm) and a room behind it.
 struct WallParams {
@@ -134,6 +139,13 @@ struct LightingParams {
   double diffuse = 0.35;                        ///< added for a surface facing the light
   Vector3d light_dir_W = Vector3d(0.3, 0.2, 1.0);  ///< towards the light (normalised on use)
   double gain = 1.0;                            ///< overall brightness [-]
+  /// Uneven illumination of a hall lit from one side of the ceiling: the light falls off with the
+  /// distance d from `lamp_W` as 1 + falloff (2 r^2 / (r^2 + d^2) - 1), r = lamp_radius_m: 1 +
+  /// falloff under the lamp, 1 at d = r, towards 1 - falloff far away. Smooth and fixed in the
+  /// world, so features still match from frame to frame. 0: even light.
+  double falloff = 0.0;                         ///< depth of the falloff [-], in [0, 0.5]
+  Vector3d lamp_W = Vector3d(0.0, 0.0, 3.0);    ///< brightest point of the light [m]
+  double lamp_radius_m = 3.0;                   ///< distance of the half-way illumination [m]
   void validate() const;
 };
 
@@ -141,7 +153,15 @@ struct LightingParams {
 struct RandomizeParams {
   double platform_xy_m = 0.0;     ///< uniform +- offset of the platform centre [m]
   double platform_yaw_deg = 0.0;  ///< uniform +- yaw of the platform [deg]
+  /// A randomised platform keeps its footprint this far from the start position in xy: the
+  /// vehicle standing there must not have a rotor over it (the largest preset's rotor-tip
+  /// radius is 0.375 m) [m]
+  double start_clearance_m = 0.5;
   double light_gain = 0.0;        ///< uniform +- relative change of the brightness [-]
+  double light_dir_deg = 0.0;     ///< uniform +- turn of the light direction about world z [deg]
+  /// Uniform [0, light_falloff] depth of the lamp's falloff (LightingParams::falloff), the lamp
+  /// anywhere above the flying area (at its configured height) [-]
+  double light_falloff = 0.0;
   void validate() const;
 };
 
@@ -150,7 +170,11 @@ struct Scenario {
   std::string file;                 ///< where it was loaded from (for messages only)
   double physics_dt_s = 0.001;      ///< fixed physics step [s] (1 kHz or finer)
   int64_t start_utime = 1700000000000000;  ///< sim clock at the start [us]
-  Vector2d area_size_m = Vector2d(6.0, 6.0);  ///< nominal flying area (documentation; not enforced)
+  /// The flying area: where the motion capture tracks the vehicle and nothing is in the way.
+  /// Leaving it is reported in SIM_TRUTH (out_of_area) and fails the run.
+  Vector2d area_size_m = Vector2d(6.0, 6.0);    ///< x, y extent [m]
+  Vector2d area_center_xy_m = Vector2d::Zero(); ///< centre of the area on the floor [m]
+  double area_height_m = 4.0;                   ///< ceiling of the area [m]
   TextureSpec floor_texture{"noise", 1, 1024, 0.004, 120, 1.0, 0.03, {}, {}};
   std::optional<PlatformParams> platform;
   std::optional<WallParams> wall;

@@ -12,6 +12,14 @@ namespace {
 bool is_pow2(int n) { return n > 0 && (n & (n - 1)) == 0; }
 }  // namespace
 
+double footprint_distance_m(const PlatformParams& platform, const Vector2d& center_xy,
+                            double yaw_rad, const Vector2d& p_xy) {
+  const Vector2d d = p_xy - center_xy;
+  const double c = std::cos(yaw_rad), s = std::sin(yaw_rad);
+  const Vector2d q(c * d.x() + s * d.y(), -s * d.x() + c * d.y());  // in the platform's frame
+  return (q.cwiseAbs() - 0.5 * platform.size_m.head<2>()).cwiseMax(0.0).norm();
+}
+
 void VehicleParams::validate() const {
   param_check(mass_kg > 0.05 && mass_kg < 20, "mass_kg", mass_kg, "must be in (0.05, 20) kg");
   param_check(inertia_kgm2.minCoeff() > 0, "inertia_kgm2", inertia_kgm2.transpose(),
@@ -136,6 +144,9 @@ void LightingParams::validate() const {
   param_check(light_dir_W.norm() > 1e-6, "light_dir_W", light_dir_W.transpose(),
               "must not be zero");
   param_check(gain > 0 && gain < 4, "gain", gain, "must be in (0, 4)");
+  param_check(falloff >= 0 && falloff <= 0.5, "falloff", falloff, "must be in [0, 0.5]");
+  param_check(lamp_W.allFinite(), "lamp_W", lamp_W.transpose(), "must be finite");
+  param_check(lamp_radius_m > 0, "lamp_radius_m", lamp_radius_m, "must be > 0");
 }
 
 void RandomizeParams::validate() const {
@@ -143,14 +154,33 @@ void RandomizeParams::validate() const {
   param_check(platform_yaw_deg >= 0 && platform_yaw_deg <= 180, "platform_yaw_deg",
               platform_yaw_deg, "must be in [0, 180]");
   param_check(light_gain >= 0 && light_gain < 1, "light_gain", light_gain, "must be in [0, 1)");
+  param_check(start_clearance_m >= 0, "start_clearance_m", start_clearance_m, "must be >= 0");
+  param_check(light_dir_deg >= 0 && light_dir_deg <= 180, "light_dir_deg", light_dir_deg,
+              "must be in [0, 180]");
+  param_check(light_falloff >= 0 && light_falloff <= 0.5, "light_falloff", light_falloff,
+              "must be in [0, 0.5]");
 }
 
 void Scenario::validate() const {
   param_check(physics_dt_s > 0 && physics_dt_s <= 0.001, "physics_dt_s", physics_dt_s,
               "must be in (0, 0.001] s (1 kHz or finer)");
   param_check(start_utime >= 0, "start_utime", start_utime, "must be >= 0");
-  param_check(area_size_m.minCoeff() > 0, "area_size_m", area_size_m.transpose(),
+  param_check(area_size_m.minCoeff() > 0, "area.size_m", area_size_m.transpose(),
               "must be positive");
+  param_check(area_height_m > 0, "area.height_m", area_height_m, "must be > 0");
+  const Vector2d start_off = start_position_m.head<2>() - area_center_xy_m;
+  param_check((start_off.cwiseAbs() - 0.5 * area_size_m).maxCoeff() < 0, "start.position_m",
+              start_position_m.transpose(), "must be inside the flying area (area.center_xy_m, area.size_m)");
+  if (platform) {
+    // Seeded placements are drawn until one clears the start; the nominal one must, so one does.
+    const double d = footprint_distance_m(*platform, platform->center_xy_m,
+                                          platform->yaw_deg * M_PI / 180.0, start_position_m.head<2>());
+    const bool randomised = randomize.platform_xy_m > 0 || randomize.platform_yaw_deg > 0;
+    param_check(!randomised || d >= randomize.start_clearance_m,
+                "platform.center_xy_m", platform->center_xy_m.transpose(),
+                "the platform must stand at least randomize.start_clearance_m = " +
+                    std::to_string(randomize.start_clearance_m) + " m from the start position");
+  }
 }
 
 }  // namespace alight::sim

@@ -4,8 +4,10 @@
 // the camera model, so lens distortion is rendered exactly) is intersected analytically with
 // the floor plane and the boxes; the nearest hit is textured with trilinear mip-mapping, the
 // level chosen from the pixel's footprint on the surface (distance and incidence), and shaded by
-// a Lambertian light. Rays are precomputed once per camera model; per frame, boxes are culled
-// against 16x16-pixel tiles by the bounds of their projection.
+// a Lambertian light times the lamp's falloff (Scene::illumination). Rays are precomputed once
+// per camera model; per frame, boxes are culled against 16x16-pixel tiles by the bounds of their
+// projection. Each row is rendered in passes over its rays that compile to SIMD code
+// (renderer.cpp).
 
 #include <vector>
 

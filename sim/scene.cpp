@@ -14,13 +14,53 @@ bool Scene::near_opening_frame(const Vector3d& p_W) const {
   return std::max(dy, dz) < frame_margin_m;
 }
 
-Scene build_scene(const Scenario& sc, uint64_t seed) {
-  Scene scene;
+SeededLayout draw_layout(const Scenario& sc, uint64_t seed) {
+  SeededLayout out;
+  // The draws of brightness and platform come first and in this order, so that seeds whose first
+  // placement was already clear of the start keep the scene they always had.
   std::mt19937_64 rng(seed ^ 0x5CE7E5CE7EULL);
   std::uniform_real_distribution<double> sym(-1.0, 1.0);
+  out.lighting = sc.lighting;
+  out.lighting.gain *= 1.0 + sc.randomize.light_gain * sym(rng);
 
-  scene.lighting = sc.lighting;
-  scene.lighting.gain *= 1.0 + sc.randomize.light_gain * sym(rng);
+  if (sc.platform) {
+    const PlatformParams& p = *sc.platform;
+    const RandomizeParams& r = sc.randomize;
+    out.platform_center_xy_m = p.center_xy_m;
+    out.platform_yaw_rad = p.yaw_deg * M_PI / 180.0;
+    if (r.platform_xy_m > 0 || r.platform_yaw_deg > 0) {
+      // Rejection keeps the placements uniform over the clear part of the range.
+      for (int attempt = 0; attempt < 1000; ++attempt) {
+        const Vector2d xy = p.center_xy_m + r.platform_xy_m * Vector2d(sym(rng), sym(rng));
+        const double yaw = (p.yaw_deg + r.platform_yaw_deg * sym(rng)) * M_PI / 180.0;
+        if (footprint_distance_m(p, xy, yaw, sc.start_position_m.head<2>()) >= r.start_clearance_m) {
+          out.platform_center_xy_m = xy;
+          out.platform_yaw_rad = yaw;
+          break;
+        }
+      }
+    }
+  }
+
+  // Lighting variation from a stream of its own: it leaves the draws above as they were.
+  std::mt19937_64 light_rng(seed ^ 0x11647ULL * 0x9E3779B97F4A7C15ULL);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  LightingParams& l = out.lighting;
+  const double turn = sc.randomize.light_dir_deg * (2.0 * unit(light_rng) - 1.0) * M_PI / 180.0;
+  l.light_dir_W = rotation_from_rpy(0, 0, turn) * l.light_dir_W;
+  if (sc.randomize.light_falloff > 0) {
+    l.falloff = sc.randomize.light_falloff * unit(light_rng);
+    const Vector2d u(unit(light_rng) - 0.5, unit(light_rng) - 0.5);
+    const Vector2d xy = sc.area_center_xy_m + sc.area_size_m.cwiseProduct(u);
+    l.lamp_W = Vector3d(xy.x(), xy.y(), l.lamp_W.z());
+  }
+  return out;
+}
+
+Scene build_scene(const Scenario& sc, uint64_t seed) {
+  Scene scene;
+  const SeededLayout layout = draw_layout(sc, seed);
+  scene.lighting = layout.lighting;
 
   scene.textures.push_back(Texture::make(sc.floor_texture, seed));
   scene.floor_texture = 0;
@@ -29,8 +69,8 @@ Scene build_scene(const Scenario& sc, uint64_t seed) {
     const PlatformParams& p = *sc.platform;
     Box b;
     b.kind = Box::Kind::kPlatform;
-    const Vector2d xy = p.center_xy_m + sc.randomize.platform_xy_m * Vector2d(sym(rng), sym(rng));
-    b.set_yaw((p.yaw_deg + sc.randomize.platform_yaw_deg * sym(rng)) * M_PI / 180.0);
+    const Vector2d xy = layout.platform_center_xy_m;
+    b.set_yaw(layout.platform_yaw_rad);
     b.half_size_m = 0.5 * p.size_m;
     b.center_W = Vector3d(xy.x(), xy.y(), 0.5 * p.size_m.z());
     b.texture = static_cast<int>(scene.textures.size());

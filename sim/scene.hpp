@@ -55,6 +55,12 @@ struct Scene {
   int floor_texture = 0;
   std::vector<Box> boxes;
   LightingParams lighting;  ///< after randomisation
+
+  /// The lamp's falloff at a point (LightingParams::falloff): multiplies the Lambertian shade.
+  double illumination(const Vector3d& p_W) const {
+    const double r2 = lighting.lamp_radius_m * lighting.lamp_radius_m;
+    return 1.0 + lighting.falloff * (2.0 * r2 / (r2 + (p_W - lighting.lamp_W).squaredNorm()) - 1.0);
+  }
   std::optional<PlatformTruth> platform;
   std::optional<OpeningTruth> opening;
   bool has_wall = false;
@@ -65,8 +71,20 @@ struct Scene {
   bool near_opening_frame(const Vector3d& p_W) const;
 };
 
-/// Builds the scene of a scenario: textures from the seed, platform pose and lighting
-/// randomised by the seed within the scenario's `randomize:` ranges.
+/// What a seed draws within the scenario's `randomize:` ranges (textures aside).
+struct SeededLayout {
+  Vector2d platform_center_xy_m = Vector2d::Zero();  ///< centre of the platform's footprint [m]
+  double platform_yaw_rad = 0.0;
+  LightingParams lighting;  ///< the scenario's lighting, varied
+};
+
+/// The seed's draws, cheap (no textures). A randomised platform is redrawn until its footprint
+/// keeps randomize.start_clearance_m from the start position (the nominal placement if no draw
+/// does), so the vehicle never starts with a rotor over it.
+SeededLayout draw_layout(const Scenario& scenario, uint64_t seed);
+
+/// Builds the scene of a scenario: textures from the seed, platform pose and lighting from
+/// draw_layout().
 Scene build_scene(const Scenario& scenario, uint64_t seed);
 
 }  // namespace alight::sim

@@ -59,6 +59,7 @@ sim_truth_t to_msg(const Truth& t) {
   m.tipped = t.tipped;
   m.collided = t.collided;
   m.n_collisions = t.n_collisions;
+  m.out_of_area = t.out_of_area;
   return m;
 }
 

@@ -4,6 +4,8 @@
 #include <cassert>
 #include <cmath>
 
+#include "common/params.hpp"
+
 namespace alight::sim {
 
 namespace {
@@ -47,6 +49,14 @@ Simulator::Simulator(const Scenario& scenario, const VehicleParams& vehicle, uin
       camera_(std::move(camera)),
       history_(history_params()),
       camera_rng_(substream(seed, 4)) {
+  const double rotor_radius_m = 0.5 * vehicle.rotor_tip_span_m;
+  if (scenario.platform && scenario.randomize.start_clearance_m < rotor_radius_m &&
+      (scenario.randomize.platform_xy_m > 0 || scenario.randomize.platform_yaw_deg > 0))
+    throw ParamError(scenario.file, "randomize.start_clearance_m",
+                     std::to_string(scenario.randomize.start_clearance_m),
+                     "must be at least the rotor-tip radius of vehicle " + vehicle.name + " (" +
+                         std::to_string(rotor_radius_m) + " m): a seeded platform could stand "
+                         "under its rotors at the start");
   const Vector3d& p0 = scenario.start_position_m;
   state_.p_W_B = Vector3d(p0.x(), p0.y(), p0.z() > 0 ? p0.z() : dynamics_->resting_height(0.0));
   state_.q_WB = Quaterniond(rotation_from_rpy(0, 0, scenario.start_yaw_deg * M_PI / 180.0));
@@ -122,6 +132,10 @@ void Simulator::physics_step() {
     if (!wall_contact_) ++n_collisions_;
   }
   wall_contact_ = wall;
+  const Vector2d off = state_.p_W_B.head<2>() - scenario_.area_center_xy_m;
+  if ((off.cwiseAbs() - 0.5 * scenario_.area_size_m).maxCoeff() > 0 ||
+      state_.p_W_B.z() > scenario_.area_height_m)
+    out_of_area_ = true;
   const bool at_rest = !state_.armed && last_.feet_on_platform_top == 4 &&
                        state_.v_W_B.norm() < 0.05 && state_.omega_B.norm() < 0.2;
   rest_s_ = at_rest ? rest_s_ + dt : 0.0;
@@ -221,6 +235,7 @@ Truth Simulator::truth() const {
   t.tipped = tipped_;
   t.collided = collided_;
   t.n_collisions = n_collisions_;
+  t.out_of_area = out_of_area_;
   t.wind_W = scenario_.wind.steady_mps + gust_W_;
   return t;
 }

@@ -39,6 +39,10 @@ struct Truth {
   bool tipped = false;    ///< tilted past 35 deg while touching the floor or platform (sticky)
   bool collided = false;  ///< touched the wall or the opening's frame (sticky)
   int n_collisions = 0;   ///< distinct wall / frame contacts
+  /// The body left the flying area (Scenario::area_*: the motion-capture volume, clear of the
+  /// hall's walls and ceiling) at some time this run (sticky): a real flight would have lost
+  /// tracking or hit the hall there, so the run has failed.
+  bool out_of_area = false;
   Vector3d wind_W = Vector3d::Zero();  ///< wind at the vehicle [m/s]
 };
 
@@ -55,7 +59,8 @@ struct CameraFrame {
 class Simulator {
  public:
   /// `camera`: the camera to render (extrinsics and intrinsics); without it take_camera()
-  /// returns nothing.
+  /// returns nothing. Throws ParamError when the scenario's randomize.start_clearance_m leaves
+  /// less room than the vehicle's rotor-tip radius.
   Simulator(const Scenario& scenario, const VehicleParams& vehicle, uint64_t seed,
             std::optional<CameraRig> camera = std::nullopt);
 
@@ -118,6 +123,7 @@ class Simulator {
   ImuEmulator imu_;
 
   bool landed_ = false, tipped_ = false, collided_ = false, wall_contact_ = false;
+  bool out_of_area_ = false;
   int n_collisions_ = 0;
   double rest_s_ = 0.0;
 

@@ -181,7 +181,7 @@ void Texture::build_pyramid(const cv::Mat& base) {
   cv::Mat cur = base;
   while (true) {
     Level L;
-    L.pixels = cur;
+    L.pixels = cur.isContinuous() ? cur : cur.clone();  // the renderer indexes it as one array
     L.mask_x = cur.cols - 1;
     L.mask_y = cur.rows - 1;
     levels_.push_back(L);

@@ -40,23 +40,29 @@ class Texture {
     return a + f * (b - a);
   }
 
+  /// Level i of the pyramid: continuous, (cols >> i) x (rows >> i).
   const cv::Mat& level(int i) const { return levels_[i].pixels; }
   int n_levels() const { return static_cast<int>(levels_.size()); }
   double texel_m() const { return 1.0 / inv_texel_m_; }
+  /// Texels per metre, exactly as sample() uses it (the renderer's batched sampling mirrors it).
+  float inv_texel_m() const { return inv_texel_m_; }
+
+  static float fast_log2(float x) {
+    // Mip level selection needs about 0.1 of a level: log2 from the float's exponent and a
+    // quadratic in its mantissa.
+    // Signed bits: the renderer's SIMD passes call this, and GCC 12 does not vectorise the
+    // unsigned-to-int conversion (& 255 makes the shift's sign irrelevant).
+    const int bits = std::bit_cast<int>(x);
+    const int e = ((bits >> 23) & 255) - 127;
+    const float m = std::bit_cast<float>((bits & 0x7fffff) | 0x3f800000) - 1.f;  // [0, 1)
+    return static_cast<float>(e) + m * (1.3465f - 0.3465f * m);
+  }
 
  private:
   struct Level {
     cv::Mat pixels;  // CV_8U: a quarter of the memory traffic of float
     int mask_x = 0, mask_y = 0;
   };
-  static float fast_log2(float x) {
-    // Mip level selection needs about 0.1 of a level: log2 from the float's exponent and a
-    // quadratic in its mantissa.
-    const uint32_t bits = std::bit_cast<uint32_t>(x);
-    const int e = static_cast<int>((bits >> 23) & 255u) - 127;
-    const float m = std::bit_cast<float>((bits & 0x7fffffu) | 0x3f800000u) - 1.f;  // [0, 1)
-    return static_cast<float>(e) + m * (1.3465f - 0.3465f * m);
-  }
   float bilinear(int l, float x, float y) const {
     const Level& L = levels_[l];
     x -= 0.5f;

@@ -103,10 +103,13 @@ std::vector<std::string> MissionMonitor::add(const sim_truth_t& t) {
   std::vector<std::string> out;
   const bool newly_tipped = t.tipped && !(truth_ && truth_->tipped);
   const bool newly_collided = t.collided && !(truth_ && truth_->collided);
+  const bool newly_out = t.out_of_area && !(truth_ && truth_->out_of_area);
   truth_ = t;
   if (end_ != End::kNone) return out;
   if (!t0_) t0_ = t.utime;
   if (newly_tipped) finish(End::kFailure, "the vehicle tipped off the platform edge", out);
+  if (newly_out && end_ == End::kNone)
+    finish(End::kFailure, "the vehicle left the flying area", out);
   if (end_ == End::kNone && landed_utime_) check_landed(t.utime, out);
   if (newly_collided)
     out.push_back(stamp(t.utime) + "contact with the wall or the opening's frame");

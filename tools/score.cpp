@@ -84,6 +84,7 @@ Score Scorer::result() const {
   s.scenario = truth.scenario;
   s.collided = truth.collided;
   s.n_collisions = truth.n_collisions;
+  s.out_of_area = truth.out_of_area;
   s.mission = mission_ ? mission_
                        : (truth.has_platform ? target_t::MISSION_LANDING
                                              : (truth.has_opening ? target_t::MISSION_INGRESS : 0));
@@ -127,6 +128,12 @@ Score Scorer::result() const {
   } else {
     s.outcome = "incomplete";
   }
+  // Out there a real flight would have lost its motion capture or hit the hall: whatever
+  // happened afterwards does not count.
+  if (truth.out_of_area && s.mission != 0) {
+    s.outcome = "left_area";
+    s.success = false;
+  }
   return s;
 }
 
@@ -154,6 +161,7 @@ std::vector<std::pair<std::string, std::string>> Score::fields() const {
   f.emplace_back("vision_found", std::to_string(vision_found));
   f.emplace_back("collided", collided ? "true" : "false");
   f.emplace_back("n_collisions", std::to_string(n_collisions));
+  f.emplace_back("out_of_area", out_of_area ? "true" : "false");
   return f;
 }
 

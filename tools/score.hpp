@@ -18,7 +18,7 @@ struct Score {
   std::string scenario;
   int mission = 0;          ///< target_t::MISSION_*
   bool success = false;     ///< landed on the platform / flew through without contact
-  std::string outcome;      ///< landed, tipped, not_landed, through, collided, incomplete
+  std::string outcome;      ///< landed, tipped, not_landed, through, collided, left_area, incomplete
   std::string final_phase;  ///< last AUTONOMY_STATUS phase name
   std::optional<double> mission_time_s;             ///< GO (detection starts) to LANDED / DONE
   std::optional<double> touchdown_lateral_error_m;  ///< body origin to platform centre, in xy
@@ -32,6 +32,7 @@ struct Score {
   int vision_found = 0;                             ///< ... with a target
   bool collided = false;
   int n_collisions = 0;
+  bool out_of_area = false;  ///< the vehicle left the flying area (fails any mission)
 
   /// `key: value` lines (absent figures are left out).
   std::string to_text() const;

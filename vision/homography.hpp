@@ -5,7 +5,9 @@
 // (Hartley 1997), with degenerate-sample rejection (collinear triples, orientation flips as in
 // OpenCV's checkSubset), MSAC scoring (Torr & Zisserman 2000), local optimisation of each new
 // best model (Chum, Matas & Kittler 2003), adaptive stopping with an iteration cap, and a final
-// least-squares DLT + Gauss-Newton refinement of the transfer error on the inliers. Seeded.
+// least-squares DLT on the inliers followed by a Cauchy-weighted (IRLS; Holland & Welsch 1977)
+// Levenberg-Marquardt refinement of the transfer error, robust to the heavy tail of real
+// keypoint residuals (see refine_transfer in homography.cpp). Seeded.
 //
 // Second plane: sample_locally draws the other three points of a sample among the first one's
 // nearest neighbours in image 1, and the stopping rule assumes the smallest plane worth finding

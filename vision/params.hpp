@@ -9,7 +9,11 @@ namespace alight::vision {
 
 /// STAR / CenSurE detector (paper 3.1.1; Agrawal, Konolige & Blas, ECCV 2008).
 struct StarParams {
-  int min_size = 1;                 ///< smallest filter index n: inner box 2n+1, outer 4n+1 [px]
+  /// Smallest filter index n: inner box 2n+1, outer 4n+1 [px]. Not 1: the 3 x 3 / 5 x 5
+  /// filter answers to single-pixel texture and noise that a little blur or a 10 % scale
+  /// change removes, so on fine texture (fur, gravel) those peaks took most of the
+  /// max_features budget and were not found again in the other view.
+  int min_size = 2;
   int max_size = 6;                 ///< largest filter index n (border 2n+1 px is skipped)
   double response_threshold = 6.0;  ///< |mean(inner) - mean(ring)| to keep a peak [grey levels]
   double line_threshold = 10.0;     ///< Harris ratio r: reject edges with tr^2/det > (r+1)^2/r
@@ -28,6 +32,10 @@ struct StarParams {
 struct SurfParams {
   double scale_per_size = 0.8;  ///< SURF scale s per CenSurE filter half-width (n + 0.5) [-]
   double min_scale = 1.2;       ///< lower bound of s (Haar size 2s >= 2 px) [px]
+  /// MU-SURF sub-regions (Agrawal, Konolige & Blas 2008, sec. 4): overlapping by 2s, each
+  /// Gaussian-weighted about its centre, and the 4 x 4 grid weighted again; false: SURF's
+  /// disjoint 5s x 5s sub-regions under one window Gaussian.
+  bool overlapping_subregions = true;
   void validate() const;
 };
 
@@ -61,7 +69,11 @@ struct HomographyParams {
   double confidence = 0.995;  ///< adaptive stopping: probability of one all-inlier sample [-]
   int max_iterations = 2000;  ///< hard cap of RANSAC samples [-]
   int min_inliers = 12;       ///< fewer inliers: no plane [-]
-  int refine_iterations = 5;  ///< Gauss-Newton steps on the inliers' transfer error [-]
+  int refine_iterations = 5;  ///< Levenberg-Marquardt steps on the inliers' transfer error [-]
+  /// Final refinement: Cauchy-weighted (IRLS) instead of plain least squares over the inliers,
+  /// its scale from their median residual, so near-miss matches just inside threshold_px pull
+  /// less (Holland & Welsch 1977).
+  bool robust_refinement = true;
   /// Second plane (3.2): draw the 3 other points of a sample among the k nearest neighbours of
   /// the first in image 1 (a platform is compact), which also bounds the work when no second
   /// plane exists: stop once a plane of min_inliers would have been sampled with `confidence`.

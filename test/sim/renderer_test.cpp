@@ -188,6 +188,67 @@ TEST(SimRendererTest, TwoViewsOfTheFloorAreRelatedByThePlaneHomography) {
   EXPECT_LT(worst, 0.3);
 }
 
+TEST(SimRendererTest, TheLampsFalloffIsFixedInTheWorldAndFramesStillMatch) {
+  const Scene even = build_scene(test::quiet(test::scenario("landing_none")), 3);
+  Scene lit = even;
+  lit.lighting.falloff = 0.3;  // beyond the scenarios' 0.2
+  lit.lighting.lamp_W = Vector3d(1.0, -0.5, 3.0);
+  const CameraModel model = CameraModel::firefly_mv_4mm();
+  const Renderer renderer(model, 1);
+  const Isometry3d X_WC1 = make_transform(rotation_from_rpy(0.02, 0.03, 0.1) * R_BC_downward(),
+                                          Vector3d(0.3, -0.2, 1.4));
+  const Isometry3d X_WC2 = make_transform(rotation_from_rpy(-0.05, 0.08, 0.3) * R_BC_downward(),
+                                          Vector3d(0.55, -0.05, 1.2));
+  auto radiance = [&](const Scene& scene, const Isometry3d& X_WC) {
+    cv::Mat acc(model.height, model.width, CV_32F, cv::Scalar(0));
+    renderer.accumulate(scene, X_WC, 1.f, acc);
+    return acc;
+  };
+  // Each pixel is brightened or dimmed by the lamp's falloff at the floor point it sees: a
+  // function of the world point alone, so it is the same from any view (no flicker).
+  for (const Isometry3d& X_WC : {X_WC1, X_WC2}) {
+    const cv::Mat a = radiance(even, X_WC), b = radiance(lit, X_WC);
+    double lo = 10, hi = 0;
+    for (int v = 10; v < 480; v += 37) {
+      for (int u = 10; u < 640; u += 41) {
+        const Vector3d d_W = X_WC.linear() * model.ray(Vector2d(u, v));
+        const Vector3d p_W = X_WC.translation() - X_WC.translation().z() / d_W.z() * d_W;
+        const double expected = lit.illumination(p_W);
+        if (a.at<float>(v, u) < 10) continue;  // too dark a texel for a ratio
+        EXPECT_NEAR(b.at<float>(v, u) / a.at<float>(v, u), expected, 1e-3) << u << ", " << v;
+        lo = std::min(lo, expected);
+        hi = std::max(hi, expected);
+      }
+    }
+    EXPECT_GT(hi - lo, 0.01);  // the falloff is there across the view...
+    EXPECT_LT(hi - lo, 0.1);   // ...and gentle, as in a hall
+  }
+  // Vision's features still match between the two views as well as under even light.
+  auto inliers = [&](const Scene& scene) {
+    cv::Mat i1, i2;
+    radiance(scene, X_WC1).convertTo(i1, CV_8U);
+    radiance(scene, X_WC2).convertTo(i2, CV_8U);
+    auto orb = cv::ORB::create(1000);
+    std::vector<cv::KeyPoint> k1, k2;
+    cv::Mat d1, d2;
+    orb->detectAndCompute(i1, cv::noArray(), k1, d1);
+    orb->detectAndCompute(i2, cv::noArray(), k2, d2);
+    std::vector<cv::DMatch> matches;
+    cv::BFMatcher(cv::NORM_HAMMING, true).match(d1, d2, matches);
+    std::vector<cv::Point2f> p1, p2;
+    for (const auto& m : matches) {
+      p1.push_back(k1[m.queryIdx].pt);
+      p2.push_back(k2[m.trainIdx].pt);
+    }
+    cv::Mat mask;
+    cv::findHomography(p1, p2, cv::RANSAC, 1.0, mask);
+    return cv::countNonZero(mask);
+  };
+  const int n_even = inliers(even), n_lit = inliers(lit);
+  EXPECT_GT(n_lit, 100);
+  EXPECT_GT(n_lit, 0.85 * n_even) << n_lit << " inliers under the lamp, " << n_even << " under even light";
+}
+
 TEST(SimRendererTest, TexturesGiveHundredsOfFeaturesOnFloorPlatformAndWall) {
   const CameraModel model = CameraModel::firefly_mv_4mm();
   const Renderer renderer(model, 1);

@@ -86,6 +86,18 @@ TEST(MonitorTest, TipOffTheEdgeIsAFailure) {
   EXPECT_EQ(m.end(), MissionMonitor::End::kFailure);
 }
 
+TEST(MonitorTest, LeavingTheFlyingAreaIsAFailure) {
+  MissionMonitor m;
+  m.add(st(0, autonomy_status_t::PHASE_APPROACH, "APPROACH", 10));
+  EXPECT_TRUE(m.add(truth()).empty());
+  sim_truth_t out = truth();
+  out.out_of_area = true;
+  const auto lines = m.add(out);
+  ASSERT_EQ(lines.size(), 1u);
+  EXPECT_EQ(lines[0], "mission failed: the vehicle left the flying area");
+  EXPECT_EQ(m.end(), MissionMonitor::End::kFailure);
+}
+
 TEST(MonitorTest, HoldAndTimeoutAreFailures) {
   MissionMonitor hold;
   auto s = st(0, autonomy_status_t::PHASE_HOLD, "HOLD");

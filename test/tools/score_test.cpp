@@ -93,6 +93,18 @@ TEST(ScoreTest, TippedLandingFails) {
   EXPECT_EQ(s.outcome, "tipped");
 }
 
+TEST(ScoreTest, LeavingTheFlyingAreaFailsEvenALanding) {
+  Scorer sc = landing_session(false);
+  sim_truth_t out = landing_truth(kT0 + 15'000'000, 1.2, -0.46, 0.24, true);
+  out.out_of_area = true;  // the sim's flag is sticky: it stays set after a landing too
+  sc.add(out);
+  const Score s = sc.result();
+  EXPECT_FALSE(s.success);
+  EXPECT_EQ(s.outcome, "left_area");
+  EXPECT_TRUE(s.out_of_area);
+  EXPECT_NE(s.to_text().find("out_of_area: true"), std::string::npos) << s.to_text();
+}
+
 TEST(ScoreTest, IngressThroughTheOpening) {
   Scorer sc;
   auto truth = [&](int64_t utime, double x, bool collided) {

@@ -27,14 +27,15 @@ constexpr double kDeg = M_PI / 180.0;
 struct PairResult {
   double corner_error_px = 1e9;
   int n_matches = 0, n_inliers = 0;
+  int n_correct = 0;  ///< matches within 1.5 px of the true homography
   bool ok = false;
 };
 
 /// Full front end on two views: detect, describe (pattern angles), match, fit H.
 PairResult run_pair(const cv::Mat& a, const cv::Mat& b, const Matrix3d& H_true, StarParams sp,
-                    double angle_a = 0.0, double angle_b = 0.0) {
+                    double angle_a = 0.0, double angle_b = 0.0, const SurfParams& surf = {},
+                    HomographyParams hp = {}) {
   PairResult r;
-  const SurfParams surf;
   const cv::Mat ia = integral_image(a), ib = integral_image(b);
   const auto ka = detect_star(a, ia, sp), kb = detect_star(b, ib, sp);
   if (!ka || !kb) return r;
@@ -47,8 +48,8 @@ PairResult run_pair(const cv::Mat& a, const cv::Mat& b, const Matrix3d& H_true, 
   for (const auto& mm : m) {
     x1.emplace_back((*ka)[mm.i1].x, (*ka)[mm.i1].y);
     x2.emplace_back((*kb)[mm.i2].x, (*kb)[mm.i2].y);
+    r.n_correct += transfer_error(H_true, x1.back(), x2.back()) < 1.5;
   }
-  HomographyParams hp;
   hp.threshold_px = 1.5;
   const auto fit = fit_homography(x1, x2, hp);
   if (!fit) return r;
@@ -187,26 +188,49 @@ TEST(FeaturesTest, WarpedPhotoCornerErrorIsBelowHalfAPixel) {
 }
 
 // Real photographs (OpenCV's sample images, Debian package opencv-doc, installed by
-// scripts/setup): aerial views like the paper's downward camera and a building facade like its
-// ingress wall, warped by the same known homographies.
-// Not yet met (issue 5 stays open for them): graf1.png at +12 deg x0.9 with blur gives 0.52 px,
-// and baboon.jpg (fur) loses the homography at +12 deg x0.9 (43 inliers at -10 deg x1.1).
+// scripts/setup): aerial views like the paper's downward camera, a building facade like its
+// ingress wall, graffiti on a wall and a baboon's fur (fine, self-similar texture), warped by the
+// same known homographies.
+// graf1 (0.52 px at +12 deg x0.9) and baboon (no homography at +12 deg x0.9) failed here until
+// three changes (see WarpedRealPhotographs* regressions below): the smallest STAR filter n = 1
+// is no longer used (its peaks on fine texture do not survive blur and scale), SURF's
+// sub-regions overlap as in MU-SURF, and the final refinement of H is Cauchy-weighted.
+const std::string kPhotoDir = "/usr/share/doc/opencv-doc/examples/data/";
+
+struct WarpCase {
+  double angle_deg, scale, tilt_x, tilt_y, blur, noise;
+};
+constexpr WarpCase kWarpCases[] = {{5, 1.0, 0, 0, 0, 2},
+                                   {-10, 1.1, 1e-4, 0, 0.5, 2},
+                                   {12, 0.9, 0, -1.5e-4, 0.8, 3},
+                                   {0, 1.2, 1e-4, 1e-4, 0, 4}};
+
+/// Two views of a photograph: the unrotated one, and the one warped by case c; H_true maps the
+/// first to the second.
+struct PhotoPair {
+  cv::Mat a, b;
+  Matrix3d H_true;
+};
+PhotoPair photo_pair(const cv::Mat& src, const WarpCase& c) {
+  const Matrix3d H1 = view_homography(src.cols, src.rows, 0.0, 1.0, 0, 0, 0, 0);
+  const Matrix3d H2 =
+      view_homography(src.cols, src.rows, c.angle_deg * kDeg, c.scale, 15, -10, c.tilt_x, c.tilt_y);
+  return {view_of(src, H1, 0, 2.0, 1), view_of(src, H2, c.blur, c.noise, 2), H2 * H1.inverse()};
+}
+
+cv::Mat load_photo(const char* name) {
+  const cv::Mat src = cv::imread(kPhotoDir + name, cv::IMREAD_GRAYSCALE);
+  EXPECT_FALSE(src.empty()) << kPhotoDir << name << " missing: scripts/setup installs opencv-doc";
+  return src;
+}
+
 TEST(FeaturesTest, WarpedRealPhotographsCornerErrorIsBelowHalfAPixel) {
-  const std::string dir = "/usr/share/doc/opencv-doc/examples/data/";
-  struct Case {
-    double angle_deg, scale, tilt_x, tilt_y, blur, noise;
-  };
-  for (const char* name : {"aero1.jpg", "aero3.jpg", "building.jpg"}) {
-    const cv::Mat src = cv::imread(dir + name, cv::IMREAD_GRAYSCALE);
-    ASSERT_FALSE(src.empty()) << dir << name << " missing: scripts/setup installs opencv-doc";
-    const Matrix3d H1 = view_homography(src.cols, src.rows, 0.0, 1.0, 0, 0, 0, 0);
-    const cv::Mat a = view_of(src, H1, 0, 2.0, 1);
-    for (const Case c : {Case{5, 1.0, 0, 0, 0, 2}, Case{-10, 1.1, 1e-4, 0, 0.5, 2},
-                         Case{12, 0.9, 0, -1.5e-4, 0.8, 3}, Case{0, 1.2, 1e-4, 1e-4, 0, 4}}) {
-      const Matrix3d H2 = view_homography(src.cols, src.rows, c.angle_deg * kDeg, c.scale, 15,
-                                          -10, c.tilt_x, c.tilt_y);
-      const cv::Mat b = view_of(src, H2, c.blur, c.noise, 2);
-      const PairResult r = run_pair(a, b, H2 * H1.inverse(), StarParams{});
+  for (const char* name : {"aero1.jpg", "aero3.jpg", "building.jpg", "graf1.png", "baboon.jpg"}) {
+    const cv::Mat src = load_photo(name);
+    ASSERT_FALSE(src.empty());
+    for (const WarpCase& c : kWarpCases) {
+      const PhotoPair p = photo_pair(src, c);
+      const PairResult r = run_pair(p.a, p.b, p.H_true, StarParams{});
       ASSERT_TRUE(r.ok) << name << " " << c.angle_deg;
       EXPECT_LT(r.corner_error_px, 0.5) << name << " angle " << c.angle_deg << " scale " << c.scale;
       EXPECT_GT(r.n_inliers, 50) << name << " " << c.angle_deg;
@@ -214,6 +238,73 @@ TEST(FeaturesTest, WarpedRealPhotographsCornerErrorIsBelowHalfAPixel) {
                   c.angle_deg, c.scale, r.corner_error_px, r.n_matches, r.n_inliers);
     }
   }
+}
+
+// Regression (graf1 / baboon): SURF's disjoint sub-regions lost the correct match of a point
+// on fine texture under 12 deg of rotation, x0.9 scale and blur; MU-SURF's overlapping,
+// Gaussian-weighted ones keep it.
+TEST(FeaturesTest, WarpedRealPhotographsOverlappingSubRegionsGiveMoreCorrectMatches) {
+  const WarpCase& c = kWarpCases[2];  // +12 deg, x0.9, tilted, blurred, noisy
+  int overlapping = 0, disjoint = 0;
+  for (const char* name : {"graf1.png", "baboon.jpg", "aero3.jpg"}) {
+    const cv::Mat src = load_photo(name);
+    ASSERT_FALSE(src.empty());
+    const PhotoPair p = photo_pair(src, c);
+    SurfParams surf;
+    const PairResult o = run_pair(p.a, p.b, p.H_true, StarParams{}, 0, 0, surf);
+    surf.overlapping_subregions = false;
+    const PairResult d = run_pair(p.a, p.b, p.H_true, StarParams{}, 0, 0, surf);
+    std::printf("%-11s correct matches: overlapping %d of %d, disjoint %d of %d\n", name,
+                o.n_correct, o.n_matches, d.n_correct, d.n_matches);
+    EXPECT_GT(o.n_correct, d.n_correct) << name;
+    overlapping += o.n_correct, disjoint += d.n_correct;
+  }
+  EXPECT_GT(overlapping, 1.2 * disjoint);
+}
+
+// Regression (baboon): with the 3 x 3 / 5 x 5 filter (min_size 1) the fur's single-pixel peaks
+// filled the feature budget and did not survive blur and scale (with SURF's sub-regions 7
+// correct matches and no homography; with MU-SURF's about 25). Without it the same budget goes
+// to blobs that are found again.
+TEST(FeaturesTest, WarpedRealPhotographsSmallestFilterOnFineTextureLosesTheHomography) {
+  const cv::Mat src = load_photo("baboon.jpg");
+  ASSERT_FALSE(src.empty());
+  const PhotoPair p = photo_pair(src, kWarpCases[2]);
+  StarParams sp;
+  const PairResult two = run_pair(p.a, p.b, p.H_true, sp);
+  sp.min_size = 1;
+  const PairResult one = run_pair(p.a, p.b, p.H_true, sp);
+  std::printf(
+      "baboon +12 deg: min_size 2: %d correct of %d matches, %d inliers, %.3f px; "
+      "min_size 1: %d correct of %d, %d inliers\n",
+      two.n_correct, two.n_matches, two.n_inliers, two.corner_error_px, one.n_correct,
+      one.n_matches, one.n_inliers);
+  ASSERT_TRUE(two.ok);
+  EXPECT_GT(two.n_correct, 2 * one.n_correct);
+  EXPECT_LT(two.corner_error_px, 0.5);
+}
+
+// Regression (graf1): the residuals of real matches are heavy-tailed, and the plain
+// least-squares refinement let the near misses just inside the inlier threshold pull H (0.52 px
+// at +12 deg). Summed over the photographs and cases, the Cauchy-weighted refinement is better.
+TEST(FeaturesTest, WarpedRealPhotographsRobustRefinementLowersTheCornerError) {
+  double robust = 0, plain = 0;
+  for (const char* name : {"graf1.png", "building.jpg", "aero3.jpg"}) {
+    const cv::Mat src = load_photo(name);
+    ASSERT_FALSE(src.empty());
+    for (const WarpCase& c : kWarpCases) {
+      const PhotoPair p = photo_pair(src, c);
+      HomographyParams hp;
+      const PairResult r = run_pair(p.a, p.b, p.H_true, StarParams{}, 0, 0, SurfParams{}, hp);
+      hp.robust_refinement = false;
+      const PairResult l = run_pair(p.a, p.b, p.H_true, StarParams{}, 0, 0, SurfParams{}, hp);
+      ASSERT_TRUE(r.ok && l.ok) << name;
+      robust += r.corner_error_px, plain += l.corner_error_px;
+    }
+  }
+  std::printf("sum of corner errors over 12 warps: robust %.3f px, least squares %.3f px\n", robust,
+              plain);
+  EXPECT_LT(robust, 0.95 * plain);
 }
 
 TEST(FeaturesTest, SubPixelStarImprovesCornerErrorAndInliers) {
