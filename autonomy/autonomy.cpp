@@ -47,6 +47,10 @@ std::string fmt(double v, int precision = 3) {
   return os.str();
 }
 
+// Vantages at least this far from where the vehicle is: the vision needs a baseline of a few
+// centimetres (waypoint.min_baseline_m) between its reference and current image [m].
+constexpr double kMinVantageStepM = 0.08;
+
 double median(std::vector<double> v) {
   if (v.empty()) return 0.0;
   const size_t mid = v.size() / 2;
@@ -255,7 +259,11 @@ void Autonomy::next_vantage() {
   const Vector3d mu = estimator_.n() > 0 ? estimator_.mean() : first_sighting_W_;
   const Matrix3d S = estimator_.covariance();
   if (mission_ == Mission::kLanding) {
-    const Vector2d xy = sampler_.draw(mu.head<2>(), S.topLeftCorner<2, 2>(), estimator_.n());
+    // A vantage next to the current position gives the vision no baseline: redraw (bounded).
+    const Vector2d here = pose_ ? Vector2d(pose_->p_W_B.head<2>()) : Vector2d(mu.head<2>());
+    Vector2d xy = sampler_.draw(mu.head<2>(), S.topLeftCorner<2, 2>(), estimator_.n());
+    for (int k = 0; k < 10 && (xy - here).norm() < kMinVantageStepM; ++k)
+      xy = sampler_.draw(mu.head<2>(), S.topLeftCorner<2, 2>(), estimator_.n());
     vantage_W_ = Vector3d(xy.x(), xy.y(), params_.detection.landing_height_m);
   } else {
     // In the plane parallel to the wall at the standoff: along-wall t and vertical z.
@@ -433,8 +441,11 @@ void Autonomy::step_phase(double dt_s) {
             add_waypoint(X_W);
             if (phase_ != Phase::kRefinement) return;  // converged (or held)
             next_vantage();
+          } else {
+            // Nothing seen here: hovering does not help (the vision's baseline shrinks to zero
+            // as the reference frames age), moving on does.
+            next_vantage();
           }
-          // else: stay until a frame comes (lost_timeout_s applies)
         }
       } else if (seconds(now_utime_ - vantage_since_utime_) > R.vantage_timeout_s) {
         next_vantage();

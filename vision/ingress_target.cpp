@@ -32,8 +32,14 @@ int cell_of(const std::vector<double>& cuts, double x) {
 
 void line_cuts(const cv::Mat& image, const IngressParams& p, std::vector<double>* x_cuts,
                std::vector<double>* y_cuts, std::vector<cv::Vec4i>* kept) {
-  cv::Mat edges;
-  cv::Canny(image, edges, p.canny_low, p.canny_high);
+  // Smoothing first: the wall's own texture gives short edges everywhere, the opening's border
+  // one long straight edge that survives the blur while the texture's break up.
+  cv::Mat smooth, edges;
+  if (p.blur_sigma_px > 0)
+    cv::GaussianBlur(image, smooth, cv::Size(), p.blur_sigma_px);
+  else
+    smooth = image;
+  cv::Canny(smooth, edges, p.canny_low, p.canny_high);
   std::vector<cv::Vec4i> segments;
   cv::HoughLinesP(edges, segments, 1.0, CV_PI / 180.0, p.hough_threshold,
                   p.hough_min_length_frac * image.cols, p.hough_max_gap_px);
@@ -124,7 +130,10 @@ TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image
           if (block(in, i0, j0, i1, j1) > 0) break;  // growing j1 only adds inliers
           const int n = block(off, i0, j0, i1, j1);
           const double area = (xc[i1] - xc[i0]) * (yc[j1] - yc[j0]);
-          if (n > best || (n == best && n > 0 && area < best_area)) {
+          // Ties: the larger block. The frame's inner faces (wall thickness) hold no wall
+          // inliers, so their far edges bound a smaller block with the same features; the
+          // opening in the wall plane is bounded by the near edges.
+          if (n > best || (n == best && n > 0 && area > best_area)) {
             best = n, best_area = area;
             b[0] = i0, b[1] = j0, b[2] = i1, b[3] = j1;
           }

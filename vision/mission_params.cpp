@@ -25,6 +25,8 @@ void IngressParams::validate() const {
   param_check(max_line_tilt_deg > 0 && max_line_tilt_deg < 45, "ingress.max_line_tilt_deg",
               max_line_tilt_deg, "must be in (0, 45)");
   param_check(merge_px >= 0, "ingress.merge_px", merge_px, "must be >= 0");
+  param_check(blur_sigma_px >= 0 && blur_sigma_px <= 10, "ingress.blur_sigma_px", blur_sigma_px,
+              "must be in [0, 10]");
   param_check(min_outliers >= 1, "ingress.min_outliers", min_outliers, "must be >= 1");
   param_check(min_size_m > 0, "ingress.min_size_m", min_size_m, "must be > 0");
 }
@@ -123,6 +125,7 @@ NodeParams load_node_params(const ParamNode& root) {
     c->finish();
   }
   if (auto c = n.optional_child("ingress")) {
+    c->read("blur_sigma_px", q.ingress.blur_sigma_px);
     c->read("canny_low", q.ingress.canny_low);
     c->read("canny_high", q.ingress.canny_high);
     c->read("hough_threshold", q.ingress.hough_threshold);

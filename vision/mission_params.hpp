@@ -36,10 +36,11 @@ struct LandingParams {
 /// Ingress target (paper 3.3): Hough lines split the image into cells; the block of cells
 /// with no wall inliers and the most off-wall features is the opening.
 struct IngressParams {
+  double blur_sigma_px = 2.0;               ///< Gaussian smoothing before Canny (0: none) [px]
   double canny_low = 50, canny_high = 150;  ///< Canny hysteresis thresholds [grey levels]
   int hough_threshold = 60;                 ///< accumulator votes for a segment [-]
   double hough_min_length_frac = 0.12;      ///< shortest segment, share of the image width [-]
-  double hough_max_gap_px = 6;              ///< largest gap joined within a segment [px]
+  double hough_max_gap_px = 20;             ///< largest gap joined within a segment [px]
   double max_line_tilt_deg = 8;             ///< near-vertical / near-horizontal within [deg]
   double merge_px = 6;                      ///< cuts closer than this are one cut [px]
   int min_outliers = 8;                     ///< fewer off-wall features in the block: no opening

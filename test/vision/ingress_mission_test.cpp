@@ -16,8 +16,11 @@ using testing::run;
 
 class IngressMissionTest : public ::testing::TestWithParam<uint64_t> {};
 
-// DISABLED until the ingress detector finds the opening in rendered views (issue 6 is open):
-// on both seeds the pipeline ends without a target (see the closing note of 2026-11-22).
+// DISABLED until the ingress detector finds the opening in both rendered views (issue 6 is
+// open). State on 2026-11-23: with features spread over a grid, smoothing before Canny and
+// 20 px Hough gaps, seed 2 passes centre (1.1 cm) and width (58.9 cm) but measures the height
+// 56 cm (the cut lies on the far edge of the frame's 10 cm inner face); seed 1 misses the
+// opening's top and left edges in Canny (low contrast against the wall's blobs): no opening.
 // Run it with --gtest_also_run_disabled_tests while working on vision/ingress_target.cpp.
 TEST_P(IngressMissionTest, DISABLED_OpeningWidthAndCentre) {
   const std::string root = ALIGHT_SOURCE_DIR;
