@@ -97,7 +97,7 @@ TEST(LandingMissionTest, ReplayGivesIdenticalResults) {
       sim::build_scene(sim::load_scenario(root + "/config/scenarios/landing_b.yaml"), 4)
           .platform->top_center_W;
   const auto seq = render_sequence("landing_b.yaml", 4, "downward",
-                                   Vector3d(top.x() - 0.1, top.y(), 1.5),
+                                   Vector3d(top.x() - 0.1, top.y(), 1.7),
                                    Vector3d(0.04, -0.01, 0.0), Vector3d(0.01, -0.02, 0.2), 6);
   const auto a = run(seq, Mission::kLanding), b = run(seq, Mission::kLanding);
   ASSERT_EQ(a.size(), b.size());
