@@ -30,6 +30,92 @@ int cell_of(const std::vector<double>& cuts, double x) {
 
 }  // namespace
 
+cv::Mat off_wall_mask(const cv::Mat& image, const cv::Mat& reference, const Matrix3d& H_21,
+                      const CameraModel& camera, const std::vector<Vector2d>& wall_px,
+                      const IngressParams& p) {
+  assert(image.type() == CV_8UC1 && reference.type() == CV_8UC1);
+  assert(image.size() == reference.size());
+  cv::Mat a, b;
+  if (p.parallax_blur_sigma_px > 0) {
+    cv::GaussianBlur(image, a, cv::Size(), p.parallax_blur_sigma_px);
+    cv::GaussianBlur(reference, b, cv::Size(), p.parallax_blur_sigma_px);
+  } else {
+    a = image, b = reference;
+  }
+  // Where each current pixel's wall point lies in the reference image.
+  cv::Mat warped, seen;
+  const cv::Mat seen_ref(reference.size(), CV_8UC1, cv::Scalar(255));
+  if (!camera.has_distortion()) {
+    cv::Mat H(3, 3, CV_64F);
+    for (int r = 0; r < 3; ++r)
+      for (int k = 0; k < 3; ++k) H.at<double>(r, k) = H_21(r, k);
+    cv::warpPerspective(b, warped, H, image.size(), cv::INTER_LINEAR, cv::BORDER_CONSTANT);
+    cv::warpPerspective(seen_ref, seen, H, image.size(), cv::INTER_NEAREST, cv::BORDER_CONSTANT);
+  } else {
+    // Raw current pixel -> undistorted -> H^-1 -> raw reference pixel, exactly on a grid every
+    // kStep pixels and bilinearly between (the map is smooth; undistorting every pixel by
+    // iteration would cost ~100 ms a frame).
+    constexpr int kStep = 8;
+    const Matrix3d K = camera.K(), K_inv = K.inverse(), H_12 = H_21.inverse();
+    const int gw = (image.cols - 1 + kStep - 1) / kStep + 1;
+    const int gh = (image.rows - 1 + kStep - 1) / kStep + 1;
+    std::vector<cv::Point2f> grid(gw * gh);
+    for (int j = 0; j < gh; ++j)
+      for (int i = 0; i < gw; ++i) {
+        const Vector2d u2(std::min(i * kStep, image.cols - 1), std::min(j * kStep, image.rows - 1));
+        const Vector3d r1 = K_inv * (H_12 * (K * camera.ray(u2)));
+        const auto u1 = r1.z() > 0 ? camera.project(r1) : std::nullopt;
+        grid[j * gw + i] = u1 ? cv::Point2f(u1->x(), u1->y()) : cv::Point2f(-1e6f, -1e6f);
+      }
+    cv::Mat map_x(image.size(), CV_32FC1), map_y(image.size(), CV_32FC1);
+    for (int v = 0; v < image.rows; ++v) {
+      const int j = std::min(v / kStep, gh - 2);
+      const float y0 = j * kStep, y1 = std::min((j + 1) * kStep, image.rows - 1);
+      const float fy = (v - y0) / (y1 - y0);
+      for (int u = 0; u < image.cols; ++u) {
+        const int i = std::min(u / kStep, gw - 2);
+        const float x0 = i * kStep, x1 = std::min((i + 1) * kStep, image.cols - 1);
+        const float fx = (u - x0) / (x1 - x0);
+        const cv::Point2f q = (1 - fy) * ((1 - fx) * grid[j * gw + i] + fx * grid[j * gw + i + 1]) +
+                              fy * ((1 - fx) * grid[(j + 1) * gw + i] +
+                                    fx * grid[(j + 1) * gw + i + 1]);
+        map_x.at<float>(v, u) = q.x;
+        map_y.at<float>(v, u) = q.y;
+      }
+    }
+    cv::remap(b, warped, map_x, map_y, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
+    cv::remap(seen_ref, seen, map_x, map_y, cv::INTER_NEAREST, cv::BORDER_CONSTANT);
+  }
+  cv::Mat diff;
+  cv::absdiff(a, warped, diff);
+  diff.setTo(0, seen == 0);  // unseen in the reference: no evidence, counts as wall
+  // The threshold follows the difference on the wall itself (noise, lighting, a slightly off
+  // homography), measured at the wall's inlier features.
+  std::vector<uint8_t> on_wall;
+  for (const auto& px : wall_px) {
+    const int u = static_cast<int>(std::lround(px.x())), v = static_cast<int>(std::lround(px.y()));
+    if (u >= 0 && v >= 0 && u < diff.cols && v < diff.rows) on_wall.push_back(diff.at<uint8_t>(v, u));
+  }
+  double threshold = p.parallax_min_diff;
+  if (!on_wall.empty()) {
+    std::nth_element(on_wall.begin(), on_wall.begin() + on_wall.size() / 2, on_wall.end());
+    threshold = std::max(threshold, p.parallax_noise_k * on_wall[on_wall.size() / 2]);
+  }
+  cv::Mat mask;
+  cv::threshold(diff, mask, threshold, 255, cv::THRESH_BINARY);
+  // Closing fills the holes where the view beyond the wall has little texture (two samples of
+  // it agree by chance); opening removes specks on the wall. Both keep a rectangle's border.
+  if (p.parallax_close_px > 1)
+    cv::morphologyEx(mask, mask, cv::MORPH_CLOSE,
+                     cv::getStructuringElement(cv::MORPH_RECT,
+                                               {p.parallax_close_px, p.parallax_close_px}));
+  if (p.parallax_open_px > 1)
+    cv::morphologyEx(mask, mask, cv::MORPH_OPEN,
+                     cv::getStructuringElement(cv::MORPH_RECT,
+                                               {p.parallax_open_px, p.parallax_open_px}));
+  return mask;
+}
+
 void line_cuts(const cv::Mat& image, const IngressParams& p, std::vector<double>* x_cuts,
                std::vector<double>* y_cuts, std::vector<cv::Vec4i>* kept) {
   // Smoothing first: the wall's own texture gives short edges everywhere, the opening's border
@@ -64,8 +150,76 @@ void line_cuts(const cv::Mat& image, const IngressParams& p, std::vector<double>
   y_cuts->front() = 0.0, y_cuts->back() = image.rows;
 }
 
+void mask_cuts(const cv::Mat& mask, const IngressParams& p, std::vector<double>* x_cuts,
+               std::vector<double>* y_cuts, std::vector<cv::Vec4i>* kept) {
+  assert(mask.type() == CV_8UC1);
+  // The mask's border, two pixels wide and straddling it, so the mean of a border line's
+  // pixels is the border itself.
+  cv::Mat border;
+  cv::morphologyEx(mask, border, cv::MORPH_GRADIENT, cv::Mat());
+  std::vector<cv::Point> px;
+  cv::findNonZero(border, px);
+  // The standard Hough transform (full lines, votes from anywhere along them) rather than the
+  // probabilistic one: the border is ragged by a few pixels where the view beyond the wall
+  // agrees with it by chance, which breaks a segment walk but barely spreads the votes.
+  std::vector<cv::Vec2f> lines;
+  if (!px.empty()) cv::HoughLines(border, lines, 1.0, CV_PI / 180.0, p.hough_threshold);
+  const double tilt = p.max_line_tilt_deg * M_PI / 180.0;
+  const double min_length = p.hough_min_length_frac * mask.cols;
+  std::vector<double> xs{0.0, static_cast<double>(mask.cols)};
+  std::vector<double> ys{0.0, static_cast<double>(mask.rows)};
+  for (const auto& l : lines) {
+    const double rho = l[0], theta = l[1];
+    const bool vertical = std::min(theta, CV_PI - theta) <= tilt;
+    if (!vertical && std::abs(theta - CV_PI / 2) > tilt) continue;
+    // Refine on the border pixels near the line: fit the across-coordinate a + b * along by
+    // least squares twice, narrowing the band; the cut is its mean (the fit at the centre).
+    auto along = [&](const cv::Point& q) { return vertical ? q.y : q.x; };
+    auto across = [&](const cv::Point& q) { return vertical ? q.x : q.y; };
+    const double c = std::cos(theta), s = std::sin(theta);
+    double a = 0, b = 0, mean_along = 0;
+    std::vector<const cv::Point*> band;
+    for (const auto& q : px)
+      if (std::abs(q.x * c + q.y * s - rho) <= 3.0) band.push_back(&q);
+    for (int pass = 0; pass < 2 && band.size() >= 2; ++pass) {
+      double sa = 0, sx = 0;
+      for (const auto* q : band) sa += along(*q), sx += across(*q);
+      mean_along = sa / band.size(), a = sx / band.size();
+      double sab = 0, saa = 0;
+      for (const auto* q : band) {
+        sab += (along(*q) - mean_along) * (across(*q) - a);
+        saa += (along(*q) - mean_along) * (along(*q) - mean_along);
+      }
+      b = saa > 0 ? sab / saa : 0.0;
+      std::vector<const cv::Point*> next;
+      for (const auto& q : px)
+        if (std::abs(across(q) - (a + b * (along(q) - mean_along))) <= 2.0) next.push_back(&q);
+      band.swap(next);
+    }
+    if (band.empty()) continue;
+    // Length: the along-coordinates the band covers (a full line may hold short pieces).
+    std::vector<uint8_t> covered(vertical ? mask.rows : mask.cols, 0);
+    int lo = static_cast<int>(covered.size()), hi = -1;
+    for (const auto* q : band) {
+      covered[along(*q)] = 1;
+      lo = std::min(lo, along(*q)), hi = std::max(hi, along(*q));
+    }
+    if (std::count(covered.begin(), covered.end(), 1) < min_length) continue;
+    (vertical ? xs : ys).push_back(a);
+    if (kept) {
+      const double e0 = a + b * (lo - mean_along), e1 = a + b * (hi - mean_along);
+      kept->push_back(vertical ? cv::Vec4i(cvRound(e0), lo, cvRound(e1), hi)
+                               : cv::Vec4i(lo, cvRound(e0), hi, cvRound(e1)));
+    }
+  }
+  *x_cuts = merged(xs, p.merge_px);
+  *y_cuts = merged(ys, p.merge_px);
+  x_cuts->front() = 0.0, x_cuts->back() = mask.cols;
+  y_cuts->front() = 0.0, y_cuts->back() = mask.rows;
+}
+
 TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image,
-                                  const PipelineParams& params) {
+                                  const cv::Mat& reference, const PipelineParams& params) {
   assert(c.camera && c.mount);
   const IngressParams& p = params.ingress;
   TargetOutcome out;
@@ -103,14 +257,33 @@ TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image
 
   // 2D histogram of wall inliers and off-wall features over the cells of the line cuts.
   std::vector<double> xc, yc;
-  line_cuts(image, p, &xc, &yc, &out.lines);
+  if (p.parallax_mask && !reference.empty()) {
+    std::vector<Vector2d> wall_px;
+    for (size_t k = 0; k < c.size(); ++k)
+      if (wall->inlier[k]) wall_px.push_back(c.u2[k]);
+    mask_cuts(off_wall_mask(image, reference, wall->H, *c.camera, wall_px, p), p, &xc, &yc,
+              &out.lines);
+  } else {
+    line_cuts(image, p, &xc, &yc, &out.lines);
+  }
   const int nx = static_cast<int>(xc.size()) - 1, ny = static_cast<int>(yc.size()) - 1;
   // Prefix sums (ny+1) x (nx+1) of both counts, so each block costs O(1).
   std::vector<int> in((nx + 1) * (ny + 1), 0), off((nx + 1) * (ny + 1), 0);
   auto at = [&](std::vector<int>& v, int i, int j) -> int& { return v[j * (nx + 1) + i]; };
+  // A wall inlier within cut_margin_px of a cut is no evidence against the cell it falls in: its
+  // detector support straddles the border, and on the frame's inner face next to the wall's
+  // edge the parallax is still within the homography's threshold.
+  auto near_cut = [&](const std::vector<double>& cuts, double x) {
+    const auto it = std::lower_bound(cuts.begin(), cuts.end(), x);
+    return (it != cuts.end() && *it - x < p.cut_margin_px) ||
+           (it != cuts.begin() && x - *(it - 1) < p.cut_margin_px);
+  };
   for (size_t k = 0; k < c.size(); ++k) {
     const int i = cell_of(xc, c.u2[k].x()), j = cell_of(yc, c.u2[k].y());
-    ++at(wall->inlier[k] ? in : off, i + 1, j + 1);
+    if (!wall->inlier[k])
+      ++at(off, i + 1, j + 1);
+    else if (!near_cut(xc, c.u2[k].x()) && !near_cut(yc, c.u2[k].y()))
+      ++at(in, i + 1, j + 1);
   }
   for (int j = 1; j <= ny; ++j)
     for (int i = 1; i <= nx; ++i) {

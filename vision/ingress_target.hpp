@@ -4,24 +4,48 @@
 // Matas, Galambos & Kittler, CVIU 2000, as cv::HoughLinesP) kept only when near-vertical or
 // near-horizontal cut the image into cells; a 2D histogram counts wall inliers and off-wall
 // features per cell, and the rectangular block of cells without any inlier that holds the most
-// off-wall features (at least min_outliers; the smallest such block on a tie) is the opening.
-// Its centre, intersected with the wall plane (paper 3.1.3), is the waypoint; its left and
-// right borders at the centre row give the width (paper Fig. 12), top and bottom the height.
+// off-wall features (at least min_outliers; the larger block on a tie) is the opening. Its
+// centre, intersected with the wall plane (paper 3.1.3), is the waypoint; its left and right
+// borders at the centre row give the width (paper Fig. 12), top and bottom the height.
+// Beyond the paper, the edges come from a dense off-wall mask rather than the grey image: the
+// reference image warped by the wall homography (plane-induced parallax, Irani & Anandan,
+// ECCV 1996) disagrees with the current image exactly where the view leaves the wall plane, so
+// the mask's border is the opening's border in the wall plane (the frame's inner faces, off the
+// plane, fall inside it).
 
 #include <opencv2/core.hpp>
+#include <vector>
+
+#include "common/camera_model.hpp"
 
 #include "vision/mission_params.hpp"
 #include "vision/target.hpp"
 
 namespace alight::vision {
 
-/// `image` is the current grey image (raw pixels, as c.u2). Fails with kTooFewMatches /
-/// kNoDominantPlane (no wall), kSmallBaseline / kDecompositionFailed, or kNoOpening.
+/// `image` is the current grey image (raw pixels, as c.u2), `reference` the reference frame's
+/// (as c.u1; empty: the paper's edges of `image`, as with params.ingress.parallax_mask false).
+/// Fails with kTooFewMatches / kNoDominantPlane (no wall), kSmallBaseline /
+/// kDecompositionFailed, or kNoOpening.
 TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image,
-                                  const PipelineParams& params);
+                                  const cv::Mat& reference, const PipelineParams& params);
 
-/// The near-vertical (x) and near-horizontal (y) cut positions of the image's straight edges,
-/// sorted, merged, including the image borders. Exposed for tests.
+/// Off-wall mask (CV_8UC1, 255 off the wall): both images smoothed, the reference warped into
+/// the current view by H_21 (undistorted pixels, x2 ~ H_21 x1), the absolute difference
+/// thresholded at max(parallax_min_diff, parallax_noise_k x its median at the wall inliers
+/// `wall_px` (raw current pixels)), then closed and opened. Pixels the reference did not see
+/// count as wall. Exposed for tests.
+cv::Mat off_wall_mask(const cv::Mat& image, const cv::Mat& reference, const Matrix3d& H_21,
+                      const CameraModel& camera, const std::vector<Vector2d>& wall_px,
+                      const IngressParams& params);
+
+/// The near-vertical (x) and near-horizontal (y) cut positions of the image's straight edges
+/// (Canny, probabilistic Hough), sorted, merged, including the image borders. Exposed for tests.
+/// The same cuts from an off-wall mask's border: standard Hough lines, each refined by a
+/// least-squares fit to the border pixels along it. Exposed for tests.
+void mask_cuts(const cv::Mat& mask, const IngressParams& params, std::vector<double>* x_cuts,
+               std::vector<double>* y_cuts, std::vector<cv::Vec4i>* kept_segments);
+
 void line_cuts(const cv::Mat& image, const IngressParams& params, std::vector<double>* x_cuts,
                std::vector<double>* y_cuts, std::vector<cv::Vec4i>* kept_segments);
 

@@ -27,6 +27,18 @@ void IngressParams::validate() const {
   param_check(merge_px >= 0, "ingress.merge_px", merge_px, "must be >= 0");
   param_check(blur_sigma_px >= 0 && blur_sigma_px <= 10, "ingress.blur_sigma_px", blur_sigma_px,
               "must be in [0, 10]");
+  param_check(parallax_blur_sigma_px >= 0 && parallax_blur_sigma_px <= 10,
+              "ingress.parallax_blur_sigma_px", parallax_blur_sigma_px, "must be in [0, 10]");
+  param_check(parallax_min_diff > 0 && parallax_min_diff < 255, "ingress.parallax_min_diff",
+              parallax_min_diff, "must be in (0, 255)");
+  param_check(parallax_noise_k >= 0, "ingress.parallax_noise_k", parallax_noise_k,
+              "must be >= 0");
+  param_check(parallax_close_px >= 0 && parallax_close_px <= 101, "ingress.parallax_close_px",
+              parallax_close_px, "must be in [0, 101]");
+  param_check(parallax_open_px >= 0 && parallax_open_px <= 101, "ingress.parallax_open_px",
+              parallax_open_px, "must be in [0, 101]");
+  param_check(cut_margin_px >= 0 && cut_margin_px <= 50, "ingress.cut_margin_px", cut_margin_px,
+              "must be in [0, 50]");
   param_check(min_outliers >= 1, "ingress.min_outliers", min_outliers, "must be >= 1");
   param_check(min_size_m > 0, "ingress.min_size_m", min_size_m, "must be > 0");
 }
@@ -125,7 +137,16 @@ NodeParams load_node_params(const ParamNode& root) {
     c->finish();
   }
   if (auto c = n.optional_child("ingress")) {
+    c->read("parallax_mask", q.ingress.parallax_mask);
+    c->read("parallax_blur_sigma_px", q.ingress.parallax_blur_sigma_px);
+    c->read("parallax_min_diff", q.ingress.parallax_min_diff);
+    c->read("parallax_noise_k", q.ingress.parallax_noise_k);
+    c->read("parallax_close_px", q.ingress.parallax_close_px);
+    c->read("parallax_open_px", q.ingress.parallax_open_px);
     c->read("blur_sigma_px", q.ingress.blur_sigma_px);
+    c->read("hough_max_gap_px", q.ingress.hough_max_gap_px);
+    c->read("merge_px", q.ingress.merge_px);
+    c->read("cut_margin_px", q.ingress.cut_margin_px);
     c->read("canny_low", q.ingress.canny_low);
     c->read("canny_high", q.ingress.canny_high);
     c->read("hough_threshold", q.ingress.hough_threshold);

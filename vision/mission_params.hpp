@@ -36,6 +36,16 @@ struct LandingParams {
 /// Ingress target (paper 3.3): Hough lines split the image into cells; the block of cells
 /// with no wall inliers and the most off-wall features is the opening.
 struct IngressParams {
+  /// Beyond the paper: Canny and Hough run on the off-wall mask (the reference image warped by
+  /// the wall homography disagrees with the current one wherever the view passes the wall
+  /// plane) instead of on the grey image, whose wall texture and the frame's inner faces give
+  /// edges of their own while the opening's border can lack contrast. false: the paper's edges.
+  bool parallax_mask = true;
+  double parallax_blur_sigma_px = 1.5;  ///< smoothing of both images before the difference [px]
+  double parallax_min_diff = 8;         ///< smallest off-wall difference [grey levels]
+  double parallax_noise_k = 4;          ///< or k x the median difference at wall inliers [-]
+  int parallax_close_px = 15;           ///< closing fills texture-poor holes off the wall [px]
+  int parallax_open_px = 7;             ///< opening drops specks on the wall [px]
   double blur_sigma_px = 2.0;               ///< Gaussian smoothing before Canny (0: none) [px]
   double canny_low = 50, canny_high = 150;  ///< Canny hysteresis thresholds [grey levels]
   int hough_threshold = 60;                 ///< accumulator votes for a segment [-]
@@ -43,6 +53,7 @@ struct IngressParams {
   double hough_max_gap_px = 20;             ///< largest gap joined within a segment [px]
   double max_line_tilt_deg = 8;             ///< near-vertical / near-horizontal within [deg]
   double merge_px = 6;                      ///< cuts closer than this are one cut [px]
+  double cut_margin_px = 6;                 ///< wall inliers this close to a cut do not count [px]
   int min_outliers = 8;                     ///< fewer off-wall features in the block: no opening
   double min_size_m = 0.1;                  ///< smaller width or height: no opening [m]
   void validate() const;

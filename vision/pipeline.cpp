@@ -55,6 +55,8 @@ FrameResult Pipeline::process(const cv::Mat& gray, int64_t utime,
   frame.pattern_angle_rad = pattern_angle(X_WC.linear(), d_W);
   frame.descriptors = describe_surf(integral, *kps, params_.surf, frame.pattern_angle_rad);
   frame.keypoints = std::move(*kps);
+  // Ingress compares the current image with the reference's warped by the wall homography.
+  if (mission_ == Mission::kIngress) frame.image = gray.clone();
 
   const auto up = tracker_.add(std::move(frame));
   if (up.reset) poses_.clear();
@@ -109,7 +111,7 @@ FrameResult Pipeline::process(const cv::Mat& gray, int64_t utime,
   }
   r.matched_px = c.u2;
   const TargetOutcome t = mission_ == Mission::kLanding ? find_landing_target(c, params_)
-                                                        : find_ingress_target(c, gray, params_);
+                                                        : find_ingress_target(c, gray, a.image, params_);
   r.target = t.estimate;
   r.labels = t.labels;
   r.lines = t.lines;

@@ -16,13 +16,12 @@ using testing::run;
 
 class IngressMissionTest : public ::testing::TestWithParam<uint64_t> {};
 
-// DISABLED until the ingress detector finds the opening in both rendered views (issue 6 is
-// open). State on 2026-11-23: with features spread over a grid, smoothing before Canny and
-// 20 px Hough gaps, seed 2 passes centre (1.1 cm) and width (58.9 cm) but measures the height
-// 56 cm (the cut lies on the far edge of the frame's 10 cm inner face); seed 1 misses the
-// opening's top and left edges in Canny (low contrast against the wall's blobs): no opening.
-// Run it with --gtest_also_run_disabled_tests while working on vision/ingress_target.cpp.
-TEST_P(IngressMissionTest, DISABLED_OpeningWidthAndCentre) {
+// Issue 6's bars: width 60 +- 1 cm, centre within 2 cm; the height within 2 cm (the sill's and
+// lintel's inner faces next to the wall's edge agree with the wall homography for a few pixels,
+// so top and bottom sit up to ~1 cm inside). Regression: before the off-wall mask (Canny on the
+// grey image) seed 1 missed the opening's top and left edges and seed 2 cut the height at the
+// far edges of the inner faces (56 cm).
+TEST_P(IngressMissionTest, OpeningWidthAndCentre) {
   const std::string root = ALIGHT_SOURCE_DIR;
   const auto scene =
       sim::build_scene(sim::load_scenario(root + "/config/scenarios/ingress.yaml"), GetParam());
@@ -46,16 +45,16 @@ TEST_P(IngressMissionTest, DISABLED_OpeningWidthAndCentre) {
       (r.target.p_W - c).tail<2>().norm(), r.target.size_m[0], r.target.size_m[1],
       scene.opening->size_m.x(), scene.opening->size_m.y(), r.target.n_inliers_dominant,
       r.target.n_inliers_target, r.lines.size());
-  EXPECT_LT((r.target.p_W - c).norm(), 0.03);
-  EXPECT_NEAR(r.target.size_m[0], 0.60, 0.02);
-  EXPECT_NEAR(r.target.size_m[1], 0.60, 0.03);
+  EXPECT_LT((r.target.p_W - c).norm(), 0.02);
+  EXPECT_NEAR(r.target.size_m[0], 0.60, 0.01);
+  EXPECT_NEAR(r.target.size_m[1], 0.60, 0.02);
   EXPECT_LT(r.target.n_W.x(), -0.99);  // towards the approach side
   const cv::Mat diag = draw_diag_image(seq.frames.back().image, r);
   EXPECT_EQ(diag.type(), CV_8UC3);
   EXPECT_EQ(diag.size(), seq.frames.back().image.size());
 }
 
-INSTANTIATE_TEST_SUITE_P(Seeds, IngressMissionTest, ::testing::Values(1, 2));
+INSTANTIATE_TEST_SUITE_P(Seeds, IngressMissionTest, ::testing::Values(1, 2, 3, 4, 5, 6));
 
 TEST(IngressMissionTest, NoOpeningInTheSolidWall) {
   const auto seq = render_sequence("ingress_solid.yaml", 3, "forward", Vector3d(1.5, -0.12, 1.2),

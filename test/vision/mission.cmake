@@ -12,3 +12,9 @@ if(TARGET alight_vision_mission AND TARGET alight_sim AND TARGET alight_sim_para
     LIBS alight_vision_mission alight_sim alight_sim_params opencv_imgcodecs
     LABELS vision TIMEOUT 120)
 endif()
+if(TARGET alight_vision_mission)
+  alight_add_gtest(vision_ingress_target_test
+    SOURCES ${CMAKE_CURRENT_LIST_DIR}/ingress_target_test.cpp
+    LIBS alight_vision_mission opencv_imgproc
+    LABELS vision)
+endif()
