@@ -484,7 +484,7 @@ void Autonomy::step_phase(double dt_s) {
         const Vector3d& n = normal_W_;
         const Vector3d t(-n.y(), n.x(), 0);
         if (ingress_stage_ == IngressStage::kAlign) {
-          if (since_found_s > I.lost_timeout_s) {
+          if (I.lost_timeout_s > 0 && since_found_s > I.lost_timeout_s) {
             target_lost("no target seen for " + fmt(since_found_s, 1) + " s while aligning");
             return;
           }

@@ -102,7 +102,7 @@ void IngressParams::validate() const {
   param_check(vehicle_span_m > 0, "vehicle_span_m", vehicle_span_m, "must be > 0");
   param_check(vehicle_height_m > 0, "vehicle_height_m", vehicle_height_m, "must be > 0");
   param_check(clearance_m >= 0, "clearance_m", clearance_m, "must be >= 0");
-  param_check(lost_timeout_s > 0, "lost_timeout_s", lost_timeout_s, "must be > 0");
+  param_check(lost_timeout_s >= 0, "lost_timeout_s", lost_timeout_s, "must be >= 0 (0: no check)");
 }
 
 void FailsafeParams::validate() const {

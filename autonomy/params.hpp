@@ -95,7 +95,11 @@ struct IngressParams {
   double vehicle_span_m = 0.45;     ///< rotor tip to rotor tip, across [m]
   double vehicle_height_m = 0.2;    ///< gear feet to rotor top [m]
   double clearance_m = 0.05;        ///< refuse openings narrower than vehicle + 2 clearance [m]
-  double lost_timeout_s = 3.0;      ///< target unseen this long while aligning: lost [s]
+  /// Target unseen this long while aligning: lost [s]; 0: no check, the converged estimate is
+  /// flown as the paper's fixed fly-to-waypoint manoeuvre (3.4). Aligning on the normal moves
+  /// the camera along its axis, where the opening at the image centre shows no parallax, and
+  /// hovering gives no baseline at all: real vision goes quiet there (closed-loop flights).
+  double lost_timeout_s = 0.0;
   void validate() const;
 };
 

@@ -379,6 +379,41 @@ TEST(AutonomyTest, IngressAlignsFliesThroughWithinToleranceAndStopsPastTheWall) 
   EXPECT_NEAR(w.p.x(), 3.0 + params.ingress.pass_distance_m, 0.1);
 }
 
+// Regression (closed-loop ingress_wide, seed 1): aligning on the normal, real vision has no
+// parallax on the opening and went quiet; the 3 s lost check sent a converged estimate back to
+// detection twice and the mission held. By default the converged estimate is flown blind.
+TEST(AutonomyTest, IngressFliesTheConvergedEstimateWithoutVisionUnlessALostCheckIsSet) {
+  for (const double lost_timeout_s : {0.0, 3.0}) {
+    test::OracleVisionParams vp;
+    vp.mission = Mission::kIngress;
+    vp.R_BC = R_BC_forward();
+    vp.t_B_C = Vector3d(0.12, 0, 0);
+    auto params = test::test_params();
+    params.ingress.vehicle_span_m = 0.45;
+    params.ingress.lost_timeout_s = lost_timeout_s;
+    KinematicWorld w(params, vp);
+    w.takeoff_and_hover();
+    w.send(Command::kGo, Mission::kIngress);
+    ASSERT_TRUE(w.run_until_phase(Phase::kApproach, 120));
+    w.vision.silent = true;
+    // Held 10 cm beside the standoff point for 5 s (a gust), so it cannot align yet.
+    const Vector3d align_W = w.autonomy.final_estimate() +
+                             Vector3d(-params.ingress.standoff_m, 0.1, 0.0);
+    for (int i = 0; i < 500 && w.autonomy.phase() == Phase::kApproach; ++i) {
+      w.p = align_W;
+      w.step();
+    }
+    if (lost_timeout_s == 0.0) {
+      EXPECT_EQ(w.autonomy.phase(), Phase::kApproach) << w.out.status.reason;
+      w.run_until([&] { return w.autonomy.phase() != Phase::kApproach; }, 60);
+      EXPECT_EQ(w.autonomy.phase(), Phase::kDone) << w.out.status.reason;
+    } else {
+      EXPECT_EQ(w.autonomy.phase(), Phase::kDetection) << w.out.status.reason;
+      EXPECT_NE(w.out.status.reason.find("while aligning"), std::string::npos);
+    }
+  }
+}
+
 TEST(AutonomyTest, IngressPausesWhileOutsideTheLateralTolerance) {
   test::OracleVisionParams vp;
   vp.mission = Mission::kIngress;
