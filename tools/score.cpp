@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <sstream>
+#include <unordered_set>
 
 namespace alight::tools {
 
@@ -12,6 +13,12 @@ double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   const size_t n = v.size();
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+// Nearest rank: the smallest value with at least `percent` % of the values at or below it.
+double percentile(const std::vector<double>& sorted, int percent) {
+  const size_t n = sorted.size();
+  const size_t rank = (static_cast<size_t>(percent) * n + 99) / 100;  // ceil(percent * n / 100)
+  return sorted[std::clamp<size_t>(rank, 1, n) - 1];
 }
 double dist_xy(const double a[3], const double b[3]) {
   return std::hypot(a[0] - b[0], a[1] - b[1]);
@@ -66,10 +73,69 @@ void Scorer::add(const target_t& t) {
     heights_m_.push_back(t.target_height_m);
 }
 
+void Scorer::add(const target_t& t, int64_t received_utime) {
+  target_received_.emplace_back(t.utime, received_utime);
+  if (t.found) ++timed_found_;
+  extend_span(received_utime);
+  add(t);
+}
+
+void Scorer::add_camera_frame(int64_t image_utime, int64_t received_utime) {
+  ++camera_frames_;
+  camera_received_.emplace(image_utime, received_utime);
+  if (!first_camera_) first_camera_ = {image_utime, received_utime};
+  last_camera_ = {image_utime, received_utime};
+  extend_span(received_utime);
+}
+
+void Scorer::extend_span(int64_t received_utime) {
+  if (!first_received_ || received_utime < *first_received_) first_received_ = received_utime;
+  if (!last_received_ || received_utime > *last_received_) last_received_ = received_utime;
+}
+
+namespace {
+void timing(const std::unordered_map<int64_t, int64_t>& camera_received,
+            const std::vector<std::pair<int64_t, int64_t>>& target_received, Score& s) {
+  std::vector<double> latencies_ms;
+  std::unordered_set<int64_t> covered;
+  for (const auto& [image_utime, received] : target_received) {
+    const auto it = camera_received.find(image_utime);
+    if (it == camera_received.end()) {
+      ++s.vision_latency_unmatched;
+      continue;
+    }
+    latencies_ms.push_back(1e-3 * static_cast<double>(received - it->second));
+    covered.insert(image_utime);
+  }
+  if (!latencies_ms.empty()) {
+    std::sort(latencies_ms.begin(), latencies_ms.end());
+    s.vision_latency_p50_ms = percentile(latencies_ms, 50);
+    s.vision_latency_p99_ms = percentile(latencies_ms, 99);
+    s.vision_latency_max_ms = latencies_ms.back();
+  }
+  if (!camera_received.empty())
+    s.vision_frame_coverage =
+        static_cast<double>(covered.size()) / static_cast<double>(camera_received.size());
+}
+}  // namespace
+
 Score Scorer::result() const {
   Score s;
   s.vision_frames = vision_frames_;
   s.vision_found = vision_found_;
+  s.camera_frames = camera_frames_;
+  timing(camera_received_, target_received_, s);
+  if (first_received_ && *last_received_ > *first_received_) {
+    const double span_s = 1e-6 * static_cast<double>(*last_received_ - *first_received_);
+    if (camera_frames_ > 0) s.camera_frames_per_s = camera_frames_ / span_s;
+    if (!target_received_.empty()) {
+      s.vision_frames_per_s = static_cast<double>(target_received_.size()) / span_s;
+      s.vision_waypoints_per_s = timed_found_ / span_s;
+    }
+  }
+  if (first_camera_ && last_camera_->second > first_camera_->second)
+    s.real_time_factor = static_cast<double>(last_camera_->first - first_camera_->first) /
+                         static_cast<double>(last_camera_->second - first_camera_->second);
   if (last_status_) {
     s.final_phase = last_status_->phase_name;
     s.n_measurements = last_status_->n_measurements;
@@ -159,6 +225,16 @@ std::vector<std::pair<std::string, std::string>> Score::fields() const {
   f.emplace_back("n_measurements", std::to_string(n_measurements));
   f.emplace_back("vision_frames", std::to_string(vision_frames));
   f.emplace_back("vision_found", std::to_string(vision_found));
+  f.emplace_back("camera_frames", std::to_string(camera_frames));
+  opt("vision_latency_p50_ms", vision_latency_p50_ms);
+  opt("vision_latency_p99_ms", vision_latency_p99_ms);
+  opt("vision_latency_max_ms", vision_latency_max_ms);
+  f.emplace_back("vision_latency_unmatched", std::to_string(vision_latency_unmatched));
+  opt("camera_frames_per_s", camera_frames_per_s);
+  opt("vision_frames_per_s", vision_frames_per_s);
+  opt("vision_waypoints_per_s", vision_waypoints_per_s);
+  opt("vision_frame_coverage", vision_frame_coverage);
+  opt("real_time_factor", real_time_factor);
   f.emplace_back("collided", collided ? "true" : "false");
   f.emplace_back("n_collisions", std::to_string(n_collisions));
   f.emplace_back("out_of_area", out_of_area ? "true" : "false");

@@ -3,12 +3,19 @@
 // platform, Fig. 10; platform height, Fig. 11; opening width, Fig. 12) measured against the
 // simulator's ground truth (SIM_TRUTH), which flight code never sees. Pure: fed decoded
 // messages in log order; alight-score does the file reading.
+//
+// Timing (paper 4: waypoints at about 5 fps on STARMAC, 2 fps on the Pelican): given each
+// message's receipt time in the log (lcm-logger's wall-clock stamp), the scorer also measures
+// the camera -> VISION_TARGET latency and the frame and waypoint rates. All of it is wall-clock
+// time, whatever real-time factor the simulator ran at.
 
 #include <alight/autonomy_status_t.hpp>
 #include <alight/sim_truth_t.hpp>
 #include <alight/target_t.hpp>
+#include <cstdint>
 #include <optional>
 #include <string>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -30,6 +37,24 @@ struct Score {
   int n_measurements = 0;                           ///< waypoints in the final estimate
   int vision_frames = 0;                            ///< VISION_TARGET messages
   int vision_found = 0;                             ///< ... with a target
+  int camera_frames = 0;                            ///< CAMERA frames in the log
+
+  // Latency: receipt of a VISION_TARGET minus receipt of the CAMERA frame with the same exposure
+  // time (target_t::utime = image_t::utime), both as stamped by the logger, so it spans the
+  // camera message's transport, the vision's queue (it waits for the pose at exposure time and
+  // drops to the newest frame when behind), its processing and the target's transport.
+  // Percentiles are nearest-rank over the targets whose frame is in the log.
+  std::optional<double> vision_latency_p50_ms;  ///< median wall-clock latency [ms]
+  std::optional<double> vision_latency_p99_ms;  ///< 99th percentile [ms]
+  std::optional<double> vision_latency_max_ms;  ///< largest [ms]
+  int vision_latency_unmatched = 0;  ///< timed VISION_TARGETs whose CAMERA frame is not in the log
+  // Rates: messages per wall second over the log's span (first to last receipt of a CAMERA or
+  // VISION_TARGET message).
+  std::optional<double> camera_frames_per_s;     ///< CAMERA frames per wall second
+  std::optional<double> vision_frames_per_s;     ///< VISION_TARGETs (processed frames) per second
+  std::optional<double> vision_waypoints_per_s;  ///< ... of them with a target found
+  std::optional<double> vision_frame_coverage;   ///< camera frames that got a VISION_TARGET [0, 1]
+  std::optional<double> real_time_factor;        ///< camera exposure time elapsed per wall second
   bool collided = false;
   int n_collisions = 0;
   bool out_of_area = false;  ///< the vehicle left the flying area (fails any mission)
@@ -45,6 +70,10 @@ class Scorer {
   void add(const sim_truth_t& truth);
   void add(const autonomy_status_t& status);
   void add(const target_t& target);
+  /// A VISION_TARGET with its receipt time [us, wall clock, as the logger stamps it].
+  void add(const target_t& target, int64_t received_utime);
+  /// A CAMERA frame: its exposure time (image_t::utime) and receipt time [us].
+  void add_camera_frame(int64_t image_utime, int64_t received_utime);
   Score result() const;
 
  private:
@@ -56,6 +85,14 @@ class Scorer {
   int mission_ = 0;
   bool tipped_ = false;  // any sample: the vehicle fell off an edge
   int vision_frames_ = 0, vision_found_ = 0;
+  // Timing: receipts of camera frames by exposure time (the first one when a frame repeats),
+  // and of targets as (exposure time, receipt).
+  std::unordered_map<int64_t, int64_t> camera_received_;
+  std::vector<std::pair<int64_t, int64_t>> target_received_;
+  int camera_frames_ = 0, timed_found_ = 0;
+  std::optional<int64_t> first_received_, last_received_;
+  std::optional<std::pair<int64_t, int64_t>> first_camera_, last_camera_;  // (exposure, receipt)
+  void extend_span(int64_t received_utime);
 };
 
 }  // namespace alight::tools

@@ -1,7 +1,10 @@
 // alight-score LOG [--json]: the mission's figures from a session log, as `key: value` lines
 // (or one JSON object), for people and scripts. Exit status: 0 when the mission succeeded,
 // 1 when it did not, 2 when the log cannot be read or holds no SIM_TRUTH.
+// The vision's latency and rates use each event's receipt time as lcm-logger stamped it (wall
+// clock): a VISION_TARGET's receipt minus that of the CAMERA frame with the same utime.
 #include <CLI/CLI.hpp>
+#include <alight/image_t.hpp>
 #include <cstdio>
 #include <iostream>
 #include <lcm/lcm-cpp.hpp>
@@ -18,13 +21,14 @@ bool decode(const lcm::LogEvent& ev, T& msg) {
 int main(int argc, char** argv) {
   CLI::App app{"alight-score: score a mission from its session log against the simulator's truth"};
   std::string log_path, truth_ch = "SIM_TRUTH", status_ch = "AUTONOMY_STATUS",
-                        target_ch = "VISION_TARGET";
+                        target_ch = "VISION_TARGET", camera_ch = "CAMERA";
   bool json = false;
   app.add_option("log", log_path, "Session log (.lcmlog)")->required()->check(CLI::ExistingFile);
   app.add_flag("--json", json, "Print one JSON object instead of key: value lines");
   app.add_option("--truth-channel", truth_ch, "Channel of sim_truth_t");
   app.add_option("--status-channel", status_ch, "Channel of autonomy_status_t");
   app.add_option("--target-channel", target_ch, "Channel of target_t");
+  app.add_option("--camera-channel", camera_ch, "Channel of image_t (raw frames)");
   CLI11_PARSE(app, argc, argv);
 
   lcm::LogFile log(log_path, "r");
@@ -48,7 +52,10 @@ int main(int argc, char** argv) {
       decode(*ev, m) ? scorer.add(m) : void(++bad);
     } else if (ev->channel == target_ch) {
       alight::target_t m;
-      decode(*ev, m) ? scorer.add(m) : void(++bad);
+      decode(*ev, m) ? scorer.add(m, ev->timestamp) : void(++bad);
+    } else if (ev->channel == camera_ch) {
+      alight::image_t m;
+      decode(*ev, m) ? scorer.add_camera_frame(m.utime, ev->timestamp) : void(++bad);
     }
   }
   if (bad > 0)

@@ -2,10 +2,14 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <alight/image_t.hpp>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <lcm/lcm-cpp.hpp>
+#include <numeric>
+#include <random>
 
 namespace alight::tools {
 namespace {
@@ -160,6 +164,116 @@ TEST(ScoreTest, IngressThroughTheOpening) {
   EXPECT_EQ(sc.result().outcome, "collided");
 }
 
+target_t vision_target(int64_t image_utime, bool found) {
+  target_t t{};
+  t.utime = image_utime;
+  t.mission = target_t::MISSION_LANDING;
+  t.found = found;
+  t.reason = found ? target_t::REASON_OK : target_t::REASON_TOO_FEW_MATCHES;
+  return t;
+}
+
+TEST(ScoreTest, LatencyPercentilesAreNearestRankOverKnownLatencies) {
+  // Given 100 frames whose targets arrive 1, 2, ..., 100 ms after them, in shuffled order
+  std::vector<int> latency_ms(100);
+  std::iota(latency_ms.begin(), latency_ms.end(), 1);
+  std::shuffle(latency_ms.begin(), latency_ms.end(), std::mt19937(7));
+  Scorer sc;
+  for (int i = 0; i < 100; ++i) {
+    const int64_t exposure = kT0 + i * 200'000, received = exposure + 3'000;
+    sc.add_camera_frame(exposure, received);
+    sc.add(vision_target(exposure, true), received + latency_ms[i] * 1'000);
+  }
+  // Then the median is the 50th value, p99 the 99th, and every frame is covered
+  const Score s = sc.result();
+  ASSERT_TRUE(s.vision_latency_p50_ms && s.vision_latency_p99_ms && s.vision_latency_max_ms);
+  EXPECT_DOUBLE_EQ(*s.vision_latency_p50_ms, 50.0);
+  EXPECT_DOUBLE_EQ(*s.vision_latency_p99_ms, 99.0);
+  EXPECT_DOUBLE_EQ(*s.vision_latency_max_ms, 100.0);
+  EXPECT_EQ(s.vision_latency_unmatched, 0);
+  ASSERT_TRUE(s.vision_frame_coverage);
+  EXPECT_DOUBLE_EQ(*s.vision_frame_coverage, 1.0);
+  EXPECT_EQ(s.camera_frames, 100);
+
+  // With four latencies the nearest-rank median is the lower middle one, not their mean
+  Scorer four;
+  for (int i = 0; i < 4; ++i) {
+    four.add_camera_frame(kT0 + i, kT0 + i * 100'000);
+    four.add(vision_target(kT0 + i, false), kT0 + i * 100'000 + (4 - i) * 10'000);
+  }
+  const Score f = four.result();
+  EXPECT_DOUBLE_EQ(*f.vision_latency_p50_ms, 20.0);
+  EXPECT_DOUBLE_EQ(*f.vision_latency_p99_ms, 40.0);
+}
+
+TEST(ScoreTest, DroppedFramesLowerTheCoverageAndTheRates) {
+  // Given 41 camera frames received 50 ms apart (a 2 s span) but exposed 25 ms apart (the sim
+  // at half real time), of which the vision processed every fourth, 30 ms late, and found the
+  // target in every other processed one
+  Scorer sc;
+  for (int k = 0; k <= 40; ++k) {
+    const int64_t exposure = kT0 + k * 25'000, received = kT0 + 5'000'000 + k * 50'000;
+    sc.add_camera_frame(exposure, received);
+    if (k % 4 == 0 && k < 40) sc.add(vision_target(exposure, k % 8 == 0), received + 30'000);
+  }
+  const Score s = sc.result();
+  EXPECT_EQ(s.vision_frames, 10);
+  EXPECT_EQ(s.vision_found, 5);
+  ASSERT_TRUE(s.camera_frames_per_s && s.vision_frames_per_s && s.vision_waypoints_per_s);
+  EXPECT_DOUBLE_EQ(*s.camera_frames_per_s, 41 / 2.0);
+  EXPECT_DOUBLE_EQ(*s.vision_frames_per_s, 10 / 2.0);
+  EXPECT_DOUBLE_EQ(*s.vision_waypoints_per_s, 5 / 2.0);
+  ASSERT_TRUE(s.vision_frame_coverage);
+  EXPECT_DOUBLE_EQ(*s.vision_frame_coverage, 10 / 41.0);
+  EXPECT_DOUBLE_EQ(*s.vision_latency_p50_ms, 30.0);
+  EXPECT_DOUBLE_EQ(*s.vision_latency_max_ms, 30.0);
+  // Latency is wall-clock: the sim's slower clock does not scale it
+  ASSERT_TRUE(s.real_time_factor);
+  EXPECT_DOUBLE_EQ(*s.real_time_factor, 0.5);
+  const std::string text = s.to_text();
+  EXPECT_NE(text.find("vision_frames_per_s: 5.0000\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("vision_frame_coverage: 0.2439\n"), std::string::npos) << text;
+}
+
+TEST(ScoreTest, TargetsWhoseCameraFrameIsMissingAreCountedNotMatched) {
+  Scorer sc;
+  // A target logged before its frame (out of order) still matches it
+  sc.add(vision_target(kT0 + 1, true), kT0 + 1'040'000);
+  sc.add_camera_frame(kT0 + 1, kT0 + 1'000'000);
+  // Two targets of frames the logger never recorded
+  sc.add(vision_target(kT0 + 2, true), kT0 + 1'100'000);
+  sc.add(vision_target(kT0 + 3, false), kT0 + 1'200'000);
+  const Score s = sc.result();
+  EXPECT_EQ(s.vision_latency_unmatched, 2);
+  ASSERT_TRUE(s.vision_latency_p50_ms);
+  EXPECT_DOUBLE_EQ(*s.vision_latency_p50_ms, 40.0);
+  EXPECT_DOUBLE_EQ(*s.vision_latency_max_ms, 40.0);
+  EXPECT_DOUBLE_EQ(*s.vision_frame_coverage, 1.0);
+  EXPECT_NE(s.to_text().find("vision_latency_unmatched: 2\n"), std::string::npos);
+
+  // No camera frames at all: rates of the targets, no latency, no coverage, no crash
+  Scorer none;
+  none.add(vision_target(kT0 + 2, true), kT0);
+  none.add(vision_target(kT0 + 3, true), kT0 + 500'000);
+  const Score n = none.result();
+  EXPECT_EQ(n.vision_latency_unmatched, 2);
+  EXPECT_FALSE(n.vision_latency_p50_ms.has_value());
+  EXPECT_FALSE(n.vision_frame_coverage.has_value());
+  EXPECT_FALSE(n.camera_frames_per_s.has_value());
+  ASSERT_TRUE(n.vision_waypoints_per_s);
+  EXPECT_DOUBLE_EQ(*n.vision_waypoints_per_s, 4.0);
+  EXPECT_EQ(n.to_text().find("vision_latency_p50_ms"), std::string::npos);
+}
+
+TEST(ScoreTest, TargetsWithoutReceiptTimesGiveNoTimingFigures) {
+  const Score s = landing_session(false).result();
+  EXPECT_FALSE(s.vision_latency_p50_ms.has_value());
+  EXPECT_FALSE(s.vision_frames_per_s.has_value());
+  EXPECT_FALSE(s.real_time_factor.has_value());
+  EXPECT_EQ(s.vision_latency_unmatched, 0);
+  EXPECT_EQ(s.to_text().find("_per_s"), std::string::npos) << s.to_text();
+}
+
 TEST(ScoreTest, JsonQuotesStringsAndNotNumbers) {
   const std::string j = landing_session(false).result().to_json();
   EXPECT_NE(j.find("\"success\": true"), std::string::npos) << j;
@@ -172,14 +286,26 @@ TEST(ScoreTest, CommandLineReadsASessionLog) {
   const auto path = std::filesystem::temp_directory_path() / "alight_score_test.lcmlog";
   {
     lcm::LogFile log(path.string(), "w");
-    auto write = [&](const char* ch, const auto& msg) {
+    auto write_at = [&](const char* ch, const auto& msg, int64_t received_utime) {
       std::vector<uint8_t> buf(msg.getEncodedSize());
       msg.encode(buf.data(), 0, static_cast<int>(buf.size()));
-      lcm::LogEvent ev{0, msg.utime, ch, static_cast<int32_t>(buf.size()), buf.data()};
+      lcm::LogEvent ev{0, received_utime, ch, static_cast<int32_t>(buf.size()), buf.data()};
       log.writeEvent(&ev);
     };
+    auto write = [&](const char* ch, const auto& msg) { write_at(ch, msg, msg.utime); };
     write("SIM_TRUTH", landing_truth(kT0, 0, 0, 1.5, false));
     write("AUTONOMY_STATUS", status(kT0 + 1, autonomy_status_t::PHASE_DETECTION, "DETECTION"));
+    // Two frames 0.5 s apart, each answered by the vision 120 ms (wall) after the logger got it
+    for (int i = 0; i < 2; ++i) {
+      image_t img{};
+      img.utime = kT0 + 10 + i;
+      img.width = img.height = img.row_stride = 2;
+      img.pixelformat = image_t::PIXEL_FORMAT_GRAY;
+      img.size = 4;
+      img.data.assign(4, 128);
+      write_at("CAMERA", img, kT0 + 1'000'000 + i * 500'000);
+      write_at("VISION_TARGET", vision_target(img.utime, i == 1), kT0 + 1'120'000 + i * 500'000);
+    }
     write("SIM_TRUTH", landing_truth(kT0 + 2, 1.0, -0.5, 0.24, true));
   }
   const std::string bin = std::string(ALIGHT_BINARY_DIR) + "/bin/alight-score ";
@@ -193,6 +319,9 @@ TEST(ScoreTest, CommandLineReadsASessionLog) {
   EXPECT_EQ(run(path.string(), &text), 0) << text;
   EXPECT_NE(text.find("outcome: landed\n"), std::string::npos) << text;
   EXPECT_NE(text.find("touchdown_lateral_error_m: 0.0000\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("vision_latency_p99_ms: 120.0000\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("camera_frames: 2\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("vision_frame_coverage: 1.0000\n"), std::string::npos) << text;
   EXPECT_EQ(run(path.string() + " --json", &json), 0);
   EXPECT_EQ(json.front(), '{');
   EXPECT_EQ(run("/nonexistent.lcmlog", &missing), 105);  // CLI11: the file does not exist
