@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <opencv2/imgproc.hpp>
 
 #include "vision/decomposition.hpp"
@@ -26,6 +27,20 @@ int cell_of(const std::vector<double>& cuts, double x) {
   const auto it = std::upper_bound(cuts.begin(), cuts.end(), x);
   const int i = static_cast<int>(it - cuts.begin()) - 1;
   return std::clamp(i, 0, static_cast<int>(cuts.size()) - 2);
+}
+
+// The point nearest both rays c_a + s d_a and c_b + t d_b (world); nullopt when the rays are
+// near parallel or it lies behind either camera.
+std::optional<Vector3d> triangulate_midpoint(const Isometry3d& X_WA, const Vector3d& d_a,
+                                             const Isometry3d& X_WB, const Vector3d& d_b) {
+  const Vector3d w = X_WA.translation() - X_WB.translation();
+  const double a = d_a.dot(d_a), b = d_a.dot(d_b), c = d_b.dot(d_b);
+  const double d = d_a.dot(w), e = d_b.dot(w);
+  const double den = a * c - b * b;
+  if (den < 1e-12 * a * c) return std::nullopt;
+  const double s = (b * e - c * d) / den, t = (a * e - b * d) / den;
+  if (s <= 0 || t <= 0) return std::nullopt;
+  return 0.5 * (X_WA.translation() + s * d_a + X_WB.translation() + t * d_b);
 }
 
 }  // namespace
@@ -343,6 +358,24 @@ TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image
   e.size_m[1] = (w_b->p_W - w_t->p_W).norm();
   e.outline = {{left, top}, {right, top}, {right, bottom}, {left, bottom}};
   if (e.size_m[0] < p.min_size_m || e.size_m[1] < p.min_size_m) {
+    out.reason = Reason::kNoOpening;
+    return out;
+  }
+  // What is seen through an opening lies behind the wall. When the dominant plane is something
+  // seen through the opening instead (a large opening shows the room's back wall, which then
+  // holds more matches than the wall around it), the features in the block are the wall itself,
+  // in front of that plane: no opening in this frame.
+  const Isometry3d X_WC1 = camera_in_world(c.pose_1.X_WB(), c.mount->X_BC());
+  const Isometry3d X_WC2 = camera_in_world(c.pose_2.X_WB(), c.mount->X_BC());
+  int behind = 0, in_block = 0;
+  for (size_t k = 0; k < c.size(); ++k) {
+    if (out.labels[k] != Label::kTarget) continue;
+    ++in_block;
+    const auto X_W = triangulate_midpoint(X_WC1, X_WC1.linear() * c.camera->ray(c.u1[k]), X_WC2,
+                                          X_WC2.linear() * c.camera->ray(c.u2[k]));
+    if (X_W && e.n_W.dot(*X_W - e.p_W) < -p.behind_margin_m) ++behind;
+  }
+  if (behind < p.min_outliers || behind < p.min_behind_share * in_block) {
     out.reason = Reason::kNoOpening;
     return out;
   }

@@ -41,6 +41,9 @@ void IngressParams::validate() const {
               "must be in [0, 50]");
   param_check(min_outliers >= 1, "ingress.min_outliers", min_outliers, "must be >= 1");
   param_check(min_size_m > 0, "ingress.min_size_m", min_size_m, "must be > 0");
+  param_check(behind_margin_m >= 0, "ingress.behind_margin_m", behind_margin_m, "must be >= 0");
+  param_check(min_behind_share >= 0 && min_behind_share <= 1, "ingress.min_behind_share",
+              min_behind_share, "must be in [0, 1]");
 }
 
 void PipelineParams::validate() const {
@@ -154,6 +157,8 @@ NodeParams load_node_params(const ParamNode& root) {
     c->read("max_line_tilt_deg", q.ingress.max_line_tilt_deg);
     c->read("min_outliers", q.ingress.min_outliers);
     c->read("min_size_m", q.ingress.min_size_m);
+    c->read("behind_margin_m", q.ingress.behind_margin_m);
+    c->read("min_behind_share", q.ingress.min_behind_share);
     c->finish();
   }
   n.validate(p);

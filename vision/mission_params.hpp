@@ -55,6 +55,8 @@ struct IngressParams {
   double merge_px = 6;                      ///< cuts closer than this are one cut [px]
   double cut_margin_px = 6;                 ///< wall inliers this close to a cut do not count [px]
   int min_outliers = 8;                     ///< fewer off-wall features in the block: no opening
+  double behind_margin_m = 0.02;  ///< a block feature this far behind the wall is seen through [m]
+  double min_behind_share = 0.7;  ///< fewer of the block's features behind the wall: no opening
   double min_size_m = 0.1;                  ///< smaller width or height: no opening [m]
   void validate() const;
 };
