@@ -17,7 +17,6 @@
 #include <vector>
 
 #include "common/camera_model.hpp"
-
 #include "vision/mission_params.hpp"
 #include "vision/target.hpp"
 
@@ -42,9 +41,11 @@ cv::Mat off_wall_mask(const cv::Mat& image, const cv::Mat& reference, const Matr
 /// The near-vertical (x) and near-horizontal (y) cut positions of the image's straight edges
 /// (Canny, probabilistic Hough), sorted, merged, including the image borders. Exposed for tests.
 /// The same cuts from an off-wall mask's border: standard Hough lines, each refined by a
-/// least-squares fit to the border pixels along it. Exposed for tests.
+/// least-squares fit to the border pixels along it and, given the grey `image`, moved to the
+/// wall's edge: the step in the image within snap_px on the wall's side. Exposed for tests.
 void mask_cuts(const cv::Mat& mask, const IngressParams& params, std::vector<double>* x_cuts,
-               std::vector<double>* y_cuts, std::vector<cv::Vec4i>* kept_segments);
+               std::vector<double>* y_cuts, std::vector<cv::Vec4i>* kept_segments,
+               const cv::Mat& image = cv::Mat());
 
 void line_cuts(const cv::Mat& image, const IngressParams& params, std::vector<double>* x_cuts,
                std::vector<double>* y_cuts, std::vector<cv::Vec4i>* kept_segments);

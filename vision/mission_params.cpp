@@ -31,14 +31,16 @@ void IngressParams::validate() const {
               "ingress.parallax_blur_sigma_px", parallax_blur_sigma_px, "must be in [0, 10]");
   param_check(parallax_min_diff > 0 && parallax_min_diff < 255, "ingress.parallax_min_diff",
               parallax_min_diff, "must be in (0, 255)");
-  param_check(parallax_noise_k >= 0, "ingress.parallax_noise_k", parallax_noise_k,
-              "must be >= 0");
+  param_check(parallax_noise_k >= 0, "ingress.parallax_noise_k", parallax_noise_k, "must be >= 0");
   param_check(parallax_close_px >= 0 && parallax_close_px <= 101, "ingress.parallax_close_px",
               parallax_close_px, "must be in [0, 101]");
   param_check(parallax_open_px >= 0 && parallax_open_px <= 101, "ingress.parallax_open_px",
               parallax_open_px, "must be in [0, 101]");
   param_check(cut_margin_px >= 0 && cut_margin_px <= 50, "ingress.cut_margin_px", cut_margin_px,
               "must be in [0, 50]");
+  param_check(snap_px >= 0 && snap_px <= 30, "ingress.snap_px", snap_px, "must be in [0, 30]");
+  param_check(snap_min_gradient >= 0, "ingress.snap_min_gradient", snap_min_gradient,
+              "must be >= 0");
   param_check(min_outliers >= 1, "ingress.min_outliers", min_outliers, "must be >= 1");
   param_check(min_size_m > 0, "ingress.min_size_m", min_size_m, "must be > 0");
   param_check(behind_margin_m >= 0, "ingress.behind_margin_m", behind_margin_m, "must be >= 0");
@@ -146,6 +148,8 @@ NodeParams load_node_params(const ParamNode& root) {
     c->read("parallax_noise_k", q.ingress.parallax_noise_k);
     c->read("parallax_close_px", q.ingress.parallax_close_px);
     c->read("parallax_open_px", q.ingress.parallax_open_px);
+    c->read("snap_px", q.ingress.snap_px);
+    c->read("snap_min_gradient", q.ingress.snap_min_gradient);
     c->read("blur_sigma_px", q.ingress.blur_sigma_px);
     c->read("hough_max_gap_px", q.ingress.hough_max_gap_px);
     c->read("merge_px", q.ingress.merge_px);

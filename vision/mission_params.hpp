@@ -46,7 +46,9 @@ struct IngressParams {
   double parallax_noise_k = 4;          ///< or k x the median difference at wall inliers [-]
   int parallax_close_px = 15;           ///< closing fills texture-poor holes off the wall [px]
   int parallax_open_px = 7;             ///< opening drops specks on the wall [px]
-  double blur_sigma_px = 2.0;               ///< Gaussian smoothing before Canny (0: none) [px]
+  double snap_px = 6;                   ///< cut to the wall's edge within this [px] (0: off)
+  double snap_min_gradient = 8;         ///< weaker mean step along the cut: no edge [Sobel units]
+  double blur_sigma_px = 2.0;           ///< Gaussian smoothing before Canny (0: none) [px]
   double canny_low = 50, canny_high = 150;  ///< Canny hysteresis thresholds [grey levels]
   int hough_threshold = 60;                 ///< accumulator votes for a segment [-]
   double hough_min_length_frac = 0.12;      ///< shortest segment, share of the image width [-]
@@ -57,7 +59,8 @@ struct IngressParams {
   int min_outliers = 8;                     ///< fewer off-wall features in the block: no opening
   double behind_margin_m = 0.02;  ///< a block feature this far behind the wall is seen through [m]
   double min_behind_share = 0.7;  ///< fewer of the block's features behind the wall: no opening
-  double min_size_m = 0.1;                  ///< smaller width or height: no opening [m]
+                                  ///< (0: no check)
+  double min_size_m = 0.1;        ///< smaller width or height: no opening [m]
   void validate() const;
 };
 

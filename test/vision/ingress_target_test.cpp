@@ -6,11 +6,13 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
-
 #include <opencv2/imgproc.hpp>
+#include <random>
 
 #include "common/params.hpp"
 #include "vision/mission_params.hpp"
+#include "vision/status.hpp"
+#include "vision/waypoint.hpp"
 
 namespace alight::vision {
 namespace {
@@ -162,12 +164,117 @@ TEST(MaskCutsTest, RaggedBorderGivesItsMean) {
   EXPECT_GE(kept.size(), 4u);
 }
 
+TEST(MaskCutsTest, CutsSnapToTheWallsEdgeOnTheWallSide) {
+  // The wall (textured, 150 on average) ends at x = 199.5 and y = 99.5; a brighter inner face
+  // follows for 5 px, then the room. The mask starts 4 px inside (the face's near part agreed
+  // with the wall homography); the cut moves back to the wall's edge.
+  cv::Mat image = texture(480, 640, 11, 2.0) * 0.3 + 105;
+  cv::Mat room = texture(480, 640, 12, 3.0);
+  room(cv::Rect(205, 105, 230, 250)).copyTo(image(cv::Rect(205, 105, 230, 250)));
+  image(cv::Rect(200, 100, 5, 260)).setTo(220);  // left face
+  image(cv::Rect(200, 100, 240, 5)).setTo(220);  // top face
+  cv::Mat mask(480, 640, CV_8UC1, cv::Scalar(0));
+  mask(cv::Rect(204, 104, 232, 252)).setTo(255);
+  std::vector<double> xc, yc;
+  mask_cuts(mask, IngressParams{}, &xc, &yc, nullptr);
+  ASSERT_EQ(xc.size(), 4u);
+  EXPECT_NEAR(xc[1], 203.5, 0.3) << "without the image: the mask's border";
+  mask_cuts(mask, IngressParams{}, &xc, &yc, nullptr, image);
+  ASSERT_EQ(xc.size(), 4u);
+  ASSERT_EQ(yc.size(), 4u);
+  EXPECT_NEAR(xc[1], 199.5, 0.3);
+  EXPECT_NEAR(yc[1], 99.5, 0.3);
+  // No face at the right and bottom borders: nothing to snap to beyond the texture's noise.
+  EXPECT_NEAR(xc[2], 435.5, 1.0);
+  EXPECT_NEAR(yc[2], 355.5, 1.0);
+}
+
 TEST(MaskCutsTest, EmptyMaskGivesOnlyTheImageBorders) {
   const cv::Mat mask(480, 640, CV_8UC1, cv::Scalar(0));
   std::vector<double> xc, yc;
   mask_cuts(mask, IngressParams{}, &xc, &yc, nullptr);
   EXPECT_EQ(xc, (std::vector<double>{0.0, 640.0}));
   EXPECT_EQ(yc, (std::vector<double>{0.0, 480.0}));
+}
+
+// Two views of the wall at x = 3 m with a 60 x 60 cm hole (centre y = 0, z = 1.2) from 1.5 m,
+// 30 cm apart, and of a back wall at x = 6.1 m seen through the hole; the current image shows
+// the hole as a bright square, so Canny and Hough find its borders.
+struct WallScene {
+  CameraModel camera;
+  CameraMount mount;
+  PoseSample pose_1, pose_2;
+  cv::Mat image;
+  Correspondences c;
+
+  WallScene(int n_wall, int n_back) {
+    mount.R_BC = R_BC_forward();
+    pose_1.p_W_B = Vector3d(1.5, -0.15, 1.2);
+    pose_2.p_W_B = Vector3d(1.5, 0.15, 1.2);
+    pose_2.utime = 100'000;
+    c.camera = &camera;
+    c.mount = &mount;
+    c.pose_1 = pose_1;
+    c.pose_2 = pose_2;
+    const Isometry3d X_CW1 = camera_in_world(pose_1.X_WB(), mount.X_BC()).inverse();
+    const Isometry3d X_CW2 = camera_in_world(pose_2.X_WB(), mount.X_BC()).inverse();
+    auto in_hole = [](double y, double z) { return std::abs(y) < 0.3 && std::abs(z - 1.2) < 0.3; };
+    // Whether the segment from a camera to p_W passes the wall plane inside the hole.
+    auto through_hole = [&](const Vector3d& c_W, const Vector3d& p_W) {
+      const double f = (3.0 - c_W.x()) / (p_W.x() - c_W.x());
+      const Vector3d q = c_W + f * (p_W - c_W);
+      return std::abs(q.y()) < 0.27 && std::abs(q.z() - 1.2) < 0.27;
+    };
+    auto add = [&](const Vector3d& p_W) {
+      const auto u1 = camera.project(X_CW1 * p_W), u2 = camera.project(X_CW2 * p_W);
+      if (!u1 || !u2 || !camera.in_image(*u1, 10) || !camera.in_image(*u2, 10)) return false;
+      c.x1.push_back(*u1), c.x2.push_back(*u2), c.u1.push_back(*u1), c.u2.push_back(*u2);
+      return true;
+    };
+    std::mt19937_64 rng(3);
+    std::uniform_real_distribution<double> y(-1.0, 1.0), z(0.6, 1.8);
+    for (int k = 0; k < n_wall;) {
+      const Vector3d p(3.0, y(rng), z(rng));
+      if (!in_hole(p.y(), p.z()) && add(p)) ++k;
+    }
+    for (int k = 0; k < n_back;) {
+      const Vector3d p(6.1, y(rng), z(rng));
+      if (through_hole(pose_1.p_W_B, p) && through_hole(pose_2.p_W_B, p) && add(p)) ++k;
+    }
+    // The current image: the hole bright on a dark wall.
+    image = cv::Mat(camera.height, camera.width, CV_8UC1, cv::Scalar(60));
+    const auto tl = camera.project(X_CW2 * Vector3d(3.0, -0.3, 1.5));
+    const auto br = camera.project(X_CW2 * Vector3d(3.0, 0.3, 0.9));
+    cv::rectangle(image, cv::Point(cvRound(tl->x()), cvRound(tl->y())),
+                  cv::Point(cvRound(br->x()), cvRound(br->y())), cv::Scalar(200), cv::FILLED);
+  }
+};
+
+TEST(IngressTargetTest, OpeningInFrontOfTheRoomIsFound) {
+  const WallScene s(150, 60);
+  PipelineParams params;
+  params.ingress.parallax_mask = false;  // the grey image's edges (paper)
+  const TargetOutcome t = find_ingress_target(s.c, s.image, cv::Mat(), params);
+  ASSERT_EQ(t.reason, Reason::kOk) << to_string(t.reason);
+  EXPECT_LT((t.estimate.p_W - Vector3d(3.0, 0.0, 1.2)).norm(), 0.01);
+  EXPECT_NEAR(t.estimate.size_m[0], 0.6, 0.01);
+  EXPECT_NEAR(t.estimate.size_m[1], 0.6, 0.01);
+}
+
+// Regression (closed-loop ingress_wide, seed 1): through a wide opening the room's back wall
+// held more matches than the wall around it and became the dominant plane; the wall's own
+// features then formed an inlier-free block and "openings" were reported at x = 6 m.
+TEST(IngressTargetTest, BackWallAsDominantPlaneIsNoOpening) {
+  const WallScene s(60, 150);
+  PipelineParams params;
+  params.ingress.parallax_mask = false;
+  const TargetOutcome t = find_ingress_target(s.c, s.image, cv::Mat(), params);
+  EXPECT_EQ(t.reason, Reason::kNoOpening) << "at " << t.estimate.p_W.transpose();
+  // Without the check the same frame gives an opening on the back wall's plane.
+  params.ingress.min_behind_share = 0.0;
+  const TargetOutcome unchecked = find_ingress_target(s.c, s.image, cv::Mat(), params);
+  ASSERT_EQ(unchecked.reason, Reason::kOk) << to_string(unchecked.reason);
+  EXPECT_GT(unchecked.estimate.p_W.x(), 5.0);
 }
 
 TEST(IngressParamsTest, LoadedFromTheVehicleFileAndValidated) {
@@ -179,8 +286,8 @@ TEST(IngressParamsTest, LoadedFromTheVehicleFileAndValidated) {
   EXPECT_EQ(p.pipeline.ingress.parallax_min_diff, 15);
   EXPECT_EQ(p.pipeline.ingress.cut_margin_px, 3);
   try {
-    load_node_params(ParamNode::from_string(
-        "vision:\n  ingress:\n    parallax_close_px: -4\n", "vehicle.yaml"));
+    load_node_params(
+        ParamNode::from_string("vision:\n  ingress:\n    parallax_close_px: -4\n", "vehicle.yaml"));
     FAIL() << "accepted a negative closing";
   } catch (const ParamError& e) {
     EXPECT_NE(std::string(e.what()).find("parallax_close_px"), std::string::npos) << e.what();
