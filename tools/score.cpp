@@ -190,6 +190,12 @@ Score Scorer::result() const {
   } else if (s.mission == target_t::MISSION_INGRESS) {
     const bool done = last_status_ && last_status_->phase == autonomy_status_t::PHASE_DONE;
     s.outcome = truth.collided ? "collided" : (after_crossing_ ? "through" : "incomplete");
+    // Autonomy's refusal of an opening the vehicle does not fit through (the paper's 60 cm
+    // window for a 67 cm vehicle) is the right end of such a flight, not an unfinished one.
+    if (s.outcome == "incomplete" && last_status_ &&
+        last_status_->phase == autonomy_status_t::PHASE_HOLD &&
+        last_status_->reason.rfind("refused", 0) == 0)
+      s.outcome = "refused";
     s.success = !truth.collided && after_crossing_.has_value() && done;
   } else {
     s.outcome = "incomplete";

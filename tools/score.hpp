@@ -25,7 +25,8 @@ struct Score {
   std::string scenario;
   int mission = 0;          ///< target_t::MISSION_*
   bool success = false;     ///< landed on the platform / flew through without contact
-  std::string outcome;      ///< landed, tipped, not_landed, through, collided, left_area, incomplete
+  std::string outcome;      ///< landed, tipped, not_landed, through, refused (autonomy refused
+                            ///< the target: too small), collided, left_area, incomplete
   std::string final_phase;  ///< last AUTONOMY_STATUS phase name
   std::optional<double> mission_time_s;             ///< GO (detection starts) to LANDED / DONE
   std::optional<double> touchdown_lateral_error_m;  ///< body origin to platform centre, in xy

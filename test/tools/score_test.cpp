@@ -164,6 +164,38 @@ TEST(ScoreTest, IngressThroughTheOpening) {
   EXPECT_EQ(sc.result().outcome, "collided");
 }
 
+TEST(ScoreTest, RefusedOpeningIsItsOwnOutcome) {
+  Scorer sc;
+  sim_truth_t t{};
+  t.utime = kT0;
+  t.scenario = "ingress";
+  t.pos[0] = 1.5;
+  t.has_opening = true;
+  t.opening_center_W[0] = 3.0;
+  t.opening_size_m[0] = t.opening_size_m[1] = 0.6;
+  t.wall_normal_W[0] = -1;
+  target_t w{};
+  w.mission = target_t::MISSION_INGRESS;
+  w.found = true;
+  w.size_m[0] = 0.595;
+  sc.add(w);
+  autonomy_status_t st{};
+  st.mission = target_t::MISSION_INGRESS;
+  st.phase = autonomy_status_t::PHASE_HOLD;
+  st.phase_name = "HOLD";
+  st.reason = "refused ingress: opening 0.595 x 0.600 m smaller than the vehicle + clearance";
+  sc.add(st);
+  sc.add(t);
+  Score s = sc.result();
+  EXPECT_FALSE(s.success);
+  EXPECT_EQ(s.outcome, "refused");
+  ASSERT_TRUE(s.opening_width_error_m);
+  EXPECT_NEAR(*s.opening_width_error_m, -0.005, 1e-9);
+  st.reason = "target lost (no target seen for 3.0 s); 2 retries exhausted: holding";
+  sc.add(st);
+  EXPECT_EQ(sc.result().outcome, "incomplete");
+}
+
 target_t vision_target(int64_t image_utime, bool found) {
   target_t t{};
   t.utime = image_utime;
