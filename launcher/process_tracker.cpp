@@ -64,6 +64,13 @@ void ProcessTracker::ended(int exit_code, int signal, int64_t now, const std::st
     state_ = success ? ProcState::kExited : ProcState::kFailed;
     return;
   }
+  // Exit code 2 is alight's configuration error (run_node_main: bad parameter, missing file);
+  // a restart reads the same files and fails the same way, hundreds of times a session.
+  if (signal == 0 && exit_code == kConfigErrorExitCode) {
+    state_ = ProcState::kFailed;
+    reason_ += " (configuration error: not restarted)";
+    return;
+  }
   const bool restart = spec_.restart == RestartPolicy::kAlways ||
                        (spec_.restart == RestartPolicy::kOnFailure && !success);
   if (!restart) {

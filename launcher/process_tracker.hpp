@@ -12,6 +12,9 @@
 
 namespace alight::launcher {
 
+/// The exit code of an alight node that found its configuration bad (common/node.hpp).
+constexpr int kConfigErrorExitCode = 2;
+
 enum class ProcState { kWaiting, kRunning, kBackoff, kExited, kStopped, kFailed };
 const char* to_string(ProcState s);
 

@@ -33,6 +33,19 @@ TEST(ProcessTrackerTest, CrashLoopBacksOffFrom10msDoublingTo1s) {
   EXPECT_EQ(t.restarts(), 9);  // the 10th restart has not happened yet
 }
 
+// Regression: a vehicle file naming a camera_info path that does not exist made vision exit
+// with code 2 at start; the launcher restarted it every second for the whole 300 s demo.
+TEST(ProcessTrackerTest, ConfigurationErrorIsNotRestarted) {
+  for (const auto policy : {RestartPolicy::kOnFailure, RestartPolicy::kAlways}) {
+    ProcessTracker t(spec(policy), BackoffParams{});
+    t.started(1, 0);
+    t.exited(kConfigErrorExitCode, 0, 1000);
+    EXPECT_EQ(t.state(), ProcState::kFailed);
+    EXPECT_FALSE(t.restart_due(10'000'000));
+    EXPECT_NE(t.last_reason().find("configuration error"), std::string::npos) << t.last_reason();
+  }
+}
+
 TEST(ProcessTrackerTest, HealthyRunResetsTheBackoff) {
   ProcessTracker t(spec(RestartPolicy::kOnFailure), BackoffParams{});
   t.started(1, 0);
