@@ -18,42 +18,12 @@
 #include "common/camera_mount.hpp"
 #include "common/msg_convert.hpp"
 #include "common/node.hpp"
+#include "vision/convert.hpp"
 #include "vision/diag_image.hpp"
 #include "vision/pipeline.hpp"
 
-namespace {
-
 using namespace alight;
 using namespace alight::vision;
-
-target_t to_msg(const FrameResult& r) {
-  target_t m{};
-  m.utime = r.utime;
-  m.ref_utime = r.ref_utime;
-  m.seq = r.seq;
-  m.mission = static_cast<int8_t>(r.mission);
-  m.found = r.found();
-  m.reason = static_cast<int8_t>(r.reason);
-  // A target cut by the image border still says where to look (REASON_PARTIAL_VIEW).
-  const bool has = r.found() || r.reason == Reason::kPartialView;
-  for (int i = 0; i < 3; ++i) {
-    m.p_W_target[i] = has ? r.target.p_W[i] : 0.0;
-    m.n_W[i] = has ? r.target.n_W[i] : 0.0;
-  }
-  m.pixel[0] = has ? r.target.pixel.x() : 0.0;
-  m.pixel[1] = has ? r.target.pixel.y() : 0.0;
-  m.target_height_m = has ? r.target.height_m : 0.0;
-  m.size_m[0] = has ? r.target.size_m[0] : 0.0;
-  m.size_m[1] = has ? r.target.size_m[1] : 0.0;
-  m.baseline_m = r.baseline_m;
-  m.n_features = r.n_features;
-  m.n_matches = r.n_matches;
-  m.n_inliers_dominant = r.target.n_inliers_dominant;
-  m.n_inliers_target = r.target.n_inliers_target;
-  return m;
-}
-
-}  // namespace
 
 int main(int argc, char** argv) {
   return alight::run_node_main("alight-vision", [&]() -> int {

@@ -25,11 +25,18 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
     au_params.ingress.vehicle_span_m = *config.rotor_span_m;
   }
   sim::Scenario scenario = sim::load_scenario(config.scenario_file);
-  if (config.opening_size_m && scenario.wall) scenario.wall->opening_size_m = *config.opening_size_m;
+  if (config.opening_size_m && scenario.wall)
+    scenario.wall->opening_size_m = *config.opening_size_m;
   const CameraMount mount =
       load_camera_mount(root, config.mission == Mission::kLanding ? "downward" : "forward");
 
-  sim::Simulator simulator(scenario, vehicle, config.seed);
+  std::optional<sim::CameraRig> rig;
+  if (config.camera_vision)
+    rig = sim::load_camera_rig(config.vehicle_file,
+                               config.mission == Mission::kLanding ? "downward" : "forward");
+  sim::Simulator simulator(scenario, vehicle, config.seed, rig);
+  PoseBuffer mocap_poses;
+  std::optional<sim::CameraFrame> pending_frame;  // waits for motion capture past its exposure
   outer_loop::PositionController controller(ol_params);
   Autonomy autonomy(au_params);
   OracleVisionParams vp = config.vision;
@@ -54,12 +61,22 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
 
   const auto step_autonomy = [&](Inputs in) {
     if (!takeoff_sent && pose) {
-      in.command = OperatorCommand{now, ++seq, "test", Command::kTakeoff, Mission::kNone,
-                                   Vector3d::Zero(), CommandAuth::kInternal};
+      in.command = OperatorCommand{now,
+                                   ++seq,
+                                   "test",
+                                   Command::kTakeoff,
+                                   Mission::kNone,
+                                   Vector3d::Zero(),
+                                   CommandAuth::kInternal};
       takeoff_sent = true;
     } else if (!go_sent && autonomy.phase() == Phase::kHover && !in.command) {
-      in.command = OperatorCommand{now, ++seq, "test", Command::kGo, config.mission,
-                                   Vector3d::Zero(), CommandAuth::kInternal};
+      in.command = OperatorCommand{now,
+                                   ++seq,
+                                   "test",
+                                   Command::kGo,
+                                   config.mission,
+                                   Vector3d::Zero(),
+                                   CommandAuth::kInternal};
       go_sent = true;
       r.tipped_before_go = simulator.truth().tipped;
     }
@@ -71,12 +88,13 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
 
   while (now < t_end) {
     const int64_t until = now + 5000;
-    const sim::AttitudeCommand cmd{att.utime,      att.roll_rad, att.pitch_rad,
+    const sim::AttitudeCommand cmd{att.utime,          att.roll_rad, att.pitch_rad,
                                    att.yaw_rate_radps, att.thrust_N, att.armed};
     simulator.step(cmd, until);
     for (const auto& m : simulator.take_mocap()) {
       now = std::max(now, m.pose.utime);
       pose = m.pose;
+      mocap_poses.add(m.pose);
       Inputs in;
       in.pose = m.pose;
       step_autonomy(in);
@@ -117,7 +135,26 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
             std::max({r.max_lateral_in_wall_m, std::abs(d.dot(t)), std::abs(d.z())});
       }
     }
-    if (auto m = vision.update(ot, until)) {
+    if (config.camera_vision) {
+      if (auto f = simulator.take_camera()) pending_frame = std::move(f);
+      if (pending_frame) {
+        PoseSample at;
+        const auto st = mocap_poses.lookup(pending_frame->utime, &at);
+        const bool waiting =
+            (st == PoseBuffer::Status::kAfterNewest || st == PoseBuffer::Status::kEmpty) &&
+            now - pending_frame->utime < 100'000;
+        if (!waiting) {
+          const auto m = config.camera_vision(
+              *pending_frame, st == PoseBuffer::Status::kOk ? std::optional(at) : std::nullopt);
+          pending_frame.reset();
+          if (m && !vision.silent) {
+            Inputs in;
+            in.target = *m;
+            step_autonomy(in);
+          }
+        }
+      }
+    } else if (auto m = vision.update(ot, until)) {
       Inputs in;
       in.target = *m;
       step_autonomy(in);
@@ -130,7 +167,8 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
       if (act.vision_silent && !vision.silent) event = true;
       vision.silent = act.vision_silent;
       if (act.drop_mocap_for_s) {
-        simulator.inject_mocap_dropout(now, now + static_cast<int64_t>(*act.drop_mocap_for_s * 1e6));
+        simulator.inject_mocap_dropout(now,
+                                       now + static_cast<int64_t>(*act.drop_mocap_for_s * 1e6));
         event = true;
       }
       if (act.command) {
@@ -144,17 +182,23 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
     }
     if (event) r.min_z_after_event_m = std::min(r.min_z_after_event_m, truth.state.p_W_B.z());
     const Phase ph = autonomy.phase();
-    if (trace && (truth.contact != sim::Contact::kNone || truth.tipped) && truth.utime % 50000 == 0) {
+    if (trace && (truth.contact != sim::Contact::kNone || truth.tipped) &&
+        truth.utime % 50000 == 0) {
       const Vector3d rpy = rpy_from_rotation(truth.state.q_WB.toRotationMatrix());
-      std::fprintf(stderr, "%.3f %s p %.3f %.3f %.3f v %.2f %.2f %.2f rpy %.1f %.1f %.1f thr %.2f contact %d armed %d tipped %d\n",
+      std::fprintf(stderr,
+                   "%.3f %s p %.3f %.3f %.3f v %.2f %.2f %.2f rpy %.1f %.1f %.1f thr %.2f contact "
+                   "%d armed %d tipped %d\n",
                    (now - t0) * 1e-6, phase_name(ph), truth.state.p_W_B.x(), truth.state.p_W_B.y(),
                    truth.state.p_W_B.z(), truth.state.v_W_B.x(), truth.state.v_W_B.y(),
                    truth.state.v_W_B.z(), rpy.x() * 57.3, rpy.y() * 57.3, rpy.z() * 57.3,
-                   truth.state.thrust_N, static_cast<int>(truth.contact), truth.state.armed, truth.tipped);
+                   truth.state.thrust_N, static_cast<int>(truth.contact), truth.state.armed,
+                   truth.tipped);
     }
     if (truth.platform) {
-      const double e = (truth.state.p_W_B.head<2>() - truth.platform->top_center_W.head<2>()).norm();
-      if (ph == Phase::kFinalDescent && r.error_at_final_descent_m < 0) r.error_at_final_descent_m = e;
+      const double e =
+          (truth.state.p_W_B.head<2>() - truth.platform->top_center_W.head<2>()).norm();
+      if (ph == Phase::kFinalDescent && r.error_at_final_descent_m < 0)
+        r.error_at_final_descent_m = e;
       if (ph == Phase::kLanded && r.error_at_touchdown_m < 0) r.error_at_touchdown_m = e;
       r.platform_yaw_rad = truth.platform->yaw_rad;
     }
@@ -185,7 +229,8 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
   r.n_rejected = autonomy.estimator().n_rejected();
   r.retries = autonomy.retries();
   if (truth.platform) {
-    r.touchdown_error_m = (truth.state.p_W_B.head<2>() - truth.platform->top_center_W.head<2>()).norm();
+    r.touchdown_error_m =
+        (truth.state.p_W_B.head<2>() - truth.platform->top_center_W.head<2>()).norm();
     r.estimate_error_W = autonomy.final_estimate() - truth.platform->top_center_W;
   } else if (truth.opening) {
     r.estimate_error_W = autonomy.final_estimate() - truth.opening->center_W;

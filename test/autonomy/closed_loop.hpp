@@ -1,9 +1,10 @@
 #pragma once
 // Closed-loop flights composed in-process, deterministic: alight_sim (vehicle, motion capture,
-// IMU; no camera rendering) + outer_loop::PositionController + autonomy::Autonomy + ORACLE
-// VISION (the test fixture standing in for the vision process). Used by the ctest closed-loop
-// tests (a few seeds) and by bench/autonomy (20 seeds per platform). Commands are issued as the
-// node's --auto-go does: TAKEOFF once a pose arrived, GO once hovering.
+// IMU; camera rendering only for real vision) + outer_loop::PositionController +
+// autonomy::Autonomy + ORACLE VISION (the test fixture standing in for the vision process) or,
+// with camera_vision set, the caller's real vision on rendered frames. Used by the ctest
+// closed-loop tests (a few seeds) and by bench/autonomy (20 seeds per platform). Commands are
+// issued as the node's --auto-go does: TAKEOFF once a pose arrived, GO once hovering.
 
 #include <cstdint>
 #include <functional>
@@ -11,7 +12,9 @@
 #include <string>
 
 #include "autonomy/autonomy.hpp"
+#include "common/pose_buffer.hpp"
 #include "oracle_vision.hpp"
+#include "sim/simulator.hpp"
 
 namespace alight::autonomy::test {
 
@@ -29,6 +32,13 @@ struct ClosedLoopConfig {
   std::optional<Vector2d> opening_size_m;
   /// Overrides the vehicle's rotor tip span (sim model and autonomy's fit check alike) [m].
   std::optional<double> rotor_span_m;
+  /// Real vision instead of the oracle: the simulator renders the mission's camera and this is
+  /// called with each frame and the motion-capture pose interpolated at its exposure (as the
+  /// vision node does; nullopt when motion capture has none within 100 ms); what it returns
+  /// reaches autonomy at once (processing time is not simulated).
+  std::function<std::optional<TargetMeasurement>(const sim::CameraFrame&,
+                                                 const std::optional<PoseSample>&)>
+      camera_vision;
 };
 
 struct ScriptActions {
@@ -39,15 +49,15 @@ struct ScriptActions {
 };
 
 struct ClosedLoopResult {
-  Phase phase = Phase::kIdle;   ///< final autonomy phase
+  Phase phase = Phase::kIdle;  ///< final autonomy phase
   std::string reason;
-  bool landed = false;          ///< sim: at rest on the platform top, motors off
+  bool landed = false;  ///< sim: at rest on the platform top, motors off
   bool tipped = false;
   bool collided = false;
   int n_collisions = 0;
-  bool armed = true;            ///< sim: motors armed at the end
+  bool armed = true;              ///< sim: motors armed at the end
   double touchdown_error_m = -1;  ///< lateral distance body origin - platform top centre [m]
-  double mission_time_s = 0;    ///< GO to LANDED / DONE [s]
+  double mission_time_s = 0;      ///< GO to LANDED / DONE [s]
   double sim_time_s = 0;
   Vector3d final_p_W = Vector3d::Zero();
   Vector3d estimate_error_W = Vector3d::Zero();  ///< final estimate - true target [m]

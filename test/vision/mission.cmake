@@ -18,3 +18,9 @@ if(TARGET alight_vision_mission)
     LIBS alight_vision_mission opencv_imgproc
     LABELS vision)
 endif()
+if(TARGET alight_vision_msgs)
+  alight_add_gtest(vision_convert_test
+    SOURCES ${CMAKE_CURRENT_LIST_DIR}/convert_test.cpp
+    LIBS alight_vision_msgs
+    LABELS vision)
+endif()

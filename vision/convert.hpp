@@ -1,0 +1,17 @@
+#pragma once
+// FrameResult (the pipeline's per-frame outcome) to the VISION_TARGET message (target_t), as the
+// alight-vision node publishes it; a free function so tests and the in-process closed loop use
+// exactly the node's conversion.
+
+#include <alight/target_t.hpp>
+
+#include "vision/pipeline.hpp"
+
+namespace alight::vision {
+
+/// Found targets carry every field; a target cut by the image border (REASON_PARTIAL_VIEW)
+/// still says where to look (waypoint, normal, pixel, sizes); other failures carry the reason
+/// and the counts only.
+target_t to_msg(const FrameResult& r);
+
+}  // namespace alight::vision
