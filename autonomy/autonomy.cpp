@@ -239,11 +239,13 @@ void Autonomy::start_refinement(const TargetMeasurement& m) {
   estimator_.reset();
   sizes_m_.clear();
   normal_sum_W_.setZero();
+  yaw4_sum_.setZero();
   first_sighting_W_ = m.p_W_target;
   if (m.found) {
     estimator_.add(m.p_W_target);
     sizes_m_.push_back(m.size_m);
     normal_sum_W_ += m.n_W;
+    yaw4_sum_ += Vector2d(std::cos(4 * m.yaw_rad), std::sin(4 * m.yaw_rad));
   } else {
     normal_sum_W_ += m.n_W;  // the plane's orientation is measured also from a part of it
   }
@@ -308,6 +310,13 @@ void Autonomy::finish_refinement() {
     }
     z_sp_m_ = pose_->p_W_B.z();
     land_here_ = false;
+    if (L.align_yaw_tol_deg > 0 && yaw4_sum_.norm() > 1e-9) {
+      // The platform's edges modulo 90 deg (the gear is square): the turn of at most 45 deg.
+      const double edges = std::atan2(yaw4_sum_.y(), yaw4_sum_.x()) / 4;
+      const double now = yaw_of(pose_->q_WB.toRotationMatrix());
+      const double k = std::round(wrap_angle(now - edges) / (M_PI / 2));
+      yaw_sp_rad_ = wrap_angle(edges + k * M_PI / 2);
+    }
     enter(Phase::kApproach, "refinement converged (eqs. 7-9): " + where);
   } else {
     const auto& I = params_.ingress;
@@ -359,6 +368,7 @@ void Autonomy::handle_target(const TargetMeasurement& m) {
   } else if (phase_ == Phase::kRefinement) {
     sizes_m_.push_back(m.size_m);
     normal_sum_W_ += m.n_W;
+    yaw4_sum_ += Vector2d(std::cos(4 * m.yaw_rad), std::sin(4 * m.yaw_rad));
     if (params_.refinement.one_waypoint_per_vantage) {
       if (at_vantage_since_) at_vantage_W_.push_back(m.p_W_target);  // added when the dwell ends
       return;
@@ -469,7 +479,11 @@ void Autonomy::step_phase(double dt_s) {
           target_lost("no target seen for " + fmt(since_found_s, 1) + " s in approach");
           return;
         }
-        if (e_r <= L.radial_tol_m) {  // descend only inside the prescribed volume
+        const bool turned =
+            L.align_yaw_tol_deg <= 0 || !pose_ ||
+            std::abs(wrap_angle(yaw_of(pose_->q_WB.toRotationMatrix()) - yaw_sp_rad_)) <=
+                L.align_yaw_tol_deg * M_PI / 180.0;
+        if (e_r <= L.radial_tol_m && turned) {  // descend only inside the prescribed volume
           z_sp_m_ -= L.descent_rate_mps * dt_s;
           sp_v_W_.z() = -L.descent_rate_mps;
         }

@@ -114,6 +114,7 @@ class Autonomy {
   std::vector<Vector3d> at_vantage_W_;
   Vector3d first_sighting_W_ = Vector3d::Zero();  // X_V,1, possibly from a partial view  // waypoints seen while dwelling at the current vantage
   Vector3d normal_sum_W_ = Vector3d::Zero();
+  Vector2d yaw4_sum_ = Vector2d::Zero();  // landing: sum of (cos, sin)(4 yaw), yaw modulo 90 deg
 
   // Approach.
   Vector3d estimate_W_ = Vector3d::Zero();

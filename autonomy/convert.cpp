@@ -76,6 +76,7 @@ TargetMeasurement from_msg(const target_t& msg) {
   t.p_W_target = Vector3d(msg.p_W_target[0], msg.p_W_target[1], msg.p_W_target[2]);
   t.n_W = Vector3d(msg.n_W[0], msg.n_W[1], msg.n_W[2]);
   t.size_m = Vector2d(msg.size_m[0], msg.size_m[1]);
+  t.yaw_rad = msg.target_yaw_rad;
   return t;
 }
 
@@ -95,6 +96,7 @@ target_t to_msg(const TargetMeasurement& t, int64_t seq) {
   }
   m.size_m[0] = t.size_m.x();
   m.size_m[1] = t.size_m.y();
+  m.target_yaw_rad = t.yaw_rad;
   return m;
 }
 

@@ -88,6 +88,8 @@ void LandingParams::validate() const {
   param_check(touchdown_still_s > 0, "touchdown_still_s", touchdown_still_s, "must be > 0");
   param_check(lost_timeout_s > 0, "lost_timeout_s", lost_timeout_s, "must be > 0");
   param_check(lost_check_height_m >= 0, "lost_check_height_m", lost_check_height_m, "must be >= 0");
+  param_check(align_yaw_tol_deg >= 0 && align_yaw_tol_deg < 45, "align_yaw_tol_deg",
+              align_yaw_tol_deg, "must be in [0, 45) (0: no turn)");
 }
 
 void IngressParams::validate() const {
@@ -202,6 +204,7 @@ AutonomyParams load_params(const ParamNode& root) {
     c->read("touchdown_still_s", l.touchdown_still_s);
     c->read("lost_timeout_s", l.lost_timeout_s);
     c->read("lost_check_height_m", l.lost_check_height_m);
+    c->read("align_yaw_tol_deg", l.align_yaw_tol_deg);
     c->finish();
   }
   if (auto c = n.optional_child("ingress")) {

@@ -53,6 +53,7 @@ struct TargetMeasurement {
   Vector3d n_W = Vector3d::UnitZ();        ///< target plane normal, towards the camera
   Vector2d size_m = Vector2d::Zero();      ///< landing: platform extent (long, short);
                                            ///< ingress: opening width, height [m]
+  double yaw_rad = 0.0;  ///< landing: platform long axis about world z, in (-pi/2, pi/2] [rad]
 };
 
 enum class Command { kNone, kTakeoff, kGo, kAbort, kLandHere, kKill, kNudge };

@@ -20,6 +20,7 @@ target_t to_msg(const FrameResult& r) {
   m.target_height_m = has ? r.target.height_m : 0.0;
   m.size_m[0] = has ? r.target.size_m[0] : 0.0;
   m.size_m[1] = has ? r.target.size_m[1] : 0.0;
+  m.target_yaw_rad = has ? r.target.yaw_rad : 0.0;
   m.baseline_m = r.baseline_m;
   m.n_features = r.n_features;
   m.n_matches = r.n_matches;

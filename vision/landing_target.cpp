@@ -141,6 +141,11 @@ TargetOutcome find_landing_target(const Correspondences& c, const PipelineParams
   e.height_m = w_floor->distance_m - w_top->distance_m;
   e.size_m[0] = hi[0] - lo[0];
   e.size_m[1] = hi[1] - lo[1];
+  // The plane is level (max_tilt_deg), so the long axis' direction in the world xy plane is the
+  // platform's yaw; autonomy aligns the gear with the edges before touch-down.
+  e.yaw_rad = std::atan2(ax_long.y(), ax_long.x());
+  if (e.yaw_rad <= -M_PI / 2) e.yaw_rad += M_PI;
+  if (e.yaw_rad > M_PI / 2) e.yaw_rad -= M_PI;
   const auto px = c.camera->project(w_top->p_C2);
   e.pixel = px ? *px : (K * aim_ray).hnormalized();
   for (int k = 0; k < 4; ++k) {  // the extent's rectangle, for the diagnostic image

@@ -34,6 +34,7 @@ struct TargetEstimate {
   Vector2d pixel = Vector2d::Zero();  ///< aiming point in the current (raw) image [px]
   double height_m = 0.0;              ///< landing: platform top above the floor [m]
   double size_m[2] = {0, 0};          ///< landing: extent (long, short); ingress: width, height [m]
+  double yaw_rad = 0.0;  ///< landing: long axis direction about world z, in (-pi/2, pi/2] [rad]
   int n_inliers_dominant = 0;         ///< floor / wall inliers
   int n_inliers_target = 0;           ///< platform inliers / off-wall features in the opening
   std::vector<Vector2d> outline;      ///< platform hull / opening box in the current image [px]

@@ -74,6 +74,27 @@ TEST(AutonomyTest, LandingMissionDetectsRefinesApproachesAndLands) {
   EXPECT_GT(w.out.status.mission_time_s, 1.0);
 }
 
+// Regression (Monte Carlo landing_c, 3 of 20 tipped): the gear square landed turned 25 deg to
+// a 21.6 cm wide ream, one foot within mm of its edge. The gear now turns to the platform's
+// edges (modulo 90 deg, the smaller turn) before it descends.
+TEST(AutonomyTest, GearTurnsToThePlatformsEdgesBeforeTouchdown) {
+  for (const double platform_yaw_deg : {25.0, -40.0, 70.0}) {
+    KinematicWorld w;
+    w.truth.platform_yaw_rad = platform_yaw_deg * M_PI / 180.0;
+    w.takeoff_and_hover();
+    w.send(Command::kGo, Mission::kLanding);
+    ASSERT_TRUE(w.run_until_phase(Phase::kApproach, 120));
+    const double z_approach = w.p.z();
+    ASSERT_TRUE(w.run_until_phase(Phase::kLanded, 60)) << w.out.status.reason;
+    // Modulo 90 deg the gear's sides lie along the platform's; the turn was the smaller one.
+    const double quarter = M_PI / 2;
+    const double off = wrap_angle(4 * (w.yaw - w.truth.platform_yaw_rad)) / 4;
+    EXPECT_LT(std::abs(off), 3.0 * M_PI / 180.0) << platform_yaw_deg;
+    EXPECT_LE(std::abs(wrap_angle(w.yaw)), quarter / 2 + 1e-6) << platform_yaw_deg;
+    EXPECT_GT(z_approach, 1.0);
+  }
+}
+
 TEST(AutonomyTest, DescendsOnlyWhileInsideTheRadialTolerance) {
   KinematicWorld w;
   w.takeoff_and_hover();

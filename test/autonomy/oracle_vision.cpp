@@ -58,6 +58,12 @@ std::optional<TargetMeasurement> OracleVision::update(const OracleTruth& truth, 
     const double a = truth.platform_size_m.x(), b = truth.platform_size_m.y();
     m.size_m = Vector2d(std::max(a, b) + params_.size_sigma_m * n01(rng_),
                         std::min(a, b) + params_.size_sigma_m * n01(rng_));
+    // The long axis (size x lies along the platform's yaw), in (-pi/2, pi/2] as vision gives it.
+    double yaw = truth.platform_yaw_rad + (a >= b ? 0.0 : M_PI / 2);
+    yaw = wrap_angle(yaw);
+    if (yaw <= -M_PI / 2) yaw += M_PI;
+    if (yaw > M_PI / 2) yaw -= M_PI;
+    m.yaw_rad = yaw;
   } else {
     m.n_W = truth.wall_normal_W.normalized();
     m.size_m = truth.opening_size_m + Vector2d(params_.size_sigma_m * n01(rng_),
