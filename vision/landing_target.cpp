@@ -3,6 +3,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <opencv2/imgproc.hpp>
 #include <cmath>
 
 #include "vision/alignment.hpp"
@@ -90,8 +91,10 @@ TargetOutcome find_landing_target(const Correspondences& c, const PipelineParams
     out.reason = Reason::kDecompositionFailed;
     return out;
   }
-  // Principal axes of the features in the plane; the centre of their extent is the aim point
-  // (the mean would follow the texture's feature density, the extent follows the edges).
+  // Axes of the features' minimum-area bounding rectangle in the plane (Freeman & Shapira 1975,
+  // rotating calipers, as cv::minAreaRect); the centre of that extent is the aim point (the mean
+  // would follow the texture's feature density, the extent follows the edges). Principal axes
+  // were 15-20 deg off on the nearly square 21.6 x 27.9 cm ream (Monte Carlo landing_c).
   Vector3d mean = Vector3d::Zero();
   for (const auto& p : pts_W) mean += p;
   mean /= static_cast<double>(pts_W.size());
@@ -102,13 +105,20 @@ TargetOutcome find_landing_target(const Correspondences& c, const PipelineParams
   }
   Vector3d e1 = n_W.unitOrthogonal();
   Vector3d e2 = n_W.cross(e1);
-  Eigen::Matrix2d C = Eigen::Matrix2d::Zero();
-  for (const auto& p : pts_W) {
-    const Eigen::Vector2d q((p - mean).dot(e1), (p - mean).dot(e2));
-    C += q * q.transpose();
+  std::vector<cv::Point2f> q2;
+  for (const auto& p : pts_W)
+    q2.emplace_back(static_cast<float>((p - mean).dot(e1)), static_cast<float>((p - mean).dot(e2)));
+  cv::Point2f corner[4];
+  cv::minAreaRect(q2).points(corner);
+  Eigen::Vector2d side_a(corner[1].x - corner[0].x, corner[1].y - corner[0].y);
+  Eigen::Vector2d side_b(corner[2].x - corner[1].x, corner[2].y - corner[1].y);
+  if (side_a.norm() < side_b.norm()) std::swap(side_a, side_b);
+  if (side_a.norm() < 1e-9) {
+    out.reason = Reason::kDecompositionFailed;
+    return out;
   }
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(C);
-  const Eigen::Vector2d a_long = eig.eigenvectors().col(1), a_short = eig.eigenvectors().col(0);
+  const Eigen::Vector2d a_long = side_a.normalized();
+  const Eigen::Vector2d a_short(-a_long.y(), a_long.x());
   const Vector3d ax_long = a_long.x() * e1 + a_long.y() * e2;
   const Vector3d ax_short = a_short.x() * e1 + a_short.y() * e2;
   double lo[2] = {1e9, 1e9}, hi[2] = {-1e9, -1e9};

@@ -43,6 +43,12 @@ TEST_P(LandingMissionTest, PlatformCentreAndHeightWithinTwoCentimetres) {
       r.target.n_inliers_target, r.baseline_m);
   EXPECT_LT(err, 0.02);
   EXPECT_NEAR(r.target.height_m, scene.platform->size_m.z(), 0.015);
+  // The platform's edges modulo 90 deg (autonomy turns the square gear to them).
+  const double edge_error =
+      std::abs(wrap_angle(4 * (r.target.yaw_rad - scene.platform->yaw_rad)) / 4);
+  std::printf("  yaw %.1f deg, true %.1f deg: edge error %.1f deg\n", r.target.yaw_rad * 180 / M_PI,
+              scene.platform->yaw_rad * 180 / M_PI, edge_error * 180 / M_PI);
+  EXPECT_LT(edge_error, 5 * M_PI / 180);
   // The visible extent of the features cannot exceed the platform's top (plus feature radius).
   EXPECT_LT(r.target.size_m[0], std::max(scene.platform->size_m.x(), scene.platform->size_m.y()) + 0.05);
   EXPECT_GT(r.target.size_m[1], 0.5 * std::min(scene.platform->size_m.x(), scene.platform->size_m.y()));
