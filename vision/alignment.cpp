@@ -3,6 +3,7 @@
 
 #include <Eigen/Dense>
 #include <array>
+#include <cassert>
 #include <cmath>
 #include <limits>
 
@@ -43,11 +44,20 @@ double set_cost(const Matrix3d& R, const Vector3d& t, const Vector3d& n,
   return c;
 }
 
-/// Levenberg-Marquardt on the joint transfer error; returns the final cost.
+/// Residual of the rotation prior (zero without one).
+Vector3d prior_residual(const Matrix3d& R, const std::optional<RotationPrior>& prior) {
+  if (!prior) return Vector3d::Zero();
+  const Eigen::AngleAxisd d(prior->R_21.transpose() * R);
+  return prior->weight * d.angle() * d.axis();
+}
+
+/// Levenberg-Marquardt on the joint transfer error (and the rotation prior); returns the final
+/// cost.
 template <class CostFn>
 double refine(State& s, double cost, int iterations, const std::vector<Vector3d>& rays_1a,
               const std::vector<Vector3d>& rays_2a, const std::vector<Vector3d>& rays_1b,
-              const std::vector<Vector3d>& rays_2b, const CostFn& cost_of) {
+              const std::vector<Vector3d>& rays_2b, const std::optional<RotationPrior>& prior,
+              const CostFn& cost_of) {
   double lambda = 1e-4;
   for (int it = 0; it < iterations; ++it) {
     // Gauss-Newton normal equations from forward-difference Jacobians, point by point.
@@ -86,6 +96,13 @@ double refine(State& s, double cost, int iterations, const std::vector<Vector3d>
     };
     accumulate(rays_1a, rays_2a, true);
     accumulate(rays_1b, rays_2b, false);
+    if (prior) {
+      const Vector3d r0 = prior_residual(s.R, prior);
+      Eigen::Matrix<double, 3, 12> J = Eigen::Matrix<double, 3, 12>::Zero();
+      for (int k = 0; k < 3; ++k) J.col(k) = (prior_residual(shifted[k].R, prior) - r0) / h;
+      JtJ.noalias() += J.transpose() * J;
+      Jtr.noalias() += J.transpose() * r0;
+    }
     bool improved = false;
     while (lambda < 1e6) {
       Eigen::Matrix<double, 12, 12> A = JtJ;
@@ -108,12 +125,21 @@ double refine(State& s, double cost, int iterations, const std::vector<Vector3d>
 
 }  // namespace
 
+std::optional<RotationPrior> rotation_prior(const Matrix3d& R_21_mocap, const AlignParams& params,
+                                            double focal_px) {
+  assert(focal_px > 0);
+  if (params.rotation_prior_sigma_deg <= 0) return std::nullopt;
+  const double sigma_rad = params.rotation_prior_sigma_deg * M_PI / 180.0;
+  return RotationPrior{R_21_mocap, params.feature_sigma_px / focal_px / sigma_rad};
+}
+
 Result<TwoPlaneMotion> align_two_planes(const Matrix3d& H_a, const std::vector<Vector3d>& rays_1a,
                                         const std::vector<Vector3d>& rays_2a, const Matrix3d& H_b,
                                         const std::vector<Vector3d>& rays_1b,
                                         const std::vector<Vector3d>& rays_2b,
                                         const AlignParams& params,
-                                        const DecompositionParams& dparams) {
+                                        const DecompositionParams& dparams,
+                                        const std::optional<RotationPrior>& prior) {
   using R = Result<TwoPlaneMotion>;
   const auto all_a = decompose_homography(H_a, rays_1a, dparams);
   const auto all_b = decompose_homography(H_b, rays_1b, dparams);
@@ -125,8 +151,11 @@ Result<TwoPlaneMotion> align_two_planes(const Matrix3d& H_a, const std::vector<V
   constexpr double kDeg = M_PI / 180.0;
   const double max_r = params.max_rotation_disagreement_deg * kDeg;
   const double max_t = params.max_translation_disagreement_deg * kDeg;
-  auto cost_of = [&](const State& x) {
+  auto transfer_cost = [&](const State& x) {
     return set_cost(x.R, x.t, x.na, rays_1a, rays_2a) + set_cost(x.R, x.t, x.nb, rays_1b, rays_2b);
+  };
+  auto cost_of = [&](const State& x) {
+    return transfer_cost(x) + prior_residual(x.R, prior).squaredNorm();
   };
   // Pairs of candidates whose motions agree within the limits. Two parallel planes (a floor and
   // a platform top) have false solutions whose translations agree (both along the normal), so
@@ -144,22 +173,24 @@ Result<TwoPlaneMotion> align_two_planes(const Matrix3d& H_a, const std::vector<V
       x.R = nearest_rotation(a.R_21 + b.R_21);  // mean motion, each plane keeps its own n~
       x.t = (a.t_12 + b.t_12).normalized();
       x.na = a.n_1, x.nb = b.n_1;
+      const State x0 = x;
       const double c0 = cost_of(x);
       const double c = refine(x, c0, std::min(3, params.max_iterations), rays_1a, rays_2a, rays_1b,
-                              rays_2b, cost_of);
+                              rays_2b, prior, cost_of);
       if (c < cost) {
         s = x, cost = c, any = true;
         out.rotation_disagreement_rad = dr, out.translation_disagreement_rad = dt;
-        out.rms_before = std::sqrt(c0 / double(rays_1a.size() + rays_1b.size()));
+        out.rms_before = std::sqrt(transfer_cost(x0) / double(rays_1a.size() + rays_1b.size()));
       }
     }
   if (!any) return R::fail(Reason::kDecompositionFailed);
   const size_t n_points = rays_1a.size() + rays_1b.size();
-  cost = refine(s, cost, params.max_iterations, rays_1a, rays_2a, rays_1b, rays_2b, cost_of);
+  refine(s, cost, params.max_iterations, rays_1a, rays_2a, rays_1b, rays_2b, prior, cost_of);
   out.R_21 = nearest_rotation(s.R);
   out.t_12 = s.t.normalized();
   out.n_a = s.na, out.n_b = s.nb;
-  out.rms_after = std::sqrt(cost / double(std::max<size_t>(1, n_points)));
+  out.rms_after = std::sqrt(transfer_cost(s) / double(std::max<size_t>(1, n_points)));
+  out.used_rotation_prior = prior.has_value();
   // The refined planes must still lie in front of both cameras.
   if (positive_depth({out.plane_a()}, rays_1a, rays_2a, dparams).empty() ||
       positive_depth({out.plane_b()}, rays_1b, rays_2b, dparams).empty())

@@ -27,9 +27,24 @@ struct TwoPlaneMotion {
   double rotation_disagreement_rad = 0;  ///< between the two separate decompositions
   double translation_disagreement_rad = 0;
 
+  bool used_rotation_prior = false;
+
   PlaneMotion plane_a() const { return {R_21, t_12, n_a}; }
   PlaneMotion plane_b() const { return {R_21, t_12, n_b}; }
 };
+
+/// A prior on R21 from motion capture (beyond the paper): a residual weight * log(R_prior^T R21)
+/// joins the transfer errors, so weight is the transfer error [normalised image units] that one
+/// radian of disagreement costs as much as: (feature sigma / focal length) / (prior sigma).
+struct RotationPrior {
+  Matrix3d R_21 = Matrix3d::Identity();
+  double weight = 0.0;
+};
+
+/// The prior of params (rotation_prior_sigma_deg, feature_sigma_px) for a camera of focal length
+/// focal_px; none when the prior is switched off.
+std::optional<RotationPrior> rotation_prior(const Matrix3d& R_21_mocap, const AlignParams& params,
+                                            double focal_px);
 
 /// Aligns the calibrated homographies of two planes given each one's inlier rays (normalised,
 /// z = 1) in both images. Fails with kSmallBaseline (no translation in either), or
@@ -40,6 +55,7 @@ Result<TwoPlaneMotion> align_two_planes(const Matrix3d& H_a, const std::vector<V
                                         const std::vector<Vector3d>& rays_1b,
                                         const std::vector<Vector3d>& rays_2b,
                                         const AlignParams& params = {},
-                                        const DecompositionParams& dparams = {});
+                                        const DecompositionParams& dparams = {},
+                                        const std::optional<RotationPrior>& prior = std::nullopt);
 
 }  // namespace alight::vision

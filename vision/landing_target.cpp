@@ -44,11 +44,12 @@ TargetOutcome find_landing_target(const Correspondences& c, const PipelineParams
 
   const Matrix3d K = c.camera->K();
   const Matrix3d K_inv = K.inverse();
-  const auto al =
-      align_two_planes(calibrate_homography(first.H, K), rays_of(c.x1, first.inlier, K_inv),
-                       rays_of(c.x2, first.inlier, K_inv), calibrate_homography(second.H, K),
-                       rays_of(c.x1, second.inlier, K_inv), rays_of(c.x2, second.inlier, K_inv),
-                       params.align, params.decomposition);
+  const MocapMotion mocap = mocap_motion(c.pose_1, c.pose_2, *c.mount);
+  const auto al = align_two_planes(
+      calibrate_homography(first.H, K), rays_of(c.x1, first.inlier, K_inv),
+      rays_of(c.x2, first.inlier, K_inv), calibrate_homography(second.H, K),
+      rays_of(c.x1, second.inlier, K_inv), rays_of(c.x2, second.inlier, K_inv), params.align,
+      params.decomposition, rotation_prior(mocap.R_21, params.align, K(0, 0)));
   if (!al) {
     out.reason = al.reason();
     return out;
@@ -72,7 +73,6 @@ TargetOutcome find_landing_target(const Correspondences& c, const PipelineParams
   }
 
   // Platform features on the platform plane, in world (eqs. 4-6 with the motion-capture scale).
-  const MocapMotion mocap = mocap_motion(c.pose_1, c.pose_2, *c.mount);
   if (mocap.baseline_m < params.waypoint.min_baseline_m) {
     out.reason = Reason::kSmallBaseline;
     return out;

@@ -126,6 +126,14 @@ NodeParams load_node_params(const ParamNode& root) {
     read_seed(*c, "seed", q.homography.seed);
     c->finish();
   }
+  if (auto c = n.optional_child("align")) {
+    c->read("max_rotation_disagreement_deg", q.align.max_rotation_disagreement_deg);
+    c->read("max_translation_disagreement_deg", q.align.max_translation_disagreement_deg);
+    c->read("max_iterations", q.align.max_iterations);
+    c->read("rotation_prior_sigma_deg", q.align.rotation_prior_sigma_deg);
+    c->read("feature_sigma_px", q.align.feature_sigma_px);
+    c->finish();
+  }
   if (auto c = n.optional_child("waypoint")) {
     c->read("min_baseline_m", q.waypoint.min_baseline_m);
     c->read("max_translation_angle_deg", q.waypoint.max_translation_angle_deg);

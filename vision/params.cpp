@@ -64,6 +64,9 @@ void AlignParams::validate() const {
   param_check(max_translation_disagreement_deg > 0.0, "max_translation_disagreement_deg",
               max_translation_disagreement_deg, "must be > 0");
   param_check(max_iterations >= 0, "max_iterations", max_iterations, "must be >= 0");
+  param_check(rotation_prior_sigma_deg >= 0.0, "rotation_prior_sigma_deg", rotation_prior_sigma_deg,
+              "must be >= 0 (0 = no prior)");
+  param_check(feature_sigma_px > 0.0, "feature_sigma_px", feature_sigma_px, "must be > 0");
 }
 
 void WaypointParams::validate() const {

@@ -119,6 +119,51 @@ TEST(AlignmentTest, HomographiesOfDifferentMotionsAreRefused) {
   EXPECT_EQ(a.reason(), Reason::kDecompositionFailed);
 }
 
+TEST(AlignmentTest, RotationPriorIsOffByDefaultAndWeighsFeatureNoiseAgainstItsSigma) {
+  const Matrix3d R = Eigen::AngleAxisd(0.1, Vector3d(0, 0, 1)).toRotationMatrix();
+  EXPECT_FALSE(rotation_prior(R, AlignParams{}, 500.0));
+  AlignParams p;
+  p.rotation_prior_sigma_deg = 0.1;
+  p.feature_sigma_px = 0.5;
+  const auto prior = rotation_prior(R, p, 500.0);
+  ASSERT_TRUE(prior);
+  EXPECT_TRUE(prior->R_21.isApprox(R));
+  // One sigma of rotation costs as much as one feature one sigma off.
+  EXPECT_NEAR(prior->weight * 0.1 * kDeg, 0.5 / 500.0, 1e-12);
+}
+
+TEST(AlignmentTest, AccurateRotationPriorRemovesTheDistanceErrorOfTheBasReliefAmbiguity) {
+  // A narrow field of view at 0.5 px noise: a rotation error across the baseline is absorbed by |t|/d,
+  // so vision alone gets the planes' distances (in baselines) a few percent wrong. With motion
+  // capture's R21 as a prior the rotation, and with it the distances, are pinned.
+  double r_alone = 0, r_prior = 0, d_alone = 0, d_prior = 0;
+  AlignParams with;
+  with.rotation_prior_sigma_deg = 0.01;
+  for (uint64_t seed = 100; seed < 120; ++seed) {
+    const TwoPlanes s = make(seed, 0.5);
+    const Fitted f = fit(s);
+    const auto alone = align_two_planes(f.Ha, f.r1a, f.r2a, f.Hb, f.r1b, f.r2b);
+    const auto prior = rotation_prior(s.v.R_21, with, s.v.K(0, 0));
+    const auto aided = align_two_planes(f.Ha, f.r1a, f.r2a, f.Hb, f.r1b, f.r2b, with,
+                                        DecompositionParams{}, prior);
+    ASSERT_TRUE(alone) << seed << " " << to_string(alone.reason());
+    ASSERT_TRUE(aided) << seed << " " << to_string(aided.reason());
+    EXPECT_FALSE(alone->used_rotation_prior);
+    EXPECT_TRUE(aided->used_rotation_prior);
+    EXPECT_TRUE(is_rotation(aided->R_21, 1e-9));
+    const double d_true = s.d_floor / s.v.t_12_m.norm();
+    r_alone += rotation_angle(alone->R_21, s.v.R_21) / kDeg / 20;
+    r_prior += rotation_angle(aided->R_21, s.v.R_21) / kDeg / 20;
+    d_alone += std::abs(alone->plane_a().distance_1() / d_true - 1) / 20;
+    d_prior += std::abs(aided->plane_a().distance_1() / d_true - 1) / 20;
+    EXPECT_LT(rotation_angle(aided->R_21, s.v.R_21), 0.03 * kDeg) << seed;
+  }
+  std::printf("mean R21 error: alone %.4f deg, prior %.4f deg; floor distance error: alone %.3f%%, "
+              "prior %.3f%%\n", r_alone, r_prior, 100 * d_alone, 100 * d_prior);
+  EXPECT_LT(d_prior, 0.5 * d_alone);
+  EXPECT_LT(r_prior, 0.5 * r_alone);
+}
+
 TEST(AlignmentTest, PureRotationIsSmallBaseline) {
   const Matrix3d R = Eigen::AngleAxisd(0.1, Vector3d(0, 0, 1)).toRotationMatrix();
   std::vector<Vector3d> r1 = {{0, 0, 1}, {0.1, 0, 1}, {0, 0.1, 1}, {0.1, 0.1, 1}}, r2;

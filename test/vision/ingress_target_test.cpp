@@ -298,5 +298,21 @@ TEST(IngressParamsTest, LoadedFromTheVehicleFileAndValidated) {
                ParamError);
 }
 
+TEST(AlignParamsTest, RotationPriorLoadedFromTheVehicleFileAndValidated) {
+  const auto p = load_node_params(ParamNode::from_string(
+      "vision:\n  align:\n    rotation_prior_sigma_deg: 0.05\n    feature_sigma_px: 0.3\n",
+      "vehicle.yaml"));
+  EXPECT_EQ(p.pipeline.align.rotation_prior_sigma_deg, 0.05);
+  EXPECT_EQ(p.pipeline.align.feature_sigma_px, 0.3);
+  try {
+    load_node_params(ParamNode::from_string(
+        "vision:\n  align:\n    rotation_prior_sigma_deg: -1\n", "vehicle.yaml"));
+    FAIL() << "accepted a negative sigma";
+  } catch (const ParamError& e) {
+    EXPECT_NE(std::string(e.what()).find("rotation_prior_sigma_deg"), std::string::npos)
+        << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace alight::vision

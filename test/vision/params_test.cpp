@@ -43,6 +43,9 @@ TEST(VisionParamsTest, BadValuesNameTheirField) {
   expect_rejects<DecompositionParams>([](auto& p) { p.min_front_fraction = 0.2; },
                                       "min_front_fraction");
   expect_rejects<AlignParams>([](auto& p) { p.max_iterations = -1; }, "max_iterations");
+  expect_rejects<AlignParams>([](auto& p) { p.rotation_prior_sigma_deg = -0.1; },
+                              "rotation_prior_sigma_deg");
+  expect_rejects<AlignParams>([](auto& p) { p.feature_sigma_px = 0; }, "feature_sigma_px");
   expect_rejects<WaypointParams>([](auto& p) { p.min_baseline_m = 0; }, "min_baseline_m");
 }
 
