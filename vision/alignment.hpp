@@ -7,7 +7,8 @@
 // candidates whose rotation and translation agree is the physical one (the false solution of a
 // homography depends on its plane, so false solutions of two planes disagree). From that pair a
 // joint Levenberg-Marquardt refinement of R21, t12 and both n~ over both inlier sets minimises
-// the transfer error, which makes the two homographies consistent by construction.
+// the Cauchy-weighted transfer error (IRLS, AlignParams::robust), which makes the two
+// homographies consistent by construction.
 
 #include <optional>
 #include <vector>

@@ -131,11 +131,7 @@ Matrix3d refine_transfer(const Matrix3d& H0, const std::vector<Vector2d>& x1,
     if (!robust) return;
     std::vector<double> e(idx.size());
     for (size_t k = 0; k < idx.size(); ++k) e[k] = transfer_error(G, x1[idx[k]], x2[idx[k]]);
-    std::vector<double> sorted = e;
-    std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
-    const double sigma = sorted[sorted.size() / 2] / 1.177;
-    const double c = 2.385 * std::max(sigma, 1e-3);
-    for (size_t k = 0; k < idx.size(); ++k) w[k] = 1.0 / (1.0 + (e[k] / c) * (e[k] / c));
+    w = cauchy_weights(e, 1e-3);
   };
   auto cost_of = [&](const Matrix3d& G) {
     double c = 0.0;
@@ -244,6 +240,17 @@ std::optional<Matrix3d> homography_dlt(const std::vector<Vector2d>& x1,
 
 double transfer_error(const Matrix3d& H, const Vector2d& x1, const Vector2d& x2) {
   return ((H * x1.homogeneous()).hnormalized() - x2).norm();
+}
+
+std::vector<double> cauchy_weights(const std::vector<double>& e, double min_sigma) {
+  if (e.empty()) return {};
+  std::vector<double> sorted = e;
+  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+  const double sigma = std::max(sorted[sorted.size() / 2] / 1.177, min_sigma);
+  const double c = 2.385 * sigma;
+  std::vector<double> w(e.size());
+  for (size_t k = 0; k < e.size(); ++k) w[k] = 1.0 / (1.0 + (e[k] / c) * (e[k] / c));
+  return w;
 }
 
 double corner_error(const Matrix3d& H_a, const Matrix3d& H_b, double width, double height) {

@@ -130,6 +130,7 @@ NodeParams load_node_params(const ParamNode& root) {
     c->read("max_rotation_disagreement_deg", q.align.max_rotation_disagreement_deg);
     c->read("max_translation_disagreement_deg", q.align.max_translation_disagreement_deg);
     c->read("max_iterations", q.align.max_iterations);
+    c->read("robust", q.align.robust);
     c->read("rotation_prior_sigma_deg", q.align.rotation_prior_sigma_deg);
     c->read("feature_sigma_px", q.align.feature_sigma_px);
     c->finish();

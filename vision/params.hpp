@@ -94,6 +94,9 @@ struct AlignParams {
   double max_rotation_disagreement_deg = 5.0;      ///< planes' R21 must agree within [deg]
   double max_translation_disagreement_deg = 20.0;  ///< planes' t12 directions agree within [deg]
   int max_iterations = 15;  ///< Levenberg-Marquardt iterations of the joint refinement [-]
+  /// Joint refinement Cauchy-weighted (IRLS, each plane's scale from its median residual)
+  /// instead of plain least squares, as the final fit of each homography.
+  bool robust = true;
   /// Motion capture's R21 as a prior on the joint refinement, with this standard deviation
   /// [deg]; 0 = vision alone (the paper). Breaks the rotation-translation (bas-relief) ambiguity
   /// of a narrow field of view that leaves the planes' distances a few percent off.

@@ -300,8 +300,11 @@ TEST(IngressParamsTest, LoadedFromTheVehicleFileAndValidated) {
 
 TEST(AlignParamsTest, RotationPriorLoadedFromTheVehicleFileAndValidated) {
   const auto p = load_node_params(ParamNode::from_string(
-      "vision:\n  align:\n    rotation_prior_sigma_deg: 0.05\n    feature_sigma_px: 0.3\n",
+      "vision:\n  align:\n    rotation_prior_sigma_deg: 0.05\n    feature_sigma_px: 0.3\n"
+      "    robust: false\n",
       "vehicle.yaml"));
+  EXPECT_TRUE(AlignParams{}.robust);
+  EXPECT_FALSE(p.pipeline.align.robust);
   EXPECT_EQ(p.pipeline.align.rotation_prior_sigma_deg, 0.05);
   EXPECT_EQ(p.pipeline.align.feature_sigma_px, 0.3);
   try {

@@ -1,17 +1,21 @@
 // Two rendered views (alight_sim, issue 3) of a floor with a platform of the paper (landing_a:
 // 43.2 x 27.9 x 10.9 cm): the whole library chain from pixels to the world waypoint. Camera at
 // about 1.5 m, 20 cm baseline. Both planes are found, the decomposition agrees with the true
-// motion and the platform-centre waypoint lands within 1 cm of the truth when motion capture's
-// relative rotation is a prior on the alignment (AlignParams::rotation_prior_sigma_deg).
+// motion and the platform-centre waypoint lands within 1 cm of the truth, vision alone (the
+// paper: motion capture gives the scale only).
 //
-// Vision alone (the paper) the waypoint is within 1 cm across the line of sight, but along it
-// only within ~3 cm: with a 20 cm baseline at 1.5 m a rotation error of delta about the axis
-// across the baseline moves image points like a translation of delta * depth, so the estimated
-// |t| / d absorbs it (bas-relief ambiguity): seed 6 has R21 0.19 deg off and both planes' distances
-// 2.2% short (0.0033 rad / (0.2 m / 1.5 m) = 2.5%). Seeds 1-20 vision alone: 17 within 1 cm,
-// worst 2.8 cm; with an exact rotation prior: all within 0.6 mm. With the simulator's
-// motion-capture noise (0.3 mm, 0.086 deg per axis and sample) the relative rotation is no
-// better than the vision's, and its position noise alone moves the scale by ~0.2% (3 mm).
+// Regression (seeds 6, 8, 12): with a plain least-squares joint refinement the aligned R21 came
+// out worse than either plane's own decomposition (seed 6: 0.19 deg against 0.05 deg each), and
+// with a 20 cm baseline at 1.5 m a rotation error delta about the axis across the baseline moves
+// image points like a translation of delta * depth, so |t| / d absorbed it (bas-relief
+// ambiguity): both distances 2.2% short, the waypoint 2.8 cm off along the line of sight. The
+// Cauchy-weighted joint refinement (AlignParams::robust) keeps platform-edge features and near
+// misses from pulling the shared motion: seeds 1-20, R21 within 0.07 deg, waypoint within 8.4 mm.
+//
+// Motion capture's relative rotation as a prior (AlignParams::rotation_prior_sigma_deg, off by
+// default): exact, every waypoint is within 0.3 mm; with the simulator's motion-capture noise
+// (0.3 mm, 0.086 deg per axis and sample) the relative rotation is worse than the vision's
+// (waypoints within 1.9 cm), which is why the prior stays off.
 #include <gtest/gtest.h>
 
 #include <random>
@@ -136,7 +140,7 @@ TEST_P(SimTwoViewsTest, PlatformWaypointWithinOneCentimetreAtOnePointFiveMetres)
 
   // Decomposition against the truth.
   const MocapMotion truth = mocap_motion(pose_1, pose_2, rig.mount);
-  EXPECT_LT(rotation_angle(al->R_21, truth.R_21), (mode == Mocap::kExactPrior ? 0.02 : 0.25) * kDeg);
+  EXPECT_LT(rotation_angle(al->R_21, truth.R_21), (mode == Mocap::kExactPrior ? 0.02 : noisy ? 0.25 : 0.1) * kDeg);
   EXPECT_LT(direction_angle(al->t_12, truth.t_12), 2 * kDeg);
   const Vector3d n_true = -(X_WC(pose_1).linear().transpose() * Vector3d::UnitZ());
   EXPECT_LT(direction_angle(al->n_a, n_true), 2 * kDeg);
@@ -150,7 +154,8 @@ TEST_P(SimTwoViewsTest, PlatformWaypointWithinOneCentimetreAtOnePointFiveMetres)
   const HomographyFit& floor_fit = a_is_top ? *top : *floor;
   const HomographyFit& top_fit = a_is_top ? *floor : *top;
   const double h_cam = X_WC(pose_1).translation().z();  // distance of camera 1 from the floor
-  const double distance_tol_m = mode == Mocap::kExactPrior ? 0.01 : 0.035;
+  // Vision alone the floor's distance is within 1.05 cm (seed 8), the waypoint within 8.4 mm.
+  const double distance_tol_m = mode == Mocap::kExactPrior ? 0.01 : noisy ? 0.035 : 0.015;
   EXPECT_NEAR(floor_plane.distance_1() * truth.baseline_m, h_cam, distance_tol_m);
   EXPECT_NEAR(top_plane.distance_1() * truth.baseline_m, h_cam - p_W_top.z(), distance_tol_m);
   // The estimated homographies against the true ones (pixels, undistorted).
@@ -177,7 +182,7 @@ TEST_P(SimTwoViewsTest, PlatformWaypointWithinOneCentimetreAtOnePointFiveMetres)
               int(seed), int(mode), rotation_angle(al->R_21, truth.R_21) / kDeg,
               (w->p_W - p_W_top).norm(), (w->p_W - p_W_top).head<2>().norm());
   EXPECT_LT((w->p_W - p_W_top).head<2>().norm(), 0.01);
-  EXPECT_LT((w->p_W - p_W_top).norm(), mode == Mocap::kExactPrior ? 0.01 : 0.035);
+  EXPECT_LT((w->p_W - p_W_top).norm(), noisy ? 0.035 : 0.01);
 }
 
 // Seeds move the platform and change textures and lighting.
