@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <fstream>
 
+#include "common/heap.hpp"
 #include "common/params.hpp"
 
 namespace alight {
@@ -185,6 +186,9 @@ int Node::run() {
 }
 
 int run_node_main(const char* node_name, const std::function<int()>& body) {
+  if (!retain_freed_memory())
+    spdlog::warn("{}: glibc refused the heap settings: frame buffers page-fault in every frame",
+                 node_name);
   try {
     return body();
   } catch (const ParamError& e) {

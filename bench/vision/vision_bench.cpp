@@ -12,7 +12,10 @@
 #include <opencv2/core.hpp>
 #include <opencv2/features2d.hpp>
 #include <random>
+#include <string>
+#include <vector>
 
+#include "common/heap.hpp"
 #include "test/vision/test_images.hpp"
 #include "vision/alignment.hpp"
 #include "vision/homography.hpp"
@@ -61,8 +64,16 @@ struct Stages {
 }  // namespace
 
 int main(int argc, char** argv) {
-  const int frames = argc > 1 ? std::atoi(argv[1]) : 40;
-  const int repeats = argc > 2 ? std::atoi(argv[2]) : 3;
+  // vision_bench [FRAMES [REPEATS]] [--default-heap]: the heap as the nodes set it
+  // (retain_freed_memory), or glibc's defaults, under which every frame's large buffers
+  // page-fault in again.
+  std::vector<std::string> args(argv + 1, argv + argc);
+  const auto default_heap = std::find(args.begin(), args.end(), "--default-heap");
+  const bool retained = default_heap == args.end();
+  if (!retained) args.erase(default_heap);
+  if (retained && !retain_freed_memory()) std::fprintf(stderr, "glibc refused the heap settings\n");
+  const int frames = args.size() > 0 ? std::atoi(args[0].c_str()) : 40;
+  const int repeats = args.size() > 1 ? std::atoi(args[1].c_str()) : 3;
   cv::setNumThreads(1);
   std::mt19937_64 rng(2011);
   std::uniform_real_distribution<double> u(-1, 1);
@@ -306,9 +317,9 @@ int main(int argc, char** argv) {
   }
 
   std::printf(
-      "vision_bench: %d frames x %d repeats, 640x480, 1 thread, median thread-CPU ms "
+      "vision_bench: %d frames x %d repeats, 640x480, 1 thread, %s, median thread-CPU ms "
       "per frame\n",
-      frames, repeats);
+      frames, repeats, retained ? "heap keeps freed memory (as the nodes)" : "glibc's default heap");
   std::printf("%-12s %10s %10s\n", "stage", "ours", "ORB+BF+H");
   auto row = [](const char* name, const std::vector<double>& a, const std::vector<double>* b) {
     if (b)
