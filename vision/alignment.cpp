@@ -39,7 +39,8 @@ std::vector<double> set_errors(const Matrix3d& R, const Vector3d& t, const Vecto
                                const std::vector<Vector3d>& r1, const std::vector<Vector3d>& r2) {
   const Matrix3d H = R * (Matrix3d::Identity() - t * n.transpose());
   std::vector<double> e(r1.size());
-  for (size_t i = 0; i < r1.size(); ++i) e[i] = ((H * r1[i]).hnormalized() - r2[i].hnormalized()).norm();
+  for (size_t i = 0; i < r1.size(); ++i)
+    e[i] = ((H * r1[i]).hnormalized() - r2[i].hnormalized()).norm();
   return e;
 }
 

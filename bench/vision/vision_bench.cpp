@@ -319,7 +319,8 @@ int main(int argc, char** argv) {
   std::printf(
       "vision_bench: %d frames x %d repeats, 640x480, 1 thread, %s, median thread-CPU ms "
       "per frame\n",
-      frames, repeats, retained ? "heap keeps freed memory (as the nodes)" : "glibc's default heap");
+      frames, repeats,
+      retained ? "heap keeps freed memory (as the nodes)" : "glibc's default heap");
   std::printf("%-12s %10s %10s\n", "stage", "ours", "ORB+BF+H");
   auto row = [](const char* name, const std::vector<double>& a, const std::vector<double>* b) {
     if (b)

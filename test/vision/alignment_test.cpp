@@ -133,9 +133,9 @@ TEST(AlignmentTest, RotationPriorIsOffByDefaultAndWeighsFeatureNoiseAgainstItsSi
 }
 
 TEST(AlignmentTest, AccurateRotationPriorRemovesTheDistanceErrorOfTheBasReliefAmbiguity) {
-  // A narrow field of view at 0.5 px noise: a rotation error across the baseline is absorbed by |t|/d,
-  // so vision alone gets the planes' distances (in baselines) a few percent wrong. With motion
-  // capture's R21 as a prior the rotation, and with it the distances, are pinned.
+  // A narrow field of view at 0.5 px noise: a rotation error across the baseline is absorbed by
+  // |t|/d, so vision alone gets the planes' distances (in baselines) a few percent wrong. With
+  // motion capture's R21 as a prior the rotation, and with it the distances, are pinned.
   double r_alone = 0, r_prior = 0, d_alone = 0, d_prior = 0;
   AlignParams with;
   with.rotation_prior_sigma_deg = 0.01;
@@ -158,8 +158,10 @@ TEST(AlignmentTest, AccurateRotationPriorRemovesTheDistanceErrorOfTheBasReliefAm
     d_prior += std::abs(aided->plane_a().distance_1() / d_true - 1) / 20;
     EXPECT_LT(rotation_angle(aided->R_21, s.v.R_21), 0.03 * kDeg) << seed;
   }
-  std::printf("mean R21 error: alone %.4f deg, prior %.4f deg; floor distance error: alone %.3f%%, "
-              "prior %.3f%%\n", r_alone, r_prior, 100 * d_alone, 100 * d_prior);
+  std::printf(
+      "mean R21 error: alone %.4f deg, prior %.4f deg; floor distance error: alone %.3f%%, "
+      "prior %.3f%%\n",
+      r_alone, r_prior, 100 * d_alone, 100 * d_prior);
   EXPECT_LT(d_prior, 0.5 * d_alone);
   EXPECT_LT(r_prior, 0.5 * r_alone);
 }

@@ -65,13 +65,15 @@ PoseSample mocap_sample(const PoseSample& truth, std::mt19937_64& rng) {
 }
 
 enum class Mocap {
-  kVisionAlone,     ///< exact poses for the scale only (the paper)
-  kExactPrior,      ///< exact poses, their R21 a prior with 0.02 deg
-  kNoisyPrior,      ///< the simulator's motion-capture noise, prior with 0.15 deg
+  kVisionAlone,  ///< exact poses for the scale only (the paper)
+  kExactPrior,   ///< exact poses, their R21 a prior with 0.02 deg
+  kNoisyPrior,   ///< the simulator's motion-capture noise, prior with 0.15 deg
 };
 
 void PrintTo(Mocap m, std::ostream* os) {
-  *os << (m == Mocap::kVisionAlone ? "vision alone" : m == Mocap::kExactPrior ? "exact prior" : "noisy prior");
+  *os << (m == Mocap::kVisionAlone  ? "vision alone"
+          : m == Mocap::kExactPrior ? "exact prior"
+                                    : "noisy prior");
 }
 
 class SimTwoViewsTest : public ::testing::TestWithParam<std::tuple<uint64_t, Mocap>> {};
@@ -129,8 +131,7 @@ TEST_P(SimTwoViewsTest, PlatformWaypointWithinOneCentimetreAtOnePointFiveMetres)
   const PoseSample mocap_2 = noisy ? mocap_sample(pose_2, rng) : pose_2;
   AlignParams align;
   align.rotation_prior_sigma_deg = mode == Mocap::kExactPrior ? 0.02 : noisy ? 0.15 : 0.0;
-  const auto prior =
-      rotation_prior(mocap_motion(mocap_1, mocap_2, rig.mount).R_21, align, K(0, 0));
+  const auto prior = rotation_prior(mocap_motion(mocap_1, mocap_2, rig.mount).R_21, align, K(0, 0));
   const auto al = align_two_planes(calibrate_homography(floor->H, K), rays(x1, floor->inlier),
                                    rays(x2, floor->inlier), calibrate_homography(top->H, K),
                                    rays(o1, top->inlier), rays(o2, top->inlier), align,
@@ -140,7 +141,10 @@ TEST_P(SimTwoViewsTest, PlatformWaypointWithinOneCentimetreAtOnePointFiveMetres)
 
   // Decomposition against the truth.
   const MocapMotion truth = mocap_motion(pose_1, pose_2, rig.mount);
-  EXPECT_LT(rotation_angle(al->R_21, truth.R_21), (mode == Mocap::kExactPrior ? 0.02 : noisy ? 0.25 : 0.1) * kDeg);
+  EXPECT_LT(rotation_angle(al->R_21, truth.R_21), (mode == Mocap::kExactPrior ? 0.02
+                                                   : noisy                    ? 0.25
+                                                                              : 0.1) *
+                                                      kDeg);
   EXPECT_LT(direction_angle(al->t_12, truth.t_12), 2 * kDeg);
   const Vector3d n_true = -(X_WC(pose_1).linear().transpose() * Vector3d::UnitZ());
   EXPECT_LT(direction_angle(al->n_a, n_true), 2 * kDeg);
@@ -178,9 +182,11 @@ TEST_P(SimTwoViewsTest, PlatformWaypointWithinOneCentimetreAtOnePointFiveMetres)
   const Vector3d p_C2 = X_WC(pose_2).inverse() * p_W_top;
   const auto w = compute_waypoint(top_plane, p_C2 / p_C2.z(), mocap_1, mocap_2, rig.mount);
   ASSERT_TRUE(w) << to_string(w.reason());
-  std::printf("seed %d mocap mode %d: R21 error %.3f deg, platform centre waypoint error %.4f m (xy %.4f m)\n",
-              int(seed), int(mode), rotation_angle(al->R_21, truth.R_21) / kDeg,
-              (w->p_W - p_W_top).norm(), (w->p_W - p_W_top).head<2>().norm());
+  std::printf(
+      "seed %d mocap mode %d: R21 error %.3f deg, platform centre waypoint error %.4f m (xy %.4f "
+      "m)\n",
+      int(seed), int(mode), rotation_angle(al->R_21, truth.R_21) / kDeg, (w->p_W - p_W_top).norm(),
+      (w->p_W - p_W_top).head<2>().norm());
   EXPECT_LT((w->p_W - p_W_top).head<2>().norm(), 0.01);
   EXPECT_LT((w->p_W - p_W_top).norm(), noisy ? 0.035 : 0.01);
 }
