@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include <tuple>
+
 #include "autonomy/convert.hpp"
 #include "closed_loop.hpp"
 #include "vision/convert.hpp"
@@ -87,6 +89,30 @@ TEST(RealVisionIngressTest, FliesThroughTheWindowWithoutContact) {
   EXPECT_FALSE(r.collided);
   EXPECT_LT(r.estimate_error_W.norm(), 0.02) << "opening centre";
 }
+
+// No false target (issue 6): whole flights with real vision over the bare floor and along the
+// solid wall. The search is flown, and flown again on each retry, without a single detection;
+// autonomy ends in HOLD with nothing measured.
+class RealVisionNoTargetTest
+    : public ::testing::TestWithParam<std::tuple<std::string, Mission>> {};
+
+TEST_P(RealVisionNoTargetTest, WholeSearchWithoutASingleDetection) {
+  const auto& [scenario, mission] = GetParam();
+  RealVision vision(path("config/vehicles/pelican.yaml"), mission);
+  const auto r = fly_closed_loop(config(scenario, mission, 7, &vision));
+  std::printf("%s: %s, %s after %.1f s, retries %d, vision found %d of %d frames\n",
+              scenario.c_str(), phase_name(r.phase), r.reason.c_str(), r.sim_time_s, r.retries,
+              vision.found, vision.frames);
+  EXPECT_EQ(vision.found, 0);
+  EXPECT_EQ(r.n_measurements, 0);
+  EXPECT_EQ(r.phase, Phase::kHold) << r.reason;  // every search pass flown, nothing seen
+  EXPECT_GT(r.retries, 0);
+  EXPECT_FALSE(r.collided);
+}
+
+INSTANTIATE_TEST_SUITE_P(BareFloorAndSolidWall, RealVisionNoTargetTest,
+                         ::testing::Values(std::make_tuple("landing_none", Mission::kLanding),
+                                           std::make_tuple("ingress_solid", Mission::kIngress)));
 
 }  // namespace
 }  // namespace alight::autonomy::test
