@@ -4,10 +4,12 @@
 
 #include <CLI/CLI.hpp>
 #include <chrono>
+#include <cassert>
 #include <cerrno>
 #include <csignal>
 #include <cstdlib>
 #include <fstream>
+#include <unistd.h>
 
 #include "common/heap.hpp"
 #include "common/params.hpp"
@@ -17,6 +19,9 @@ namespace alight {
 namespace {
 std::atomic<bool> g_signalled{false};
 extern "C" void on_signal(int) { g_signalled = true; }
+
+// Every refusal is counted; the log says so for the first and then every 100th.
+bool log_this(uint64_t n) { return n == 1 || n % 100 == 0; }
 
 int rmem_max_bytes() {
   std::ifstream f("/proc/sys/net/core/rmem_max");
@@ -55,6 +60,12 @@ int64_t wall_utime() {
       .count();
 }
 
+int64_t steady_utime() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(
+             std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+
 struct Node::Subscription {
   Node* node = nullptr;
   std::string channel;
@@ -76,7 +87,8 @@ struct Node::Subscription {
   }
 };
 
-Node::Node(const std::string& lcm_url, std::string name) : name_(std::move(name)) {
+Node::Node(const std::string& lcm_url, std::string name)
+    : name_(std::move(name)), start_steady_us_(steady_utime()) {
   install_signal_handlers();
   const std::string url = with_receive_buffer(lcm_url);
   lcm_ = std::make_unique<lcm::LCM>(url);
@@ -124,12 +136,50 @@ void Node::subscribe_raw(const std::string& channel, bool latest,
 
 void Node::report_decode_error(const std::string& channel, uint32_t size) {
   const uint64_t n = ++stats_[channel].decode_errors;
-  // Every error is counted; the log says so for the first and then every 100th.
-  if (n == 1 || n % 100 == 0)
+  if (log_this(n))
     spdlog::error(
         "{}: {} message(s) on channel {} failed to decode (last: {} bytes; wrong type "
         "or malformed)",
         name_, n, channel, size);
+}
+
+bool Node::reject_value(const std::string& channel, const std::string& why) {
+  const uint64_t n = ++stats_[channel].rejected_values;
+  if (log_this(n)) spdlog::warn("{}: {} message(s) on {} refused (last: {})", name_, n, channel, why);
+  return false;
+}
+
+bool Node::accept_stamp(const std::string& channel, int64_t utime) {
+  const StampVerdict v = stamps_.check(channel, utime, steady_utime(), wall_utime());
+  if (v == StampVerdict::kRestarted)
+    spdlog::warn("{}: stamps on {} went back to {} and stayed there: taken as a restart", name_,
+                 channel, utime);
+  if (stamp_ok(v)) return true;
+  const uint64_t n = ++stats_[channel].rejected_stamps;
+  if (log_this(n))
+    spdlog::warn("{}: {} message(s) on {} refused for their stamp (last: utime {}, {})", name_, n,
+                 channel, utime, stamp_verdict_name(v));
+  return false;
+}
+
+node_status_t Node::status_message(int64_t wall) const {
+  node_status_t m{};
+  m.utime = wall;
+  m.node = name_;
+  m.pid = static_cast<int32_t>(::getpid());
+  m.uptime_s = (steady_utime() - start_steady_us_) * 1e-6;
+  for (const auto& [channel, st] : stats_) {
+    channel_stats_t c{};
+    c.channel = channel;
+    c.received = static_cast<int64_t>(st.received);
+    c.decode_errors = static_cast<int64_t>(st.decode_errors);
+    c.rejected_values = static_cast<int64_t>(st.rejected_values);
+    c.rejected_stamps = static_cast<int64_t>(st.rejected_stamps);
+    c.skipped = static_cast<int64_t>(st.skipped);
+    m.channels.push_back(c);
+  }
+  m.n = static_cast<int32_t>(m.channels.size());
+  return m;
 }
 
 const ChannelStats& Node::stats(const std::string& channel) const {
@@ -139,25 +189,32 @@ const ChannelStats& Node::stats(const std::string& channel) const {
 }
 
 void Node::every(double period_s, std::function<void(int64_t)> fn) {
-  const auto period_us = static_cast<int64_t>(period_s * 1e6);
-  timers_.push_back({period_us, wall_utime() + period_us, std::move(fn)});
+  // Programmer invariant: periods come from validated parameters or constants.
+  assert(period_s > 0 && period_s < 1e6);
+  const auto period_us = std::max<int64_t>(1, static_cast<int64_t>(period_s * 1e6));
+  timers_.push_back({period_us, steady_utime() + period_us, std::move(fn)});
 }
 
 void Node::run_timers(int64_t now) {
   for (auto& t : timers_) {
     if (now < t.next_utime) continue;
-    t.fn(now);
+    t.fn(wall_utime());
     t.next_utime += t.period_us;
     if (t.next_utime <= now) t.next_utime = now + t.period_us;  // fell behind: skip, don't burst
   }
 }
 
 int Node::spin_once(int timeout_ms) {
+  if (!status_timer_added_) {
+    status_timer_added_ = true;
+    if (status_period_s_ > 0)
+      every(status_period_s_, [this](int64_t wall) { publish("NODE_STATUS", status_message(wall)); });
+  }
   if (!timers_.empty()) {
     int64_t next = timers_.front().next_utime;
     for (const auto& t : timers_) next = std::min(next, t.next_utime);
     // Rounded up: waking early would spin until the timer is due.
-    const int64_t wait_ms = std::max<int64_t>(0, (next - wall_utime() + 999) / 1000);
+    const int64_t wait_ms = std::max<int64_t>(0, (next - steady_utime() + 999) / 1000);
     timeout_ms = static_cast<int>(std::min<int64_t>(timeout_ms, wait_ms));
   }
   int handled = 0;
@@ -175,7 +232,7 @@ int Node::spin_once(int timeout_ms) {
     msg.swap(s->pending);
     s->dispatch(msg.data(), static_cast<uint32_t>(msg.size()));
   }
-  run_timers(wall_utime());
+  run_timers(steady_utime());
   return handled;
 }
 

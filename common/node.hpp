@@ -8,9 +8,16 @@
 //  - per-subscription queues hold 30 messages and silently drop the newest beyond that: every
 //    subscription gets a deep queue, and on_latest() drains all pending messages before
 //    calling back with the newest one, counting the ones it skipped;
-//  - a message that fails to decode is only printed by its typed handler: ours decode
-//    themselves and count and report decode errors per channel.
+//  - a message that fails to decode is only printed by its typed handler, and lcm-gen's
+//    decoders throw on some malformed lengths: ours decode through decode_message()
+//    (common/decode.hpp), which never throws, and count and report decode errors per channel.
+//
+// Every input is untrusted: besides decode errors, a node counts the messages its conversions
+// refuse (reject_value) and the stamps its StampGuard refuses (accept_stamp), and publishes all
+// counters on NODE_STATUS once a second. Timers run on the steady clock, so a wall-clock step
+// neither freezes nor bursts them.
 
+#include <alight/node_status_t.hpp>
 #include <atomic>
 #include <cstdint>
 #include <functional>
@@ -19,6 +26,9 @@
 #include <memory>
 #include <string>
 #include <vector>
+
+#include "common/decode.hpp"
+#include "common/stamp_guard.hpp"
 
 namespace CLI {
 class App;
@@ -47,12 +57,16 @@ struct NodeArgs {
 std::string with_receive_buffer(const std::string& url, int bytes = kDefaultRecvBufBytes);
 /// Current wall-clock time [us since Unix epoch]. For nodes only; flight logic gets time passed in.
 int64_t wall_utime();
+/// Monotonic time [us since an arbitrary start]: for timers and timeouts, immune to clock steps.
+int64_t steady_utime();
 
 /// Per-channel counters, for logs and tests.
 struct ChannelStats {
-  uint64_t received = 0;       ///< messages decoded
-  uint64_t decode_errors = 0;  ///< messages that failed to decode (malformed or wrong type)
-  uint64_t skipped = 0;        ///< on_latest(): older messages replaced by a newer one
+  uint64_t received = 0;         ///< messages decoded
+  uint64_t decode_errors = 0;    ///< messages that failed to decode (malformed or wrong type)
+  uint64_t rejected_values = 0;  ///< decoded, then refused by a conversion (non-finite, range)
+  uint64_t rejected_stamps = 0;  ///< decoded, then refused by the stamp guard
+  uint64_t skipped = 0;          ///< on_latest(): older messages replaced by a newer one
 };
 
 class Node {
@@ -84,8 +98,24 @@ class Node {
   int publish(const std::string& channel, const Msg& msg) {
     return lcm_->publish(channel, &msg);
   }
-  /// Calls `fn(now_utime)` every `period_s` of wall time.
+  /// Calls `fn(wall_utime)` every `period_s` of steady time (the argument is the wall clock, for
+  /// stamping messages; never use it to measure intervals).
   void every(double period_s, std::function<void(int64_t)> fn);
+
+  /// Counts a decoded message on `channel` that a conversion refused, and logs `why` for the
+  /// first and then every 100th. Returns false, for `return node.reject_value(...)`.
+  bool reject_value(const std::string& channel, const std::string& why);
+  /// Judges a decoded message's stamp (StampGuard, with this node's clocks). A refused stamp is
+  /// counted and logged like reject_value; true when the message may be used.
+  bool accept_stamp(const std::string& channel, int64_t utime);
+  /// Newest stamp accepted on any channel (0 before the first).
+  int64_t newest_stamp() const { return stamps_.newest_utime(); }
+  void set_stamp_params(const StampGuardParams& p) { stamps_ = StampGuard(p); }
+  /// Publishes this node's counters on NODE_STATUS every `period_s` (every node does, at 1 s,
+  /// unless it calls this with 0 before run()).
+  void set_status_period(double period_s) { status_period_s_ = period_s; }
+  /// The NODE_STATUS message as it would be published now.
+  node_status_t status_message(int64_t wall_utime) const;
 
   /// Handles messages and timers until SIGINT / SIGTERM or stop(). Returns 0.
   int run();
@@ -109,7 +139,7 @@ class Node {
                      std::function<void(const void*, uint32_t)> dispatch);
   template <class Msg>
   bool decode(const std::string& channel, Msg& msg, const void* data, uint32_t size) {
-    if (msg.decode(data, 0, size) != static_cast<int>(size)) {
+    if (!decode_message(msg, data, size)) {
       report_decode_error(channel, size);
       return false;
     }
@@ -117,7 +147,7 @@ class Node {
     return true;
   }
   void report_decode_error(const std::string& channel, uint32_t size);
-  void run_timers(int64_t now);
+  void run_timers(int64_t steady_now);
 
   std::string name_;
   std::unique_ptr<lcm::LCM> lcm_;
@@ -128,8 +158,12 @@ class Node {
     int64_t next_utime;
     std::function<void(int64_t)> fn;
   };
-  std::vector<Timer> timers_;
+  std::vector<Timer> timers_;  // next_utime on the steady clock
   std::atomic<bool> stopping_{false};
+  StampGuard stamps_;
+  double status_period_s_ = 1.0;
+  bool status_timer_added_ = false;
+  int64_t start_steady_us_ = 0;
 };
 
 /// Runs a node's body, turning exceptions into a message on stderr and an exit code: 2 for bad

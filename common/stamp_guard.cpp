@@ -1,0 +1,63 @@
+#include "common/stamp_guard.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace alight {
+
+const char* stamp_verdict_name(StampVerdict v) {
+  switch (v) {
+    case StampVerdict::kAccepted: return "accepted";
+    case StampVerdict::kRestarted: return "accepted as a restart of the source";
+    case StampVerdict::kNonPositive: return "stamp not positive";
+    case StampVerdict::kBackwards: return "stamp older than the source's last";
+    case StampVerdict::kAhead: return "stamp further ahead than can have elapsed";
+  }
+  return "?";
+}
+
+int64_t StampGuard::reach_us(const Source& s, int64_t steady_us) const {
+  const double elapsed_us = static_cast<double>(std::max<int64_t>(0, steady_us - s.last_steady_us));
+  const double reach = static_cast<double>(s.last_utime) + params_.max_rate * elapsed_us +
+                       params_.tolerance_s * 1e6;
+  return reach >= 9.2e18 ? INT64_MAX : static_cast<int64_t>(reach);
+}
+
+StampVerdict StampGuard::check(const std::string& source, int64_t utime, int64_t steady_us,
+                               int64_t wall_us) {
+  if (utime <= 0) return StampVerdict::kNonPositive;
+  const auto it = sources_.find(source);
+  StampVerdict verdict = StampVerdict::kAccepted;
+  if (it == sources_.end()) {
+    // First stamp of this source: against the others, else against the wall clock.
+    int64_t bound = 0;
+    bool any = false;
+    for (const auto& [name, s] : sources_) {
+      bound = any ? std::max(bound, reach_us(s, steady_us)) : reach_us(s, steady_us);
+      any = true;
+    }
+    if (!any) bound = wall_us + static_cast<int64_t>(params_.max_first_ahead_s * 1e6);
+    if (utime > bound) return StampVerdict::kAhead;
+  } else {
+    Source& s = it->second;
+    if (utime < s.last_utime) {
+      if (steady_us - s.last_steady_us < static_cast<int64_t>(params_.reset_after_s * 1e6))
+        return StampVerdict::kBackwards;
+      verdict = StampVerdict::kRestarted;
+    } else if (utime > reach_us(s, steady_us)) {
+      return StampVerdict::kAhead;
+    }
+  }
+  Source& s = sources_[source];
+  s.last_utime = utime;
+  s.last_steady_us = steady_us;
+  if (verdict == StampVerdict::kRestarted) {
+    newest_utime_ = 0;
+    for (const auto& [name, other] : sources_) newest_utime_ = std::max(newest_utime_, other.last_utime);
+  } else {
+    newest_utime_ = std::max(newest_utime_, utime);
+  }
+  return verdict;
+}
+
+}  // namespace alight
