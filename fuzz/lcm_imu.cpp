@@ -1,0 +1,12 @@
+// IMU (imu_t): decoded and converted as autonomy does.
+#include "autonomy/convert.hpp"
+#include "fuzz/fuzz_support.hpp"
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  using namespace alight;
+  const auto msg = fuzz::decode<imu_t>(data, size);
+  if (!msg) return 0;
+  auto converted = autonomy::from_msg(*msg);
+  if (const auto* imu = fuzz::value_of(converted)) (void)autonomy::to_msg(*imu, msg->seq);
+  return 0;
+}

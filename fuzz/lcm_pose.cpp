@@ -1,0 +1,24 @@
+// MOCAP_POSE (pose_t): decoded as every node does, converted (outer loop, autonomy, vision),
+// kept in vision's pose history and shown by the ground station.
+#include "common/msg_convert.hpp"
+#include "common/pose_buffer.hpp"
+#include "fuzz/fuzz_support.hpp"
+#include "ground_station/state.hpp"
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  using namespace alight;
+  const auto msg = fuzz::decode<pose_t>(data, size);
+  if (!msg) return 0;
+  auto converted = from_msg(*msg);
+  if (const auto* pose = fuzz::value_of(converted)) {
+    PoseBuffer poses;
+    poses.add(*pose);
+    (void)poses.at(msg->utime);
+    (void)poses.at(msg->utime / 2);
+  }
+  ground_station::StationState state{ground_station::GroundStationParams{}};
+  state.on_pose(*msg, msg->utime);
+  state.on_pose(*msg, 1'700'000'000'000'000);
+  (void)state.to_json(msg->utime);
+  return 0;
+}

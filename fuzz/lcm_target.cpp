@@ -1,0 +1,18 @@
+// VISION_TARGET (target_t): decoded and converted as autonomy does, and shown by the ground
+// station.
+#include "autonomy/convert.hpp"
+#include "fuzz/fuzz_support.hpp"
+#include "ground_station/state.hpp"
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  using namespace alight;
+  const auto msg = fuzz::decode<target_t>(data, size);
+  if (!msg) return 0;
+  auto converted = autonomy::from_msg(*msg);
+  if (const auto* m = fuzz::value_of(converted)) (void)autonomy::to_msg(*m, msg->seq);
+  ground_station::StationState state{ground_station::GroundStationParams{}};
+  state.on_target(*msg, msg->utime);
+  state.on_target(*msg, 1'700'000'000'000'000);
+  (void)state.to_json(msg->utime);
+  return 0;
+}
