@@ -4,15 +4,21 @@
 #include "autonomy/convert.hpp"
 #include "common/operator_auth.hpp"
 #include "fuzz/fuzz_support.hpp"
+#include "fuzz/operator_support.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace alight;
   const auto msg = fuzz::decode<operator_cmd_t>(data, size);
   if (!msg) return 0;
+#ifdef ALIGHT_FUZZ_HAS_COMMAND_FROM_MSG
+  std::string why;
+  auto converted = autonomy::command_from_msg(*msg, &why);
+#else
   auto converted = autonomy::from_msg(*msg);
+#endif
   (void)fuzz::value_of(converted);
-  const OperatorKey key{std::vector<uint8_t>(32, 0x5a)};
-  CommandVerifier verifier(key);
+  const OperatorKey key = fuzz::test_key();
+  CommandVerifier verifier = fuzz::make_verifier(key);
   (void)verifier.check(*msg, msg->utime);
   (void)verifier.check(*msg, msg->utime);  // the same again: a replay
   (void)verifier.check(*msg, 1'700'000'000'000'000);

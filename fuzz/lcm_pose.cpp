@@ -9,7 +9,12 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace alight;
   const auto msg = fuzz::decode<pose_t>(data, size);
   if (!msg) return 0;
+#ifdef ALIGHT_FUZZ_HAS_POSE_FROM_MSG
+  std::string why;
+  auto converted = pose_from_msg(*msg, &why);
+#else
   auto converted = from_msg(*msg);
+#endif
   if (const auto* pose = fuzz::value_of(converted)) {
     PoseBuffer poses;
     poses.add(*pose);

@@ -8,7 +8,12 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace alight;
   const auto msg = fuzz::decode<target_t>(data, size);
   if (!msg) return 0;
+#ifdef ALIGHT_FUZZ_HAS_TARGET_FROM_MSG
+  std::string why;
+  auto converted = autonomy::target_from_msg(*msg, &why);
+#else
   auto converted = autonomy::from_msg(*msg);
+#endif
   if (const auto* m = fuzz::value_of(converted)) (void)autonomy::to_msg(*m, msg->seq);
   ground_station::StationState state{ground_station::GroundStationParams{}};
   state.on_target(*msg, msg->utime);

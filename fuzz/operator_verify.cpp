@@ -2,7 +2,8 @@
 // arbitrary stamps, sequence numbers, senders and verifier clocks, so that the staleness and
 // replay rules (which a random signature never reaches) see extreme values. Properties: a
 // command accepted once is never accepted again by the same verifier; an accepted command is
-// within max_age of the verifier's clock; a command with any field changed after signing fails.
+// within max_age of the verifier's clock; a command with any field changed after signing fails;
+// once commands name a session, one naming another session fails.
 #include <fuzzer/FuzzedDataProvider.h>
 
 #include <algorithm>
@@ -10,13 +11,14 @@
 
 #include "common/operator_auth.hpp"
 #include "fuzz/fuzz_support.hpp"
+#include "fuzz/operator_support.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace alight;
   FuzzedDataProvider in(data, size);
-  const OperatorKey key{std::vector<uint8_t>(32, 0x5a)};
+  const OperatorKey key = fuzz::test_key();
   const int64_t max_age_us = in.ConsumeIntegralInRange<int64_t>(1, 10'000'000);
-  CommandVerifier verifier(key, max_age_us);
+  CommandVerifier verifier = fuzz::make_verifier(key, max_age_us);
   std::vector<operator_cmd_t> accepted;
   while (in.remaining_bytes() > 0) {
     operator_cmd_t cmd{};
@@ -26,6 +28,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     cmd.command = in.ConsumeIntegral<int8_t>();
     cmd.mission = in.ConsumeIntegral<int8_t>();
     for (double& d : cmd.nudge_W) d = in.ConsumeFloatingPoint<double>();
+    const bool bound = in.ConsumeIntegralInRange<int>(0, 7) != 0;
+    if (bound) fuzz::bind_to_vehicle(cmd);
     // The verifier's clock near the stamp (saturated at the int64 range) or anywhere.
     int64_t now = in.ConsumeIntegral<int64_t>();
     if (in.ConsumeBool()) {
@@ -59,6 +63,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       for (const auto& a : accepted)
         if (a.sender == cmd.sender && a.seq == cmd.seq)
           fuzz::fail("a sequence number was accepted twice");
+      if (!bound && fuzz::names_other_session(cmd))
+        fuzz::fail("a command for another session was accepted");
       accepted.push_back(cmd);
     }
   }
