@@ -1,11 +1,12 @@
 // decode_message(): untrusted bytes never throw, never allocate what the buffer cannot hold.
 #include "common/decode.hpp"
 
-#include <alight/autonomy_status_t.hpp>
-#include <alight/operator_cmd_t.hpp>
-#include <alight/pose_t.hpp>
 #include <gtest/gtest.h>
 
+#include <alight/autonomy_status_t.hpp>
+#include <alight/node_status_t.hpp>
+#include <alight/operator_cmd_t.hpp>
+#include <alight/pose_t.hpp>
 #include <cstring>
 #include <vector>
 
@@ -118,6 +119,23 @@ TEST(DecodeTest, ProcessStatusCountBoundedByTheBuffer) {
   put_int32(buf, buf.size() - 4, 100000000);
   process_status_t out{};
   EXPECT_FALSE(wire::precheck<process_status_t>(buf.data(), buf.size()));
+  EXPECT_FALSE(decode_message(out, buf.data(), buf.size()));
+}
+
+TEST(DecodeRegression, NodeStatusCountBoundedByTheBuffer) {
+  // fuzz/crashes-found/lcm_status/node_status_count_allocates_93GB: the channel count was used
+  // to allocate before the bytes behind it were checked.
+  node_status_t s{};
+  s.node = "n";
+  s.n = 1;
+  s.channels.resize(1);
+  s.channels[0].channel = "c";
+  auto buf = encode(s);
+  node_status_t out{};
+  ASSERT_TRUE(decode_message(out, buf.data(), buf.size()));
+  // n sits after fingerprint, utime, node (4 + 2 bytes), pid and uptime_s.
+  put_int32(buf, 8 + 8 + 6 + 4 + 8, 0x7fffffff);
+  EXPECT_FALSE(wire::precheck<node_status_t>(buf.data(), buf.size()));
   EXPECT_FALSE(decode_message(out, buf.data(), buf.size()));
 }
 
