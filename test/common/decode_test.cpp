@@ -7,6 +7,7 @@
 #include <alight/node_status_t.hpp>
 #include <alight/operator_cmd_t.hpp>
 #include <alight/pose_t.hpp>
+#include <climits>
 #include <cstring>
 #include <vector>
 
@@ -137,6 +138,21 @@ TEST(DecodeRegression, NodeStatusCountBoundedByTheBuffer) {
   put_int32(buf, 8 + 8 + 6 + 4 + 8, 0x7fffffff);
   EXPECT_FALSE(wire::precheck<node_status_t>(buf.data(), buf.size()));
   EXPECT_FALSE(decode_message(out, buf.data(), buf.size()));
+}
+
+TEST(DecodeRegression, StringLengthOfInt32MinIsAnErrorNotAnOverRead) {
+  // fuzz/lcm_operator_cmd: lcm-gen's decoder copied len - 1 bytes for a string of length
+  // INT32_MIN, which wrapped to INT32_MAX: a 2 GiB read past the buffer (SIGSEGV in autonomy).
+  operator_cmd_t m{};
+  m.sender = "abc";
+  auto buf = encode(m);
+  put_int32(buf, 8 + 8 + 8, INT32_MIN);  // sender's length, after fingerprint, utime and seq
+  operator_cmd_t out{};
+  EXPECT_FALSE(decode_message(out, buf.data(), buf.size()));
+  for (int32_t len : {-1, 0, INT32_MIN + 1}) {
+    put_int32(buf, 8 + 8 + 8, len);
+    EXPECT_FALSE(decode_message(out, buf.data(), buf.size())) << len;
+  }
 }
 
 // Property: every prefix and every single-byte corruption of a valid image either decodes or is
