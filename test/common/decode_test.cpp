@@ -1,11 +1,11 @@
 // decode_message(): untrusted bytes never throw, never allocate what the buffer cannot hold.
 #include "common/decode.hpp"
 
+#include <gtest/gtest.h>
+
 #include <alight/autonomy_status_t.hpp>
 #include <alight/operator_cmd_t.hpp>
 #include <alight/pose_t.hpp>
-#include <gtest/gtest.h>
-
 #include <cstring>
 #include <vector>
 
