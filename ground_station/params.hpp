@@ -7,7 +7,7 @@
 namespace alight::ground_station {
 
 struct GroundStationParams {
-  // Channels (DESIGN.md "Processes and channels").
+  // Channels (docs/ARCHITECTURE.md "Channels").
   std::string camera_channel = "CAMERA";
   std::string diag_channel = "VISION_DIAG";
   std::string status_channel = "AUTONOMY_STATUS";
