@@ -149,5 +149,38 @@ TEST(DecodeTest, CorruptionsOfAnImageNeverThrow) {
   }
 }
 
+// Regression (issue 14, found by the fault campaign): a string length of INT32_MIN made
+// lcm-gen's decoder compute len - 1 = INT32_MAX and copy 2 GiB past the buffer (segfault in
+// autonomy and the ground station). lcmtypes/harden_decoders.cmake fixes the generated code.
+TEST(DecodeTest, RegressionHostileStringLengthsAreRefusedInEveryStringField) {
+  for (const int32_t len : {int32_t{0}, int32_t{-1}, INT32_MIN, INT32_MAX, int32_t{0x55555556}}) {
+    operator_cmd_t c{};
+    c.sender = "gs";
+    auto buf = encode(c);
+    put_int32(buf, 8 + 8 + 8, len);
+    operator_cmd_t out{};
+    EXPECT_FALSE(decode_message(out, buf.data(), buf.size())) << len;
+
+    autonomy_status_t s{};
+    s.phase_name = "HOVER";
+    s.reason = "why";
+    auto sb = encode(s);
+    put_int32(sb, 8 + 8 + 1 + 1 + 4 + 6, len);  // the reason's length, after "HOVER\0"
+    autonomy_status_t sout{};
+    EXPECT_FALSE(decode_message(sout, sb.data(), sb.size())) << len;
+  }
+}
+
+TEST(DecodeTest, RegressionArrayCountsBeyondTheBufferAreRefusedByTheGeneratedCode) {
+  image_t m{};
+  auto buf = encode(m);
+  for (const int32_t n : {int32_t{-1}, INT32_MIN, int32_t{1000}}) {
+    put_int32(buf, 8 + 8 + 16, n);
+    image_t out{};
+    // Straight into the generated decoder, without decode_message's walk.
+    EXPECT_LT(out.decode(buf.data(), 0, static_cast<int>(buf.size())), 0) << n;
+  }
+}
+
 }  // namespace
 }  // namespace alight
