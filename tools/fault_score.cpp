@@ -95,6 +95,10 @@ void FaultScorer::add(const sim_truth_t& m, int64_t received_utime) {
     const double h = height_above_surface(m);
     max_disarm_m_ = std::max(max_disarm_m_.value_or(h), h);
   }
+  if (last_truth_ && last_truth_->contact == sim_truth_t::CONTACT_NONE &&
+      m.contact != sim_truth_t::CONTACT_NONE)
+    touchdown_mps_ = std::max(touchdown_mps_.value_or(0.0), -last_truth_->vel[2]);
+  flew_ = flew_ || height_above_surface(m) > params_.airborne_height_m;
   collided_ = collided_ || m.collided;
   tipped_ = tipped_ || m.tipped;
   out_of_area_ = out_of_area_ || m.out_of_area;
@@ -167,6 +171,7 @@ FaultOutcome FaultScorer::result() const {
   r.refused_messages = refused_;
   r.disarms = disarms_;
   r.max_disarm_height_m = max_disarm_m_;
+  r.max_touchdown_speed_mps = touchdown_mps_;
   r.collided = collided_;
   r.failsafe_descent_seen = failsafe_seen_;
   if (last_status_) r.final_phase = last_status_->phase_name;
@@ -267,7 +272,15 @@ FaultOutcome FaultScorer::result() const {
     r.outcome = "disarmed_in_air";  // falling at the end of the log: the disarm was just now
     r.violations.push_back("motors off in the air at the end of the run");
   } else {
-    r.outcome = failsafe_seen_ ? "failsafe_descent" : "grounded";
+    if (failsafe_seen_) {
+      r.outcome = "failsafe_descent";
+    } else if (flew_) {
+      r.outcome = "came_down";
+      r.violations.push_back(
+          "came down to the ground with no landing, failsafe descent or hold commanded");
+    } else {
+      r.outcome = "grounded";  // never left the ground: nothing was put at risk
+    }
   }
   r.ok = r.violations.empty();
   return r;
@@ -289,6 +302,8 @@ std::string FaultOutcome::to_json() const {
   field("ok", ok ? "true" : "false");
   field("max_disarm_height_m", max_disarm_height_m ? num(*max_disarm_height_m) : "null");
   field("disarms", std::to_string(disarms));
+  field("max_touchdown_speed_mps",
+        max_touchdown_speed_mps ? num(*max_touchdown_speed_mps) : "null");
   field("collided", collided ? "true" : "false");
   field("unexpected_exits", std::to_string(unexpected_exits));
   std::string ex = "[";

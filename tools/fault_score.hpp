@@ -12,7 +12,9 @@
 //   SETPOINT_LOST_DESCENT,
 //                     autonomy FAILSAFE, or no ATTITUDE_CMD while the vehicle sinks: the
 //                     autopilot's own command-loss failsafe) in progress or ended on the ground
-//   grounded          on the ground with motors off or idle, no mission success, no failsafe
+//   grounded          on the ground with motors off or idle, and never flew (e.g. a kill in
+//                     take-off before lift-off: the restarted autonomy waits for the operator)
+//   came_down         on the ground after flying, with no landing, failsafe or hold (a failure)
 //   in_mission        still flying a mission phase when the log ends (run too short: not a pass)
 //   collision, tipped, left_area, disarmed_in_air, no_truth   (failures)
 //
@@ -60,6 +62,7 @@ struct FaultOutcome {
   std::vector<std::string> violations;        ///< why not, one line each
   std::optional<double> max_disarm_height_m;  ///< highest disarm above the surface below [m]
   int disarms = 0;
+  std::optional<double> max_touchdown_speed_mps;  ///< fastest sink rate on touching a surface
   bool collided = false;
   std::vector<ProcessExit> exits;  ///< every exit the launcher reported (shutdown excluded)
   int unexpected_exits = 0;
@@ -98,7 +101,8 @@ class FaultScorer {
   Scorer mission_;
   std::map<std::string, int64_t> last_utime_;
   std::optional<sim_truth_t> first_truth_, last_truth_;
-  bool collided_ = false, tipped_ = false, out_of_area_ = false;
+  bool collided_ = false, tipped_ = false, out_of_area_ = false, flew_ = false;
+  std::optional<double> touchdown_mps_;
   std::optional<double> max_disarm_m_;
   int disarms_ = 0;
   std::optional<attitude_cmd_t> last_cmd_;

@@ -9,6 +9,33 @@
 #include "common/decode.hpp"
 #include "tools/fault_score.hpp"
 
+namespace {
+
+// decode_message() on main (75dfc60) dies of SIGSEGV on a string length of INT32_MIN (lcm-gen's
+// `len - 1` wraps): the referee walks the strings of the types it reads itself first, so the log
+// of a campaign that injected exactly that can still be judged.
+bool strings_ok(const std::string& channel, const void* data, size_t size) {
+  alight::wire::Reader r(data, size);
+  int32_t n = 0;
+  if (channel == "AUTONOMY_STATUS") return r.skip(8 + 8 + 1 + 1) && r.string() && r.string();
+  if (channel == "SIM_TRUTH") return r.skip(8 + 8) && r.string();
+  if (channel == "PROCESS_STATUS") {
+    if (!r.skip(8 + 8) || !r.string() || !r.string() || !r.int32(n) || n < 0) return false;
+    for (int32_t i = 0; i < n; ++i)  // name, then pid .. backoff_s
+      if (!r.string() || !r.skip(4 + 1 + 4 + 4 + 4 + 8 + 8)) return false;
+    return true;
+  }
+  if (channel == "NODE_STATUS") {
+    if (!r.skip(8 + 8) || !r.string() || !r.skip(4 + 8) || !r.int32(n) || n < 0) return false;
+    for (int32_t i = 0; i < n; ++i)  // channel, then 5 int64 counters
+      if (!r.string() || !r.skip(5 * 8)) return false;
+    return true;
+  }
+  return true;
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
   CLI::App app{"alight-fault-score: outcome of a fault-campaign run from its session log"};
   std::string log_path;
@@ -30,7 +57,8 @@ int main(int argc, char** argv) {
   // Injected garbage fails to decode here too: skipped without a word.
   for (const lcm::LogEvent* ev = log.readNextEvent(); ev; ev = log.readNextEvent()) {
     const auto feed = [&](auto msg) {
-      if (alight::decode_message(msg, ev->data, static_cast<size_t>(ev->datalen)))
+      const auto size = static_cast<size_t>(ev->datalen);
+      if (strings_ok(ev->channel, ev->data, size) && alight::decode_message(msg, ev->data, size))
         scorer.add(msg, ev->timestamp);
     };
     if (ev->channel == "SIM_TRUTH") {

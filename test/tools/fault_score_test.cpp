@@ -144,6 +144,30 @@ TEST(FaultScoreTest, HeightIsMeasuredAboveThePlatformTopWhenOverIt) {
   EXPECT_EQ(r.outcome, "grounded");  // on the platform, but the simulator never said landed
 }
 
+TEST(FaultScoreTest, ComingDownWithoutALandingOrFailsafeIsNotAPass) {
+  // Seen with future-stamped messages: normal mode, the vehicle sinks to the floor at 1.2 m/s
+  // and disarms on the impact, 0 m up.
+  FaultScorer sc = airborne_run(attitude_cmd_t::MODE_NORMAL, autonomy_status_t::PHASE_DETECTION,
+                                "DETECTION", -1.2);
+  sc.add(truth(kT0 + 11 * kS, 0, 0.3, true, -1.2), kT0 + 11 * kS);
+  sc.add(truth(kT0 + 12 * kS, 0, kRestZ, false), kT0 + 12 * kS);
+  const auto r = sc.result();
+  EXPECT_EQ(r.outcome, "came_down");
+  EXPECT_FALSE(r.ok);
+  ASSERT_TRUE(r.max_touchdown_speed_mps);
+  EXPECT_NEAR(*r.max_touchdown_speed_mps, 1.2, 1e-9);
+  ASSERT_TRUE(r.max_disarm_height_m);
+  EXPECT_LT(*r.max_disarm_height_m, 0.3);
+}
+
+TEST(FaultScoreTest, NeverLeavingTheGroundIsGrounded) {
+  FaultScorer sc;
+  for (int i = 0; i < 5; ++i) sc.add(truth(kT0 + i * kS, 0, kRestZ, false), kT0 + i * kS);
+  const auto r = sc.result();
+  EXPECT_EQ(r.outcome, "grounded");
+  EXPECT_TRUE(r.ok);
+}
+
 TEST(FaultScoreTest, TheKilledProcessIsExpectedAndAnyOtherExitIsNot) {
   FaultScoreParams p;
   p.expected_exit = "vision";
