@@ -8,6 +8,7 @@
 #include <spdlog/spdlog.h>
 
 #include <alight/attitude_cmd_t.hpp>
+#include <alight/sim_control_t.hpp>
 
 #include <chrono>
 #include <filesystem>
@@ -16,6 +17,7 @@
 #include "common/node.hpp"
 #include "common/params.hpp"
 #include "sim/params.hpp"
+#include "sim/sensor_gate.hpp"
 #include "sim/sim_msgs.hpp"
 #include "sim/simulator.hpp"
 
@@ -68,6 +70,16 @@ int main(int argc, char** argv) {
     sim::AttitudeCommand cmd;  // disarmed until the outer loop says otherwise
     node.on<attitude_cmd_t>("ATTITUDE_CMD",
                             [&](const attitude_cmd_t& m) { cmd = sim::from_msg(m); });
+    // Test hook of the fault campaign: sensor dropouts on request (sim/sensor_gate.hpp).
+    sim::SensorGates gates;
+    node.on<sim_control_t>("SIM_CONTROL", [&](const sim_control_t& m) {
+      if (const auto why = gates.apply(m, simulator.now_utime())) {
+        node.reject_value("SIM_CONTROL", *why);
+      } else {
+        spdlog::info("alight-sim: SIM_CONTROL: mocap off {} s, camera off {} s, imu off {} s",
+                     m.mocap_off_s, m.camera_off_s, m.imu_off_s);
+      }
+    });
 
     spdlog::info("alight-sim: scenario {} ({}), vehicle {} ({}), seed {}, rate {}", scenario.name,
                  scenario_file, vehicle.name, vehicle_file, seed, rate);
@@ -91,9 +103,13 @@ int main(int argc, char** argv) {
         late_warned_at = wall;
       }
       simulator.step(cmd, std::min(end_utime, simulator.now_utime() + kChunkUs));
-      for (const auto& m : simulator.take_mocap()) node.publish("MOCAP_POSE", sim::to_msg(m));
-      for (const auto& m : simulator.take_imu()) node.publish("IMU", sim::to_msg(m));
-      if (auto frame = simulator.take_camera()) node.publish("CAMERA", sim::to_msg(*frame));
+      const int64_t now = simulator.now_utime();
+      for (const auto& m : simulator.take_mocap())
+        if (gates.mocap.on(now)) node.publish("MOCAP_POSE", sim::to_msg(m));
+      for (const auto& m : simulator.take_imu())
+        if (gates.imu.on(now)) node.publish("IMU", sim::to_msg(m));
+      if (auto frame = simulator.take_camera())
+        if (gates.camera.on(now)) node.publish("CAMERA", sim::to_msg(*frame));
       if (simulator.now_utime() >= next_truth) {
         node.publish("SIM_TRUTH", sim::to_msg(simulator.truth()));
         next_truth += kTruthPeriodUs;
