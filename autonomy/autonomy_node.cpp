@@ -169,7 +169,10 @@ int main(int argc, char** argv) {
       in.imu = au::imu_from_msg(m, &why);
       if (!in.imu) return (void)node.reject_value("IMU", why);
       if (!node.accept_stamp("IMU", m.utime)) return;
-      now_utime = std::max(now_utime, m.utime);
+      // The clock starts with the first pose. The first stamp of all is judged against the wall
+      // clock only, and sensor time (a simulator's) may lie far behind it: an IMU sample an hour
+      // ahead as the very first message would otherwise set the clock for good.
+      if (now_utime != 0) now_utime = std::max(now_utime, m.utime);
       step(in);
     });
     node.on<alight::target_t>("VISION_TARGET", [&](const alight::target_t& m) {
