@@ -1,5 +1,6 @@
 #include "common/msg_convert.hpp"
 
+#include <cmath>
 #include <cstring>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -14,6 +15,28 @@ PoseSample from_msg(const pose_t& m) {
   s.q_WB = quat_from_wxyz(m.orientation);
   s.omega_B = Vector3d(m.angular_velocity_B[0], m.angular_velocity_B[1], m.angular_velocity_B[2]);
   return s;
+}
+
+std::optional<PoseSample> pose_from_msg(const pose_t& m, std::string* why) {
+  const auto refuse = [&](const std::string& text) -> std::optional<PoseSample> {
+    if (why) *why = text;
+    return std::nullopt;
+  };
+  const auto finite3 = [](const double v[3]) {
+    return std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]);
+  };
+  if (!finite3(m.pos)) return refuse("pose: non-finite position");
+  if (!finite3(m.vel)) return refuse("pose: non-finite velocity");
+  if (!finite3(m.angular_velocity_B)) return refuse("pose: non-finite angular velocity");
+  double q_norm2 = 0.0;
+  for (int i = 0; i < 4; ++i) q_norm2 += m.orientation[i] * m.orientation[i];
+  if (!std::isfinite(q_norm2)) return refuse("pose: non-finite orientation");
+  // Mocap streams unit quaternions; anything else is a corrupt sample, not one to renormalise.
+  if (std::abs(std::sqrt(q_norm2) - 1.0) > 1e-3) {
+    return refuse("pose: orientation quaternion of norm " + std::to_string(std::sqrt(q_norm2)) +
+                  " (must be 1)");
+  }
+  return from_msg(m);
 }
 
 pose_t to_msg(const PoseSample& s, int64_t seq) {
