@@ -48,6 +48,12 @@ struct OuterLoopParams {
   double landed_still_s = 1.0;       ///< with no setpoint: disarm after this long not descending
                                      ///< although commanded to (on the ground) [s]
 
+  // Land detector (like PX4's): a motors-off setpoint without KILL is honoured only on the ground.
+  double land_detect_s = 0.5;        ///< on the ground once this long with the demand below [s]
+  double land_vz_mps = 0.1;          ///< ... no faster vertically than this [m/s]
+  double land_accel_mps2 = 0.5;      ///< ... and the position loop asking for at least this much
+                                     ///< downward acceleration (the ground holds it up) [m/s^2]
+
   double i_zone_m = 0.3;             ///< integrate only while the error is smaller (no windup
                                      ///< during large steps) [m]
   double i_still_mps = 0.1;          ///< ... or while slower than this (steady offsets) [m/s]

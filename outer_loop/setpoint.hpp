@@ -14,7 +14,9 @@ struct PositionSetpoint {
   Vector3d p_W = Vector3d::Zero();   ///< position setpoint, world [m]
   Vector3d v_W = Vector3d::Zero();   ///< feed-forward velocity, world [m/s]
   double yaw_rad = 0.0;              ///< heading setpoint about world z [rad]
-  bool motors_on = false;            ///< false: disarm now (landed, killed, not yet taken off)
+  bool motors_on = false;            ///< false: motors off (landed, not yet taken off); honoured
+                                     ///< in the air only with kill
+  bool kill = false;                 ///< operator KILL: disarm at once, even in the air
   bool idle = false;                 ///< on the ground with motors at idle (no position control)
 };
 
