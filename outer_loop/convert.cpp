@@ -53,12 +53,18 @@ position_setpoint_t to_msg(const PositionSetpoint& sp) {
 
 int8_t mode_to_msg(Mode mode) {
   switch (mode) {
-    case Mode::kNormal: return attitude_cmd_t::MODE_NORMAL;
-    case Mode::kHoldLevel: return attitude_cmd_t::MODE_HOLD_LEVEL;
-    case Mode::kFailsafeDescent: return attitude_cmd_t::MODE_FAILSAFE_DESCENT;
-    case Mode::kHoldPosition: return attitude_cmd_t::MODE_HOLD_POSITION;
-    case Mode::kSetpointLostDescent: return attitude_cmd_t::MODE_SETPOINT_LOST_DESCENT;
-    case Mode::kDisarmed: return attitude_cmd_t::MODE_DISARMED;
+    case Mode::kNormal:
+      return attitude_cmd_t::MODE_NORMAL;
+    case Mode::kHoldLevel:
+      return attitude_cmd_t::MODE_HOLD_LEVEL;
+    case Mode::kFailsafeDescent:
+      return attitude_cmd_t::MODE_FAILSAFE_DESCENT;
+    case Mode::kHoldPosition:
+      return attitude_cmd_t::MODE_HOLD_POSITION;
+    case Mode::kSetpointLostDescent:
+      return attitude_cmd_t::MODE_SETPOINT_LOST_DESCENT;
+    case Mode::kDisarmed:
+      return attitude_cmd_t::MODE_DISARMED;
   }
   return attitude_cmd_t::MODE_DISARMED;
 }
@@ -84,12 +90,24 @@ AttitudeCommand from_msg(const attitude_cmd_t& msg) {
   c.thrust_N = msg.thrust_N;
   c.armed = msg.armed;
   switch (msg.mode) {
-    case attitude_cmd_t::MODE_NORMAL: c.mode = Mode::kNormal; break;
-    case attitude_cmd_t::MODE_HOLD_LEVEL: c.mode = Mode::kHoldLevel; break;
-    case attitude_cmd_t::MODE_FAILSAFE_DESCENT: c.mode = Mode::kFailsafeDescent; break;
-    case attitude_cmd_t::MODE_HOLD_POSITION: c.mode = Mode::kHoldPosition; break;
-    case attitude_cmd_t::MODE_SETPOINT_LOST_DESCENT: c.mode = Mode::kSetpointLostDescent; break;
-    default: c.mode = Mode::kDisarmed; break;
+    case attitude_cmd_t::MODE_NORMAL:
+      c.mode = Mode::kNormal;
+      break;
+    case attitude_cmd_t::MODE_HOLD_LEVEL:
+      c.mode = Mode::kHoldLevel;
+      break;
+    case attitude_cmd_t::MODE_FAILSAFE_DESCENT:
+      c.mode = Mode::kFailsafeDescent;
+      break;
+    case attitude_cmd_t::MODE_HOLD_POSITION:
+      c.mode = Mode::kHoldPosition;
+      break;
+    case attitude_cmd_t::MODE_SETPOINT_LOST_DESCENT:
+      c.mode = Mode::kSetpointLostDescent;
+      break;
+    default:
+      c.mode = Mode::kDisarmed;
+      break;
   }
   return c;
 }

@@ -21,8 +21,9 @@
 
 int main(int argc, char** argv) {
   return alight::run_node_main("alight-outer-loop", [&]() -> int {
-    CLI::App app{"alight outer loop: linear position controller (POSITION_SETPOINT, MOCAP_POSE -> "
-                 "ATTITUDE_CMD)"};
+    CLI::App app{
+        "alight outer loop: linear position controller (POSITION_SETPOINT, MOCAP_POSE -> "
+        "ATTITUDE_CMD)"};
     alight::NodeArgs args;
     args.add_to(app, true);
     namespace ol = alight::outer_loop;
@@ -32,9 +33,9 @@ int main(int argc, char** argv) {
     app.add_option("--pose-channel", options.pose_channel, "pose_t input");
     app.add_option("--setpoint-channel", options.setpoint_channel, "position_setpoint_t input");
     app.add_option("--cmd-channel", cmd_channel, "attitude_cmd_t output");
-    app.add_option("--state-file", state_file,
-                   "What survives a restart (failsafe latch, armed); default " +
-                       ol::default_state_path());
+    app.add_option(
+        "--state-file", state_file,
+        "What survives a restart (failsafe latch, armed); default " + ol::default_state_path());
     app.add_option("--state-max-age", state_max_age_s,
                    "A restart trusts the file's 'armed' only when it is this recent [s]")
         ->check(CLI::Range(0.5, 600.0));
@@ -89,10 +90,10 @@ int main(int argc, char** argv) {
     node.on<alight::pose_t>(options.pose_channel, [&](const alight::pose_t& m) {
       publish(runner.on_pose(m, alight::steady_utime()));
     });
-    node.on<alight::position_setpoint_t>(
-        options.setpoint_channel, [&](const alight::position_setpoint_t& m) {
-          publish(runner.on_setpoint(m, alight::steady_utime()));
-        });
+    node.on<alight::position_setpoint_t>(options.setpoint_channel,
+                                         [&](const alight::position_setpoint_t& m) {
+                                           publish(runner.on_setpoint(m, alight::steady_utime()));
+                                         });
     node.every(0.01, [&](int64_t) {
       publish(runner.tick(alight::steady_utime()));
       // While flying, keep the record fresh: a restart trusts "armed" only from a recent one.

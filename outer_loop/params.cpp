@@ -42,7 +42,8 @@ void OuterLoopParams::validate() const {
       {"i_still_mps", i_still_mps},
       {"max_dt_s", max_dt_s},
   };
-  for (const auto& [key, value] : all) param_check(std::isfinite(value), key, value, "must be finite");
+  for (const auto& [key, value] : all)
+    param_check(std::isfinite(value), key, value, "must be finite");
 
   param_check(mass_kg > 0.0 && mass_kg < 50.0, "mass_kg", mass_kg, "must be in (0, 50) kg");
   param_check(gravity_mps2 > 9.0 && gravity_mps2 < 10.5, "gravity_mps2", gravity_mps2,

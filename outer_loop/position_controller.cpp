@@ -9,12 +9,18 @@ namespace alight::outer_loop {
 
 const char* mode_name(Mode mode) {
   switch (mode) {
-    case Mode::kNormal: return "NORMAL";
-    case Mode::kHoldLevel: return "HOLD_LEVEL";
-    case Mode::kFailsafeDescent: return "FAILSAFE_DESCENT";
-    case Mode::kHoldPosition: return "HOLD_POSITION";
-    case Mode::kSetpointLostDescent: return "SETPOINT_LOST_DESCENT";
-    case Mode::kDisarmed: return "DISARMED";
+    case Mode::kNormal:
+      return "NORMAL";
+    case Mode::kHoldLevel:
+      return "HOLD_LEVEL";
+    case Mode::kFailsafeDescent:
+      return "FAILSAFE_DESCENT";
+    case Mode::kHoldPosition:
+      return "HOLD_POSITION";
+    case Mode::kSetpointLostDescent:
+      return "SETPOINT_LOST_DESCENT";
+    case Mode::kDisarmed:
+      return "DISARMED";
   }
   return "?";
 }
@@ -32,7 +38,6 @@ void clamp_norm(Eigen::Ref<Eigen::VectorXd> v, double limit) {
   const double n = v.norm();
   if (n > limit && n > 0.0) v *= limit / n;
 }
-
 
 bool all_finite(const PositionSetpoint& sp) {
   return sp.p_W.allFinite() && sp.v_W.allFinite() && std::isfinite(sp.yaw_rad);
@@ -84,9 +89,8 @@ AttitudeCommand PositionController::disarmed(const char* reason) {
   return c;
 }
 
-AttitudeCommand PositionController::track(const Vector3d& p_sp, const Vector3d& v_sp,
-                                          double yaw_sp, const PoseSample& pose, double dt_s,
-                                          bool integrate) {
+AttitudeCommand PositionController::track(const Vector3d& p_sp, const Vector3d& v_sp, double yaw_sp,
+                                          const PoseSample& pose, double dt_s, bool integrate) {
   const auto& P = params_;
   const Vector3d e_p = p_sp - pose.p_W_B;
   const Vector3d e_v = v_sp - pose.v_W_B;
@@ -103,11 +107,11 @@ AttitudeCommand PositionController::track(const Vector3d& p_sp, const Vector3d& 
                                     -P.i_limit_z_mps2, P.i_limit_z_mps2);
   }
 
-  Vector2d a_xy = P.kp_xy_per_s2 * e_p.head<2>() + P.kd_xy_per_s * e_v.head<2>() +
-                  integral_mps2_.head<2>();
+  Vector2d a_xy =
+      P.kp_xy_per_s2 * e_p.head<2>() + P.kd_xy_per_s * e_v.head<2>() + integral_mps2_.head<2>();
   last_demand_z_mps2_ = P.kp_z_per_s2 * e_p.z() + P.kd_z_per_s * e_v.z();
-  const double a_z = std::clamp(last_demand_z_mps2_ + integral_mps2_.z(),
-                                -P.max_accel_z_mps2, P.max_accel_z_mps2);
+  const double a_z =
+      std::clamp(last_demand_z_mps2_ + integral_mps2_.z(), -P.max_accel_z_mps2, P.max_accel_z_mps2);
   const double f_z = P.gravity_mps2 + a_z;  // > 0 since max_accel_z < g
   const double max_tilt_rad = P.max_tilt_deg * kDegToRad;
   const double a_xy_max = f_z * std::tan(max_tilt_rad);
@@ -126,8 +130,7 @@ AttitudeCommand PositionController::track(const Vector3d& p_sp, const Vector3d& 
   const double f_norm = std::sqrt(f_x * f_x + f_y * f_y + f_z * f_z);
   cmd.thrust_N = std::clamp(P.mass_kg * f_norm, P.thrust_min_N, P.thrust_max_N);
   const double max_rate = P.max_yaw_rate_dps * kDegToRad;
-  cmd.yaw_rate_radps =
-      std::clamp(P.yaw_kp_per_s * wrap_angle(yaw_sp - yaw), -max_rate, max_rate);
+  cmd.yaw_rate_radps = std::clamp(P.yaw_kp_per_s * wrap_angle(yaw_sp - yaw), -max_rate, max_rate);
   cmd.armed = true;
   cmd.mode = Mode::kNormal;
   return cmd;
@@ -200,8 +203,8 @@ AttitudeCommand PositionController::land(const PoseSample& pose, int64_t now_uti
 }
 
 AttitudeCommand PositionController::step(const std::optional<PositionSetpoint>& setpoint,
-                                         const std::optional<PoseSample>& pose,
-                                         int64_t now_utime, double dt_s) {
+                                         const std::optional<PoseSample>& pose, int64_t now_utime,
+                                         double dt_s) {
   const auto& P = params_;
   if (pose && age_s(pose->utime, now_utime) <= P.pose_stale_s) {
     detect_landing(*pose, now_utime);

@@ -78,8 +78,8 @@ class PositionController {
   std::optional<int64_t> last_utime_;
   Vector3d integral_mps2_ = Vector3d::Zero();
 
-  bool disarm_latched_ = false;   // failsafe disarm: stays until autonomy sends motors off
-  bool armed_ = false;            // the last command's armed
+  bool disarm_latched_ = false;  // failsafe disarm: stays until autonomy sends motors off
+  bool armed_ = false;           // the last command's armed
   bool started_ = false;
   bool landed_ = false;
   std::optional<int64_t> land_since_;

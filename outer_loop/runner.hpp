@@ -61,8 +61,8 @@ class Runner {
   RunnerOptions options_;
   std::optional<PoseSample> pose_;
   std::optional<PositionSetpoint> setpoint_;
-  int64_t newest_utime_ = 0;       // newest accepted input stamp
-  int64_t newest_steady_us_ = 0;   // steady time it arrived
+  int64_t newest_utime_ = 0;      // newest accepted input stamp
+  int64_t newest_steady_us_ = 0;  // steady time it arrived
   std::optional<int64_t> last_step_steady_us_;
   int64_t now_utime_ = 0;
 };

@@ -89,9 +89,12 @@ TEST(OuterLoopRegression, NonFiniteSetpointIsRefusedAtConversion) {
   for (int field = 0; field < 7; ++field) {
     for (double bad : {std::nan(""), std::numeric_limits<double>::infinity()}) {
       position_setpoint_t m = good;
-      if (field < 3) m.p_W[field] = bad;
-      else if (field < 6) m.v_W[field - 3] = bad;
-      else m.yaw_rad = bad;
+      if (field < 3)
+        m.p_W[field] = bad;
+      else if (field < 6)
+        m.v_W[field - 3] = bad;
+      else
+        m.yaw_rad = bad;
       why.clear();
       EXPECT_FALSE(setpoint_from_msg(m, &why)) << field;
       EXPECT_NE(why.find("non-finite"), std::string::npos) << why;
@@ -115,10 +118,14 @@ TEST(OuterLoopRegression, NonFiniteOrNonUnitPoseIsRefusedAtConversion) {
   const double nan = std::nan("");
   for (int field = 0; field < 13; ++field) {
     pose_t m = good;
-    if (field < 3) m.pos[field] = nan;
-    else if (field < 6) m.vel[field - 3] = nan;
-    else if (field < 10) m.orientation[field - 6] = nan;
-    else m.angular_velocity_B[field - 10] = nan;
+    if (field < 3)
+      m.pos[field] = nan;
+    else if (field < 6)
+      m.vel[field - 3] = nan;
+    else if (field < 10)
+      m.orientation[field - 6] = nan;
+    else
+      m.angular_velocity_B[field - 10] = nan;
     EXPECT_FALSE(pose_from_msg(m, &why)) << field;
   }
   pose_t m = good;

@@ -1,8 +1,8 @@
 // The outer_loop: sections of the vehicle files load and validate; errors name file and key.
 
-#include <gtest/gtest.h>
-
 #include "outer_loop/params.hpp"
+
+#include <gtest/gtest.h>
 
 namespace alight::outer_loop {
 namespace {
@@ -58,9 +58,9 @@ TEST(OuterLoopRegression, InfiniteTimeoutInAFileIsAParamErrorNamingFileKeyAndVal
 }
 
 TEST(OuterLoopParamsTest, EveryTimeoutHasAnUpperBound) {
-  for (const char* kv : {"pose_stale_s: 2.5", "pose_lost_s: 6", "failsafe_disarm_after_s: 121",
-                         "setpoint_stale_s: 6", "setpoint_lost_s: 31", "landed_still_s: 11",
-                         "land_detect_s: 6"}) {
+  for (const char* kv :
+       {"pose_stale_s: 2.5", "pose_lost_s: 6", "failsafe_disarm_after_s: 121",
+        "setpoint_stale_s: 6", "setpoint_lost_s: 31", "landed_still_s: 11", "land_detect_s: 6"}) {
     const std::string yaml = std::string("outer_loop: {mass_kg: 1.0, ") + kv + "}";
     const std::string key = std::string(kv).substr(0, std::string(kv).find(':'));
     try {

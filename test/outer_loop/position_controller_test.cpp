@@ -97,8 +97,8 @@ TEST(PositionControllerTest, YawRateFollowsTheHeadingErrorWithinItsLimit) {
   auto cmd = c.update(setpoint_at({0, 0, 1}, 0.1, kT0), pose_at({0, 0, 1}, 0, kT0), kT0);
   EXPECT_NEAR(cmd.yaw_rate_radps, p.yaw_kp_per_s * 0.1, 1e-9);
   // Across the +-pi seam the short way round.
-  cmd = c.update(setpoint_at({0, 0, 1}, M_PI - 0.1, kT0), pose_at({0, 0, 1}, -M_PI + 0.1, kT0),
-                 kT0);
+  cmd =
+      c.update(setpoint_at({0, 0, 1}, M_PI - 0.1, kT0), pose_at({0, 0, 1}, -M_PI + 0.1, kT0), kT0);
   EXPECT_LT(cmd.yaw_rate_radps, 0);
   cmd = c.update(setpoint_at({0, 0, 1}, 3.0, kT0), pose_at({0, 0, 1}, 0, kT0), kT0);
   EXPECT_NEAR(cmd.yaw_rate_radps, p.max_yaw_rate_dps * M_PI / 180, 1e-9);

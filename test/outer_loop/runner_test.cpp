@@ -37,8 +37,7 @@ struct Harness {
   std::optional<AttitudeCommand> last;
   int published = 0;
 
-  explicit Harness(PersistentState restored = {})
-      : runner(params(), restored, gate()) {}
+  explicit Harness(PersistentState restored = {}) : runner(params(), restored, gate()) {}
 
   InputGate gate() {
     InputGate g;
