@@ -28,14 +28,14 @@ int main(int argc, char** argv) {
     args.add_to(app, true);
     namespace ol = alight::outer_loop;
     ol::RunnerOptions options;
-    std::string cmd_channel = "ATTITUDE_CMD", state_file = ol::default_state_path();
+    std::string cmd_channel = "ATTITUDE_CMD", state_file;
     double state_max_age_s = 10.0;
     app.add_option("--pose-channel", options.pose_channel, "pose_t input");
     app.add_option("--setpoint-channel", options.setpoint_channel, "position_setpoint_t input");
     app.add_option("--cmd-channel", cmd_channel, "attitude_cmd_t output");
-    app.add_option(
-        "--state-file", state_file,
-        "What survives a restart (failsafe latch, armed); default " + ol::default_state_path());
+    app.add_option("--state-file", state_file,
+                   "What survives a restart (failsafe latch, armed); default "
+                   "/tmp/alight-<uid>/outer_loop-<LCM URL>.state");
     app.add_option("--state-max-age", state_max_age_s,
                    "A restart trusts the file's 'armed' only when it is this recent [s]")
         ->check(CLI::Range(0.5, 600.0));
@@ -45,6 +45,7 @@ int main(int argc, char** argv) {
       return app.exit(e);
     }
     args.finalize();
+    if (state_file.empty()) state_file = ol::default_state_path(args.lcm_url);
 
     const ol::OuterLoopParams params = ol::load_params(args.config);
     std::string error;

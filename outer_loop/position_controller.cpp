@@ -198,7 +198,7 @@ AttitudeCommand PositionController::land(const PoseSample& pose, int64_t now_uti
   auto c = track(p_sp, Vector3d(0, 0, -P.setpoint_lost_descent_mps), landing_yaw_rad_, pose, dt_s,
                  false);
   c.mode = Mode::kSetpointLostDescent;
-  c.reason = "motors off refused in the air (no KILL): landing, disarm on the ground";
+  c.reason = "motors off without KILL, not judged on the ground yet: landing";
   return c;
 }
 

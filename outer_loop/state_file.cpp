@@ -92,8 +92,15 @@ PersistentState restored_state(const std::optional<StateRecord>& record, int64_t
   return s;
 }
 
-std::string default_state_path() {
-  return "/tmp/alight-" + std::to_string(::getuid()) + "/outer_loop.state";
+std::string default_state_path(const std::string& tag) {
+  std::string name = tag;
+  for (char& c : name) {
+    const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
+                    c == '_' || c == '.' || c == '-';
+    if (!ok) c = '_';
+  }
+  if (name.size() > 100) name.resize(100);
+  return "/tmp/alight-" + std::to_string(::getuid()) + "/outer_loop-" + name + ".state";
 }
 
 }  // namespace alight::outer_loop

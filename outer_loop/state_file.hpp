@@ -33,7 +33,8 @@ std::optional<StateRecord> load_state(const std::string& path, std::string* erro
 PersistentState restored_state(const std::optional<StateRecord>& record, int64_t wall_now_utime,
                                double max_age_s);
 
-/// /tmp/alight-<uid>/outer_loop.state
-std::string default_state_path();
+/// /tmp/alight-<uid>/outer_loop-<tag>.state, `tag` (the LCM URL) reduced to [A-Za-z0-9_.-]: outer
+/// loops on different LCM networks (tests on private ports, parallel sessions) never share one.
+std::string default_state_path(const std::string& tag);
 
 }  // namespace alight::outer_loop
