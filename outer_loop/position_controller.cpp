@@ -218,7 +218,11 @@ AttitudeCommand PositionController::step(const std::optional<PositionSetpoint>& 
     disarm_latched_ = false;  // a KILL is also the acknowledgement of a failsafe disarm
     return disarmed("setpoint: KILL");
   }
-  const bool motors_off_refused = !setpoint->motors_on && armed_ && !landed_;
+  // Without pose the land detector is blind and the outer loop is descending blind itself: then
+  // autonomy's touch-down (from the IMU) is the only land detector left, and its motors-off is
+  // honoured.
+  const bool pose_lost = !pose || age_s(pose->utime, now_utime) > P.pose_lost_s;
+  const bool motors_off_refused = !setpoint->motors_on && armed_ && !landed_ && !pose_lost;
   if (!setpoint->motors_on && !motors_off_refused) {
     disarm_latched_ = false;  // autonomy acknowledged: the next motors-on may arm again
     return disarmed(armed_ ? "setpoint: motors off, landed" : "setpoint: motors off");

@@ -20,8 +20,9 @@
 // motors-off setpoint is honoured at once only with kill (the operator's KILL), or when the
 // vehicle is not armed, or when the land detector judges it on the ground (the position loop
 // asks for a clear downward acceleration and the vehicle does not move vertically, for
-// land_detect_s). Otherwise the outer loop lands: a slow descent on the pose from where it is,
-// disarming once the land detector says it is down.
+// land_detect_s), or during the blind pose-lost descent (where autonomy's IMU touch-down is the
+// only land detector left). Otherwise the outer loop lands: a slow descent on the pose from
+// where it is, disarming once the land detector says it is down.
 //
 // Defence in depth: the node refuses non-finite input, but update() also never lets one
 // through: a non-finite setpoint or pose is replaced by the last finite one, a non-finite

@@ -443,5 +443,17 @@ TEST(OuterLoopRegression, ParamsRejectInfiniteTimeouts) {
   }
 }
 
+TEST(PositionControllerTest, WithThePoseLostAutonomysTouchDownMotorsOffIsHonoured) {
+  // Blind failsafe descent: autonomy's IMU touch-down is the only land detector left.
+  PositionController c(params());
+  const auto last_pose = pose_at({0, 0, 1}, 0, kT0);
+  c.update(setpoint_at({0, 0, 1}, 0, kT0), last_pose, kT0);
+  const int64_t t = kT0 + 3'000 * kMs;
+  ASSERT_EQ(c.update(setpoint_at({0, 0, 1}, 0, t), last_pose, t).mode, Mode::kFailsafeDescent);
+  auto off = setpoint_at({0, 0, 0}, 0, t + 10 * kMs);
+  off.motors_on = false;
+  EXPECT_FALSE(c.update(off, last_pose, t + 10 * kMs).armed);
+}
+
 }  // namespace
 }  // namespace alight::outer_loop
