@@ -117,6 +117,9 @@ AttitudeCommand Simulator::autopilot_command() {
   if (silent_s <= V.cmd_loss_timeout_s) {
     cmd_lost_since_.reset();
     cmd_loss_rest_since_.reset();
+    // Disarmed by the failsafe, it arms again only after a disarmed command (as an autopilot
+    // needs an explicit arm after a failsafe landing), not on the first armed one that arrives.
+    if (cmd_loss_disarmed_ && cmd_.armed) return AttitudeCommand{cmd_.utime};
     cmd_loss_disarmed_ = false;
     return cmd_;
   }

@@ -74,7 +74,8 @@ class Simulator {
   bool command_lost() const { return cmd_lost_since_.has_value(); }
   /// Advances under the last command received. When none arrived for the vehicle's
   /// cmd_loss_timeout_s while armed, the autopilot's command-loss failsafe flies it: level, then
-  /// a descent at cmd_loss_descent_mps, then disarmed once it rests on the ground.
+  /// a descent at cmd_loss_descent_mps, then disarmed once it rests on the ground, and then
+  /// armed again only after a disarmed command.
   void advance_to(int64_t until_utime);
 
   int64_t now_utime() const { return now_utime_; }

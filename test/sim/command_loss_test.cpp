@@ -66,6 +66,12 @@ TEST_F(SimCommandLossTest, CommandLossLevelsThenDescendsThenDisarmsOnTheGround) 
   EXPECT_FALSE(disarmed_in_air);
   EXPECT_LT(sim.state().p_W_B.z(), 0.2);
   EXPECT_FALSE(sim.truth().tipped);
+  // A restarted outer loop's armed command does not re-arm it; a disarmed one first does.
+  sim.step(last, sim.now_utime() + 500 * kMs);
+  EXPECT_FALSE(sim.state().armed);
+  sim.step(AttitudeCommand{}, sim.now_utime() + 10 * kMs);
+  sim.step(hover(vehicle_), sim.now_utime() + 10 * kMs);
+  EXPECT_TRUE(sim.state().armed);
 }
 
 TEST_F(SimCommandLossTest, StepHoldsACommandAsIfReceivedAllTheWhile) {
