@@ -685,6 +685,7 @@ Output Autonomy::make_output() {
   sp.v_W = geofence_clamped_ ? Vector3d::Zero() : sp_v_W_;
   sp.yaw_rad = yaw_sp_rad_;
   sp.motors_on = motors_on_;
+  sp.kill = phase_ == Phase::kKilled;  // the outer loop disarms in the air only on an explicit KILL
   sp.idle = false;
 
   out.has_setpoint = started_;

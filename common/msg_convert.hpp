@@ -14,12 +14,12 @@ namespace alight {
 
 PoseSample from_msg(const pose_t& msg);
 pose_t to_msg(const PoseSample& pose, int64_t seq);
-
-/// The validating form of from_msg(pose_t) for untrusted input: nullopt (and *why, when given,
-/// naming the field) for a non-finite position, velocity, angular rate or orientation, or an
-/// orientation quaternion whose norm is not 1 within 1e-3 (a zero one included; a unit one is
-/// renormalised). A NaN pose would reach thrust and setpoints; a zero quaternion divides by 0.
+/// Validating form of from_msg for untrusted input: nullopt (and *why, when given) unless every
+/// position, velocity, orientation and rate field is finite and the quaternion's norm is within
+/// 0.01 of 1 (it is then normalised; a zero one would divide by zero). The stamp is left to the
+/// node's StampGuard.
 std::optional<PoseSample> pose_from_msg(const pose_t& msg, std::string* why);
+
 
 /// A decoded camera frame.
 struct Image {

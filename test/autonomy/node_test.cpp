@@ -209,7 +209,7 @@ TEST(AutonomyNodeTest, AutoGoTakesOffStatusAtTenHertzAndKillStopsEverything) {
   EXPECT_EQ(rec.status.back().phase, alight::autonomy_status_t::PHASE_KILLED)
       << rec.status.back().reason;
   EXPECT_EQ(rec.status.back().failsafe, alight::autonomy_status_t::FAILSAFE_KILL);
-  EXPECT_EQ(rec.setpoints.back().motors, alight::position_setpoint_t::MOTORS_OFF);
+  EXPECT_EQ(rec.setpoints.back().motors, alight::position_setpoint_t::MOTORS_KILL);
   EXPECT_FALSE(rec.cmds.back().armed);
   EXPECT_EQ(rec.cmds.back().thrust_N, 0.0);
   EXPECT_EQ(rec.status.back().last_cmd_seq, 4);
