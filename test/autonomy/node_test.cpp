@@ -151,10 +151,14 @@ TEST(AutonomyNodeTest, AutoGoTakesOffStatusAtTenHertzAndKillStopsEverything) {
     c.utime = utime;
     c.seq = seq;
     c.sender = "test-station";
+    // Signed for this vehicle and this run of autonomy, as announced on AUTONOMY_STATUS.
+    c.vehicle_id = rec.status.back().vehicle_id;
+    c.session = rec.status.back().cmd_session;
     c.command = alight::operator_cmd_t::CMD_KILL;
     c.auth = alight::operator_cmd_t::AUTH_NONE;
     return c;
   };
+  ASSERT_NE(rec.status.back().cmd_session, 0) << "a verifier announces its session";
   alight::operator_cmd_t unsigned_kill = kill_cmd(1, alight::wall_utime());
   lcm.publish("OPERATOR_CMD", &unsigned_kill);
   alight::operator_cmd_t forged = kill_cmd(2, alight::wall_utime());
