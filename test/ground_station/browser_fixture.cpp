@@ -34,6 +34,7 @@ int main(int argc, char** argv) {
   const int64_t session = alight::draw_session_nonce();
   alight::CommandVerifier verifier(alight::load_key_file(key_file).key, "alight", session);
   std::atomic<int64_t> last_accepted_seq{-1};
+  std::atomic<bool> acknowledge{true};
   alight::Node node(lcm_url, "gs-fixture");
   std::atomic<int> phase{alight::autonomy_status_t::PHASE_IDLE};
   std::atomic<bool> quit{false};
@@ -41,6 +42,8 @@ int main(int argc, char** argv) {
     std::string line;
     while (std::getline(std::cin, line)) {
       if (line.rfind("phase ", 0) == 0) phase = std::stoi(line.substr(6));
+      if (line == "ack off") acknowledge = false;  // a vehicle that no longer answers
+      if (line == "ack on") acknowledge = true;
       if (line == "quit") break;
     }
     quit = true;
@@ -49,7 +52,7 @@ int main(int argc, char** argv) {
 
   node.on<alight::operator_cmd_t>("OPERATOR_CMD", [&](const alight::operator_cmd_t& cmd) {
     const auto verdict = verifier.check(cmd, alight::wall_utime());
-    if (verdict.accepted()) last_accepted_seq = cmd.seq;
+    if (verdict.accepted() && acknowledge) last_accepted_seq = cmd.seq;
     std::printf(
         "{\"event\":\"cmd\",\"verdict\":\"%s\",\"command\":%d,\"mission\":%d,\"seq\":%lld,"
         "\"sender\":\"%s\",\"nudge\":[%.3f,%.3f,%.3f]}\n",
