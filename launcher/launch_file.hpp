@@ -6,7 +6,8 @@
 //   lcm_url: udpm://239.255.76.67:7667?ttl=0   # every process gets it as LCM_DEFAULT_URL
 //   record: true                               # lcm-logger into the session folder
 //   stop_timeout_s: 3.0                        # SIGINT, then SIGKILL after this long
-//   backoff: {initial_s: 0.01, max_s: 1.0, reset_after_s: 10.0}
+//   backoff: {initial_s: 0.01, max_s: 1.0, reset_after_s: 10.0,   # optional
+//             start_limit_burst: 12, start_limit_interval_s: 30.0}
 //   processes:
 //     - name: sim
 //       command: [alight-sim, --scenario, "${ALIGHT_ROOT}/config/scenarios/landing_a.yaml"]
