@@ -40,10 +40,12 @@ void GroundStationParams::validate() const {
               "must be in [0, client_timeout_s)");
   param_check(jpeg_quality >= 1 && jpeg_quality <= 100, "jpeg_quality", jpeg_quality,
               "must be in [1, 100]");
-  param_check(track_period_s > 0.0, "track_period_s", track_period_s, "must be > 0");
+  param_check(track_period_s > 0.0 && track_period_s <= 60.0, "track_period_s", track_period_s,
+              "must be in (0, 60] s");
   param_check(track_max_points >= 10, "track_max_points", track_max_points, "must be >= 10");
   param_check(measurements_max >= 1, "measurements_max", measurements_max, "must be >= 1");
-  param_check(channel_stale_s > 0.0, "channel_stale_s", channel_stale_s, "must be > 0");
+  param_check(channel_stale_s > 0.0 && channel_stale_s <= 3600.0, "channel_stale_s",
+              channel_stale_s, "must be in (0, 3600] s");
   param_check(nudge_max_m > 0.0 && nudge_max_m <= 5.0, "nudge_max_m", nudge_max_m,
               "must be in (0, 5] m");
 }
