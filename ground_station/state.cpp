@@ -261,6 +261,12 @@ std::string StationState::to_json(int64_t now_utime, const std::string& extra) c
     w.field("vehicle_id", s.vehicle_id);
     w.field("cmd_session", s.cmd_session);
     w.field("last_rejected_seq", s.last_rejected_seq);
+    w.key("cmds_rejected_by_reason").begin_object();
+    for (int r = 1; r < 8; ++r)
+      if (s.cmds_rejected_by_reason[r] > 0)
+        w.field(reject_reason_name(static_cast<int8_t>(r)),
+                static_cast<int>(s.cmds_rejected_by_reason[r]));
+    w.end_object();
     w.field(
         "last_reject_reason",
         std::string(s.last_reject_reason == 0 ? "none" : reject_reason_name(s.last_reject_reason)));

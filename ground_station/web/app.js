@@ -344,7 +344,10 @@ function render(s) {
   $('n-meas').textContent = st ? `${st.n_measurements} (rej ${st.n_rejected})` : '—';
   $('failsafe').textContent = st ? FAILSAFES[st.failsafe] || st.failsafe : '—';
   $('mission-time').textContent = st ? `${fmt(st.mission_time_s, 1)} s` : '—';
-  $('reason').textContent = st ? (st.reason || '') + (st.cmds_rejected ? ` · ${st.cmds_rejected} cmds rejected` : '') : '—';
+  const byReason = st && st.cmds_rejected_by_reason ? Object.entries(st.cmds_rejected_by_reason)
+    .map(([why, n]) => `${n} ${why}`).join(', ') : '';
+  $('reason').textContent = st ? (st.reason || '') + (st.cmds_rejected
+    ? ` · ${st.cmds_rejected} cmds rejected${byReason ? ` (${byReason})` : ''}` : '') : '—';
 
   const ch = s.channels || {};
   const statusCh = ch[station.status_channel];

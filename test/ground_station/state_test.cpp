@@ -162,6 +162,10 @@ TEST(StationStateTest, ShowsTheClockOffsetAndTheVehiclesSession) {
   EXPECT_TRUE(contains(doc, "\"clock_offset_s\":0.25")) << doc;
   EXPECT_TRUE(contains(doc, "\"clock_offset_warn\":false"));
   EXPECT_TRUE(contains(doc, "\"session_known\":true"));
+  EXPECT_TRUE(contains(doc, "\"cmds_rejected_by_reason\":{}"));
+  st.cmds_rejected_by_reason[autonomy_status_t::REJECT_WRONG_SESSION] = 2;
+  state.on_status(st, 5'000'000, kT0);
+  EXPECT_TRUE(contains(state.to_json(5'000'000), "\"wrong session (autonomy restarted?)\":2"));
 
   // Another vehicle's status: its session is not ours to sign for.
   st.vehicle_id = "uav-2";

@@ -257,8 +257,8 @@ TEST_F(StationServerTest, ManyClientsDoNotStallTheLcmLoopOrGrowMemory) {
   const double p99_latency_s = sorted_s[sorted_s.size() * 99 / 100];
   const auto counters = station.counters();
   std::printf(
-      "clients: %d, connections: %llu (%llu after warm-up), http requests: %llu, served by the "
-      "accept thread (queue full): %llu\n"
+      "clients: %d, connections: %llu (%llu after warm-up), http requests: %llu, refused at the "
+      "gate (no worker free or too many heads): %llu\n"
       "LCM loop: longest iteration %.1f ms; status latency median %.1f ms, 99th percentile "
       "%.1f ms, max %.1f ms; %d received of %d sent\n"
       "RSS: %ld KiB after warm-up, %ld KiB at end (%+ld KiB)\n",
