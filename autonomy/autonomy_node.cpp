@@ -54,25 +54,20 @@ int main(int argc, char** argv) {
                        static_cast<int64_t>(std::llround(params.command_max_age_s * 1e6)));
     }
     // What the station needs to sign for this run, and its acknowledgements (issue 14).
-    int64_t unsigned_refused_seq = -1;
+    int64_t last_rejected_seq = -1;
+    int8_t last_reject_reason = alight::autonomy_status_t::REJECT_NONE;
     int32_t n_unsigned_refused = 0;
     const auto fill_link_status = [&](alight::autonomy_status_t& st) {
       st.vehicle_id = params.vehicle_id;
       st.cmd_session = verifier ? verifier->session() : 0;
-      st.last_rejected_seq = unsigned_refused_seq;
-      st.last_reject_reason = unsigned_refused_seq >= 0 ? alight::autonomy_status_t::REJECT_UNSIGNED
-                                                        : alight::autonomy_status_t::REJECT_NONE;
+      st.last_rejected_seq = last_rejected_seq;
+      st.last_reject_reason = last_reject_reason;
       for (auto& n : st.cmds_rejected_by_reason) n = 0;
       st.cmds_rejected_by_reason[alight::autonomy_status_t::REJECT_UNSIGNED] = n_unsigned_refused;
-      if (verifier) {
+      if (verifier)
         for (int r = 1; r < alight::CommandVerdict::kReasonCount; ++r)
           st.cmds_rejected_by_reason[r] += static_cast<int32_t>(
               verifier->n_rejected(static_cast<alight::CommandVerdict::Reason>(r)));
-        if (verifier->last_rejected_seq() >= 0) {
-          st.last_rejected_seq = verifier->last_rejected_seq();
-          st.last_reject_reason = static_cast<int8_t>(verifier->last_reject_reason());
-        }
-      }
       st.wall_utime = alight::wall_utime();
     };
     alight::Node node(args.lcm_url, "alight-autonomy");
@@ -152,11 +147,14 @@ int main(int argc, char** argv) {
         if (!verdict.accepted()) {
           spdlog::warn("OPERATOR_CMD from '{}' for '{}' seq {} rejected: {}", m.sender,
                        m.vehicle_id, m.seq, alight::reason_name(verdict.reason));
+          last_rejected_seq = m.seq;
+          last_reject_reason = static_cast<int8_t>(verdict.reason);
           return;
         }
         in.command->auth = au::CommandAuth::kVerified;
       } else if (m.auth == alight::operator_cmd_t::AUTH_NONE && !params.accept_unsigned_commands) {
-        unsigned_refused_seq = m.seq;  // autonomy refuses it and counts it in cmds_rejected
+        last_rejected_seq = m.seq;  // autonomy refuses it and counts it in cmds_rejected
+        last_reject_reason = alight::autonomy_status_t::REJECT_UNSIGNED;
         ++n_unsigned_refused;
       }
       if (now_utime == 0) {

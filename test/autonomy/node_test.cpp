@@ -204,6 +204,15 @@ TEST(AutonomyNodeTest, AutoGoTakesOffStatusAtTenHertzAndKillStopsEverything) {
   } while (rec.status.back().cmds_rejected < 4 &&
            std::chrono::steady_clock::now() < replay_deadline);
   EXPECT_EQ(rec.status.back().cmds_rejected, 4);
+  // Issue 14: the station learns which command was refused and why.
+  using S = alight::autonomy_status_t;
+  EXPECT_EQ(rec.status.back().last_rejected_seq, 4);
+  EXPECT_EQ(rec.status.back().last_reject_reason, S::REJECT_REPLAYED);
+  EXPECT_EQ(rec.status.back().cmds_rejected_by_reason[S::REJECT_UNSIGNED], 1);
+  EXPECT_EQ(rec.status.back().cmds_rejected_by_reason[S::REJECT_BAD_SIGNATURE], 1);
+  EXPECT_EQ(rec.status.back().cmds_rejected_by_reason[S::REJECT_STALE], 1);
+  EXPECT_EQ(rec.status.back().cmds_rejected_by_reason[S::REJECT_REPLAYED], 1);
+  EXPECT_GT(rec.status.back().wall_utime, 0);
   std::filesystem::remove(key_path);
 }
 
