@@ -412,7 +412,8 @@ TEST_F(StationServerTest, ViewOnlyStationRefusesCommands) {
   station.stop();
 }
 
-// What a raw socket gets back within `timeout_s` (until the peer closes or the time is up).
+// What a raw socket gets back within `timeout_s`: up to the end of the answer's head, the peer
+// closing, or the time being up.
 std::string read_reply(int fd, double timeout_s) {
   std::string out;
   const auto t0 = std::chrono::steady_clock::now();
@@ -420,7 +421,7 @@ std::string read_reply(int fd, double timeout_s) {
   while (seconds_since(t0) < timeout_s) {
     const ssize_t n = ::recv(fd, buf, sizeof buf, 0);  // SO_RCVTIMEO 1 s (connect_to)
     if (n > 0) out.append(buf, static_cast<size_t>(n));
-    if (n == 0) break;
+    if (n == 0 || out.find("\r\n\r\n") != std::string::npos) break;  // the status is in
   }
   return out;
 }
@@ -566,6 +567,15 @@ TEST_F(StationServerTest, HeadsOverTheLimitsOrTooSlowAreRefused) {
   EXPECT_EQ(reply.rfind("HTTP/1.1 408", 0), 0u) << reply;
   EXPECT_LT(closed_after_s, 3.0);
   ::close(fd);
+
+  // A body over max_payload_bytes is refused before it is read (413), on the command route too.
+  for (const char* path : {"/api/state", "/api/command"}) {
+    fd = connect_to(port);
+    send_all(fd, std::string("POST ") + path +
+                     " HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Length: 10000000\r\n\r\nxx");
+    EXPECT_EQ(read_reply(fd, 3.0).rfind("HTTP/1.1 413", 0), 0u) << path;
+    ::close(fd);
+  }
 
   // An ordinary request still works, and keeps its connection for a second one.
   httplib::Client http("127.0.0.1", port);
