@@ -95,9 +95,27 @@ int main(int argc, char** argv) {
     if (!key_file.empty()) {
       auto loaded = alight::load_key_file(key_file);
       for (const auto& w : loaded.warnings) spdlog::warn("{}", w);
-      verifier.emplace(std::move(loaded.key),
+      // A new session per start: commands signed for an earlier run are refused (issue 14).
+      verifier.emplace(std::move(loaded.key), params.vehicle_id, alight::draw_session_nonce(),
                        static_cast<int64_t>(std::llround(params.command_max_age_s * 1e6)));
     }
+    // What the station needs to sign for this run, and its acknowledgements (issue 14).
+    int64_t last_rejected_seq = -1;
+    int8_t last_reject_reason = alight::autonomy_status_t::REJECT_NONE;
+    int32_t n_unsigned_refused = 0;
+    const auto fill_link_status = [&](alight::autonomy_status_t& st) {
+      st.vehicle_id = params.vehicle_id;
+      st.cmd_session = verifier ? verifier->session() : 0;
+      st.last_rejected_seq = last_rejected_seq;
+      st.last_reject_reason = last_reject_reason;
+      for (auto& n : st.cmds_rejected_by_reason) n = 0;
+      st.cmds_rejected_by_reason[alight::autonomy_status_t::REJECT_UNSIGNED] = n_unsigned_refused;
+      if (verifier)
+        for (int r = 1; r < alight::CommandVerdict::kReasonCount; ++r)
+          st.cmds_rejected_by_reason[r] += static_cast<int32_t>(
+              verifier->n_rejected(static_cast<alight::CommandVerdict::Reason>(r)));
+      st.wall_utime = alight::wall_utime();
+    };
     alight::Node node(args.lcm_url, "alight-autonomy");
 
     int64_t now_utime = 0;
@@ -148,6 +166,7 @@ int main(int argc, char** argv) {
       if (changed || (now_utime - last_status_utime) * 1e-6 >= params.status_period_s * 0.5) {
         last_status = au::to_msg(out.status);
         if (verifier) last_status.cmds_rejected += static_cast<int32_t>(verifier->n_rejected());
+        fill_link_status(last_status);
         node.publish("AUTONOMY_STATUS", last_status);
         last_status_utime = now_utime;
         last_status_wall = alight::wall_utime();
@@ -191,11 +210,17 @@ int main(int argc, char** argv) {
       if (m.auth != alight::operator_cmd_t::AUTH_NONE && verifier) {
         const auto verdict = verifier->check(m, alight::wall_utime());
         if (!verdict.accepted()) {
-          spdlog::warn("OPERATOR_CMD from '{}' seq {} rejected: {}", m.sender, m.seq,
-                       alight::reason_name(verdict.reason));
+          spdlog::warn("OPERATOR_CMD from '{}' for '{}' seq {} rejected: {}", m.sender,
+                       m.vehicle_id, m.seq, alight::reason_name(verdict.reason));
+          last_rejected_seq = m.seq;
+          last_reject_reason = static_cast<int8_t>(verdict.reason);
           return;
         }
         in.command->auth = au::CommandAuth::kVerified;
+      } else if (m.auth == alight::operator_cmd_t::AUTH_NONE && !params.accept_unsigned_commands) {
+        last_rejected_seq = m.seq;  // autonomy refuses it and counts it in cmds_rejected
+        last_reject_reason = alight::autonomy_status_t::REJECT_UNSIGNED;
+        ++n_unsigned_refused;
       }
       if (now_utime == 0) {
         spdlog::warn("operator command before any sensor time: ignored");
@@ -210,15 +235,18 @@ int main(int argc, char** argv) {
       if (last_status_utime != 0 && (wall - last_status_wall) * 1e-6 >= params.status_period_s) {
         alight::autonomy_status_t st = last_status;
         st.reason = "no sensor input: " + st.reason;
+        fill_link_status(st);
         node.publish("AUTONOMY_STATUS", st);
         last_status_wall = wall;
       }
     });
-    spdlog::info("alight-autonomy: seed {}, signed commands {}, unsigned commands {}{}",
-                 params.seed,
-                 verifier ? "verified with " + key_file : std::string("refused (no key)"),
-                 params.accept_unsigned_commands ? "accepted" : "refused",
-                 auto_go.empty() ? "" : ", auto-go " + auto_go);
+    spdlog::info(
+        "alight-autonomy: seed {}, vehicle '{}', signed commands {}, unsigned commands {}{}",
+        params.seed, params.vehicle_id,
+        verifier ? "verified with " + key_file + ", session " + std::to_string(verifier->session())
+                 : std::string("refused (no key)"),
+        params.accept_unsigned_commands ? "accepted" : "refused",
+        auto_go.empty() ? "" : ", auto-go " + auto_go);
     return node.run();
   });
 }

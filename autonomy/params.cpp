@@ -180,6 +180,10 @@ AutonomyParams load_params(const ParamNode& root) {
   if (!p.operator_key_file.empty())
     p.operator_key_file = resolve_relative(n.file(), p.operator_key_file);
   rd(n, "command_max_age_s", p.command_max_age_s);
+  rd(n, "vehicle_id", p.vehicle_id);
+  n.check(!p.vehicle_id.empty() && p.vehicle_id.size() <= 64 &&
+              p.vehicle_id.find_first_of(" \t\r\n\"'<>&") == std::string::npos,
+          "vehicle_id", "must be 1 to 64 characters without spaces, quotes or <>&");
   rd(n, "status_period_s", p.status_period_s);
   rd(n, "hover_tol_m", p.hover_tol_m);
   if (auto c = n.optional_child("takeoff")) {

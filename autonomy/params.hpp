@@ -139,6 +139,7 @@ struct AutonomyParams {
   std::string operator_key_file;          ///< HMAC key shared with the ground station (relative
                                           ///< to the vehicle file; empty: no signed commands)
   double command_max_age_s = 2.0;         ///< signed commands older / newer than this are stale [s]
+  std::string vehicle_id = "alight";      ///< signed commands must name it (operator_cmd_t)
   double status_period_s = 0.1;           ///< AUTONOMY_STATUS at least this often [s]
   double hover_tol_m = 0.1;               ///< "arrived" for path and hold points [m]
   TakeoffParams takeoff;

@@ -12,6 +12,10 @@ void BackoffParams::validate() const {
   param_check(initial_s <= 60, "backoff.initial_s", initial_s, "must be <= 60");
   param_check(max_s <= 3600, "backoff.max_s", max_s, "must be <= 3600");
   param_check(reset_after_s <= 3600, "backoff.reset_after_s", reset_after_s, "must be <= 3600");
+  param_check(start_limit_burst >= 0 && start_limit_burst <= 1000, "backoff.start_limit_burst",
+              start_limit_burst, "must be in [0, 1000] (0: no limit)");
+  param_check(start_limit_interval_s > 0 && start_limit_interval_s <= 86400,
+              "backoff.start_limit_interval_s", start_limit_interval_s, "must be in (0, 86400] s");
 }
 
 void LaunchFile::validate() const {
@@ -75,6 +79,8 @@ LaunchFile parse_root(const ParamNode& root) {
     b->read("initial_s", lf.backoff.initial_s);
     b->read("max_s", lf.backoff.max_s);
     b->read("reset_after_s", lf.backoff.reset_after_s);
+    b->read("start_limit_burst", lf.backoff.start_limit_burst);
+    b->read("start_limit_interval_s", lf.backoff.start_limit_interval_s);
     b->finish();
   }
   std::set<std::string> names;

@@ -173,10 +173,14 @@ TEST(AutonomyNodeTest, AutoGoTakesOffStatusAtTenHertzAndKillStopsEverything) {
     c.utime = utime;
     c.seq = seq;
     c.sender = "test-station";
+    // Signed for this vehicle and this run of autonomy, as announced on AUTONOMY_STATUS.
+    c.vehicle_id = rec.status.back().vehicle_id;
+    c.session = rec.status.back().cmd_session;
     c.command = alight::operator_cmd_t::CMD_KILL;
     c.auth = alight::operator_cmd_t::AUTH_NONE;
     return c;
   };
+  ASSERT_NE(rec.status.back().cmd_session, 0) << "a verifier announces its session";
   alight::operator_cmd_t unsigned_kill = kill_cmd(1, alight::wall_utime());
   lcm.publish("OPERATOR_CMD", &unsigned_kill);
   alight::operator_cmd_t forged = kill_cmd(2, alight::wall_utime());
@@ -222,6 +226,15 @@ TEST(AutonomyNodeTest, AutoGoTakesOffStatusAtTenHertzAndKillStopsEverything) {
   } while (rec.status.back().cmds_rejected < 4 &&
            std::chrono::steady_clock::now() < replay_deadline);
   EXPECT_EQ(rec.status.back().cmds_rejected, 4);
+  // Issue 14: the station learns which command was refused and why.
+  using S = alight::autonomy_status_t;
+  EXPECT_EQ(rec.status.back().last_rejected_seq, 4);
+  EXPECT_EQ(rec.status.back().last_reject_reason, S::REJECT_REPLAYED);
+  EXPECT_EQ(rec.status.back().cmds_rejected_by_reason[S::REJECT_UNSIGNED], 1);
+  EXPECT_EQ(rec.status.back().cmds_rejected_by_reason[S::REJECT_BAD_SIGNATURE], 1);
+  EXPECT_EQ(rec.status.back().cmds_rejected_by_reason[S::REJECT_STALE], 1);
+  EXPECT_EQ(rec.status.back().cmds_rejected_by_reason[S::REJECT_REPLAYED], 1);
+  EXPECT_GT(rec.status.back().wall_utime, 0);
   std::filesystem::remove(key_path);
   std::filesystem::remove(state_path);
 }
