@@ -9,27 +9,42 @@ namespace alight::autonomy {
 
 const char* mission_name(Mission m) {
   switch (m) {
-    case Mission::kNone: return "NONE";
-    case Mission::kLanding: return "LANDING";
-    case Mission::kIngress: return "INGRESS";
+    case Mission::kNone:
+      return "NONE";
+    case Mission::kLanding:
+      return "LANDING";
+    case Mission::kIngress:
+      return "INGRESS";
   }
   return "?";
 }
 
 const char* phase_name(Phase p) {
   switch (p) {
-    case Phase::kIdle: return "IDLE";
-    case Phase::kTakeoff: return "TAKEOFF";
-    case Phase::kHover: return "HOVER";
-    case Phase::kDetection: return "DETECTION";
-    case Phase::kRefinement: return "REFINEMENT";
-    case Phase::kApproach: return "APPROACH";
-    case Phase::kFinalDescent: return "FINAL_DESCENT";
-    case Phase::kLanded: return "LANDED";
-    case Phase::kDone: return "DONE";
-    case Phase::kHold: return "HOLD";
-    case Phase::kFailsafe: return "FAILSAFE";
-    case Phase::kKilled: return "KILLED";
+    case Phase::kIdle:
+      return "IDLE";
+    case Phase::kTakeoff:
+      return "TAKEOFF";
+    case Phase::kHover:
+      return "HOVER";
+    case Phase::kDetection:
+      return "DETECTION";
+    case Phase::kRefinement:
+      return "REFINEMENT";
+    case Phase::kApproach:
+      return "APPROACH";
+    case Phase::kFinalDescent:
+      return "FINAL_DESCENT";
+    case Phase::kLanded:
+      return "LANDED";
+    case Phase::kDone:
+      return "DONE";
+    case Phase::kHold:
+      return "HOLD";
+    case Phase::kFailsafe:
+      return "FAILSAFE";
+    case Phase::kKilled:
+      return "KILLED";
   }
   return "?";
 }
@@ -51,6 +66,11 @@ std::string fmt(double v, int precision = 3) {
 // centimetres (waypoint.min_baseline_m) between its reference and current image [m].
 constexpr double kMinVantageStepM = 0.08;
 
+bool finite(const PoseSample& s) {
+  return s.p_W_B.allFinite() && s.v_W_B.allFinite() && s.q_WB.coeffs().allFinite() &&
+         s.omega_B.allFinite() && std::abs(s.q_WB.norm() - 1.0) < 1e-3;
+}
+
 double median(std::vector<double> v) {
   if (v.empty()) return 0.0;
   const size_t mid = v.size() / 2;
@@ -59,21 +79,32 @@ double median(std::vector<double> v) {
 }
 }  // namespace
 
-Autonomy::Autonomy(const AutonomyParams& params)
+Autonomy::Autonomy(const AutonomyParams& params, const RestartState& restored)
     : params_(params),
       estimator_(params.refinement),
       sampler_(params.refinement, params.seed),
-      touchdown_(params.landing) {
+      touchdown_(params.landing),
+      restored_(restored) {
   params_.validate();
+  if (restored_.killed) {
+    // An explicit KILL outlives the process that received it: motors off at once, whatever
+    // the pose, and nothing (TAKEOFF, --auto-go) turns them on again.
+    started_ = resumed_ = true;
+    failsafe_ = Failsafe::kKill;
+    enter(Phase::kKilled, "KILL latched before a restart: motors stay off");
+  }
 }
 
 bool Autonomy::airborne() const {
   switch (phase_) {
     case Phase::kIdle:
     case Phase::kLanded:
-    case Phase::kKilled: return false;
-    case Phase::kFailsafe: return motors_on_;
-    default: return true;
+    case Phase::kKilled:
+      return false;
+    case Phase::kFailsafe:
+      return motors_on_;
+    default:
+      return true;
   }
 }
 
@@ -104,6 +135,53 @@ void Autonomy::enter_pose_lost() {
                               " s: controlled descent, disarm on touch-down");
 }
 
+RestartState Autonomy::restart_state() const {
+  RestartState r;
+  r.killed = phase_ == Phase::kKilled;
+  // Stale is a transient (the pose comes back); the one it interrupted is what is latched.
+  r.failsafe = failsafe_ == Failsafe::kPoseStale ? failsafe_before_stale_ : failsafe_;
+  if (!started_) r = restored_;  // nothing decided yet: keep what the previous one knew
+  r.motors_on = started_ ? motors_on_ : restored_.motors_on;
+  return r;
+}
+
+void Autonomy::start_from_first_pose() {
+  started_ = true;
+  const auto& R = params_.restart;
+  const Vector3d p = pose_->p_W_B;
+  const double gear_above_floor_m =
+      p.z() - params_.geofence.min_W_m.z() - params_.landing.gear_height_m;
+  const bool high = gear_above_floor_m > R.airborne_height_m;
+  const bool moving = pose_->v_W_B.norm() > R.airborne_speed_mps;
+  sp_p_W_ = p;
+  last_finite_sp_p_W_ = p;
+  yaw_sp_rad_ = yaw_of(pose_->q_WB.toRotationMatrix());
+  last_finite_yaw_rad_ = yaw_sp_rad_;
+  if (!(restored_.motors_on || high || moving)) {
+    failsafe_ = restored_.failsafe == Failsafe::kPoseStale ? Failsafe::kNone : restored_.failsafe;
+    reason_ = "waiting for TAKEOFF";
+    return;  // on the ground: a normal start (IDLE)
+  }
+  resumed_ = true;
+  motors_on_ = true;
+  takeoff_xy_ = p.head<2>();
+  z_sp_m_ = p.z();
+  const std::string why = std::string("restarted in flight (") +
+                          (restored_.motors_on ? "previous instance flying"
+                           : high              ? "gear " + fmt(gear_above_floor_m, 2) + " m up"
+                                               : "moving") +
+                          ")";
+  if (restored_.failsafe == Failsafe::kPoseLost) {
+    enter_pose_lost();
+    reason_ = why + ": motion-capture-lost failsafe continues, disarm on touch-down";
+    return;
+  }
+  hold_p_W_ = p;
+  failsafe_ =
+      restored_.failsafe == Failsafe::kOperatorAbort ? Failsafe::kOperatorAbort : Failsafe::kNone;
+  enter(Phase::kHold, why + ": holding position, waiting for the operator");
+}
+
 bool Autonomy::accept(const OperatorCommand& cmd) {
   std::string why;
   if (cmd.auth == CommandAuth::kInternal) return true;
@@ -116,7 +194,8 @@ bool Autonomy::accept(const OperatorCommand& cmd) {
   } else {
     const auto it = last_seq_.find(cmd.sender);
     if (it != last_seq_.end() && cmd.seq <= it->second) {
-      why = "replayed or out-of-order seq " + std::to_string(cmd.seq) + " from '" + cmd.sender + "'";
+      why =
+          "replayed or out-of-order seq " + std::to_string(cmd.seq) + " from '" + cmd.sender + "'";
     }
   }
   if (!why.empty()) {
@@ -134,6 +213,7 @@ void Autonomy::handle_command(const OperatorCommand& cmd) {
   const bool in_failsafe = phase_ == Phase::kFailsafe;
   switch (cmd.command) {
     case Command::kKill:
+      started_ = true;  // an explicit KILL is sent even before the first pose
       motors_on_ = false;
       failsafe_ = Failsafe::kKill;
       if (!end_utime_) end_utime_ = now_utime_;
@@ -203,12 +283,17 @@ void Autonomy::handle_command(const OperatorCommand& cmd) {
       }
       {
         Vector3d d = cmd.nudge_W;
+        if (!d.allFinite()) {
+          reason_ = "NUDGE refused: non-finite offset";
+          return;
+        }
         if (d.norm() > params_.failsafe.max_nudge_m) d *= params_.failsafe.max_nudge_m / d.norm();
         hold_p_W_ += d;
         reason_ = "NUDGE";
       }
       return;
-    case Command::kNone: return;
+    case Command::kNone:
+      return;
   }
 }
 
@@ -279,7 +364,8 @@ void Autonomy::next_vantage() {
     const Vector2d mu2(t.dot(mu), mu.z());
     const Eigen::Matrix2d S2 = B.transpose() * S * B;
     const Vector2d d = sampler_.draw(mu2, S2, estimator_.n()) - mu2;
-    vantage_W_ = mu + n * params_.refinement.ingress_standoff_m + t * d.x() + Vector3d::UnitZ() * d.y();
+    vantage_W_ =
+        mu + n * params_.refinement.ingress_standoff_m + t * d.x() + Vector3d::UnitZ() * d.y();
     yaw_sp_rad_ = std::atan2(-n.y(), -n.x());
   }
   vantage_since_utime_ = now_utime_;
@@ -296,13 +382,13 @@ void Autonomy::finish_refinement() {
   }
   const double size_a = median(a), size_b = median(b);
   const std::string where = "estimate (" + fmt(estimate_W_.x()) + ", " + fmt(estimate_W_.y()) +
-                            ", " + fmt(estimate_W_.z()) + ") from n = " +
-                            std::to_string(estimator_.n());
+                            ", " + fmt(estimate_W_.z()) +
+                            ") from n = " + std::to_string(estimator_.n());
   if (mission_ == Mission::kLanding) {
     const auto& L = params_.landing;
     const double short_side = std::min(size_a, size_b);
     const double needed = L.gear_footprint_m + 2 * L.fit_margin_m;
-    if (short_side < needed) {
+    if (!(short_side >= needed)) {  // NaN-safe: an unmeasured size is refused
       hold("refused to land: platform short side " + fmt(short_side) + " m < gear footprint " +
                fmt(L.gear_footprint_m) + " m + 2 x margin " + fmt(L.fit_margin_m) + " m",
            Failsafe::kNone, params_.takeoff.height_m);
@@ -322,7 +408,7 @@ void Autonomy::finish_refinement() {
     const auto& I = params_.ingress;
     const double need_w = I.vehicle_span_m + 2 * I.clearance_m;
     const double need_h = I.vehicle_height_m + 2 * I.clearance_m;
-    if (size_a < need_w || size_b < need_h) {
+    if (!(size_a >= need_w && size_b >= need_h)) {  // NaN-safe
       hold("refused ingress: opening " + fmt(size_a) + " x " + fmt(size_b) +
                " m smaller than the vehicle + clearance " + fmt(need_w) + " x " + fmt(need_h) +
                " m",
@@ -354,7 +440,10 @@ void Autonomy::target_lost(const std::string& what) {
 }
 
 void Autonomy::handle_target(const TargetMeasurement& m) {
-  if (!(m.found || m.partial) || m.mission != mission_ || !m.p_W_target.allFinite()) return;
+  if (!(m.found || m.partial) || m.mission != mission_ || !m.p_W_target.allFinite() ||
+      !m.n_W.allFinite() || !m.size_m.allFinite() || !std::isfinite(m.yaw_rad)) {
+    return;
+  }
   // A target cut by the image border is in sight (not lost) and locates it well enough to fly
   // the vantages around; it is never averaged into the estimate.
   last_found_utime_ = std::max(m.utime, last_found_utime_.value_or(m.utime));
@@ -380,8 +469,9 @@ void Autonomy::handle_target(const TargetMeasurement& m) {
 void Autonomy::add_waypoint(const Vector3d& X_W) {
   const auto verdict = estimator_.add(X_W);
   if (verdict == RefinementEstimator::Verdict::kRestarted) {
-    reason_ = "estimate restarted: " + std::to_string(params_.refinement.max_consecutive_rejections) +
-              " waypoints in a row outside the gate";
+    reason_ =
+        "estimate restarted: " + std::to_string(params_.refinement.max_consecutive_rejections) +
+        " waypoints in a row outside the gate";
   }
   if (estimator_.converged()) finish_refinement();
 }
@@ -389,8 +479,8 @@ void Autonomy::add_waypoint(const Vector3d& X_W) {
 void Autonomy::step_phase(double dt_s) {
   const Vector3d p = pose_ ? pose_->p_W_B : sp_p_W_;
   sp_v_W_.setZero();
-  const double since_found_s =
-      last_found_utime_ ? seconds(now_utime_ - *last_found_utime_) : seconds(now_utime_ - phase_start_utime_);
+  const double since_found_s = last_found_utime_ ? seconds(now_utime_ - *last_found_utime_)
+                                                 : seconds(now_utime_ - phase_start_utime_);
 
   switch (phase_) {
     case Phase::kIdle:
@@ -436,8 +526,7 @@ void Autonomy::step_phase(double dt_s) {
         return;
       }
       if (seconds(now_utime_ - phase_start_utime_) > R.max_time_s) {
-        hold("refinement did not converge in " + fmt(R.max_time_s, 0) + " s", Failsafe::kNone,
-             0.0);
+        hold("refinement did not converge in " + fmt(R.max_time_s, 0) + " s", Failsafe::kNone, 0.0);
         return;
       }
       if ((p - vantage_W_).norm() < R.vantage_reach_tol_m) {
@@ -490,8 +579,8 @@ void Autonomy::step_phase(double dt_s) {
         sp_p_W_ = Vector3d(estimate_W_.x(), estimate_W_.y(), z_sp_m_);
         if (z_sp_m_ - z_touch <= L.final_height_m) {
           touchdown_.arm(now_utime_);
-          enter(Phase::kFinalDescent, "final descent: " + fmt(L.final_height_m, 2) +
-                                          " m above the platform");
+          enter(Phase::kFinalDescent,
+                "final descent: " + fmt(L.final_height_m, 2) + " m above the platform");
         }
       } else {
         const auto& I = params_.ingress;
@@ -519,8 +608,8 @@ void Autonomy::step_phase(double dt_s) {
           const double lateral = d.dot(t), vertical = d.z();
           const double s_end = I.standoff_m + I.pass_distance_m;
           const double s_vehicle = I.standoff_m - d.dot(n);  // progress of the vehicle
-          const bool inside = std::abs(lateral) <= I.lateral_tol_m &&
-                              std::abs(vertical) <= I.vertical_tol_m;
+          const bool inside =
+              std::abs(lateral) <= I.lateral_tol_m && std::abs(vertical) <= I.vertical_tol_m;
           if (inside && through_s_m_ < s_end && through_s_m_ - s_vehicle < kPathLeadM) {
             through_s_m_ = std::min(s_end, through_s_m_ + I.speed_mps * dt_s);
             sp_v_W_ = -n * I.speed_mps;
@@ -529,8 +618,8 @@ void Autonomy::step_phase(double dt_s) {
           if (through_s_m_ >= s_end && (p - sp_p_W_).norm() < params_.hover_tol_m) {
             hold_p_W_ = sp_p_W_;
             end_utime_ = now_utime_;
-            enter(Phase::kDone, "through the opening: " + fmt(I.pass_distance_m, 2) +
-                                    " m past the wall");
+            enter(Phase::kDone,
+                  "through the opening: " + fmt(I.pass_distance_m, 2) + " m past the wall");
           }
         }
       }
@@ -559,22 +648,33 @@ void Autonomy::step_phase(double dt_s) {
       if (!motors_on_) return;
       if (pose_fresh()) {
         // Pose back: a controlled descent on it instead of the outer loop's open-loop one.
-        sp_p_W_.z() = failsafe_z_m_ - params_.failsafe.descent_mps *
-                                          seconds(now_utime_ - failsafe_since_utime_);
+        sp_p_W_.z() = failsafe_z_m_ -
+                      params_.failsafe.descent_mps * seconds(now_utime_ - failsafe_since_utime_);
         sp_v_W_.z() = -params_.failsafe.descent_mps;
         touchdown_.add_pose(*pose_, sp_p_W_.z(), now_utime_);
       }
       if (touchdown_.detected()) {
         motors_on_ = false;
         touchdown_.disarm();
-        reason_ = std::string("failsafe descent: touch-down (") + touchdown_.cue() +
-                  "): motors off";
+        reason_ =
+            std::string("failsafe descent: touch-down (") + touchdown_.cue() + "): motors off";
       }
       return;
   }
 }
 
 Output Autonomy::make_output() {
+  // The last line of defence: whatever got through, a non-finite setpoint is never sent (NaN
+  // passes cwiseMax / cwiseMin, so the geofence alone does not stop it).
+  if (!sp_p_W_.allFinite() || !sp_v_W_.allFinite() || !std::isfinite(yaw_sp_rad_)) {
+    sp_p_W_ = last_finite_sp_p_W_;
+    sp_v_W_.setZero();
+    yaw_sp_rad_ = last_finite_yaw_rad_;
+    hold_p_W_ = hold_p_W_.allFinite() ? hold_p_W_ : last_finite_sp_p_W_;
+    reason_ = "non-finite setpoint refused: holding the last finite one";
+  }
+  last_finite_sp_p_W_ = sp_p_W_;
+  last_finite_yaw_rad_ = yaw_sp_rad_;
   const auto& G = params_.geofence;
   const Vector3d clamped = sp_p_W_.cwiseMax(G.min_W_m).cwiseMin(G.max_W_m);
   geofence_clamped_ = motors_on_ && (clamped - sp_p_W_).norm() > 1e-9;
@@ -585,8 +685,10 @@ Output Autonomy::make_output() {
   sp.v_W = geofence_clamped_ ? Vector3d::Zero() : sp_v_W_;
   sp.yaw_rad = yaw_sp_rad_;
   sp.motors_on = motors_on_;
+  sp.kill = phase_ == Phase::kKilled;  // the outer loop disarms in the air only on an explicit KILL
   sp.idle = false;
 
+  out.has_setpoint = started_;
   auto& st = out.status;
   st.utime = now_utime_;
   st.mission = mission_;
@@ -615,8 +717,10 @@ Output Autonomy::update(const Inputs& in, int64_t now_utime) {
   if (last_step_utime_) dt_s = std::clamp(seconds(now_utime_ - *last_step_utime_), 0.0, 0.1);
   last_step_utime_ = now_utime_;
 
-  if (in.pose && (!pose_ || in.pose->utime >= pose_->utime)) pose_ = in.pose;
-  if (in.imu) touchdown_.add_imu(*in.imu);
+  if (in.pose && finite(*in.pose) && (!pose_ || in.pose->utime >= pose_->utime)) pose_ = in.pose;
+  if (in.imu && in.imu->accel_B.allFinite() && in.imu->gyro_B.allFinite())
+    touchdown_.add_imu(*in.imu);
+  if (!started_ && pose_) start_from_first_pose();
   if (in.command) handle_command(*in.command);
 
   if (airborne() && phase_ != Phase::kFailsafe) {

@@ -21,6 +21,14 @@
 //  - Failsafes: pose older than pose_stale_s freezes the mission (the outer loop levels and
 //    holds hover thrust); older than pose_lost_s: FAILSAFE, controlled descent, motors off at
 //    touch-down. ABORT: climb to abort_height and HOLD. KILL: motors off at once, for good.
+//  - Restart (issue 14, as PX4 does after an in-flight reboot of a module): nothing is
+//    commanded before the first pose. If it (or the restored state) shows the vehicle flying,
+//    the autonomy holds there with the motors on and waits for the operator (GO, NUDGE, ABORT,
+//    LAND_HERE, KILL); it never takes off again. A restored KILL keeps the motors off; a
+//    restored pose-lost failsafe continues its controlled descent.
+//  - Every input is untrusted even here (defence in depth behind the node's conversions):
+//    non-finite poses, IMU samples, targets and NUDGE offsets are ignored, and a non-finite
+//    setpoint is never sent.
 
 #include <map>
 #include <optional>
@@ -37,7 +45,9 @@ namespace alight::autonomy {
 
 class Autonomy {
  public:
-  explicit Autonomy(const AutonomyParams& params);
+  /// `restored`: the latches of a previous instance (the node's state file); default: a fresh
+  /// start.
+  explicit Autonomy(const AutonomyParams& params, const RestartState& restored = {});
 
   /// One step at now_utime (the newest sensor time: pose or IMU; never the wall clock) with
   /// whatever arrived since the last step.
@@ -52,6 +62,13 @@ class Autonomy {
   const Vector3d& final_estimate() const { return estimate_W_; }
   const Vector3d& current_vantage() const { return vantage_W_; }
   int retries() const { return retries_; }
+  /// Whether the first pose has been seen (and the start decided: on the ground, or flying).
+  bool started() const { return started_; }
+  /// Started while the vehicle was flying (or with a restored KILL): take-off and --auto-go
+  /// must never run.
+  bool resumed() const { return resumed_; }
+  /// What a restart must restore (the node persists it whenever it changes).
+  RestartState restart_state() const;
 
  private:
   enum class IngressStage { kAlign, kThrough };
@@ -71,6 +88,7 @@ class Autonomy {
   void target_lost(const std::string& what);
   void hold(const std::string& reason, Failsafe failsafe, double min_z_m);
   void enter_pose_lost();
+  void start_from_first_pose();
   Output make_output();
 
   AutonomyParams params_;
@@ -78,6 +96,12 @@ class Autonomy {
   VantageSampler sampler_;
   TouchdownDetector touchdown_;
   PathFollower path_;
+
+  RestartState restored_;
+  bool started_ = false;
+  bool resumed_ = false;
+  Vector3d last_finite_sp_p_W_ = Vector3d::Zero();
+  double last_finite_yaw_rad_ = 0.0;
 
   int64_t now_utime_ = 0;
   std::optional<int64_t> last_step_utime_;
@@ -87,7 +111,7 @@ class Autonomy {
   Mission mission_ = Mission::kNone;
   Failsafe failsafe_ = Failsafe::kNone;
   Failsafe failsafe_before_stale_ = Failsafe::kNone;  // restored when the pose is back
-  std::string reason_ = "waiting for TAKEOFF";
+  std::string reason_ = "waiting for the first pose";
 
   // Setpoint being commanded.
   Vector3d sp_p_W_ = Vector3d::Zero();
@@ -112,7 +136,9 @@ class Autonomy {
   std::optional<int64_t> at_vantage_since_;
   std::vector<Vector2d> sizes_m_;
   std::vector<Vector3d> at_vantage_W_;
-  Vector3d first_sighting_W_ = Vector3d::Zero();  // X_V,1, possibly from a partial view  // waypoints seen while dwelling at the current vantage
+  Vector3d first_sighting_W_ =
+      Vector3d::Zero();  // X_V,1, possibly from a partial view  // waypoints seen while dwelling at
+                         // the current vantage
   Vector3d normal_sum_W_ = Vector3d::Zero();
   Vector2d yaw4_sum_ = Vector2d::Zero();  // landing: sum of (cos, sin)(4 yaw), yaw modulo 90 deg
 

@@ -3,8 +3,21 @@
 // autonomy's clock to their utime; vision measurements (stamped at exposure, in the past) and
 // operator commands (stamped by the ground station's clock) are handled at the current sensor
 // time and never move it, so a replayed log gives the same setpoints.
+//
+// Input boundary (issue 14): every message goes through a validating conversion (non-finite or
+// absurd values are counted with reject_value and dropped; the autonomy keeps the last good
+// one), and pose, IMU and vision stamps through the node's StampGuard: only an accepted stamp
+// advances the clock, so one IMU sample stamped an hour ahead no longer ages every pose past
+// pose_lost_s (FAILSAFE for good). Operator commands are stamped by the ground station's clock
+// and judged by the verifier on the wall clock, not here.
+//
+// Restart (issue 14): the latches (KILL, failsafe) and whether the motors were on are kept in a
+// state file (autonomy/restart_state.hpp says why a file), rewritten on every change and once a
+// second. A restarted autonomy gets them as RestartState; it publishes no setpoint before the
+// first pose, and one that finds the vehicle flying holds there and never runs --auto-go.
 
 #include <spdlog/spdlog.h>
+#include <unistd.h>
 
 #include <CLI/CLI.hpp>
 #include <optional>
@@ -12,6 +25,7 @@
 #include "autonomy/autonomy.hpp"
 #include "autonomy/convert.hpp"
 #include "autonomy/params.hpp"
+#include "autonomy/restart_state.hpp"
 #include "common/msg_convert.hpp"
 #include "common/node.hpp"
 #include "common/operator_auth.hpp"
@@ -32,6 +46,10 @@ int main(int argc, char** argv) {
     app.add_option(
         "--key-file", key_file,
         "HMAC key shared with the ground station (overrides autonomy.operator_key_file)");
+    std::string state_file;
+    app.add_option("--state-file", state_file,
+                   "where the KILL / failsafe latches survive a restart (default: "
+                   "$XDG_RUNTIME_DIR/alight/ or /tmp/alight-<uid>/, one file per LCM URL)");
     try {
       app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
@@ -40,7 +58,35 @@ int main(int argc, char** argv) {
     args.finalize();
 
     const au::AutonomyParams params = au::load_params(args.config);
-    au::Autonomy autonomy(params);
+    if (state_file.empty()) state_file = au::default_state_path(args.lcm_url);
+    const std::string boot_id = au::read_boot_id();
+    const int64_t session = static_cast<int64_t>(::getppid());
+    au::RestartState restored;
+    {
+      std::string why;
+      std::optional<au::RestartRecord> record;
+      if (auto text = au::read_state_file(state_file, &why)) {
+        record = au::parse_record(*text, &why);
+        if (!record) spdlog::warn("{}: {}: ignored", state_file, why);
+      }
+      restored = au::restore_state(record, boot_id, session, alight::steady_utime(),
+                                   params.restart.state_max_age_s, &why);
+      spdlog::log(restored != au::RestartState{} ? spdlog::level::warn : spdlog::level::info,
+                  "{}: {}", state_file, why);
+    }
+    au::Autonomy autonomy(params, restored);
+    au::RestartState saved_state;
+    bool state_file_ok = true;
+    const auto save_state = [&]() {
+      saved_state = autonomy.restart_state();
+      au::RestartRecord r{boot_id, session, alight::steady_utime(), saved_state};
+      std::string why;
+      const bool ok = au::write_state_file(state_file, au::format_record(r), &why);
+      if (!ok && state_file_ok)
+        spdlog::error("state file not written, latches will not survive a restart: {}", why);
+      state_file_ok = ok;
+    };
+    save_state();
     // Signed operator commands (issue 8) are verified here, at the link: the pure autonomy only
     // sees commands the verifier accepted. Freshness is judged on the wall clock because the
     // command's utime comes from the ground station's clock, not from the sensors.
@@ -49,9 +95,27 @@ int main(int argc, char** argv) {
     if (!key_file.empty()) {
       auto loaded = alight::load_key_file(key_file);
       for (const auto& w : loaded.warnings) spdlog::warn("{}", w);
-      verifier.emplace(std::move(loaded.key),
+      // A new session per start: commands signed for an earlier run are refused (issue 14).
+      verifier.emplace(std::move(loaded.key), params.vehicle_id, alight::draw_session_nonce(),
                        static_cast<int64_t>(std::llround(params.command_max_age_s * 1e6)));
     }
+    // What the station needs to sign for this run, and its acknowledgements (issue 14).
+    int64_t last_rejected_seq = -1;
+    int8_t last_reject_reason = alight::autonomy_status_t::REJECT_NONE;
+    int32_t n_unsigned_refused = 0;
+    const auto fill_link_status = [&](alight::autonomy_status_t& st) {
+      st.vehicle_id = params.vehicle_id;
+      st.cmd_session = verifier ? verifier->session() : 0;
+      st.last_rejected_seq = last_rejected_seq;
+      st.last_reject_reason = last_reject_reason;
+      for (auto& n : st.cmds_rejected_by_reason) n = 0;
+      st.cmds_rejected_by_reason[alight::autonomy_status_t::REJECT_UNSIGNED] = n_unsigned_refused;
+      if (verifier)
+        for (int r = 1; r < alight::CommandVerdict::kReasonCount; ++r)
+          st.cmds_rejected_by_reason[r] += static_cast<int32_t>(
+              verifier->n_rejected(static_cast<alight::CommandVerdict::Reason>(r)));
+      st.wall_utime = alight::wall_utime();
+    };
     alight::Node node(args.lcm_url, "alight-autonomy");
 
     int64_t now_utime = 0;
@@ -64,7 +128,10 @@ int main(int argc, char** argv) {
 
     const auto step = [&](au::Inputs in) {
       if (now_utime == 0) return;  // no sensor time yet
-      if (!auto_go.empty() && in.pose && !takeoff_sent) {
+      // --auto-go only for an autonomy that started on the ground: never after a restart in
+      // flight or a latched KILL (the first pose decides, so TAKEOFF waits for the second).
+      const bool auto_go_now = !auto_go.empty() && autonomy.started() && !autonomy.resumed();
+      if (auto_go_now && in.pose && !takeoff_sent) {
         in.command = au::OperatorCommand{now_utime,
                                          ++internal_seq,
                                          "auto-go",
@@ -73,8 +140,7 @@ int main(int argc, char** argv) {
                                          alight::Vector3d::Zero(),
                                          au::CommandAuth::kInternal};
         takeoff_sent = true;
-      } else if (!auto_go.empty() && !go_sent && autonomy.phase() == au::Phase::kHover &&
-                 !in.command) {
+      } else if (auto_go_now && !go_sent && autonomy.phase() == au::Phase::kHover && !in.command) {
         in.command = au::OperatorCommand{
             now_utime,
             ++internal_seq,
@@ -86,7 +152,10 @@ int main(int argc, char** argv) {
         go_sent = true;
       }
       const au::Output out = autonomy.update(in, now_utime);
-      node.publish("POSITION_SETPOINT", alight::outer_loop::to_msg(out.setpoint));
+      if (autonomy.restart_state() != saved_state) save_state();
+      // Nothing before the first pose: a motors-off setpoint would disarm a flying vehicle.
+      if (out.has_setpoint)
+        node.publish("POSITION_SETPOINT", alight::outer_loop::to_msg(out.setpoint));
       const std::string phase_reason =
           std::string(au::phase_name(out.status.phase)) + ": " + out.status.reason;
       const bool changed = phase_reason != last_phase_reason;
@@ -97,6 +166,7 @@ int main(int argc, char** argv) {
       if (changed || (now_utime - last_status_utime) * 1e-6 >= params.status_period_s * 0.5) {
         last_status = au::to_msg(out.status);
         if (verifier) last_status.cmds_rejected += static_cast<int32_t>(verifier->n_rejected());
+        fill_link_status(last_status);
         node.publish("AUTONOMY_STATUS", last_status);
         last_status_utime = now_utime;
         last_status_wall = alight::wall_utime();
@@ -104,33 +174,53 @@ int main(int argc, char** argv) {
     };
 
     node.on<alight::pose_t>("MOCAP_POSE", [&](const alight::pose_t& m) {
-      now_utime = std::max(now_utime, m.utime);
+      std::string why;
       au::Inputs in;
-      in.pose = alight::from_msg(m);
+      in.pose = alight::pose_from_msg(m, &why);
+      if (!in.pose) return (void)node.reject_value("MOCAP_POSE", why);
+      if (!node.accept_stamp("MOCAP_POSE", m.utime)) return;
+      now_utime = std::max(now_utime, m.utime);
       step(in);
     });
     node.on<alight::imu_t>("IMU", [&](const alight::imu_t& m) {
-      now_utime = std::max(now_utime, m.utime);
+      std::string why;
       au::Inputs in;
-      in.imu = au::from_msg(m);
+      in.imu = au::imu_from_msg(m, &why);
+      if (!in.imu) return (void)node.reject_value("IMU", why);
+      if (!node.accept_stamp("IMU", m.utime)) return;
+      // The clock starts with the first pose. The first stamp of all is judged against the wall
+      // clock only, and sensor time (a simulator's) may lie far behind it: an IMU sample an hour
+      // ahead as the very first message would otherwise set the clock for good.
+      if (now_utime != 0) now_utime = std::max(now_utime, m.utime);
       step(in);
     });
     node.on<alight::target_t>("VISION_TARGET", [&](const alight::target_t& m) {
+      std::string why;
       au::Inputs in;
-      in.target = au::from_msg(m);
+      in.target = au::target_from_msg(m, &why);
+      if (!in.target) return (void)node.reject_value("VISION_TARGET", why);
+      if (!node.accept_stamp("VISION_TARGET", m.utime)) return;
       step(in);
     });
     node.on<alight::operator_cmd_t>("OPERATOR_CMD", [&](const alight::operator_cmd_t& m) {
       au::Inputs in;
-      in.command = au::from_msg(m);
+      std::string why;
+      in.command = au::command_from_msg(m, &why);
+      if (!in.command) return (void)node.reject_value("OPERATOR_CMD", why);
       if (m.auth != alight::operator_cmd_t::AUTH_NONE && verifier) {
         const auto verdict = verifier->check(m, alight::wall_utime());
         if (!verdict.accepted()) {
-          spdlog::warn("OPERATOR_CMD from '{}' seq {} rejected: {}", m.sender, m.seq,
-                       alight::reason_name(verdict.reason));
+          spdlog::warn("OPERATOR_CMD from '{}' for '{}' seq {} rejected: {}", m.sender,
+                       m.vehicle_id, m.seq, alight::reason_name(verdict.reason));
+          last_rejected_seq = m.seq;
+          last_reject_reason = static_cast<int8_t>(verdict.reason);
           return;
         }
         in.command->auth = au::CommandAuth::kVerified;
+      } else if (m.auth == alight::operator_cmd_t::AUTH_NONE && !params.accept_unsigned_commands) {
+        last_rejected_seq = m.seq;  // autonomy refuses it and counts it in cmds_rejected
+        last_reject_reason = alight::autonomy_status_t::REJECT_UNSIGNED;
+        ++n_unsigned_refused;
       }
       if (now_utime == 0) {
         spdlog::warn("operator command before any sensor time: ignored");
@@ -138,20 +228,25 @@ int main(int argc, char** argv) {
       }
       step(in);
     });
+    // The heartbeat that tells a restarted instance the record is from this session.
+    node.every(1.0, [&](int64_t) { save_state(); });
     // Without sensor input the autonomy cannot step; keep the ground station informed anyway.
     node.every(params.status_period_s, [&](int64_t wall) {
       if (last_status_utime != 0 && (wall - last_status_wall) * 1e-6 >= params.status_period_s) {
         alight::autonomy_status_t st = last_status;
         st.reason = "no sensor input: " + st.reason;
+        fill_link_status(st);
         node.publish("AUTONOMY_STATUS", st);
         last_status_wall = wall;
       }
     });
-    spdlog::info("alight-autonomy: seed {}, signed commands {}, unsigned commands {}{}",
-                 params.seed,
-                 verifier ? "verified with " + key_file : std::string("refused (no key)"),
-                 params.accept_unsigned_commands ? "accepted" : "refused",
-                 auto_go.empty() ? "" : ", auto-go " + auto_go);
+    spdlog::info(
+        "alight-autonomy: seed {}, vehicle '{}', signed commands {}, unsigned commands {}{}",
+        params.seed, params.vehicle_id,
+        verifier ? "verified with " + key_file + ", session " + std::to_string(verifier->session())
+                 : std::string("refused (no key)"),
+        params.accept_unsigned_commands ? "accepted" : "refused",
+        auto_go.empty() ? "" : ", auto-go " + auto_go);
     return node.run();
   });
 }

@@ -1,12 +1,17 @@
 #include "autonomy/convert.hpp"
 
+#include <cmath>
+
 namespace alight::autonomy {
 
 int8_t mission_to_msg(Mission m) {
   switch (m) {
-    case Mission::kLanding: return target_t::MISSION_LANDING;
-    case Mission::kIngress: return target_t::MISSION_INGRESS;
-    case Mission::kNone: break;
+    case Mission::kLanding:
+      return target_t::MISSION_LANDING;
+    case Mission::kIngress:
+      return target_t::MISSION_INGRESS;
+    case Mission::kNone:
+      break;
   }
   return target_t::MISSION_NONE;
 }
@@ -20,18 +25,30 @@ Mission mission_from_msg(int8_t m) {
 int8_t phase_to_msg(Phase p) {
   using S = autonomy_status_t;
   switch (p) {
-    case Phase::kIdle: return S::PHASE_IDLE;
-    case Phase::kTakeoff: return S::PHASE_TAKEOFF;
-    case Phase::kHover: return S::PHASE_HOVER;
-    case Phase::kDetection: return S::PHASE_DETECTION;
-    case Phase::kRefinement: return S::PHASE_REFINEMENT;
-    case Phase::kApproach: return S::PHASE_APPROACH;
-    case Phase::kFinalDescent: return S::PHASE_FINAL_DESCENT;
-    case Phase::kLanded: return S::PHASE_LANDED;
-    case Phase::kDone: return S::PHASE_DONE;
-    case Phase::kHold: return S::PHASE_HOLD;
-    case Phase::kFailsafe: return S::PHASE_FAILSAFE;
-    case Phase::kKilled: return S::PHASE_KILLED;
+    case Phase::kIdle:
+      return S::PHASE_IDLE;
+    case Phase::kTakeoff:
+      return S::PHASE_TAKEOFF;
+    case Phase::kHover:
+      return S::PHASE_HOVER;
+    case Phase::kDetection:
+      return S::PHASE_DETECTION;
+    case Phase::kRefinement:
+      return S::PHASE_REFINEMENT;
+    case Phase::kApproach:
+      return S::PHASE_APPROACH;
+    case Phase::kFinalDescent:
+      return S::PHASE_FINAL_DESCENT;
+    case Phase::kLanded:
+      return S::PHASE_LANDED;
+    case Phase::kDone:
+      return S::PHASE_DONE;
+    case Phase::kHold:
+      return S::PHASE_HOLD;
+    case Phase::kFailsafe:
+      return S::PHASE_FAILSAFE;
+    case Phase::kKilled:
+      return S::PHASE_KILLED;
   }
   return S::PHASE_IDLE;
 }
@@ -39,11 +56,16 @@ int8_t phase_to_msg(Phase p) {
 int8_t failsafe_to_msg(Failsafe f) {
   using S = autonomy_status_t;
   switch (f) {
-    case Failsafe::kNone: return S::FAILSAFE_NONE;
-    case Failsafe::kPoseStale: return S::FAILSAFE_POSE_STALE;
-    case Failsafe::kPoseLost: return S::FAILSAFE_POSE_LOST;
-    case Failsafe::kOperatorAbort: return S::FAILSAFE_OPERATOR_ABORT;
-    case Failsafe::kKill: return S::FAILSAFE_KILL;
+    case Failsafe::kNone:
+      return S::FAILSAFE_NONE;
+    case Failsafe::kPoseStale:
+      return S::FAILSAFE_POSE_STALE;
+    case Failsafe::kPoseLost:
+      return S::FAILSAFE_POSE_LOST;
+    case Failsafe::kOperatorAbort:
+      return S::FAILSAFE_OPERATOR_ABORT;
+    case Failsafe::kKill:
+      return S::FAILSAFE_KILL;
   }
   return S::FAILSAFE_NONE;
 }
@@ -106,19 +128,86 @@ OperatorCommand from_msg(const operator_cmd_t& msg) {
   c.seq = msg.seq;
   c.sender = msg.sender;
   switch (msg.command) {
-    case operator_cmd_t::CMD_TAKEOFF: c.command = Command::kTakeoff; break;
-    case operator_cmd_t::CMD_GO: c.command = Command::kGo; break;
-    case operator_cmd_t::CMD_ABORT: c.command = Command::kAbort; break;
-    case operator_cmd_t::CMD_LAND_HERE: c.command = Command::kLandHere; break;
-    case operator_cmd_t::CMD_KILL: c.command = Command::kKill; break;
-    case operator_cmd_t::CMD_NUDGE: c.command = Command::kNudge; break;
-    default: c.command = Command::kNone; break;
+    case operator_cmd_t::CMD_TAKEOFF:
+      c.command = Command::kTakeoff;
+      break;
+    case operator_cmd_t::CMD_GO:
+      c.command = Command::kGo;
+      break;
+    case operator_cmd_t::CMD_ABORT:
+      c.command = Command::kAbort;
+      break;
+    case operator_cmd_t::CMD_LAND_HERE:
+      c.command = Command::kLandHere;
+      break;
+    case operator_cmd_t::CMD_KILL:
+      c.command = Command::kKill;
+      break;
+    case operator_cmd_t::CMD_NUDGE:
+      c.command = Command::kNudge;
+      break;
+    default:
+      c.command = Command::kNone;
+      break;
   }
   c.mission = mission_from_msg(msg.mission);
   c.nudge_W = Vector3d(msg.nudge_W[0], msg.nudge_W[1], msg.nudge_W[2]);
   // Never kInternal from the wire: only the node itself issues internal commands.
   c.auth = msg.auth == operator_cmd_t::AUTH_NONE ? CommandAuth::kNone : CommandAuth::kHmacSha256;
   return c;
+}
+
+namespace {
+template <class T>
+std::optional<T> refuse(std::string* why, const std::string& text) {
+  if (why) *why = text;
+  return std::nullopt;
+}
+bool finite(const double* v, int n) {
+  for (int i = 0; i < n; ++i)
+    if (!std::isfinite(v[i])) return false;
+  return true;
+}
+bool within(const double* v, int n, double bound) {
+  for (int i = 0; i < n; ++i)
+    if (!(std::abs(v[i]) <= bound)) return false;  // NaN-safe
+  return true;
+}
+}  // namespace
+
+std::optional<ImuSample> imu_from_msg(const imu_t& m, std::string* why) {
+  if (!finite(m.accel_B, 3)) return refuse<ImuSample>(why, "imu: non-finite accel_B");
+  if (!finite(m.gyro_B, 3)) return refuse<ImuSample>(why, "imu: non-finite gyro_B");
+  if (!within(m.accel_B, 3, kMaxAccelMps2))
+    return refuse<ImuSample>(why, "imu: accel_B beyond any IMU's range");
+  if (!within(m.gyro_B, 3, kMaxGyroRadps))
+    return refuse<ImuSample>(why, "imu: gyro_B beyond any IMU's range");
+  return from_msg(m);
+}
+
+std::optional<TargetMeasurement> target_from_msg(const target_t& m, std::string* why) {
+  using T = TargetMeasurement;
+  if (!finite(m.p_W_target, 3)) return refuse<T>(why, "target: non-finite p_W_target");
+  if (!finite(m.n_W, 3)) return refuse<T>(why, "target: non-finite n_W");
+  if (!finite(m.size_m, 2)) return refuse<T>(why, "target: non-finite size_m");
+  if (!std::isfinite(m.target_yaw_rad)) return refuse<T>(why, "target: non-finite target_yaw_rad");
+  if (m.size_m[0] < 0 || m.size_m[1] < 0) return refuse<T>(why, "target: negative size_m");
+  TargetMeasurement t = from_msg(m);
+  if (t.found || t.partial) {
+    // Measured geometry must be usable: a zero normal has no direction to approach along.
+    if (t.n_W.norm() < 1e-6) return refuse<T>(why, "target: zero normal n_W");
+    t.n_W.normalize();
+  }
+  return t;
+}
+
+std::optional<OperatorCommand> command_from_msg(const operator_cmd_t& m, std::string* why) {
+  using C = OperatorCommand;
+  if (m.command < operator_cmd_t::CMD_NONE || m.command > operator_cmd_t::CMD_NUDGE)
+    return refuse<C>(why, "command: unknown code " + std::to_string(m.command));
+  if (!finite(m.nudge_W, 3)) return refuse<C>(why, "command: non-finite nudge_W");
+  if (!within(m.nudge_W, 3, kMaxNudgeM)) return refuse<C>(why, "command: nudge_W out of range");
+  return from_msg(m);
 }
 
 autonomy_status_t to_msg(const Status& s) {

@@ -6,6 +6,8 @@
 #include <alight/imu_t.hpp>
 #include <alight/operator_cmd_t.hpp>
 #include <alight/target_t.hpp>
+#include <optional>
+#include <string>
 
 #include "autonomy/types.hpp"
 
@@ -14,6 +16,22 @@ namespace alight::autonomy {
 ImuSample from_msg(const imu_t& msg);
 TargetMeasurement from_msg(const target_t& msg);
 OperatorCommand from_msg(const operator_cmd_t& msg);
+
+/// Validating forms for untrusted input (the node uses only these): nullopt, with *why naming
+/// the field, for a message the autonomy must not act on. The node counts it (reject_value) and
+/// keeps the last good one.
+///  - IMU: non-finite, or beyond any MEMS range (|accel| > kMaxAccelMps2 per axis, |gyro| >
+///    kMaxGyroRadps): an Inf sample would count as a touch-down impact and cut the motors.
+///  - Target: non-finite position, normal, size or yaw; a zero normal; a negative size. A NaN
+///    size_m would skip the vehicle-fits-the-opening check.
+///  - Command: a non-finite or absurd (> kMaxNudgeM) NUDGE offset (NaN passed the geofence
+///    clamp); an unknown command code. The signature is not judged here (the node's verifier).
+inline constexpr double kMaxAccelMps2 = 1000.0;  // ~100 g: above any flight IMU's range
+inline constexpr double kMaxGyroRadps = 100.0;   // ~5700 deg/s
+inline constexpr double kMaxNudgeM = 100.0;      // the autonomy clamps to max_nudge_m anyway
+std::optional<ImuSample> imu_from_msg(const imu_t& msg, std::string* why);
+std::optional<TargetMeasurement> target_from_msg(const target_t& msg, std::string* why);
+std::optional<OperatorCommand> command_from_msg(const operator_cmd_t& msg, std::string* why);
 autonomy_status_t to_msg(const Status& status);
 
 int8_t mission_to_msg(Mission m);

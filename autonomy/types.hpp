@@ -103,7 +103,24 @@ struct Status {
 
 struct Output {
   outer_loop::PositionSetpoint setpoint;
+  /// False until the first pose told whether the vehicle is flying (and not after a KILL
+  /// either way): an autonomy (re)started in the air must send the outer loop nothing rather
+  /// than a motors-off setpoint.
+  bool has_setpoint = true;
   Status status;
+};
+
+/// What the autonomy must know from before a restart (the node keeps it in a state file, see
+/// autonomy/restart_state.hpp): the latches a restart must not forget, and whether it had the
+/// motors on. A fresh start gets the defaults.
+struct RestartState {
+  bool killed = false;                  ///< KILL: the motors stay off for good
+  Failsafe failsafe = Failsafe::kNone;  ///< latched failsafe (pose lost, operator abort)
+  bool motors_on = false;               ///< the previous instance was flying the vehicle
+  bool operator==(const RestartState& o) const {
+    return killed == o.killed && failsafe == o.failsafe && motors_on == o.motors_on;
+  }
+  bool operator!=(const RestartState& o) const { return !(*this == o); }
 };
 
 }  // namespace alight::autonomy

@@ -1,7 +1,7 @@
 #pragma once
 // V4L2 buffer timestamps to Unix utime. UVC and most V4L2 drivers stamp buffers with
 // CLOCK_MONOTONIC (V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC); every alight message carries Unix time
-// (DESIGN.md "Time comes from messages"). The offset between the two clocks is measured once at
+// (docs/ARCHITECTURE.md "Time"). The offset between the two clocks is measured once at
 // start and then kept: re-measuring it per frame would let NTP slews of CLOCK_REALTIME jitter
 // the frame times, whereas a fixed offset keeps frame-to-frame intervals exactly the camera's.
 

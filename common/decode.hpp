@@ -7,7 +7,6 @@
 // the whole buffer. It never throws.
 
 #include <alight/image_t.hpp>
-#include <alight/node_status_t.hpp>
 #include <alight/process_status_t.hpp>
 #include <cstddef>
 #include <cstdint>
@@ -76,17 +75,6 @@ inline bool precheck<process_status_t>(const void* data, size_t size) {
   if (!r.skip(8 + 8) || !r.string() || !r.string() || !r.int32(n) || n < 0) return false;
   // Each process_info_t takes at least 37 bytes (a 1-byte string and 33 bytes of fields).
   return static_cast<uint64_t>(n) * 37 <= r.remaining();
-}
-
-template <>
-inline bool precheck<node_status_t>(const void* data, size_t size) {
-  // fingerprint, utime, node, pid, uptime_s, n. Without this a 40-byte NODE_STATUS claiming 2^31
-  // channels made lcm-gen allocate 2^31 channel_stats_t (found by fuzz/lcm_status).
-  Reader r(data, size);
-  int32_t n = 0;
-  if (!r.skip(8 + 8) || !r.string() || !r.skip(4 + 8) || !r.int32(n) || n < 0) return false;
-  // Each channel_stats_t takes at least 45 bytes (a 1-byte string and 5 int64 counters).
-  return static_cast<uint64_t>(n) * 45 <= r.remaining();
 }
 
 }  // namespace wire

@@ -1,5 +1,5 @@
 #pragma once
-// Frames and transforms (DESIGN.md "Frames", REP-103): world W z-up, body B x forward / y left /
+// Frames and transforms (docs/ARCHITECTURE.md "Frames"): world W z-up, body B x forward / y left /
 // z up, camera C optical (x right, y down, z forward). Quaternions are Hamilton [w, x, y, z]
 // rotating body to world. Paper symbols: R_V1 = R_WB at the reference image, R_c = R_BC,
 // t_c = t_B_C (eqs. 3 and 6).

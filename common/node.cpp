@@ -1,15 +1,15 @@
 #include "common/node.hpp"
 
 #include <spdlog/spdlog.h>
+#include <unistd.h>
 
 #include <CLI/CLI.hpp>
-#include <chrono>
 #include <cassert>
 #include <cerrno>
+#include <chrono>
 #include <csignal>
 #include <cstdlib>
 #include <fstream>
-#include <unistd.h>
 
 #include "common/heap.hpp"
 #include "common/params.hpp"
@@ -145,7 +145,8 @@ void Node::report_decode_error(const std::string& channel, uint32_t size) {
 
 bool Node::reject_value(const std::string& channel, const std::string& why) {
   const uint64_t n = ++stats_[channel].rejected_values;
-  if (log_this(n)) spdlog::warn("{}: {} message(s) on {} refused (last: {})", name_, n, channel, why);
+  if (log_this(n))
+    spdlog::warn("{}: {} message(s) on {} refused (last: {})", name_, n, channel, why);
   return false;
 }
 
@@ -208,7 +209,8 @@ int Node::spin_once(int timeout_ms) {
   if (!status_timer_added_) {
     status_timer_added_ = true;
     if (status_period_s_ > 0)
-      every(status_period_s_, [this](int64_t wall) { publish("NODE_STATUS", status_message(wall)); });
+      every(status_period_s_,
+            [this](int64_t wall) { publish("NODE_STATUS", status_message(wall)); });
   }
   if (!timers_.empty()) {
     int64_t next = timers_.front().next_utime;

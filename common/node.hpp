@@ -1,6 +1,6 @@
 #pragma once
 // The thin-node side of every process: owns the LCM handle, the command line, the wall clock
-// and the signals; libraries never see any of them (DESIGN.md "Processes and channels").
+// and the signals; libraries never see any of them (docs/ARCHITECTURE.md "Libraries and nodes").
 //
 // Debian's LCM 1.3.1 needs three things done for it here:
 //  - a large UDP receive buffer (its default loses most of a burst of 300 KB images): the URL

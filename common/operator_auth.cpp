@@ -3,6 +3,7 @@
 #include <openssl/crypto.h>
 #include <openssl/evp.h>
 #include <openssl/hmac.h>
+#include <openssl/rand.h>
 #include <sys/stat.h>
 
 #include <cassert>
@@ -95,12 +96,16 @@ HmacTag hmac_sha256(const std::vector<uint8_t>& key, const std::vector<uint8_t>&
 
 std::vector<uint8_t> canonical_bytes(const operator_cmd_t& cmd) {
   std::vector<uint8_t> out;
-  out.reserve(46 + cmd.sender.size() + 1);
+  out.reserve(58 + cmd.sender.size() + cmd.vehicle_id.size() + 2);
   put_be(out, static_cast<uint64_t>(cmd.utime), 8);
   put_be(out, static_cast<uint64_t>(cmd.seq), 8);
   put_be(out, static_cast<uint32_t>(cmd.sender.size() + 1), 4);
   out.insert(out.end(), cmd.sender.begin(), cmd.sender.end());
   out.push_back(0);
+  put_be(out, static_cast<uint32_t>(cmd.vehicle_id.size() + 1), 4);
+  out.insert(out.end(), cmd.vehicle_id.begin(), cmd.vehicle_id.end());
+  out.push_back(0);
+  put_be(out, static_cast<uint64_t>(cmd.session), 8);
   out.push_back(static_cast<uint8_t>(cmd.command));
   out.push_back(static_cast<uint8_t>(cmd.mission));
   for (double d : cmd.nudge_W) {
@@ -140,26 +145,53 @@ const char* reason_name(CommandVerdict::Reason reason) {
       return "stale";
     case CommandVerdict::Reason::kReplayed:
       return "replayed";
+    case CommandVerdict::Reason::kWrongVehicle:
+      return "wrong_vehicle";
+    case CommandVerdict::Reason::kWrongSession:
+      return "wrong_session";
   }
   return "unknown";
 }
 
-CommandVerifier::CommandVerifier(OperatorKey key, int64_t max_age_us)
-    : key_(std::move(key)), max_age_us_(max_age_us) {
+int64_t draw_session_nonce() {
+  for (;;) {
+    uint64_t v = 0;
+    if (RAND_bytes(reinterpret_cast<unsigned char*>(&v), sizeof v) != 1)
+      throw std::runtime_error("RAND_bytes failed: no session nonce for the command verifier");
+    v &= ~(uint64_t{1} << 63);  // positive: shown as a plain number in logs and the page
+    if (v != 0) return static_cast<int64_t>(v);
+  }
+}
+
+CommandVerifier::CommandVerifier(OperatorKey key, std::string vehicle_id, int64_t session,
+                                 int64_t max_age_us)
+    : key_(std::move(key)),
+      vehicle_id_(std::move(vehicle_id)),
+      session_(session),
+      max_age_us_(max_age_us) {
   if (key_.bytes.size() < kMinKeyBytes)
     throw KeyFileError("CommandVerifier: key of " + std::to_string(key_.bytes.size()) +
                        " bytes, need at least " + std::to_string(kMinKeyBytes));
-  assert(max_age_us_ > 0);
+  // 0 is "no session" on AUTONOMY_STATUS; a verifier must never accept commands signed for it.
+  if (session_ == 0) throw std::invalid_argument("CommandVerifier: session nonce 0");
+  if (max_age_us_ <= 0)
+    throw std::invalid_argument("CommandVerifier: max_age_us " + std::to_string(max_age_us_) +
+                                " must be > 0");
 }
 
 CommandVerdict CommandVerifier::check(const operator_cmd_t& cmd, int64_t now_utime) {
   using R = CommandVerdict::Reason;
-  auto reject = [this](R r) {
+  auto reject = [&](R r) {
     ++n_rejected_;
+    ++by_reason_[static_cast<size_t>(r)];
+    last_rejected_seq_ = cmd.seq;
+    last_reject_reason_ = r;
     return CommandVerdict{r};
   };
   if (cmd.auth != operator_cmd_t::AUTH_HMAC_SHA256) return reject(R::kUnsigned);
   if (!signature_valid(cmd, key_)) return reject(R::kBadSignature);
+  if (cmd.vehicle_id != vehicle_id_) return reject(R::kWrongVehicle);
+  if (cmd.session != session_) return reject(R::kWrongSession);
   // Written to avoid overflow of now - utime for adversarial utime values (they are signed, so
   // only a key holder could send them, but a buggy ground station could).
   const bool too_old = cmd.utime < now_utime && now_utime - max_age_us_ > cmd.utime;

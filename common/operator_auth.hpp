@@ -11,20 +11,27 @@
 // operator_cmd_t, in declaration order, big-endian, without the 8-byte type fingerprint:
 //   offset 0   int64  utime           8 bytes, big-endian two's complement
 //   offset 8   int64  seq             8 bytes, big-endian two's complement
-//   offset 16  int32  L = len(sender) + 1, big-endian
-//   offset 20  sender bytes (L - 1), then one 0x00
-//   20 + L     int8   command
-//   21 + L     int8   mission
-//   22 + L     3 x IEEE-754 binary64 nudge_W[0..2], big-endian each (24 bytes)
-//   total      46 + L bytes
+//   offset 16  int32  Ls = len(sender) + 1, big-endian
+//   offset 20  sender bytes (Ls - 1), then one 0x00
+//   20 + Ls    int32  Lv = len(vehicle_id) + 1, big-endian
+//   24 + Ls    vehicle_id bytes (Lv - 1), then one 0x00
+//   24+Ls+Lv   int64  session         8 bytes, big-endian two's complement
+//   32+Ls+Lv   int8   command
+//   33+Ls+Lv   int8   mission
+//   34+Ls+Lv   3 x IEEE-754 binary64 nudge_W[0..2], big-endian each (24 bytes)
+//   total      58 + Ls + Lv bytes
 // `auth` and `hmac` are not covered (auth must be AUTH_HMAC_SHA256 for a command to be
 // accepted at all). Because it equals LCM's own encoding, a verifier in any language can take
 // the bytes straight from the received message.
 //
-// Replay protection: seq must be strictly greater than the last accepted seq of the same sender,
-// and utime within a window of the verifier's clock. A vehicle that restarts forgets the last
-// seqs; the staleness window bounds what can be replayed then, and the ground station starts its
-// seq at the wall time in microseconds so it increases across ground-station restarts too.
+// Binding (issue 14): the tag covers the vehicle's id, so vehicles sharing a key no longer obey
+// each other's commands, and the session nonce that the verifier draws from the operating
+// system's random source at every start of autonomy and announces in AUTONOMY_STATUS, so a
+// command recorded before a restart of autonomy is refused after it (the new verifier has no
+// sequence history, but it has a new session). Within a session, replay protection is the
+// sequence number: seq must be strictly greater than the last accepted seq of the same sender;
+// and utime must be within a window of the verifier's clock. The ground station starts its seq
+// at the wall time in microseconds so it increases across ground-station restarts too.
 
 #include <alight/operator_cmd_t.hpp>
 #include <array>
@@ -71,35 +78,65 @@ void sign(operator_cmd_t& cmd, const OperatorKey& key);
 /// True when auth = AUTH_HMAC_SHA256 and the tag matches (constant-time comparison).
 bool signature_valid(const operator_cmd_t& cmd, const OperatorKey& key);
 
-/// Outcome of CommandVerifier::check.
+/// Outcome of CommandVerifier::check. The values are autonomy_status_t.REJECT_*.
 struct CommandVerdict {
-  enum class Reason : int8_t { kAccepted = 0, kUnsigned, kBadSignature, kStale, kReplayed };
+  enum class Reason : int8_t {
+    kAccepted = 0,
+    kUnsigned = 1,
+    kBadSignature = 2,
+    kStale = 3,
+    kReplayed = 4,
+    kWrongVehicle = 5,
+    kWrongSession = 6,
+  };
+  static constexpr int kReasonCount = 7;
   Reason reason = Reason::kAccepted;
   bool accepted() const { return reason == Reason::kAccepted; }
 };
 const char* reason_name(CommandVerdict::Reason reason);
 
-/// Accepts an operator command only when it is signed with the shared key, fresh and new.
-/// Used by autonomy on every OPERATOR_CMD; the node passes its current time in.
+/// A fresh session nonce for a CommandVerifier: 63 random bits from OpenSSL's RAND_bytes (seeded
+/// by the operating system, never by the vehicle's configured seed), never 0. Not pure: the
+/// node draws it once at start and passes it to the verifier.
+int64_t draw_session_nonce();
+
+/// Accepts an operator command only when it is signed with the shared key, names this vehicle
+/// and this session, is fresh and new. Used by autonomy on every OPERATOR_CMD; the node passes
+/// its current time in. Pure.
 class CommandVerifier {
  public:
-  /// `max_age_us`: largest |now - cmd.utime| accepted (covers clock offset between the ground
-  /// station and the vehicle plus link delay).
-  explicit CommandVerifier(OperatorKey key, int64_t max_age_us = 2'000'000);
+  /// `vehicle_id`: the id commands must name. `session`: this run's nonce (draw_session_nonce;
+  /// not 0). `max_age_us`: largest |now - cmd.utime| accepted (covers clock offset between the
+  /// ground station and the vehicle plus link delay).
+  CommandVerifier(OperatorKey key, std::string vehicle_id, int64_t session,
+                  int64_t max_age_us = 2'000'000);
 
-  /// Checks in order unsigned, bad signature, stale, replayed; remembers seq only when accepted,
-  /// so a rejected message cannot block later genuine ones.
+  /// Checks in order unsigned, bad signature, wrong vehicle, wrong session, stale, replayed;
+  /// remembers seq only when accepted, so a rejected message cannot block later genuine ones.
   CommandVerdict check(const operator_cmd_t& cmd, int64_t now_utime);
 
+  const std::string& vehicle_id() const { return vehicle_id_; }
+  int64_t session() const { return session_; }
   uint64_t n_rejected() const { return n_rejected_; }
+  uint64_t n_rejected(CommandVerdict::Reason reason) const {
+    return by_reason_[static_cast<size_t>(reason)];
+  }
+  /// seq and reason of the last rejected command (-1 and kAccepted when none was rejected).
+  int64_t last_rejected_seq() const { return last_rejected_seq_; }
+  CommandVerdict::Reason last_reject_reason() const { return last_reject_reason_; }
   /// Last accepted seq of `sender`, or INT64_MIN when none was accepted.
   int64_t last_seq(const std::string& sender) const;
 
  private:
   OperatorKey key_;
+  std::string vehicle_id_;
+  int64_t session_;
   int64_t max_age_us_;
   std::map<std::string, int64_t> last_seq_;  // per sender; only signed senders get an entry
   uint64_t n_rejected_ = 0;
+  std::array<uint64_t, CommandVerdict::kReasonCount> by_reason_{};
+  int64_t last_rejected_seq_ = -1;
+  CommandVerdict::Reason last_reject_reason_ = CommandVerdict::Reason::kAccepted;
 };
 
 }  // namespace alight

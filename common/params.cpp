@@ -11,6 +11,27 @@ std::string compose(const std::string& file, const std::string& key, const std::
   if (!key.empty()) msg += key + (value.empty() ? std::string() : " = " + value) + ": ";
   return msg + problem;
 }
+
+// Walks every mapping and sequence; `path` is the dotted key of `node`.
+void reject_duplicate_keys(const YAML::Node& node, const std::string& path,
+                           const std::string& file) {
+  if (node.IsMap()) {
+    std::set<std::string> seen;
+    for (const auto& kv : node) {
+      const std::string key =
+          kv.first.IsScalar() ? kv.first.Scalar() : std::string("<complex key>");
+      const std::string full = path.empty() ? key : path + "." + key;
+      if (!seen.insert(key).second)
+        throw ParamError(file, full, kv.second.IsScalar() ? kv.second.Scalar() : "",
+                         "duplicate key (line " + std::to_string(kv.first.Mark().line + 1) +
+                             "): the key appears twice in the same mapping");
+      reject_duplicate_keys(kv.second, full, file);
+    }
+  } else if (node.IsSequence()) {
+    for (size_t i = 0; i < node.size(); ++i)
+      reject_duplicate_keys(node[i], path + "[" + std::to_string(i) + "]", file);
+  }
+}
 }  // namespace
 
 ParamError::ParamError(std::string file, std::string key, std::string value, std::string problem)
@@ -49,6 +70,7 @@ ParamNode ParamNode::from_string(const std::string& yaml, const std::string& nam
                      "invalid YAML at line " + std::to_string(e.mark.line + 1) + ": " + e.msg);
   }
   if (!root.IsMap()) throw ParamError(name, "", "", "the top level must be a mapping of keys");
+  reject_duplicate_keys(root, "", name);
   return ParamNode(std::make_shared<const std::string>(name), root, "");
 }
 

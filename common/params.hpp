@@ -8,6 +8,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <cmath>
 #include <memory>
 #include <optional>
 #include <set>
@@ -53,7 +54,8 @@ void param_check(bool ok, const std::string& key, const T& value, const std::str
 class ParamNode {
  public:
   /// Loads a YAML file whose top level must be a mapping. Throws ParamError when the file is
-  /// missing, unreadable or not valid YAML.
+  /// missing, unreadable or not valid YAML, or when a mapping anywhere in it repeats a key
+  /// (yaml-cpp keeps both and lookups see the first: a later edit would silently do nothing).
   static ParamNode load_file(const std::string& path);
   /// Parses YAML text; `name` stands in for the file name in errors.
   static ParamNode from_string(const std::string& yaml, const std::string& name = "<string>");
@@ -138,10 +140,16 @@ struct ParamConvert<int64_t> {
   static int64_t from(const YAML::Node& n) { return n.as<int64_t>(); }
   static const char* expected() { return "an integer"; }
 };
+// Non-finite numbers (.inf, .nan) are never a valid setting: an infinite timeout turns a
+// failsafe off, a NaN gain poisons a controller.
 template <>
 struct ParamConvert<double> {
-  static double from(const YAML::Node& n) { return n.as<double>(); }
-  static const char* expected() { return "a number"; }
+  static double from(const YAML::Node& n) {
+    const double v = n.as<double>();
+    if (!std::isfinite(v)) throw YAML::BadConversion(n.Mark());
+    return v;
+  }
+  static const char* expected() { return "a finite number"; }
 };
 template <>
 struct ParamConvert<std::string> {
@@ -159,7 +167,7 @@ struct ParamConvert<std::array<E, N>> {
     for (size_t i = 0; i < N; ++i) out[i] = ParamConvert<E>::from(n[i]);
     return out;
   }
-  static std::string expected() { return "a list of " + std::to_string(N) + " numbers"; }
+  static std::string expected() { return "a list of " + std::to_string(N) + " finite numbers"; }
 };
 template <class E>
 struct ParamConvert<std::vector<E>> {
@@ -177,7 +185,7 @@ struct ParamConvert<Eigen::Vector3d> {
     const auto a = ParamConvert<std::array<double, 3>>::from(n);
     return Eigen::Vector3d(a[0], a[1], a[2]);
   }
-  static const char* expected() { return "a list of 3 numbers"; }
+  static const char* expected() { return "a list of 3 finite numbers"; }
 };
 }  // namespace detail
 

@@ -1,6 +1,6 @@
 #pragma once
-// Recent motion-capture history, queried at an image's exposure time (DESIGN.md "Time comes
-// from messages"): vision needs R_V1, P_V1 at the reference image and R_V2 at the current one
+// Recent motion-capture history, queried at an image's exposure time (docs/ARCHITECTURE.md
+// "Time"): vision needs R_V1, P_V1 at the reference image and R_V2 at the current one
 // (paper eqs. 3 and 6), which fall between mocap samples.
 
 #include <cstdint>

@@ -7,19 +7,24 @@ namespace alight {
 
 const char* stamp_verdict_name(StampVerdict v) {
   switch (v) {
-    case StampVerdict::kAccepted: return "accepted";
-    case StampVerdict::kRestarted: return "accepted as a restart of the source";
-    case StampVerdict::kNonPositive: return "stamp not positive";
-    case StampVerdict::kBackwards: return "stamp older than the source's last";
-    case StampVerdict::kAhead: return "stamp further ahead than can have elapsed";
+    case StampVerdict::kAccepted:
+      return "accepted";
+    case StampVerdict::kRestarted:
+      return "accepted as a restart of the source";
+    case StampVerdict::kNonPositive:
+      return "stamp not positive";
+    case StampVerdict::kBackwards:
+      return "stamp older than the source's last";
+    case StampVerdict::kAhead:
+      return "stamp further ahead than can have elapsed";
   }
   return "?";
 }
 
 int64_t StampGuard::reach_us(const Source& s, int64_t steady_us) const {
   const double elapsed_us = static_cast<double>(std::max<int64_t>(0, steady_us - s.last_steady_us));
-  const double reach = static_cast<double>(s.last_utime) + params_.max_rate * elapsed_us +
-                       params_.tolerance_s * 1e6;
+  const double reach =
+      static_cast<double>(s.last_utime) + params_.max_rate * elapsed_us + params_.tolerance_s * 1e6;
   return reach >= 9.2e18 ? INT64_MAX : static_cast<int64_t>(reach);
 }
 
@@ -53,7 +58,8 @@ StampVerdict StampGuard::check(const std::string& source, int64_t utime, int64_t
   s.last_steady_us = steady_us;
   if (verdict == StampVerdict::kRestarted) {
     newest_utime_ = 0;
-    for (const auto& [name, other] : sources_) newest_utime_ = std::max(newest_utime_, other.last_utime);
+    for (const auto& [name, other] : sources_)
+      newest_utime_ = std::max(newest_utime_, other.last_utime);
   } else {
     newest_utime_ = std::max(newest_utime_, utime);
   }

@@ -17,20 +17,21 @@
 namespace alight {
 
 struct StampGuardParams {
-  double tolerance_s = 0.5;         ///< slack on every forward bound [s]
-  double max_rate = 20.0;           ///< stamps may advance this much faster than the steady clock
-                                    ///< (a simulator faster than real time) [-]
-  double reset_after_s = 1.0;       ///< backward stamps accepted as a restart after this long
-                                    ///< with nothing newer from the source [s]
-  double max_first_ahead_s = 300.0; ///< a first stamp this far ahead of the reference is refused [s]
+  double tolerance_s = 0.5;    ///< slack on every forward bound [s]
+  double max_rate = 20.0;      ///< stamps may advance this much faster than the steady clock
+                               ///< (a simulator faster than real time) [-]
+  double reset_after_s = 1.0;  ///< backward stamps accepted as a restart after this long
+                               ///< with nothing newer from the source [s]
+  double max_first_ahead_s =
+      300.0;  ///< a first stamp this far ahead of the reference is refused [s]
 };
 
 enum class StampVerdict {
   kAccepted,
-  kRestarted,      ///< accepted: the source went backwards and then stayed there (a restart)
-  kNonPositive,    ///< utime <= 0
-  kBackwards,      ///< older than the source's last accepted stamp
-  kAhead,          ///< further ahead than can have elapsed
+  kRestarted,    ///< accepted: the source went backwards and then stayed there (a restart)
+  kNonPositive,  ///< utime <= 0
+  kBackwards,    ///< older than the source's last accepted stamp
+  kAhead,        ///< further ahead than can have elapsed
 };
 
 const char* stamp_verdict_name(StampVerdict v);

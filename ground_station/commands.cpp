@@ -112,25 +112,112 @@ ParsedCommand parse_command_request(const std::map<std::string, std::string>& fi
   return out;
 }
 
-CommandBuilder::CommandBuilder(std::string sender, OperatorKey key)
-    : sender_(std::move(sender)), key_(std::move(key)) {
+CommandBuilder::CommandBuilder(std::string sender, OperatorKey key, std::string vehicle_id)
+    : sender_(std::move(sender)), key_(std::move(key)), vehicle_id_(std::move(vehicle_id)) {
   if (key_.bytes.size() < kMinKeyBytes)
     throw KeyFileError("CommandBuilder: key shorter than " + std::to_string(kMinKeyBytes) +
                        " bytes");
 }
 
-operator_cmd_t CommandBuilder::build(const CommandRequest& request, int64_t now_utime) {
+operator_cmd_t CommandBuilder::build(const CommandRequest& request, int64_t session,
+                                     int64_t now_utime) {
   operator_cmd_t cmd{};
   cmd.utime = now_utime;
   last_seq_ = std::max(last_seq_ + 1, now_utime);
   cmd.seq = last_seq_;
   cmd.sender = sender_;
+  cmd.vehicle_id = vehicle_id_;
+  cmd.session = session;
   cmd.command = request.command;
   cmd.mission = request.command == operator_cmd_t::CMD_GO ? request.mission : 0;
   for (int i = 0; i < 3; ++i)
     cmd.nudge_W[i] = request.command == operator_cmd_t::CMD_NUDGE ? request.nudge_W[i] : 0.0;
   sign(cmd, key_);
   return cmd;
+}
+
+const char* ack_state_name(AckState s) {
+  switch (s) {
+    case AckState::kSent:
+      return "sent";
+    case AckState::kAcknowledged:
+      return "acknowledged";
+    case AckState::kRejected:
+      return "rejected";
+    case AckState::kNotAcknowledged:
+      return "not_acknowledged";
+  }
+  return "unknown";
+}
+
+const char* reject_reason_name(int8_t reason) {
+  switch (reason) {
+    case autonomy_status_t::REJECT_UNSIGNED:
+      return "unsigned";
+    case autonomy_status_t::REJECT_BAD_SIGNATURE:
+      return "bad signature (key?)";
+    case autonomy_status_t::REJECT_STALE:
+      return "stale (clock offset?)";
+    case autonomy_status_t::REJECT_REPLAYED:
+      return "replayed";
+    case autonomy_status_t::REJECT_WRONG_VEHICLE:
+      return "wrong vehicle id";
+    case autonomy_status_t::REJECT_WRONG_SESSION:
+      return "wrong session (autonomy restarted?)";
+  }
+  return "rejected";
+}
+
+CommandTracker::CommandTracker(double ack_timeout_s, size_t kept)
+    : ack_timeout_us_(static_cast<int64_t>(std::llround(ack_timeout_s * 1e6))), kept_(kept) {}
+
+void CommandTracker::sent(const std::string& name, int64_t seq, int64_t session,
+                          int64_t now_utime) {
+  TrackedCommand c;
+  c.name = name;
+  c.seq = seq;
+  c.session = session;
+  c.sent_utime = now_utime;
+  c.rejected_at_send = vehicle_session_ == session ? vehicle_rejected_ : -1;
+  commands_.push_back(std::move(c));
+  while (commands_.size() > kept_) commands_.pop_front();
+}
+
+void CommandTracker::on_status(const autonomy_status_t& st, int64_t now_utime) {
+  vehicle_rejected_ = st.cmds_rejected;
+  vehicle_session_ = st.cmd_session;
+  // Is the echoed accepted seq one of ours (of this session)?
+  bool echoed_is_ours = false;
+  for (const auto& c : commands_)
+    echoed_is_ours |= c.seq == st.last_cmd_seq && c.session == st.cmd_session;
+  for (auto& c : commands_) {
+    if (c.state == AckState::kAcknowledged || c.state == AckState::kRejected) continue;
+    if (c.session != st.cmd_session) continue;  // answers of another run say nothing of it
+    if (st.last_cmd_seq == c.seq) {
+      c.state = AckState::kAcknowledged;
+    } else if (st.last_rejected_seq == c.seq) {
+      c.state = AckState::kRejected;
+      c.reject_reason = reject_reason_name(st.last_reject_reason);
+    } else if (echoed_is_ours && st.last_cmd_seq > c.seq && c.rejected_at_send >= 0 &&
+               st.cmds_rejected == c.rejected_at_send) {
+      c.state = AckState::kAcknowledged;  // a later one of ours was accepted, nothing rejected
+    } else {
+      continue;
+    }
+    c.answered_utime = now_utime;
+  }
+}
+
+AckState CommandTracker::state_at(const TrackedCommand& c, int64_t now_utime) const {
+  if (c.state == AckState::kSent && now_utime - c.sent_utime > ack_timeout_us_)
+    return AckState::kNotAcknowledged;
+  return c.state;
+}
+
+const TrackedCommand* CommandTracker::alarm(int64_t now_utime) const {
+  if (commands_.empty()) return nullptr;
+  const TrackedCommand& newest = commands_.back();
+  return state_at(newest, now_utime) == AckState::kNotAcknowledged ? &newest : nullptr;
 }
 
 bool is_loopback_address(const std::string& address) {
@@ -150,7 +237,7 @@ bool is_loopback_address(const std::string& address) {
 AccessPolicy policy_for_bind(const std::string& bind_address, std::string token) {
   AccessPolicy p;
   p.loopback_only = is_loopback_address(bind_address);
-  p.require_token = !p.loopback_only;
+  p.require_token = true;  // on loopback too: any page in the operator's browser can reach it
   p.token = std::move(token);
   return p;
 }

@@ -39,16 +39,25 @@ int main(int argc, char** argv) {
         ->check(CLI::ExistingDirectory);
     bool require_token = false;
     app.add_flag("--require-token", require_token,
-                 "Require the session token also on loopback (e.g. when reached through an SSH "
-                 "tunnel or a proxy)");
+                 "On loopback, do not hand the session token to the page (GET /api/session): "
+                 "it must come from the printed URL (e.g. when reached through an SSH tunnel or "
+                 "a proxy)");
     app.add_option("--sender", sender, "Sender id in OPERATOR_CMD (default gs-<hostname>)");
+    std::string vehicle_id;
+    app.add_option("--vehicle-id", vehicle_id,
+                   "Vehicle to command (overrides ground_station.vehicle_id; must equal the "
+                   "vehicle's autonomy.vehicle_id)");
     try {
       app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
       return app.exit(e);
     }
     args.finalize();
-    const gs::GroundStationParams params = gs::load_params(args.config);
+    gs::GroundStationParams params = gs::load_params(args.config);
+    if (!vehicle_id.empty()) {
+      params.vehicle_id = vehicle_id;
+      params.validate();
+    }
 
     gs::StationOptions options;
     options.bind_address = bind;

@@ -119,7 +119,8 @@ const char* target_reason_name(int8_t reason) {
   return "unknown";
 }
 
-StationState::StationState(const GroundStationParams& params) : params_(params) {
+StationState::StationState(const GroundStationParams& params)
+    : params_(params), commands_(params.ack_timeout_s, kSentCommandsKept) {
   params_.validate();
 }
 
@@ -132,10 +133,15 @@ void StationState::arrived(const std::string& channel, int64_t now_utime) {
   channels_[channel].add(now_utime);
 }
 
-void StationState::on_status(const autonomy_status_t& msg, int64_t now_utime) {
+void StationState::on_status(const autonomy_status_t& msg, int64_t now_utime,
+                             std::optional<int64_t> wall_utime) {
   arrived(params_.status_channel, now_utime);
   status_ = msg;
   sample_height(msg.utime);
+  // The vehicle's wall clock when it published (older autonomy: the status time).
+  const int64_t vehicle_utime = msg.wall_utime != 0 ? msg.wall_utime : msg.utime;
+  clock_offset_s_ = (wall_utime.value_or(now_utime) - vehicle_utime) * 1e-6;
+  commands_.on_status(msg, now_utime);
 }
 
 void StationState::on_pose(const pose_t& msg, int64_t now_utime) {
@@ -183,18 +189,28 @@ void StationState::on_target(const target_t& msg, int64_t now_utime) {
   }
 }
 
-void StationState::on_process_status(const process_status_t& msg, int64_t now_utime) {
+void StationState::on_process_status(const process_status_t& msg, int64_t now_utime,
+                                     std::optional<int64_t> wall_utime) {
   arrived(params_.process_channel, now_utime);
   processes_ = msg;
+  processes_age_at_arrival_us_ = wall_utime.value_or(now_utime) - msg.utime;
+  processes_arrival_utime_ = now_utime;
 }
 
-void StationState::on_frame(const std::string& channel, int64_t frame_utime, int64_t now_utime) {
+void StationState::on_frame(const std::string& channel, int64_t frame_utime, int64_t now_utime,
+                            std::optional<int64_t> wall_utime) {
   arrived(channel, now_utime);
-  frame_utime_[channel] = frame_utime;
+  frames_[channel] = FrameArrival{wall_utime.value_or(now_utime) - frame_utime, now_utime};
 }
 
-void StationState::on_command_sent(const std::string& name, int64_t seq, int64_t now_utime) {
-  push_bounded(sent_, SentCommand{name, seq, now_utime}, kSentCommandsKept);
+void StationState::on_command_sent(const std::string& name, int64_t seq, int64_t session,
+                                   int64_t now_utime) {
+  commands_.sent(name, seq, session, now_utime);
+}
+
+int64_t StationState::vehicle_session() const {
+  if (!status_ || status_->vehicle_id != params_.vehicle_id) return 0;
+  return status_->cmd_session;
 }
 
 double StationState::channel_rate_hz(const std::string& channel, int64_t now_utime) const {
@@ -242,6 +258,18 @@ std::string StationState::to_json(int64_t now_utime, const std::string& extra) c
     w.field("last_cmd_seq", s.last_cmd_seq);
     w.field("geofence_clamped", s.geofence_clamped != 0);
     w.field("mission_time_s", s.mission_time_s);
+    w.field("vehicle_id", s.vehicle_id);
+    w.field("cmd_session", s.cmd_session);
+    w.field("last_rejected_seq", s.last_rejected_seq);
+    w.key("cmds_rejected_by_reason").begin_object();
+    for (int r = 1; r < 8; ++r)
+      if (s.cmds_rejected_by_reason[r] > 0)
+        w.field(reject_reason_name(static_cast<int8_t>(r)),
+                static_cast<int>(s.cmds_rejected_by_reason[r]));
+    w.end_object();
+    w.field(
+        "last_reject_reason",
+        std::string(s.last_reject_reason == 0 ? "none" : reject_reason_name(s.last_reject_reason)));
     w.end_object();
   }
 
@@ -288,8 +316,10 @@ std::string StationState::to_json(int64_t now_utime, const std::string& extra) c
     w.field("rate_hz", meter.rate_hz(now_utime));
     w.field("age_s", age ? *age : kNaN);
     w.field("stale", !age || *age > params_.channel_stale_s);
-    auto f = frame_utime_.find(name);
-    if (f != frame_utime_.end()) w.field("frame_latency_s", (now_utime - f->second) * 1e-6);
+    auto f = frames_.find(name);
+    if (f != frames_.end())
+      w.field("frame_latency_s",
+              (f->second.latency_us + (now_utime - f->second.arrival_utime)) * 1e-6);
     w.end_object();
   }
   w.end_object();
@@ -300,7 +330,8 @@ std::string StationState::to_json(int64_t now_utime, const std::string& extra) c
   } else {
     w.begin_object();
     w.field("launch_name", processes_->launch_name);
-    w.field("age_s", (now_utime - processes_->utime) * 1e-6);
+    w.field("age_s",
+            (processes_age_at_arrival_us_ + (now_utime - processes_arrival_utime_)) * 1e-6);
     w.key("list").begin_array();
     for (const auto& p : processes_->processes) {
       w.begin_object();
@@ -329,13 +360,41 @@ std::string StationState::to_json(int64_t now_utime, const std::string& extra) c
   w.end_array();
 
   w.key("sent").begin_array();
-  for (const auto& c : sent_)
+  for (const auto& c : commands_.commands()) {
+    const AckState state = commands_.state_at(c, now_utime);
     w.begin_object()
         .field("name", c.name)
         .field("seq", c.seq)
-        .field("age_s", (now_utime - c.utime) * 1e-6)
-        .end_object();
+        .field("age_s", (now_utime - c.sent_utime) * 1e-6)
+        .field("state", std::string(ack_state_name(state)));
+    if (state == AckState::kAcknowledged || state == AckState::kRejected)
+      w.field("answer_s", (c.answered_utime - c.sent_utime) * 1e-6);
+    if (state == AckState::kRejected) w.field("reject_reason", c.reject_reason);
+    w.end_object();
+  }
   w.end_array();
+
+  // The operator link: who is commanded, whether the clocks agree, and the alarm for a command
+  // the vehicle did not acknowledge.
+  w.key("link").begin_object();
+  w.field("vehicle_id", params_.vehicle_id);
+  w.field("session_known", vehicle_session() != 0);
+  w.field("vehicle_seen", status_.has_value());
+  if (status_ && status_->vehicle_id != params_.vehicle_id)
+    w.field("other_vehicle_id", status_->vehicle_id);
+  w.field("clock_offset_s", clock_offset_s_ ? *clock_offset_s_ : kNaN);
+  w.field("clock_offset_warn",
+          clock_offset_s_ && std::abs(*clock_offset_s_) > params_.clock_offset_warn_s);
+  w.field("ack_timeout_s", params_.ack_timeout_s);
+  if (const TrackedCommand* a = commands_.alarm(now_utime)) {
+    w.key("alarm").begin_object();
+    w.field("name", a->name).field("seq", a->seq);
+    w.field("age_s", (now_utime - a->sent_utime) * 1e-6);
+    w.end_object();
+  } else {
+    w.field("alarm", std::string("none"));
+  }
+  w.end_object();
 
   std::string out = w.str();
   out += ",\"station\":";

@@ -15,6 +15,7 @@
 #include <optional>
 #include <string>
 
+#include "ground_station/commands.hpp"
 #include "ground_station/params.hpp"
 
 namespace alight::ground_station {
@@ -61,14 +62,30 @@ class StationState {
  public:
   explicit StationState(const GroundStationParams& params);
 
-  void on_status(const autonomy_status_t& msg, int64_t now_utime);
+  // `now_utime` is the station's steady clock (arrival ages, rates, command deadlines: a step of
+  // the system clock must neither hide a dead link nor delay an alarm). Where a message's stamp
+  // is compared with the station's wall clock (clock offset, frame latency, process report age)
+  // the node passes `wall_utime` too; without it, now_utime stands for both (tests).
+  void on_status(const autonomy_status_t& msg, int64_t now_utime,
+                 std::optional<int64_t> wall_utime = std::nullopt);
   void on_target(const target_t& msg, int64_t now_utime);
-  void on_process_status(const process_status_t& msg, int64_t now_utime);
+  void on_process_status(const process_status_t& msg, int64_t now_utime,
+                         std::optional<int64_t> wall_utime = std::nullopt);
   void on_pose(const pose_t& msg, int64_t now_utime);
   /// A frame arrived on a video channel; `frame_utime` is its exposure time.
-  void on_frame(const std::string& channel, int64_t frame_utime, int64_t now_utime);
-  /// A command was handed to LCM (shown in the page's command log).
-  void on_command_sent(const std::string& name, int64_t seq, int64_t now_utime);
+  void on_frame(const std::string& channel, int64_t frame_utime, int64_t now_utime,
+                std::optional<int64_t> wall_utime = std::nullopt);
+  /// A command was handed to LCM, signed for `session` (shown in the page's command log until
+  /// AUTONOMY_STATUS acknowledges or rejects it, or its deadline passes).
+  void on_command_sent(const std::string& name, int64_t seq, int64_t session, int64_t now_utime);
+
+  /// The session nonce announced by the configured vehicle's autonomy (0 before any status, or
+  /// when its verifier has no key): commands are signed for it.
+  int64_t vehicle_session() const;
+  /// Station clock minus the vehicle's wall clock at the newest AUTONOMY_STATUS (includes the
+  /// link delay) [s]; nullopt before any status.
+  std::optional<double> clock_offset_s() const { return clock_offset_s_; }
+  const CommandTracker& commands() const { return commands_; }
 
   /// The page's state document (JSON). `extra` is spliced in verbatim as `"station": extra`.
   std::string to_json(int64_t now_utime, const std::string& extra = "{}") const;
@@ -92,18 +109,22 @@ class StationState {
   std::optional<process_status_t> processes_;
   std::optional<pose_t> pose_;
   std::map<std::string, RateMeter> channels_;
-  std::map<std::string, int64_t> frame_utime_;  // exposure time of the newest frame per channel
+  // Per channel, the newest frame's latency at arrival (wall clock minus exposure) and its
+  // arrival on the steady clock: the latency shown grows with the steady clock from there.
+  struct FrameArrival {
+    int64_t latency_us;
+    int64_t arrival_utime;
+  };
+  std::map<std::string, FrameArrival> frames_;
+  int64_t processes_age_at_arrival_us_ = 0;  // wall clock minus the report's stamp
+  int64_t processes_arrival_utime_ = 0;
   std::deque<TrackPoint> track_;
   std::deque<HeightPoint> heights_;
   std::deque<Measurement> measurements_;
   int64_t last_track_utime_ = INT64_MIN;
   int64_t last_height_utime_ = INT64_MIN;
-  struct SentCommand {
-    std::string name;
-    int64_t seq;
-    int64_t utime;
-  };
-  std::deque<SentCommand> sent_;
+  CommandTracker commands_;
+  std::optional<double> clock_offset_s_;
 };
 
 }  // namespace alight::ground_station

@@ -8,10 +8,10 @@
 #include <alight/pose_t.hpp>
 #include <alight/process_status_t.hpp>
 #include <alight/target_t.hpp>
-#include <condition_variable>
 #include <filesystem>
 
 #include "ground_station/http.hpp"
+#include "ground_station/http_server.hpp"
 #include "ground_station/json_writer.hpp"
 
 namespace alight::ground_station {
@@ -37,64 +37,6 @@ std::string error_json(const std::string& message) {
 }
 }  // namespace
 
-// Worker threads with a bounded queue of accepted connections. httplib hands each accepted
-// socket to enqueue(); when the queue is full the accept thread serves that connection itself,
-// which stops it accepting more until done (the kernel's listen backlog then pushes back on
-// clients), so neither threads nor queued sockets grow without bound.
-class Station::BoundedPool : public httplib::TaskQueue {
- public:
-  BoundedPool(size_t n_threads, size_t max_queued, std::atomic<uint64_t>* over_limit)
-      : max_queued_(max_queued), over_limit_(over_limit) {
-    for (size_t i = 0; i < n_threads; ++i) threads_.emplace_back([this] { work(); });
-  }
-  ~BoundedPool() override { shutdown(); }
-  void enqueue(std::function<void()> fn) override {
-    {
-      std::unique_lock<std::mutex> lock(mutex_);
-      if (queue_.size() < max_queued_ && !stopping_) {
-        queue_.push_back(std::move(fn));
-        cv_.notify_one();
-        return;
-      }
-    }
-    ++*over_limit_;
-    fn();
-  }
-  void shutdown() override {
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      if (stopping_ && threads_.empty()) return;
-      stopping_ = true;
-    }
-    cv_.notify_all();
-    for (auto& t : threads_)
-      if (t.joinable()) t.join();
-    threads_.clear();
-  }
-
- private:
-  void work() {
-    for (;;) {
-      std::function<void()> fn;
-      {
-        std::unique_lock<std::mutex> lock(mutex_);
-        cv_.wait(lock, [this] { return stopping_ || !queue_.empty(); });
-        if (queue_.empty()) return;  // stopping and drained: every socket gets closed
-        fn = std::move(queue_.front());
-        queue_.pop_front();
-      }
-      fn();
-    }
-  }
-  size_t max_queued_;
-  std::atomic<uint64_t>* over_limit_;
-  std::mutex mutex_;
-  std::condition_variable cv_;
-  std::deque<std::function<void()>> queue_;
-  std::vector<std::thread> threads_;
-  bool stopping_ = false;
-};
-
 std::string make_session_token() {
   uint8_t bytes[16];
   if (RAND_bytes(bytes, sizeof bytes) != 1)
@@ -109,44 +51,51 @@ Station::Station(const GroundStationParams& params, StationOptions options)
       state_(params),
       camera_(params.jpeg_quality),
       diag_(params.jpeg_quality) {
-  if (options_.require_token) policy_.require_token = true;
-  if (policy_.require_token && policy_.token.size() < 16)
+  // Every command needs the token, on loopback too (issue 14: no token was asked there, so any
+  // page the operator's browser opened could post commands). On loopback the page may fetch it
+  // from GET /api/session; elsewhere the operator types it or opens the printed URL.
+  if (policy_.loopback_only && policy_.token.empty()) policy_.token = make_session_token();
+  if (policy_.token.size() < 16)
     throw std::runtime_error("serving " + options_.bind_address +
                              " needs a session token of at least 16 characters");
-  if (options_.key) builder_.emplace(options_.sender, *options_.key);
+  policy_.require_token = true;
+  if (options_.key) builder_.emplace(options_.sender, *options_.key, params_.vehicle_id);
 }
 
 Station::~Station() { stop(); }
 
 void Station::attach(Node& node) {
+  // StationState runs on the steady clock; the wall clock only where a vehicle's stamp is
+  // compared with it (clock offset, latencies).
   node.on<autonomy_status_t>(params_.status_channel, [this](const autonomy_status_t& m) {
     std::lock_guard<std::mutex> lock(state_mutex_);
-    state_.on_status(m, wall_utime());
+    state_.on_status(m, steady_utime(), wall_utime());
   });
   node.on<target_t>(params_.target_channel, [this](const target_t& m) {
     std::lock_guard<std::mutex> lock(state_mutex_);
-    state_.on_target(m, wall_utime());
+    state_.on_target(m, steady_utime());
   });
   node.on<process_status_t>(params_.process_channel, [this](const process_status_t& m) {
     std::lock_guard<std::mutex> lock(state_mutex_);
-    state_.on_process_status(m, wall_utime());
+    state_.on_process_status(m, steady_utime(), wall_utime());
   });
   node.on<pose_t>(params_.pose_channel, [this](const pose_t& m) {
     std::lock_guard<std::mutex> lock(state_mutex_);
-    state_.on_pose(m, wall_utime());
+    state_.on_pose(m, steady_utime());
   });
   auto video = [this](const std::string& channel, FrameStore& store) {
     return [this, channel, &store](const image_t& m) {
       {
         std::lock_guard<std::mutex> lock(state_mutex_);
-        state_.on_frame(channel, m.utime, wall_utime());
+        state_.on_frame(channel, m.utime, steady_utime(), wall_utime());
       }
       store.put(std::make_shared<const image_t>(m));
     };
   };
   node.on_latest<image_t>(params_.camera_channel, video(params_.camera_channel, camera_));
   node.on_latest<image_t>(params_.diag_channel, video(params_.diag_channel, diag_));
-  node.every(0.02, [this, &node](int64_t now) { publish_pending(node, now); });
+  // Node::every runs on the steady clock (a step of the system clock froze this timer).
+  node.every(0.02, [this, &node](int64_t) { publish_pending(node, steady_utime()); });
 }
 
 void Station::publish_pending(Node& node, int64_t now_utime) {
@@ -168,6 +117,7 @@ std::string Station::station_json(int64_t now_utime) const {
   w.begin_object();
   w.field("commands_enabled", builder_.has_value());
   w.field("token_required", policy_.require_token);
+  w.field("token_from_server", policy_.loopback_only && !options_.require_token);
   w.field("sender", options_.sender);
   w.field("bind", options_.bind_address);
   const int64_t tick = lcm_loop_utime_;
@@ -193,7 +143,18 @@ std::shared_ptr<const std::string> Station::state_json(int64_t now_utime) {
 }
 
 StationCounters Station::counters() const {
-  return {http_requests_, commands_published_, commands_refused_, connections_over_limit_};
+  StationCounters c;
+  c.http_requests = http_requests_;
+  c.commands_published = commands_published_;
+  c.commands_refused = commands_refused_;
+  c.commands_without_session = commands_without_session_;
+  if (server_) {
+    const HttpGateCounters g = server_->gate_counters();
+    c.connections_over_limit = g.queue_full + g.pending_dropped;
+    c.heads_timed_out = g.heads_timed_out;
+    c.heads_too_large = g.heads_too_large;
+  }
+  return c;
 }
 
 void Station::setup_routes() {
@@ -204,7 +165,26 @@ void Station::setup_routes() {
   });
 
   svr.Get("/api/state", [this](const httplib::Request&, httplib::Response& res) {
-    json_reply(res, 200, *state_json(wall_utime()));
+    json_reply(res, 200, *state_json(steady_utime()));
+  });
+
+  // The page on loopback asks for the session token here. Only a same-origin script can read
+  // the answer (no CORS header is ever sent), the Host must be a loopback name (DNS
+  // rebinding), and no framing is allowed (X-Frame-Options): another page cannot get it.
+  svr.Get("/api/session", [this](const httplib::Request& req, httplib::Response& res) {
+    AccessPolicy no_token = policy_;
+    no_token.require_token = false;
+    const Access access = check_command_access(no_token, plain_headers(req));
+    if (!policy_.loopback_only || options_.require_token || access != Access::kAllowed) {
+      json_reply(res, 403,
+                 error_json(access != Access::kAllowed
+                                ? access_name(access)
+                                : "the session token is not handed out here: type it in"));
+      return;
+    }
+    JsonWriter w;
+    w.begin_object().field("ok", true).field("token", policy_.token).end_object();
+    json_reply(res, 200, w.str());
   });
 
   auto frame_route = [this](FrameStore& store) {
@@ -262,12 +242,27 @@ void Station::setup_routes() {
       json_reply(res, 503, error_json("command queue full (LCM loop not running?)"));
       return;
     }
-    const int64_t now = wall_utime();
-    const operator_cmd_t cmd = builder_->build(*parsed.request, now);
+    // Signed for the session the vehicle announced: without one, the vehicle would refuse it
+    // (and the operator would see "sent"), so say so now.
+    int64_t session = 0;
+    {
+      std::lock_guard<std::mutex> state_lock(state_mutex_);
+      session = state_.vehicle_session();
+    }
+    if (session == 0) {
+      ++commands_refused_;
+      ++commands_without_session_;
+      json_reply(res, 503,
+                 error_json("vehicle '" + params_.vehicle_id +
+                            "' not heard: no AUTONOMY_STATUS with its command session "
+                            "(autonomy down, link lost, no key there, or another vehicle_id)"));
+      return;
+    }
+    const operator_cmd_t cmd = builder_->build(*parsed.request, session, wall_utime());
     pending_commands_.push_back(cmd);
     {
       std::lock_guard<std::mutex> state_lock(state_mutex_);
-      state_.on_command_sent(command_name(cmd.command), cmd.seq, now);
+      state_.on_command_sent(command_name(cmd.command), cmd.seq, session, steady_utime());
     }
     JsonWriter w;
     w.begin_object().field("ok", true).field("command", command_name(cmd.command));
@@ -281,20 +276,25 @@ void Station::setup_routes() {
 
 int Station::start() {
   if (server_) throw std::runtime_error("ground station server already started");
-  server_ = std::make_unique<httplib::Server>();
-  const size_t threads = static_cast<size_t>(params_.http_threads);
-  const size_t queued = static_cast<size_t>(params_.max_queued_connections);
-  server_->new_task_queue = [this, threads, queued] {
-    return new BoundedPool(threads, queued, &connections_over_limit_);
-  };
-  const auto timeout = std::chrono::duration<double>(params_.client_timeout_s);
-  const auto timeout_us = std::chrono::duration_cast<std::chrono::microseconds>(timeout);
-  server_->set_read_timeout(timeout_us);
-  server_->set_write_timeout(timeout_us);
-  server_->set_keep_alive_timeout(
-      std::max<time_t>(1, static_cast<time_t>(params_.client_timeout_s)));
-  server_->set_keep_alive_max_count(100);
-  server_->set_payload_max_length(64 * 1024);
+  HttpLimits limits;
+  limits.workers = params_.http_threads;
+  limits.command_workers = params_.command_threads;
+  limits.max_queued = static_cast<size_t>(params_.max_queued_connections);
+  limits.max_pending_heads = static_cast<size_t>(params_.max_pending_heads);
+  limits.io_timeout_s = params_.client_timeout_s;
+  limits.idle_timeout_s = params_.client_timeout_s;
+  limits.head_deadline_s = params_.head_deadline_s;
+  limits.request_deadline_s = params_.request_deadline_s;
+  limits.max_header_count = static_cast<size_t>(params_.max_header_count);
+  limits.max_head_bytes = static_cast<size_t>(params_.max_head_bytes);
+  limits.max_payload_bytes = static_cast<size_t>(params_.max_payload_bytes);
+  server_ = std::make_unique<HardenedServer>(limits);
+  // On every response, the page's and errors alike: never inside another site's frame
+  // (clickjacking the command buttons), no MIME sniffing, no referrer with the token fragment.
+  server_->set_default_headers({{"X-Frame-Options", "DENY"},
+                                {"Content-Security-Policy", "frame-ancestors 'none'"},
+                                {"X-Content-Type-Options", "nosniff"},
+                                {"Referrer-Policy", "no-referrer"}});
   setup_routes();
   const int port = options_.port >= 0 ? options_.port : params_.http_port;
   int bound = -1;
@@ -306,6 +306,7 @@ int Station::start() {
   if (bound <= 0)
     throw std::runtime_error("cannot listen on " + options_.bind_address + ":" +
                              std::to_string(port) + " (address in use or not local?)");
+  server_->widen_backlog(128);
   server_thread_ = std::thread([this] { server_->listen_after_bind(); });
   return bound;
 }
@@ -315,6 +316,7 @@ void Station::stop() {
   diag_.wake_all();
   if (server_) server_->stop();
   if (server_thread_.joinable()) server_thread_.join();
+  if (server_) server_->shutdown_all();
   server_.reset();
 }
 

@@ -8,12 +8,22 @@ void BackoffParams::validate() const {
   param_check(initial_s > 0, "backoff.initial_s", initial_s, "must be > 0");
   param_check(max_s >= initial_s, "backoff.max_s", max_s, "must be >= backoff.initial_s");
   param_check(reset_after_s > 0, "backoff.reset_after_s", reset_after_s, "must be > 0");
+  // Upper bounds: a supervisor that waits hours to restart or to stop is not supervising.
+  param_check(initial_s <= 60, "backoff.initial_s", initial_s, "must be <= 60");
+  param_check(max_s <= 3600, "backoff.max_s", max_s, "must be <= 3600");
+  param_check(reset_after_s <= 3600, "backoff.reset_after_s", reset_after_s, "must be <= 3600");
+  param_check(start_limit_burst >= 0 && start_limit_burst <= 1000, "backoff.start_limit_burst",
+              start_limit_burst, "must be in [0, 1000] (0: no limit)");
+  param_check(start_limit_interval_s > 0 && start_limit_interval_s <= 86400,
+              "backoff.start_limit_interval_s", start_limit_interval_s, "must be in (0, 86400] s");
 }
 
 void LaunchFile::validate() const {
   param_check(!name.empty(), "name", name, "must not be empty");
   param_check(stop_timeout_s > 0, "stop_timeout_s", stop_timeout_s, "must be > 0");
   param_check(status_period_s > 0, "status_period_s", status_period_s, "must be > 0");
+  param_check(stop_timeout_s <= 60, "stop_timeout_s", stop_timeout_s, "must be <= 60");
+  param_check(status_period_s <= 60, "status_period_s", status_period_s, "must be <= 60");
   backoff.validate();
 }
 
@@ -40,6 +50,7 @@ ProcessSpec parse_process(const ParamNode& n) {
   n.check(p.max_restarts >= -1, "max_restarts", "must be >= 0, or -1 for unlimited");
   n.read("start_delay_s", p.start_delay_s);
   n.check(p.start_delay_s >= 0, "start_delay_s", "must be >= 0");
+  n.check(p.start_delay_s <= 600, "start_delay_s", "must be <= 600");
   std::string on_exit = "restart";
   n.read("on_exit", on_exit);
   if (on_exit != "restart" && on_exit != "shutdown")
@@ -68,6 +79,8 @@ LaunchFile parse_root(const ParamNode& root) {
     b->read("initial_s", lf.backoff.initial_s);
     b->read("max_s", lf.backoff.max_s);
     b->read("reset_after_s", lf.backoff.reset_after_s);
+    b->read("start_limit_burst", lf.backoff.start_limit_burst);
+    b->read("start_limit_interval_s", lf.backoff.start_limit_interval_s);
     b->finish();
   }
   std::set<std::string> names;

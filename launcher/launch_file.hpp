@@ -6,7 +6,8 @@
 //   lcm_url: udpm://239.255.76.67:7667?ttl=0   # every process gets it as LCM_DEFAULT_URL
 //   record: true                               # lcm-logger into the session folder
 //   stop_timeout_s: 3.0                        # SIGINT, then SIGKILL after this long
-//   backoff: {initial_s: 0.01, max_s: 1.0, reset_after_s: 10.0}
+//   backoff: {initial_s: 0.01, max_s: 1.0, reset_after_s: 10.0,   # optional
+//             start_limit_burst: 12, start_limit_interval_s: 30.0}
 //   processes:
 //     - name: sim
 //       command: [alight-sim, --scenario, "${ALIGHT_ROOT}/config/scenarios/landing_a.yaml"]
@@ -18,8 +19,8 @@
 //
 // In command arguments and env values, ${ALIGHT_ROOT} (the source tree), ${SESSION_DIR},
 // ${LCM_URL} and ${NAME} for any variable in the launcher's environment are replaced (so a
-// script can pick the scenario: ALIGHT_SCENARIO=... scripts/alight-launch FILE). A command without a slash is looked up next to alight-launch first (build/bin),
-// then on PATH.
+// script can pick the scenario: ALIGHT_SCENARIO=... scripts/alight-launch FILE). A command without
+// a slash is looked up next to alight-launch first (build/bin), then on PATH.
 
 #include <map>
 #include <string>
@@ -35,6 +36,11 @@ struct BackoffParams {
   double initial_s = 0.01;      ///< first restart delay [s] (bot-procman: 10 ms)
   double max_s = 1.0;           ///< the delay doubles up to this [s] (bot-procman: 1 s)
   double reset_after_s = 10.0;  ///< a process that ran this long starts again from initial_s [s]
+  /// Start limit (systemd's StartLimitBurst / StartLimitIntervalSec): this many quick failures
+  /// (each ran less than reset_after_s) within start_limit_interval_s mark the process FAILED
+  /// instead of restarting it forever (e.g. an abort at start). 0 disables the limit.
+  int start_limit_burst = 12;
+  double start_limit_interval_s = 30.0;  ///< window of the start limit [s]
   void validate() const;
 };
 

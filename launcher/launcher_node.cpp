@@ -115,8 +115,8 @@ class Launcher {
   }
 
   void wait_while_supervising(double seconds) {
-    const int64_t end = alight::wall_utime() + static_cast<int64_t>(seconds * 1e6);
-    while (alight::wall_utime() < end && !g_stop_signal && !ended_) {
+    const int64_t end = alight::steady_utime() + static_cast<int64_t>(seconds * 1e6);
+    while (alight::steady_utime() < end && !g_stop_signal && !ended_) {
       supervise();
       std::this_thread::sleep_for(std::chrono::milliseconds(5));
     }
@@ -142,7 +142,7 @@ class Launcher {
   }
 
   void start(ProcessTracker& t) {
-    const int64_t now = alight::wall_utime();
+    const int64_t now = alight::steady_utime();
     std::vector<std::string> argv;
     for (const auto& a : t.spec().command) argv.push_back(alight::launcher::substitute(a, vars_));
     const std::string program = resolve(argv[0]);
@@ -241,9 +241,9 @@ class Launcher {
       // Anything the process left behind in its group goes with it.
       kill(-pid, SIGKILL);
       if (WIFEXITED(status)) {
-        t->exited(WEXITSTATUS(status), 0, alight::wall_utime());
+        t->exited(WEXITSTATUS(status), 0, alight::steady_utime());
       } else if (WIFSIGNALED(status)) {
-        t->exited(0, WTERMSIG(status), alight::wall_utime());
+        t->exited(0, WTERMSIG(status), alight::steady_utime());
       }
       report(*t);
       if (t->ends_session() && !ended_) {
@@ -257,7 +257,7 @@ class Launcher {
 
   void supervise() {
     reap();
-    const int64_t now = alight::wall_utime();
+    const int64_t now = alight::steady_utime();
     if (!ended_ && !g_stop_signal)
       for (auto& t : trackers_)
         if (t->restart_due(now)) start(*t);
@@ -266,14 +266,21 @@ class Launcher {
 
   void publish_status() {
     status_dirty_ = false;
-    const int64_t now = alight::wall_utime();
+    const int64_t now = alight::steady_utime();
     next_status_utime_ = now + static_cast<int64_t>(lf_.status_period_s * 1e6);
     if (!lcm_->good()) return;
+    // The trackers and every delay run on the steady clock; the report is stamped with the wall
+    // clock, and each start time is carried over to it.
+    const int64_t wall = alight::wall_utime();
     alight::process_status_t msg{};
-    msg.utime = now;
+    msg.utime = wall;
     msg.launch_name = lf_.name;
     msg.session_dir = session_.string();
-    for (const auto& t : trackers_) msg.processes.push_back(t->info());
+    for (const auto& t : trackers_) {
+      alight::process_info_t info = t->info();
+      if (info.started_utime != 0) info.started_utime = wall - (now - info.started_utime);
+      msg.processes.push_back(info);
+    }
     msg.n = static_cast<int32_t>(msg.processes.size());
     lcm_->publish(lf_.status_channel, &msg);
   }
@@ -290,8 +297,8 @@ class Launcher {
         std::this_thread::sleep_for(std::chrono::milliseconds(200));
       kill(-pid, SIGINT);
       const int64_t deadline =
-          alight::wall_utime() + static_cast<int64_t>(lf_.stop_timeout_s * 1e6);
-      while (t.pid() == pid && alight::wall_utime() < deadline) {
+          alight::steady_utime() + static_cast<int64_t>(lf_.stop_timeout_s * 1e6);
+      while (t.pid() == pid && alight::steady_utime() < deadline) {
         reap();
         std::this_thread::sleep_for(std::chrono::milliseconds(5));
       }

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <cstdio>
 
 namespace alight::launcher {
 
@@ -83,7 +84,23 @@ void ProcessTracker::ended(int exit_code, int signal, int64_t now, const std::st
     return;
   }
   const double ran_s = 1e-6 * static_cast<double>(now - started_utime_);
-  consecutive_crashes_ = ran_s >= backoff_.reset_after_s ? 0 : consecutive_crashes_ + 1;
+  const bool quick = ran_s < backoff_.reset_after_s;
+  if (backoff_.start_limit_burst > 0 && quick && !success) {
+    const int64_t window_us = static_cast<int64_t>(backoff_.start_limit_interval_s * 1e6);
+    quick_failures_utime_.push_back(now);
+    while (!quick_failures_utime_.empty() && now - quick_failures_utime_.front() > window_us)
+      quick_failures_utime_.pop_front();
+    if (static_cast<int>(quick_failures_utime_.size()) >= backoff_.start_limit_burst) {
+      state_ = ProcState::kFailed;
+      char buf[128];
+      std::snprintf(buf, sizeof buf,
+                    ", start limit: %d quick failures within %.0f s (not restarted)",
+                    backoff_.start_limit_burst, backoff_.start_limit_interval_s);
+      reason_ += buf;
+      return;
+    }
+  }
+  consecutive_crashes_ = quick ? consecutive_crashes_ + 1 : 0;
   backoff_s_ = std::min(backoff_.max_s,
                         backoff_.initial_s * std::pow(2.0, std::max(0, consecutive_crashes_ - 1)));
   next_start_utime_ = now + static_cast<int64_t>(std::llround(backoff_s_ * 1e6));

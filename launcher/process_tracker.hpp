@@ -1,11 +1,14 @@
 #pragma once
 // What the launcher knows and decides about one process: its state, its restarts and when the
 // next restart is due (bot-procman's policy: a delay of 10 ms doubling to 1 s per consecutive
-// crash, back to 10 ms after a run long enough to count as healthy). Pure: the node does the
-// fork / exec / wait / kill and tells the tracker what happened, with the time.
+// crash, back to 10 ms after a run long enough to count as healthy), and systemd's start limit:
+// too many quick failures in a window and the process is FAILED, not restarted forever. Pure:
+// the node does the fork / exec / wait / kill and tells the tracker what happened, with the
+// time of a steady clock (a wall-clock step must neither freeze nor hurry a restart).
 
 #include <alight/process_info_t.hpp>
 #include <cstdint>
+#include <deque>
 #include <string>
 
 #include "launcher/launch_file.hpp"
@@ -55,6 +58,7 @@ class ProcessTracker {
   double backoff_s_ = 0.0;
   int64_t started_utime_ = 0;
   int64_t next_start_utime_ = 0;
+  std::deque<int64_t> quick_failures_utime_;  // ends of quick failures within the start limit
   int exit_code_ = 0;
   int signal_ = 0;
   bool stopping_ = false;

@@ -1,5 +1,7 @@
 #include "outer_loop/convert.hpp"
 
+#include <cmath>
+
 namespace alight::outer_loop {
 
 PositionSetpoint from_msg(const position_setpoint_t& msg) {
@@ -9,8 +11,29 @@ PositionSetpoint from_msg(const position_setpoint_t& msg) {
   sp.v_W = Vector3d(msg.v_W[0], msg.v_W[1], msg.v_W[2]);
   sp.yaw_rad = msg.yaw_rad;
   sp.motors_on = msg.motors == position_setpoint_t::MOTORS_ON;
+  sp.kill = msg.motors == position_setpoint_t::MOTORS_KILL;
   sp.idle = msg.mode == position_setpoint_t::MODE_IDLE;
   return sp;
+}
+
+std::optional<PositionSetpoint> setpoint_from_msg(const position_setpoint_t& msg,
+                                                  std::string* why) {
+  const auto refuse = [&](const std::string& text) -> std::optional<PositionSetpoint> {
+    if (why) *why = text;
+    return std::nullopt;
+  };
+  for (int i = 0; i < 3; ++i) {
+    if (!std::isfinite(msg.p_W[i])) return refuse("setpoint: non-finite position");
+    if (!std::isfinite(msg.v_W[i])) return refuse("setpoint: non-finite velocity");
+  }
+  if (!std::isfinite(msg.yaw_rad)) return refuse("setpoint: non-finite yaw");
+  if (msg.motors != position_setpoint_t::MOTORS_OFF &&
+      msg.motors != position_setpoint_t::MOTORS_ON &&
+      msg.motors != position_setpoint_t::MOTORS_KILL)
+    return refuse("setpoint: unknown motors value " + std::to_string(msg.motors));
+  if (msg.mode != position_setpoint_t::MODE_POSITION && msg.mode != position_setpoint_t::MODE_IDLE)
+    return refuse("setpoint: unknown mode value " + std::to_string(msg.mode));
+  return from_msg(msg);
 }
 
 position_setpoint_t to_msg(const PositionSetpoint& sp) {
@@ -21,19 +44,27 @@ position_setpoint_t to_msg(const PositionSetpoint& sp) {
     msg.v_W[i] = sp.v_W[i];
   }
   msg.yaw_rad = sp.yaw_rad;
-  msg.motors = sp.motors_on ? position_setpoint_t::MOTORS_ON : position_setpoint_t::MOTORS_OFF;
+  msg.motors = sp.kill        ? position_setpoint_t::MOTORS_KILL
+               : sp.motors_on ? position_setpoint_t::MOTORS_ON
+                              : position_setpoint_t::MOTORS_OFF;
   msg.mode = sp.idle ? position_setpoint_t::MODE_IDLE : position_setpoint_t::MODE_POSITION;
   return msg;
 }
 
 int8_t mode_to_msg(Mode mode) {
   switch (mode) {
-    case Mode::kNormal: return attitude_cmd_t::MODE_NORMAL;
-    case Mode::kHoldLevel: return attitude_cmd_t::MODE_HOLD_LEVEL;
-    case Mode::kFailsafeDescent: return attitude_cmd_t::MODE_FAILSAFE_DESCENT;
-    case Mode::kHoldPosition: return attitude_cmd_t::MODE_HOLD_POSITION;
-    case Mode::kSetpointLostDescent: return attitude_cmd_t::MODE_SETPOINT_LOST_DESCENT;
-    case Mode::kDisarmed: return attitude_cmd_t::MODE_DISARMED;
+    case Mode::kNormal:
+      return attitude_cmd_t::MODE_NORMAL;
+    case Mode::kHoldLevel:
+      return attitude_cmd_t::MODE_HOLD_LEVEL;
+    case Mode::kFailsafeDescent:
+      return attitude_cmd_t::MODE_FAILSAFE_DESCENT;
+    case Mode::kHoldPosition:
+      return attitude_cmd_t::MODE_HOLD_POSITION;
+    case Mode::kSetpointLostDescent:
+      return attitude_cmd_t::MODE_SETPOINT_LOST_DESCENT;
+    case Mode::kDisarmed:
+      return attitude_cmd_t::MODE_DISARMED;
   }
   return attitude_cmd_t::MODE_DISARMED;
 }
@@ -59,12 +90,24 @@ AttitudeCommand from_msg(const attitude_cmd_t& msg) {
   c.thrust_N = msg.thrust_N;
   c.armed = msg.armed;
   switch (msg.mode) {
-    case attitude_cmd_t::MODE_NORMAL: c.mode = Mode::kNormal; break;
-    case attitude_cmd_t::MODE_HOLD_LEVEL: c.mode = Mode::kHoldLevel; break;
-    case attitude_cmd_t::MODE_FAILSAFE_DESCENT: c.mode = Mode::kFailsafeDescent; break;
-    case attitude_cmd_t::MODE_HOLD_POSITION: c.mode = Mode::kHoldPosition; break;
-    case attitude_cmd_t::MODE_SETPOINT_LOST_DESCENT: c.mode = Mode::kSetpointLostDescent; break;
-    default: c.mode = Mode::kDisarmed; break;
+    case attitude_cmd_t::MODE_NORMAL:
+      c.mode = Mode::kNormal;
+      break;
+    case attitude_cmd_t::MODE_HOLD_LEVEL:
+      c.mode = Mode::kHoldLevel;
+      break;
+    case attitude_cmd_t::MODE_FAILSAFE_DESCENT:
+      c.mode = Mode::kFailsafeDescent;
+      break;
+    case attitude_cmd_t::MODE_HOLD_POSITION:
+      c.mode = Mode::kHoldPosition;
+      break;
+    case attitude_cmd_t::MODE_SETPOINT_LOST_DESCENT:
+      c.mode = Mode::kSetpointLostDescent;
+      break;
+    default:
+      c.mode = Mode::kDisarmed;
+      break;
   }
   return c;
 }

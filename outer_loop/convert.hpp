@@ -4,12 +4,19 @@
 
 #include <alight/attitude_cmd_t.hpp>
 #include <alight/position_setpoint_t.hpp>
+#include <optional>
+#include <string>
 
 #include "outer_loop/setpoint.hpp"
 
 namespace alight::outer_loop {
 
+/// Unchecked conversion (trusted, e.g. a message this process made).
 PositionSetpoint from_msg(const position_setpoint_t& msg);
+/// Validating conversion for untrusted input: nullopt (and *why, when given) for a non-finite
+/// position, velocity or yaw, or an unknown motors / mode value. The stamp is left to the node's
+/// StampGuard.
+std::optional<PositionSetpoint> setpoint_from_msg(const position_setpoint_t& msg, std::string* why);
 position_setpoint_t to_msg(const PositionSetpoint& sp);
 
 attitude_cmd_t to_msg(const AttitudeCommand& cmd);

@@ -1,69 +1,108 @@
 // alight-outer-loop: POSITION_SETPOINT + MOCAP_POSE -> ATTITUDE_CMD (paper 3.4, 4.1).
-// Steps on the utime of its inputs: every pose and every setpoint advances the controller to the
-// newest input time seen, so a replayed log gives the same commands as the live flight, and the
-// pose-lost failsafe still runs when motion capture stops (autonomy keeps publishing setpoints
-// stepped on the IMU).
+// Glue only: the input boundary, controller time and the failsafe timer are the Runner's
+// (outer_loop/runner.hpp); this file owns LCM, the clocks, the parameters and the state file.
+//
+// Steps on the utime of its inputs, so a replayed log gives the same commands as the live
+// flight; its own steady-clock timer keeps the failsafe sequence running when motion capture and
+// setpoints have both stopped. A (re)started outer loop publishes nothing until a pose and a
+// setpoint are both fresh, and restores a latched failsafe disarm (and whether the vehicle was
+// flying) from its state file.
 
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
 #include <optional>
 
-#include "common/msg_convert.hpp"
 #include "common/node.hpp"
 #include "outer_loop/convert.hpp"
 #include "outer_loop/params.hpp"
-#include "outer_loop/position_controller.hpp"
+#include "outer_loop/runner.hpp"
+#include "outer_loop/state_file.hpp"
 
 int main(int argc, char** argv) {
   return alight::run_node_main("alight-outer-loop", [&]() -> int {
-    CLI::App app{"alight outer loop: linear position controller (POSITION_SETPOINT, MOCAP_POSE -> "
-                 "ATTITUDE_CMD)"};
+    CLI::App app{
+        "alight outer loop: linear position controller (POSITION_SETPOINT, MOCAP_POSE -> "
+        "ATTITUDE_CMD)"};
     alight::NodeArgs args;
     args.add_to(app, true);
-    std::string pose_channel = "MOCAP_POSE", setpoint_channel = "POSITION_SETPOINT",
-                cmd_channel = "ATTITUDE_CMD";
-    app.add_option("--pose-channel", pose_channel, "pose_t input");
-    app.add_option("--setpoint-channel", setpoint_channel, "position_setpoint_t input");
+    namespace ol = alight::outer_loop;
+    ol::RunnerOptions options;
+    std::string cmd_channel = "ATTITUDE_CMD", state_file;
+    double state_max_age_s = 10.0;
+    app.add_option("--pose-channel", options.pose_channel, "pose_t input");
+    app.add_option("--setpoint-channel", options.setpoint_channel, "position_setpoint_t input");
     app.add_option("--cmd-channel", cmd_channel, "attitude_cmd_t output");
+    app.add_option("--state-file", state_file,
+                   "What survives a restart (failsafe latch, armed); default "
+                   "/tmp/alight-<uid>/outer_loop-<LCM URL>.state");
+    app.add_option("--state-max-age", state_max_age_s,
+                   "A restart trusts the file's 'armed' only when it is this recent [s]")
+        ->check(CLI::Range(0.5, 600.0));
     try {
       app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
       return app.exit(e);
     }
     args.finalize();
+    if (state_file.empty()) state_file = ol::default_state_path(args.lcm_url);
 
-    namespace ol = alight::outer_loop;
     const ol::OuterLoopParams params = ol::load_params(args.config);
-    ol::PositionController controller(params);
+    std::string error;
+    const auto record = ol::load_state(state_file, &error);
+    if (!error.empty()) spdlog::warn("outer loop: {}: starting from the ground state", error);
+    const ol::PersistentState restored =
+        ol::restored_state(record, alight::wall_utime(), state_max_age_s);
+    if (restored.disarm_latched || restored.armed)
+      spdlog::warn("outer loop: restored from {}: failsafe latched {}, armed {}", state_file,
+                   restored.disarm_latched, restored.armed);
+
     alight::Node node(args.lcm_url, "alight-outer-loop");
-
-    std::optional<alight::PoseSample> pose;
-    std::optional<ol::PositionSetpoint> setpoint;
-    int64_t now_utime = 0;
-    ol::Mode last_mode = ol::Mode::kDisarmed;
-
-    const auto step = [&](int64_t input_utime) {
-      now_utime = std::max(now_utime, input_utime);
-      const ol::AttitudeCommand cmd = controller.update(setpoint, pose, now_utime);
-      if (cmd.mode != last_mode) {
-        spdlog::info("outer loop: {} -> {} ({})", ol::mode_name(last_mode), ol::mode_name(cmd.mode),
-                     cmd.reason);
-        last_mode = cmd.mode;
-      }
-      node.publish(cmd_channel, ol::to_msg(cmd));
+    ol::InputGate gate;
+    gate.reject_value = [&](const std::string& ch, const std::string& why) {
+      return node.reject_value(ch, why);
     };
-    node.on<alight::pose_t>(pose_channel, [&](const alight::pose_t& m) {
-      pose = alight::from_msg(m);
-      step(m.utime);
+    gate.accept_stamp = [&](const std::string& ch, int64_t utime) {
+      return node.accept_stamp(ch, utime);
+    };
+    ol::Runner runner(params, restored, gate, options);
+
+    ol::Mode last_mode = ol::Mode::kDisarmed;
+    ol::PersistentState saved = restored;
+    int64_t saved_steady_us = 0;
+    const auto save = [&](const ol::PersistentState& s) {
+      std::string err;
+      if (!ol::save_state(state_file, {s, alight::wall_utime()}, &err))
+        spdlog::error("outer loop: state file: {}", err);
+      saved = s;
+      saved_steady_us = alight::steady_utime();
+    };
+    const auto publish = [&](const std::optional<ol::AttitudeCommand>& cmd) {
+      if (!cmd) return;
+      if (cmd->mode != last_mode) {
+        spdlog::info("outer loop: {} -> {} ({})", ol::mode_name(last_mode),
+                     ol::mode_name(cmd->mode), cmd->reason);
+        last_mode = cmd->mode;
+      }
+      node.publish(cmd_channel, ol::to_msg(*cmd));
+      const ol::PersistentState s = runner.controller().persistent_state();
+      if (s.disarm_latched != saved.disarm_latched || s.armed != saved.armed) save(s);
+    };
+    node.on<alight::pose_t>(options.pose_channel, [&](const alight::pose_t& m) {
+      publish(runner.on_pose(m, alight::steady_utime()));
     });
-    node.on<alight::position_setpoint_t>(setpoint_channel,
+    node.on<alight::position_setpoint_t>(options.setpoint_channel,
                                          [&](const alight::position_setpoint_t& m) {
-                                           setpoint = ol::from_msg(m);
-                                           step(m.utime);
+                                           publish(runner.on_setpoint(m, alight::steady_utime()));
                                          });
-    spdlog::info("alight-outer-loop: {} + {} -> {} (mass {} kg)", setpoint_channel, pose_channel,
-                 cmd_channel, params.mass_kg);
+    node.every(0.01, [&](int64_t) {
+      publish(runner.tick(alight::steady_utime()));
+      // While flying, keep the record fresh: a restart trusts "armed" only from a recent one.
+      if (saved.armed && alight::steady_utime() - saved_steady_us > 1'000'000) save(saved);
+    });
+    spdlog::info("alight-outer-loop: {} + {} -> {} (mass {} kg, state {})",
+                 options.setpoint_channel, options.pose_channel, cmd_channel, params.mass_kg,
+                 state_file);
     return node.run();
   });
 }

@@ -9,12 +9,18 @@ namespace alight::outer_loop {
 
 const char* mode_name(Mode mode) {
   switch (mode) {
-    case Mode::kNormal: return "NORMAL";
-    case Mode::kHoldLevel: return "HOLD_LEVEL";
-    case Mode::kFailsafeDescent: return "FAILSAFE_DESCENT";
-    case Mode::kHoldPosition: return "HOLD_POSITION";
-    case Mode::kSetpointLostDescent: return "SETPOINT_LOST_DESCENT";
-    case Mode::kDisarmed: return "DISARMED";
+    case Mode::kNormal:
+      return "NORMAL";
+    case Mode::kHoldLevel:
+      return "HOLD_LEVEL";
+    case Mode::kFailsafeDescent:
+      return "FAILSAFE_DESCENT";
+    case Mode::kHoldPosition:
+      return "HOLD_POSITION";
+    case Mode::kSetpointLostDescent:
+      return "SETPOINT_LOST_DESCENT";
+    case Mode::kDisarmed:
+      return "DISARMED";
   }
   return "?";
 }
@@ -32,9 +38,25 @@ void clamp_norm(Eigen::Ref<Eigen::VectorXd> v, double limit) {
   const double n = v.norm();
   if (n > limit && n > 0.0) v *= limit / n;
 }
+
+bool all_finite(const PositionSetpoint& sp) {
+  return sp.p_W.allFinite() && sp.v_W.allFinite() && std::isfinite(sp.yaw_rad);
+}
+
+bool all_finite(const PoseSample& pose) {
+  return pose.p_W_B.allFinite() && pose.v_W_B.allFinite() && pose.q_WB.coeffs().allFinite() &&
+         pose.omega_B.allFinite() && std::abs(pose.q_WB.norm() - 1.0) <= 0.01;
+}
+
+bool all_finite(const AttitudeCommand& c) {
+  return std::isfinite(c.roll_rad) && std::isfinite(c.pitch_rad) &&
+         std::isfinite(c.yaw_rate_radps) && std::isfinite(c.thrust_N);
+}
 }  // namespace
 
-PositionController::PositionController(const OuterLoopParams& params) : params_(params) {
+PositionController::PositionController(const OuterLoopParams& params,
+                                       const PersistentState& restored)
+    : params_(params), disarm_latched_(restored.disarm_latched), armed_(restored.armed) {
   params_.validate();
 }
 
@@ -53,6 +75,10 @@ AttitudeCommand PositionController::level(double thrust_N) const {
 AttitudeCommand PositionController::disarmed(const char* reason) {
   integral_mps2_.setZero();
   holding_ = false;
+  landing_since_.reset();
+  land_since_.reset();
+  landed_ = false;
+  last_demand_z_mps2_ = 0.0;
   pose_lost_since_.reset();
   setpoint_lost_since_.reset();
   still_since_.reset();
@@ -63,9 +89,8 @@ AttitudeCommand PositionController::disarmed(const char* reason) {
   return c;
 }
 
-AttitudeCommand PositionController::track(const Vector3d& p_sp, const Vector3d& v_sp,
-                                          double yaw_sp, const PoseSample& pose, double dt_s,
-                                          bool integrate) {
+AttitudeCommand PositionController::track(const Vector3d& p_sp, const Vector3d& v_sp, double yaw_sp,
+                                          const PoseSample& pose, double dt_s, bool integrate) {
   const auto& P = params_;
   const Vector3d e_p = p_sp - pose.p_W_B;
   const Vector3d e_v = v_sp - pose.v_W_B;
@@ -82,11 +107,11 @@ AttitudeCommand PositionController::track(const Vector3d& p_sp, const Vector3d& 
                                     -P.i_limit_z_mps2, P.i_limit_z_mps2);
   }
 
-  Vector2d a_xy = P.kp_xy_per_s2 * e_p.head<2>() + P.kd_xy_per_s * e_v.head<2>() +
-                  integral_mps2_.head<2>();
-  const double a_z = std::clamp(P.kp_z_per_s2 * e_p.z() + P.kd_z_per_s * e_v.z() +
-                                    integral_mps2_.z(),
-                                -P.max_accel_z_mps2, P.max_accel_z_mps2);
+  Vector2d a_xy =
+      P.kp_xy_per_s2 * e_p.head<2>() + P.kd_xy_per_s * e_v.head<2>() + integral_mps2_.head<2>();
+  last_demand_z_mps2_ = P.kp_z_per_s2 * e_p.z() + P.kd_z_per_s * e_v.z();
+  const double a_z =
+      std::clamp(last_demand_z_mps2_ + integral_mps2_.z(), -P.max_accel_z_mps2, P.max_accel_z_mps2);
   const double f_z = P.gravity_mps2 + a_z;  // > 0 since max_accel_z < g
   const double max_tilt_rad = P.max_tilt_deg * kDegToRad;
   const double a_xy_max = f_z * std::tan(max_tilt_rad);
@@ -105,37 +130,108 @@ AttitudeCommand PositionController::track(const Vector3d& p_sp, const Vector3d& 
   const double f_norm = std::sqrt(f_x * f_x + f_y * f_y + f_z * f_z);
   cmd.thrust_N = std::clamp(P.mass_kg * f_norm, P.thrust_min_N, P.thrust_max_N);
   const double max_rate = P.max_yaw_rate_dps * kDegToRad;
-  cmd.yaw_rate_radps =
-      std::clamp(P.yaw_kp_per_s * wrap_angle(yaw_sp - yaw), -max_rate, max_rate);
+  cmd.yaw_rate_radps = std::clamp(P.yaw_kp_per_s * wrap_angle(yaw_sp - yaw), -max_rate, max_rate);
   cmd.armed = true;
   cmd.mode = Mode::kNormal;
   return cmd;
 }
 
-AttitudeCommand PositionController::update(const std::optional<PositionSetpoint>& setpoint,
-                                           const std::optional<PoseSample>& pose,
+AttitudeCommand PositionController::update(const std::optional<PositionSetpoint>& setpoint_in,
+                                           const std::optional<PoseSample>& pose_in,
                                            int64_t now_utime) {
   const auto& P = params_;
   double dt_s = 0.0;
   if (last_utime_) {
     dt_s = std::clamp(static_cast<double>(now_utime - *last_utime_) * 1e-6, 0.0, P.max_dt_s);
   }
-  last_utime_ = std::max(now_utime, last_utime_.value_or(now_utime));
+  last_utime_ = now_utime;
 
-  const auto finish = [&](AttitudeCommand c) {
-    c.utime = now_utime;
-    return c;
-  };
+  // A non-finite input is replaced by the last finite one (which then ages like a lost input).
+  if (setpoint_in && all_finite(*setpoint_in)) last_good_setpoint_ = *setpoint_in;
+  if (pose_in && all_finite(*pose_in)) last_good_pose_ = *pose_in;
+  const std::optional<PositionSetpoint> setpoint =
+      setpoint_in ? last_good_setpoint_ : std::optional<PositionSetpoint>{};
+  const std::optional<PoseSample> pose = pose_in ? last_good_pose_ : std::optional<PoseSample>{};
 
-  if (!setpoint) return finish(disarmed("no setpoint received yet"));
-  if (!setpoint->motors_on) {
+  if (!started_ && setpoint && pose && age_s(pose->utime, now_utime) <= P.pose_stale_s &&
+      age_s(setpoint->utime, now_utime) <= P.setpoint_stale_s) {
+    started_ = true;
+  }
+
+  AttitudeCommand c = step(setpoint, pose, now_utime, dt_s);
+  if (!integral_mps2_.allFinite()) integral_mps2_.setZero();
+  if (c.armed && !all_finite(c)) {
+    c = level(P.mass_kg * P.gravity_mps2);
+    c.mode = Mode::kHoldLevel;
+    c.reason = "non-finite command refused: level, hover thrust";
+  }
+  c.utime = now_utime;
+  // Before the start nothing is published, so nothing was commanded: a restored "armed" stands.
+  if (started_) armed_ = c.armed;
+  return c;
+}
+
+void PositionController::detect_landing(const PoseSample& pose, int64_t now_utime) {
+  const auto& P = params_;
+  // The position loop pushes down, yet the vehicle does not move down: the ground holds it up.
+  const bool held_up = armed_ && last_demand_z_mps2_ < -P.land_accel_mps2 &&
+                       std::abs(pose.v_W_B.z()) < P.land_vz_mps;
+  if (!held_up) {
+    land_since_.reset();
+    landed_ = false;
+    return;
+  }
+  if (!land_since_) land_since_ = now_utime;
+  landed_ = age_s(*land_since_, now_utime) >= P.land_detect_s;
+}
+
+AttitudeCommand PositionController::land(const PoseSample& pose, int64_t now_utime, double dt_s) {
+  const auto& P = params_;
+  if (!landing_since_) {
+    landing_since_ = now_utime;
+    landing_p_W_ = pose.p_W_B;
+    landing_yaw_rad_ = yaw_of(pose.q_WB.toRotationMatrix());
+  }
+  const double t_s = std::max(0.0, age_s(*landing_since_, now_utime));
+  Vector3d p_sp = landing_p_W_;
+  p_sp.z() -= P.setpoint_lost_descent_mps * t_s;
+  auto c = track(p_sp, Vector3d(0, 0, -P.setpoint_lost_descent_mps), landing_yaw_rad_, pose, dt_s,
+                 false);
+  c.mode = Mode::kSetpointLostDescent;
+  c.reason = "motors off without KILL, not judged on the ground yet: landing";
+  return c;
+}
+
+AttitudeCommand PositionController::step(const std::optional<PositionSetpoint>& setpoint,
+                                         const std::optional<PoseSample>& pose, int64_t now_utime,
+                                         double dt_s) {
+  const auto& P = params_;
+  if (pose && age_s(pose->utime, now_utime) <= P.pose_stale_s) {
+    detect_landing(*pose, now_utime);
+  } else {
+    land_since_.reset();
+    landed_ = false;
+  }
+
+  if (!setpoint) return disarmed("no setpoint received yet");
+  if (setpoint->kill) {
+    disarm_latched_ = false;  // a KILL is also the acknowledgement of a failsafe disarm
+    return disarmed("setpoint: KILL");
+  }
+  // Without pose the land detector is blind and the outer loop is descending blind itself: then
+  // autonomy's touch-down (from the IMU) is the only land detector left, and its motors-off is
+  // honoured.
+  const bool pose_lost = !pose || age_s(pose->utime, now_utime) > P.pose_lost_s;
+  const bool motors_off_refused = !setpoint->motors_on && armed_ && !landed_ && !pose_lost;
+  if (!setpoint->motors_on && !motors_off_refused) {
     disarm_latched_ = false;  // autonomy acknowledged: the next motors-on may arm again
-    return finish(disarmed("setpoint: motors off"));
+    return disarmed(armed_ ? "setpoint: motors off, landed" : "setpoint: motors off");
   }
+  if (setpoint->motors_on) landing_since_.reset();
   if (disarm_latched_) {
-    return finish(disarmed("failsafe disarmed; waiting for autonomy to send motors off"));
+    return disarmed("failsafe disarmed; waiting for autonomy to send motors off");
   }
-  if (!pose) return finish(disarmed("no pose received yet: refusing to arm"));
+  if (!pose) return disarmed("no pose received yet: refusing to arm");
 
   const double pose_age_s = age_s(pose->utime, now_utime);
   const double sp_age_s = age_s(setpoint->utime, now_utime);
@@ -145,34 +241,40 @@ AttitudeCommand PositionController::update(const std::optional<PositionSetpoint>
     const double t_s = age_s(*pose_lost_since_, now_utime);
     if (t_s > P.failsafe_disarm_after_s) {
       disarm_latched_ = true;
-      return finish(disarmed("pose lost: failsafe descent timed out, disarmed"));
+      return disarmed("pose lost: failsafe descent timed out, disarmed");
     }
     // Accelerate down at a_fs until the descent speed is reached, then hold that speed against
     // the expected drag. Without a velocity measurement this is open loop: a drag smaller than
     // drag_per_s lets it speed up slowly, a larger one slows it.
     const double accel_time_s = P.failsafe_descent_mps / P.failsafe_descent_accel_mps2;
+    last_demand_z_mps2_ = 0.0;
     const double a_z = t_s < accel_time_s ? -P.failsafe_descent_accel_mps2
                                           : -P.drag_per_s * P.failsafe_descent_mps;
     auto c = level(P.mass_kg * (P.gravity_mps2 + integral_mps2_.z() + a_z));
     c.mode = Mode::kFailsafeDescent;
     c.reason = "pose lost: open-loop slow descent";
-    return finish(c);
+    return c;
   }
   pose_lost_since_.reset();
   if (pose_age_s > P.pose_stale_s) {
+    last_demand_z_mps2_ = 0.0;
     auto c = level(hover_thrust_N());
     c.mode = Mode::kHoldLevel;
     c.reason = "pose stale: level, hover thrust";
-    return finish(c);
+    return c;
   }
+
+  if (motors_off_refused) return land(*pose, now_utime, dt_s);
 
   if (setpoint->idle) {
     integral_mps2_.setZero();
+    last_demand_z_mps2_ = 0.0;
+    landed_ = true;  // autonomy keeps it on the ground at idle
     holding_ = false;
     auto c = level(P.thrust_min_N);
     c.mode = Mode::kNormal;
     c.reason = "idle on the ground";
-    return finish(c);
+    return c;
   }
 
   if (sp_age_s <= P.setpoint_stale_s) {
@@ -181,7 +283,7 @@ AttitudeCommand PositionController::update(const std::optional<PositionSetpoint>
     still_since_.reset();
     auto c = track(setpoint->p_W, setpoint->v_W, setpoint->yaw_rad, *pose, dt_s, true);
     c.reason = "tracking";
-    return finish(c);
+    return c;
   }
 
   if (!holding_) {
@@ -193,7 +295,7 @@ AttitudeCommand PositionController::update(const std::optional<PositionSetpoint>
     auto c = track(hold_p_W_, Vector3d::Zero(), hold_yaw_rad_, *pose, dt_s, false);
     c.mode = Mode::kHoldPosition;
     c.reason = "setpoint stale: holding position";
-    return finish(c);
+    return c;
   }
 
   if (!setpoint_lost_since_) {
@@ -212,12 +314,12 @@ AttitudeCommand PositionController::update(const std::optional<PositionSetpoint>
     still_since_ = now_utime;
   } else if (age_s(*still_since_, now_utime) > P.landed_still_s) {
     disarm_latched_ = true;
-    return finish(disarmed("setpoint lost: descended to the ground, disarmed"));
+    return disarmed("setpoint lost: descended to the ground, disarmed");
   }
   auto c = track(p_sp, v_sp, hold_yaw_rad_, *pose, dt_s, false);
   c.mode = Mode::kSetpointLostDescent;
   c.reason = "setpoint lost: slow descent";
-  return finish(c);
+  return c;
 }
 
 }  // namespace alight::outer_loop

@@ -15,6 +15,18 @@
 // level attitude with hover thrust; older than pose_lost_s → open-loop slow descent and disarm;
 // setpoint older than setpoint_stale_s → hold the position where it went stale; older than
 // setpoint_lost_s → slow descent on the pose, disarm once on the ground.
+//
+// Disarming in the air (PX4's rule: a disarm request in flight is refused unless forced): a
+// motors-off setpoint is honoured at once only with kill (the operator's KILL), or when the
+// vehicle is not armed, or when the land detector judges it on the ground (the position loop
+// asks for a clear downward acceleration and the vehicle does not move vertically, for
+// land_detect_s), or during the blind pose-lost descent (where autonomy's IMU touch-down is the
+// only land detector left). Otherwise the outer loop lands: a slow descent on the pose from
+// where it is, disarming once the land detector says it is down.
+//
+// Defence in depth: the node refuses non-finite input, but update() also never lets one
+// through: a non-finite setpoint or pose is replaced by the last finite one, a non-finite
+// integrator is reset, and a non-finite command becomes level hover thrust.
 
 #include <cstdint>
 #include <optional>
@@ -25,14 +37,28 @@
 
 namespace alight::outer_loop {
 
+/// What must survive a restart of the outer loop (the node keeps it in its state file).
+struct PersistentState {
+  bool disarm_latched = false;  ///< a failsafe disarmed: stays off until a motors-off setpoint
+  bool armed = false;           ///< the last command was armed (flying, as far as we know)
+};
+
 class PositionController {
  public:
-  explicit PositionController(const OuterLoopParams& params);
+  /// `restored`: the state a previous run of the outer loop left (default: on the ground).
+  explicit PositionController(const OuterLoopParams& params, const PersistentState& restored = {});
 
   /// One control step at `now_utime` (the newest input time; never the wall clock) with the
   /// newest setpoint and pose received so far (nullopt: none yet). Ages are now - utime.
   AttitudeCommand update(const std::optional<PositionSetpoint>& setpoint,
                          const std::optional<PoseSample>& pose, int64_t now_utime);
+
+  /// True once one update saw a setpoint and a pose both fresh: before that a (re)started outer
+  /// loop publishes nothing (it knows nothing that would justify a command).
+  bool started() const { return started_; }
+  /// Land detector's verdict at the last update.
+  bool landed() const { return landed_; }
+  PersistentState persistent_state() const { return {disarm_latched_, armed_}; }
 
   /// Integral terms [m/s^2] (for tests and logs).
   const Vector3d& integral() const { return integral_mps2_; }
@@ -44,12 +70,27 @@ class PositionController {
   AttitudeCommand level(double thrust_N) const;
   AttitudeCommand disarmed(const char* reason);
   double hover_thrust_N() const;
+  AttitudeCommand step(const std::optional<PositionSetpoint>& setpoint,
+                       const std::optional<PoseSample>& pose, int64_t now_utime, double dt_s);
+  AttitudeCommand land(const PoseSample& pose, int64_t now_utime, double dt_s);
+  void detect_landing(const PoseSample& pose, int64_t now_utime);
 
   OuterLoopParams params_;
   std::optional<int64_t> last_utime_;
   Vector3d integral_mps2_ = Vector3d::Zero();
 
-  bool disarm_latched_ = false;   // failsafe disarm: stays until autonomy sends motors off
+  bool disarm_latched_ = false;  // failsafe disarm: stays until autonomy sends motors off
+  bool armed_ = false;           // the last command's armed
+  bool started_ = false;
+  bool landed_ = false;
+  std::optional<int64_t> land_since_;
+  double last_demand_z_mps2_ = 0.0;  // PD part of the last vertical demand (land detector)
+  std::optional<PositionSetpoint> last_good_setpoint_;
+  std::optional<PoseSample> last_good_pose_;
+  std::optional<PositionSetpoint> last_motors_on_;  // newest motors-on setpoint
+  std::optional<int64_t> landing_since_;            // refused motors-off: landing since
+  Vector3d landing_p_W_ = Vector3d::Zero();
+  double landing_yaw_rad_ = 0.0;
   std::optional<int64_t> pose_lost_since_;
   std::optional<int64_t> setpoint_lost_since_;
   std::optional<int64_t> still_since_;

@@ -10,12 +10,14 @@
 namespace alight::outer_loop {
 
 struct PositionSetpoint {
-  int64_t utime = 0;                 ///< time of the autonomy input that produced it [us]
-  Vector3d p_W = Vector3d::Zero();   ///< position setpoint, world [m]
-  Vector3d v_W = Vector3d::Zero();   ///< feed-forward velocity, world [m/s]
-  double yaw_rad = 0.0;              ///< heading setpoint about world z [rad]
-  bool motors_on = false;            ///< false: disarm now (landed, killed, not yet taken off)
-  bool idle = false;                 ///< on the ground with motors at idle (no position control)
+  int64_t utime = 0;                ///< time of the autonomy input that produced it [us]
+  Vector3d p_W = Vector3d::Zero();  ///< position setpoint, world [m]
+  Vector3d v_W = Vector3d::Zero();  ///< feed-forward velocity, world [m/s]
+  double yaw_rad = 0.0;             ///< heading setpoint about world z [rad]
+  bool motors_on = false;           ///< false: motors off (landed, not yet taken off); honoured
+                                    ///< in the air only with kill
+  bool kill = false;                ///< operator KILL: disarm at once, even in the air
+  bool idle = false;                ///< on the ground with motors at idle (no position control)
 };
 
 /// What the outer loop is doing, and why (maps onto attitude_cmd_t.MODE_*).
@@ -38,7 +40,7 @@ struct AttitudeCommand {
   double thrust_N = 0.0;        ///< collective thrust along body z [N]
   bool armed = false;
   Mode mode = Mode::kDisarmed;
-  const char* reason = "";      ///< static text: why this mode
+  const char* reason = "";  ///< static text: why this mode
 };
 
 }  // namespace alight::outer_loop

@@ -1,16 +1,14 @@
 #include "sim/params.hpp"
 
+#include <cmath>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
-
-#include <cmath>
 
 #include "common/params.hpp"
 
 namespace alight::sim {
 
 namespace {
-
 
 Vector2d read_vec2(const ParamNode& n, const std::string& key, const Vector2d& def) {
   std::array<double, 2> a{def.x(), def.y()};
@@ -66,6 +64,10 @@ VehicleParams load_vehicle_params(const std::string& vehicle_file) {
   n.read("contact_stiffness_Npm", p.contact_stiffness_Npm);
   n.read("contact_damping_Nspm", p.contact_damping_Nspm);
   n.read("friction_coefficient", p.friction_coefficient);
+  n.read("cmd_loss_timeout_s", p.cmd_loss_timeout_s);
+  n.read("cmd_loss_level_s", p.cmd_loss_level_s);
+  n.read("cmd_loss_descent_mps", p.cmd_loss_descent_mps);
+  n.read("cmd_loss_disarm_after_s", p.cmd_loss_disarm_after_s);
   n.validate(p);
   n.finish();
   return p;

@@ -43,6 +43,14 @@ struct VehicleParams {
   double contact_damping_Nspm = 40.0;                    ///< per contact point [N s/m]
   double friction_coefficient = 0.6;                     ///< Coulomb friction, gear on surfaces [-]
 
+  // The autopilot's own command-loss failsafe (PX4's offboard loss, COM_OF_LOSS_T; ArduPilot's
+  // guided timeout): ATTITUDE_CMD silent this long while armed: level and hold the vertical
+  // speed at 0, then descend, then disarm once resting on the ground.
+  double cmd_loss_timeout_s = 1.0;      ///< silence before the failsafe takes over [s]
+  double cmd_loss_level_s = 1.0;        ///< level, vertical speed 0, this long first [s]
+  double cmd_loss_descent_mps = 0.5;    ///< then descend at this speed [m/s]
+  double cmd_loss_disarm_after_s = 1.0; ///< disarm after resting on the ground this long [s]
+
   double hover_thrust_N() const { return mass_kg * 9.81; }
   void validate() const;
 };

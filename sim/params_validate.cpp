@@ -53,6 +53,15 @@ void VehicleParams::validate() const {
               "must be >= 0");
   param_check(friction_coefficient >= 0, "friction_coefficient", friction_coefficient,
               "must be >= 0");
+  // Written so that NaN fails too; every timeout bounded (an infinite one is no failsafe).
+  param_check(cmd_loss_timeout_s > 0 && cmd_loss_timeout_s <= 10, "cmd_loss_timeout_s",
+              cmd_loss_timeout_s, "must be in (0, 10] s");
+  param_check(cmd_loss_level_s >= 0 && cmd_loss_level_s <= 30, "cmd_loss_level_s",
+              cmd_loss_level_s, "must be in [0, 30] s");
+  param_check(cmd_loss_descent_mps > 0 && cmd_loss_descent_mps <= 2, "cmd_loss_descent_mps",
+              cmd_loss_descent_mps, "must be in (0, 2] m/s");
+  param_check(cmd_loss_disarm_after_s > 0 && cmd_loss_disarm_after_s <= 10,
+              "cmd_loss_disarm_after_s", cmd_loss_disarm_after_s, "must be in (0, 10] s");
 }
 
 void TextureSpec::validate() const {

@@ -1,5 +1,7 @@
 #include "sim/sim_msgs.hpp"
 
+#include <cmath>
+
 #include "common/msg_convert.hpp"
 
 namespace alight::sim {
@@ -72,6 +74,15 @@ AttitudeCommand from_msg(const attitude_cmd_t& msg) {
   c.thrust_N = msg.thrust_N;
   c.armed = msg.armed;
   return c;
+}
+
+std::optional<AttitudeCommand> command_from_msg(const attitude_cmd_t& msg, std::string* why) {
+  if (!std::isfinite(msg.roll_rad) || !std::isfinite(msg.pitch_rad) ||
+      !std::isfinite(msg.yaw_rate_radps) || !std::isfinite(msg.thrust_N)) {
+    if (why) *why = "attitude command: non-finite roll, pitch, yaw rate or thrust";
+    return std::nullopt;
+  }
+  return from_msg(msg);
 }
 
 }  // namespace alight::sim

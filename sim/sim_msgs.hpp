@@ -7,6 +7,8 @@
 #include <alight/imu_t.hpp>
 #include <alight/pose_t.hpp>
 #include <alight/sim_truth_t.hpp>
+#include <optional>
+#include <string>
 
 #include "sim/simulator.hpp"
 
@@ -18,5 +20,8 @@ imu_t to_msg(const ImuSample& sample);
 image_t to_msg(const CameraFrame& frame);
 sim_truth_t to_msg(const Truth& truth);
 AttitudeCommand from_msg(const attitude_cmd_t& msg);
+/// Validating form for untrusted input: nullopt (and *why, when given) for a non-finite angle,
+/// rate or thrust.
+std::optional<AttitudeCommand> command_from_msg(const attitude_cmd_t& msg, std::string* why);
 
 }  // namespace alight::sim

@@ -4,11 +4,11 @@
 //   alight-sim --scenario config/scenarios/landing_a.yaml [--vehicle FILE] [--seed N]
 //              [--rate X] [--duration S] [--lcm-url URL]
 
-#include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
 
+#include <CLI/CLI.hpp>
 #include <alight/attitude_cmd_t.hpp>
-
+#include <alight/sim_control_t.hpp>
 #include <chrono>
 #include <filesystem>
 #include <thread>
@@ -16,6 +16,7 @@
 #include "common/node.hpp"
 #include "common/params.hpp"
 #include "sim/params.hpp"
+#include "sim/sensor_gate.hpp"
 #include "sim/sim_msgs.hpp"
 #include "sim/simulator.hpp"
 
@@ -43,7 +44,8 @@ int main(int argc, char** argv) {
         ->check(CLI::Range(0.0, 1000.0));
     app.add_option("--duration", duration_s, "Stop after this much sim time [s] (0: never)")
         ->check(CLI::NonNegativeNumber);
-    app.add_flag("--start-now", start_now, "Start the sim clock at the wall clock, not the scenario's start_utime");
+    app.add_flag("--start-now", start_now,
+                 "Start the sim clock at the wall clock, not the scenario's start_utime");
     app.add_option("--render-threads", threads, "Threads for the camera renderer")
         ->check(CLI::Range(1, 16));
     args.add_to(app, false);
@@ -65,14 +67,33 @@ int main(int argc, char** argv) {
     sim::Simulator simulator(scenario, vehicle, seed, rig);
     simulator.set_render_threads(threads);
     Node node(with_receive_buffer(args.lcm_url), "alight-sim");
-    sim::AttitudeCommand cmd;  // disarmed until the outer loop says otherwise
-    node.on<attitude_cmd_t>("ATTITUDE_CMD",
-                            [&](const attitude_cmd_t& m) { cmd = sim::from_msg(m); });
+    // Disarmed until the outer loop says otherwise; its silence is the autopilot's command-loss
+    // failsafe's business (Simulator::advance_to).
+    node.on<attitude_cmd_t>("ATTITUDE_CMD", [&](const attitude_cmd_t& m) {
+      std::string why;
+      if (const auto cmd = sim::command_from_msg(m, &why)) {
+        simulator.command(*cmd);
+      } else {
+        node.reject_value("ATTITUDE_CMD", why);
+      }
+    });
+    bool command_lost = false;
+    // Test hook of the fault campaign: sensor dropouts on request (sim/sensor_gate.hpp).
+    sim::SensorGates gates;
+    node.on<sim_control_t>("SIM_CONTROL", [&](const sim_control_t& m) {
+      if (const auto why = gates.apply(m, simulator.now_utime())) {
+        node.reject_value("SIM_CONTROL", *why);
+      } else {
+        spdlog::info("alight-sim: SIM_CONTROL: mocap off {} s, camera off {} s, imu off {} s",
+                     m.mocap_off_s, m.camera_off_s, m.imu_off_s);
+      }
+    });
 
     spdlog::info("alight-sim: scenario {} ({}), vehicle {} ({}), seed {}, rate {}", scenario.name,
                  scenario_file, vehicle.name, vehicle_file, seed, rate);
     const int64_t sim0 = simulator.now_utime();
-    const int64_t end_utime = duration_s > 0 ? sim0 + static_cast<int64_t>(duration_s * 1e6) : INT64_MAX;
+    const int64_t end_utime =
+        duration_s > 0 ? sim0 + static_cast<int64_t>(duration_s * 1e6) : INT64_MAX;
     const int64_t wall0 = wall_utime();
     int64_t next_truth = sim0;
     int64_t late_warned_at = wall0;
@@ -80,7 +101,8 @@ int main(int argc, char** argv) {
       node.spin_once(0);
       const int64_t wall = wall_utime();
       const int64_t target =
-          rate > 0 ? sim0 + static_cast<int64_t>(static_cast<double>(wall - wall0) * rate) : INT64_MAX;
+          rate > 0 ? sim0 + static_cast<int64_t>(static_cast<double>(wall - wall0) * rate)
+                   : INT64_MAX;
       if (simulator.now_utime() + kChunkUs > target) {
         node.spin_once(1);  // ahead of the wall clock: wait for commands
         continue;
@@ -90,10 +112,22 @@ int main(int argc, char** argv) {
                      (target - simulator.now_utime()) / 1e3, rate);
         late_warned_at = wall;
       }
-      simulator.step(cmd, std::min(end_utime, simulator.now_utime() + kChunkUs));
-      for (const auto& m : simulator.take_mocap()) node.publish("MOCAP_POSE", sim::to_msg(m));
-      for (const auto& m : simulator.take_imu()) node.publish("IMU", sim::to_msg(m));
-      if (auto frame = simulator.take_camera()) node.publish("CAMERA", sim::to_msg(*frame));
+      simulator.advance_to(std::min(end_utime, simulator.now_utime() + kChunkUs));
+      if (simulator.command_lost() != command_lost) {
+        command_lost = !command_lost;
+        if (command_lost)
+          spdlog::warn("alight-sim: no ATTITUDE_CMD for {} s: autopilot failsafe (level, descend)",
+                       vehicle.cmd_loss_timeout_s);
+        else
+          spdlog::info("alight-sim: ATTITUDE_CMD back: autopilot failsafe ended");
+      }
+      const int64_t now = simulator.now_utime();
+      for (const auto& m : simulator.take_mocap())
+        if (gates.mocap.on(now)) node.publish("MOCAP_POSE", sim::to_msg(m));
+      for (const auto& m : simulator.take_imu())
+        if (gates.imu.on(now)) node.publish("IMU", sim::to_msg(m));
+      if (auto frame = simulator.take_camera())
+        if (gates.camera.on(now)) node.publish("CAMERA", sim::to_msg(*frame));
       if (simulator.now_utime() >= next_truth) {
         node.publish("SIM_TRUTH", sim::to_msg(simulator.truth()));
         next_truth += kTruthPeriodUs;

@@ -55,7 +55,8 @@ Simulator::Simulator(const Scenario& scenario, const VehicleParams& vehicle, uin
     throw ParamError(scenario.file, "randomize.start_clearance_m",
                      std::to_string(scenario.randomize.start_clearance_m),
                      "must be at least the rotor-tip radius of vehicle " + vehicle.name + " (" +
-                         std::to_string(rotor_radius_m) + " m): a seeded platform could stand "
+                         std::to_string(rotor_radius_m) +
+                         " m): a seeded platform could stand "
                          "under its rotors at the start");
   const Vector3d& p0 = scenario.start_position_m;
   state_.p_W_B = Vector3d(p0.x(), p0.y(), p0.z() > 0 ? p0.z() : dynamics_->resting_height(0.0));
@@ -65,6 +66,7 @@ Simulator::Simulator(const Scenario& scenario, const VehicleParams& vehicle, uin
     std::normal_distribution<double> n(0.0, scenario.wind.gust_sigma_mps);
     gust_W_ = Vector3d(n(wind_rng_), n(wind_rng_), 0.3 * n(wind_rng_));
   }
+  last_command_utime_ = now_utime_;
   history_.add(to_pose(state_, now_utime_));
   mocap_.update(now_utime_, to_pose(state_, now_utime_));
   if (camera_ && scenario.camera.enabled) {
@@ -98,7 +100,61 @@ void Simulator::inject_mocap_dropout(int64_t from_utime, int64_t to_utime) {
 
 void Simulator::step(const AttitudeCommand& cmd, int64_t until_utime) {
   cmd_ = cmd;
-  advance_to(until_utime);
+  while (now_utime_ + dt_us_ <= until_utime) {
+    last_command_utime_ = now_utime_;
+    physics_step();
+  }
+}
+
+void Simulator::command(const AttitudeCommand& cmd) {
+  cmd_ = cmd;
+  last_command_utime_ = now_utime_;
+}
+
+AttitudeCommand Simulator::autopilot_command() {
+  const VehicleParams& V = vehicle_;
+  const double silent_s = static_cast<double>(now_utime_ - last_command_utime_) * 1e-6;
+  if (silent_s <= V.cmd_loss_timeout_s) {
+    cmd_lost_since_.reset();
+    cmd_loss_rest_since_.reset();
+    // Disarmed by the failsafe, it arms again only after a disarmed command (as an autopilot
+    // needs an explicit arm after a failsafe landing), not on the first armed one that arrives.
+    if (cmd_loss_disarmed_ && cmd_.armed) return AttitudeCommand{cmd_.utime};
+    cmd_loss_disarmed_ = false;
+    return cmd_;
+  }
+  if (!cmd_lost_since_) {
+    // Only a flying vehicle needs the failsafe: disarmed stays disarmed.
+    if (!cmd_.armed) return cmd_;
+    cmd_lost_since_ = now_utime_;
+  }
+  AttitudeCommand fs;
+  fs.utime = cmd_.utime;
+  fs.armed = !cmd_loss_disarmed_;
+  if (cmd_loss_disarmed_) return fs;
+  const double t_s = static_cast<double>(now_utime_ - *cmd_lost_since_) * 1e-6;
+  const bool descending = t_s >= V.cmd_loss_level_s;
+  // Vertical speed loop on the autopilot's own estimate (here: the true velocity).
+  constexpr double kVz_per_s = 5.0, kMaxAccel_mps2 = 3.0;
+  const double vz_des = descending ? -V.cmd_loss_descent_mps : 0.0;
+  const double a_z =
+      std::clamp(kVz_per_s * (vz_des - state_.v_W_B.z()), -kMaxAccel_mps2, kMaxAccel_mps2);
+  const double cos_tilt = std::max(0.5, state_.q_WB.toRotationMatrix()(2, 2));
+  fs.thrust_N = std::clamp(V.mass_kg * (9.81 + a_z) / cos_tilt, 0.0, V.max_thrust_N);
+  // Resting on the ground while descending: disarm (the autopilot's land detector).
+  const bool resting =
+      descending && last_.contact != Contact::kNone && std::abs(state_.v_W_B.z()) < 0.1;
+  if (!resting) {
+    cmd_loss_rest_since_.reset();
+  } else if (!cmd_loss_rest_since_) {
+    cmd_loss_rest_since_ = now_utime_;
+  } else if (static_cast<double>(now_utime_ - *cmd_loss_rest_since_) * 1e-6 >=
+             V.cmd_loss_disarm_after_s) {
+    cmd_loss_disarmed_ = true;
+    fs.armed = false;
+    fs.thrust_N = 0.0;
+  }
+  return fs;
 }
 
 void Simulator::advance_to(int64_t until_utime) {
@@ -118,7 +174,7 @@ void Simulator::physics_step() {
   }
   const Vector3d wind = w.steady_mps + gust_W_;
 
-  last_ = dynamics_->step(state_, cmd_, wind, dt);
+  last_ = dynamics_->step(state_, autopilot_command(), wind, dt);
   now_utime_ += dt_us_;
 
   // Outcome flags.
@@ -162,10 +218,11 @@ void Simulator::schedule_camera() {
   const int k = c.motion_blur_samples;
   const Isometry3d X_BC = camera_->mount.X_BC();
   for (int i = 0; i < k; ++i) {
-    const int64_t t = k == 1 ? f.utime
-                             : f.utime - half_exposure + (2 * half_exposure * i) / (k - 1);
+    const int64_t t =
+        k == 1 ? f.utime : f.utime - half_exposure + (2 * half_exposure * i) / (k - 1);
     const auto pose = history_.at(t);
-    const Isometry3d X_WB = pose ? pose->X_WB() : make_transform(state_.q_WB.toRotationMatrix(), state_.p_W_B);
+    const Isometry3d X_WB =
+        pose ? pose->X_WB() : make_transform(state_.q_WB.toRotationMatrix(), state_.p_W_B);
     f.X_WC.push_back(camera_in_world(X_WB, X_BC));
   }
   if (pending_) ++frames_skipped_;
@@ -236,6 +293,7 @@ Truth Simulator::truth() const {
   t.collided = collided_;
   t.n_collisions = n_collisions_;
   t.out_of_area = out_of_area_;
+  t.command_lost = cmd_lost_since_.has_value();
   t.wind_W = scenario_.wind.steady_mps + gust_W_;
   return t;
 }

@@ -11,12 +11,11 @@
 
 #include <cstdint>
 #include <memory>
+#include <opencv2/core.hpp>
 #include <optional>
 #include <random>
 #include <string>
 #include <vector>
-
-#include <opencv2/core.hpp>
 
 #include "common/pose_buffer.hpp"
 #include "sim/dynamics.hpp"
@@ -43,17 +42,19 @@ struct Truth {
   /// hall's walls and ceiling) at some time this run (sticky): a real flight would have lost
   /// tracking or hit the hall there, so the run has failed.
   bool out_of_area = false;
+  /// The autopilot's command-loss failsafe is flying the vehicle (ATTITUDE_CMD silent).
+  bool command_lost = false;
   Vector3d wind_W = Vector3d::Zero();  ///< wind at the vehicle [m/s]
 };
 
 /// One camera frame.
 struct CameraFrame {
-  int64_t utime = 0;        ///< middle of the exposure [us]
-  int64_t seq = 0;          ///< frame counter
+  int64_t utime = 0;  ///< middle of the exposure [us]
+  int64_t seq = 0;    ///< frame counter
   double exposure_s = 0.0;
-  double gain = 1.0;        ///< exposure / gain factor applied to this frame
+  double gain = 1.0;                         ///< exposure / gain factor applied to this frame
   Isometry3d X_WC = Isometry3d::Identity();  ///< camera pose at mid-exposure
-  cv::Mat pixels;           ///< mono8
+  cv::Mat pixels;                            ///< mono8
 };
 
 class Simulator {
@@ -64,9 +65,17 @@ class Simulator {
   Simulator(const Scenario& scenario, const VehicleParams& vehicle, uint64_t seed,
             std::optional<CameraRig> camera = std::nullopt);
 
-  /// Holds `cmd` from now until `until_utime` (fixed physics steps; time never goes back).
+  /// Holds `cmd` from now until `until_utime`, as if it were received all the while (fixed
+  /// physics steps; time never goes back).
   void step(const AttitudeCommand& cmd, int64_t until_utime);
-  /// Advances under the last command given.
+  /// A command received now (the node: one ATTITUDE_CMD message).
+  void command(const AttitudeCommand& cmd);
+  /// The autopilot's command-loss failsafe is flying the vehicle.
+  bool command_lost() const { return cmd_lost_since_.has_value(); }
+  /// Advances under the last command received. When none arrived for the vehicle's
+  /// cmd_loss_timeout_s while armed, the autopilot's command-loss failsafe flies it: level, then
+  /// a descent at cmd_loss_descent_mps, then disarmed once it rests on the ground, and then
+  /// armed again only after a disarmed command.
   void advance_to(int64_t until_utime);
 
   int64_t now_utime() const { return now_utime_; }
@@ -105,6 +114,8 @@ class Simulator {
     std::vector<Isometry3d> X_WC;  // over the exposure
   };
   void physics_step();
+  // What the autopilot's inner loop follows: the last command, or its command-loss failsafe.
+  AttitudeCommand autopilot_command();
   void schedule_camera();
 
   Scenario scenario_;
@@ -113,6 +124,10 @@ class Simulator {
   std::unique_ptr<Dynamics> dynamics_;
   VehicleState state_;
   AttitudeCommand cmd_;
+  int64_t last_command_utime_ = 0;         // sim time the last command was received
+  std::optional<int64_t> cmd_lost_since_;  // failsafe active since
+  std::optional<int64_t> cmd_loss_rest_since_;
+  bool cmd_loss_disarmed_ = false;
   int64_t now_utime_;
   int64_t dt_us_;
   StepResult last_;

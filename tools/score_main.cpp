@@ -9,12 +9,13 @@
 #include <iostream>
 #include <lcm/lcm-cpp.hpp>
 
+#include "common/decode.hpp"
 #include "tools/score.hpp"
 
 namespace {
 template <class T>
 bool decode(const lcm::LogEvent& ev, T& msg) {
-  return msg.decode(ev.data, 0, ev.datalen) == ev.datalen;
+  return ev.datalen >= 0 && alight::decode_message(msg, ev.data, static_cast<size_t>(ev.datalen));
 }
 }  // namespace
 

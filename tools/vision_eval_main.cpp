@@ -6,12 +6,11 @@
 // on this machine (which bounds the waypoint rate the node can reach).
 //
 // Exit status: 0 when the log was read, 2 when it cannot be read or holds no CAMERA frames.
+#include <CLI/CLI.hpp>
+#include <algorithm>
 #include <alight/image_t.hpp>
 #include <alight/pose_t.hpp>
 #include <alight/sim_truth_t.hpp>
-
-#include <CLI/CLI.hpp>
-#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <lcm/lcm-cpp.hpp>
@@ -20,6 +19,7 @@
 #include <vector>
 
 #include "common/camera_mount.hpp"
+#include "common/decode.hpp"
 #include "common/msg_convert.hpp"
 #include "common/params.hpp"
 #include "vision/pipeline.hpp"
@@ -31,7 +31,7 @@ using namespace alight::vision;
 
 template <class T>
 bool decode(const lcm::LogEvent& ev, T& msg) {
-  return msg.decode(ev.data, 0, ev.datalen) == ev.datalen;
+  return ev.datalen >= 0 && alight::decode_message(msg, ev.data, static_cast<size_t>(ev.datalen));
 }
 
 double percentile(std::vector<double> v, double q) {
@@ -108,8 +108,8 @@ int main(int argc, char** argv) {
       ++reasons[r.reason];
       double lat = -1, dh = 0;
       if (truth && (r.found() || r.reason == Reason::kPartialView)) {
-        const double* c = mission == Mission::kLanding ? truth->platform_center_W
-                                                       : truth->opening_center_W;
+        const double* c =
+            mission == Mission::kLanding ? truth->platform_center_W : truth->opening_center_W;
         const Vector3d c_W(c[0], c[1], c[2]);
         lat = mission == Mission::kLanding ? (r.target.p_W - c_W).head<2>().norm()
                                            : (r.target.p_W - c_W).tail<2>().norm();

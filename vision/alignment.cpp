@@ -2,17 +2,14 @@
 #include "vision/alignment.hpp"
 
 #include <Eigen/Dense>
-#include <array>
 #include <cassert>
 #include <cmath>
 #include <limits>
 
-#include "vision/homography.hpp"
+#include "common/robust_lsq.hpp"
 
 namespace alight::vision {
 namespace {
-
-using Vec12 = Eigen::Matrix<double, 12, 1>;
 
 struct State {
   Matrix3d R;
@@ -20,7 +17,7 @@ struct State {
 };
 
 /// R exp([w]x), t + dt, n + dn from a 12-vector (w, dt, dna, dnb).
-State apply(const State& s, const Vec12& d) {
+State apply(const State& s, const Eigen::VectorXd& d) {
   State o = s;
   const Vector3d w = d.segment<3>(0);
   const double angle = w.norm();
@@ -34,14 +31,14 @@ State apply(const State& s, const Vec12& d) {
   return o;
 }
 
-/// Transfer errors |proj(R (I - t n^T) x1) - x2| of one set [normalised units].
-std::vector<double> set_errors(const Matrix3d& R, const Vector3d& t, const Vector3d& n,
-                               const std::vector<Vector3d>& r1, const std::vector<Vector3d>& r2) {
+/// Transfer residuals proj(R (I - t n^T) x1) - x2 of one set [normalised units], into
+/// r.segment<2>(2 (at + i)).
+void set_residuals(const Matrix3d& R, const Vector3d& t, const Vector3d& n,
+                   const std::vector<Vector3d>& r1, const std::vector<Vector3d>& r2,
+                   Eigen::VectorXd& r, size_t at) {
   const Matrix3d H = R * (Matrix3d::Identity() - t * n.transpose());
-  std::vector<double> e(r1.size());
   for (size_t i = 0; i < r1.size(); ++i)
-    e[i] = ((H * r1[i]).hnormalized() - r2[i].hnormalized()).norm();
-  return e;
+    r.segment<2>(2 * (at + i)) = (H * r1[i]).hnormalized() - r2[i].hnormalized();
 }
 
 /// Residual of the rotation prior (zero without one).
@@ -51,118 +48,61 @@ Vector3d prior_residual(const Matrix3d& R, const std::optional<RotationPrior>& p
   return prior->weight * d.angle() * d.axis();
 }
 
-/// The joint problem: both planes' inlier rays (normalised, z = 1), per-point weights of their
-/// squared transfer errors (1 until reweight()), and the rotation prior.
+/// The joint problem: both planes' inlier rays (normalised, z = 1) and the rotation prior.
+/// Residuals: plane a's points (x, y), then plane b's, then the prior's three.
 struct Joint {
   const std::vector<Vector3d>& r1a;
   const std::vector<Vector3d>& r2a;
   const std::vector<Vector3d>& r1b;
   const std::vector<Vector3d>& r2b;
   const std::optional<RotationPrior>& prior;
-  std::vector<double> wa = std::vector<double>(r1a.size(), 1.0);
-  std::vector<double> wb = std::vector<double>(r1b.size(), 1.0);
 
-  /// Sum of w_i e_i^2 (w empty: weight 1).
-  static double sum_sq(const std::vector<double>& e, const std::vector<double>& w = {}) {
-    double c = 0;
-    for (size_t i = 0; i < e.size(); ++i) c += (w.empty() ? 1.0 : w[i]) * e[i] * e[i];
-    return c;
+  size_t n_points() const { return r1a.size() + r1b.size(); }
+  void residuals(const State& x, Eigen::VectorXd& r) const {
+    r.resize(2 * n_points() + (prior ? 3 : 0));
+    set_residuals(x.R, x.t, x.na, r1a, r2a, r, 0);
+    set_residuals(x.R, x.t, x.nb, r1b, r2b, r, r1a.size());
+    if (prior) r.tail<3>() = prior_residual(x.R, prior);
   }
   /// Unweighted sum of squared transfer errors of both sets.
   double transfer_cost(const State& x) const {
-    return sum_sq(set_errors(x.R, x.t, x.na, r1a, r2a)) +
-           sum_sq(set_errors(x.R, x.t, x.nb, r1b, r2b));
+    Eigen::VectorXd r;
+    residuals(x, r);
+    return r.head(2 * n_points()).squaredNorm();
   }
-  /// What the refinement minimises: weighted transfer errors and the prior.
-  double cost(const State& x) const {
-    return sum_sq(set_errors(x.R, x.t, x.na, r1a, r2a), wa) +
-           sum_sq(set_errors(x.R, x.t, x.nb, r1b, r2b), wb) +
-           prior_residual(x.R, prior).squaredNorm();
-  }
-  /// IRLS: Cauchy weights from each set's residuals at x (each plane its own scale), as in the
-  /// final refinement of each homography (homography.cpp): a feature on the platform's edge or a
-  /// near miss inside the RANSAC threshold must not pull the shared motion. With plain least
-  /// squares the joint R21 came out worse than either plane's own (rendered seed 6: 0.19 deg
-  /// against 0.05 deg each).
-  void reweight(const State& x) {
-    wa = cauchy_weights(set_errors(x.R, x.t, x.na, r1a, r2a), 1e-6);
-    wb = cauchy_weights(set_errors(x.R, x.t, x.nb, r1b, r2b), 1e-6);
+  /// IRLS: Cauchy weights from each set's residuals (each plane its own scale), as in the final
+  /// refinement of each homography (homography.cpp): a feature on the platform's edge or a near
+  /// miss inside the RANSAC threshold must not pull the shared motion. With plain least squares
+  /// the joint R21 came out worse than either plane's own (rendered seed 6: 0.19 deg against
+  /// 0.05 deg each). The prior keeps weight 1.
+  void weights(const Eigen::VectorXd& r, Eigen::VectorXd& w) const {
+    w.setOnes(r.size());
+    auto set_weights = [&](size_t at, size_t n) {
+      std::vector<double> e(n);
+      for (size_t i = 0; i < n; ++i) e[i] = r.segment<2>(2 * (at + i)).norm();
+      const std::vector<double> wi = lsq::cauchy_weights(e, 1e-6);
+      for (size_t i = 0; i < n; ++i) w(2 * (at + i)) = w(2 * (at + i) + 1) = wi[i];
+    };
+    set_weights(0, r1a.size());
+    set_weights(r1a.size(), r1b.size());
   }
 };
 
-/// Levenberg-Marquardt on the joint (weighted) transfer error and the rotation prior; robust:
-/// the weights are re-evaluated at the start and after every accepted step (IRLS). Returns the
-/// final cost.
-double refine(State& s, Joint& jp, int iterations, bool robust) {
-  if (robust) jp.reweight(s);
-  double cost = jp.cost(s);
-  double lambda = 1e-4;
-  for (int it = 0; it < iterations; ++it) {
-    // Gauss-Newton normal equations from forward-difference Jacobians, point by point.
-    Eigen::Matrix<double, 12, 12> JtJ = Eigen::Matrix<double, 12, 12>::Zero();
-    Vec12 Jtr = Vec12::Zero();
-    const double h = 1e-7;
-    std::array<State, 12> shifted;
-    for (int k = 0; k < 12; ++k) {
-      shifted[k] = s;
-      // Without the gauge renormalisation, so each column is a clean partial derivative.
-      if (k < 3)
-        shifted[k].R = s.R * Eigen::AngleAxisd(h, Vector3d::Unit(k)).toRotationMatrix();
-      else if (k < 6)
-        shifted[k].t(k - 3) += h;
-      else if (k < 9)
-        shifted[k].na(k - 6) += h;
-      else
-        shifted[k].nb(k - 9) += h;
-    }
-    auto accumulate = [&](const std::vector<Vector3d>& r1, const std::vector<Vector3d>& r2,
-                          const std::vector<double>& w, bool plane_a) {
-      auto H_of = [&](const State& x) {
-        return Matrix3d(x.R * (Matrix3d::Identity() - x.t * (plane_a ? x.na : x.nb).transpose()));
-      };
-      const Matrix3d H0 = H_of(s);
-      std::array<Matrix3d, 12> Hk;
-      for (int k = 0; k < 12; ++k) Hk[k] = H_of(shifted[k]);
-      for (size_t i = 0; i < r1.size(); ++i) {
-        const Vector2d p0 = (H0 * r1[i]).hnormalized();
-        const Vector2d res = p0 - r2[i].hnormalized();
-        Eigen::Matrix<double, 2, 12> J;
-        for (int k = 0; k < 12; ++k) J.col(k) = ((Hk[k] * r1[i]).hnormalized() - p0) / h;
-        JtJ.noalias() += w[i] * J.transpose() * J;
-        Jtr.noalias() += w[i] * J.transpose() * res;
-      }
-    };
-    accumulate(jp.r1a, jp.r2a, jp.wa, true);
-    accumulate(jp.r1b, jp.r2b, jp.wb, false);
-    if (jp.prior) {
-      const Vector3d r0 = prior_residual(s.R, jp.prior);
-      Eigen::Matrix<double, 3, 12> J = Eigen::Matrix<double, 3, 12>::Zero();
-      for (int k = 0; k < 3; ++k) J.col(k) = (prior_residual(shifted[k].R, jp.prior) - r0) / h;
-      JtJ.noalias() += J.transpose() * J;
-      Jtr.noalias() += J.transpose() * r0;
-    }
-    bool improved = false;
-    while (lambda < 1e6) {
-      Eigen::Matrix<double, 12, 12> A = JtJ;
-      A.diagonal() += lambda * (JtJ.diagonal().array() + 1e-12).matrix();
-      const Vec12 d = A.ldlt().solve(-Jtr);
-      if (!d.allFinite()) break;
-      const State n = apply(s, d);
-      const double c = jp.cost(n);
-      if (c < cost) {
-        const bool converged = cost - c < 1e-10 * cost;
-        s = n, cost = c, lambda = std::max(1e-9, lambda * 0.1), improved = !converged;
-        break;
-      }
-      lambda *= 10;
-    }
-    if (!improved) break;
-    if (robust) {
-      jp.reweight(s);
-      cost = jp.cost(s);
-    }
-  }
-  return cost;
+/// Levenberg-Marquardt (common/robust_lsq.hpp) on the joint (weighted) transfer error and the
+/// rotation prior, forward-difference Jacobian through apply(); robust: the weights are
+/// re-evaluated at the start and after every accepted step (IRLS). Returns the final cost.
+double refine(State& s, const Joint& jp, int iterations, bool robust) {
+  lsq::Problem problem;
+  problem.num_parameters = 12;
+  problem.residuals = [&](const Eigen::VectorXd& d, Eigen::VectorXd& r) {
+    jp.residuals(apply(s, d), r);
+  };
+  problem.accept = [&](const Eigen::VectorXd& d) { s = apply(s, d); };
+  if (robust)
+    problem.weights = [&](const Eigen::VectorXd& r, Eigen::VectorXd& w) { jp.weights(r, w); };
+  lsq::Options options;
+  options.max_iterations = iterations;
+  return lsq::solve(problem, options).final_cost;
 }
 
 }  // namespace

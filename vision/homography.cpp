@@ -8,6 +8,7 @@
 #include <numeric>
 #include <random>
 
+#include "common/robust_lsq.hpp"
 #include "vision/simd.hpp"
 
 namespace alight::vision {
@@ -109,76 +110,60 @@ bool degenerate_sample(const Vector2d* a, const Vector2d* b, double min_height_a
   return false;
 }
 
-/// Levenberg-Marquardt on the forward transfer error |proj(H x1) - x2|, h33 = 1.
+/// Levenberg-Marquardt (common/robust_lsq.hpp) on the forward transfer error
+/// |proj(H x1) - x2|, h33 = 1, analytic Jacobian.
 ///
 /// Robust: the residuals of real matches are heavy-tailed (a blob detected at the neighbouring
 /// filter scale in one view moves by up to a pixel, and a near-miss match can sit just inside
 /// the inlier threshold, where the hard threshold of the inlier set gives it full weight), so
-/// the squared errors are Cauchy-weighted, w = 1 / (1 + (e / c)^2), and the weights re-evaluated
-/// after each accepted step (IRLS; Holland & Welsch 1977), with c = 2.385 sigma (95 % efficiency
-/// under Gaussian noise) and sigma from the inliers' median residual (a 2-D Gaussian residual
-/// has median length 1.177 sigma). On warped photographs (features_test's and others) this
-/// lowered the mean corner error by 10-15 % against plain least squares and removed its worst
-/// cases; measuring the error in both images (symmetric transfer, Hartley & Zisserman eq. 4.7)
-/// was tried as well and was no better than the forward error.
+/// the squared errors are Cauchy-weighted (lsq::cauchy_weights, sigma from the inliers' median
+/// residual) and the weights re-evaluated after each accepted step (IRLS; Holland & Welsch
+/// 1977). On warped photographs (features_test's and others) this lowered the mean corner error
+/// by 10-15 % against plain least squares and removed its worst cases; measuring the error in
+/// both images (symmetric transfer, Hartley & Zisserman eq. 4.7) was tried as well and was no
+/// better than the forward error.
 Matrix3d refine_transfer(const Matrix3d& H0, const std::vector<Vector2d>& x1,
                          const std::vector<Vector2d>& x2, const std::vector<int>& idx,
                          int iterations, bool robust) {
   if (std::abs(H0(2, 2)) < 1e-12) return H0;
   Matrix3d H = H0 / H0(2, 2);
-  std::vector<double> w(idx.size(), 1.0);
-  auto update_weights = [&](const Matrix3d& G) {
-    if (!robust) return;
-    std::vector<double> e(idx.size());
-    for (size_t k = 0; k < idx.size(); ++k) e[k] = transfer_error(G, x1[idx[k]], x2[idx[k]]);
-    w = cauchy_weights(e, 1e-3);
+  const size_t m = idx.size();
+  auto plus = [&](const Eigen::VectorXd& dh) {
+    Matrix3d G = H;
+    for (int k = 0; k < 8; ++k) G(k / 3, k % 3) += dh(k);
+    return G;
   };
-  auto cost_of = [&](const Matrix3d& G) {
-    double c = 0.0;
-    for (size_t k = 0; k < idx.size(); ++k) {
-      const int i = idx[k];
-      c += w[k] * ((G * x1[i].homogeneous()).hnormalized() - x2[i]).squaredNorm();
-    }
-    return c;
+  lsq::Problem problem;
+  problem.num_parameters = 8;
+  problem.residuals = [&](const Eigen::VectorXd& dh, Eigen::VectorXd& r) {
+    const Matrix3d G = plus(dh);
+    r.resize(2 * m);
+    for (size_t k = 0; k < m; ++k)
+      r.segment<2>(2 * k) = (G * x1[idx[k]].homogeneous()).hnormalized() - x2[idx[k]];
   };
-  update_weights(H);
-  double cost = cost_of(H);
-  double lambda = 1e-6;
-  for (int it = 0; it < iterations; ++it) {
-    Eigen::Matrix<double, 8, 8> JtJ = Eigen::Matrix<double, 8, 8>::Zero();
-    Eigen::Matrix<double, 8, 1> Jtr = Eigen::Matrix<double, 8, 1>::Zero();
-    for (size_t k = 0; k < idx.size(); ++k) {
-      const int i = idx[k];
-      const double x = x1[i].x(), y = x1[i].y();
+  problem.jacobian = [&](const Eigen::VectorXd&, Eigen::MatrixXd& J) {
+    J.resize(2 * m, 8);
+    for (size_t k = 0; k < m; ++k) {
+      const double x = x1[idx[k]].x(), y = x1[idx[k]].y();
       const Vector3d q = H * Vector3d(x, y, 1.0);
       const double iw = 1.0 / q.z();
       const double u = q.x() * iw, v = q.y() * iw;
-      Eigen::Matrix<double, 2, 8> J;
-      J << x * iw, y * iw, iw, 0, 0, 0, -u * x * iw, -u * y * iw,  //
+      J.block<2, 8>(2 * k, 0) << x * iw, y * iw, iw, 0, 0, 0, -u * x * iw, -u * y * iw,  //
           0, 0, 0, x * iw, y * iw, iw, -v * x * iw, -v * y * iw;
-      const Vector2d r(u - x2[i].x(), v - x2[i].y());
-      JtJ.noalias() += w[k] * J.transpose() * J;
-      Jtr.noalias() += w[k] * J.transpose() * r;
     }
-    Eigen::Matrix<double, 8, 8> A = JtJ;
-    A.diagonal() *= 1.0 + lambda;
-    const Eigen::Matrix<double, 8, 1> dh = A.ldlt().solve(-Jtr);
-    if (!dh.allFinite()) break;
-    Matrix3d Hn = H;
-    for (int k = 0; k < 8; ++k) Hn(k / 3, k % 3) += dh(k);
-    const double c = cost_of(Hn);
-    if (c < cost) {
-      const bool converged = cost - c < 1e-12 * (1.0 + cost);
-      H = Hn;
-      lambda = std::max(1e-9, lambda * 0.1);
-      if (converged && !robust) break;
-      update_weights(H);  // IRLS: the weights follow the new residuals
-      cost = cost_of(H);
-    } else {
-      lambda *= 100.0;
-      if (lambda > 1e3) break;
-    }
-  }
+  };
+  problem.accept = [&](const Eigen::VectorXd& dh) { H = plus(dh); };
+  if (robust)
+    problem.weights = [&](const Eigen::VectorXd& r, Eigen::VectorXd& w) {
+      std::vector<double> e(m);
+      for (size_t k = 0; k < m; ++k) e[k] = r.segment<2>(2 * k).norm();
+      const std::vector<double> wk = lsq::cauchy_weights(e, 1e-3);
+      w.resize(2 * m);
+      for (size_t k = 0; k < m; ++k) w(2 * k) = w(2 * k + 1) = wk[k];
+    };
+  lsq::Options options;
+  options.max_iterations = iterations;
+  lsq::solve(problem, options);
   return H;
 }
 
@@ -240,17 +225,6 @@ std::optional<Matrix3d> homography_dlt(const std::vector<Vector2d>& x1,
 
 double transfer_error(const Matrix3d& H, const Vector2d& x1, const Vector2d& x2) {
   return ((H * x1.homogeneous()).hnormalized() - x2).norm();
-}
-
-std::vector<double> cauchy_weights(const std::vector<double>& e, double min_sigma) {
-  if (e.empty()) return {};
-  std::vector<double> sorted = e;
-  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
-  const double sigma = std::max(sorted[sorted.size() / 2] / 1.177, min_sigma);
-  const double c = 2.385 * sigma;
-  std::vector<double> w(e.size());
-  for (size_t k = 0; k < e.size(); ++k) w[k] = 1.0 / (1.0 + (e[k] / c) * (e[k] / c));
-  return w;
 }
 
 double corner_error(const Matrix3d& H_a, const Matrix3d& H_b, double width, double height) {

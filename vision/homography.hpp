@@ -6,8 +6,8 @@
 // OpenCV's checkSubset), MSAC scoring (Torr & Zisserman 2000), local optimisation of each new
 // best model (Chum, Matas & Kittler 2003), adaptive stopping with an iteration cap, and a final
 // least-squares DLT on the inliers followed by a Cauchy-weighted (IRLS; Holland & Welsch 1977)
-// Levenberg-Marquardt refinement of the transfer error, robust to the heavy tail of real
-// keypoint residuals (see refine_transfer in homography.cpp). Seeded.
+// Levenberg-Marquardt refinement (common/robust_lsq.hpp) of the transfer error, robust to the heavy
+// tail of real keypoint residuals (see refine_transfer in homography.cpp). Seeded.
 //
 // Second plane: sample_locally draws the other three points of a sample among the first one's
 // nearest neighbours in image 1, and the stopping rule assumes the smallest plane worth finding
@@ -65,12 +65,6 @@ std::optional<Matrix3d> homography_dlt(const std::vector<Vector2d>& x1,
 
 /// Forward transfer error |proj(H x1) - x2|.
 double transfer_error(const Matrix3d& H, const Vector2d& x1, const Vector2d& x2);
-
-/// IRLS weights of 2-D residual lengths e under a Cauchy loss, w = 1 / (1 + (e / c)^2), with
-/// c = 2.385 sigma (95 % efficiency under Gaussian noise; Holland & Welsch 1977) and sigma from
-/// the median length (a 2-D Gaussian residual has median length 1.177 sigma), at least
-/// min_sigma. Empty e: empty weights.
-std::vector<double> cauchy_weights(const std::vector<double>& e, double min_sigma);
 
 /// Mean distance between H_a and H_b applied to the four corners of a w x h image [px]; the
 /// accuracy measure of the tests and bench.

@@ -1,5 +1,5 @@
 #pragma once
-// Runtime outcomes of the vision library (STYLE.md "Errors: three tiers"): a stage that cannot
+// Vision's runtime outcomes (docs/ARCHITECTURE.md "Errors: three tiers"): a stage that cannot
 // give a trustworthy answer returns a Reason instead of a value, never garbage. The numeric values
 // of Reason equal target_t's REASON_* constants (lcmtypes/target_t.lcm), so the node copies them
 // without a table; test/vision/status_test.cpp pins the correspondence.

@@ -10,10 +10,21 @@ const NUDGE_STEP_M = 0.1;
 
 let latest = null;          // newest state document
 let station = {};           // the server's "station" part
-const token = (() => {
+// Every command carries the session token in X-Alight-Token (a header a cross-site form cannot
+// send). It comes from the URL fragment, the station (loopback only: GET /api/session), or the
+// operator typing it.
+let token = (() => {
   const m = /token=([0-9a-fA-F]+)/.exec(location.hash);
   return m ? m[1] : '';
 })();
+async function fetchSessionToken() {
+  if (token) return;
+  try {
+    const r = await fetch('/api/session', { cache: 'no-store' });
+    const j = await r.json();
+    if (j.ok && j.token) token = j.token;
+  } catch (e) { /* typed in by the operator instead */ }
+}
 
 const fmt = (v, d = 2) => (v === null || v === undefined || Number.isNaN(v)) ? '—' : Number(v).toFixed(d);
 const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
@@ -333,7 +344,10 @@ function render(s) {
   $('n-meas').textContent = st ? `${st.n_measurements} (rej ${st.n_rejected})` : '—';
   $('failsafe').textContent = st ? FAILSAFES[st.failsafe] || st.failsafe : '—';
   $('mission-time').textContent = st ? `${fmt(st.mission_time_s, 1)} s` : '—';
-  $('reason').textContent = st ? (st.reason || '') + (st.cmds_rejected ? ` · ${st.cmds_rejected} cmds rejected` : '') : '—';
+  const byReason = st && st.cmds_rejected_by_reason ? Object.entries(st.cmds_rejected_by_reason)
+    .map(([why, n]) => `${n} ${why}`).join(', ') : '';
+  $('reason').textContent = st ? (st.reason || '') + (st.cmds_rejected
+    ? ` · ${st.cmds_rejected} cmds rejected${byReason ? ` (${byReason})` : ''}` : '') : '—';
 
   const ch = s.channels || {};
   const statusCh = ch[station.status_channel];
@@ -365,9 +379,42 @@ function render(s) {
       q.signal ? `sig ${q.signal}` : q.exit_code],
   })) : [{ cells: ['no PROCESS_STATUS'] }]);
 
+  // Each command: sent, then acknowledged (AUTONOMY_STATUS echoed it), rejected (with the
+  // vehicle's reason), or NOT ACKNOWLEDGED once the deadline passed without an answer.
+  const ACK_TEXT = {
+    sent: () => 'sent',
+    acknowledged: (c) => `acknowledged ${fmt(c.answer_s, 2)} s`,
+    rejected: (c) => `REJECTED: ${c.reject_reason}`,
+    not_acknowledged: () => 'NOT ACKNOWLEDGED',
+  };
   rows($('sent').tBodies[0], (s.sent || []).slice(-6).reverse().map((c) => ({
-    cells: [c.name, `seq …${String(c.seq).slice(-6)}`, `${fmt(c.age_s, 1)} s ago`],
+    cells: [c.name, `seq …${String(c.seq).slice(-6)}`,
+      { text: (ACK_TEXT[c.state] || (() => c.state))(c), cls: 'ack-' + c.state },
+      `${fmt(c.age_s, 1)} s ago`],
   })));
+  const lk = typeof s.link === 'object' ? s.link : {};
+  const alarm = $('ack-alarm');
+  if (lk.alarm && typeof lk.alarm === 'object') {
+    alarm.hidden = false;
+    alarm.textContent = `${lk.alarm.name.toUpperCase()} NOT ACKNOWLEDGED by ${lk.vehicle_id} ` +
+      `(${fmt(lk.alarm.age_s, 1)} s, seq …${String(lk.alarm.seq).slice(-6)}): do not assume it acted`;
+  } else {
+    alarm.hidden = true;
+  }
+  const off = $('clock-offset');
+  if (lk.clock_offset_s === null || lk.clock_offset_s === undefined) {
+    off.textContent = 'clock offset —';
+    off.className = 'link';
+  } else {
+    off.textContent = `clock offset ${lk.clock_offset_s >= 0 ? '+' : ''}${fmt(lk.clock_offset_s, 3)} s`;
+    off.className = lk.clock_offset_warn ? 'link bad' : 'link ok';
+  }
+  if (lk.vehicle_seen && !lk.session_known) {
+    $('cmd-result').textContent = lk.other_vehicle_id
+      ? `vehicle '${lk.other_vehicle_id}' heard, but this station commands '${lk.vehicle_id}'`
+      : `vehicle '${lk.vehicle_id}' announces no command session (no key there?)`;
+    $('cmd-result').className = 'cmd-result bad';
+  }
 
   const enabled = !!station.commands_enabled;
   for (const b of document.querySelectorAll('.controls button')) b.disabled = !enabled;
@@ -393,6 +440,7 @@ async function pollState() {
   }
 }
 
+fetchSessionToken();
 setupControls();
 setupGamepad();
 startVideo('camera');

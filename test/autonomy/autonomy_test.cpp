@@ -5,13 +5,15 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
+
 #include "kinematic_world.hpp"
 
 namespace alight::autonomy {
 namespace {
 
-using test::KinematicWorld;
 using test::command;
+using test::KinematicWorld;
 
 TEST(AutonomyTest, StartsIdleWithMotorsOff) {
   KinematicWorld w;
@@ -118,7 +120,8 @@ TEST(AutonomyTest, DescendsOnlyWhileInsideTheRadialTolerance) {
   const double z1 = w.out.setpoint.p_W.z();
   w.p.head<2>() = est.head<2>();
   w.step();
-  EXPECT_NEAR(z1 - w.out.setpoint.p_W.z(), w.autonomy.params().landing.descent_rate_mps * 0.01, 1e-9);
+  EXPECT_NEAR(z1 - w.out.setpoint.p_W.z(), w.autonomy.params().landing.descent_rate_mps * 0.01,
+              1e-9);
 }
 
 TEST(AutonomyTest, RefusesAPlatformSmallerThanTheGearFootprint) {
@@ -389,8 +392,8 @@ TEST(AutonomyTest, IngressAlignsFliesThroughWithinToleranceAndStopsPastTheWall) 
   while (w.t < test::kT0 + 200'000'000 && w.autonomy.phase() == Phase::kApproach) {
     w.step();
     if (std::abs(w.p.x() - 3.0) < 0.1) {
-      max_lateral_near_wall = std::max({max_lateral_near_wall, std::abs(w.p.y()),
-                                        std::abs(w.p.z() - 1.2)});
+      max_lateral_near_wall =
+          std::max({max_lateral_near_wall, std::abs(w.p.y()), std::abs(w.p.z() - 1.2)});
       through = true;
     }
   }
@@ -418,8 +421,8 @@ TEST(AutonomyTest, IngressFliesTheConvergedEstimateWithoutVisionUnlessALostCheck
     ASSERT_TRUE(w.run_until_phase(Phase::kApproach, 120));
     w.vision.silent = true;
     // Held 10 cm beside the standoff point for 5 s (a gust), so it cannot align yet.
-    const Vector3d align_W = w.autonomy.final_estimate() +
-                             Vector3d(-params.ingress.standoff_m, 0.1, 0.0);
+    const Vector3d align_W =
+        w.autonomy.final_estimate() + Vector3d(-params.ingress.standoff_m, 0.1, 0.0);
     for (int i = 0; i < 500 && w.autonomy.phase() == Phase::kApproach; ++i) {
       w.p = align_W;
       w.step();
@@ -505,6 +508,243 @@ TEST(AutonomyTest, StatusCarriesEstimateAndCovariance) {
   EXPECT_EQ(st.estimate_W, w.autonomy.estimator().mean());
   EXPECT_TRUE(st.covariance.isApprox(st.covariance.transpose()));
   EXPECT_GT(st.covariance.trace(), 0.0);
+}
+
+// --- Issue 14: hostile values reaching the pure autonomy (defence in depth behind the node's
+// validating conversions), each a regression that failed before the fix.
+
+Inputs imu_only(int64_t t, const Vector3d& accel_B) {
+  Inputs in;
+  ImuSample imu;
+  imu.utime = t;
+  imu.accel_B = accel_B;
+  in.imu = imu;
+  return in;
+}
+
+// Bug: an Inf IMU sample counted as a touch-down impact and cut the motors in the air.
+TEST(AutonomyRegression, InfImuSampleIsNoImpact) {
+  KinematicWorld w;
+  w.takeoff_and_hover();
+  w.mocap = false;  // pose lost: the failsafe descent arms the touch-down detector
+  ASSERT_TRUE(w.run_until_phase(Phase::kFailsafe, 3));
+  ASSERT_TRUE(w.out.setpoint.motors_on);
+  const double inf = std::numeric_limits<double>::infinity();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (const Vector3d& a : {Vector3d(0, 0, inf), Vector3d(inf, -inf, 9.81), Vector3d(nan, 0, 0)}) {
+    w.t += 10'000;
+    w.out = w.autonomy.update(imu_only(w.t, a), w.t);
+    EXPECT_TRUE(w.out.setpoint.motors_on) << a.transpose() << ": " << w.out.status.reason;
+  }
+  EXPECT_EQ(w.autonomy.phase(), Phase::kFailsafe);
+  EXPECT_GT(w.p.z(), 0.5) << "still in the air";
+}
+
+// Bug: a NUDGE of NaN or Inf passed the geofence clamp (NaN survives cwiseMax / cwiseMin) and
+// reached the outer loop as the position setpoint.
+TEST(AutonomyRegression, NonFiniteNudgeNeverReachesTheSetpoint) {
+  const double inf = std::numeric_limits<double>::infinity();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (const Vector3d& d : {Vector3d(nan, 0, 0), Vector3d(0, inf, 0), Vector3d(-inf, inf, nan)}) {
+    KinematicWorld w;
+    w.takeoff_and_hover();
+    const Vector3d before = w.out.setpoint.p_W;
+    OperatorCommand c = command(Command::kNudge, ++w.seq);
+    c.nudge_W = d;
+    w.step(c);
+    EXPECT_TRUE(w.out.setpoint.p_W.allFinite()) << d.transpose();
+    EXPECT_TRUE(w.out.setpoint.v_W.allFinite()) << d.transpose();
+    EXPECT_LT((w.out.setpoint.p_W - before).norm(), 1e-9) << d.transpose();
+    for (int i = 0; i < 100; ++i) w.step();
+    EXPECT_TRUE(w.out.setpoint.p_W.allFinite() && w.p.allFinite()) << d.transpose();
+    EXPECT_EQ(w.autonomy.phase(), Phase::kHover);
+  }
+}
+
+// Bug: a NaN size_m made the fit check (short side >= gear footprint + margins) false in both
+// directions, so a platform of unknown size was landed on.
+TEST(AutonomyRegression, NanPlatformSizeIsNeverLandedOn) {
+  KinematicWorld w;
+  w.corrupt_target = [](TargetMeasurement& m) {
+    m.size_m = Vector2d(std::numeric_limits<double>::quiet_NaN(), 0.3);
+  };
+  w.takeoff_and_hover();
+  w.send(Command::kGo, Mission::kLanding);
+  bool approached = false;
+  w.run_until(
+      [&] {
+        approached = approached || w.autonomy.phase() == Phase::kApproach ||
+                     w.autonomy.phase() == Phase::kFinalDescent;
+        return w.autonomy.phase() == Phase::kHold;
+      },
+      400);
+  EXPECT_FALSE(approached) << w.out.status.reason;
+  EXPECT_EQ(w.autonomy.phase(), Phase::kHold) << w.out.status.reason;
+  EXPECT_TRUE(w.out.setpoint.motors_on);
+}
+
+// The same for an opening: NaN width skipped the vehicle-fits-the-opening check.
+TEST(AutonomyRegression, NanOpeningSizeIsNeverFlownThrough) {
+  test::OracleVisionParams vp;
+  vp.mission = Mission::kIngress;
+  vp.R_BC = R_BC_forward();
+  vp.t_B_C = Vector3d(0.12, 0, 0);
+  KinematicWorld w(test::test_params(), vp);
+  w.corrupt_target = [](TargetMeasurement& m) {
+    m.size_m.x() = std::numeric_limits<double>::quiet_NaN();
+  };
+  w.takeoff_and_hover();
+  w.send(Command::kGo, Mission::kIngress);
+  bool approached = false;
+  w.run_until(
+      [&] {
+        approached = approached || w.autonomy.phase() == Phase::kApproach;
+        return w.autonomy.phase() == Phase::kHold;
+      },
+      400);
+  EXPECT_FALSE(approached) << w.out.status.reason;
+  EXPECT_EQ(w.autonomy.phase(), Phase::kHold) << w.out.status.reason;
+}
+
+// A NaN pose (a corrupt mocap sample past the node) never becomes the setpoint or the state.
+TEST(AutonomyTest, NanPoseIsIgnored) {
+  KinematicWorld w;
+  w.takeoff_and_hover();
+  w.send(Command::kGo, Mission::kLanding);
+  ASSERT_EQ(w.autonomy.phase(), Phase::kDetection);
+  for (int i = 0; i < 20; ++i) {
+    w.t += 10'000;
+    Inputs in;
+    PoseSample bad = w.pose();
+    bad.p_W_B.x() = std::numeric_limits<double>::quiet_NaN();
+    in.pose = bad;
+    w.out = w.autonomy.update(in, w.t);
+    ASSERT_TRUE(w.out.setpoint.p_W.allFinite()) << i;
+    ASSERT_TRUE(w.out.setpoint.v_W.allFinite()) << i;
+  }
+  for (int i = 0; i < 100; ++i) w.step();
+  EXPECT_TRUE(w.out.setpoint.p_W.allFinite());
+  EXPECT_EQ(w.autonomy.phase(), Phase::kDetection) << w.out.status.reason;
+}
+
+// --- Issue 14: restart semantics, the PX4 way.
+
+// Bug: a restarted autonomy's first setpoint was motors-off (the outer loop disarmed in the
+// air). Nothing is published before the first pose says where the vehicle is.
+TEST(AutonomyRestart, NothingIsCommandedBeforeTheFirstPose) {
+  KinematicWorld w;
+  w.mocap = false;
+  for (int i = 0; i < 10; ++i) {
+    w.step();
+    EXPECT_FALSE(w.out.has_setpoint) << i;
+  }
+  w.mocap = true;
+  w.step();
+  EXPECT_TRUE(w.out.has_setpoint);
+  EXPECT_EQ(w.autonomy.phase(), Phase::kIdle);
+  EXPECT_FALSE(w.autonomy.resumed());
+}
+
+// A fresh autonomy (no restored state) that finds the vehicle 1 m up holds there with the
+// motors on, ignores TAKEOFF, and waits: it never takes off or starts a mission by itself.
+TEST(AutonomyRestart, RestartedInFlightHoldsWithMotorsOnAndWaitsForTheOperator) {
+  KinematicWorld w;
+  w.p = Vector3d(0.4, -0.3, 1.1);
+  w.yaw = 0.3;
+  w.step();
+  EXPECT_TRUE(w.autonomy.resumed());
+  EXPECT_EQ(w.autonomy.phase(), Phase::kHold) << w.out.status.reason;
+  EXPECT_TRUE(w.out.has_setpoint);
+  EXPECT_TRUE(w.out.setpoint.motors_on);
+  EXPECT_LT((w.out.setpoint.p_W - Vector3d(0.4, -0.3, 1.1)).norm(), 0.02);
+  EXPECT_NEAR(w.out.setpoint.yaw_rad, 0.3, 1e-9);
+  w.send(Command::kTakeoff);
+  for (int i = 0; i < 500; ++i) {
+    w.step();
+    ASSERT_TRUE(w.out.setpoint.motors_on) << i;
+  }
+  EXPECT_EQ(w.autonomy.phase(), Phase::kHold);
+  EXPECT_LT((w.p - Vector3d(0.4, -0.3, 1.1)).norm(), 0.03);
+  // The operator resumes: GO flies the mission from the hold.
+  w.send(Command::kGo, Mission::kLanding);
+  EXPECT_EQ(w.autonomy.phase(), Phase::kDetection);
+}
+
+// Low over the floor, below airborne_height_m, the pose cannot tell hover from standing: the
+// previous instance's word (motors on) decides, and moving counts as flying too.
+TEST(AutonomyRestart, PreviousInstanceFlyingOrMovingCountsAsAirborne) {
+  {
+    RestartState r;
+    r.motors_on = true;
+    KinematicWorld w(test::test_params(), {}, r);
+    w.p.z() += 0.05;
+    w.step();
+    EXPECT_EQ(w.autonomy.phase(), Phase::kHold) << w.out.status.reason;
+    EXPECT_TRUE(w.out.setpoint.motors_on);
+  }
+  {
+    KinematicWorld w;
+    w.v = Vector3d(0.6, 0, 0);
+    w.p.z() += 0.05;
+    Inputs in;
+    w.t += 10'000;
+    in.pose = w.pose();
+    w.out = w.autonomy.update(in, w.t);
+    EXPECT_EQ(w.autonomy.phase(), Phase::kHold) << w.out.status.reason;
+    EXPECT_TRUE(w.out.setpoint.motors_on);
+  }
+  {
+    KinematicWorld w;  // on the floor, still, no restored state: a normal start
+    w.step();
+    EXPECT_EQ(w.autonomy.phase(), Phase::kIdle);
+    EXPECT_FALSE(w.out.setpoint.motors_on);
+    w.send(Command::kTakeoff);
+    EXPECT_EQ(w.autonomy.phase(), Phase::kTakeoff);
+  }
+}
+
+// Bug: after a KILL, a restarted autonomy (with --auto-go) took off again. The KILL latch is
+// handed from the killed instance to the next one and keeps the motors off, airborne or not.
+TEST(AutonomyRestart, KillSurvivesARestart) {
+  KinematicWorld a;
+  a.takeoff_and_hover();
+  a.send(Command::kKill);
+  ASSERT_EQ(a.autonomy.phase(), Phase::kKilled);
+  const RestartState latched = a.autonomy.restart_state();
+  EXPECT_TRUE(latched.killed);
+  EXPECT_FALSE(latched.motors_on);
+
+  KinematicWorld b(test::test_params(), {}, latched);
+  b.p = Vector3d(0, 0, 1.0);  // say the process died before the vehicle hit the ground
+  b.step();
+  EXPECT_EQ(b.autonomy.phase(), Phase::kKilled);
+  EXPECT_TRUE(b.autonomy.resumed());
+  EXPECT_FALSE(b.out.setpoint.motors_on);
+  EXPECT_EQ(b.out.status.failsafe, Failsafe::kKill);
+  b.send(Command::kTakeoff);
+  for (int i = 0; i < 200; ++i) b.step();
+  EXPECT_EQ(b.autonomy.phase(), Phase::kKilled);
+  EXPECT_FALSE(b.out.setpoint.motors_on);
+  EXPECT_TRUE(b.autonomy.restart_state().killed) << "and on to the next restart";
+}
+
+// A pose-lost failsafe latched before the restart continues as a controlled descent on the
+// pose, motors on until touch-down; it is not forgotten into a hold.
+TEST(AutonomyRestart, PoseLostFailsafeSurvivesARestart) {
+  RestartState r;
+  r.motors_on = true;
+  r.failsafe = Failsafe::kPoseLost;
+  KinematicWorld w(test::test_params(), {}, r);
+  w.p = Vector3d(0.2, 0.1, 1.0);
+  w.step();
+  EXPECT_EQ(w.autonomy.phase(), Phase::kFailsafe) << w.out.status.reason;
+  EXPECT_TRUE(w.out.setpoint.motors_on);
+  EXPECT_EQ(w.autonomy.restart_state().failsafe, Failsafe::kPoseLost);
+  for (int i = 0; i < 100; ++i) w.step();
+  EXPECT_LT(w.p.z(), 0.85) << "descending";
+  EXPECT_TRUE(w.out.setpoint.motors_on);
+  ASSERT_TRUE(w.run_until([&] { return !w.out.setpoint.motors_on; }, 20));
+  EXPECT_LT(w.p.z(), w.gear_height_m + 0.05) << "motors off only on the ground";
 }
 
 }  // namespace

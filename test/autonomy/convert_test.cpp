@@ -4,6 +4,10 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
+
+#include "common/msg_convert.hpp"
+
 namespace alight::autonomy {
 namespace {
 
@@ -107,6 +111,154 @@ TEST(AutonomyConvertTest, StatusCarriesEveryField) {
   }
   EXPECT_EQ(phase_to_msg(Phase::kKilled), autonomy_status_t::PHASE_KILLED);
   EXPECT_EQ(failsafe_to_msg(Failsafe::kKill), autonomy_status_t::FAILSAFE_KILL);
+}
+
+// --- Issue 14: the validating conversions the node uses for every input.
+
+constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+imu_t good_imu() {
+  imu_t m{};
+  m.utime = 10;
+  m.accel_B[2] = 9.81;
+  return m;
+}
+
+// Bug: an Inf IMU sample reached the touch-down detector as an impact (motors off in the air).
+TEST(AutonomyConvertRegression, ImuNonFiniteOrBeyondRangeIsRefused) {
+  std::string why;
+  ASSERT_TRUE(imu_from_msg(good_imu(), &why));
+  for (int i = 0; i < 3; ++i) {
+    for (const double bad : {kNan, kInf, -kInf, 5000.0}) {
+      imu_t m = good_imu();
+      m.accel_B[i] = bad;
+      EXPECT_FALSE(imu_from_msg(m, &why)) << i << " " << bad;
+      EXPECT_NE(why.find("accel_B"), std::string::npos) << why;
+      m = good_imu();
+      m.gyro_B[i] = bad;
+      EXPECT_FALSE(imu_from_msg(m, &why)) << i << " " << bad;
+      EXPECT_NE(why.find("gyro_B"), std::string::npos) << why;
+    }
+  }
+  imu_t hard = good_imu();
+  hard.accel_B[2] = 9.81 + 60.0;  // a real touch-down spike is kept
+  EXPECT_TRUE(imu_from_msg(hard, &why));
+}
+
+target_t good_target() {
+  TargetMeasurement t;
+  t.utime = 99;
+  t.mission = Mission::kLanding;
+  t.found = true;
+  t.p_W_target = {1, 0.5, 0.2};
+  t.n_W = {0, 0, 2};  // not unit on the wire: normalised
+  t.size_m = {0.43, 0.28};
+  return to_msg(t, 1);
+}
+
+// Bug: a NaN size_m skipped the vehicle-fits check; NaN anywhere in a target is refused.
+TEST(AutonomyConvertRegression, TargetWithNonFiniteFieldsIsRefused) {
+  std::string why;
+  const auto ok = target_from_msg(good_target(), &why);
+  ASSERT_TRUE(ok) << why;
+  EXPECT_NEAR(ok->n_W.norm(), 1.0, 1e-12);
+  const auto expect_refused = [&](target_t m, const char* field) {
+    std::string w;
+    EXPECT_FALSE(target_from_msg(m, &w)) << field;
+    EXPECT_NE(w.find(field), std::string::npos) << w;
+  };
+  for (const double bad : {kNan, kInf}) {
+    for (int i = 0; i < 2; ++i) {
+      target_t m = good_target();
+      m.size_m[i] = bad;
+      expect_refused(m, "size_m");
+    }
+    for (int i = 0; i < 3; ++i) {
+      target_t m = good_target();
+      m.p_W_target[i] = bad;
+      expect_refused(m, "p_W_target");
+      m = good_target();
+      m.n_W[i] = bad;
+      expect_refused(m, "n_W");
+    }
+    target_t m = good_target();
+    m.target_yaw_rad = bad;
+    expect_refused(m, "target_yaw_rad");
+  }
+  target_t m = good_target();
+  m.size_m[1] = -0.3;
+  expect_refused(m, "size_m");
+  m = good_target();
+  m.n_W[0] = m.n_W[1] = m.n_W[2] = 0;
+  expect_refused(m, "n_W");
+  m.found = false;  // not found: the normal is not used
+  m.reason = target_t::REASON_NO_TARGET_PLANE;
+  EXPECT_TRUE(target_from_msg(m, &why));
+}
+
+// Bug: a signed NUDGE of NaN / Inf passed the geofence clamp.
+TEST(AutonomyConvertRegression, CommandWithNonFiniteNudgeIsRefused) {
+  operator_cmd_t m{};
+  m.command = operator_cmd_t::CMD_NUDGE;
+  m.nudge_W[0] = 0.2;
+  std::string why;
+  const auto ok = command_from_msg(m, &why);
+  ASSERT_TRUE(ok);
+  EXPECT_EQ(ok->command, Command::kNudge);
+  for (const double bad : {kNan, kInf, -kInf, 1e300}) {
+    for (int i = 0; i < 3; ++i) {
+      operator_cmd_t c = m;
+      c.nudge_W[i] = bad;
+      EXPECT_FALSE(command_from_msg(c, &why)) << i << " " << bad;
+      EXPECT_NE(why.find("nudge_W"), std::string::npos) << why;
+    }
+  }
+  operator_cmd_t unknown = m;
+  unknown.command = 42;
+  EXPECT_FALSE(command_from_msg(unknown, &why));
+  EXPECT_NE(why.find("42"), std::string::npos) << why;
+}
+
+// (common/msg_convert's pose_from_msg, tested here with the autonomy's other inputs.)
+TEST(AutonomyConvertRegression, PoseWithNonFiniteValuesOrBadQuaternionIsRefused) {
+  pose_t good{};
+  good.utime = 5;
+  good.pos[2] = 1.0;
+  good.orientation[0] = 1.0;
+  std::string why;
+  const auto p = pose_from_msg(good, &why);
+  ASSERT_TRUE(p) << why;
+  EXPECT_EQ(p->p_W_B, Vector3d(0, 0, 1.0));
+  const auto expect_refused = [&](const pose_t& m, const char* what) {
+    std::string w;
+    EXPECT_FALSE(pose_from_msg(m, &w)) << what;
+    EXPECT_NE(w.find(what), std::string::npos) << w;
+  };
+  for (const double bad : {kNan, kInf}) {
+    for (int i = 0; i < 3; ++i) {
+      pose_t m = good;
+      m.pos[i] = bad;
+      expect_refused(m, "position");
+      m = good;
+      m.vel[i] = bad;
+      expect_refused(m, "velocity");
+      m = good;
+      m.angular_velocity_B[i] = bad;
+      expect_refused(m, "angular");
+    }
+    for (int i = 0; i < 4; ++i) {
+      pose_t m = good;
+      m.orientation[i] = bad;
+      expect_refused(m, "orientation");
+    }
+  }
+  pose_t zero = good;
+  zero.orientation[0] = 0.0;
+  expect_refused(zero, "quaternion");
+  pose_t twice = good;
+  twice.orientation[0] = 2.0;
+  expect_refused(twice, "quaternion");
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 // gives an accelerometer impact spike. Time is injected: 10 ms per step.
 
 #include <cmath>
+#include <functional>
 #include <optional>
 
 #include "autonomy/autonomy.hpp"
@@ -36,8 +37,8 @@ inline OperatorCommand command(Command c, int64_t seq, Mission m = Mission::kNon
 
 struct KinematicWorld {
   explicit KinematicWorld(const AutonomyParams& params = test_params(),
-                          const OracleVisionParams& vp = {})
-      : autonomy(params), vision(vp), gear_height_m(params.landing.gear_height_m) {
+                          const OracleVisionParams& vp = {}, const RestartState& restored = {})
+      : autonomy(params, restored), vision(vp), gear_height_m(params.landing.gear_height_m) {
     truth.has_platform = true;
     truth.platform_center_W = Vector3d(1.0, 0.5, 0.2);
     truth.platform_size_m = Vector3d(0.432, 0.279, 0.2);
@@ -56,11 +57,13 @@ struct KinematicWorld {
   double yaw = 0.0;
   int64_t t = kT0;
   Output out;
-  bool mocap = true;        ///< false: no pose reaches autonomy (dropout)
-  bool vision_on = true;    ///< false: no VISION_TARGET at all
-  bool impact = false;      ///< an impact spike happened in the last step
+  bool mocap = true;      ///< false: no pose reaches autonomy (dropout)
+  bool vision_on = true;  ///< false: no VISION_TARGET at all
+  bool impact = false;    ///< an impact spike happened in the last step
   int64_t seq = 0;
   int64_t last_mocap_t = kT0;
+  /// Applied to every measurement of the oracle vision (a corrupt VISION_TARGET).
+  std::function<void(TargetMeasurement&)> corrupt_target;
 
   double ground_z(const Vector3d& q) const {
     if (truth.has_platform) {
@@ -124,6 +127,7 @@ struct KinematicWorld {
       in.target = target;
     } else if (vision_on) {
       in.target = vision.update(truth, t);
+      if (in.target && corrupt_target) corrupt_target(*in.target);
     }
     out = autonomy.update(in, t);
   }

@@ -10,6 +10,7 @@
 #include <spawn.h>
 #include <sys/wait.h>
 
+#include <Eigen/Core>
 #include <alight/attitude_cmd_t.hpp>
 #include <alight/autonomy_status_t.hpp>
 #include <alight/imu_t.hpp>
@@ -20,6 +21,7 @@
 #include <filesystem>
 #include <fstream>
 #include <lcm/lcm-cpp.hpp>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -48,6 +50,22 @@ class Process {
     }
   }
   bool ok() const { return pid_ > 0; }
+  /// SIGKILL, as a crash: no handler runs, nothing is flushed.
+  void crash() {
+    if (pid_ > 0) {
+      kill(pid_, SIGKILL);
+      int status = 0;
+      waitpid(pid_, &status, 0);
+      pid_ = -1;
+    }
+  }
+  /// Waits for the process to exit by itself; its exit code (128 + signal when killed).
+  int wait_exit() {
+    int status = 0;
+    waitpid(pid_, &status, 0);
+    pid_ = -1;
+    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  }
 
  private:
   pid_t pid_ = -1;
@@ -88,8 +106,12 @@ TEST(AutonomyNodeTest, AutoGoTakesOffStatusAtTenHertzAndKillStopsEverything) {
   std::filesystem::permissions(
       key_path, std::filesystem::perms::owner_read | std::filesystem::perms::owner_write);
   const alight::OperatorKey key = alight::parse_key(key_hex, "test key");
+  const auto state_path =
+      std::filesystem::temp_directory_path() / "alight_autonomy_node_test_1.state";
+  std::filesystem::remove(state_path);
   Process autonomy({bin + "alight-autonomy", "--config", config, "--lcm-url", kUrl, "--auto-go",
-                    "landing", "--log-level", "warn", "--key-file", key_path.string()});
+                    "landing", "--log-level", "warn", "--key-file", key_path.string(),
+                    "--state-file", state_path.string()});
   Process outer(
       {bin + "alight-outer-loop", "--config", config, "--lcm-url", kUrl, "--log-level", "warn"});
   ASSERT_TRUE(autonomy.ok());
@@ -151,10 +173,14 @@ TEST(AutonomyNodeTest, AutoGoTakesOffStatusAtTenHertzAndKillStopsEverything) {
     c.utime = utime;
     c.seq = seq;
     c.sender = "test-station";
+    // Signed for this vehicle and this run of autonomy, as announced on AUTONOMY_STATUS.
+    c.vehicle_id = rec.status.back().vehicle_id;
+    c.session = rec.status.back().cmd_session;
     c.command = alight::operator_cmd_t::CMD_KILL;
     c.auth = alight::operator_cmd_t::AUTH_NONE;
     return c;
   };
+  ASSERT_NE(rec.status.back().cmd_session, 0) << "a verifier announces its session";
   alight::operator_cmd_t unsigned_kill = kill_cmd(1, alight::wall_utime());
   lcm.publish("OPERATOR_CMD", &unsigned_kill);
   alight::operator_cmd_t forged = kill_cmd(2, alight::wall_utime());
@@ -187,7 +213,7 @@ TEST(AutonomyNodeTest, AutoGoTakesOffStatusAtTenHertzAndKillStopsEverything) {
   EXPECT_EQ(rec.status.back().phase, alight::autonomy_status_t::PHASE_KILLED)
       << rec.status.back().reason;
   EXPECT_EQ(rec.status.back().failsafe, alight::autonomy_status_t::FAILSAFE_KILL);
-  EXPECT_EQ(rec.setpoints.back().motors, alight::position_setpoint_t::MOTORS_OFF);
+  EXPECT_EQ(rec.setpoints.back().motors, alight::position_setpoint_t::MOTORS_KILL);
   EXPECT_FALSE(rec.cmds.back().armed);
   EXPECT_EQ(rec.cmds.back().thrust_N, 0.0);
   EXPECT_EQ(rec.status.back().last_cmd_seq, 4);
@@ -200,6 +226,226 @@ TEST(AutonomyNodeTest, AutoGoTakesOffStatusAtTenHertzAndKillStopsEverything) {
   } while (rec.status.back().cmds_rejected < 4 &&
            std::chrono::steady_clock::now() < replay_deadline);
   EXPECT_EQ(rec.status.back().cmds_rejected, 4);
+  // Issue 14: the station learns which command was refused and why.
+  using S = alight::autonomy_status_t;
+  EXPECT_EQ(rec.status.back().last_rejected_seq, 4);
+  EXPECT_EQ(rec.status.back().last_reject_reason, S::REJECT_REPLAYED);
+  EXPECT_EQ(rec.status.back().cmds_rejected_by_reason[S::REJECT_UNSIGNED], 1);
+  EXPECT_EQ(rec.status.back().cmds_rejected_by_reason[S::REJECT_BAD_SIGNATURE], 1);
+  EXPECT_EQ(rec.status.back().cmds_rejected_by_reason[S::REJECT_STALE], 1);
+  EXPECT_EQ(rec.status.back().cmds_rejected_by_reason[S::REJECT_REPLAYED], 1);
+  EXPECT_GT(rec.status.back().wall_utime, 0);
+  std::filesystem::remove(key_path);
+  std::filesystem::remove(state_path);
+}
+
+// --- Issue 14: the input boundary and restarts, with the real process.
+
+// Feeds MOCAP_POSE + IMU at 100 Hz of sensor time and records what alight-autonomy answers.
+struct Bench {
+  lcm::LCM lcm{kUrl};
+  Recorder rec;
+  int64_t t = 1'700'000'000'000'000;
+  Eigen::Vector3d p{0, 0, 0.12};
+  Eigen::Vector3d v{0, 0, 0};
+  Bench() {
+    lcm.subscribe("AUTONOMY_STATUS", &Recorder::on_status, &rec);
+    lcm.subscribe("POSITION_SETPOINT", &Recorder::on_sp, &rec);
+  }
+  void publish_sensors(int n) {
+    for (int i = 0; i < n; ++i) {
+      t += 10'000;
+      alight::pose_t pose{};
+      pose.utime = t;
+      for (int k = 0; k < 3; ++k) {
+        pose.pos[k] = p[k];
+        pose.vel[k] = v[k];
+      }
+      pose.orientation[0] = 1.0;
+      lcm.publish("MOCAP_POSE", &pose);
+      alight::imu_t imu{};
+      imu.utime = t;
+      imu.accel_B[2] = 9.81;
+      lcm.publish("IMU", &imu);
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+      while (lcm.handleTimeout(0) > 0) {
+      }
+    }
+  }
+  /// Sensors until the node has answered (a loaded machine may take a while to start it).
+  bool wait_for_status(int seconds = 20) {
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(seconds);
+    while (rec.status.empty() && std::chrono::steady_clock::now() < deadline) {
+      publish_sensors(5);
+      lcm.handleTimeout(20);
+    }
+    return !rec.status.empty();
+  }
+  template <class Pred>
+  bool sensors_until(Pred pred, int seconds = 10) {
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(seconds);
+    while (!pred() && std::chrono::steady_clock::now() < deadline) {
+      publish_sensors(5);
+      for (int i = 0; i < 5; ++i) lcm.handleTimeout(5);
+    }
+    return pred();
+  }
+};
+
+std::string temp_file(const std::string& name) {
+  const auto path = std::filesystem::temp_directory_path() /
+                    ("alight_autonomy_node_test_" + std::to_string(getpid()) + "_" + name);
+  std::filesystem::remove(path);
+  return path.string();
+}
+
+// Bug: one IMU message stamped an hour ahead moved the autonomy's clock an hour on, so every
+// pose after it was an hour old: FAILSAFE for good. Now the stamp guard refuses that message
+// and the clock never moves.
+TEST(AutonomyNodeRegression, ImuStampedAnHourAheadDoesNotHoldFailsafe) {
+  const std::string bin = std::string(ALIGHT_BINARY_DIR) + "/bin/";
+  const std::string config = std::string(ALIGHT_SOURCE_DIR) + "/config/vehicles/starmac.yaml";
+  const std::string state = temp_file("future.state");
+  Bench b;
+  ASSERT_TRUE(b.lcm.good());
+  Process autonomy({bin + "alight-autonomy", "--config", config, "--lcm-url", kUrl, "--auto-go",
+                    "landing", "--log-level", "error", "--state-file", state});
+  ASSERT_TRUE(autonomy.ok());
+  ASSERT_TRUE(b.wait_for_status()) << "alight-autonomy never answered";
+  ASSERT_TRUE(b.sensors_until(
+      [&] { return b.rec.status.back().phase == alight::autonomy_status_t::PHASE_TAKEOFF; }));
+  alight::imu_t future{};
+  future.utime = b.t + 3600'000'000LL;
+  future.accel_B[2] = 9.81;
+  b.lcm.publish("IMU", &future);
+  b.publish_sensors(200);  // 2 s of sensor time: twice pose_lost_s
+  for (int i = 0; i < 20; ++i) b.lcm.handleTimeout(10);
+  ASSERT_FALSE(b.rec.status.empty());
+  const auto& last = b.rec.status.back();
+  EXPECT_NE(last.phase, alight::autonomy_status_t::PHASE_FAILSAFE) << last.reason;
+  EXPECT_EQ(last.phase, alight::autonomy_status_t::PHASE_TAKEOFF) << last.reason;
+  EXPECT_LT(last.utime, b.t + 1'000'000) << "the clock never jumped ahead";
+  EXPECT_EQ(b.rec.setpoints.back().motors, alight::position_setpoint_t::MOTORS_ON);
+  std::filesystem::remove(state);
+}
+
+// Bug: a restarted autonomy's first setpoint was motors-off (the outer loop disarmed in the
+// air), and with --auto-go it took off and started the mission again, even after a KILL. Now:
+// killed (SIGKILL) in flight and started again with the same arguments, it holds where the
+// vehicle is with the motors on; after a KILL it keeps the motors off, even on the ground.
+TEST(AutonomyNodeRegression, RestartedInFlightHoldsAndKillSurvivesRestarts) {
+  const std::string bin = std::string(ALIGHT_BINARY_DIR) + "/bin/";
+  const std::string config = std::string(ALIGHT_SOURCE_DIR) + "/config/vehicles/starmac.yaml";
+  const std::string state = temp_file("restart.state");
+  const std::string key_path = temp_file("restart.key");
+  const std::string key_hex(64, 'c');
+  {
+    std::ofstream f(key_path);
+    f << key_hex << "\n";
+  }
+  std::filesystem::permissions(
+      key_path, std::filesystem::perms::owner_read | std::filesystem::perms::owner_write);
+  const alight::OperatorKey key = alight::parse_key(key_hex, "test key");
+  const std::vector<std::string> args = {bin + "alight-autonomy",
+                                         "--config",
+                                         config,
+                                         "--lcm-url",
+                                         kUrl,
+                                         "--auto-go",
+                                         "landing",
+                                         "--log-level",
+                                         "error",
+                                         "--key-file",
+                                         key_path,
+                                         "--state-file",
+                                         state};
+  Bench b;
+  ASSERT_TRUE(b.lcm.good());
+  const auto phase_is = [&](int8_t phase) {
+    return !b.rec.status.empty() && b.rec.status.back().phase == phase;
+  };
+  {
+    Process first(args);
+    ASSERT_TRUE(first.ok());
+    ASSERT_TRUE(b.wait_for_status()) << "alight-autonomy never answered";
+    ASSERT_TRUE(
+        b.sensors_until([&] { return phase_is(alight::autonomy_status_t::PHASE_TAKEOFF); }));
+    b.p.z() = 0.9;  // climbing
+    b.v.z() = 0.4;
+    b.publish_sensors(150);
+    ASSERT_TRUE(phase_is(alight::autonomy_status_t::PHASE_TAKEOFF));
+    first.crash();
+  }
+  b.rec = Recorder{};
+  {
+    Process second(args);
+    ASSERT_TRUE(second.ok());
+    ASSERT_TRUE(b.wait_for_status()) << "the restarted alight-autonomy never answered";
+    b.publish_sensors(200);
+    for (int i = 0; i < 20; ++i) b.lcm.handleTimeout(10);
+    ASSERT_FALSE(b.rec.setpoints.empty());
+    for (const auto& sp : b.rec.setpoints) {
+      ASSERT_EQ(sp.motors, alight::position_setpoint_t::MOTORS_ON) << "motors off in the air";
+      EXPECT_NEAR(sp.p_W[2], 0.9, 0.05) << "holds where it is";
+    }
+    for (const auto& st : b.rec.status) {
+      EXPECT_NE(st.phase, alight::autonomy_status_t::PHASE_TAKEOFF) << "took off again";
+      EXPECT_NE(st.phase, alight::autonomy_status_t::PHASE_DETECTION) << "--auto-go ran";
+    }
+    EXPECT_EQ(b.rec.status.back().phase, alight::autonomy_status_t::PHASE_HOLD)
+        << b.rec.status.back().reason;
+
+    alight::operator_cmd_t kill{};
+    kill.utime = alight::wall_utime();
+    kill.seq = 1;
+    kill.sender = "test-station";
+    kill.command = alight::operator_cmd_t::CMD_KILL;
+    alight::sign(kill, key);
+    b.lcm.publish("OPERATOR_CMD", &kill);
+    ASSERT_TRUE(b.sensors_until([&] { return phase_is(alight::autonomy_status_t::PHASE_KILLED); }));
+    second.crash();
+  }
+  b.rec = Recorder{};
+  b.p.z() = 0.12;  // it fell; on the ground, --auto-go must still not take off
+  b.v.setZero();
+  {
+    Process third(args);
+    ASSERT_TRUE(third.ok());
+    ASSERT_TRUE(b.wait_for_status()) << "the restarted alight-autonomy never answered";
+    b.publish_sensors(200);
+    for (int i = 0; i < 20; ++i) b.lcm.handleTimeout(10);
+    ASSERT_FALSE(b.rec.setpoints.empty());
+    for (const auto& sp : b.rec.setpoints)
+      EXPECT_EQ(sp.motors, alight::position_setpoint_t::MOTORS_OFF) << "KILL forgotten";
+    for (const auto& st : b.rec.status)
+      EXPECT_EQ(st.phase, alight::autonomy_status_t::PHASE_KILLED) << st.reason;
+  }
+  std::filesystem::remove(state);
+  std::filesystem::remove(key_path);
+}
+
+// Bug: command_max_age_s: 1e-7 reached an assert (SIGABRT, exit 134) that the launcher
+// restarted forever. Now exit 2 with file, key and value.
+TEST(AutonomyNodeRegression, BadTimeoutIsExitTwoNotAnAbort) {
+  const std::string bin = std::string(ALIGHT_BINARY_DIR) + "/bin/";
+  std::ifstream in(std::string(ALIGHT_SOURCE_DIR) + "/config/vehicles/starmac.yaml");
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string yaml = text.str();
+  const std::string from = "command_max_age_s: 2.0";
+  ASSERT_NE(yaml.find(from), std::string::npos);
+  yaml.replace(yaml.find(from), from.size(), "command_max_age_s: 1e-7");
+  const std::string config = temp_file("tiny.yaml");
+  std::ofstream(config) << yaml;
+  const std::string key_path = temp_file("tiny.key");
+  std::ofstream(key_path) << std::string(64, 'd') << "\n";
+  std::filesystem::permissions(
+      key_path, std::filesystem::perms::owner_read | std::filesystem::perms::owner_write);
+  Process autonomy({bin + "alight-autonomy", "--config", config, "--lcm-url", kUrl, "--key-file",
+                    key_path, "--state-file", temp_file("tiny.state"), "--log-level", "error"});
+  ASSERT_TRUE(autonomy.ok());
+  EXPECT_EQ(autonomy.wait_exit(), 2);
+  std::filesystem::remove(config);
   std::filesystem::remove(key_path);
 }
 

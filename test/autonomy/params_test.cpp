@@ -1,11 +1,27 @@
 // The autonomy: sections of the vehicle files load and validate; errors name file and key.
 
+#include "autonomy/params.hpp"
+
 #include <gtest/gtest.h>
 
-#include "autonomy/params.hpp"
+#include <cmath>
+#include <string>
+#include <utility>
+#include <vector>
 
 namespace alight::autonomy {
 namespace {
+
+// The value in an error is as written for a non-finite one (refused at the read), as the number
+// it is otherwise (refused by validate(): 1e-7 reads back as 1e-07).
+void expect_value(const ParamError& e, const std::string& written) {
+  const double want = YAML::Load(written).as<double>();
+  if (std::isfinite(want)) {
+    EXPECT_DOUBLE_EQ(std::stod(e.value()), want) << e.what();
+  } else {
+    EXPECT_EQ(e.value(), written) << e.what();
+  }
+}
 
 TEST(AutonomyParamsTest, VehicleFilesLoadWithThePapersThresholds) {
   for (const char* v : {"starmac", "pelican"}) {
@@ -39,6 +55,71 @@ TEST(AutonomyParamsTest, ErrorsNameTheNestedKey) {
 TEST(AutonomyParamsTest, UnsignedCommandsAreRefusedByDefault) {
   const auto p = load_params(ParamNode::from_string("autonomy: {}", "v.yaml"));
   EXPECT_FALSE(p.accept_unsigned_commands);
+}
+
+// Bug: command_max_age_s: 1e-7 reached the verifier's assert (SIGABRT, exit 134, restarted by
+// the launcher forever). Now a ParamError (exit 2) naming file, key and value.
+TEST(AutonomyParamsRegression, TinyCommandMaxAgeIsAParamErrorNotAnAssert) {
+  for (const char* v : {"1e-7", "0", "-1", "1e9", ".inf", ".nan"}) {
+    try {
+      load_params(ParamNode::from_string(std::string("autonomy: {command_max_age_s: ") + v + "}",
+                                         "v.yaml"));
+      ADD_FAILURE() << v << " accepted";
+    } catch (const ParamError& e) {
+      EXPECT_EQ(e.file(), "v.yaml") << v;
+      EXPECT_EQ(e.key(), "autonomy.command_max_age_s") << v;
+      expect_value(e, v);
+    }
+  }
+}
+
+// Bug: `.inf` loaded for pose_lost_s (and every other timeout): the failsafe never fired.
+TEST(AutonomyParamsRegression, InfiniteOrHugeTimeoutsAreRefusedNamingTheKey) {
+  const std::vector<std::pair<std::string, std::string>> timeouts = {
+      {"failsafe", "pose_stale_s"},      {"failsafe", "pose_lost_s"},
+      {"refinement", "vantage_dwell_s"}, {"refinement", "vantage_timeout_s"},
+      {"refinement", "lost_timeout_s"},  {"refinement", "max_time_s"},
+      {"landing", "touchdown_still_s"},  {"landing", "lost_timeout_s"},
+      {"ingress", "align_settle_s"},     {"ingress", "lost_timeout_s"},
+      {"restart", "state_max_age_s"},    {"", "status_period_s"},
+      {"", "command_max_age_s"}};
+  for (const auto& [section, key] : timeouts) {
+    const std::string full = "autonomy." + (section.empty() ? key : section + "." + key);
+    for (const char* v : {".inf", ".nan", "1e7"}) {
+      const std::string yaml = section.empty()
+                                   ? "autonomy: {" + key + ": " + v + "}"
+                                   : "autonomy: {" + section + ": {" + key + ": " + v + "}}";
+      try {
+        load_params(ParamNode::from_string(yaml, "v.yaml"));
+        ADD_FAILURE() << full << " = " << v << " accepted";
+      } catch (const ParamError& e) {
+        EXPECT_EQ(e.key(), full) << v << ": " << e.what();
+        expect_value(e, v);
+        EXPECT_EQ(e.file(), "v.yaml");
+      }
+    }
+  }
+}
+
+// Every number must be finite, not only the timeouts (an infinite geofence clamps nothing).
+TEST(AutonomyParamsRegression, NonFiniteNumbersAreRefusedNamingTheKey) {
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"autonomy: {geofence: {max_W_m: [3, .inf, 2.5]}}", "autonomy.geofence.max_W_m"},
+      {"autonomy: {detection: {landing_area_max_W_m: [.nan, 1]}}",
+       "autonomy.detection.landing_area_max_W_m"},
+      {"autonomy: {takeoff: {reached_tol_m: .inf}}", "autonomy.takeoff.reached_tol_m"},
+      {"autonomy: {refinement: {gate_chi2: .inf}}", "autonomy.refinement.gate_chi2"},
+      {"autonomy: {hover_tol_m: .nan}", "autonomy.hover_tol_m"},
+      {"autonomy: {failsafe: {max_nudge_m: .inf}}", "autonomy.failsafe.max_nudge_m"},
+      {"autonomy: {restart: {airborne_height_m: .inf}}", "autonomy.restart.airborne_height_m"}};
+  for (const auto& [yaml, key] : cases) {
+    try {
+      load_params(ParamNode::from_string(yaml, "v.yaml"));
+      ADD_FAILURE() << yaml << " accepted";
+    } catch (const ParamError& e) {
+      EXPECT_EQ(e.key(), key) << e.what();
+    }
+  }
 }
 
 }  // namespace

@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <alight/imu_t.hpp>
+#include <alight/node_status_t.hpp>
+#include <alight/operator_cmd_t.hpp>
 #include <alight/pose_t.hpp>
 #include <chrono>
 #include <csignal>
@@ -76,6 +78,55 @@ TEST(NodeTest, MalformedMessagesAreCountedNotDelivered) {
   ASSERT_TRUE(spin_until(
       sub, [&] { return delivered == 1 && sub.stats("NODE_TEST_BAD").decode_errors == 2; }));
   EXPECT_EQ(sub.stats("NODE_TEST_BAD").received, 1u);
+}
+
+// Regression (issue 14): one 28-byte OPERATOR_CMD (right fingerprint, a string length of 0)
+// made lcm-gen's decoder throw std::length_error out of Node::decode and alight-autonomy exited.
+TEST(NodeTest, RegressionZeroLengthStringIsADecodeErrorNotAnException) {
+  Node pub(kUrl, "pub"), sub(kUrl, "sub");
+  int delivered = 0;
+  sub.on<operator_cmd_t>("NODE_TEST_CMD", [&](const operator_cmd_t&) { ++delivered; });
+  operator_cmd_t c{};
+  c.sender = "gs";
+  std::vector<uint8_t> bytes(c.getEncodedSize());
+  c.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  bytes.resize(28);
+  for (int i = 0; i < 4; ++i) bytes[24 + i] = 0;  // the sender string's length
+  pub.lcm().publish("NODE_TEST_CMD", bytes.data(), static_cast<unsigned>(bytes.size()));
+  pub.publish("NODE_TEST_CMD", c);
+  ASSERT_TRUE(spin_until(
+      sub, [&] { return delivered == 1 && sub.stats("NODE_TEST_CMD").decode_errors == 1; }));
+}
+
+TEST(NodeTest, RefusedValuesAndStampsAreCountedAndReported) {
+  Node node(kUrl, "counted");
+  node.on<imu_t>("NODE_TEST_COUNT", [](const imu_t&) {});
+  EXPECT_FALSE(node.reject_value("NODE_TEST_COUNT", "accel not finite"));
+  EXPECT_TRUE(node.accept_stamp("NODE_TEST_COUNT", wall_utime()));
+  EXPECT_FALSE(node.accept_stamp("NODE_TEST_COUNT", wall_utime() + 3'600'000'000LL));
+  EXPECT_FALSE(node.accept_stamp("NODE_TEST_COUNT", 0));
+  EXPECT_EQ(node.stats("NODE_TEST_COUNT").rejected_values, 1u);
+  EXPECT_EQ(node.stats("NODE_TEST_COUNT").rejected_stamps, 2u);
+  const node_status_t st = node.status_message(123);
+  EXPECT_EQ(st.node, "counted");
+  EXPECT_EQ(st.utime, 123);
+  ASSERT_EQ(st.n, 1);
+  EXPECT_EQ(st.channels.at(0).channel, "NODE_TEST_COUNT");
+  EXPECT_EQ(st.channels.at(0).rejected_values, 1);
+  EXPECT_EQ(st.channels.at(0).rejected_stamps, 2);
+}
+
+TEST(NodeTest, EveryNodePublishesItsStatus) {
+  Node pub(kUrl, "status-pub"), sub(kUrl, "sub");
+  pub.set_status_period(0.05);
+  std::vector<std::string> names;
+  sub.on<node_status_t>("NODE_STATUS", [&](const node_status_t& m) { names.push_back(m.node); });
+  ASSERT_TRUE(spin_until(sub, [&] {
+    pub.spin_once(10);
+    for (const auto& n : names)
+      if (n == "status-pub") return true;
+    return false;
+  }));
 }
 
 TEST(NodeTest, TimersRunAtTheirPeriodAndStopEndsRun) {

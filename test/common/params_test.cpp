@@ -144,5 +144,47 @@ TEST(ParamsTest, CameraMountRejectsUnknownMount) {
   EXPECT_EQ(e.value(), "sideways");
 }
 
+// Regression (issue 14): `.inf` loaded for pose_lost_s / failsafe_disarm_after_s /
+// setpoint_lost_s and turned the failsafes off; NaN passed every `x > 0` check as false but
+// `!(x <= 0)` style checks as true.
+TEST(ParamsTest, NonFiniteNumbersAreRefusedWithTheFullKey) {
+  for (const char* v : {".inf", "-.inf", ".nan", ".NaN", "1e999"}) {
+    const auto e = expect_param_error(
+        [&] { load(std::string("autonomy:\n  refinement:\n    eps_horz_m: ") + v + "\n"); });
+    EXPECT_EQ(e.key(), "autonomy.refinement.eps_horz_m") << v;
+    EXPECT_EQ(e.value(), v);
+    EXPECT_EQ(e.file(), "config/vehicles/test.yaml");
+    EXPECT_NE(std::string(e.what()).find("finite"), std::string::npos) << e.what();
+  }
+}
+
+TEST(ParamsTest, NonFiniteNumbersInAListAreRefused) {
+  const auto root = ParamNode::from_string("p: [1, .nan, 3]\n", "f.yaml");
+  Eigen::Vector3d v;
+  const auto e = expect_param_error([&] { root.read("p", v); });
+  EXPECT_EQ(e.key(), "p");
+}
+
+// Regression (issue 14): a duplicate YAML key was taken silently (yaml-cpp keeps both entries
+// and lookups see the first, so the later line, usually the edit, did nothing).
+TEST(ParamsTest, DuplicateKeyIsRefusedWithItsFullKeyAndLine) {
+  const auto e = expect_param_error(
+      [] { load("autonomy:\n  refinement:\n    n_min: 3\n    eps_horz_m: 0.1\n    n_min: 5\n"); });
+  EXPECT_EQ(e.key(), "autonomy.refinement.n_min");
+  EXPECT_EQ(e.value(), "5");
+  EXPECT_EQ(e.file(), "config/vehicles/test.yaml");
+  EXPECT_NE(std::string(e.what()).find("line 5"), std::string::npos) << e.what();
+}
+
+TEST(ParamsTest, DuplicateKeyInsideAListIsRefused) {
+  const auto e = expect_param_error(
+      [] { ParamNode::from_string("procs:\n  - name: a\n    name: b\n", "launch.yaml"); });
+  EXPECT_EQ(e.key(), "procs[0].name");
+}
+
+TEST(ParamsTest, SameKeyInDifferentMappingsIsFine) {
+  EXPECT_NO_THROW(ParamNode::from_string("a:\n  x: 1\nb:\n  x: 2\n", "f.yaml"));
+}
+
 }  // namespace
 }  // namespace alight

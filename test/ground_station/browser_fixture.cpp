@@ -29,7 +29,12 @@ int main(int argc, char** argv) {
   app.add_option("--fps", fps);
   CLI11_PARSE(app, argc, argv);
 
-  alight::CommandVerifier verifier(alight::load_key_file(key_file).key);
+  // As autonomy runs it: vehicle id, a session per start, announced on AUTONOMY_STATUS, and the
+  // last accepted / rejected seq echoed there (the page shows acknowledgements from them).
+  const int64_t session = alight::draw_session_nonce();
+  alight::CommandVerifier verifier(alight::load_key_file(key_file).key, "alight", session);
+  std::atomic<int64_t> last_accepted_seq{-1};
+  std::atomic<bool> acknowledge{true};
   alight::Node node(lcm_url, "gs-fixture");
   std::atomic<int> phase{alight::autonomy_status_t::PHASE_IDLE};
   std::atomic<bool> quit{false};
@@ -37,6 +42,8 @@ int main(int argc, char** argv) {
     std::string line;
     while (std::getline(std::cin, line)) {
       if (line.rfind("phase ", 0) == 0) phase = std::stoi(line.substr(6));
+      if (line == "ack off") acknowledge = false;  // a vehicle that no longer answers
+      if (line == "ack on") acknowledge = true;
       if (line == "quit") break;
     }
     quit = true;
@@ -45,6 +52,7 @@ int main(int argc, char** argv) {
 
   node.on<alight::operator_cmd_t>("OPERATOR_CMD", [&](const alight::operator_cmd_t& cmd) {
     const auto verdict = verifier.check(cmd, alight::wall_utime());
+    if (verdict.accepted() && acknowledge) last_accepted_seq = cmd.seq;
     std::printf(
         "{\"event\":\"cmd\",\"verdict\":\"%s\",\"command\":%d,\"mission\":%d,\"seq\":%lld,"
         "\"sender\":\"%s\",\"nudge\":[%.3f,%.3f,%.3f]}\n",
@@ -98,6 +106,13 @@ int main(int argc, char** argv) {
     s.covariance[4] = 0.02;
     s.covariance[8] = 0.0025;
     s.setpoint_W[2] = 1.5;
+    s.vehicle_id = "alight";
+    s.cmd_session = session;
+    s.last_cmd_seq = last_accepted_seq;
+    s.cmds_rejected = static_cast<int32_t>(verifier.n_rejected());
+    s.last_rejected_seq = verifier.last_rejected_seq();
+    s.last_reject_reason = static_cast<int8_t>(verifier.last_reject_reason());
+    s.wall_utime = alight::wall_utime();
     node.publish("AUTONOMY_STATUS", s);
   });
   node.every(0.2, [&](int64_t now) {

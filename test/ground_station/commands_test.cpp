@@ -50,18 +50,22 @@ TEST(ParseCommandTest, RefusesMalformedRequests) {
   EXPECT_FALSE(parse_command_request({{"command", "nudge"}, {"dz", ""}}, 1.0).request);
 }
 
+constexpr int64_t kSession = 77;
+
 TEST(CommandBuilderTest, SignsCommandsThatTheVerifierAccepts) {
-  CommandBuilder builder("gs-test", key());
-  CommandVerifier verifier(key());
+  CommandBuilder builder("gs-test", key(), "uav-1");
+  CommandVerifier verifier(key(), "uav-1", kSession);
   const int64_t now = 1'700'000'000'000'000;
   CommandRequest go{operator_cmd_t::CMD_GO, 1, {9, 9, 9}};
-  const operator_cmd_t a = builder.build(go, now);
+  const operator_cmd_t a = builder.build(go, kSession, now);
   EXPECT_EQ(a.sender, "gs-test");
+  EXPECT_EQ(a.vehicle_id, "uav-1");
+  EXPECT_EQ(a.session, kSession);
   EXPECT_EQ(a.utime, now);
   EXPECT_EQ(a.nudge_W[0], 0.0);  // only nudges carry an offset
   EXPECT_EQ(verifier.check(a, now).reason, CommandVerdict::Reason::kAccepted);
   // Two commands in the same microsecond still get increasing seq.
-  const operator_cmd_t b = builder.build({operator_cmd_t::CMD_ABORT, 0, {}}, now);
+  const operator_cmd_t b = builder.build({operator_cmd_t::CMD_ABORT, 0, {}}, kSession, now);
   EXPECT_GT(b.seq, a.seq);
   EXPECT_EQ(b.mission, 0);
   EXPECT_EQ(verifier.check(b, now).reason, CommandVerdict::Reason::kAccepted);
@@ -69,17 +73,109 @@ TEST(CommandBuilderTest, SignsCommandsThatTheVerifierAccepts) {
 
 TEST(CommandBuilderTest, SeqIncreasesAcrossGroundStationRestarts) {
   const int64_t t0 = 1'700'000'000'000'000;
-  CommandVerifier verifier(key());
-  CommandBuilder first("gs", key());
+  CommandVerifier verifier(key(), "uav-1", kSession);
+  CommandBuilder first("gs", key(), "uav-1");
   for (int i = 0; i < 5; ++i)
     ASSERT_TRUE(
-        verifier.check(first.build({operator_cmd_t::CMD_ABORT, 0, {}}, t0), t0 + 10).accepted());
+        verifier.check(first.build({operator_cmd_t::CMD_ABORT, 0, {}}, kSession, t0), t0 + 10)
+            .accepted());
   // A restarted station (fresh builder) one second later is not taken for a replay.
-  CommandBuilder second("gs", key());
-  EXPECT_TRUE(
-      verifier
-          .check(second.build({operator_cmd_t::CMD_ABORT, 0, {}}, t0 + 1'000'000), t0 + 1'000'000)
-          .accepted());
+  CommandBuilder second("gs", key(), "uav-1");
+  EXPECT_TRUE(verifier
+                  .check(second.build({operator_cmd_t::CMD_ABORT, 0, {}}, kSession, t0 + 1'000'000),
+                         t0 + 1'000'000)
+                  .accepted());
+}
+
+// --- acknowledgement -------------------------------------------------------------------------
+
+autonomy_status_t status(int64_t session, int64_t last_cmd_seq, int32_t rejected = 0,
+                         int64_t last_rejected_seq = -1, int8_t reason = 0) {
+  autonomy_status_t st{};
+  st.vehicle_id = "uav-1";
+  st.cmd_session = session;
+  st.last_cmd_seq = last_cmd_seq;
+  st.cmds_rejected = rejected;
+  st.last_rejected_seq = last_rejected_seq;
+  st.last_reject_reason = reason;
+  return st;
+}
+
+// Regression (issue 14): a KILL with no vehicle listening showed "sent", nothing more. Now it
+// turns NOT ACKNOWLEDGED once the deadline passes without AUTONOMY_STATUS echoing it.
+TEST(CommandTrackerRegression, KillWithNoVehicleListeningRaisesTheAlarm) {
+  CommandTracker tracker(1.0);
+  const int64_t t0 = 5'000'000;
+  tracker.sent("kill", 1001, kSession, t0);
+  const TrackedCommand& kill = tracker.commands().back();
+  EXPECT_EQ(tracker.state_at(kill, t0 + 999'999), AckState::kSent);
+  EXPECT_EQ(tracker.alarm(t0 + 999'999), nullptr);
+  EXPECT_EQ(tracker.state_at(kill, t0 + 1'000'001), AckState::kNotAcknowledged);
+  ASSERT_NE(tracker.alarm(t0 + 1'000'001), nullptr);
+  EXPECT_EQ(tracker.alarm(t0 + 1'000'001)->name, "kill");
+  EXPECT_STREQ(ack_state_name(tracker.state_at(kill, t0 + 2'000'000)), "not_acknowledged");
+}
+
+TEST(CommandTrackerTest, EchoedSeqAcknowledgesAndALateEchoStillCounts) {
+  CommandTracker tracker(1.0);
+  tracker.on_status(status(kSession, -1), 0);
+  tracker.sent("go", 2000, kSession, 100);
+  tracker.on_status(status(kSession, -1), 50'000);  // not yet
+  EXPECT_EQ(tracker.state_at(tracker.commands().back(), 60'000), AckState::kSent);
+  tracker.on_status(status(kSession, 2000), 120'000);
+  const TrackedCommand& go = tracker.commands().back();
+  EXPECT_EQ(tracker.state_at(go, 5'000'000), AckState::kAcknowledged);
+  EXPECT_EQ(go.answered_utime, 120'000);
+  EXPECT_EQ(tracker.alarm(5'000'000), nullptr);
+
+  tracker.sent("abort", 2001, kSession, 6'000'000);
+  EXPECT_NE(tracker.alarm(7'500'000), nullptr);  // overdue
+  tracker.on_status(status(kSession, 2001), 7'600'000);
+  EXPECT_EQ(tracker.alarm(7'600'000), nullptr);  // answered late: the alarm clears
+}
+
+TEST(CommandTrackerTest, RejectionIsShownWithItsReason) {
+  CommandTracker tracker(1.0);
+  tracker.sent("go", 3000, kSession, 0);
+  tracker.on_status(status(kSession, -1, 1, 3000, autonomy_status_t::REJECT_STALE), 10'000);
+  const TrackedCommand& go = tracker.commands().back();
+  EXPECT_EQ(tracker.state_at(go, 10'000), AckState::kRejected);
+  EXPECT_NE(go.reject_reason.find("stale"), std::string::npos);
+}
+
+TEST(CommandTrackerTest, ALaterEchoAcknowledgesAnEarlierCommandOnlyWhenNothingWasRejected) {
+  CommandTracker tracker(1.0);
+  tracker.on_status(status(kSession, -1, 4), 0);
+  tracker.sent("nudge", 10, kSession, 100);
+  tracker.sent("nudge", 11, kSession, 200);
+  // Only seq 11 was echoed, and the rejection count is unchanged: 10 was accepted before it.
+  tracker.on_status(status(kSession, 11, 4), 50'000);
+  EXPECT_EQ(tracker.state_at(tracker.commands()[0], 60'000), AckState::kAcknowledged);
+  EXPECT_EQ(tracker.state_at(tracker.commands()[1], 60'000), AckState::kAcknowledged);
+
+  // The same with one rejection in between: it may have been ours; never guessed.
+  CommandTracker other(1.0);
+  other.on_status(status(kSession, -1, 4), 0);
+  other.sent("nudge", 10, kSession, 100);
+  other.sent("nudge", 11, kSession, 200);
+  other.on_status(status(kSession, 11, 5, 999), 50'000);
+  EXPECT_EQ(other.state_at(other.commands()[0], 2'000'000), AckState::kNotAcknowledged);
+  EXPECT_EQ(other.state_at(other.commands()[1], 2'000'000), AckState::kAcknowledged);
+}
+
+TEST(CommandTrackerTest, AnswersOfAnotherSessionAcknowledgeNothing) {
+  // autonomy restarted (new session) and happens to echo an equal seq: not ours.
+  CommandTracker tracker(1.0);
+  tracker.sent("go", 42, kSession, 0);
+  tracker.on_status(status(kSession + 1, 42), 10'000);
+  EXPECT_EQ(tracker.state_at(tracker.commands().back(), 2'000'000), AckState::kNotAcknowledged);
+}
+
+TEST(CommandTrackerTest, KeepsABoundedHistory) {
+  CommandTracker tracker(1.0, 5);
+  for (int i = 0; i < 50; ++i) tracker.sent("abort", i, kSession, i);
+  EXPECT_EQ(tracker.commands().size(), 5u);
+  EXPECT_EQ(tracker.commands().front().seq, 45);
 }
 
 TEST(LoopbackTest, RecognisesLoopbackAddresses) {
@@ -92,20 +188,38 @@ TEST(LoopbackTest, RecognisesLoopbackAddresses) {
 
 using Headers = std::multimap<std::string, std::string>;
 
-TEST(AccessTest, LoopbackNeedsNoTokenButALoopbackHost) {
-  const AccessPolicy p = policy_for_bind("127.0.0.1", "0123456789abcdef0123456789abcdef");
-  EXPECT_FALSE(p.require_token);
-  EXPECT_EQ(check_command_access(p, {{"Host", "127.0.0.1:8080"}}), Access::kAllowed);
-  EXPECT_EQ(
-      check_command_access(p, {{"host", "localhost:8080"}, {"Origin", "http://localhost:8080"}}),
-      Access::kAllowed);
+// Regression (issue 14): on 127.0.0.1 no token was asked, so any web page the operator's
+// browser opened could post commands (a form needs no script). Now the token is required there
+// too, in a custom header that a cross-site form cannot set.
+TEST(AccessRegression, LoopbackCommandsNeedTheTokenToo) {
+  const std::string token = "0123456789abcdef0123456789abcdef";
+  const AccessPolicy p = policy_for_bind("127.0.0.1", token);
+  EXPECT_TRUE(p.require_token);
+  EXPECT_EQ(check_command_access(p, {{"Host", "127.0.0.1:8080"}}), Access::kMissingToken);
+  // What a cross-site <form method=post> can send: no custom header.
+  EXPECT_EQ(check_command_access(p, {{"Host", "127.0.0.1:8080"},
+                                     {"Content-Type", "application/x-www-form-urlencoded"}}),
+            Access::kMissingToken);
+  EXPECT_EQ(check_command_access(p, {{"Host", "127.0.0.1:8080"}, {"X-Alight-Token", token}}),
+            Access::kAllowed);
+}
+
+TEST(AccessTest, LoopbackNeedsALoopbackHost) {
+  const std::string token = "0123456789abcdef0123456789abcdef";
+  const AccessPolicy p = policy_for_bind("127.0.0.1", token);
+  EXPECT_EQ(check_command_access(p, {{"host", "localhost:8080"},
+                                     {"Origin", "http://localhost:8080"},
+                                     {"X-Alight-Token", token}}),
+            Access::kAllowed);
   // DNS rebinding: a name that resolves to 127.0.0.1 but is not ours.
-  EXPECT_EQ(check_command_access(p, {{"Host", "evil.example:8080"}}), Access::kBadHost);
+  EXPECT_EQ(check_command_access(p, {{"Host", "evil.example:8080"}, {"X-Alight-Token", token}}),
+            Access::kBadHost);
   EXPECT_EQ(check_command_access(p, {}), Access::kBadHost);
   // A page from another site posting to the station (CSRF).
-  EXPECT_EQ(
-      check_command_access(p, {{"Host", "127.0.0.1:8080"}, {"Origin", "https://evil.example"}}),
-      Access::kCrossOrigin);
+  EXPECT_EQ(check_command_access(p, {{"Host", "127.0.0.1:8080"},
+                                     {"Origin", "https://evil.example"},
+                                     {"X-Alight-Token", token}}),
+            Access::kCrossOrigin);
 }
 
 TEST(AccessTest, NonLoopbackBindRefusesRequestsWithoutTheToken) {

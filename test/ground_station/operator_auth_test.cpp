@@ -10,6 +10,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <set>
 
 namespace alight {
 namespace {
@@ -50,11 +51,15 @@ TEST(HmacSha256Test, MatchesRfc4231TestVectors) {
 
 OperatorKey test_key(uint8_t fill = 0x42) { return OperatorKey{std::vector<uint8_t>(32, fill)}; }
 
+constexpr int64_t kSession = 0x5e5510'4a11ce;
+
 operator_cmd_t make_cmd(int64_t utime, int64_t seq, const std::string& sender = "gs-test") {
   operator_cmd_t cmd{};
   cmd.utime = utime;
   cmd.seq = seq;
   cmd.sender = sender;
+  cmd.vehicle_id = "uav-1";
+  cmd.session = kSession;
   cmd.command = operator_cmd_t::CMD_GO;
   cmd.mission = 1;
   cmd.nudge_W[0] = 0.25;
@@ -67,16 +72,20 @@ operator_cmd_t make_cmd(int64_t utime, int64_t seq, const std::string& sender = 
 
 TEST(CanonicalBytesTest, HasTheDocumentedLayout) {
   operator_cmd_t cmd = make_cmd(0x0102030405060708, 0x1112131415161718, "ab");
+  cmd.vehicle_id = "v";
+  cmd.session = 0x2122232425262728;
   const std::vector<uint8_t> expected = {
       0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07, 0x08,  // utime
       0x11, 0x12, 0x13, 0x14, 0x15, 0x16, 0x17, 0x18,  // seq
       0x00, 0x00, 0x00, 0x03, 'a',  'b',  0x00,        // sender: length incl. NUL, bytes, NUL
+      0x00, 0x00, 0x00, 0x02, 'v',  0x00,              // vehicle_id
+      0x21, 0x22, 0x23, 0x24, 0x25, 0x26, 0x27, 0x28,  // session
       0x02, 0x01,                                      // command GO, mission LANDING
       0x3f, 0xd0, 0,    0,    0,    0,    0,    0,     // 0.25
       0xbf, 0xf0, 0,    0,    0,    0,    0,    0,     // -1.0
       0x00, 0x00, 0,    0,    0,    0,    0,    0};    // 0.0
   EXPECT_EQ(canonical_bytes(cmd), expected);
-  EXPECT_EQ(expected.size(), 46u + 3u);
+  EXPECT_EQ(expected.size(), 58u + 3u + 2u);
 }
 
 TEST(CanonicalBytesTest, EqualsTheLcmEncodingOfTheCoveredFields) {
@@ -103,7 +112,7 @@ TEST(SignTest, SignedCommandCarriesTheHmacOfItsCanonicalBytes) {
 class VerifierTest : public ::testing::Test {
  protected:
   static constexpr int64_t kNow = 1'700'000'000'000'000;
-  CommandVerifier verifier{test_key(), 2'000'000};
+  CommandVerifier verifier{test_key(), "uav-1", kSession, 2'000'000};
   operator_cmd_t signed_cmd(int64_t utime, int64_t seq, const std::string& sender = "gs-test") {
     operator_cmd_t c = make_cmd(utime, seq, sender);
     sign(c, test_key());
@@ -155,6 +164,8 @@ TEST_F(VerifierTest, RejectsForgedCommands) {
   EXPECT_EQ(tampered([](operator_cmd_t& c) { c.utime += 1; }), R::kBadSignature);
   EXPECT_EQ(tampered([](operator_cmd_t& c) { c.sender = "gs-tesu"; }), R::kBadSignature);
   EXPECT_EQ(tampered([](operator_cmd_t& c) { c.nudge_W[2] = 1e-300; }), R::kBadSignature);
+  EXPECT_EQ(tampered([](operator_cmd_t& c) { c.vehicle_id = "uav-2"; }), R::kBadSignature);
+  EXPECT_EQ(tampered([](operator_cmd_t& c) { c.session += 1; }), R::kBadSignature);
   EXPECT_EQ(tampered([](operator_cmd_t& c) { c.hmac[31] ^= 1; }), R::kBadSignature);
   EXPECT_EQ(verifier.last_seq("gs-test"), INT64_MIN);  // nothing was accepted
 }
@@ -195,8 +206,12 @@ TEST_F(VerifierTest, RejectedCommandsDoNotAdvanceTheSequence) {
   EXPECT_EQ(check(signed_cmd(kNow, 1)), R::kAccepted);
 }
 
-TEST(VerifierConstructionTest, RefusesShortKeys) {
-  EXPECT_THROW(CommandVerifier(OperatorKey{std::vector<uint8_t>(31, 1)}), KeyFileError);
+TEST(VerifierConstructionTest, RefusesShortKeysSessionZeroAndNonPositiveAge) {
+  EXPECT_THROW(CommandVerifier(OperatorKey{std::vector<uint8_t>(31, 1)}, "uav-1", kSession),
+               KeyFileError);
+  EXPECT_THROW(CommandVerifier(test_key(), "uav-1", 0), std::invalid_argument);
+  // Was an assert (SIGABRT) reachable from `command_max_age_s: 1e-7` (issue 14).
+  EXPECT_THROW(CommandVerifier(test_key(), "uav-1", kSession, 0), std::invalid_argument);
 }
 
 TEST(ReasonNameTest, NamesEveryReason) {
@@ -205,6 +220,62 @@ TEST(ReasonNameTest, NamesEveryReason) {
   EXPECT_STREQ(reason_name(R::kBadSignature), "bad_signature");
   EXPECT_STREQ(reason_name(R::kStale), "stale");
   EXPECT_STREQ(reason_name(R::kReplayed), "replayed");
+  EXPECT_STREQ(reason_name(R::kWrongVehicle), "wrong_vehicle");
+  EXPECT_STREQ(reason_name(R::kWrongSession), "wrong_session");
+}
+
+// Regression (issue 14): a recorded signed GO replayed within 2 s after autonomy restarted was
+// accepted: the new verifier had no sequence history. Each start of autonomy draws a new session
+// nonce, the command's tag covers the session it was signed for, and the old one is refused.
+TEST(OperatorAuthRegression, SignedGoReplayedAfterAutonomyRestartIsRefused) {
+  constexpr int64_t kNow = 1'700'000'000'000'000;
+  const int64_t first_session = draw_session_nonce();
+  CommandVerifier before_restart(test_key(), "uav-1", first_session);
+  operator_cmd_t go = make_cmd(kNow, kNow);
+  go.session = first_session;  // as the station signs it: for the announced session
+  sign(go, test_key());
+  ASSERT_EQ(before_restart.check(go, kNow).reason, R::kAccepted);
+
+  // autonomy restarts 0.5 s later; the recording is replayed at once, well inside 2 s.
+  CommandVerifier after_restart(test_key(), "uav-1", draw_session_nonce());
+  const CommandVerdict verdict = after_restart.check(go, kNow + 500'000);
+  EXPECT_EQ(verdict.reason, R::kWrongSession);
+  EXPECT_EQ(after_restart.n_rejected(R::kWrongSession), 1u);
+  EXPECT_EQ(after_restart.last_rejected_seq(), go.seq);
+  EXPECT_EQ(after_restart.last_reject_reason(), R::kWrongSession);
+}
+
+// Regression (issue 14): the HMAC named no vehicle, so vehicles sharing a key obeyed each
+// other's commands.
+TEST(OperatorAuthRegression, VehiclesSharingAKeyRefuseEachOthersCommands) {
+  constexpr int64_t kNow = 1'700'000'000'000'000;
+  CommandVerifier uav1(test_key(), "uav-1", 11);
+  CommandVerifier uav2(test_key(), "uav-2", 11);  // even with an equal session
+  operator_cmd_t kill = make_cmd(kNow, 1);
+  kill.command = operator_cmd_t::CMD_KILL;
+  kill.vehicle_id = "uav-1";
+  kill.session = 11;
+  sign(kill, test_key());
+  EXPECT_EQ(uav2.check(kill, kNow).reason, R::kWrongVehicle);
+  EXPECT_EQ(uav1.check(kill, kNow).reason, R::kAccepted);
+}
+
+TEST(SessionNonceTest, IsPositiveAndDiffersBetweenDraws) {
+  std::set<int64_t> seen;
+  for (int i = 0; i < 100; ++i) {
+    const int64_t s = draw_session_nonce();
+    EXPECT_GT(s, 0);
+    seen.insert(s);
+  }
+  EXPECT_EQ(seen.size(), 100u);
+}
+
+TEST_F(VerifierTest, SequenceReplayProtectionHoldsWithinASession) {
+  const operator_cmd_t go = signed_cmd(kNow, 50);
+  EXPECT_EQ(check(go), R::kAccepted);
+  EXPECT_EQ(check(go, kNow + 100'000), R::kReplayed);
+  EXPECT_EQ(verifier.n_rejected(R::kReplayed), 1u);
+  EXPECT_EQ(verifier.last_rejected_seq(), 50);
 }
 
 class KeyFileTest : public ::testing::Test {

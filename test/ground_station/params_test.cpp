@@ -54,5 +54,25 @@ TEST(GroundStationParamsTest, UnknownKeysAreRejected) {
   std::filesystem::remove(path);
 }
 
+TEST(GroundStationParamsTest, OperatorLinkAndServerLimitsAreReadAndBounded) {
+  const auto ok = write_yaml("link",
+                             "ground_station:\n  vehicle_id: uav-7\n  ack_timeout_s: 0.5\n"
+                             "  head_deadline_s: 1.5\n  command_threads: 3\n");
+  const GroundStationParams p = load_params(ok);
+  EXPECT_EQ(p.vehicle_id, "uav-7");
+  EXPECT_DOUBLE_EQ(p.ack_timeout_s, 0.5);
+  EXPECT_DOUBLE_EQ(p.head_deadline_s, 1.5);
+  EXPECT_EQ(p.command_threads, 3);
+  std::filesystem::remove(ok);
+  // An infinite or missing deadline would let a slow client hold a connection for good.
+  for (const char* bad : {"head_deadline_s: .inf", "request_deadline_s: .nan", "ack_timeout_s: 0",
+                          "max_header_count: 100000", "vehicle_id: \"\"", "command_threads: 0",
+                          "channel_stale_s: .inf", "request_deadline_s: 0.5"}) {
+    const auto path = write_yaml("bad_link", std::string("ground_station:\n  ") + bad + "\n");
+    EXPECT_THROW(load_params(path), ParamError) << bad;
+    std::filesystem::remove(path);
+  }
+}
+
 }  // namespace
 }  // namespace alight::ground_station

@@ -144,6 +144,85 @@ TEST(StationStateTest, ProcessTableIsInTheDocument) {
   EXPECT_TRUE(contains(json, "\"restarts\":2"));
 }
 
+TEST(StationStateTest, ShowsTheClockOffsetAndTheVehiclesSession) {
+  GroundStationParams p;
+  p.vehicle_id = "uav-1";
+  StationState state(p);
+  EXPECT_FALSE(state.clock_offset_s());
+  EXPECT_EQ(state.vehicle_session(), 0);
+  autonomy_status_t st = status(kT0, autonomy_status_t::PHASE_HOVER);
+  st.vehicle_id = "uav-1";
+  st.cmd_session = 99;
+  st.wall_utime = kT0 - 250'000;  // the vehicle's clock is 0.25 s behind the station's
+  state.on_status(st, 5'000'000, kT0);
+  ASSERT_TRUE(state.clock_offset_s());
+  EXPECT_NEAR(*state.clock_offset_s(), 0.25, 1e-9);
+  EXPECT_EQ(state.vehicle_session(), 99);
+  const std::string doc = state.to_json(5'000'000);
+  EXPECT_TRUE(contains(doc, "\"clock_offset_s\":0.25")) << doc;
+  EXPECT_TRUE(contains(doc, "\"clock_offset_warn\":false"));
+  EXPECT_TRUE(contains(doc, "\"session_known\":true"));
+  EXPECT_TRUE(contains(doc, "\"cmds_rejected_by_reason\":{}"));
+  st.cmds_rejected_by_reason[autonomy_status_t::REJECT_WRONG_SESSION] = 2;
+  state.on_status(st, 5'000'000, kT0);
+  EXPECT_TRUE(contains(state.to_json(5'000'000), "\"wrong session (autonomy restarted?)\":2"));
+
+  // Another vehicle's status: its session is not ours to sign for.
+  st.vehicle_id = "uav-2";
+  state.on_status(st, 5'100'000, kT0 + 100'000);
+  EXPECT_EQ(state.vehicle_session(), 0);
+  EXPECT_TRUE(contains(state.to_json(5'100'000), "\"other_vehicle_id\":\"uav-2\""));
+
+  // Beyond clock_offset_warn_s the page warns.
+  st.vehicle_id = "uav-1";
+  st.wall_utime = kT0;
+  state.on_status(st, 5'200'000, kT0 + 3'000'000);
+  EXPECT_TRUE(contains(state.to_json(5'200'000), "\"clock_offset_warn\":true"));
+}
+
+// Regression (issue 14): the station timed everything on the system clock, so a step of it
+// (NTP, an operator setting the time) froze its timers or faked ages. StationState now takes
+// the steady clock as `now` and the wall clock only where a vehicle stamp is compared with it:
+// a 60 s step back of the wall clock neither shows a dead link as fresh nor delays the alarm.
+TEST(StationStateRegression, WallClockStepNeitherHidesADeadLinkNorDelaysTheAlarm) {
+  GroundStationParams p;
+  StationState state(p);
+  const int64_t steady0 = 1'000'000'000;
+  autonomy_status_t st = status(kT0, autonomy_status_t::PHASE_HOVER);
+  st.vehicle_id = p.vehicle_id;
+  st.cmd_session = 7;
+  st.wall_utime = kT0;
+  state.on_status(st, steady0, kT0);
+  state.on_command_sent("kill", 123, 7, steady0 + 100'000);
+  // 2 s later on the steady clock; the wall clock was stepped back by 60 s meanwhile.
+  const int64_t steady_now = steady0 + 2'000'000;
+  const auto age = state.channel_age_s(p.status_channel, steady_now);
+  ASSERT_TRUE(age);
+  EXPECT_NEAR(*age, 2.0, 1e-9);
+  const std::string doc = state.to_json(steady_now);
+  EXPECT_TRUE(contains(doc, "\"stale\":true")) << doc;
+  EXPECT_TRUE(contains(doc, "\"state\":\"not_acknowledged\"")) << doc;
+  EXPECT_TRUE(contains(doc, "\"alarm\":{\"name\":\"kill\""));
+}
+
+TEST(StationStateTest, CommandsShowTheirAcknowledgement) {
+  GroundStationParams p;
+  StationState state(p);
+  autonomy_status_t st = status(kT0, autonomy_status_t::PHASE_HOVER);
+  st.vehicle_id = p.vehicle_id;
+  st.cmd_session = 7;
+  st.last_cmd_seq = -1;
+  st.last_rejected_seq = -1;
+  state.on_status(st, 0);
+  state.on_command_sent("go", 500, 7, 1'000);
+  EXPECT_TRUE(contains(state.to_json(2'000), "\"state\":\"sent\""));
+  st.last_cmd_seq = 500;
+  state.on_status(st, 81'000);
+  const std::string doc = state.to_json(90'000);
+  EXPECT_TRUE(contains(doc, "\"state\":\"acknowledged\",\"answer_s\":0.08")) << doc;
+  EXPECT_TRUE(contains(doc, "\"alarm\":\"none\""));
+}
+
 TEST(JsonWriterTest, EscapesAndNests) {
   JsonWriter w;
   w.begin_object().field("a", std::string("q\"\\\n\x01")).key("b").begin_array();

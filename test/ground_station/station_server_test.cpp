@@ -14,7 +14,10 @@
 #include <alight/operator_cmd_t.hpp>
 #include <atomic>
 #include <chrono>
+#include <cstring>
+#include <filesystem>
 #include <fstream>
+#include <optional>
 #include <random>
 #include <thread>
 
@@ -31,6 +34,31 @@ constexpr const char* kLcmUrl = "udpm://239.255.76.67:7862?ttl=0";
 const std::string kToken = "00112233445566778899aabbccddeeff";
 
 OperatorKey key() { return OperatorKey{std::vector<uint8_t>(32, 0x33)}; }
+constexpr int64_t kSession = 0x1234'5678'9abc;  // as a vehicle's verifier would announce it
+const char* kForm = "application/x-www-form-urlencoded";
+
+// The vehicle's AUTONOMY_STATUS announcing its command session, until the station knows it.
+bool announce_session(Node& node, Station& station, int64_t session = kSession) {
+  autonomy_status_t st{};
+  st.utime = wall_utime();
+  st.wall_utime = st.utime;
+  st.vehicle_id = "alight";
+  st.cmd_session = session;
+  st.last_cmd_seq = -1;
+  st.last_rejected_seq = -1;
+  const auto t0 = std::chrono::steady_clock::now();
+  while (std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() < 3.0) {
+    node.publish("AUTONOMY_STATUS", st);
+    node.spin_once(20);
+    if (station.state_json(steady_utime())->find("\"session_known\":true") != std::string::npos)
+      return true;
+  }
+  return false;
+}
+
+httplib::Headers token_header(const Station& station) {
+  return {{"X-Alight-Token", station.policy().token}};
+}
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -152,6 +180,8 @@ TEST_F(StationServerTest, ManyClientsDoNotStallTheLcmLoopOrGrowMemory) {
       autonomy_status_t s{};
       s.utime = wall_utime();
       s.phase = autonomy_status_t::PHASE_DETECTION;
+      s.vehicle_id = "alight";
+      s.cmd_session = kSession;
       lcm.publish("AUTONOMY_STATUS", &s);
       ++status_sent;
       ++i;
@@ -207,8 +237,7 @@ TEST_F(StationServerTest, ManyClientsDoNotStallTheLcmLoopOrGrowMemory) {
   ASSERT_TRUE(frame);
   EXPECT_EQ(frame->status, 200);
   EXPECT_EQ(frame->get_header_value("Content-Type"), "image/jpeg");
-  auto go =
-      http.Post("/api/command", "command=go&mission=landing", "application/x-www-form-urlencoded");
+  auto go = http.Post("/api/command", token_header(station), "command=go&mission=landing", kForm);
   ASSERT_TRUE(go);
   EXPECT_EQ(go->status, 200) << go->body;
   const auto t_cmd = std::chrono::steady_clock::now();
@@ -218,7 +247,7 @@ TEST_F(StationServerTest, ManyClientsDoNotStallTheLcmLoopOrGrowMemory) {
   station.stop();
 
   ASSERT_TRUE(published);
-  CommandVerifier verifier(key());
+  CommandVerifier verifier(key(), "alight", kSession);
   EXPECT_TRUE(verifier.check(*published, wall_utime()).accepted());
 
   std::vector<double> sorted_s = loop_latencies_s;
@@ -228,8 +257,8 @@ TEST_F(StationServerTest, ManyClientsDoNotStallTheLcmLoopOrGrowMemory) {
   const double p99_latency_s = sorted_s[sorted_s.size() * 99 / 100];
   const auto counters = station.counters();
   std::printf(
-      "clients: %d, connections: %llu (%llu after warm-up), http requests: %llu, served by the "
-      "accept thread (queue full): %llu\n"
+      "clients: %d, connections: %llu (%llu after warm-up), http requests: %llu, refused at the "
+      "gate (no worker free or too many heads): %llu\n"
       "LCM loop: longest iteration %.1f ms; status latency median %.1f ms, 99th percentile "
       "%.1f ms, max %.1f ms; %d received of %d sent\n"
       "RSS: %ld KiB after warm-up, %ld KiB at end (%+ld KiB)\n",
@@ -263,12 +292,13 @@ TEST_F(StationServerTest, ForgedReplayedStaleAndUnsignedCommandsOnLcmAreRejected
   Station station(params(), opt);
   Node node("udpm://239.255.76.67:7863?ttl=0", "gs-security-test");
   station.attach(node);
-  CommandVerifier verifier(key());
+  CommandVerifier verifier(key(), "alight", kSession);
   std::vector<std::pair<operator_cmd_t, CommandVerdict::Reason>> seen;
   node.on<operator_cmd_t>("OPERATOR_CMD", [&](const operator_cmd_t& m) {
     seen.emplace_back(m, verifier.check(m, wall_utime()).reason);
   });
   const int port = station.start();
+  ASSERT_TRUE(announce_session(node, station));
   // Bounded by time, not iterations: spin_once returns at once when a timer is < 1 ms away.
   auto spin_until = [&](size_t n) {
     const auto t0 = std::chrono::steady_clock::now();
@@ -280,8 +310,7 @@ TEST_F(StationServerTest, ForgedReplayedStaleAndUnsignedCommandsOnLcmAreRejected
 
   // A genuine command from the page.
   httplib::Client http("127.0.0.1", port);
-  auto r =
-      http.Post("/api/command", "command=go&mission=ingress", "application/x-www-form-urlencoded");
+  auto r = http.Post("/api/command", token_header(station), "command=go&mission=ingress", kForm);
   ASSERT_TRUE(r);
   ASSERT_EQ(r->status, 200) << r->body;
   ASSERT_TRUE(spin_until(1));
@@ -303,9 +332,9 @@ TEST_F(StationServerTest, ForgedReplayedStaleAndUnsignedCommandsOnLcmAreRejected
   std::fill(std::begin(unsigned_kill.hmac), std::end(unsigned_kill.hmac), 0);
   node.publish("OPERATOR_CMD", unsigned_kill);
   // and replays a genuinely signed command recorded 10 s ago (new seq, old time).
-  CommandBuilder recorder("gs-security-test", key());
+  CommandBuilder recorder("gs-security-test", key(), "alight");
   const operator_cmd_t old =
-      recorder.build({operator_cmd_t::CMD_ABORT, 0, {}}, wall_utime() - 10'000'000);
+      recorder.build({operator_cmd_t::CMD_ABORT, 0, {}}, kSession, wall_utime() - 10'000'000);
   node.publish("OPERATOR_CMD", old);
   ASSERT_TRUE(spin_until(5));
   EXPECT_EQ(seen[1].second, R::kReplayed);
@@ -315,7 +344,7 @@ TEST_F(StationServerTest, ForgedReplayedStaleAndUnsignedCommandsOnLcmAreRejected
   EXPECT_EQ(verifier.n_rejected(), 4u);
 
   // The station's next command still goes through.
-  r = http.Post("/api/command", "command=abort", "application/x-www-form-urlencoded");
+  r = http.Post("/api/command", token_header(station), "command=abort", kForm);
   ASSERT_TRUE(r);
   ASSERT_TRUE(spin_until(6));
   EXPECT_EQ(seen[5].second, R::kAccepted);
@@ -329,7 +358,10 @@ TEST_F(StationServerTest, CommandsNeedTheTokenWhenRequired) {
   opt.token = kToken;
   opt.require_token = true;  // as when serving other hosts (not bound here to keep it local)
   Station station(params(), opt);
+  Node node("udpm://239.255.76.67:7864?ttl=0", "gs-token-test");
+  station.attach(node);
   const int port = station.start();
+  ASSERT_TRUE(announce_session(node, station));
   httplib::Client http("127.0.0.1", port);
   const char* form = "application/x-www-form-urlencoded";
 
@@ -370,14 +402,224 @@ TEST_F(StationServerTest, ViewOnlyStationRefusesCommands) {
   Station station(params(), opt);
   const int port = station.start();
   httplib::Client http("127.0.0.1", port);
-  auto r = http.Post("/api/command", "command=takeoff", "application/x-www-form-urlencoded");
+  auto r = http.Post("/api/command", token_header(station), "command=takeoff", kForm);
   ASSERT_TRUE(r);
   EXPECT_EQ(r->status, 503);
   EXPECT_NE(r->body.find("view-only"), std::string::npos);
-  auto bad = http.Post("/api/command", "command=kill", "application/x-www-form-urlencoded");
+  auto bad = http.Post("/api/command", token_header(station), "command=kill", kForm);
   ASSERT_TRUE(bad);
   EXPECT_EQ(bad->status, 400);  // parse errors are reported before the key is needed
   station.stop();
+}
+
+// What a raw socket gets back within `timeout_s`: up to the end of the answer's head, the peer
+// closing, or the time being up.
+std::string read_reply(int fd, double timeout_s) {
+  std::string out;
+  const auto t0 = std::chrono::steady_clock::now();
+  char buf[4096];
+  while (seconds_since(t0) < timeout_s) {
+    const ssize_t n = ::recv(fd, buf, sizeof buf, 0);  // SO_RCVTIMEO 1 s (connect_to)
+    if (n > 0) out.append(buf, static_cast<size_t>(n));
+    if (n == 0 || out.find("\r\n\r\n") != std::string::npos) break;  // the status is in
+  }
+  return out;
+}
+
+// Regression (issue 14): 24 slow clients (one header line every 0.8 s) kept POST /api/command
+// unanswered for 15 s: httplib gave each a worker at once, and each worker waited as long as
+// lines kept coming. Here the station has exactly as many workers as there are slow clients,
+// and slow clients of every kind (a GET, a command's head, a command's body) keep trickling
+// while a KILL is posted: it is answered at once and reaches LCM.
+TEST_F(StationServerTest, RegressionSlowClientsDoNotHoldBackAKill) {
+  GroundStationParams p = params();
+  p.http_threads = 24;
+  p.client_timeout_s = 2.0;  // longer than the 0.8 s between lines: the old per-read timeout
+  p.frame_wait_s = 0.2;
+  StationOptions opt;
+  opt.key = key();
+  opt.port = 0;
+  Station station(p, opt);
+  Node node("udpm://239.255.76.67:7865?ttl=0", "gs-slow-test");
+  station.attach(node);
+  std::optional<operator_cmd_t> published;
+  node.on<operator_cmd_t>("OPERATOR_CMD", [&](const operator_cmd_t& m) { published = m; });
+  const int port = station.start();
+  ASSERT_TRUE(announce_session(node, station));
+
+  constexpr int kSlow = 24;
+  std::vector<int> fds;
+  for (int i = 0; i < kSlow; ++i) {
+    const int fd = connect_to(port);
+    ASSERT_GE(fd, 0) << i << ": " << std::strerror(errno);
+    if (i % 3 == 0) send_all(fd, "GET /api/state HTTP/1.1\r\n");
+    if (i % 3 == 1) send_all(fd, "POST /api/command HTTP/1.1\r\n");
+    if (i % 3 == 2)
+      send_all(fd, "POST /api/command HTTP/1.1\r\nHost: 127.0.0.1\r\nX-Alight-Token: " +
+                       station.policy().token + "\r\nContent-Length: 400\r\n\r\ncommand=");
+    fds.push_back(fd);
+  }
+  std::atomic<bool> stop{false};
+  std::thread trickler([&] {
+    const auto t0 = std::chrono::steady_clock::now();
+    int line = 0;
+    while (!stop && seconds_since(t0) < 6.0) {
+      for (size_t i = 0; i < fds.size(); ++i)
+        send_all(fds[i],
+                 i % 3 == 2 ? std::string("x") : "X-Slow-" + std::to_string(line) + ": 1\r\n");
+      ++line;
+      for (int k = 0; k < 8 && !stop; ++k)
+        std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+  });
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));  // every slow client is in
+
+  httplib::Client http("127.0.0.1", port);
+  http.set_connection_timeout(2, 0);
+  http.set_read_timeout(8, 0);
+  const auto t_kill = std::chrono::steady_clock::now();
+  auto kill = http.Post("/api/command", token_header(station), "command=kill&confirm=kill", kForm);
+  const double answer_s = seconds_since(t_kill);
+  const auto t_lcm = std::chrono::steady_clock::now();
+  while (!published && seconds_since(t_lcm) < 3.0) node.spin_once(20);
+  stop = true;
+  trickler.join();
+  for (int fd : fds) ::close(fd);
+  station.stop();
+
+  std::printf("KILL answered in %.3f s with %d slow clients on %d workers\n", answer_s, kSlow,
+              p.http_threads);
+  ASSERT_TRUE(kill);
+  EXPECT_EQ(kill->status, 200) << kill->body;
+  // Slow clients would hold it for their whole 6 s; an unloaded answer takes a few ms.
+  EXPECT_LT(answer_s, 1.5);
+  ASSERT_TRUE(published);
+  EXPECT_EQ(published->command, operator_cmd_t::CMD_KILL);
+}
+
+// Regression (issue 14): no X-Frame-Options or CSP, so a page could frame the station (on
+// 127.0.0.1, where no token was asked) and trick a click on KILL. Every response forbids it.
+TEST_F(StationServerTest, RegressionEveryResponseForbidsFraming) {
+  const auto web =
+      std::filesystem::temp_directory_path() / ("alight_gs_web_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(web);
+  std::ofstream(web / "index.html") << "<!doctype html><title>t</title>";
+  StationOptions opt;
+  opt.key = key();
+  opt.port = 0;
+  opt.web_dir = web.string();
+  Station station(params(), opt);
+  const int port = station.start();
+  httplib::Client http("127.0.0.1", port);
+  std::vector<std::pair<std::string, httplib::Result>> replies;
+  replies.emplace_back("GET /", http.Get("/"));
+  replies.emplace_back("GET /index.html", http.Get("/index.html"));
+  replies.emplace_back("GET /api/state", http.Get("/api/state"));
+  replies.emplace_back("GET /api/session", http.Get("/api/session"));
+  replies.emplace_back("GET /missing", http.Get("/missing"));
+  replies.emplace_back("POST /api/command (no token)",
+                       http.Post("/api/command", "command=abort", kForm));
+  replies.emplace_back("POST /api/command (no session)",
+                       http.Post("/api/command", token_header(station), "command=abort", kForm));
+  for (auto& [what, r] : replies) {
+    ASSERT_TRUE(r) << what;
+    EXPECT_EQ(r->get_header_value("X-Frame-Options"), "DENY") << what << " " << r->status;
+    EXPECT_NE(r->get_header_value("Content-Security-Policy").find("frame-ancestors 'none'"),
+              std::string::npos)
+        << what;
+  }
+  EXPECT_EQ(replies[0].second->status, 200);
+  EXPECT_EQ(replies[4].second->status, 404);
+  EXPECT_EQ(replies[5].second->status, 403);
+  // Without an AUTONOMY_STATUS naming its session the station cannot sign: it says so instead
+  // of showing "sent".
+  EXPECT_EQ(replies[6].second->status, 503);
+  EXPECT_NE(replies[6].second->body.find("not heard"), std::string::npos);
+  EXPECT_EQ(station.counters().commands_without_session, 1u);
+  station.stop();
+  std::filesystem::remove_all(web);
+}
+
+TEST_F(StationServerTest, HeadsOverTheLimitsOrTooSlowAreRefused) {
+  GroundStationParams p = params();
+  p.head_deadline_s = 0.5;
+  p.max_header_count = 16;
+  Station station(p, StationOptions{.port = 0});
+  const int port = station.start();
+
+  int fd = connect_to(port);
+  std::string many = "GET /api/state HTTP/1.1\r\n";
+  for (int i = 0; i < 40; ++i) many += "X-" + std::to_string(i) + ": 1\r\n";
+  send_all(fd, many + "\r\n");
+  EXPECT_EQ(read_reply(fd, 3.0).rfind("HTTP/1.1 431", 0), 0u);
+  ::close(fd);
+
+  fd = connect_to(port);
+  send_all(fd, "GET /api/state HTTP/1.1\r\nX-Big: " + std::string(40'000, 'a') + "\r\n\r\n");
+  EXPECT_EQ(read_reply(fd, 3.0).rfind("HTTP/1.1 431", 0), 0u);
+  ::close(fd);
+
+  fd = connect_to(port);
+  const auto t0 = std::chrono::steady_clock::now();
+  send_all(fd, "GET /api/state HTTP/1.1\r\nHost: 127.0.0.1\r\n");  // and never the empty line
+  const std::string reply = read_reply(fd, 4.0);
+  const double closed_after_s = seconds_since(t0);
+  EXPECT_EQ(reply.rfind("HTTP/1.1 408", 0), 0u) << reply;
+  EXPECT_LT(closed_after_s, 3.0);
+  ::close(fd);
+
+  // A body over max_payload_bytes is refused before it is read (413), on the command route too.
+  for (const char* path : {"/api/state", "/api/command"}) {
+    fd = connect_to(port);
+    send_all(fd, std::string("POST ") + path +
+                     " HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Length: 10000000\r\n\r\nxx");
+    EXPECT_EQ(read_reply(fd, 3.0).rfind("HTTP/1.1 413", 0), 0u) << path;
+    ::close(fd);
+  }
+
+  // An ordinary request still works, and keeps its connection for a second one.
+  httplib::Client http("127.0.0.1", port);
+  auto a = http.Get("/api/state");
+  auto b = http.Get("/api/state");
+  ASSERT_TRUE(a);
+  ASSERT_TRUE(b);
+  EXPECT_EQ(a->status, 200);
+  EXPECT_EQ(b->status, 200);
+  const auto c = station.counters();
+  EXPECT_EQ(c.heads_too_large, 2u);
+  EXPECT_EQ(c.heads_timed_out, 1u);
+  station.stop();
+}
+
+TEST_F(StationServerTest, SessionTokenIsHandedOnlyToTheStationsOwnPageOnLoopback) {
+  StationOptions opt;
+  opt.key = key();
+  opt.port = 0;
+  Station station(params(), opt);
+  const int port = station.start();
+  httplib::Client http("127.0.0.1", port);
+  auto own = http.Get("/api/session");
+  ASSERT_TRUE(own);
+  EXPECT_EQ(own->status, 200);
+  EXPECT_NE(own->body.find(station.policy().token), std::string::npos);
+  auto rebound = http.Get("/api/session", {{"Host", "evil.example:8080"}});
+  ASSERT_TRUE(rebound);
+  EXPECT_EQ(rebound->status, 403);
+  EXPECT_EQ(rebound->body.find(station.policy().token), std::string::npos);
+  auto cross = http.Get("/api/session", {{"Origin", "http://evil.example"}});
+  ASSERT_TRUE(cross);
+  EXPECT_EQ(cross->status, 403);
+  EXPECT_TRUE(cross->get_header_value("Access-Control-Allow-Origin").empty());
+  station.stop();
+
+  opt.require_token = true;  // --require-token: the token only from the printed URL
+  Station strict(params(), opt);
+  const int strict_port = strict.start();
+  httplib::Client strict_http("127.0.0.1", strict_port);
+  auto refused = strict_http.Get("/api/session");
+  ASSERT_TRUE(refused);
+  EXPECT_EQ(refused->status, 403);
+  strict.stop();
 }
 
 }  // namespace

@@ -70,6 +70,22 @@ TEST(LaunchFileTest, BadValuesNameFileKeyAndValue) {
       std::string::npos);
 }
 
+// Issue 14: every timeout finite and bounded, named with its full key.
+TEST(LaunchFileTest, TimeoutsAreFiniteAndBounded) {
+  const std::string procs = "processes:\n  - {name: a, command: [a]}\n";
+  EXPECT_EQ(error_of("name: x\nstop_timeout_s: .inf\n" + procs),
+            "bad.yaml: stop_timeout_s = .inf: expected a finite number");
+  EXPECT_EQ(error_of("name: x\nstop_timeout_s: 100\n" + procs),
+            "bad.yaml: stop_timeout_s = 100: must be <= 60");
+  EXPECT_EQ(error_of("name: x\nbackoff: {initial_s: 0.1, max_s: 7200}\n" + procs),
+            "bad.yaml: backoff.max_s = 7200: must be <= 3600");
+  EXPECT_EQ(error_of("name: x\nprocesses:\n  - {name: a, command: [a], start_delay_s: 601}\n"),
+            "bad.yaml: processes[0].start_delay_s = 601: must be <= 600");
+  EXPECT_EQ(
+      error_of("name: x\nname: y\n" + procs),
+      "bad.yaml: name = y: duplicate key (line 2): the key appears twice in the same mapping");
+}
+
 TEST(LaunchFileTest, SubstitutesKnownVariablesOnly) {
   const std::map<std::string, std::string> vars{{"A", "x"}, {"SESSION_DIR", "/s"}};
   EXPECT_EQ(substitute("${A}/b/${SESSION_DIR}", vars), "x/b//s");

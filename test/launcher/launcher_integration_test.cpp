@@ -86,6 +86,7 @@ class LauncherIntegrationTest : public ::testing::Test {
       const std::string out = (dir_ / "stdout.txt").string();
       freopen(out.c_str(), "w", stdout);
       dup2(fileno(stdout), 2);
+      for (const auto& [k, v] : env_) setenv(k.c_str(), v.c_str(), 1);
       const std::string bin = std::string(ALIGHT_BINARY_DIR) + "/bin/alight-launch";
       execl(bin.c_str(), bin.c_str(), (dir_ / "test.yaml").c_str(), "--log-root",
             (dir_ / "logs").c_str(), static_cast<char*>(nullptr));
@@ -124,6 +125,7 @@ class LauncherIntegrationTest : public ::testing::Test {
 
   fs::path dir_;
   pid_t launcher_pid_ = -1;
+  std::vector<std::pair<std::string, std::string>> env_;  // extra environment of the launcher
 };
 
 TEST_F(LauncherIntegrationTest, RestartsWithBackoffStopsEverythingAndRecordsAReplayableLog) {
@@ -206,6 +208,43 @@ processes:
   const int64_t end = wall_utime() + 8'000'000;
   while (replayed < statuses && wall_utime() < end) listener.spin_once(50);
   EXPECT_EQ(replayed, statuses);
+}
+
+// Regression (issue 14): the launcher timed its restart backoff on the system clock, so a step of
+// it back by 60 s (NTP, an operator setting the time) froze every pending restart for 60 s: a
+// crashed autonomy stayed down. Under libfaketime the launcher's wall clock is stepped back by
+// 60 s while a process crash-loops; restarts must go on at the backoff rate.
+TEST_F(LauncherIntegrationTest, RegressionWallClockStepDoesNotFreezeRestarts) {
+  const std::string faketime = "/usr/lib/x86_64-linux-gnu/faketime/libfaketime.so.1";
+  if (!fs::exists(faketime)) GTEST_SKIP() << "libfaketime not installed (apt-get install faketime)";
+  const fs::path offset = dir_ / "faketime";
+  std::ofstream(offset) << "+0\n";
+  env_ = {{"LD_PRELOAD", faketime},
+          {"FAKETIME_TIMESTAMP_FILE", offset.string()},
+          {"FAKETIME_NO_CACHE", "1"},
+          {"FAKETIME_DONT_FAKE_MONOTONIC", "1"}};  // only the wall clock steps
+  write_launch_file(std::string("name: clockstep\nlcm_url: ") + kUrl + R"(
+record: false
+backoff: {initial_s: 0.2, max_s: 0.2, reset_after_s: 100, start_limit_burst: 0}
+processes:
+  - name: crasher
+    command: [sh, -c, "sleep 0.05; exit 3"]
+)");
+  start_launcher();
+  std::this_thread::sleep_for(std::chrono::milliseconds(800));
+  std::ofstream(offset) << "-60\n";  // the wall clock jumps back a minute
+  const size_t before = output().size();
+  std::this_thread::sleep_for(std::chrono::milliseconds(2000));
+  const std::string after = output().substr(before);
+  kill(launcher_pid_, SIGINT);
+  EXPECT_EQ(wait_exit(5.0), 0);
+  size_t restarts = 0;
+  for (size_t pos = after.find("crasher: running"); pos != std::string::npos;
+       pos = after.find("crasher: running", pos + 1))
+    ++restarts;
+  // One every ~0.25 s (0.05 s run + 0.2 s backoff) when not frozen: about 8 in 2 s.
+  std::printf("restarts in the 2 s after a 60 s step back of the wall clock: %zu\n", restarts);
+  EXPECT_GE(restarts, 3u) << after;
 }
 
 TEST_F(LauncherIntegrationTest, ShutdownOnExitEndsTheSessionWithItsExitCode) {

@@ -140,5 +140,59 @@ TEST(ProcessTrackerTest, RegressionRepeatedExecFailureBacksOffAndHitsTheLimit) {
   EXPECT_NEAR(delays[2], 0.04, 1e-12);
 }
 
+// Regression (issue 14): `command_max_age_s: 1e-7` made autonomy abort (SIGABRT) at start, and
+// the launcher restarted it forever, once a second, for the whole session. Like systemd's
+// StartLimitBurst, quick failures in a window now end in FAILED, reported on PROCESS_STATUS.
+TEST(ProcessTrackerRegression, AbortAtStartIsNotRestartedForever) {
+  BackoffParams backoff;  // defaults: 12 quick failures within 30 s
+  ProcessTracker t(spec(RestartPolicy::kOnFailure), backoff);
+  int64_t now = 1'000'000;
+  int failures = 0;
+  for (int i = 0; i < 100 && t.state() != ProcState::kFailed; ++i) {
+    t.started(100 + i, now);
+    now += 5'000;         // aborts 5 ms after starting
+    t.exited(0, 6, now);  // SIGABRT
+    ++failures;
+    if (t.state() == ProcState::kBackoff) {
+      now += static_cast<int64_t>(t.backoff_s() * 1e6);
+      ASSERT_TRUE(t.restart_due(now));
+    }
+  }
+  EXPECT_EQ(t.state(), ProcState::kFailed);
+  EXPECT_EQ(failures, backoff.start_limit_burst);
+  EXPECT_NE(t.last_reason().find("start limit"), std::string::npos) << t.last_reason();
+  EXPECT_FALSE(t.restart_due(now + 3'600'000'000LL));
+  EXPECT_EQ(t.info().state, process_info_t::STATE_FAILED);
+  EXPECT_EQ(t.info().signal, 6);
+}
+
+TEST(ProcessTrackerTest, FailuresSpreadBeyondTheStartLimitWindowKeepRestarting) {
+  // A process that runs a while before each crash (longer than reset_after_s) is restarted
+  // every time: only quick failures count against the start limit.
+  ProcessTracker t(spec(RestartPolicy::kOnFailure), BackoffParams{});
+  int64_t now = 0;
+  for (int i = 0; i < 50; ++i) {
+    t.started(100 + i, now);
+    now += 11'000'000;  // ran 11 s > reset_after_s
+    t.exited(1, 0, now);
+    ASSERT_EQ(t.state(), ProcState::kBackoff) << i;
+    now += static_cast<int64_t>(t.backoff_s() * 1e6);
+  }
+}
+
+TEST(ProcessTrackerTest, StartLimitZeroDisablesIt) {
+  BackoffParams backoff;
+  backoff.start_limit_burst = 0;
+  ProcessTracker t(spec(RestartPolicy::kOnFailure), backoff);
+  int64_t now = 0;
+  for (int i = 0; i < 100; ++i) {
+    t.started(100 + i, now);
+    now += 1000;
+    t.exited(1, 0, now);
+    ASSERT_EQ(t.state(), ProcState::kBackoff) << i;
+    now += static_cast<int64_t>(t.backoff_s() * 1e6);
+  }
+}
+
 }  // namespace
 }  // namespace alight::launcher

@@ -4,6 +4,11 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <limits>
+
+#include "common/msg_convert.hpp"
+
 namespace alight::outer_loop {
 namespace {
 
@@ -58,6 +63,81 @@ TEST(OuterLoopConvertTest, AttitudeCommandRoundTripsEveryMode) {
   }
   EXPECT_EQ(mode_to_msg(Mode::kHoldLevel), attitude_cmd_t::MODE_HOLD_LEVEL);
   EXPECT_EQ(mode_to_msg(Mode::kFailsafeDescent), attitude_cmd_t::MODE_FAILSAFE_DESCENT);
+}
+
+TEST(OuterLoopConvertTest, KillRoundTripsAsItsOwnMotorsValue) {
+  PositionSetpoint sp;
+  sp.utime = 1;
+  sp.kill = true;
+  const auto msg = to_msg(sp);
+  EXPECT_EQ(msg.motors, position_setpoint_t::MOTORS_KILL);
+  const auto back = setpoint_from_msg(msg, nullptr);
+  ASSERT_TRUE(back);
+  EXPECT_TRUE(back->kill);
+  EXPECT_FALSE(back->motors_on);
+  sp.kill = false;
+  EXPECT_FALSE(setpoint_from_msg(to_msg(sp), nullptr)->kill);
+}
+
+TEST(OuterLoopRegression, NonFiniteSetpointIsRefusedAtConversion) {
+  PositionSetpoint sp;
+  sp.utime = 1;
+  sp.motors_on = true;
+  const position_setpoint_t good = to_msg(sp);
+  std::string why;
+  ASSERT_TRUE(setpoint_from_msg(good, &why));
+  for (int field = 0; field < 7; ++field) {
+    for (double bad : {std::nan(""), std::numeric_limits<double>::infinity()}) {
+      position_setpoint_t m = good;
+      if (field < 3)
+        m.p_W[field] = bad;
+      else if (field < 6)
+        m.v_W[field - 3] = bad;
+      else
+        m.yaw_rad = bad;
+      why.clear();
+      EXPECT_FALSE(setpoint_from_msg(m, &why)) << field;
+      EXPECT_NE(why.find("non-finite"), std::string::npos) << why;
+    }
+  }
+  position_setpoint_t m = good;
+  m.motors = 7;
+  EXPECT_FALSE(setpoint_from_msg(m, &why));
+  m = good;
+  m.mode = -1;
+  EXPECT_FALSE(setpoint_from_msg(m, &why));
+}
+
+TEST(OuterLoopRegression, NonFiniteOrNonUnitPoseIsRefusedAtConversion) {
+  PoseSample s;
+  s.utime = 1;
+  s.p_W_B = {1, 2, 3};
+  const pose_t good = alight::to_msg(s, 1);
+  std::string why;
+  ASSERT_TRUE(pose_from_msg(good, &why));
+  const double nan = std::nan("");
+  for (int field = 0; field < 13; ++field) {
+    pose_t m = good;
+    if (field < 3)
+      m.pos[field] = nan;
+    else if (field < 6)
+      m.vel[field - 3] = nan;
+    else if (field < 10)
+      m.orientation[field - 6] = nan;
+    else
+      m.angular_velocity_B[field - 10] = nan;
+    EXPECT_FALSE(pose_from_msg(m, &why)) << field;
+  }
+  pose_t m = good;
+  m.orientation[0] = 0.98;  // norm 0.98: not a rotation
+  EXPECT_FALSE(pose_from_msg(m, &why));
+  EXPECT_NE(why.find("norm"), std::string::npos);
+  m.orientation[0] = 0.0;  // all zero
+  EXPECT_FALSE(pose_from_msg(m, &why));
+  m.orientation[0] = 1.005;  // within 0.01 of 1: renormalised
+  const auto ok = pose_from_msg(m, &why);
+  ASSERT_TRUE(ok);
+  EXPECT_NEAR(ok->q_WB.norm(), 1.0, 1e-12);
 }
 
 }  // namespace

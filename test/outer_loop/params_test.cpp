@@ -1,8 +1,8 @@
 // The outer_loop: sections of the vehicle files load and validate; errors name file and key.
 
-#include <gtest/gtest.h>
-
 #include "outer_loop/params.hpp"
+
+#include <gtest/gtest.h>
 
 namespace alight::outer_loop {
 namespace {
@@ -33,6 +33,43 @@ TEST(OuterLoopParamsTest, BadValueAndUnknownKeyNameTheKey) {
   }
   EXPECT_THROW(load_params(ParamNode::from_string("outer_loop: {kp_xy_per_s2: 3}", "v.yaml")),
                ParamError);  // mass_kg is required
+}
+
+TEST(OuterLoopRegression, InfiniteTimeoutInAFileIsAParamErrorNamingFileKeyAndValue) {
+  // `.inf` loaded and switched the failsafe it bounds off.
+  for (const char* key : {"pose_lost_s", "failsafe_disarm_after_s", "setpoint_lost_s",
+                          "pose_stale_s", "setpoint_stale_s", "landed_still_s"}) {
+    const std::string yaml = std::string("outer_loop: {mass_kg: 1.0, ") + key + ": .inf}";
+    try {
+      load_params(ParamNode::from_string(yaml, "v.yaml"));
+      ADD_FAILURE() << key << ": .inf accepted";
+    } catch (const ParamError& e) {
+      EXPECT_EQ(e.file(), "v.yaml") << key;
+      EXPECT_EQ(e.key(), std::string("outer_loop.") + key);
+      EXPECT_EQ(e.value(), "inf") << key;
+    }
+  }
+  try {
+    load_params(ParamNode::from_string("outer_loop: {mass_kg: 1.0, kp_z_per_s2: .nan}", "v.yaml"));
+    ADD_FAILURE() << ".nan accepted";
+  } catch (const ParamError& e) {
+    EXPECT_EQ(e.key(), "outer_loop.kp_z_per_s2");
+  }
+}
+
+TEST(OuterLoopParamsTest, EveryTimeoutHasAnUpperBound) {
+  for (const char* kv :
+       {"pose_stale_s: 2.5", "pose_lost_s: 6", "failsafe_disarm_after_s: 121",
+        "setpoint_stale_s: 6", "setpoint_lost_s: 31", "landed_still_s: 11", "land_detect_s: 6"}) {
+    const std::string yaml = std::string("outer_loop: {mass_kg: 1.0, ") + kv + "}";
+    const std::string key = std::string(kv).substr(0, std::string(kv).find(':'));
+    try {
+      load_params(ParamNode::from_string(yaml, "v.yaml"));
+      ADD_FAILURE() << kv << " accepted";
+    } catch (const ParamError& e) {
+      EXPECT_EQ(e.key(), "outer_loop." + key);
+    }
+  }
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 
 #include "lag_model.hpp"
 
@@ -96,8 +97,8 @@ TEST(PositionControllerTest, YawRateFollowsTheHeadingErrorWithinItsLimit) {
   auto cmd = c.update(setpoint_at({0, 0, 1}, 0.1, kT0), pose_at({0, 0, 1}, 0, kT0), kT0);
   EXPECT_NEAR(cmd.yaw_rate_radps, p.yaw_kp_per_s * 0.1, 1e-9);
   // Across the +-pi seam the short way round.
-  cmd = c.update(setpoint_at({0, 0, 1}, M_PI - 0.1, kT0), pose_at({0, 0, 1}, -M_PI + 0.1, kT0),
-                 kT0);
+  cmd =
+      c.update(setpoint_at({0, 0, 1}, M_PI - 0.1, kT0), pose_at({0, 0, 1}, -M_PI + 0.1, kT0), kT0);
   EXPECT_LT(cmd.yaw_rate_radps, 0);
   cmd = c.update(setpoint_at({0, 0, 1}, 3.0, kT0), pose_at({0, 0, 1}, 0, kT0), kT0);
   EXPECT_NEAR(cmd.yaw_rate_radps, p.max_yaw_rate_dps * M_PI / 180, 1e-9);
@@ -240,6 +241,218 @@ TEST(PositionControllerTest, ParamsValidateRejectsNonsense) {
   p = params();
   p.thrust_max_N = 1.0;  // cannot hover
   EXPECT_THROW(p.validate(), ParamError);
+}
+
+// Flies `c` on `model` from t for `seconds` with the setpoint `sp` (restamped each step), the
+// pose from the model; returns the last command.
+AttitudeCommand fly(PositionController& c, test::LagModel& model, PositionSetpoint sp, int64_t& t,
+                    double seconds) {
+  AttitudeCommand cmd;
+  const int64_t end = t + static_cast<int64_t>(seconds * 1e6);
+  for (; t < end; t += 10 * kMs) {
+    sp.utime = t;
+    cmd = c.update(sp, model.pose(t), t);
+    for (int k = 0; k < 10; ++k) model.step(cmd, 0.001);
+  }
+  return cmd;
+}
+
+bool finite(const AttitudeCommand& c) {
+  return std::isfinite(c.roll_rad) && std::isfinite(c.pitch_rad) &&
+         std::isfinite(c.yaw_rate_radps) && std::isfinite(c.thrust_N);
+}
+
+TEST(OuterLoopRegression, NanPoseNeverReachesThrust) {
+  // Given a vehicle hovering under control
+  PositionController c(params());
+  test::LagModel model;
+  model.hover_at({0, 0, 1});
+  int64_t t = kT0;
+  fly(c, model, setpoint_at({0, 0, 1}, 0, t), t, 1.0);
+  // When one pose has a NaN position, one a NaN velocity and one a NaN quaternion
+  for (int field = 0; field < 3; ++field) {
+    auto bad = model.pose(t);
+    if (field == 0) bad.p_W_B.z() = std::nan("");
+    if (field == 1) bad.v_W_B.x() = std::nan("");
+    if (field == 2) bad.q_WB.w() = std::nan("");
+    const auto cmd = c.update(setpoint_at({0, 0, 1}, 0, t), bad, t);
+    // Then the command stays finite and armed, and the integrator is untouched
+    EXPECT_TRUE(finite(cmd)) << field;
+    EXPECT_TRUE(cmd.armed) << field;
+    EXPECT_TRUE(c.integral().allFinite()) << field;
+    t += 10 * kMs;
+  }
+  // And a second of good input flies on as before
+  const auto cmd = fly(c, model, setpoint_at({0, 0, 1}, 0, t), t, 1.0);
+  EXPECT_TRUE(finite(cmd));
+  EXPECT_TRUE(c.integral().allFinite());
+  EXPECT_NEAR(model.p.z(), 1.0, 0.05);
+}
+
+TEST(OuterLoopRegression, NanSetpointNeverReachesThrust) {
+  PositionController c(params());
+  test::LagModel model;
+  model.hover_at({0, 0, 1});
+  int64_t t = kT0;
+  fly(c, model, setpoint_at({0, 0, 1}, 0, t), t, 1.0);
+  auto bad = setpoint_at({0, 0, std::numeric_limits<double>::infinity()}, 0, t);
+  bad.v_W.x() = std::nan("");
+  bad.yaw_rad = std::nan("");
+  const auto cmd = c.update(bad, model.pose(t), t);
+  EXPECT_TRUE(finite(cmd));
+  EXPECT_TRUE(cmd.armed);
+  EXPECT_TRUE(c.integral().allFinite());
+  const auto after = fly(c, model, setpoint_at({0, 0, 1}, 0, t), t, 1.0);
+  EXPECT_TRUE(finite(after));
+  EXPECT_NEAR(model.p.z(), 1.0, 0.05);
+}
+
+TEST(OuterLoopRegression, MotorsOffWithoutKillLandsInsteadOfDisarmingInTheAir) {
+  // Given a vehicle hovering at 1.5 m (a restarted autonomy's first setpoint is motors off)
+  auto p = params();
+  PositionController c(p);
+  test::LagModel model;
+  model.hover_at({0.3, 0.2, 1.5});
+  int64_t t = kT0;
+  fly(c, model, setpoint_at({0.3, 0.2, 1.5}, 0, t), t, 1.0);
+  // When motors off arrives without KILL
+  auto off = setpoint_at({0, 0, 0}, 0, t);
+  off.motors_on = false;
+  AttitudeCommand cmd;
+  double lowest_armed_m = 10;
+  bool disarmed_in_air = false;
+  for (int64_t end = t + 15'000 * kMs; t < end; t += 10 * kMs) {
+    off.utime = t;
+    cmd = c.update(off, model.pose(t), t);
+    if (cmd.armed) lowest_armed_m = std::min(lowest_armed_m, model.p.z());
+    if (!cmd.armed && model.p.z() > 0.01) disarmed_in_air = true;
+    for (int k = 0; k < 10; ++k) model.step(cmd, 0.001);
+  }
+  // Then it lands slowly on the pose where it was and disarms only on the ground
+  EXPECT_FALSE(disarmed_in_air);
+  EXPECT_FALSE(cmd.armed);
+  EXPECT_NEAR(model.p.z(), 0.0, 1e-9);
+  EXPECT_NEAR(model.p.x(), 0.3, 0.05);
+  EXPECT_NEAR(model.p.y(), 0.2, 0.05);
+}
+
+TEST(OuterLoopRegression, KillDisarmsAtOnceInTheAir) {
+  PositionController c(params());
+  test::LagModel model;
+  model.hover_at({0, 0, 1.5});
+  int64_t t = kT0;
+  fly(c, model, setpoint_at({0, 0, 1.5}, 0, t), t, 1.0);
+  auto kill = setpoint_at({0, 0, 1.5}, 0, t);
+  kill.motors_on = false;
+  kill.kill = true;
+  const auto cmd = c.update(kill, model.pose(t), t);
+  EXPECT_FALSE(cmd.armed);
+  EXPECT_EQ(cmd.mode, Mode::kDisarmed);
+}
+
+TEST(PositionControllerTest, MotorsOffAfterATouchDownDisarmsWithinASecond) {
+  // Autonomy's final descent presses the vehicle onto the ground, then it sends motors off.
+  PositionController c(params());
+  test::LagModel model;
+  model.hover_at({0, 0, 0.3});
+  int64_t t = kT0;
+  fly(c, model, setpoint_at({0, 0, -0.3}, 0, t), t, 1.5);
+  ASSERT_NEAR(model.p.z(), 0.0, 1e-9);
+  auto off = setpoint_at({0, 0, -0.3}, 0, t);
+  off.motors_on = false;
+  const int64_t t_off = t;
+  AttitudeCommand cmd;
+  for (; t < t_off + 2'000 * kMs; t += 10 * kMs) {
+    off.utime = t;
+    cmd = c.update(off, model.pose(t), t);
+    for (int k = 0; k < 10; ++k) model.step(cmd, 0.001);
+    if (!cmd.armed) break;
+  }
+  EXPECT_FALSE(cmd.armed);
+  EXPECT_LE(t - t_off, 1'000 * kMs);
+}
+
+TEST(PositionControllerTest, HoverWithAMassErrorIsNotTakenForLanded) {
+  // The nominal mass 20 % above the true one: hover thrust well below m g, yet airborne.
+  auto p = params();
+  p.mass_kg = 1.2 * 1.2;
+  PositionController c(p);
+  test::LagModel model;
+  model.hover_at({0, 0, 1});
+  int64_t t = kT0;
+  fly(c, model, setpoint_at({0, 0, 1}, 0, t), t, 15.0);
+  EXPECT_FALSE(c.landed());
+  auto off = setpoint_at({0, 0, 1}, 0, t);
+  off.motors_on = false;
+  EXPECT_TRUE(c.update(off, model.pose(t), t).armed);
+}
+
+TEST(OuterLoopRegression, LatchedFailsafeDisarmSurvivesARestart) {
+  // A new controller given the latch its predecessor persisted refuses a motors-on setpoint
+  PositionController c(params(), PersistentState{true, false});
+  auto cmd = c.update(setpoint_at({0, 0, 1}, 0, kT0), pose_at({0, 0, 0}, 0, kT0), kT0);
+  EXPECT_FALSE(cmd.armed);
+  EXPECT_TRUE(c.persistent_state().disarm_latched);
+  // until autonomy acknowledges with motors off
+  auto off = setpoint_at({0, 0, 0}, 0, kT0);
+  off.motors_on = false;
+  c.update(off, pose_at({0, 0, 0}, 0, kT0), kT0);
+  EXPECT_FALSE(c.persistent_state().disarm_latched);
+  cmd = c.update(setpoint_at({0, 0, 1}, 0, kT0), pose_at({0, 0, 0}, 0, kT0), kT0);
+  EXPECT_TRUE(cmd.armed);
+}
+
+TEST(OuterLoopRegression, RestartedInFlightAMotorsOffDoesNotDisarm) {
+  // The predecessor was flying; the new one's first setpoint is motors off (no KILL).
+  PositionController c(params(), PersistentState{false, true});
+  test::LagModel model;
+  model.hover_at({0, 0, 1.5});
+  auto off = setpoint_at({0, 0, 0}, 0, kT0);
+  off.motors_on = false;
+  const auto cmd = c.update(off, model.pose(kT0), kT0);
+  EXPECT_TRUE(cmd.armed);
+  EXPECT_EQ(cmd.mode, Mode::kSetpointLostDescent);
+}
+
+TEST(PositionControllerTest, StartsOnlyWithAPoseAndASetpointBothFresh) {
+  PositionController c(params());
+  c.update(std::nullopt, pose_at({0, 0, 0}, 0, kT0), kT0);
+  EXPECT_FALSE(c.started());
+  c.update(setpoint_at({0, 0, 0}, 0, kT0 - 2'000 * kMs), pose_at({0, 0, 0}, 0, kT0), kT0);
+  EXPECT_FALSE(c.started()) << "stale setpoint";
+  c.update(setpoint_at({0, 0, 0}, 0, kT0), pose_at({0, 0, 0}, 0, kT0 - 2'000 * kMs), kT0);
+  EXPECT_FALSE(c.started()) << "stale pose";
+  c.update(setpoint_at({0, 0, 0}, 0, kT0), pose_at({0, 0, 0}, 0, kT0), kT0);
+  EXPECT_TRUE(c.started());
+}
+
+TEST(OuterLoopRegression, ParamsRejectInfiniteTimeouts) {
+  for (const char* key : {"pose_lost_s", "failsafe_disarm_after_s", "setpoint_lost_s"}) {
+    auto p = params();
+    if (std::string(key) == "pose_lost_s") p.pose_lost_s = std::numeric_limits<double>::infinity();
+    if (std::string(key) == "failsafe_disarm_after_s")
+      p.failsafe_disarm_after_s = std::numeric_limits<double>::infinity();
+    if (std::string(key) == "setpoint_lost_s")
+      p.setpoint_lost_s = std::numeric_limits<double>::infinity();
+    try {
+      p.validate();
+      ADD_FAILURE() << key << " = inf accepted";
+    } catch (const ParamError& e) {
+      EXPECT_EQ(e.key(), key);
+    }
+  }
+}
+
+TEST(PositionControllerTest, WithThePoseLostAutonomysTouchDownMotorsOffIsHonoured) {
+  // Blind failsafe descent: autonomy's IMU touch-down is the only land detector left.
+  PositionController c(params());
+  const auto last_pose = pose_at({0, 0, 1}, 0, kT0);
+  c.update(setpoint_at({0, 0, 1}, 0, kT0), last_pose, kT0);
+  const int64_t t = kT0 + 3'000 * kMs;
+  ASSERT_EQ(c.update(setpoint_at({0, 0, 1}, 0, t), last_pose, t).mode, Mode::kFailsafeDescent);
+  auto off = setpoint_at({0, 0, 0}, 0, t + 10 * kMs);
+  off.motors_on = false;
+  EXPECT_FALSE(c.update(off, last_pose, t + 10 * kMs).armed);
 }
 
 }  // namespace

@@ -108,7 +108,12 @@ async function main() {
     };
     navigator.getGamepads = () => [window.__pad];
   });
-  await page.goto(url, { timeout: 15_000 });
+  const response = await page.goto(url, { timeout: 15_000 });
+  // Issue 14: the page may not be framed by another site (clickjacking the command buttons).
+  const headers = response.headers();
+  if (headers['x-frame-options'] !== 'DENY') fail(`X-Frame-Options ${headers['x-frame-options']}`);
+  if (!(headers['content-security-policy'] || '').includes("frame-ancestors 'none'"))
+    fail(`Content-Security-Policy ${headers['content-security-policy']}`);
 
   // 1. The page loads and shows the state.
   await waitFor('phase IDLE on the page', async () => (await page.textContent('#phase')) === 'IDLE');
@@ -190,7 +195,21 @@ async function main() {
     fail(`gamepad nudge ${JSON.stringify(padNudge)}`);
   console.log('ok: gamepad Y -> takeoff, left stick forward -> nudge +x, accepted');
 
-  // 5. Screenshot artifact, after the plots have some history.
+  // 5. Acknowledgement (issue 14): the page shows each command acknowledged by the vehicle, the
+  // clock offset, and an alarm for a command the vehicle does not acknowledge.
+  await waitFor('commands shown as acknowledged', async () =>
+    (await page.textContent('#sent')).includes('acknowledged'));
+  await waitFor('a clock offset shown', async () =>
+    /clock offset [+-]\d/.test(await page.textContent('#clock-offset')));
+  fixture.child.stdin.write('ack off\n');
+  await page.keyboard.press('a');
+  await waitFor('NOT ACKNOWLEDGED alarm', async () =>
+    (await page.isVisible('#ack-alarm')) &&
+    (await page.textContent('#ack-alarm')).includes('NOT ACKNOWLEDGED'), 5000);
+  fixture.child.stdin.write('ack on\n');
+  console.log('ok: commands acknowledged, clock offset shown, NOT ACKNOWLEDGED alarm when unanswered');
+
+  // 6. Screenshot artifact, after the plots have some history.
   await page.waitForTimeout(1000);
   fs.mkdirSync(outDir, { recursive: true });
   const shot = path.join(outDir, 'ground_station_browser.png');
