@@ -50,10 +50,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     if (!std::isfinite(d) || std::abs(d) > nudge_max_m)
       fuzz::fail("parse_command_request passed a nudge outside +-nudge_max_m");
   const OperatorKey key = fuzz::test_key();
-  CommandBuilder builder("station", key);
+  CommandBuilder builder("station", key, fuzz::kVehicle);
   const int64_t now = 1'700'000'000'000'000;
-  operator_cmd_t cmd = builder.build(req, now);
-  fuzz::bind_and_sign(cmd, key);
+  operator_cmd_t cmd = builder.build(req, fuzz::kSession, now);
   CommandVerifier verifier = fuzz::make_verifier(key);
   if (!verifier.check(cmd, now).accepted())
     fuzz::fail("a command the station built and signed is refused by the vehicle's verifier");

@@ -5,6 +5,7 @@
 #include <alight/sim_truth_t.hpp>
 
 #include "fuzz/fuzz_support.hpp"
+#include "ground_station/commands.hpp"
 #include "ground_station/state.hpp"
 #include "tools/monitor.hpp"
 
@@ -23,6 +24,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       if (const auto msg = fuzz::decode<autonomy_status_t>(data, size)) {
         state.on_status(*msg, kNow);
         (void)state.to_json(kNow);
+        ground_station::CommandTracker tracker(1.0);
+        tracker.sent("go", 1, 1, kNow);
+        tracker.on_status(*msg, kNow + 100'000);
+        (void)tracker.alarm(kNow + 2'000'000);
         tools::MissionMonitor monitor;
         (void)monitor.add(*msg);
         (void)monitor.add(*msg);
@@ -35,6 +40,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       break;
     case 2:
       if (const auto msg = fuzz::decode<sim_truth_t>(data, size)) {
+        ground_station::CommandTracker tracker(1.0);
+        tracker.sent("go", 1, 1, kNow);
+        tracker.on_status(*msg, kNow + 100'000);
+        (void)tracker.alarm(kNow + 2'000'000);
         tools::MissionMonitor monitor;
         (void)monitor.add(*msg);
         (void)monitor.add(*msg);
