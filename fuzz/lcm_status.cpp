@@ -40,10 +40,6 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       break;
     case 2:
       if (const auto msg = fuzz::decode<sim_truth_t>(data, size)) {
-        ground_station::CommandTracker tracker(1.0);
-        tracker.sent("go", 1, 1, kNow);
-        tracker.on_status(*msg, kNow + 100'000);
-        (void)tracker.alarm(kNow + 2'000'000);
         tools::MissionMonitor monitor;
         (void)monitor.add(*msg);
         (void)monitor.add(*msg);
