@@ -194,8 +194,14 @@ CommandVerdict CommandVerifier::check(const operator_cmd_t& cmd, int64_t now_uti
   if (cmd.session != session_) return reject(R::kWrongSession);
   // Written to avoid overflow of now - utime for adversarial utime values (they are signed, so
   // only a key holder could send them, but a buggy ground station could).
-  const bool too_old = cmd.utime < now_utime && now_utime - max_age_us_ > cmd.utime;
-  const bool too_new = cmd.utime > now_utime && cmd.utime - max_age_us_ > now_utime;
+  // The differences in unsigned arithmetic are exact for any two int64 values (fuzzing found the
+  // signed form overflowing near INT64_MIN).
+  const auto gap = [](int64_t hi, int64_t lo) {
+    return static_cast<uint64_t>(hi) - static_cast<uint64_t>(lo);
+  };
+  const auto max_age = static_cast<uint64_t>(max_age_us_);
+  const bool too_old = cmd.utime < now_utime && gap(now_utime, cmd.utime) > max_age;
+  const bool too_new = cmd.utime > now_utime && gap(cmd.utime, now_utime) > max_age;
   if (too_old || too_new) return reject(R::kStale);
   auto it = last_seq_.find(cmd.sender);
   if (it != last_seq_.end() && cmd.seq <= it->second) return reject(R::kReplayed);

@@ -132,7 +132,14 @@ std::vector<ParamNode> ParamNode::child_list(const std::string& key) const {
 void ParamNode::finish(const std::vector<std::string>& ignored) const {
   if (!node_.IsMap()) return;
   for (const auto& kv : node_) {
-    const std::string key = kv.first.as<std::string>();
+    // A key that is a list or a mapping ({[a]: 1}) is nobody's parameter; found by fuzzing, it
+    // threw yaml-cpp's BadConversion, and the node exited 1 naming nothing.
+    if (!kv.first.IsScalar())
+      throw ParamError(
+          *file_,
+          key_path("<" + std::string(kv.first.IsSequence() ? "list" : "mapping") + " as a key>"),
+          "", "keys must be plain names (line " + std::to_string(kv.first.Mark().line + 1) + ")");
+    const std::string key = kv.first.Scalar();
     if (read_keys_->count(key)) continue;
     bool skip = false;
     for (const auto& i : ignored) skip = skip || i == key;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <cstdint>
 
 #include "common/params.hpp"
 
@@ -19,7 +20,12 @@ PoseBuffer::PoseBuffer(const PoseBufferParams& params) : params_(params) { param
 
 bool PoseBuffer::add(const PoseSample& sample) {
   const auto history_us = static_cast<int64_t>(params_.history_s * 1e6);
-  if (!samples_.empty() && sample.utime < samples_.back().utime - history_us) return false;
+  // Saturating: a pose stamped near INT64_MIN made `utime - history_us` overflow, which emptied
+  // the buffer below and read front() of an empty deque (found by fuzzing).
+  const auto window_start = [history_us](int64_t newest) {
+    return newest < INT64_MIN + history_us ? INT64_MIN : newest - history_us;
+  };
+  if (!samples_.empty() && sample.utime < window_start(samples_.back().utime)) return false;
   auto it = std::lower_bound(samples_.begin(), samples_.end(), sample.utime,
                              [](const PoseSample& s, int64_t t) { return s.utime < t; });
   if (it != samples_.end() && it->utime == sample.utime) {
@@ -27,7 +33,7 @@ bool PoseBuffer::add(const PoseSample& sample) {
   } else {
     samples_.insert(it, sample);
   }
-  while (samples_.front().utime < samples_.back().utime - history_us) samples_.pop_front();
+  while (samples_.front().utime < window_start(samples_.back().utime)) samples_.pop_front();
   return true;
 }
 

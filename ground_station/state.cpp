@@ -140,7 +140,9 @@ void StationState::on_status(const autonomy_status_t& msg, int64_t now_utime,
   sample_height(msg.utime);
   // The vehicle's wall clock when it published (older autonomy: the status time).
   const int64_t vehicle_utime = msg.wall_utime != 0 ? msg.wall_utime : msg.utime;
-  clock_offset_s_ = (wall_utime.value_or(now_utime) - vehicle_utime) * 1e-6;
+  // In double: a hostile stamp must not overflow the subtraction (found by fuzzing).
+  clock_offset_s_ = (static_cast<double>(wall_utime.value_or(now_utime)) -
+                     static_cast<double>(vehicle_utime)) * 1e-6;
   commands_.on_status(msg, now_utime);
 }
 

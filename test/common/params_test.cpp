@@ -186,5 +186,16 @@ TEST(ParamsTest, SameKeyInDifferentMappingsIsFine) {
   EXPECT_NO_THROW(ParamNode::from_string("a:\n  x: 1\nb:\n  x: 2\n", "f.yaml"));
 }
 
+
+// Regression (issue 14, found by fuzzing): a key that is a list or a mapping threw yaml-cpp's
+// BadConversion from finish(), and every node exited 1 naming no key.
+TEST(ParamsTest, NonScalarKeyIsAParamErrorNamingWhere) {
+  const auto root = ParamNode::from_string("ground_station:\n  {[a]: 1}\n", "station.yaml");
+  const auto sec = root.child("ground_station");
+  const auto e = expect_param_error([&] { sec.finish(); });
+  EXPECT_EQ(e.file(), "station.yaml");
+  EXPECT_EQ(e.key(), "ground_station.<list as a key>");
+}
+
 }  // namespace
 }  // namespace alight

@@ -101,5 +101,21 @@ TEST(PoseBufferTest, SampleOlderThanHistoryIsIgnored) {
   EXPECT_FALSE(buf.add(truth(kT0)));
 }
 
+
+// Regression (issue 14, found by fuzzing): a pose stamped near INT64_MIN made the history
+// window's start overflow; the buffer emptied itself and read front() of an empty deque.
+TEST(PoseBufferRegression, ExtremeStampsNeverEmptyTheBuffer) {
+  PoseBuffer buf = filled(PoseBufferParams{});
+  PoseSample s = truth(kT0);
+  s.utime = INT64_MIN + 5;
+  EXPECT_FALSE(buf.add(s));
+  PoseBuffer fresh;
+  EXPECT_TRUE(fresh.add(s));
+  s.utime = INT64_MIN;
+  EXPECT_TRUE(fresh.add(s));
+  PoseSample out;
+  EXPECT_EQ(fresh.lookup(INT64_MIN, &out), PoseBuffer::Status::kOk);
+}
+
 }  // namespace
 }  // namespace alight

@@ -125,6 +125,15 @@ class VerifierTest : public ::testing::Test {
 
 using R = CommandVerdict::Reason;
 
+// Regression (issue 14, found by fuzzing): the staleness test computed now - max_age and
+// utime - max_age in signed arithmetic, which overflowed for stamps near INT64_MIN.
+TEST_F(VerifierTest, RegressionExtremeStampsAreStaleWithoutOverflow) {
+  EXPECT_EQ(check(signed_cmd(INT64_MIN, 1)), R::kStale);
+  EXPECT_EQ(check(signed_cmd(INT64_MAX, 2)), R::kStale);
+  EXPECT_EQ(check(signed_cmd(INT64_MAX, 3), INT64_MIN), R::kStale);
+  EXPECT_EQ(check(signed_cmd(INT64_MIN + 1, 4), INT64_MIN), R::kAccepted);
+}
+
 TEST_F(VerifierTest, AcceptsAFreshCorrectlySignedCommand) {
   EXPECT_EQ(check(signed_cmd(kNow, 1)), R::kAccepted);
   EXPECT_EQ(verifier.last_seq("gs-test"), 1);
