@@ -112,8 +112,12 @@ TEST(AutonomyNodeTest, AutoGoTakesOffStatusAtTenHertzAndKillStopsEverything) {
   Process autonomy({bin + "alight-autonomy", "--config", config, "--lcm-url", kUrl, "--auto-go",
                     "landing", "--log-level", "warn", "--key-file", key_path.string(),
                     "--state-file", state_path.string()});
-  Process outer(
-      {bin + "alight-outer-loop", "--config", config, "--lcm-url", kUrl, "--log-level", "warn"});
+  // Its own state file: the per-URL default would carry latches from an earlier test run.
+  const auto outer_state_path =
+      std::filesystem::temp_directory_path() / "alight_autonomy_node_test_outer_1.state";
+  std::filesystem::remove(outer_state_path);
+  Process outer({bin + "alight-outer-loop", "--config", config, "--lcm-url", kUrl, "--log-level",
+                 "warn", "--state-file", outer_state_path.string()});
   ASSERT_TRUE(autonomy.ok());
   ASSERT_TRUE(outer.ok());
   const int64_t t0 = 1'700'000'000'000'000;
@@ -400,6 +404,9 @@ TEST(AutonomyNodeRegression, RestartedInFlightHoldsAndKillSurvivesRestarts) {
     kill.seq = 1;
     kill.sender = "test-station";
     kill.command = alight::operator_cmd_t::CMD_KILL;
+    // Signed for this vehicle and this run of autonomy, as announced on AUTONOMY_STATUS.
+    kill.vehicle_id = b.rec.status.back().vehicle_id;
+    kill.session = b.rec.status.back().cmd_session;
     alight::sign(kill, key);
     b.lcm.publish("OPERATOR_CMD", &kill);
     ASSERT_TRUE(b.sensors_until([&] { return phase_is(alight::autonomy_status_t::PHASE_KILLED); }));
@@ -416,7 +423,7 @@ TEST(AutonomyNodeRegression, RestartedInFlightHoldsAndKillSurvivesRestarts) {
     for (int i = 0; i < 20; ++i) b.lcm.handleTimeout(10);
     ASSERT_FALSE(b.rec.setpoints.empty());
     for (const auto& sp : b.rec.setpoints)
-      EXPECT_EQ(sp.motors, alight::position_setpoint_t::MOTORS_OFF) << "KILL forgotten";
+      EXPECT_EQ(sp.motors, alight::position_setpoint_t::MOTORS_KILL) << "KILL forgotten";
     for (const auto& st : b.rec.status)
       EXPECT_EQ(st.phase, alight::autonomy_status_t::PHASE_KILLED) << st.reason;
   }
