@@ -24,10 +24,13 @@ void CameraParams::validate() const {
               "must be in 2..32");
   param_check(!camera_info.empty(), "camera_info", camera_info, "must name a camera_info file");
   param_check(!channel.empty(), "channel", channel, "must not be empty");
-  param_check(backoff_initial_s > 0.0, "backoff_initial_s", backoff_initial_s, "must be > 0 s");
-  param_check(backoff_max_s >= backoff_initial_s, "backoff_max_s", backoff_max_s,
-              "must be >= backoff_initial_s");
-  param_check(stall_timeout_s > 0.0, "stall_timeout_s", stall_timeout_s, "must be > 0 s");
+  // Written so that NaN fails every check; the upper bounds refuse .inf.
+  param_check(backoff_initial_s > 0.0 && backoff_initial_s <= kMaxTimeoutS, "backoff_initial_s",
+              backoff_initial_s, "must be in (0, 60] s");
+  param_check(backoff_max_s >= backoff_initial_s && backoff_max_s <= kMaxTimeoutS, "backoff_max_s",
+              backoff_max_s, "must be in [backoff_initial_s, 60] s");
+  param_check(stall_timeout_s > 0.0 && stall_timeout_s <= kMaxTimeoutS, "stall_timeout_s",
+              stall_timeout_s, "must be in (0, 60] s");
 }
 
 CameraParams load_params(const std::string& path) {

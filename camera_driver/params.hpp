@@ -9,6 +9,11 @@
 
 namespace alight::camera {
 
+/// Upper bound of every camera timeout [s]: a camera that stays stuck or away for longer than
+/// this is not worth waiting for any longer between attempts, and an infinite (".inf") or huge
+/// value would switch the supervision off.
+inline constexpr double kMaxTimeoutS = 60.0;
+
 struct CameraParams {
   std::string device = "/dev/video0";     ///< a V4L2 node path, or usb:VVVV:PPPP[:SERIAL] (hex ids)
   std::string pixel_format = "GREY";      ///< GREY | YUYV | MJPEG: what the camera sends
@@ -21,9 +26,10 @@ struct CameraParams {
   int buffer_count = 4;  ///< mmap buffers to request (>= 2)
   std::string camera_info = "firefly_mv_4mm.yaml";  ///< intrinsics; relative to this file
   std::string channel = "CAMERA";                   ///< LCM channel of the frames
-  double backoff_initial_s = 0.1;                   ///< first wait before reconnecting [s]
-  double backoff_max_s = 5.0;                       ///< longest wait between reconnect attempts [s]
-  double stall_timeout_s = 2.0;    ///< no frame this long while streaming = stalled [s]
+  double backoff_initial_s = 0.1;  ///< first wait before reconnecting, in (0, kMaxTimeoutS] [s]
+  double backoff_max_s = 5.0;      ///< longest wait between reconnect attempts, <= kMaxTimeoutS [s]
+  double stall_timeout_s = 2.0;    ///< no good frame this long while streaming = stalled,
+                                   ///< in (0, kMaxTimeoutS] [s]
   bool usb_reset_on_stall = true;  ///< reset a stalled USB camera through libusb
 
   void validate() const;  ///< throws ParamError naming the field and its value

@@ -92,17 +92,21 @@ CameraSupervisor::Step CameraSupervisor::step(int64_t now_mono_us) {
     case GrabStatus::kError:
       lose(now_mono_us, g.message + "; reopening", out);
       break;
-    case GrabStatus::kTimeout: {
-      const int64_t silent_us = now_mono_us - last_frame_mono_us_;
-      if (silent_us > static_cast<int64_t>(params_.stall_timeout_s * 1e6)) {
-        const VideoNode node = capture_.node();
-        if (params_.usb_reset_on_stall && node.is_usb && node.usb_bus >= 0) reset_target_ = node;
-        lose(now_mono_us,
-             node.path + ": no frame for " + std::to_string(silent_us / 1000) + " ms (stalled); " +
-                 (reset_target_ ? "resetting over USB and " : "") + "reopening",
-             out);
-      }
+    case GrabStatus::kTimeout:
       break;
+  }
+  // No good frame for stall_timeout_s is a stall whatever the device reports: silence, only
+  // corrupt buffers (a camera whose every frame is flagged V4L2_BUF_FLAG_ERROR, or fails to
+  // convert) or only stale ones all leave the consumer without an image.
+  if (state_ == State::kStreaming && !out.frame) {
+    const int64_t silent_us = now_mono_us - last_frame_mono_us_;
+    if (silent_us > static_cast<int64_t>(params_.stall_timeout_s * 1e6)) {
+      const VideoNode node = capture_.node();
+      if (params_.usb_reset_on_stall && node.is_usb && node.usb_bus >= 0) reset_target_ = node;
+      lose(now_mono_us,
+           node.path + ": no good frame for " + std::to_string(silent_us / 1000) +
+               " ms (stalled); " + (reset_target_ ? "resetting over USB and " : "") + "reopening",
+           out);
     }
   }
   return out;

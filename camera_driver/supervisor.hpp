@@ -31,7 +31,8 @@ class ReconnectBackoff {
 struct SupervisorParams {
   double backoff_initial_s = 0.1;  ///< first wait after a loss [s]
   double backoff_max_s = 5.0;      ///< longest wait between attempts [s]
-  double stall_timeout_s = 2.0;    ///< no frame for this long while streaming = stuck [s]
+  double stall_timeout_s = 2.0;    ///< no good frame for this long while streaming = stuck,
+                                 ///< whether the device is silent or sends only corrupt frames [s]
   bool usb_reset_on_stall = true;  ///< reset a stuck USB camera through libusb before reopening
   int grab_timeout_ms = 100;       ///< longest block inside one step [ms]
 };

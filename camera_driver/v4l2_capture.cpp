@@ -297,6 +297,9 @@ Status V4l2Capture::start_streaming() {
     return classify(-r, node_.path, "VIDIOC_STREAMON");
   streaming_ = true;
   last_sequence_ = -1;  // the kernel numbers frames from 0 at every STREAMON
+  // A new stream's timestamps owe nothing to the last one's (a device with its own clock, a
+  // re-enumerated USB camera): judging them against the old stream dropped every frame.
+  last_returned_us_ = -1;
   return Status{};
 }
 

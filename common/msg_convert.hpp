@@ -28,8 +28,38 @@ struct Image {
   cv::Mat pixels;     ///< CV_8UC1 (mono8) or CV_8UC3 (BGR)
 };
 
+/// Largest image side image_from_msg accepts [px]. 8192 covers every camera alight flies (the
+/// Firefly MV's 640x480 up to 4K sensors) and bounds a decoded frame at 8192 x 8192 x 3 bytes
+/// = 192 MiB, so no message, however crafted, makes a node allocate more.
+inline constexpr int kMaxImageSide = 8192;
+/// Largest image_t data buffer accepted [bytes]: a raw 8192 x 8192 BGRA frame (256 MiB).
+inline constexpr int64_t kMaxImageBytes = int64_t{kMaxImageSide} * kMaxImageSide * 4;
+/// Most scans a JPEG may have (a progressive JPEG has about 10; each scan costs a pass over the
+/// whole image, so thousands of tiny scans would make a small message expensive to decode).
+inline constexpr int kMaxJpegScans = 100;
+
+/// What a JPEG's headers say, read without decoding it.
+struct JpegInfo {
+  int width = 0;       ///< [px]
+  int height = 0;      ///< [px]
+  int components = 0;  ///< 1 (grey) or 3 (colour)
+  int scans = 0;       ///< SOS segments (1 for baseline, several for progressive)
+};
+
+/// Walks a JPEG's marker segments (ITU-T T.81 annex B) without decoding any pixel: the stream
+/// must start with SOI, have one baseline, extended or progressive frame header (SOF0/1/2) with
+/// 8-bit samples, 1 or 3 components and a size within kMaxImageSide before its first scan, and
+/// end with EOI after its last scan. A stream cut anywhere before its EOI is refused, which
+/// libjpeg (through cv::imdecode) is not: it pads a truncated scan with grey and returns it.
+/// Bytes after EOI are ignored (some cameras pad their frames). Never reads outside [data,
+/// data + size).
+std::optional<JpegInfo> jpeg_info(const uint8_t* data, size_t size, std::string* error);
+
 /// Decodes GRAY, RGB, BGR, RGBA, BGRA and MJPEG/JPEG frames. `mono` converts colour to mono8.
-/// Returns nullopt and sets *error (naming the problem) for malformed or unsupported frames.
+/// Returns nullopt and sets *error (naming the problem) for malformed, truncated, oversize
+/// (beyond kMaxImageSide / kMaxImageBytes) or unsupported frames; never throws (OpenCV's
+/// exceptions, bad_alloc included, become an error text). A JPEG's size is read from its header
+/// (jpeg_info) before it is decoded.
 std::optional<Image> image_from_msg(const image_t& msg, bool mono, std::string* error);
 
 /// Raw frame: mono8 as PIXEL_FORMAT_GRAY, 8-bit 3-channel as PIXEL_FORMAT_BGR.

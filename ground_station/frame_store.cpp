@@ -10,16 +10,22 @@ namespace alight::ground_station {
 
 std::optional<std::string> frame_to_jpeg(const image_t& frame, int quality, std::string* error) {
   if (frame.pixelformat == image_t::PIXEL_FORMAT_MJPEG) {
-    if (frame.data.size() < 4 || frame.data[0] != 0xFF || frame.data[1] != 0xD8) {
-      if (error) *error = "MJPEG frame without a JPEG start marker";
-      return std::nullopt;
-    }
+    // Passed through undecoded, but only a complete JPEG of a sane size (jpeg_info: header and
+    // EOI checked, the same rules as image_from_msg) reaches the browser.
+    if (!jpeg_info(frame.data.data(), frame.data.size(), error)) return std::nullopt;
     return std::string(frame.data.begin(), frame.data.end());
   }
-  const auto image = image_from_msg(frame, false, error);
+  const auto image = image_from_msg(frame, false, error);  // never throws
   if (!image) return std::nullopt;
   std::vector<uint8_t> buf;
-  if (!cv::imencode(".jpg", image->pixels, buf, {cv::IMWRITE_JPEG_QUALITY, quality})) {
+  bool encoded = false;
+  try {
+    encoded = cv::imencode(".jpg", image->pixels, buf, {cv::IMWRITE_JPEG_QUALITY, quality});
+  } catch (const std::exception& e) {  // cv::Exception, bad_alloc: the frame is dropped
+    if (error) *error = std::string("JPEG encoding failed: ") + e.what();
+    return std::nullopt;
+  }
+  if (!encoded) {
     if (error) *error = "JPEG encoding failed";
     return std::nullopt;
   }

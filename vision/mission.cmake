@@ -10,8 +10,9 @@ target_link_libraries(alight_vision_mission PUBLIC alight_vision alight_common o
 target_compile_options(alight_vision_mission PRIVATE -O2)
 
 # The FrameResult -> target_t conversion (the node's, shared with tests and the closed loop).
-add_library(alight_vision_msgs STATIC ${CMAKE_CURRENT_LIST_DIR}/convert.cpp)
-target_link_libraries(alight_vision_msgs PUBLIC alight_vision_mission alight_lcmtypes)
+add_library(alight_vision_msgs STATIC ${CMAKE_CURRENT_LIST_DIR}/convert.cpp
+                                      ${CMAKE_CURRENT_LIST_DIR}/inputs.cpp)
+target_link_libraries(alight_vision_msgs PUBLIC alight_vision_mission alight_msgs alight_lcmtypes)
 
 alight_add_node(alight-vision SOURCES ${CMAKE_CURRENT_LIST_DIR}/vision_node.cpp
                 LIBS alight_vision_msgs alight_msgs alight_node alight_lcmtypes)

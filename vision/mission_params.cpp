@@ -66,8 +66,12 @@ void PipelineParams::validate() const {
 void NodeParams::validate() const {
   pipeline.validate();
   poses.validate();
-  param_check(max_pose_wait_s >= 0, "max_pose_wait_s", max_pose_wait_s, "must be >= 0");
-  param_check(diag_rate_hz >= 0, "diag_rate_hz", diag_rate_hz, "must be >= 0");
+  // Finite and bounded (NaN fails every comparison): `.inf` made every frame wait for its pose
+  // forever, and an infinite wait converted to microseconds is undefined behaviour.
+  param_check(max_pose_wait_s >= 0 && max_pose_wait_s <= 5.0, "max_pose_wait_s", max_pose_wait_s,
+              "must be in [0, 5] s");
+  param_check(diag_rate_hz >= 0 && diag_rate_hz <= 100.0, "diag_rate_hz", diag_rate_hz,
+              "must be in [0, 100] Hz");
   param_check(diag_jpeg_quality >= 1 && diag_jpeg_quality <= 100, "diag_jpeg_quality",
               diag_jpeg_quality, "must be in [1, 100]");
 }

@@ -94,8 +94,8 @@ struct PipelineParams {
 struct NodeParams {
   PipelineParams pipeline{};
   PoseBufferParams poses{};
-  double max_pose_wait_s = 0.2;  ///< a frame waits this long (wall clock) for its pose [s]
-  double diag_rate_hz = 2.0;     ///< VISION_DIAG images per second (0: none) [Hz]
+  double max_pose_wait_s = 0.2;  ///< a frame waits this long (wall clock) for its pose, <= 5 [s]
+  double diag_rate_hz = 2.0;     ///< VISION_DIAG images per second (0: none), <= 100 [Hz]
   int diag_jpeg_quality = 75;    ///< [1..100]
   void validate() const;
 };

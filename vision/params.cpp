@@ -33,8 +33,11 @@ void MatchParams::validate() const {
 void TrackerParams::validate() const {
   param_check(min_tracked >= 4, "min_tracked", min_tracked, "must be >= 4");
   param_check(max_history >= 2, "max_history", max_history, "must be >= 2");
-  param_check(max_frame_gap_s > 0.0, "max_frame_gap_s", max_frame_gap_s, "must be > 0");
-  param_check(max_reference_age_s > 0.0, "max_reference_age_s", max_reference_age_s, "must be > 0");
+  // Finite and bounded: an infinite gap or age would keep a reference from any time ago.
+  param_check(max_frame_gap_s > 0.0 && max_frame_gap_s <= 60.0, "max_frame_gap_s", max_frame_gap_s,
+              "must be in (0, 60] s");
+  param_check(max_reference_age_s > 0.0 && max_reference_age_s <= 600.0, "max_reference_age_s",
+              max_reference_age_s, "must be in (0, 600] s");
   param_check(frame_threshold_px >= 0.0, "frame_threshold_px", frame_threshold_px, "must be >= 0");
   try {
     match.validate();

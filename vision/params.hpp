@@ -24,7 +24,7 @@ struct StarParams {
   /// platform top) otherwise takes nearly all features and leaves the floor too few for its
   /// homography. [cells]
   int grid_cols = 0, grid_rows = 0;
-  bool subpixel = true;             ///< paper 3.1.1: quadratic refinement of x, y and scale
+  bool subpixel = true;  ///< paper 3.1.1: quadratic refinement of x, y and scale
   void validate() const;
 };
 
@@ -52,8 +52,8 @@ struct MatchParams {
 struct TrackerParams {
   int min_tracked = 40;          ///< N: features that must be tracked from reference to now [-]
   int max_history = 60;          ///< frames kept (bounds the reference age in frames) [-]
-  double max_frame_gap_s = 1.0;  ///< a larger gap between frames resets the history [s]
-  double max_reference_age_s = 10.0;  ///< older frames are never the reference [s]
+  double max_frame_gap_s = 1.0;  ///< a larger gap between frames resets the history, <= 60 [s]
+  double max_reference_age_s = 10.0;  ///< older frames are never the reference, <= 600 [s]
   MatchParams match{};                ///< frame-to-frame matching
   /// Frame-to-frame matches must fit one homography within this; consecutive frames are close,
   /// so off-plane parallax stays below it while wrong matches do not (0: no check) [px].

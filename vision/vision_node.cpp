@@ -6,13 +6,21 @@
 // newest motion-capture sample is still older than the frame, the frame waits for it (at most
 // max_pose_wait_s, then it is processed without a pose: REASON_NO_POSE). Everything published
 // is stamped with the frame's exposure time, so a replayed log gives the same sequence.
+//
+// Input boundary (issue 14, vision/inputs.hpp): a pose with a non-finite value or a non-unit
+// quaternion is refused, and so is any message whose stamp the node's StampGuard refuses (a
+// pose an hour ahead used to push every later pose out of the buffer); a frame that does not
+// decode safely is reported as REASON_BAD_IMAGE. An exception out of one frame's work (OpenCV,
+// out of memory) drops that frame, is counted (NODE_STATUS: CAMERA rejected_values, and the
+// periodic log line) and never ends the process. None of this reads a clock into what is
+// computed: a replayed log still gives byte-identical output.
 
-#include <alight/image_t.hpp>
-#include <alight/pose_t.hpp>
-#include <alight/target_t.hpp>
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
+#include <alight/image_t.hpp>
+#include <alight/pose_t.hpp>
+#include <alight/target_t.hpp>
 #include <optional>
 
 #include "common/camera_mount.hpp"
@@ -20,6 +28,7 @@
 #include "common/node.hpp"
 #include "vision/convert.hpp"
 #include "vision/diag_image.hpp"
+#include "vision/inputs.hpp"
 #include "vision/pipeline.hpp"
 
 using namespace alight;
@@ -61,19 +70,38 @@ int main(int argc, char** argv) {
     int64_t last_diag_utime = 0;
     uint64_t n_found = 0, n_frames = 0;
 
+    uint64_t n_frame_errors = 0;
+    const StampCheck accept_stamp = [&](const std::string& channel, int64_t utime) {
+      return node.accept_stamp(channel, utime);
+    };
+    const RejectValue reject = [&](const std::string& channel, const std::string& why) {
+      node.reject_value(channel, why);
+    };
+
     const auto process = [&](const Pending& f, const std::optional<PoseSample>& pose) {
-      const FrameResult r = f.bad ? pipeline.process(cv::Mat(), f.image.utime, pose)
-                                  : pipeline.process(f.image.pixels, f.image.utime, pose);
-      node.publish("VISION_TARGET", to_msg(r));
-      ++n_frames;
-      if (r.found()) ++n_found;
-      spdlog::debug("frame {} utime {}: {} ({} features, {} matches)", r.seq, r.utime,
-                    to_string(r.reason), r.n_features, r.n_matches);
-      if (params.diag_rate_hz > 0 &&
-          r.utime - last_diag_utime >= static_cast<int64_t>(1e6 / params.diag_rate_hz)) {
-        last_diag_utime = r.utime;
-        node.publish("VISION_DIAG", jpeg_image_to_msg(draw_diag_image(f.image.pixels, r), r.utime,
-                                                      params.diag_jpeg_quality));
+      // Nothing is published before the frame's work is through, so a frame that throws
+      // half-way is dropped whole.
+      const auto error = run_guarded([&] {
+        const FrameResult r = f.bad ? pipeline.process(cv::Mat(), f.image.utime, pose)
+                                    : pipeline.process(f.image.pixels, f.image.utime, pose);
+        const target_t target = to_msg(r);
+        std::optional<image_t> diag;
+        if (params.diag_rate_hz > 0 &&
+            r.utime - last_diag_utime >= static_cast<int64_t>(1e6 / params.diag_rate_hz)) {
+          diag = jpeg_image_to_msg(draw_diag_image(f.image.pixels, r), r.utime,
+                                   params.diag_jpeg_quality);
+          last_diag_utime = r.utime;
+        }
+        node.publish("VISION_TARGET", target);
+        if (diag) node.publish("VISION_DIAG", *diag);
+        ++n_frames;
+        if (r.found()) ++n_found;
+        spdlog::debug("frame {} utime {}: {} ({} features, {} matches)", r.seq, r.utime,
+                      to_string(r.reason), r.n_features, r.n_matches);
+      });
+      if (error) {
+        ++n_frame_errors;
+        reject("CAMERA", "frame " + std::to_string(f.image.utime) + " dropped: " + *error);
       }
     };
     const auto try_process = [&]() {
@@ -86,8 +114,8 @@ int main(int argc, char** argv) {
         process(f, pose);
         return;
       }
-      const bool may_come = status == PoseBuffer::Status::kAfterNewest ||
-                            status == PoseBuffer::Status::kEmpty;
+      const bool may_come =
+          status == PoseBuffer::Status::kAfterNewest || status == PoseBuffer::Status::kEmpty;
       if (may_come &&
           wall_utime() - pending->arrived_wall < static_cast<int64_t>(params.max_pose_wait_s * 1e6))
         return;  // wait for the pose
@@ -97,17 +125,16 @@ int main(int argc, char** argv) {
     };
 
     node.on<pose_t>("MOCAP_POSE", [&](const pose_t& msg) {
-      poses.add(from_msg(msg));
-      try_process();
+      if (add_mocap_pose(msg, poses, accept_stamp, reject)) try_process();
     });
     node.on_latest<image_t>("CAMERA", [&](const image_t& msg) {
-      std::string error;
+      FrameInput in = camera_frame(msg, accept_stamp, reject);
+      if (!in.use) return;
       Pending f;
       f.arrived_wall = wall_utime();
-      if (auto img = image_from_msg(msg, true, &error)) {
-        f.image = std::move(*img);
+      if (in.image) {
+        f.image = std::move(*in.image);
       } else {
-        spdlog::warn("CAMERA frame {}: {}", msg.utime, error);
         f.image.utime = msg.utime;
         f.bad = true;
       }
@@ -117,8 +144,11 @@ int main(int argc, char** argv) {
     });
     node.every(0.02, [&](int64_t) { try_process(); });
     node.every(10.0, [&](int64_t) {
-      spdlog::info("{} frames, {} with a target, {} camera frames skipped", n_frames, n_found,
-                   node.stats("CAMERA").skipped);
+      const ChannelStats& c = node.stats("CAMERA");
+      spdlog::info(
+          "{} frames, {} with a target, {} camera frames skipped, {} refused (image or stamp), "
+          "{} dropped by an exception",
+          n_frames, n_found, c.skipped, c.rejected_values + c.rejected_stamps, n_frame_errors);
     });
     return node.run();
   });

@@ -143,6 +143,33 @@ TEST_F(ParamsTest, ErrorsNameFileKeyAndValue) {
   }
 }
 
+TEST_F(ParamsTest, InfiniteOrHugeTimeoutsAreRefusedNamingFileKeyAndValue) {
+  // Regression (issue 14): `stall_timeout_s: .inf` loaded and switched stall detection off;
+  // `backoff_max_s: 1e9` let a lost camera wait 30 years between attempts.
+  struct Case {
+    const char* yaml;
+    const char* key;
+    const char* value;
+  };
+  for (const Case& c :
+       {Case{"stall_timeout_s: .inf\n", "stall_timeout_s", "inf"},
+        Case{"stall_timeout_s: 61\n", "stall_timeout_s", "61"},
+        Case{"backoff_max_s: 1e9\n", "backoff_max_s", "1e+09"},
+        Case{"backoff_initial_s: .inf\nbackoff_max_s: .inf\n", "backoff_initial_s", "inf"},
+        Case{"backoff_initial_s: .nan\n", "backoff_initial_s", "nan"}}) {
+    const std::string path = write(c.yaml);
+    try {
+      load_params(path);
+      ADD_FAILURE() << "accepted: " << c.yaml;
+    } catch (const ParamError& e) {
+      EXPECT_EQ(e.file(), path);
+      EXPECT_EQ(e.key(), c.key) << e.what();
+      EXPECT_NE(std::string(e.what()).find(c.value), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_EQ(load_params(write("stall_timeout_s: 60\nbackoff_max_s: 60\n")).stall_timeout_s, 60.0);
+}
+
 TEST(FramePacerTest, PlaysAtItsRateAndSkipsToTheNewestWhenBehind) {
   FramePacer pacer(10.0, 1'000'000);  // 100 ms period from t = 1 s
   auto p = pacer.plan(1'000'000);

@@ -155,6 +155,63 @@ TEST_F(SupervisorTest, PublishedSequenceKeepsIncreasingAcrossAReconnect) {
   EXPECT_FALSE(labeler.used_dequeue_time());
 }
 
+TEST_F(SupervisorTest, CameraDeliveringOnlyCorruptFramesIsDeclaredStalled) {
+  // Regression (issue 14): only a poll timeout counted towards the stall, so a device whose
+  // every buffer came back flagged V4L2_BUF_FLAG_ERROR streamed "bad frames" forever and was
+  // never reopened. No good frame for stall_timeout_s is a stall, whatever the device says.
+  CameraSupervisor sup(io, config, params);
+  int64_t t = 0;
+  ASSERT_TRUE(sup.start(t).ok());
+  io.emit_frame(dev, 1000, frame);
+  ASSERT_TRUE(sup.step(t).frame);
+  bool stalled = false;
+  for (t = 33'000; t <= 3'000'000 && !stalled; t += 33'000) {
+    io.emit_frame(dev, t, frame, /*error=*/true);
+    const auto s = sup.step(t);
+    EXPECT_FALSE(s.frame);
+    stalled = mentions(s.events, "stalled");
+    if (stalled) {
+      EXPECT_GT(t, 2'000'000);  // not before the timeout
+      EXPECT_LE(t, 2'000'000 + 33'000);
+    }
+  }
+  EXPECT_TRUE(stalled);
+  EXPECT_EQ(sup.state(), CameraSupervisor::State::kReconnecting);
+  // Reopened (after a USB reset), it streams again.
+  sup.step(t);
+  ASSERT_EQ(sup.state(), CameraSupervisor::State::kStreaming);
+  EXPECT_EQ(io.resets(), 1);
+  io.emit_frame(dev, t + 33'000, frame);
+  EXPECT_TRUE(sup.step(t + 33'000).frame);
+}
+
+TEST_F(SupervisorTest, FramesStampedLowerAfterAReconnectAreDelivered) {
+  // Regression (issue 14): the capture kept the newest timestamp it had returned across a
+  // reopen, so after a reconnect whose timestamps restarted lower (a device with its own
+  // clock, a USB re-enumeration) every frame was counted "stale" and dropped for good.
+  CameraSupervisor sup(io, config, params);
+  ASSERT_TRUE(sup.start(0).ok());
+  io.emit_frame(dev, 50'000'000, frame);
+  ASSERT_TRUE(sup.step(0).frame);
+  io.unplug(dev);
+  sup.step(100'000);
+  io.replug(dev);
+  sup.step(100'000);
+  ASSERT_EQ(sup.state(), CameraSupervisor::State::kStreaming);
+  for (int i = 0; i < 5; ++i) {
+    const int64_t t = 200'000 + i * 33'000;
+    io.emit_frame(dev, 1'000 + i * 33'000, frame);  // the new stream's clock started near 0
+    const auto s = sup.step(t);
+    ASSERT_TRUE(s.frame) << "frame " << i << " after the reconnect was dropped";
+    EXPECT_EQ(s.frame->buffer_mono_us, 1'000 + i * 33'000);
+  }
+  EXPECT_EQ(sup.capture().counters().stale, 0u);
+  // Within one stream, an older buffer is still never delivered as new.
+  io.emit_frame(dev, 500, frame);
+  EXPECT_FALSE(sup.step(400'000).frame);
+  EXPECT_EQ(sup.capture().counters().stale, 1u);
+}
+
 TEST(FrameLabelerTest, MidExposureStampAndDequeueTimeFallback) {
   FrameLabeler labeler(1000, /*exposure_us=*/8000);
   Frame f;

@@ -20,7 +20,7 @@ if(TARGET alight_vision_mission)
 endif()
 if(TARGET alight_vision_msgs)
   alight_add_gtest(vision_convert_test
-    SOURCES ${CMAKE_CURRENT_LIST_DIR}/convert_test.cpp
+    SOURCES ${CMAKE_CURRENT_LIST_DIR}/convert_test.cpp ${CMAKE_CURRENT_LIST_DIR}/inputs_test.cpp
     LIBS alight_vision_msgs
     LABELS vision)
 endif()

@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "common/params.hpp"
 
 namespace alight::vision {
@@ -47,6 +49,13 @@ TEST(VisionParamsTest, BadValuesNameTheirField) {
                               "rotation_prior_sigma_deg");
   expect_rejects<AlignParams>([](auto& p) { p.feature_sigma_px = 0; }, "feature_sigma_px");
   expect_rejects<WaypointParams>([](auto& p) { p.min_baseline_m = 0; }, "min_baseline_m");
+}
+
+TEST(VisionParamsRegression, InfiniteTrackerTimeoutsAreRefused) {
+  // Issue 14: `.inf` loaded, and a reference of any age stayed usable.
+  expect_rejects<TrackerParams>([](auto& p) { p.max_frame_gap_s = HUGE_VAL; }, "max_frame_gap_s");
+  expect_rejects<TrackerParams>([](auto& p) { p.max_reference_age_s = HUGE_VAL; },
+                                "max_reference_age_s");
 }
 
 }  // namespace
