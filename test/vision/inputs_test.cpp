@@ -160,10 +160,10 @@ TEST(VisionParamsRegression, InfiniteOrHugeTimeoutsAreRefusedNamingFileKeyAndVal
     const char* value;
   };
   for (const Case& c :
-       {Case{"vision: {max_pose_wait_s: .inf}", "vision.max_pose_wait_s", "inf"},
+       {Case{"vision: {max_pose_wait_s: .inf}", "vision.max_pose_wait_s", ".inf"},
         Case{"vision: {max_pose_wait_s: 1e300}", "vision.max_pose_wait_s", "1e+300"},
-        Case{"vision: {max_pose_wait_s: .nan}", "vision.max_pose_wait_s", "nan"},
-        Case{"vision: {diag_rate_hz: .inf}", "vision.diag_rate_hz", "inf"}}) {
+        Case{"vision: {max_pose_wait_s: .nan}", "vision.max_pose_wait_s", ".nan"},
+        Case{"vision: {diag_rate_hz: .inf}", "vision.diag_rate_hz", ".inf"}}) {
     try {
       load_node_params(ParamNode::from_string(c.yaml, "vehicle.yaml"));
       ADD_FAILURE() << "accepted: " << c.yaml;
