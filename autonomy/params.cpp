@@ -8,23 +8,10 @@
 namespace alight::autonomy {
 
 namespace {
-// Every number read must be finite: `.inf` for a timeout switched its failsafe off, `.nan`
-// passed every comparison-based check written as "not below". Checked at the read, so the error
-// names the file, the dotted key and the value as written.
-template <class T>
-void rd(const ParamNode& n, const std::string& key, T& field) {
-  n.read(key, field);
-  if constexpr (std::is_same_v<T, double>) {
-    n.check(std::isfinite(field), key, "must be a finite number");
-  } else if constexpr (std::is_same_v<T, Vector3d>) {
-    n.check(field.allFinite(), key, "must be finite numbers");
-  }
-}
 void read_v2(const ParamNode& n, const std::string& key, Vector2d& v) {
   std::array<double, 2> a{v.x(), v.y()};
   n.read(key, a);
   v = Vector2d(a[0], a[1]);
-  n.check(v.allFinite(), key, "must be finite numbers");
 }
 // validate() of a sub-struct, with the sub-section prepended to the key of its errors.
 template <class P>
@@ -172,112 +159,112 @@ AutonomyParams load_params(const ParamNode& root) {
   const ParamNode n = root.child("autonomy");
   AutonomyParams p;
   int64_t seed = static_cast<int64_t>(p.seed);
-  rd(n, "seed", seed);
+  n.read("seed", seed);
   n.check(seed >= 0, "seed", "must be >= 0");
   p.seed = static_cast<uint64_t>(seed);
-  rd(n, "accept_unsigned_commands", p.accept_unsigned_commands);
-  rd(n, "operator_key_file", p.operator_key_file);
+  n.read("accept_unsigned_commands", p.accept_unsigned_commands);
+  n.read("operator_key_file", p.operator_key_file);
   if (!p.operator_key_file.empty())
     p.operator_key_file = resolve_relative(n.file(), p.operator_key_file);
-  rd(n, "command_max_age_s", p.command_max_age_s);
-  rd(n, "vehicle_id", p.vehicle_id);
+  n.read("command_max_age_s", p.command_max_age_s);
+  n.read("vehicle_id", p.vehicle_id);
   n.check(!p.vehicle_id.empty() && p.vehicle_id.size() <= 64 &&
               p.vehicle_id.find_first_of(" \t\r\n\"'<>&") == std::string::npos,
           "vehicle_id", "must be 1 to 64 characters without spaces, quotes or <>&");
-  rd(n, "status_period_s", p.status_period_s);
-  rd(n, "hover_tol_m", p.hover_tol_m);
+  n.read("status_period_s", p.status_period_s);
+  n.read("hover_tol_m", p.hover_tol_m);
   if (auto c = n.optional_child("takeoff")) {
-    rd(*c, "height_m", p.takeoff.height_m);
-    rd(*c, "climb_rate_mps", p.takeoff.climb_rate_mps);
-    rd(*c, "reached_tol_m", p.takeoff.reached_tol_m);
+    c->read("height_m", p.takeoff.height_m);
+    c->read("climb_rate_mps", p.takeoff.climb_rate_mps);
+    c->read("reached_tol_m", p.takeoff.reached_tol_m);
     c->finish();
   }
   if (auto c = n.optional_child("geofence")) {
-    rd(*c, "min_W_m", p.geofence.min_W_m);
-    rd(*c, "max_W_m", p.geofence.max_W_m);
+    c->read("min_W_m", p.geofence.min_W_m);
+    c->read("max_W_m", p.geofence.max_W_m);
     c->finish();
   }
   if (auto c = n.optional_child("detection")) {
     auto& d = p.detection;
-    rd(*c, "speed_mps", d.speed_mps);
+    c->read("speed_mps", d.speed_mps);
     read_v2(*c, "landing_area_min_W_m", d.landing_area_min_W_m);
     read_v2(*c, "landing_area_max_W_m", d.landing_area_max_W_m);
-    rd(*c, "lane_spacing_m", d.lane_spacing_m);
-    rd(*c, "landing_height_m", d.landing_height_m);
-    rd(*c, "ingress_start_W_m", d.ingress_start_W_m);
-    rd(*c, "ingress_end_W_m", d.ingress_end_W_m);
-    rd(*c, "ingress_yaw_deg", d.ingress_yaw_deg);
-    rd(*c, "max_retries", d.max_retries);
+    c->read("lane_spacing_m", d.lane_spacing_m);
+    c->read("landing_height_m", d.landing_height_m);
+    c->read("ingress_start_W_m", d.ingress_start_W_m);
+    c->read("ingress_end_W_m", d.ingress_end_W_m);
+    c->read("ingress_yaw_deg", d.ingress_yaw_deg);
+    c->read("max_retries", d.max_retries);
     c->finish();
   }
   if (auto c = n.optional_child("refinement")) {
     auto& r = p.refinement;
-    rd(*c, "n_min", r.n_min);
-    rd(*c, "eps_horz_m", r.eps_horz_m);
-    rd(*c, "eps_vert_m", r.eps_vert_m);
-    rd(*c, "cutoff_m", r.cutoff_m);
-    rd(*c, "prior_sigma_m", r.prior_sigma_m);
-    rd(*c, "vantage_sigma_floor_m", r.vantage_sigma_floor_m);
-    rd(*c, "vantage_reach_tol_m", r.vantage_reach_tol_m);
-    rd(*c, "vantage_dwell_s", r.vantage_dwell_s);
-    rd(*c, "one_waypoint_per_vantage", r.one_waypoint_per_vantage);
-    rd(*c, "vantage_timeout_s", r.vantage_timeout_s);
-    rd(*c, "gate_chi2", r.gate_chi2);
-    rd(*c, "gate_min_n", r.gate_min_n);
-    rd(*c, "gate_floor_sigma_m", r.gate_floor_sigma_m);
-    rd(*c, "max_consecutive_rejections", r.max_consecutive_rejections);
-    rd(*c, "lost_timeout_s", r.lost_timeout_s);
-    rd(*c, "max_time_s", r.max_time_s);
-    rd(*c, "ingress_standoff_m", r.ingress_standoff_m);
+    c->read("n_min", r.n_min);
+    c->read("eps_horz_m", r.eps_horz_m);
+    c->read("eps_vert_m", r.eps_vert_m);
+    c->read("cutoff_m", r.cutoff_m);
+    c->read("prior_sigma_m", r.prior_sigma_m);
+    c->read("vantage_sigma_floor_m", r.vantage_sigma_floor_m);
+    c->read("vantage_reach_tol_m", r.vantage_reach_tol_m);
+    c->read("vantage_dwell_s", r.vantage_dwell_s);
+    c->read("one_waypoint_per_vantage", r.one_waypoint_per_vantage);
+    c->read("vantage_timeout_s", r.vantage_timeout_s);
+    c->read("gate_chi2", r.gate_chi2);
+    c->read("gate_min_n", r.gate_min_n);
+    c->read("gate_floor_sigma_m", r.gate_floor_sigma_m);
+    c->read("max_consecutive_rejections", r.max_consecutive_rejections);
+    c->read("lost_timeout_s", r.lost_timeout_s);
+    c->read("max_time_s", r.max_time_s);
+    c->read("ingress_standoff_m", r.ingress_standoff_m);
     c->finish();
   }
   if (auto c = n.optional_child("landing")) {
     auto& l = p.landing;
-    rd(*c, "descent_rate_mps", l.descent_rate_mps);
-    rd(*c, "radial_tol_m", l.radial_tol_m);
-    rd(*c, "final_height_m", l.final_height_m);
-    rd(*c, "final_descent_rate_mps", l.final_descent_rate_mps);
-    rd(*c, "final_depth_m", l.final_depth_m);
-    rd(*c, "gear_height_m", l.gear_height_m);
-    rd(*c, "gear_footprint_m", l.gear_footprint_m);
-    rd(*c, "fit_margin_m", l.fit_margin_m);
-    rd(*c, "touchdown_accel_mps2", l.touchdown_accel_mps2);
-    rd(*c, "touchdown_still_s", l.touchdown_still_s);
-    rd(*c, "lost_timeout_s", l.lost_timeout_s);
-    rd(*c, "lost_check_height_m", l.lost_check_height_m);
-    rd(*c, "align_yaw_tol_deg", l.align_yaw_tol_deg);
+    c->read("descent_rate_mps", l.descent_rate_mps);
+    c->read("radial_tol_m", l.radial_tol_m);
+    c->read("final_height_m", l.final_height_m);
+    c->read("final_descent_rate_mps", l.final_descent_rate_mps);
+    c->read("final_depth_m", l.final_depth_m);
+    c->read("gear_height_m", l.gear_height_m);
+    c->read("gear_footprint_m", l.gear_footprint_m);
+    c->read("fit_margin_m", l.fit_margin_m);
+    c->read("touchdown_accel_mps2", l.touchdown_accel_mps2);
+    c->read("touchdown_still_s", l.touchdown_still_s);
+    c->read("lost_timeout_s", l.lost_timeout_s);
+    c->read("lost_check_height_m", l.lost_check_height_m);
+    c->read("align_yaw_tol_deg", l.align_yaw_tol_deg);
     c->finish();
   }
   if (auto c = n.optional_child("ingress")) {
     auto& i = p.ingress;
-    rd(*c, "standoff_m", i.standoff_m);
-    rd(*c, "speed_mps", i.speed_mps);
-    rd(*c, "lateral_tol_m", i.lateral_tol_m);
-    rd(*c, "vertical_tol_m", i.vertical_tol_m);
-    rd(*c, "pass_distance_m", i.pass_distance_m);
-    rd(*c, "align_tol_m", i.align_tol_m);
-    rd(*c, "align_speed_mps", i.align_speed_mps);
-    rd(*c, "align_settle_s", i.align_settle_s);
-    rd(*c, "vehicle_span_m", i.vehicle_span_m);
-    rd(*c, "vehicle_height_m", i.vehicle_height_m);
-    rd(*c, "clearance_m", i.clearance_m);
-    rd(*c, "lost_timeout_s", i.lost_timeout_s);
+    c->read("standoff_m", i.standoff_m);
+    c->read("speed_mps", i.speed_mps);
+    c->read("lateral_tol_m", i.lateral_tol_m);
+    c->read("vertical_tol_m", i.vertical_tol_m);
+    c->read("pass_distance_m", i.pass_distance_m);
+    c->read("align_tol_m", i.align_tol_m);
+    c->read("align_speed_mps", i.align_speed_mps);
+    c->read("align_settle_s", i.align_settle_s);
+    c->read("vehicle_span_m", i.vehicle_span_m);
+    c->read("vehicle_height_m", i.vehicle_height_m);
+    c->read("clearance_m", i.clearance_m);
+    c->read("lost_timeout_s", i.lost_timeout_s);
     c->finish();
   }
   if (auto c = n.optional_child("failsafe")) {
     auto& f = p.failsafe;
-    rd(*c, "pose_stale_s", f.pose_stale_s);
-    rd(*c, "pose_lost_s", f.pose_lost_s);
-    rd(*c, "descent_mps", f.descent_mps);
-    rd(*c, "abort_height_m", f.abort_height_m);
-    rd(*c, "max_nudge_m", f.max_nudge_m);
+    c->read("pose_stale_s", f.pose_stale_s);
+    c->read("pose_lost_s", f.pose_lost_s);
+    c->read("descent_mps", f.descent_mps);
+    c->read("abort_height_m", f.abort_height_m);
+    c->read("max_nudge_m", f.max_nudge_m);
     c->finish();
   }
   if (auto c = n.optional_child("restart")) {
     auto& r = p.restart;
-    rd(*c, "airborne_height_m", r.airborne_height_m);
-    rd(*c, "airborne_speed_mps", r.airborne_speed_mps);
-    rd(*c, "state_max_age_s", r.state_max_age_s);
+    c->read("airborne_height_m", r.airborne_height_m);
+    c->read("airborne_speed_mps", r.airborne_speed_mps);
+    c->read("state_max_age_s", r.state_max_age_s);
     c->finish();
   }
   n.validate(p);
