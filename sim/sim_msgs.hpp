@@ -23,5 +23,10 @@ AttitudeCommand from_msg(const attitude_cmd_t& msg);
 /// Validating form for untrusted input: nullopt (and *why, when given) for a non-finite angle,
 /// rate or thrust.
 std::optional<AttitudeCommand> command_from_msg(const attitude_cmd_t& msg, std::string* why);
+/// The same, also refusing a command stamped more than `max_age_s` before or after the
+/// simulated autopilot's clock `now_utime`: an autopilot would have given up waiting for a
+/// command that old (its command-loss timeout), so it can only be a replay or a stray sender.
+std::optional<AttitudeCommand> command_from_msg(const attitude_cmd_t& msg, int64_t now_utime,
+                                                double max_age_s, std::string* why);
 
 }  // namespace alight::sim
