@@ -121,6 +121,10 @@ void FailsafeParams::validate() const {
   param_check(pose_lost_s > pose_stale_s && pose_lost_s <= 10, "pose_lost_s", pose_lost_s,
               "must exceed pose_stale_s and be <= 10 s (a failsafe that never fires)");
   param_check(descent_mps > 0 && descent_mps <= 1, "descent_mps", descent_mps, "must be in (0, 1]");
+  param_check(pose_recovered_s > 0 && pose_recovered_s <= 5, "pose_recovered_s", pose_recovered_s,
+              "must be in (0, 5] s");
+  param_check(vision_silent_s > 0 && vision_silent_s <= 60, "vision_silent_s", vision_silent_s,
+              "must be in (0, 60] s");
   param_check(abort_height_m > 0.3, "abort_height_m", abort_height_m, "must be > 0.3 m");
   param_check(max_nudge_m >= 0 && max_nudge_m <= 5, "max_nudge_m", max_nudge_m,
               "must be in [0, 5] m");
@@ -256,6 +260,8 @@ AutonomyParams load_params(const ParamNode& root) {
     c->read("pose_stale_s", f.pose_stale_s);
     c->read("pose_lost_s", f.pose_lost_s);
     c->read("descent_mps", f.descent_mps);
+    c->read("pose_recovered_s", f.pose_recovered_s);
+    c->read("vision_silent_s", f.vision_silent_s);
     c->read("abort_height_m", f.abort_height_m);
     c->read("max_nudge_m", f.max_nudge_m);
     c->finish();

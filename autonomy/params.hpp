@@ -113,6 +113,12 @@ struct FailsafeParams {
   double pose_stale_s = 0.3;    ///< mocap older: freeze the mission (outer loop holds level) [s]
   double pose_lost_s = 1.0;     ///< mocap older: controlled descent, disarm on touch-down [s]
   double descent_mps = 0.3;     ///< failsafe descent when the pose is back [m/s]
+  /// Pose fresh again this long in the pose-lost failsafe: stop the descent and hold, waiting for
+  /// the operator (descending blind-chosen onto a platform edge tips the vehicle) [s]
+  double pose_recovered_s = 0.5;
+  /// No VISION_TARGET this long while searching or refining: the camera or the vision process is
+  /// down; hold and wait for the operator instead of searching blind [s]
+  double vision_silent_s = 5.0;
   double abort_height_m = 1.5;  ///< ABORT climbs to at least this height, world z [m]
   double max_nudge_m = 0.5;     ///< largest NUDGE offset [m]
   void validate() const;

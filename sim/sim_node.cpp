@@ -70,7 +70,6 @@ int main(int argc, char** argv) {
     // Disarmed until the outer loop says otherwise; its silence is the autopilot's command-loss
     // failsafe's business (Simulator::advance_to).
     node.on<attitude_cmd_t>("ATTITUDE_CMD", [&](const attitude_cmd_t& m) {
-      if (!node.accept_stamp("ATTITUDE_CMD", m.utime)) return;
       std::string why;
       if (const auto cmd = sim::command_from_msg(m, simulator.now_utime(),
                                                  vehicle.cmd_loss_timeout_s, &why)) {
