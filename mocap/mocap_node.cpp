@@ -105,7 +105,8 @@ int main(int argc, char** argv) {
     NodeArgs args;
     args.add_to(app, true);
     std::string tracker;
-    app.add_option("--tracker", tracker, "OBJECT@HOST[:PORT], instead of the file's server.tracker");
+    app.add_option("--tracker", tracker,
+                   "OBJECT@HOST[:PORT], instead of the file's server.tracker");
     try {
       app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
@@ -225,8 +226,8 @@ int main(int argc, char** argv) {
             if (n > 0) {
               const int64_t recv_utime = wall_utime();
               const bool had_cookie = client.decoder().cookie_received();
-              for (const auto& pose : client.on_bytes(buffer.data(), static_cast<size_t>(n),
-                                                      recv_utime))
+              for (const auto& pose :
+                   client.on_bytes(buffer.data(), static_cast<size_t>(n), recv_utime))
                 node.publish(params.channel, to_msg(pose.pose, seq++));
               last_rx = now;
               if (!had_cookie && client.decoder().cookie_received())

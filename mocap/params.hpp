@@ -24,18 +24,19 @@ std::optional<TrackerAddress> parse_tracker(const std::string& text);
 struct ServerParams {
   std::string tracker;  ///< "Object@host[:port]"
   int sensor = 0;       ///< sensor of that tracker (0 for a VICON / Motive / QTM rigid body)
-  double connect_timeout_s = 1.0;   ///< one TCP connection attempt [s]
-  double silence_timeout_s = 2.0;   ///< connected but no byte for this long: reconnect [s]
-  double retry_initial_s = 0.1;     ///< first reconnection delay; doubles up to retry_max_s [s]
-  double retry_max_s = 2.0;         ///< [s]
-  double start_timeout_s = 0.0;     ///< never connected this long after start: exit 3 (0: retry forever) [s]
+  double connect_timeout_s = 1.0;  ///< one TCP connection attempt [s]
+  double silence_timeout_s = 2.0;  ///< connected but no byte for this long: reconnect [s]
+  double retry_initial_s = 0.1;    ///< first reconnection delay; doubles up to retry_max_s [s]
+  double retry_max_s = 2.0;        ///< [s]
+  double start_timeout_s =
+      0.0;  ///< never connected this long after start: exit 3 (0: retry forever) [s]
   static const ParamSchema<ServerParams>& schema();
 };
 
 struct RoomParams {
-  std::string units = "m";   ///< unit of the server's positions: "m" or "mm"
-  std::string up_axis = "z"; ///< the room's up axis: "z" (VICON, QTM) or "y" (Motive's default)
-  double yaw_deg = 0.0;      ///< world yaw of the levelled room axes (rotation about world z) [deg]
+  std::string units = "m";    ///< unit of the server's positions: "m" or "mm"
+  std::string up_axis = "z";  ///< the room's up axis: "z" (VICON, QTM) or "y" (Motive's default)
+  double yaw_deg = 0.0;  ///< world yaw of the levelled room axes (rotation about world z) [deg]
   Eigen::Vector3d p_W_R_m = Eigen::Vector3d::Zero();  ///< room origin in world [m]
   static const ParamSchema<RoomParams>& schema();
 };
@@ -54,8 +55,8 @@ struct StampParams {
   /// (keeps the server's sample spacing, absorbs any clock offset); "receive": our receipt time.
   std::string source = "mapped";
   double latency_s = 0.0;  ///< known delay from sample to what the stamp stands for, subtracted [s]
-  double offset_window_s = 10.0;     ///< "mapped": the smallest delay is taken over this long [s]
-  double max_clock_offset_s = 0.5;   ///< "server": stamps further from our clock are refused [s]
+  double offset_window_s = 10.0;    ///< "mapped": the smallest delay is taken over this long [s]
+  double max_clock_offset_s = 0.5;  ///< "server": stamps further from our clock are refused [s]
   static const ParamSchema<StampParams>& schema();
 };
 

@@ -81,7 +81,8 @@ std::optional<int64_t> ClockMap::to_local(int64_t server_us, int64_t recv_utime,
   return server_us + *offset - latency;
 }
 
-// --- TrackerClient --------------------------------------------------------------------------------
+// --- TrackerClient
+// --------------------------------------------------------------------------------
 
 TrackerClient::TrackerClient(const MocapParams& params)
     : params_(params),
@@ -151,17 +152,21 @@ std::vector<TrackerPose> TrackerClient::on_bytes(const uint8_t* data, size_t siz
   for (const auto& r : reports) {
     if (!ours(r)) {
       ++stats_.other_objects;
-      if (trackers_seen_.size() < 16 &&
-          std::find(trackers_seen_.begin(), trackers_seen_.end(), r.tracker) ==
-              trackers_seen_.end())
+      if (trackers_seen_.size() < 16 && std::find(trackers_seen_.begin(), trackers_seen_.end(),
+                                                  r.tracker) == trackers_seen_.end())
         trackers_seen_.push_back(r.tracker);
       continue;
     }
     ++stats_.reports;
     switch (r.kind) {
-      case vrpn::TrackerReport::Kind::kPose: on_pose(r, recv_utime, newest, out); break;
-      case vrpn::TrackerReport::Kind::kVelocity: on_velocity(r, out); break;
-      case vrpn::TrackerReport::Kind::kAcceleration: break;  // counted by the decoder
+      case vrpn::TrackerReport::Kind::kPose:
+        on_pose(r, recv_utime, newest, out);
+        break;
+      case vrpn::TrackerReport::Kind::kVelocity:
+        on_velocity(r, out);
+        break;
+      case vrpn::TrackerReport::Kind::kAcceleration:
+        break;  // counted by the decoder
     }
   }
   stats_.poses += out.size();
@@ -223,8 +228,7 @@ void TrackerClient::on_pose(const vrpn::TrackerReport& r, int64_t recv_utime,
   }
   history_.push_back({tp.pose.utime, tp.pose.p_W_B, tp.pose.q_WB});
   const int64_t span_us = seconds_to_us(params_.velocity.span_s);
-  while (history_.size() >= 2 && tp.pose.utime - history_[1].utime >= span_us)
-    history_.pop_front();
+  while (history_.size() >= 2 && tp.pose.utime - history_[1].utime >= span_us) history_.pop_front();
 
   if (!server_velocity) {
     out.push_back(tp);

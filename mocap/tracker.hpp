@@ -43,23 +43,23 @@ class ClockMap {
 
 /// One pose to publish.
 struct TrackerPose {
-  PoseSample pose;          ///< body in world; utime on our clock
-  int64_t server_us = 0;    ///< the server's stamp
-  int64_t delay_us = 0;     ///< receipt - server stamp (a latency only with synchronised clocks)
+  PoseSample pose;        ///< body in world; utime on our clock
+  int64_t server_us = 0;  ///< the server's stamp
+  int64_t delay_us = 0;   ///< receipt - server stamp (a latency only with synchronised clocks)
   bool server_velocity = false;  ///< pose.v_W_B is the server's, not a difference
 };
 
 struct TrackerStats {
   vrpn::DecoderStats decoder;
-  uint64_t reports = 0;            ///< reports of the configured object and sensor
-  uint64_t other_objects = 0;      ///< reports of other trackers or sensors (not an error)
-  uint64_t rejected_values = 0;    ///< non-finite numbers, a quaternion whose norm is not 1
-  uint64_t rejected_stamps = 0;    ///< not after the previous one, or far from our clock
-  uint64_t held_back = 0;          ///< first pose of a track or after a gap: no velocity yet
-  uint64_t velocity_missing = 0;   ///< velocity.source server, but no Velocity came for a pose
-  uint64_t poses = 0;              ///< returned for publishing
-  uint64_t truncated = 0;          ///< connections that ended inside a message
-  std::string last_refusal;        ///< why the last value or stamp was refused
+  uint64_t reports = 0;           ///< reports of the configured object and sensor
+  uint64_t other_objects = 0;     ///< reports of other trackers or sensors (not an error)
+  uint64_t rejected_values = 0;   ///< non-finite numbers, a quaternion whose norm is not 1
+  uint64_t rejected_stamps = 0;   ///< not after the previous one, or far from our clock
+  uint64_t held_back = 0;         ///< first pose of a track or after a gap: no velocity yet
+  uint64_t velocity_missing = 0;  ///< velocity.source server, but no Velocity came for a pose
+  uint64_t poses = 0;             ///< returned for publishing
+  uint64_t truncated = 0;         ///< connections that ended inside a message
+  std::string last_refusal;       ///< why the last value or stamp was refused
 };
 
 class TrackerClient {

@@ -40,7 +40,7 @@ CookieCheck check_cookie(const uint8_t* cookie) {
   }
   check.log_mode = mode - '0';
   check.verdict = std::memcmp(cookie, kMagic, kMagicLength) == 0 ? CookieVerdict::kOk
-                                                                  : CookieVerdict::kMinorDiffers;
+                                                                 : CookieVerdict::kMinorDiffers;
   return check;
 }
 
@@ -134,8 +134,7 @@ bool StreamDecoder::feed(const uint8_t* data, size_t size, std::vector<TrackerRe
   return true;
 }
 
-void StreamDecoder::handle(const uint8_t* p, size_t payload_size,
-                           std::vector<TrackerReport>& out) {
+void StreamDecoder::handle(const uint8_t* p, size_t payload_size, std::vector<TrackerReport>& out) {
   const uint32_t sec = get_u32(p + 4);
   const uint32_t usec = get_u32(p + 8);
   const auto sender = static_cast<int32_t>(get_u32(p + 12));
@@ -185,9 +184,12 @@ void StreamDecoder::describe(int32_t type, int32_t id, const uint8_t* payload, s
   }
   ++stats_.type_descriptions;
   Type t;
-  if (name == kPosQuatType) t.kind = TypeKind::kPose;
-  else if (name == kVelocityType) t.kind = TypeKind::kVelocity;
-  else if (name == kAccelerationType) t.kind = TypeKind::kAcceleration;
+  if (name == kPosQuatType)
+    t.kind = TypeKind::kPose;
+  else if (name == kVelocityType)
+    t.kind = TypeKind::kVelocity;
+  else if (name == kAccelerationType)
+    t.kind = TypeKind::kAcceleration;
   t.name = std::move(name);
   types_[id] = std::move(t);
 }
@@ -216,9 +218,15 @@ void StreamDecoder::tracker(const Type& type, const std::string& sender, uint32_
   for (int i = 0; i < 4; ++i) r.q_xyzw[i] = get_f64(payload + 32 + 8 * i);
   if (type.kind != TypeKind::kPose) r.dt_s = get_f64(payload + 64);
   switch (r.kind) {
-    case TrackerReport::Kind::kPose: ++stats_.poses; break;
-    case TrackerReport::Kind::kVelocity: ++stats_.velocities; break;
-    case TrackerReport::Kind::kAcceleration: ++stats_.accelerations; break;
+    case TrackerReport::Kind::kPose:
+      ++stats_.poses;
+      break;
+    case TrackerReport::Kind::kVelocity:
+      ++stats_.velocities;
+      break;
+    case TrackerReport::Kind::kAcceleration:
+      ++stats_.accelerations;
+      break;
   }
   out.push_back(std::move(r));
 }

@@ -112,10 +112,10 @@ struct TrackerReport {
   Kind kind = Kind::kPose;
   std::string tracker;  ///< the sender's name, e.g. "Pelican"
   int32_t sensor = 0;
-  int64_t stamp_us = 0;                 ///< header timestamp [us since the server's epoch]
-  std::array<double, 3> v{};            ///< position / velocity / acceleration [room units (/s, /s^2)]
+  int64_t stamp_us = 0;       ///< header timestamp [us since the server's epoch]
+  std::array<double, 3> v{};  ///< position / velocity / acceleration [room units (/s, /s^2)]
   std::array<double, 4> q_xyzw{0, 0, 0, 1};  ///< orientation / its rate quaternion, x y z w
-  double dt_s = 0;                      ///< Velocity / Acceleration: the interval q spans [s]
+  double dt_s = 0;                           ///< Velocity / Acceleration: the interval q spans [s]
 };
 
 /// What the stream held. Every refusal has its counter; nothing is dropped silently.
@@ -124,9 +124,9 @@ struct DecoderStats {
   uint64_t messages = 0;  ///< complete frames read
   uint64_t sender_descriptions = 0;
   uint64_t type_descriptions = 0;
-  uint64_t poses = 0;          ///< Pos_Quat reports decoded
-  uint64_t velocities = 0;     ///< Velocity reports decoded
-  uint64_t accelerations = 0;  ///< Acceleration reports decoded
+  uint64_t poses = 0;           ///< Pos_Quat reports decoded
+  uint64_t velocities = 0;      ///< Velocity reports decoded
+  uint64_t accelerations = 0;   ///< Acceleration reports decoded
   uint64_t other_messages = 0;  ///< described types a tracker client has no use for
   uint64_t system_ignored = 0;  ///< UDP and log descriptions, disconnect, unknown system types
   // Refused; the frame was intact, so the stream goes on.

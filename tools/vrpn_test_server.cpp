@@ -65,7 +65,8 @@ bool VrpnTestServer::listen() {
   a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
   a.sin_port = htons(static_cast<uint16_t>(port_ ? port_ : options_.port));
   socklen_t len = sizeof a;
-  if (bind(listener_, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0 || ::listen(listener_, 4) != 0 ||
+  if (bind(listener_, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0 ||
+      ::listen(listener_, 4) != 0 ||
       getsockname(listener_, reinterpret_cast<sockaddr*>(&a), &len) != 0) {
     ::close(listener_);
     listener_ = -1;
@@ -103,7 +104,8 @@ bool VrpnTestServer::accept(double timeout_s, const std::vector<std::string>& ob
   std::vector<uint8_t> out;
   const int64_t t = now_us();
   int32_t sender = options_.first_sender_id;
-  for (const std::string& name : std::vector<std::string>{"VRPN Control"}) senders_[name] = sender++;
+  for (const std::string& name : std::vector<std::string>{"VRPN Control"})
+    senders_[name] = sender++;
   for (const auto& o : objects) senders_[o] = sender++;
   int32_t type = options_.first_type_id;
   for (const char* name :

@@ -25,7 +25,8 @@ int main(int argc, char** argv) {
   int port = 3883;
   std::string object = "Pelican", units = "m", up_axis = "z";
   double rate_hz = 100.0, radius_m = 1.0, height_m = 1.5, period_s = 10.0;
-  app.add_option("--port", port, "TCP port (0: any; the port is printed)")->check(CLI::Range(0, 65535));
+  app.add_option("--port", port, "TCP port (0: any; the port is printed)")
+      ->check(CLI::Range(0, 65535));
   app.add_option("--object", object, "tracker (object) name");
   app.add_option("--rate", rate_hz, "poses per second")->check(CLI::Range(1.0, 2000.0));
   app.add_option("--units", units, "m or mm")->check(CLI::IsMember({"m", "mm"}));

@@ -11,6 +11,7 @@
 //
 //   build/bin/mocap_latency_bench [--seconds S] [--rates 100,360,1000]
 
+#include <arpa/inet.h>
 #include <netinet/in.h>
 #include <netinet/tcp.h>
 #include <poll.h>
@@ -23,7 +24,6 @@
 #include <algorithm>
 #include <alight/node_status_t.hpp>
 #include <alight/pose_t.hpp>
-#include <arpa/inet.h>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -101,8 +101,7 @@ Result summarise(int sent, const std::vector<double>& latency, const std::vector
   Result r;
   r.sent = sent;
   r.received = static_cast<int>(latency.size());
-  if (recv.size() >= 2)
-    r.rate_hz = (recv.size() - 1) / ((recv.back() - recv.front()) * 1e-6);
+  if (recv.size() >= 2) r.rate_hz = (recv.size() - 1) / ((recv.back() - recv.front()) * 1e-6);
   r.p50_us = percentile(latency, 0.5);
   r.p99_us = percentile(latency, 0.99);
   r.max_us = latency.empty() ? NAN : *std::max_element(latency.begin(), latency.end());
@@ -125,8 +124,8 @@ Result run_node(double rate_hz, double seconds, const std::string& bin) {
   Receiver rx;
   lcm.subscribe("MOCAP_POSE", &Receiver::on_pose, &rx);
   lcm.subscribe("NODE_STATUS", &Receiver::on_status, &rx);
-  std::vector<std::string> args = {bin, "--config", config, "--lcm-url", kUrl, "--log-level",
-                                   "error"};
+  std::vector<std::string> args = {bin,  "--config",    config, "--lcm-url",
+                                   kUrl, "--log-level", "error"};
   std::vector<char*> argv;
   for (auto& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
@@ -233,7 +232,8 @@ int main(int argc, char** argv) {
     for (int peer = 0; peer < 2; ++peer) {
       const Result r = peer ? run_peer(rate, seconds) : run_node(rate, seconds, bin);
       const std::string published =
-          r.published < 0 ? "-" : std::to_string(r.published) + " (" + std::to_string(r.held_back) + ")";
+          r.published < 0 ? "-"
+                          : std::to_string(r.published) + " (" + std::to_string(r.held_back) + ")";
       std::printf("| %s | %.0f | %d | %s | %d | %.1f | %.0f | %.0f | %.0f |\n",
                   peer ? "peer: TCP + VRPN decode in-process" : "alight-mocap -> MOCAP_POSE (LCM)",
                   rate, r.sent, published.c_str(), r.received, r.rate_hz, r.p50_us, r.p99_us,

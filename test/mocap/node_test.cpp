@@ -297,9 +297,9 @@ TEST(MocapNodeTest, SurvivesGarbageTruncationRefusalsAndARestartAndCountsThem) {
   stream_and_wait("after garbage");
 
   // A message cut short by the server going away.
-  const auto cut = VrpnTestServer::frame(server.type_id("vrpn_Tracker Pos_Quat"),
-                                         server.sender_id("Pelican"), now_us(),
-                                         VrpnTestServer::pose_payload(served(now_us(), t0)));
+  const auto cut =
+      VrpnTestServer::frame(server.type_id("vrpn_Tracker Pos_Quat"), server.sender_id("Pelican"),
+                            now_us(), VrpnTestServer::pose_payload(served(now_us(), t0)));
   ASSERT_TRUE(server.send_raw(std::vector<uint8_t>(cut.begin(), cut.begin() + 40)));
   server.drop_client();
   ASSERT_TRUE(server.accept(20.0, {"Pelican", "Other"}));
@@ -355,9 +355,9 @@ TEST(MocapNodeTest, BadConfigurationIsExit2NamingFileKeyAndValue) {
   EXPECT_NE(text.find(config), std::string::npos) << text;
   EXPECT_NE(text.find("mocap.velocity.source"), std::string::npos) << text;
   EXPECT_NE(text.find("kalman"), std::string::npos) << text;
-  Process override_node({kBin, "--config", write_config("good", 3883), "--lcm-url", kUrl,
-                         "--tracker", "no-at-sign"},
-                        out);
+  Process override_node(
+      {kBin, "--config", write_config("good", 3883), "--lcm-url", kUrl, "--tracker", "no-at-sign"},
+      out);
   EXPECT_EQ(override_node.wait_exit(), 2);
   EXPECT_NE(read_file(out).find("--tracker"), std::string::npos);
 }

@@ -41,7 +41,8 @@ std::vector<uint8_t> opening() {
   return s;
 }
 
-ServedPose served(int64_t stamp_us, const Vector3d& p, const Quaterniond& q = Quaterniond::Identity(),
+ServedPose served(int64_t stamp_us, const Vector3d& p,
+                  const Quaterniond& q = Quaterniond::Identity(),
                   const std::string& object = "Pelican", int sensor = 0) {
   ServedPose s;
   s.object = object;
@@ -100,11 +101,11 @@ TEST(TrackerClientTest, GreetingIsOurCookieAndDescriptionsOfWhatWeListenTo) {
 
 TEST(TrackerClientTest, FirstPoseIsHeldBackThenVelocitiesByDifference) {
   Feeder f(params());
-  const Vector3d v(0.5, -1.0, 0.2);         // m/s
-  const double yaw_rate = 0.8;              // rad/s
+  const Vector3d v(0.5, -1.0, 0.2);  // m/s
+  const double yaw_rate = 0.8;       // rad/s
   std::vector<TrackerPose> got;
   for (int i = 0; i < 10; ++i) {
-    const int64_t t = kT0 + i * 10'000;     // 100 Hz
+    const int64_t t = kT0 + i * 10'000;  // 100 Hz
     const double s = i * 0.01;
     const auto q = Quaterniond(Eigen::AngleAxisd(yaw_rate * s, Vector3d::UnitZ()));
     for (const auto& p : f.feed(pose_frame(served(t, Vector3d(1, 2, 3) + v * s, q)), t + 3000))
@@ -137,8 +138,7 @@ TEST(TrackerClientTest, DifferenceSpansAtLeastSpanAtHighRates) {
       got.push_back(x);
   }
   ASSERT_EQ(got.size(), 39u);
-  for (size_t k = 4; k < got.size(); ++k)
-    EXPECT_NEAR(got[k].pose.v_W_B.x(), 0.3, 0.021) << k;
+  for (size_t k = 4; k < got.size(); ++k) EXPECT_NEAR(got[k].pose.v_W_B.x(), 0.3, 0.021) << k;
 }
 
 TEST(TrackerClientTest, OnlyTheConfiguredObjectAndSensorAndOthersAreListed) {
@@ -223,8 +223,7 @@ TEST(TrackerClientTest, ReceiveStampsABurstWithTheServersSpacingBeforeTheReceipt
   const int64_t recv = kT0 + 123;
   const auto got = f.feed(burst, recv);
   ASSERT_EQ(got.size(), 3u);  // the first is held back
-  for (int k = 0; k < 3; ++k)
-    EXPECT_EQ(got[k].pose.utime, recv - (2 - k) * 10'000 - 4000) << k;
+  for (int k = 0; k < 3; ++k) EXPECT_EQ(got[k].pose.utime, recv - (2 - k) * 10'000 - 4000) << k;
 }
 
 TEST(TrackerClientTest, AGapLongerThanMaxGapHoldsThePoseAfterItBack) {
@@ -313,8 +312,7 @@ TEST(TrackerClientTest, YUpMillimetreRoomEndToEnd) {
   Feeder f(p);
   f.feed(pose_frame(served(kT0, Vector3d(0, 1000, 0))), kT0);
   // Up 1 m -> 1.01 m in 10 ms along room y: 1 m/s up in world; 0.5 m along room z: world -y.
-  const auto got =
-      f.feed(pose_frame(served(kT0 + 10'000, Vector3d(0, 1010, 500))), kT0 + 10'000);
+  const auto got = f.feed(pose_frame(served(kT0 + 10'000, Vector3d(0, 1010, 500))), kT0 + 10'000);
   ASSERT_EQ(got.size(), 1u);
   EXPECT_LT((got[0].pose.p_W_B - Vector3d(0, -0.5, 1.01)).norm(), 1e-12);
   EXPECT_LT((got[0].pose.v_W_B - Vector3d(0, -50, 1)).norm(), 1e-9);

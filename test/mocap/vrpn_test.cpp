@@ -158,14 +158,15 @@ TEST(VrpnDecoderTest, AnyChunkingGivesTheSameReports) {
 TEST(VrpnDecoderTest, RefusalsAreCountedAndTheStreamGoesOn) {
   auto s = opening();
   const auto good = pose(5'000'000, 1);
-  append(s, pose_frame(99, good));                                            // undescribed sender
-  append(s, VrpnTestServer::frame(40, 7, 1, VrpnTestServer::pose_payload(good)));  // undescribed type
+  append(s, pose_frame(99, good));  // undescribed sender
+  append(s,
+         VrpnTestServer::frame(40, 7, 1, VrpnTestServer::pose_payload(good)));  // undescribed type
   auto short_payload = VrpnTestServer::pose_payload(good);
   short_payload.resize(60);
-  append(s, VrpnTestServer::frame(11, 7, 1, short_payload));                  // wrong size
-  append(s, VrpnTestServer::frame(11, 7, 1, {}));                             // empty payload
+  append(s, VrpnTestServer::frame(11, 7, 1, short_payload));  // wrong size
+  append(s, VrpnTestServer::frame(11, 7, 1, {}));             // empty payload
   auto bad_usec = pose_frame(7, good);
-  bad_usec[8] = 0x7f;                                                         // usec >= 1e6
+  bad_usec[8] = 0x7f;  // usec >= 1e6
   append(s, bad_usec);
   // Descriptions: id out of range, length beyond the payload, no NUL, over 100 bytes, empty.
   append(s, VrpnTestServer::frame(-1, kMaxIds, 1, description("Far")));
