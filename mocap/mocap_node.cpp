@@ -140,7 +140,7 @@ int main(int argc, char** argv) {
     int64_t next_attempt = start, attempt_started = 0, last_rx = 0;
     double delay_s = sp.retry_initial_s;
     bool ever_connected = false, got_pose = false, warned_no_pose = false;
-    uint64_t failures = 0, poses_before = 0, reports_before = 0;
+    uint64_t failures = 0, poses_before = 0, reports_before = 0, refusals_logged = 0;
     std::string last_error = "none yet";
     int64_t seq = 0;
     std::vector<uint8_t> buffer(65536);
@@ -249,6 +249,14 @@ int main(int argc, char** argv) {
         }
         const auto stats = client.stats();
         node.set_input_stats(input, channel_stats(stats));
+        // Refusals are counted on NODE_STATUS; the log has the first and every 100th.
+        const uint64_t refusals =
+            stats.decoder.refused() + stats.rejected_values + stats.rejected_stamps;
+        if (refusals > refusals_logged &&
+            (refusals_logged == 0 || refusals / 100 > refusals_logged / 100))
+          spdlog::warn("alight-mocap: {} message(s) or pose(s) refused (last value or stamp: {})",
+                       refusals, stats.last_refusal.empty() ? "none" : stats.last_refusal);
+        refusals_logged = refusals;
         if (stats.poses > poses_before && !got_pose) {
           got_pose = true;
           spdlog::info("alight-mocap: receiving {} sensor {}", address.object, sp.sensor);

@@ -194,7 +194,9 @@ void TrackerClient::on_pose(const vrpn::TrackerReport& r, int64_t recv_utime,
   // Receipt stamps do not need the server's to increase (some servers leave them zero).
   if (params_.stamp.source != "receive" && r.stamp_us <= last_server_us_) {
     ++stats_.rejected_stamps;
-    stats_.last_refusal = "server stamp not after the previous one";
+    stats_.last_refusal =
+        "server stamp not after the previous one (a server whose stamps do not advance needs "
+        "stamp.source receive)";
     return;
   }
   std::string why;
