@@ -143,6 +143,15 @@ struct ParamConvert<int64_t> {
 // Non-finite numbers (.inf, .nan) are never a valid setting: an infinite timeout turns a
 // failsafe off, a NaN gain poisons a controller.
 template <>
+struct ParamConvert<uint64_t> {  // seeds
+  static uint64_t from(const YAML::Node& n) {
+    const int64_t v = n.as<int64_t>();
+    if (v < 0) throw YAML::BadConversion(n.Mark());
+    return static_cast<uint64_t>(v);
+  }
+  static const char* expected() { return "a non-negative integer"; }
+};
+template <>
 struct ParamConvert<double> {
   static double from(const YAML::Node& n) {
     const double v = n.as<double>();
@@ -186,6 +195,14 @@ struct ParamConvert<Eigen::Vector3d> {
     return Eigen::Vector3d(a[0], a[1], a[2]);
   }
   static const char* expected() { return "a list of 3 finite numbers"; }
+};
+template <>
+struct ParamConvert<Eigen::Vector2d> {
+  static Eigen::Vector2d from(const YAML::Node& n) {
+    const auto a = ParamConvert<std::array<double, 2>>::from(n);
+    return Eigen::Vector2d(a[0], a[1]);
+  }
+  static const char* expected() { return "a list of 2 finite numbers"; }
 };
 }  // namespace detail
 
