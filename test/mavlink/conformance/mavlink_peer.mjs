@@ -8,6 +8,9 @@
 //   node mavlink_peer.mjs encode --key HEX
 //       one JSON line per frame node-mavlink encoded (hex bytes plus the values it was given): every
 //       message alight knows as MAVLink 2, signed MAVLink 2, MAVLink 1 (ids < 256) and all-zero.
+//   node mavlink_peer.mjs bench --key HEX
+//       node-mavlink's encode and parse throughput on a stream like bench/mavlink's (20 rounds of
+//       every message, unsigned and signed, read in 64-byte pieces), the benchmark's peer figures.
 //
 // Field values: 64-bit integers as decimal strings, NaN / Infinity / -0 as strings ("NaN",
 // "Infinity", "-Infinity", "-0"), char arrays as strings.
@@ -37,8 +40,8 @@ const REGISTRY = { ...minimal.REGISTRY, ...common.REGISTRY };
 const args = process.argv.slice(2);
 const mode = args[0];
 const keyIndex = args.indexOf('--key');
-if (!['decode', 'encode'].includes(mode) || keyIndex < 0 || !/^[0-9a-f]{64}$/i.test(args[keyIndex + 1])) {
-  console.error('usage: node mavlink_peer.mjs decode|encode --key HEX(64)');
+if (!['decode', 'encode', 'bench'].includes(mode) || keyIndex < 0 || !/^[0-9a-f]{64}$/i.test(args[keyIndex + 1])) {
+  console.error('usage: node mavlink_peer.mjs decode|encode|bench --key HEX(64)');
   process.exit(2);
 }
 const key = Buffer.from(args[keyIndex + 1], 'hex');
@@ -221,5 +224,52 @@ function encode() {
   }
 }
 
+async function bench() {
+  const fill = makeFiller(7);
+  const messages = [];
+  for (let r = 0; r < 20; r++) for (const id of IDS) messages.push(fill(REGISTRY[id]));
+  const signBaseMs = Date.UTC(2026, 0, 2, 3, 4, 5);
+  const encodeAll = (signed) => {
+    const protocol = new MavLinkProtocolV2(1, 1, signed ? MavLinkProtocolV2.IFLAG_SIGNED : 0);
+    return messages.map((m, i) => {
+      const b = protocol.serialize(m, i & 255);
+      return signed ? protocol.sign(b, 1, key, signBaseMs + i) : b;
+    });
+  };
+  // Wall time per frame over at least 2 s of repetitions.
+  const time = async (what, frames, fn) => {
+    let runs = 0;
+    const start = process.hrtime.bigint();
+    let elapsed = 0;
+    while (elapsed < 2e9) {
+      await fn();
+      runs++;
+      elapsed = Number(process.hrtime.bigint() - start);
+    }
+    const perFrameNs = elapsed / (runs * frames);
+    console.log(JSON.stringify({ what, frames_per_second: Math.round(1e9 / perFrameNs),
+                                 ns_per_frame: Math.round(perFrameNs) }));
+  };
+  for (const signed of [false, true]) {
+    await time(`encode${signed ? ' signed' : ''}`, messages.length, () => { encodeAll(signed); });
+    const stream = Buffer.concat(encodeAll(signed));
+    await time(`parse and decode${signed ? ', signature checked' : ''}`, messages.length, () =>
+      new Promise((resolve, reject) => {
+        let n = 0;
+        const pieces = [];
+        for (let i = 0; i < stream.length; i += 64) pieces.push(stream.subarray(i, i + 64));
+        const out = Readable.from(pieces).pipe(new MavLinkPacketSplitter())
+          .pipe(new MavLinkPacketParser());
+        out.on('data', (p) => {
+          if (signed && !p.signature.matches(key)) reject(new Error('bad signature'));
+          p.protocol.data(p.payload, REGISTRY[p.header.msgid]);
+          n++;
+        });
+        out.on('end', () => (n === messages.length ? resolve() : reject(new Error(`${n} frames`))));
+      }));
+  }
+}
+
 if (mode === 'decode') await decode();
-else encode();
+else if (mode === 'encode') encode();
+else await bench();
