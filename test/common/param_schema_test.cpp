@@ -7,19 +7,12 @@
 #include <optional>
 #include <sstream>
 
+#include "test/common/expect_param_error.hpp"
+
 namespace alight {
 namespace {
 
-template <class Fn>
-ParamError expect_param_error(Fn fn) {
-  try {
-    fn();
-  } catch (const ParamError& e) {
-    return e;
-  }
-  ADD_FAILURE() << "no ParamError thrown";
-  return ParamError("", "", "", "");
-}
+using test::expect_param_error;
 
 struct Inner {
   int max_size = 45;

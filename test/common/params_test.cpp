@@ -7,21 +7,12 @@
 
 #include "common/camera_mount.hpp"
 #include "common/pose_buffer.hpp"
+#include "test/common/expect_param_error.hpp"
 
 namespace alight {
 namespace {
 
-// Runs `fn`, which must throw ParamError, and returns it.
-template <class Fn>
-ParamError expect_param_error(Fn fn) {
-  try {
-    fn();
-  } catch (const ParamError& e) {
-    return e;
-  }
-  ADD_FAILURE() << "no ParamError thrown";
-  return ParamError("", "", "", "");
-}
+using test::expect_param_error;
 
 struct Refinement {
   int n_min = 10;
