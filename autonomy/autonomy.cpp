@@ -125,7 +125,7 @@ void Autonomy::hold(const std::string& reason, Failsafe failsafe, double min_z_m
   enter(Phase::kHold, reason);
 }
 
-bool Autonomy::vision_silent() {
+bool Autonomy::hold_if_vision_silent() {
   // Counted from the phase's start too: a vision that never spoke since GO is as silent.
   const int64_t heard =
       std::max(phase_start_utime_, last_vision_utime_.value_or(phase_start_utime_));
@@ -524,7 +524,7 @@ void Autonomy::step_phase(double dt_s) {
       return;
 
     case Phase::kDetection:
-      if (vision_silent()) return;
+      if (hold_if_vision_silent()) return;
       path_.step(p, dt_s, params_.detection.speed_mps, kPathLeadM);
       sp_p_W_ = path_.carrot();
       sp_v_W_ = path_.carrot_velocity();
@@ -534,7 +534,7 @@ void Autonomy::step_phase(double dt_s) {
       return;
 
     case Phase::kRefinement: {
-      if (vision_silent()) return;
+      if (hold_if_vision_silent()) return;
       const auto& R = params_.refinement;
       if (since_found_s > R.lost_timeout_s) {
         target_lost("no target seen for " + fmt(since_found_s, 1) + " s in refinement");

@@ -79,8 +79,8 @@ class Autonomy {
   void handle_command(const OperatorCommand& cmd);
   bool accept(const OperatorCommand& cmd);
   void handle_target(const TargetMeasurement& m);
-  /// Holds (and says so) when no VISION_TARGET came for failsafe.vision_silent_s.
-  bool vision_silent();
+  /// Holds (and says so) when no VISION_TARGET came for failsafe.vision_silent_s; true then.
+  bool hold_if_vision_silent();
   void step_phase(double dt_s);
   void start_detection(const std::string& reason);
   void start_refinement(const TargetMeasurement& m);
