@@ -125,10 +125,23 @@ void Autonomy::hold(const std::string& reason, Failsafe failsafe, double min_z_m
   enter(Phase::kHold, reason);
 }
 
+bool Autonomy::vision_silent() {
+  // Counted from the phase's start too: a vision that never spoke since GO is as silent.
+  const int64_t heard =
+      std::max(phase_start_utime_, last_vision_utime_.value_or(phase_start_utime_));
+  const double silent_s = seconds(now_utime_ - heard);
+  if (silent_s <= params_.failsafe.vision_silent_s) return false;
+  hold("no VISION_TARGET for " + fmt(silent_s, 1) +
+           " s (camera or vision down): holding; waiting for the operator",
+       Failsafe::kNone, 0.0);
+  return true;
+}
+
 void Autonomy::enter_pose_lost() {
   failsafe_ = Failsafe::kPoseLost;
   failsafe_z_m_ = pose_ ? pose_->p_W_B.z() : sp_p_W_.z();
   failsafe_since_utime_ = now_utime_;
+  pose_back_since_utime_.reset();
   if (pose_) sp_p_W_.head<2>() = pose_->p_W_B.head<2>();
   touchdown_.arm(now_utime_);
   enter(Phase::kFailsafe, "motion capture lost for > " + fmt(params_.failsafe.pose_lost_s, 1) +
@@ -511,6 +524,7 @@ void Autonomy::step_phase(double dt_s) {
       return;
 
     case Phase::kDetection:
+      if (vision_silent()) return;
       path_.step(p, dt_s, params_.detection.speed_mps, kPathLeadM);
       sp_p_W_ = path_.carrot();
       sp_v_W_ = path_.carrot_velocity();
@@ -520,6 +534,7 @@ void Autonomy::step_phase(double dt_s) {
       return;
 
     case Phase::kRefinement: {
+      if (vision_silent()) return;
       const auto& R = params_.refinement;
       if (since_found_s > R.lost_timeout_s) {
         target_lost("no target seen for " + fmt(since_found_s, 1) + " s in refinement");
@@ -646,6 +661,22 @@ void Autonomy::step_phase(double dt_s) {
 
     case Phase::kFailsafe:
       if (!motors_on_) return;
+      if (failsafe_ == Failsafe::kPoseLost && pose_fresh() && !touchdown_.detected()) {
+        // Pose back for good: stop descending where the failsafe happened to be (over a
+        // platform's edge it tips the vehicle) and hold; the operator decides, as after any
+        // failsafe whose cause has cleared.
+        if (!pose_back_since_utime_) pose_back_since_utime_ = now_utime_;
+        const double back_s = seconds(now_utime_ - *pose_back_since_utime_);
+        if (back_s >= params_.failsafe.pose_recovered_s) {
+          touchdown_.disarm();
+          hold("motion capture back for " + fmt(back_s, 1) +
+                   " s: failsafe descent stopped, holding; waiting for the operator",
+               Failsafe::kNone, 0.0);
+          return;
+        }
+      } else if (!pose_fresh()) {
+        pose_back_since_utime_.reset();
+      }
       if (pose_fresh()) {
         // Pose back: a controlled descent on it instead of the outer loop's open-loop one.
         sp_p_W_.z() = failsafe_z_m_ -
@@ -740,7 +771,10 @@ Output Autonomy::update(const Inputs& in, int64_t now_utime) {
     }
   }
 
-  if (in.target) handle_target(*in.target);
+  if (in.target) {
+    last_vision_utime_ = now_utime_;
+    handle_target(*in.target);
+  }
   step_phase(dt_s);
   return make_output();
 }

@@ -79,6 +79,8 @@ class Autonomy {
   void handle_command(const OperatorCommand& cmd);
   bool accept(const OperatorCommand& cmd);
   void handle_target(const TargetMeasurement& m);
+  /// Holds (and says so) when no VISION_TARGET came for failsafe.vision_silent_s.
+  bool vision_silent();
   void step_phase(double dt_s);
   void start_detection(const std::string& reason);
   void start_refinement(const TargetMeasurement& m);
@@ -128,6 +130,8 @@ class Autonomy {
   std::optional<int64_t> go_utime_;
   std::optional<int64_t> end_utime_;
   std::optional<int64_t> last_found_utime_;
+  std::optional<int64_t> last_vision_utime_;      // any VISION_TARGET, found or not
+  std::optional<int64_t> pose_back_since_utime_;  // pose fresh again in the pose-lost failsafe
   int64_t phase_start_utime_ = 0;
 
   // Refinement.

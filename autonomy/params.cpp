@@ -197,6 +197,12 @@ const ParamSchema<FailsafeParams>& FailsafeParams::schema() {
                "must exceed pose_stale_s");
     s.add("descent_mps", &P::descent_mps, Range::open_closed(0, 1), "m/s",
           "failsafe descent when the pose is back");
+    s.add("pose_recovered_s", &P::pose_recovered_s, Range::open_closed(0, 5), "s",
+          "pose fresh again this long in the pose-lost failsafe: stop the descent and hold, "
+          "waiting for the operator (descending blind onto a platform edge tips the vehicle)");
+    s.add("vision_silent_s", &P::vision_silent_s, Range::open_closed(0, 60), "s",
+          "no VISION_TARGET this long while searching or refining: the camera or the vision "
+          "process is down; hold and wait for the operator instead of searching blind");
     s.add("abort_height_m", &P::abort_height_m, Range::gt(0.3), "m",
           "ABORT climbs to at least this height, world z");
     s.add("max_nudge_m", &P::max_nudge_m, Range::closed(0, 5), "m", "largest NUDGE offset");

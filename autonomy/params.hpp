@@ -107,6 +107,8 @@ struct FailsafeParams {
   double pose_stale_s = 0.3;
   double pose_lost_s = 1.0;
   double descent_mps = 0.3;
+  double pose_recovered_s = 0.5;
+  double vision_silent_s = 5.0;
   double abort_height_m = 1.5;
   double max_nudge_m = 0.5;
   static const ParamSchema<FailsafeParams>& schema();

@@ -108,6 +108,11 @@ class Node {
   /// Judges a decoded message's stamp (StampGuard, with this node's clocks). A refused stamp is
   /// counted and logged like reject_value; true when the message may be used.
   bool accept_stamp(const std::string& channel, int64_t utime);
+  /// Sets the counters of an input that is not an LCM channel (alight-mocap's TCP stream), so
+  /// NODE_STATUS reports it beside the channels.
+  void set_input_stats(const std::string& input, const ChannelStats& stats) {
+    stats_[input] = stats;
+  }
   /// Newest stamp accepted on any channel (0 before the first).
   int64_t newest_stamp() const { return stamps_.newest_utime(); }
   void set_stamp_params(const StampGuardParams& p) { stamps_ = StampGuard(p); }

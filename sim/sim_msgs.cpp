@@ -85,4 +85,19 @@ std::optional<AttitudeCommand> command_from_msg(const attitude_cmd_t& msg, std::
   return from_msg(msg);
 }
 
+std::optional<AttitudeCommand> command_from_msg(const attitude_cmd_t& msg, int64_t now_utime,
+                                                double max_age_s, std::string* why) {
+  // In double: a hostile stamp (INT64_MIN) must not overflow the difference.
+  const double age_s = (static_cast<double>(now_utime) - static_cast<double>(msg.utime)) * 1e-6;
+  if (!(age_s <= max_age_s && -age_s <= kMaxCommandAheadS)) {
+    if (why)
+      *why = "attitude command stamped " + std::to_string(age_s) + " s " +
+             (age_s > 0 ? "before" : "after") + " the autopilot's clock (limit " +
+             std::to_string(age_s > 0 ? max_age_s : kMaxCommandAheadS) +
+             " s): a replay or a stray sender";
+    return std::nullopt;
+  }
+  return command_from_msg(msg, why);
+}
+
 }  // namespace alight::sim

@@ -23,5 +23,16 @@ AttitudeCommand from_msg(const attitude_cmd_t& msg);
 /// Validating form for untrusted input: nullopt (and *why, when given) for a non-finite angle,
 /// rate or thrust.
 std::optional<AttitudeCommand> command_from_msg(const attitude_cmd_t& msg, std::string* why);
+/// How far ahead of the simulated autopilot's clock a command may be stamped [s]. The outer loop
+/// stamps commands on its own estimate of the vehicle's clock (newest input plus steady time
+/// since), which runs ahead while the simulator is starved of CPU behind real time.
+inline constexpr double kMaxCommandAheadS = 10.0;
+/// The same, also refusing a command stamped more than `max_age_s` before the simulated
+/// autopilot's clock `now_utime` (an autopilot would have given up waiting for a command that
+/// old: its command-loss timeout; so it is a replay or a stray sender) or more than
+/// kMaxCommandAheadS after it. Not a per-source monotonic check: the outer loop's stamps step
+/// back legitimately when a pose arrives after a timer tick that extrapolated its clock.
+std::optional<AttitudeCommand> command_from_msg(const attitude_cmd_t& msg, int64_t now_utime,
+                                                double max_age_s, std::string* why);
 
 }  // namespace alight::sim

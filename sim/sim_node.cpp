@@ -71,7 +71,8 @@ int main(int argc, char** argv) {
     // failsafe's business (Simulator::advance_to).
     node.on<attitude_cmd_t>("ATTITUDE_CMD", [&](const attitude_cmd_t& m) {
       std::string why;
-      if (const auto cmd = sim::command_from_msg(m, &why)) {
+      if (const auto cmd = sim::command_from_msg(m, simulator.now_utime(),
+                                                 vehicle.cmd_loss_timeout_s, &why)) {
         simulator.command(*cmd);
       } else {
         node.reject_value("ATTITUDE_CMD", why);

@@ -728,8 +728,8 @@ TEST(AutonomyRestart, KillSurvivesARestart) {
   EXPECT_TRUE(b.autonomy.restart_state().killed) << "and on to the next restart";
 }
 
-// A pose-lost failsafe latched before the restart continues as a controlled descent on the
-// pose, motors on until touch-down; it is not forgotten into a hold.
+// A pose-lost failsafe latched before the restart continues as a controlled descent, motors on
+// until touch-down; it is not forgotten into a hold by the restart.
 TEST(AutonomyRestart, PoseLostFailsafeSurvivesARestart) {
   RestartState r;
   r.motors_on = true;
@@ -740,11 +740,77 @@ TEST(AutonomyRestart, PoseLostFailsafeSurvivesARestart) {
   EXPECT_EQ(w.autonomy.phase(), Phase::kFailsafe) << w.out.status.reason;
   EXPECT_TRUE(w.out.setpoint.motors_on);
   EXPECT_EQ(w.autonomy.restart_state().failsafe, Failsafe::kPoseLost);
-  for (int i = 0; i < 100; ++i) w.step();
+  w.mocap = false;  // still lost after the restart
+  for (int i = 0; i < 200; ++i) w.step();
   EXPECT_LT(w.p.z(), 0.85) << "descending";
   EXPECT_TRUE(w.out.setpoint.motors_on);
+  EXPECT_EQ(w.autonomy.phase(), Phase::kFailsafe) << w.out.status.reason;
   ASSERT_TRUE(w.run_until([&] { return !w.out.setpoint.motors_on; }, 20));
   EXPECT_LT(w.p.z(), w.gear_height_m + 0.05) << "motors off only on the ground";
+}
+
+// Regression (issue 14, fault campaign mocap_drop_2s): motion capture dropped for 2 s during
+// refinement; the pose-lost failsafe went on descending on the returned pose where the vehicle
+// happened to be, half over the platform, and it tipped off the edge. Once the pose is fresh
+// again for failsafe.pose_recovered_s the descent stops and the vehicle holds, motors on, until
+// the operator decides; the same after a restart in the failsafe.
+TEST(AutonomyRegression, FailsafeDescentStopsAndHoldsOnceMotionCaptureIsBack) {
+  for (const bool restarted : {false, true}) {
+    RestartState r;
+    if (restarted) {
+      r.motors_on = true;
+      r.failsafe = Failsafe::kPoseLost;
+    }
+    KinematicWorld w(test::test_params(), {}, r);
+    if (restarted) {
+      w.p = Vector3d(0.2, 0.1, 1.0);
+      w.step();
+    } else {
+      w.takeoff_and_hover();
+      w.send(Command::kGo, Mission::kLanding);
+      ASSERT_TRUE(w.run_until_phase(Phase::kRefinement, 120));
+      w.mocap = false;
+      ASSERT_TRUE(w.run_until_phase(Phase::kFailsafe, 3));
+      for (int i = 0; i < 50; ++i) w.step();  // 0.5 s of blind descent
+    }
+    ASSERT_EQ(w.autonomy.phase(), Phase::kFailsafe) << restarted;
+    w.mocap = true;
+    for (int i = 0; i < 30; ++i) w.step();  // back, not yet for long enough
+    EXPECT_EQ(w.autonomy.phase(), Phase::kFailsafe) << restarted;
+    ASSERT_TRUE(w.run_until_phase(Phase::kHold, 1)) << restarted << ": " << w.out.status.reason;
+    EXPECT_NE(w.out.status.reason.find("motion capture back"), std::string::npos)
+        << w.out.status.reason;
+    EXPECT_TRUE(w.out.setpoint.motors_on);
+    EXPECT_EQ(w.out.status.failsafe, Failsafe::kNone);
+    const double z = w.p.z();
+    for (int i = 0; i < 300; ++i) w.step();
+    EXPECT_EQ(w.autonomy.phase(), Phase::kHold);
+    EXPECT_NEAR(w.p.z(), z, 0.05) << "holds, no longer descends";
+    EXPECT_TRUE(w.out.setpoint.motors_on);
+  }
+}
+
+// Regression (issue 14, fault campaign camera_stall_forever): with the camera stalled for good
+// during the search, autonomy flew its search pattern for minutes without a single frame. No
+// VISION_TARGET for failsafe.vision_silent_s while searching or refining: hold and say why.
+TEST(AutonomyRegression, NoVisionWhileSearchingHoldsAndSaysWhy) {
+  for (const Phase stall_in : {Phase::kDetection, Phase::kRefinement}) {
+    KinematicWorld w;
+    w.takeoff_and_hover();
+    w.send(Command::kGo, Mission::kLanding);
+    ASSERT_TRUE(w.run_until_phase(stall_in, 120));
+    w.vision_on = false;
+    const double silent_s = w.autonomy.params().failsafe.vision_silent_s;
+    if (stall_in == Phase::kDetection) {
+      for (int i = 0; i < static_cast<int>(silent_s * 100) - 10; ++i) w.step();
+      EXPECT_EQ(w.autonomy.phase(), stall_in) << "not before vision_silent_s";
+    }
+    // In refinement the target is lost first (refinement.lost_timeout_s), back to detection.
+    ASSERT_TRUE(w.run_until_phase(Phase::kHold, silent_s + 5)) << w.out.status.reason;
+    EXPECT_NE(w.out.status.reason.find("no VISION_TARGET"), std::string::npos)
+        << w.out.status.reason;
+    EXPECT_TRUE(w.out.setpoint.motors_on);
+  }
 }
 
 }  // namespace

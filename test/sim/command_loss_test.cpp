@@ -128,6 +128,42 @@ TEST(SimRegression, NonFiniteAttitudeCommandIsRefused) {
   }
 }
 
+// Regression (issue 14, fault campaign replay_old_log): an old session log played onto the live
+// port carried the old run's ATTITUDE_CMD{armed = false}; the simulated autopilot obeyed it and
+// the vehicle fell from 1.1 m. A command stamped further from the autopilot's clock than its
+// command-loss timeout is refused, whichever way, and a hostile stamp cannot overflow the check.
+TEST(SimRegression, CommandsStampedFarFromTheAutopilotClockAreRefused) {
+  attitude_cmd_t m{};
+  m.armed = false;
+  const int64_t now = 1'795'597'967'000'000;
+  const double max_age_s = 0.5;
+  std::string why;
+  m.utime = now - 200'000;  // in flight through LCM: fine
+  EXPECT_TRUE(command_from_msg(m, now, max_age_s, &why)) << why;
+  m.utime = now - 1'130'000'000;  // the old log, 1130 s before
+  EXPECT_FALSE(command_from_msg(m, now, max_age_s, &why));
+  EXPECT_NE(why.find("before the autopilot's clock"), std::string::npos) << why;
+  m.utime = now + 3'600'000'000;
+  EXPECT_FALSE(command_from_msg(m, now, max_age_s, &why));
+  EXPECT_NE(why.find("after"), std::string::npos) << why;
+  // Ahead by a starved simulator's lag (the outer loop's clock extrapolated on steady time) and
+  // then back again when the next pose arrives: both taken (a monotonic stamp rule refused the
+  // second for seconds, and the vehicle drifted out of the area in the autopilot's failsafe).
+  m.utime = now + 2'700'000;
+  EXPECT_TRUE(command_from_msg(m, now, max_age_s, &why)) << why;
+  m.utime = now - 10'000;
+  EXPECT_TRUE(command_from_msg(m, now, max_age_s, &why)) << why;
+  for (const int64_t bad : {std::numeric_limits<int64_t>::min(), std::numeric_limits<int64_t>::max(),
+                            int64_t{0}}) {
+    m.utime = bad;
+    EXPECT_FALSE(command_from_msg(m, now, max_age_s, &why)) << bad;
+  }
+  m.utime = now;
+  m.thrust_N = std::nan("");
+  EXPECT_FALSE(command_from_msg(m, now, max_age_s, &why));
+  EXPECT_NE(why.find("non-finite"), std::string::npos);
+}
+
 TEST(SimRegression, CommandLossParametersAreBoundedAndFinite) {
   const auto dir = std::filesystem::path(ALIGHT_BINARY_DIR) / "test_tmp" / "sim_command_loss";
   std::filesystem::create_directories(dir);

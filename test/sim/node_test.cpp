@@ -44,9 +44,13 @@ int run(const std::string& args, std::string* stderr_text = nullptr) {
 
 struct Counter {
   std::atomic<int> mocap{0}, imu{0}, camera{0}, truth{0};
+  std::atomic<int64_t> pose_utime{0};
   sim_truth_t last_truth{};
   image_t last_image{};
-  void on_pose(const lcm::ReceiveBuffer*, const std::string&, const pose_t*) { ++mocap; }
+  void on_pose(const lcm::ReceiveBuffer*, const std::string&, const pose_t* m) {
+    pose_utime = m->utime;
+    ++mocap;
+  }
   void on_imu(const lcm::ReceiveBuffer*, const std::string&, const imu_t*) { ++imu; }
   void on_image(const lcm::ReceiveBuffer*, const std::string&, const image_t* m) {
     last_image = *m;
@@ -71,8 +75,11 @@ TEST(SimNodeTest, PublishesEveryChannelAndFollowsAttitudeCommands) {
     code = run("--scenario " + scenario("landing_a") + " --seed 3 --duration 1.5 --lcm-url '" + kUrl + "'");
   });
   // Full thrust, armed, until the node exits (however loaded the machine): it must climb.
+  // Stamped like the outer loop's, with the newest pose: the simulated autopilot refuses
+  // commands stamped far from its clock.
   while (code == -1) {
     attitude_cmd_t cmd{};
+    cmd.utime = c.pose_utime;
     cmd.thrust_N = 1.5 * 1.2 * 9.81;
     cmd.armed = true;
     lcm.publish("ATTITUDE_CMD", &cmd);

@@ -1,0 +1,570 @@
+#pragma once
+// The MAVLink messages alight speaks, written from the published definitions (message
+// definitions common.xml and minimal.xml of github.com/mavlink/mavlink; field semantics at
+// mavlink.io/en/messages/common.html). Members are declared in the XML's order, with the XML's
+// names and units; `fields()` lists them in wire order (wire.hpp) and marks where the MAVLink 2
+// extensions begin. kCrcExtra, kBaseLength and kMaxLength are the published values; the
+// static_asserts at the end recompute them from the field lists.
+//
+// Frames as the XML defines them: positions and velocities in a local NED frame, attitudes and
+// body rates in FRD (see ned_frd.hpp for alight's ENU / FLU).
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+
+#include "mavlink/wire.hpp"
+
+namespace alight::mavlink {
+
+// --- Enumerations (the values alight uses) ------------------------------------------------------
+
+namespace mav_type {
+inline constexpr uint8_t kGeneric = 0, kQuadrotor = 2, kGcs = 6, kOnboardController = 18;
+}
+namespace mav_autopilot {
+inline constexpr uint8_t kGeneric = 0, kArdupilotmega = 3, kInvalid = 8, kPx4 = 12;
+}
+namespace mav_mode_flag {  // HEARTBEAT.base_mode bits
+inline constexpr uint8_t kCustomModeEnabled = 1, kTestEnabled = 2, kAutoEnabled = 4,
+                         kGuidedEnabled = 8, kStabilizeEnabled = 16, kHilEnabled = 32,
+                         kManualInputEnabled = 64, kSafetyArmed = 128;
+}
+namespace mav_state {
+inline constexpr uint8_t kUninit = 0, kBoot = 1, kCalibrating = 2, kStandby = 3, kActive = 4,
+                         kCritical = 5, kEmergency = 6, kPoweroff = 7, kFlightTermination = 8;
+}
+namespace mav_component {
+inline constexpr uint8_t kAutopilot1 = 1, kOnboardComputer = 191, kVisualInertialOdometry = 197;
+}
+namespace mav_frame {
+inline constexpr uint8_t kLocalNed = 1, kBodyNed = 8, kBodyOffsetNed = 9, kBodyFrd = 12,
+                         kLocalFrd = 20, kLocalFlu = 21;
+}
+namespace mav_cmd {
+inline constexpr uint16_t kNavLand = 21, kNavTakeoff = 22, kDoSetMode = 176,
+                          kComponentArmDisarm = 400, kSetMessageInterval = 511,
+                          kRequestMessage = 512;
+}
+namespace mav_result {
+inline constexpr uint8_t kAccepted = 0, kTemporarilyRejected = 1, kDenied = 2, kUnsupported = 3,
+                         kFailed = 4, kInProgress = 5, kCancelled = 6;
+}
+namespace mav_severity {
+inline constexpr uint8_t kEmergency = 0, kAlert = 1, kCritical = 2, kError = 3, kWarning = 4,
+                         kNotice = 5, kInfo = 6, kDebug = 7;
+}
+namespace mav_estimator_type {
+inline constexpr uint8_t kUnknown = 0, kVision = 2, kVio = 3, kMocap = 6;
+}
+namespace attitude_target_typemask {  // SET_ATTITUDE_TARGET.type_mask: set bit = ignore
+inline constexpr uint8_t kBodyRollRateIgnore = 1, kBodyPitchRateIgnore = 2, kBodyYawRateIgnore = 4,
+                         kThrustBodySet = 32, kThrottleIgnore = 64, kAttitudeIgnore = 128;
+}
+namespace position_target_typemask {  // SET_POSITION_TARGET_LOCAL_NED.type_mask: set bit = ignore
+inline constexpr uint16_t kXIgnore = 1, kYIgnore = 2, kZIgnore = 4, kVxIgnore = 8, kVyIgnore = 16,
+                          kVzIgnore = 32, kAxIgnore = 64, kAyIgnore = 128, kAzIgnore = 256,
+                          kForceSet = 512, kYawIgnore = 1024, kYawRateIgnore = 2048;
+}
+
+// --- Messages ---------------------------------------------------------------------------------
+
+/// HEARTBEAT (0, minimal.xml): the sender exists, what it is and its state.
+struct Heartbeat {
+  static constexpr uint32_t kId = 0;
+  static constexpr std::string_view kName = "HEARTBEAT";
+  static constexpr uint8_t kCrcExtra = 50, kBaseLength = 9, kMaxLength = 9;
+
+  uint8_t type = 0;             ///< MAV_TYPE
+  uint8_t autopilot = 0;        ///< MAV_AUTOPILOT
+  uint8_t base_mode = 0;        ///< MAV_MODE_FLAG bits
+  uint32_t custom_mode = 0;     ///< autopilot-specific mode (PX4: main/sub mode; ArduPilot: mode)
+  uint8_t system_status = 0;    ///< MAV_STATE
+  uint8_t mavlink_version = 3;  ///< uint8_t_mavlink_version: the version of minimal.xml (3)
+
+  template <class S, class V>
+  static constexpr void fields(S& m, V& v) {
+    v("custom_mode", m.custom_mode);
+    v("type", m.type);
+    v("autopilot", m.autopilot);
+    v("base_mode", m.base_mode);
+    v("system_status", m.system_status);
+    v("mavlink_version", m.mavlink_version);
+  }
+  bool operator==(const Heartbeat&) const = default;
+};
+
+/// SYS_STATUS (1): sensors present / enabled / healthy, battery, communication errors.
+struct SysStatus {
+  static constexpr uint32_t kId = 1;
+  static constexpr std::string_view kName = "SYS_STATUS";
+  static constexpr uint8_t kCrcExtra = 124, kBaseLength = 31, kMaxLength = 43;
+
+  uint32_t onboard_control_sensors_present = 0;  ///< MAV_SYS_STATUS_SENSOR bits
+  uint32_t onboard_control_sensors_enabled = 0;
+  uint32_t onboard_control_sensors_health = 0;
+  uint16_t load = 0;             ///< main loop load [d%] (0..1000)
+  uint16_t voltage_battery = 0;  ///< [mV], UINT16_MAX: not sent
+  int16_t current_battery = 0;   ///< [cA], -1: not sent
+  int8_t battery_remaining = 0;  ///< [%], -1: not sent
+  uint16_t drop_rate_comm = 0;   ///< [c%]
+  uint16_t errors_comm = 0;
+  uint16_t errors_count1 = 0;
+  uint16_t errors_count2 = 0;
+  uint16_t errors_count3 = 0;
+  uint16_t errors_count4 = 0;
+  // extensions
+  uint32_t onboard_control_sensors_present_extended = 0;  ///< MAV_SYS_STATUS_SENSOR_EXTENDED
+  uint32_t onboard_control_sensors_enabled_extended = 0;
+  uint32_t onboard_control_sensors_health_extended = 0;
+
+  template <class S, class V>
+  static constexpr void fields(S& m, V& v) {
+    v("onboard_control_sensors_present", m.onboard_control_sensors_present);
+    v("onboard_control_sensors_enabled", m.onboard_control_sensors_enabled);
+    v("onboard_control_sensors_health", m.onboard_control_sensors_health);
+    v("load", m.load);
+    v("voltage_battery", m.voltage_battery);
+    v("current_battery", m.current_battery);
+    v("drop_rate_comm", m.drop_rate_comm);
+    v("errors_comm", m.errors_comm);
+    v("errors_count1", m.errors_count1);
+    v("errors_count2", m.errors_count2);
+    v("errors_count3", m.errors_count3);
+    v("errors_count4", m.errors_count4);
+    v("battery_remaining", m.battery_remaining);
+    v.extensions();
+    v("onboard_control_sensors_present_extended", m.onboard_control_sensors_present_extended);
+    v("onboard_control_sensors_enabled_extended", m.onboard_control_sensors_enabled_extended);
+    v("onboard_control_sensors_health_extended", m.onboard_control_sensors_health_extended);
+  }
+  bool operator==(const SysStatus&) const = default;
+};
+
+/// ATTITUDE_QUATERNION (31): attitude of the FRD body in the local NED frame, body rates.
+struct AttitudeQuaternion {
+  static constexpr uint32_t kId = 31;
+  static constexpr std::string_view kName = "ATTITUDE_QUATERNION";
+  static constexpr uint8_t kCrcExtra = 246, kBaseLength = 32, kMaxLength = 48;
+
+  uint32_t time_boot_ms = 0;             ///< [ms] since the sender's boot
+  float q1 = 1, q2 = 0, q3 = 0, q4 = 0;  ///< w, x, y, z
+  float rollspeed = 0;                   ///< [rad/s] about FRD x
+  float pitchspeed = 0;                  ///< [rad/s] about FRD y
+  float yawspeed = 0;                    ///< [rad/s] about FRD z
+  // extensions
+  std::array<float, 4> repr_offset_q{};  ///< display offset [w, x, y, z]; zeros: not supported
+
+  template <class S, class V>
+  static constexpr void fields(S& m, V& v) {
+    v("time_boot_ms", m.time_boot_ms);
+    v("q1", m.q1);
+    v("q2", m.q2);
+    v("q3", m.q3);
+    v("q4", m.q4);
+    v("rollspeed", m.rollspeed);
+    v("pitchspeed", m.pitchspeed);
+    v("yawspeed", m.yawspeed);
+    v.extensions();
+    v("repr_offset_q", m.repr_offset_q);
+  }
+  bool operator==(const AttitudeQuaternion&) const = default;
+};
+
+/// LOCAL_POSITION_NED (32): the autopilot's filtered local position and velocity (NED).
+struct LocalPositionNed {
+  static constexpr uint32_t kId = 32;
+  static constexpr std::string_view kName = "LOCAL_POSITION_NED";
+  static constexpr uint8_t kCrcExtra = 185, kBaseLength = 28, kMaxLength = 28;
+
+  uint32_t time_boot_ms = 0;     ///< [ms]
+  float x = 0, y = 0, z = 0;     ///< [m] NED
+  float vx = 0, vy = 0, vz = 0;  ///< [m/s] NED
+
+  template <class S, class V>
+  static constexpr void fields(S& m, V& v) {
+    v("time_boot_ms", m.time_boot_ms);
+    v("x", m.x);
+    v("y", m.y);
+    v("z", m.z);
+    v("vx", m.vx);
+    v("vy", m.vy);
+    v("vz", m.vz);
+  }
+  bool operator==(const LocalPositionNed&) const = default;
+};
+
+/// COMMAND_LONG (76): a command with up to seven float parameters (arm, mode, ...).
+struct CommandLong {
+  static constexpr uint32_t kId = 76;
+  static constexpr std::string_view kName = "COMMAND_LONG";
+  static constexpr uint8_t kCrcExtra = 152, kBaseLength = 33, kMaxLength = 33;
+
+  uint8_t target_system = 0;
+  uint8_t target_component = 0;  ///< 0: all components
+  uint16_t command = 0;          ///< MAV_CMD
+  uint8_t confirmation = 0;      ///< 0 first transmission, then 1..255
+  float param1 = 0, param2 = 0, param3 = 0, param4 = 0, param5 = 0, param6 = 0, param7 = 0;
+
+  template <class S, class V>
+  static constexpr void fields(S& m, V& v) {
+    v("param1", m.param1);
+    v("param2", m.param2);
+    v("param3", m.param3);
+    v("param4", m.param4);
+    v("param5", m.param5);
+    v("param6", m.param6);
+    v("param7", m.param7);
+    v("command", m.command);
+    v("target_system", m.target_system);
+    v("target_component", m.target_component);
+    v("confirmation", m.confirmation);
+  }
+  bool operator==(const CommandLong&) const = default;
+};
+
+/// COMMAND_ACK (77): the result of a command.
+struct CommandAck {
+  static constexpr uint32_t kId = 77;
+  static constexpr std::string_view kName = "COMMAND_ACK";
+  static constexpr uint8_t kCrcExtra = 143, kBaseLength = 3, kMaxLength = 10;
+
+  uint16_t command = 0;  ///< MAV_CMD acknowledged
+  uint8_t result = 0;    ///< MAV_RESULT
+  // extensions
+  uint8_t progress = 0;       ///< [%] with MAV_RESULT_IN_PROGRESS
+  int32_t result_param2 = 0;  ///< command-specific detail
+  uint8_t target_system = 0;  ///< the system that sent the command
+  uint8_t target_component = 0;
+
+  template <class S, class V>
+  static constexpr void fields(S& m, V& v) {
+    v("command", m.command);
+    v("result", m.result);
+    v.extensions();
+    v("progress", m.progress);
+    v("result_param2", m.result_param2);
+    v("target_system", m.target_system);
+    v("target_component", m.target_component);
+  }
+  bool operator==(const CommandAck&) const = default;
+};
+
+/// SET_ATTITUDE_TARGET (82): attitude (LOCAL_NED to BODY_FRD), body rates and thrust setpoint.
+struct SetAttitudeTarget {
+  static constexpr uint32_t kId = 82;
+  static constexpr std::string_view kName = "SET_ATTITUDE_TARGET";
+  static constexpr uint8_t kCrcExtra = 49, kBaseLength = 39, kMaxLength = 51;
+
+  uint32_t time_boot_ms = 0;  ///< [ms]
+  uint8_t target_system = 0;
+  uint8_t target_component = 0;
+  uint8_t type_mask = 0;               ///< attitude_target_typemask bits (set = ignore)
+  std::array<float, 4> q{1, 0, 0, 0};  ///< w, x, y, z: FRD body in the local NED frame
+  float body_roll_rate = 0;            ///< [rad/s]
+  float body_pitch_rate = 0;           ///< [rad/s]
+  float body_yaw_rate = 0;             ///< [rad/s]
+  float thrust = 0;                    ///< collective thrust, normalised 0..1
+  // extensions
+  std::array<float, 3> thrust_body{};  ///< 3D thrust in FRD, normalised -1..1
+
+  template <class S, class V>
+  static constexpr void fields(S& m, V& v) {
+    v("time_boot_ms", m.time_boot_ms);
+    v("q", m.q);
+    v("body_roll_rate", m.body_roll_rate);
+    v("body_pitch_rate", m.body_pitch_rate);
+    v("body_yaw_rate", m.body_yaw_rate);
+    v("thrust", m.thrust);
+    v("target_system", m.target_system);
+    v("target_component", m.target_component);
+    v("type_mask", m.type_mask);
+    v.extensions();
+    v("thrust_body", m.thrust_body);
+  }
+  bool operator==(const SetAttitudeTarget&) const = default;
+};
+
+/// SET_POSITION_TARGET_LOCAL_NED (84): position / velocity / acceleration / yaw setpoint.
+struct SetPositionTargetLocalNed {
+  static constexpr uint32_t kId = 84;
+  static constexpr std::string_view kName = "SET_POSITION_TARGET_LOCAL_NED";
+  static constexpr uint8_t kCrcExtra = 143, kBaseLength = 53, kMaxLength = 53;
+
+  uint32_t time_boot_ms = 0;  ///< [ms]
+  uint8_t target_system = 0;
+  uint8_t target_component = 0;
+  uint8_t coordinate_frame = mav_frame::kLocalNed;  ///< MAV_FRAME
+  uint16_t type_mask = 0;           ///< position_target_typemask bits (set = ignore)
+  float x = 0, y = 0, z = 0;        ///< [m] NED
+  float vx = 0, vy = 0, vz = 0;     ///< [m/s] NED
+  float afx = 0, afy = 0, afz = 0;  ///< [m/s^2] NED (or [N] with kForceSet)
+  float yaw = 0;                    ///< [rad] NED heading
+  float yaw_rate = 0;               ///< [rad/s]
+
+  template <class S, class V>
+  static constexpr void fields(S& m, V& v) {
+    v("time_boot_ms", m.time_boot_ms);
+    v("x", m.x);
+    v("y", m.y);
+    v("z", m.z);
+    v("vx", m.vx);
+    v("vy", m.vy);
+    v("vz", m.vz);
+    v("afx", m.afx);
+    v("afy", m.afy);
+    v("afz", m.afz);
+    v("yaw", m.yaw);
+    v("yaw_rate", m.yaw_rate);
+    v("type_mask", m.type_mask);
+    v("target_system", m.target_system);
+    v("target_component", m.target_component);
+    v("coordinate_frame", m.coordinate_frame);
+  }
+  bool operator==(const SetPositionTargetLocalNed&) const = default;
+};
+
+/// HIGHRES_IMU (105): IMU in SI units, FRD body.
+struct HighresImu {
+  static constexpr uint32_t kId = 105;
+  static constexpr std::string_view kName = "HIGHRES_IMU";
+  static constexpr uint8_t kCrcExtra = 93, kBaseLength = 62, kMaxLength = 63;
+
+  uint64_t time_usec = 0;                 ///< [us] Unix epoch or since boot
+  float xacc = 0, yacc = 0, zacc = 0;     ///< [m/s^2]
+  float xgyro = 0, ygyro = 0, zgyro = 0;  ///< [rad/s]
+  float xmag = 0, ymag = 0, zmag = 0;     ///< [gauss]
+  float abs_pressure = 0;                 ///< [hPa]
+  float diff_pressure = 0;                ///< [hPa]
+  float pressure_alt = 0;                 ///< [m]
+  float temperature = 0;                  ///< [degC]
+  uint16_t fields_updated = 0;            ///< HIGHRES_IMU_UPDATED_FLAGS
+  // extensions
+  uint8_t id = 0;  ///< IMU index (0 = IMU1)
+
+  template <class S, class V>
+  static constexpr void fields(S& m, V& v) {
+    v("time_usec", m.time_usec);
+    v("xacc", m.xacc);
+    v("yacc", m.yacc);
+    v("zacc", m.zacc);
+    v("xgyro", m.xgyro);
+    v("ygyro", m.ygyro);
+    v("zgyro", m.zgyro);
+    v("xmag", m.xmag);
+    v("ymag", m.ymag);
+    v("zmag", m.zmag);
+    v("abs_pressure", m.abs_pressure);
+    v("diff_pressure", m.diff_pressure);
+    v("pressure_alt", m.pressure_alt);
+    v("temperature", m.temperature);
+    v("fields_updated", m.fields_updated);
+    v.extensions();
+    v("id", m.id);
+  }
+  bool operator==(const HighresImu&) const = default;
+};
+
+/// TIMESYNC (111): request (tc1 = 0) and response of a round-trip clock offset estimate.
+struct Timesync {
+  static constexpr uint32_t kId = 111;
+  static constexpr std::string_view kName = "TIMESYNC";
+  static constexpr uint8_t kCrcExtra = 34, kBaseLength = 16, kMaxLength = 18;
+
+  int64_t tc1 = 0;  ///< [ns] responder's time (0 in a request)
+  int64_t ts1 = 0;  ///< [ns] requester's time, mirrored in the response
+  // extensions
+  uint8_t target_system = 0;  ///< request: 0 or a system; response: the requester
+  uint8_t target_component = 0;
+
+  template <class S, class V>
+  static constexpr void fields(S& m, V& v) {
+    v("tc1", m.tc1);
+    v("ts1", m.ts1);
+    v.extensions();
+    v("target_system", m.target_system);
+    v("target_component", m.target_component);
+  }
+  bool operator==(const Timesync&) const = default;
+};
+
+/// ATT_POS_MOCAP (138): motion-capture pose for the autopilot's estimator (NED, FRD).
+struct AttPosMocap {
+  static constexpr uint32_t kId = 138;
+  static constexpr std::string_view kName = "ATT_POS_MOCAP";
+  static constexpr uint8_t kCrcExtra = 109, kBaseLength = 36, kMaxLength = 120;
+
+  uint64_t time_usec = 0;              ///< [us]
+  std::array<float, 4> q{1, 0, 0, 0};  ///< w, x, y, z
+  float x = 0, y = 0, z = 0;           ///< [m] NED
+  // extensions
+  std::array<float, 21> covariance{};  ///< upper triangle of the 6x6 pose covariance, row-major
+                                       ///< (x, y, z, roll, pitch, yaw); NaN first: unknown
+
+  template <class S, class V>
+  static constexpr void fields(S& m, V& v) {
+    v("time_usec", m.time_usec);
+    v("q", m.q);
+    v("x", m.x);
+    v("y", m.y);
+    v("z", m.z);
+    v.extensions();
+    v("covariance", m.covariance);
+  }
+  bool operator==(const AttPosMocap&) const = default;
+};
+
+/// STATUSTEXT (253): a text line for the operator.
+struct Statustext {
+  static constexpr uint32_t kId = 253;
+  static constexpr std::string_view kName = "STATUSTEXT";
+  static constexpr uint8_t kCrcExtra = 83, kBaseLength = 51, kMaxLength = 54;
+
+  uint8_t severity = 0;         ///< MAV_SEVERITY
+  std::array<char, 50> text{};  ///< UTF-8, NUL-terminated only when shorter than 50
+  // extensions
+  uint16_t id = 0;        ///< groups the chunks of a long text; 0: single chunk
+  uint8_t chunk_seq = 0;  ///< chunk index
+
+  template <class S, class V>
+  static constexpr void fields(S& m, V& v) {
+    v("severity", m.severity);
+    v("text", m.text);
+    v.extensions();
+    v("id", m.id);
+    v("chunk_seq", m.chunk_seq);
+  }
+  bool operator==(const Statustext&) const = default;
+};
+
+/// ODOMETRY (331): pose, twist and their covariances in named frames (REP 147).
+struct Odometry {
+  static constexpr uint32_t kId = 331;
+  static constexpr std::string_view kName = "ODOMETRY";
+  static constexpr uint8_t kCrcExtra = 91, kBaseLength = 230, kMaxLength = 233;
+
+  uint64_t time_usec = 0;                             ///< [us]
+  uint8_t frame_id = 0;                               ///< MAV_FRAME of the pose
+  uint8_t child_frame_id = 0;                         ///< MAV_FRAME of the twist
+  float x = 0, y = 0, z = 0;                          ///< [m]
+  std::array<float, 4> q{1, 0, 0, 0};                 ///< w, x, y, z
+  float vx = 0, vy = 0, vz = 0;                       ///< [m/s]
+  float rollspeed = 0, pitchspeed = 0, yawspeed = 0;  ///< [rad/s]
+  std::array<float, 21> pose_covariance{};      ///< upper triangle, row-major; NaN first: unknown
+  std::array<float, 21> velocity_covariance{};  ///< upper triangle, row-major; NaN first: unknown
+  // extensions
+  uint8_t reset_counter = 0;   ///< incremented at every estimate reset
+  uint8_t estimator_type = 0;  ///< MAV_ESTIMATOR_TYPE
+  int8_t quality = 0;          ///< [%] -1 failed, 0 unknown, 1..100
+
+  template <class S, class V>
+  static constexpr void fields(S& m, V& v) {
+    v("time_usec", m.time_usec);
+    v("x", m.x);
+    v("y", m.y);
+    v("z", m.z);
+    v("q", m.q);
+    v("vx", m.vx);
+    v("vy", m.vy);
+    v("vz", m.vz);
+    v("rollspeed", m.rollspeed);
+    v("pitchspeed", m.pitchspeed);
+    v("yawspeed", m.yawspeed);
+    v("pose_covariance", m.pose_covariance);
+    v("velocity_covariance", m.velocity_covariance);
+    v("frame_id", m.frame_id);
+    v("child_frame_id", m.child_frame_id);
+    v.extensions();
+    v("reset_counter", m.reset_counter);
+    v("estimator_type", m.estimator_type);
+    v("quality", m.quality);
+  }
+  bool operator==(const Odometry&) const = default;
+};
+
+// --- The set, and what the parser needs to know of each --------------------------------------
+
+template <class... Ms>
+struct MessageList {};
+using KnownMessages =
+    MessageList<Heartbeat, SysStatus, AttitudeQuaternion, LocalPositionNed, CommandLong, CommandAck,
+                SetAttitudeTarget, SetPositionTargetLocalNed, HighresImu, Timesync, AttPosMocap,
+                Statustext, Odometry>;
+
+/// Calls f(M{}) for every known message type M.
+template <class F, class... Ms>
+constexpr void for_each_message_type(MessageList<Ms...>, F&& f) {
+  (f(Ms{}), ...);
+}
+template <class F>
+constexpr void for_each_message_type(F&& f) {
+  for_each_message_type(KnownMessages{}, f);
+}
+
+struct MessageInfo {
+  uint32_t id;
+  std::string_view name;
+  uint8_t crc_extra;
+  uint8_t base_length;  ///< payload bytes without extensions (a MAVLink 1 frame's length)
+  uint8_t max_length;   ///< payload bytes with every extension alight knows
+};
+
+/// The message with this id, or nullptr when alight does not know it.
+const MessageInfo* find_message(uint32_t msgid);
+
+// --- Payload encoding ----------------------------------------------------------------------
+
+/// Writes the untruncated payload of `m` (M::kMaxLength bytes) to `out` and returns the length
+/// MAVLink 2 sends: trailing zero bytes dropped, never less than one byte.
+template <class M>
+uint8_t encode_payload(const M& m, uint8_t* out) {
+  detail::PayloadWriter w(out);
+  M::fields(m, w);
+  size_t n = w.size();
+  while (n > 1 && out[n - 1] == 0) --n;
+  return static_cast<uint8_t>(n);
+}
+
+/// Reads a payload; `payload` must hold at least M::kMaxLength bytes, zero past the received
+/// length (Frame::payload is zero-filled to 255 bytes). Bytes beyond M::kMaxLength are fields of a
+/// newer definition and are ignored.
+template <class M>
+M decode_payload(const uint8_t* payload) {
+  M m{};
+  detail::PayloadReader r(payload);
+  M::fields(m, r);
+  return m;
+}
+
+/// STATUSTEXT text as a string (up to the first NUL or 50 bytes).
+std::string statustext_string(const Statustext& m);
+/// Fills STATUSTEXT text, cut to 50 bytes.
+void set_statustext(Statustext& m, std::string_view text);
+
+// The published lengths and CRC_EXTRA values agree with the field lists (and so with the wire
+// order: CRC_EXTRA hashes the base fields' types and names in the order they are sent).
+namespace detail {
+template <class M>
+constexpr bool layout_matches() {
+  constexpr auto l = layout_of<M>();
+  return l.wire_order_ok() && l.crc_extra() == M::kCrcExtra && l.base_length() == M::kBaseLength &&
+         l.max_length() == M::kMaxLength;
+}
+}  // namespace detail
+static_assert(detail::layout_matches<Heartbeat>());
+static_assert(detail::layout_matches<SysStatus>());
+static_assert(detail::layout_matches<AttitudeQuaternion>());
+static_assert(detail::layout_matches<LocalPositionNed>());
+static_assert(detail::layout_matches<CommandLong>());
+static_assert(detail::layout_matches<CommandAck>());
+static_assert(detail::layout_matches<SetAttitudeTarget>());
+static_assert(detail::layout_matches<SetPositionTargetLocalNed>());
+static_assert(detail::layout_matches<HighresImu>());
+static_assert(detail::layout_matches<Timesync>());
+static_assert(detail::layout_matches<AttPosMocap>());
+static_assert(detail::layout_matches<Statustext>());
+static_assert(detail::layout_matches<Odometry>());
+
+}  // namespace alight::mavlink
