@@ -7,6 +7,7 @@
 #include "camera_driver/params.hpp"
 #include "common/camera_mount.hpp"
 #include "ground_station/params.hpp"
+#include "mocap/params.hpp"
 #include "outer_loop/params.hpp"
 #include "sim/params.hpp"
 #include "vision/params.hpp"
@@ -48,7 +49,8 @@ ParamSection camera_section(const std::string& name) {
 }  // namespace
 
 const std::vector<std::string>& param_file_kinds() {
-  static const std::vector<std::string> kinds = {"vehicle", "scenario", "camera", "station"};
+  static const std::vector<std::string> kinds = {"vehicle", "scenario", "camera", "station",
+                                                  "mocap"};
   return kinds;
 }
 
@@ -84,8 +86,12 @@ std::vector<ParamSection> param_sections(const std::string& kind, const std::str
         "ground_station", "the operator's web page (ground_station/params.hpp): "
         "alight-ground-station --config",
         [](const std::string& f) { return ground_station::load_params(f); }));
+  } else if (kind == "mocap") {
+    out.push_back(section<mocap::MocapParams>(
+        "mocap", "a motion-capture room (mocap/params.hpp): alight-mocap --config",
+        [](const std::string& f) { return mocap::load_params(f); }));
   } else {
-    throw ParamError("", "--kind", kind, "must be vehicle, scenario, camera or station");
+    throw ParamError("", "--kind", kind, "must be vehicle, scenario, camera, station or mocap");
   }
   return out;
 }

@@ -11,7 +11,8 @@
 namespace alight::tools {
 
 /// The kinds of configuration file: vehicle (config/vehicles), scenario (config/scenarios),
-/// camera (alight-camera's, config/cameras) and station (the ground station's --config).
+/// camera (alight-camera's, config/cameras), station (the ground station's --config) and mocap
+/// (config/mocap).
 const std::vector<std::string>& param_file_kinds();
 
 /// One section of a kind of file, as the component that owns it reads it.
