@@ -10,13 +10,26 @@
 //       t_B_C_m: [0.0, 0.0, -0.06]   # camera centre in body [m]
 //     forward: {...}                 # used by the ingress mission
 
+#include <array>
 #include <string>
+#include <vector>
 
 #include "common/camera_model.hpp"
 #include "common/geometry.hpp"
-#include "common/params.hpp"
+#include "common/param_schema.hpp"
 
 namespace alight {
+
+/// One camera's section of `cameras:` as written (common/param_schema.hpp declares each key).
+struct CameraMountParams {
+  std::string camera_info;  ///< resolved against the vehicle file's folder when read
+  std::string mount = "downward";
+  std::array<double, 3> rpy_offset_deg{0, 0, 0};
+  Vector3d t_B_C_m = Vector3d::Zero();
+
+  static const ParamSchema<CameraMountParams>& schema();
+  void validate() const;
+};
 
 struct CameraMount {
   std::string name;                   ///< key under `cameras:` (downward, forward)
@@ -27,10 +40,14 @@ struct CameraMount {
   Isometry3d X_BC() const { return make_transform(R_BC, t_B_C); }
 };
 
+/// The mounting that validated parameters describe.
+CameraMount camera_mount(const std::string& name, const CameraMountParams& params);
+
 /// Reads cameras.<name> from a vehicle file node (the file's top level).
+CameraMountParams load_camera_mount_params(const ParamNode& vehicle_root, const std::string& name);
 CameraMount load_camera_mount(const ParamNode& vehicle_root, const std::string& name);
 
-/// Resolves `path` relative to the folder of `relative_to_file` unless it is absolute.
-std::string resolve_relative(const std::string& relative_to_file, const std::string& path);
+/// The names under `cameras:` in file order (none without the section).
+std::vector<std::string> camera_names(const ParamNode& vehicle_root);
 
 }  // namespace alight

@@ -54,9 +54,24 @@ std::string quote(const std::string& s) {
   return out + "\"";
 }
 
-std::string shown_value(const ParamNode& n, const std::string& key, const std::string& value) {
-  return n.has(key) ? n.value_text(key) : value;
+namespace {
+// `# text` at `pad`, wrapped at spaces to keep lines within 100 columns, also when an absent
+// optional section (and one inside it) is commented out.
+void write_comment(std::ostream& out, const std::string& pad, const std::string& text) {
+  const size_t width = pad.size() < 56 ? 96 - pad.size() - 2 : 40;
+  size_t start = 0;
+  while (start < text.size()) {
+    size_t end = text.size();
+    if (end - start > width) {
+      end = text.rfind(' ', start + width);
+      if (end == std::string::npos || end <= start) end = text.find(' ', start + width);
+      if (end == std::string::npos) end = text.size();
+    }
+    out << pad << "# " << text.substr(start, end - start) << "\n";
+    start = end + (end < text.size() ? 1 : 0);
+  }
 }
+}  // namespace
 
 void dump_line(std::ostream& out, int indent, const ParamInfo& info, const std::string& key) {
   const std::string pad(static_cast<size_t>(indent), ' ');
@@ -67,14 +82,14 @@ void dump_line(std::ostream& out, int indent, const ParamInfo& info, const std::
   else if (!info.unit.empty())
     comment += " [" + info.unit + "]";
   if (info.required) comment += (comment.empty() ? "" : "; ") + std::string("required");
-  if (!comment.empty()) out << pad << "# " << comment << "\n";
+  if (!comment.empty()) write_comment(out, pad, comment);
   out << pad << key << ": " << info.value << "\n";
 }
 
 void dump_section_head(std::ostream& out, int indent, const std::string& key,
                        const std::string& doc) {
   const std::string pad(static_cast<size_t>(indent), ' ');
-  if (!doc.empty()) out << pad << "# " << doc << "\n";
+  if (!doc.empty()) write_comment(out, pad, doc);
   out << pad << key << ":\n";
 }
 

@@ -55,6 +55,11 @@ class Range {
   /// "in (0, 2] s", "> 0 s", ">= 1", or "" for any().
   std::string text(const std::string& unit) const;
 
+  const std::optional<double>& lo() const { return lo_; }
+  const std::optional<double>& hi() const { return hi_; }
+  bool lo_closed() const { return lo_closed_; }
+  bool hi_closed() const { return hi_closed_; }
+
  private:
   Range() = default;
   Range(std::optional<double> lo, bool lo_closed, std::optional<double> hi, bool hi_closed)
@@ -71,6 +76,8 @@ struct ParamInfo {
   std::string rule;   ///< the constraint as text ("in (0, 2] s", "one of GREY, YUYV")
   std::string doc;    ///< what it means
   bool required = false;
+  Range range = Range::any();  ///< the constraint on each number of the value
+  bool integer = false;        ///< an integer parameter (its range's ends are whole numbers)
 };
 
 namespace param_detail {
@@ -108,6 +115,13 @@ std::string to_yaml(const std::vector<E>& a) {
   return out + "]";
 }
 
+/// A value as an error message shows it: as the dump writes it, strings without quotes.
+template <class T>
+std::string error_text(const T& v) {
+  if constexpr (std::is_same_v<T, std::string>) return v;
+  else return to_yaml(v);
+}
+
 /// Every number inside a value is finite (values built in code bypass the loader's check).
 template <class T>
 bool all_finite(const T& v) {
@@ -121,9 +135,6 @@ bool all_finite(const T& v) {
     return true;
   }
 }
-
-/// The value a located error shows: as written in the file when it is there, else the value.
-std::string shown_value(const ParamNode& n, const std::string& key, const std::string& value);
 
 /// Writes `# comment` lines and `key: value` at `indent` for one parameter.
 void dump_line(std::ostream& out, int indent, const ParamInfo& info, const std::string& key);
@@ -151,9 +162,23 @@ class ParamSchema {
       return *this;
     }
     /// A further condition, typically on other fields of the struct; `problem` is the message
-    /// ("must exceed pose_stale_s").
+    /// ("must exceed pose_stale_s"). Checked after every field is within its range.
     Param& check(Check ok, std::string problem) {
-      e_->checks.emplace_back(std::move(ok), std::move(problem));
+      e_->checks.push_back([ok = std::move(ok), problem = std::move(problem)](
+                               const P& p) -> std::optional<std::string> {
+        if (ok(p)) return std::nullopt;
+        return problem;
+      });
+      return *this;
+    }
+    /// A condition whose message depends on the value: `problem` returns "" when it holds.
+    Param& check_with(std::function<std::string(const P&)> problem) {
+      e_->checks.push_back(
+          [problem = std::move(problem)](const P& p) -> std::optional<std::string> {
+            std::string why = problem(p);
+            if (why.empty()) return std::nullopt;
+            return why;
+          });
       return *this;
     }
     /// For strings: the value must be one of `values` (the message lists them).
@@ -161,13 +186,24 @@ class ParamSchema {
       static_assert(std::is_same_v<T, std::string>, "one_of() is for string parameters");
       e_->rule = "one of " + join(values);
       const auto field = field_;
-      e_->checks.emplace_back(
+      return check(
           [field, values](const P& p) {
             for (const auto& v : values)
               if (p.*field == v) return true;
             return false;
           },
           "must be " + join_or(values));
+    }
+    /// For strings: a file path, relative to the folder of the file it is read from. Reading
+    /// resolves it (the default too, when not empty), so the struct holds a usable path.
+    Param& path() {
+      static_assert(std::is_same_v<T, std::string>, "path() is for string parameters");
+      const auto field = field_;
+      e_->read = [field](const ParamNode& n, const std::string& k, P& p) {
+        n.read(k, p.*field);
+        if (!(p.*field).empty()) p.*field = resolve_relative(n.file(), p.*field);
+      };
+      e_->rule = "a path relative to this file's folder";
       return *this;
     }
 
@@ -198,9 +234,11 @@ class ParamSchema {
     e->unit = std::move(unit);
     e->doc = std::move(doc);
     e->rule = range.text(e->unit);
+    e->range = range;
+    e->integer = std::is_integral_v<T> && !std::is_same_v<T, bool>;
     e->read = [field](const ParamNode& n, const std::string& k, P& p) { n.read(k, p.*field); };
-    e->present = [](const ParamNode& n, const std::string& k) { return n.has(k); };
     e->value = [field](const P& p) { return param_detail::to_yaml(p.*field); };
+    e->shown = [field](const P& p) { return param_detail::error_text(p.*field); };
     e->valid = [field, range, u = e->unit](const P& p) -> std::optional<std::string> {
       if (!param_detail::all_finite(p.*field)) return std::string("must be finite");
       if (!in_range(p.*field, range)) return "must be " + range.text(u);
@@ -214,6 +252,8 @@ class ParamSchema {
   }
 
   /// A sub-mapping `key:` read into the member `sub` with its own schema (absent: defaults).
+  /// With `present`, the flag records whether the file has the section, and the section is
+  /// validated (and dumped other than as a comment) only when it does.
   template <class S>
   void section(std::string key, S P::*sub, const ParamSchema<S>& schema, std::string doc = "",
                bool P::*present = nullptr) {
@@ -227,13 +267,18 @@ class ParamSchema {
       if (present) p.*present = child.has_value();
       if (child) s->read(*child, p.*sub);
     };
-    e->validate_section = [sub, s](const P& p, const std::string& prefix) {
-      s->validate(p.*sub, prefix);
+    e->validate_section = [sub, s, present](const P& p, const std::string& prefix) {
+      if (!present || p.*present) s->validate(p.*sub, prefix);
     };
     e->info = [sub, s](const P& p, const std::string& prefix, std::vector<ParamInfo>& out) {
       s->collect(p.*sub, prefix, out);
     };
+    e->find = [sub, s](const P& p, const std::string& key) { return s->find_shown(p.*sub, key); };
     e->dump = [sub, s](std::ostream& out, const P& p, int indent) { s->dump(out, p.*sub, indent); };
+    if (present) {
+      e->optional_section = true;
+      e->present_in = [present](const P& p) { return p.*present; };
+    }
     entries_.push_back(std::move(e));
   }
 
@@ -259,11 +304,49 @@ class ParamSchema {
     e->info = [sub, s](const P& p, const std::string& prefix, std::vector<ParamInfo>& out) {
       s->collect(p.*sub ? *(p.*sub) : S{}, prefix, out);
     };
+    e->find = [sub, s](const P& p, const std::string& key) {
+      return s->find_shown(p.*sub ? *(p.*sub) : S{}, key);
+    };
     e->dump = [sub, s](std::ostream& out, const P& p, int indent) {
       s->dump(out, p.*sub ? *(p.*sub) : S{}, indent);
     };
     e->present_in = [sub](const P& p) { return (p.*sub).has_value(); };
     e->optional_section = true;
+    entries_.push_back(std::move(e));
+  }
+
+  /// A sub-mapping `key:` whose parameters are fields of P itself (a struct that is flat in code
+  /// and nested in the file); `build` declares them on the group's schema. `present` as for
+  /// section().
+  void group(std::string key, std::string doc, const std::function<void(ParamSchema&)>& build,
+             bool P::*present = nullptr) {
+    auto g = std::make_shared<ParamSchema>();
+    build(*g);
+    auto e = std::make_unique<Entry>();
+    e->key = std::move(key);
+    e->doc = std::move(doc);
+    e->is_section = true;
+    // Validated with the rest of P (its checks may involve fields outside the group).
+    e->read = [g, present](const ParamNode& n, const std::string& k, P& p) {
+      const auto child = n.optional_child(k);
+      if (present) p.*present = child.has_value();
+      if (child) {
+        g->read_keys(*child, p);
+        child->finish();
+      }
+    };
+    e->validate_section = [g, present](const P& p, const std::string& prefix) {
+      if (!present || p.*present) g->validate(p, prefix);
+    };
+    e->info = [g](const P& p, const std::string& prefix, std::vector<ParamInfo>& out) {
+      g->collect(p, prefix, out);
+    };
+    e->find = [g](const P& p, const std::string& key) { return g->find_shown(p, key); };
+    e->dump = [g](std::ostream& out, const P& p, int indent) { g->dump_entries(out, p, indent); };
+    if (present) {
+      e->optional_section = true;
+      e->present_in = [present](const P& p) { return p.*present; };
+    }
     entries_.push_back(std::move(e));
   }
 
@@ -283,6 +366,7 @@ class ParamSchema {
     e->info = [sub, s](const P& p, const std::string& prefix, std::vector<ParamInfo>& out) {
       s->collect(p.*sub, prefix, out);
     };
+    e->find = [sub, s](const P& p, const std::string& key) { return s->find_shown(p.*sub, key); };
     e->dump = [sub, s](std::ostream& out, const P& p, int indent) {
       s->dump_entries(out, p.*sub, indent);
     };
@@ -298,13 +382,13 @@ class ParamSchema {
     e->unit = std::move(unit);
     e->doc = std::move(doc);
     e->read = [read](const ParamNode& n, const std::string&, P& p) { read(n, p); };
-    e->present = [](const ParamNode& n, const std::string& k) { return n.has(k); };
-    e->value = std::move(value);
+    e->value = value;
+    e->shown = std::move(value);
     e->valid = [](const P&) -> std::optional<std::string> { return std::nullopt; };
     entries_.push_back(std::move(e));
   }
 
-  /// A condition across several fields, reported on `key`.
+  /// A condition across several fields, reported on `key` (dotted for a key in a section).
   void check(std::string key, Check ok, std::string problem) {
     relations_.push_back({std::move(key), std::move(ok), std::move(problem)});
   }
@@ -316,31 +400,29 @@ class ParamSchema {
     try {
       validate(p);
     } catch (const ParamError& e) {
-      // Shows the value as written when the key is in this file.
-      const std::string rel = e.key();
-      const auto dot = rel.find('.');
-      const bool local = dot == std::string::npos;
-      const std::string value =
-          local && n.has(rel) ? param_detail::shown_value(n, rel, e.value()) : e.value();
-      throw ParamError(n.file(), n.key_path(rel), value, e.problem());
+      throw ParamError(n.file(), n.key_path(e.key()), e.value(), e.problem());
     }
     n.finish(ignored);
   }
 
   /// Throws ParamError (no file) naming `prefix` + the key, the value and the problem for the
-  /// first parameter of `p` that breaks its declaration.
+  /// first parameter of `p` that breaks its declaration: first every value against its range
+  /// (so a value out of range is reported at its own key, not at one whose check involves it),
+  /// then the checks, then the relations.
   void validate(const P& p, const std::string& prefix = "") const {
     for (const auto& e : entries_) {
       if (e->is_section || e->is_merge) {
         e->validate_section(p, e->is_merge ? prefix : prefix + e->key + ".");
         continue;
       }
-      if (auto problem = e->valid(p)) throw ParamError("", prefix + e->key, e->value(p), *problem);
-      for (const auto& [ok, problem] : e->checks)
-        if (!ok(p)) throw ParamError("", prefix + e->key, e->value(p), problem);
+      if (auto problem = e->valid(p)) throw ParamError("", prefix + e->key, e->shown(p), *problem);
     }
+    for (const auto& e : entries_)
+      for (const auto& check : e->checks)
+        if (auto problem = check(p)) throw ParamError("", prefix + e->key, e->shown(p), *problem);
     for (const auto& r : relations_)
-      if (!r.ok(p)) throw ParamError("", prefix + r.key, value_of(p, r.key), r.problem);
+      if (!r.ok(p))
+        throw ParamError("", prefix + r.key, find_shown(p, r.key).value_or(""), r.problem);
   }
 
   /// Every parameter with its current value in `p`, in declaration order.
@@ -360,14 +442,17 @@ class ParamSchema {
 
   struct Entry {
     std::string key, unit, doc, rule;
+    Range range = Range::any();
+    bool integer = false;
     bool required = false, is_section = false, is_merge = false, optional_section = false;
     std::function<void(const ParamNode&, const std::string&, P&)> read;
-    std::function<bool(const ParamNode&, const std::string&)> present;
-    std::function<std::string(const P&)> value;
+    std::function<std::string(const P&)> value;  // as YAML, for the dump
+    std::function<std::string(const P&)> shown;  // as an error message shows it
     std::function<std::optional<std::string>(const P&)> valid;
-    std::vector<std::pair<Check, std::string>> checks;
+    std::vector<std::function<std::optional<std::string>(const P&)>> checks;
     std::function<void(const P&, const std::string&)> validate_section;
     std::function<void(const P&, const std::string&, std::vector<ParamInfo>&)> info;
+    std::function<std::optional<std::string>(const P&, const std::string&)> find;
     std::function<void(std::ostream&, const P&, int)> dump;
     std::function<bool(const P&)> present_in;
   };
@@ -398,10 +483,19 @@ class ParamSchema {
     }
   }
 
-  std::string value_of(const P& p, const std::string& key) const {
-    for (const auto& e : entries_)
-      if (!e->is_section && !e->is_merge && e->key == key) return e->value(p);
-    return "";
+  /// The value of the parameter at dotted `key` as an error shows it.
+  std::optional<std::string> find_shown(const P& p, const std::string& key) const {
+    for (const auto& e : entries_) {
+      if (e->is_merge) {
+        if (auto v = e->find(p, key)) return v;
+      } else if (e->is_section) {
+        if (key.compare(0, e->key.size() + 1, e->key + ".") == 0)
+          if (auto v = e->find(p, key.substr(e->key.size() + 1))) return v;
+      } else if (e->key == key) {
+        return e->shown(p);
+      }
+    }
+    return std::nullopt;
   }
 
   void collect(const P& p, const std::string& prefix, std::vector<ParamInfo>& out) const {
@@ -410,8 +504,21 @@ class ParamSchema {
         e->info(p, e->is_merge ? prefix : prefix + e->key + ".", out);
         continue;
       }
-      out.push_back({prefix + e->key, e->value(p), e->unit, e->rule, e->doc, e->required});
+      out.push_back(info_of(*e, p, prefix + e->key));
     }
+  }
+
+  static ParamInfo info_of(const Entry& e, const P& p, const std::string& key) {
+    ParamInfo i;
+    i.key = key;
+    i.value = e.value(p);
+    i.unit = e.unit;
+    i.rule = e.rule;
+    i.doc = e.doc;
+    i.required = e.required;
+    i.range = e.range;
+    i.integer = e.integer;
+    return i;
   }
 
   void dump_entries(std::ostream& out, const P& p, int indent) const {
@@ -420,8 +527,11 @@ class ParamSchema {
         e->dump(out, p, indent);
       } else if (e->is_section) {
         std::ostringstream text;
-        param_detail::dump_section_head(text, indent, e->key,
-                                        e->doc + (e->optional_section ? " (optional section)" : ""));
+        const std::string doc =
+            !e->optional_section ? e->doc
+            : e->doc.empty()     ? std::string("optional section")
+                                 : e->doc + " (optional section)";
+        param_detail::dump_section_head(text, indent, e->key, doc);
         e->dump(text, p, indent + 2);
         // An absent optional section is shown as comments: the dump reads back to the same.
         if (e->optional_section && !e->present_in(p))
@@ -429,9 +539,7 @@ class ParamSchema {
         else
           out << text.str();
       } else {
-        param_detail::dump_line(out, indent,
-                                {e->key, e->value(p), e->unit, e->rule, e->doc, e->required},
-                                e->key);
+        param_detail::dump_line(out, indent, info_of(*e, p, e->key), e->key);
       }
     }
   }

@@ -1,5 +1,6 @@
 #include "common/params.hpp"
 
+#include <filesystem>
 #include <fstream>
 
 namespace alight {
@@ -33,6 +34,12 @@ void reject_duplicate_keys(const YAML::Node& node, const std::string& path,
   }
 }
 }  // namespace
+
+std::string resolve_relative(const std::string& relative_to_file, const std::string& path) {
+  const std::filesystem::path p(path);
+  if (p.is_absolute()) return path;
+  return (std::filesystem::path(relative_to_file).parent_path() / p).lexically_normal().string();
+}
 
 ParamError::ParamError(std::string file, std::string key, std::string value, std::string problem)
     : std::runtime_error(compose(file, key, value, problem)),

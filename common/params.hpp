@@ -37,6 +37,9 @@ class ParamError : public std::runtime_error {
   std::string file_, key_, value_, problem_;
 };
 
+/// Resolves `path` relative to the folder of `relative_to_file` unless it is absolute.
+std::string resolve_relative(const std::string& relative_to_file, const std::string& path);
+
 /// Throws ParamError (without file) when `ok` is false; for validate() methods.
 template <class T>
 void param_check(bool ok, const std::string& key, const T& value, const std::string& problem) {

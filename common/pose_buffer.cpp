@@ -5,16 +5,26 @@
 #include <cmath>
 #include <cstdint>
 
-#include "common/params.hpp"
+#include "common/param_schema.hpp"
 
 namespace alight {
 
-void PoseBufferParams::validate() const {
-  param_check(history_s > 0.0, "history_s", history_s, "must be > 0");
-  param_check(max_gap_s > 0.0, "max_gap_s", max_gap_s, "must be > 0");
-  param_check(max_extrapolation_s >= 0.0, "max_extrapolation_s", max_extrapolation_s,
-              "must be >= 0");
+const ParamSchema<PoseBufferParams>& PoseBufferParams::schema() {
+  using P = PoseBufferParams;
+  static const ParamSchema<P> schema = [] {
+    ParamSchema<P> s;
+    s.add("history_s", &P::history_s, Range::gt(0), "s",
+          "samples older than the newest minus this are dropped");
+    s.add("max_gap_s", &P::max_gap_s, Range::gt(0), "s",
+          "never interpolate across a larger gap between samples");
+    s.add("max_extrapolation_s", &P::max_extrapolation_s, Range::ge(0), "s",
+          "how far past the newest sample a query may reach (constant velocity)");
+    return s;
+  }();
+  return schema;
 }
+
+void PoseBufferParams::validate() const { schema().validate(*this); }
 
 PoseBuffer::PoseBuffer(const PoseBufferParams& params) : params_(params) { params_.validate(); }
 

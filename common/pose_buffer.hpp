@@ -11,6 +11,9 @@
 
 namespace alight {
 
+template <class P>
+class ParamSchema;
+
 /// One motion-capture sample (domain form of alight::pose_t).
 struct PoseSample {
   int64_t utime = 0;                           ///< sample time [us]
@@ -23,10 +26,13 @@ struct PoseSample {
 };
 
 struct PoseBufferParams {
-  double history_s = 5.0;            ///< samples older than newest - history_s are dropped [s]
-  double max_gap_s = 0.1;            ///< refuse to interpolate across a larger gap [s]
-  double max_extrapolation_s = 0.0;  ///< how far past the newest sample a query may reach [s]
-  void validate() const;             ///< throws ParamError naming the field and its value
+  double history_s = 5.0;
+  double max_gap_s = 0.1;
+  double max_extrapolation_s = 0.0;
+
+  /// Key, constraint, unit and meaning of each field (common/param_schema.hpp).
+  static const ParamSchema<PoseBufferParams>& schema();
+  void validate() const;  ///< throws ParamError naming the field and its value
 };
 
 class PoseBuffer {

@@ -7,7 +7,7 @@
 #include "fuzz/fuzz_support.hpp"
 #include "outer_loop/params.hpp"
 #include "sim/params.hpp"
-#include "vision/mission_params.hpp"
+#include "vision/params.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace alight;

@@ -1,10 +1,9 @@
-// validate() of the simulator's parameter structs: pure (part of alight_sim), so a test or a
-// closed-loop harness that fills the structs in code gets the same checks as a loaded file.
-#include "sim/params.hpp"
-
+// The simulator's parameters declared (common/param_schema.hpp): pure (part of alight_sim), so a
+// test or a closed-loop harness that fills the structs in code gets the same checks as a loaded
+// file. Loading files (and image textures) is in params.cpp.
 #include <cmath>
 
-#include "common/params.hpp"
+#include "sim/params.hpp"
 
 namespace alight::sim {
 
@@ -20,176 +19,344 @@ double footprint_distance_m(const PlatformParams& platform, const Vector2d& cent
   return (q.cwiseAbs() - 0.5 * platform.size_m.head<2>()).cwiseMax(0.0).norm();
 }
 
-void VehicleParams::validate() const {
-  param_check(mass_kg > 0.05 && mass_kg < 20, "mass_kg", mass_kg, "must be in (0.05, 20) kg");
-  param_check(inertia_kgm2.minCoeff() > 0, "inertia_kgm2", inertia_kgm2.transpose(),
-              "must be positive");
-  param_check(max_thrust_N > hover_thrust_N() * 1.2, "max_thrust_N", max_thrust_N,
-              "must exceed 1.2 x the hover thrust (mass_kg * 9.81)");
-  param_check(max_tilt_deg > 0 && max_tilt_deg <= 60, "max_tilt_deg", max_tilt_deg,
-              "must be in (0, 60] deg");
-  param_check(max_yaw_rate_dps > 0, "max_yaw_rate_dps", max_yaw_rate_dps, "must be > 0");
-  param_check(arm_length_m > 0, "arm_length_m", arm_length_m, "must be > 0");
-  param_check(rotor_tip_span_m > 2 * arm_length_m, "rotor_tip_span_m", rotor_tip_span_m,
-              "must exceed 2 x arm_length_m");
-  param_check(gear_footprint_m > 0.02 && gear_footprint_m < 1, "gear_footprint_m",
-              gear_footprint_m, "must be in (0.02, 1) m");
-  param_check(gear_height_m > 0, "gear_height_m", gear_height_m, "must be > 0");
-  param_check(motor_tau_s >= 0 && motor_tau_s < 1, "motor_tau_s", motor_tau_s,
-              "must be in [0, 1) s");
-  param_check(attitude_bandwidth_hz > 0 && attitude_bandwidth_hz < 50, "attitude_bandwidth_hz",
-              attitude_bandwidth_hz, "must be in (0, 50) Hz");
-  param_check(attitude_damping > 0, "attitude_damping", attitude_damping, "must be > 0");
-  param_check(yaw_bandwidth_hz > 0 && yaw_bandwidth_hz < 50, "yaw_bandwidth_hz",
-              yaw_bandwidth_hz, "must be in (0, 50) Hz");
-  param_check(max_torque_Nm > 0, "max_torque_Nm", max_torque_Nm, "must be > 0");
-  param_check(max_yaw_torque_Nm > 0, "max_yaw_torque_Nm", max_yaw_torque_Nm, "must be > 0");
-  param_check(drag_linear_Nspm >= 0, "drag_linear_Nspm", drag_linear_Nspm, "must be >= 0");
-  param_check(drag_quadratic_Ns2pm2 >= 0, "drag_quadratic_Ns2pm2", drag_quadratic_Ns2pm2,
-              "must be >= 0");
-  param_check(contact_stiffness_Npm > 0, "contact_stiffness_Npm", contact_stiffness_Npm,
-              "must be > 0");
-  param_check(contact_damping_Nspm >= 0, "contact_damping_Nspm", contact_damping_Nspm,
-              "must be >= 0");
-  param_check(friction_coefficient >= 0, "friction_coefficient", friction_coefficient,
-              "must be >= 0");
-  // Written so that NaN fails too; every timeout bounded (an infinite one is no failsafe).
-  param_check(cmd_loss_timeout_s > 0 && cmd_loss_timeout_s <= 10, "cmd_loss_timeout_s",
-              cmd_loss_timeout_s, "must be in (0, 10] s");
-  param_check(cmd_loss_level_s >= 0 && cmd_loss_level_s <= 30, "cmd_loss_level_s",
-              cmd_loss_level_s, "must be in [0, 30] s");
-  param_check(cmd_loss_descent_mps > 0 && cmd_loss_descent_mps <= 2, "cmd_loss_descent_mps",
-              cmd_loss_descent_mps, "must be in (0, 2] m/s");
-  param_check(cmd_loss_disarm_after_s > 0 && cmd_loss_disarm_after_s <= 10,
-              "cmd_loss_disarm_after_s", cmd_loss_disarm_after_s, "must be in (0, 10] s");
+const ParamSchema<VehicleParams>& VehicleParams::schema() {
+  using P = VehicleParams;
+  static const ParamSchema<P> schema = [] {
+    ParamSchema<P> s;
+    s.add("name", &P::name, Range::any(), "", "the vehicle's name (reports, the monitor)");
+    s.add("mass_kg", &P::mass_kg, Range::open(0.05, 20), "kg", "take-off mass");
+    s.add("inertia_kgm2", &P::inertia_kgm2, Range::gt(0), "kg m^2",
+          "principal inertia Jxx, Jyy, Jzz");
+    s.add("max_thrust_N", &P::max_thrust_N, Range::gt(0), "N", "collective thrust limit")
+        .check([](const P& p) { return p.max_thrust_N > p.hover_thrust_N() * 1.2; },
+               "must exceed 1.2 x the hover thrust (mass_kg * 9.81)");
+    s.add("max_tilt_deg", &P::max_tilt_deg, Range::open_closed(0, 60), "deg",
+          "roll / pitch command limit of the inner loop");
+    s.add("max_yaw_rate_dps", &P::max_yaw_rate_dps, Range::gt(0), "deg/s",
+          "yaw-rate command limit");
+    s.add("arm_length_m", &P::arm_length_m, Range::gt(0), "m", "body centre to a rotor axis");
+    s.add("rotor_tip_span_m", &P::rotor_tip_span_m, Range::gt(0), "m",
+          "rotor tip to rotor tip, across")
+        .check([](const P& p) { return p.rotor_tip_span_m > 2 * p.arm_length_m; },
+               "must exceed 2 x arm_length_m");
+    s.add("gear_footprint_m", &P::gear_footprint_m, Range::open(0.02, 1), "m",
+          "side of the square landing gear");
+    s.add("gear_height_m", &P::gear_height_m, Range::gt(0), "m", "body origin above the gear feet");
+    s.add("rotor_height_m", &P::rotor_height_m, Range::any(), "m",
+          "rotor plane above the body origin");
+    s.add("motor_tau_s", &P::motor_tau_s, Range::closed_open(0, 1), "s", "thrust first-order lag");
+    s.add("attitude_bandwidth_hz", &P::attitude_bandwidth_hz, Range::open(0, 50), "Hz",
+          "inner loop natural frequency (roll, pitch)");
+    s.add("attitude_damping", &P::attitude_damping, Range::gt(0), "", "inner loop damping ratio");
+    s.add("yaw_bandwidth_hz", &P::yaw_bandwidth_hz, Range::open(0, 50), "Hz",
+          "yaw loop natural frequency");
+    s.add("max_torque_Nm", &P::max_torque_Nm, Range::gt(0), "N m", "roll / pitch torque limit");
+    s.add("max_yaw_torque_Nm", &P::max_yaw_torque_Nm, Range::gt(0), "N m", "yaw torque limit");
+    s.add("drag_linear_Nspm", &P::drag_linear_Nspm, Range::ge(0), "N s/m",
+          "linear drag on airspeed");
+    s.add("drag_quadratic_Ns2pm2", &P::drag_quadratic_Ns2pm2, Range::ge(0), "N s^2/m^2",
+          "quadratic drag on airspeed");
+    s.add("contact_stiffness_Npm", &P::contact_stiffness_Npm, Range::gt(0), "N/m",
+          "gear and rotor-rim contact springs, per contact point");
+    s.add("contact_damping_Nspm", &P::contact_damping_Nspm, Range::ge(0), "N s/m",
+          "per contact point");
+    s.add("friction_coefficient", &P::friction_coefficient, Range::ge(0), "",
+          "Coulomb friction, gear on surfaces");
+    // Every timeout bounded: an infinite one is no failsafe.
+    s.add("cmd_loss_timeout_s", &P::cmd_loss_timeout_s, Range::open_closed(0, 10), "s",
+          "the autopilot's command-loss failsafe (PX4's offboard loss): ATTITUDE_CMD silent this "
+          "long while armed: level and hold the vertical speed at 0, then descend, then disarm "
+          "once resting on the ground");
+    s.add("cmd_loss_level_s", &P::cmd_loss_level_s, Range::closed(0, 30), "s",
+          "level, vertical speed 0, this long first");
+    s.add("cmd_loss_descent_mps", &P::cmd_loss_descent_mps, Range::open_closed(0, 2), "m/s",
+          "then descend at this speed");
+    s.add("cmd_loss_disarm_after_s", &P::cmd_loss_disarm_after_s, Range::open_closed(0, 10), "s",
+          "disarm after resting on the ground this long");
+    return s;
+  }();
+  return schema;
 }
 
-void TextureSpec::validate() const {
-  param_check(kind == "noise" || kind == "blobs" || kind == "paper" || kind == "checker" ||
-                  kind == "image",
-              "kind", kind, "must be noise, blobs, paper, checker or image");
-  param_check(is_pow2(size_px) && size_px >= 64 && size_px <= 4096, "size_px", size_px,
-              "must be a power of two in [64, 4096]");
-  param_check(texel_m > 1e-5 && texel_m < 1, "texel_m", texel_m, "must be in (1e-5, 1) m");
-  param_check(mean >= 0 && mean <= 255, "mean", mean, "must be in [0, 255]");
-  param_check(contrast >= 0 && contrast <= 2, "contrast", contrast, "must be in [0, 2]");
-  param_check(feature_m > 0, "feature_m", feature_m, "must be > 0");
+const ParamSchema<TextureSpec>& TextureSpec::schema() {
+  using P = TextureSpec;
+  static const ParamSchema<P> schema = [] {
+    ParamSchema<P> s;
+    s.add("kind", &P::kind, Range::any(), "", "procedural (seeded), or an image file")
+        .one_of({"noise", "blobs", "paper", "checker", "image"});
+    s.add("seed", &P::seed, Range::any(), "", "added to the scenario seed (so surfaces differ)");
+    s.add("size_px", &P::size_px, Range::closed(64, 4096), "px",
+          "procedural textures are size_px x size_px")
+        .check([](const P& p) { return is_pow2(p.size_px); },
+               "must be a power of two in [64, 4096]");
+    s.add("texel_m", &P::texel_m, Range::open(1e-5, 1), "m", "size of one texel on the surface");
+    s.add("mean", &P::mean, Range::closed(0, 255), "grey levels", "mean grey level");
+    s.add("contrast", &P::contrast, Range::closed(0, 2), "", "1 = full contrast");
+    s.add("feature_m", &P::feature_m, Range::gt(0), "m",
+          "typical feature size: blob radius, text line height");
+    s.add("path", &P::path, Range::any(), "", "image file (kind image)")
+        .path()
+        .check([](const P& p) { return p.kind != "image" || !p.path.empty(); },
+               "an image texture needs a path");
+    return s;
+  }();
+  return schema;
 }
 
-void PlatformParams::validate() const {
-  param_check(size_m.minCoeff() > 0.01 && size_m.maxCoeff() < 5, "size_m", size_m.transpose(),
-              "each side must be in (0.01, 5) m");
+const ParamSchema<PlatformParams>& PlatformParams::schema() {
+  using P = PlatformParams;
+  static const ParamSchema<P> schema = [] {
+    ParamSchema<P> s;
+    s.add("center_xy_m", &P::center_xy_m, Range::any(), "m", "centre of its footprint");
+    s.add("size_m", &P::size_m, Range::open(0.01, 5), "m", "length x, width y, height")
+        .required();
+    s.add("yaw_deg", &P::yaw_deg, Range::any(), "deg", "rotation about world z");
+    s.section("texture", &P::texture, TextureSpec::schema(), "of its top and sides");
+    return s;
+  }();
+  return schema;
 }
 
-void WallParams::validate() const {
-  param_check(width_m > 0.2, "width_m", width_m, "must be > 0.2 m");
-  param_check(height_m > 0.2, "height_m", height_m, "must be > 0.2 m");
-  param_check(thickness_m > 0.005, "thickness_m", thickness_m, "must be > 0.005 m");
-  param_check(room_depth_m > thickness_m, "room_depth_m", room_depth_m,
-              "must exceed the wall thickness");
-  if (has_opening) {
-    param_check(opening_size_m.minCoeff() > 0.05, "opening_size_m",
-                opening_size_m.transpose(), "must be > 0.05 m");
-    const double half_w = 0.5 * opening_size_m.x(), half_h = 0.5 * opening_size_m.y();
-    const bool inside = opening_center_yz_m.y() - half_h > 0.01 &&
-                        opening_center_yz_m.y() + half_h < height_m - 0.01 &&
-                        std::abs(opening_center_yz_m.x() - center_y_m) + half_w < 0.5 * width_m - 0.01;
-    param_check(inside, "opening_center_yz_m", opening_center_yz_m.transpose(),
-                "the opening must lie inside the wall, not touching its border");
-  }
+const ParamSchema<WallParams>& WallParams::schema() {
+  using P = WallParams;
+  static const ParamSchema<P> schema = [] {
+    ParamSchema<P> s;
+    s.add("x_m", &P::x_m, Range::any(), "m", "position of the approach face along world x");
+    s.add("center_y_m", &P::center_y_m, Range::any(), "m", "centre of the wall along world y");
+    s.add("width_m", &P::width_m, Range::gt(0.2), "m", "along world y");
+    s.add("height_m", &P::height_m, Range::gt(0.2), "m", "from the floor up");
+    s.add("thickness_m", &P::thickness_m, Range::gt(0.005), "m", "along world x");
+    s.add("room_depth_m", &P::room_depth_m, Range::gt(0), "m", "back wall this far behind the wall")
+        .check([](const P& p) { return p.room_depth_m > p.thickness_m; },
+               "must exceed the wall thickness");
+    s.group(
+        "opening", "a rectangular opening (paper 4.1: 60 x 60 cm); without it the wall is solid",
+        [](ParamSchema<P>& g) {
+          g.add("center_yz_m", &P::opening_center_yz_m, Range::any(), "m",
+                "centre of the opening (y, z)");
+          g.add("size_m", &P::opening_size_m, Range::gt(0.05), "m", "width (y), height (z)");
+        },
+        &P::has_opening);
+    s.section("texture", &P::texture, TextureSpec::schema(), "of the wall");
+    s.section("room_texture", &P::room_texture, TextureSpec::schema(), "of the room behind it");
+    s.check("opening.center_yz_m",
+            [](const P& p) {
+              if (!p.has_opening) return true;
+              const double half_w = 0.5 * p.opening_size_m.x(), half_h = 0.5 * p.opening_size_m.y();
+              return p.opening_center_yz_m.y() - half_h > 0.01 &&
+                     p.opening_center_yz_m.y() + half_h < p.height_m - 0.01 &&
+                     std::abs(p.opening_center_yz_m.x() - p.center_y_m) + half_w <
+                         0.5 * p.width_m - 0.01;
+            },
+            "the opening must lie inside the wall, not touching its border");
+    return s;
+  }();
+  return schema;
 }
 
-void WindParams::validate() const {
-  param_check(steady_mps.norm() < 20, "steady_mps", steady_mps.transpose(), "must be < 20 m/s");
-  param_check(gust_sigma_mps >= 0 && gust_sigma_mps < 10, "gust_sigma_mps", gust_sigma_mps,
-              "must be in [0, 10) m/s");
-  param_check(gust_tau_s > 0, "gust_tau_s", gust_tau_s, "must be > 0");
+const ParamSchema<WindParams>& WindParams::schema() {
+  using P = WindParams;
+  static const ParamSchema<P> schema = [] {
+    ParamSchema<P> s;
+    s.add("steady_mps", &P::steady_mps, Range::any(), "m/s", "mean wind in world")
+        .check([](const P& p) { return p.steady_mps.norm() < 20; }, "must be < 20 m/s");
+    s.add("gust_sigma_mps", &P::gust_sigma_mps, Range::closed_open(0, 10), "m/s",
+          "standard deviation of gusts per axis");
+    s.add("gust_tau_s", &P::gust_tau_s, Range::gt(0), "s", "gust correlation time");
+    return s;
+  }();
+  return schema;
 }
 
-void MocapParams::validate() const {
-  param_check(rate_hz > 0 && rate_hz <= 1000, "rate_hz", rate_hz, "must be in (0, 1000] Hz");
-  param_check(latency_s >= 0 && latency_s < 1, "latency_s", latency_s, "must be in [0, 1) s");
-  param_check(pos_sigma_m >= 0, "pos_sigma_m", pos_sigma_m, "must be >= 0");
-  param_check(rot_sigma_rad >= 0, "rot_sigma_rad", rot_sigma_rad, "must be >= 0");
-  param_check(vel_sigma_mps >= 0, "vel_sigma_mps", vel_sigma_mps, "must be >= 0");
-  param_check(rate_sigma_radps >= 0, "rate_sigma_radps", rate_sigma_radps, "must be >= 0");
-  param_check(dropout_probability >= 0 && dropout_probability < 1, "dropout_probability",
-              dropout_probability, "must be in [0, 1)");
-  for (const auto& d : dropouts_s)
-    param_check(d[0] >= 0 && d[1] > d[0], "dropouts_s", std::to_string(d[0]) + ", " + std::to_string(d[1]),
-                "each interval must be [start_s, end_s] with 0 <= start_s < end_s");
+const ParamSchema<MocapParams>& MocapParams::schema() {
+  using P = MocapParams;
+  static const ParamSchema<P> schema = [] {
+    ParamSchema<P> s;
+    s.add("rate_hz", &P::rate_hz, Range::open_closed(0, 1000), "Hz", "MOCAP_POSE rate");
+    s.add("latency_s", &P::latency_s, Range::closed_open(0, 1), "s",
+          "sample time to availability");
+    s.add("pos_sigma_m", &P::pos_sigma_m, Range::ge(0), "m", "position noise");
+    s.add("rot_sigma_rad", &P::rot_sigma_rad, Range::ge(0), "rad", "orientation noise per axis");
+    s.add("vel_sigma_mps", &P::vel_sigma_mps, Range::ge(0), "m/s", "velocity noise");
+    s.add("rate_sigma_radps", &P::rate_sigma_radps, Range::ge(0), "rad/s", "angular rate noise");
+    s.add("dropout_probability", &P::dropout_probability, Range::closed_open(0, 1), "",
+          "chance that a sample is lost");
+    s.add("dropouts_s", &P::dropouts_s, Range::ge(0), "s",
+          "intervals [start_s, end_s] after the sim start without any sample (failsafe tests)")
+        .check([](const P& p) {
+          for (const auto& d : p.dropouts_s)
+            if (!(d[1] > d[0])) return false;
+          return true;
+        }, "each interval must be [start_s, end_s] with 0 <= start_s < end_s");
+    return s;
+  }();
+  return schema;
 }
 
-void ImuParams::validate() const {
-  param_check(rate_hz > 0 && rate_hz <= 1000, "rate_hz", rate_hz, "must be in (0, 1000] Hz");
-  param_check(accel_sigma_mps2 >= 0, "accel_sigma_mps2", accel_sigma_mps2, "must be >= 0");
-  param_check(gyro_sigma_radps >= 0, "gyro_sigma_radps", gyro_sigma_radps, "must be >= 0");
-  param_check(accel_bias_sigma_mps2 >= 0, "accel_bias_sigma_mps2", accel_bias_sigma_mps2,
-              "must be >= 0");
-  param_check(gyro_bias_sigma_radps >= 0, "gyro_bias_sigma_radps", gyro_bias_sigma_radps,
-              "must be >= 0");
+const ParamSchema<ImuParams>& ImuParams::schema() {
+  using P = ImuParams;
+  static const ParamSchema<P> schema = [] {
+    ParamSchema<P> s;
+    s.add("rate_hz", &P::rate_hz, Range::open_closed(0, 1000), "Hz", "IMU rate");
+    s.add("accel_sigma_mps2", &P::accel_sigma_mps2, Range::ge(0), "m/s^2",
+          "white noise per sample");
+    s.add("gyro_sigma_radps", &P::gyro_sigma_radps, Range::ge(0), "rad/s",
+          "white noise per sample");
+    s.add("accel_bias_sigma_mps2", &P::accel_bias_sigma_mps2, Range::ge(0), "m/s^2",
+          "constant bias drawn per run");
+    s.add("gyro_bias_sigma_radps", &P::gyro_bias_sigma_radps, Range::ge(0), "rad/s",
+          "constant bias drawn per run");
+    return s;
+  }();
+  return schema;
 }
 
-void CameraParams::validate() const {
-  param_check(mount == "downward" || mount == "forward", "mount", mount,
-              "must be downward or forward");
-  param_check(rate_hz > 0 && rate_hz <= 60, "rate_hz", rate_hz, "must be in (0, 60] Hz");
-  param_check(exposure_s > 0 && exposure_s < 1.0 / rate_hz, "exposure_s", exposure_s,
-              "must be > 0 and shorter than the frame period");
-  param_check(latency_s >= 0 && latency_s < 1, "latency_s", latency_s, "must be in [0, 1) s");
-  param_check(noise_sigma >= 0 && noise_sigma < 50, "noise_sigma", noise_sigma,
-              "must be in [0, 50) grey levels");
-  param_check(motion_blur_samples >= 1 && motion_blur_samples <= 16, "motion_blur_samples",
-              motion_blur_samples, "must be in [1, 16]");
-  param_check(gain_jitter >= 0 && gain_jitter < 0.5, "gain_jitter", gain_jitter,
-              "must be in [0, 0.5)");
-  param_check(supersample >= 1 && supersample <= 4, "supersample", supersample,
-              "must be in [1, 4]");
+const ParamSchema<CameraParams>& CameraParams::schema() {
+  using P = CameraParams;
+  static const ParamSchema<P> schema = [] {
+    ParamSchema<P> s;
+    s.add("enabled", &P::enabled, Range::any(), "", "render and publish CAMERA");
+    s.add("mount", &P::mount, Range::any(), "", "the camera of the vehicle file's cameras:")
+        .one_of({"downward", "forward"});
+    s.add("rate_hz", &P::rate_hz, Range::open_closed(0, 60), "Hz", "frames per second");
+    s.add("exposure_s", &P::exposure_s, Range::gt(0), "s",
+          "exposure time; frames are stamped at its middle")
+        .check([](const P& p) { return p.exposure_s < 1.0 / p.rate_hz; },
+               "must be > 0 and shorter than the frame period");
+    s.add("latency_s", &P::latency_s, Range::closed_open(0, 1), "s",
+          "end of exposure to availability");
+    s.add("noise_sigma", &P::noise_sigma, Range::closed_open(0, 50), "grey levels",
+          "sensor noise");
+    s.add("motion_blur_samples", &P::motion_blur_samples, Range::closed(1, 16), "",
+          "poses averaged over the exposure (1 = no blur)");
+    s.add("gain_jitter", &P::gain_jitter, Range::closed_open(0, 0.5), "",
+          "per-frame exposure / gain change, standard deviation");
+    s.add("supersample", &P::supersample, Range::closed(1, 4), "",
+          "rays per pixel side (1 = mip-mapping only, 2 = 4 rays)");
+    return s;
+  }();
+  return schema;
 }
 
-void LightingParams::validate() const {
-  param_check(ambient >= 0 && ambient <= 2, "ambient", ambient, "must be in [0, 2]");
-  param_check(diffuse >= 0 && diffuse <= 2, "diffuse", diffuse, "must be in [0, 2]");
-  param_check(light_dir_W.norm() > 1e-6, "light_dir_W", light_dir_W.transpose(),
-              "must not be zero");
-  param_check(gain > 0 && gain < 4, "gain", gain, "must be in (0, 4)");
-  param_check(falloff >= 0 && falloff <= 0.5, "falloff", falloff, "must be in [0, 0.5]");
-  param_check(lamp_W.allFinite(), "lamp_W", lamp_W.transpose(), "must be finite");
-  param_check(lamp_radius_m > 0, "lamp_radius_m", lamp_radius_m, "must be > 0");
+const ParamSchema<LightingParams>& LightingParams::schema() {
+  using P = LightingParams;
+  static const ParamSchema<P> schema = [] {
+    ParamSchema<P> s;
+    s.add("ambient", &P::ambient, Range::closed(0, 2), "",
+          "shade of a surface facing away from the light");
+    s.add("diffuse", &P::diffuse, Range::closed(0, 2), "", "added for a surface facing the light");
+    s.add("light_dir_W", &P::light_dir_W, Range::any(), "",
+          "towards the light (normalised on use)")
+        .check([](const P& p) { return p.light_dir_W.norm() > 1e-6; }, "must not be zero");
+    s.add("gain", &P::gain, Range::open(0, 4), "", "overall brightness");
+    s.add("falloff", &P::falloff, Range::closed(0, 0.5), "",
+          "uneven illumination of a hall lit from one side of the ceiling: the light falls off "
+          "with the distance d from lamp_W as 1 + falloff (2 r^2 / (r^2 + d^2) - 1), r = "
+          "lamp_radius_m; smooth and fixed in the world, so features still match from frame to "
+          "frame. 0: even light");
+    s.add("lamp_W", &P::lamp_W, Range::any(), "m", "brightest point of the light");
+    s.add("lamp_radius_m", &P::lamp_radius_m, Range::gt(0), "m",
+          "distance of the half-way illumination");
+    return s;
+  }();
+  return schema;
 }
 
-void RandomizeParams::validate() const {
-  param_check(platform_xy_m >= 0, "platform_xy_m", platform_xy_m, "must be >= 0");
-  param_check(platform_yaw_deg >= 0 && platform_yaw_deg <= 180, "platform_yaw_deg",
-              platform_yaw_deg, "must be in [0, 180]");
-  param_check(light_gain >= 0 && light_gain < 1, "light_gain", light_gain, "must be in [0, 1)");
-  param_check(start_clearance_m >= 0, "start_clearance_m", start_clearance_m, "must be >= 0");
-  param_check(light_dir_deg >= 0 && light_dir_deg <= 180, "light_dir_deg", light_dir_deg,
-              "must be in [0, 180]");
-  param_check(light_falloff >= 0 && light_falloff <= 0.5, "light_falloff", light_falloff,
-              "must be in [0, 0.5]");
+const ParamSchema<RandomizeParams>& RandomizeParams::schema() {
+  using P = RandomizeParams;
+  static const ParamSchema<P> schema = [] {
+    ParamSchema<P> s;
+    s.add("platform_xy_m", &P::platform_xy_m, Range::ge(0), "m",
+          "uniform +- offset of the platform centre");
+    s.add("platform_yaw_deg", &P::platform_yaw_deg, Range::closed(0, 180), "deg",
+          "uniform +- yaw of the platform");
+    s.add("start_clearance_m", &P::start_clearance_m, Range::ge(0), "m",
+          "a randomised platform keeps its footprint this far from the start position in xy: "
+          "the vehicle standing there must not have a rotor over it (the largest preset's "
+          "rotor-tip radius is 0.375 m)");
+    s.add("light_gain", &P::light_gain, Range::closed_open(0, 1), "",
+          "uniform +- relative change of the brightness");
+    s.add("light_dir_deg", &P::light_dir_deg, Range::closed(0, 180), "deg",
+          "uniform +- turn of the light direction about world z");
+    s.add("light_falloff", &P::light_falloff, Range::closed(0, 0.5), "",
+          "uniform [0, light_falloff] depth of the lamp's falloff (lighting.falloff), the lamp "
+          "anywhere above the flying area (at its configured height)");
+    return s;
+  }();
+  return schema;
 }
 
-void Scenario::validate() const {
-  param_check(physics_dt_s > 0 && physics_dt_s <= 0.001, "physics_dt_s", physics_dt_s,
-              "must be in (0, 0.001] s (1 kHz or finer)");
-  param_check(start_utime >= 0, "start_utime", start_utime, "must be >= 0");
-  param_check(area_size_m.minCoeff() > 0, "area.size_m", area_size_m.transpose(),
-              "must be positive");
-  param_check(area_height_m > 0, "area.height_m", area_height_m, "must be > 0");
-  const Vector2d start_off = start_position_m.head<2>() - area_center_xy_m;
-  param_check((start_off.cwiseAbs() - 0.5 * area_size_m).maxCoeff() < 0, "start.position_m",
-              start_position_m.transpose(), "must be inside the flying area (area.center_xy_m, area.size_m)");
-  if (platform) {
+const ParamSchema<Scenario>& Scenario::schema() {
+  using P = Scenario;
+  static const ParamSchema<P> schema = [] {
+    ParamSchema<P> s;
+    s.add("name", &P::name, Range::any(), "", "the scenario's name").required();
+    s.group("sim", "the simulation", [](ParamSchema<P>& g) {
+      g.add("physics_dt_s", &P::physics_dt_s, Range::open_closed(0, 0.001), "s",
+            "fixed physics step (1 kHz or finer)");
+      g.add("start_utime", &P::start_utime, Range::ge(0), "us",
+            "sim clock at the start (without --start-now)");
+    });
+    s.group("area",
+            "the flying area: where the motion capture tracks the vehicle and nothing is in the "
+            "way; leaving it is reported in SIM_TRUTH (out_of_area) and fails the run",
+            [](ParamSchema<P>& g) {
+              g.add("size_m", &P::area_size_m, Range::gt(0), "m", "x, y extent");
+              g.add("center_xy_m", &P::area_center_xy_m, Range::any(), "m",
+                    "centre of the area on the floor");
+              g.add("height_m", &P::area_height_m, Range::gt(0), "m", "ceiling of the area");
+              g.section("floor_texture", &P::floor_texture, TextureSpec::schema(), "the floor");
+            });
+    s.optional_section("platform", &P::platform, PlatformParams::schema(),
+                       "the elevated landing platform (paper 4.2): a box on the floor");
+    s.optional_section("wall", &P::wall, WallParams::schema(),
+                       "a wall facing -x, with an opening and a room behind it (paper 4.3)");
+    s.section("wind", &P::wind, WindParams::schema(), "wind");
+    s.section("mocap", &P::mocap, MocapParams::schema(), "motion capture (MOCAP_POSE)");
+    s.section("imu", &P::imu, ImuParams::schema(), "IMU");
+    s.section("camera", &P::camera, CameraParams::schema(), "the rendered camera (CAMERA)");
+    s.section("lighting", &P::lighting, LightingParams::schema(), "the renderer's light");
+    s.section("randomize", &P::randomize, RandomizeParams::schema(),
+              "what a seed changes: platform pose, texture seeds (always) and lighting");
+    s.group("start", "the start state", [](ParamSchema<P>& g) {
+      g.add("position_m", &P::start_position_m, Range::any(), "m",
+            "the gear stands on the floor below this point");
+      g.add("yaw_deg", &P::start_yaw_deg, Range::any(), "deg", "heading at the start");
+    });
+    s.check("start.position_m",
+            [](const P& p) {
+              const Vector2d off = p.start_position_m.head<2>() - p.area_center_xy_m;
+              return (off.cwiseAbs() - 0.5 * p.area_size_m).maxCoeff() < 0;
+            },
+            "must be inside the flying area (area.center_xy_m, area.size_m)");
     // Seeded placements are drawn until one clears the start; the nominal one must, so one does.
-    const double d = footprint_distance_m(*platform, platform->center_xy_m,
-                                          platform->yaw_deg * M_PI / 180.0, start_position_m.head<2>());
-    const bool randomised = randomize.platform_xy_m > 0 || randomize.platform_yaw_deg > 0;
-    param_check(!randomised || d >= randomize.start_clearance_m,
-                "platform.center_xy_m", platform->center_xy_m.transpose(),
-                "the platform must stand at least randomize.start_clearance_m = " +
-                    std::to_string(randomize.start_clearance_m) + " m from the start position");
-  }
+    s.check("platform.center_xy_m",
+            [](const P& p) {
+              if (!p.platform) return true;
+              const double d = footprint_distance_m(*p.platform, p.platform->center_xy_m,
+                                                    p.platform->yaw_deg * M_PI / 180.0,
+                                                    p.start_position_m.head<2>());
+              const bool randomised =
+                  p.randomize.platform_xy_m > 0 || p.randomize.platform_yaw_deg > 0;
+              return !randomised || d >= p.randomize.start_clearance_m;
+            },
+            "the platform must stand at least randomize.start_clearance_m from the start "
+            "position");
+    return s;
+  }();
+  return schema;
 }
+
+void VehicleParams::validate() const { schema().validate(*this); }
+void TextureSpec::validate() const { schema().validate(*this); }
+void PlatformParams::validate() const { schema().validate(*this); }
+void WallParams::validate() const { schema().validate(*this); }
+void WindParams::validate() const { schema().validate(*this); }
+void MocapParams::validate() const { schema().validate(*this); }
+void ImuParams::validate() const { schema().validate(*this); }
+void CameraParams::validate() const { schema().validate(*this); }
+void LightingParams::validate() const { schema().validate(*this); }
+void RandomizeParams::validate() const { schema().validate(*this); }
+void Scenario::validate() const { schema().validate(*this); }
 
 }  // namespace alight::sim

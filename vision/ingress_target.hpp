@@ -17,7 +17,7 @@
 #include <vector>
 
 #include "common/camera_model.hpp"
-#include "vision/mission_params.hpp"
+#include "vision/params.hpp"
 #include "vision/target.hpp"
 
 namespace alight::vision {

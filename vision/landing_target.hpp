@@ -10,7 +10,7 @@
 // The paper takes the first homography as the floor; here the roles follow the geometry,
 // because a richly textured platform top can hold more matches than the floor in view.
 
-#include "vision/mission_params.hpp"
+#include "vision/params.hpp"
 #include "vision/target.hpp"
 
 namespace alight::vision {

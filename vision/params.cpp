@@ -1,83 +1,337 @@
 #include "vision/params.hpp"
 
-#include "common/params.hpp"
-
 namespace alight::vision {
 
-void StarParams::validate() const {
-  param_check(min_size >= 1, "min_size", min_size, "must be >= 1");
-  param_check(max_size >= min_size && max_size <= 32, "max_size", max_size,
-              "must be in [min_size, 32]");
-  param_check(response_threshold >= 0.0, "response_threshold", response_threshold, "must be >= 0");
-  param_check(line_threshold > 1.0, "line_threshold", line_threshold, "must be > 1");
-  param_check(nms_radius_px >= 1 && nms_radius_px <= 8, "nms_radius_px", nms_radius_px,
-              "must be in [1, 8]");
-  param_check(max_features >= 0, "max_features", max_features, "must be >= 0");
-  param_check(grid_cols >= 0 && grid_cols <= 64, "grid_cols", grid_cols, "must be in [0, 64]");
-  param_check(grid_rows >= 0 && grid_rows <= 64, "grid_rows", grid_rows, "must be in [0, 64]");
-  param_check((grid_cols == 0) == (grid_rows == 0), "grid_rows", grid_rows,
-              "grid_cols and grid_rows are both 0 (off) or both > 0");
+const ParamSchema<StarParams>& StarParams::schema() {
+  using P = StarParams;
+  static const ParamSchema<P> schema = [] {
+    ParamSchema<P> s;
+    s.add("min_size", &P::min_size, Range::ge(1), "",
+          "smallest filter index n: inner box 2n+1, outer 4n+1 px. Not 1: the 3 x 3 / 5 x 5 "
+          "filter answers to single-pixel texture and noise that a little blur or a 10 % scale "
+          "change removes, so on fine texture (fur, gravel) those peaks took most of the "
+          "max_features budget and were not found again in the other view");
+    s.add("max_size", &P::max_size, Range::closed(1, 32), "",
+          "largest filter index n (a border of 2n+1 px is skipped)")
+        .check([](const P& p) { return p.max_size >= p.min_size; }, "must not be below min_size");
+    s.add("response_threshold", &P::response_threshold, Range::ge(0), "grey levels",
+          "|mean(inner) - mean(ring)| to keep a peak");
+    s.add("line_threshold", &P::line_threshold, Range::gt(1), "",
+          "Harris ratio r: reject edges with tr^2/det > (r+1)^2/r");
+    s.add("nms_radius_px", &P::nms_radius_px, Range::closed(1, 8), "px",
+          "spatial non-maximum suppression radius");
+    s.add("max_features", &P::max_features, Range::ge(0), "", "strongest peaks kept (0: all)");
+    s.add("grid_cols", &P::grid_cols, Range::closed(0, 64), "",
+          "spread over the image (0: off): first at most max_features / (grid_cols * grid_rows) "
+          "strongest per cell, then the strongest of the rest. A richly textured patch (a printed "
+          "platform top) otherwise takes nearly all features and leaves the floor too few for "
+          "its homography");
+    s.add("grid_rows", &P::grid_rows, Range::closed(0, 64), "", "rows of that grid")
+        .check([](const P& p) { return (p.grid_cols == 0) == (p.grid_rows == 0); },
+               "grid_cols and grid_rows are both 0 (off) or both > 0");
+    s.add("subpixel", &P::subpixel, Range::any(), "",
+          "paper 3.1.1: quadratic refinement of x, y and scale");
+    return s;
+  }();
+  return schema;
 }
 
-void SurfParams::validate() const {
-  param_check(scale_per_size > 0.0, "scale_per_size", scale_per_size, "must be > 0");
-  param_check(min_scale >= 0.5, "min_scale", min_scale, "must be >= 0.5");
+const ParamSchema<SurfParams>& SurfParams::schema() {
+  using P = SurfParams;
+  static const ParamSchema<P> schema = [] {
+    ParamSchema<P> s;
+    s.add("scale_per_size", &P::scale_per_size, Range::gt(0), "",
+          "SURF scale s per CenSurE filter half-width (n + 0.5)");
+    s.add("min_scale", &P::min_scale, Range::ge(0.5), "px", "lower bound of s (Haar size 2s >= 2 px)");
+    s.add("overlapping_subregions", &P::overlapping_subregions, Range::any(), "",
+          "MU-SURF sub-regions (Agrawal, Konolige & Blas 2008, sec. 4): overlapping by 2s, each "
+          "Gaussian-weighted about its centre, and the 4 x 4 grid weighted again; false: SURF's "
+          "disjoint 5s x 5s sub-regions under one window Gaussian");
+    return s;
+  }();
+  return schema;
 }
 
-void MatchParams::validate() const {
-  param_check(ratio > 0.0 && ratio <= 1.0, "ratio", ratio, "must be in (0, 1]");
-  param_check(max_distance > 0.0 && max_distance <= 2.0, "max_distance", max_distance,
-              "must be in (0, 2]");
+const ParamSchema<MatchParams>& MatchParams::schema() {
+  using P = MatchParams;
+  static const ParamSchema<P> schema = [] {
+    ParamSchema<P> s;
+    s.add("ratio", &P::ratio, Range::open_closed(0, 1), "",
+          "Lowe's ratio test: best / second-best distance must be below this");
+    s.add("mutual", &P::mutual, Range::any(), "",
+          "keep a match only if it is also the reverse best match");
+    s.add("max_distance", &P::max_distance, Range::open_closed(0, 2), "",
+          "Euclidean distance of unit descriptors above which nothing matches");
+    s.add("same_sign_only", &P::same_sign_only, Range::any(), "",
+          "match bright blobs with bright, dark with dark (SURF's trick)");
+    return s;
+  }();
+  return schema;
 }
 
-void TrackerParams::validate() const {
-  param_check(min_tracked >= 4, "min_tracked", min_tracked, "must be >= 4");
-  param_check(max_history >= 2, "max_history", max_history, "must be >= 2");
-  // Finite and bounded: an infinite gap or age would keep a reference from any time ago.
-  param_check(max_frame_gap_s > 0.0 && max_frame_gap_s <= 60.0, "max_frame_gap_s", max_frame_gap_s,
-              "must be in (0, 60] s");
-  param_check(max_reference_age_s > 0.0 && max_reference_age_s <= 600.0, "max_reference_age_s",
-              max_reference_age_s, "must be in (0, 600] s");
-  param_check(frame_threshold_px >= 0.0, "frame_threshold_px", frame_threshold_px, "must be >= 0");
-  try {
-    match.validate();
-  } catch (const ParamError& e) {
-    throw e.located("", "match");
-  }
+const ParamSchema<TrackerParams>& TrackerParams::schema() {
+  using P = TrackerParams;
+  static const ParamSchema<P> schema = [] {
+    ParamSchema<P> s;
+    s.add("min_tracked", &P::min_tracked, Range::ge(4), "",
+          "N: features that must be tracked from the reference to now");
+    s.add("max_history", &P::max_history, Range::ge(2), "",
+          "frames kept (bounds the reference age in frames)");
+    // Finite and bounded: an infinite gap or age would keep a reference from any time ago.
+    s.add("max_frame_gap_s", &P::max_frame_gap_s, Range::open_closed(0, 60), "s",
+          "a larger gap between frames resets the history");
+    s.add("max_reference_age_s", &P::max_reference_age_s, Range::open_closed(0, 600), "s",
+          "older frames are never the reference");
+    s.section("match", &P::match, MatchParams::schema(), "frame-to-frame matching");
+    s.add("frame_threshold_px", &P::frame_threshold_px, Range::ge(0), "px",
+          "frame-to-frame matches must fit one homography within this; consecutive frames are "
+          "close, so off-plane parallax stays below it while wrong matches do not (0: no check)");
+    s.add("seed", &P::seed, Range::any(), "", "RANSAC seed of the frame-to-frame check");
+    return s;
+  }();
+  return schema;
 }
 
-void HomographyParams::validate() const {
-  param_check(threshold_px > 0.0, "threshold_px", threshold_px, "must be > 0");
-  param_check(confidence > 0.0 && confidence < 1.0, "confidence", confidence, "must be in (0, 1)");
-  param_check(max_iterations >= 1, "max_iterations", max_iterations, "must be >= 1");
-  param_check(min_inliers >= 4, "min_inliers", min_inliers, "must be >= 4");
-  param_check(refine_iterations >= 0, "refine_iterations", refine_iterations, "must be >= 0");
-  param_check(local_neighbours >= 3, "local_neighbours", local_neighbours, "must be >= 3");
+const ParamSchema<HomographyParams>& HomographyParams::schema() {
+  using P = HomographyParams;
+  static const ParamSchema<P> schema = [] {
+    ParamSchema<P> s;
+    s.add("threshold_px", &P::threshold_px, Range::gt(0), "px",
+          "inlier if the transfer error in image 2 is below");
+    s.add("confidence", &P::confidence, Range::open(0, 1), "",
+          "adaptive stopping: probability of one all-inlier sample");
+    s.add("max_iterations", &P::max_iterations, Range::ge(1), "", "hard cap of RANSAC samples");
+    s.add("min_inliers", &P::min_inliers, Range::ge(4), "", "fewer inliers: no plane");
+    s.add("refine_iterations", &P::refine_iterations, Range::ge(0), "",
+          "Levenberg-Marquardt steps on the inliers' transfer error");
+    s.add("robust_refinement", &P::robust_refinement, Range::any(), "",
+          "final refinement Cauchy-weighted (IRLS) instead of plain least squares over the "
+          "inliers, its scale from their median residual, so near-miss matches just inside "
+          "threshold_px pull less (Holland & Welsch 1977)");
+    s.add("local_neighbours", &P::local_neighbours, Range::ge(3), "",
+          "second plane (3.2): the 3 other points of a sample are drawn among the k nearest "
+          "neighbours of the first in image 1 (a platform is compact), which also bounds the "
+          "work when no second plane exists: stop once a plane of min_inliers would have been "
+          "sampled with `confidence`");
+    s.add("seed", &P::seed, Range::any(), "", "RANSAC random seed");
+    return s;
+  }();
+  return schema;
 }
 
-void DecompositionParams::validate() const {
-  param_check(min_singular_gap > 0.0, "min_singular_gap", min_singular_gap, "must be > 0");
-  param_check(min_front_fraction > 0.5 && min_front_fraction <= 1.0, "min_front_fraction",
-              min_front_fraction, "must be in (0.5, 1]");
+const ParamSchema<DecompositionParams>& DecompositionParams::schema() {
+  using P = DecompositionParams;
+  static const ParamSchema<P> schema = [] {
+    ParamSchema<P> s;
+    s.add("min_singular_gap", &P::min_singular_gap, Range::gt(0), "",
+          "sigma1 - sigma3 of the normalised H below this: no translation");
+    s.add("min_front_fraction", &P::min_front_fraction, Range::open_closed(0.5, 1), "",
+          "share of inliers that must lie in front of both cameras");
+    return s;
+  }();
+  return schema;
 }
 
-void AlignParams::validate() const {
-  param_check(max_rotation_disagreement_deg > 0.0, "max_rotation_disagreement_deg",
-              max_rotation_disagreement_deg, "must be > 0");
-  param_check(max_translation_disagreement_deg > 0.0, "max_translation_disagreement_deg",
-              max_translation_disagreement_deg, "must be > 0");
-  param_check(max_iterations >= 0, "max_iterations", max_iterations, "must be >= 0");
-  param_check(rotation_prior_sigma_deg >= 0.0, "rotation_prior_sigma_deg", rotation_prior_sigma_deg,
-              "must be >= 0 (0 = no prior)");
-  param_check(feature_sigma_px > 0.0, "feature_sigma_px", feature_sigma_px, "must be > 0");
+const ParamSchema<AlignParams>& AlignParams::schema() {
+  using P = AlignParams;
+  static const ParamSchema<P> schema = [] {
+    ParamSchema<P> s;
+    s.add("max_rotation_disagreement_deg", &P::max_rotation_disagreement_deg, Range::gt(0),
+          "deg", "the two planes' R21 must agree within this");
+    s.add("max_translation_disagreement_deg", &P::max_translation_disagreement_deg, Range::gt(0),
+          "deg", "the two planes' t12 directions must agree within this");
+    s.add("max_iterations", &P::max_iterations, Range::ge(0), "",
+          "Levenberg-Marquardt iterations of the joint refinement");
+    s.add("robust", &P::robust, Range::any(), "",
+          "joint refinement Cauchy-weighted (IRLS, each plane's scale from its median residual) "
+          "instead of plain least squares, as the final fit of each homography");
+    s.add("rotation_prior_sigma_deg", &P::rotation_prior_sigma_deg, Range::ge(0), "deg",
+          "motion capture's R21 as a prior on the joint refinement, with this standard "
+          "deviation; 0 = vision alone (the paper). Breaks the rotation-translation (bas-relief) "
+          "ambiguity of a narrow field of view that leaves the planes' distances a few percent "
+          "off");
+    s.add("feature_sigma_px", &P::feature_sigma_px, Range::gt(0), "px",
+          "feature position noise the prior is weighed against");
+    return s;
+  }();
+  return schema;
 }
 
-void WaypointParams::validate() const {
-  param_check(min_baseline_m > 0.0, "min_baseline_m", min_baseline_m, "must be > 0");
-  param_check(max_translation_angle_deg > 0.0 && max_translation_angle_deg <= 180.0,
-              "max_translation_angle_deg", max_translation_angle_deg, "must be in (0, 180]");
-  param_check(max_rotation_error_deg > 0.0, "max_rotation_error_deg", max_rotation_error_deg,
-              "must be > 0");
+const ParamSchema<WaypointParams>& WaypointParams::schema() {
+  using P = WaypointParams;
+  static const ParamSchema<P> schema = [] {
+    ParamSchema<P> s;
+    s.add("min_baseline_m", &P::min_baseline_m, Range::gt(0), "m",
+          "smaller camera translation: no usable scale (eq. 3)");
+    s.add("max_translation_angle_deg", &P::max_translation_angle_deg, Range::open_closed(0, 180),
+          "deg", "vision's t12 direction against motion capture's");
+    s.add("max_rotation_error_deg", &P::max_rotation_error_deg, Range::gt(0), "deg",
+          "vision's R21 against motion capture's");
+    return s;
+  }();
+  return schema;
+}
+
+const ParamSchema<LandingParams>& LandingParams::schema() {
+  using P = LandingParams;
+  static const ParamSchema<P> schema = [] {
+    ParamSchema<P> s;
+    s.add("min_platform_inliers", &P::min_platform_inliers, Range::ge(4), "",
+          "fewer second-plane inliers: no platform");
+    s.add("min_height_m", &P::min_height_m, Range::gt(0), "m",
+          "the platform top is at least this far above the floor");
+    s.add("max_height_m", &P::max_height_m, Range::gt(0), "m",
+          "and at most this far (a larger step is no landing platform)")
+        .check([](const P& p) { return p.max_height_m > p.min_height_m; },
+               "must be > min_height_m");
+    s.add("max_normal_angle_deg", &P::max_normal_angle_deg, Range::open(0, 90), "deg",
+          "floor and platform normals agree within this");
+    s.add("max_tilt_deg", &P::max_tilt_deg, Range::open(0, 90), "deg",
+          "the platform top is level: its normal within this of world up (motion capture). A "
+          "second \"plane\" through the platform's edge and the floor beyond is tilted by "
+          "atan(h / d); in flight such false planes came out 3-12 deg, true tops within 1 deg");
+    s.add("edge_margin_px", &P::edge_margin_px, Range::ge(0), "px",
+          "platform inliers this close to the border of either image: the platform may extend "
+          "out of view, the centre of its visible features is not its centre "
+          "(REASON_PARTIAL_VIEW). Matched features thin out well inside the STAR border "
+          "(2 max_size + 1 px): in flight logs a 24 px band let cut platforms through (waypoints "
+          "5-17 cm off), 40 px none beyond 5 cm");
+    return s;
+  }();
+  return schema;
+}
+
+const ParamSchema<IngressParams>& IngressParams::schema() {
+  using P = IngressParams;
+  static const ParamSchema<P> schema = [] {
+    ParamSchema<P> s;
+    s.add("parallax_mask", &P::parallax_mask, Range::any(), "",
+          "beyond the paper: Canny and Hough run on the off-wall mask (the reference image "
+          "warped by the wall homography disagrees with the current one wherever the view passes "
+          "the wall plane) instead of on the grey image, whose wall texture and the frame's "
+          "inner faces give edges of their own while the opening's border can lack contrast. "
+          "false: the paper's edges");
+    s.add("parallax_blur_sigma_px", &P::parallax_blur_sigma_px, Range::closed(0, 10), "px",
+          "smoothing of both images before the difference");
+    s.add("parallax_min_diff", &P::parallax_min_diff, Range::open(0, 255), "grey levels",
+          "smallest off-wall difference");
+    s.add("parallax_noise_k", &P::parallax_noise_k, Range::ge(0), "",
+          "or k x the median difference at wall inliers");
+    s.add("parallax_close_px", &P::parallax_close_px, Range::closed(0, 101), "px",
+          "closing fills texture-poor holes off the wall");
+    s.add("parallax_open_px", &P::parallax_open_px, Range::closed(0, 101), "px",
+          "opening drops specks on the wall");
+    s.add("snap_px", &P::snap_px, Range::closed(0, 30), "px",
+          "a cut snaps to the wall's edge within this (0: off)");
+    s.add("snap_min_gradient", &P::snap_min_gradient, Range::ge(0), "Sobel units",
+          "a weaker mean step along the cut is no edge");
+    s.add("blur_sigma_px", &P::blur_sigma_px, Range::closed(0, 10), "px",
+          "Gaussian smoothing before Canny (0: none)");
+    s.add("canny_low", &P::canny_low, Range::gt(0), "grey levels", "Canny hysteresis: low");
+    s.add("canny_high", &P::canny_high, Range::gt(0), "grey levels", "Canny hysteresis: high")
+        .check([](const P& p) { return p.canny_high > p.canny_low; }, "must be > canny_low");
+    s.add("hough_threshold", &P::hough_threshold, Range::ge(1), "",
+          "accumulator votes for a segment");
+    s.add("hough_min_length_frac", &P::hough_min_length_frac, Range::open(0, 1), "",
+          "shortest segment, share of the image width");
+    s.add("hough_max_gap_px", &P::hough_max_gap_px, Range::ge(0), "px",
+          "largest gap joined within a segment");
+    s.add("max_line_tilt_deg", &P::max_line_tilt_deg, Range::open(0, 45), "deg",
+          "near-vertical / near-horizontal within this");
+    s.add("merge_px", &P::merge_px, Range::ge(0), "px", "cuts closer than this are one cut");
+    s.add("cut_margin_px", &P::cut_margin_px, Range::closed(0, 50), "px",
+          "wall inliers this close to a cut do not count");
+    s.add("min_outliers", &P::min_outliers, Range::ge(1), "",
+          "fewer off-wall features in the block: no opening");
+    s.add("behind_margin_m", &P::behind_margin_m, Range::ge(0), "m",
+          "a block feature this far behind the wall is seen through it");
+    s.add("min_behind_share", &P::min_behind_share, Range::closed(0, 1), "",
+          "fewer of the block's features behind the wall: no opening (0: no check)");
+    s.add("min_size_m", &P::min_size_m, Range::gt(0), "m",
+          "smaller width or height: no opening");
+    return s;
+  }();
+  return schema;
+}
+
+const ParamSchema<PipelineParams>& PipelineParams::schema() {
+  using P = PipelineParams;
+  static const ParamSchema<P> schema = [] {
+    ParamSchema<P> s;
+    s.add("max_reference_baseline_m", &P::max_reference_baseline_m, Range::gt(0), "m",
+          "the reference is the oldest tracked frame (3.1.1) no farther than this from the "
+          "current camera: a target must be in view in both images, and a 0.6 m baseline (a "
+          "search pass at 0.4 m/s) leaves a 43 cm platform wholly in neither")
+        .check([](const P& p) { return p.max_reference_baseline_m > p.waypoint.min_baseline_m; },
+               "must exceed waypoint.min_baseline_m");
+    s.section("star", &P::star, StarParams::schema(),
+              "STAR / CenSurE detector (paper 3.1.1; Agrawal, Konolige & Blas 2008)");
+    s.section("surf", &P::surf, SurfParams::schema(),
+              "upright SURF descriptor (Bay, Tuytelaars & Van Gool 2006)");
+    s.section("tracker", &P::tracker, TrackerParams::schema(),
+              "reference frame by continuous tracking (paper 3.1.1)");
+    s.section("match", &P::match, MatchParams::schema(), "reference-to-current matching");
+    s.section("homography", &P::homography, HomographyParams::schema(),
+              "RANSAC homography of the dominant plane (paper 3.1.2)");
+    s.section("decomposition", &P::decomposition, DecompositionParams::schema(),
+              "homography decomposition (paper 3.1.2; Longuet-Higgins 1986)");
+    s.section("align", &P::align, AlignParams::schema(), "two-plane alignment (paper 3.2)");
+    s.section("waypoint", &P::waypoint, WaypointParams::schema(),
+              "waypoint geometry (paper 3.1.3, eqs. 3-6)");
+    s.section("landing", &P::landing, LandingParams::schema(), "landing target (paper 3.2)");
+    s.section("ingress", &P::ingress, IngressParams::schema(), "ingress target (paper 3.3)");
+    return s;
+  }();
+  return schema;
+}
+
+const ParamSchema<NodeParams>& NodeParams::schema() {
+  using P = NodeParams;
+  static const ParamSchema<P> schema = [] {
+    ParamSchema<P> s;
+    // Finite and bounded: `.inf` made every frame wait for its pose forever, and an infinite
+    // wait converted to microseconds is undefined behaviour.
+    s.add("max_pose_wait_s", &P::max_pose_wait_s, Range::closed(0, 5), "s",
+          "a frame waits this long (wall clock) for its pose");
+    s.add("diag_rate_hz", &P::diag_rate_hz, Range::closed(0, 100), "Hz",
+          "VISION_DIAG images per second (0: none)");
+    s.add("diag_jpeg_quality", &P::diag_jpeg_quality, Range::closed(1, 100), "",
+          "JPEG quality of VISION_DIAG");
+    s.section("poses", &P::poses, PoseBufferParams::schema(),
+              "motion-capture history, looked up at each frame's exposure time");
+    s.merge(&P::pipeline, PipelineParams::schema());
+    return s;
+  }();
+  return schema;
+}
+
+void StarParams::validate() const { schema().validate(*this); }
+void SurfParams::validate() const { schema().validate(*this); }
+void MatchParams::validate() const { schema().validate(*this); }
+void TrackerParams::validate() const { schema().validate(*this); }
+void HomographyParams::validate() const { schema().validate(*this); }
+void DecompositionParams::validate() const { schema().validate(*this); }
+void AlignParams::validate() const { schema().validate(*this); }
+void WaypointParams::validate() const { schema().validate(*this); }
+void LandingParams::validate() const { schema().validate(*this); }
+void IngressParams::validate() const { schema().validate(*this); }
+void PipelineParams::validate() const { schema().validate(*this); }
+void NodeParams::validate() const { schema().validate(*this); }
+
+NodeParams load_node_params(const ParamNode& root) {
+  NodeParams p;
+  if (const auto n = root.optional_child("vision")) NodeParams::schema().read(*n, p);
+  return p;
+}
+
+NodeParams load_node_params(const std::string& vehicle_file) {
+  return load_node_params(ParamNode::load_file(vehicle_file));
+}
+
+Mission mission_from_string(const std::string& s) {
+  if (s == "landing") return Mission::kLanding;
+  if (s == "ingress") return Mission::kIngress;
+  throw ParamError("", "--mission", s, "must be landing or ingress");
 }
 
 }  // namespace alight::vision

@@ -1,116 +1,190 @@
 #pragma once
-// Parameters of the vision library, one struct per stage (paper sections 3.1 and 3.2), with
-// defaults and units at each field. validate() throws ParamError naming the field and value;
-// loading from a file is the node's job (issue 6).
+// Parameters of the vision: one struct per stage of the per-frame pipeline (paper 3.1-3.3), the
+// landing and ingress targets, and the alight-vision node, read from the optional `vision:`
+// section of a vehicle file. The defaults are the initialisers below; key, constraint, unit and
+// meaning of each field are declared once in params.cpp (common/param_schema.hpp), and
+// `alight-params --defaults vehicle` prints them.
 
 #include <cstdint>
+#include <string>
+
+#include "common/param_schema.hpp"
+#include "common/pose_buffer.hpp"
 
 namespace alight::vision {
 
+enum class Mission : int8_t { kNone = 0, kLanding = 1, kIngress = 2 };  // = target_t MISSION_*
+
 /// STAR / CenSurE detector (paper 3.1.1; Agrawal, Konolige & Blas, ECCV 2008).
 struct StarParams {
-  /// Smallest filter index n: inner box 2n+1, outer 4n+1 [px]. Not 1: the 3 x 3 / 5 x 5
-  /// filter answers to single-pixel texture and noise that a little blur or a 10 % scale
-  /// change removes, so on fine texture (fur, gravel) those peaks took most of the
-  /// max_features budget and were not found again in the other view.
   int min_size = 2;
-  int max_size = 6;                 ///< largest filter index n (border 2n+1 px is skipped)
-  double response_threshold = 6.0;  ///< |mean(inner) - mean(ring)| to keep a peak [grey levels]
-  double line_threshold = 10.0;     ///< Harris ratio r: reject edges with tr^2/det > (r+1)^2/r
-  int nms_radius_px = 2;            ///< spatial non-maximum suppression radius [px]
-  int max_features = 600;           ///< strongest peaks kept (0: all)
-  /// Spread over the image (0: off): first at most max_features / (grid_cols * grid_rows)
-  /// strongest per cell, then the strongest of the rest. A richly textured patch (a printed
-  /// platform top) otherwise takes nearly all features and leaves the floor too few for its
-  /// homography. [cells]
+  int max_size = 6;
+  double response_threshold = 6.0;
+  double line_threshold = 10.0;
+  int nms_radius_px = 2;
+  int max_features = 600;
   int grid_cols = 0, grid_rows = 0;
-  bool subpixel = true;  ///< paper 3.1.1: quadratic refinement of x, y and scale
+  bool subpixel = true;
+  static const ParamSchema<StarParams>& schema();
   void validate() const;
 };
 
 /// Upright SURF descriptor (Bay, Tuytelaars & Van Gool, ECCV 2006 / CVIU 2008).
 struct SurfParams {
-  double scale_per_size = 0.8;  ///< SURF scale s per CenSurE filter half-width (n + 0.5) [-]
-  double min_scale = 1.2;       ///< lower bound of s (Haar size 2s >= 2 px) [px]
-  /// MU-SURF sub-regions (Agrawal, Konolige & Blas 2008, sec. 4): overlapping by 2s, each
-  /// Gaussian-weighted about its centre, and the 4 x 4 grid weighted again; false: SURF's
-  /// disjoint 5s x 5s sub-regions under one window Gaussian.
+  double scale_per_size = 0.8;
+  double min_scale = 1.2;
   bool overlapping_subregions = true;
+  static const ParamSchema<SurfParams>& schema();
   void validate() const;
 };
 
 /// Descriptor matching: nearest neighbour, Lowe's ratio test, mutual check.
 struct MatchParams {
-  double ratio = 0.8;          ///< best / second-best distance must be below this [-]
-  bool mutual = true;          ///< keep a match only if it is also the reverse best match
-  double max_distance = 0.6;   ///< Euclidean distance of unit descriptors above which no match [-]
-  bool same_sign_only = true;  ///< match bright blobs with bright, dark with dark (SURF's trick)
+  double ratio = 0.8;
+  bool mutual = true;
+  double max_distance = 0.6;
+  bool same_sign_only = true;
+  static const ParamSchema<MatchParams>& schema();
   void validate() const;
 };
 
 /// Reference frame selection by continuous tracking (paper 3.1.1).
 struct TrackerParams {
-  int min_tracked = 40;          ///< N: features that must be tracked from reference to now [-]
-  int max_history = 60;          ///< frames kept (bounds the reference age in frames) [-]
-  double max_frame_gap_s = 1.0;  ///< a larger gap between frames resets the history, <= 60 [s]
-  double max_reference_age_s = 10.0;  ///< older frames are never the reference, <= 600 [s]
-  MatchParams match{};                ///< frame-to-frame matching
-  /// Frame-to-frame matches must fit one homography within this; consecutive frames are close,
-  /// so off-plane parallax stays below it while wrong matches do not (0: no check) [px].
+  int min_tracked = 40;
+  int max_history = 60;
+  double max_frame_gap_s = 1.0;
+  double max_reference_age_s = 10.0;
+  MatchParams match{};  ///< frame-to-frame matching
   double frame_threshold_px = 8.0;
-  uint64_t seed = 1;  ///< RANSAC seed of the frame-to-frame check [-]
+  uint64_t seed = 1;
+  static const ParamSchema<TrackerParams>& schema();
   void validate() const;
 };
 
 /// Robust homography (paper 3.1.2; Fischler & Bolles 1981 RANSAC, Hartley 1997 normalisation,
 /// Chum, Matas & Kittler 2003 LO-RANSAC refinement).
 struct HomographyParams {
-  double threshold_px = 2.0;  ///< inlier if the transfer error in image 2 is below [px]
-  double confidence = 0.995;  ///< adaptive stopping: probability of one all-inlier sample [-]
-  int max_iterations = 2000;  ///< hard cap of RANSAC samples [-]
-  int min_inliers = 12;       ///< fewer inliers: no plane [-]
-  int refine_iterations = 5;  ///< Levenberg-Marquardt steps on the inliers' transfer error [-]
-  /// Final refinement: Cauchy-weighted (IRLS) instead of plain least squares over the inliers,
-  /// its scale from their median residual, so near-miss matches just inside threshold_px pull
-  /// less (Holland & Welsch 1977).
+  double threshold_px = 2.0;
+  double confidence = 0.995;
+  int max_iterations = 2000;
+  int min_inliers = 12;
+  int refine_iterations = 5;
   bool robust_refinement = true;
-  /// Second plane (3.2): draw the 3 other points of a sample among the k nearest neighbours of
-  /// the first in image 1 (a platform is compact), which also bounds the work when no second
-  /// plane exists: stop once a plane of min_inliers would have been sampled with `confidence`.
-  int local_neighbours = 16;  ///< k [-]
-  uint64_t seed = 1;          ///< RANSAC random seed [-]
+  int local_neighbours = 16;
+  uint64_t seed = 1;
+  static const ParamSchema<HomographyParams>& schema();
   void validate() const;
 };
 
 /// Homography decomposition (paper 3.1.2; Longuet-Higgins 1986).
 struct DecompositionParams {
-  double min_singular_gap = 1e-4;   ///< sigma1 - sigma3 of the normalised H below: no translation
-  double min_front_fraction = 0.9;  ///< share of inliers that must lie in front of both cameras
+  double min_singular_gap = 1e-4;
+  double min_front_fraction = 0.9;
+  static const ParamSchema<DecompositionParams>& schema();
   void validate() const;
 };
 
 /// Two-plane alignment (paper 3.2).
 struct AlignParams {
-  double max_rotation_disagreement_deg = 5.0;      ///< planes' R21 must agree within [deg]
-  double max_translation_disagreement_deg = 20.0;  ///< planes' t12 directions agree within [deg]
-  int max_iterations = 15;  ///< Levenberg-Marquardt iterations of the joint refinement [-]
-  /// Joint refinement Cauchy-weighted (IRLS, each plane's scale from its median residual)
-  /// instead of plain least squares, as the final fit of each homography.
+  double max_rotation_disagreement_deg = 5.0;
+  double max_translation_disagreement_deg = 20.0;
+  int max_iterations = 15;
   bool robust = true;
-  /// Motion capture's R21 as a prior on the joint refinement, with this standard deviation
-  /// [deg]; 0 = vision alone (the paper). Breaks the rotation-translation (bas-relief) ambiguity
-  /// of a narrow field of view that leaves the planes' distances a few percent off.
   double rotation_prior_sigma_deg = 0.0;
-  double feature_sigma_px = 0.5;  ///< feature position noise the prior is weighed against [px]
+  double feature_sigma_px = 0.5;
+  static const ParamSchema<AlignParams>& schema();
   void validate() const;
 };
 
 /// Waypoint geometry (paper 3.1.3, eqs. 3-6).
 struct WaypointParams {
-  double min_baseline_m = 0.03;             ///< smaller camera translation: no usable scale [m]
-  double max_translation_angle_deg = 30.0;  ///< vision vs motion-capture t12 direction [deg]
-  double max_rotation_error_deg = 5.0;      ///< vision vs motion-capture R21 [deg]
+  double min_baseline_m = 0.03;
+  double max_translation_angle_deg = 30.0;
+  double max_rotation_error_deg = 5.0;
+  static const ParamSchema<WaypointParams>& schema();
   void validate() const;
 };
+
+/// Landing target (paper 3.2): the second plane is the platform when it is nearer than the
+/// floor by more than min_height_m, roughly parallel to it, and has enough inliers.
+struct LandingParams {
+  int min_platform_inliers = 12;
+  double min_height_m = 0.03;
+  double max_height_m = 1.0;
+  double max_normal_angle_deg = 15;
+  double max_tilt_deg = 3.0;
+  double edge_margin_px = 40.0;
+  static const ParamSchema<LandingParams>& schema();
+  void validate() const;
+};
+
+/// Ingress target (paper 3.3): Hough lines split the image into cells; the block of cells
+/// with no wall inliers and the most off-wall features is the opening.
+struct IngressParams {
+  bool parallax_mask = true;
+  double parallax_blur_sigma_px = 1.5;
+  double parallax_min_diff = 8;
+  double parallax_noise_k = 4;
+  int parallax_close_px = 15;
+  int parallax_open_px = 7;
+  double snap_px = 6;
+  double snap_min_gradient = 8;
+  double blur_sigma_px = 2.0;
+  double canny_low = 50, canny_high = 150;
+  int hough_threshold = 60;
+  double hough_min_length_frac = 0.12;
+  double hough_max_gap_px = 20;
+  double max_line_tilt_deg = 8;
+  double merge_px = 6;
+  double cut_margin_px = 6;
+  int min_outliers = 8;
+  double behind_margin_m = 0.02;
+  double min_behind_share = 0.7;
+  double min_size_m = 0.1;
+  static const ParamSchema<IngressParams>& schema();
+  void validate() const;
+};
+
+/// Everything the pipeline uses, one struct per stage.
+struct PipelineParams {
+  /// Features spread over a 4 x 3 grid: the floor keeps enough for its homography when the
+  /// platform top (richer texture) fills part of the view (star_detector.hpp).
+  StarParams star = [] {
+    StarParams s;
+    s.grid_cols = 4;
+    s.grid_rows = 3;
+    return s;
+  }();
+  SurfParams surf{};
+  TrackerParams tracker{};
+  MatchParams match{};  ///< reference-to-current matching
+  HomographyParams homography{};
+  DecompositionParams decomposition{};
+  AlignParams align{};
+  WaypointParams waypoint{};
+  LandingParams landing{};
+  IngressParams ingress{};
+  double max_reference_baseline_m = 0.3;
+  static const ParamSchema<PipelineParams>& schema();
+  void validate() const;
+};
+
+/// The node's own settings on top of the pipeline.
+struct NodeParams {
+  PipelineParams pipeline{};
+  PoseBufferParams poses{};
+  double max_pose_wait_s = 0.2;
+  double diag_rate_hz = 2.0;
+  int diag_jpeg_quality = 75;
+  static const ParamSchema<NodeParams>& schema();
+  void validate() const;  ///< throws ParamError naming the full key and its value
+};
+
+/// Reads the `vision:` section of a vehicle file (absent: the defaults; missing keys keep their
+/// defaults; unknown keys are an error).
+NodeParams load_node_params(const ParamNode& vehicle_root);
+NodeParams load_node_params(const std::string& vehicle_file);
+
+Mission mission_from_string(const std::string& s);  ///< "landing" | "ingress", else ParamError
 
 }  // namespace alight::vision

@@ -13,7 +13,7 @@
 #include "common/camera_model.hpp"
 #include "common/camera_mount.hpp"
 #include "common/pose_buffer.hpp"
-#include "vision/mission_params.hpp"
+#include "vision/params.hpp"
 #include "vision/reference_tracker.hpp"
 #include "vision/target.hpp"
 

@@ -215,5 +215,121 @@ TEST(ParamSchemaTest, RangeTextsAndBoundaries) {
   EXPECT_EQ(Range::any().text("s"), "");
 }
 
+// A struct that is flat in code and nested in the file (group), with a presence flag; a message
+// that depends on the value (check_with); a path resolved against the file's folder.
+struct Wall {
+  double width_m = 4.0;
+  bool has_opening = true;
+  double opening_width_m = 0.6;
+  std::string texture = "";
+  std::string device = "/dev/video0";
+  static const ParamSchema<Wall>& schema() {
+    static const ParamSchema<Wall> s = [] {
+      ParamSchema<Wall> s;
+      s.add("width_m", &Wall::width_m, Range::gt(0.2), "m", "along y");
+      s.group(
+          "opening", "a hole in it",
+          [](ParamSchema<Wall>& g) {
+            g.add("width_m", &Wall::opening_width_m, Range::gt(0.05), "m", "of the hole");
+          },
+          &Wall::has_opening);
+      s.add("texture", &Wall::texture, Range::any(), "", "an image").path();
+      s.add("device", &Wall::device, Range::any(), "", "a device").check_with([](const Wall& w) {
+        return w.device.rfind("/dev/", 0) == 0 ? std::string()
+                                               : "must start with /dev/, not " + w.device;
+      });
+      s.check("opening.width_m",
+              [](const Wall& w) { return !w.has_opening || w.opening_width_m < w.width_m; },
+              "must be narrower than the wall");
+      return s;
+    }();
+    return s;
+  }
+};
+
+Wall load_wall(const std::string& yaml) {
+  Wall w;
+  Wall::schema().read(ParamNode::from_string(yaml, "dir/w.yaml").child("wall"), w);
+  return w;
+}
+
+TEST(ParamSchemaTest, AGroupNestsFieldsOfTheSameStructAndItsFlagSaysWhetherItIsThere) {
+  Wall w = load_wall("wall:\n  opening: {width_m: 0.8}\n");
+  EXPECT_TRUE(w.has_opening);
+  EXPECT_EQ(w.opening_width_m, 0.8);
+  w = load_wall("wall: {width_m: 0.3}\n");
+  EXPECT_FALSE(w.has_opening);  // and the opening, wider than the wall, is not checked
+  auto e = expect_param_error([] { load_wall("wall:\n  opening: {width_m: 0.01}\n"); });
+  EXPECT_EQ(std::string(e.what()), "dir/w.yaml: wall.opening.width_m = 0.01: must be > 0.05 m");
+  e = expect_param_error([] { load_wall("wall:\n  width_m: 0.5\n  opening: {width_m: 0.6}\n"); });
+  EXPECT_EQ(std::string(e.what()),
+            "dir/w.yaml: wall.opening.width_m = 0.6: must be narrower than the wall");
+  e = expect_param_error([] { load_wall("wall:\n  opening: {widht_m: 0.6}\n"); });
+  EXPECT_EQ(e.key(), "wall.opening.widht_m");
+  // Dumped as comments when absent, so the dump reads back without it.
+  w = load_wall("wall: {width_m: 0.3}\n");
+  std::ostringstream text;
+  text << "wall:\n";
+  Wall::schema().dump(text, w, 2);
+  EXPECT_NE(text.str().find("  # opening:\n"), std::string::npos) << text.str();
+  EXPECT_FALSE(load_wall(text.str()).has_opening);
+  const auto keys = Wall::schema().params(w);
+  EXPECT_EQ(keys[1].key, "opening.width_m");
+}
+
+TEST(ParamSchemaTest, PathsAreResolvedAgainstTheFilesFolderAndMessagesMayDependOnTheValue) {
+  EXPECT_EQ(load_wall("wall: {texture: img/a.png}\n").texture, "dir/img/a.png");
+  EXPECT_EQ(load_wall("wall: {texture: /abs/a.png}\n").texture, "/abs/a.png");
+  EXPECT_EQ(load_wall("wall: {}\n").texture, "");  // an empty default stays empty
+  const auto e = expect_param_error([] { load_wall("wall: {device: video0}\n"); });
+  EXPECT_EQ(std::string(e.what()), "dir/w.yaml: wall.device = video0: must start with /dev/, not video0");
+}
+
+// A value out of its own range is reported at its key, even when the check of a key declared
+// before it involves it (ranges first, then checks, then relations).
+struct Span {
+  double low = 1;
+  double high = 2;
+  static const ParamSchema<Span>& schema() {
+    static const ParamSchema<Span> s = [] {
+      ParamSchema<Span> s;
+      s.add("low", &Span::low, Range::any(), "m", "start")
+          .check([](const Span& p) { return p.low < p.high; }, "must be below high");
+      s.add("high", &Span::high, Range::le(10), "m", "end");
+      return s;
+    }();
+    return s;
+  }
+};
+
+TEST(ParamSchemaTest, AValueOutOfRangeIsReportedAtItsOwnKeyBeforeAnyCheckThatInvolvesIt) {
+  Span p{30, 20};
+  auto e = expect_param_error([&] { Span::schema().validate(p); });
+  EXPECT_EQ(std::string(e.what()), "high = 20: must be <= 10 m");
+  p = Span{9, 8};
+  e = expect_param_error([&] { Span::schema().validate(p); });
+  EXPECT_EQ(std::string(e.what()), "low = 9: must be below high");
+}
+
+// Error values show the value as it was understood (1e9 as 1e+09), as the dump would write it.
+TEST(ParamSchemaTest, ErrorsShowTheValueAsTheDumpWritesIt) {
+  auto e = expect_param_error([] { load("top:\n  timeout_s: 1e9\n"); });
+  EXPECT_EQ(e.value(), "1e+09");
+  e = expect_param_error([] { load("top:\n  format: \"RGB 3\"\n"); });
+  EXPECT_EQ(e.value(), "RGB 3");
+}
+
+TEST(ParamSchemaTest, ParamInfoCarriesTheRangeAndWhetherTheParameterIsAnInteger) {
+  const auto params = Outer::schema().params(Outer{});
+  EXPECT_EQ(*params[0].range.lo(), 0);
+  EXPECT_FALSE(params[0].range.lo_closed());
+  EXPECT_EQ(*params[0].range.hi(), 2);
+  EXPECT_TRUE(params[0].range.hi_closed());
+  EXPECT_FALSE(params[0].integer);
+  EXPECT_TRUE(params[2].integer);                     // count
+  EXPECT_FALSE(params[3].integer);                    // robust: a bool is no integer
+  EXPECT_FALSE(params[1].range.lo().has_value());     // lost_s: <= 5
+}
+
 }  // namespace
 }  // namespace alight

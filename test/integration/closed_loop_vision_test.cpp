@@ -11,7 +11,7 @@
 #include "autonomy/convert.hpp"
 #include "closed_loop.hpp"
 #include "vision/convert.hpp"
-#include "vision/mission_params.hpp"
+#include "vision/params.hpp"
 #include "vision/pipeline.hpp"
 
 namespace alight::autonomy::test {

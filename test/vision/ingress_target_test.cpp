@@ -10,7 +10,7 @@
 #include <random>
 
 #include "common/params.hpp"
-#include "vision/mission_params.hpp"
+#include "vision/params.hpp"
 #include "vision/status.hpp"
 #include "vision/waypoint.hpp"
 

@@ -13,7 +13,7 @@
 
 #include "common/params.hpp"
 #include "common/stamp_guard.hpp"
-#include "vision/mission_params.hpp"
+#include "vision/params.hpp"
 
 namespace alight::vision {
 namespace {

@@ -58,5 +58,83 @@ TEST(VisionParamsRegression, InfiniteTrackerTimeoutsAreRefused) {
                                 "max_reference_age_s");
 }
 
+template <class Fn>
+ParamError load_error(Fn fn) {
+  try {
+    fn();
+  } catch (const ParamError& e) {
+    return e;
+  }
+  ADD_FAILURE() << "no ParamError thrown";
+  return ParamError("", "", "", "");
+}
+
+ParamError vision_error(const std::string& yaml) {
+  return load_error([&] { load_node_params(ParamNode::from_string(yaml, "vehicle.yaml")); });
+}
+
+// Issue 18: the stages' validate() knew no section, so the node's error dropped it and named a
+// key that is nowhere in the file.
+TEST(VisionParamsRegression, AlignMaxIterationsIsReportedAsVisionAlignMaxIterations) {
+  const ParamError e = vision_error("vision:\n  align:\n    max_iterations: -1\n");
+  EXPECT_EQ(e.key(), "vision.align.max_iterations");  // was vision.max_iterations
+  EXPECT_EQ(e.value(), "-1");
+  EXPECT_EQ(e.file(), "vehicle.yaml");
+}
+
+TEST(VisionParamsRegression, StarMaxSizeIsReportedAsVisionStarMaxSize) {
+  const ParamError e = vision_error("vision:\n  star:\n    max_size: 40\n");
+  EXPECT_EQ(e.key(), "vision.star.max_size");  // was vision.max_size
+  EXPECT_EQ(e.value(), "40");
+  EXPECT_EQ(std::string(e.what()), "vehicle.yaml: vision.star.max_size = 40: must be in [1, 32]");
+}
+
+// Issue 18: these were validated but no file could set them.
+TEST(VisionParamsTest, EveryValidatedFieldIsSettableFromTheVehicleFile) {
+  const NodeParams p = load_node_params(ParamNode::from_string(
+      "vision:\n"
+      "  homography: {confidence: 0.99, refine_iterations: 3, robust_refinement: false,\n"
+      "               local_neighbours: 8}\n"
+      "  surf: {scale_per_size: 1.1, min_scale: 1.5, overlapping_subregions: false}\n"
+      "  decomposition: {min_singular_gap: 0.001, min_front_fraction: 0.8}\n"
+      "  tracker: {frame_threshold_px: 5, match: {ratio: 0.7, mutual: false}}\n"
+      "  match: {mutual: false, same_sign_only: false}\n"
+      "  star: {min_size: 3, line_threshold: 12, nms_radius_px: 3, subpixel: false}\n"
+      "  poses: {max_extrapolation_s: 0.01}\n",
+      "vehicle.yaml"));
+  const PipelineParams& q = p.pipeline;
+  EXPECT_EQ(q.homography.confidence, 0.99);
+  EXPECT_EQ(q.homography.refine_iterations, 3);
+  EXPECT_FALSE(q.homography.robust_refinement);
+  EXPECT_EQ(q.homography.local_neighbours, 8);
+  EXPECT_EQ(q.surf.scale_per_size, 1.1);
+  EXPECT_EQ(q.surf.min_scale, 1.5);
+  EXPECT_FALSE(q.surf.overlapping_subregions);
+  EXPECT_EQ(q.decomposition.min_singular_gap, 0.001);
+  EXPECT_EQ(q.decomposition.min_front_fraction, 0.8);
+  EXPECT_EQ(q.tracker.frame_threshold_px, 5);
+  EXPECT_EQ(q.tracker.match.ratio, 0.7);
+  EXPECT_FALSE(q.tracker.match.mutual);
+  EXPECT_FALSE(q.match.mutual);
+  EXPECT_FALSE(q.match.same_sign_only);
+  EXPECT_EQ(q.star.min_size, 3);
+  EXPECT_EQ(q.star.grid_cols, 4);  // the pipeline's default, not StarParams'
+  EXPECT_FALSE(q.star.subpixel);
+  EXPECT_EQ(p.poses.max_extrapolation_s, 0.01);
+  EXPECT_EQ(vision_error("vision: {homography: {confidence: 1}}").key(),
+            "vision.homography.confidence");
+  EXPECT_EQ(vision_error("vision: {surf: {min_scale: 0.4}}").key(), "vision.surf.min_scale");
+  EXPECT_EQ(vision_error("vision: {decomposition: {min_front_fraction: 0.5}}").key(),
+            "vision.decomposition.min_front_fraction");
+  EXPECT_EQ(vision_error("vision: {tracker: {match: {ratio: 0}}}").key(),
+            "vision.tracker.match.ratio");
+}
+
+TEST(VisionParamsTest, WithoutAVisionSectionTheDefaultsApply) {
+  const NodeParams p = load_node_params(ParamNode::from_string("autonomy: {}\n", "vehicle.yaml"));
+  EXPECT_EQ(p.pipeline.star.grid_rows, 3);
+  EXPECT_EQ(p.max_pose_wait_s, NodeParams{}.max_pose_wait_s);
+}
+
 }  // namespace
 }  // namespace alight::vision
