@@ -61,7 +61,7 @@ struct VehicleParams {
 
 /// A texture: procedural (seeded) or an image (loaded by the loader into `image`).
 struct TextureSpec {
-  std::string kind = "noise";  ///< noise | blobs | paper | checker | image
+  std::string kind = "noise";  ///< noise | blobs | paper | checker | tiles | image
   int seed = 1;
   int size_px = 1024;
   double texel_m = 0.004;

@@ -83,7 +83,7 @@ const ParamSchema<TextureSpec>& TextureSpec::schema() {
   static const ParamSchema<P> schema = [] {
     ParamSchema<P> s;
     s.add("kind", &P::kind, Range::any(), "", "procedural (seeded), or an image file")
-        .one_of({"noise", "blobs", "paper", "checker", "image"});
+        .one_of({"noise", "blobs", "paper", "checker", "tiles", "image"});
     s.add("seed", &P::seed, Range::any(), "", "added to the scenario seed (so surfaces differ)");
     s.add("size_px", &P::size_px, Range::closed(64, 4096), "px",
           "procedural textures are size_px x size_px")
@@ -93,7 +93,7 @@ const ParamSchema<TextureSpec>& TextureSpec::schema() {
     s.add("mean", &P::mean, Range::closed(0, 255), "grey levels", "mean grey level");
     s.add("contrast", &P::contrast, Range::closed(0, 2), "", "1 = full contrast");
     s.add("feature_m", &P::feature_m, Range::gt(0), "m",
-          "typical feature size: blob radius, text line height");
+          "typical feature size: blob radius, text line height, tile side");
     s.add("path", &P::path, Range::any(), "", "image file (kind image)")
         .path()
         .check([](const P& p) { return p.kind != "image" || !p.path.empty(); },

@@ -137,6 +137,35 @@ cv::Mat checker_texture(const TextureSpec& s, std::mt19937_64& rng) {
   return img;
 }
 
+cv::Mat tiles_texture(const TextureSpec& s, std::mt19937_64& rng) {
+  // A floor of square tiles of side feature_m, each one flat grey, with darker grout between:
+  // a surface whose only features are the tiles' edges and corners (issue 15's hard floor). The
+  // tile side is rounded so a whole number of tiles fills the wrapping texture.
+  const int n = s.size_px;
+  const int tiles = std::max(1, static_cast<int>(std::lround(n * s.texel_m / s.feature_m)));
+  const double cell = static_cast<double>(n) / tiles;
+  const double grout = std::max(1.0, 0.02 * cell);
+  std::normal_distribution<float> tone(0.f, 6.f * static_cast<float>(s.contrast));
+  std::vector<float> level(static_cast<size_t>(tiles * tiles));
+  for (auto& l : level) l = static_cast<float>(s.mean) + tone(rng);
+  const float grout_level = static_cast<float>(s.mean) - 45.f * static_cast<float>(s.contrast);
+  cv::Mat img(n, n, CV_32F);
+  for (int y = 0; y < n; ++y) {
+    const int ty = static_cast<int>(y / cell);
+    const bool gy = y - ty * cell < grout;
+    for (int x = 0; x < n; ++x) {
+      const int tx = static_cast<int>(x / cell);
+      const bool gx = x - tx * cell < grout;
+      img.at<float>(y, x) = (gx || gy) ? grout_level : level[static_cast<size_t>(ty * tiles + tx)];
+    }
+  }
+  // A faint glaze: far too weak for features away from the grout, as on a real tiled floor.
+  img += wrapped_value_noise(n, 4, rng) * (1.5 * s.contrast);
+  cv::Mat out;
+  img.convertTo(out, CV_8U);
+  return out;
+}
+
 }  // namespace
 
 cv::Mat make_procedural_texture(const TextureSpec& spec, uint64_t seed) {
@@ -145,6 +174,7 @@ cv::Mat make_procedural_texture(const TextureSpec& spec, uint64_t seed) {
   if (spec.kind == "blobs") return blob_texture(spec, rng);
   if (spec.kind == "paper") return paper_texture(spec, rng);
   if (spec.kind == "checker") return checker_texture(spec, rng);
+  if (spec.kind == "tiles") return tiles_texture(spec, rng);
   assert(false && "validate() admits only known kinds");
   return {};
 }

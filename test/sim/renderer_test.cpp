@@ -283,6 +283,51 @@ TEST(SimRendererTest, TexturesGiveHundredsOfFeaturesOnFloorPlatformAndWall) {
   }
 }
 
+// The tiled floor of issue 15: flat tiles of the given side whose only corners are where the
+// grout lines cross, and a texture that wraps without a seam (a whole number of tiles).
+TEST(SimRendererTest, TilesTextureHasCornersOnlyWhereTheGroutCrosses) {
+  TextureSpec spec;
+  spec.kind = "tiles";
+  spec.size_px = 512;
+  spec.texel_m = 0.004;   // 2.048 m of floor
+  spec.feature_m = 0.30;  // -> 7 tiles across, 73.14 px each
+  spec.mean = 150;
+  spec.contrast = 1.0;
+  const cv::Mat img = make_procedural_texture(spec, 7);
+  ASSERT_EQ(img.type(), CV_8UC1);
+  ASSERT_EQ(img.rows, 512);
+  const int tiles = 7;
+  const double cell = 512.0 / tiles;
+  cv::Mat wrapped;
+  cv::copyMakeBorder(img, wrapped, 16, 16, 16, 16, cv::BORDER_WRAP);
+  std::vector<cv::Point2f> pts;
+  cv::goodFeaturesToTrack(wrapped, pts, 1000, 0.05, 5);
+  ASSERT_GE(pts.size(), static_cast<size_t>(tiles * tiles));
+  for (const cv::Point2f& p : pts) {
+    const double x = p.x - 16, y = p.y - 16;
+    const double dx = std::abs(x / cell - std::round(x / cell)) * cell;
+    const double dy = std::abs(y / cell - std::round(y / cell)) * cell;
+    EXPECT_LT(std::max(dx, dy), 6.0) << "a corner inside a tile at " << x << ", " << y;
+  }
+  // Seamless wrap: the grout columns are evenly spaced across the wrap too (whole tiles).
+  cv::Mat column_mean;
+  cv::reduce(img, column_mean, 0, cv::REDUCE_AVG, CV_32F);
+  std::vector<int> starts;
+  for (int x = 0; x < 512; ++x) {
+    const bool dark = column_mean.at<float>(0, x) < 150 - 20;
+    const bool was_dark = column_mean.at<float>(0, (x + 511) % 512) < 150 - 20;
+    if (dark && !was_dark) starts.push_back(x);
+  }
+  ASSERT_EQ(starts.size(), static_cast<size_t>(tiles));
+  for (size_t i = 0; i < starts.size(); ++i) {
+    const int next = i + 1 < starts.size() ? starts[i + 1] : starts[0] + 512;
+    EXPECT_NEAR(next - starts[i], cell, 1.5) << "grout " << i;
+  }
+  // Different seeds give different tones, the same seed the same texture.
+  EXPECT_EQ(cv::norm(img, make_procedural_texture(spec, 7), cv::NORM_INF), 0.0);
+  EXPECT_GT(cv::norm(img, make_procedural_texture(spec, 8), cv::NORM_INF), 0.0);
+}
+
 TEST(SimRendererTest, DistantFloorIsFilteredLikeASupersampledReference) {
   // Far, oblique floor: many texels per pixel. Mip-mapping must give what 16 rays per pixel
   // average to, not the aliased value of one texel.

@@ -1,0 +1,197 @@
+"""Scene families (issue 15): scenario files drawn at random from a family's distribution, so a
+Monte Carlo over fresh seeds measures the vision on scenes nobody tuned it to.
+
+    import scene_families
+    scenario = scene_families.draw("landing_tiles", seed)   # a dict: a config/scenarios file
+
+A family is a distribution over everything a scenario holds: surfaces textured from many
+photographs (OpenCV's sample images from Debian's opencv-doc, none of those the vision tests
+use), tiled and low-texture floors, platforms of many sizes and turns, openings of several
+sizes, aspect ratios and offsets in walls of several thicknesses, wind with gusts, exposure blur
+and gain flicker. The same (family, seed) always gives the same scenario; scripts/scenes writes
+them to files and scripts/montecarlo --families flies them.
+"""
+import math
+import os
+import random
+
+PHOTO_DIR = "/usr/share/doc/opencv-doc/examples/data"
+# Photographs for floors, walls and the room behind an opening. Disjoint from the ones the
+# vision tests warp (aero1, aero3, baboon, building, graf1) and from the platform-top pool.
+SURFACE_PHOTOS = ["aloeL.jpg", "board.jpg", "box_in_scene.png", "ela_original.jpg", "home.jpg",
+                  "leuvenA.jpg", "pca_test1.jpg", "rubberwhale1.png", "squirrel_cls.jpg",
+                  "starry_night.jpg", "stuff.jpg", "graf3.png", "basketball1.png", "left.jpg",
+                  "licenseplate_motion.jpg", "Blender_Suzanne1.jpg"]
+# Photographs printed on a platform's top (a poster, a magazine, a box lid).
+TOP_PHOTOS = ["sudoku.png", "smarties.png", "butterfly.jpg", "messi5.jpg", "fruits.jpg",
+              "apple.jpg", "orange.jpg", "chicky_512.png", "text_motion.jpg", "rubberwhale2.png"]
+
+FAMILIES = {
+    "landing_photo": "photographed floor and platform tops, any size and turn, wind, blur, flicker",
+    "landing_tiles": "floor of flat grey tiles 20-40 cm (features only at their corners)",
+    "landing_lowtex": "pale low-contrast floor and a nearly blank paper platform",
+    "landing_none_photo": "a photographed floor and no platform: nothing may be found",
+    "ingress_photo": "photographed wall and room, openings of many sizes, shapes and offsets",
+    "ingress_solid_photo": "a photographed wall without an opening: nothing may be found",
+}
+
+# Flying area, sensors and sim step as in the shipped scenarios (config/scenarios/landing_a.yaml).
+_MOCAP = {"rate_hz": 100, "latency_s": 0.010, "pos_sigma_m": 0.0003, "rot_sigma_rad": 0.0015,
+          "vel_sigma_mps": 0.005, "rate_sigma_radps": 0.01}
+_IMU = {"rate_hz": 200, "accel_sigma_mps2": 0.04, "gyro_sigma_radps": 0.003,
+        "accel_bias_sigma_mps2": 0.05, "gyro_bias_sigma_radps": 0.005}
+
+
+def _pow2_width(path):
+    # The renderer scales an image down to power-of-two sides (sim/texture.cpp); the texel size
+    # applies to those pixels.
+    from PIL import Image  # python3-pil: a dependency of python3-matplotlib
+    with Image.open(path) as im:
+        w = im.size[0]
+    p = 1
+    while p * 2 <= min(w, 4096):
+        p *= 2
+    return p
+
+
+def _photo(rng, pool, extent_m):
+    """An image texture from the pool, one copy spanning extent_m (the surface repeats it)."""
+    path = os.path.join(PHOTO_DIR, rng.choice(pool))
+    return {"kind": "image", "path": path, "texel_m": round(extent_m / _pow2_width(path), 6)}
+
+
+def _procedural(rng, kind, size_px, texel_m, mean, contrast, feature_m):
+    return {"kind": kind, "seed": rng.randint(1, 999), "size_px": size_px, "texel_m": texel_m,
+            "mean": round(mean, 1), "contrast": round(contrast, 3), "feature_m": round(feature_m, 4)}
+
+
+def _wind(rng, steady_max, gust_max):
+    speed = rng.uniform(0.0, steady_max)
+    heading = rng.uniform(0.0, 2 * math.pi)
+    return {"steady_mps": [round(speed * math.cos(heading), 3), round(speed * math.sin(heading), 3), 0.0],
+            "gust_sigma_mps": round(rng.uniform(0.0, gust_max), 3),
+            "gust_tau_s": round(rng.uniform(0.5, 2.0), 2)}
+
+
+def _camera(rng, mount):
+    # Exposure 2-12 ms smeared over several samples, sensor noise, frame-to-frame gain flicker.
+    return {"mount": mount, "rate_hz": 30, "exposure_s": round(rng.uniform(0.002, 0.012), 4),
+            "noise_sigma": round(rng.uniform(1.0, 3.0), 2), "motion_blur_samples": 4,
+            "gain_jitter": round(rng.uniform(0.0, 0.06), 3)}
+
+
+def _lighting(rng, light_dir):
+    return {"ambient": round(rng.uniform(0.6, 0.85), 3), "diffuse": round(rng.uniform(0.2, 0.45), 3),
+            "light_dir_W": light_dir, "gain": round(rng.uniform(0.85, 1.15), 3),
+            "lamp_W": [round(rng.uniform(-2, 2), 2), round(rng.uniform(-2, 2), 2), 3.0],
+            "lamp_radius_m": 3.0}
+
+
+def _landing(rng, name, floor, platform):
+    s = {
+        "name": name,
+        "sim": {"physics_dt_s": 0.001, "start_utime": 1700000000000000},
+        "area": {"size_m": [6.0, 6.0], "center_xy_m": [0.0, 0.0], "height_m": 4.0,
+                 "floor_texture": floor},
+        "wind": _wind(rng, 0.7, 0.4),
+        "mocap": dict(_MOCAP), "imu": dict(_IMU),
+        "camera": _camera(rng, "downward"),
+        "lighting": _lighting(rng, [0.3, 0.2, 1.0]),
+        "randomize": {"platform_xy_m": 0.0, "platform_yaw_deg": 0, "start_clearance_m": 0.5,
+                      "light_gain": 0.15, "light_dir_deg": 30, "light_falloff": 0.2},
+        "start": {"position_m": [0.0, 0.0, 0.0], "yaw_deg": 0.0},
+    }
+    if platform is not None:
+        s["platform"] = platform
+    return s
+
+
+def _platform(rng, top_of_length):
+    # Anything from a ream of paper to a small crate: long side 25-50 cm, short side 20-32 cm
+    # (the gear footprint plus margins fits on all), 8-22 cm high, any turn.
+    length = rng.uniform(0.25, 0.50)
+    width = rng.uniform(0.20, min(0.32, length))
+    # Anywhere in the vehicles' search rectangle (autonomy.detection.landing_area_*: x -0.2..2,
+    # y -0.5..1.5) with its edges inside it and clear of the start.
+    return {"center_xy_m": [round(rng.uniform(0.8, 1.6), 3), round(rng.uniform(-0.15, 1.15), 3)],
+            "size_m": [round(length, 3), round(width, 3), round(rng.uniform(0.08, 0.22), 3)],
+            "yaw_deg": round(rng.uniform(-90, 90), 1),
+            "texture": top_of_length(length)}
+
+
+def _top(rng, length_m):
+    # A photograph at least as long as the top, so it shows one picture, not a repeated one.
+    if rng.random() < 0.6:
+        return _photo(rng, TOP_PHOTOS, length_m * rng.uniform(1.0, 1.3))
+    return _procedural(rng, "paper", 1024, 0.001, rng.uniform(190, 215), rng.uniform(0.6, 1.0),
+                       rng.uniform(0.006, 0.010))
+
+
+def _ingress(rng, name, opening):
+    wall_x = 3.0
+    s = {
+        "name": name,
+        "sim": {"physics_dt_s": 0.001, "start_utime": 1700000000000000},
+        "area": {"size_m": [9.0, 6.0], "center_xy_m": [1.5, 0.0], "height_m": 4.0,
+                 "floor_texture": _floor_any(rng)},
+        "wall": {"x_m": wall_x, "center_y_m": 0.0, "width_m": 4.0, "height_m": 2.5,
+                 "thickness_m": round(rng.uniform(0.05, 0.30), 3), "room_depth_m": 3.0,
+                 "texture": _photo(rng, SURFACE_PHOTOS, rng.uniform(1.5, 3.0)),
+                 "room_texture": _photo(rng, SURFACE_PHOTOS, rng.uniform(1.5, 3.0))},
+        "wind": _wind(rng, 0.4, 0.3),
+        "mocap": dict(_MOCAP), "imu": dict(_IMU),
+        "camera": _camera(rng, "forward"),
+        "lighting": _lighting(rng, [-0.6, 0.3, 1.0]),
+        "randomize": {"light_gain": 0.15, "light_dir_deg": 30, "light_falloff": 0.2},
+        "start": {"position_m": [0.0, 0.0, 0.0], "yaw_deg": 0.0},
+    }
+    if opening is not None:
+        s["wall"]["opening"] = opening
+    return s
+
+
+def _floor_any(rng):
+    if rng.random() < 0.5:
+        return _photo(rng, SURFACE_PHOTOS, rng.uniform(1.5, 3.0))
+    return _procedural(rng, "noise", 2048, 0.003, rng.uniform(80, 150), rng.uniform(0.5, 1.0), 0.03)
+
+
+def _opening(rng):
+    # Windows and doors the Pelican and the STARMAC (67 and 75 cm across) fit through with room:
+    # 85-130 cm wide, 55-110 cm high, centred anywhere 45 cm either side of the wall's middle and
+    # 0.9-1.5 m up (the sill at least 35 cm above the floor).
+    w = rng.uniform(0.85, 1.30)
+    h = rng.uniform(0.55, 1.10)
+    zc = rng.uniform(max(0.9, 0.35 + h / 2), 1.5)
+    return {"center_yz_m": [round(rng.uniform(-0.45, 0.45), 3), round(zc, 3)],
+            "size_m": [round(w, 3), round(h, 3)]}
+
+
+def draw(family, seed):
+    """The scenario (a dict, as a config/scenarios file holds) that `seed` draws from `family`."""
+    if family not in FAMILIES:
+        raise KeyError("unknown scene family '%s' (known: %s)" % (family, ", ".join(sorted(FAMILIES))))
+    rng = random.Random("%s/%d" % (family, seed))
+    if family == "landing_photo":
+        return _landing(rng, family, _photo(rng, SURFACE_PHOTOS, rng.uniform(1.5, 3.0)),
+                        _platform(rng, lambda length: _top(rng, length)))
+    if family == "landing_tiles":
+        floor = _procedural(rng, "tiles", 2048, 0.002, rng.uniform(110, 190), rng.uniform(0.5, 1.0),
+                            rng.uniform(0.20, 0.40))
+        return _landing(rng, family, floor, _platform(rng, lambda length: _top(rng, length)))
+    if family == "landing_lowtex":
+        floor = _procedural(rng, "noise", 2048, 0.003, rng.uniform(170, 210), rng.uniform(0.12, 0.3),
+                            rng.uniform(0.02, 0.06))
+        top = _procedural(rng, "paper", 1024, 0.001, rng.uniform(215, 235), rng.uniform(0.25, 0.5),
+                          rng.uniform(0.006, 0.010))
+        return _landing(rng, family, floor, _platform(rng, lambda length: top))
+    if family == "landing_none_photo":
+        return _landing(rng, family, _photo(rng, SURFACE_PHOTOS, rng.uniform(1.5, 3.0)), None)
+    if family == "ingress_photo":
+        return _ingress(rng, family, _opening(rng))
+    assert family == "ingress_solid_photo"
+    return _ingress(rng, family, None)
+
+
+def mission_of(family):
+    return "ingress" if family.startswith("ingress") else "landing"

@@ -1,0 +1,87 @@
+"""Scene families (scripts/scene_families.py, issue 15): every draw is a scenario the simulator
+accepts, the same (family, seed) gives the same scenario, and the draws keep the promises the
+family makes (the platform inside the search rectangle, openings the vehicles fit through inside
+the wall, photographs other than the vision tests' own).
+Usage: scene_families_test.py SCRIPTS_DIR ALIGHT_PARAMS_BIN VEHICLE_FILE"""
+import math
+import os
+import subprocess
+import sys
+import tempfile
+
+import yaml
+
+scripts, params_bin, vehicle_file = sys.argv[1], sys.argv[2], sys.argv[3]
+sys.path.insert(0, scripts)
+import scene_families  # noqa: E402
+
+VISION_TEST_PHOTOS = {"aero1.jpg", "aero3.jpg", "baboon.jpg", "building.jpg", "graf1.png"}
+with open(vehicle_file) as f:
+    detection = yaml.safe_load(f)["autonomy"]["detection"]
+area_min, area_max = detection["landing_area_min_W_m"], detection["landing_area_max_W_m"]
+
+
+def textures(s):
+    out = [s["area"]["floor_texture"]]
+    if "platform" in s:
+        out.append(s["platform"]["texture"])
+    if "wall" in s:
+        out += [s["wall"]["texture"], s["wall"]["room_texture"]]
+    return out
+
+
+checked = 0
+with tempfile.TemporaryDirectory() as tmp:
+    for family in scene_families.FAMILIES:
+        for seed in range(1, 41):
+            s = scene_families.draw(family, seed)
+            assert s == scene_families.draw(family, seed), (family, seed)
+            for t in textures(s):
+                if t["kind"] == "image":
+                    assert os.path.exists(t["path"]), t["path"]
+                    assert os.path.basename(t["path"]) not in VISION_TEST_PHOTOS, t["path"]
+            if family.startswith("landing"):
+                assert ("platform" in s) == (family != "landing_none_photo"), family
+                assert s["camera"]["mount"] == "downward"
+            if "platform" in s:
+                p = s["platform"]
+                (cx, cy), (length, width, height) = p["center_xy_m"], p["size_m"]
+                assert 0.20 <= width <= length <= 0.50 and 0.08 <= height <= 0.22, p
+                yaw = math.radians(p["yaw_deg"])
+                for sx in (-1, 1):
+                    for sy in (-1, 1):
+                        x = cx + math.cos(yaw) * sx * length / 2 - math.sin(yaw) * sy * width / 2
+                        y = cy + math.sin(yaw) * sx * length / 2 + math.cos(yaw) * sy * width / 2
+                        assert area_min[0] <= x <= area_max[0] and area_min[1] <= y <= area_max[1], \
+                            (family, seed, "platform corner outside the search rectangle", x, y)
+                        assert math.hypot(x, y) > 0.35, (family, seed, "platform under the start")
+            if family.startswith("ingress"):
+                w = s["wall"]
+                assert ("opening" in w) == (family == "ingress_photo"), family
+                assert s["camera"]["mount"] == "forward"
+                if "opening" in w:
+                    (oy, oz), (ow, oh) = w["opening"]["center_yz_m"], w["opening"]["size_m"]
+                    assert ow >= 0.85, (seed, "narrower than the STARMAC plus clearance", ow)
+                    assert oz - oh / 2 >= 0.35 - 1e-9 and oz + oh / 2 <= w["height_m"], (seed, oz, oh)
+                    assert abs(oy) + ow / 2 <= w["width_m"] / 2, (seed, oy, ow)
+            speed = math.hypot(*s["wind"]["steady_mps"][:2])
+            assert speed <= 0.7 + 1e-9 and s["wind"]["gust_sigma_mps"] <= 0.4 + 1e-9, s["wind"]
+            # The simulator's own loader accepts it: every key known, every value in range.
+            if seed <= 4:
+                path = os.path.join(tmp, "%s-%d.yaml" % (family, seed))
+                with open(path, "w") as f:
+                    yaml.safe_dump(s, f)
+                r = subprocess.run([params_bin, "--dump", path, "--kind", "scenario"],
+                                   stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                assert r.returncode == 0, (path, r.stderr)
+                checked += 1
+    # Draws vary: 40 seeds of a family are 40 different scenes.
+    for family in scene_families.FAMILIES:
+        assert len({repr(scene_families.draw(family, k)) for k in range(1, 41)}) == 40, family
+    try:
+        scene_families.draw("no_such_family", 1)
+        raise AssertionError("an unknown family was drawn")
+    except KeyError as e:
+        assert "landing_tiles" in str(e), e
+print("scene families: %d families x 40 seeds checked, %d loaded by alight-params"
+      % (len(scene_families.FAMILIES), checked))
