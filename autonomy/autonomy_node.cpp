@@ -34,6 +34,7 @@
 int main(int argc, char** argv) {
   return alight::run_node_main("alight-autonomy", [&]() -> int {
     namespace au = alight::autonomy;
+    namespace ch = alight::channels;
     CLI::App app{"alight autonomy loop: detection, refinement and approach for landing / ingress"};
     alight::NodeArgs args;
     args.add_to(app, true);
@@ -116,7 +117,7 @@ int main(int argc, char** argv) {
               verifier->n_rejected(static_cast<alight::CommandVerdict::Reason>(r)));
       st.wall_utime = alight::wall_utime();
     };
-    alight::Node node(args.lcm_url, "alight-autonomy");
+    alight::Node node(args, "alight-autonomy");
 
     int64_t now_utime = 0;
     int64_t last_status_utime = 0;
@@ -155,7 +156,7 @@ int main(int argc, char** argv) {
       if (autonomy.restart_state() != saved_state) save_state();
       // Nothing before the first pose: a motors-off setpoint would disarm a flying vehicle.
       if (out.has_setpoint)
-        node.publish("POSITION_SETPOINT", alight::outer_loop::to_msg(out.setpoint));
+        node.publish(ch::kPositionSetpoint, alight::outer_loop::to_msg(out.setpoint));
       const std::string phase_reason =
           std::string(au::phase_name(out.status.phase)) + ": " + out.status.reason;
       const bool changed = phase_reason != last_phase_reason;
@@ -167,46 +168,46 @@ int main(int argc, char** argv) {
         last_status = au::to_msg(out.status);
         if (verifier) last_status.cmds_rejected += static_cast<int32_t>(verifier->n_rejected());
         fill_link_status(last_status);
-        node.publish("AUTONOMY_STATUS", last_status);
+        node.publish(ch::kAutonomyStatus, last_status);
         last_status_utime = now_utime;
         last_status_wall = alight::wall_utime();
       }
     };
 
-    node.on<alight::pose_t>("MOCAP_POSE", [&](const alight::pose_t& m) {
+    node.on<alight::pose_t>(ch::kMocapPose, [&](const alight::pose_t& m) {
       std::string why;
       au::Inputs in;
       in.pose = alight::pose_from_msg(m, &why);
-      if (!in.pose) return (void)node.reject_value("MOCAP_POSE", why);
-      if (!node.accept_stamp("MOCAP_POSE", m.utime)) return;
+      if (!in.pose) return (void)node.reject_value(ch::kMocapPose, why);
+      if (!node.accept_stamp(ch::kMocapPose, m.utime)) return;
       now_utime = std::max(now_utime, m.utime);
       step(in);
     });
-    node.on<alight::imu_t>("IMU", [&](const alight::imu_t& m) {
+    node.on<alight::imu_t>(ch::kImu, [&](const alight::imu_t& m) {
       std::string why;
       au::Inputs in;
       in.imu = au::imu_from_msg(m, &why);
-      if (!in.imu) return (void)node.reject_value("IMU", why);
-      if (!node.accept_stamp("IMU", m.utime)) return;
+      if (!in.imu) return (void)node.reject_value(ch::kImu, why);
+      if (!node.accept_stamp(ch::kImu, m.utime)) return;
       // The clock starts with the first pose. The first stamp of all is judged against the wall
       // clock only, and sensor time (a simulator's) may lie far behind it: an IMU sample an hour
       // ahead as the very first message would otherwise set the clock for good.
       if (now_utime != 0) now_utime = std::max(now_utime, m.utime);
       step(in);
     });
-    node.on<alight::target_t>("VISION_TARGET", [&](const alight::target_t& m) {
+    node.on<alight::target_t>(ch::kVisionTarget, [&](const alight::target_t& m) {
       std::string why;
       au::Inputs in;
       in.target = au::target_from_msg(m, &why);
-      if (!in.target) return (void)node.reject_value("VISION_TARGET", why);
-      if (!node.accept_stamp("VISION_TARGET", m.utime)) return;
+      if (!in.target) return (void)node.reject_value(ch::kVisionTarget, why);
+      if (!node.accept_stamp(ch::kVisionTarget, m.utime)) return;
       step(in);
     });
-    node.on<alight::operator_cmd_t>("OPERATOR_CMD", [&](const alight::operator_cmd_t& m) {
+    node.on<alight::operator_cmd_t>(ch::kOperatorCmd, [&](const alight::operator_cmd_t& m) {
       au::Inputs in;
       std::string why;
       in.command = au::command_from_msg(m, &why);
-      if (!in.command) return (void)node.reject_value("OPERATOR_CMD", why);
+      if (!in.command) return (void)node.reject_value(ch::kOperatorCmd, why);
       if (m.auth != alight::operator_cmd_t::AUTH_NONE && verifier) {
         const auto verdict = verifier->check(m, alight::wall_utime());
         if (!verdict.accepted()) {
@@ -236,7 +237,7 @@ int main(int argc, char** argv) {
         alight::autonomy_status_t st = last_status;
         st.reason = "no sensor input: " + st.reason;
         fill_link_status(st);
-        node.publish("AUTONOMY_STATUS", st);
+        node.publish(ch::kAutonomyStatus, st);
         last_status_wall = wall;
       }
     });

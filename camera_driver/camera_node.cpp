@@ -187,7 +187,7 @@ int run_stored(const Options& o, const CameraParams& p, const SourceSpec& spec) 
                o.as_fast_as_possible ? std::string("full speed") : std::to_string(fps) + " fps",
                p.output_encoding, p.channel);
   const int64_t offset_us = measure_clock_offset_us();
-  Node node(o.args.lcm_url, "alight-camera");
+  Node node(o.args, "alight-camera");
   Publisher pub{node, p.channel, enc};
   FramePacer pacer(fps, mono_now_us());
   int64_t seq = 0;
@@ -260,7 +260,7 @@ int run_camera(const Options& o, const CameraParams& p) {
   check_camera_info(p, f.width, f.height);
 
   const int64_t offset_us = measure_clock_offset_us();
-  Node node(o.args.lcm_url, "alight-camera");
+  Node node(o.args, "alight-camera");
   Publisher pub{node, p.channel, *parse_output_encoding(p.output_encoding)};
   RateLimitedLog log;
   FrameLabeler labeler(offset_us, p.exposure_us);

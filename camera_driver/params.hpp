@@ -8,6 +8,7 @@
 
 #include "camera_driver/supervisor.hpp"
 #include "camera_driver/v4l2_capture.hpp"
+#include "common/channels.hpp"
 #include "common/param_schema.hpp"
 
 namespace alight::camera {
@@ -28,7 +29,7 @@ struct CameraParams {
   int gain = -1;
   int buffer_count = 4;
   std::string camera_info = "firefly_mv_4mm.yaml";  ///< resolved against the file's folder
-  std::string channel = "CAMERA";
+  std::string channel = channels::kCamera;
   double backoff_initial_s = 0.1;
   double backoff_max_s = 5.0;
   double stall_timeout_s = 2.0;

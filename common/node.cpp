@@ -38,6 +38,10 @@ void NodeArgs::add_to(CLI::App& app, bool config_required) {
                  "LCM URL (default: $LCM_DEFAULT_URL, else " + std::string(kDefaultLcmUrl) + ")");
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error")
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error"}));
+  app.add_option("--remap", remap_args,
+                 "FROM=TO: use channel TO where this process would use FROM (repeatable; FROM "
+                 "one of the channels in common/channels.hpp)")
+      ->allow_extra_args(false);
 }
 
 void NodeArgs::finalize() {
@@ -46,6 +50,8 @@ void NodeArgs::finalize() {
     lcm_url = (env && *env) ? env : kDefaultLcmUrl;
   }
   spdlog::set_level(spdlog::level::from_str(log_level));
+  remap = parse_remaps(remap_args);
+  for (const auto& [from, to] : remap.map()) spdlog::info("channel {} remapped to {}", from, to);
 }
 
 std::string with_receive_buffer(const std::string& url, int bytes) {
@@ -103,6 +109,10 @@ Node::Node(const std::string& lcm_url, std::string name)
         name_, rmem, kDefaultRecvBufBytes);
 }
 
+Node::Node(const NodeArgs& args, std::string name) : Node(args.lcm_url, std::move(name)) {
+  remap_ = args.remap;
+}
+
 Node::~Node() {
   for (auto& s : subs_)
     if (s->handle) lcm_->unsubscribe(s->handle);
@@ -143,14 +153,16 @@ void Node::report_decode_error(const std::string& channel, uint32_t size) {
         name_, n, channel, size);
 }
 
-bool Node::reject_value(const std::string& channel, const std::string& why) {
+bool Node::reject_value(const std::string& name, const std::string& why) {
+  const std::string channel = remap_(name);
   const uint64_t n = ++stats_[channel].rejected_values;
   if (log_this(n))
     spdlog::warn("{}: {} message(s) on {} refused (last: {})", name_, n, channel, why);
   return false;
 }
 
-bool Node::accept_stamp(const std::string& channel, int64_t utime) {
+bool Node::accept_stamp(const std::string& name, int64_t utime) {
+  const std::string channel = remap_(name);
   const StampVerdict v = stamps_.check(channel, utime, steady_utime(), wall_utime());
   if (v == StampVerdict::kRestarted)
     spdlog::warn("{}: stamps on {} went back to {} and stayed there: taken as a restart", name_,
@@ -185,7 +197,7 @@ node_status_t Node::status_message(int64_t wall) const {
 
 const ChannelStats& Node::stats(const std::string& channel) const {
   static const ChannelStats kEmpty;
-  auto it = stats_.find(channel);
+  auto it = stats_.find(remap_(channel));
   return it == stats_.end() ? kEmpty : it->second;
 }
 
@@ -210,7 +222,7 @@ int Node::spin_once(int timeout_ms) {
     status_timer_added_ = true;
     if (status_period_s_ > 0)
       every(status_period_s_,
-            [this](int64_t wall) { publish("NODE_STATUS", status_message(wall)); });
+            [this](int64_t wall) { publish(channels::kNodeStatus, status_message(wall)); });
   }
   if (!timers_.empty()) {
     int64_t next = timers_.front().next_utime;
@@ -252,6 +264,9 @@ int run_node_main(const char* node_name, const std::function<int()>& body) {
     return body();
   } catch (const ParamError& e) {
     spdlog::error("{}: configuration error: {}", node_name, e.what());
+    return 2;
+  } catch (const RemapError& e) {
+    spdlog::error("{}: {}", node_name, e.what());
     return 2;
   } catch (const std::exception& e) {
     spdlog::error("{}: {}", node_name, e.what());

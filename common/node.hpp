@@ -14,8 +14,9 @@
 //
 // Every input is untrusted: besides decode errors, a node counts the messages its conversions
 // refuse (reject_value) and the stamps its StampGuard refuses (accept_stamp), and publishes all
-// counters on NODE_STATUS once a second. Timers run on the steady clock, so a wall-clock step
-// neither freezes nor bursts them.
+// counters on NODE_STATUS once a second. Channels are named in the code by common/channels.hpp
+// and renamed per process by --remap FROM=TO (NodeArgs, Node(const NodeArgs&, ...)). Timers run on
+// the steady clock, so a wall-clock step neither freezes nor bursts them.
 
 #include <alight/node_status_t.hpp>
 #include <atomic>
@@ -27,6 +28,7 @@
 #include <string>
 #include <vector>
 
+#include "common/channels.hpp"
 #include "common/decode.hpp"
 #include "common/stamp_guard.hpp"
 
@@ -46,10 +48,13 @@ struct NodeArgs {
   std::string config;   ///< --config FILE (component parameters)
   std::string lcm_url;  ///< --lcm-url URL, else $LCM_DEFAULT_URL, else kDefaultLcmUrl
   std::string log_level = "info";
+  std::vector<std::string> remap_args;  ///< --remap FROM=TO, repeatable
+  ChannelRemap remap;                   ///< remap_args parsed by finalize()
 
-  /// Adds --config, --lcm-url and --log-level to an app that has options of its own.
+  /// Adds --config, --lcm-url, --log-level and --remap to an app that has options of its own.
   void add_to(CLI::App& app, bool config_required);
-  /// Fills lcm_url from the environment when not given, and applies the log level.
+  /// Fills lcm_url from the environment when not given, applies the log level and parses the
+  /// remaps (throws RemapError, which run_node_main turns into exit code 2).
   void finalize();
 };
 
@@ -73,13 +78,16 @@ class Node {
  public:
   /// Connects to LCM; throws std::runtime_error naming the URL when that fails.
   explicit Node(const std::string& lcm_url, std::string name = "alight");
+  /// Connects to args.lcm_url and renames channels by args.remap.
+  Node(const NodeArgs& args, std::string name);
   ~Node();
   Node(const Node&) = delete;
   Node& operator=(const Node&) = delete;
 
   /// Calls `fn` for every message on `channel`, in arrival order.
   template <class Msg>
-  void on(const std::string& channel, std::function<void(const Msg&)> fn) {
+  void on(const std::string& name, std::function<void(const Msg&)> fn) {
+    const std::string channel = remap_(name);
     subscribe_raw(channel, false, [this, channel, fn](const void* data, uint32_t size) {
       Msg msg;
       if (decode(channel, msg, data, size)) fn(msg);
@@ -88,7 +96,8 @@ class Node {
   /// Calls `fn` with only the newest message on `channel` each time the node catches up, so a
   /// slow consumer works on the newest frame instead of a backlog.
   template <class Msg>
-  void on_latest(const std::string& channel, std::function<void(const Msg&)> fn) {
+  void on_latest(const std::string& name, std::function<void(const Msg&)> fn) {
+    const std::string channel = remap_(name);
     subscribe_raw(channel, true, [this, channel, fn](const void* data, uint32_t size) {
       Msg msg;
       if (decode(channel, msg, data, size)) fn(msg);
@@ -96,7 +105,7 @@ class Node {
   }
   template <class Msg>
   int publish(const std::string& channel, const Msg& msg) {
-    return lcm_->publish(channel, &msg);
+    return lcm_->publish(remap_(channel), &msg);
   }
   /// Calls `fn(wall_utime)` every `period_s` of steady time (the argument is the wall clock, for
   /// stamping messages; never use it to measure intervals).
@@ -132,6 +141,9 @@ class Node {
 
   const ChannelStats& stats(const std::string& channel) const;
   lcm::LCM& lcm() { return *lcm_; }
+  /// The name on LCM of a channel named in the code (channels.hpp): its --remap target or itself.
+  /// Every method above that takes a channel applies it.
+  std::string channel_name(const std::string& channel) const { return remap_(channel); }
   const std::string& name() const { return name_; }
 
   /// Installs the SIGINT / SIGTERM handlers that make run() return (called by the constructor).
@@ -155,6 +167,7 @@ class Node {
   void run_timers(int64_t steady_now);
 
   std::string name_;
+  ChannelRemap remap_;
   std::unique_ptr<lcm::LCM> lcm_;
   std::vector<std::unique_ptr<Subscription>> subs_;
   std::map<std::string, ChannelStats> stats_;

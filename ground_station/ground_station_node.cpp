@@ -79,7 +79,7 @@ int main(int argc, char** argv) {
     options.token = gs::make_session_token();
     options.require_token = require_token;
 
-    alight::Node node(args.lcm_url, "alight-ground-station");
+    alight::Node node(args, "alight-ground-station");
     gs::Station station(params, options);
     station.attach(node);
     const int bound = station.start();

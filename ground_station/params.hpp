@@ -6,19 +6,20 @@
 
 #include <string>
 
+#include "common/channels.hpp"
 #include "common/param_schema.hpp"
 
 namespace alight::ground_station {
 
 struct GroundStationParams {
   // Channels (docs/ARCHITECTURE.md "Channels").
-  std::string camera_channel = "CAMERA";
-  std::string diag_channel = "VISION_DIAG";
-  std::string status_channel = "AUTONOMY_STATUS";
-  std::string target_channel = "VISION_TARGET";
-  std::string process_channel = "PROCESS_STATUS";
-  std::string pose_channel = "MOCAP_POSE";
-  std::string command_channel = "OPERATOR_CMD";
+  std::string camera_channel = channels::kCamera;
+  std::string diag_channel = channels::kVisionDiag;
+  std::string status_channel = channels::kAutonomyStatus;
+  std::string target_channel = channels::kVisionTarget;
+  std::string process_channel = channels::kProcessStatus;
+  std::string pose_channel = channels::kMocapPose;
+  std::string command_channel = channels::kOperatorCmd;
 
   std::string vehicle_id = "alight";
   double ack_timeout_s = 1.0;

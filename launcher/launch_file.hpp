@@ -26,6 +26,7 @@
 #include <string>
 #include <vector>
 
+#include "common/channels.hpp"
 #include "common/params.hpp"
 
 namespace alight::launcher {
@@ -61,7 +62,7 @@ struct LaunchFile {
   std::string record_channels = ".*";  ///< lcm-logger channel regex
   double stop_timeout_s = 3.0;         ///< grace between SIGINT and SIGKILL [s]
   double status_period_s = 1.0;        ///< PROCESS_STATUS period [s]
-  std::string status_channel = "PROCESS_STATUS";
+  std::string status_channel = channels::kProcessStatus;
   BackoffParams backoff;
   std::vector<ProcessSpec> processes;
   void validate() const;

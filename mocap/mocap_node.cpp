@@ -126,7 +126,7 @@ int main(int argc, char** argv) {
     const std::string where = address.host + ":" + std::to_string(address.port);
     const std::string input = "vrpn:" + params.server.tracker;
 
-    Node node(args.lcm_url, "alight-mocap");
+    Node node(args, "alight-mocap");
     mocap::TrackerClient client(params);
     node.set_input_stats(input, {});
     spdlog::info("alight-mocap: {} sensor {} from {}, room {} {}-up, stamps {}, velocity {} -> {}",

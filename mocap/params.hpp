@@ -8,6 +8,7 @@
 #include <optional>
 #include <string>
 
+#include "common/channels.hpp"
 #include "common/param_schema.hpp"
 
 namespace alight::mocap {
@@ -75,7 +76,7 @@ struct MocapParams {
   BodyParams body;
   StampParams stamp;
   VelocityParams velocity;
-  std::string channel = "MOCAP_POSE";  ///< pose_t output
+  std::string channel = channels::kMocapPose;  ///< pose_t output
 
   static const ParamSchema<MocapParams>& schema();
   void validate() const;  ///< throws ParamError naming the field and its value

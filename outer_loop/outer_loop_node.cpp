@@ -28,7 +28,7 @@ int main(int argc, char** argv) {
     args.add_to(app, true);
     namespace ol = alight::outer_loop;
     ol::RunnerOptions options;
-    std::string cmd_channel = "ATTITUDE_CMD", state_file;
+    std::string cmd_channel = alight::channels::kAttitudeCmd, state_file;
     double state_max_age_s = 10.0;
     app.add_option("--pose-channel", options.pose_channel, "pose_t input");
     app.add_option("--setpoint-channel", options.setpoint_channel, "position_setpoint_t input");
@@ -57,7 +57,7 @@ int main(int argc, char** argv) {
       spdlog::warn("outer loop: restored from {}: failsafe latched {}, armed {}", state_file,
                    restored.disarm_latched, restored.armed);
 
-    alight::Node node(args.lcm_url, "alight-outer-loop");
+    alight::Node node(args, "alight-outer-loop");
     ol::InputGate gate;
     gate.reject_value = [&](const std::string& ch, const std::string& why) {
       return node.reject_value(ch, why);

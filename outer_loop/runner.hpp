@@ -17,6 +17,7 @@
 #include <optional>
 #include <string>
 
+#include "common/channels.hpp"
 #include "common/pose_buffer.hpp"
 #include "outer_loop/position_controller.hpp"
 
@@ -30,8 +31,8 @@ struct InputGate {
 };
 
 struct RunnerOptions {
-  std::string pose_channel = "MOCAP_POSE";
-  std::string setpoint_channel = "POSITION_SETPOINT";
+  std::string pose_channel = channels::kMocapPose;
+  std::string setpoint_channel = channels::kPositionSetpoint;
   /// tick() steps the controller only when no input stepped it for this long [s] (steady).
   double tick_quiet_s = 0.02;
 };

@@ -66,24 +66,24 @@ int main(int argc, char** argv) {
 
     sim::Simulator simulator(scenario, vehicle, seed, rig);
     simulator.set_render_threads(threads);
-    Node node(with_receive_buffer(args.lcm_url), "alight-sim");
+    Node node(args, "alight-sim");
     // Disarmed until the outer loop says otherwise; its silence is the autopilot's command-loss
     // failsafe's business (Simulator::advance_to).
-    node.on<attitude_cmd_t>("ATTITUDE_CMD", [&](const attitude_cmd_t& m) {
+    node.on<attitude_cmd_t>(channels::kAttitudeCmd, [&](const attitude_cmd_t& m) {
       std::string why;
       if (const auto cmd = sim::command_from_msg(m, simulator.now_utime(),
                                                  vehicle.cmd_loss_timeout_s, &why)) {
         simulator.command(*cmd);
       } else {
-        node.reject_value("ATTITUDE_CMD", why);
+        node.reject_value(channels::kAttitudeCmd, why);
       }
     });
     bool command_lost = false;
     // Test hook of the fault campaign: sensor dropouts on request (sim/sensor_gate.hpp).
     sim::SensorGates gates;
-    node.on<sim_control_t>("SIM_CONTROL", [&](const sim_control_t& m) {
+    node.on<sim_control_t>(channels::kSimControl, [&](const sim_control_t& m) {
       if (const auto why = gates.apply(m, simulator.now_utime())) {
-        node.reject_value("SIM_CONTROL", *why);
+        node.reject_value(channels::kSimControl, *why);
       } else {
         spdlog::info("alight-sim: SIM_CONTROL: mocap off {} s, camera off {} s, imu off {} s",
                      m.mocap_off_s, m.camera_off_s, m.imu_off_s);
@@ -124,13 +124,13 @@ int main(int argc, char** argv) {
       }
       const int64_t now = simulator.now_utime();
       for (const auto& m : simulator.take_mocap())
-        if (gates.mocap.on(now)) node.publish("MOCAP_POSE", sim::to_msg(m));
+        if (gates.mocap.on(now)) node.publish(channels::kMocapPose, sim::to_msg(m));
       for (const auto& m : simulator.take_imu())
-        if (gates.imu.on(now)) node.publish("IMU", sim::to_msg(m));
+        if (gates.imu.on(now)) node.publish(channels::kImu, sim::to_msg(m));
       if (auto frame = simulator.take_camera())
-        if (gates.camera.on(now)) node.publish("CAMERA", sim::to_msg(*frame));
+        if (gates.camera.on(now)) node.publish(channels::kCamera, sim::to_msg(*frame));
       if (simulator.now_utime() >= next_truth) {
-        node.publish("SIM_TRUTH", sim::to_msg(simulator.truth()));
+        node.publish(channels::kSimTruth, sim::to_msg(simulator.truth()));
         next_truth += kTruthPeriodUs;
       }
     }

@@ -17,6 +17,7 @@
 #include <map>
 #include <set>
 
+#include "common/channels.hpp"
 #include "common/decode.hpp"
 
 namespace alight::tools::faults {
@@ -171,7 +172,7 @@ node_status_t make_default<node_status_t>(int64_t t) {
   m.node = "alight-inject";
   m.pid = 1;
   channel_stats_t c{};
-  c.channel = "MOCAP_POSE";
+  c.channel = channels::kMocapPose;
   m.channels = {c};
   m.n = 1;
   return m;
@@ -372,18 +373,18 @@ const std::map<std::string, TypeOps>& registry() {
 
 const std::map<std::string, std::string>& channel_types() {
   static const std::map<std::string, std::string> c{
-      {"MOCAP_POSE", "pose_t"},
-      {"IMU", "imu_t"},
-      {"CAMERA", "image_t"},
-      {"VISION_DIAG", "image_t"},
-      {"VISION_TARGET", "target_t"},
-      {"POSITION_SETPOINT", "position_setpoint_t"},
-      {"ATTITUDE_CMD", "attitude_cmd_t"},
-      {"AUTONOMY_STATUS", "autonomy_status_t"},
-      {"OPERATOR_CMD", "operator_cmd_t"},
-      {"PROCESS_STATUS", "process_status_t"},
-      {"NODE_STATUS", "node_status_t"},
-      {"SIM_TRUTH", "sim_truth_t"},
+      {channels::kMocapPose, "pose_t"},
+      {channels::kImu, "imu_t"},
+      {channels::kCamera, "image_t"},
+      {channels::kVisionDiag, "image_t"},
+      {channels::kVisionTarget, "target_t"},
+      {channels::kPositionSetpoint, "position_setpoint_t"},
+      {channels::kAttitudeCmd, "attitude_cmd_t"},
+      {channels::kAutonomyStatus, "autonomy_status_t"},
+      {channels::kOperatorCmd, "operator_cmd_t"},
+      {channels::kProcessStatus, "process_status_t"},
+      {channels::kNodeStatus, "node_status_t"},
+      {channels::kSimTruth, "sim_truth_t"},
   };
   return c;
 }
@@ -430,7 +431,7 @@ std::optional<std::string> type_of_channel(const std::string& channel) {
 std::vector<std::string> injectable_channels() {
   std::vector<std::string> out;
   for (const auto& [ch, type] : channel_types())
-    if (ch != "SIM_TRUTH") out.push_back(ch);
+    if (ch != channels::kSimTruth) out.push_back(ch);
   return out;
 }
 

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstdio>
 
+#include "common/channels.hpp"
+
 namespace alight::tools {
 
 namespace {
@@ -88,7 +90,7 @@ double FaultScorer::height_above_surface(const sim_truth_t& t) const {
 
 void FaultScorer::add(const sim_truth_t& m, int64_t received_utime) {
   seen(received_utime);
-  if (!fresh("SIM_TRUTH", m.utime, received_utime)) return;
+  if (!fresh(channels::kSimTruth, m.utime, received_utime)) return;
   if (!first_truth_) first_truth_ = m;
   if (last_truth_ && last_truth_->armed && !m.armed) {
     ++disarms_;
@@ -108,7 +110,7 @@ void FaultScorer::add(const sim_truth_t& m, int64_t received_utime) {
 
 void FaultScorer::add(const attitude_cmd_t& m, int64_t received_utime) {
   seen(received_utime);
-  if (!fresh("ATTITUDE_CMD", m.utime, received_utime)) return;
+  if (!fresh(channels::kAttitudeCmd, m.utime, received_utime)) return;
   if (descent_mode(m.mode) && m.armed) failsafe_seen_ = true;
   last_cmd_ = m;
   last_cmd_received_ = received_utime;
@@ -116,7 +118,7 @@ void FaultScorer::add(const attitude_cmd_t& m, int64_t received_utime) {
 
 void FaultScorer::add(const autonomy_status_t& m, int64_t received_utime) {
   seen(received_utime);
-  if (!fresh("AUTONOMY_STATUS", m.utime, received_utime)) return;
+  if (!fresh(channels::kAutonomyStatus, m.utime, received_utime)) return;
   if (m.phase == autonomy_status_t::PHASE_FAILSAFE) failsafe_seen_ = true;
   last_status_ = m;
   last_status_received_ = received_utime;
@@ -125,7 +127,7 @@ void FaultScorer::add(const autonomy_status_t& m, int64_t received_utime) {
 
 void FaultScorer::add(const process_status_t& m, int64_t received_utime) {
   seen(received_utime);
-  if (!fresh("PROCESS_STATUS", m.utime, received_utime)) return;
+  if (!fresh(channels::kProcessStatus, m.utime, received_utime)) return;
   for (const auto& p : m.processes) {
     if (p.state == process_info_t::STATE_STOPPED && !shutdown_received_)
       shutdown_received_ = received_utime;

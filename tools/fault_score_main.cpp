@@ -6,6 +6,7 @@
 #include <iostream>
 #include <lcm/lcm-cpp.hpp>
 
+#include "common/channels.hpp"
 #include "common/decode.hpp"
 #include "tools/fault_score.hpp"
 
@@ -17,15 +18,16 @@ namespace {
 bool strings_ok(const std::string& channel, const void* data, size_t size) {
   alight::wire::Reader r(data, size);
   int32_t n = 0;
-  if (channel == "AUTONOMY_STATUS") return r.skip(8 + 8 + 1 + 1) && r.string() && r.string();
-  if (channel == "SIM_TRUTH") return r.skip(8 + 8) && r.string();
-  if (channel == "PROCESS_STATUS") {
+  if (channel == alight::channels::kAutonomyStatus)
+    return r.skip(8 + 8 + 1 + 1) && r.string() && r.string();
+  if (channel == alight::channels::kSimTruth) return r.skip(8 + 8) && r.string();
+  if (channel == alight::channels::kProcessStatus) {
     if (!r.skip(8 + 8) || !r.string() || !r.string() || !r.int32(n) || n < 0) return false;
     for (int32_t i = 0; i < n; ++i)  // name, then pid .. backoff_s
       if (!r.string() || !r.skip(4 + 1 + 4 + 4 + 4 + 8 + 8)) return false;
     return true;
   }
-  if (channel == "NODE_STATUS") {
+  if (channel == alight::channels::kNodeStatus) {
     if (!r.skip(8 + 8) || !r.string() || !r.skip(4 + 8) || !r.int32(n) || n < 0) return false;
     for (int32_t i = 0; i < n; ++i)  // channel, then 5 int64 counters
       if (!r.string() || !r.skip(5 * 8)) return false;
@@ -61,15 +63,15 @@ int main(int argc, char** argv) {
       if (strings_ok(ev->channel, ev->data, size) && alight::decode_message(msg, ev->data, size))
         scorer.add(msg, ev->timestamp);
     };
-    if (ev->channel == "SIM_TRUTH") {
+    if (ev->channel == alight::channels::kSimTruth) {
       feed(alight::sim_truth_t{});
-    } else if (ev->channel == "ATTITUDE_CMD") {
+    } else if (ev->channel == alight::channels::kAttitudeCmd) {
       feed(alight::attitude_cmd_t{});
-    } else if (ev->channel == "AUTONOMY_STATUS") {
+    } else if (ev->channel == alight::channels::kAutonomyStatus) {
       feed(alight::autonomy_status_t{});
-    } else if (ev->channel == "PROCESS_STATUS") {
+    } else if (ev->channel == alight::channels::kProcessStatus) {
       feed(alight::process_status_t{});
-    } else if (ev->channel == "NODE_STATUS") {
+    } else if (ev->channel == alight::channels::kNodeStatus) {
       feed(alight::node_status_t{});
     }
   }

@@ -117,7 +117,15 @@ int main(int argc, char** argv) {
   app.add_option("--replay-s", replay_s, "Stop the replay after this long [s]")
       ->check(CLI::Range(0.0, 3600.0));
   CLI11_PARSE(app, argc, argv);
-  args.finalize();
+  try {
+    args.finalize();
+  } catch (const alight::RemapError& e) {
+    std::fprintf(stderr, "alight-inject: %s\n", e.what());
+    return 2;
+  }
+  // Channels are named as in common/channels.hpp and --fault; on LCM they go by their remapped
+  // names, as the session's processes were started with.
+  const alight::ChannelRemap& lcm_name = args.remap;
 
   // Parse everything before touching the session.
   std::vector<std::pair<std::vector<faults::Kind>, std::vector<std::string>>> message_faults;
@@ -188,17 +196,18 @@ int main(int argc, char** argv) {
   Live live;
   struct Handler {
     Live* live;
+    std::string status_channel, process_channel;
     void on(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
       const auto* p = static_cast<const uint8_t*>(rbuf->data);
       const auto* c = static_cast<const char*>(rbuf->data);
       if (live->sent.count(std::hash<std::string_view>{}(std::string_view(c, rbuf->data_size))))
         return;
-      if (channel == "AUTONOMY_STATUS") {
+      if (channel == status_channel) {
         alight::autonomy_status_t m;
         if (alight::decode_message(m, rbuf->data, rbuf->data_size) &&
             (!live->status || m.utime > live->status->utime))
           live->status = m;
-      } else if (channel == "PROCESS_STATUS") {
+      } else if (channel == process_channel) {
         alight::process_status_t m;
         if (alight::decode_message(m, rbuf->data, rbuf->data_size) &&
             (!live->processes || m.utime > live->processes->utime))
@@ -206,7 +215,8 @@ int main(int argc, char** argv) {
       }
       live->newest[channel].assign(p, p + rbuf->data_size);
     }
-  } handler{&live};
+  } handler{&live, lcm_name(alight::channels::kAutonomyStatus),
+            lcm_name(alight::channels::kProcessStatus)};
   lcm.subscribe(".*", &Handler::on, &handler);
 
   if (phase_re) {
@@ -242,7 +252,7 @@ int main(int argc, char** argv) {
   }
   if (!sim_control.empty()) {
     control.utime = alight::wall_utime();
-    lcm.publish("SIM_CONTROL", &control);
+    lcm.publish(lcm_name(alight::channels::kSimControl), &control);
     say("SIM_CONTROL " + sim_control);
   }
   if (!message_faults.empty()) {
@@ -253,14 +263,14 @@ int main(int argc, char** argv) {
       for (const auto& [kinds, channels] : message_faults)
         for (const auto& channel : channels) {
           const std::string type = *faults::type_of_channel(channel);
-          const auto it = live.newest.find(channel);
+          const auto it = live.newest.find(lcm_name(channel));
           const faults::Bytes base = it == live.newest.end() ? faults::Bytes{} : it->second;
           for (const auto kind : kinds)
             for (const auto& bytes :
                  faults::generate(kind, type, base, alight::wall_utime(), rng)) {
               live.sent.insert(std::hash<std::string_view>{}(
                   std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size())));
-              lcm.publish(channel, bytes.data(), static_cast<unsigned>(bytes.size()));
+              lcm.publish(lcm_name(channel), bytes.data(), static_cast<unsigned>(bytes.size()));
               ++sent;
             }
         }

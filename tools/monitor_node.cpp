@@ -19,16 +19,17 @@ int main(int argc, char** argv) {
   app.add_option("--wall-timeout-s", wall_timeout_s,
                  "Also give up after this much wall time [s] (0: never)");
   CLI11_PARSE(app, argc, argv);
-  args.finalize();
   return alight::run_node_main("alight-monitor", [&]() -> int {
-    alight::Node node(args.lcm_url, "alight-monitor");
+    args.finalize();
+    alight::Node node(args, "alight-monitor");
     alight::tools::MissionMonitor monitor(params);
     auto print = [](const std::vector<std::string>& lines) {
       for (const auto& l : lines) std::cout << l << std::endl;
     };
-    node.on<alight::autonomy_status_t>("AUTONOMY_STATUS",
+    node.on<alight::autonomy_status_t>(alight::channels::kAutonomyStatus,
                                        [&](const auto& m) { print(monitor.add(m)); });
-    node.on<alight::sim_truth_t>("SIM_TRUTH", [&](const auto& m) { print(monitor.add(m)); });
+    node.on<alight::sim_truth_t>(alight::channels::kSimTruth,
+                                 [&](const auto& m) { print(monitor.add(m)); });
     const int64_t start = alight::wall_utime();
     while (!node.stopping() && monitor.end() == alight::tools::MissionMonitor::End::kNone) {
       node.spin_once(100);

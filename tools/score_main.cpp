@@ -9,6 +9,7 @@
 #include <iostream>
 #include <lcm/lcm-cpp.hpp>
 
+#include "common/channels.hpp"
 #include "common/decode.hpp"
 #include "tools/score.hpp"
 
@@ -21,8 +22,9 @@ bool decode(const lcm::LogEvent& ev, T& msg) {
 
 int main(int argc, char** argv) {
   CLI::App app{"alight-score: score a mission from its session log against the simulator's truth"};
-  std::string log_path, truth_ch = "SIM_TRUTH", status_ch = "AUTONOMY_STATUS",
-                        target_ch = "VISION_TARGET", camera_ch = "CAMERA";
+  std::string log_path,
+      truth_ch = alight::channels::kSimTruth, status_ch = alight::channels::kAutonomyStatus,
+      target_ch = alight::channels::kVisionTarget, camera_ch = alight::channels::kCamera;
   bool json = false;
   app.add_option("log", log_path, "Session log (.lcmlog)")->required()->check(CLI::ExistingFile);
   app.add_flag("--json", json, "Print one JSON object instead of key: value lines");

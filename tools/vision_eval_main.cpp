@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "common/camera_mount.hpp"
+#include "common/channels.hpp"
 #include "common/decode.hpp"
 #include "common/msg_convert.hpp"
 #include "common/params.hpp"
@@ -78,10 +79,10 @@ int main(int argc, char** argv) {
     std::optional<sim_truth_t> truth;
     std::vector<int64_t> frame_offsets;
     for (const lcm::LogEvent* ev = log.readNextEvent(); ev; ev = log.readNextEvent()) {
-      if (ev->channel == "MOCAP_POSE") {
+      if (ev->channel == channels::kMocapPose) {
         pose_t m;
         if (decode(*ev, m)) poses.add(from_msg(m));
-      } else if (ev->channel == "SIM_TRUTH" && !truth) {
+      } else if (ev->channel == channels::kSimTruth && !truth) {
         sim_truth_t m;
         if (decode(*ev, m)) truth = m;
       }
@@ -94,7 +95,7 @@ int main(int argc, char** argv) {
     std::vector<double> lateral_m, height_m, size_err_m, ms;
     int frames = 0;
     for (const lcm::LogEvent* ev = log2.readNextEvent(); ev; ev = log2.readNextEvent()) {
-      if (ev->channel != "CAMERA") continue;
+      if (ev->channel != channels::kCamera) continue;
       image_t msg;
       if (!decode(*ev, msg)) continue;
       std::string error;

@@ -10,6 +10,7 @@
 #include <optional>
 #include <string>
 
+#include "common/channels.hpp"
 #include "common/msg_convert.hpp"
 #include "common/pose_buffer.hpp"
 
@@ -28,7 +29,7 @@ std::optional<PoseSample> mocap_pose_from_msg(const pose_t& msg, std::string* er
 /// an hour ahead would otherwise push every later pose out of the buffer's history window, so
 /// that every frame after it went without a pose), then the buffer. True when added.
 bool add_mocap_pose(const pose_t& msg, PoseBuffer& poses, const StampCheck& accept_stamp,
-                    const RejectValue& reject, const std::string& channel = "MOCAP_POSE");
+                    const RejectValue& reject, const std::string& channel = channels::kMocapPose);
 
 /// What became of a CAMERA message.
 struct FrameInput {
@@ -40,7 +41,7 @@ struct FrameInput {
 /// CAMERA: the stamp first (a frame from an hour ahead is not reported at all), then the safe
 /// decode (image_from_msg, mono); a frame that does not decode is counted through `reject`.
 FrameInput camera_frame(const image_t& msg, const StampCheck& accept_stamp,
-                        const RejectValue& reject, const std::string& channel = "CAMERA");
+                        const RejectValue& reject, const std::string& channel = channels::kCamera);
 
 /// Runs one frame's work; an exception out of it (cv::Exception from OpenCV, bad_alloc, any
 /// std::exception) is returned as its text instead of ending the node. nullopt: it ran through.

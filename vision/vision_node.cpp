@@ -28,6 +28,7 @@
 #include "common/node.hpp"
 #include "vision/convert.hpp"
 #include "vision/diag_image.hpp"
+#include "vision/frame_pose_pairing.hpp"
 #include "vision/inputs.hpp"
 #include "vision/pipeline.hpp"
 
@@ -56,17 +57,18 @@ int main(int argc, char** argv) {
         load_camera_mount(root, mission == Mission::kLanding ? "downward" : "forward");
     const CameraModel camera = load_camera_info(mount.camera_info_path);
     Pipeline pipeline(mission, params.pipeline, camera, mount);
-    PoseBuffer poses(params.poses);
-    Node node(args.lcm_url, "alight-vision");
+    Node node(args, "alight-vision");
     spdlog::info("alight-vision: mission {}, camera {} ({}x{}, f {:.1f} px)", mission_name,
                  mount.name, camera.width, camera.height, camera.fx);
 
     struct Pending {
       Image image;
-      int64_t arrived_wall = 0;
       bool bad = false;
     };
-    std::optional<Pending> pending;
+    // The frame-to-pose policy (vision/frame_pose_pairing.hpp), waiting on the wall clock: the
+    // wait is for the transport, which the frames' stamps cannot measure.
+    FramePosePairing<Pending> pairing(params.poses,
+                                      static_cast<int64_t>(params.max_pose_wait_s * 1e6));
     int64_t last_diag_utime = 0;
     uint64_t n_found = 0, n_frames = 0;
 
@@ -92,8 +94,8 @@ int main(int argc, char** argv) {
                                    params.diag_jpeg_quality);
           last_diag_utime = r.utime;
         }
-        node.publish("VISION_TARGET", target);
-        if (diag) node.publish("VISION_DIAG", *diag);
+        node.publish(channels::kVisionTarget, target);
+        if (diag) node.publish(channels::kVisionDiag, *diag);
         ++n_frames;
         if (r.found()) ++n_found;
         spdlog::debug("frame {} utime {}: {} ({} features, {} matches)", r.seq, r.utime,
@@ -101,50 +103,35 @@ int main(int argc, char** argv) {
       });
       if (error) {
         ++n_frame_errors;
-        reject("CAMERA", "frame " + std::to_string(f.image.utime) + " dropped: " + *error);
+        reject(channels::kCamera, "frame " + std::to_string(f.image.utime) + " dropped: " + *error);
       }
     };
     const auto try_process = [&]() {
-      if (!pending) return;
-      PoseSample pose;
-      const auto status = poses.lookup(pending->image.utime, &pose);
-      if (status == PoseBuffer::Status::kOk) {
-        const Pending f = std::move(*pending);
-        pending.reset();
-        process(f, pose);
-        return;
-      }
-      const bool may_come =
-          status == PoseBuffer::Status::kAfterNewest || status == PoseBuffer::Status::kEmpty;
-      if (may_come &&
-          wall_utime() - pending->arrived_wall < static_cast<int64_t>(params.max_pose_wait_s * 1e6))
-        return;  // wait for the pose
-      const Pending f = std::move(*pending);
-      pending.reset();
-      process(f, std::nullopt);
+      if (auto r = pairing.poll(wall_utime())) process(r->frame, r->pose);
     };
 
-    node.on<pose_t>("MOCAP_POSE", [&](const pose_t& msg) {
-      if (add_mocap_pose(msg, poses, accept_stamp, reject)) try_process();
+    node.on<pose_t>(channels::kMocapPose, [&](const pose_t& msg) {
+      if (add_mocap_pose(msg, pairing.poses(), accept_stamp, reject)) try_process();
     });
-    node.on_latest<image_t>("CAMERA", [&](const image_t& msg) {
+    node.on_latest<image_t>(channels::kCamera, [&](const image_t& msg) {
       FrameInput in = camera_frame(msg, accept_stamp, reject);
       if (!in.use) return;
+      const int64_t arrived_wall = wall_utime();
       Pending f;
-      f.arrived_wall = wall_utime();
       if (in.image) {
         f.image = std::move(*in.image);
       } else {
         f.image.utime = msg.utime;
         f.bad = true;
       }
-      if (pending) spdlog::debug("frame {} skipped: no pose for it yet", pending->image.utime);
-      pending = std::move(f);
+      const int64_t utime = f.image.utime;
+      if (const auto dropped = pairing.add_frame(std::move(f), utime, arrived_wall))
+        spdlog::debug("frame {} skipped: {}", dropped->utime, to_string(dropped->outcome));
       try_process();
     });
     node.every(0.02, [&](int64_t) { try_process(); });
     node.every(10.0, [&](int64_t) {
-      const ChannelStats& c = node.stats("CAMERA");
+      const ChannelStats& c = node.stats(channels::kCamera);
       spdlog::info(
           "{} frames, {} with a target, {} camera frames skipped, {} refused (image or stamp), "
           "{} dropped by an exception",

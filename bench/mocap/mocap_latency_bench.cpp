@@ -36,6 +36,7 @@
 #include <thread>
 #include <vector>
 
+#include "common/channels.hpp"
 #include "mocap/vrpn.hpp"
 #include "tools/vrpn_test_server.hpp"
 
@@ -122,8 +123,8 @@ Result run_node(double rate_hz, double seconds, const std::string& bin) {
   }
   lcm::LCM lcm(kUrl + "&recv_buf_size=4194304");
   Receiver rx;
-  lcm.subscribe("MOCAP_POSE", &Receiver::on_pose, &rx);
-  lcm.subscribe("NODE_STATUS", &Receiver::on_status, &rx);
+  lcm.subscribe(alight::channels::kMocapPose, &Receiver::on_pose, &rx);
+  lcm.subscribe(alight::channels::kNodeStatus, &Receiver::on_status, &rx);
   std::vector<std::string> args = {bin,  "--config",    config, "--lcm-url",
                                    kUrl, "--log-level", "error"};
   std::vector<char*> argv;

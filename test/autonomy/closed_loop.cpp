@@ -9,8 +9,14 @@
 #include "outer_loop/position_controller.hpp"
 #include "sim/params.hpp"
 #include "sim/simulator.hpp"
+#include "vision/frame_pose_pairing.hpp"
 
 namespace alight::autonomy::test {
+
+namespace {
+// Longest wait for a frame's pose, from its exposure in sim time (closed_loop.hpp).
+constexpr int64_t kMaxPoseWaitUs = 100'000;
+}  // namespace
 
 ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
   const auto root = ParamNode::load_file(config.vehicle_file);
@@ -35,8 +41,8 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
     rig = sim::load_camera_rig(config.vehicle_file,
                                config.mission == Mission::kLanding ? "downward" : "forward");
   sim::Simulator simulator(scenario, vehicle, config.seed, rig);
-  PoseBuffer mocap_poses;
-  std::optional<sim::CameraFrame> pending_frame;  // waits for motion capture past its exposure
+  // The vision node's frame-to-pose policy, waiting on sim time from the frame's exposure.
+  vision::FramePosePairing<sim::CameraFrame> frames(PoseBufferParams{}, kMaxPoseWaitUs);
   outer_loop::PositionController controller(ol_params);
   Autonomy autonomy(au_params);
   OracleVisionParams vp = config.vision;
@@ -94,7 +100,7 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
     for (const auto& m : simulator.take_mocap()) {
       now = std::max(now, m.pose.utime);
       pose = m.pose;
-      mocap_poses.add(m.pose);
+      frames.add_pose(m.pose);
       Inputs in;
       in.pose = m.pose;
       step_autonomy(in);
@@ -136,22 +142,16 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
       }
     }
     if (config.camera_vision) {
-      if (auto f = simulator.take_camera()) pending_frame = std::move(f);
-      if (pending_frame) {
-        PoseSample at;
-        const auto st = mocap_poses.lookup(pending_frame->utime, &at);
-        const bool waiting =
-            (st == PoseBuffer::Status::kAfterNewest || st == PoseBuffer::Status::kEmpty) &&
-            now - pending_frame->utime < 100'000;
-        if (!waiting) {
-          const auto m = config.camera_vision(
-              *pending_frame, st == PoseBuffer::Status::kOk ? std::optional(at) : std::nullopt);
-          pending_frame.reset();
-          if (m && !vision.silent) {
-            Inputs in;
-            in.target = *m;
-            step_autonomy(in);
-          }
+      if (auto f = simulator.take_camera()) {
+        const int64_t exposure_utime = f->utime;
+        frames.add_frame(std::move(*f), exposure_utime, exposure_utime);
+      }
+      if (const auto ready = frames.poll(now)) {
+        const auto m = config.camera_vision(ready->frame, ready->pose);
+        if (m && !vision.silent) {
+          Inputs in;
+          in.target = *m;
+          step_autonomy(in);
         }
       }
     } else if (auto m = vision.update(ot, until)) {

@@ -33,9 +33,10 @@ struct ClosedLoopConfig {
   /// Overrides the vehicle's rotor tip span (sim model and autonomy's fit check alike) [m].
   std::optional<double> rotor_span_m;
   /// Real vision instead of the oracle: the simulator renders the mission's camera and this is
-  /// called with each frame and the motion-capture pose interpolated at its exposure (as the
-  /// vision node does; nullopt when motion capture has none within 100 ms); what it returns
-  /// reaches autonomy at once (processing time is not simulated).
+  /// called with each frame and the motion-capture pose interpolated at its exposure, paired by
+  /// the vision node's policy (vision/frame_pose_pairing.hpp; nullopt when motion capture has
+  /// none within 100 ms of sim time after the exposure); what it returns reaches autonomy at
+  /// once (processing time is not simulated).
   std::function<std::optional<TargetMeasurement>(const sim::CameraFrame&,
                                                  const std::optional<PoseSample>&)>
       camera_vision;

@@ -93,9 +93,9 @@ TEST(AutonomyNodeTest, AutoGoTakesOffStatusAtTenHertzAndKillStopsEverything) {
   lcm::LCM lcm(kUrl);
   ASSERT_TRUE(lcm.good());
   Recorder rec;
-  lcm.subscribe("AUTONOMY_STATUS", &Recorder::on_status, &rec);
-  lcm.subscribe("POSITION_SETPOINT", &Recorder::on_sp, &rec);
-  lcm.subscribe("ATTITUDE_CMD", &Recorder::on_cmd, &rec);
+  lcm.subscribe(alight::channels::kAutonomyStatus, &Recorder::on_status, &rec);
+  lcm.subscribe(alight::channels::kPositionSetpoint, &Recorder::on_sp, &rec);
+  lcm.subscribe(alight::channels::kAttitudeCmd, &Recorder::on_cmd, &rec);
   // The key the ground station and the vehicle share.
   const auto key_path = std::filesystem::temp_directory_path() / "alight_autonomy_node_test.key";
   const std::string key_hex(64, 'a');
@@ -130,12 +130,12 @@ TEST(AutonomyNodeTest, AutoGoTakesOffStatusAtTenHertzAndKillStopsEverything) {
       pose.seq = (t - t0) / 10'000;
       pose.pos[2] = 0.12;
       pose.orientation[0] = 1.0;
-      lcm.publish("MOCAP_POSE", &pose);
+      lcm.publish(alight::channels::kMocapPose, &pose);
       alight::imu_t imu{};
       imu.utime = t;
       imu.seq = pose.seq;
       imu.accel_B[2] = 9.81;
-      lcm.publish("IMU", &imu);
+      lcm.publish(alight::channels::kImu, &imu);
       std::this_thread::sleep_for(std::chrono::milliseconds(2));
       while (lcm.handleTimeout(0) > 0) {
       }
@@ -186,13 +186,13 @@ TEST(AutonomyNodeTest, AutoGoTakesOffStatusAtTenHertzAndKillStopsEverything) {
   };
   ASSERT_NE(rec.status.back().cmd_session, 0) << "a verifier announces its session";
   alight::operator_cmd_t unsigned_kill = kill_cmd(1, alight::wall_utime());
-  lcm.publish("OPERATOR_CMD", &unsigned_kill);
+  lcm.publish(alight::channels::kOperatorCmd, &unsigned_kill);
   alight::operator_cmd_t forged = kill_cmd(2, alight::wall_utime());
   alight::sign(forged, alight::parse_key(std::string(64, 'b'), "wrong key"));
-  lcm.publish("OPERATOR_CMD", &forged);
+  lcm.publish(alight::channels::kOperatorCmd, &forged);
   alight::operator_cmd_t stale = kill_cmd(3, alight::wall_utime() - 10'000'000);
   alight::sign(stale, key);
-  lcm.publish("OPERATOR_CMD", &stale);
+  lcm.publish(alight::channels::kOperatorCmd, &stale);
   const auto reject_deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
   do {
     publish_sensors(5);
@@ -206,7 +206,7 @@ TEST(AutonomyNodeTest, AutoGoTakesOffStatusAtTenHertzAndKillStopsEverything) {
 
   alight::operator_cmd_t kill = kill_cmd(4, alight::wall_utime());
   alight::sign(kill, key);
-  lcm.publish("OPERATOR_CMD", &kill);
+  lcm.publish(alight::channels::kOperatorCmd, &kill);
   const auto kill_deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
   do {
     publish_sensors(5);
@@ -222,7 +222,7 @@ TEST(AutonomyNodeTest, AutoGoTakesOffStatusAtTenHertzAndKillStopsEverything) {
   EXPECT_EQ(rec.cmds.back().thrust_N, 0.0);
   EXPECT_EQ(rec.status.back().last_cmd_seq, 4);
 
-  lcm.publish("OPERATOR_CMD", &kill);  // replayed
+  lcm.publish(alight::channels::kOperatorCmd, &kill);  // replayed
   const auto replay_deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
   do {
     publish_sensors(5);
@@ -253,8 +253,8 @@ struct Bench {
   Eigen::Vector3d p{0, 0, 0.12};
   Eigen::Vector3d v{0, 0, 0};
   Bench() {
-    lcm.subscribe("AUTONOMY_STATUS", &Recorder::on_status, &rec);
-    lcm.subscribe("POSITION_SETPOINT", &Recorder::on_sp, &rec);
+    lcm.subscribe(alight::channels::kAutonomyStatus, &Recorder::on_status, &rec);
+    lcm.subscribe(alight::channels::kPositionSetpoint, &Recorder::on_sp, &rec);
   }
   void publish_sensors(int n) {
     for (int i = 0; i < n; ++i) {
@@ -266,11 +266,11 @@ struct Bench {
         pose.vel[k] = v[k];
       }
       pose.orientation[0] = 1.0;
-      lcm.publish("MOCAP_POSE", &pose);
+      lcm.publish(alight::channels::kMocapPose, &pose);
       alight::imu_t imu{};
       imu.utime = t;
       imu.accel_B[2] = 9.81;
-      lcm.publish("IMU", &imu);
+      lcm.publish(alight::channels::kImu, &imu);
       std::this_thread::sleep_for(std::chrono::milliseconds(2));
       while (lcm.handleTimeout(0) > 0) {
       }
@@ -321,7 +321,7 @@ TEST(AutonomyNodeRegression, ImuStampedAnHourAheadDoesNotHoldFailsafe) {
   alight::imu_t future{};
   future.utime = b.t + 3600'000'000LL;
   future.accel_B[2] = 9.81;
-  b.lcm.publish("IMU", &future);
+  b.lcm.publish(alight::channels::kImu, &future);
   b.publish_sensors(200);  // 2 s of sensor time: twice pose_lost_s
   for (int i = 0; i < 20; ++i) b.lcm.handleTimeout(10);
   ASSERT_FALSE(b.rec.status.empty());
@@ -408,7 +408,7 @@ TEST(AutonomyNodeRegression, RestartedInFlightHoldsAndKillSurvivesRestarts) {
     kill.vehicle_id = b.rec.status.back().vehicle_id;
     kill.session = b.rec.status.back().cmd_session;
     alight::sign(kill, key);
-    b.lcm.publish("OPERATOR_CMD", &kill);
+    b.lcm.publish(alight::channels::kOperatorCmd, &kill);
     ASSERT_TRUE(b.sensors_until([&] { return phase_is(alight::autonomy_status_t::PHASE_KILLED); }));
     second.crash();
   }

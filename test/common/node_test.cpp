@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <CLI/CLI.hpp>
 #include <alight/imu_t.hpp>
 #include <alight/node_status_t.hpp>
 #include <alight/operator_cmd_t.hpp>
@@ -153,6 +154,68 @@ TEST(NodeTest, RegressionSignalDuringWaitEndsRunCleanly) {
   EXPECT_EQ(node.run(), 0);
   killer.join();
   EXPECT_TRUE(Node::signalled());
+}
+
+// The command line as a node parses it (NodeArgs::add_to, then finalize).
+NodeArgs parse_args(std::vector<std::string> argv) {
+  CLI::App app{"test"};
+  NodeArgs args;
+  args.add_to(app, false);
+  argv.insert(argv.begin(), "node");
+  std::vector<char*> c;
+  for (auto& a : argv) c.push_back(a.data());
+  app.parse(static_cast<int>(c.size()), c.data());
+  args.finalize();
+  return args;
+}
+
+TEST(NodeTest, RemapIsRepeatable) {
+  const NodeArgs args =
+      parse_args({"--remap", "IMU=NODE_TEST_IMU", "--remap", "MOCAP_POSE=NODE_TEST_POSE"});
+  EXPECT_EQ(args.remap(channels::kImu), "NODE_TEST_IMU");
+  EXPECT_EQ(args.remap(channels::kMocapPose), "NODE_TEST_POSE");
+  EXPECT_EQ(args.remap(channels::kCamera), "CAMERA");
+  EXPECT_TRUE(parse_args({}).remap.empty());
+}
+
+TEST(NodeTest, ABadRemapEndsTheNodeWithCode2) {
+  EXPECT_THROW(parse_args({"--remap", "IMU"}), RemapError);
+  EXPECT_THROW(parse_args({"--remap", "NO_SUCH_CHANNEL=X"}), RemapError);
+  EXPECT_EQ(run_node_main("test",
+                          [] {
+                            parse_args({"--remap", "IMU"});
+                            return 0;
+                          }),
+            2);
+}
+
+TEST(NodeTest, ARemappedNodeUsesTheNewNameEverywhere) {
+  const NodeArgs args = parse_args({"--lcm-url", kUrl, "--remap", "IMU=NODE_TEST_REMAP_IMU",
+                                    "--remap", "MOCAP_POSE=NODE_TEST_REMAP_POSE"});
+  Node remapped(args, "remapped"), plain(kUrl, "plain");
+  std::vector<int64_t> heard_by_plain, heard_by_remapped;
+  plain.on<imu_t>("NODE_TEST_REMAP_IMU", [&](const imu_t& m) { heard_by_plain.push_back(m.seq); });
+  remapped.on<pose_t>(channels::kMocapPose,
+                      [&](const pose_t& m) { heard_by_remapped.push_back(m.utime); });
+  remapped.publish(channels::kImu, imu(7));
+  pose_t pose{};
+  pose.utime = 42;
+  pose.orientation[0] = 1;
+  plain.publish("NODE_TEST_REMAP_POSE", pose);
+  ASSERT_TRUE(spin_until(plain, [&] {
+    remapped.spin_once(10);
+    return !heard_by_plain.empty() && !heard_by_remapped.empty();
+  }));
+  EXPECT_EQ(heard_by_plain.at(0), 7);
+  EXPECT_EQ(heard_by_remapped.at(0), 42);
+  // Counters and NODE_STATUS name the channel as it is on LCM; the code's name finds it.
+  EXPECT_EQ(remapped.channel_name(channels::kMocapPose), "NODE_TEST_REMAP_POSE");
+  EXPECT_EQ(remapped.stats(channels::kMocapPose).received, 1u);
+  EXPECT_FALSE(remapped.reject_value(channels::kMocapPose, "test"));
+  EXPECT_EQ(remapped.stats("NODE_TEST_REMAP_POSE").rejected_values, 1u);
+  const node_status_t st = remapped.status_message(1);
+  ASSERT_EQ(st.n, 1);
+  EXPECT_EQ(st.channels.at(0).channel, "NODE_TEST_REMAP_POSE");
 }
 
 TEST(NodeTest, BadUrlThrowsNamingIt) {

@@ -21,6 +21,7 @@
 #include "common/operator_auth.hpp"
 
 int main(int argc, char** argv) {
+  namespace ch = alight::channels;
   CLI::App app{"ground station browser-test fixture"};
   std::string lcm_url, key_file;
   double fps = 15.0;
@@ -50,7 +51,7 @@ int main(int argc, char** argv) {
   });
   input.detach();
 
-  node.on<alight::operator_cmd_t>("OPERATOR_CMD", [&](const alight::operator_cmd_t& cmd) {
+  node.on<alight::operator_cmd_t>(ch::kOperatorCmd, [&](const alight::operator_cmd_t& cmd) {
     const auto verdict = verifier.check(cmd, alight::wall_utime());
     if (verdict.accepted() && acknowledge) last_accepted_seq = cmd.seq;
     std::printf(
@@ -70,12 +71,12 @@ int main(int argc, char** argv) {
     cv::rectangle(img, {x, 0}, {x + 20, 239}, cv::Scalar(220), cv::FILLED);
     cv::putText(img, "frame " + std::to_string(frame), {10, 30}, cv::FONT_HERSHEY_SIMPLEX, 0.8,
                 cv::Scalar(255), 2);
-    node.publish("CAMERA", alight::image_to_msg(img, now, frame));
+    node.publish(ch::kCamera, alight::image_to_msg(img, now, frame));
     if (frame % 3 == 0) {
       cv::Mat diag;
       cv::cvtColor(img, diag, cv::COLOR_GRAY2BGR);
       cv::circle(diag, {160, 120}, 40 + static_cast<int>(frame % 20), {0, 200, 0}, 2);
-      node.publish("VISION_DIAG", alight::jpeg_image_to_msg(diag, now));
+      node.publish(ch::kVisionDiag, alight::jpeg_image_to_msg(diag, now));
     }
     ++frame;
   });
@@ -87,7 +88,7 @@ int main(int argc, char** argv) {
     p.pos[1] = 2.0 * std::sin(0.3 * t);
     p.pos[2] = 2.0 - 0.02 * t;
     p.orientation[0] = 1;
-    node.publish("MOCAP_POSE", p);
+    node.publish(ch::kMocapPose, p);
   });
   node.every(0.1, [&](int64_t now) {
     alight::autonomy_status_t s{};
@@ -113,7 +114,7 @@ int main(int argc, char** argv) {
     s.last_rejected_seq = verifier.last_rejected_seq();
     s.last_reject_reason = static_cast<int8_t>(verifier.last_reject_reason());
     s.wall_utime = alight::wall_utime();
-    node.publish("AUTONOMY_STATUS", s);
+    node.publish(ch::kAutonomyStatus, s);
   });
   node.every(0.2, [&](int64_t now) {
     alight::target_t t{};
@@ -125,7 +126,7 @@ int main(int argc, char** argv) {
     t.p_W_target[2] = 0.6;
     t.n_features = 300;
     t.n_matches = 120;
-    node.publish("VISION_TARGET", t);
+    node.publish(ch::kVisionTarget, t);
   });
   node.every(1.0, [&](int64_t now) {
     alight::process_status_t ps{};
@@ -139,7 +140,7 @@ int main(int argc, char** argv) {
       ps.processes.push_back(p);
     }
     ps.n = static_cast<int32_t>(ps.processes.size());
-    node.publish("PROCESS_STATUS", ps);
+    node.publish(ch::kProcessStatus, ps);
   });
   std::printf("{\"event\":\"ready\"}\n");
   std::fflush(stdout);

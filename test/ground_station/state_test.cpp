@@ -6,6 +6,7 @@
 
 #include <cmath>
 
+#include "common/channels.hpp"
 #include "common/msg_convert.hpp"
 #include "ground_station/frame_store.hpp"
 #include "ground_station/json_writer.hpp"
@@ -107,14 +108,15 @@ TEST(StationStateTest, KeepsOnlyFoundWaypoints) {
 
 TEST(StationStateTest, ChannelHealthShowsRateAgeAndStaleness) {
   StationState state{GroundStationParams{}};
-  for (int i = 0; i <= 30; ++i) state.on_frame("CAMERA", kT0 + i * 33'333, kT0 + i * 33'333);
+  for (int i = 0; i <= 30; ++i)
+    state.on_frame(channels::kCamera, kT0 + i * 33'333, kT0 + i * 33'333);
   const int64_t t_last = kT0 + 30 * 33'333;
-  EXPECT_NEAR(state.channel_rate_hz("CAMERA", t_last), 30.0, 0.5);
-  EXPECT_NEAR(*state.channel_age_s("CAMERA", t_last + 500'000), 0.5, 1e-9);
-  EXPECT_FALSE(state.channel_age_s("VISION_DIAG", t_last));
+  EXPECT_NEAR(state.channel_rate_hz(channels::kCamera, t_last), 30.0, 0.5);
+  EXPECT_NEAR(*state.channel_age_s(channels::kCamera, t_last + 500'000), 0.5, 1e-9);
+  EXPECT_FALSE(state.channel_age_s(channels::kVisionDiag, t_last));
   // A channel that stopped: its rate decays and it is marked stale.
-  EXPECT_LT(state.channel_rate_hz("CAMERA", t_last + 1'500'000), 10.0);
-  EXPECT_EQ(state.channel_rate_hz("CAMERA", t_last + 3'000'000), 0.0);
+  EXPECT_LT(state.channel_rate_hz(channels::kCamera, t_last + 1'500'000), 10.0);
+  EXPECT_EQ(state.channel_rate_hz(channels::kCamera, t_last + 3'000'000), 0.0);
   EXPECT_TRUE(contains(state.to_json(t_last + 3'000'000), "\"stale\":true"));
   EXPECT_TRUE(contains(state.to_json(t_last + 10'000), "\"stale\":false"));
 }

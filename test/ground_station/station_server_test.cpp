@@ -48,7 +48,7 @@ bool announce_session(Node& node, Station& station, int64_t session = kSession) 
   st.last_rejected_seq = -1;
   const auto t0 = std::chrono::steady_clock::now();
   while (std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() < 3.0) {
-    node.publish("AUTONOMY_STATUS", st);
+    node.publish(channels::kAutonomyStatus, st);
     node.spin_once(20);
     if (station.state_json(steady_utime())->find("\"session_known\":true") != std::string::npos)
       return true;
@@ -157,7 +157,7 @@ TEST_F(StationServerTest, ManyClientsDoNotStallTheLcmLoopOrGrowMemory) {
   station.attach(node);
   std::atomic<int> status_received{0};
   std::vector<double> latencies_s;  // publish (vehicle) to handler (LCM loop) of each status
-  node.on<autonomy_status_t>("AUTONOMY_STATUS", [&](const autonomy_status_t& m) {
+  node.on<autonomy_status_t>(channels::kAutonomyStatus, [&](const autonomy_status_t& m) {
     ++status_received;
     latencies_s.push_back((wall_utime() - m.utime) * 1e-6);
   });
@@ -175,14 +175,14 @@ TEST_F(StationServerTest, ManyClientsDoNotStallTheLcmLoopOrGrowMemory) {
       if (i % 5 == 0) {
         img.setTo(static_cast<double>(i % 255));
         const image_t frame = image_to_msg(img, wall_utime(), i);
-        lcm.publish("CAMERA", &frame);
+        lcm.publish(channels::kCamera, &frame);
       }
       autonomy_status_t s{};
       s.utime = wall_utime();
       s.phase = autonomy_status_t::PHASE_DETECTION;
       s.vehicle_id = "alight";
       s.cmd_session = kSession;
-      lcm.publish("AUTONOMY_STATUS", &s);
+      lcm.publish(channels::kAutonomyStatus, &s);
       ++status_sent;
       ++i;
       std::this_thread::sleep_for(std::chrono::microseconds(6'667));  // ~150 Hz loop
@@ -230,7 +230,7 @@ TEST_F(StationServerTest, ManyClientsDoNotStallTheLcmLoopOrGrowMemory) {
 
   // After the storm an ordinary client still gets frames and its command reaches LCM.
   std::optional<operator_cmd_t> published;
-  node.on<operator_cmd_t>("OPERATOR_CMD", [&](const operator_cmd_t& m) { published = m; });
+  node.on<operator_cmd_t>(channels::kOperatorCmd, [&](const operator_cmd_t& m) { published = m; });
   httplib::Client http("127.0.0.1", port);
   http.set_read_timeout(2, 0);
   auto frame = http.Get("/api/frame/camera?after=0");
@@ -294,7 +294,7 @@ TEST_F(StationServerTest, ForgedReplayedStaleAndUnsignedCommandsOnLcmAreRejected
   station.attach(node);
   CommandVerifier verifier(key(), "alight", kSession);
   std::vector<std::pair<operator_cmd_t, CommandVerdict::Reason>> seen;
-  node.on<operator_cmd_t>("OPERATOR_CMD", [&](const operator_cmd_t& m) {
+  node.on<operator_cmd_t>(channels::kOperatorCmd, [&](const operator_cmd_t& m) {
     seen.emplace_back(m, verifier.check(m, wall_utime()).reason);
   });
   const int port = station.start();
@@ -320,22 +320,22 @@ TEST_F(StationServerTest, ForgedReplayedStaleAndUnsignedCommandsOnLcmAreRejected
   EXPECT_EQ(genuine.mission, 2);
 
   // An attacker on the network replays it as captured,
-  node.publish("OPERATOR_CMD", genuine);
+  node.publish(channels::kOperatorCmd, genuine);
   // turns it into a kill with a newer seq (keeping the tag),
   operator_cmd_t forged = genuine;
   forged.command = operator_cmd_t::CMD_KILL;
   forged.seq += 1;
-  node.publish("OPERATOR_CMD", forged);
+  node.publish(channels::kOperatorCmd, forged);
   // sends a kill without any signature,
   operator_cmd_t unsigned_kill = forged;
   unsigned_kill.auth = operator_cmd_t::AUTH_NONE;
   std::fill(std::begin(unsigned_kill.hmac), std::end(unsigned_kill.hmac), 0);
-  node.publish("OPERATOR_CMD", unsigned_kill);
+  node.publish(channels::kOperatorCmd, unsigned_kill);
   // and replays a genuinely signed command recorded 10 s ago (new seq, old time).
   CommandBuilder recorder("gs-security-test", key(), "alight");
   const operator_cmd_t old =
       recorder.build({operator_cmd_t::CMD_ABORT, 0, {}}, kSession, wall_utime() - 10'000'000);
-  node.publish("OPERATOR_CMD", old);
+  node.publish(channels::kOperatorCmd, old);
   ASSERT_TRUE(spin_until(5));
   EXPECT_EQ(seen[1].second, R::kReplayed);
   EXPECT_EQ(seen[2].second, R::kBadSignature);
@@ -443,7 +443,7 @@ TEST_F(StationServerTest, RegressionSlowClientsDoNotHoldBackAKill) {
   Node node("udpm://239.255.76.67:7865?ttl=0", "gs-slow-test");
   station.attach(node);
   std::optional<operator_cmd_t> published;
-  node.on<operator_cmd_t>("OPERATOR_CMD", [&](const operator_cmd_t& m) { published = m; });
+  node.on<operator_cmd_t>(channels::kOperatorCmd, [&](const operator_cmd_t& m) { published = m; });
   const int port = station.start();
   ASSERT_TRUE(announce_session(node, station));
 

@@ -184,7 +184,7 @@ processes:
   int statuses = 0;
   process_status_t last{};
   for (const lcm::LogEvent* ev = log.readNextEvent(); ev; ev = log.readNextEvent()) {
-    if (ev->channel != "PROCESS_STATUS") continue;
+    if (ev->channel != channels::kProcessStatus) continue;
     ASSERT_GT(last.decode(ev->data, 0, ev->datalen), 0);
     ++statuses;
   }
@@ -201,7 +201,8 @@ processes:
   // And it replays: lcm-logplayer onto another port, a node counts the statuses.
   Node listener("udpm://239.255.76.67:7713?ttl=0", "listener");
   int replayed = 0;
-  listener.on<process_status_t>("PROCESS_STATUS", [&](const process_status_t&) { ++replayed; });
+  listener.on<process_status_t>(channels::kProcessStatus,
+                                [&](const process_status_t&) { ++replayed; });
   const std::string cmd = "lcm-logplayer -s 4 -l 'udpm://239.255.76.67:7713?ttl=0' '" +
                           (session / "session.lcmlog").string() + "' >/dev/null 2>&1 &";
   ASSERT_EQ(std::system(cmd.c_str()), 0);

@@ -8,6 +8,7 @@
 #include <lcm/lcm-cpp.hpp>
 #include <opencv2/core.hpp>
 
+#include "common/channels.hpp"
 #include "common/msg_convert.hpp"
 
 namespace {
@@ -40,24 +41,24 @@ int main(int argc, char** argv) {
     alight::PoseSample s;
     s.utime = t0 + i * 10'000;
     s.p_W_B = Eigen::Vector3d(0.1 * i, 0, 1.5);
-    write(log, s.utime, "MOCAP_POSE", alight::to_msg(s, i));
+    write(log, s.utime, alight::channels::kMocapPose, alight::to_msg(s, i));
   }
-  write(log, t0 + 50'000, "CAMERA",
+  write(log, t0 + 50'000, alight::channels::kCamera,
         alight::image_to_msg(cv::Mat(480, 640, CV_8UC1, cv::Scalar(128)), t0 + 50'000, 0));
   alight::target_t t{};
   t.utime = t0 + 50'000;
   t.found = true;
   t.mission = alight::target_t::MISSION_LANDING;
   t.p_W_target[0] = 1.25;
-  write(log, t0 + 90'000, "VISION_TARGET", t);
+  write(log, t0 + 90'000, alight::channels::kVisionTarget, t);
   alight::autonomy_status_t st{};
   st.utime = t0 + 95'000;
   st.phase_name = "REFINEMENT";
-  write(log, t0 + 95'000, "AUTONOMY_STATUS", st);
+  write(log, t0 + 95'000, alight::channels::kAutonomyStatus, st);
   alight::process_status_t ps{};
   ps.utime = t0 + 99'000;
   ps.launch_name = "fixture";
   ps.n = 0;
-  write(log, t0 + 99'000, "PROCESS_STATUS", ps);
+  write(log, t0 + 99'000, alight::channels::kProcessStatus, ps);
   return 0;
 }

@@ -29,6 +29,7 @@
 #include <sstream>
 #include <thread>
 
+#include "common/channels.hpp"
 #include "tools/vrpn_test_server.hpp"
 
 extern char** environ;
@@ -152,8 +153,8 @@ struct Listener {
   std::vector<alight::pose_t> poses;
   std::vector<alight::node_status_t> status;
   Listener() {
-    lcm.subscribe("MOCAP_POSE", &Listener::on_pose, this);
-    lcm.subscribe("NODE_STATUS", &Listener::on_status, this);
+    lcm.subscribe(alight::channels::kMocapPose, &Listener::on_pose, this);
+    lcm.subscribe(alight::channels::kNodeStatus, &Listener::on_status, this);
   }
   void on_pose(const lcm::ReceiveBuffer*, const std::string&, const alight::pose_t* m) {
     poses.push_back(*m);

@@ -9,6 +9,7 @@
 #include <limits>
 #include <map>
 
+#include "common/channels.hpp"
 #include "common/msg_convert.hpp"
 #include "common/stamp_guard.hpp"
 #include "lag_model.hpp"
@@ -93,7 +94,7 @@ TEST(OuterLoopRegression, NanPoseIsRefusedCountedAndTheLastGoodKept) {
   pose_t bad = alight::to_msg(h.model.pose(h.now()), 0);
   bad.pos[2] = std::nan("");
   h.pose(bad);
-  EXPECT_EQ(h.rejected_values["MOCAP_POSE"], 1);
+  EXPECT_EQ(h.rejected_values[channels::kMocapPose], 1);
   EXPECT_EQ(h.published, before) << "a refused pose steps nothing";
   for (int i = 0; i < 100; ++i) h.step(hover_sp({0, 0, 1}));
   EXPECT_TRUE(std::isfinite(h.last->thrust_N));
@@ -110,7 +111,7 @@ TEST(OuterLoopRegression, SetpointStampedZeroWithMotorsOffDoesNotDisarm) {
   off.utime = 0;
   off.motors = position_setpoint_t::MOTORS_OFF;
   h.take(h.runner.on_setpoint(off, h.steady_us));
-  EXPECT_EQ(h.rejected_stamps["POSITION_SETPOINT"], 1);
+  EXPECT_EQ(h.rejected_stamps[channels::kPositionSetpoint], 1);
   for (int i = 0; i < 10; ++i) h.step(hover_sp({0, 0, 1}));
   EXPECT_TRUE(h.last->armed);
   EXPECT_NEAR(h.model.p.z(), 1.0, 0.05);
@@ -122,9 +123,9 @@ TEST(OuterLoopRegression, PoseStampedAnHourAheadDoesNotPoisonLaterPoses) {
   for (int i = 0; i < 100; ++i) h.step(hover_sp({0, 0, 1}));
   pose_t ahead = alight::to_msg(h.model.pose(h.now() + 3'600'000'000LL), 0);
   h.pose(ahead);
-  EXPECT_EQ(h.rejected_stamps["MOCAP_POSE"], 1);
+  EXPECT_EQ(h.rejected_stamps[channels::kMocapPose], 1);
   for (int i = 0; i < 100; ++i) h.step(hover_sp({0, 0, 1}));
-  EXPECT_EQ(h.rejected_stamps["MOCAP_POSE"], 1) << "later poses accepted";
+  EXPECT_EQ(h.rejected_stamps[channels::kMocapPose], 1) << "later poses accepted";
   EXPECT_EQ(h.last->mode, Mode::kNormal);
   EXPECT_TRUE(h.last->armed);
 }

@@ -1,6 +1,4 @@
 #include <gtest/gtest.h>
-
-#include <lcm/lcm-cpp.hpp>
 #include <sys/wait.h>
 
 #include <alight/attitude_cmd_t.hpp>
@@ -8,13 +6,14 @@
 #include <alight/imu_t.hpp>
 #include <alight/pose_t.hpp>
 #include <alight/sim_truth_t.hpp>
-
 #include <atomic>
 #include <filesystem>
 #include <fstream>
+#include <lcm/lcm-cpp.hpp>
 #include <sstream>
 #include <thread>
 
+#include "common/channels.hpp"
 #include "common/msg_convert.hpp"
 
 namespace alight {
@@ -66,10 +65,10 @@ TEST(SimNodeTest, PublishesEveryChannelAndFollowsAttitudeCommands) {
   lcm::LCM lcm(kUrl + "&recv_buf_size=8388608");
   ASSERT_TRUE(lcm.good());
   Counter c;
-  lcm.subscribe("MOCAP_POSE", &Counter::on_pose, &c);
-  lcm.subscribe("IMU", &Counter::on_imu, &c);
-  lcm.subscribe("CAMERA", &Counter::on_image, &c)->setQueueCapacity(100);
-  lcm.subscribe("SIM_TRUTH", &Counter::on_truth, &c);
+  lcm.subscribe(channels::kMocapPose, &Counter::on_pose, &c);
+  lcm.subscribe(channels::kImu, &Counter::on_imu, &c);
+  lcm.subscribe(channels::kCamera, &Counter::on_image, &c)->setQueueCapacity(100);
+  lcm.subscribe(channels::kSimTruth, &Counter::on_truth, &c);
   std::atomic<int> code{-1};
   std::thread node([&] {
     code = run("--scenario " + scenario("landing_a") + " --seed 3 --duration 1.5 --lcm-url '" + kUrl + "'");
@@ -82,7 +81,7 @@ TEST(SimNodeTest, PublishesEveryChannelAndFollowsAttitudeCommands) {
     cmd.utime = c.pose_utime;
     cmd.thrust_N = 1.5 * 1.2 * 9.81;
     cmd.armed = true;
-    lcm.publish("ATTITUDE_CMD", &cmd);
+    lcm.publish(channels::kAttitudeCmd, &cmd);
     lcm.handleTimeout(5);
   }
   node.join();
@@ -101,6 +100,57 @@ TEST(SimNodeTest, PublishesEveryChannelAndFollowsAttitudeCommands) {
   EXPECT_EQ(c.last_image.height, 480);
   EXPECT_EQ(c.last_image.pixelformat, image_t::PIXEL_FORMAT_GRAY);
   EXPECT_TRUE(metadata_int(c.last_image, "seq").has_value());
+}
+
+TEST(SimNodeTest, RemappedChannelsAreUsedUnderTheirNewNames) {
+  lcm::LCM lcm(kUrl + "&recv_buf_size=8388608");
+  ASSERT_TRUE(lcm.good());
+  Counter renamed, original;
+  lcm.subscribe("SIM_NODE_TEST_TRUTH", &Counter::on_truth, &renamed);
+  lcm.subscribe("SIM_NODE_TEST_POSE", &Counter::on_pose, &renamed);
+  lcm.subscribe(channels::kSimTruth, &Counter::on_truth, &original);
+  lcm.subscribe(channels::kMocapPose, &Counter::on_pose, &original);
+  std::atomic<int> code{-1};
+  std::thread node([&] {
+    code =
+        run("--scenario " + scenario("landing_a") + " --seed 3 --duration 1.5 --lcm-url '" + kUrl +
+            "' --remap SIM_TRUTH=SIM_NODE_TEST_TRUTH --remap MOCAP_POSE=SIM_NODE_TEST_POSE "
+            "--remap ATTITUDE_CMD=SIM_NODE_TEST_CMD");
+  });
+  // Full thrust on the renamed command channel only: the vehicle arms and climbs iff the sim
+  // subscribed to the new name.
+  while (code == -1) {
+    attitude_cmd_t cmd{};
+    cmd.utime = renamed.pose_utime;
+    cmd.thrust_N = 1.5 * 1.2 * 9.81;
+    cmd.armed = true;
+    lcm.publish("SIM_NODE_TEST_CMD", &cmd);
+    lcm.handleTimeout(5);
+  }
+  node.join();
+  while (lcm.handleTimeout(50) > 0) {
+  }
+  EXPECT_EQ(code, 0);
+  EXPECT_GE(renamed.truth, 10);
+  EXPECT_GE(renamed.mocap, 20);
+  EXPECT_TRUE(renamed.last_truth.armed);
+  EXPECT_GT(renamed.last_truth.pos[2], 0.5);
+  EXPECT_EQ(original.truth, 0);  // nothing on the old names
+  EXPECT_EQ(original.mocap, 0);
+}
+
+TEST(SimNodeTest, ABadRemapExitsWithCode2NamingTheKnownChannels) {
+  std::string err;
+  EXPECT_EQ(
+      run("--scenario " + scenario("landing_a") + " --lcm-url '" + kUrl + "' --remap SIM_TRUTH",
+          &err),
+      2);
+  EXPECT_NE(err.find("FROM=TO"), std::string::npos) << err;
+  EXPECT_EQ(run("--scenario " + scenario("landing_a") + " --lcm-url '" + kUrl + "' --remap TRUTH=X",
+                &err),
+            2);
+  EXPECT_NE(err.find("unknown channel 'TRUTH'"), std::string::npos) << err;
+  EXPECT_NE(err.find(channels::kSimTruth), std::string::npos) << err;
 }
 
 TEST(SimNodeTest, ABadScenarioExitsWithCode2NamingFileKeyAndValue) {

@@ -16,6 +16,7 @@
 #include <cmath>
 #include <cstdlib>
 
+#include "common/channels.hpp"
 #include "common/decode.hpp"
 
 namespace alight::tools::faults {
@@ -71,12 +72,12 @@ std::vector<std::string> all_types() {
 TEST(FaultGenTest, KindsRoundTripAndChannelsHaveTypes) {
   for (Kind k : all_kinds()) EXPECT_EQ(parse_kind(to_string(k)), k);
   EXPECT_FALSE(parse_kind("bogus"));
-  EXPECT_EQ(type_of_channel("MOCAP_POSE"), "pose_t");
-  EXPECT_EQ(type_of_channel("VISION_DIAG"), "image_t");
+  EXPECT_EQ(type_of_channel(channels::kMocapPose), "pose_t");
+  EXPECT_EQ(type_of_channel(channels::kVisionDiag), "image_t");
   EXPECT_FALSE(type_of_channel("NO_SUCH_CHANNEL"));
   const auto chans = injectable_channels();
-  EXPECT_EQ(std::count(chans.begin(), chans.end(), "SIM_TRUTH"), 0);  // the referee
-  EXPECT_EQ(std::count(chans.begin(), chans.end(), "OPERATOR_CMD"), 1);
+  EXPECT_EQ(std::count(chans.begin(), chans.end(), channels::kSimTruth), 0);  // the referee
+  EXPECT_EQ(std::count(chans.begin(), chans.end(), channels::kOperatorCmd), 1);
   for (const auto& c : chans) EXPECT_TRUE(type_of_channel(c)) << c;
 }
 
@@ -126,7 +127,7 @@ TEST(FaultGenTest, LengthOffsetsPointAtTheLengthsTheDecoderReads) {
   ASSERT_EQ(no.size(), 3u);  // node, n, channels[0].channel
   EXPECT_EQ(int32_at(ns, no[0]), static_cast<int32_t>(sizeof "alight-inject"));
   EXPECT_EQ(int32_at(ns, no[1]), 1);
-  EXPECT_EQ(int32_at(ns, no[2]), static_cast<int32_t>(sizeof "MOCAP_POSE"));
+  EXPECT_EQ(int32_at(ns, no[2]), static_cast<int32_t>(sizeof channels::kMocapPose));
   EXPECT_TRUE(length_field_offsets("pose_t", default_message("pose_t", kNow)).empty());
 }
 

@@ -11,6 +11,8 @@
 #include <numeric>
 #include <random>
 
+#include "common/channels.hpp"
+
 namespace alight::tools {
 namespace {
 
@@ -325,8 +327,9 @@ TEST(ScoreTest, CommandLineReadsASessionLog) {
       log.writeEvent(&ev);
     };
     auto write = [&](const char* ch, const auto& msg) { write_at(ch, msg, msg.utime); };
-    write("SIM_TRUTH", landing_truth(kT0, 0, 0, 1.5, false));
-    write("AUTONOMY_STATUS", status(kT0 + 1, autonomy_status_t::PHASE_DETECTION, "DETECTION"));
+    write(channels::kSimTruth, landing_truth(kT0, 0, 0, 1.5, false));
+    write(channels::kAutonomyStatus,
+          status(kT0 + 1, autonomy_status_t::PHASE_DETECTION, "DETECTION"));
     // Two frames 0.5 s apart, each answered by the vision 120 ms (wall) after the logger got it
     for (int i = 0; i < 2; ++i) {
       image_t img{};
@@ -335,10 +338,11 @@ TEST(ScoreTest, CommandLineReadsASessionLog) {
       img.pixelformat = image_t::PIXEL_FORMAT_GRAY;
       img.size = 4;
       img.data.assign(4, 128);
-      write_at("CAMERA", img, kT0 + 1'000'000 + i * 500'000);
-      write_at("VISION_TARGET", vision_target(img.utime, i == 1), kT0 + 1'120'000 + i * 500'000);
+      write_at(channels::kCamera, img, kT0 + 1'000'000 + i * 500'000);
+      write_at(channels::kVisionTarget, vision_target(img.utime, i == 1),
+               kT0 + 1'120'000 + i * 500'000);
     }
-    write("SIM_TRUTH", landing_truth(kT0 + 2, 1.0, -0.5, 0.24, true));
+    write(channels::kSimTruth, landing_truth(kT0 + 2, 1.0, -0.5, 0.24, true));
   }
   const std::string bin = std::string(ALIGHT_BINARY_DIR) + "/bin/alight-score ";
   auto run = [&](const std::string& args, std::string* out) {

@@ -11,6 +11,7 @@
 #include <new>
 #include <opencv2/core.hpp>
 
+#include "common/channels.hpp"
 #include "common/params.hpp"
 #include "common/stamp_guard.hpp"
 #include "vision/params.hpp"
@@ -56,7 +57,7 @@ TEST(VisionInputsRegression, PoseStampedAnHourAheadDoesNotPushLaterPosesOut) {
   for (int i = 0; i < 100; ++i, t += 10'000, b.steady_us += 10'000)
     EXPECT_TRUE(add_mocap_pose(pose_msg(t, 0.001 * i), poses, b.accept, b.reject));
   EXPECT_FALSE(add_mocap_pose(pose_msg(t + 3'600'000'000, 9.0), poses, b.accept, b.reject));
-  EXPECT_EQ(b.rejected_stamps["MOCAP_POSE"], 1);
+  EXPECT_EQ(b.rejected_stamps[channels::kMocapPose], 1);
   for (int i = 0; i < 100; ++i, t += 10'000, b.steady_us += 10'000)
     EXPECT_TRUE(add_mocap_pose(pose_msg(t, 0.1 + 0.001 * i), poses, b.accept, b.reject));
   PoseSample at;
@@ -91,7 +92,7 @@ TEST(VisionInputsRegression, NonFinitePoseIsRefusedCountedAndTheLastGoodKept) {
     }
     EXPECT_FALSE(add_mocap_pose(m, poses, b.accept, b.reject)) << field;
   }
-  EXPECT_EQ(b.rejected_values["MOCAP_POSE"], 5);
+  EXPECT_EQ(b.rejected_values[channels::kMocapPose], 5);
   EXPECT_EQ(poses.size(), 1u);
   EXPECT_EQ(poses.newest().p_W_B.x(), 1.0);
   // A NaN pose stamped far ahead did not move the stamp guard: the next good pose is taken.
@@ -100,7 +101,7 @@ TEST(VisionInputsRegression, NonFinitePoseIsRefusedCountedAndTheLastGoodKept) {
   EXPECT_FALSE(add_mocap_pose(bad, poses, b.accept, b.reject));
   b.steady_us += 10'000;
   EXPECT_TRUE(add_mocap_pose(pose_msg(kT0 + 10'000, 3.0), poses, b.accept, b.reject));
-  EXPECT_EQ(b.rejected_stamps["MOCAP_POSE"], 0);
+  EXPECT_EQ(b.rejected_stamps[channels::kMocapPose], 0);
 }
 
 TEST(VisionInputsTest, SlightlyUnnormalisedQuaternionIsTakenAndNormalised) {
@@ -124,7 +125,7 @@ TEST(VisionInputsTest, CameraFrameAheadIsDroppedAndABadImageIsReportedAtItsStamp
   ahead.utime = kT0 + 3'600'000'000;
   f = camera_frame(ahead, b.accept, b.reject);
   EXPECT_FALSE(f.use);
-  EXPECT_EQ(b.rejected_stamps["CAMERA"], 1);
+  EXPECT_EQ(b.rejected_stamps[channels::kCamera], 1);
 
   image_t overflow = ok;  // the RGB frame whose width * 3 wrapped in int32
   overflow.utime = kT0 + 33'000;
@@ -138,7 +139,7 @@ TEST(VisionInputsTest, CameraFrameAheadIsDroppedAndABadImageIsReportedAtItsStamp
   f = camera_frame(overflow, b.accept, b.reject);
   EXPECT_TRUE(f.use);
   EXPECT_FALSE(f.image);
-  EXPECT_EQ(b.rejected_values["CAMERA"], 1);
+  EXPECT_EQ(b.rejected_values[channels::kCamera], 1);
 }
 
 TEST(VisionInputsTest, ExceptionsOutOfAFrameBecomeTextNotAnExit) {
