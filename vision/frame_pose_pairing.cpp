@@ -10,8 +10,8 @@ const char* to_string(PairingOutcome outcome) {
       return "no pose in time";
     case PairingOutcome::kPoseUnavailable:
       return "no pose for its stamp";
-    case PairingOutcome::kSuperseded:
-      return "superseded by a newer frame";
+    case PairingOutcome::kQueueFull:
+      return "too many frames waiting";
   }
   return "?";
 }
@@ -23,7 +23,8 @@ std::optional<PairingOutcome> judge_waiting_frame(PoseBuffer::Status status, int
       return PairingOutcome::kWithPose;
     case PoseBuffer::Status::kEmpty:
     case PoseBuffer::Status::kAfterNewest:
-      // The pose after the exposure may still come.
+      // The pose after the exposure may still come, unless the camera ran on max_wait_us
+      // without it.
       if (waited_us < max_wait_us) return std::nullopt;
       return PairingOutcome::kPoseTimedOut;
     case PoseBuffer::Status::kBeforeHistory:

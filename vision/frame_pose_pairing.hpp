@@ -5,22 +5,28 @@
 //
 // The policy alight-vision runs, as a pure class so the in-process closed loop
 // (test/autonomy/closed_loop.cpp) runs the same one and tests can drive it: no LCM, no clock.
-// The caller feeds poses and frames with their stamps and asks, with its own clock, whether the
-// waiting frame is decided:
-//  - one frame waits at a time; a newer frame that arrives first takes its place and the older
-//    one is dropped (kSuperseded): the newest view is the one worth the processing time, and the
-//    node already takes only the newest frame off LCM when it falls behind (Node::on_latest);
-//  - the frame goes with its pose as soon as the buffer can interpolate one at its exposure
+// Every frame is processed, in the order it arrived, and what becomes of it depends only on the
+// sequence of frames and poses offered (issue 15: a replay through lcm-logplayer gives the same
+// output on a loaded machine as live; an earlier policy let a newer frame displace one still
+// waiting for its pose and timed the wait on the wall clock, so how busy the machine was decided
+// which frames were processed):
+//  - frames queue in arrival order; only the oldest can be decided, the others wait behind it
+//    (the pipeline tracks its reference frame forward in time);
+//  - it goes with its pose as soon as the buffer can interpolate one at its exposure
 //    (PoseBuffer::lookup is kOk);
-//  - while the newest pose is still older than the exposure (or there is none yet) the frame
-//    waits, at most max_wait_us of the caller's clock counted from when it was offered; then it
-//    goes without a pose (kPoseTimedOut: the pipeline reports REASON_NO_POSE);
 //  - when the buffer can never give one (the exposure is before its history or in a gap larger
-//    than max_gap_s; poses come in time order) it goes without a pose at once
-//    (kPoseUnavailable).
-// The output depends only on the sequence of calls and their arguments.
+//    than max_gap_s; poses come in time order) it goes without a pose at once (kPoseUnavailable);
+//  - while the newest pose is still older than the exposure (or there is none yet) it waits, on
+//    sensor time: until a frame exposed max_wait_us or more after it has arrived (motion capture
+//    is late or lost while the camera runs on), then it goes without a pose (kPoseTimedOut: the
+//    pipeline reports REASON_NO_POSE);
+//  - at most max_queued frames wait; one more sends the oldest on without a pose (kQueueFull),
+//    a bound on memory for stamps that never move on.
 
+#include <algorithm>
+#include <cassert>
 #include <cstdint>
+#include <deque>
 #include <optional>
 #include <utility>
 
@@ -31,14 +37,14 @@ namespace alight::vision {
 /// What became of a frame offered to FramePosePairing.
 enum class PairingOutcome {
   kWithPose,         ///< to be processed with the pose at its exposure
-  kPoseTimedOut,     ///< to be processed without a pose: none after its exposure in time
+  kPoseTimedOut,     ///< to be processed without a pose: none came while the camera ran on
   kPoseUnavailable,  ///< to be processed without a pose: the buffer can never give one
-  kSuperseded,       ///< dropped unprocessed: a newer frame arrived before its pose
+  kQueueFull,        ///< to be processed without a pose: too many frames waiting behind it
 };
 const char* to_string(PairingOutcome outcome);
 
-/// The decision for a waiting frame, given the pose buffer's answer at its exposure and how long
-/// it has waited (caller's clock); nullopt: keep waiting.
+/// The decision for the oldest waiting frame, given the pose buffer's answer at its exposure and
+/// how far the newest frame's exposure is past its own (sensor time) [us]; nullopt: keep waiting.
 std::optional<PairingOutcome> judge_waiting_frame(PoseBuffer::Status status, int64_t waited_us,
                                                   int64_t max_wait_us);
 
@@ -55,18 +61,17 @@ class FramePosePairing {
     PairingOutcome outcome = PairingOutcome::kWithPose;
     PoseBuffer::Status pose_status = PoseBuffer::Status::kOk;  ///< the lookup that decided it
   };
-  /// A frame dropped unprocessed.
-  struct Dropped {
-    int64_t utime = 0;  ///< the frame's exposure time [us]
-    PairingOutcome outcome = PairingOutcome::kSuperseded;
-  };
   struct Counts {
-    uint64_t with_pose = 0, timed_out = 0, unavailable = 0, superseded = 0;
+    uint64_t with_pose = 0, timed_out = 0, unavailable = 0, queue_full = 0;
   };
 
-  /// max_wait_us: longest wait for a pose after the exposure, on the caller's clock [us].
-  FramePosePairing(const PoseBufferParams& pose_params, int64_t max_wait_us)
-      : poses_(pose_params), max_wait_us_(max_wait_us) {}
+  /// max_wait_us: longest wait for a pose, in exposure time of the frames that arrive meanwhile
+  /// [us]; max_queued: frames that may wait at once (>= 1).
+  FramePosePairing(const PoseBufferParams& pose_params, int64_t max_wait_us,
+                   size_t max_queued = 64)
+      : poses_(pose_params), max_wait_us_(max_wait_us), max_queued_(max_queued) {
+    assert(max_queued_ >= 1);
+  }
 
   /// Adds a motion-capture sample (PoseBuffer::add: false when older than its history).
   bool add_pose(const PoseSample& pose) { return poses_.add(pose); }
@@ -75,30 +80,26 @@ class FramePosePairing {
   PoseBuffer& poses() { return poses_; }
   const PoseBuffer& poses() const { return poses_; }
 
-  /// Offers a frame exposed at `frame_utime`; its wait for a pose is counted from
-  /// `wait_from_utime` on the clock later passed to poll(). Returns the frame it displaced.
-  std::optional<Dropped> add_frame(Frame frame, int64_t frame_utime, int64_t wait_from_utime) {
-    std::optional<Dropped> dropped;
-    if (waiting_) {
-      dropped = Dropped{waiting_->utime, PairingOutcome::kSuperseded};
-      ++counts_.superseded;
-    }
-    waiting_.emplace(Waiting{std::move(frame), frame_utime, wait_from_utime});
-    return dropped;
+  /// Queues a frame exposed at `frame_utime` behind those already waiting.
+  void add_frame(Frame frame, int64_t frame_utime) {
+    newest_frame_utime_ = seen_frame_ ? std::max(newest_frame_utime_, frame_utime) : frame_utime;
+    seen_frame_ = true;
+    queue_.push_back(Waiting{std::move(frame), frame_utime});
   }
 
-  /// The waiting frame once it is decided (then it no longer waits); nullopt while it waits or
-  /// when none does. Call after every add_pose / add_frame and periodically, so a frame whose
-  /// pose never comes is released once max_wait_us has passed.
-  std::optional<Ready> poll(int64_t now_utime) {
-    if (!waiting_) return std::nullopt;
+  /// The oldest waiting frame once it is decided (it then leaves the queue); nullopt while it
+  /// waits or when none does. Call until nullopt after every add_pose / add_frame: the answer
+  /// depends only on what was added, so calling more often changes nothing.
+  std::optional<Ready> poll() {
+    if (queue_.empty()) return std::nullopt;
+    Waiting& head = queue_.front();
     PoseSample pose;
-    const PoseBuffer::Status status = poses_.lookup(waiting_->utime, &pose);
-    const auto outcome =
-        judge_waiting_frame(status, now_utime - waiting_->wait_from_utime, max_wait_us_);
+    const PoseBuffer::Status status = poses_.lookup(head.utime, &pose);
+    auto outcome = judge_waiting_frame(status, newest_frame_utime_ - head.utime, max_wait_us_);
+    if (!outcome && queue_.size() > max_queued_) outcome = PairingOutcome::kQueueFull;
     if (!outcome) return std::nullopt;
-    Ready r{std::move(waiting_->frame), waiting_->utime, std::nullopt, *outcome, status};
-    waiting_.reset();
+    Ready r{std::move(head.frame), head.utime, std::nullopt, *outcome, status};
+    queue_.pop_front();
     switch (*outcome) {
       case PairingOutcome::kWithPose:
         r.pose = pose;
@@ -110,16 +111,18 @@ class FramePosePairing {
       case PairingOutcome::kPoseUnavailable:
         ++counts_.unavailable;
         break;
-      case PairingOutcome::kSuperseded:  // only add_frame() supersedes
+      case PairingOutcome::kQueueFull:
+        ++counts_.queue_full;
         break;
     }
     return r;
   }
 
-  /// Exposure time of the waiting frame, if one waits.
+  /// Exposure time of the oldest waiting frame, if one waits.
   std::optional<int64_t> waiting_utime() const {
-    return waiting_ ? std::optional<int64_t>(waiting_->utime) : std::nullopt;
+    return queue_.empty() ? std::nullopt : std::optional<int64_t>(queue_.front().utime);
   }
+  size_t waiting() const { return queue_.size(); }
   const Counts& counts() const { return counts_; }
   int64_t max_wait_us() const { return max_wait_us_; }
 
@@ -127,11 +130,13 @@ class FramePosePairing {
   struct Waiting {
     Frame frame;
     int64_t utime;
-    int64_t wait_from_utime;
   };
   PoseBuffer poses_;
   int64_t max_wait_us_;
-  std::optional<Waiting> waiting_;
+  size_t max_queued_;
+  std::deque<Waiting> queue_;
+  bool seen_frame_ = false;
+  int64_t newest_frame_utime_ = 0;  ///< newest exposure among the frames offered [us]
   Counts counts_;
 };
 

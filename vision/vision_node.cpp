@@ -1,11 +1,13 @@
 // alight-vision: CAMERA + MOCAP_POSE -> VISION_TARGET (one per processed frame, also when
 // nothing was found, with the reason) and VISION_DIAG (JPEG, lower rate). Paper 3.1-3.3.
 //
-// Frames: CAMERA is subscribed with on_latest, so when processing falls behind the node takes
-// the newest frame and skips the rest. A frame needs the pose at its exposure time; when the
-// newest motion-capture sample is still older than the frame, the frame waits for it (at most
-// max_pose_wait_s, then it is processed without a pose: REASON_NO_POSE). Everything published
-// is stamped with the frame's exposure time, so a replayed log gives the same sequence.
+// Frames: every CAMERA message is processed, in the order it arrived (issue 15). A frame needs
+// the pose at its exposure time; when the newest motion-capture sample is still older than the
+// frame, the frame waits for it, with the frames after it, until the camera has run on
+// max_pose_wait_s of exposure time without it (then it is processed without a pose:
+// REASON_NO_POSE) - vision/frame_pose_pairing.hpp. Nothing here reads a clock, and everything
+// published is stamped with the frame's exposure time, so the output is a function of the
+// message sequence alone: a replayed log gives the same bytes however busy the machine is.
 //
 // Input boundary (issue 14, vision/inputs.hpp): a pose with a non-finite value or a non-unit
 // quaternion is refused, and so is any message whose stamp the node's StampGuard refuses (a
@@ -65,8 +67,6 @@ int main(int argc, char** argv) {
       Image image;
       bool bad = false;
     };
-    // The frame-to-pose policy (vision/frame_pose_pairing.hpp), waiting on the wall clock: the
-    // wait is for the transport, which the frames' stamps cannot measure.
     FramePosePairing<Pending> pairing(params.poses,
                                       static_cast<int64_t>(params.max_pose_wait_s * 1e6));
     int64_t last_diag_utime = 0;
@@ -107,16 +107,19 @@ int main(int argc, char** argv) {
       }
     };
     const auto try_process = [&]() {
-      if (auto r = pairing.poll(wall_utime())) process(r->frame, r->pose);
+      while (auto r = pairing.poll()) {
+        if (r->outcome != PairingOutcome::kWithPose)
+          spdlog::debug("frame {} without a pose: {}", r->utime, to_string(r->outcome));
+        process(r->frame, r->pose);
+      }
     };
 
     node.on<pose_t>(channels::kMocapPose, [&](const pose_t& msg) {
       if (add_mocap_pose(msg, pairing.poses(), accept_stamp, reject)) try_process();
     });
-    node.on_latest<image_t>(channels::kCamera, [&](const image_t& msg) {
+    node.on<image_t>(channels::kCamera, [&](const image_t& msg) {
       FrameInput in = camera_frame(msg, accept_stamp, reject);
       if (!in.use) return;
-      const int64_t arrived_wall = wall_utime();
       Pending f;
       if (in.image) {
         f.image = std::move(*in.image);
@@ -125,17 +128,17 @@ int main(int argc, char** argv) {
         f.bad = true;
       }
       const int64_t utime = f.image.utime;
-      if (const auto dropped = pairing.add_frame(std::move(f), utime, arrived_wall))
-        spdlog::debug("frame {} skipped: {}", dropped->utime, to_string(dropped->outcome));
+      pairing.add_frame(std::move(f), utime);
       try_process();
     });
-    node.every(0.02, [&](int64_t) { try_process(); });
     node.every(10.0, [&](int64_t) {
       const ChannelStats& c = node.stats(channels::kCamera);
       spdlog::info(
-          "{} frames, {} with a target, {} camera frames skipped, {} refused (image or stamp), "
-          "{} dropped by an exception",
-          n_frames, n_found, c.skipped, c.rejected_values + c.rejected_stamps, n_frame_errors);
+          "{} frames, {} with a target, {} without a pose ({} timed out, {} not in the history, "
+          "{} behind a full queue), {} refused (image or stamp), {} dropped by an exception",
+          n_frames, n_found, pairing.counts().timed_out + pairing.counts().unavailable +
+          pairing.counts().queue_full, pairing.counts().timed_out, pairing.counts().unavailable,
+          pairing.counts().queue_full, c.rejected_values + c.rejected_stamps, n_frame_errors);
     });
     return node.run();
   });

@@ -14,7 +14,7 @@
 namespace alight::autonomy::test {
 
 namespace {
-// Longest wait for a frame's pose, from its exposure in sim time (closed_loop.hpp).
+// Longest wait for a frame's pose, in exposure time of the frames after it (closed_loop.hpp).
 constexpr int64_t kMaxPoseWaitUs = 100'000;
 }  // namespace
 
@@ -41,7 +41,7 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
     rig = sim::load_camera_rig(config.vehicle_file,
                                config.mission == Mission::kLanding ? "downward" : "forward");
   sim::Simulator simulator(scenario, vehicle, config.seed, rig);
-  // The vision node's frame-to-pose policy, waiting on sim time from the frame's exposure.
+  // The vision node's frame-to-pose policy (vision/frame_pose_pairing.hpp).
   vision::FramePosePairing<sim::CameraFrame> frames(PoseBufferParams{}, kMaxPoseWaitUs);
   outer_loop::PositionController controller(ol_params);
   Autonomy autonomy(au_params);
@@ -144,9 +144,9 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
     if (config.camera_vision) {
       if (auto f = simulator.take_camera()) {
         const int64_t exposure_utime = f->utime;
-        frames.add_frame(std::move(*f), exposure_utime, exposure_utime);
+        frames.add_frame(std::move(*f), exposure_utime);
       }
-      if (const auto ready = frames.poll(now)) {
+      while (const auto ready = frames.poll()) {
         const auto m = config.camera_vision(ready->frame, ready->pose);
         if (m && !vision.silent) {
           Inputs in;

@@ -1,10 +1,13 @@
 #!/usr/bin/env python3
-"""Replay regression (issue 6): a landing flown live over LCM (simulator, vision, autonomy and
-outer loop through alight-launch, recorded by lcm-logger) is replayed by lcm-logplayer into a
-fresh alight-vision, which must publish the same VISION_TARGET sequence byte for byte
+"""Replay regression (issue 6): a landing or an ingress flown live over LCM (simulator, vision,
+autonomy and outer loop through alight-launch, recorded by lcm-logger) is replayed by
+lcm-logplayer into a fresh alight-vision, which must publish the same VISION_TARGET sequence byte for byte
 (scripts/replay-vision does the replay and the comparison).
 
-    vision_replay_test.py SOURCE_DIR BUILD_DIR [--seconds S]
+    vision_replay_test.py SOURCE_DIR BUILD_DIR [--seconds S] [--load N]
+
+--load N keeps N busy processes running through both the live flight and the replay (CTest runs
+it with one per core): the output must not depend on how busy the machine is (issue 15).
 
 The live part flies until the vision has published at least MIN_FOUND targets with the platform
 found (or S seconds of wall time pass), so the comparison covers real waypoints, not only
@@ -29,20 +32,44 @@ def main():
     ap.add_argument("source")
     ap.add_argument("build")
     ap.add_argument("--seconds", type=float, default=60.0)
+    ap.add_argument("--load", type=int, default=0, help="busy processes alongside")
+    ap.add_argument("--mission", choices=["landing", "ingress"], default="landing")
     args = ap.parse_args()
+    load = [subprocess.Popen([sys.executable, "-c", "while True: pass"])
+            for _ in range(args.load)]
+    try:
+        # A loaded lcm-logger sometimes loses a message; when the log then cannot say what the
+        # live node processed, replay-vision says so (exit 3) and the flight is flown again.
+        # A replay that differs (exit 1) fails at once: that is what this test is for.
+        for attempt in range(1, 4):
+            status = run(args)
+            if status != 3:
+                return status
+            print("attempt %d: the session log lost data the comparison needs; flying again"
+                  % attempt)
+        print("FAIL: three session logs in a row lost data")
+        return 1
+    finally:
+        for p in load:
+            p.kill()
+            p.wait()
+
+
+def run(args):
     sys.path.insert(0, os.path.join(args.source, "scripts"))
     import lcmlog  # noqa: E402
 
     log_root = tempfile.mkdtemp(prefix="alight-replay-test-")
     url = "udpm://239.255.76.67:%d?ttl=0" % (7700 + random.randrange(100))
     env = dict(os.environ, ALIGHT_BUILD_DIR=args.build, ALIGHT_ROOT=args.source,
-               ALIGHT_SCENARIO=os.path.join(args.source, "config/scenarios/landing_b.yaml"),
+               ALIGHT_SCENARIO=os.path.join(args.source, "config/scenarios/%s.yaml" % (
+                   "landing_b" if args.mission == "landing" else "ingress_wide")),
                ALIGHT_VEHICLE=os.path.join(args.source, "config/vehicles/pelican.yaml"),
                ALIGHT_SEED="3", ALIGHT_RATE="1")
     out = open(os.path.join(log_root, "launch.out"), "w+")
     launcher = subprocess.Popen(
         [os.path.join(args.build, "bin", "alight-launch"),
-         os.path.join(args.source, "config/launch/sim_landing.yaml"), "--lcm-url", url,
+         os.path.join(args.source, "config/launch/sim_%s.yaml" % args.mission), "--lcm-url", url,
          "--log-root", log_root], stdout=out, stderr=subprocess.STDOUT, env=env)
     session = None
     found = 0
@@ -77,27 +104,29 @@ def main():
     print("logs: %s" % log_root)
     if session is None or found < MIN_FOUND:
         print(launch_text)
-        print("FAIL: the live flight published %d targets with the platform found in %g s "
+        print("FAIL: the live flight published %d targets with the target found in %g s "
               "(need %d)" % (found, args.seconds, MIN_FOUND))
         return 1
     log = os.path.join(session, "session.lcmlog")
-    print("live session %s: %d targets with the platform found" % (log, found))
+    print("live session %s: %d targets with the target found" % (log, found))
     replay = subprocess.run(
         [sys.executable, os.path.join(args.source, "scripts", "replay-vision"), log,
-         "--config", env["ALIGHT_VEHICLE"], "--mission", "landing", "--build", args.build,
+         "--config", env["ALIGHT_VEHICLE"], "--mission", args.mission, "--build", args.build,
          "--keep", os.path.join(log_root, "replay")],
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
         env=dict(os.environ, ALIGHT_LCMTYPES_PYTHON=os.environ.get(
             "ALIGHT_LCMTYPES_PYTHON", os.path.join(args.build, "lcmtypes", "python"))))
     print(replay.stdout)
+    if replay.returncode == 3:
+        return 3
     if replay.returncode != 0:
         print("FAIL: replay-vision exited with %d" % replay.returncode)
         return 1
     m = re.search(r"identical: (\d+) VISION_TARGET messages \((\d+) with a target\)", replay.stdout)
     if not m or int(m.group(2)) < MIN_FOUND:
-        print("FAIL: the replay compared fewer than %d targets with the platform found" % MIN_FOUND)
+        print("FAIL: the replay compared fewer than %d targets with the target found" % MIN_FOUND)
         return 1
-    print("PASS: %s targets identical, %s with the platform found" % (m.group(1), m.group(2)))
+    print("PASS: %s targets identical, %s with the target found" % (m.group(1), m.group(2)))
     shutil.rmtree(log_root, ignore_errors=True)  # a failing run keeps its logs for a look
     return 0
 
