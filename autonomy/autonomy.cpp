@@ -216,6 +216,11 @@ void Autonomy::start_from_first_pose() {
   enter(phases::Hold{p}, why + ": holding position, waiting for the operator");
 }
 
+void Autonomy::refused_at_link(const OperatorCommand& cmd) {
+  assert(cmd.auth == CommandAuth::kHmacSha256 && cmd.link_reject != CommandReject::kNone);
+  gate_.check(cmd);
+}
+
 void Autonomy::handle_command(const OperatorCommand& cmd) {
   const CommandGate::Verdict verdict = gate_.check(cmd);
   if (!verdict.accepted) {

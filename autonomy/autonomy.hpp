@@ -113,6 +113,10 @@ class Autonomy {
   /// One step at now_utime (the newest sensor time: pose or IMU; never the wall clock) with
   /// whatever arrived since the last step.
   Output update(const Inputs& in, int64_t now_utime);
+  /// An operator command whose signature check failed at the link (cmd.link_reject says why):
+  /// the command gate counts it like every refusal, but the loop does not step on it (a flood
+  /// of forgeries drives nothing, and gets no setpoint published).
+  void refused_at_link(const OperatorCommand& cmd);
 
   Phase phase() const { return static_cast<Phase>(state_.index()); }
   Mission mission() const { return profile_ ? profile_->mission() : Mission::kNone; }

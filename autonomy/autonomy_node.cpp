@@ -204,16 +204,16 @@ int main(int argc, char** argv) {
       in.command = au::command_from_msg(m, &why);
       if (!in.command) return (void)node.reject_value("OPERATOR_CMD", why);
       // The signature is checked here, where the wire message is (the HMAC covers its
-      // encoding); the autonomy's CommandGate takes the verdict and decides, counts and acks.
+      // encoding); the autonomy's CommandGate takes the verdict, decides, counts and acks.
       if (m.auth != alight::operator_cmd_t::AUTH_NONE && verifier) {
         const auto verdict = verifier->check(m, alight::wall_utime());
-        if (verdict.accepted()) {
-          in.command->auth = au::CommandAuth::kVerified;
-        } else {
+        if (!verdict.accepted()) {
           spdlog::warn("OPERATOR_CMD from '{}' for '{}' seq {} rejected: {}", m.sender,
                        m.vehicle_id, m.seq, alight::reason_name(verdict.reason));
           in.command->link_reject = static_cast<au::CommandReject>(verdict.reason);
+          return autonomy.refused_at_link(*in.command);
         }
+        in.command->auth = au::CommandAuth::kVerified;
       }
       if (now_utime == 0) {
         spdlog::warn("operator command before any sensor time: ignored");
