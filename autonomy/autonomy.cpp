@@ -331,10 +331,11 @@ void Autonomy::start_refinement(const TargetMeasurement& m) {
     r.sizes_m.push_back(m.size_m);
     r.yaw4_sum = Vector2d(std::cos(4 * m.yaw_rad), std::sin(4 * m.yaw_rad));
   }
-  auto& entered = enter(
-      std::move(r), std::string(m.found ? "first waypoint X_V,1" : "first sighting (partly in view)") +
-                        " at (" + fmt(m.p_W_target.x()) + ", " + fmt(m.p_W_target.y()) + ", " +
-                        fmt(m.p_W_target.z()) + ")");
+  auto& entered =
+      enter(std::move(r),
+            std::string(m.found ? "first waypoint X_V,1" : "first sighting (partly in view)") +
+                " at (" + fmt(m.p_W_target.x()) + ", " + fmt(m.p_W_target.y()) + ", " +
+                fmt(m.p_W_target.z()) + ")");
   next_vantage(entered);
 }
 
@@ -512,8 +513,8 @@ void Autonomy::step(phases::Refinement& r, const Vector3d& p, double /*dt_s*/) {
 }
 
 void Autonomy::step(phases::Approach& a, const Vector3d& p, double dt_s) {
-  const ApproachInputs in{pose_,  p,    estimate_W_, yaw_sp_rad_, since_found_s(a.last_found_utime),
-                          dt_s, now_utime_};
+  const ApproachInputs in{
+      pose_, p, estimate_W_, yaw_sp_rad_, since_found_s(a.last_found_utime), dt_s, now_utime_};
   ApproachStep next = profile_->step_approach(a.how, in);
   if (next.next == ApproachStep::Next::kTargetLost) {
     target_lost(next.reason);
@@ -610,7 +611,8 @@ Output Autonomy::make_output() {
   sp.v_W = geofence_clamped_ ? Vector3d::Zero() : sp_v_W_;
   sp.yaw_rad = yaw_sp_rad_;
   sp.motors_on = motors_on_;
-  sp.kill = phase() == Phase::kKilled;  // the outer loop disarms in the air only on an explicit KILL
+  sp.kill =
+      phase() == Phase::kKilled;  // the outer loop disarms in the air only on an explicit KILL
   sp.idle = false;
 
   out.has_setpoint = started_;

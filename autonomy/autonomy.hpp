@@ -69,7 +69,7 @@ struct Refinement {
   Vector3d first_sighting_W = Vector3d::Zero();  ///< X_V,1, possibly from a partial view
   std::vector<Vector2d> sizes_m;                 ///< every full view's measured size
   Vector3d normal_sum_W = Vector3d::Zero();      ///< sum of the measured normals
-  Vector2d yaw4_sum = Vector2d::Zero();  ///< landing: sum of (cos, sin)(4 yaw), yaw mod 90 deg
+  Vector2d yaw4_sum = Vector2d::Zero();   ///< landing: sum of (cos, sin)(4 yaw), yaw mod 90 deg
   Vector3d vantage_W = Vector3d::Zero();  ///< the vantage point being flown to
   int64_t vantage_since_utime = 0;
   std::optional<int64_t> at_vantage_since_utime;  ///< dwelling at the vantage since

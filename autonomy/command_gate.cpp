@@ -60,9 +60,9 @@ CommandGate::Verdict CommandGate::check(const OperatorCommand& cmd) {
   // the verifier's, and a sender's unsigned and verified commands share one sequence.
   const auto it = last_seq_.find(cmd.sender);
   if (cmd.auth == CommandAuth::kNone && it != last_seq_.end() && cmd.seq <= it->second) {
-    return refuse(cmd, CommandReject::kNone,
-                  "replayed or out-of-order seq " + std::to_string(cmd.seq) + " from '" +
-                      cmd.sender + "'");
+    return refuse(
+        cmd, CommandReject::kNone,
+        "replayed or out-of-order seq " + std::to_string(cmd.seq) + " from '" + cmd.sender + "'");
   }
   last_seq_[cmd.sender] = cmd.seq;
   last_accepted_seq_ = cmd.seq;

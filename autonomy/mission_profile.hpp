@@ -94,9 +94,8 @@ class MissionProfile {
     Vector3d p_W = Vector3d::Zero();
     std::optional<double> yaw_rad;
   };
-  virtual Vantage vantage(const Vector3d& mu_W, const Matrix3d& S_W, int n,
-                          const Vector3d& here_W, const Vector3d& normal_sum_W,
-                          VantageSampler& sampler) const = 0;
+  virtual Vantage vantage(const Vector3d& mu_W, const Matrix3d& S_W, int n, const Vector3d& here_W,
+                          const Vector3d& normal_sum_W, VantageSampler& sampler) const = 0;
 
   /// The fit check on the median measured sizes (a, b of TargetMeasurement::size_m): why it is
   /// refused and how high to hold then, or nothing when the vehicle fits. NaN sizes are refused.
