@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
-#include <sstream>
+#include <type_traits>
+
+#include "autonomy/text.hpp"
 
 namespace alight::autonomy {
 
@@ -50,21 +52,21 @@ const char* phase_name(Phase p) {
 }
 
 namespace {
-constexpr double kPathLeadM = 0.3;  // the search carrot waits when the vehicle is this far behind
+// PhaseState's alternatives are in Phase's order: phase() is the variant's index.
+template <Phase P, class State>
+constexpr bool kAt =
+    std::is_same_v<std::variant_alternative_t<static_cast<size_t>(P), PhaseState>, State>;
+static_assert(std::variant_size_v<PhaseState> == static_cast<size_t>(Phase::kKilled) + 1);
+static_assert(kAt<Phase::kIdle, phases::Idle> && kAt<Phase::kTakeoff, phases::Takeoff> &&
+              kAt<Phase::kHover, phases::Hover> && kAt<Phase::kDetection, phases::Detection> &&
+              kAt<Phase::kRefinement, phases::Refinement> &&
+              kAt<Phase::kApproach, phases::Approach> &&
+              kAt<Phase::kFinalDescent, phases::FinalDescent> &&
+              kAt<Phase::kLanded, phases::Landed> && kAt<Phase::kDone, phases::Done> &&
+              kAt<Phase::kHold, phases::Hold> && kAt<Phase::kFailsafe, phases::FailsafeDescent> &&
+              kAt<Phase::kKilled, phases::Killed>);
 
 double seconds(int64_t dt_utime) { return static_cast<double>(dt_utime) * 1e-6; }
-
-std::string fmt(double v, int precision = 3) {
-  std::ostringstream os;
-  os.setf(std::ios::fixed);
-  os.precision(precision);
-  os << v;
-  return os.str();
-}
-
-// Vantages at least this far from where the vehicle is: the vision needs a baseline of a few
-// centimetres (waypoint.min_baseline_m) between its reference and current image [m].
-constexpr double kMinVantageStepM = 0.08;
 
 bool finite(const PoseSample& s) {
   return s.p_W_B.allFinite() && s.v_W_B.allFinite() && s.q_WB.coeffs().allFinite() &&
@@ -83,7 +85,7 @@ Autonomy::Autonomy(const AutonomyParams& params, const RestartState& restored)
     : params_(params),
       estimator_(params.refinement),
       sampler_(params.refinement, params.seed),
-      touchdown_(params.landing),
+      gate_(params.accept_unsigned_commands),
       restored_(restored) {
   params_.validate();
   if (restored_.killed) {
@@ -91,12 +93,38 @@ Autonomy::Autonomy(const AutonomyParams& params, const RestartState& restored)
     // the pose, and nothing (TAKEOFF, --auto-go) turns them on again.
     started_ = resumed_ = true;
     failsafe_ = Failsafe::kKill;
-    enter(Phase::kKilled, "KILL latched before a restart: motors stay off");
+    enter(phases::Killed{}, "KILL latched before a restart: motors stay off");
   }
 }
 
+template <class State>
+State& Autonomy::enter(State state, std::string reason) {
+  state_ = std::move(state);
+  reason_ = std::move(reason);
+  phase_start_utime_ = now_utime_;
+  return std::get<State>(state_);
+}
+
+Vector3d Autonomy::current_vantage() const {
+  const auto* r = std::get_if<phases::Refinement>(&state_);
+  return r ? r->vantage_W : Vector3d::Zero();
+}
+
+Vector3d* Autonomy::held_position() {
+  if (auto* s = std::get_if<phases::Hover>(&state_)) return &s->hold_p_W;
+  if (auto* s = std::get_if<phases::Hold>(&state_)) return &s->hold_p_W;
+  if (auto* s = std::get_if<phases::Done>(&state_)) return &s->hold_p_W;
+  return nullptr;
+}
+
+TouchdownDetector* Autonomy::touchdown() {
+  if (auto* s = std::get_if<phases::FinalDescent>(&state_)) return &s->touchdown;
+  if (auto* s = std::get_if<phases::FailsafeDescent>(&state_)) return &s->touchdown;
+  return nullptr;
+}
+
 bool Autonomy::airborne() const {
-  switch (phase_) {
+  switch (phase()) {
     case Phase::kIdle:
     case Phase::kLanded:
     case Phase::kKilled:
@@ -112,17 +140,14 @@ bool Autonomy::pose_fresh() const {
   return pose_ && seconds(now_utime_ - pose_->utime) <= params_.failsafe.pose_stale_s;
 }
 
-void Autonomy::enter(Phase phase, std::string reason) {
-  phase_ = phase;
-  reason_ = std::move(reason);
-  phase_start_utime_ = now_utime_;
+double Autonomy::since_found_s(const std::optional<int64_t>& last_found_utime) const {
+  return seconds(now_utime_ - last_found_utime.value_or(phase_start_utime_));
 }
 
 void Autonomy::hold(const std::string& reason, Failsafe failsafe, double min_z_m) {
   const Vector3d p = pose_ ? pose_->p_W_B : sp_p_W_;
-  hold_p_W_ = Vector3d(p.x(), p.y(), std::max(p.z(), min_z_m));
   failsafe_ = failsafe;
-  enter(Phase::kHold, reason);
+  enter(phases::Hold{Vector3d(p.x(), p.y(), std::max(p.z(), min_z_m))}, reason);
 }
 
 bool Autonomy::hold_if_vision_silent() {
@@ -139,18 +164,17 @@ bool Autonomy::hold_if_vision_silent() {
 
 void Autonomy::enter_pose_lost() {
   failsafe_ = Failsafe::kPoseLost;
-  failsafe_z_m_ = pose_ ? pose_->p_W_B.z() : sp_p_W_.z();
-  failsafe_since_utime_ = now_utime_;
-  pose_back_since_utime_.reset();
+  phases::FailsafeDescent f{pose_ ? pose_->p_W_B.z() : sp_p_W_.z(), now_utime_, std::nullopt,
+                            TouchdownDetector(params_.landing)};
+  f.touchdown.arm(now_utime_);
   if (pose_) sp_p_W_.head<2>() = pose_->p_W_B.head<2>();
-  touchdown_.arm(now_utime_);
-  enter(Phase::kFailsafe, "motion capture lost for > " + fmt(params_.failsafe.pose_lost_s, 1) +
-                              " s: controlled descent, disarm on touch-down");
+  enter(std::move(f), "motion capture lost for > " + fmt(params_.failsafe.pose_lost_s, 1) +
+                          " s: controlled descent, disarm on touch-down");
 }
 
 RestartState Autonomy::restart_state() const {
   RestartState r;
-  r.killed = phase_ == Phase::kKilled;
+  r.killed = phase() == Phase::kKilled;
   // Stale is a transient (the pose comes back); the one it interrupted is what is latched.
   r.failsafe = failsafe_ == Failsafe::kPoseStale ? failsafe_before_stale_ : failsafe_;
   if (!started_) r = restored_;  // nothing decided yet: keep what the previous one knew
@@ -177,8 +201,6 @@ void Autonomy::start_from_first_pose() {
   }
   resumed_ = true;
   motors_on_ = true;
-  takeoff_xy_ = p.head<2>();
-  z_sp_m_ = p.z();
   const std::string why = std::string("restarted in flight (") +
                           (restored_.motors_on ? "previous instance flying"
                            : high              ? "gear " + fmt(gear_above_floor_m, 2) + " m up"
@@ -189,254 +211,165 @@ void Autonomy::start_from_first_pose() {
     reason_ = why + ": motion-capture-lost failsafe continues, disarm on touch-down";
     return;
   }
-  hold_p_W_ = p;
   failsafe_ =
       restored_.failsafe == Failsafe::kOperatorAbort ? Failsafe::kOperatorAbort : Failsafe::kNone;
-  enter(Phase::kHold, why + ": holding position, waiting for the operator");
+  enter(phases::Hold{p}, why + ": holding position, waiting for the operator");
 }
 
-bool Autonomy::accept(const OperatorCommand& cmd) {
-  std::string why;
-  if (cmd.auth == CommandAuth::kInternal) return true;
-  if (cmd.auth == CommandAuth::kHmacSha256) {
-    why = "signed command, but no operator key to verify it (autonomy.operator_key_file)";
-  } else if (cmd.auth == CommandAuth::kVerified) {
-    // Signature, freshness and replay were checked by the node's CommandVerifier.
-  } else if (!params_.accept_unsigned_commands) {
-    why = "unsigned command refused (autonomy.accept_unsigned_commands is false)";
-  } else {
-    const auto it = last_seq_.find(cmd.sender);
-    if (it != last_seq_.end() && cmd.seq <= it->second) {
-      why =
-          "replayed or out-of-order seq " + std::to_string(cmd.seq) + " from '" + cmd.sender + "'";
-    }
-  }
-  if (!why.empty()) {
-    ++cmds_rejected_;
-    reason_ = "command rejected: " + why;
-    return false;
-  }
-  last_seq_[cmd.sender] = cmd.seq;
-  last_cmd_seq_ = cmd.seq;
-  return true;
+void Autonomy::refused_at_link(const OperatorCommand& cmd) {
+  assert(cmd.auth == CommandAuth::kHmacSha256 && cmd.link_reject != CommandReject::kNone);
+  gate_.check(cmd);
 }
 
 void Autonomy::handle_command(const OperatorCommand& cmd) {
-  if (!accept(cmd)) return;
-  const bool in_failsafe = phase_ == Phase::kFailsafe;
+  const CommandGate::Verdict verdict = gate_.check(cmd);
+  if (!verdict.accepted) {
+    if (!verdict.at_link) reason_ = "command rejected: " + verdict.why;
+    return;
+  }
+  const Phase current = phase();
+  const bool in_failsafe = current == Phase::kFailsafe;
   switch (cmd.command) {
     case Command::kKill:
       started_ = true;  // an explicit KILL is sent even before the first pose
       motors_on_ = false;
       failsafe_ = Failsafe::kKill;
       if (!end_utime_) end_utime_ = now_utime_;
-      enter(Phase::kKilled, "KILL: motors off");
+      enter(phases::Killed{}, "KILL: motors off");
       return;
     case Command::kTakeoff:
-      if (phase_ != Phase::kIdle && phase_ != Phase::kLanded) {
-        reason_ = std::string("TAKEOFF ignored in ") + phase_name(phase_);
+      if (current != Phase::kIdle && current != Phase::kLanded) {
+        reason_ = std::string("TAKEOFF ignored in ") + phase_name(current);
         return;
       }
       if (!pose_fresh()) {
         reason_ = "TAKEOFF refused: no fresh motion-capture pose";
         return;
       }
-      takeoff_xy_ = pose_->p_W_B.head<2>();
-      z_sp_m_ = pose_->p_W_B.z();
       yaw_sp_rad_ = yaw_of(pose_->q_WB.toRotationMatrix());
       motors_on_ = true;
       failsafe_ = Failsafe::kNone;
-      mission_ = Mission::kNone;
+      profile_.reset();
       go_utime_.reset();
       end_utime_.reset();
-      enter(Phase::kTakeoff, "TAKEOFF");
+      enter(phases::Takeoff{pose_->p_W_B.head<2>(), pose_->p_W_B.z()}, "TAKEOFF");
       return;
     case Command::kGo:
-      if (phase_ != Phase::kHover && phase_ != Phase::kHold && phase_ != Phase::kDone) {
-        reason_ = std::string("GO ignored in ") + phase_name(phase_);
+      if (current != Phase::kHover && current != Phase::kHold && current != Phase::kDone) {
+        reason_ = std::string("GO ignored in ") + phase_name(current);
         return;
       }
       if (cmd.mission != Mission::kLanding && cmd.mission != Mission::kIngress) {
         reason_ = "GO refused: no mission (landing or ingress) given";
         return;
       }
-      mission_ = cmd.mission;
+      profile_ = MissionProfile::make(cmd.mission, params_);
       retries_ = 0;
       failsafe_ = Failsafe::kNone;
       go_utime_ = now_utime_;
       end_utime_.reset();
-      land_here_ = false;
-      start_detection(std::string("GO ") + mission_name(mission_));
+      start_detection(std::string("GO ") + mission_name(cmd.mission));
       return;
     case Command::kAbort:
       if (!airborne() || in_failsafe) {
-        reason_ = std::string("ABORT ignored in ") + phase_name(phase_);
+        reason_ = std::string("ABORT ignored in ") + phase_name(current);
         return;
       }
-      touchdown_.disarm();
       hold("operator ABORT: climb to a safe height and hover", Failsafe::kOperatorAbort,
            params_.failsafe.abort_height_m);
       return;
     case Command::kLandHere:
       if (!airborne() || in_failsafe || !pose_) {
-        reason_ = std::string("LAND_HERE ignored in ") + phase_name(phase_);
+        reason_ = std::string("LAND_HERE ignored in ") + phase_name(current);
         return;
       }
-      mission_ = Mission::kLanding;
-      land_here_ = true;
+      profile_ = MissionProfile::make(Mission::kLanding, params_);
       estimate_W_ = Vector3d(pose_->p_W_B.x(), pose_->p_W_B.y(), params_.geofence.min_W_m.z());
-      z_sp_m_ = pose_->p_W_B.z();
       failsafe_ = Failsafe::kNone;
-      enter(Phase::kApproach, "LAND_HERE: landing on the floor below");
+      enter(phases::Approach{LandingApproach{pose_->p_W_B.z(), true}, std::nullopt},
+            "LAND_HERE: landing on the floor below");
       return;
-    case Command::kNudge:
-      if (phase_ != Phase::kHover && phase_ != Phase::kHold && phase_ != Phase::kDone) {
-        reason_ = std::string("NUDGE ignored in ") + phase_name(phase_);
+    case Command::kNudge: {
+      Vector3d* held = held_position();  // HOVER, HOLD, DONE
+      if (!held) {
+        reason_ = std::string("NUDGE ignored in ") + phase_name(current);
         return;
       }
-      {
-        Vector3d d = cmd.nudge_W;
-        if (!d.allFinite()) {
-          reason_ = "NUDGE refused: non-finite offset";
-          return;
-        }
-        if (d.norm() > params_.failsafe.max_nudge_m) d *= params_.failsafe.max_nudge_m / d.norm();
-        hold_p_W_ += d;
-        reason_ = "NUDGE";
+      Vector3d d = cmd.nudge_W;
+      if (!d.allFinite()) {
+        reason_ = "NUDGE refused: non-finite offset";
+        return;
       }
+      if (d.norm() > params_.failsafe.max_nudge_m) d *= params_.failsafe.max_nudge_m / d.norm();
+      *held += d;
+      reason_ = "NUDGE";
       return;
+    }
     case Command::kNone:
       return;
   }
 }
 
 void Autonomy::start_detection(const std::string& reason) {
-  assert(pose_);
-  const Vector3d p = pose_->p_W_B;
-  std::vector<Vector3d> pts;
-  const auto& d = params_.detection;
-  if (mission_ == Mission::kLanding) {
-    // Up (or down) to the search height above where we are: a safe hover, then the lawnmower.
-    pts.emplace_back(p.x(), p.y(), d.landing_height_m);
-    const auto lm = lawnmower(d.landing_area_min_W_m, d.landing_area_max_W_m, d.lane_spacing_m,
-                              d.landing_height_m);
-    pts.insert(pts.end(), lm.begin(), lm.end());
-  } else {
-    yaw_sp_rad_ = d.ingress_yaw_deg * M_PI / 180.0;
-    pts.push_back(d.ingress_start_W_m);
-    pts.push_back(d.ingress_end_W_m);
-  }
-  path_.start(p, std::move(pts));
+  assert(pose_ && profile_);
+  auto search = profile_->search(pose_->p_W_B);
+  if (search.yaw_rad) yaw_sp_rad_ = *search.yaw_rad;
+  phases::Detection d;
+  d.path.start(pose_->p_W_B, std::move(search.path_W));
   estimator_.reset();
-  last_found_utime_.reset();
-  touchdown_.disarm();
-  enter(Phase::kDetection, reason);
+  enter(std::move(d), reason);
 }
 
 void Autonomy::start_refinement(const TargetMeasurement& m) {
   estimator_.reset();
-  sizes_m_.clear();
-  normal_sum_W_.setZero();
-  yaw4_sum_.setZero();
-  first_sighting_W_ = m.p_W_target;
+  phases::Refinement r;
+  r.last_found_utime = m.utime;
+  r.first_sighting_W = m.p_W_target;
+  r.normal_sum_W = m.n_W;  // the plane's orientation is measured also from a part of it
   if (m.found) {
     estimator_.add(m.p_W_target);
-    sizes_m_.push_back(m.size_m);
-    normal_sum_W_ += m.n_W;
-    yaw4_sum_ += Vector2d(std::cos(4 * m.yaw_rad), std::sin(4 * m.yaw_rad));
-  } else {
-    normal_sum_W_ += m.n_W;  // the plane's orientation is measured also from a part of it
+    r.sizes_m.push_back(m.size_m);
+    r.yaw4_sum = Vector2d(std::cos(4 * m.yaw_rad), std::sin(4 * m.yaw_rad));
   }
-  enter(Phase::kRefinement,
-        std::string(m.found ? "first waypoint X_V,1" : "first sighting (partly in view)") +
-            " at (" + fmt(m.p_W_target.x()) + ", " + fmt(m.p_W_target.y()) + ", " +
-            fmt(m.p_W_target.z()) + ")");
-  next_vantage();
+  auto& entered =
+      enter(std::move(r),
+            std::string(m.found ? "first waypoint X_V,1" : "first sighting (partly in view)") +
+                " at (" + fmt(m.p_W_target.x()) + ", " + fmt(m.p_W_target.y()) + ", " +
+                fmt(m.p_W_target.z()) + ")");
+  next_vantage(entered);
 }
 
-void Autonomy::next_vantage() {
+void Autonomy::next_vantage(phases::Refinement& r) {
   // Around the first sighting until the first full-view waypoint.
-  const Vector3d mu = estimator_.n() > 0 ? estimator_.mean() : first_sighting_W_;
-  const Matrix3d S = estimator_.covariance();
-  if (mission_ == Mission::kLanding) {
-    // A vantage next to the current position gives the vision no baseline: redraw (bounded).
-    const Vector2d here = pose_ ? Vector2d(pose_->p_W_B.head<2>()) : Vector2d(mu.head<2>());
-    Vector2d xy = sampler_.draw(mu.head<2>(), S.topLeftCorner<2, 2>(), estimator_.n());
-    for (int k = 0; k < 10 && (xy - here).norm() < kMinVantageStepM; ++k)
-      xy = sampler_.draw(mu.head<2>(), S.topLeftCorner<2, 2>(), estimator_.n());
-    vantage_W_ = Vector3d(xy.x(), xy.y(), params_.detection.landing_height_m);
-  } else {
-    // In the plane parallel to the wall at the standoff: along-wall t and vertical z.
-    Vector3d n = normal_sum_W_;
-    n.z() = 0;
-    n = n.norm() > 1e-6 ? Vector3d(n.normalized()) : Vector3d(-1, 0, 0);
-    const Vector3d t(-n.y(), n.x(), 0);
-    Eigen::Matrix<double, 3, 2> B;
-    B.col(0) = t;
-    B.col(1) = Vector3d::UnitZ();
-    const Vector2d mu2(t.dot(mu), mu.z());
-    const Eigen::Matrix2d S2 = B.transpose() * S * B;
-    const Vector2d d = sampler_.draw(mu2, S2, estimator_.n()) - mu2;
-    vantage_W_ =
-        mu + n * params_.refinement.ingress_standoff_m + t * d.x() + Vector3d::UnitZ() * d.y();
-    yaw_sp_rad_ = std::atan2(-n.y(), -n.x());
-  }
-  vantage_since_utime_ = now_utime_;
-  at_vantage_since_.reset();
-  at_vantage_W_.clear();
+  const Vector3d mu = estimator_.n() > 0 ? estimator_.mean() : r.first_sighting_W;
+  const Vector3d here = pose_ ? pose_->p_W_B : mu;
+  const auto v = profile_->vantage(mu, estimator_.covariance(), estimator_.n(), here,
+                                   r.normal_sum_W, sampler_);
+  r.vantage_W = v.p_W;
+  if (v.yaw_rad) yaw_sp_rad_ = *v.yaw_rad;
+  r.vantage_since_utime = now_utime_;
+  r.at_vantage_since_utime.reset();
+  r.at_vantage_W.clear();
 }
 
-void Autonomy::finish_refinement() {
+void Autonomy::finish_refinement(phases::Refinement& r) {
   estimate_W_ = estimator_.mean();
   std::vector<double> a, b;
-  for (const auto& s : sizes_m_) {
+  for (const auto& s : r.sizes_m) {
     a.push_back(s.x());
     b.push_back(s.y());
   }
-  const double size_a = median(a), size_b = median(b);
+  if (const auto refusal = profile_->refuse(median(a), median(b))) {
+    hold(refusal->why, Failsafe::kNone, refusal->hold_min_z_m);
+    return;
+  }
   const std::string where = "estimate (" + fmt(estimate_W_.x()) + ", " + fmt(estimate_W_.y()) +
                             ", " + fmt(estimate_W_.z()) +
                             ") from n = " + std::to_string(estimator_.n());
-  if (mission_ == Mission::kLanding) {
-    const auto& L = params_.landing;
-    const double short_side = std::min(size_a, size_b);
-    const double needed = L.gear_footprint_m + 2 * L.fit_margin_m;
-    if (!(short_side >= needed)) {  // NaN-safe: an unmeasured size is refused
-      hold("refused to land: platform short side " + fmt(short_side) + " m < gear footprint " +
-               fmt(L.gear_footprint_m) + " m + 2 x margin " + fmt(L.fit_margin_m) + " m",
-           Failsafe::kNone, params_.takeoff.height_m);
-      return;
-    }
-    z_sp_m_ = pose_->p_W_B.z();
-    land_here_ = false;
-    if (L.align_yaw_tol_deg > 0 && yaw4_sum_.norm() > 1e-9) {
-      // The platform's edges modulo 90 deg (the gear is square): the turn of at most 45 deg.
-      const double edges = std::atan2(yaw4_sum_.y(), yaw4_sum_.x()) / 4;
-      const double now = yaw_of(pose_->q_WB.toRotationMatrix());
-      const double k = std::round(wrap_angle(now - edges) / (M_PI / 2));
-      yaw_sp_rad_ = wrap_angle(edges + k * M_PI / 2);
-    }
-    enter(Phase::kApproach, "refinement converged (eqs. 7-9): " + where);
-  } else {
-    const auto& I = params_.ingress;
-    const double need_w = I.vehicle_span_m + 2 * I.clearance_m;
-    const double need_h = I.vehicle_height_m + 2 * I.clearance_m;
-    if (!(size_a >= need_w && size_b >= need_h)) {  // NaN-safe
-      hold("refused ingress: opening " + fmt(size_a) + " x " + fmt(size_b) +
-               " m smaller than the vehicle + clearance " + fmt(need_w) + " x " + fmt(need_h) +
-               " m",
-           Failsafe::kNone, 0.0);
-      return;
-    }
-    Vector3d n = normal_sum_W_;
-    n.z() = 0;
-    normal_W_ = n.norm() > 1e-6 ? Vector3d(n.normalized()) : Vector3d(-1, 0, 0);
-    yaw_sp_rad_ = std::atan2(-normal_W_.y(), -normal_W_.x());
-    ingress_stage_ = IngressStage::kAlign;
-    aligned_since_.reset();
-    through_s_m_ = 0.0;
-    enter(Phase::kApproach, "refinement converged (eqs. 7-9): " + where);
-  }
+  auto start = profile_->begin_approach(*pose_, yaw_sp_rad_, r.normal_sum_W, r.yaw4_sum);
+  yaw_sp_rad_ = start.yaw_sp_rad;
+  enter(phases::Approach{std::move(start.state), r.last_found_utime},
+        "refinement converged (eqs. 7-9): " + where);
 }
 
 void Autonomy::target_lost(const std::string& what) {
@@ -445,7 +378,7 @@ void Autonomy::target_lost(const std::string& what) {
   if (retries_ > params_.detection.max_retries) {
     hold("target lost (" + what + "); " + std::to_string(params_.detection.max_retries) +
              " retries exhausted: holding",
-         Failsafe::kNone, mission_ == Mission::kLanding ? params_.detection.landing_height_m : 0.0);
+         Failsafe::kNone, profile_->lost_hold_min_z_m());
     return;
   }
   start_detection("target lost (" + what + "): detection retry " + std::to_string(retries_) +
@@ -453,244 +386,206 @@ void Autonomy::target_lost(const std::string& what) {
 }
 
 void Autonomy::handle_target(const TargetMeasurement& m) {
-  if (!(m.found || m.partial) || m.mission != mission_ || !m.p_W_target.allFinite() ||
+  if (!(m.found || m.partial) || m.mission != mission() || !m.p_W_target.allFinite() ||
       !m.n_W.allFinite() || !m.size_m.allFinite() || !std::isfinite(m.yaw_rad)) {
     return;
   }
   // A target cut by the image border is in sight (not lost) and locates it well enough to fly
   // the vantages around; it is never averaged into the estimate.
-  last_found_utime_ = std::max(m.utime, last_found_utime_.value_or(m.utime));
-  if (phase_ == Phase::kDetection) {
+  const auto seen = [&](std::optional<int64_t>& last_found_utime) {
+    last_found_utime = std::max(m.utime, last_found_utime.value_or(m.utime));
+  };
+  if (std::holds_alternative<phases::Detection>(state_)) {
     start_refinement(m);
-  } else if (phase_ == Phase::kRefinement && !m.found) {
-    // Until the first full view the vantages follow the newest partial one: its centre lies
-    // between the vehicle and the true centre, so each vantage sees more of the target (in
-    // Monte Carlo runs the draws around the first sighting alone kept it cut for 60 s).
-    if (estimator_.n() == 0) first_sighting_W_ = m.p_W_target;
-  } else if (phase_ == Phase::kRefinement) {
-    sizes_m_.push_back(m.size_m);
-    normal_sum_W_ += m.n_W;
-    yaw4_sum_ += Vector2d(std::cos(4 * m.yaw_rad), std::sin(4 * m.yaw_rad));
-    if (params_.refinement.one_waypoint_per_vantage) {
-      if (at_vantage_since_) at_vantage_W_.push_back(m.p_W_target);  // added when the dwell ends
+  } else if (auto* a = std::get_if<phases::Approach>(&state_)) {
+    seen(a->last_found_utime);
+  } else if (auto* r = std::get_if<phases::Refinement>(&state_)) {
+    seen(r->last_found_utime);
+    if (!m.found) {
+      // Until the first full view the vantages follow the newest partial one: its centre lies
+      // between the vehicle and the true centre, so each vantage sees more of the target (in
+      // Monte Carlo runs the draws around the first sighting alone kept it cut for 60 s).
+      if (estimator_.n() == 0) r->first_sighting_W = m.p_W_target;
       return;
     }
-    add_waypoint(m.p_W_target);
+    r->sizes_m.push_back(m.size_m);
+    r->normal_sum_W += m.n_W;
+    r->yaw4_sum += Vector2d(std::cos(4 * m.yaw_rad), std::sin(4 * m.yaw_rad));
+    if (params_.refinement.one_waypoint_per_vantage) {
+      // Added when the dwell ends.
+      if (r->at_vantage_since_utime) r->at_vantage_W.push_back(m.p_W_target);
+      return;
+    }
+    add_waypoint(*r, m.p_W_target);
   }
 }
 
-void Autonomy::add_waypoint(const Vector3d& X_W) {
+void Autonomy::add_waypoint(phases::Refinement& r, const Vector3d& X_W) {
   const auto verdict = estimator_.add(X_W);
   if (verdict == RefinementEstimator::Verdict::kRestarted) {
     reason_ =
         "estimate restarted: " + std::to_string(params_.refinement.max_consecutive_rejections) +
         " waypoints in a row outside the gate";
   }
-  if (estimator_.converged()) finish_refinement();
+  if (estimator_.converged()) finish_refinement(r);  // leaves REFINEMENT: r is gone
 }
 
 void Autonomy::step_phase(double dt_s) {
   const Vector3d p = pose_ ? pose_->p_W_B : sp_p_W_;
   sp_v_W_.setZero();
-  const double since_found_s = last_found_utime_ ? seconds(now_utime_ - *last_found_utime_)
-                                                 : seconds(now_utime_ - phase_start_utime_);
-
-  switch (phase_) {
-    case Phase::kIdle:
-    case Phase::kLanded:
-    case Phase::kKilled:
-      motors_on_ = false;
-      sp_p_W_ = p;
-      return;
-
-    case Phase::kTakeoff: {
-      const auto& T = params_.takeoff;
-      if (z_sp_m_ < T.height_m) {
-        z_sp_m_ = std::min(T.height_m, z_sp_m_ + T.climb_rate_mps * dt_s);
-        sp_v_W_.z() = T.climb_rate_mps;
-      }
-      sp_p_W_ = Vector3d(takeoff_xy_.x(), takeoff_xy_.y(), z_sp_m_);
-      if (z_sp_m_ >= T.height_m && (p - sp_p_W_).norm() < T.reached_tol_m) {
-        hold_p_W_ = sp_p_W_;
-        enter(Phase::kHover, "take-off complete: hovering, waiting for GO");
-      }
-      return;
-    }
-
-    case Phase::kHover:
-    case Phase::kHold:
-    case Phase::kDone:
-      sp_p_W_ = hold_p_W_;
-      return;
-
-    case Phase::kDetection:
-      if (hold_if_vision_silent()) return;
-      path_.step(p, dt_s, params_.detection.speed_mps, kPathLeadM);
-      sp_p_W_ = path_.carrot();
-      sp_v_W_ = path_.carrot_velocity();
-      if (path_.finished(p, params_.hover_tol_m)) {
-        target_lost("search path flown without a detection");
-      }
-      return;
-
-    case Phase::kRefinement: {
-      if (hold_if_vision_silent()) return;
-      const auto& R = params_.refinement;
-      if (since_found_s > R.lost_timeout_s) {
-        target_lost("no target seen for " + fmt(since_found_s, 1) + " s in refinement");
-        return;
-      }
-      if (seconds(now_utime_ - phase_start_utime_) > R.max_time_s) {
-        hold("refinement did not converge in " + fmt(R.max_time_s, 0) + " s", Failsafe::kNone, 0.0);
-        return;
-      }
-      if ((p - vantage_W_).norm() < R.vantage_reach_tol_m) {
-        if (!at_vantage_since_) at_vantage_since_ = now_utime_;
-        if (seconds(now_utime_ - *at_vantage_since_) >= R.vantage_dwell_s) {
-          if (!R.one_waypoint_per_vantage) {
-            next_vantage();
-          } else if (!at_vantage_W_.empty()) {
-            // The vantage's waypoint: the median is robust to a stray frame among few.
-            Vector3d X_W;
-            for (int k = 0; k < 3; ++k) {
-              std::vector<double> v;
-              for (const auto& w : at_vantage_W_) v.push_back(w[k]);
-              X_W[k] = median(v);
-            }
-            add_waypoint(X_W);
-            if (phase_ != Phase::kRefinement) return;  // converged (or held)
-            next_vantage();
-          } else {
-            // Nothing seen here: hovering does not help (the vision's baseline shrinks to zero
-            // as the reference frames age), moving on does.
-            next_vantage();
-          }
-        }
-      } else if (seconds(now_utime_ - vantage_since_utime_) > R.vantage_timeout_s) {
-        next_vantage();
-      }
-      sp_p_W_ = vantage_W_;
-      return;
-    }
-
-    case Phase::kApproach:
-      if (mission_ == Mission::kLanding) {
-        const auto& L = params_.landing;
-        const double z_touch = estimate_W_.z() + L.gear_height_m;  // body z on the platform
-        const double e_r = (p.head<2>() - estimate_W_.head<2>()).norm();
-        if (!land_here_ && p.z() - z_touch > L.lost_check_height_m &&
-            since_found_s > L.lost_timeout_s) {
-          target_lost("no target seen for " + fmt(since_found_s, 1) + " s in approach");
-          return;
-        }
-        const bool turned =
-            L.align_yaw_tol_deg <= 0 || !pose_ ||
-            std::abs(wrap_angle(yaw_of(pose_->q_WB.toRotationMatrix()) - yaw_sp_rad_)) <=
-                L.align_yaw_tol_deg * M_PI / 180.0;
-        if (e_r <= L.radial_tol_m && turned) {  // descend only inside the prescribed volume
-          z_sp_m_ -= L.descent_rate_mps * dt_s;
-          sp_v_W_.z() = -L.descent_rate_mps;
-        }
-        sp_p_W_ = Vector3d(estimate_W_.x(), estimate_W_.y(), z_sp_m_);
-        if (z_sp_m_ - z_touch <= L.final_height_m) {
-          touchdown_.arm(now_utime_);
-          enter(Phase::kFinalDescent,
-                "final descent: " + fmt(L.final_height_m, 2) + " m above the platform");
-        }
-      } else {
-        const auto& I = params_.ingress;
-        const Vector3d& n = normal_W_;
-        const Vector3d t(-n.y(), n.x(), 0);
-        if (ingress_stage_ == IngressStage::kAlign) {
-          if (I.lost_timeout_s > 0 && since_found_s > I.lost_timeout_s) {
-            target_lost("no target seen for " + fmt(since_found_s, 1) + " s while aligning");
-            return;
-          }
-          sp_p_W_ = estimate_W_ + n * I.standoff_m;
-          const bool aligned = (p - sp_p_W_).norm() < I.align_tol_m && pose_ &&
-                               pose_->v_W_B.norm() < I.align_speed_mps;
-          if (!aligned) {
-            aligned_since_.reset();
-          } else if (!aligned_since_) {
-            aligned_since_ = now_utime_;
-          } else if (seconds(now_utime_ - *aligned_since_) >= I.align_settle_s) {
-            ingress_stage_ = IngressStage::kThrough;
-            through_s_m_ = 0.0;
-            reason_ = "aligned on the opening's normal: flying through";
-          }
+  std::visit(
+      [&](auto& s) {
+        using S = std::decay_t<decltype(s)>;
+        if constexpr (std::is_same_v<S, phases::Idle> || std::is_same_v<S, phases::Landed> ||
+                      std::is_same_v<S, phases::Killed>) {
+          motors_on_ = false;
+          sp_p_W_ = p;
+        } else if constexpr (std::is_same_v<S, phases::Hover> || std::is_same_v<S, phases::Hold> ||
+                             std::is_same_v<S, phases::Done>) {
+          sp_p_W_ = s.hold_p_W;
         } else {
-          const Vector3d d = p - estimate_W_;
-          const double lateral = d.dot(t), vertical = d.z();
-          const double s_end = I.standoff_m + I.pass_distance_m;
-          const double s_vehicle = I.standoff_m - d.dot(n);  // progress of the vehicle
-          const bool inside =
-              std::abs(lateral) <= I.lateral_tol_m && std::abs(vertical) <= I.vertical_tol_m;
-          if (inside && through_s_m_ < s_end && through_s_m_ - s_vehicle < kPathLeadM) {
-            through_s_m_ = std::min(s_end, through_s_m_ + I.speed_mps * dt_s);
-            sp_v_W_ = -n * I.speed_mps;
-          }
-          sp_p_W_ = estimate_W_ + n * (I.standoff_m - through_s_m_);
-          if (through_s_m_ >= s_end && (p - sp_p_W_).norm() < params_.hover_tol_m) {
-            hold_p_W_ = sp_p_W_;
-            end_utime_ = now_utime_;
-            enter(Phase::kDone,
-                  "through the opening: " + fmt(I.pass_distance_m, 2) + " m past the wall");
-          }
+          step(s, p, dt_s);
         }
-      }
-      return;
+      },
+      state_);
+}
 
-    case Phase::kFinalDescent: {
-      const auto& L = params_.landing;
-      const double z_touch = estimate_W_.z() + L.gear_height_m;
-      const double z_floor = z_touch - L.final_depth_m;
-      if (z_sp_m_ > z_floor) {
-        z_sp_m_ = std::max(z_floor, z_sp_m_ - L.final_descent_rate_mps * dt_s);
-        sp_v_W_.z() = -L.final_descent_rate_mps;
+void Autonomy::step(phases::Takeoff& s, const Vector3d& p, double dt_s) {
+  const auto& T = params_.takeoff;
+  if (s.z_sp_m < T.height_m) {
+    s.z_sp_m = std::min(T.height_m, s.z_sp_m + T.climb_rate_mps * dt_s);
+    sp_v_W_.z() = T.climb_rate_mps;
+  }
+  sp_p_W_ = Vector3d(s.xy_W.x(), s.xy_W.y(), s.z_sp_m);
+  if (s.z_sp_m >= T.height_m && (p - sp_p_W_).norm() < T.reached_tol_m) {
+    enter(phases::Hover{sp_p_W_}, "take-off complete: hovering, waiting for GO");
+  }
+}
+
+void Autonomy::step(phases::Detection& s, const Vector3d& p, double dt_s) {
+  if (hold_if_vision_silent()) return;
+  s.path.step(p, dt_s, params_.detection.speed_mps, kPathLeadM);
+  sp_p_W_ = s.path.carrot();
+  sp_v_W_ = s.path.carrot_velocity();
+  if (s.path.finished(p, params_.hover_tol_m)) {
+    target_lost("search path flown without a detection");
+  }
+}
+
+void Autonomy::step(phases::Refinement& r, const Vector3d& p, double /*dt_s*/) {
+  if (hold_if_vision_silent()) return;
+  const auto& R = params_.refinement;
+  const double since_found = since_found_s(r.last_found_utime);
+  if (since_found > R.lost_timeout_s) {
+    target_lost("no target seen for " + fmt(since_found, 1) + " s in refinement");
+    return;
+  }
+  if (seconds(now_utime_ - phase_start_utime_) > R.max_time_s) {
+    hold("refinement did not converge in " + fmt(R.max_time_s, 0) + " s", Failsafe::kNone, 0.0);
+    return;
+  }
+  if ((p - r.vantage_W).norm() < R.vantage_reach_tol_m) {
+    if (!r.at_vantage_since_utime) r.at_vantage_since_utime = now_utime_;
+    if (seconds(now_utime_ - *r.at_vantage_since_utime) >= R.vantage_dwell_s) {
+      if (!R.one_waypoint_per_vantage) {
+        next_vantage(r);
+      } else if (!r.at_vantage_W.empty()) {
+        // The vantage's waypoint: the median is robust to a stray frame among few.
+        Vector3d X_W;
+        for (int k = 0; k < 3; ++k) {
+          std::vector<double> v;
+          for (const auto& w : r.at_vantage_W) v.push_back(w[k]);
+          X_W[k] = median(v);
+        }
+        add_waypoint(r, X_W);
+        if (phase() != Phase::kRefinement) return;  // converged (or held): r is gone
+        next_vantage(r);
+      } else {
+        // Nothing seen here: hovering does not help (the vision's baseline shrinks to zero
+        // as the reference frames age), moving on does.
+        next_vantage(r);
       }
-      sp_p_W_ = Vector3d(estimate_W_.x(), estimate_W_.y(), z_sp_m_);
-      if (pose_fresh()) touchdown_.add_pose(*pose_, z_sp_m_, now_utime_);
-      if (touchdown_.detected()) {
-        motors_on_ = false;
-        touchdown_.disarm();
-        end_utime_ = now_utime_;
-        enter(Phase::kLanded, std::string("touch-down (") + touchdown_.cue() + "): motors off");
-      }
+    }
+  } else if (seconds(now_utime_ - r.vantage_since_utime) > R.vantage_timeout_s) {
+    next_vantage(r);
+  }
+  sp_p_W_ = r.vantage_W;
+}
+
+void Autonomy::step(phases::Approach& a, const Vector3d& p, double dt_s) {
+  const ApproachInputs in{
+      pose_, p, estimate_W_, yaw_sp_rad_, since_found_s(a.last_found_utime), dt_s, now_utime_};
+  ApproachStep next = profile_->step_approach(a.how, in);
+  if (next.next == ApproachStep::Next::kTargetLost) {
+    target_lost(next.reason);
+    return;
+  }
+  sp_p_W_ = next.sp_p_W;
+  sp_v_W_ = next.sp_v_W;
+  switch (next.next) {
+    case ApproachStep::Next::kContinue:
+      if (!next.reason.empty()) reason_ = std::move(next.reason);
+      return;
+    case ApproachStep::Next::kFinalDescent: {
+      phases::FinalDescent f{std::get<LandingApproach>(a.how).z_sp_m,
+                             TouchdownDetector(params_.landing)};
+      f.touchdown.arm(now_utime_);
+      enter(std::move(f), std::move(next.reason));
       return;
     }
-
-    case Phase::kFailsafe:
-      if (!motors_on_) return;
-      if (failsafe_ == Failsafe::kPoseLost && pose_fresh() && !touchdown_.detected()) {
-        // Pose back for good: stop descending where the failsafe happened to be (over a
-        // platform's edge it tips the vehicle) and hold; the operator decides, as after any
-        // failsafe whose cause has cleared.
-        if (!pose_back_since_utime_) pose_back_since_utime_ = now_utime_;
-        const double back_s = seconds(now_utime_ - *pose_back_since_utime_);
-        if (back_s >= params_.failsafe.pose_recovered_s) {
-          touchdown_.disarm();
-          hold("motion capture back for " + fmt(back_s, 1) +
-                   " s: failsafe descent stopped, holding; waiting for the operator",
-               Failsafe::kNone, 0.0);
-          return;
-        }
-      } else if (!pose_fresh()) {
-        pose_back_since_utime_.reset();
-      }
-      if (pose_fresh()) {
-        // Pose back: a controlled descent on it instead of the outer loop's open-loop one.
-        sp_p_W_.z() = failsafe_z_m_ -
-                      params_.failsafe.descent_mps * seconds(now_utime_ - failsafe_since_utime_);
-        sp_v_W_.z() = -params_.failsafe.descent_mps;
-        touchdown_.add_pose(*pose_, sp_p_W_.z(), now_utime_);
-      }
-      if (touchdown_.detected()) {
-        motors_on_ = false;
-        touchdown_.disarm();
-        reason_ =
-            std::string("failsafe descent: touch-down (") + touchdown_.cue() + "): motors off";
-      }
+    case ApproachStep::Next::kDone:
+      end_utime_ = now_utime_;
+      enter(phases::Done{sp_p_W_}, std::move(next.reason));
       return;
+    case ApproachStep::Next::kTargetLost:
+      return;
+  }
+}
+
+void Autonomy::step(phases::FinalDescent& s, const Vector3d& /*p*/, double dt_s) {
+  const auto& L = params_.landing;
+  const double z_touch = estimate_W_.z() + L.gear_height_m;
+  const double z_floor = z_touch - L.final_depth_m;
+  if (s.z_sp_m > z_floor) {
+    s.z_sp_m = std::max(z_floor, s.z_sp_m - L.final_descent_rate_mps * dt_s);
+    sp_v_W_.z() = -L.final_descent_rate_mps;
+  }
+  sp_p_W_ = Vector3d(estimate_W_.x(), estimate_W_.y(), s.z_sp_m);
+  if (pose_fresh()) s.touchdown.add_pose(*pose_, s.z_sp_m, now_utime_);
+  if (s.touchdown.detected()) {
+    motors_on_ = false;
+    end_utime_ = now_utime_;
+    enter(phases::Landed{}, std::string("touch-down (") + s.touchdown.cue() + "): motors off");
+  }
+}
+
+void Autonomy::step(phases::FailsafeDescent& s, const Vector3d& /*p*/, double /*dt_s*/) {
+  if (!motors_on_) return;
+  if (failsafe_ == Failsafe::kPoseLost && pose_fresh() && !s.touchdown.detected()) {
+    // Pose back for good: stop descending where the failsafe happened to be (over a
+    // platform's edge it tips the vehicle) and hold; the operator decides, as after any
+    // failsafe whose cause has cleared.
+    if (!s.pose_back_since_utime) s.pose_back_since_utime = now_utime_;
+    const double back_s = seconds(now_utime_ - *s.pose_back_since_utime);
+    if (back_s >= params_.failsafe.pose_recovered_s) {
+      hold("motion capture back for " + fmt(back_s, 1) +
+               " s: failsafe descent stopped, holding; waiting for the operator",
+           Failsafe::kNone, 0.0);
+      return;
+    }
+  } else if (!pose_fresh()) {
+    s.pose_back_since_utime.reset();
+  }
+  if (pose_fresh()) {
+    // Pose back: a controlled descent on it instead of the outer loop's open-loop one.
+    sp_p_W_.z() = s.z0_m - params_.failsafe.descent_mps * seconds(now_utime_ - s.since_utime);
+    sp_v_W_.z() = -params_.failsafe.descent_mps;
+    s.touchdown.add_pose(*pose_, sp_p_W_.z(), now_utime_);
+  }
+  if (s.touchdown.detected()) {
+    motors_on_ = false;
+    s.touchdown.disarm();
+    reason_ = std::string("failsafe descent: touch-down (") + s.touchdown.cue() + "): motors off";
   }
 }
 
@@ -701,7 +596,7 @@ Output Autonomy::make_output() {
     sp_p_W_ = last_finite_sp_p_W_;
     sp_v_W_.setZero();
     yaw_sp_rad_ = last_finite_yaw_rad_;
-    hold_p_W_ = hold_p_W_.allFinite() ? hold_p_W_ : last_finite_sp_p_W_;
+    if (Vector3d* held = held_position(); held && !held->allFinite()) *held = last_finite_sp_p_W_;
     reason_ = "non-finite setpoint refused: holding the last finite one";
   }
   last_finite_sp_p_W_ = sp_p_W_;
@@ -716,27 +611,31 @@ Output Autonomy::make_output() {
   sp.v_W = geofence_clamped_ ? Vector3d::Zero() : sp_v_W_;
   sp.yaw_rad = yaw_sp_rad_;
   sp.motors_on = motors_on_;
-  sp.kill = phase_ == Phase::kKilled;  // the outer loop disarms in the air only on an explicit KILL
+  sp.kill =
+      phase() == Phase::kKilled;  // the outer loop disarms in the air only on an explicit KILL
   sp.idle = false;
 
   out.has_setpoint = started_;
   auto& st = out.status;
   st.utime = now_utime_;
-  st.mission = mission_;
-  st.phase = phase_;
+  st.mission = mission();
+  st.phase = phase();
   st.reason = reason_;
   st.n_measurements = estimator_.n();
   st.n_rejected = estimator_.n_rejected();
   st.retries = retries_;
-  const bool final = phase_ == Phase::kApproach || phase_ == Phase::kFinalDescent ||
-                     phase_ == Phase::kLanded || phase_ == Phase::kDone;
+  const bool final = st.phase == Phase::kApproach || st.phase == Phase::kFinalDescent ||
+                     st.phase == Phase::kLanded || st.phase == Phase::kDone;
   st.has_estimate = final || estimator_.n() > 0;
   st.estimate_W = final ? estimate_W_ : estimator_.mean();
   st.covariance = estimator_.covariance();
   st.setpoint_W = sp.p_W;
   st.failsafe = failsafe_;
-  st.cmds_rejected = cmds_rejected_;
-  st.last_cmd_seq = last_cmd_seq_;
+  st.cmds_rejected = gate_.n_rejected();
+  st.last_cmd_seq = gate_.last_accepted_seq();
+  st.last_rejected_seq = gate_.last_rejected_seq();
+  st.last_reject_reason = gate_.last_reject_reason();
+  st.cmds_rejected_by_reason = gate_.n_rejected_by_reason();
   st.geofence_clamped = geofence_clamped_;
   if (go_utime_) st.mission_time_s = seconds(end_utime_.value_or(now_utime_) - *go_utime_);
   return out;
@@ -749,12 +648,13 @@ Output Autonomy::update(const Inputs& in, int64_t now_utime) {
   last_step_utime_ = now_utime_;
 
   if (in.pose && finite(*in.pose) && (!pose_ || in.pose->utime >= pose_->utime)) pose_ = in.pose;
-  if (in.imu && in.imu->accel_B.allFinite() && in.imu->gyro_B.allFinite())
-    touchdown_.add_imu(*in.imu);
+  if (in.imu && in.imu->accel_B.allFinite() && in.imu->gyro_B.allFinite()) {
+    if (TouchdownDetector* td = touchdown()) td->add_imu(*in.imu);
+  }
   if (!started_ && pose_) start_from_first_pose();
   if (in.command) handle_command(*in.command);
 
-  if (airborne() && phase_ != Phase::kFailsafe) {
+  if (airborne() && phase() != Phase::kFailsafe) {
     const double age_s = pose_ ? seconds(now_utime_ - pose_->utime) : 1e9;
     if (age_s > params_.failsafe.pose_lost_s) {
       enter_pose_lost();

@@ -26,15 +26,23 @@
 //    the autonomy holds there with the motors on and waits for the operator (GO, NUDGE, ABORT,
 //    LAND_HERE, KILL); it never takes off again. A restored KILL keeps the motors off; a
 //    restored pose-lost failsafe continues its controlled descent.
+//  - Structure: the state that matters in one phase only lives in that phase's struct
+//    (phases:: below, one alternative of a std::variant per Phase): entering a phase constructs
+//    it, leaving destroys it, so nothing is reset by hand. What differs between landing and
+//    ingress is asked of the MissionProfile chosen at GO (autonomy/mission_profile.hpp); whether
+//    an operator command is obeyed, of the CommandGate (autonomy/command_gate.hpp).
 //  - Every input is untrusted even here (defence in depth behind the node's conversions):
 //    non-finite poses, IMU samples, targets and NUDGE offsets are ignored, and a non-finite
 //    setpoint is never sent.
 
-#include <map>
+#include <memory>
 #include <optional>
 #include <string>
+#include <variant>
 #include <vector>
 
+#include "autonomy/command_gate.hpp"
+#include "autonomy/mission_profile.hpp"
 #include "autonomy/params.hpp"
 #include "autonomy/refinement.hpp"
 #include "autonomy/search_path.hpp"
@@ -42,6 +50,59 @@
 #include "autonomy/types.hpp"
 
 namespace alight::autonomy {
+
+/// The state each phase of Phase owns, in the same order (PhaseState's index is the Phase).
+namespace phases {
+struct Idle {};
+struct Takeoff {
+  Vector2d xy_W = Vector2d::Zero();  ///< climbing straight up from here
+  double z_sp_m = 0.0;               ///< altitude setpoint, rising at climb_rate
+};
+struct Hover {
+  Vector3d hold_p_W = Vector3d::Zero();  ///< NUDGE moves it
+};
+struct Detection {
+  PathFollower path;  ///< the mission's search path and the carrot's progress along it
+};
+struct Refinement {
+  std::optional<int64_t> last_found_utime;  ///< the target last in sight (full or partial view)
+  Vector3d first_sighting_W = Vector3d::Zero();  ///< X_V,1, possibly from a partial view
+  std::vector<Vector2d> sizes_m;                 ///< every full view's measured size
+  Vector3d normal_sum_W = Vector3d::Zero();      ///< sum of the measured normals
+  Vector2d yaw4_sum = Vector2d::Zero();   ///< landing: sum of (cos, sin)(4 yaw), yaw mod 90 deg
+  Vector3d vantage_W = Vector3d::Zero();  ///< the vantage point being flown to
+  int64_t vantage_since_utime = 0;
+  std::optional<int64_t> at_vantage_since_utime;  ///< dwelling at the vantage since
+  std::vector<Vector3d> at_vantage_W;             ///< waypoints seen while dwelling there
+};
+struct Approach {
+  ApproachState how;                        ///< the mission profile's own approach state
+  std::optional<int64_t> last_found_utime;  ///< carried over from refinement
+};
+struct FinalDescent {
+  double z_sp_m = 0.0;
+  TouchdownDetector touchdown;  ///< armed on entry
+};
+struct Landed {};
+struct Done {
+  Vector3d hold_p_W = Vector3d::Zero();
+};
+struct Hold {
+  Vector3d hold_p_W = Vector3d::Zero();
+};
+struct FailsafeDescent {
+  double z0_m = 0.0;  ///< altitude when the pose was lost
+  int64_t since_utime = 0;
+  std::optional<int64_t> pose_back_since_utime;  ///< pose fresh again since
+  TouchdownDetector touchdown;                   ///< armed on entry
+};
+struct Killed {};
+}  // namespace phases
+
+using PhaseState =
+    std::variant<phases::Idle, phases::Takeoff, phases::Hover, phases::Detection,
+                 phases::Refinement, phases::Approach, phases::FinalDescent, phases::Landed,
+                 phases::Done, phases::Hold, phases::FailsafeDescent, phases::Killed>;
 
 class Autonomy {
  public:
@@ -52,15 +113,20 @@ class Autonomy {
   /// One step at now_utime (the newest sensor time: pose or IMU; never the wall clock) with
   /// whatever arrived since the last step.
   Output update(const Inputs& in, int64_t now_utime);
+  /// An operator command whose signature check failed at the link (cmd.link_reject says why):
+  /// the command gate counts it like every refusal, but the loop does not step on it (a flood
+  /// of forgeries drives nothing, and gets no setpoint published).
+  void refused_at_link(const OperatorCommand& cmd);
 
-  Phase phase() const { return phase_; }
-  Mission mission() const { return mission_; }
+  Phase phase() const { return static_cast<Phase>(state_.index()); }
+  Mission mission() const { return profile_ ? profile_->mission() : Mission::kNone; }
   Failsafe failsafe() const { return failsafe_; }
   const RefinementEstimator& estimator() const { return estimator_; }
   const AutonomyParams& params() const { return params_; }
-  /// The final estimate the approach flies to (valid from APPROACH on).
+  /// The final estimate the approach flies to (valid from APPROACH on, kept after the mission).
   const Vector3d& final_estimate() const { return estimate_W_; }
-  const Vector3d& current_vantage() const { return vantage_W_; }
+  /// The vantage point refinement flies to (zero outside REFINEMENT).
+  Vector3d current_vantage() const;
   int retries() const { return retries_; }
   /// Whether the first pose has been seen (and the start decided: on the ground, or flying).
   bool started() const { return started_; }
@@ -69,35 +135,48 @@ class Autonomy {
   bool resumed() const { return resumed_; }
   /// What a restart must restore (the node persists it whenever it changes).
   RestartState restart_state() const;
+  /// The operator commands' checks and counters.
+  const CommandGate& commands() const { return gate_; }
 
  private:
-  enum class IngressStage { kAlign, kThrough };
-
   bool airborne() const;
   bool pose_fresh() const;
-  void enter(Phase phase, std::string reason);
+  /// Seconds since the target was last in sight (since the phase began when it never was).
+  double since_found_s(const std::optional<int64_t>& last_found_utime) const;
+  /// Leaves the current phase (destroying its state) for `state`.
+  template <class State>
+  State& enter(State state, std::string reason);
+  /// The held position of HOVER, HOLD and DONE (nullptr in the other phases).
+  Vector3d* held_position();
+  /// The touch-down detector of FINAL_DESCENT and FAILSAFE (nullptr in the other phases).
+  TouchdownDetector* touchdown();
   void handle_command(const OperatorCommand& cmd);
-  bool accept(const OperatorCommand& cmd);
   void handle_target(const TargetMeasurement& m);
   /// Holds (and says so) when no VISION_TARGET came for failsafe.vision_silent_s; true then.
   bool hold_if_vision_silent();
   void step_phase(double dt_s);
+  void step(phases::Takeoff& s, const Vector3d& p, double dt_s);
+  void step(phases::Detection& s, const Vector3d& p, double dt_s);
+  void step(phases::Refinement& s, const Vector3d& p, double dt_s);
+  void step(phases::Approach& s, const Vector3d& p, double dt_s);
+  void step(phases::FinalDescent& s, const Vector3d& p, double dt_s);
+  void step(phases::FailsafeDescent& s, const Vector3d& p, double dt_s);
   void start_detection(const std::string& reason);
   void start_refinement(const TargetMeasurement& m);
-  void finish_refinement();
-  void next_vantage();
-  void add_waypoint(const Vector3d& X_W);
+  void finish_refinement(phases::Refinement& r);
+  void next_vantage(phases::Refinement& r);
+  void add_waypoint(phases::Refinement& r, const Vector3d& X_W);
   void target_lost(const std::string& what);
   void hold(const std::string& reason, Failsafe failsafe, double min_z_m);
   void enter_pose_lost();
   void start_from_first_pose();
   Output make_output();
 
+  // Whole run.
   AutonomyParams params_;
-  RefinementEstimator estimator_;
-  VantageSampler sampler_;
-  TouchdownDetector touchdown_;
-  PathFollower path_;
+  RefinementEstimator estimator_;  // the current mission's waypoints (reported after it too)
+  VantageSampler sampler_;         // one random stream for the run (autonomy.seed)
+  CommandGate gate_;
 
   RestartState restored_;
   bool started_ = false;
@@ -108,12 +187,13 @@ class Autonomy {
   int64_t now_utime_ = 0;
   std::optional<int64_t> last_step_utime_;
   std::optional<PoseSample> pose_;
+  std::optional<int64_t> last_vision_utime_;  // any VISION_TARGET, found or not
 
-  Phase phase_ = Phase::kIdle;
-  Mission mission_ = Mission::kNone;
+  PhaseState state_;
+  int64_t phase_start_utime_ = 0;
+  std::string reason_ = "waiting for the first pose";
   Failsafe failsafe_ = Failsafe::kNone;
   Failsafe failsafe_before_stale_ = Failsafe::kNone;  // restored when the pose is back
-  std::string reason_ = "waiting for the first pose";
 
   // Setpoint being commanded.
   Vector3d sp_p_W_ = Vector3d::Zero();
@@ -122,46 +202,12 @@ class Autonomy {
   bool motors_on_ = false;
   bool geofence_clamped_ = false;
 
-  Vector3d hold_p_W_ = Vector3d::Zero();
-  Vector2d takeoff_xy_ = Vector2d::Zero();
-  double z_sp_m_ = 0.0;
-
+  // The mission (from GO or LAND_HERE; none after TAKEOFF).
+  std::unique_ptr<const MissionProfile> profile_;
   int retries_ = 0;
   std::optional<int64_t> go_utime_;
   std::optional<int64_t> end_utime_;
-  std::optional<int64_t> last_found_utime_;
-  std::optional<int64_t> last_vision_utime_;      // any VISION_TARGET, found or not
-  std::optional<int64_t> pose_back_since_utime_;  // pose fresh again in the pose-lost failsafe
-  int64_t phase_start_utime_ = 0;
-
-  // Refinement.
-  Vector3d vantage_W_ = Vector3d::Zero();
-  int64_t vantage_since_utime_ = 0;
-  std::optional<int64_t> at_vantage_since_;
-  std::vector<Vector2d> sizes_m_;
-  std::vector<Vector3d> at_vantage_W_;
-  Vector3d first_sighting_W_ =
-      Vector3d::Zero();  // X_V,1, possibly from a partial view  // waypoints seen while dwelling at
-                         // the current vantage
-  Vector3d normal_sum_W_ = Vector3d::Zero();
-  Vector2d yaw4_sum_ = Vector2d::Zero();  // landing: sum of (cos, sin)(4 yaw), yaw modulo 90 deg
-
-  // Approach.
-  Vector3d estimate_W_ = Vector3d::Zero();
-  Vector3d normal_W_ = Vector3d::UnitX();
-  bool land_here_ = false;
-  IngressStage ingress_stage_ = IngressStage::kAlign;
-  std::optional<int64_t> aligned_since_;
-  double through_s_m_ = 0.0;
-
-  // Failsafe descent.
-  double failsafe_z_m_ = 0.0;
-  int64_t failsafe_since_utime_ = 0;
-
-  // Operator commands.
-  std::map<std::string, int64_t> last_seq_;
-  int cmds_rejected_ = 0;
-  int64_t last_cmd_seq_ = -1;
+  Vector3d estimate_W_ = Vector3d::Zero();  // the final estimate, from APPROACH on
 };
 
 }  // namespace alight::autonomy

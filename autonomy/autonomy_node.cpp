@@ -31,6 +31,13 @@
 #include "common/operator_auth.hpp"
 #include "outer_loop/convert.hpp"
 
+// The verifier's reasons are the gate's (both are autonomy_status_t.REJECT_*).
+static_assert(static_cast<int>(alight::CommandVerdict::Reason::kWrongSession) ==
+                  static_cast<int>(alight::autonomy::CommandReject::kWrongSession) &&
+              static_cast<int>(alight::CommandVerdict::Reason::kReplayed) ==
+                  static_cast<int>(alight::autonomy::CommandReject::kReplayed) &&
+              alight::CommandVerdict::kReasonCount <= alight::autonomy::kCommandRejectSlots);
+
 int main(int argc, char** argv) {
   return alight::run_node_main("alight-autonomy", [&]() -> int {
     namespace au = alight::autonomy;
@@ -100,21 +107,11 @@ int main(int argc, char** argv) {
       verifier.emplace(std::move(loaded.key), params.vehicle_id, alight::draw_session_nonce(),
                        static_cast<int64_t>(std::llround(params.command_max_age_s * 1e6)));
     }
-    // What the station needs to sign for this run, and its acknowledgements (issue 14).
-    int64_t last_rejected_seq = -1;
-    int8_t last_reject_reason = alight::autonomy_status_t::REJECT_NONE;
-    int32_t n_unsigned_refused = 0;
+    // What the station needs to sign for this run (issue 14); the acknowledgements and the
+    // counters of refused commands are the autonomy's CommandGate's (in the converted status).
     const auto fill_link_status = [&](alight::autonomy_status_t& st) {
       st.vehicle_id = params.vehicle_id;
       st.cmd_session = verifier ? verifier->session() : 0;
-      st.last_rejected_seq = last_rejected_seq;
-      st.last_reject_reason = last_reject_reason;
-      for (auto& n : st.cmds_rejected_by_reason) n = 0;
-      st.cmds_rejected_by_reason[alight::autonomy_status_t::REJECT_UNSIGNED] = n_unsigned_refused;
-      if (verifier)
-        for (int r = 1; r < alight::CommandVerdict::kReasonCount; ++r)
-          st.cmds_rejected_by_reason[r] += static_cast<int32_t>(
-              verifier->n_rejected(static_cast<alight::CommandVerdict::Reason>(r)));
       st.wall_utime = alight::wall_utime();
     };
     alight::Node node(args, "alight-autonomy");
@@ -166,7 +163,6 @@ int main(int argc, char** argv) {
       }
       if (changed || (now_utime - last_status_utime) * 1e-6 >= params.status_period_s * 0.5) {
         last_status = au::to_msg(out.status);
-        if (verifier) last_status.cmds_rejected += static_cast<int32_t>(verifier->n_rejected());
         fill_link_status(last_status);
         node.publish(ch::kAutonomyStatus, last_status);
         last_status_utime = now_utime;
@@ -208,20 +204,17 @@ int main(int argc, char** argv) {
       std::string why;
       in.command = au::command_from_msg(m, &why);
       if (!in.command) return (void)node.reject_value(ch::kOperatorCmd, why);
+      // The signature is checked here, where the wire message is (the HMAC covers its
+      // encoding); the autonomy's CommandGate takes the verdict, decides, counts and acks.
       if (m.auth != alight::operator_cmd_t::AUTH_NONE && verifier) {
         const auto verdict = verifier->check(m, alight::wall_utime());
         if (!verdict.accepted()) {
           spdlog::warn("OPERATOR_CMD from '{}' for '{}' seq {} rejected: {}", m.sender,
                        m.vehicle_id, m.seq, alight::reason_name(verdict.reason));
-          last_rejected_seq = m.seq;
-          last_reject_reason = static_cast<int8_t>(verdict.reason);
-          return;
+          in.command->link_reject = static_cast<au::CommandReject>(verdict.reason);
+          return autonomy.refused_at_link(*in.command);
         }
         in.command->auth = au::CommandAuth::kVerified;
-      } else if (m.auth == alight::operator_cmd_t::AUTH_NONE && !params.accept_unsigned_commands) {
-        last_rejected_seq = m.seq;  // autonomy refuses it and counts it in cmds_rejected
-        last_reject_reason = alight::autonomy_status_t::REJECT_UNSIGNED;
-        ++n_unsigned_refused;
       }
       if (now_utime == 0) {
         spdlog::warn("operator command before any sensor time: ignored");

@@ -210,6 +210,13 @@ std::optional<OperatorCommand> command_from_msg(const operator_cmd_t& m, std::st
   return from_msg(m);
 }
 
+static_assert(static_cast<int8_t>(CommandReject::kUnsigned) == autonomy_status_t::REJECT_UNSIGNED &&
+              static_cast<int8_t>(CommandReject::kReplayed) == autonomy_status_t::REJECT_REPLAYED &&
+              static_cast<int8_t>(CommandReject::kWrongSession) ==
+                  autonomy_status_t::REJECT_WRONG_SESSION);
+static_assert(kCommandRejectSlots ==
+              sizeof(autonomy_status_t::cmds_rejected_by_reason) / sizeof(int32_t));
+
 autonomy_status_t to_msg(const Status& s) {
   autonomy_status_t m{};
   m.utime = s.utime;
@@ -229,6 +236,10 @@ autonomy_status_t to_msg(const Status& s) {
   m.failsafe = failsafe_to_msg(s.failsafe);
   m.cmds_rejected = s.cmds_rejected;
   m.last_cmd_seq = s.last_cmd_seq;
+  m.last_rejected_seq = s.last_rejected_seq;
+  m.last_reject_reason = static_cast<int8_t>(s.last_reject_reason);
+  for (int r = 0; r < kCommandRejectSlots; ++r)
+    m.cmds_rejected_by_reason[r] = s.cmds_rejected_by_reason[r];
   m.geofence_clamped = s.geofence_clamped;
   m.mission_time_s = s.mission_time_s;
   return m;

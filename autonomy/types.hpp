@@ -2,6 +2,7 @@
 // Domain inputs and outputs of the autonomy loop (paper 3.4): middleware-free forms of imu_t,
 // target_t, operator_cmd_t and autonomy_status_t (conversions in autonomy/convert.hpp).
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -59,10 +60,22 @@ struct TargetMeasurement {
 enum class Command { kNone, kTakeoff, kGo, kAbort, kLandHere, kKill, kNudge };
 enum class CommandAuth {
   kNone,        ///< unsigned (accepted only with accept_unsigned_commands)
-  kHmacSha256,  ///< signed, but not verified by the node (no key configured): refused
+  kHmacSha256,  ///< signed: refused unless the link's CommandVerifier accepted it (kVerified)
   kVerified,    ///< HMAC-SHA256 verified by the node (common/operator_auth CommandVerifier)
   kInternal,    ///< issued by the node itself (--auto-go in simulation launch files)
 };
+/// Why an operator command was refused; the values are autonomy_status_t.REJECT_* (and
+/// common/operator_auth's CommandVerdict::Reason).
+enum class CommandReject : int8_t {
+  kNone = 0,
+  kUnsigned = 1,
+  kBadSignature = 2,
+  kStale = 3,
+  kReplayed = 4,
+  kWrongVehicle = 5,
+  kWrongSession = 6,
+};
+inline constexpr int kCommandRejectSlots = 8;  ///< autonomy_status_t.cmds_rejected_by_reason
 
 struct OperatorCommand {
   int64_t utime = 0;
@@ -72,6 +85,9 @@ struct OperatorCommand {
   Mission mission = Mission::kNone;  ///< for kGo
   Vector3d nudge_W = Vector3d::Zero();
   CommandAuth auth = CommandAuth::kNone;
+  /// kHmacSha256 only: the link's CommandVerifier refused it, for this reason (kNone: the node
+  /// had no key to verify it with).
+  CommandReject link_reject = CommandReject::kNone;
 };
 
 /// What arrived since the last step (each optional is a new message, consumed by the step).
@@ -97,6 +113,9 @@ struct Status {
   Failsafe failsafe = Failsafe::kNone;
   int cmds_rejected = 0;
   int64_t last_cmd_seq = -1;
+  int64_t last_rejected_seq = -1;  ///< of the last command refused with a reason below
+  CommandReject last_reject_reason = CommandReject::kNone;
+  std::array<int, kCommandRejectSlots> cmds_rejected_by_reason{};  ///< by CommandReject
   bool geofence_clamped = false;
   double mission_time_s = 0.0;
 };

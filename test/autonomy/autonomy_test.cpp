@@ -334,6 +334,32 @@ TEST(AutonomyTest, SignedButUnverifiedRejectedVerifiedAcceptedAndReplaysRejected
   EXPECT_NE(w.out.status.reason.find("replayed"), std::string::npos);
 }
 
+TEST(AutonomyTest, CommandRefusedAtTheLinkIsCountedByReasonButNeitherObeyedNorShown) {
+  KinematicWorld w;
+  w.step();
+  const std::string reason = w.out.status.reason;
+  // The node's CommandVerifier found the signature wrong: the gate counts it, no step.
+  auto forged = command(Command::kTakeoff, 9);
+  forged.auth = CommandAuth::kHmacSha256;
+  forged.link_reject = CommandReject::kBadSignature;
+  w.autonomy.refused_at_link(forged);
+  w.step();
+  EXPECT_EQ(w.autonomy.phase(), Phase::kIdle);
+  EXPECT_EQ(w.out.status.cmds_rejected, 1);
+  EXPECT_EQ(w.out.status.cmds_rejected_by_reason[static_cast<int>(CommandReject::kBadSignature)],
+            1);
+  EXPECT_EQ(w.out.status.last_rejected_seq, 9);
+  EXPECT_EQ(w.out.status.last_reject_reason, CommandReject::kBadSignature);
+  // Handed to update (a replayed log may): refused the same way; a forgery never becomes the
+  // status reason.
+  forged.seq = 10;
+  w.step(forged);
+  EXPECT_EQ(w.autonomy.phase(), Phase::kIdle);
+  EXPECT_EQ(w.out.status.cmds_rejected, 2);
+  EXPECT_EQ(w.out.status.last_rejected_seq, 10);
+  EXPECT_EQ(w.out.status.reason, reason);
+}
+
 TEST(AutonomyTest, EverySetpointIsClampedToTheGeofence) {
   auto params = test::test_params();
   params.geofence.max_W_m = Vector3d(0.8, 3, 2.5);  // the lawnmower reaches x = 2

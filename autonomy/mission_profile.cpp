@@ -1,0 +1,224 @@
+#include "autonomy/mission_profile.hpp"
+
+#include <cmath>
+
+#include "autonomy/search_path.hpp"
+#include "autonomy/text.hpp"
+
+namespace alight::autonomy {
+namespace {
+
+double seconds(int64_t dt_utime) { return static_cast<double>(dt_utime) * 1e-6; }
+
+// Vantages at least this far from where the vehicle is: the vision needs a baseline of a few
+// centimetres (waypoint.min_baseline_m) between its reference and current image [m].
+constexpr double kMinVantageStepM = 0.08;
+
+// The horizontal unit normal of the measured normals' sum (the opening faces -x without one).
+Vector3d horizontal_normal(const Vector3d& normal_sum_W) {
+  Vector3d n = normal_sum_W;
+  n.z() = 0;
+  return n.norm() > 1e-6 ? Vector3d(n.normalized()) : Vector3d(-1, 0, 0);
+}
+
+// Facing the opening: the camera looks along -n.
+double yaw_facing(const Vector3d& n_W) { return std::atan2(-n_W.y(), -n_W.x()); }
+
+class LandingProfile final : public MissionProfile {
+ public:
+  explicit LandingProfile(const AutonomyParams& params) : p_(params) {}
+
+  Mission mission() const override { return Mission::kLanding; }
+
+  Search search(const Vector3d& p_W) const override {
+    // Up (or down) to the search height above where we are: a safe hover, then the lawnmower.
+    const auto& d = p_.detection;
+    Search s;
+    s.path_W.emplace_back(p_W.x(), p_W.y(), d.landing_height_m);
+    const auto lm = lawnmower(d.landing_area_min_W_m, d.landing_area_max_W_m, d.lane_spacing_m,
+                              d.landing_height_m);
+    s.path_W.insert(s.path_W.end(), lm.begin(), lm.end());
+    return s;
+  }
+
+  Vantage vantage(const Vector3d& mu_W, const Matrix3d& S_W, int n, const Vector3d& here_W,
+                  const Vector3d& /*normal_sum_W*/, VantageSampler& sampler) const override {
+    // A vantage next to the current position gives the vision no baseline: redraw (bounded).
+    const Vector2d here = here_W.head<2>();
+    Vector2d xy = sampler.draw(mu_W.head<2>(), S_W.topLeftCorner<2, 2>(), n);
+    for (int k = 0; k < 10 && (xy - here).norm() < kMinVantageStepM; ++k)
+      xy = sampler.draw(mu_W.head<2>(), S_W.topLeftCorner<2, 2>(), n);
+    return {Vector3d(xy.x(), xy.y(), p_.detection.landing_height_m), std::nullopt};
+  }
+
+  std::optional<Refusal> refuse(double size_a_m, double size_b_m) const override {
+    const auto& L = p_.landing;
+    const double short_side = std::min(size_a_m, size_b_m);
+    const double needed = L.gear_footprint_m + 2 * L.fit_margin_m;
+    if (short_side >= needed) return std::nullopt;  // NaN-safe: an unmeasured size is refused
+    return Refusal{"refused to land: platform short side " + fmt(short_side) +
+                       " m < gear footprint " + fmt(L.gear_footprint_m) + " m + 2 x margin " +
+                       fmt(L.fit_margin_m) + " m",
+                   p_.takeoff.height_m};
+  }
+
+  Start begin_approach(const PoseSample& pose, double yaw_sp_rad, const Vector3d& /*normal_sum_W*/,
+                       const Vector2d& yaw4_sum) const override {
+    Start s{LandingApproach{pose.p_W_B.z(), false}, yaw_sp_rad};
+    if (p_.landing.align_yaw_tol_deg > 0 && yaw4_sum.norm() > 1e-9) {
+      // The platform's edges modulo 90 deg (the gear is square): the turn of at most 45 deg.
+      const double edges = std::atan2(yaw4_sum.y(), yaw4_sum.x()) / 4;
+      const double now = yaw_of(pose.q_WB.toRotationMatrix());
+      const double k = std::round(wrap_angle(now - edges) / (M_PI / 2));
+      s.yaw_sp_rad = wrap_angle(edges + k * M_PI / 2);
+    }
+    return s;
+  }
+
+  ApproachStep step_approach(ApproachState& state, const ApproachInputs& in) const override {
+    auto& a = std::get<LandingApproach>(state);
+    const auto& L = p_.landing;
+    const Vector3d& p = in.p_W;
+    const Vector3d& target = in.target_W;
+    ApproachStep out;
+    const double z_touch = target.z() + L.gear_height_m;  // body z on the platform
+    const double e_r = (p.head<2>() - target.head<2>()).norm();
+    if (!a.land_here && p.z() - z_touch > L.lost_check_height_m &&
+        in.since_found_s > L.lost_timeout_s) {
+      out.next = ApproachStep::Next::kTargetLost;
+      out.reason = "no target seen for " + fmt(in.since_found_s, 1) + " s in approach";
+      return out;
+    }
+    const bool turned =
+        L.align_yaw_tol_deg <= 0 || !in.pose ||
+        std::abs(wrap_angle(yaw_of(in.pose->q_WB.toRotationMatrix()) - in.yaw_sp_rad)) <=
+            L.align_yaw_tol_deg * M_PI / 180.0;
+    if (e_r <= L.radial_tol_m && turned) {  // descend only inside the prescribed volume
+      a.z_sp_m -= L.descent_rate_mps * in.dt_s;
+      out.sp_v_W.z() = -L.descent_rate_mps;
+    }
+    out.sp_p_W = Vector3d(target.x(), target.y(), a.z_sp_m);
+    if (a.z_sp_m - z_touch <= L.final_height_m) {
+      out.next = ApproachStep::Next::kFinalDescent;
+      out.reason = "final descent: " + fmt(L.final_height_m, 2) + " m above the platform";
+    }
+    return out;
+  }
+
+  double lost_hold_min_z_m() const override { return p_.detection.landing_height_m; }
+
+ private:
+  AutonomyParams p_;
+};
+
+class IngressProfile final : public MissionProfile {
+ public:
+  explicit IngressProfile(const AutonomyParams& params) : p_(params) {}
+
+  Mission mission() const override { return Mission::kIngress; }
+
+  Search search(const Vector3d& /*p_W*/) const override {
+    const auto& d = p_.detection;
+    return {{d.ingress_start_W_m, d.ingress_end_W_m}, d.ingress_yaw_deg * M_PI / 180.0};
+  }
+
+  Vantage vantage(const Vector3d& mu_W, const Matrix3d& S_W, int n, const Vector3d& /*here_W*/,
+                  const Vector3d& normal_sum_W, VantageSampler& sampler) const override {
+    // In the plane parallel to the wall at the standoff: along-wall t and vertical z.
+    const Vector3d nh = horizontal_normal(normal_sum_W);
+    const Vector3d t(-nh.y(), nh.x(), 0);
+    Eigen::Matrix<double, 3, 2> B;
+    B.col(0) = t;
+    B.col(1) = Vector3d::UnitZ();
+    const Vector2d mu2(t.dot(mu_W), mu_W.z());
+    const Eigen::Matrix2d S2 = B.transpose() * S_W * B;
+    const Vector2d d = sampler.draw(mu2, S2, n) - mu2;
+    return {mu_W + nh * p_.refinement.ingress_standoff_m + t * d.x() + Vector3d::UnitZ() * d.y(),
+            yaw_facing(nh)};
+  }
+
+  std::optional<Refusal> refuse(double size_a_m, double size_b_m) const override {
+    const auto& I = p_.ingress;
+    const double need_w = I.vehicle_span_m + 2 * I.clearance_m;
+    const double need_h = I.vehicle_height_m + 2 * I.clearance_m;
+    if (size_a_m >= need_w && size_b_m >= need_h) return std::nullopt;  // NaN-safe
+    return Refusal{"refused ingress: opening " + fmt(size_a_m) + " x " + fmt(size_b_m) +
+                       " m smaller than the vehicle + clearance " + fmt(need_w) + " x " +
+                       fmt(need_h) + " m",
+                   0.0};
+  }
+
+  Start begin_approach(const PoseSample& /*pose*/, double /*yaw_sp_rad*/,
+                       const Vector3d& normal_sum_W, const Vector2d& /*yaw4_sum*/) const override {
+    IngressApproach a;
+    a.n_W = horizontal_normal(normal_sum_W);
+    return {a, yaw_facing(a.n_W)};
+  }
+
+  ApproachStep step_approach(ApproachState& state, const ApproachInputs& in) const override {
+    auto& a = std::get<IngressApproach>(state);
+    const auto& I = p_.ingress;
+    const Vector3d& p = in.p_W;
+    const Vector3d& n = a.n_W;
+    const Vector3d t(-n.y(), n.x(), 0);
+    ApproachStep out;
+    if (!a.through) {
+      if (I.lost_timeout_s > 0 && in.since_found_s > I.lost_timeout_s) {
+        out.next = ApproachStep::Next::kTargetLost;
+        out.reason = "no target seen for " + fmt(in.since_found_s, 1) + " s while aligning";
+        return out;
+      }
+      out.sp_p_W = in.target_W + n * I.standoff_m;
+      const bool aligned = (p - out.sp_p_W).norm() < I.align_tol_m && in.pose &&
+                           in.pose->v_W_B.norm() < I.align_speed_mps;
+      if (!aligned) {
+        a.aligned_since_utime.reset();
+      } else if (!a.aligned_since_utime) {
+        a.aligned_since_utime = in.now_utime;
+      } else if (seconds(in.now_utime - *a.aligned_since_utime) >= I.align_settle_s) {
+        a.through = true;
+        a.through_s_m = 0.0;
+        out.reason = "aligned on the opening's normal: flying through";
+      }
+      return out;
+    }
+    const Vector3d d = p - in.target_W;
+    const double lateral = d.dot(t), vertical = d.z();
+    const double s_end = I.standoff_m + I.pass_distance_m;
+    const double s_vehicle = I.standoff_m - d.dot(n);  // progress of the vehicle
+    const bool inside =
+        std::abs(lateral) <= I.lateral_tol_m && std::abs(vertical) <= I.vertical_tol_m;
+    if (inside && a.through_s_m < s_end && a.through_s_m - s_vehicle < kPathLeadM) {
+      a.through_s_m = std::min(s_end, a.through_s_m + I.speed_mps * in.dt_s);
+      out.sp_v_W = -n * I.speed_mps;
+    }
+    out.sp_p_W = in.target_W + n * (I.standoff_m - a.through_s_m);
+    if (a.through_s_m >= s_end && (p - out.sp_p_W).norm() < p_.hover_tol_m) {
+      out.next = ApproachStep::Next::kDone;
+      out.reason = "through the opening: " + fmt(I.pass_distance_m, 2) + " m past the wall";
+    }
+    return out;
+  }
+
+  double lost_hold_min_z_m() const override { return 0.0; }
+
+ private:
+  AutonomyParams p_;
+};
+
+}  // namespace
+
+std::unique_ptr<const MissionProfile> MissionProfile::make(Mission mission,
+                                                           const AutonomyParams& params) {
+  switch (mission) {
+    case Mission::kLanding:
+      return std::make_unique<LandingProfile>(params);
+    case Mission::kIngress:
+      return std::make_unique<IngressProfile>(params);
+    case Mission::kNone:
+      break;
+  }
+  return nullptr;
+}
+
+}  // namespace alight::autonomy

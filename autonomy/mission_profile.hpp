@@ -1,0 +1,122 @@
+#pragma once
+// What differs between the two missions, in one place: landing on a platform (paper 3.4.1) and
+// ingress through an opening (3.4.2, 4.3; the paper did not fly it). The autonomy chooses a
+// profile once, at GO (or LAND_HERE, which lands), and asks it wherever the two differ instead
+// of testing the mission: the search path of detection, where refinement's vantage points lie,
+// whether the target fits the vehicle, how the approach flies and where it ends, and how high
+// to hold when the target is lost for good. Pure: the autonomy passes in what it knows.
+//
+//  - Landing: a lawnmower over the landing area at the search height; vantages at that height
+//    around the estimate's x, y; the platform's short side must take the gear footprint plus
+//    margins; above the estimate at the current altitude, descend at v_des (x3(t+1) = x3(t) -
+//    v_des dt) only while the radial error e_r(t) is within radial_tol (and the yaw turned onto
+//    the platform's edges), final_height above the platform -> FINAL_DESCENT.
+//  - Ingress: a pass along the wall; vantages in the plane parallel to the wall at a standoff;
+//    the opening must take the vehicle plus clearance; align on the opening's normal at a
+//    standoff, then advance along it only while the lateral and vertical errors are within
+//    tolerance, pass_distance beyond the wall -> DONE.
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include "autonomy/params.hpp"
+#include "autonomy/refinement.hpp"
+#include "autonomy/types.hpp"
+
+namespace alight::autonomy {
+
+/// A carrot (the search path's, the ingress pass's) waits when the vehicle is this far behind.
+inline constexpr double kPathLeadM = 0.3;
+
+/// The landing approach's own state.
+struct LandingApproach {
+  double z_sp_m = 0.0;     ///< x3(t), the altitude setpoint [m]
+  bool land_here = false;  ///< operator LAND_HERE: onto the floor below, no target to lose
+};
+
+/// The ingress approach's own state: aligning at the standoff, then through the opening.
+struct IngressApproach {
+  Vector3d n_W = Vector3d(-1, 0, 0);  ///< horizontal normal of the opening, towards the vehicle
+  bool through = false;               ///< aligned: flying through
+  std::optional<int64_t> aligned_since_utime;
+  double through_s_m = 0.0;  ///< carrot's progress along -n from the standoff [m]
+};
+
+using ApproachState = std::variant<LandingApproach, IngressApproach>;
+
+/// What one approach step sees.
+struct ApproachInputs {
+  const std::optional<PoseSample>& pose;
+  Vector3d p_W;  ///< the vehicle (the setpoint when there is no pose)
+  Vector3d target_W;
+  double yaw_sp_rad = 0.0;
+  double since_found_s = 0.0;  ///< since the target was last in sight
+  double dt_s = 0.0;
+  int64_t now_utime = 0;
+};
+
+/// What one approach step decided.
+struct ApproachStep {
+  enum class Next {
+    kContinue,      ///< fly sp_p_W / sp_v_W; a non-empty reason is the new status reason
+    kTargetLost,    ///< reason says what was lost; the setpoint is left as it was
+    kFinalDescent,  ///< landing: fly sp_p_W, then FINAL_DESCENT (reason says why)
+    kDone,          ///< ingress: through; hold sp_p_W (reason says why)
+  };
+  Next next = Next::kContinue;
+  Vector3d sp_p_W = Vector3d::Zero();
+  Vector3d sp_v_W = Vector3d::Zero();
+  std::string reason;
+};
+
+class MissionProfile {
+ public:
+  /// kLanding or kIngress.
+  static std::unique_ptr<const MissionProfile> make(Mission mission, const AutonomyParams& params);
+  virtual ~MissionProfile() = default;
+
+  virtual Mission mission() const = 0;
+
+  /// Detection: the search path from the vehicle at p_W, and the yaw to fly it with (none: keep
+  /// the current one).
+  struct Search {
+    std::vector<Vector3d> path_W;
+    std::optional<double> yaw_rad;
+  };
+  virtual Search search(const Vector3d& p_W) const = 0;
+
+  /// Refinement: the next vantage point around mu_W with covariance S_W of n waypoints; here_W:
+  /// the vehicle (mu_W without a pose); normal_sum_W: the sum of the measured target normals.
+  struct Vantage {
+    Vector3d p_W = Vector3d::Zero();
+    std::optional<double> yaw_rad;
+  };
+  virtual Vantage vantage(const Vector3d& mu_W, const Matrix3d& S_W, int n, const Vector3d& here_W,
+                          const Vector3d& normal_sum_W, VantageSampler& sampler) const = 0;
+
+  /// The fit check on the median measured sizes (a, b of TargetMeasurement::size_m): why it is
+  /// refused and how high to hold then, or nothing when the vehicle fits. NaN sizes are refused.
+  struct Refusal {
+    std::string why;
+    double hold_min_z_m = 0.0;
+  };
+  virtual std::optional<Refusal> refuse(double size_a_m, double size_b_m) const = 0;
+
+  /// The approach's start from the converged refinement: its state and the yaw to fly it with.
+  /// yaw4_sum: sum of (cos, sin)(4 yaw) of the platform's measured long axis.
+  struct Start {
+    ApproachState state;
+    double yaw_sp_rad = 0.0;
+  };
+  virtual Start begin_approach(const PoseSample& pose, double yaw_sp_rad,
+                               const Vector3d& normal_sum_W, const Vector2d& yaw4_sum) const = 0;
+  virtual ApproachStep step_approach(ApproachState& state, const ApproachInputs& in) const = 0;
+
+  /// Target lost and retries exhausted: hold at least this high [m].
+  virtual double lost_hold_min_z_m() const = 0;
+};
+
+}  // namespace alight::autonomy
