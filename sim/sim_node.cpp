@@ -2,7 +2,12 @@
 // of sim/ that knows LCM, files or the wall clock; the simulation itself is the Simulator.
 //
 //   alight-sim --scenario config/scenarios/landing_a.yaml [--vehicle FILE] [--seed N]
-//              [--rate X] [--duration S] [--lcm-url URL]
+//              [--rate X] [--duration S] [--lcm-url URL] [--mavlink ADDRESS]
+//
+// --mavlink: the vehicle's autopilot is a MAVLink peer that behaves like PX4's offboard interface
+// (sim/offboard_endpoint.hpp) on that link (e.g. udp:127.0.0.1:14540:14580, where alight-mavlink
+// listens, as PX4 SITL's onboard link does): commands come as SET_ATTITUDE_TARGET instead of
+// ATTITUDE_CMD, and IMU goes out as HIGHRES_IMU (alight-mavlink publishes it) instead of on LCM.
 
 #include <spdlog/spdlog.h>
 
@@ -15,6 +20,8 @@
 
 #include "common/node.hpp"
 #include "common/params.hpp"
+#include "mavlink/link_io.hpp"
+#include "sim/offboard_endpoint.hpp"
 #include "sim/params.hpp"
 #include "sim/sensor_gate.hpp"
 #include "sim/sim_msgs.hpp"
@@ -35,6 +42,11 @@ int main(int argc, char** argv) {
     bool start_now = false;
     int threads = 1;
     NodeArgs args;
+    std::string mavlink_link;
+    app.add_option("--mavlink", mavlink_link,
+                   "The autopilot speaks MAVLink (PX4 offboard) on this link instead of taking "
+                   "ATTITUDE_CMD: udp:HOST:PORT[:LOCAL_PORT], udp-listen:HOST:PORT or "
+                   "serial:DEVICE:BAUD");
     app.add_option("--scenario", scenario_file, "Scenario file (config/scenarios/*.yaml)")
         ->required();
     app.add_option("--vehicle", vehicle_file,
@@ -64,12 +76,20 @@ int main(int argc, char** argv) {
     if (scenario.camera.enabled) rig = sim::load_camera_rig(vehicle_file, scenario.camera.mount);
     if (start_now) scenario.start_utime = wall_utime();
 
+    std::optional<mavlink::LinkAddress> mavlink_address;
+    if (!mavlink_link.empty()) {
+      std::string why;
+      mavlink_address = mavlink::parse_link_address(mavlink_link, &why);
+      if (!mavlink_address) throw ParamError("--mavlink", "mavlink", mavlink_link, why);
+    }
+
     sim::Simulator simulator(scenario, vehicle, seed, rig);
     simulator.set_render_threads(threads);
     Node node(with_receive_buffer(args.lcm_url), "alight-sim");
     // Disarmed until the outer loop says otherwise; its silence is the autopilot's command-loss
     // failsafe's business (Simulator::advance_to).
     node.on<attitude_cmd_t>("ATTITUDE_CMD", [&](const attitude_cmd_t& m) {
+      if (mavlink_address) return;  // the autopilot takes its commands over MAVLink
       std::string why;
       if (const auto cmd = sim::command_from_msg(m, simulator.now_utime(),
                                                  vehicle.cmd_loss_timeout_s, &why)) {
@@ -93,6 +113,61 @@ int main(int argc, char** argv) {
     spdlog::info("alight-sim: scenario {} ({}), vehicle {} ({}), seed {}, rate {}", scenario.name,
                  scenario_file, vehicle.name, vehicle_file, seed, rate);
     const int64_t sim0 = simulator.now_utime();
+    // The MAVLink autopilot: its link, reopened when it fails (a bridge that is not up yet).
+    std::optional<mavlink::LinkIo> link;
+    std::optional<sim::OffboardEndpoint> autopilot;
+    if (mavlink_address) {
+      link.emplace(*mavlink_address);
+      autopilot.emplace(sim::OffboardEndpointParams{}, vehicle.hover_thrust_N(), sim0);
+      spdlog::info("alight-sim: the autopilot speaks MAVLink (PX4 offboard) on {}",
+                   mavlink_address->text());
+    }
+    std::vector<uint8_t> link_rx(65536);
+    int64_t link_next_open = 0;
+    const auto serve_autopilot = [&](std::vector<sim::ImuSample> imu) {
+      if (link && !link->is_open() && wall_utime() >= link_next_open) {
+        std::string error;
+        if (!link->open(&error)) {
+          spdlog::warn("alight-sim: {}", error);
+          link_next_open = wall_utime() + 1'000'000;
+        }
+      }
+      std::vector<uint8_t> bytes;
+      for (int i = 0; link->is_open() && i < 64; ++i) {
+        std::string error;
+        const long n = link->read(link_rx, &error);
+        if (n < 0) {
+          spdlog::warn("alight-sim: {}", error);
+          link->close();
+        }
+        if (n <= 0) break;
+        bytes.insert(bytes.end(), link_rx.begin(), link_rx.begin() + n);
+      }
+      const sim::Truth t = simulator.truth();
+      sim::EndpointInput in;
+      in.bytes = bytes;
+      in.now_utime = simulator.now_utime();
+      in.state = simulator.state();
+      in.on_ground = t.contact == sim::Contact::kFloor || t.contact == sim::Contact::kPlatformTop;
+      in.imu = std::move(imu);
+      sim::EndpointOutput out = autopilot->update(in);
+      for (const auto& e : out.events) spdlog::info("alight-sim: autopilot: {}", e);
+      if (out.command) simulator.command(*out.command);
+      if (out.disarm) {
+        sim::AttitudeCommand off;
+        off.utime = simulator.now_utime();
+        simulator.command(off);
+      }
+      if (out.position)
+        spdlog::warn("alight-sim: position setpoints are not flown by the simulated autopilot");
+      if (link->is_open() && !out.bytes.empty()) {
+        std::string error;
+        if (link->write(out.bytes, &error) < 0) {
+          spdlog::warn("alight-sim: {}", error);
+          link->close();
+        }
+      }
+    };
     const int64_t end_utime =
         duration_s > 0 ? sim0 + static_cast<int64_t>(duration_s * 1e6) : INT64_MAX;
     const int64_t wall0 = wall_utime();
@@ -125,8 +200,14 @@ int main(int argc, char** argv) {
       const int64_t now = simulator.now_utime();
       for (const auto& m : simulator.take_mocap())
         if (gates.mocap.on(now)) node.publish("MOCAP_POSE", sim::to_msg(m));
+      std::vector<sim::ImuSample> imu;
       for (const auto& m : simulator.take_imu())
-        if (gates.imu.on(now)) node.publish("IMU", sim::to_msg(m));
+        if (gates.imu.on(now)) imu.push_back(m);
+      if (autopilot) {
+        serve_autopilot(std::move(imu));
+      } else {
+        for (const auto& m : imu) node.publish("IMU", sim::to_msg(m));
+      }
       if (auto frame = simulator.take_camera())
         if (gates.camera.on(now)) node.publish("CAMERA", sim::to_msg(*frame));
       if (simulator.now_utime() >= next_truth) {
