@@ -59,6 +59,17 @@ std::optional<PositionTarget> position_from_msg(const position_setpoint_t& msg, 
   return t;
 }
 
+std::optional<std::string> setpoint_stamp_problem(int64_t utime, int64_t reference_utime,
+                                                  double max_age_s, double max_ahead_s) {
+  if (utime <= 0) return "stamp not positive";
+  if (reference_utime <= 0) return std::nullopt;
+  // In double: hostile stamps near INT64_MIN / MAX must not overflow the difference.
+  const double d_s = (static_cast<double>(utime) - static_cast<double>(reference_utime)) * 1e-6;
+  if (d_s < -max_age_s) return "stamped " + std::to_string(-d_s) + " s before the newest input";
+  if (d_s > max_ahead_s) return "stamped " + std::to_string(d_s) + " s after the newest input";
+  return std::nullopt;
+}
+
 imu_t to_msg(const ImuOut& imu, int64_t seq) {
   imu_t m{};
   m.utime = imu.utime;

@@ -33,6 +33,12 @@
 
 namespace {
 
+/// Setpoints stamped further before the newest input (motion capture) are replays or strays; an
+/// autopilot's offboard-loss timeout is about as long (PX4 COM_OF_LOSS_T: 1 s) [s].
+constexpr double kMaxSetpointAgeS = 1.0;
+/// The outer loop's clock runs ahead of the inputs' while a loaded machine delays them [s].
+constexpr double kMaxSetpointAheadS = 10.0;
+
 alight::ChannelStats link_stats(const alight::mavlink::AutopilotStatus& s) {
   alight::ChannelStats c;
   c.received = s.parser.frames_ok;
@@ -116,7 +122,9 @@ int main(int argc, char** argv) {
       std::string why;
       auto t = mav::attitude_from_msg(m, &why);
       if (!t) return (void)node.reject_value(mav::channel::kAttitudeCmd, why);
-      if (!node.accept_stamp(mav::channel::kAttitudeCmd, m.utime)) return;
+      if (const auto p = mav::setpoint_stamp_problem(m.utime, node.newest_stamp(),
+                                                     kMaxSetpointAgeS, kMaxSetpointAheadS))
+        return (void)node.reject_value(mav::channel::kAttitudeCmd, *p);
       mav::BridgeInput in;
       in.attitude = t;
       step(in);
@@ -125,7 +133,9 @@ int main(int argc, char** argv) {
       std::string why;
       auto t = mav::position_from_msg(m, &why);
       if (!t) return (void)node.reject_value(mav::channel::kPositionSetpoint, why);
-      if (!node.accept_stamp(mav::channel::kPositionSetpoint, m.utime)) return;
+      if (const auto p = mav::setpoint_stamp_problem(m.utime, node.newest_stamp(),
+                                                     kMaxSetpointAgeS, kMaxSetpointAheadS))
+        return (void)node.reject_value(mav::channel::kPositionSetpoint, *p);
       mav::BridgeInput in;
       in.position = t;
       step(in);

@@ -72,3 +72,21 @@ TEST(BridgeMsgsTest, StatusCarriesModeArmingLinkAndCounters) {
 
 }  // namespace
 }  // namespace alight::mavlink
+
+namespace alight::mavlink {
+namespace {
+
+TEST(BridgeMsgsTest, SetpointStampsMayStepBackALittleButNotReplayOrRunFarAhead) {
+  const int64_t ref = 1'700'000'000'000'000;
+  EXPECT_FALSE(setpoint_stamp_problem(ref - 20'000, ref, 1.0, 10.0));  // the outer loop's step back
+  EXPECT_FALSE(setpoint_stamp_problem(ref + 5'000'000, ref, 1.0, 10.0));
+  EXPECT_FALSE(setpoint_stamp_problem(5, 0, 1.0, 10.0));  // nothing to judge against yet
+  EXPECT_TRUE(setpoint_stamp_problem(ref - 2'000'000, ref, 1.0, 10.0));  // an old log replayed
+  EXPECT_TRUE(setpoint_stamp_problem(ref + 11'000'000, ref, 1.0, 10.0));
+  EXPECT_TRUE(setpoint_stamp_problem(0, ref, 1.0, 10.0));
+  EXPECT_TRUE(setpoint_stamp_problem(INT64_MIN, ref, 1.0, 10.0));
+  EXPECT_TRUE(setpoint_stamp_problem(INT64_MAX, ref, 1.0, 10.0));
+}
+
+}  // namespace
+}  // namespace alight::mavlink
