@@ -412,7 +412,9 @@ void Bridge::forward_mocap(const PoseSample& pose, const BridgeClock& now, Bridg
   } else {
     Odometry m;
     m.time_usec = static_cast<uint64_t>(std::max<int64_t>(pose.utime, 0));
-    m.frame_id = mav_frame::kLocalNed;
+    // MAV_FRAME_LOCAL_FRD: what PX4's EKF2 (external vision) and ArduPilot's EKF3 (ExternalNav)
+    // take; the room's NED-from-ENU axes are such a frame, whatever its heading to north.
+    m.frame_id = mav_frame::kLocalFrd;
     m.child_frame_id = mav_frame::kBodyFrd;
     m.x = static_cast<float>(p.x());
     m.y = static_cast<float>(p.y());

@@ -486,6 +486,30 @@ TEST(BridgeTest, MotionCaptureGoesToTheEstimatorInNedAtTheConfiguredRate) {
   EXPECT_TRUE(std::isnan(m[0].covariance[0]));
 }
 
+TEST(BridgeTest, OdometryCarriesThePoseInLocalFrdAndTheTwistInTheBody) {
+  BridgeParams params = px4_params();
+  params.mocap_message = "odometry";
+  Harness h(params);
+  h.ap.heartbeat(kPosctl, false);
+  h.step();
+  PoseSample p;
+  p.utime = 1'700'000'000'000'000;
+  p.p_W_B = Vector3d(1, 2, 3);
+  p.q_WB = Quaterniond(Eigen::AngleAxisd(M_PI / 2, Vector3d::UnitZ()));  // facing north
+  p.v_W_B = Vector3d(0, 1, 0.5);                                          // forward and up
+  BridgeInput in;
+  in.mocap = p;
+  h.step(in);
+  const auto m = h.ap.take<Odometry>();
+  ASSERT_EQ(m.size(), 1u);
+  EXPECT_EQ(m[0].frame_id, mav_frame::kLocalFrd);
+  EXPECT_EQ(m[0].child_frame_id, mav_frame::kBodyFrd);
+  EXPECT_FLOAT_EQ(m[0].x, 2);
+  EXPECT_NEAR(m[0].vx, 1, 1e-6);    // forward
+  EXPECT_NEAR(m[0].vz, -0.5, 1e-6);  // up is -z in FRD
+  EXPECT_EQ(m[0].estimator_type, mav_estimator_type::kMocap);
+}
+
 TEST(BridgeTest, ImuIsPublishedInFluWithUnixStampsKeptAndBootStampsMapped) {
   Harness h;
   h.ap.heartbeat(kPosctl, false);
