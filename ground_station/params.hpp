@@ -17,6 +17,7 @@ struct GroundStationParams {
   std::string status_channel = "AUTONOMY_STATUS";
   std::string target_channel = "VISION_TARGET";
   std::string process_channel = "PROCESS_STATUS";
+  std::string autopilot_channel = "AUTOPILOT_STATUS";
   std::string pose_channel = "MOCAP_POSE";
   std::string command_channel = "OPERATOR_CMD";
 
