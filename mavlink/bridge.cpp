@@ -520,8 +520,11 @@ void Bridge::decide_commands(const BridgeClock& now, BridgeOutput& out) {
   const bool streamed_enough =
       streaming_since_us_ && now.steady_us - *streaming_since_us_ >= params_.offboard_warmup_s * 1e6;
 
+  // Armed in another mode: the pilot's, or the autopilot's failsafe (also one that flew while the
+  // link was down, when the bridge could not see it leave). alight engages from the ground only.
+  const bool hands_off = override_ || (armed && !in_fly);
   if (!params_.auto_engage()) engage_ = EngageState::kOperator;
-  else if (override_) engage_ = EngageState::kOverride;
+  else if (hands_off) engage_ = EngageState::kOverride;
   else if (armed && in_fly) engage_ = EngageState::kFlying;
   else if (!want_armed) engage_ = EngageState::kIdle;
   else if (!streamed_enough) engage_ = EngageState::kStreaming;
@@ -535,7 +538,7 @@ void Bridge::decide_commands(const BridgeClock& now, BridgeOutput& out) {
   }
   if (await_heartbeat_ && now.steady_us < settle_until_us_) return;
   await_heartbeat_ = false;
-  if (params_.auto_engage() && want_armed && !override_ && streamed_enough) {
+  if (params_.auto_engage() && want_armed && !hands_off && streamed_enough) {
     if (!in_fly) {
       const SetModeParams m = set_mode_params(flavour_, fly_custom_mode(flavour_, control_));
       send_command(mav_cmd::kDoSetMode, mode_name(flavour_, fly_custom_mode(flavour_, control_)),

@@ -24,9 +24,9 @@
 //    ARM. Each COMMAND_LONG waits for its COMMAND_ACK, is resent (confirmation + 1) after
 //    command_timeout_s up to command_retries times, and after a refusal or no answer the bridge
 //    waits command_backoff_s. After an accepted command it waits for the next HEARTBEAT (which
-//    shows the result) before deciding again. If the autopilot leaves the offboard mode while
-//    armed (the pilot's switch, or its own failsafe), the bridge does not take it back until the
-//    vehicle has been disarmed: the pilot's override wins. A KILL (POSITION_SETPOINT motors KILL)
+//    shows the result) before deciding again. It engages from the ground only: an autopilot armed
+//    in another mode (the pilot's switch, its own failsafe, also one entered while the link was
+//    down) is left alone until it has been disarmed: the pilot's override wins. A KILL (POSITION_SETPOINT motors KILL)
 //    is a forced disarm at once; the stack's motors-off in the offboard mode (the outer loop's
 //    land detector said down) is a normal disarm, which the autopilot refuses in the air.
 //  - Telemetry: HIGHRES_IMU becomes IMU (FRD -> FLU), ATTITUDE_QUATERNION with

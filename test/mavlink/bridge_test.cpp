@@ -376,6 +376,26 @@ TEST(BridgeTest, ThePilotsOverrideWinsUntilTheVehicleIsDisarmed) {
   EXPECT_EQ(h.ap.commands(mav_cmd::kDoSetMode).size(), 1u);
 }
 
+TEST(BridgeTest, AfterALinkLossAnArmedVehicleInTheAutopilotsFailsafeIsLeftAlone) {
+  Harness h;
+  engage(h);
+  ASSERT_EQ(h.bridge.engage_state(), EngageState::kFlying);
+  h.ap.take<CommandLong>();
+  // The link drops; meanwhile the autopilot's failsafe switched to AUTO.LAND.
+  h.run_for(h.params.heartbeat_timeout_s + 0.5, hover());
+  ASSERT_FALSE(h.bridge.link_up());
+  const uint32_t land = px4_mode::custom_mode(px4_mode::kAuto, px4_mode::auto_sub::kLand);
+  for (int i = 0; i < 30; ++i) {
+    h.ap.heartbeat(land, true);
+    level_attitude(h.ap, 50000 + i * 100);
+    h.run_for(0.1, hover());
+  }
+  EXPECT_TRUE(h.bridge.link_up());
+  EXPECT_EQ(h.bridge.engage_state(), EngageState::kOverride);
+  EXPECT_TRUE(h.ap.commands(mav_cmd::kDoSetMode).empty());
+  EXPECT_TRUE(h.ap.commands(mav_cmd::kComponentArmDisarm).empty());
+}
+
 TEST(BridgeTest, KillIsAForcedDisarmAtOnce) {
   Harness h;
   engage(h);
