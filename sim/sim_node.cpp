@@ -22,6 +22,10 @@
 #include "common/params.hpp"
 #include "mavlink/link_io.hpp"
 #include "sim/offboard_endpoint.hpp"
+#ifdef ALIGHT_SIM_POSITION_CONTROL
+#include "outer_loop/params.hpp"
+#include "outer_loop/position_controller.hpp"
+#endif
 #include "sim/params.hpp"
 #include "sim/sensor_gate.hpp"
 #include "sim/sim_msgs.hpp"
@@ -122,6 +126,12 @@ int main(int argc, char** argv) {
       spdlog::info("alight-sim: the autopilot speaks MAVLink (PX4 offboard) on {}",
                    mavlink_address->text());
     }
+#ifdef ALIGHT_SIM_POSITION_CONTROL
+    // The autopilot's own position controller for SET_POSITION_TARGET_LOCAL_NED: alight's outer
+    // loop with the vehicle file's gains, on the true state (the autopilot's estimate).
+    std::optional<outer_loop::PositionController> position_controller;
+    std::optional<sim::EndpointPositionTarget> position_target;
+#endif
     std::vector<uint8_t> link_rx(65536);
     int64_t link_next_open = 0;
     const auto serve_autopilot = [&](std::vector<sim::ImuSample> imu) {
@@ -158,8 +168,43 @@ int main(int argc, char** argv) {
         off.utime = simulator.now_utime();
         simulator.command(off);
       }
+#ifdef ALIGHT_SIM_POSITION_CONTROL
+      if (out.position) {
+        if (!position_controller)
+          position_controller.emplace(outer_loop::load_params(vehicle_file));
+        position_target = out.position;
+      }
+      // Flown while fresh, armed and in OFFBOARD; otherwise the commands stop and the simulated
+      // autopilot's command-loss descent takes over, as PX4's failsafe would.
+      if (position_target && !out.disarm && autopilot->armed() && autopilot->offboard() &&
+          simulator.now_utime() - position_target->utime < 500'000) {
+        const sim::VehicleState& s = simulator.state();
+        PoseSample pose;
+        pose.utime = simulator.now_utime();
+        pose.p_W_B = s.p_W_B;
+        pose.v_W_B = s.v_W_B;
+        pose.q_WB = s.q_WB;
+        pose.omega_B = s.omega_B;
+        outer_loop::PositionSetpoint sp;
+        sp.utime = position_target->utime;
+        sp.p_W = position_target->p_W;
+        sp.v_W = position_target->v_W;
+        sp.yaw_rad = position_target->yaw_rad;
+        sp.motors_on = true;
+        const auto c = position_controller->update(sp, pose, simulator.now_utime());
+        sim::AttitudeCommand cmd;
+        cmd.utime = simulator.now_utime();
+        cmd.roll_rad = c.roll_rad;
+        cmd.pitch_rad = c.pitch_rad;
+        cmd.yaw_rate_radps = c.yaw_rate_radps;
+        cmd.thrust_N = c.thrust_N;
+        cmd.armed = true;
+        simulator.command(cmd);
+      }
+#else
       if (out.position)
-        spdlog::warn("alight-sim: position setpoints are not flown by the simulated autopilot");
+        spdlog::warn("alight-sim: built without the outer loop: position targets are not flown");
+#endif
       if (link->is_open() && !out.bytes.empty()) {
         std::string error;
         if (link->write(out.bytes, &error) < 0) {

@@ -63,7 +63,7 @@ TEST(ParamFilesTest, EveryShippedFileDumpsToYamlThatLoadsBackToTheSameParameters
   EXPECT_EQ(files.at("scenario").size(), 7u);
   EXPECT_EQ(files.at("camera").size(), 2u);
   EXPECT_EQ(files.at("mocap").size(), 2u);
-  EXPECT_EQ(files.at("autopilot").size(), 3u);
+  EXPECT_EQ(files.at("autopilot").size(), 4u);
   const fs::path dir = temp_dir("round_trip");
   for (const auto& [kind, paths] : files) {
     for (const auto& path : paths) {
