@@ -47,12 +47,17 @@ inline constexpr const char kSimControl[] = "SIM_CONTROL";
 inline constexpr const char kProcessStatus[] = "PROCESS_STATUS";
 /// node_status_t: per-input counters, 1 Hz. every alight::Node → logs, fault referee.
 inline constexpr const char kNodeStatus[] = "NODE_STATUS";
+/// pose_t: the autopilot's own attitude and local position. alight-mavlink → logs, ground
+/// station.
+inline constexpr const char kAutopilotPose[] = "AUTOPILOT_POSE";
+/// autopilot_status_t: link, mode, arming, bridge state, 5 Hz. alight-mavlink → ground station.
+inline constexpr const char kAutopilotStatus[] = "AUTOPILOT_STATUS";
 
 /// Every channel above.
-inline constexpr std::array<const char*, 13> kAll = {
-    kCamera,         kMocapPose,        kImu,         kVisionTarget, kVisionDiag, kOperatorCmd,
-    kAutonomyStatus, kPositionSetpoint, kAttitudeCmd, kSimTruth,     kSimControl, kProcessStatus,
-    kNodeStatus};
+inline constexpr std::array<const char*, 15> kAll = {
+    kCamera,         kMocapPose,        kImu,          kVisionTarget, kVisionDiag,
+    kOperatorCmd,    kAutonomyStatus,   kPositionSetpoint, kAttitudeCmd, kSimTruth,
+    kSimControl,     kProcessStatus,    kNodeStatus,   kAutopilotPose, kAutopilotStatus};
 
 /// True when `name` is one of kAll.
 bool is_known(const std::string& name);

@@ -191,6 +191,12 @@ void StationState::on_target(const target_t& msg, int64_t now_utime) {
   }
 }
 
+void StationState::on_autopilot_status(const autopilot_status_t& msg, int64_t now_utime) {
+  arrived(params_.autopilot_channel, now_utime);
+  autopilot_ = msg;
+  autopilot_arrival_utime_ = now_utime;
+}
+
 void StationState::on_process_status(const process_status_t& msg, int64_t now_utime,
                                      std::optional<int64_t> wall_utime) {
   arrived(params_.process_channel, now_utime);
@@ -346,6 +352,34 @@ std::string StationState::to_json(int64_t now_utime, const std::string& extra) c
       w.end_object();
     }
     w.end_array().end_object();
+  }
+
+  // The autopilot (alight-mavlink): its heartbeat age grows with the station's clock from the
+  // report's arrival, so a bridge that went silent shows an ageing link, not a frozen one.
+  w.key("autopilot");
+  if (!autopilot_) {
+    w.value(std::string("none"));
+  } else {
+    const autopilot_status_t& a = *autopilot_;
+    const double since_s = (now_utime - autopilot_arrival_utime_) * 1e-6;
+    w.begin_object();
+    w.field("autopilot", std::string(a.autopilot == autopilot_status_t::AUTOPILOT_PX4 ? "PX4"
+                                                                                     : "ArduPilot"));
+    w.field("link_up", a.link_up && since_s <= params_.channel_stale_s);
+    w.field("heartbeat_age_s", a.heartbeat_age_s < 0 ? -1.0 : a.heartbeat_age_s + since_s);
+    w.field("report_age_s", since_s);
+    w.field("mode", a.mode);
+    w.field("armed", static_cast<bool>(a.armed));
+    w.field("offboard", static_cast<bool>(a.offboard));
+    w.field("engage", a.engage);
+    w.field("streaming", static_cast<bool>(a.streaming));
+    w.field("last_command", a.last_command);
+    w.field("last_result", static_cast<int>(a.last_result));
+    w.field("last_statustext", a.last_statustext);
+    w.field("battery_V", a.battery_V);
+    w.field("crc_errors", static_cast<double>(a.crc_errors));
+    w.field("link_losses", static_cast<double>(a.link_losses));
+    w.end_object();
   }
 
   // Plot series as flat arrays [t, x, y, z, ...] to keep the document small.

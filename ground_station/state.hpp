@@ -6,6 +6,7 @@
 // channel (link health), and the launcher's process table. Pure: time is passed in.
 
 #include <alight/autonomy_status_t.hpp>
+#include <alight/autopilot_status_t.hpp>
 #include <alight/pose_t.hpp>
 #include <alight/process_status_t.hpp>
 #include <alight/target_t.hpp>
@@ -72,6 +73,8 @@ class StationState {
   void on_process_status(const process_status_t& msg, int64_t now_utime,
                          std::optional<int64_t> wall_utime = std::nullopt);
   void on_pose(const pose_t& msg, int64_t now_utime);
+  /// The autopilot's mode, arming and link as alight-mavlink sees them (a real vehicle only).
+  void on_autopilot_status(const autopilot_status_t& msg, int64_t now_utime);
   /// A frame arrived on a video channel; `frame_utime` is its exposure time.
   void on_frame(const std::string& channel, int64_t frame_utime, int64_t now_utime,
                 std::optional<int64_t> wall_utime = std::nullopt);
@@ -107,6 +110,8 @@ class StationState {
   std::optional<autonomy_status_t> status_;
   std::optional<target_t> target_;
   std::optional<process_status_t> processes_;
+  std::optional<autopilot_status_t> autopilot_;
+  int64_t autopilot_arrival_utime_ = 0;
   std::optional<pose_t> pose_;
   std::map<std::string, RateMeter> channels_;
   // Per channel, the newest frame's latency at arrival (wall clock minus exposure) and its

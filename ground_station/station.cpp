@@ -79,6 +79,10 @@ void Station::attach(Node& node) {
     std::lock_guard<std::mutex> lock(state_mutex_);
     state_.on_process_status(m, steady_utime(), wall_utime());
   });
+  node.on<autopilot_status_t>(params_.autopilot_channel, [this](const autopilot_status_t& m) {
+    std::lock_guard<std::mutex> lock(state_mutex_);
+    state_.on_autopilot_status(m, steady_utime());
+  });
   node.on<pose_t>(params_.pose_channel, [this](const pose_t& m) {
     std::lock_guard<std::mutex> lock(state_mutex_);
     state_.on_pose(m, steady_utime());

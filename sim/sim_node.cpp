@@ -2,7 +2,12 @@
 // of sim/ that knows LCM, files or the wall clock; the simulation itself is the Simulator.
 //
 //   alight-sim --scenario config/scenarios/landing_a.yaml [--vehicle FILE] [--seed N]
-//              [--rate X] [--duration S] [--lcm-url URL]
+//              [--rate X] [--duration S] [--lcm-url URL] [--mavlink ADDRESS]
+//
+// --mavlink: the vehicle's autopilot is a MAVLink peer that behaves like PX4's offboard interface
+// (sim/offboard_endpoint.hpp) on that link (e.g. udp:127.0.0.1:14540:14580, where alight-mavlink
+// listens, as PX4 SITL's onboard link does): commands come as SET_ATTITUDE_TARGET instead of
+// ATTITUDE_CMD, and IMU goes out as HIGHRES_IMU (alight-mavlink publishes it) instead of on LCM.
 
 #include <spdlog/spdlog.h>
 
@@ -15,6 +20,12 @@
 
 #include "common/node.hpp"
 #include "common/params.hpp"
+#include "mavlink/link_io.hpp"
+#include "sim/offboard_endpoint.hpp"
+#ifdef ALIGHT_SIM_POSITION_CONTROL
+#include "outer_loop/params.hpp"
+#include "outer_loop/position_controller.hpp"
+#endif
 #include "sim/params.hpp"
 #include "sim/sensor_gate.hpp"
 #include "sim/sim_msgs.hpp"
@@ -35,6 +46,11 @@ int main(int argc, char** argv) {
     bool start_now = false;
     int threads = 1;
     NodeArgs args;
+    std::string mavlink_link;
+    app.add_option("--mavlink", mavlink_link,
+                   "The autopilot speaks MAVLink (PX4 offboard) on this link instead of taking "
+                   "ATTITUDE_CMD: udp:HOST:PORT[:LOCAL_PORT], udp-listen:HOST:PORT or "
+                   "serial:DEVICE:BAUD");
     app.add_option("--scenario", scenario_file, "Scenario file (config/scenarios/*.yaml)")
         ->required();
     app.add_option("--vehicle", vehicle_file,
@@ -64,12 +80,20 @@ int main(int argc, char** argv) {
     if (scenario.camera.enabled) rig = sim::load_camera_rig(vehicle_file, scenario.camera.mount);
     if (start_now) scenario.start_utime = wall_utime();
 
+    std::optional<mavlink::LinkAddress> mavlink_address;
+    if (!mavlink_link.empty()) {
+      std::string why;
+      mavlink_address = mavlink::parse_link_address(mavlink_link, &why);
+      if (!mavlink_address) throw ParamError("--mavlink", "mavlink", mavlink_link, why);
+    }
+
     sim::Simulator simulator(scenario, vehicle, seed, rig);
     simulator.set_render_threads(threads);
     Node node(args, "alight-sim");
     // Disarmed until the outer loop says otherwise; its silence is the autopilot's command-loss
     // failsafe's business (Simulator::advance_to).
     node.on<attitude_cmd_t>(channels::kAttitudeCmd, [&](const attitude_cmd_t& m) {
+      if (mavlink_address) return;  // the autopilot takes its commands over MAVLink
       std::string why;
       if (const auto cmd = sim::command_from_msg(m, simulator.now_utime(),
                                                  vehicle.cmd_loss_timeout_s, &why)) {
@@ -93,6 +117,102 @@ int main(int argc, char** argv) {
     spdlog::info("alight-sim: scenario {} ({}), vehicle {} ({}), seed {}, rate {}", scenario.name,
                  scenario_file, vehicle.name, vehicle_file, seed, rate);
     const int64_t sim0 = simulator.now_utime();
+    // The MAVLink autopilot: its link, reopened when it fails (a bridge that is not up yet).
+    std::optional<mavlink::LinkIo> link;
+    std::optional<sim::OffboardEndpoint> autopilot;
+    if (mavlink_address) {
+      link.emplace(*mavlink_address);
+      autopilot.emplace(sim::OffboardEndpointParams{}, vehicle.hover_thrust_N(), sim0);
+      spdlog::info("alight-sim: the autopilot speaks MAVLink (PX4 offboard) on {}",
+                   mavlink_address->text());
+    }
+#ifdef ALIGHT_SIM_POSITION_CONTROL
+    // The autopilot's own position controller for SET_POSITION_TARGET_LOCAL_NED: alight's outer
+    // loop with the vehicle file's gains, on the true state (the autopilot's estimate).
+    std::optional<outer_loop::PositionController> position_controller;
+    std::optional<sim::EndpointPositionTarget> position_target;
+#endif
+    std::vector<uint8_t> link_rx(65536);
+    int64_t link_next_open = 0;
+    const auto serve_autopilot = [&](std::vector<sim::ImuSample> imu) {
+      if (link && !link->is_open() && wall_utime() >= link_next_open) {
+        std::string error;
+        if (!link->open(&error)) {
+          spdlog::warn("alight-sim: {}", error);
+          link_next_open = wall_utime() + 1'000'000;
+        }
+      }
+      std::vector<uint8_t> bytes;
+      for (int i = 0; link->is_open() && i < 64; ++i) {
+        std::string error;
+        const long n = link->read(link_rx, &error);
+        if (n < 0) {
+          spdlog::warn("alight-sim: {}", error);
+          link->close();
+        }
+        if (n <= 0) break;
+        bytes.insert(bytes.end(), link_rx.begin(), link_rx.begin() + n);
+      }
+      const sim::Truth t = simulator.truth();
+      sim::EndpointInput in;
+      in.bytes = bytes;
+      in.now_utime = simulator.now_utime();
+      in.state = simulator.state();
+      in.on_ground = t.contact == sim::Contact::kFloor || t.contact == sim::Contact::kPlatformTop;
+      in.imu = std::move(imu);
+      sim::EndpointOutput out = autopilot->update(in);
+      for (const auto& e : out.events) spdlog::info("alight-sim: autopilot: {}", e);
+      if (out.command) simulator.command(*out.command);
+      if (out.disarm) {
+        sim::AttitudeCommand off;
+        off.utime = simulator.now_utime();
+        simulator.command(off);
+      }
+#ifdef ALIGHT_SIM_POSITION_CONTROL
+      if (out.position) {
+        if (!position_controller)
+          position_controller.emplace(outer_loop::load_params(vehicle_file));
+        position_target = out.position;
+      }
+      // Flown while fresh, armed and in OFFBOARD; otherwise the commands stop and the simulated
+      // autopilot's command-loss descent takes over, as PX4's failsafe would.
+      if (position_target && !out.disarm && autopilot->armed() && autopilot->offboard() &&
+          simulator.now_utime() - position_target->utime < 500'000) {
+        const sim::VehicleState& s = simulator.state();
+        PoseSample pose;
+        pose.utime = simulator.now_utime();
+        pose.p_W_B = s.p_W_B;
+        pose.v_W_B = s.v_W_B;
+        pose.q_WB = s.q_WB;
+        pose.omega_B = s.omega_B;
+        outer_loop::PositionSetpoint sp;
+        sp.utime = position_target->utime;
+        sp.p_W = position_target->p_W;
+        sp.v_W = position_target->v_W;
+        sp.yaw_rad = position_target->yaw_rad;
+        sp.motors_on = true;
+        const auto c = position_controller->update(sp, pose, simulator.now_utime());
+        sim::AttitudeCommand cmd;
+        cmd.utime = simulator.now_utime();
+        cmd.roll_rad = c.roll_rad;
+        cmd.pitch_rad = c.pitch_rad;
+        cmd.yaw_rate_radps = c.yaw_rate_radps;
+        cmd.thrust_N = c.thrust_N;
+        cmd.armed = true;
+        simulator.command(cmd);
+      }
+#else
+      if (out.position)
+        spdlog::warn("alight-sim: built without the outer loop: position targets are not flown");
+#endif
+      if (link->is_open() && !out.bytes.empty()) {
+        std::string error;
+        if (link->write(out.bytes, &error) < 0) {
+          spdlog::warn("alight-sim: {}", error);
+          link->close();
+        }
+      }
+    };
     const int64_t end_utime =
         duration_s > 0 ? sim0 + static_cast<int64_t>(duration_s * 1e6) : INT64_MAX;
     const int64_t wall0 = wall_utime();
@@ -125,8 +245,14 @@ int main(int argc, char** argv) {
       const int64_t now = simulator.now_utime();
       for (const auto& m : simulator.take_mocap())
         if (gates.mocap.on(now)) node.publish(channels::kMocapPose, sim::to_msg(m));
+      std::vector<sim::ImuSample> imu;
       for (const auto& m : simulator.take_imu())
-        if (gates.imu.on(now)) node.publish(channels::kImu, sim::to_msg(m));
+        if (gates.imu.on(now)) imu.push_back(m);
+      if (autopilot) {
+        serve_autopilot(std::move(imu));
+      } else {
+        for (const auto& m : imu) node.publish(channels::kImu, sim::to_msg(m));
+      }
       if (auto frame = simulator.take_camera())
         if (gates.camera.on(now)) node.publish(channels::kCamera, sim::to_msg(*frame));
       if (simulator.now_utime() >= next_truth) {

@@ -7,6 +7,7 @@
 #include "camera_driver/params.hpp"
 #include "common/camera_mount.hpp"
 #include "ground_station/params.hpp"
+#include "mavlink/bridge_params.hpp"
 #include "mocap/params.hpp"
 #include "outer_loop/params.hpp"
 #include "sim/params.hpp"
@@ -50,7 +51,7 @@ ParamSection camera_section(const std::string& name) {
 
 const std::vector<std::string>& param_file_kinds() {
   static const std::vector<std::string> kinds = {"vehicle", "scenario", "camera", "station",
-                                                  "mocap"};
+                                                  "mocap", "autopilot"};
   return kinds;
 }
 
@@ -90,8 +91,13 @@ std::vector<ParamSection> param_sections(const std::string& kind, const std::str
     out.push_back(section<mocap::MocapParams>(
         "mocap", "a motion-capture room (mocap/params.hpp): alight-mocap --config",
         [](const std::string& f) { return mocap::load_params(f); }));
+  } else if (kind == "autopilot") {
+    out.push_back(section<mavlink::BridgeParams>(
+        "mavlink", "an autopilot over MAVLink (mavlink/bridge_params.hpp): alight-mavlink --config",
+        [](const std::string& f) { return mavlink::load_bridge_params(f); }));
   } else {
-    throw ParamError("", "--kind", kind, "must be vehicle, scenario, camera, station or mocap");
+    throw ParamError("", "--kind", kind,
+                     "must be vehicle, scenario, camera, station, mocap or autopilot");
   }
   return out;
 }

@@ -372,6 +372,22 @@ function render(s) {
     { cells: ['inliers dom / target', `${t.n_inliers_dominant} / ${t.n_inliers_target}`] },
   ] : [{ cells: ['no VISION_TARGET yet'] }]);
 
+  // The autopilot over MAVLink (alight-mavlink), on a real vehicle.
+  const ap = typeof s.autopilot === 'object' ? s.autopilot : null;
+  $('autopilot-name').textContent = ap ? `(${ap.autopilot})` : '';
+  rows($('autopilot').tBodies[0], ap ? [
+    { cells: ['link', ap.link_up ? `up, heartbeat ${fmt(ap.heartbeat_age_s, 1)} s` : 'DOWN'],
+      cls: ap.link_up ? '' : 'stale' },
+    { cells: ['mode', `${ap.mode || '?'}${ap.offboard ? ' (alight flies)' : ''}`] },
+    { cells: ['armed', ap.armed ? 'ARMED' : 'disarmed'] },
+    { cells: ['bridge', `${ap.engage}${ap.streaming ? ', streaming' : ''}`],
+      cls: ap.engage === 'OVERRIDE' ? 'stale' : '' },
+    { cells: ['last command', ap.last_command ? `${ap.last_command}: ${
+      ap.last_result === 0 ? 'accepted' : ap.last_result === -1 ? 'no answer' : `result ${ap.last_result}`}` : '–'] },
+    { cells: ['autopilot says', ap.last_statustext || '–'] },
+    { cells: ['battery', ap.battery_V >= 0 ? `${fmt(ap.battery_V, 2)} V` : '–'] },
+  ] : [{ cells: ['no AUTOPILOT_STATUS (simulated autopilot over LCM)'] }]);
+
   const p = typeof s.processes === 'object' ? s.processes : null;
   $('launch-name').textContent = p ? `(${p.launch_name})` : '';
   rows($('processes').tBodies[0], p ? p.list.map((q) => ({

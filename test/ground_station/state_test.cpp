@@ -146,6 +146,28 @@ TEST(StationStateTest, ProcessTableIsInTheDocument) {
   EXPECT_TRUE(contains(json, "\"restarts\":2"));
 }
 
+TEST(StationStateTest, ShowsTheAutopilotsModeArmingAndAnAgeingLink) {
+  StationState state{GroundStationParams{}};
+  EXPECT_TRUE(contains(state.to_json(kT0), "\"autopilot\":\"none\""));
+  autopilot_status_t a{};
+  a.utime = kT0;
+  a.link_up = true;
+  a.heartbeat_age_s = 0.2;
+  a.mode = "OFFBOARD";
+  a.armed = true;
+  a.offboard = true;
+  a.engage = "FLYING";
+  a.last_command = "arm";
+  state.on_autopilot_status(a, kT0);
+  std::string doc = state.to_json(kT0);
+  EXPECT_TRUE(contains(doc, "\"autopilot\":\"PX4\",\"link_up\":true")) << doc;
+  EXPECT_TRUE(contains(doc, "\"mode\":\"OFFBOARD\",\"armed\":true")) << doc;
+  EXPECT_TRUE(contains(doc, "\"engage\":\"FLYING\""));
+  // alight-mavlink went silent: two seconds later the link shows down and the heartbeat older.
+  doc = state.to_json(kT0 + 2'000'000);
+  EXPECT_TRUE(contains(doc, "\"link_up\":false,\"heartbeat_age_s\":2.2")) << doc;
+}
+
 TEST(StationStateTest, ShowsTheClockOffsetAndTheVehiclesSession) {
   GroundStationParams p;
   p.vehicle_id = "uav-1";

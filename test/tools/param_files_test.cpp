@@ -44,7 +44,8 @@ std::string body(const std::string& dump) { return dump.substr(dump.find('\n') +
 std::map<std::string, std::vector<fs::path>> shipped_files() {
   std::map<std::string, std::vector<fs::path>> out;
   const std::map<std::string, std::string> folders = {
-      {"vehicles", "vehicle"}, {"scenarios", "scenario"}, {"cameras", "camera"}, {"mocap", "mocap"}};
+      {"vehicles", "vehicle"}, {"scenarios", "scenario"}, {"cameras", "camera"}, {"mocap", "mocap"},
+      {"autopilot", "autopilot"}};
   for (const auto& [folder, kind] : folders) {
     for (const auto& entry : fs::directory_iterator(kConfig / folder)) {
       if (entry.path().extension() != ".yaml") continue;
@@ -62,6 +63,7 @@ TEST(ParamFilesTest, EveryShippedFileDumpsToYamlThatLoadsBackToTheSameParameters
   EXPECT_EQ(files.at("scenario").size(), 7u);
   EXPECT_EQ(files.at("camera").size(), 2u);
   EXPECT_EQ(files.at("mocap").size(), 2u);
+  EXPECT_EQ(files.at("autopilot").size(), 4u);
   const fs::path dir = temp_dir("round_trip");
   for (const auto& [kind, paths] : files) {
     for (const auto& path : paths) {
@@ -167,7 +169,8 @@ TEST(ParamFilesProperty, AValueJustOutsideItsRangeIsReportedAtItsFullKeyWithTheV
       {"scenario", {kConfig / "scenarios/landing_a.yaml", kConfig / "scenarios/ingress.yaml"}},
       {"camera", {kConfig / "cameras/usb_mono_640x480.yaml"}},
       {"station", {""}},
-      {"mocap", {kConfig / "mocap/optitrack_motive.yaml"}}};
+      {"mocap", {kConfig / "mocap/optitrack_motive.yaml"}},
+      {"autopilot", {kConfig / "autopilot/px4.yaml"}}};
   const fs::path dir = temp_dir("ranges");
   std::set<std::string> tested;
   int cases = 0;
@@ -222,7 +225,8 @@ TEST(ParamFilesProperty, AValueJustOutsideItsRangeIsReportedAtItsFullKeyWithTheV
         "vehicle vision.max_pose_wait_s", "scenario sim.physics_dt_s", "scenario platform.size_m",
         "scenario wall.opening.size_m", "scenario wall.room_texture.size_px",
         "scenario area.floor_texture.mean", "scenario mocap.rate_hz", "camera backoff_max_s",
-        "station ground_station.max_payload_bytes", "mocap mocap.velocity.span_s"})
+        "station ground_station.max_payload_bytes", "mocap mocap.velocity.span_s",
+        "autopilot mavlink.stream_rate_hz"})
     EXPECT_TRUE(tested.count(key)) << key;
   EXPECT_GT(cases, 250);
   std::cout << cases << " values out of range over " << tested.size() << " bounded keys\n";

@@ -1,0 +1,92 @@
+// alight-mavlink's LCM conversions: the validating ones refuse what must never become a setpoint.
+#include "mavlink/bridge_msgs.hpp"
+
+#include <gtest/gtest.h>
+
+#include <limits>
+
+namespace alight::mavlink {
+namespace {
+
+TEST(BridgeMsgsTest, AttitudeCommandsWithNonFiniteOrAbsurdValuesAreRefused) {
+  attitude_cmd_t m{};
+  m.utime = 5;
+  m.roll_rad = 0.1;
+  m.thrust_N = 12;
+  m.armed = true;
+  std::string why;
+  const auto t = attitude_from_msg(m, &why);
+  ASSERT_TRUE(t);
+  EXPECT_EQ(t->utime, 5);
+  EXPECT_EQ(t->roll_rad, 0.1);
+  EXPECT_TRUE(t->armed);
+  auto bad = m;
+  bad.pitch_rad = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(attitude_from_msg(bad, &why));
+  bad = m;
+  bad.thrust_N = -1;
+  EXPECT_FALSE(attitude_from_msg(bad, &why));
+  bad = m;
+  bad.yaw_rate_radps = std::numeric_limits<double>::infinity();
+  EXPECT_FALSE(attitude_from_msg(bad, &why));
+  EXPECT_FALSE(why.empty());
+}
+
+TEST(BridgeMsgsTest, PositionSetpointsNeedFiniteValuesAndAKnownMotorsValue) {
+  position_setpoint_t m{};
+  m.p_W[2] = 1.5;
+  m.motors = position_setpoint_t::MOTORS_KILL;
+  std::string why;
+  const auto t = position_from_msg(m, &why);
+  ASSERT_TRUE(t);
+  EXPECT_EQ(t->motors, Motors::kKill);
+  EXPECT_EQ(t->p_W.z(), 1.5);
+  auto bad = m;
+  bad.motors = 7;
+  EXPECT_FALSE(position_from_msg(bad, &why));
+  bad = m;
+  bad.v_W[0] = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(position_from_msg(bad, &why));
+}
+
+TEST(BridgeMsgsTest, StatusCarriesModeArmingLinkAndCounters) {
+  AutopilotStatus s;
+  s.link_up = true;
+  s.mode = "OFFBOARD";
+  s.armed = true;
+  s.offboard = true;
+  s.engage = EngageState::kFlying;
+  s.flavour = Flavour::kArdupilot;
+  s.stats.commands_failed = 3;
+  s.parser.crc_errors = 4;
+  const auto m = to_msg(s, 42, 2);
+  EXPECT_EQ(m.utime, 42);
+  EXPECT_TRUE(m.link_up);
+  EXPECT_EQ(m.mode, "OFFBOARD");
+  EXPECT_EQ(m.engage, "FLYING");
+  EXPECT_EQ(m.autopilot, autopilot_status_t::AUTOPILOT_ARDUPILOT);
+  EXPECT_EQ(m.commands_failed, 3);
+  EXPECT_EQ(m.crc_errors, 4);
+  EXPECT_EQ(m.reopens, 2);
+}
+
+}  // namespace
+}  // namespace alight::mavlink
+
+namespace alight::mavlink {
+namespace {
+
+TEST(BridgeMsgsTest, SetpointStampsMayStepBackALittleButNotReplayOrRunFarAhead) {
+  const int64_t ref = 1'700'000'000'000'000;
+  EXPECT_FALSE(setpoint_stamp_problem(ref - 20'000, ref, 1.0, 10.0));  // the outer loop's step back
+  EXPECT_FALSE(setpoint_stamp_problem(ref + 5'000'000, ref, 1.0, 10.0));
+  EXPECT_FALSE(setpoint_stamp_problem(5, 0, 1.0, 10.0));  // nothing to judge against yet
+  EXPECT_TRUE(setpoint_stamp_problem(ref - 2'000'000, ref, 1.0, 10.0));  // an old log replayed
+  EXPECT_TRUE(setpoint_stamp_problem(ref + 11'000'000, ref, 1.0, 10.0));
+  EXPECT_TRUE(setpoint_stamp_problem(0, ref, 1.0, 10.0));
+  EXPECT_TRUE(setpoint_stamp_problem(INT64_MIN, ref, 1.0, 10.0));
+  EXPECT_TRUE(setpoint_stamp_problem(INT64_MAX, ref, 1.0, 10.0));
+}
+
+}  // namespace
+}  // namespace alight::mavlink
