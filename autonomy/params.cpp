@@ -6,7 +6,8 @@ const ParamSchema<TakeoffParams>& TakeoffParams::schema() {
   using P = TakeoffParams;
   static const ParamSchema<P> schema = [] {
     ParamSchema<P> s;
-    s.add("height_m", &P::height_m, Range::open(0.3, 10), "m", "hover height after take-off, world z");
+    s.add("height_m", &P::height_m, Range::open(0.3, 10), "m",
+          "hover height after take-off, world z");
     s.add("climb_rate_mps", &P::climb_rate_mps, Range::open_closed(0, 2), "m/s",
           "setpoint ramp while climbing");
     s.add("reached_tol_m", &P::reached_tol_m, Range::gt(0), "m",
@@ -24,11 +25,13 @@ const ParamSchema<GeofenceParams>& GeofenceParams::schema() {
           "lower corner of the box every setpoint is clamped into; its z is the floor (LAND_HERE "
           "lands on it)");
     s.add("max_W_m", &P::max_W_m, Range::any(), "m", "upper corner")
-        .check([](const P& p) {
-          for (int i = 0; i < 3; ++i)
-            if (!(p.max_W_m[i] > p.min_W_m[i] + 0.5)) return false;
-          return true;
-        }, "must exceed min_W_m by 0.5 m on every axis");
+        .check(
+            [](const P& p) {
+              for (int i = 0; i < 3; ++i)
+                if (!(p.max_W_m[i] > p.min_W_m[i] + 0.5)) return false;
+              return true;
+            },
+            "must exceed min_W_m by 0.5 m on every axis");
     return s;
   }();
   return schema;
@@ -42,9 +45,11 @@ const ParamSchema<DetectionParams>& DetectionParams::schema() {
     s.add("landing_area_min_W_m", &P::landing_area_min_W_m, Range::any(), "m",
           "the lawnmower covers this rectangle: lower corner (x, y)");
     s.add("landing_area_max_W_m", &P::landing_area_max_W_m, Range::any(), "m", "upper corner")
-        .check([](const P& p) {
-          return (p.landing_area_max_W_m - p.landing_area_min_W_m).minCoeff() >= 0;
-        }, "must not be below landing_area_min_W_m");
+        .check(
+            [](const P& p) {
+              return (p.landing_area_max_W_m - p.landing_area_min_W_m).minCoeff() >= 0;
+            },
+            "must not be below landing_area_min_W_m");
     s.add("lane_spacing_m", &P::lane_spacing_m, Range::gt(0.05), "m",
           "lawnmower lanes (along x) this far apart in y");
     s.add("landing_height_m", &P::landing_height_m, Range::gt(0.3), "m",
@@ -247,10 +252,12 @@ const ParamSchema<AutonomyParams>& AutonomyParams::schema() {
           "signed commands older or newer than this (against the vehicle clock) are stale");
     s.add("vehicle_id", &P::vehicle_id, Range::any(), "",
           "signed commands must name it (ground_station.vehicle_id)")
-        .check([](const P& p) {
-          return !p.vehicle_id.empty() && p.vehicle_id.size() <= 64 &&
-                 p.vehicle_id.find_first_of(" \t\r\n\"'<>&") == std::string::npos;
-        }, "must be 1 to 64 characters without spaces, quotes or <>&");
+        .check(
+            [](const P& p) {
+              return !p.vehicle_id.empty() && p.vehicle_id.size() <= 64 &&
+                     p.vehicle_id.find_first_of(" \t\r\n\"'<>&") == std::string::npos;
+            },
+            "must be 1 to 64 characters without spaces, quotes or <>&");
     s.add("status_period_s", &P::status_period_s, Range::open_closed(0, 0.1), "s",
           "AUTONOMY_STATUS at least this often (>= 10 Hz)");
     s.add("hover_tol_m", &P::hover_tol_m, Range::gt(0), "m", "\"arrived\" at path and hold points");
@@ -268,9 +275,9 @@ const ParamSchema<AutonomyParams>& AutonomyParams::schema() {
     s.section("failsafe", &P::failsafe, FailsafeParams::schema(), "lost motion capture");
     s.section("restart", &P::restart, RestartParams::schema(),
               "a restart in flight holds and waits for the operator (issue 14)");
-    s.check("takeoff.height_m",
-            [](const P& p) { return p.takeoff.height_m < p.geofence.max_W_m.z(); },
-            "must be inside the geofence");
+    s.check(
+        "takeoff.height_m", [](const P& p) { return p.takeoff.height_m < p.geofence.max_W_m.z(); },
+        "must be inside the geofence");
     return s;
   }();
   return schema;

@@ -33,8 +33,8 @@ Matrix3d RefinementEstimator::covariance() const { return cov_of(samples_, mean(
 
 double RefinementEstimator::mahalanobis2(const Vector3d& X_W) const {
   const Vector3d mu = mean();
-  const Matrix3d S = covariance() + params_.gate_floor_sigma_m * params_.gate_floor_sigma_m *
-                                        Matrix3d::Identity();
+  const Matrix3d S =
+      covariance() + params_.gate_floor_sigma_m * params_.gate_floor_sigma_m * Matrix3d::Identity();
   const Vector3d d = X_W - mu;
   return d.dot(S.ldlt().solve(d));
 }
@@ -87,9 +87,9 @@ RefinementEstimator::Verdict RefinementEstimator::add(const Vector3d& X_W) {
 }
 
 bool RefinementEstimator::converged() const {
-  return have_change_ && n() >= params_.n_min &&                       // eq. 7
-         last_change_.head<2>().norm() <= params_.eps_horz_m &&        // eq. 8
-         std::abs(last_change_.z()) <= params_.eps_vert_m;             // eq. 9
+  return have_change_ && n() >= params_.n_min &&                 // eq. 7
+         last_change_.head<2>().norm() <= params_.eps_horz_m &&  // eq. 8
+         std::abs(last_change_.z()) <= params_.eps_vert_m;       // eq. 9
 }
 
 Vector2d VantageSampler::draw(const Vector2d& mu_2, const Eigen::Matrix2d& Sigma_2, int n) {

@@ -9,15 +9,16 @@
 // opposite x and y changes cancel.
 //
 // Outliers (the paper: "measurements are subject to noise and outliers") are gated by the squared
-// Mahalanobis distance (P. C. Mahalanobis, "On the generalised distance in statistics", 1936) d^2 = (X - mu)^T (S + s0^2 I)^-1 (X - mu) against the sample mean mu and
-// sample covariance S of the accepted waypoints, with an isotropic floor s0 so that a few
-// identical early waypoints do not make the gate infinitely tight; d^2 > gate_chi2 (chi^2 with 3
-// degrees of freedom) rejects. The gate starts at gate_min_n waypoints. Because an outlier among
-// the first few waypoints would inflate S and open the gate, every accepted waypoint is followed
-// by a leave-one-out pass: each stored waypoint is tested against the mean and covariance of the
-// others, and the worst one beyond the gate is removed (repeated while one is). If
-// max_consecutive_rejections waypoints in a row are rejected, the estimate itself was seeded by
-// outliers (or the target moved): it restarts from the newest waypoint.
+// Mahalanobis distance (P. C. Mahalanobis, "On the generalised distance in statistics", 1936) d^2 =
+// (X - mu)^T (S + s0^2 I)^-1 (X - mu) against the sample mean mu and sample covariance S of the
+// accepted waypoints, with an isotropic floor s0 so that a few identical early waypoints do not
+// make the gate infinitely tight; d^2 > gate_chi2 (chi^2 with 3 degrees of freedom) rejects. The
+// gate starts at gate_min_n waypoints. Because an outlier among the first few waypoints would
+// inflate S and open the gate, every accepted waypoint is followed by a leave-one-out pass: each
+// stored waypoint is tested against the mean and covariance of the others, and the worst one beyond
+// the gate is removed (repeated while one is). If max_consecutive_rejections waypoints in a row are
+// rejected, the estimate itself was seeded by outliers (or the target moved): it restarts from the
+// newest waypoint.
 
 #include <random>
 #include <vector>

@@ -5,8 +5,8 @@
 
 namespace alight::autonomy {
 
-std::vector<Vector3d> lawnmower(const Vector2d& min_W, const Vector2d& max_W,
-                                double lane_spacing_m, double z_m) {
+std::vector<Vector3d> lawnmower(const Vector2d& min_W, const Vector2d& max_W, double lane_spacing_m,
+                                double z_m) {
   assert(lane_spacing_m > 0);
   std::vector<Vector3d> pts;
   const double span = max_W.y() - min_W.y();

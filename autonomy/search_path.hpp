@@ -12,8 +12,8 @@ namespace alight::autonomy {
 
 /// Boustrophedon ("lawnmower") over the rectangle [min, max] at height z: lanes along x, spaced
 /// lane_spacing_m in y, alternating direction; the first lane at min.y, the last at max.y.
-std::vector<Vector3d> lawnmower(const Vector2d& min_W, const Vector2d& max_W,
-                                double lane_spacing_m, double z_m);
+std::vector<Vector3d> lawnmower(const Vector2d& min_W, const Vector2d& max_W, double lane_spacing_m,
+                                double z_m);
 
 class PathFollower {
  public:

@@ -45,10 +45,9 @@ std::optional<PoseSample> pose_from_msg(const pose_t& m, std::string* why) {
   if (!all_finite(m.vel, 3)) return refuse("pose: non-finite velocity");
   if (!all_finite(m.orientation, 4)) return refuse("pose: non-finite orientation");
   if (!all_finite(m.angular_velocity_B, 3)) return refuse("pose: non-finite angular velocity");
-  const double q_norm = std::sqrt(m.orientation[0] * m.orientation[0] +
-                                  m.orientation[1] * m.orientation[1] +
-                                  m.orientation[2] * m.orientation[2] +
-                                  m.orientation[3] * m.orientation[3]);
+  const double q_norm =
+      std::sqrt(m.orientation[0] * m.orientation[0] + m.orientation[1] * m.orientation[1] +
+                m.orientation[2] * m.orientation[2] + m.orientation[3] * m.orientation[3]);
   // Not a rotation: a sender's bug or a corrupted message, never renormalised into one.
   if (!(std::abs(q_norm - 1.0) <= 0.01))
     return refuse("pose: orientation quaternion norm " + std::to_string(q_norm) + " is not 1");

@@ -20,7 +20,6 @@ pose_t to_msg(const PoseSample& pose, int64_t seq);
 /// node's StampGuard.
 std::optional<PoseSample> pose_from_msg(const pose_t& msg, std::string* why);
 
-
 /// A decoded camera frame.
 struct Image {
   int64_t utime = 0;  ///< exposure time [us]

@@ -97,8 +97,8 @@ void comment_out(std::ostream& out, const std::string& text, int indent) {
   size_t start = 0;
   while (start < text.size()) {
     const size_t end = text.find('\n', start);
-    const std::string line = text.substr(start, end == std::string::npos ? std::string::npos
-                                                                         : end - start);
+    const std::string line =
+        text.substr(start, end == std::string::npos ? std::string::npos : end - start);
     const size_t at = std::min(line.find_first_not_of(' '), static_cast<size_t>(indent));
     out << line.substr(0, at) << "# " << line.substr(at) << "\n";
     if (end == std::string::npos) break;

@@ -89,8 +89,10 @@ inline std::string to_yaml(bool v) { return v ? "true" : "false"; }
 inline std::string to_yaml(const std::string& v) { return quote(v); }
 template <class T, std::enable_if_t<std::is_arithmetic_v<T>, int> = 0>
 std::string to_yaml(T v) {
-  if constexpr (std::is_floating_point_v<T>) return number_text(v);
-  else return std::to_string(v);
+  if constexpr (std::is_floating_point_v<T>)
+    return number_text(v);
+  else
+    return std::to_string(v);
 }
 template <class E, size_t N>
 std::string to_yaml(const std::array<E, N>& a);
@@ -118,17 +120,23 @@ std::string to_yaml(const std::vector<E>& a) {
 /// A value as an error message shows it: as the dump writes it, strings without quotes.
 template <class T>
 std::string error_text(const T& v) {
-  if constexpr (std::is_same_v<T, std::string>) return v;
-  else return to_yaml(v);
+  if constexpr (std::is_same_v<T, std::string>)
+    return v;
+  else
+    return to_yaml(v);
 }
 
 /// Every number inside a value is finite (values built in code bypass the loader's check).
 template <class T>
 bool all_finite(const T& v) {
-  if constexpr (std::is_floating_point_v<T>) return std::isfinite(v);
-  else if constexpr (std::is_arithmetic_v<T>) return true;
-  else if constexpr (std::is_same_v<T, std::string>) return true;
-  else if constexpr (std::is_base_of_v<Eigen::MatrixBase<T>, T>) return v.allFinite();
+  if constexpr (std::is_floating_point_v<T>)
+    return std::isfinite(v);
+  else if constexpr (std::is_arithmetic_v<T>)
+    return true;
+  else if constexpr (std::is_same_v<T, std::string>)
+    return true;
+  else if constexpr (std::is_base_of_v<Eigen::MatrixBase<T>, T>)
+    return v.allFinite();
   else {
     for (const auto& e : v)
       if (!all_finite(e)) return false;
@@ -357,9 +365,7 @@ class ParamSchema {
     auto e = std::make_unique<Entry>();
     e->is_merge = true;
     const ParamSchema<S>* s = &schema;
-    e->read = [sub, s](const ParamNode& n, const std::string&, P& p) {
-      s->read_keys(n, p.*sub);
-    };
+    e->read = [sub, s](const ParamNode& n, const std::string&, P& p) { s->read_keys(n, p.*sub); };
     e->validate_section = [sub, s](const P& p, const std::string& prefix) {
       s->validate(p.*sub, prefix);
     };
@@ -527,10 +533,9 @@ class ParamSchema {
         e->dump(out, p, indent);
       } else if (e->is_section) {
         std::ostringstream text;
-        const std::string doc =
-            !e->optional_section ? e->doc
-            : e->doc.empty()     ? std::string("optional section")
-                                 : e->doc + " (optional section)";
+        const std::string doc = !e->optional_section ? e->doc
+                                : e->doc.empty()     ? std::string("optional section")
+                                                     : e->doc + " (optional section)";
         param_detail::dump_section_head(text, indent, e->key, doc);
         e->dump(text, p, indent + 2);
         // An absent optional section is shown as comments: the dump reads back to the same.

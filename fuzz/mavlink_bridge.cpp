@@ -69,8 +69,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         fuzz::fail("a frame not from alight's own system and component");
       if (auto m = decode<SetAttitudeTarget>(f)) {
         if (!(m->thrust >= 0 && m->thrust <= 1)) fuzz::fail("thrust outside [0, 1]");
-        const double norm = std::sqrt(m->q[0] * m->q[0] + m->q[1] * m->q[1] +
-                                      m->q[2] * m->q[2] + m->q[3] * m->q[3]);
+        const double norm = std::sqrt(m->q[0] * m->q[0] + m->q[1] * m->q[1] + m->q[2] * m->q[2] +
+                                      m->q[3] * m->q[3]);
         if (!(std::abs(norm - 1) < 1e-3)) fuzz::fail("attitude setpoint not a unit quaternion");
       }
       if (auto m = decode<SetPositionTargetLocalNed>(f)) {

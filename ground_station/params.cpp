@@ -7,8 +7,8 @@ const ParamSchema<GroundStationParams>& GroundStationParams::schema() {
   static const ParamSchema<P> schema = [] {
     ParamSchema<P> s;
     const auto channel = [&s](const char* key, std::string P::*field, const char* doc) {
-      s.add(key, field, Range::any(), "", doc).check(
-          [field](const P& p) { return !(p.*field).empty(); }, "must not be empty");
+      s.add(key, field, Range::any(), "", doc)
+          .check([field](const P& p) { return !(p.*field).empty(); }, "must not be empty");
     };
     channel("camera_channel", &P::camera_channel, "LCM channel of the live video");
     channel("diag_channel", &P::diag_channel, "of the vision's diagnostic image");

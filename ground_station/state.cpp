@@ -141,8 +141,9 @@ void StationState::on_status(const autonomy_status_t& msg, int64_t now_utime,
   // The vehicle's wall clock when it published (older autonomy: the status time).
   const int64_t vehicle_utime = msg.wall_utime != 0 ? msg.wall_utime : msg.utime;
   // In double: a hostile stamp must not overflow the subtraction (found by fuzzing).
-  clock_offset_s_ = (static_cast<double>(wall_utime.value_or(now_utime)) -
-                     static_cast<double>(vehicle_utime)) * 1e-6;
+  clock_offset_s_ =
+      (static_cast<double>(wall_utime.value_or(now_utime)) - static_cast<double>(vehicle_utime)) *
+      1e-6;
   commands_.on_status(msg, now_utime);
 }
 
@@ -363,8 +364,8 @@ std::string StationState::to_json(int64_t now_utime, const std::string& extra) c
     const autopilot_status_t& a = *autopilot_;
     const double since_s = (now_utime - autopilot_arrival_utime_) * 1e-6;
     w.begin_object();
-    w.field("autopilot", std::string(a.autopilot == autopilot_status_t::AUTOPILOT_PX4 ? "PX4"
-                                                                                     : "ArduPilot"));
+    w.field("autopilot",
+            std::string(a.autopilot == autopilot_status_t::AUTOPILOT_PX4 ? "PX4" : "ArduPilot"));
     w.field("link_up", a.link_up && since_s <= params_.channel_stale_s);
     w.field("heartbeat_age_s", a.heartbeat_age_s < 0 ? -1.0 : a.heartbeat_age_s + since_s);
     w.field("report_age_s", since_s);

@@ -75,9 +75,12 @@ class Launcher {
       logger.name = "lcm-logger";
       // The nodes' large receive buffer for the logger too: it takes every camera frame and
       // falls behind first on a loaded machine.
-      logger.command = {
-          "lcm-logger", "--lcm-url=" + alight::with_receive_buffer(lf_.lcm_url), "-q",
-          "-c",         lf_.record_channels,        (session_ / "session.lcmlog").string()};
+      logger.command = {"lcm-logger",
+                        "--lcm-url=" + alight::with_receive_buffer(lf_.lcm_url),
+                        "-q",
+                        "-c",
+                        lf_.record_channels,
+                        (session_ / "session.lcmlog").string()};
       logger.restart = alight::launcher::RestartPolicy::kAlways;
       trackers_.push_back(std::make_unique<ProcessTracker>(logger, lf_.backoff));
     }

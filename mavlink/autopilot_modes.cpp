@@ -9,46 +9,77 @@ namespace {
 std::string px4_name(uint32_t custom) {
   using namespace px4_mode;
   switch (main_mode(custom)) {
-    case kManual: return "MANUAL";
-    case kAltctl: return "ALTCTL";
-    case kPosctl: return "POSCTL";
-    case kAcro: return "ACRO";
-    case kOffboard: return "OFFBOARD";
-    case kStabilized: return "STABILIZED";
-    case kRattitude: return "RATTITUDE";
+    case kManual:
+      return "MANUAL";
+    case kAltctl:
+      return "ALTCTL";
+    case kPosctl:
+      return "POSCTL";
+    case kAcro:
+      return "ACRO";
+    case kOffboard:
+      return "OFFBOARD";
+    case kStabilized:
+      return "STABILIZED";
+    case kRattitude:
+      return "RATTITUDE";
     case kAuto:
       switch (sub_mode(custom)) {
-        case auto_sub::kReady: return "AUTO.READY";
-        case auto_sub::kTakeoff: return "AUTO.TAKEOFF";
-        case auto_sub::kLoiter: return "AUTO.LOITER";
-        case auto_sub::kMission: return "AUTO.MISSION";
-        case auto_sub::kRtl: return "AUTO.RTL";
-        case auto_sub::kLand: return "AUTO.LAND";
-        case auto_sub::kFollowTarget: return "AUTO.FOLLOW_TARGET";
-        case auto_sub::kPrecland: return "AUTO.PRECLAND";
-        default: return "AUTO(" + std::to_string(sub_mode(custom)) + ")";
+        case auto_sub::kReady:
+          return "AUTO.READY";
+        case auto_sub::kTakeoff:
+          return "AUTO.TAKEOFF";
+        case auto_sub::kLoiter:
+          return "AUTO.LOITER";
+        case auto_sub::kMission:
+          return "AUTO.MISSION";
+        case auto_sub::kRtl:
+          return "AUTO.RTL";
+        case auto_sub::kLand:
+          return "AUTO.LAND";
+        case auto_sub::kFollowTarget:
+          return "AUTO.FOLLOW_TARGET";
+        case auto_sub::kPrecland:
+          return "AUTO.PRECLAND";
+        default:
+          return "AUTO(" + std::to_string(sub_mode(custom)) + ")";
       }
-    default: return "MODE(" + std::to_string(custom) + ")";
+    default:
+      return "MODE(" + std::to_string(custom) + ")";
   }
 }
 
 std::string copter_name(uint32_t custom) {
   using namespace copter_mode;
   switch (custom) {
-    case kStabilize: return "STABILIZE";
-    case kAcro: return "ACRO";
-    case kAltHold: return "ALT_HOLD";
-    case kAuto: return "AUTO";
-    case kGuided: return "GUIDED";
-    case kLoiter: return "LOITER";
-    case kRtl: return "RTL";
-    case kCircle: return "CIRCLE";
-    case kLand: return "LAND";
-    case kPosHold: return "POSHOLD";
-    case kBrake: return "BRAKE";
-    case kGuidedNoGps: return "GUIDED_NOGPS";
-    case kSmartRtl: return "SMART_RTL";
-    default: return "MODE(" + std::to_string(custom) + ")";
+    case kStabilize:
+      return "STABILIZE";
+    case kAcro:
+      return "ACRO";
+    case kAltHold:
+      return "ALT_HOLD";
+    case kAuto:
+      return "AUTO";
+    case kGuided:
+      return "GUIDED";
+    case kLoiter:
+      return "LOITER";
+    case kRtl:
+      return "RTL";
+    case kCircle:
+      return "CIRCLE";
+    case kLand:
+      return "LAND";
+    case kPosHold:
+      return "POSHOLD";
+    case kBrake:
+      return "BRAKE";
+    case kGuidedNoGps:
+      return "GUIDED_NOGPS";
+    case kSmartRtl:
+      return "SMART_RTL";
+    default:
+      return "MODE(" + std::to_string(custom) + ")";
   }
 }
 

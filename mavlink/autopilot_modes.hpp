@@ -24,8 +24,8 @@ enum class Flavour { kPx4, kArdupilot };
 enum class ControlMode { kAttitude, kPosition };
 
 namespace px4_mode {
-inline constexpr uint8_t kManual = 1, kAltctl = 2, kPosctl = 3, kAuto = 4, kAcro = 5,
-                         kOffboard = 6, kStabilized = 7, kRattitude = 8;
+inline constexpr uint8_t kManual = 1, kAltctl = 2, kPosctl = 3, kAuto = 4, kAcro = 5, kOffboard = 6,
+                         kStabilized = 7, kRattitude = 8;
 namespace auto_sub {
 inline constexpr uint8_t kReady = 1, kTakeoff = 2, kLoiter = 3, kMission = 4, kRtl = 5, kLand = 6,
                          kFollowTarget = 8, kPrecland = 9;
@@ -40,8 +40,8 @@ constexpr uint8_t sub_mode(uint32_t custom) { return static_cast<uint8_t>(custom
 
 namespace copter_mode {
 inline constexpr uint32_t kStabilize = 0, kAcro = 1, kAltHold = 2, kAuto = 3, kGuided = 4,
-                          kLoiter = 5, kRtl = 6, kCircle = 7, kLand = 9, kPosHold = 16,
-                          kBrake = 17, kGuidedNoGps = 20, kSmartRtl = 21;
+                          kLoiter = 5, kRtl = 6, kCircle = 7, kLand = 9, kPosHold = 16, kBrake = 17,
+                          kGuidedNoGps = 20, kSmartRtl = 21;
 }
 
 /// The mode's name as the autopilot's ground stations show it ("OFFBOARD", "AUTO.LAND",

@@ -42,14 +42,22 @@ bool within(float a, float b, float c, double limit) {
 
 const char* engage_state_name(EngageState s) {
   switch (s) {
-    case EngageState::kNoLink: return "NO_LINK";
-    case EngageState::kIdle: return "IDLE";
-    case EngageState::kStreaming: return "STREAMING";
-    case EngageState::kModeWait: return "MODE_WAIT";
-    case EngageState::kArmWait: return "ARM_WAIT";
-    case EngageState::kFlying: return "FLYING";
-    case EngageState::kOverride: return "OVERRIDE";
-    case EngageState::kOperator: return "OPERATOR";
+    case EngageState::kNoLink:
+      return "NO_LINK";
+    case EngageState::kIdle:
+      return "IDLE";
+    case EngageState::kStreaming:
+      return "STREAMING";
+    case EngageState::kModeWait:
+      return "MODE_WAIT";
+    case EngageState::kArmWait:
+      return "ARM_WAIT";
+    case EngageState::kFlying:
+      return "FLYING";
+    case EngageState::kOverride:
+      return "OVERRIDE";
+    case EngageState::kOperator:
+      return "OPERATOR";
   }
   return "?";
 }
@@ -211,7 +219,8 @@ void Bridge::handle_frame(const Frame& f, const BridgeClock& now, BridgeOutput& 
       local_position_steady_us_ = now.steady_us;
     } else if constexpr (std::is_same_v<M, Statustext>) {
       last_statustext_ = statustext_string(m);
-      out.events.push_back({m.severity <= mav_severity::kWarning, "autopilot: " + last_statustext_});
+      out.events.push_back(
+          {m.severity <= mav_severity::kWarning, "autopilot: " + last_statustext_});
     } else if constexpr (std::is_same_v<M, SysStatus>) {
       battery_V_ = m.voltage_battery == UINT16_MAX ? -1.0 : m.voltage_battery / 1000.0;
     }
@@ -265,8 +274,8 @@ void Bridge::on_heartbeat(const Frame& f, const Heartbeat& m, const BridgeClock&
 }
 
 void Bridge::on_boot_time(uint64_t boot_us, BridgeOutput& out) {
-  if (last_boot_us_ && static_cast<int64_t>(boot_us) < static_cast<int64_t>(*last_boot_us_) -
-                                                           kRebootJumpUs) {
+  if (last_boot_us_ &&
+      static_cast<int64_t>(boot_us) < static_cast<int64_t>(*last_boot_us_) - kRebootJumpUs) {
     ++stats_.reboots;
     out.events.push_back({true, "autopilot rebooted (its boot time went back)"});
     const auto hb = heartbeat_;
@@ -316,8 +325,8 @@ void Bridge::check_link(const BridgeClock& now, BridgeOutput& out) {
   if (now.steady_us - last_heartbeat_steady_ <= params_.heartbeat_timeout_s * 1e6) return;
   link_up_ = false;
   ++stats_.link_losses;
-  out.events.push_back({true, "link lost: no HEARTBEAT for " +
-                                  std::to_string(params_.heartbeat_timeout_s) + " s"});
+  out.events.push_back(
+      {true, "link lost: no HEARTBEAT for " + std::to_string(params_.heartbeat_timeout_s) + " s"});
   // Whatever comes back (the same autopilot, or one that rebooted) starts from scratch; the
   // heartbeat is kept for the status page, marked stale by its age.
   const auto hb = heartbeat_;
@@ -479,9 +488,9 @@ void Bridge::command_finished(bool ok, int result, const BridgeClock& now, Bridg
     intervals_to_ask_.erase(intervals_to_ask_.begin());
     backoff_until_us_ = now.steady_us;
   }
-  out.events.push_back(
-      {true, name + ": " + (result < 0 ? std::string("no answer") : "refused, MAV_RESULT " +
-                                                                     std::to_string(result))});
+  out.events.push_back({true, name + ": " +
+                                  (result < 0 ? std::string("no answer")
+                                              : "refused, MAV_RESULT " + std::to_string(result))});
 }
 
 void Bridge::service_pending(const BridgeClock& now, BridgeOutput& out) {
@@ -515,20 +524,26 @@ void Bridge::decide_commands(const BridgeClock& now, BridgeOutput& out) {
                     now.steady_us - position_rx_steady_us_ <= limit;
   bool want_armed = false;
   if (fresh)
-    want_armed = control_ == ControlMode::kAttitude ? attitude_->armed
-                                                    : position_->motors == Motors::kOn;
-  const bool streamed_enough =
-      streaming_since_us_ && now.steady_us - *streaming_since_us_ >= params_.offboard_warmup_s * 1e6;
+    want_armed =
+        control_ == ControlMode::kAttitude ? attitude_->armed : position_->motors == Motors::kOn;
+  const bool streamed_enough = streaming_since_us_ && now.steady_us - *streaming_since_us_ >=
+                                                          params_.offboard_warmup_s * 1e6;
 
   // Armed in another mode: the pilot's, or the autopilot's failsafe (also one that flew while the
   // link was down, when the bridge could not see it leave). alight engages from the ground only.
   const bool hands_off = override_ || (armed && !in_fly);
-  if (!params_.auto_engage()) engage_ = EngageState::kOperator;
-  else if (hands_off) engage_ = EngageState::kOverride;
-  else if (armed && in_fly) engage_ = EngageState::kFlying;
-  else if (!want_armed) engage_ = EngageState::kIdle;
-  else if (!streamed_enough) engage_ = EngageState::kStreaming;
-  else engage_ = in_fly ? EngageState::kArmWait : EngageState::kModeWait;
+  if (!params_.auto_engage())
+    engage_ = EngageState::kOperator;
+  else if (hands_off)
+    engage_ = EngageState::kOverride;
+  else if (armed && in_fly)
+    engage_ = EngageState::kFlying;
+  else if (!want_armed)
+    engage_ = EngageState::kIdle;
+  else if (!streamed_enough)
+    engage_ = EngageState::kStreaming;
+  else
+    engage_ = in_fly ? EngageState::kArmWait : EngageState::kModeWait;
 
   if (pending_ || now.steady_us < backoff_until_us_) return;
   // A KILL does not wait for a heartbeat to settle.

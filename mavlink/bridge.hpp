@@ -26,9 +26,10 @@
 //    waits command_backoff_s. After an accepted command it waits for the next HEARTBEAT (which
 //    shows the result) before deciding again. It engages from the ground only: an autopilot armed
 //    in another mode (the pilot's switch, its own failsafe, also one entered while the link was
-//    down) is left alone until it has been disarmed: the pilot's override wins. A KILL (POSITION_SETPOINT motors KILL)
-//    is a forced disarm at once; the stack's motors-off in the offboard mode (the outer loop's
-//    land detector said down) is a normal disarm, which the autopilot refuses in the air.
+//    down) is left alone until it has been disarmed: the pilot's override wins. A KILL
+//    (POSITION_SETPOINT motors KILL) is a forced disarm at once; the stack's motors-off in the
+//    offboard mode (the outer loop's land detector said down) is a normal disarm, which the
+//    autopilot refuses in the air.
 //  - Telemetry: HIGHRES_IMU becomes IMU (FRD -> FLU), ATTITUDE_QUATERNION with
 //    LOCAL_POSITION_NED the autopilot's pose (NED -> ENU). time_usec in the Unix epoch (> 2001)
 //    is kept; boot time is moved onto the wall clock by the smallest receipt delay seen (which
@@ -82,11 +83,11 @@ struct PositionTarget {
 };
 
 struct BridgeInput {
-  std::span<const uint8_t> link_bytes;        ///< read from the autopilot's link
-  std::optional<AttitudeTarget> attitude;     ///< a new ATTITUDE_CMD
-  std::optional<PositionTarget> position;     ///< a new POSITION_SETPOINT
-  std::optional<PoseSample> mocap;            ///< a new MOCAP_POSE
-  bool link_reopened = false;                 ///< the node reopened the device / socket
+  std::span<const uint8_t> link_bytes;     ///< read from the autopilot's link
+  std::optional<AttitudeTarget> attitude;  ///< a new ATTITUDE_CMD
+  std::optional<PositionTarget> position;  ///< a new POSITION_SETPOINT
+  std::optional<PoseSample> mocap;         ///< a new MOCAP_POSE
+  bool link_reopened = false;              ///< the node reopened the device / socket
 };
 
 /// One IMU sample from the autopilot, in alight's body frame.
@@ -102,22 +103,22 @@ struct BridgeEvent {
 };
 
 struct BridgeOutput {
-  std::vector<uint8_t> link_bytes;          ///< write these to the autopilot
-  std::vector<ImuOut> imu;                  ///< publish as IMU
-  std::vector<PoseSample> autopilot_pose;   ///< publish as AUTOPILOT_POSE
-  std::vector<BridgeEvent> events;          ///< log them
+  std::vector<uint8_t> link_bytes;         ///< write these to the autopilot
+  std::vector<ImuOut> imu;                 ///< publish as IMU
+  std::vector<PoseSample> autopilot_pose;  ///< publish as AUTOPILOT_POSE
+  std::vector<BridgeEvent> events;         ///< log them
 };
 
 /// What the bridge asks of the autopilot, or that it has stopped asking.
 enum class EngageState {
-  kNoLink,      ///< no autopilot heard
-  kIdle,        ///< the stack does not want the motors on
-  kStreaming,   ///< streaming, not yet long enough to ask for the offboard mode
-  kModeWait,    ///< asking for the offboard mode
-  kArmWait,     ///< in the offboard mode, asking to arm
-  kFlying,      ///< armed in the offboard mode
-  kOverride,    ///< armed, but the autopilot left the offboard mode: hands off until disarmed
-  kOperator,    ///< engage: operator; the pilot decides mode and arming
+  kNoLink,     ///< no autopilot heard
+  kIdle,       ///< the stack does not want the motors on
+  kStreaming,  ///< streaming, not yet long enough to ask for the offboard mode
+  kModeWait,   ///< asking for the offboard mode
+  kArmWait,    ///< in the offboard mode, asking to arm
+  kFlying,     ///< armed in the offboard mode
+  kOverride,   ///< armed, but the autopilot left the offboard mode: hands off until disarmed
+  kOperator,   ///< engage: operator; the pilot decides mode and arming
 };
 const char* engage_state_name(EngageState s);
 
@@ -125,16 +126,16 @@ struct BridgeStats {
   uint64_t heartbeats = 0;
   uint64_t link_losses = 0;
   uint64_t reboots = 0;
-  uint64_t foreign_frames = 0;    ///< from other systems / components, ignored
-  uint64_t rejected_values = 0;   ///< telemetry with non-finite or absurd values
-  uint64_t rejected_stamps = 0;   ///< telemetry stamped backwards or implausibly
+  uint64_t foreign_frames = 0;   ///< from other systems / components, ignored
+  uint64_t rejected_values = 0;  ///< telemetry with non-finite or absurd values
+  uint64_t rejected_stamps = 0;  ///< telemetry stamped backwards or implausibly
   uint64_t setpoints_sent = 0;
   uint64_t setpoints_not_sent = 0;  ///< due, but no heading known yet (attitude)
   uint64_t mocap_sent = 0;
   uint64_t imu_out = 0;
-  uint64_t commands_sent = 0;     ///< COMMAND_LONG frames, resends included
-  uint64_t commands_failed = 0;   ///< refused, or never answered
-  uint64_t acks_unexpected = 0;   ///< COMMAND_ACK for nothing pending
+  uint64_t commands_sent = 0;    ///< COMMAND_LONG frames, resends included
+  uint64_t commands_failed = 0;  ///< refused, or never answered
+  uint64_t acks_unexpected = 0;  ///< COMMAND_ACK for nothing pending
   uint64_t frames_sent = 0;
 };
 
@@ -149,16 +150,16 @@ struct AutopilotStatus {
   uint32_t custom_mode = 0;
   uint8_t base_mode = 0;
   uint8_t system_status = 0;
-  std::string mode;            ///< mode_name()
+  std::string mode;  ///< mode_name()
   bool armed = false;
-  bool offboard = false;       ///< in the mode alight flies in
+  bool offboard = false;  ///< in the mode alight flies in
   EngageState engage = EngageState::kNoLink;
   bool streaming = false;
   double setpoint_age_s = -1;  ///< of the stack's newest setpoint; -1: none
   std::string last_command;    ///< "offboard", "arm", "disarm", "force disarm", "interval"
   int last_result = -2;        ///< MAV_RESULT; -1: no answer; -2: none yet
   std::string last_statustext;
-  double battery_V = -1;       ///< -1: not reported
+  double battery_V = -1;  ///< -1: not reported
   BridgeStats stats;
   ParserStats parser;
 };

@@ -43,14 +43,22 @@ std::optional<PositionTarget> position_from_msg(const position_setpoint_t& msg, 
     return std::nullopt;
   };
   if (!finite_within(msg.p_W, 3, kMaxPositionM)) return fail("position not finite or beyond 10 km");
-  if (!finite_within(msg.v_W, 3, kMaxVelocityMps)) return fail("velocity not finite or beyond 100 m/s");
+  if (!finite_within(msg.v_W, 3, kMaxVelocityMps))
+    return fail("velocity not finite or beyond 100 m/s");
   if (!std::isfinite(msg.yaw_rad)) return fail("yaw not finite");
   PositionTarget t;
   switch (msg.motors) {
-    case position_setpoint_t::MOTORS_OFF: t.motors = Motors::kOff; break;
-    case position_setpoint_t::MOTORS_ON: t.motors = Motors::kOn; break;
-    case position_setpoint_t::MOTORS_KILL: t.motors = Motors::kKill; break;
-    default: return fail("unknown motors value");
+    case position_setpoint_t::MOTORS_OFF:
+      t.motors = Motors::kOff;
+      break;
+    case position_setpoint_t::MOTORS_ON:
+      t.motors = Motors::kOn;
+      break;
+    case position_setpoint_t::MOTORS_KILL:
+      t.motors = Motors::kKill;
+      break;
+    default:
+      return fail("unknown motors value");
   }
   t.utime = msg.utime;
   t.p_W = Vector3d(msg.p_W[0], msg.p_W[1], msg.p_W[2]);

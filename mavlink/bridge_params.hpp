@@ -13,12 +13,12 @@
 namespace alight::mavlink {
 
 struct BridgeParams {
-  std::string autopilot = "px4";  ///< "px4" or "ardupilot"
+  std::string autopilot = "px4";                  ///< "px4" or "ardupilot"
   std::string link = "udp-listen:0.0.0.0:14540";  ///< link_address.hpp
-  int target_sysid = 0;      ///< autopilot's system id (0: the first autopilot heard)
-  int target_compid = 1;     ///< autopilot's component id (MAV_COMP_ID_AUTOPILOT1)
-  int own_sysid = 1;         ///< ours: the vehicle's system id (a companion computer shares it)
-  int own_compid = 191;      ///< MAV_COMP_ID_ONBOARD_COMPUTER
+  int target_sysid = 0;   ///< autopilot's system id (0: the first autopilot heard)
+  int target_compid = 1;  ///< autopilot's component id (MAV_COMP_ID_AUTOPILOT1)
+  int own_sysid = 1;      ///< ours: the vehicle's system id (a companion computer shares it)
+  int own_compid = 191;   ///< MAV_COMP_ID_ONBOARD_COMPUTER
   double heartbeat_timeout_s = 3.0;  ///< no autopilot HEARTBEAT this long: link down [s]
   double reopen_delay_s = 0.5;       ///< wait before reopening a failed device / socket [s]
 
@@ -27,18 +27,19 @@ struct BridgeParams {
   /// POSITION_SETPOINT.motors); "operator": the pilot switches mode and arms (RC / QGC), the
   /// bridge only streams setpoints and disarms on KILL or after touch-down in the offboard mode.
   std::string engage = "auto";
-  double stream_rate_hz = 50.0;       ///< setpoints to the autopilot (PX4 needs > 2 Hz) [Hz]
-  double setpoint_timeout_s = 0.5;    ///< stack's setpoint older: stop streaming [s]
-  double offboard_warmup_s = 1.0;     ///< stream this long before asking for OFFBOARD [s]
-  double command_timeout_s = 0.5;     ///< COMMAND_LONG unanswered this long: sent again [s]
-  int command_retries = 4;            ///< resends before a command counts as failed
-  double command_backoff_s = 1.0;     ///< after a refused / failed command, wait this long [s]
+  double stream_rate_hz = 50.0;     ///< setpoints to the autopilot (PX4 needs > 2 Hz) [Hz]
+  double setpoint_timeout_s = 0.5;  ///< stack's setpoint older: stop streaming [s]
+  double offboard_warmup_s = 1.0;   ///< stream this long before asking for OFFBOARD [s]
+  double command_timeout_s = 0.5;   ///< COMMAND_LONG unanswered this long: sent again [s]
+  int command_retries = 4;          ///< resends before a command counts as failed
+  double command_backoff_s = 1.0;   ///< after a refused / failed command, wait this long [s]
 
   double hover_thrust = 0.5;  ///< normalised thrust (0..1) that hovers (PX4 MPC_THR_HOVER) [-]
   double yaw_lead_s = 0.35;   ///< attitude: heading setpoint = heading + yaw rate x this [s]
 
-  std::string mocap_message = "att_pos_mocap";  ///< MOCAP_POSE as "att_pos_mocap", "odometry", "none"
-  double mocap_rate_hz = 50.0;                  ///< at most this many poses forwarded [Hz]
+  std::string mocap_message =
+      "att_pos_mocap";          ///< MOCAP_POSE as "att_pos_mocap", "odometry", "none"
+  double mocap_rate_hz = 50.0;  ///< at most this many poses forwarded [Hz]
 
   double imu_rate_hz = 200.0;       ///< HIGHRES_IMU asked of the autopilot (0: leave it) [Hz]
   double attitude_rate_hz = 100.0;  ///< ATTITUDE_QUATERNION asked (0: leave it) [Hz]

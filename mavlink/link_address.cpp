@@ -33,8 +33,10 @@ bool valid_baud(int baud) {
 
 std::string LinkAddress::text() const {
   switch (kind) {
-    case Kind::kSerial: return "serial:" + device + ":" + std::to_string(baud);
-    case Kind::kUdpListen: return "udp-listen:" + host + ":" + std::to_string(port);
+    case Kind::kSerial:
+      return "serial:" + device + ":" + std::to_string(baud);
+    case Kind::kUdpListen:
+      return "udp-listen:" + host + ":" + std::to_string(port);
     case Kind::kUdpPeer:
       return "udp:" + host + ":" + std::to_string(port) +
              (local_port ? ":" + std::to_string(local_port) : "");

@@ -19,8 +19,8 @@ namespace alight::mavlink {
 struct LinkIoStats {
   uint64_t bytes_read = 0;
   uint64_t bytes_written = 0;
-  uint64_t bytes_unsent = 0;        ///< the device could not take them (or no UDP peer yet)
-  uint64_t datagrams_foreign = 0;   ///< udp: from another address than the peer, ignored
+  uint64_t bytes_unsent = 0;       ///< the device could not take them (or no UDP peer yet)
+  uint64_t datagrams_foreign = 0;  ///< udp: from another address than the peer, ignored
 };
 
 class LinkIo {

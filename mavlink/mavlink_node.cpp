@@ -23,11 +23,11 @@
 #include <alight/position_setpoint_t.hpp>
 #include <array>
 
+#include "common/channels.hpp"
 #include "common/msg_convert.hpp"
 #include "common/node.hpp"
 #include "mavlink/bridge.hpp"
 #include "mavlink/bridge_msgs.hpp"
-#include "common/channels.hpp"
 #include "mavlink/link_io.hpp"
 #include "outer_loop/params.hpp"
 
@@ -74,7 +74,8 @@ int main(int argc, char** argv) {
     mav::BridgeParams params = mav::load_bridge_params(args.config);
     if (!link.empty()) {
       std::string why;
-      if (!mav::parse_link_address(link, &why)) throw ParamError("--link", "mavlink.link", link, why);
+      if (!mav::parse_link_address(link, &why))
+        throw ParamError("--link", "mavlink.link", link, why);
       params.link = link;
       params.validate();
     }
@@ -96,8 +97,9 @@ int main(int argc, char** argv) {
     mav::Bridge bridge(params, weight_N);
     mav::LinkIo io(address);
     int64_t imu_seq = 0, pose_seq = 0, reopens = 0;
-    spdlog::info("alight-mavlink: {} over {}, {} control, engage {}, setpoints at {} Hz", params.autopilot,
-                 address.text(), params.control, params.engage, params.stream_rate_hz);
+    spdlog::info("alight-mavlink: {} over {}, {} control, engage {}, setpoints at {} Hz",
+                 params.autopilot, address.text(), params.control, params.engage,
+                 params.stream_rate_hz);
 
     const auto clock = [] { return mav::BridgeClock{steady_utime(), wall_utime()}; };
     const auto step = [&](const mav::BridgeInput& in) {
@@ -113,8 +115,10 @@ int main(int argc, char** argv) {
       for (const auto& p : out.autopilot_pose)
         node.publish(channels::kAutopilotPose, to_msg(p, pose_seq++));
       for (const auto& e : out.events) {
-        if (e.warning) spdlog::warn("alight-mavlink: {}", e.text);
-        else spdlog::info("alight-mavlink: {}", e.text);
+        if (e.warning)
+          spdlog::warn("alight-mavlink: {}", e.text);
+        else
+          spdlog::info("alight-mavlink: {}", e.text);
       }
     };
 
@@ -122,8 +126,8 @@ int main(int argc, char** argv) {
       std::string why;
       auto t = mav::attitude_from_msg(m, &why);
       if (!t) return (void)node.reject_value(channels::kAttitudeCmd, why);
-      if (const auto p = mav::setpoint_stamp_problem(m.utime, node.newest_stamp(),
-                                                     kMaxSetpointAgeS, kMaxSetpointAheadS))
+      if (const auto p = mav::setpoint_stamp_problem(m.utime, node.newest_stamp(), kMaxSetpointAgeS,
+                                                     kMaxSetpointAheadS))
         return (void)node.reject_value(channels::kAttitudeCmd, *p);
       mav::BridgeInput in;
       in.attitude = t;
@@ -133,8 +137,8 @@ int main(int argc, char** argv) {
       std::string why;
       auto t = mav::position_from_msg(m, &why);
       if (!t) return (void)node.reject_value(channels::kPositionSetpoint, why);
-      if (const auto p = mav::setpoint_stamp_problem(m.utime, node.newest_stamp(),
-                                                     kMaxSetpointAgeS, kMaxSetpointAheadS))
+      if (const auto p = mav::setpoint_stamp_problem(m.utime, node.newest_stamp(), kMaxSetpointAgeS,
+                                                     kMaxSetpointAheadS))
         return (void)node.reject_value(channels::kPositionSetpoint, *p);
       mav::BridgeInput in;
       in.position = t;

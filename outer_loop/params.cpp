@@ -1,6 +1,5 @@
 #include "outer_loop/params.hpp"
 
-
 namespace alight::outer_loop {
 
 const ParamSchema<OuterLoopParams>& OuterLoopParams::schema() {
@@ -41,8 +40,7 @@ const ParamSchema<OuterLoopParams>& OuterLoopParams::schema() {
                "must exceed the hover thrust mass_kg * g by 10% at least");
     s.add("max_accel_z_mps2", &P::max_accel_z_mps2, Range::gt(0), "m/s^2",
           "largest commanded vertical acceleration magnitude")
-        .check([](const P& p) { return p.max_accel_z_mps2 < p.gravity_mps2; },
-               "must be in (0, g)");
+        .check([](const P& p) { return p.max_accel_z_mps2 < p.gravity_mps2; }, "must be in (0, g)");
     s.add("yaw_kp_per_s", &P::yaw_kp_per_s, Range::ge(0), "1/s",
           "yaw rate per radian of heading error");
     s.add("max_yaw_rate_dps", &P::max_yaw_rate_dps, Range::gt(0), "deg/s",

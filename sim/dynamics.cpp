@@ -77,11 +77,13 @@ StepResult Dynamics::step(VehicleState& s, const AttitudeCommand& cmd, const Vec
   Vector3d tau_B = Vector3d::Zero();
   if (s.armed) {
     const double yaw_rate_max = p.max_yaw_rate_dps * M_PI / 180.0;
-    s.yaw_des_rad = wrap_angle(s.yaw_des_rad + std::clamp(cmd.yaw_rate_radps, -yaw_rate_max, yaw_rate_max) * dt);
+    s.yaw_des_rad = wrap_angle(s.yaw_des_rad +
+                               std::clamp(cmd.yaw_rate_radps, -yaw_rate_max, yaw_rate_max) * dt);
     tau_B = attitude_torque(s, cmd);
     const double target = std::clamp(cmd.thrust_N, 0.0, p.max_thrust_N);
-    s.thrust_N = p.motor_tau_s > 0 ? s.thrust_N + (target - s.thrust_N) * std::min(1.0, dt / p.motor_tau_s)
-                                   : target;
+    s.thrust_N = p.motor_tau_s > 0
+                     ? s.thrust_N + (target - s.thrust_N) * std::min(1.0, dt / p.motor_tau_s)
+                     : target;
   } else {
     s.thrust_N = 0.0;
     s.yaw_des_rad = yaw_of(R);  // re-arming holds the current heading
@@ -143,7 +145,8 @@ StepResult Dynamics::step(VehicleState& s, const AttitudeCommand& cmd, const Vec
   s.omega_B += alpha * dt;
   const Vector3d dtheta = s.omega_B * dt;
   const double angle = dtheta.norm();
-  if (angle > 0) s.q_WB = (s.q_WB * Quaterniond(Eigen::AngleAxisd(angle, dtheta / angle))).normalized();
+  if (angle > 0)
+    s.q_WB = (s.q_WB * Quaterniond(Eigen::AngleAxisd(angle, dtheta / angle))).normalized();
   return res;
 }
 

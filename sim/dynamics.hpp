@@ -42,10 +42,18 @@ struct VehicleState {
 };
 
 /// What touches what in one step.
-enum class Contact { kNone = 0, kFloor = 1, kPlatformTop = 2, kPlatformEdge = 3, kWall = 4, kFrame = 5 };
+enum class Contact {
+  kNone = 0,
+  kFloor = 1,
+  kPlatformTop = 2,
+  kPlatformEdge = 3,
+  kWall = 4,
+  kFrame = 5
+};
 
 struct StepResult {
-  Vector3d specific_force_B = Vector3d::Zero();  ///< non-gravitational force / mass, in body [m/s^2]
+  Vector3d specific_force_B =
+      Vector3d::Zero();              ///< non-gravitational force / mass, in body [m/s^2]
   Contact contact = Contact::kNone;  ///< the most severe contact this step
   int feet_on_platform_top = 0;      ///< gear feet resting on the platform top
   bool rim_touch = false;            ///< a rotor rim touched the floor or platform (on its side)

@@ -9,12 +9,13 @@ namespace alight::sim {
 
 namespace mav = alight::mavlink;
 
-
 namespace {
 constexpr int64_t kHeartbeatPeriodUs = 1'000'000;
 const uint32_t kOffboardMode = mav::px4_mode::custom_mode(mav::px4_mode::kOffboard);
-const uint32_t kLandMode = mav::px4_mode::custom_mode(mav::px4_mode::kAuto, mav::px4_mode::auto_sub::kLand);
-const uint32_t kLoiterMode = mav::px4_mode::custom_mode(mav::px4_mode::kAuto, mav::px4_mode::auto_sub::kLoiter);
+const uint32_t kLandMode =
+    mav::px4_mode::custom_mode(mav::px4_mode::kAuto, mav::px4_mode::auto_sub::kLand);
+const uint32_t kLoiterMode =
+    mav::px4_mode::custom_mode(mav::px4_mode::kAuto, mav::px4_mode::auto_sub::kLoiter);
 
 int64_t period_us(double hz) { return hz > 0 ? static_cast<int64_t>(1e6 / hz) : INT64_MAX; }
 }  // namespace
@@ -91,8 +92,7 @@ void OffboardEndpoint::on_command(const mav::CommandLong& c, const EndpointInput
       }
       if (main_mode == mav::px4_mode::kOffboard && !stream_ok(in.now_utime)) {
         ack(c, mav::mav_result::kTemporarilyRejected, to_sys, to_comp, out);
-        text(mav::mav_severity::kCritical, "Switching to Offboard is currently not available",
-             out);
+        text(mav::mav_severity::kCritical, "Switching to Offboard is currently not available", out);
         return;
       }
       set_mode(mav::px4_mode::custom_mode(main_mode, sub), out);
@@ -101,7 +101,8 @@ void OffboardEndpoint::on_command(const mav::CommandLong& c, const EndpointInput
     }
     case mav::mav_cmd::kComponentArmDisarm: {
       if (c.param1 == 1.0f) {
-        if (!armed_) out.events.push_back("armed in " + mav::mode_name(mav::Flavour::kPx4, custom_mode_));
+        if (!armed_)
+          out.events.push_back("armed in " + mav::mode_name(mav::Flavour::kPx4, custom_mode_));
         armed_ = true;
         ack(c, mav::mav_result::kAccepted, to_sys, to_comp, out);
       } else if (c.param1 == 0.0f) {
@@ -141,7 +142,8 @@ void OffboardEndpoint::on_command(const mav::CommandLong& c, const EndpointInput
       ack(c, mav::mav_result::kAccepted, to_sys, to_comp, out);
       return;
     }
-    default: ack(c, mav::mav_result::kUnsupported, to_sys, to_comp, out);
+    default:
+      ack(c, mav::mav_result::kUnsupported, to_sys, to_comp, out);
   }
 }
 
@@ -180,9 +182,8 @@ void OffboardEndpoint::handle(const mav::Frame& f, const EndpointInput& in, Endp
       cmd.utime = in.now_utime;
       cmd.roll_rad = rpy.x();
       cmd.pitch_rad = rpy.y();
-      cmd.yaw_rate_radps =
-          std::clamp(params_.yaw_p_per_s * wrap_angle(rpy.z() - yaw_now),
-                     -params_.max_yaw_rate_radps, params_.max_yaw_rate_radps);
+      cmd.yaw_rate_radps = std::clamp(params_.yaw_p_per_s * wrap_angle(rpy.z() - yaw_now),
+                                      -params_.max_yaw_rate_radps, params_.max_yaw_rate_radps);
       cmd.thrust_N = std::clamp<double>(m.thrust, 0, 1) / params_.hover_thrust * hover_thrust_N_;
       cmd.armed = true;
       out.command = cmd;
@@ -240,8 +241,8 @@ EndpointOutput OffboardEndpoint::update(const EndpointInput& in) {
     mav::Heartbeat hb;
     hb.type = mav::mav_type::kQuadrotor;
     hb.autopilot = mav::mav_autopilot::kPx4;
-    hb.base_mode = mav::mav_mode_flag::kCustomModeEnabled |
-                   (armed_ ? mav::mav_mode_flag::kSafetyArmed : 0);
+    hb.base_mode =
+        mav::mav_mode_flag::kCustomModeEnabled | (armed_ ? mav::mav_mode_flag::kSafetyArmed : 0);
     hb.custom_mode = custom_mode_;
     hb.system_status = armed_ ? mav::mav_state::kActive : mav::mav_state::kStandby;
     send(hb, out);
@@ -264,8 +265,10 @@ EndpointOutput OffboardEndpoint::update(const EndpointInput& in) {
     mav::LocalPositionNed l;
     l.time_boot_ms = boot_ms(now);
     const Vector3d p = mav::ned_from_enu(s.p_W_B), v = mav::ned_from_enu(s.v_W_B);
-    l.x = static_cast<float>(p.x()), l.y = static_cast<float>(p.y()), l.z = static_cast<float>(p.z());
-    l.vx = static_cast<float>(v.x()), l.vy = static_cast<float>(v.y()), l.vz = static_cast<float>(v.z());
+    l.x = static_cast<float>(p.x()), l.y = static_cast<float>(p.y()),
+    l.z = static_cast<float>(p.z());
+    l.vx = static_cast<float>(v.x()), l.vy = static_cast<float>(v.y()),
+    l.vz = static_cast<float>(v.z());
     send(l, out);
     next_position_ = now + period_us(position_rate_hz_);
   }
@@ -275,8 +278,10 @@ EndpointOutput OffboardEndpoint::update(const EndpointInput& in) {
     mav::HighresImu h;
     h.time_usec = static_cast<uint64_t>(i.utime);
     const Vector3d a = mav::frd_from_flu(i.accel_B), g = mav::frd_from_flu(i.gyro_B);
-    h.xacc = static_cast<float>(a.x()), h.yacc = static_cast<float>(a.y()), h.zacc = static_cast<float>(a.z());
-    h.xgyro = static_cast<float>(g.x()), h.ygyro = static_cast<float>(g.y()), h.zgyro = static_cast<float>(g.z());
+    h.xacc = static_cast<float>(a.x()), h.yacc = static_cast<float>(a.y()),
+    h.zacc = static_cast<float>(a.z());
+    h.xgyro = static_cast<float>(g.x()), h.ygyro = static_cast<float>(g.y()),
+    h.zgyro = static_cast<float>(g.z());
     h.fields_updated = 0x3F;  // accelerometer and gyro
     send(h, out);
   }

@@ -87,8 +87,7 @@ struct EndpointStats {
 class OffboardEndpoint {
  public:
   /// `hover_thrust_N`: the simulated vehicle's weight.
-  OffboardEndpoint(const OffboardEndpointParams& params, double hover_thrust_N,
-                   int64_t boot_utime);
+  OffboardEndpoint(const OffboardEndpointParams& params, double hover_thrust_N, int64_t boot_utime);
 
   EndpointOutput update(const EndpointInput& in);
 

@@ -8,11 +8,10 @@
 
 #include <array>
 #include <cstdint>
+#include <opencv2/core.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <opencv2/core.hpp>
 
 #include "common/camera_model.hpp"
 #include "common/camera_mount.hpp"
@@ -97,7 +96,7 @@ struct WallParams {
   double width_m = 4.0;
   double height_m = 2.5;
   double thickness_m = 0.1;
-  bool has_opening = true;  ///< the file has an `opening:` section
+  bool has_opening = true;                            ///< the file has an `opening:` section
   Vector2d opening_center_yz_m = Vector2d(0.0, 1.2);  ///< `opening.center_yz_m`
   Vector2d opening_size_m = Vector2d(0.6, 0.6);       ///< `opening.size_m`
   double room_depth_m = 3.0;
@@ -182,8 +181,8 @@ struct RandomizeParams {
 
 struct Scenario {
   std::string name = "landing_none";
-  std::string file;  ///< where it was loaded from (for messages only; not a parameter)
-  double physics_dt_s = 0.001;             ///< `sim.physics_dt_s`
+  std::string file;             ///< where it was loaded from (for messages only; not a parameter)
+  double physics_dt_s = 0.001;  ///< `sim.physics_dt_s`
   int64_t start_utime = 1700000000000000;  ///< `sim.start_utime`
   /// The flying area (`area:`): where the motion capture tracks the vehicle and nothing is in
   /// the way. Leaving it is reported in SIM_TRUTH (out_of_area) and fails the run.

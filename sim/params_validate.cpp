@@ -108,8 +108,7 @@ const ParamSchema<PlatformParams>& PlatformParams::schema() {
   static const ParamSchema<P> schema = [] {
     ParamSchema<P> s;
     s.add("center_xy_m", &P::center_xy_m, Range::any(), "m", "centre of its footprint");
-    s.add("size_m", &P::size_m, Range::open(0.01, 5), "m", "length x, width y, height")
-        .required();
+    s.add("size_m", &P::size_m, Range::open(0.01, 5), "m", "length x, width y, height").required();
     s.add("yaw_deg", &P::yaw_deg, Range::any(), "deg", "rotation about world z");
     s.section("texture", &P::texture, TextureSpec::schema(), "of its top and sides");
     return s;
@@ -139,16 +138,17 @@ const ParamSchema<WallParams>& WallParams::schema() {
         &P::has_opening);
     s.section("texture", &P::texture, TextureSpec::schema(), "of the wall");
     s.section("room_texture", &P::room_texture, TextureSpec::schema(), "of the room behind it");
-    s.check("opening.center_yz_m",
-            [](const P& p) {
-              if (!p.has_opening) return true;
-              const double half_w = 0.5 * p.opening_size_m.x(), half_h = 0.5 * p.opening_size_m.y();
-              return p.opening_center_yz_m.y() - half_h > 0.01 &&
-                     p.opening_center_yz_m.y() + half_h < p.height_m - 0.01 &&
-                     std::abs(p.opening_center_yz_m.x() - p.center_y_m) + half_w <
-                         0.5 * p.width_m - 0.01;
-            },
-            "the opening must lie inside the wall, not touching its border");
+    s.check(
+        "opening.center_yz_m",
+        [](const P& p) {
+          if (!p.has_opening) return true;
+          const double half_w = 0.5 * p.opening_size_m.x(), half_h = 0.5 * p.opening_size_m.y();
+          return p.opening_center_yz_m.y() - half_h > 0.01 &&
+                 p.opening_center_yz_m.y() + half_h < p.height_m - 0.01 &&
+                 std::abs(p.opening_center_yz_m.x() - p.center_y_m) + half_w <
+                     0.5 * p.width_m - 0.01;
+        },
+        "the opening must lie inside the wall, not touching its border");
     return s;
   }();
   return schema;
@@ -173,8 +173,7 @@ const ParamSchema<MocapParams>& MocapParams::schema() {
   static const ParamSchema<P> schema = [] {
     ParamSchema<P> s;
     s.add("rate_hz", &P::rate_hz, Range::open_closed(0, 1000), "Hz", "MOCAP_POSE rate");
-    s.add("latency_s", &P::latency_s, Range::closed_open(0, 1), "s",
-          "sample time to availability");
+    s.add("latency_s", &P::latency_s, Range::closed_open(0, 1), "s", "sample time to availability");
     s.add("pos_sigma_m", &P::pos_sigma_m, Range::ge(0), "m", "position noise");
     s.add("rot_sigma_rad", &P::rot_sigma_rad, Range::ge(0), "rad", "orientation noise per axis");
     s.add("vel_sigma_mps", &P::vel_sigma_mps, Range::ge(0), "m/s", "velocity noise");
@@ -183,11 +182,13 @@ const ParamSchema<MocapParams>& MocapParams::schema() {
           "chance that a sample is lost");
     s.add("dropouts_s", &P::dropouts_s, Range::ge(0), "s",
           "intervals [start_s, end_s] after the sim start without any sample (failsafe tests)")
-        .check([](const P& p) {
-          for (const auto& d : p.dropouts_s)
-            if (!(d[1] > d[0])) return false;
-          return true;
-        }, "each interval must be [start_s, end_s] with 0 <= start_s < end_s");
+        .check(
+            [](const P& p) {
+              for (const auto& d : p.dropouts_s)
+                if (!(d[1] > d[0])) return false;
+              return true;
+            },
+            "each interval must be [start_s, end_s] with 0 <= start_s < end_s");
     return s;
   }();
   return schema;
@@ -225,8 +226,7 @@ const ParamSchema<CameraParams>& CameraParams::schema() {
                "must be > 0 and shorter than the frame period");
     s.add("latency_s", &P::latency_s, Range::closed_open(0, 1), "s",
           "end of exposure to availability");
-    s.add("noise_sigma", &P::noise_sigma, Range::closed_open(0, 50), "grey levels",
-          "sensor noise");
+    s.add("noise_sigma", &P::noise_sigma, Range::closed_open(0, 50), "grey levels", "sensor noise");
     s.add("motion_blur_samples", &P::motion_blur_samples, Range::closed(1, 16), "",
           "poses averaged over the exposure (1 = no blur)");
     s.add("gain_jitter", &P::gain_jitter, Range::closed_open(0, 0.5), "",
@@ -245,8 +245,7 @@ const ParamSchema<LightingParams>& LightingParams::schema() {
     s.add("ambient", &P::ambient, Range::closed(0, 2), "",
           "shade of a surface facing away from the light");
     s.add("diffuse", &P::diffuse, Range::closed(0, 2), "", "added for a surface facing the light");
-    s.add("light_dir_W", &P::light_dir_W, Range::any(), "",
-          "towards the light (normalised on use)")
+    s.add("light_dir_W", &P::light_dir_W, Range::any(), "", "towards the light (normalised on use)")
         .check([](const P& p) { return p.light_dir_W.norm() > 1e-6; }, "must not be zero");
     s.add("gain", &P::gain, Range::open(0, 4), "", "overall brightness");
     s.add("falloff", &P::falloff, Range::closed(0, 0.5), "",
@@ -323,25 +322,26 @@ const ParamSchema<Scenario>& Scenario::schema() {
             "the gear stands on the floor below this point");
       g.add("yaw_deg", &P::start_yaw_deg, Range::any(), "deg", "heading at the start");
     });
-    s.check("start.position_m",
-            [](const P& p) {
-              const Vector2d off = p.start_position_m.head<2>() - p.area_center_xy_m;
-              return (off.cwiseAbs() - 0.5 * p.area_size_m).maxCoeff() < 0;
-            },
-            "must be inside the flying area (area.center_xy_m, area.size_m)");
+    s.check(
+        "start.position_m",
+        [](const P& p) {
+          const Vector2d off = p.start_position_m.head<2>() - p.area_center_xy_m;
+          return (off.cwiseAbs() - 0.5 * p.area_size_m).maxCoeff() < 0;
+        },
+        "must be inside the flying area (area.center_xy_m, area.size_m)");
     // Seeded placements are drawn until one clears the start; the nominal one must, so one does.
-    s.check("platform.center_xy_m",
-            [](const P& p) {
-              if (!p.platform) return true;
-              const double d = footprint_distance_m(*p.platform, p.platform->center_xy_m,
-                                                    p.platform->yaw_deg * M_PI / 180.0,
-                                                    p.start_position_m.head<2>());
-              const bool randomised =
-                  p.randomize.platform_xy_m > 0 || p.randomize.platform_yaw_deg > 0;
-              return !randomised || d >= p.randomize.start_clearance_m;
-            },
-            "the platform must stand at least randomize.start_clearance_m from the start "
-            "position");
+    s.check(
+        "platform.center_xy_m",
+        [](const P& p) {
+          if (!p.platform) return true;
+          const double d = footprint_distance_m(*p.platform, p.platform->center_xy_m,
+                                                p.platform->yaw_deg * M_PI / 180.0,
+                                                p.start_position_m.head<2>());
+          const bool randomised = p.randomize.platform_xy_m > 0 || p.randomize.platform_yaw_deg > 0;
+          return !randomised || d >= p.randomize.start_clearance_m;
+        },
+        "the platform must stand at least randomize.start_clearance_m from the start "
+        "position");
     return s;
   }();
   return schema;

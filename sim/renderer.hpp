@@ -1,17 +1,16 @@
 #pragma once
 // Camera image of a Scene by exact per-pixel ray casting (Appel 1968; ray-box slab test of Kay and
-// Kajiya, SIGGRAPH 1986) for the paper's camera (section 4.1): each pixel's ray (undistorted through
-// the camera model, so lens distortion is rendered exactly) is intersected analytically with
-// the floor plane and the boxes; the nearest hit is textured with trilinear mip-mapping, the
+// Kajiya, SIGGRAPH 1986) for the paper's camera (section 4.1): each pixel's ray (undistorted
+// through the camera model, so lens distortion is rendered exactly) is intersected analytically
+// with the floor plane and the boxes; the nearest hit is textured with trilinear mip-mapping, the
 // level chosen from the pixel's footprint on the surface (distance and incidence), and shaded by
 // a Lambertian light times the lamp's falloff (Scene::illumination). Rays are precomputed once
 // per camera model; per frame, boxes are culled against 16x16-pixel tiles by the bounds of their
 // projection. Each row is rendered in passes over its rays that compile to SIMD code
 // (renderer.cpp).
 
-#include <vector>
-
 #include <opencv2/core.hpp>
+#include <vector>
 
 #include "common/camera_model.hpp"
 #include "sim/scene.hpp"

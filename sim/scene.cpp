@@ -33,7 +33,8 @@ SeededLayout draw_layout(const Scenario& sc, uint64_t seed) {
       for (int attempt = 0; attempt < 1000; ++attempt) {
         const Vector2d xy = p.center_xy_m + r.platform_xy_m * Vector2d(sym(rng), sym(rng));
         const double yaw = (p.yaw_deg + r.platform_yaw_deg * sym(rng)) * M_PI / 180.0;
-        if (footprint_distance_m(p, xy, yaw, sc.start_position_m.head<2>()) >= r.start_clearance_m) {
+        if (footprint_distance_m(p, xy, yaw, sc.start_position_m.head<2>()) >=
+            r.start_clearance_m) {
           out.platform_center_xy_m = xy;
           out.platform_yaw_rad = yaw;
           break;
@@ -87,8 +88,8 @@ Scene build_scene(const Scenario& sc, uint64_t seed) {
     const int room_tex = static_cast<int>(scene.textures.size());
     scene.textures.push_back(Texture::make(w.room_texture, seed));
     const double y0 = w.center_y_m - 0.5 * w.width_m, y1 = w.center_y_m + 0.5 * w.width_m;
-    auto add = [&](Box::Kind kind, double xa, double xb, double ya, double yb, double za,
-                   double zb, int tex) {
+    auto add = [&](Box::Kind kind, double xa, double xb, double ya, double yb, double za, double zb,
+                   int tex) {
       if (xb - xa <= 1e-6 || yb - ya <= 1e-6 || zb - za <= 1e-6) return;
       Box b;
       b.kind = kind;
@@ -103,12 +104,13 @@ Scene build_scene(const Scenario& sc, uint64_t seed) {
       const double oy1 = w.opening_center_yz_m.x() + 0.5 * w.opening_size_m.x();
       const double oz0 = w.opening_center_yz_m.y() - 0.5 * w.opening_size_m.y();
       const double oz1 = w.opening_center_yz_m.y() + 0.5 * w.opening_size_m.y();
-      add(Box::Kind::kWall, xa, xb, y0, oy0, 0, w.height_m, wall_tex);    // left of the opening
-      add(Box::Kind::kWall, xa, xb, oy1, y1, 0, w.height_m, wall_tex);    // right
-      add(Box::Kind::kWall, xa, xb, oy0, oy1, 0, oz0, wall_tex);          // below
-      add(Box::Kind::kWall, xa, xb, oy0, oy1, oz1, w.height_m, wall_tex); // above
-      scene.opening = OpeningTruth{Vector3d(xa, w.opening_center_yz_m.x(), w.opening_center_yz_m.y()),
-                                   w.opening_size_m, -Vector3d::UnitX()};
+      add(Box::Kind::kWall, xa, xb, y0, oy0, 0, w.height_m, wall_tex);     // left of the opening
+      add(Box::Kind::kWall, xa, xb, oy1, y1, 0, w.height_m, wall_tex);     // right
+      add(Box::Kind::kWall, xa, xb, oy0, oy1, 0, oz0, wall_tex);           // below
+      add(Box::Kind::kWall, xa, xb, oy0, oy1, oz1, w.height_m, wall_tex);  // above
+      scene.opening =
+          OpeningTruth{Vector3d(xa, w.opening_center_yz_m.x(), w.opening_center_yz_m.y()),
+                       w.opening_size_m, -Vector3d::UnitX()};
     } else {
       add(Box::Kind::kWall, xa, xb, y0, y1, 0, w.height_m, wall_tex);
     }

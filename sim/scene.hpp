@@ -17,7 +17,7 @@ struct Box {
   Kind kind = Kind::kPlatform;
   Vector3d center_W = Vector3d::Zero();
   Vector3d half_size_m = Vector3d::Constant(0.5);
-  int texture = 0;       ///< index into Scene::textures
+  int texture = 0;  ///< index into Scene::textures
 
   /// Turns the box about world z (its frame O: axes along its sides, origin at its centre).
   void set_yaw(double yaw_rad) {

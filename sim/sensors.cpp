@@ -14,10 +14,7 @@ int64_t period_of(double rate_hz) { return std::llround(1e6 / rate_hz); }
 }  // namespace
 
 MocapEmulator::MocapEmulator(const MocapParams& params, int64_t start_utime, uint64_t seed)
-    : params_(params),
-      period_us_(period_of(params.rate_hz)),
-      next_utime_(start_utime),
-      rng_(seed) {
+    : params_(params), period_us_(period_of(params.rate_hz)), next_utime_(start_utime), rng_(seed) {
   for (const auto& d : params.dropouts_s)
     add_dropout(start_utime + std::llround(d[0] * 1e6), start_utime + std::llround(d[1] * 1e6));
 }
@@ -70,12 +67,16 @@ std::vector<MocapSample> MocapEmulator::take(int64_t now_utime) {
 }
 
 ImuEmulator::ImuEmulator(const ImuParams& params, int64_t start_utime, uint64_t seed)
-    : params_(params), period_us_(period_of(params.rate_hz)), next_utime_(start_utime + period_us_), rng_(seed) {
+    : params_(params),
+      period_us_(period_of(params.rate_hz)),
+      next_utime_(start_utime + period_us_),
+      rng_(seed) {
   accel_bias_ = gauss3(rng_, params.accel_bias_sigma_mps2);
   gyro_bias_ = gauss3(rng_, params.gyro_bias_sigma_radps);
 }
 
-void ImuEmulator::update(int64_t now_utime, int64_t dt_us, const Vector3d& f_B, const Vector3d& w_B) {
+void ImuEmulator::update(int64_t now_utime, int64_t dt_us, const Vector3d& f_B,
+                         const Vector3d& w_B) {
   const double dt = dt_us * 1e-6;
   accel_sum_ += f_B * dt;
   gyro_sum_ += w_B * dt;

@@ -95,8 +95,8 @@ int main(int argc, char** argv) {
     node.on<attitude_cmd_t>(channels::kAttitudeCmd, [&](const attitude_cmd_t& m) {
       if (mavlink_address) return;  // the autopilot takes its commands over MAVLink
       std::string why;
-      if (const auto cmd = sim::command_from_msg(m, simulator.now_utime(),
-                                                 vehicle.cmd_loss_timeout_s, &why)) {
+      if (const auto cmd =
+              sim::command_from_msg(m, simulator.now_utime(), vehicle.cmd_loss_timeout_s, &why)) {
         simulator.command(*cmd);
       } else {
         node.reject_value(channels::kAttitudeCmd, why);

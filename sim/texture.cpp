@@ -1,9 +1,8 @@
 #include "sim/texture.hpp"
 
-#include <opencv2/imgproc.hpp>
-
 #include <cassert>
 #include <cmath>
+#include <opencv2/imgproc.hpp>
 #include <random>
 
 namespace alight::sim {
@@ -133,7 +132,8 @@ cv::Mat checker_texture(const TextureSpec& s, std::mt19937_64& rng) {
   std::vector<int> level(static_cast<size_t>(cells * cells));
   for (auto& l : level) l = cv::saturate_cast<uchar>(s.mean + s.contrast * g(rng));
   for (int y = 0; y < n; ++y)
-    for (int x = 0; x < n; ++x) img.at<uchar>(y, x) = static_cast<uchar>(level[(y / cell) * cells + x / cell]);
+    for (int x = 0; x < n; ++x)
+      img.at<uchar>(y, x) = static_cast<uchar>(level[(y / cell) * cells + x / cell]);
   return img;
 }
 

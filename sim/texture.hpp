@@ -7,9 +7,8 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
-#include <vector>
-
 #include <opencv2/core.hpp>
+#include <vector>
 
 #include "sim/params.hpp"
 

@@ -40,8 +40,9 @@ ParamSection section(std::string key, std::string doc,
 ParamSection camera_section(const std::string& name) {
   return section<CameraMountParams>(
       "cameras." + name,
-      "the camera `" + name + "` (common/camera_mount.hpp; paper eqs. 3 and 6): alight-sim, "
-      "alight-vision",
+      "the camera `" + name +
+          "` (common/camera_mount.hpp; paper eqs. 3 and 6): alight-sim, "
+          "alight-vision",
       [name](const std::string& file) {
         return load_camera_mount_params(ParamNode::load_file(file), name);
       });
@@ -50,17 +51,17 @@ ParamSection camera_section(const std::string& name) {
 }  // namespace
 
 const std::vector<std::string>& param_file_kinds() {
-  static const std::vector<std::string> kinds = {"vehicle", "scenario", "camera", "station",
-                                                  "mocap", "autopilot"};
+  static const std::vector<std::string> kinds = {"vehicle", "scenario", "camera",
+                                                 "station", "mocap",    "autopilot"};
   return kinds;
 }
 
 std::vector<ParamSection> param_sections(const std::string& kind, const std::string& file) {
   std::vector<ParamSection> out;
   if (kind == "vehicle") {
-    const std::vector<std::string> cameras =
-        file.empty() ? std::vector<std::string>{"downward"}
-                     : camera_names(ParamNode::load_file(file));
+    const std::vector<std::string> cameras = file.empty()
+                                                 ? std::vector<std::string>{"downward"}
+                                                 : camera_names(ParamNode::load_file(file));
     for (const auto& name : cameras) out.push_back(camera_section(name));
     out.push_back(section<sim::VehicleParams>(
         "vehicle", "physical model (sim/params.hpp): alight-sim",
@@ -75,16 +76,17 @@ std::vector<ParamSection> param_sections(const std::string& kind, const std::str
         "vision", "vision (paper 3.1-3.3), optional in the file: alight-vision",
         [](const std::string& f) { return vision::load_node_params(f); }));
   } else if (kind == "scenario") {
-    out.push_back(section<sim::Scenario>(
-        "", "a simulated world (sim/params.hpp): alight-sim --scenario",
-        [](const std::string& f) { return sim::load_scenario(f); }));
+    out.push_back(
+        section<sim::Scenario>("", "a simulated world (sim/params.hpp): alight-sim --scenario",
+                               [](const std::string& f) { return sim::load_scenario(f); }));
   } else if (kind == "camera") {
     out.push_back(section<camera::CameraParams>(
         "", "a camera (camera_driver/params.hpp): alight-camera --config",
         [](const std::string& f) { return camera::load_params(f); }));
   } else if (kind == "station") {
     out.push_back(section<ground_station::GroundStationParams>(
-        "ground_station", "the operator's web page (ground_station/params.hpp): "
+        "ground_station",
+        "the operator's web page (ground_station/params.hpp): "
         "alight-ground-station --config",
         [](const std::string& f) { return ground_station::load_params(f); }));
   } else if (kind == "mocap") {

@@ -5,9 +5,9 @@
 //   alight-params --dump config/scenarios/ingress.yaml --kind scenario
 //   alight-params --defaults camera                                 # the defaults alone
 //
-// Kinds: vehicle (the default), scenario, camera, station, mocap, autopilot. The output is YAML that loads back to
-// the same values. A bad file is exit 2 with the error naming the file, the full key and the
-// value, as the nodes report it.
+// Kinds: vehicle (the default), scenario, camera, station, mocap, autopilot. The output is YAML
+// that loads back to the same values. A bad file is exit 2 with the error naming the file, the full
+// key and the value, as the nodes report it.
 #include <CLI/CLI.hpp>
 #include <iostream>
 

@@ -67,8 +67,7 @@ class FramePosePairing {
 
   /// max_wait_us: longest wait for a pose, in exposure time of the frames that arrive meanwhile
   /// [us]; max_queued: frames that may wait at once (>= 1).
-  FramePosePairing(const PoseBufferParams& pose_params, int64_t max_wait_us,
-                   size_t max_queued = 64)
+  FramePosePairing(const PoseBufferParams& pose_params, int64_t max_wait_us, size_t max_queued = 64)
       : poses_(pose_params), max_wait_us_(max_wait_us), max_queued_(max_queued) {
     assert(max_queued_ >= 1);
   }

@@ -3,8 +3,8 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
-#include <opencv2/imgproc.hpp>
 #include <cmath>
+#include <opencv2/imgproc.hpp>
 
 #include "vision/alignment.hpp"
 #include "vision/homography.hpp"

@@ -42,7 +42,8 @@ const ParamSchema<SurfParams>& SurfParams::schema() {
     ParamSchema<P> s;
     s.add("scale_per_size", &P::scale_per_size, Range::gt(0), "",
           "SURF scale s per CenSurE filter half-width (n + 0.5)");
-    s.add("min_scale", &P::min_scale, Range::ge(0.5), "px", "lower bound of s (Haar size 2s >= 2 px)");
+    s.add("min_scale", &P::min_scale, Range::ge(0.5), "px",
+          "lower bound of s (Haar size 2s >= 2 px)");
     s.add("overlapping_subregions", &P::overlapping_subregions, Range::any(), "",
           "MU-SURF sub-regions (Agrawal, Konolige & Blas 2008, sec. 4): overlapping by 2s, each "
           "Gaussian-weighted about its centre, and the 4 x 4 grid weighted again; false: SURF's "
@@ -136,8 +137,8 @@ const ParamSchema<AlignParams>& AlignParams::schema() {
   using P = AlignParams;
   static const ParamSchema<P> schema = [] {
     ParamSchema<P> s;
-    s.add("max_rotation_disagreement_deg", &P::max_rotation_disagreement_deg, Range::gt(0),
-          "deg", "the two planes' R21 must agree within this");
+    s.add("max_rotation_disagreement_deg", &P::max_rotation_disagreement_deg, Range::gt(0), "deg",
+          "the two planes' R21 must agree within this");
     s.add("max_translation_disagreement_deg", &P::max_translation_disagreement_deg, Range::gt(0),
           "deg", "the two planes' t12 directions must agree within this");
     s.add("max_iterations", &P::max_iterations, Range::ge(0), "",
@@ -247,8 +248,7 @@ const ParamSchema<IngressParams>& IngressParams::schema() {
           "a block feature this far behind the wall is seen through it");
     s.add("min_behind_share", &P::min_behind_share, Range::closed(0, 1), "",
           "fewer of the block's features behind the wall: no opening (0: no check)");
-    s.add("min_size_m", &P::min_size_m, Range::gt(0), "m",
-          "smaller width or height: no opening");
+    s.add("min_size_m", &P::min_size_m, Range::gt(0), "m", "smaller width or height: no opening");
     return s;
   }();
   return schema;

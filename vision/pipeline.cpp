@@ -110,8 +110,9 @@ FrameResult Pipeline::process(const cv::Mat& gray, int64_t utime,
     c.u2.emplace_back(k2.x, k2.y);
   }
   r.matched_px = c.u2;
-  const TargetOutcome t = mission_ == Mission::kLanding ? find_landing_target(c, params_)
-                                                        : find_ingress_target(c, gray, a.image, params_);
+  const TargetOutcome t = mission_ == Mission::kLanding
+                              ? find_landing_target(c, params_)
+                              : find_ingress_target(c, gray, a.image, params_);
   r.target = t.estimate;
   r.labels = t.labels;
   r.lines = t.lines;

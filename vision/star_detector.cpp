@@ -115,43 +115,43 @@ Result<std::vector<Keypoint>> detect_star(const cv::Mat& gray, const cv::Mat& in
   std::vector<uint8_t> taken(grid ? peaks.size() : 0, 0);
   std::vector<Keypoint> kps;
   for (int pass = grid ? 0 : 1; pass < 2; ++pass)
-  for (size_t pi = 0; pi < peaks.size(); ++pi) {
-    const Keypoint& p = peaks[pi];
-    if (params.max_features > 0 && int(kps.size()) >= params.max_features) break;
-    int cell = 0;
-    if (grid) {
-      if (taken[pi]) continue;
-      cell = std::min(params.grid_cols - 1, int(p.x) * params.grid_cols / w) +
-             params.grid_cols * std::min(params.grid_rows - 1, int(p.y) * params.grid_rows / h);
-      if (pass == 0 && per_cell[cell] >= cap) continue;
-      taken[pi] = 1;  // tested once: kept, or rejected as a line
-    }
-    const int x = int(p.x), y = int(p.y);
-    // The scale of the peak and its signed response.
-    int n_best = params.min_size;
-    float r_best = 0.f;
-    for (int n = params.min_size; n <= params.max_size; ++n) {
-      const float v = star_response(integral, x, y, n);
-      if (std::abs(v) > std::abs(r_best)) r_best = v, n_best = n;
-    }
-    // Second-moment matrix of |response| around the peak, over a window of the blob size.
-    const int rad = std::max(2, n_best + 1);
-    double sxx = 0, syy = 0, sxy = 0;
-    for (int v = std::max(y0 + 1, y - rad); v <= std::min(y1 - 2, y + rad); ++v) {
-      const float* br = best_abs.ptr<float>(v);
-      const float* bu = best_abs.ptr<float>(v - 1);
-      const float* bd = best_abs.ptr<float>(v + 1);
-      for (int u = std::max(x0 + 1, x - rad); u <= std::min(x1 - 2, x + rad); ++u) {
-        const double gx = 0.5 * (br[u + 1] - br[u - 1]);
-        const double gy = 0.5 * (bd[u] - bu[u]);
-        sxx += gx * gx, syy += gy * gy, sxy += gx * gy;
+    for (size_t pi = 0; pi < peaks.size(); ++pi) {
+      const Keypoint& p = peaks[pi];
+      if (params.max_features > 0 && int(kps.size()) >= params.max_features) break;
+      int cell = 0;
+      if (grid) {
+        if (taken[pi]) continue;
+        cell = std::min(params.grid_cols - 1, int(p.x) * params.grid_cols / w) +
+               params.grid_cols * std::min(params.grid_rows - 1, int(p.y) * params.grid_rows / h);
+        if (pass == 0 && per_cell[cell] >= cap) continue;
+        taken[pi] = 1;  // tested once: kept, or rejected as a line
       }
+      const int x = int(p.x), y = int(p.y);
+      // The scale of the peak and its signed response.
+      int n_best = params.min_size;
+      float r_best = 0.f;
+      for (int n = params.min_size; n <= params.max_size; ++n) {
+        const float v = star_response(integral, x, y, n);
+        if (std::abs(v) > std::abs(r_best)) r_best = v, n_best = n;
+      }
+      // Second-moment matrix of |response| around the peak, over a window of the blob size.
+      const int rad = std::max(2, n_best + 1);
+      double sxx = 0, syy = 0, sxy = 0;
+      for (int v = std::max(y0 + 1, y - rad); v <= std::min(y1 - 2, y + rad); ++v) {
+        const float* br = best_abs.ptr<float>(v);
+        const float* bu = best_abs.ptr<float>(v - 1);
+        const float* bd = best_abs.ptr<float>(v + 1);
+        for (int u = std::max(x0 + 1, x - rad); u <= std::min(x1 - 2, x + rad); ++u) {
+          const double gx = 0.5 * (br[u + 1] - br[u - 1]);
+          const double gy = 0.5 * (bd[u] - bu[u]);
+          sxx += gx * gx, syy += gy * gy, sxy += gx * gy;
+        }
+      }
+      const double det = sxx * syy - sxy * sxy;
+      if (!(det > 0) || (sxx + syy) * (sxx + syy) > max_ratio * det) continue;
+      kps.push_back({p.x, p.y, float(n_best), r_best});
+      ++per_cell[cell];
     }
-    const double det = sxx * syy - sxy * sxy;
-    if (!(det > 0) || (sxx + syy) * (sxx + syy) > max_ratio * det) continue;
-    kps.push_back({p.x, p.y, float(n_best), r_best});
-    ++per_cell[cell];
-  }
   if (grid)  // strongest first, as without the grid
     std::sort(kps.begin(), kps.end(), [](const Keypoint& a, const Keypoint& b) {
       return std::abs(a.response) > std::abs(b.response);

@@ -35,9 +35,9 @@ struct TargetEstimate {
   double height_m = 0.0;              ///< landing: platform top above the floor [m]
   double size_m[2] = {0, 0};          ///< landing: extent (long, short); ingress: width, height [m]
   double yaw_rad = 0.0;  ///< landing: long axis direction about world z, in (-pi/2, pi/2] [rad]
-  int n_inliers_dominant = 0;         ///< floor / wall inliers
-  int n_inliers_target = 0;           ///< platform inliers / off-wall features in the opening
-  std::vector<Vector2d> outline;      ///< platform hull / opening box in the current image [px]
+  int n_inliers_dominant = 0;     ///< floor / wall inliers
+  int n_inliers_target = 0;       ///< platform inliers / off-wall features in the opening
+  std::vector<Vector2d> outline;  ///< platform hull / opening box in the current image [px]
 };
 
 /// The detector's answer with everything the diagnostics want also when nothing was found.

@@ -136,9 +136,10 @@ int main(int argc, char** argv) {
       spdlog::info(
           "{} frames, {} with a target, {} without a pose ({} timed out, {} not in the history, "
           "{} behind a full queue), {} refused (image or stamp), {} dropped by an exception",
-          n_frames, n_found, pairing.counts().timed_out + pairing.counts().unavailable +
-          pairing.counts().queue_full, pairing.counts().timed_out, pairing.counts().unavailable,
-          pairing.counts().queue_full, c.rejected_values + c.rejected_stamps, n_frame_errors);
+          n_frames, n_found,
+          pairing.counts().timed_out + pairing.counts().unavailable + pairing.counts().queue_full,
+          pairing.counts().timed_out, pairing.counts().unavailable, pairing.counts().queue_full,
+          c.rejected_values + c.rejected_stamps, n_frame_errors);
     });
     return node.run();
   });

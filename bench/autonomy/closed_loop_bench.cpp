@@ -66,7 +66,8 @@ int main(int argc, char** argv) {
   double rate_hz = 5.0, outliers = 0.05, sigma_xy = 0.01, sigma_z = 0.03;
   double ingress_width = 1.0, ingress_height = 0.6, ingress_span = 0.0;
   app.add_option("--seeds", seeds, "runs per case");
-  app.add_option("--vision-rate", rate_hz, "oracle measurements per second (paper: ~5 STARMAC, ~2 Pelican)");
+  app.add_option("--vision-rate", rate_hz,
+                 "oracle measurements per second (paper: ~5 STARMAC, ~2 Pelican)");
   app.add_option("--outliers", outliers, "oracle outlier probability");
   app.add_option("--sigma-xy", sigma_xy, "oracle lateral noise [m]");
   app.add_option("--sigma-z", sigma_z, "oracle vertical noise [m]");
@@ -79,8 +80,9 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
 
   const std::string root = ALIGHT_SOURCE_DIR;
-  std::printf("oracle vision: %.1f Hz, sigma_xy %.3f m, sigma_z %.3f m, outliers %.0f %%; %d seeds\n",
-              rate_hz, sigma_xy, sigma_z, 100 * outliers, seeds);
+  std::printf(
+      "oracle vision: %.1f Hz, sigma_xy %.3f m, sigma_z %.3f m, outliers %.0f %%; %d seeds\n",
+      rate_hz, sigma_xy, sigma_z, 100 * outliers, seeds);
   const char* only = std::getenv("BENCH_ONLY");  // e.g. "starmac/c" for a quick look
   for (const std::string vehicle : {"starmac", "pelican"}) {
     for (const std::string platform : {"a", "b", "c"}) {
@@ -111,18 +113,20 @@ int main(int argc, char** argv) {
         if (ok) {
           ++s.ok;
           if (r.tipped_before_go) {
-            std::printf("  %s/%s seed %d: sim flagged tipped at spawn (platform overlaps the start "
-                        "spot); landed on the platform top anyway\n",
-                        vehicle.c_str(), platform.c_str(), seed);
+            std::printf(
+                "  %s/%s seed %d: sim flagged tipped at spawn (platform overlaps the start "
+                "spot); landed on the platform top anyway\n",
+                vehicle.c_str(), platform.c_str(), seed);
           }
           s.err_cm.push_back(100 * r.touchdown_error_m);
           s.time_s.push_back(r.mission_time_s);
         } else {
-          std::printf("  %s/%s seed %d: %s (landed %d tipped %d; platform yaw %.0f deg, lateral "
-                      "error at final descent %.1f cm, at touch-down %.1f cm)\n",
-                      vehicle.c_str(), platform.c_str(), seed, r.reason.c_str(), r.landed,
-                      r.tipped, r.platform_yaw_rad * 180 / M_PI, 100 * r.error_at_final_descent_m,
-                      100 * r.error_at_touchdown_m);
+          std::printf(
+              "  %s/%s seed %d: %s (landed %d tipped %d; platform yaw %.0f deg, lateral "
+              "error at final descent %.1f cm, at touch-down %.1f cm)\n",
+              vehicle.c_str(), platform.c_str(), seed, r.reason.c_str(), r.landed, r.tipped,
+              r.platform_yaw_rad * 180 / M_PI, 100 * r.error_at_final_descent_m,
+              100 * r.error_at_touchdown_m);
         }
         s.tipped += r.tipped;
         s.est_cm.push_back(100 * r.estimate_error_W.head<2>().norm());
@@ -164,9 +168,10 @@ int main(int argc, char** argv) {
     s.retries += r.retries;
   }
   char name[64];
-  std::snprintf(name, sizeof name, "starmac%s ingress %.2fx%.2f",
-                ingress_span > 0 ? ("(span " + std::to_string(ingress_span).substr(0, 4) + ")").c_str() : "",
-                ingress_width, ingress_height);
+  std::snprintf(
+      name, sizeof name, "starmac%s ingress %.2fx%.2f",
+      ingress_span > 0 ? ("(span " + std::to_string(ingress_span).substr(0, 4) + ")").c_str() : "",
+      ingress_width, ingress_height);
   print(name, s, false);
   return 0;
 }

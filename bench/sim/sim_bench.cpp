@@ -15,7 +15,9 @@ namespace {
 using namespace alight;
 using namespace alight::sim;
 
-std::string config(const std::string& rel) { return std::string(ALIGHT_SOURCE_DIR) + "/config/" + rel; }
+std::string config(const std::string& rel) {
+  return std::string(ALIGHT_SOURCE_DIR) + "/config/" + rel;
+}
 
 // A view typical of each mission: 1.5 m above the platform area, 1.5 m in front of the wall.
 Isometry3d typical_view(const Scene& scene, const std::string& name, double t) {
@@ -76,19 +78,29 @@ void BM_RealTimeFactor(benchmark::State& state, const std::string& name, bool ca
 
 int main(int argc, char** argv) {
   const int cores = std::max(1, cv::getNumberOfCPUs());
-  for (const std::string name : {"landing_a", "landing_c", "landing_none", "ingress", "ingress_solid"}) {
+  for (const std::string name :
+       {"landing_a", "landing_c", "landing_none", "ingress", "ingress_solid"}) {
     benchmark::RegisterBenchmark(("render_1core/" + name).c_str(), BM_Render, name, 1, 1)
-        ->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
+        ->Unit(benchmark::kMillisecond)
+        ->MeasureProcessCPUTime()
+        ->UseRealTime();
   }
   for (const std::string name : {"landing_a", "ingress"}) {
     benchmark::RegisterBenchmark(("render_allcores/" + name).c_str(), BM_Render, name, cores, 1)
-        ->Unit(benchmark::kMillisecond)->UseRealTime();
-    benchmark::RegisterBenchmark(("render_1core_supersample2/" + name).c_str(), BM_Render, name, 1, 2)
-        ->Unit(benchmark::kMillisecond)->UseRealTime();
-    benchmark::RegisterBenchmark(("realtime_factor_with_camera/" + name).c_str(), BM_RealTimeFactor, name, true)
-        ->Unit(benchmark::kMillisecond)->UseRealTime();
-    benchmark::RegisterBenchmark(("realtime_factor_no_camera/" + name).c_str(), BM_RealTimeFactor, name, false)
-        ->Unit(benchmark::kMillisecond)->UseRealTime();
+        ->Unit(benchmark::kMillisecond)
+        ->UseRealTime();
+    benchmark::RegisterBenchmark(("render_1core_supersample2/" + name).c_str(), BM_Render, name, 1,
+                                 2)
+        ->Unit(benchmark::kMillisecond)
+        ->UseRealTime();
+    benchmark::RegisterBenchmark(("realtime_factor_with_camera/" + name).c_str(), BM_RealTimeFactor,
+                                 name, true)
+        ->Unit(benchmark::kMillisecond)
+        ->UseRealTime();
+    benchmark::RegisterBenchmark(("realtime_factor_no_camera/" + name).c_str(), BM_RealTimeFactor,
+                                 name, false)
+        ->Unit(benchmark::kMillisecond)
+        ->UseRealTime();
   }
   benchmark::Initialize(&argc, argv);
   benchmark::RunSpecifiedBenchmarks();

@@ -42,13 +42,14 @@ std::optional<TargetMeasurement> OracleVision::update(const OracleTruth& truth, 
     // For a wall the "lateral" plane is the wall's; the depth along the normal is the poorest.
     const Vector3d n = truth.wall_normal_W.normalized();
     const Vector3d t = Vector3d::UnitZ().cross(n).normalized();
-    noise = t * params_.sigma_xy_m * n01(rng_) + Vector3d::UnitZ() * params_.sigma_xy_m * n01(rng_) +
-            n * params_.sigma_z_m * n01(rng_);
+    noise = t * params_.sigma_xy_m * n01(rng_) +
+            Vector3d::UnitZ() * params_.sigma_xy_m * n01(rng_) + n * params_.sigma_z_m * n01(rng_);
   }
   if (u01(rng_) < params_.outlier_prob) {
     Vector3d dir(n01(rng_), n01(rng_), n01(rng_));
     dir.normalize();
-    const double r = params_.outlier_min_m + (params_.outlier_max_m - params_.outlier_min_m) * u01(rng_);
+    const double r =
+        params_.outlier_min_m + (params_.outlier_max_m - params_.outlier_min_m) * u01(rng_);
     noise = dir * r;
     ++n_outliers_;
   }
@@ -66,8 +67,8 @@ std::optional<TargetMeasurement> OracleVision::update(const OracleTruth& truth, 
     m.yaw_rad = yaw;
   } else {
     m.n_W = truth.wall_normal_W.normalized();
-    m.size_m = truth.opening_size_m + Vector2d(params_.size_sigma_m * n01(rng_),
-                                               params_.size_sigma_m * n01(rng_));
+    m.size_m = truth.opening_size_m +
+               Vector2d(params_.size_sigma_m * n01(rng_), params_.size_sigma_m * n01(rng_));
   }
   return m;
 }

@@ -31,13 +31,13 @@ struct OracleTruth {
   double platform_yaw_rad = 0.0;
   bool has_opening = false;
   Vector3d opening_center_W = Vector3d::Zero();
-  Vector2d opening_size_m = Vector2d::Zero();     ///< width, height [m]
-  Vector3d wall_normal_W = -Vector3d::UnitX();    ///< towards the approach side
+  Vector2d opening_size_m = Vector2d::Zero();   ///< width, height [m]
+  Vector3d wall_normal_W = -Vector3d::UnitX();  ///< towards the approach side
 };
 
 struct OracleVisionParams {
   Mission mission = Mission::kLanding;
-  double rate_hz = 5.0;           ///< the paper: ~5 fps on STARMAC, ~2 fps on the Pelican
+  double rate_hz = 5.0;  ///< the paper: ~5 fps on STARMAC, ~2 fps on the Pelican
   double sigma_xy_m = 0.01;
   double sigma_z_m = 0.03;
   double size_sigma_m = 0.01;

@@ -76,7 +76,7 @@ TEST(ChannelRemapTest, AnUnknownChannelIsRefusedListingTheKnownOnes) {
 TEST(ChannelRemapTest, ANameLcmCannotUseIsRefused) {
   // LCM subscribes by regular expression: '.', '*', '(' ... would match other channels.
   const std::vector<std::string> bad = {"CAM.ERA", "CAM*",   "CAM ERA",
-                                         "CAM(1)",  "CAMÉRA", std::string(64, 'A')};
+                                        "CAM(1)",  "CAMÉRA", std::string(64, 'A')};
   for (const std::string& to : bad)
     EXPECT_NE(remap_error({"CAMERA=" + to}).find("not a usable channel name"), std::string::npos)
         << to;

@@ -78,8 +78,9 @@ struct Outer {
       s.section("inner", &Outer::inner, Inner::schema(), "the detector");
       s.merge(&Outer::shared, Shared::schema());
       s.optional_section("box", &Outer::box, Box::schema(), "an obstacle");
-      s.check("count", [](const Outer& o) { return o.count <= o.inner.max_size; },
-              "must not exceed inner.max_size");
+      s.check(
+          "count", [](const Outer& o) { return o.count <= o.inner.max_size; },
+          "must not exceed inner.max_size");
       return s;
     }();
     return s;
@@ -238,9 +239,10 @@ struct Wall {
         return w.device.rfind("/dev/", 0) == 0 ? std::string()
                                                : "must start with /dev/, not " + w.device;
       });
-      s.check("opening.width_m",
-              [](const Wall& w) { return !w.has_opening || w.opening_width_m < w.width_m; },
-              "must be narrower than the wall");
+      s.check(
+          "opening.width_m",
+          [](const Wall& w) { return !w.has_opening || w.opening_width_m < w.width_m; },
+          "must be narrower than the wall");
       return s;
     }();
     return s;
@@ -282,7 +284,8 @@ TEST(ParamSchemaTest, PathsAreResolvedAgainstTheFilesFolderAndMessagesMayDependO
   EXPECT_EQ(load_wall("wall: {texture: /abs/a.png}\n").texture, "/abs/a.png");
   EXPECT_EQ(load_wall("wall: {}\n").texture, "");  // an empty default stays empty
   const auto e = expect_param_error([] { load_wall("wall: {device: video0}\n"); });
-  EXPECT_EQ(std::string(e.what()), "dir/w.yaml: wall.device = video0: must start with /dev/, not video0");
+  EXPECT_EQ(std::string(e.what()),
+            "dir/w.yaml: wall.device = video0: must start with /dev/, not video0");
 }
 
 // A value out of its own range is reported at its key, even when the check of a key declared
@@ -326,9 +329,9 @@ TEST(ParamSchemaTest, ParamInfoCarriesTheRangeAndWhetherTheParameterIsAnInteger)
   EXPECT_EQ(*params[0].range.hi(), 2);
   EXPECT_TRUE(params[0].range.hi_closed());
   EXPECT_FALSE(params[0].integer);
-  EXPECT_TRUE(params[2].integer);                     // count
-  EXPECT_FALSE(params[3].integer);                    // robust: a bool is no integer
-  EXPECT_FALSE(params[1].range.lo().has_value());     // lost_s: <= 5
+  EXPECT_TRUE(params[2].integer);                  // count
+  EXPECT_FALSE(params[3].integer);                 // robust: a bool is no integer
+  EXPECT_FALSE(params[1].range.lo().has_value());  // lost_s: <= 5
 }
 
 }  // namespace

@@ -177,7 +177,6 @@ TEST(ParamsTest, SameKeyInDifferentMappingsIsFine) {
   EXPECT_NO_THROW(ParamNode::from_string("a:\n  x: 1\nb:\n  x: 2\n", "f.yaml"));
 }
 
-
 // Regression (issue 14, found by fuzzing): a key that is a list or a mapping threw yaml-cpp's
 // BadConversion from finish(), and every node exited 1 naming no key.
 TEST(ParamsTest, NonScalarKeyIsAParamErrorNamingWhere) {

@@ -101,7 +101,6 @@ TEST(PoseBufferTest, SampleOlderThanHistoryIsIgnored) {
   EXPECT_FALSE(buf.add(truth(kT0)));
 }
 
-
 // Regression (issue 14, found by fuzzing): a pose stamped near INT64_MIN made the history
 // window's start overflow; the buffer emptied itself and read front() of an empty deque.
 TEST(PoseBufferRegression, ExtremeStampsNeverEmptyTheBuffer) {

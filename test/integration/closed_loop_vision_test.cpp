@@ -93,8 +93,7 @@ TEST(RealVisionIngressTest, FliesThroughTheWindowWithoutContact) {
 // No false target (issue 6): whole flights with real vision over the bare floor and along the
 // solid wall. The search is flown, and flown again on each retry, without a single detection;
 // autonomy ends in HOLD with nothing measured.
-class RealVisionNoTargetTest
-    : public ::testing::TestWithParam<std::tuple<std::string, Mission>> {};
+class RealVisionNoTargetTest : public ::testing::TestWithParam<std::tuple<std::string, Mission>> {};
 
 TEST_P(RealVisionNoTargetTest, WholeSearchWithoutASingleDetection) {
   const auto& [scenario, mission] = GetParam();

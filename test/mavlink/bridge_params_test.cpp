@@ -1,8 +1,9 @@
 // alight-mavlink's parameters, link addresses and the autopilots' mode numbers.
+#include "mavlink/bridge_params.hpp"
+
 #include <gtest/gtest.h>
 
 #include "mavlink/autopilot_modes.hpp"
-#include "mavlink/bridge_params.hpp"
 #include "mavlink/link_address.hpp"
 #include "test/common/expect_param_error.hpp"
 
@@ -71,8 +72,7 @@ TEST(BridgeParamsTest, ReadsAFileAndNamesTheKeyOfABadValue) {
 
 TEST(BridgeParamsTest, StreamsThatDoNotFitTheSerialLinkAreRefused) {
   // 50 Hz attitude setpoints and 50 Hz ATT_POS_MOCAP need about 9 kB/s; 57600 baud carries 5.76.
-  const auto e = expect_param_error(
-      [] { load("mavlink:\n  link: serial:/dev/ttyUSB0:57600\n"); });
+  const auto e = expect_param_error([] { load("mavlink:\n  link: serial:/dev/ttyUSB0:57600\n"); });
   EXPECT_EQ(e.key(), "mavlink.stream_rate_hz");
   EXPECT_NE(e.problem().find("57600"), std::string::npos);
   // Lower rates fit.
@@ -85,13 +85,13 @@ TEST(AutopilotModesTest, Px4CustomModesAndNames) {
   const uint32_t offboard = px4_mode::custom_mode(px4_mode::kOffboard);
   EXPECT_EQ(offboard, 6u << 16);
   EXPECT_EQ(mode_name(Flavour::kPx4, offboard), "OFFBOARD");
-  EXPECT_EQ(mode_name(Flavour::kPx4, px4_mode::custom_mode(px4_mode::kAuto,
-                                                           px4_mode::auto_sub::kLand)),
-            "AUTO.LAND");
+  EXPECT_EQ(
+      mode_name(Flavour::kPx4, px4_mode::custom_mode(px4_mode::kAuto, px4_mode::auto_sub::kLand)),
+      "AUTO.LAND");
   EXPECT_TRUE(is_fly_mode(Flavour::kPx4, ControlMode::kAttitude, offboard));
   EXPECT_TRUE(is_fly_mode(Flavour::kPx4, ControlMode::kPosition, offboard));
-  EXPECT_FALSE(is_fly_mode(Flavour::kPx4, ControlMode::kAttitude,
-                           px4_mode::custom_mode(px4_mode::kPosctl)));
+  EXPECT_FALSE(
+      is_fly_mode(Flavour::kPx4, ControlMode::kAttitude, px4_mode::custom_mode(px4_mode::kPosctl)));
   const auto p = set_mode_params(Flavour::kPx4, offboard);
   EXPECT_EQ(p.param1, 1.0f);
   EXPECT_EQ(p.param2, 6.0f);

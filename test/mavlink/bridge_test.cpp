@@ -47,8 +47,10 @@ struct FakeAutopilot {
     std::vector<M> out;
     std::vector<Frame> rest;
     for (const Frame& f : heard) {
-      if (auto m = decode<M>(f)) out.push_back(*m);
-      else rest.push_back(f);
+      if (auto m = decode<M>(f))
+        out.push_back(*m);
+      else
+        rest.push_back(f);
     }
     heard = rest;
     return out;
@@ -262,7 +264,8 @@ void engage(Harness& h, double limit_s = 5) {
     h.run_for(0.01, hover());
     for (const auto& c : h.ap.take<CommandLong>()) {
       if (c.command == mav_cmd::kDoSetMode) {
-        mode = px4_mode::custom_mode(static_cast<uint8_t>(c.param2), static_cast<uint8_t>(c.param3));
+        mode =
+            px4_mode::custom_mode(static_cast<uint8_t>(c.param2), static_cast<uint8_t>(c.param3));
         h.ap.ack(c.command, mav_result::kAccepted);
         h.ap.heartbeat(mode, armed);
       } else if (c.command == mav_cmd::kComponentArmDisarm) {
@@ -516,7 +519,7 @@ TEST(BridgeTest, OdometryCarriesThePoseInLocalFrdAndTheTwistInTheBody) {
   p.utime = 1'700'000'000'000'000;
   p.p_W_B = Vector3d(1, 2, 3);
   p.q_WB = Quaterniond(Eigen::AngleAxisd(M_PI / 2, Vector3d::UnitZ()));  // facing north
-  p.v_W_B = Vector3d(0, 1, 0.5);                                          // forward and up
+  p.v_W_B = Vector3d(0, 1, 0.5);                                         // forward and up
   BridgeInput in;
   in.mocap = p;
   h.step(in);
@@ -525,7 +528,7 @@ TEST(BridgeTest, OdometryCarriesThePoseInLocalFrdAndTheTwistInTheBody) {
   EXPECT_EQ(m[0].frame_id, mav_frame::kLocalFrd);
   EXPECT_EQ(m[0].child_frame_id, mav_frame::kBodyFrd);
   EXPECT_FLOAT_EQ(m[0].x, 2);
-  EXPECT_NEAR(m[0].vx, 1, 1e-6);    // forward
+  EXPECT_NEAR(m[0].vx, 1, 1e-6);     // forward
   EXPECT_NEAR(m[0].vz, -0.5, 1e-6);  // up is -z in FRD
   EXPECT_EQ(m[0].estimator_type, mav_estimator_type::kMocap);
 }

@@ -36,7 +36,8 @@ struct LagModel {
     const double t_cmd = c.armed ? c.thrust_N : 0.0;
     thrust_N += (t_cmd - thrust_N) * std::min(1.0, dt / motor_tau_s);
     const Matrix3d R = rotation_from_rpy(roll, pitch, yaw);
-    Vector3d a = R * Vector3d(0, 0, thrust_N / mass_kg) - Vector3d(0, 0, g) - drag_Nspm / mass_kg * v;
+    Vector3d a =
+        R * Vector3d(0, 0, thrust_N / mass_kg) - Vector3d(0, 0, g) - drag_Nspm / mass_kg * v;
     v += a * dt;
     p += v * dt;
     if (floor && p.z() < 0) {

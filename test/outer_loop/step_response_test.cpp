@@ -21,8 +21,8 @@ constexpr double kPhysicsDt = 0.001;
 constexpr int kControlEvery = 10;  // 100 Hz pose / control rate
 
 struct StepResult {
-  double overshoot_frac = 0;   // largest travel beyond the target along the step / step size
-  double settling_s = 0;       // last time the error exceeded 5 % of the step
+  double overshoot_frac = 0;  // largest travel beyond the target along the step / step size
+  double settling_s = 0;      // last time the error exceeded 5 % of the step
   double final_error_m = 0;
   double max_tilt_rad = 0;
   Vector3d final_p = Vector3d::Zero();

@@ -153,8 +153,8 @@ TEST(SimRegression, CommandsStampedFarFromTheAutopilotClockAreRefused) {
   EXPECT_TRUE(command_from_msg(m, now, max_age_s, &why)) << why;
   m.utime = now - 10'000;
   EXPECT_TRUE(command_from_msg(m, now, max_age_s, &why)) << why;
-  for (const int64_t bad : {std::numeric_limits<int64_t>::min(), std::numeric_limits<int64_t>::max(),
-                            int64_t{0}}) {
+  for (const int64_t bad :
+       {std::numeric_limits<int64_t>::min(), std::numeric_limits<int64_t>::max(), int64_t{0}}) {
     m.utime = bad;
     EXPECT_FALSE(command_from_msg(m, now, max_age_s, &why)) << bad;
   }

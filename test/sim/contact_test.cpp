@@ -24,7 +24,8 @@ Outcome land(const std::string& scenario_name, const Vector2d& offset_P, double 
   const VehicleParams v = test::starmac();
   Simulator sim(sc, v, 1);
   const PlatformTruth p = *sim.truth().platform;
-  const Vector3d off_W = rotation_from_rpy(0, 0, p.yaw_rad) * Vector3d(offset_P.x(), offset_P.y(), 0);
+  const Vector3d off_W =
+      rotation_from_rpy(0, 0, p.yaw_rad) * Vector3d(offset_P.x(), offset_P.y(), 0);
   place(sim, p.top_center_W + off_W + Vector3d(0, 0, v.gear_height_m + 0.3), true, yaw);
   AttitudeCommand cmd = hover(v);
   cmd.thrust_N *= 0.9;
@@ -63,8 +64,9 @@ TEST(SimContactTest, ALandingOffsetByMoreThanHalfThePlatformFails) {
     const char* scenario;
     Vector2d offset;
   };
-  for (const Case& c : {Case{"landing_a", Vector2d(0.26, 0.0)}, Case{"landing_b", Vector2d(0.0, 0.17)},
-                        Case{"landing_c", Vector2d(0.14, 0.0)}, Case{"landing_c", Vector2d(-0.12, 0.16)}}) {
+  for (const Case& c :
+       {Case{"landing_a", Vector2d(0.26, 0.0)}, Case{"landing_b", Vector2d(0.0, 0.17)},
+        Case{"landing_c", Vector2d(0.14, 0.0)}, Case{"landing_c", Vector2d(-0.12, 0.16)}}) {
     SCOPED_TRACE(std::string(c.scenario) + " offset " + std::to_string(c.offset.x()) + ", " +
                  std::to_string(c.offset.y()));
     const Outcome o = land(c.scenario, c.offset);

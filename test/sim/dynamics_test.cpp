@@ -53,15 +53,15 @@ TEST_F(SimDynamicsTest, RollAndPitchStepsSettleWithBoundedOvershootAndAccelerate
       if (t90 < 0 && a >= 0.9 * step) t90 = ms * 1e-3;
     }
     EXPECT_NEAR(rpy(sim.state())[axis], step, 0.02 * step);
-    EXPECT_LT(peak, 1.15 * step);                 // a damped inner loop
-    EXPECT_GT(t90, 0.03);                         // not instantaneous: finite bandwidth
-    EXPECT_LT(t90, 0.3);                          // but quick, like an autopilot's
+    EXPECT_LT(peak, 1.15 * step);  // a damped inner loop
+    EXPECT_GT(t90, 0.03);          // not instantaneous: finite bandwidth
+    EXPECT_LT(t90, 0.3);           // but quick, like an autopilot's
     if (axis == 0) {
       EXPECT_LT(sim.state().v_W_B.y(), -0.5);  // right side down: to -y
     } else {
       EXPECT_GT(sim.state().v_W_B.x(), 0.5);  // nose down: to +x
     }
-    EXPECT_NEAR(sim.state().p_W_B.z(), 2.0, 0.05);          // thrust compensates the tilt
+    EXPECT_NEAR(sim.state().p_W_B.z(), 2.0, 0.05);  // thrust compensates the tilt
   }
 }
 
@@ -95,7 +95,7 @@ TEST_F(SimDynamicsTest, DisarmedMotorsGiveNoThrustAtOnce) {
   sim.step(cmd, sim.now_utime() + 200000);
   EXPECT_EQ(sim.state().thrust_N, 0.0);
   EXPECT_NEAR(sim.state().v_W_B.z(), -9.81 * 0.2, 0.08);  // free fall, a little drag
-  EXPECT_LT(sim.specific_force_B().norm(), 0.6);           // an accelerometer in free fall
+  EXPECT_LT(sim.specific_force_B().norm(), 0.6);          // an accelerometer in free fall
 }
 
 TEST_F(SimDynamicsTest, NoEnergyGainWithoutInput) {
@@ -115,8 +115,9 @@ TEST_F(SimDynamicsTest, NoEnergyGainWithoutInput) {
     e_max = std::max(e_max, energy(vehicle_, sim.state()));
   }
   // The contact springs store a little energy (compression); allow that and nothing more.
-  const double spring_J = 4 * 0.5 * vehicle_.contact_stiffness_Npm *
-                          std::pow(vehicle_.mass_kg * 9.81 / (4 * vehicle_.contact_stiffness_Npm), 2);
+  const double spring_J =
+      4 * 0.5 * vehicle_.contact_stiffness_Npm *
+      std::pow(vehicle_.mass_kg * 9.81 / (4 * vehicle_.contact_stiffness_Npm), 2);
   EXPECT_LE(e_max, e0 + 1e-6 + spring_J);
   EXPECT_LT(sim.state().v_W_B.norm(), 0.01);  // came to rest on the floor
   EXPECT_LT(sim.state().omega_B.norm(), 0.05);

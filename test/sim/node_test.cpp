@@ -71,7 +71,8 @@ TEST(SimNodeTest, PublishesEveryChannelAndFollowsAttitudeCommands) {
   lcm.subscribe(channels::kSimTruth, &Counter::on_truth, &c);
   std::atomic<int> code{-1};
   std::thread node([&] {
-    code = run("--scenario " + scenario("landing_a") + " --seed 3 --duration 1.5 --lcm-url '" + kUrl + "'");
+    code = run("--scenario " + scenario("landing_a") + " --seed 3 --duration 1.5 --lcm-url '" +
+               kUrl + "'");
   });
   // Full thrust, armed, until the node exits (however loaded the machine): it must climb.
   // Stamped like the outer loop's, with the newest pose: the simulated autopilot refuses
@@ -88,10 +89,10 @@ TEST(SimNodeTest, PublishesEveryChannelAndFollowsAttitudeCommands) {
   while (lcm.handleTimeout(50) > 0) {
   }
   EXPECT_EQ(code, 0);
-  EXPECT_GE(c.mocap, 130);   // 100 Hz
-  EXPECT_GE(c.imu, 270);     // 200 Hz
-  EXPECT_GE(c.camera, 35);   // 30 Hz
-  EXPECT_GE(c.truth, 65);    // 50 Hz
+  EXPECT_GE(c.mocap, 130);  // 100 Hz
+  EXPECT_GE(c.imu, 270);    // 200 Hz
+  EXPECT_GE(c.camera, 35);  // 30 Hz
+  EXPECT_GE(c.truth, 65);   // 50 Hz
   EXPECT_EQ(c.last_truth.scenario, "landing_a");
   EXPECT_TRUE(c.last_truth.has_platform);
   EXPECT_TRUE(c.last_truth.armed);

@@ -1,11 +1,11 @@
-#include <gtest/gtest.h>
+#include "common/params.hpp"
 
-#include <opencv2/imgcodecs.hpp>
+#include <gtest/gtest.h>
 
 #include <filesystem>
 #include <fstream>
+#include <opencv2/imgcodecs.hpp>
 
-#include "common/params.hpp"
 #include "sim/params.hpp"
 #include "sim_test_util.hpp"
 
@@ -23,17 +23,19 @@ std::string write_temp(const std::string& name, const std::string& text) {
 }
 
 TEST(SimParamsTest, EveryScenarioAndVehicleInTheRepositoryLoads) {
-  for (const char* name : {"landing_a", "landing_b", "landing_c", "landing_none", "ingress",
-                           "ingress_solid"}) {
+  for (const char* name :
+       {"landing_a", "landing_b", "landing_c", "landing_none", "ingress", "ingress_solid"}) {
     SCOPED_TRACE(name);
     const Scenario s = test::scenario(name);
     EXPECT_EQ(s.name, name);
   }
   for (const char* v : {"starmac", "pelican"}) {
-    const VehicleParams p = load_vehicle_params(config_path(std::string("vehicles/") + v + ".yaml"));
+    const VehicleParams p =
+        load_vehicle_params(config_path(std::string("vehicles/") + v + ".yaml"));
     EXPECT_EQ(p.name, v);
     EXPECT_NEAR(p.gear_footprint_m, 0.15, 1e-9);  // paper 4.1
-    EXPECT_NO_THROW(load_camera_rig(config_path(std::string("vehicles/") + v + ".yaml"), "downward"));
+    EXPECT_NO_THROW(
+        load_camera_rig(config_path(std::string("vehicles/") + v + ".yaml"), "downward"));
   }
 }
 
@@ -107,7 +109,8 @@ TEST(SimParamsTest, AnImageTextureIsLoadedRelativeToTheScenario) {
 }
 
 TEST(SimParamsTest, AVehicleWithTooLittleThrustIsRejected) {
-  const std::string path = write_temp("weak.yaml", "vehicle:\n  mass_kg: 3.0\n  max_thrust_N: 20\n");
+  const std::string path =
+      write_temp("weak.yaml", "vehicle:\n  mass_kg: 3.0\n  max_thrust_N: 20\n");
   EXPECT_THROW(load_vehicle_params(path), ParamError);
 }
 

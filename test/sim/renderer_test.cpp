@@ -1,12 +1,12 @@
+#include "sim/renderer.hpp"
+
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include <cmath>
-
-#include "sim/renderer.hpp"
 #include "sim/simulator.hpp"
 #include "sim_test_util.hpp"
 
@@ -101,11 +101,13 @@ TEST(SimRendererTest, PlatformCornersProjectOntoTheRenderedCorners) {
     Renderer renderer(model, 4);
     // Above the platform's top (no side faces in view), tilted and turned a little.
     const Vector3d C_W = box.center_W + Vector3d(0.04, -0.03, 1.0);
-    const Isometry3d X_WC = make_transform(rotation_from_rpy(0.06, -0.04, 0.4) * R_BC_downward(), C_W);
+    const Isometry3d X_WC =
+        make_transform(rotation_from_rpy(0.06, -0.04, 0.4) * R_BC_downward(), C_W);
     const cv::Mat img = renderer.render(scene, X_WC);
     std::vector<Vector3d> top;
     for (const auto& [sx, sy] : {std::pair{1, 1}, {-1, 1}, {-1, -1}, {1, -1}})
-      top.push_back(box.center_W + box.R_WO() * Vector3d(sx * box.half_size_m.x(), sy * box.half_size_m.y(),
+      top.push_back(box.center_W + box.R_WO() * Vector3d(sx * box.half_size_m.x(),
+                                                         sy * box.half_size_m.y(),
                                                          box.half_size_m.z()));
     for (int i = 0; i < 4; ++i) {
       const double err = corner_error(img, model, X_WC, top[i], top[(i + 1) % 4], top[(i + 3) % 4]);
@@ -122,7 +124,8 @@ TEST(SimRendererTest, OpeningCornersProjectOntoTheRenderedCorners) {
   const CameraModel model = CameraModel::firefly_mv_4mm();
   Renderer renderer(model, 4);
   const Vector3d C_W = o.center_W + Vector3d(-1.3, 0.05, 0.03);
-  const Isometry3d X_WC = make_transform(rotation_from_rpy(0.03, 0.05, -0.06) * R_BC_forward(), C_W);
+  const Isometry3d X_WC =
+      make_transform(rotation_from_rpy(0.03, 0.05, -0.06) * R_BC_forward(), C_W);
   const cv::Mat img = renderer.render(scene, X_WC);
   const double w = 0.5 * o.size_m.x(), h = 0.5 * o.size_m.y();
   std::vector<Vector3d> c;
@@ -151,7 +154,9 @@ TEST(SimRendererTest, TwoViewsOfTheFloorAreRelatedByThePlaneHomography) {
   const double d = X_WC1.translation().z();
   const Matrix3d K = model.K();
   const Matrix3d H = K * (R - t * n.transpose() / d) * K.inverse();
-  auto apply = [](const Matrix3d& M, const Vector2d& p) { return (M * p.homogeneous()).hnormalized(); };
+  auto apply = [](const Matrix3d& M, const Vector2d& p) {
+    return (M * p.homogeneous()).hnormalized();
+  };
 
   // Measured correspondences: template matching with sub-pixel peaks around the prediction.
   std::vector<cv::Point2f> p1, p2;
@@ -160,18 +165,22 @@ TEST(SimRendererTest, TwoViewsOfTheFloorAreRelatedByThePlaneHomography) {
     for (int u = 60; u <= 580; u += 40) {
       const Vector2d q = apply(H, Vector2d(u, v));
       const cv::Rect tpl_rect(u - half, v - half, 2 * half + 1, 2 * half + 1);
-      const cv::Rect win(int(std::lround(q.x())) - half - search, int(std::lround(q.y())) - half - search,
-                         2 * (half + search) + 1, 2 * (half + search) + 1);
+      const cv::Rect win(int(std::lround(q.x())) - half - search,
+                         int(std::lround(q.y())) - half - search, 2 * (half + search) + 1,
+                         2 * (half + search) + 1);
       if ((win & cv::Rect(0, 0, 640, 480)) != win) continue;
       cv::Mat score;
       cv::matchTemplate(img2(win), img1(tpl_rect), score, cv::TM_CCOEFF_NORMED);
       double best;
       cv::Point at;
       cv::minMaxLoc(score, nullptr, &best, nullptr, &at);
-      if (best < 0.9 || at.x < 1 || at.y < 1 || at.x >= score.cols - 1 || at.y >= score.rows - 1) continue;
+      if (best < 0.9 || at.x < 1 || at.y < 1 || at.x >= score.cols - 1 || at.y >= score.rows - 1)
+        continue;
       auto peak = [](float a, float b, float c) { return 0.5f * (a - c) / (a - 2 * b + c); };
-      const float dx = peak(score.at<float>(at.y, at.x - 1), score.at<float>(at.y, at.x), score.at<float>(at.y, at.x + 1));
-      const float dy = peak(score.at<float>(at.y - 1, at.x), score.at<float>(at.y, at.x), score.at<float>(at.y + 1, at.x));
+      const float dx = peak(score.at<float>(at.y, at.x - 1), score.at<float>(at.y, at.x),
+                            score.at<float>(at.y, at.x + 1));
+      const float dy = peak(score.at<float>(at.y - 1, at.x), score.at<float>(at.y, at.x),
+                            score.at<float>(at.y + 1, at.x));
       p1.emplace_back(float(u), float(v));
       p2.emplace_back(float(win.x + half + at.x + dx), float(win.y + half + at.y + dy));
     }
@@ -183,7 +192,8 @@ TEST(SimRendererTest, TwoViewsOfTheFloorAreRelatedByThePlaneHomography) {
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c) H_est(r, c) = Hm.at<double>(r, c);
   double worst = 0;
-  for (const Vector2d& corner : {Vector2d(0, 0), Vector2d(639, 0), Vector2d(639, 479), Vector2d(0, 479)})
+  for (const Vector2d& corner :
+       {Vector2d(0, 0), Vector2d(639, 0), Vector2d(639, 479), Vector2d(0, 479)})
     worst = std::max(worst, (apply(H_est, corner) - apply(H, corner)).norm());
   EXPECT_LT(worst, 0.3);
 }
@@ -246,7 +256,8 @@ TEST(SimRendererTest, TheLampsFalloffIsFixedInTheWorldAndFramesStillMatch) {
   };
   const int n_even = inliers(even), n_lit = inliers(lit);
   EXPECT_GT(n_lit, 100);
-  EXPECT_GT(n_lit, 0.85 * n_even) << n_lit << " inliers under the lamp, " << n_even << " under even light";
+  EXPECT_GT(n_lit, 0.85 * n_even) << n_lit << " inliers under the lamp, " << n_even
+                                  << " under even light";
 }
 
 TEST(SimRendererTest, TexturesGiveHundredsOfFeaturesOnFloorPlatformAndWall) {
@@ -268,8 +279,9 @@ TEST(SimRendererTest, TexturesGiveHundredsOfFeaturesOnFloorPlatformAndWall) {
     cv::Mat mask = cv::Mat::zeros(img.size(), CV_8U);
     std::vector<cv::Point> poly;
     for (const auto& [sx, sy] : {std::pair{1, 1}, {-1, 1}, {-1, -1}, {1, -1}}) {
-      const Vector3d p = box.center_W + box.R_WO() * Vector3d(0.9 * sx * box.half_size_m.x(),
-                                                              0.9 * sy * box.half_size_m.y(), box.half_size_m.z());
+      const Vector3d p =
+          box.center_W + box.R_WO() * Vector3d(0.9 * sx * box.half_size_m.x(),
+                                               0.9 * sy * box.half_size_m.y(), box.half_size_m.z());
       const Vector2d px = project(model, X_WC, p);
       poly.emplace_back(int(px.x()), int(px.y()));
     }
@@ -334,7 +346,8 @@ TEST(SimRendererTest, DistantFloorIsFilteredLikeASupersampledReference) {
   const Scene scene = build_scene(test::quiet(test::scenario("landing_none")), 2);
   const CameraModel model = CameraModel::firefly_mv_4mm();
   const Renderer fast(model, 1), reference(model, 4);
-  const Isometry3d X_WC = make_transform(rotation_from_rpy(0, 0.6, 0) * R_BC_forward(), Vector3d(0, 0, 2.5));
+  const Isometry3d X_WC =
+      make_transform(rotation_from_rpy(0, 0.6, 0) * R_BC_forward(), Vector3d(0, 0, 2.5));
   cv::Mat a, b;
   fast.render(scene, X_WC).convertTo(a, CV_32F);
   reference.render(scene, X_WC).convertTo(b, CV_32F);
@@ -345,7 +358,8 @@ TEST(SimRendererTest, DistantFloorIsFilteredLikeASupersampledReference) {
   cv::meanStdDev(b(far_rows), ref_mu, ref_sd);
   EXPECT_LT(sd[0], 0.35 * ref_sd[0]) << "difference " << sd[0] << " of contrast " << ref_sd[0];
   // And moving by a fraction of a texel changes the image only a little (no shimmer).
-  const Isometry3d X_WC_moved = make_transform(X_WC.linear(), X_WC.translation() + Vector3d(0.0011, 0.0007, 0));
+  const Isometry3d X_WC_moved =
+      make_transform(X_WC.linear(), X_WC.translation() + Vector3d(0.0011, 0.0007, 0));
   cv::Mat c;
   fast.render(scene, X_WC_moved).convertTo(c, CV_32F);
   cv::meanStdDev(c(far_rows) - a(far_rows), mu, sd);
@@ -381,7 +395,8 @@ TEST(SimRendererTest, CameraFramesArriveAtTheirRateStampedAtMidExposureWithNoise
   cv::meanStdDev(d, mu, sd);
   EXPECT_NEAR(sd[0], std::sqrt(2.0) * 3.0, 0.4);
   // Frames rendered agree with render() from the mid-exposure pose.
-  const cv::Mat clean = sim.render(rig.mount, rig.model, make_transform(sim.state().q_WB.toRotationMatrix(), sim.state().p_W_B));
+  const cv::Mat clean = sim.render(
+      rig.mount, rig.model, make_transform(sim.state().q_WB.toRotationMatrix(), sim.state().p_W_B));
   cv::subtract(frames.back().pixels, clean, d, cv::noArray(), CV_32F);
   cv::meanStdDev(d, mu, sd);
   EXPECT_NEAR(sd[0], 3.0, 0.4);

@@ -1,3 +1,5 @@
+#include "sim/scene.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -6,7 +8,6 @@
 #include <set>
 
 #include "common/params.hpp"
-#include "sim/scene.hpp"
 #include "sim/sim_msgs.hpp"
 #include "sim/simulator.hpp"
 #include "sim_test_util.hpp"
@@ -17,7 +18,8 @@ namespace {
 using test::place;
 
 double rotor_radius(const std::string& vehicle) {
-  return 0.5 * load_vehicle_params(test::config_path("vehicles/" + vehicle + ".yaml")).rotor_tip_span_m;
+  return 0.5 *
+         load_vehicle_params(test::config_path("vehicles/" + vehicle + ".yaml")).rotor_tip_span_m;
 }
 
 // Bug: landing_b with seed 5 put the platform under the vehicle's rotors at the start spot, so
@@ -32,8 +34,8 @@ TEST(SimSceneTest, RegressionSeededPlatformNeverCoversTheStartSpot) {
     std::set<double> xs;
     for (uint64_t seed = 0; seed < 3000; ++seed) {
       const SeededLayout l = draw_layout(sc, seed);
-      const double d = footprint_distance_m(*sc.platform, l.platform_center_xy_m, l.platform_yaw_rad,
-                                            sc.start_position_m.head<2>());
+      const double d = footprint_distance_m(*sc.platform, l.platform_center_xy_m,
+                                            l.platform_yaw_rad, sc.start_position_m.head<2>());
       ASSERT_GE(d, sc.randomize.start_clearance_m) << "seed " << seed;
       // Still within the configured ranges.
       ASSERT_LE((l.platform_center_xy_m - sc.platform->center_xy_m).cwiseAbs().maxCoeff(),
@@ -48,10 +50,10 @@ TEST(SimSceneTest, RegressionSeededPlatformNeverCoversTheStartSpot) {
   const VehicleParams v = test::starmac();
   Simulator sim(test::scenario("landing_b"), v, 5);
   const Vector2d start = sim.state().p_W_B.head<2>();
-  EXPECT_GE(footprint_distance_m(*sim.scenario().platform,
-                                 sim.truth().platform->top_center_W.head<2>(),
-                                 sim.truth().platform->yaw_rad, start),
-            0.5 * v.rotor_tip_span_m);
+  EXPECT_GE(
+      footprint_distance_m(*sim.scenario().platform, sim.truth().platform->top_center_W.head<2>(),
+                           sim.truth().platform->yaw_rad, start),
+      0.5 * v.rotor_tip_span_m);
   sim.step(AttitudeCommand{}, sim.now_utime() + 1'000'000);
   EXPECT_FALSE(sim.truth().tipped);
   EXPECT_EQ(sim.truth().contact, Contact::kFloor);
@@ -97,7 +99,8 @@ TEST(SimSceneTest, SeededLightingIsDeterministicVariedAndMild) {
     // The light turns about z only, within its range.
     const Vector3d d0 = sc.lighting.light_dir_W, d1 = a.lighting.light_dir_W;
     EXPECT_NEAR(d1.z(), d0.z(), 1e-12);
-    const double turn = std::atan2(d0.x() * d1.y() - d0.y() * d1.x(), d0.head<2>().dot(d1.head<2>()));
+    const double turn =
+        std::atan2(d0.x() * d1.y() - d0.y() * d1.x(), d0.head<2>().dot(d1.head<2>()));
     EXPECT_LE(std::abs(turn) * 180 / M_PI, sc.randomize.light_dir_deg + 1e-9);
     falloffs.insert(a.lighting.falloff);
     lamp_x.insert(a.lighting.lamp_W.x());
@@ -130,7 +133,8 @@ TEST(SimSceneTest, LeavingTheFlyingAreaIsReportedAndStaysReported) {
   {
     // Hovering anywhere inside, up to just below the ceiling: not flagged.
     Simulator sim(sc, v, 1);
-    for (const Vector3d& p : {Vector3d(0, 0, 1), Vector3d(2.8, -2.8, 1.5), Vector3d(-2.8, 2.8, 3.8)}) {
+    for (const Vector3d& p :
+         {Vector3d(0, 0, 1), Vector3d(2.8, -2.8, 1.5), Vector3d(-2.8, 2.8, 3.8)}) {
       place(sim, p);
       sim.step(test::hover(v), sim.now_utime() + 200'000);
       EXPECT_FALSE(sim.truth().out_of_area) << p.transpose();

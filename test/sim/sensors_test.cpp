@@ -158,13 +158,15 @@ TEST_F(SimSensorsTest, TouchDownGivesAnAccelerometerSpike) {
     if (!touch_utime && sim.truth().contact != Contact::kNone) touch_utime = sim.now_utime();
     for (const auto& s : sim.take_imu()) {
       const double a = s.accel_B.z();
-      if (!touch_utime) peak_before = std::max(peak_before, a);
-      else if (s.utime < touch_utime + 100000) peak_after = std::max(peak_after, a);
+      if (!touch_utime)
+        peak_before = std::max(peak_before, a);
+      else if (s.utime < touch_utime + 100000)
+        peak_after = std::max(peak_after, a);
     }
   }
   ASSERT_NE(touch_utime, 0);
-  EXPECT_LT(peak_before, 9.81);        // descending under less than the weight
-  EXPECT_GT(peak_after, 2.0 * 9.81);   // the gear stops the vehicle hard
+  EXPECT_LT(peak_before, 9.81);       // descending under less than the weight
+  EXPECT_GT(peak_after, 2.0 * 9.81);  // the gear stops the vehicle hard
 }
 
 TEST_F(SimSensorsTest, MessagesCarryTheSamples) {

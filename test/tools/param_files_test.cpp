@@ -43,9 +43,11 @@ std::string body(const std::string& dump) { return dump.substr(dump.find('\n') +
 // are OpenCV's format, not alight-camera's).
 std::map<std::string, std::vector<fs::path>> shipped_files() {
   std::map<std::string, std::vector<fs::path>> out;
-  const std::map<std::string, std::string> folders = {
-      {"vehicles", "vehicle"}, {"scenarios", "scenario"}, {"cameras", "camera"}, {"mocap", "mocap"},
-      {"autopilot", "autopilot"}};
+  const std::map<std::string, std::string> folders = {{"vehicles", "vehicle"},
+                                                      {"scenarios", "scenario"},
+                                                      {"cameras", "camera"},
+                                                      {"mocap", "mocap"},
+                                                      {"autopilot", "autopilot"}};
   for (const auto& [folder, kind] : folders) {
     for (const auto& entry : fs::directory_iterator(kConfig / folder)) {
       if (entry.path().extension() != ".yaml") continue;
@@ -199,9 +201,8 @@ TEST(ParamFilesProperty, AValueJustOutsideItsRangeIsReportedAtItsFullKeyWithTheV
             } else {
               node = YAML::Load(bad);
             }
-            const std::string file = write(dir / (kind + "_" + key + (upper ? "_hi" : "_lo") +
-                                                  ".yaml"),
-                                           emit(doc));
+            const std::string file =
+                write(dir / (kind + "_" + key + (upper ? "_hi" : "_lo") + ".yaml"), emit(doc));
             ++cases;
             try {
               section.load(file);
@@ -244,7 +245,8 @@ ToolRun run(const std::string& args) {
   FILE* pipe = ::popen((std::string(ALIGHT_PARAMS_BIN) + " " + args + " 2>&1").c_str(), "r");
   if (!pipe) return r;
   std::array<char, 4096> buf{};
-  for (size_t n; (n = std::fread(buf.data(), 1, buf.size(), pipe)) > 0;) r.output.append(buf.data(), n);
+  for (size_t n; (n = std::fread(buf.data(), 1, buf.size(), pipe)) > 0;)
+    r.output.append(buf.data(), n);
   const int status = ::pclose(pipe);
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return r;

@@ -308,8 +308,8 @@ TEST(AlignParamsTest, RotationPriorLoadedFromTheVehicleFileAndValidated) {
   EXPECT_EQ(p.pipeline.align.rotation_prior_sigma_deg, 0.05);
   EXPECT_EQ(p.pipeline.align.feature_sigma_px, 0.3);
   try {
-    load_node_params(ParamNode::from_string(
-        "vision:\n  align:\n    rotation_prior_sigma_deg: -1\n", "vehicle.yaml"));
+    load_node_params(ParamNode::from_string("vision:\n  align:\n    rotation_prior_sigma_deg: -1\n",
+                                            "vehicle.yaml"));
     FAIL() << "accepted a negative sigma";
   } catch (const ParamError& e) {
     EXPECT_NE(std::string(e.what()).find("rotation_prior_sigma_deg"), std::string::npos)

@@ -27,9 +27,9 @@ TEST_P(LandingMissionTest, PlatformCentreAndHeightWithinTwoCentimetres) {
   const Vector3d top = scene.platform->top_center_W;
   // 1.7 m above the floor, starting 12 cm off the platform centre, 24 cm baseline: the platform's
   // corners stay clear of the partial-view band (edge_margin_px) in both images.
-  const auto seq = render_sequence(k.scenario, k.seed, "downward",
-                                   Vector3d(top.x() - 0.12, top.y() + 0.04, 1.7),
-                                   Vector3d(0.04, -0.01, 0.0), Vector3d(0.01, -0.02, 0.2), 7);
+  const auto seq =
+      render_sequence(k.scenario, k.seed, "downward", Vector3d(top.x() - 0.12, top.y() + 0.04, 1.7),
+                      Vector3d(0.04, -0.01, 0.0), Vector3d(0.01, -0.02, 0.2), 7);
   const auto results = run(seq, Mission::kLanding);
   const FrameResult& r = results.back();
   ASSERT_TRUE(r.found()) << to_string(r.reason) << " matches " << r.n_matches;
@@ -37,10 +37,11 @@ TEST_P(LandingMissionTest, PlatformCentreAndHeightWithinTwoCentimetres) {
   std::printf(
       "%s seed %llu: waypoint error %.4f m (xy %.4f), height %.4f (true %.4f), size %.3f x "
       "%.3f (true %.3f x %.3f), inliers floor %d platform %d, baseline %.3f m\n",
-      k.scenario, static_cast<unsigned long long>(k.seed), err, (r.target.p_W - top).head<2>().norm(),
-      r.target.height_m, scene.platform->size_m.z(), r.target.size_m[0], r.target.size_m[1],
-      scene.platform->size_m.x(), scene.platform->size_m.y(), r.target.n_inliers_dominant,
-      r.target.n_inliers_target, r.baseline_m);
+      k.scenario, static_cast<unsigned long long>(k.seed), err,
+      (r.target.p_W - top).head<2>().norm(), r.target.height_m, scene.platform->size_m.z(),
+      r.target.size_m[0], r.target.size_m[1], scene.platform->size_m.x(),
+      scene.platform->size_m.y(), r.target.n_inliers_dominant, r.target.n_inliers_target,
+      r.baseline_m);
   EXPECT_LT(err, 0.02);
   EXPECT_NEAR(r.target.height_m, scene.platform->size_m.z(), 0.015);
   // The platform's edges modulo 90 deg (autonomy turns the square gear to them).
@@ -50,8 +51,10 @@ TEST_P(LandingMissionTest, PlatformCentreAndHeightWithinTwoCentimetres) {
               scene.platform->yaw_rad * 180 / M_PI, edge_error * 180 / M_PI);
   EXPECT_LT(edge_error, 5 * M_PI / 180);
   // The visible extent of the features cannot exceed the platform's top (plus feature radius).
-  EXPECT_LT(r.target.size_m[0], std::max(scene.platform->size_m.x(), scene.platform->size_m.y()) + 0.05);
-  EXPECT_GT(r.target.size_m[1], 0.5 * std::min(scene.platform->size_m.x(), scene.platform->size_m.y()));
+  EXPECT_LT(r.target.size_m[0],
+            std::max(scene.platform->size_m.x(), scene.platform->size_m.y()) + 0.05);
+  EXPECT_GT(r.target.size_m[1],
+            0.5 * std::min(scene.platform->size_m.x(), scene.platform->size_m.y()));
   EXPECT_GT(r.target.n_W.z(), 0.99);
   EXPECT_EQ(r.mission, Mission::kLanding);
   EXPECT_GT(r.ref_utime, 0);
@@ -102,9 +105,9 @@ TEST(LandingMissionTest, ReplayGivesIdenticalResults) {
   const Vector3d top =
       sim::build_scene(sim::load_scenario(root + "/config/scenarios/landing_b.yaml"), 4)
           .platform->top_center_W;
-  const auto seq = render_sequence("landing_b.yaml", 4, "downward",
-                                   Vector3d(top.x() - 0.1, top.y(), 1.7),
-                                   Vector3d(0.04, -0.01, 0.0), Vector3d(0.01, -0.02, 0.2), 6);
+  const auto seq =
+      render_sequence("landing_b.yaml", 4, "downward", Vector3d(top.x() - 0.1, top.y(), 1.7),
+                      Vector3d(0.04, -0.01, 0.0), Vector3d(0.01, -0.02, 0.2), 6);
   const auto a = run(seq, Mission::kLanding), b = run(seq, Mission::kLanding);
   ASSERT_EQ(a.size(), b.size());
   for (size_t i = 0; i < a.size(); ++i) {
