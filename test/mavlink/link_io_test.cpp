@@ -127,13 +127,27 @@ TEST(LinkIoSerialTest, OpensAPtyInRawModeAtEachSupportedBaud) {
     ASSERT_EQ(tcgetattr(io.fd(), &t), 0);
     speed_t expected = B0;
     switch (baud) {
-      case 57600: expected = B57600; break;
-      case 115200: expected = B115200; break;
-      case 230400: expected = B230400; break;
-      case 460800: expected = B460800; break;
-      case 500000: expected = B500000; break;
-      case 576000: expected = B576000; break;
-      case 921600: expected = B921600; break;
+      case 57600:
+        expected = B57600;
+        break;
+      case 115200:
+        expected = B115200;
+        break;
+      case 230400:
+        expected = B230400;
+        break;
+      case 460800:
+        expected = B460800;
+        break;
+      case 500000:
+        expected = B500000;
+        break;
+      case 576000:
+        expected = B576000;
+        break;
+      case 921600:
+        expected = B921600;
+        break;
     }
     EXPECT_EQ(cfgetispeed(&t), expected);
     EXPECT_EQ(cfgetospeed(&t), expected);

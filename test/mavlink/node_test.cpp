@@ -45,9 +45,7 @@ std::filesystem::path tmp(const std::string& name) {
   std::filesystem::create_directories(dir);
   return dir / name;
 }
-std::string test_name() {
-  return ::testing::UnitTest::GetInstance()->current_test_info()->name();
-}
+std::string test_name() { return ::testing::UnitTest::GetInstance()->current_test_info()->name(); }
 std::string slurp(const std::filesystem::path& p) {
   std::stringstream ss;
   ss << std::ifstream(p).rdbuf();
@@ -190,9 +188,9 @@ TEST(MavlinkNodeTest, ABadConfigKeyOrValueExitsWithCode2NamingFileKeyAndValue) {
 }
 
 TEST(MavlinkNodeTest, AMalformedLinkAddressExitsWithCode2NamingIt) {
-  for (const std::string link : {"serial:/dev/ttyACM0:9600", "serial:/dev/ttyACM0",
-                                 "tcp:127.0.0.1:14540", "udp:127.0.0.1:99999",
-                                 "udp-listen:0.0.0.0:14540:14550", "14540"}) {
+  for (const std::string link :
+       {"serial:/dev/ttyACM0:9600", "serial:/dev/ttyACM0", "tcp:127.0.0.1:14540",
+        "udp:127.0.0.1:99999", "udp-listen:0.0.0.0:14540:14550", "14540"}) {
     SCOPED_TRACE(link);
     std::string out;
     EXPECT_EQ(run("--config " + source("config/autopilot/px4.yaml") + " --vehicle " +
@@ -224,11 +222,11 @@ TEST(MavlinkNodeTest, OverAPtyItSendsHeartbeatsReportsTheLinkAndReopensALostDevi
   const auto drain = [&] { ap.drain(pty->master); };
 
   // 1. Nobody answers: heartbeats go out, the status says the link is down.
-  const bool silent_seen = wait_for(lcm, drain, [&] {
-    return ap.heartbeats.size() >= 2 && !rec.status.empty();
-  });
+  const bool silent_seen =
+      wait_for(lcm, drain, [&] { return ap.heartbeats.size() >= 2 && !rec.status.empty(); });
   ASSERT_TRUE(silent_seen) << "heartbeats " << ap.heartbeats.size() << ", status "
-                           << rec.status.size() << "\n" << slurp(output);
+                           << rec.status.size() << "\n"
+                           << slurp(output);
   for (const auto& [f, hb] : ap.heartbeats) {
     EXPECT_EQ(f.sysid, 1);     // own_sysid
     EXPECT_EQ(f.compid, 191);  // MAV_COMP_ID_ONBOARD_COMPUTER
@@ -270,7 +268,8 @@ TEST(MavlinkNodeTest, OverAPtyItSendsHeartbeatsReportsTheLinkAndReopensALostDevi
       lcm, [&] { again.drain(pty->master); },
       [&] { return !again.heartbeats.empty() && rec.status.back().reopens >= 1; });
   EXPECT_TRUE(reopened) << "heartbeats on the new device " << again.heartbeats.size()
-                        << ", reopens " << rec.status.back().reopens << "\n" << slurp(output);
+                        << ", reopens " << rec.status.back().reopens << "\n"
+                        << slurp(output);
   EXPECT_TRUE(node.running()) << slurp(output);
   EXPECT_NE(slurp(output).find("reopening"), std::string::npos) << slurp(output);
   std::filesystem::remove(link);
