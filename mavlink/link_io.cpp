@@ -3,6 +3,7 @@
 #include <arpa/inet.h>
 #include <fcntl.h>
 #include <netdb.h>
+#include <poll.h>
 #include <sys/ioctl.h>
 #include <sys/socket.h>
 #include <termios.h>
@@ -150,7 +151,17 @@ long LinkIo::read(std::span<uint8_t> out, std::string* error) {
     ssize_t n;
     if (address_.kind == LinkAddress::Kind::kSerial) {
       n = ::read(fd_, out.data(), out.size());
-      if (n == 0) return 0;  // VMIN = 0: nothing now (an unplugged USB device fails with EIO)
+      if (n == 0) {
+        // VMIN = 0: nothing now, or the device is gone: a tty that was hung up (USB adapter
+        // unplugged, pty master closed) reads 0 bytes forever instead of failing, and polls
+        // readable, so the node would spin without ever reopening it.
+        pollfd p{fd_, POLLIN, 0};
+        if (poll(&p, 1, 0) > 0 && (p.revents & (POLLHUP | POLLERR | POLLNVAL))) {
+          *error = address_.text() + ": read: the device hung up (unplugged or closed)";
+          return -1;
+        }
+        return 0;
+      }
     } else {
       sockaddr_in from{};
       socklen_t len = sizeof from;

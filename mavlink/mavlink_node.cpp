@@ -161,6 +161,7 @@ int main(int argc, char** argv) {
 
     int64_t next_open = steady_utime();
     uint64_t open_failures = 0;
+    bool opened_before = false;  // every successful open after the first is a reopen
     std::array<uint8_t, 4096> buffer;
     const int lcm_fd = node.lcm().getFileno();
     while (!node.stopping()) {
@@ -169,7 +170,8 @@ int main(int argc, char** argv) {
         std::string error;
         if (io.open(&error)) {
           reopened = true;
-          if (open_failures > 0 || reopens > 0) ++reopens;
+          if (opened_before) ++reopens;
+          opened_before = true;
           open_failures = 0;
           spdlog::info("alight-mavlink: opened {}", address.text());
         } else {
