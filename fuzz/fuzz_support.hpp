@@ -52,9 +52,9 @@ auto* value_of(T& v) {
 }
 
 /// Runs a configuration loader. A bad file must be a ParamError (exit 2 naming file, key and
-/// value; docs/ARCHITECTURE.md "Errors: three tiers"); anything else escaping a loader (yaml-cpp's
-/// exceptions, std::out_of_range,
-/// ...) would end the node with exit 1 and a message that names no key, so it counts as a crash.
+/// value; docs/ARCHITECTURE.md "Errors: three tiers"); anything else escaping a loader
+/// (yaml-cpp's exceptions, std::out_of_range, ...) would end the node with exit 1 and a message
+/// that names no key, so it counts as a crash.
 template <class F>
 void expect_param_errors_only(const char* loader, F&& f) {
   try {
