@@ -112,7 +112,10 @@ def run(args):
     replay = subprocess.run(
         [sys.executable, os.path.join(args.source, "scripts", "replay-vision"), log,
          "--config", env["ALIGHT_VEHICLE"], "--mission", args.mission, "--build", args.build,
-         "--keep", os.path.join(log_root, "replay")],
+         "--keep", os.path.join(log_root, "replay"),
+         # Real time: the node processes every frame it gets and queues behind a slow one, so
+         # the replay needs no slow motion to match (the default 0.5x is for a slower machine).
+         "--speed", "1.0"],
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
         env=dict(os.environ, ALIGHT_LCMTYPES_PYTHON=os.environ.get(
             "ALIGHT_LCMTYPES_PYTHON", os.path.join(args.build, "lcmtypes", "python"))))
