@@ -381,7 +381,7 @@ const ParamSchema<Scenario>& Scenario::schema() {
     s.section("mocap", &P::mocap, MocapParams::schema(), "motion capture (MOCAP_POSE)");
     s.section("imu", &P::imu, ImuParams::schema(), "IMU");
     s.section("rangefinder", &P::rangefinder, RangefinderParams::schema(),
-              "a downward rangefinder (RANGE)");
+              "a rangefinder fixed to the body, looking down by default (RANGE)");
     s.section("baro", &P::baro, BaroParams::schema(), "a barometer (BARO)");
     s.section("camera", &P::camera, CameraParams::schema(), "the rendered camera (CAMERA)");
     s.section("lighting", &P::lighting, LightingParams::schema(), "the renderer's light");
