@@ -201,19 +201,18 @@ BaroEmulator::BaroEmulator(const BaroParams& params, int64_t start_utime, uint64
       rng_(seed) {
   std::normal_distribution<double> n(0.0, 1.0);
   offset_pa_ = params.offset_sigma_pa * n(rng_);
+  const double dt = period_us_ * 1e-6, tau = params.drift_tau_s;
+  drift_decay_ = std::exp(-dt / tau);
+  // sqrt(1 - a^2) through expm1: 1 - a^2 is tiny for a long correlation time.
+  drift_step_pa_ = params.drift_pa_per_sqrt_s * std::sqrt(0.5 * tau * -std::expm1(-2.0 * dt / tau));
 }
 
 void BaroEmulator::update(int64_t now_utime, const Vector3d& p_W_B) {
   const BaroParams& P = params_;
-  const double dt = period_us_ * 1e-6;
-  const double a = std::exp(-dt / P.drift_tau_s);
-  // sqrt(1 - a^2) through expm1: 1 - a^2 is tiny for a long correlation time.
-  const double drift_step = P.drift_pa_per_sqrt_s *
-                            std::sqrt(0.5 * P.drift_tau_s * -std::expm1(-2.0 * dt / P.drift_tau_s));
   while (now_utime >= next_utime_) {
     std::normal_distribution<double> n(0.0, 1.0);
     const double w = n(rng_), v = n(rng_);
-    drift_pa_ = a * drift_pa_ + drift_step * w;
+    drift_pa_ = drift_decay_ * drift_pa_ + drift_step_pa_ * w;
     const double altitude_m = P.ground_altitude_m + p_W_B.z();
     BaroSample s;
     s.utime = next_utime_;

@@ -162,6 +162,7 @@ class BaroEmulator {
   int64_t seq_ = 0;
   std::mt19937_64 rng_;
   double offset_pa_ = 0.0, drift_pa_ = 0.0;
+  double drift_decay_ = 1.0, drift_step_pa_ = 0.0;  // per sample
   std::deque<BaroSample> queue_;
 };
 
