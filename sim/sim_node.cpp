@@ -1,5 +1,7 @@
-// alight-sim: the simulated vehicle, motion-capture room, IMU and camera on LCM. The only file
-// of sim/ that knows LCM, files or the wall clock; the simulation itself is the Simulator.
+// alight-sim: the simulated vehicle, motion-capture room, IMU, rangefinder, barometer and camera
+// on LCM. The only file of sim/ that knows LCM, files or the wall clock; the simulation itself
+// is the Simulator. Each sensor is switched in the scenario (`enabled:`); one switched off
+// publishes nothing (SIM_TRUTH is always published).
 //
 //   alight-sim --scenario config/scenarios/landing_a.yaml [--vehicle FILE] [--seed N]
 //              [--rate X] [--duration S] [--lcm-url URL] [--mavlink ADDRESS]
@@ -8,6 +10,7 @@
 // (sim/offboard_endpoint.hpp) on that link (e.g. udp:127.0.0.1:14540:14580, where alight-mavlink
 // listens, as PX4 SITL's onboard link does): commands come as SET_ATTITUDE_TARGET instead of
 // ATTITUDE_CMD, and IMU goes out as HIGHRES_IMU (alight-mavlink publishes it) instead of on LCM.
+// RANGE and BARO are published on LCM either way (alight-mavlink does not bridge them).
 
 #include <spdlog/spdlog.h>
 
@@ -39,7 +42,9 @@ constexpr int64_t kTruthPeriodUs = 20000;  // SIM_TRUTH at 50 Hz
 int main(int argc, char** argv) {
   return alight::run_node_main("alight-sim", [&]() -> int {
     using namespace alight;
-    CLI::App app("alight-sim: quadrotor, motion capture, IMU and camera, simulated");
+    CLI::App app(
+        "alight-sim: quadrotor, motion capture, IMU, rangefinder, barometer and camera, "
+        "simulated");
     std::string scenario_file, vehicle_file;
     uint64_t seed = 0;
     double rate = 1.0, duration_s = 0.0;
@@ -253,6 +258,8 @@ int main(int argc, char** argv) {
       } else {
         for (const auto& m : imu) node.publish(channels::kImu, sim::to_msg(m));
       }
+      for (const auto& m : simulator.take_range()) node.publish(channels::kRange, sim::to_msg(m));
+      for (const auto& m : simulator.take_baro()) node.publish(channels::kBaro, sim::to_msg(m));
       if (auto frame = simulator.take_camera())
         if (gates.camera.on(now)) node.publish(channels::kCamera, sim::to_msg(*frame));
       if (simulator.now_utime() >= next_truth) {
