@@ -391,7 +391,8 @@ FlowFit fit_t_over_d(const std::vector<Vector3d>& rays_1, const std::vector<Vect
       untruncated_sigma(sigma_kept, params.inlier_threshold_px) / std::max(sigma_kept, 1e-300);
   fit.sigma_px = std::max(params.min_sigma_px, truncation * std::sqrt(psi2 / dof) / mean_dpsi);
   fit.t_over_d_C1 = u;
-  fit.cov = fit.sigma_px * fit.sigma_px * JtJ_inv;
+  const double correlated = std::max(1.0, static_cast<double>(m) / params.max_independent_points);
+  fit.cov = correlated * fit.sigma_px * fit.sigma_px * JtJ_inv;
   fit.cov = 0.5 * (fit.cov + fit.cov.transpose()).eval();
   fit.J_rotation = -H_ldlt.solve(Bt);
   fit.J_normal = -H_ldlt.solve(Bn);

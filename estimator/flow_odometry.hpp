@@ -30,10 +30,13 @@
 //      squares), MSAC scoring (Torr & Zisserman 2000), seeded and so deterministic;
 //   2. Levenberg-Marquardt with Huber IRLS (Huber 1964; common/robust_lsq.hpp) on the inliers'
 //      reprojection errors, the scale from their median, inliers re-selected and refined again;
-//   3. covariance sigma^2 (J^T W J)^-1 with sigma^2 from the weighted residuals (floored at
-//      FlowFitParams::min_sigma_px), and the sensitivities of u to errors of R_C2C1 and n_C1
-//      (implicit function theorem on the normal equations): the EKF decides how much of its
-//      gyro and attitude uncertainty to add (J_rotation Sigma_theta J_rotation^T + ...).
+//   3. covariance: Huber's sandwich sigma_eff^2 (J^T J)^-1, sigma_eff^2 = E|psi|^2 / E[psi']^2,
+//      corrected for the inlier threshold's truncation of the noise, floored at min_sigma_px, and
+//      counting at most max_independent_points inliers as independent (nearby tracks share
+//      their errors); and the sensitivities of u to errors of R_C2C1 and n_C1 (implicit function
+//      theorem on the estimating equation): the EKF adds as much of its gyro and attitude
+//      uncertainty as it sees fit (J_rotation Sigma_theta J_rotation^T + ...). The covariance
+//      covers the image noise only.
 // Off-floor points (a box, a platform) move differently and fall out as outliers. Only the
 // dominant plane is modelled: d is the distance to the floor, which the rangefinder must measure
 // too (over a box it sees the box: the EKF's business).
@@ -63,9 +66,12 @@ struct FlowSample {
   Eigen::Vector3d t_over_d_C1 = Eigen::Vector3d::Zero();
   Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();  ///< covariance of t_over_d_C1 [-^2]
   int inliers = 0;                                ///< correspondences on the floor [-]
-  /// d t_over_d_C1 / d theta for a true rotation R_C2C1 Exp(theta) (theta in C1) [1/rad].
+  /// Sensitivity to an error of the rotation passed in: given R_C2C1 Exp(theta) instead of
+  /// R_C2C1 (theta in C1), the output moves by J_rotation theta [1/rad]. About 1 per radian
+  /// across the optical axis: a gyro error looks like a translation (bas-relief ambiguity).
   Eigen::Matrix3d J_rotation = Eigen::Matrix3d::Zero();
-  /// d t_over_d_C1 / d delta for a true normal (n_C1 + delta) / |n_C1 + delta| [-].
+  /// Sensitivity to an error of the normal passed in: given (n_C1 + delta) / |n_C1 + delta|,
+  /// the output moves by J_normal delta [-].
   Eigen::Matrix3d J_normal = Eigen::Matrix3d::Zero();
   double residual_rms_px = 0.0;  ///< inliers' reprojection error, root mean square [px]
 };

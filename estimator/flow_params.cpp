@@ -71,6 +71,11 @@ const ParamSchema<FlowFitParams>& FlowFitParams::schema() {
           "efficiency under Gaussian noise)");
     s.add("min_sigma_px", &P::min_sigma_px, Range::open_closed(0, 10), "px",
           "floor of the residual standard deviation, for the Huber threshold and the covariance");
+    s.add("max_independent_points", &P::max_independent_points, Range::ge(3), "",
+          "the covariance counts at most this many inliers as independent (it is scaled by "
+          "inliers / this when there are more): tracking errors of nearby features share the "
+          "texture, the interpolation and the lighting, so they do not average out as 1 / n. "
+          "On rendered floors 150 inliers showed errors up to 6 sigma of the uncapped covariance");
     s.add("refine_iterations", &P::refine_iterations, Range::closed(1, 100), "",
           "Levenberg-Marquardt steps of each robust refinement at most");
     s.add("min_inliers", &P::min_inliers, Range::closed(3, 100000), "",

@@ -21,7 +21,7 @@ struct FlowTrackParams {
   double quality_level = 0.01;   ///< corner's min eigenvalue relative to the image's best [-]
   double min_quality = 1e-4;     ///< and absolute (OpenCV's min-eigenvalue scale) [-]
   double border_px = 12;         ///< features kept this far from the image edge [px]
-  int window_px = 21;            ///< Lucas-Kanade window side at the tracking level [px]
+  int window_px = 15;            ///< Lucas-Kanade window side at the tracking level [px]
   int pyramid_levels = 3;        ///< Lucas-Kanade pyramid levels above the tracking level [-]
   int lk_iterations = 20;        ///< Lucas-Kanade iterations per level at most [-]
   double lk_epsilon = 0.01;      ///< Lucas-Kanade stops when the update is smaller [px]
@@ -41,6 +41,7 @@ struct FlowFitParams {
   uint64_t seed = 17;                    ///< RANSAC's random generator, reseeded every fit
   double huber_k = 1.345;                ///< Huber threshold in robust standard deviations [-]
   double min_sigma_px = 0.05;            ///< floor of the residual standard deviation [px]
+  int max_independent_points = 50;       ///< covariance: information of at most this many points
   int refine_iterations = 10;            ///< Levenberg-Marquardt steps per refinement at most
   int min_inliers = 12;                  ///< fewer inliers: no sample [-]
   double min_inlier_fraction = 0.25;     ///< inliers over correspondences at least [-]
