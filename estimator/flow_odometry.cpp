@@ -2,7 +2,9 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <cassert>
 #include <cmath>
+#include <limits>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
 #include <random>
@@ -14,6 +16,9 @@ namespace alight::estimator {
 using Eigen::Matrix3d;
 using Eigen::Vector2d;
 using Eigen::Vector3d;
+
+static_assert(static_cast<int>(FlowReason::kPlaneNotInView) + 1 == kNumFlowReasons,
+              "kNumFlowReasons counts every FlowReason");
 
 const char* to_string(FlowReason r) {
   switch (r) {

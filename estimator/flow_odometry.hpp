@@ -112,7 +112,8 @@ struct FlowFit {
 
 /// Robust t/d from correspondences of normalised, undistorted rays (x, y, 1) (CameraModel::ray)
 /// in the first and second image, given R_C2C1 and the unit floor normal n_C1 (pointing
-/// towards the camera). `focal_px` converts the pixel thresholds. Pure and deterministic.
+/// towards the camera). `focal_px` (> 0, from a validated CameraModel) converts the pixel
+/// thresholds. Pure and deterministic: the same inputs give the same bits.
 FlowFit fit_t_over_d(const std::vector<Eigen::Vector3d>& rays_1,
                      const std::vector<Eigen::Vector3d>& rays_2, const Eigen::Matrix3d& R_C2C1,
                      const Eigen::Vector3d& n_C1, double focal_px, const FlowFitParams& params);
