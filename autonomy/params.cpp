@@ -216,9 +216,10 @@ const ParamSchema<FailsafeParams>& FailsafeParams::schema() {
           "LOST (failsafe descent), as if the estimator had said so (it publishes at the IMU "
           "rate, so 0.5 s is ~100 estimates missed)");
     s.add("require_estimate", &P::require_estimate, Range::any(), "",
-          "TAKEOFF and GO are refused until STATE_ESTIMATE says OK, also before the first one "
-          "arrives (flying without motion capture); false: without any STATE_ESTIMATE the "
-          "autonomy flies on the pose alone");
+          "true (flying without motion capture): TAKEOFF and GO are refused until a "
+          "STATE_ESTIMATE says OK, also before the first one arrives; false: refused only while "
+          "an estimate once heard is not OK, and without any STATE_ESTIMATE the autonomy flies "
+          "on the pose alone");
     return s;
   }();
   return schema;
