@@ -69,6 +69,10 @@ int main(int argc, char** argv) {
                  "Start the sim clock at the wall clock, not the scenario's start_utime");
     app.add_option("--render-threads", threads, "Threads for the camera renderer")
         ->check(CLI::Range(1, 16));
+    bool no_mocap = false;
+    app.add_flag("--no-mocap", no_mocap,
+                 "No MOCAP_POSE whatever the scenario says (mocap.enabled: false): the vehicle "
+                 "flies on its onboard estimate; SIM_TRUTH still scores it");
     args.add_to(app, false);
     try {
       app.parse(argc, argv);
@@ -84,6 +88,7 @@ int main(int argc, char** argv) {
     std::optional<sim::CameraRig> rig;
     if (scenario.camera.enabled) rig = sim::load_camera_rig(vehicle_file, scenario.camera.mount);
     if (start_now) scenario.start_utime = wall_utime();
+    if (no_mocap) scenario.mocap.enabled = false;
 
     std::optional<mavlink::LinkAddress> mavlink_address;
     if (!mavlink_link.empty()) {
