@@ -129,8 +129,8 @@ void inject(FilterState& s, const ErrVec& dx) {
   }
 }
 
-Outcome fuse(FilterState& s, const MeasVec& r, const MeasJac& H, const MeasCov& R,
-             double gate_chi2, double* nis) {
+Outcome fuse(FilterState& s, const MeasVec& r, const MeasJac& H, const MeasCov& R, double gate_chi2,
+             double* nis) {
   const int n = s.dim();
   const int m = static_cast<int>(r.size());
   assert(H.rows() == m && H.cols() == n && R.rows() == m && R.cols() == m);
@@ -223,8 +223,7 @@ double implied_terrain_m(const Nominal& x, const Vector3d& t_B_R, const Vector3d
   if (J) {
     J->setZero();
     (*J)(idx::kP + 2) = 1.0;
-    J->segment<3>(idx::kTheta) =
-        -(R * skew(t_B_R)).row(2) - range_m * (R * skew(d_B)).row(2);
+    J->segment<3>(idx::kTheta) = -(R * skew(t_B_R)).row(2) - range_m * (R * skew(d_B)).row(2);
   }
   return x.p_W_B.z() + (R * t_B_R).z() - range_m * cos_tilt;
 }

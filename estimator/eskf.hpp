@@ -73,7 +73,7 @@ struct FilterState {
   RangeStreak range_streak;
   std::array<int64_t, kSensorCount> last_fused_utime{};  ///< per sensor, for health
   std::array<Outcome, kSensorCount> last_outcome{};      ///< of the latest update per sensor
-  int64_t last_imu_gap_utime = 0;  ///< end of the latest IMU gap (0: none)
+  int64_t last_imu_gap_utime = 0;                        ///< end of the latest IMU gap (0: none)
   int64_t terrain_resets = 0;
 
   int dim() const { return idx::kCore + kCloneDim * n_clones; }
@@ -96,8 +96,8 @@ CoreMatrix transition_matrix(const Nominal& x, const Vector3d& accel_B, const Ve
 /// Applies residual r = z - h(x) with Jacobian H (rows of the error state) and noise R when the
 /// normalised innovation squared r' S^-1 r is within gate_chi2: Kalman update, injection into the
 /// nominal state (and clones), reset of the covariance. kGate or kNumerical leave s unchanged.
-Outcome fuse(FilterState& s, const MeasVec& r, const MeasJac& H, const MeasCov& R,
-             double gate_chi2, double* nis = nullptr);
+Outcome fuse(FilterState& s, const MeasVec& r, const MeasJac& H, const MeasCov& R, double gate_chi2,
+             double* nis = nullptr);
 
 /// Injects an error-state correction (Sola 6.2) and resets P (6.3, eq. 287).
 void inject(FilterState& s, const ErrVec& dx);
@@ -125,8 +125,7 @@ struct FlowModel {
   Eigen::Matrix<double, 3, idx::kCore> H_core = Eigen::Matrix<double, 3, idx::kCore>::Zero();
   Eigen::Matrix<double, 3, kCloneDim> H_clone = Eigen::Matrix<double, 3, kCloneDim>::Zero();
 };
-FlowModel flow_model(const Nominal& x, const Clone& c, const Matrix3d& R_BC,
-                     const Vector3d& t_B_C);
+FlowModel flow_model(const Nominal& x, const Clone& c, const Matrix3d& R_BC, const Vector3d& t_B_C);
 
 /// exp map of a rotation vector (Sola eq. 101).
 Quaterniond quat_exp(const Vector3d& theta);

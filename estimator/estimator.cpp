@@ -44,7 +44,8 @@ Outcome Estimator::reject(Sensor sensor, Outcome why) {
 // ---- IMU and static alignment ----------------------------------------------------------------
 
 Outcome Estimator::add_imu(const ImuSample& imu) {
-  if (!imu.accel_B.allFinite() || !imu.gyro_B.allFinite()) return reject(Sensor::kImu, Outcome::kNonFinite);
+  if (!imu.accel_B.allFinite() || !imu.gyro_B.allFinite())
+    return reject(Sensor::kImu, Outcome::kNonFinite);
   if (imu.utime <= 0 || imu.accel_B.norm() > params_.imu.max_accel_mps2 ||
       imu.gyro_B.norm() > params_.imu.max_gyro_radps)
     return reject(Sensor::kImu, Outcome::kAbsurd);
@@ -75,8 +76,8 @@ void Estimator::align(const ImuSample& imu) {
   const auto& p = params_.init;
   const bool still = std::abs(imu.accel_B.norm() - params_.gravity_mps2) <= p.accel_tol_mps2 &&
                      imu.gyro_B.norm() <= p.gyro_tol_radps;
-  const bool gap = alignment_.n > 0 &&
-                   imu.utime - alignment_.last_utime > to_us(params_.health.imu_gap_s);
+  const bool gap =
+      alignment_.n > 0 && imu.utime - alignment_.last_utime > to_us(params_.health.imu_gap_s);
   if (!still || gap) alignment_ = Alignment{};
   if (!still) return;
   if (alignment_.n == 0) alignment_.start_utime = imu.utime;
@@ -95,8 +96,7 @@ void Estimator::start(const ImuSample& last, const Vector3d& accel_mean,
   // position from the parameters (the take-off point). Earth rate (7e-5 rad/s) is below the
   // gyro's noise over the alignment and is left in the bias.
   const double roll = std::atan2(accel_mean.y(), accel_mean.z());
-  const double pitch =
-      std::atan2(-accel_mean.x(), std::hypot(accel_mean.y(), accel_mean.z()));
+  const double pitch = std::atan2(-accel_mean.x(), std::hypot(accel_mean.y(), accel_mean.z()));
   const Matrix3d R_WB = rotation_from_rpy(roll, pitch, p.yaw_deg * M_PI / 180.0);
 
   FilterState s;
@@ -123,8 +123,9 @@ void Estimator::start(const ImuSample& last, const Vector3d& accel_mean,
   s.P.block<3, 3>(idx::kTheta, idx::kBa) = A * P_ba;
   s.P.block<3, 3>(idx::kBa, idx::kTheta) = (A * P_ba).transpose();
   s.P.block<3, 3>(idx::kBa, idx::kBa) = P_ba;
-  s.P.block<3, 3>(idx::kBg, idx::kBg).diagonal().setConstant(p.sigma_gyro_bias_radps *
-                                                             p.sigma_gyro_bias_radps);
+  s.P.block<3, 3>(idx::kBg, idx::kBg)
+      .diagonal()
+      .setConstant(p.sigma_gyro_bias_radps * p.sigma_gyro_bias_radps);
   s.P(idx::kBaro, idx::kBaro) = 1.0;  // replaced by the first baro reading
   s.P(idx::kTerrain, idx::kTerrain) = p.sigma_terrain_m * p.sigma_terrain_m;
   s.last_fused_utime.fill(s.utime);
@@ -211,9 +212,10 @@ Outcome Estimator::add_event(Event update, int64_t earliest_utime) {
   update.outcome = Outcome::kQueued;
   const Event key = update;
   auto insert = [this](Event e) {
-    events_.insert(std::upper_bound(events_.begin(), events_.end(), e,
-                                    [](const Event& a, const Event& b) { return event_before(a, b); }),
-                   std::move(e));
+    events_.insert(
+        std::upper_bound(events_.begin(), events_.end(), e,
+                         [](const Event& a, const Event& b) { return event_before(a, b); }),
+        std::move(e));
   };
   if (sensor == Sensor::kFlow) {
     // The clone of the pose at the first exposure, made when the replay passes utime_from.
@@ -225,8 +227,9 @@ Outcome Estimator::add_event(Event update, int64_t earliest_utime) {
   }
   insert(std::move(update));
   if (earliest_utime <= newest) replay_from(earliest_utime);
-  const auto it = std::lower_bound(events_.begin(), events_.end(), key,
-                                   [](const Event& a, const Event& b) { return event_before(a, b); });
+  const auto it =
+      std::lower_bound(events_.begin(), events_.end(), key,
+                       [](const Event& a, const Event& b) { return event_before(a, b); });
   assert(it != events_.end() && it->seq == key.seq && !it->clone);
   return it->outcome;
 }
@@ -463,7 +466,8 @@ State Estimator::state() const {
   if (range.range_m > params_.range.min_range_m && age_s(Sensor::kRange) > h.range_timeout_s)
     flag(kNoRange, Health::kDegraded);
   if (age_s(Sensor::kBaro) > h.baro_timeout_s) flag(kNoBaro, Health::kDegraded);
-  if (s.last_imu_gap_utime != 0 && (s.utime - s.last_imu_gap_utime) / kUsPerS < h.imu_gap_recovery_s)
+  if (s.last_imu_gap_utime != 0 &&
+      (s.utime - s.last_imu_gap_utime) / kUsPerS < h.imu_gap_recovery_s)
     flag(kImuGap, Health::kDegraded);
   if ((newest_other_utime_ - s.utime) / kUsPerS > h.imu_lost_s) flag(kImuStopped, Health::kLost);
 

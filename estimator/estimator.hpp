@@ -58,8 +58,8 @@ class Estimator {
     Outcome outcome = Outcome::kQueued;
   };
   struct Checkpoint {
-    FilterState s;    ///< after everything up to and including s.utime
-    ImuSample imu;    ///< the sample whose interval ends at s.utime
+    FilterState s;  ///< after everything up to and including s.utime
+    ImuSample imu;  ///< the sample whose interval ends at s.utime
   };
   struct Alignment {
     int64_t start_utime = 0, last_utime = 0;
@@ -92,7 +92,7 @@ class Estimator {
   std::deque<Checkpoint> history_;  ///< oldest first; empty until initialised
   std::vector<Event> events_;       ///< sorted by (utime, order, seq)
   Alignment alignment_;
-  int64_t last_imu_utime_ = 0;  ///< newest accepted IMU stamp (also during alignment)
+  int64_t last_imu_utime_ = 0;      ///< newest accepted IMU stamp (also during alignment)
   int64_t newest_other_utime_ = 0;  ///< newest stamp of any other sensor's plausible sample
   int64_t seq_ = 0;
   Counters counters_;

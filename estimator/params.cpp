@@ -9,8 +9,9 @@ const ParamSchema<ImuNoiseParams>& ImuNoiseParams::schema() {
   static const ParamSchema<P> schema = [] {
     ParamSchema<P> s;
     s.add("accel_noise_density", &P::accel_noise_density, Range::open_closed(0, 1),
-          "m/s^2/sqrt(Hz)", "accelerometer white noise (BMI088: 190 ug/sqrt(Hz); raise it for a "
-                            "vibrating airframe)");
+          "m/s^2/sqrt(Hz)",
+          "accelerometer white noise (BMI088: 190 ug/sqrt(Hz); raise it for a "
+          "vibrating airframe)");
     s.add("gyro_noise_density", &P::gyro_noise_density, Range::open_closed(0, 0.1),
           "rad/s/sqrt(Hz)", "gyro white noise (BMI088: 0.014 deg/s/sqrt(Hz))");
     s.add("accel_bias_rw", &P::accel_bias_rw, Range::open_closed(0, 0.1), "m/s^3/sqrt(Hz)",
@@ -43,15 +44,16 @@ const ParamSchema<InitParams>& InitParams::schema() {
     s.add("sigma_p_m", &P::sigma_p_m, Range::open_closed(0, 10), "m", "initial position sigma");
     s.add("sigma_v_mps", &P::sigma_v_mps, Range::open_closed(0, 10), "m/s",
           "initial velocity sigma");
-    s.add("sigma_roll_pitch_rad", &P::sigma_roll_pitch_rad, Range::open_closed(0, 0.5), "rad",
-          "initial roll / pitch sigma besides the accelerometer bias's share (sigma_accel_bias / g, "
-          "correlated with the bias): mounting, vibration");
+    s.add(
+        "sigma_roll_pitch_rad", &P::sigma_roll_pitch_rad, Range::open_closed(0, 0.5), "rad",
+        "initial roll / pitch sigma besides the accelerometer bias's share (sigma_accel_bias / g, "
+        "correlated with the bias): mounting, vibration");
     s.add("sigma_yaw_rad", &P::sigma_yaw_rad, Range::open_closed(0, 3.2), "rad",
           "initial yaw sigma");
     s.add("sigma_accel_bias_mps2", &P::sigma_accel_bias_mps2, Range::open_closed(0, 5), "m/s^2",
           "initial accelerometer bias sigma");
-    s.add("sigma_gyro_bias_radps", &P::sigma_gyro_bias_radps, Range::open_closed(0, 0.5),
-          "rad/s", "gyro bias sigma after averaging the gyro at rest");
+    s.add("sigma_gyro_bias_radps", &P::sigma_gyro_bias_radps, Range::open_closed(0, 0.5), "rad/s",
+          "gyro bias sigma after averaging the gyro at rest");
     s.add("sigma_terrain_m", &P::sigma_terrain_m, Range::open_closed(0, 10), "m",
           "initial terrain sigma (the take-off floor is height 0)");
     return s;
@@ -71,8 +73,7 @@ const ParamSchema<RangeParams>& RangeParams::schema() {
           "shorter readings are refused (the sensor's blind zone)");
     s.add("max_range_m", &P::max_range_m, Range::open_closed(0, 200), "m",
           "longer readings are refused")
-        .check([](const P& p) { return p.max_range_m > p.min_range_m; },
-               "must exceed min_range_m");
+        .check([](const P& p) { return p.max_range_m > p.min_range_m; }, "must exceed min_range_m");
     s.add("sigma_m", &P::sigma_m, Range::open_closed(0, 5), "m",
           "noise sigma: sigma_m + sigma_rel * range");
     s.add("sigma_rel", &P::sigma_rel, Range::closed(0, 1), "", "noise proportional to the range");
@@ -143,8 +144,7 @@ const ParamSchema<FlowParams>& FlowParams::schema() {
           "the front end's covariance is scaled by this");
     s.add("sigma_floor", &P::sigma_floor, Range::closed(0, 1), "",
           "sigma added on each axis of t_over_d");
-    s.add("gate_chi2", &P::gate_chi2, Range::gt(0), "",
-          "chi-square gate (3 dof: 16.27 = 99.9 %)");
+    s.add("gate_chi2", &P::gate_chi2, Range::gt(0), "", "chi-square gate (3 dof: 16.27 = 99.9 %)");
     return s;
   }();
   return schema;

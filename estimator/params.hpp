@@ -26,16 +26,16 @@ struct ImuNoiseParams {
 
 /// Static alignment on the floor and the initial uncertainty.
 struct InitParams {
-  double duration_s = 1.0;          ///< still this long before the state starts [s]
-  double accel_tol_mps2 = 0.4;      ///< each sample's | |accel| - g | below [m/s^2]
-  double gyro_tol_radps = 0.05;     ///< each sample's |gyro| below [rad/s]
+  double duration_s = 1.0;              ///< still this long before the state starts [s]
+  double accel_tol_mps2 = 0.5;          ///< each sample's | |accel| - g | below [m/s^2]
+  double gyro_tol_radps = 0.05;         ///< each sample's |gyro| below [rad/s]
   Vector3d p_W_B_m = Vector3d::Zero();  ///< body origin at take-off, in world [m]
-  double yaw_deg = 0.0;             ///< heading at take-off (not observable without a compass)
+  double yaw_deg = 0.0;                 ///< heading at take-off (not observable without a compass)
   double sigma_p_m = 0.01;
   double sigma_v_mps = 0.02;
   double sigma_roll_pitch_rad = 0.005;  ///< besides the accel bias's share (correlated with it)
   double sigma_yaw_rad = 0.02;
-  double sigma_accel_bias_mps2 = 0.2;  ///< BMI088 offset +-20 mg
+  double sigma_accel_bias_mps2 = 0.1;  ///< BMI088 offset: +-20 mg at most
   double sigma_gyro_bias_radps = 0.005;
   double sigma_terrain_m = 0.01;  ///< the floor at take-off is terrain height 0
 
@@ -65,9 +65,9 @@ struct RangeParams {
 
 /// Barometer: ISA altitude, white noise, and an offset state that drifts.
 struct BaroParams {
-  double sigma_m = 0.1;      ///< altitude noise incl. prop wash [m]
-  double offset_rw = 0.02;   ///< offset random walk [m/sqrt(s)] (BMP388: ~6 cm per kelvin)
-  double gate_chi2 = 25.0;   ///< chi-square gate (1 dof)
+  double sigma_m = 0.1;     ///< altitude noise incl. prop wash [m]
+  double offset_rw = 0.02;  ///< offset random walk [m/sqrt(s)] (BMP388: ~6 cm per kelvin)
+  double gate_chi2 = 25.0;  ///< chi-square gate (1 dof)
 
   static const ParamSchema<BaroParams>& schema();
 };
@@ -77,13 +77,13 @@ struct FlowParams {
   std::string mount = "downward";                 ///< R_BC: downward | forward (geometry.hpp)
   std::array<double, 3> rpy_offset_deg{0, 0, 0};  ///< calibrated rotation after the mount [deg]
   Vector3d t_B_C_m{0.0, 0.0, -0.06};              ///< camera centre in body [m]
-  int min_inliers = 12;          ///< fewer homography inliers: refused
-  double max_span_s = 0.2;       ///< utime_to - utime_from above: refused [s]
-  double min_height_m = 0.05;    ///< camera height above terrain below: refused [m]
-  double max_t_over_d = 5.0;     ///< |t/d| above: absurd [-]
-  double cov_scale = 1.0;        ///< the front end's covariance times this [-]
-  double sigma_floor = 0.002;    ///< plus this sigma on each axis [-]
-  double gate_chi2 = 16.27;      ///< chi-square gate (3 dof; 16.27 = 99.9 %)
+  int min_inliers = 12;                           ///< fewer homography inliers: refused
+  double max_span_s = 0.2;                        ///< utime_to - utime_from above: refused [s]
+  double min_height_m = 0.05;  ///< camera height above terrain below: refused [m]
+  double max_t_over_d = 5.0;   ///< |t/d| above: absurd [-]
+  double cov_scale = 1.0;      ///< the front end's covariance times this [-]
+  double sigma_floor = 0.002;  ///< plus this sigma on each axis [-]
+  double gate_chi2 = 16.27;    ///< chi-square gate (3 dof; 16.27 = 99.9 %)
 
   Matrix3d R_BC() const;  ///< camera axes in body
   static const ParamSchema<FlowParams>& schema();
@@ -91,10 +91,10 @@ struct FlowParams {
 
 /// When the estimate is DEGRADED (hold) or LOST (failsafe descent).
 struct HealthParams {
-  double flow_timeout_s = 0.5;   ///< no flow fused this long: DEGRADED [s]
-  double range_timeout_s = 1.0;  ///< no range fused this long (above min_range_m): DEGRADED [s]
-  double baro_timeout_s = 2.0;   ///< no baro fused this long: DEGRADED [s]
-  double imu_gap_s = 0.05;       ///< an IMU interval longer than this is a gap [s]
+  double flow_timeout_s = 0.5;      ///< no flow fused this long: DEGRADED [s]
+  double range_timeout_s = 1.0;     ///< no range fused this long (above min_range_m): DEGRADED [s]
+  double baro_timeout_s = 2.0;      ///< no baro fused this long: DEGRADED [s]
+  double imu_gap_s = 0.05;          ///< an IMU interval longer than this is a gap [s]
   double imu_gap_recovery_s = 1.0;  ///< DEGRADED this long after a gap [s]
   double imu_lost_s = 0.2;          ///< other sensors this far ahead of the IMU: LOST [s]
   double pos_sigma_degraded_m = 1.0;  ///< horizontal position sigma (largest axis) [m]

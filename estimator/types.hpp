@@ -51,23 +51,23 @@ struct FlowSample {
 /// What the estimator did with an input. kFused and kQueued are not rejections; every other
 /// value is a reason, counted per sensor in Counters.
 enum class Outcome : uint8_t {
-  kFused = 0,        ///< used (IMU: propagated; measurement: update applied or terrain reset)
-  kQueued,           ///< newer than the newest IMU sample: fused once the IMU reaches its time
-  kNonFinite,        ///< NaN / inf in a value
-  kAbsurd,           ///< outside physical bounds (accel, rate, pressure, flow magnitude, cov)
-  kOutOfOrder,       ///< IMU stamp not after the previous one
-  kTooOld,           ///< older than the history (or its flow clone time is)
-  kTooNew,           ///< further ahead of the newest IMU sample than max_ahead_s
-  kNotInitialised,   ///< before static alignment finished
-  kInvalid,          ///< the sensor flagged it invalid
-  kOutOfRange,       ///< range outside [min_range_m, max_range_m]
-  kBeamAngle,        ///< rangefinder beam too far from vertical
-  kGate,             ///< innovation outside the chi-square gate
-  kTooFewInliers,    ///< flow with fewer homography inliers than min_inliers
-  kGeometry,         ///< flow span or camera height unusable
-  kNoClone,          ///< flow whose clone could not be made (too many overlapping samples)
-  kQueueFull,        ///< too many measurements waiting for the IMU
-  kNumerical,        ///< innovation covariance not positive definite / non-finite result
+  kFused = 0,       ///< used (IMU: propagated; measurement: update applied or terrain reset)
+  kQueued,          ///< newer than the newest IMU sample: fused once the IMU reaches its time
+  kNonFinite,       ///< NaN / inf in a value
+  kAbsurd,          ///< outside physical bounds (accel, rate, pressure, flow magnitude, cov)
+  kOutOfOrder,      ///< IMU stamp not after the previous one
+  kTooOld,          ///< older than the history (or its flow clone time is)
+  kTooNew,          ///< further ahead of the newest IMU sample than max_ahead_s
+  kNotInitialised,  ///< before static alignment finished
+  kInvalid,         ///< the sensor flagged it invalid
+  kOutOfRange,      ///< range outside [min_range_m, max_range_m]
+  kBeamAngle,       ///< rangefinder beam too far from vertical
+  kGate,            ///< innovation outside the chi-square gate
+  kTooFewInliers,   ///< flow with fewer homography inliers than min_inliers
+  kGeometry,        ///< flow span or camera height unusable
+  kNoClone,         ///< flow whose clone could not be made (too many overlapping samples)
+  kQueueFull,       ///< too many measurements waiting for the IMU
+  kNumerical,       ///< innovation covariance not positive definite / non-finite result
   kCount
 };
 constexpr int kOutcomeCount = static_cast<int>(Outcome::kCount);
@@ -100,15 +100,15 @@ const char* to_string(Health h);
 /// Why the health is not OK; several can hold at once (bits of State::health_reasons).
 enum HealthReason : uint32_t {
   kReasonNone = 0,
-  kNotInitialised = 1u << 0,        ///< LOST: static alignment not finished
-  kNoFlow = 1u << 1,                ///< DEGRADED: no flow fused for health.flow_timeout_s
-  kNoRange = 1u << 2,               ///< DEGRADED: no range fused for health.range_timeout_s
-  kNoBaro = 1u << 3,                ///< DEGRADED: no baro fused for health.baro_timeout_s
-  kPositionUncertain = 1u << 4,     ///< DEGRADED / LOST: horizontal position sigma over a limit
-  kVelocityUncertain = 1u << 5,     ///< DEGRADED / LOST: velocity sigma over a limit
-  kImuGap = 1u << 6,                ///< DEGRADED: an IMU gap within health.imu_gap_recovery_s
-  kImuStopped = 1u << 7,            ///< LOST: other sensors run imu_lost_s ahead of the IMU
-  kHeightUncertain = 1u << 8,       ///< DEGRADED / LOST: vertical position sigma over a limit
+  kNotInitialised = 1u << 0,     ///< LOST: static alignment not finished
+  kNoFlow = 1u << 1,             ///< DEGRADED: no flow fused for health.flow_timeout_s
+  kNoRange = 1u << 2,            ///< DEGRADED: no range fused for health.range_timeout_s
+  kNoBaro = 1u << 3,             ///< DEGRADED: no baro fused for health.baro_timeout_s
+  kPositionUncertain = 1u << 4,  ///< DEGRADED / LOST: horizontal position sigma over a limit
+  kVelocityUncertain = 1u << 5,  ///< DEGRADED / LOST: velocity sigma over a limit
+  kImuGap = 1u << 6,             ///< DEGRADED: an IMU gap within health.imu_gap_recovery_s
+  kImuStopped = 1u << 7,         ///< LOST: other sensors run imu_lost_s ahead of the IMU
+  kHeightUncertain = 1u << 8,    ///< DEGRADED / LOST: vertical position sigma over a limit
 };
 /// "no_flow|no_range" for a reasons bit set ("" for none).
 std::string health_reasons_text(uint32_t reasons);
@@ -140,8 +140,8 @@ struct State {
   double terrain_height_m = 0.0;             ///< h_W_terrain: surface under the rangefinder
   CoreMatrix cov = CoreMatrix::Zero();       ///< error-state covariance in the idx:: order
 
-  Matrix3d cov_p() const { return cov.block<3, 3>(idx::kP, idx::kP); }          ///< [m^2]
-  Matrix3d cov_v() const { return cov.block<3, 3>(idx::kV, idx::kV); }          ///< [m^2/s^2]
+  Matrix3d cov_p() const { return cov.block<3, 3>(idx::kP, idx::kP); }  ///< [m^2]
+  Matrix3d cov_v() const { return cov.block<3, 3>(idx::kV, idx::kV); }  ///< [m^2/s^2]
   Matrix3d cov_attitude() const { return cov.block<3, 3>(idx::kTheta, idx::kTheta); }  ///< rad^2
 
   Health health = Health::kLost;
