@@ -87,7 +87,7 @@ void propagate(FilterState& s, const Vector3d& accel_B, const Vector3d& gyro_B, 
     // Clones are constant: only their correlation with the core moves.
     const Eigen::Matrix<double, idx::kCore, Eigen::Dynamic, 0, idx::kCore, kMaxDim> Pcx =
         s.P.topRightCorner(idx::kCore, n_x);
-    s.P.topRightCorner(idx::kCore, n_x) = F * Pcx;
+    s.P.topRightCorner(idx::kCore, n_x) = F.lazyProduct(Pcx);
     s.P.bottomLeftCorner(n_x, idx::kCore) = s.P.topRightCorner(idx::kCore, n_x).transpose();
   }
 
@@ -134,9 +134,10 @@ Outcome fuse(FilterState& s, const MeasVec& r, const MeasJac& H, const MeasCov& 
   const int n = s.dim();
   const int m = static_cast<int>(r.size());
   assert(H.rows() == m && H.cols() == n && R.rows() == m && R.cols() == m);
+  // Small products: coefficient-wise (lazyProduct) beats the blocked GEMM at these sizes.
   const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxDim, 3> PHt =
-      s.P * H.transpose();
-  MeasCov S = H * PHt + R;
+      s.P.lazyProduct(H.transpose());
+  MeasCov S = H.lazyProduct(PHt) + R;
   S = (0.5 * (S + S.transpose())).eval();
   const Eigen::LLT<MeasCov> llt(S);
   if (llt.info() != Eigen::Success || !S.allFinite()) return Outcome::kNumerical;
@@ -148,9 +149,9 @@ Outcome fuse(FilterState& s, const MeasVec& r, const MeasJac& H, const MeasCov& 
   // K = P H^T S^-1, computed as (S^-1 (P H^T)^T)^T.
   const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxDim, 3> K =
       llt.solve(PHt.transpose()).transpose();
-  const ErrVec dx = K * r;
+  const ErrVec dx = K.lazyProduct(r);
   if (!dx.allFinite()) return Outcome::kNumerical;
-  Cov P = s.P - K * PHt.transpose();
+  Cov P = s.P - K.lazyProduct(PHt.transpose());
   P = (0.5 * (P + P.transpose())).eval();
   if (!P.allFinite() || (P.diagonal().array() < 0).any()) return Outcome::kNumerical;
   s.P = P;

@@ -65,9 +65,9 @@ Outcome Estimator::add_imu(const ImuSample& imu) {
     align(imu);
     return Outcome::kFused;
   }
-  Checkpoint next{history_.back().s, imu};
+  Checkpoint& next = history_.push_copy_of_back();
+  next.imu = imu;
   run_interval(next.s, imu);
-  history_.push_back(std::move(next));
   prune();
   return Outcome::kFused;
 }
@@ -260,11 +260,11 @@ void Estimator::replay_from(int64_t utime) {
   if (k + 1 == history_.size()) return;
   replay_imu_.clear();
   for (size_t j = k + 1; j < history_.size(); ++j) replay_imu_.push_back(history_[j].imu);
-  history_.resize(k + 1);
+  history_.truncate(k + 1);
   for (const ImuSample& imu : replay_imu_) {
-    Checkpoint next{history_.back().s, imu};
+    Checkpoint& next = history_.push_copy_of_back();
+    next.imu = imu;
     run_interval(next.s, imu);
-    history_.push_back(std::move(next));
   }
   ++counters_.replays;
 }

@@ -15,7 +15,7 @@
 // Every input is untrusted: non-finite or absurd values, stamps out of order, too old or too far
 // ahead are counted per sensor and reason (State::counters) and dropped; nothing throws.
 
-#include <deque>
+#include <cstddef>
 #include <vector>
 
 #include "estimator/eskf.hpp"
@@ -23,6 +23,48 @@
 #include "estimator/types.hpp"
 
 namespace alight::estimator {
+
+namespace detail {
+/// A ring buffer that keeps its storage: the history's checkpoints (about 3 KB each) are
+/// overwritten in place, so an IMU sample allocates nothing once the history has filled.
+template <class T>
+class Ring {
+ public:
+  size_t size() const { return size_; }
+  bool empty() const { return size_ == 0; }
+  T& operator[](size_t i) { return buf_[(head_ + i) % buf_.size()]; }
+  const T& operator[](size_t i) const { return buf_[(head_ + i) % buf_.size()]; }
+  T& front() { return (*this)[0]; }
+  const T& front() const { return (*this)[0]; }
+  T& back() { return (*this)[size_ - 1]; }
+  const T& back() const { return (*this)[size_ - 1]; }
+  void clear() { head_ = size_ = 0; }
+  void pop_front() { head_ = (head_ + 1) % buf_.size(), --size_; }
+  void truncate(size_t n) { size_ = n < size_ ? n : size_; }
+  /// Appends a copy of `v` (which must not live in this ring).
+  void push_back(const T& v) { slot() = v; }
+  /// Appends a copy of the last element and returns it.
+  T& push_copy_of_back() {
+    const size_t last = size_ - 1;
+    T& out = slot();
+    out = (*this)[last];
+    return out;
+  }
+
+ private:
+  T& slot() {
+    if (size_ == buf_.size()) {
+      std::vector<T> grown(buf_.empty() ? 64 : 2 * buf_.size());
+      for (size_t i = 0; i < size_; ++i) grown[i] = std::move((*this)[i]);
+      buf_.swap(grown);
+      head_ = 0;
+    }
+    return (*this)[size_++];
+  }
+  std::vector<T> buf_;
+  size_t head_ = 0, size_ = 0;
+};
+}  // namespace detail
 
 class Estimator {
  public:
@@ -89,8 +131,8 @@ class Estimator {
   EstimatorParams params_;
   Vector3d range_d_B_;  ///< unit beam direction
   Matrix3d R_BC_;
-  std::deque<Checkpoint> history_;  ///< oldest first; empty until initialised
-  std::vector<Event> events_;       ///< sorted by (utime, order, seq)
+  detail::Ring<Checkpoint> history_;  ///< oldest first; empty until initialised
+  std::vector<Event> events_;         ///< sorted by (utime, order, seq)
   Alignment alignment_;
   int64_t last_imu_utime_ = 0;      ///< newest accepted IMU stamp (also during alignment)
   int64_t newest_other_utime_ = 0;  ///< newest stamp of any other sensor's plausible sample

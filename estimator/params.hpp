@@ -36,7 +36,9 @@ struct InitParams {
   double sigma_roll_pitch_rad = 0.005;  ///< besides the accel bias's share (correlated with it)
   double sigma_yaw_rad = 0.02;
   double sigma_accel_bias_mps2 = 0.1;  ///< BMI088 offset: +-20 mg at most
-  double sigma_gyro_bias_radps = 0.005;
+  /// After averaging 1 s at rest the error is ~n_g / sqrt(1 s) = 2.5e-4; the rest leaves room for
+  /// temperature. Larger values let the (unobservable) heading wander: see README, limitations.
+  double sigma_gyro_bias_radps = 0.001;
   double sigma_terrain_m = 0.01;  ///< the floor at take-off is terrain height 0
 
   static const ParamSchema<InitParams>& schema();
