@@ -148,7 +148,6 @@ void Estimator::reset_to_alignment() {
 Outcome Estimator::add_range(const RangeSample& m) {
   if (!std::isfinite(m.range_m)) return reject(Sensor::kRange, Outcome::kNonFinite);
   if (m.utime <= 0) return reject(Sensor::kRange, Outcome::kAbsurd);
-  newest_other_utime_ = std::max(newest_other_utime_, m.utime);
   if (!m.valid) return reject(Sensor::kRange, Outcome::kInvalid);
   if (m.range_m < params_.range.min_range_m || m.range_m > params_.range.max_range_m)
     return reject(Sensor::kRange, Outcome::kOutOfRange);
@@ -164,7 +163,6 @@ Outcome Estimator::add_baro(const BaroSample& m) {
   if (!std::isfinite(m.pressure_pa)) return reject(Sensor::kBaro, Outcome::kNonFinite);
   if (m.utime <= 0 || m.pressure_pa < kMinPressurePa || m.pressure_pa > kMaxPressurePa)
     return reject(Sensor::kBaro, Outcome::kAbsurd);
-  newest_other_utime_ = std::max(newest_other_utime_, m.utime);
   Event e;
   e.utime = m.utime;
   e.order = 1;
@@ -185,7 +183,6 @@ Outcome Estimator::add_flow(const FlowSample& m) {
       (m.cov.diagonal().array() < 0).any() ||
       Eigen::LLT<Matrix3d>(Matrix3d(flow_noise(m, p))).info() != Eigen::Success)
     return reject(Sensor::kFlow, Outcome::kAbsurd);
-  newest_other_utime_ = std::max(newest_other_utime_, m.utime_to);
   if (m.utime_to - m.utime_from > to_us(p.max_span_s))
     return reject(Sensor::kFlow, Outcome::kGeometry);
   if (m.inliers < p.min_inliers) return reject(Sensor::kFlow, Outcome::kTooFewInliers);
@@ -203,6 +200,9 @@ Outcome Estimator::add_event(Event update, int64_t earliest_utime) {
   if (earliest_utime <= history_.front().s.utime) return reject(sensor, Outcome::kTooOld);
   const int64_t newest = newest_imu_utime();
   if (update.utime > newest + to_us(params_.max_ahead_s)) return reject(sensor, Outcome::kTooNew);
+  // Sensors running ahead of the IMU (within max_ahead_s, so that one absurd stamp cannot make
+  // the estimate lost for good) tell that the IMU has stopped.
+  newest_other_utime_ = std::max(newest_other_utime_, update.utime);
   const auto waiting = std::count_if(events_.begin(), events_.end(), [newest](const Event& e) {
     return !e.clone && e.utime > newest;
   });
@@ -465,7 +465,8 @@ State Estimator::state() const {
   const RangeModel range = range_model(s.x, params_.range.t_B_R_m, range_d_B_);
   if (range.range_m > params_.range.min_range_m && age_s(Sensor::kRange) > h.range_timeout_s)
     flag(kNoRange, Health::kDegraded);
-  if (age_s(Sensor::kBaro) > h.baro_timeout_s) flag(kNoBaro, Health::kDegraded);
+  if (h.baro_timeout_s > 0 && age_s(Sensor::kBaro) > h.baro_timeout_s)
+    flag(kNoBaro, Health::kDegraded);
   if (s.last_imu_gap_utime != 0 &&
       (s.utime - s.last_imu_gap_utime) / kUsPerS < h.imu_gap_recovery_s)
     flag(kImuGap, Health::kDegraded);

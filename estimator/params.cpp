@@ -158,8 +158,8 @@ const ParamSchema<HealthParams>& HealthParams::schema() {
           "no flow fused this long: DEGRADED");
     s.add("range_timeout_s", &P::range_timeout_s, Range::open_closed(0, 60), "s",
           "no range fused this long while above the rangefinder's min range: DEGRADED");
-    s.add("baro_timeout_s", &P::baro_timeout_s, Range::open_closed(0, 600), "s",
-          "no baro fused this long: DEGRADED");
+    s.add("baro_timeout_s", &P::baro_timeout_s, Range::closed(0, 600), "s",
+          "no baro fused this long: DEGRADED (0: no barometer expected)");
     s.add("imu_gap_s", &P::imu_gap_s, Range::open_closed(0, 1), "s",
           "an IMU interval longer than this is a gap (counted)");
     s.add("imu_gap_recovery_s", &P::imu_gap_recovery_s, Range::closed(0, 60), "s",
@@ -198,6 +198,9 @@ const ParamSchema<EstimatorParams>& EstimatorParams::schema() {
           "IMU samples and states kept for delayed measurements; older ones are refused");
     s.add("max_ahead_s", &P::max_ahead_s, Range::open_closed(0, 10), "s",
           "measurements stamped further ahead of the newest IMU sample are refused");
+    s.check(
+        "health.imu_lost_s", [](const P& p) { return p.health.imu_lost_s < p.max_ahead_s; },
+        "must be below max_ahead_s (samples further ahead are refused, so they cannot tell)");
     s.add("max_queued", &P::max_queued, Range::closed(1, 100000), "",
           "measurements waiting for the IMU to reach their time, at most");
     s.section("imu", &P::imu, ImuNoiseParams::schema(), "IMU noise model");

@@ -403,6 +403,9 @@ TEST(EstimatorTest, HealthDegradesWithoutFlowAndIsLostWhenTheImuStops) {
   EXPECT_TRUE(s.health_reasons & kNoFlow);
   EXPECT_FALSE(s.health_reasons & kNoRange);
   EXPECT_FALSE(s.health_reasons & kNoBaro);
+  // One sample stamped far ahead is refused and tells nothing about the IMU.
+  EXPECT_EQ(est.add_range({s.utime + 3'600'000'000LL, 1.15, true}), Outcome::kTooNew);
+  EXPECT_FALSE(est.state().health_reasons & kImuStopped);
   // The IMU stops; the rangefinder goes on.
   for (int i = 1; i <= 30; ++i) est.add_range({s.utime + i * 20000, 1.15, true});
   s = est.state();

@@ -46,6 +46,8 @@ TEST(EstimatorParamsTest, ErrorsNameTheFullKey) {
   EXPECT_NE(error_of("estimator:\n  flow:\n    mount: sideways\n").find("estimator.flow.mount"),
             std::string::npos);
   EXPECT_NE(error_of("estimator:\n  baro:\n    sigma: 1\n").find("sigma"), std::string::npos);
+  EXPECT_NE(error_of("estimator:\n  max_ahead_s: 0.1\n").find("estimator.health.imu_lost_s"),
+            std::string::npos);
 }
 
 TEST(EstimatorParamsTest, TheEstimatorRefusesInvalidParameters) {
