@@ -208,6 +208,14 @@ Outcome Estimator::add_event(Event update, int64_t earliest_utime) {
   });
   if (waiting >= params_.max_queued) return reject(sensor, Outcome::kQueueFull);
 
+  // The same stamp twice from one sensor is a repeated message: fusing it would count its
+  // information twice.
+  const auto same =
+      std::equal_range(events_.begin(), events_.end(), update, [](const Event& a, const Event& b) {
+        return a.utime != b.utime ? a.utime < b.utime : a.order < b.order;
+      });
+  if (same.first != same.second) return reject(sensor, Outcome::kDuplicate);
+
   update.seq = ++seq_;
   update.outcome = Outcome::kQueued;
   const Event key = update;

@@ -36,6 +36,8 @@ const char* to_string(Outcome o) {
       return "no_clone";
     case Outcome::kQueueFull:
       return "queue_full";
+    case Outcome::kDuplicate:
+      return "duplicate";
     case Outcome::kNumerical:
       return "numerical";
     case Outcome::kCount:

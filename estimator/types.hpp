@@ -67,6 +67,7 @@ enum class Outcome : uint8_t {
   kGeometry,        ///< flow span or camera height unusable
   kNoClone,         ///< flow whose clone could not be made (too many overlapping samples)
   kQueueFull,       ///< too many measurements waiting for the IMU
+  kDuplicate,       ///< the sensor's second sample with the same stamp (a repeated message)
   kNumerical,       ///< innovation covariance not positive definite / non-finite result
   kCount
 };

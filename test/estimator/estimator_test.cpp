@@ -7,6 +7,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <limits>
+#include <random>
 
 #include "common/geometry.hpp"
 #include "synthetic.hpp"
@@ -369,6 +370,67 @@ TEST(EstimatorTest, BadInputsAreCountedAndDroppedWithoutTouchingTheEstimate) {
   EXPECT_EQ(dirty.add_imu({now + kDtUs, Vector3d(0, 0, g), Vector3d::Zero()}), Outcome::kFused);
 }
 
+TEST(EstimatorTest, GarbageAmongTheInputsNeverCrashesNorCorruptsTheEstimate) {
+  // A hover with a third of the inputs spoiled: non-finite, huge or negative values, IMU stamps
+  // going back, measurement stamps anywhere within +-5 s, random covariances, repeats.
+  const EstimatorParams p = default_params(1.2);
+  const Flight f = test::simulate(test::hover(1.2, 1.2), 12.0, SensorConfig{}, p, 4);
+  std::mt19937_64 rng(99);
+  std::uniform_real_distribution<double> U(0.0, 1.0);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  auto junk = [&] {
+    const double r = U(rng);
+    return r < 0.2 ? nan : r < 0.3 ? -inf : r < 0.5 ? 1e9 * (U(rng) - 0.5) : 40 * (U(rng) - 0.5);
+  };
+  Estimator est(p);
+  int spoiled = 0;
+  for (test::Input in : f.inputs) {
+    if (U(rng) < 0.33) {
+      ++spoiled;
+      const int64_t jitter = static_cast<int64_t>((U(rng) - 0.5) * 10e6);
+      switch (in.kind) {
+        case test::Kind::kImu:
+          if (U(rng) < 0.5)
+            in.imu.accel_B[rng() % 3] = U(rng) < 0.5 ? nan : 1e6;
+          else
+            in.imu.utime -= static_cast<int64_t>(U(rng) * 1e6);
+          break;
+        case test::Kind::kRange:
+          in.range.range_m = junk();
+          in.range.utime += jitter;
+          in.range.valid = U(rng) < 0.8;
+          break;
+        case test::Kind::kBaro:
+          in.baro.pressure_pa = U(rng) < 0.5 ? junk() : 30000 + U(rng) * 80000;
+          in.baro.utime += U(rng) < 0.5 ? jitter : 0;
+          break;
+        case test::Kind::kFlow:
+          in.flow.t_over_d_C1[rng() % 3] = junk();
+          in.flow.cov(rng() % 3, rng() % 3) = junk();
+          in.flow.utime_from += U(rng) < 0.3 ? jitter : 0;
+          in.flow.inliers = static_cast<int>(rng() % 200) - 50;
+          break;
+      }
+    }
+    test::feed(est, in);
+    if (U(rng) < 0.05) test::feed(est, in);  // a repeated message
+    const State s = est.state();
+    ASSERT_TRUE(s.p_W_B.allFinite() && s.v_W_B.allFinite() && s.q_WB.coeffs().allFinite() &&
+                s.cov.allFinite());
+  }
+  const State s = est.state();
+  ASSERT_TRUE(s.initialised);
+  const test::Truth& truth = truth_at(f, s.utime);
+  EXPECT_LT((s.p_W_B - truth.p_W_B).norm(), 0.3) << s.p_W_B.transpose();
+  EXPECT_LT(s.v_W_B.norm(), 0.1);
+  EXPECT_GT(spoiled, 1000);
+  EXPECT_GT(s.counters.count(Sensor::kRange, Outcome::kDuplicate) +
+                s.counters.count(Sensor::kBaro, Outcome::kDuplicate) +
+                s.counters.count(Sensor::kFlow, Outcome::kDuplicate),
+            0);
+}
+
 TEST(EstimatorTest, MoreOverlappingFlowSamplesThanClonesAreRefused) {
   const EstimatorParams p = default_params(1.2);
   Estimator est(p);
@@ -378,12 +440,12 @@ TEST(EstimatorTest, MoreOverlappingFlowSamplesThanClonesAreRefused) {
   for (int i = 0; i < kMaxClones + 1; ++i) {
     FlowSample f;
     f.utime_from = t - (10 - i) * kDtUs;
-    f.utime_to = t + 10 * kDtUs;
+    f.utime_to = t + (10 + i) * kDtUs;
     f.cov = Matrix3d::Identity() * 1e-4;
     f.inliers = 50;
     EXPECT_EQ(est.add_flow(f), Outcome::kQueued);
   }
-  for (int i = 0; i < 10; ++i) est.add_imu(at_rest(t += kDtUs, p));
+  for (int i = 0; i < 20; ++i) est.add_imu(at_rest(t += kDtUs, p));
   const State s = est.state();
   EXPECT_EQ(s.counters.count(Sensor::kFlow, Outcome::kNoClone), 1);
   EXPECT_EQ(s.counters.fused(Sensor::kFlow), kMaxClones);
