@@ -130,7 +130,7 @@ void inject(FilterState& s, const ErrVec& dx) {
 }
 
 Outcome fuse(FilterState& s, const MeasVec& r, const MeasJac& H, const MeasCov& R, double gate_chi2,
-             double* nis) {
+             double* nis, bool heading_unobservable) {
   const int n = s.dim();
   const int m = static_cast<int>(r.size());
   assert(H.rows() == m && H.cols() == n && R.rows() == m && R.cols() == m);
@@ -147,11 +147,31 @@ Outcome fuse(FilterState& s, const MeasVec& r, const MeasJac& H, const MeasCov& 
   if (d2 > gate_chi2) return Outcome::kGate;
 
   // K = P H^T S^-1, computed as (S^-1 (P H^T)^T)^T.
-  const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxDim, 3> K =
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxDim, 3> K =
       llt.solve(PHt.transpose()).transpose();
+  if (heading_unobservable) {
+    // No sensor here measures the heading, yet the EKF's linearisation at changing estimates
+    // hands it spurious information through the correlations (Huang, Mourikis, Roumeliotis 2010;
+    // Hesch et al. 2014), and the heading and the gyro bias about the vertical then wander far
+    // beyond their variance. So the update leaves the heading alone: the gain's components of
+    // the attitude errors (core and clones) and of the gyro bias along the world vertical
+    // (expressed in body) are removed, a consider (Schmidt) update of that subspace.
+    auto drop_vertical = [&K](int row, const Matrix3d& R_WB) {
+      const Vector3d u = R_WB.transpose().col(2);
+      K.middleRows(row, 3) =
+          ((Matrix3d::Identity() - u * u.transpose()) * K.middleRows(row, 3)).eval();
+    };
+    const Matrix3d R_WB = s.x.q_WB.toRotationMatrix();
+    drop_vertical(idx::kTheta, R_WB);
+    drop_vertical(idx::kBg, R_WB);
+    for (int i = 0; i < s.n_clones; ++i)
+      drop_vertical(idx::kCore + kCloneDim * i + 3, s.clones[i].q_WB.toRotationMatrix());
+  }
   const ErrVec dx = K.lazyProduct(r);
   if (!dx.allFinite()) return Outcome::kNumerical;
-  Cov P = s.P - K.lazyProduct(PHt.transpose());
+  // Joseph's form expanded, valid for any gain: P - K H P - P H^T K^T + K S K^T.
+  const Cov KPH = K.lazyProduct(PHt.transpose());
+  Cov P = s.P - KPH - KPH.transpose() + K.lazyProduct(S).lazyProduct(K.transpose());
   P = (0.5 * (P + P.transpose())).eval();
   if (!P.allFinite() || (P.diagonal().array() < 0).any()) return Outcome::kNumerical;
   s.P = P;

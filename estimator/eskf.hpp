@@ -96,8 +96,10 @@ CoreMatrix transition_matrix(const Nominal& x, const Vector3d& accel_B, const Ve
 /// Applies residual r = z - h(x) with Jacobian H (rows of the error state) and noise R when the
 /// normalised innovation squared r' S^-1 r is within gate_chi2: Kalman update, injection into the
 /// nominal state (and clones), reset of the covariance. kGate or kNumerical leave s unchanged.
+/// heading_unobservable: the update does not touch the heading nor the gyro bias about the
+/// vertical (true of every sensor here: none measures the heading).
 Outcome fuse(FilterState& s, const MeasVec& r, const MeasJac& H, const MeasCov& R, double gate_chi2,
-             double* nis = nullptr);
+             double* nis = nullptr, bool heading_unobservable = true);
 
 /// Injects an error-state correction (Sola 6.2) and resets P (6.3, eq. 287).
 void inject(FilterState& s, const ErrVec& dx);

@@ -54,8 +54,8 @@ struct RangeParams {
   double sigma_rel = 0.01;            ///< [-]
   double max_tilt_deg = 30.0;         ///< beam further from vertical: refused [deg]
   double gate_chi2 = 25.0;            ///< chi-square gate (1 dof; 25 = 5 sigma)
-  double terrain_rw = 0.005;          ///< terrain random walk [m/sqrt(s)]
-  double terrain_gradient = 0.02;     ///< terrain change per metre flown, as noise [-]
+  double terrain_rw = 0.002;          ///< terrain random walk [m/sqrt(s)] (indoors: a flat floor)
+  double terrain_gradient = 0.005;    ///< terrain change per metre flown, as noise [-]
   double reset_window_s = 0.15;       ///< out of gate this long (consistently): platform step [s]
   int reset_min_samples = 4;          ///< ... and at least this many samples
   double reset_spread_m = 0.08;       ///< ... whose implied terrain heights agree this well [m]

@@ -12,6 +12,11 @@
 namespace alight::estimator {
 namespace {
 
+Vector3d test_log(const Quaterniond& q) {
+  const Eigen::AngleAxisd aa(q);
+  return aa.angle() * aa.axis();
+}
+
 Nominal some_state() {
   Nominal x;
   x.p_W_B = Vector3d(0.3, -0.7, 1.6);
@@ -194,6 +199,40 @@ TEST(EskfTest, GateRefusesAnOutlierAndLeavesTheStateAlone) {
   EXPECT_EQ(fuse(s, r, H, R, 25.0), Outcome::kFused);
   EXPECT_NEAR(s.x.p_W_B.z(), before.x.p_W_B.z() + 0.1 * 0.01 / 0.0101, 1e-12);
   EXPECT_NEAR(s.P(2, 2), 0.01 - 0.01 * 0.01 / 0.0101, 1e-12);
+}
+
+TEST(EskfTest, UpdatesLeaveTheHeadingAndTheVerticalGyroBiasAlone) {
+  // A covariance that correlates everything with everything, the vehicle tilted, a clone: a
+  // flow update moves position, velocity, tilt and biases but not the heading (no sensor here
+  // measures it), and the heading's variance does not shrink.
+  std::mt19937_64 rng(12);
+  std::normal_distribution<double> N;
+  Eigen::MatrixXd A(idx::kCore, idx::kCore);
+  for (int i = 0; i < A.size(); ++i) A.data()[i] = 0.05 * N(rng);
+  FilterState s;
+  s.x = some_state();
+  s.P = A * A.transpose() + 1e-4 * Eigen::MatrixXd::Identity(idx::kCore, idx::kCore);
+  ASSERT_TRUE(add_clone(s, 1));
+  s.x.p_W_B += Vector3d(0.03, 0.01, 0);
+  const FlowModel m = flow_model(s.x, s.clones[0], R_BC_downward(), Vector3d(0.1, 0, -0.06));
+  MeasJac H = MeasJac::Zero(3, s.dim());
+  H.leftCols<idx::kCore>() = m.H_core;
+  H.rightCols<kCloneDim>() = m.H_clone;
+  const MeasVec r = Vector3d(0.01, -0.02, 0.005);
+  const MeasCov R = MeasCov::Identity(3, 3) * 1e-4;
+  const FilterState before = s;
+  const Vector3d u_B = before.x.q_WB.toRotationMatrix().transpose().col(2);
+  ASSERT_EQ(fuse(s, r, H, R, 1e9), Outcome::kFused);
+  // The correction's attitude part has no component about the vertical.
+  const Vector3d dtheta = test_log(before.x.q_WB.conjugate() * s.x.q_WB);
+  EXPECT_GT(dtheta.norm(), 1e-4);
+  EXPECT_LT(std::abs(dtheta.dot(u_B)), 1e-12 + 1e-6 * dtheta.norm());
+  EXPECT_LT(std::abs((s.x.gyro_bias_B - before.x.gyro_bias_B).dot(u_B)), 1e-15);
+  EXPECT_GT((s.x.p_W_B - before.x.p_W_B).norm(), 1e-4);
+  // ... and the variance about the vertical is not reduced (to first order in the reset).
+  const double var_before = u_B.dot(before.P.block<3, 3>(idx::kTheta, idx::kTheta) * u_B);
+  const double var_after = u_B.dot(s.P.block<3, 3>(idx::kTheta, idx::kTheta) * u_B);
+  EXPECT_GT(var_after, var_before * 0.999);
 }
 
 TEST(EskfTest, IsaAltitudeKnownValuesAndRoundTrip) {
