@@ -41,7 +41,7 @@ Outcome Estimator::reject(Sensor sensor, Outcome why) {
   return why;
 }
 
-// ---- IMU and static alignment ----------------------------------------------------------------
+// ---- IMU and static alignment
 
 Outcome Estimator::add_imu(const ImuSample& imu) {
   if (!imu.accel_B.allFinite() || !imu.gyro_B.allFinite())
@@ -143,7 +143,7 @@ void Estimator::reset_to_alignment() {
   alignment_ = Alignment{};
 }
 
-// ---- Measurements ------------------------------------------------------------------------------
+// ---- Measurements
 
 Outcome Estimator::add_range(const RangeSample& m) {
   if (!std::isfinite(m.range_m)) return reject(Sensor::kRange, Outcome::kNonFinite);
@@ -242,7 +242,7 @@ Outcome Estimator::add_event(Event update, int64_t earliest_utime) {
   return it->outcome;
 }
 
-// ---- History: intervals, replay, pruning ------------------------------------------------------
+// ---- History: intervals, replay, pruning
 
 void Estimator::run_interval(FilterState& s, const ImuSample& imu) {
   if (imu.utime - s.utime > to_us(params_.health.imu_gap_s)) s.last_imu_gap_utime = imu.utime;
@@ -315,7 +315,7 @@ void Estimator::apply(Event& e, FilterState& s) {
   if (o == Outcome::kFused) s.last_fused_utime[static_cast<int>(e.sensor)] = e.utime;
 }
 
-// ---- Updates ----------------------------------------------------------------------------------
+// ---- Updates
 
 Outcome Estimator::apply_range(const RangeSample& m, FilterState& s) {
   const auto& p = params_.range;
@@ -435,7 +435,7 @@ Outcome Estimator::apply_flow(const FlowSample& m, int64_t key, FilterState& s) 
   return o;
 }
 
-// ---- Output -----------------------------------------------------------------------------------
+// ---- Output
 
 State Estimator::state() const {
   State out;

@@ -52,6 +52,17 @@ void expect_same_estimate(const State& a, const State& b) {
   EXPECT_EQ(a.cov, b.cov);
 }
 
+/// As expect_same_estimate, except the baro offset and its covariance row.
+void expect_same_estimate_but_baro(const State& a, const State& b) {
+  EXPECT_EQ(a.p_W_B, b.p_W_B);
+  EXPECT_EQ(a.v_W_B, b.v_W_B);
+  EXPECT_EQ(a.q_WB.coeffs(), b.q_WB.coeffs());
+  EXPECT_EQ(a.terrain_height_m, b.terrain_height_m);
+  const Eigen::Matrix<double, 15, 15> ca = a.cov.topLeftCorner<15, 15>();
+  const Eigen::Matrix<double, 15, 15> cb = b.cov.topLeftCorner<15, 15>();
+  EXPECT_EQ(ca, cb);
+}
+
 Estimator fly(const Flight& f, const EstimatorParams& p, size_t n_inputs = SIZE_MAX) {
   Estimator est(p);
   for (size_t i = 0; i < f.inputs.size() && i < n_inputs; ++i) test::feed(est, f.inputs[i]);
@@ -64,7 +75,7 @@ const test::Truth& truth_at(const Flight& f, int64_t utime) {
   return *it;
 }
 
-// ---- Initialisation -----------------------------------------------------------------------------
+// ---- Initialisation
 
 TEST(EstimatorTest, NotInitialisedUntilStillForTheAlignmentTimeThenLevelledFromTheAccelerometer) {
   EstimatorParams p = default_params();
@@ -111,7 +122,7 @@ TEST(EstimatorTest, NotInitialisedUntilStillForTheAlignmentTimeThenLevelledFromT
   EXPECT_EQ(st.counters.count(Sensor::kRange, Outcome::kNotInitialised), 1);
 }
 
-// ---- Analytic motions with perfect sensors ------------------------------------------------------
+// ---- Analytic motions with perfect sensors
 
 TEST(EstimatorTest, ConstantAccelerationGivesHalfATSquared) {
   const EstimatorParams p = default_params(1.0);
@@ -152,7 +163,7 @@ TEST(EstimatorTest, PureRotationFollowsTheAnalyticQuaternion) {
   EXPECT_LT(s.v_W_B.norm(), 1e-3);
 }
 
-// ---- A hover with every sensor -----------------------------------------------------------------
+// ---- A hover with every sensor
 
 TEST(EstimatorTest, StaticHoverStaysPutBiasesConvergeCovarianceBounded) {
   // A perfect hover at 1.2 m (the specific force of a hover is that of rest, so the alignment
@@ -189,7 +200,7 @@ TEST(EstimatorTest, StaticHoverStaysPutBiasesConvergeCovarianceBounded) {
   EXPECT_GT(s.counters.fused(Sensor::kBaro), 800);
 }
 
-// ---- Platform step -----------------------------------------------------------------------------
+// ---- Platform step
 
 TEST(EstimatorTest, RangeStepOntoAPlatformResetsTheTerrainNotTheVehicleHeight) {
   // Hover at 1.5 m, then the first leg of a square (+x, 1 m/s) crosses a 0.5 m platform from
@@ -218,7 +229,6 @@ TEST(EstimatorTest, RangeStepOntoAPlatformResetsTheTerrainNotTheVehicleHeight) {
 }
 
 // ---- Gating
-// --------------------------------------------------------------------------------------
 
 TEST(EstimatorTest, AnOutlierOfEachSensorIsGatedAndChangesNothing) {
   const EstimatorParams p = default_params(1.2);
@@ -251,7 +261,6 @@ TEST(EstimatorTest, AnOutlierOfEachSensorIsGatedAndChangesNothing) {
 }
 
 // ---- Delayed measurements and replay
-// -------------------------------------------------------------
 
 TEST(EstimatorTest, DelayedMeasurementsGiveTheSameBitsAsOnTimeOnes) {
   const EstimatorParams p = default_params();
@@ -287,7 +296,6 @@ TEST(EstimatorTest, TheSameInputsTwiceGiveBitIdenticalStates) {
 }
 
 // ---- Bad inputs
-// ------------------------------------------------------------------------------------
 
 TEST(EstimatorTest, BadInputsAreCountedAndDroppedWithoutTouchingTheEstimate) {
   const EstimatorParams p = default_params(1.2);
@@ -451,8 +459,37 @@ TEST(EstimatorTest, MoreOverlappingFlowSamplesThanClonesAreRefused) {
   EXPECT_EQ(s.counters.fused(Sensor::kFlow), kMaxClones);
 }
 
+TEST(EstimatorTest, TheFirstBaroReadingSetsTheOffsetWithoutMovingTheHeight) {
+  const EstimatorParams p = default_params();
+  Estimator est(p);
+  int64_t t = align(est);
+  est.add_imu(at_rest(t += kDtUs, p));
+  const State before = est.state();
+  EXPECT_EQ(est.add_baro({t, isa_pressure_pa(412.0)}), Outcome::kFused);
+  const State after = est.state();
+  EXPECT_NEAR(after.baro_offset_m, 412.0 - kRestZ, 1e-6);
+  expect_same_estimate_but_baro(before, after);
+  // Later readings are fused against it; one 3 m off is refused.
+  est.add_imu(at_rest(t += kDtUs, p));
+  EXPECT_EQ(est.add_baro({t, isa_pressure_pa(412.05)}), Outcome::kFused);
+  est.add_imu(at_rest(t += kDtUs, p));
+  EXPECT_EQ(est.add_baro({t, isa_pressure_pa(415.0)}), Outcome::kGate);
+}
+
+TEST(EstimatorTest, OnTheFloorNoRangeIsExpectedAndHealthIsOk) {
+  // Resting on the floor: the rangefinder sits in its blind zone (readings invalid), the flow
+  // sees no motion, the baro reads the take-off altitude.
+  const EstimatorParams p = default_params();
+  const Flight f = test::simulate(test::hover(kRestZ, kRestZ), 5.0, SensorConfig{}, p, 6);
+  const Estimator est = fly(f, p);
+  const State s = est.state();
+  EXPECT_EQ(s.health, Health::kOk) << health_reasons_text(s.health_reasons);
+  EXPECT_EQ(s.counters.fused(Sensor::kRange), 0);
+  EXPECT_GT(s.counters.count(Sensor::kRange, Outcome::kInvalid), 100);
+  EXPECT_LT((s.p_W_B - Vector3d(0, 0, kRestZ)).norm(), 0.02);
+}
+
 // ---- Health
-// --------------------------------------------------------------------------------------
 
 TEST(EstimatorTest, HealthDegradesWithoutFlowAndIsLostWhenTheImuStops) {
   const EstimatorParams p = default_params(1.2);
