@@ -91,9 +91,8 @@ int main(int argc, char** argv) {
     node.every(10.0, [&](int64_t) {
       const estimator::State s = onboard.state();
       spdlog::info("estimator: {} ({}), p_W [{:.2f} {:.2f} {:.2f}] m, terrain {:.2f} m",
-                   estimator::to_string(s.health),
-                   estimator::health_reasons_text(s.health_reasons), s.p_W_B.x(), s.p_W_B.y(),
-                   s.p_W_B.z(), s.terrain_height_m);
+                   estimator::to_string(s.health), estimator::health_reasons_text(s.health_reasons),
+                   s.p_W_B.x(), s.p_W_B.y(), s.p_W_B.z(), s.terrain_height_m);
     });
     spdlog::info("alight-estimator: camera {} ({}x{}), publishing {} and {}", mount.name,
                  camera.width, camera.height, channels::kStateEstimate, channels::kEstimatePose);

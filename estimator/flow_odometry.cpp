@@ -419,7 +419,7 @@ std::optional<Vector2d> predict_pixel(const CameraModel& camera, const Vector3d&
 
 // --- Front end ---------------------------------------------------------------------------------
 
-FlowOdometry::FlowOdometry(const FlowParams& params, const CameraModel& camera)
+FlowOdometry::FlowOdometry(const FlowFrontParams& params, const CameraModel& camera)
     : params_(params), camera_(camera) {
   params_.validate();
   camera_.validate();

@@ -54,27 +54,11 @@
 
 #include "common/camera_model.hpp"
 #include "estimator/flow_params.hpp"
+#include "estimator/types.hpp"
 
 namespace alight::estimator {
 
-/// One measurement between two consecutive frames.
-struct FlowSample {
-  int64_t utime_from = 0;  ///< exposure (middle) of the first frame [us]
-  int64_t utime_to = 0;    ///< exposure (middle) of the second frame [us]
-  /// p_C1_C2 / d: camera translation from the first to the second exposure, in the first
-  /// camera's frame, over the first camera's distance to the floor [-].
-  Eigen::Vector3d t_over_d_C1 = Eigen::Vector3d::Zero();
-  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();  ///< covariance of t_over_d_C1 [-^2]
-  int inliers = 0;                                ///< correspondences on the floor [-]
-  /// Sensitivity to an error of the rotation passed in: given R_C2C1 Exp(theta) instead of
-  /// R_C2C1 (theta in C1), the output moves by J_rotation theta [1/rad]. About 1 per radian
-  /// across the optical axis: a gyro error looks like a translation (bas-relief ambiguity).
-  Eigen::Matrix3d J_rotation = Eigen::Matrix3d::Zero();
-  /// Sensitivity to an error of the normal passed in: given (n_C1 + delta) / |n_C1 + delta|,
-  /// the output moves by J_normal delta [-].
-  Eigen::Matrix3d J_normal = Eigen::Matrix3d::Zero();
-  double residual_rms_px = 0.0;  ///< inliers' reprojection error, root mean square [px]
-};
+/// One measurement between two consecutive frames: FlowSample (estimator/types.hpp).
 
 /// Why a frame pair gave no sample. kOk exactly when there is one.
 enum class FlowReason : int8_t {
@@ -140,7 +124,7 @@ struct FlowResult {
 class FlowOdometry {
  public:
   /// Throws ParamError (params.validate(), camera.validate()) on a bad configuration.
-  FlowOdometry(const FlowParams& params, const CameraModel& camera);
+  FlowOdometry(const FlowFrontParams& params, const CameraModel& camera);
 
   /// The next frame (mono8, camera-sized) with its exposure time, the rotation R_C2C1 from the
   /// previous frame passed here to this one (gyro), and the unit floor normal in the previous
@@ -158,14 +142,14 @@ class FlowOdometry {
   const std::array<int64_t, kNumFlowReasons>& counts() const { return counts_; }
   /// The current frame's features, full-resolution pixels (diagnostics).
   std::vector<Eigen::Vector2d> feature_pixels() const;
-  const FlowParams& params() const { return params_; }
+  const FlowFrontParams& params() const { return params_; }
   const CameraModel& camera() const { return camera_; }
 
  private:
   FlowResult finish(FlowResult r);
   void detect(int already_tracked, FlowResult& r);
 
-  FlowParams params_;
+  FlowFrontParams params_;
   CameraModel camera_;
   double level_scale_ = 1.0;  // full-resolution pixels per tracking-level pixel
   cv::Size level_size_;

@@ -95,8 +95,8 @@ const ParamSchema<FlowFitParams>& FlowFitParams::schema() {
 
 void FlowFitParams::validate() const { schema().validate(*this); }
 
-const ParamSchema<FlowParams>& FlowParams::schema() {
-  using P = FlowParams;
+const ParamSchema<FlowFrontParams>& FlowFrontParams::schema() {
+  using P = FlowFrontParams;
   static const ParamSchema<P> schema = [] {
     ParamSchema<P> s;
     s.section("track", &P::track, FlowTrackParams::schema(), "feature detection and tracking");
@@ -109,6 +109,6 @@ const ParamSchema<FlowParams>& FlowParams::schema() {
   return schema;
 }
 
-void FlowParams::validate() const { schema().validate(*this); }
+void FlowFrontParams::validate() const { schema().validate(*this); }
 
 }  // namespace alight::estimator

@@ -53,12 +53,12 @@ struct FlowFitParams {
 };
 
 /// Keys `estimator.flow.*`.
-struct FlowParams {
+struct FlowFrontParams {
   FlowTrackParams track;
   FlowFitParams fit;
   double max_gap_s = 0.2;  ///< frames further apart make no pair [s]
 
-  static const ParamSchema<FlowParams>& schema();
+  static const ParamSchema<FlowFrontParams>& schema();
   void validate() const;  ///< throws ParamError naming the key (below `flow.`) and its value
 };
 

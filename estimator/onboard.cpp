@@ -21,7 +21,7 @@ Onboard::Onboard(const EstimatorParams& params, const CameraModel& camera)
     : params_(params),
       filter_(params),
       flow_(params.flow.front, camera),
-      R_BC_(params.flow.R_BC) {}
+      R_BC_(params.flow.R_BC()) {}
 
 Outcome Onboard::add_imu(const ImuSample& imu) {
   const Outcome out = filter_.add_imu(imu);

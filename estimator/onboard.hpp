@@ -19,7 +19,7 @@ namespace alight::estimator {
 
 /// What happened to a camera frame.
 struct FrameOutcome {
-  bool queued = false;  ///< waits for the IMU to reach its exposure time
+  bool queued = false;   ///< waits for the IMU to reach its exposure time
   bool dropped = false;  ///< the frame queue was full (the IMU stalled): the oldest dropped
   FlowReason flow = FlowReason::kNoPrevious;  ///< the front end's verdict (when processed)
   Outcome fused = Outcome::kQueued;           ///< the filter's verdict on the flow sample

@@ -73,7 +73,7 @@ const std::vector<Frame>& flight(const std::string& floor) {
 
 void BM_FlowFrame(benchmark::State& state, const std::string& floor) {
   const auto& frames = flight(floor);
-  FlowParams params;
+  FlowFrontParams params;
   params.track.downsample = static_cast<int>(state.range(0));
   params.track.max_features = static_cast<int>(state.range(1));
   params.track.min_tracks = params.track.max_features * 5 / 8;

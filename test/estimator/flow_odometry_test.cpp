@@ -453,7 +453,7 @@ struct FlightStats {
 };
 
 FlightStats fly(const sim::Scene& scene, const std::vector<Frame>& frames,
-                const FlowParams& params = {}, uint64_t noise_seed = 1) {
+                const FlowFrontParams& params = {}, uint64_t noise_seed = 1) {
   const sim::Renderer renderer(kCam);
   FlowOdometry flow(params, kCam);
   FlightStats s;
@@ -560,7 +560,7 @@ TEST(FlowRenderedTest, PlatformsInViewDoNotBiasTheFloorEstimate) {
   for (const Case& c : cases) {
     sim::Scene scene = floor_scene("noise");
     add_box(scene, Vector3d(0.1, 0.05, 0.3), c.size_m, c.texture);
-    FlowParams params;
+    FlowFrontParams params;
     if (c.detect_every_frame) params.track.min_tracks = params.track.max_features;
     const FlightStats s = fly(scene, frames, params);
     s.print(c.name);
@@ -590,7 +590,7 @@ TEST(FlowRenderedTest, APlatformFillingTheViewIsTakenForTheFloor) {
   add_box(scene, Vector3d(0, 0, 0), Vector3d(2.0, 1.6, top_m),
           spec("blobs", 1024, 0.002, 150, 0.02));
   const sim::Renderer renderer(kCam);
-  FlowOdometry flow(FlowParams{}, kCam);
+  FlowOdometry flow(FlowFrontParams{}, kCam);
   for (size_t k = 0; k < frames.size(); ++k) {
     const PairTruth t = k ? truth_of(frames[k - 1], frames[k]) : PairTruth{};
     const FlowResult r = flow.add_frame(render(renderer, scene, frames[k], k), frames[k].utime,
@@ -621,7 +621,7 @@ TEST(FlowRenderedTest, PropertyManySeededRandomMotionsAreWithinTheirCovariance) 
     f.omega_mean_B = Vector3d(u(rng), u(rng), u(rng)) * 30 * kDeg;
     f.omega_amp_B = Vector3d(u(rng), u(rng), u(rng)) * 30 * kDeg;
     f.frames = 3;
-    const FlightStats s = fly(scenes[which], frames_of(f), FlowParams{}, trial + 1);
+    const FlightStats s = fly(scenes[which], frames_of(f), FlowFrontParams{}, trial + 1);
     pairs += s.pairs;
     samples += s.samples;
     int k = 0;
@@ -675,7 +675,7 @@ TEST(FlowRenderedTest, RefusedFramesAndInputsAreCountedAndRecoveredFrom) {
   const auto frames = frames_of(f);
   const sim::Scene scene = floor_scene("noise");
   const sim::Renderer renderer(kCam);
-  FlowOdometry flow(FlowParams{}, kCam);
+  FlowOdometry flow(FlowFrontParams{}, kCam);
   auto img = [&](size_t k) { return render(renderer, scene, frames[k], k); };
   auto add = [&](size_t k, const cv::Mat& image, int64_t utime) {
     const PairTruth t = truth_of(frames[k - 1], frames[k]);
@@ -742,18 +742,18 @@ INSTANTIATE_TEST_SUITE_P(Floors, FlowRenderedFloorTest,
 
 // --- Parameters --------------------------------------------------------------------------------
 
-FlowParams read_flow(const std::string& yaml) {
+FlowFrontParams read_flow(const std::string& yaml) {
   const ParamNode root = ParamNode::from_string(yaml, "v.yaml");
-  FlowParams p;
-  FlowParams::schema().read(root.child("estimator").child("flow"), p);
+  FlowFrontParams p;
+  FlowFrontParams::schema().read(root.child("estimator").child("flow").child("front"), p);
   return p;
 }
 
 TEST(FlowParamsTest, DefaultsAreValidAndKeysAreRead) {
-  EXPECT_NO_THROW(FlowParams{}.validate());
-  const FlowParams p = read_flow(
-      "estimator: {flow: {max_gap_s: 0.1, track: {max_features: 300, downsample: 1}, "
-      "fit: {inlier_threshold_px: 1.5, seed: 3}}}");
+  EXPECT_NO_THROW(FlowFrontParams{}.validate());
+  const FlowFrontParams p = read_flow(
+      "estimator: {flow: {front: {max_gap_s: 0.1, track: {max_features: 300, downsample: 1}, "
+      "fit: {inlier_threshold_px: 1.5, seed: 3}}}}");
   EXPECT_EQ(p.max_gap_s, 0.1);
   EXPECT_EQ(p.track.max_features, 300);
   EXPECT_EQ(p.fit.inlier_threshold_px, 1.5);
@@ -764,17 +764,18 @@ TEST(FlowParamsTest, ErrorsNameTheFullKey) {
   auto error = [](const std::string& yaml) {
     return test::expect_param_error([&] { read_flow(yaml); });
   };
-  EXPECT_EQ(error("estimator: {flow: {fit: {min_inliers: 1}}}").key(),
-            "estimator.flow.fit.min_inliers");
-  EXPECT_EQ(error("estimator: {flow: {track: {max_features: 50, min_tracks: 60}}}").key(),
-            "estimator.flow.track.min_tracks");
-  EXPECT_EQ(error("estimator: {flow: {max_gap_s: -1}}").key(), "estimator.flow.max_gap_s");
-  EXPECT_EQ(error("estimator: {flow: {track: {downsample: 3}}}").key(),
-            "estimator.flow.track.downsample");
-  EXPECT_EQ(error("estimator: {flow: {fit: {ransac_confidence: 1}}}").key(),
-            "estimator.flow.fit.ransac_confidence");
-  EXPECT_EQ(error("estimator: {flow: {fitt: {}}}").key(), "estimator.flow.fitt");
-  const ParamError e = error("estimator: {flow: {track: {max_fb_error_px: 0}}}");
+  EXPECT_EQ(error("estimator: {flow: {front: {fit: {min_inliers: 1}}}}").key(),
+            "estimator.flow.front.fit.min_inliers");
+  EXPECT_EQ(error("estimator: {flow: {front: {track: {max_features: 50, min_tracks: 60}}}}").key(),
+            "estimator.flow.front.track.min_tracks");
+  EXPECT_EQ(error("estimator: {flow: {front: {max_gap_s: -1}}}").key(),
+            "estimator.flow.front.max_gap_s");
+  EXPECT_EQ(error("estimator: {flow: {front: {track: {downsample: 3}}}}").key(),
+            "estimator.flow.front.track.downsample");
+  EXPECT_EQ(error("estimator: {flow: {front: {fit: {ransac_confidence: 1}}}}").key(),
+            "estimator.flow.front.fit.ransac_confidence");
+  EXPECT_EQ(error("estimator: {flow: {front: {fitt: {}}}}").key(), "estimator.flow.front.fitt");
+  const ParamError e = error("estimator: {flow: {front: {track: {max_fb_error_px: 0}}}}");
   EXPECT_EQ(e.file(), "v.yaml");
   EXPECT_NE(std::string(e.what()).find("px"), std::string::npos) << e.what();
 }

@@ -1,0 +1,504 @@
+#include "estimator/estimator.hpp"
+
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+
+#include "common/geometry.hpp"
+
+namespace alight::estimator {
+
+namespace {
+constexpr double kUsPerS = 1e6;
+// A barometer reading outside this is not an altitude anyone flies at (about -600 m to 9 km).
+constexpr double kMinPressurePa = 30000.0;
+constexpr double kMaxPressurePa = 110000.0;
+
+int64_t to_us(double s) { return static_cast<int64_t>(std::llround(s * kUsPerS)); }
+
+bool event_before(const auto& a, const auto& b) {
+  if (a.utime != b.utime) return a.utime < b.utime;
+  if (a.order != b.order) return a.order < b.order;
+  return a.seq < b.seq;
+}
+
+MeasCov flow_noise(const FlowSample& m, const FlowParams& p) {
+  MeasCov R = 0.5 * p.cov_scale * (m.cov + m.cov.transpose());
+  R.diagonal().array() += p.sigma_floor * p.sigma_floor;
+  return R;
+}
+}  // namespace
+
+Estimator::Estimator(const EstimatorParams& params) : params_(params) {
+  params_.validate();
+  range_d_B_ = params_.range.d_B.normalized();
+  R_BC_ = params_.flow.R_BC();
+}
+
+Outcome Estimator::reject(Sensor sensor, Outcome why) {
+  ++counters_.by_outcome[static_cast<int>(sensor)][static_cast<int>(why)];
+  return why;
+}
+
+// ---- IMU and static alignment
+
+Outcome Estimator::add_imu(const ImuSample& imu) {
+  if (!imu.accel_B.allFinite() || !imu.gyro_B.allFinite())
+    return reject(Sensor::kImu, Outcome::kNonFinite);
+  if (imu.utime <= 0 || imu.accel_B.norm() > params_.imu.max_accel_mps2 ||
+      imu.gyro_B.norm() > params_.imu.max_gyro_radps)
+    return reject(Sensor::kImu, Outcome::kAbsurd);
+  if (last_imu_utime_ != 0 && imu.utime <= last_imu_utime_)
+    return reject(Sensor::kImu, Outcome::kOutOfOrder);
+  const int64_t dt_us = last_imu_utime_ != 0 ? imu.utime - last_imu_utime_ : 0;
+  last_imu_utime_ = imu.utime;
+  ++counters_.by_outcome[static_cast<int>(Sensor::kImu)][static_cast<int>(Outcome::kFused)];
+  if (dt_us > to_us(params_.health.imu_gap_s)) ++counters_.imu_gaps;
+
+  if (initialised() && dt_us > to_us(params_.max_ahead_s)) {
+    // Too long to bridge by holding one sample: the attitude and velocity are unknown. Start
+    // over with a static alignment (which waits for the vehicle to be still).
+    reset_to_alignment();
+  }
+  if (!initialised()) {
+    align(imu);
+    return Outcome::kFused;
+  }
+  Checkpoint& next = history_.push_copy_of_back();
+  next.imu = imu;
+  run_interval(next.s, imu);
+  prune();
+  return Outcome::kFused;
+}
+
+void Estimator::align(const ImuSample& imu) {
+  const auto& p = params_.init;
+  const bool still = std::abs(imu.accel_B.norm() - params_.gravity_mps2) <= p.accel_tol_mps2 &&
+                     imu.gyro_B.norm() <= p.gyro_tol_radps;
+  const bool gap =
+      alignment_.n > 0 && imu.utime - alignment_.last_utime > to_us(params_.health.imu_gap_s);
+  if (!still || gap) alignment_ = Alignment{};
+  if (!still) return;
+  if (alignment_.n == 0) alignment_.start_utime = imu.utime;
+  alignment_.accel_sum += imu.accel_B;
+  alignment_.gyro_sum += imu.gyro_B;
+  ++alignment_.n;
+  alignment_.last_utime = imu.utime;
+  if (alignment_.last_utime - alignment_.start_utime >= to_us(p.duration_s))
+    start(imu, alignment_.accel_sum / alignment_.n, alignment_.gyro_sum / alignment_.n);
+}
+
+void Estimator::start(const ImuSample& last, const Vector3d& accel_mean,
+                      const Vector3d& gyro_mean) {
+  const auto& p = params_.init;
+  // At rest the specific force is R_WB^T (0, 0, g): roll and pitch from its direction, yaw and
+  // position from the parameters (the take-off point). Earth rate (7e-5 rad/s) is below the
+  // gyro's noise over the alignment and is left in the bias.
+  const double roll = std::atan2(accel_mean.y(), accel_mean.z());
+  const double pitch = std::atan2(-accel_mean.x(), std::hypot(accel_mean.y(), accel_mean.z()));
+  const Matrix3d R_WB = rotation_from_rpy(roll, pitch, p.yaw_deg * M_PI / 180.0);
+
+  FilterState s;
+  s.utime = last.utime;
+  s.x.p_W_B = p.p_W_B_m;
+  s.x.q_WB = Quaterniond(R_WB).normalized();
+  s.x.gyro_bias_B = gyro_mean;
+  s.x.terrain_m = 0.0;
+  s.P = Cov::Zero(idx::kCore, idx::kCore);
+  s.P.block<3, 3>(idx::kP, idx::kP).diagonal().setConstant(p.sigma_p_m * p.sigma_p_m);
+  s.P.block<3, 3>(idx::kV, idx::kV).diagonal().setConstant(p.sigma_v_mps * p.sigma_v_mps);
+  // Roll / pitch and yaw sigmas are about world axes; the error state is in body axes.
+  const Vector3d att_var_W(p.sigma_roll_pitch_rad * p.sigma_roll_pitch_rad,
+                           p.sigma_roll_pitch_rad * p.sigma_roll_pitch_rad,
+                           p.sigma_yaw_rad * p.sigma_yaw_rad);
+  const Matrix3d P_ba = Matrix3d::Identity() * p.sigma_accel_bias_mps2 * p.sigma_accel_bias_mps2;
+  // The levelled attitude absorbs the horizontal accelerometer bias: f = R^T g_W + b gives
+  // [g_B]x dtheta = -b_perp, so dtheta = A db with A = [g_B]x / g^2 (g_B = R^T (0, 0, g)). The
+  // tilt error and the bias error are one error, and P says so.
+  const Vector3d g_B = R_WB.transpose() * Vector3d(0.0, 0.0, params_.gravity_mps2);
+  const Matrix3d A = skew(g_B) / (params_.gravity_mps2 * params_.gravity_mps2);
+  s.P.block<3, 3>(idx::kTheta, idx::kTheta) =
+      R_WB.transpose() * att_var_W.asDiagonal() * R_WB + A * P_ba * A.transpose();
+  s.P.block<3, 3>(idx::kTheta, idx::kBa) = A * P_ba;
+  s.P.block<3, 3>(idx::kBa, idx::kTheta) = (A * P_ba).transpose();
+  s.P.block<3, 3>(idx::kBa, idx::kBa) = P_ba;
+  s.P.block<3, 3>(idx::kBg, idx::kBg)
+      .diagonal()
+      .setConstant(p.sigma_gyro_bias_radps * p.sigma_gyro_bias_radps);
+  s.P(idx::kBaro, idx::kBaro) = 1.0;  // replaced by the first baro reading
+  s.P(idx::kTerrain, idx::kTerrain) = p.sigma_terrain_m * p.sigma_terrain_m;
+  s.last_fused_utime.fill(s.utime);
+  s.last_outcome.fill(Outcome::kFused);
+  history_.push_back(Checkpoint{s, last});
+  alignment_ = Alignment{};
+}
+
+void Estimator::reset_to_alignment() {
+  // Measurements still waiting never get fused: counted as refused for want of a state.
+  for (const Event& e : events_)
+    if (!e.clone && e.outcome == Outcome::kQueued) reject(e.sensor, Outcome::kNotInitialised);
+  history_.clear();
+  events_.clear();
+  alignment_ = Alignment{};
+}
+
+// ---- Measurements
+
+Outcome Estimator::add_range(const RangeSample& m) {
+  if (!std::isfinite(m.range_m)) return reject(Sensor::kRange, Outcome::kNonFinite);
+  if (m.utime <= 0) return reject(Sensor::kRange, Outcome::kAbsurd);
+  if (!m.valid) return reject(Sensor::kRange, Outcome::kInvalid);
+  if (m.range_m < params_.range.min_range_m || m.range_m > params_.range.max_range_m)
+    return reject(Sensor::kRange, Outcome::kOutOfRange);
+  Event e;
+  e.utime = m.utime;
+  e.order = 0;
+  e.sensor = Sensor::kRange;
+  e.range = m;
+  return add_event(std::move(e), m.utime);
+}
+
+Outcome Estimator::add_baro(const BaroSample& m) {
+  if (!std::isfinite(m.pressure_pa)) return reject(Sensor::kBaro, Outcome::kNonFinite);
+  if (m.utime <= 0 || m.pressure_pa < kMinPressurePa || m.pressure_pa > kMaxPressurePa)
+    return reject(Sensor::kBaro, Outcome::kAbsurd);
+  Event e;
+  e.utime = m.utime;
+  e.order = 1;
+  e.sensor = Sensor::kBaro;
+  e.baro = m;
+  return add_event(std::move(e), m.utime);
+}
+
+Outcome Estimator::add_flow(const FlowSample& m) {
+  const auto& p = params_.flow;
+  if (!m.t_over_d_C1.allFinite() || !m.cov.allFinite())
+    return reject(Sensor::kFlow, Outcome::kNonFinite);
+  if (m.utime_from <= 0 || m.utime_to <= m.utime_from || m.t_over_d_C1.norm() > p.max_t_over_d)
+    return reject(Sensor::kFlow, Outcome::kAbsurd);
+  // A covariance must be symmetric and, with the floor added, positive definite.
+  const double scale = std::max(1e-12, m.cov.cwiseAbs().maxCoeff());
+  if ((m.cov - m.cov.transpose()).cwiseAbs().maxCoeff() > 1e-6 * scale ||
+      (m.cov.diagonal().array() < 0).any() ||
+      Eigen::LLT<Matrix3d>(Matrix3d(flow_noise(m, p))).info() != Eigen::Success)
+    return reject(Sensor::kFlow, Outcome::kAbsurd);
+  if (m.utime_to - m.utime_from > to_us(p.max_span_s))
+    return reject(Sensor::kFlow, Outcome::kGeometry);
+  if (m.inliers < p.min_inliers) return reject(Sensor::kFlow, Outcome::kTooFewInliers);
+  Event e;
+  e.utime = m.utime_to;
+  e.order = 2;
+  e.sensor = Sensor::kFlow;
+  e.flow = m;
+  return add_event(std::move(e), m.utime_from);
+}
+
+Outcome Estimator::add_event(Event update, int64_t earliest_utime) {
+  const Sensor sensor = update.sensor;
+  if (!initialised()) return reject(sensor, Outcome::kNotInitialised);
+  if (earliest_utime <= history_.front().s.utime) return reject(sensor, Outcome::kTooOld);
+  const int64_t newest = newest_imu_utime();
+  if (update.utime > newest + to_us(params_.max_ahead_s)) return reject(sensor, Outcome::kTooNew);
+  // Sensors running ahead of the IMU (within max_ahead_s, so that one absurd stamp cannot make
+  // the estimate lost for good) tell that the IMU has stopped.
+  newest_other_utime_ = std::max(newest_other_utime_, update.utime);
+  const auto waiting = std::count_if(events_.begin(), events_.end(), [newest](const Event& e) {
+    return !e.clone && e.utime > newest;
+  });
+  if (waiting >= params_.max_queued) return reject(sensor, Outcome::kQueueFull);
+
+  // The same stamp twice from one sensor is a repeated message: fusing it would count its
+  // information twice.
+  const auto same =
+      std::equal_range(events_.begin(), events_.end(), update, [](const Event& a, const Event& b) {
+        return a.utime != b.utime ? a.utime < b.utime : a.order < b.order;
+      });
+  if (same.first != same.second) return reject(sensor, Outcome::kDuplicate);
+
+  update.seq = ++seq_;
+  update.outcome = Outcome::kQueued;
+  const Event key = update;
+  auto insert = [this](Event e) {
+    events_.insert(
+        std::upper_bound(events_.begin(), events_.end(), e,
+                         [](const Event& a, const Event& b) { return event_before(a, b); }),
+        std::move(e));
+  };
+  if (sensor == Sensor::kFlow) {
+    // The clone of the pose at the first exposure, made when the replay passes utime_from.
+    Event clone = update;
+    clone.utime = update.flow.utime_from;
+    clone.order = 3;
+    clone.clone = true;
+    insert(std::move(clone));
+  }
+  insert(std::move(update));
+  if (earliest_utime <= newest) replay_from(earliest_utime);
+  const auto it =
+      std::lower_bound(events_.begin(), events_.end(), key,
+                       [](const Event& a, const Event& b) { return event_before(a, b); });
+  assert(it != events_.end() && it->seq == key.seq && !it->clone);
+  return it->outcome;
+}
+
+// ---- History: intervals, replay, pruning
+
+void Estimator::run_interval(FilterState& s, const ImuSample& imu) {
+  if (imu.utime - s.utime > to_us(params_.health.imu_gap_s)) s.last_imu_gap_utime = imu.utime;
+  const auto first = std::upper_bound(events_.begin(), events_.end(), s.utime,
+                                      [](int64_t t, const Event& e) { return t < e.utime; });
+  for (auto it = first; it != events_.end() && it->utime <= imu.utime; ++it) {
+    if (it->utime > s.utime) {
+      propagate(s, imu.accel_B, imu.gyro_B, (it->utime - s.utime) / kUsPerS, params_);
+      s.utime = it->utime;
+    }
+    apply(*it, s);
+  }
+  if (imu.utime > s.utime) {
+    propagate(s, imu.accel_B, imu.gyro_B, (imu.utime - s.utime) / kUsPerS, params_);
+    s.utime = imu.utime;
+  }
+}
+
+void Estimator::replay_from(int64_t utime) {
+  size_t k = history_.size() - 1;
+  while (k > 0 && history_[k].s.utime >= utime) --k;
+  assert(history_[k].s.utime < utime);
+  if (k + 1 == history_.size()) return;
+  replay_imu_.clear();
+  for (size_t j = k + 1; j < history_.size(); ++j) replay_imu_.push_back(history_[j].imu);
+  history_.truncate(k + 1);
+  for (const ImuSample& imu : replay_imu_) {
+    Checkpoint& next = history_.push_copy_of_back();
+    next.imu = imu;
+    run_interval(next.s, imu);
+  }
+  ++counters_.replays;
+}
+
+void Estimator::prune() {
+  const int64_t horizon = newest_imu_utime() - to_us(params_.history_s);
+  while (history_.size() > 1 && history_[1].s.utime <= horizon) history_.pop_front();
+  // Events at or before the oldest checkpoint are in it for good; their outcomes are final.
+  const int64_t oldest = history_.front().s.utime;
+  const auto end = std::upper_bound(events_.begin(), events_.end(), oldest,
+                                    [](int64_t t, const Event& e) { return t < e.utime; });
+  events_.erase(events_.begin(), end);
+}
+
+void Estimator::apply(Event& e, FilterState& s) {
+  if (e.clone) {
+    add_clone(s, e.seq);  // when full, the flow update finds no clone (kNoClone)
+    return;
+  }
+  Outcome o = Outcome::kFused;
+  switch (e.sensor) {
+    case Sensor::kRange:
+      o = apply_range(e.range, s);
+      break;
+    case Sensor::kBaro:
+      o = apply_baro(e.baro, s);
+      break;
+    case Sensor::kFlow:
+      o = apply_flow(e.flow, e.seq, s);
+      break;
+    default:
+      assert(false);
+  }
+  // A replay fuses an event again: it is counted once, with its latest outcome.
+  auto& counts = counters_.by_outcome[static_cast<int>(e.sensor)];
+  if (e.outcome != Outcome::kQueued) --counts[static_cast<int>(e.outcome)];
+  ++counts[static_cast<int>(o)];
+  e.outcome = o;
+  s.last_outcome[static_cast<int>(e.sensor)] = o;
+  if (o == Outcome::kFused) s.last_fused_utime[static_cast<int>(e.sensor)] = e.utime;
+}
+
+// ---- Updates
+
+Outcome Estimator::apply_range(const RangeSample& m, FilterState& s) {
+  const auto& p = params_.range;
+  const RangeModel model = range_model(s.x, p.t_B_R_m, range_d_B_);
+  if (model.cos_tilt < std::cos(p.max_tilt_deg * M_PI / 180.0)) return Outcome::kBeamAngle;
+  const double sigma = p.sigma_m + p.sigma_rel * m.range_m;
+  MeasVec r(1);
+  r[0] = m.range_m - model.range_m;
+  MeasJac H = MeasJac::Zero(1, s.dim());
+  H.leftCols<idx::kCore>() = model.H;
+  MeasCov R(1, 1);
+  R(0, 0) = sigma * sigma;
+  const Outcome o = fuse(s, r, H, R, p.gate_chi2);
+  if (o == Outcome::kFused) s.range_streak.clear();
+  if (o != Outcome::kGate) return o;
+
+  // Platform step: the readings jump and stay consistent with a new surface while the vehicle's
+  // height (IMU, baro) has not moved. The terrain, not the vehicle, is reset to what they imply.
+  s.range_streak.add(m.utime, implied_terrain_m(s.x, p.t_B_R_m, range_d_B_, m.range_m));
+  double terrain_m = 0.0;
+  if (!terrain_reset_due(s, &terrain_m) || !vertical_ok(s)) return Outcome::kGate;
+  CoreRow J;
+  implied_terrain_m(s.x, p.t_B_R_m, range_d_B_, m.range_m, &J);
+  // The new terrain is a function of p_z and the attitude (J has no terrain column): its
+  // correlations follow from J, its variance gets the reading's noise and an inflation.
+  Eigen::Matrix<double, 1, Eigen::Dynamic, Eigen::RowMajor, 1, kMaxDim> row =
+      J * s.P.topRows(idx::kCore);
+  const double meas_sigma = sigma / std::max(model.cos_tilt, 1e-3);
+  row[idx::kTerrain] = (J * s.P.topLeftCorner<idx::kCore, idx::kCore>() * J.transpose())(0, 0) +
+                       meas_sigma * meas_sigma + p.reset_sigma_m * p.reset_sigma_m;
+  s.P.row(idx::kTerrain) = row;
+  s.P.col(idx::kTerrain) = row.transpose();
+  s.x.terrain_m = terrain_m;
+  s.range_streak.clear();
+  ++s.terrain_resets;
+  return Outcome::kFused;
+}
+
+bool Estimator::terrain_reset_due(const FilterState& s, double* terrain_m) const {
+  const RangeStreak& st = s.range_streak;
+  if (st.count == 0) return false;
+  const auto& p = params_.range;
+  const int newest_slot = (st.head + RangeStreak::kCapacity - 1) % RangeStreak::kCapacity;
+  const int64_t newest = st.utime[newest_slot];
+  const int64_t window = to_us(p.reset_window_s);
+  if (newest - st.start_utime < window) return false;
+  int n = 0;
+  double lo = 0, hi = 0, sum = 0;
+  for (int i = 0; i < st.count; ++i) {
+    const int slot = (newest_slot - i + RangeStreak::kCapacity) % RangeStreak::kCapacity;
+    if (newest - st.utime[slot] > window) break;
+    const double h = st.implied_terrain_m[slot];
+    lo = n ? std::min(lo, h) : h;
+    hi = n ? std::max(hi, h) : h;
+    sum += h;
+    ++n;
+  }
+  if (n < p.reset_min_samples || hi - lo > p.reset_spread_m) return false;
+  *terrain_m = sum / n;
+  return true;
+}
+
+bool Estimator::vertical_ok(const FilterState& s) const {
+  // The vehicle's own height must be trustworthy: small sigma, and the barometer (when there is
+  // one) agreeing. The flow is no witness: its scale uses the terrain that is in question.
+  return std::sqrt(s.P(idx::kP + 2, idx::kP + 2)) <= params_.range.reset_max_sigma_z_m &&
+         s.last_outcome[static_cast<int>(Sensor::kBaro)] != Outcome::kGate;
+}
+
+Outcome Estimator::apply_baro(const BaroSample& m, FilterState& s) {
+  const auto& p = params_.baro;
+  const double altitude_m = isa_altitude_m(m.pressure_pa);
+  if (!s.baro_initialised) {
+    // The offset starts as the first reading minus the height: b = alt - p_z, so its
+    // correlations are those of -p_z and its variance that of p_z plus the reading's.
+    s.x.baro_offset_m = altitude_m - s.x.p_W_B.z();
+    Eigen::Matrix<double, 1, Eigen::Dynamic, Eigen::RowMajor, 1, kMaxDim> row =
+        -s.P.row(idx::kP + 2);
+    row[idx::kBaro] = s.P(idx::kP + 2, idx::kP + 2) + p.sigma_m * p.sigma_m;
+    s.P.row(idx::kBaro) = row;
+    s.P.col(idx::kBaro) = row.transpose();
+    s.baro_initialised = true;
+    return Outcome::kFused;
+  }
+  MeasVec r(1);
+  r[0] = altitude_m - (s.x.p_W_B.z() + s.x.baro_offset_m);
+  MeasJac H = MeasJac::Zero(1, s.dim());
+  H(0, idx::kP + 2) = 1.0;
+  H(0, idx::kBaro) = 1.0;
+  MeasCov R(1, 1);
+  R(0, 0) = p.sigma_m * p.sigma_m;
+  return fuse(s, r, H, R, p.gate_chi2);
+}
+
+// Flow spans two times. Stochastic cloning (preferred over the velocity approximation
+// t ~ R_CB R_WB^T v dt): the model above is exact in p and q at both exposures, the lever arm of
+// the camera under rotation (t_B_C x omega) and any acceleration inside the interval are
+// accounted for, and the cross-covariance between the pose at utime_from and the state now is the
+// filter's own, so the update is consistent. The velocity form would treat the mean velocity over
+// the interval as the velocity at one end (an error of a dt / 2, 3 % of the displacement at
+// 2 m/s^2 and 30 Hz, as large as the flow noise) and drop that correlation. The cost is a 6-dim
+// augmentation for one frame interval; the history already visits utime_from on every replay.
+Outcome Estimator::apply_flow(const FlowSample& m, int64_t key, FilterState& s) {
+  const auto& p = params_.flow;
+  const int ci = s.clone_index(key);
+  if (ci < 0) return Outcome::kNoClone;
+  const FlowModel model = flow_model(s.x, s.clones[ci], R_BC_, p.t_B_C_m);
+  Outcome o = Outcome::kGeometry;
+  if (model.height_m >= p.min_height_m) {
+    const MeasVec r = m.t_over_d_C1 - model.t_over_d;
+    MeasJac H = MeasJac::Zero(3, s.dim());
+    H.leftCols<idx::kCore>() = model.H_core;
+    H.middleCols<kCloneDim>(idx::kCore + kCloneDim * ci) = model.H_clone;
+    o = fuse(s, r, H, flow_noise(m, p), p.gate_chi2);
+  }
+  remove_clone(s, ci);
+  return o;
+}
+
+// ---- Output
+
+State Estimator::state() const {
+  State out;
+  out.counters = counters_;
+  if (!initialised()) {
+    out.health = Health::kLost;
+    out.health_reasons = kNotInitialised;
+    return out;
+  }
+  const FilterState& s = history_.back().s;
+  out.utime = s.utime;
+  out.initialised = true;
+  out.p_W_B = s.x.p_W_B;
+  out.v_W_B = s.x.v_W_B;
+  out.q_WB = s.x.q_WB;
+  out.accel_bias_B = s.x.accel_bias_B;
+  out.gyro_bias_B = s.x.gyro_bias_B;
+  out.baro_offset_m = s.x.baro_offset_m;
+  out.terrain_height_m = s.x.terrain_m;
+  out.cov = s.P.topLeftCorner<idx::kCore, idx::kCore>();
+  out.counters.terrain_resets = s.terrain_resets;
+
+  const auto& h = params_.health;
+  uint32_t reasons = kReasonNone;
+  Health health = Health::kOk;
+  auto flag = [&](uint32_t why, Health level) {
+    reasons |= why;
+    health = std::max(health, level);
+  };
+  auto age_s = [&](Sensor sensor) {
+    return (s.utime - s.last_fused_utime[static_cast<int>(sensor)]) / kUsPerS;
+  };
+  if (age_s(Sensor::kFlow) > h.flow_timeout_s) flag(kNoFlow, Health::kDegraded);
+  // Below the rangefinder's blind zone (resting on the floor) no reading is expected.
+  const RangeModel range = range_model(s.x, params_.range.t_B_R_m, range_d_B_);
+  if (range.range_m > params_.range.min_range_m && age_s(Sensor::kRange) > h.range_timeout_s)
+    flag(kNoRange, Health::kDegraded);
+  if (h.baro_timeout_s > 0 && age_s(Sensor::kBaro) > h.baro_timeout_s)
+    flag(kNoBaro, Health::kDegraded);
+  if (s.last_imu_gap_utime != 0 &&
+      (s.utime - s.last_imu_gap_utime) / kUsPerS < h.imu_gap_recovery_s)
+    flag(kImuGap, Health::kDegraded);
+  if ((newest_other_utime_ - s.utime) / kUsPerS > h.imu_lost_s) flag(kImuStopped, Health::kLost);
+
+  const Eigen::VectorXd sd = out.cov.diagonal().cwiseMax(0.0).cwiseSqrt();
+  const double pos_sd = std::max(sd[idx::kP], sd[idx::kP + 1]);
+  const double vel_sd = sd.segment<3>(idx::kV).maxCoeff();
+  const double height_sd = sd[idx::kP + 2];
+  if (pos_sd > h.pos_sigma_lost_m)
+    flag(kPositionUncertain, Health::kLost);
+  else if (pos_sd > h.pos_sigma_degraded_m)
+    flag(kPositionUncertain, Health::kDegraded);
+  if (vel_sd > h.vel_sigma_lost_mps)
+    flag(kVelocityUncertain, Health::kLost);
+  else if (vel_sd > h.vel_sigma_degraded_mps)
+    flag(kVelocityUncertain, Health::kDegraded);
+  if (height_sd > h.height_sigma_lost_m)
+    flag(kHeightUncertain, Health::kLost);
+  else if (height_sd > h.height_sigma_degraded_m)
+    flag(kHeightUncertain, Health::kDegraded);
+  out.health = health;
+  out.health_reasons = reasons;
+  return out;
+}
+
+}  // namespace alight::estimator
