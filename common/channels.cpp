@@ -2,12 +2,38 @@
 
 #include <algorithm>
 #include <cctype>
+#include <map>
 
 namespace alight {
 
 namespace channels {
 bool is_known(const std::string& name) {
   return std::any_of(kAll.begin(), kAll.end(), [&](const char* c) { return name == c; });
+}
+
+std::string message_type(const std::string& name) {
+  static const std::map<std::string, std::string> kTypes = {
+      {kCamera, "image_t"},
+      {kMocapPose, "pose_t"},
+      {kImu, "imu_t"},
+      {kRange, "range_t"},
+      {kBaro, "baro_t"},
+      {kStateEstimate, "state_estimate_t"},
+      {kEstimatePose, "pose_t"},
+      {kVisionTarget, "target_t"},
+      {kVisionDiag, "image_t"},
+      {kOperatorCmd, "operator_cmd_t"},
+      {kAutonomyStatus, "autonomy_status_t"},
+      {kPositionSetpoint, "position_setpoint_t"},
+      {kAttitudeCmd, "attitude_cmd_t"},
+      {kSimTruth, "sim_truth_t"},
+      {kSimControl, "sim_control_t"},
+      {kProcessStatus, "process_status_t"},
+      {kNodeStatus, "node_status_t"},
+      {kAutopilotPose, "pose_t"},
+      {kAutopilotStatus, "autopilot_status_t"}};
+  const auto it = kTypes.find(name);
+  return it == kTypes.end() ? "" : it->second;
 }
 }  // namespace channels
 
@@ -53,12 +79,20 @@ ChannelRemap parse_remaps(const std::vector<std::string>& args) {
       throw RemapError(where + from + " is already remapped to " + it->second);
     remap.to_[from] = to;
   }
-  // Two channels on one name would mix message types on it.
+  // Two channels on one name would mix message types on it. One exception: a channel remapped
+  // onto another known channel of the same type that keeps its own name, to read that one in
+  // its place (alight-vision --remap MOCAP_POSE=ESTIMATE_POSE flies on the onboard estimate).
+  const auto reads_in_place_of = [&](const std::string& a, const std::string& b) {
+    const bool a_moved = remap(a) != a, b_moved = remap(b) != b;
+    const std::string& kept = a_moved ? b : a;
+    return a_moved != b_moved && remap(a) == remap(b) && remap(kept) == kept &&
+           channels::message_type(a) == channels::message_type(b);
+  };
   std::map<std::string, std::string> owner;  // name on LCM -> channel
   for (const char* c : channels::kAll) {
     const std::string name = remap(c);
     const auto [it, fresh] = owner.emplace(name, c);
-    if (!fresh)
+    if (!fresh && !reads_in_place_of(it->second, c))
       throw RemapError("--remap: " + it->second + " and " + c + " would both be on channel " +
                        name + ": two channels cannot share one name");
   }

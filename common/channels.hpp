@@ -75,6 +75,8 @@ inline constexpr std::array<const char*, 19> kAll = {
 
 /// True when `name` is one of kAll.
 bool is_known(const std::string& name);
+/// The lcm-gen type a channel of kAll carries ("pose_t"); "" for another name.
+std::string message_type(const std::string& name);
 
 }  // namespace alight::channels
 

@@ -76,6 +76,7 @@ int main(int argc, char** argv) {
       if (!accept_stamp(channels::kBaro, m.utime)) return;
       count(channels::kBaro, onboard.add_baro(estimator::from_msg(m)));
     });
+    estimator::FlowReason last_flow = estimator::FlowReason::kNoPrevious;
     node.on<image_t>(channels::kCamera, [&](const image_t& m) {
       if (!accept_stamp(channels::kCamera, m.utime)) return;
       std::string error;
@@ -85,6 +86,10 @@ int main(int argc, char** argv) {
         return;
       }
       const estimator::FrameOutcome o = onboard.add_frame(image->pixels, image->utime);
+      if (onboard.last_frame().flow != last_flow) {
+        last_flow = onboard.last_frame().flow;
+        spdlog::info("estimator: flow {}", estimator::to_string(last_flow));
+      }
       if (o.dropped) node.reject_value(channels::kCamera, "frame queue full (IMU stalled?)");
       if (o.processed > 0) count(channels::kCamera, o.fused);
     });

@@ -30,7 +30,19 @@ Outcome Onboard::add_imu(const ImuSample& imu) {
   if (!imu_.empty() && imu.utime <= imu_.back().utime) return out;
   imu_.push_back(imu);
   while (imu_.size() > 2 && imu_.back().utime - imu_.front().utime > kImuKeepUs) imu_.pop_front();
+  drain();
   return out;
+}
+
+int Onboard::drain() {
+  // In arrival order: a frame waits for the IMU, and the frames after it wait behind it.
+  int n = 0;
+  while (!frames_.empty() && !imu_.empty() && frames_.front().utime <= imu_.back().utime) {
+    last_ = process(frames_.front());
+    frames_.pop_front();
+    ++n;
+  }
+  return n;
 }
 
 std::optional<Matrix3d> Onboard::body_rotation(int64_t t1_utime, int64_t t2_utime,
@@ -56,14 +68,9 @@ FrameOutcome Onboard::add_frame(const cv::Mat& gray, int64_t utime) {
     out.dropped = true;
   }
   frames_.push_back({gray, utime});
-  // In arrival order: a frame waits for the IMU, and the frames after it wait behind it.
-  while (!frames_.empty() && !imu_.empty() && frames_.front().utime <= imu_.back().utime) {
-    const FrameOutcome o = process(frames_.front());
-    frames_.pop_front();
-    out.flow = o.flow;
-    out.fused = o.fused;
-    ++out.processed;
-  }
+  out.processed = drain();
+  out.flow = last_.flow;
+  out.fused = last_.fused;
   out.queued = out.processed == 0;
   return out;
 }

@@ -35,11 +35,14 @@ class Onboard {
   Outcome add_range(const RangeSample& range) { return filter_.add_range(range); }
   Outcome add_baro(const BaroSample& baro) { return filter_.add_baro(baro); }
   /// A mono8 frame with its exposure time. Processed once the IMU has reached that time (the
-  /// rotation since the previous frame must be known), in arrival order.
+  /// rotation since the previous frame must be known), in arrival order: here, or by the
+  /// add_imu that reaches it.
   FrameOutcome add_frame(const cv::Mat& gray, int64_t utime);
 
   State state() const { return filter_.state(); }
   const FlowOdometry& flow() const { return flow_; }
+  /// The verdicts on the last frame processed (by add_frame or by add_imu catching up).
+  const FrameOutcome& last_frame() const { return last_; }
   /// Frames dropped because the queue was full.
   int64_t frames_dropped() const { return frames_dropped_; }
 
@@ -55,6 +58,7 @@ class Onboard {
     int64_t utime = 0;
   };
   FrameOutcome process(const Frame& f);
+  int drain();  ///< processes the queued frames the IMU has reached; how many
 
   EstimatorParams params_;
   Estimator filter_;
@@ -64,6 +68,7 @@ class Onboard {
   std::deque<Frame> frames_;   ///< waiting for the IMU
   std::optional<int64_t> prev_frame_utime_;
   int64_t frames_dropped_ = 0;
+  FrameOutcome last_;
 };
 
 }  // namespace alight::estimator

@@ -91,6 +91,19 @@ TEST(ChannelRemapTest, ConflictingRenamesAreRefused) {
   // Onto another channel's name while that one keeps it: image_t and pose_t on one channel.
   const std::string onto = remap_error({"CAMERA=MOCAP_POSE"});
   EXPECT_NE(onto.find("would both be on channel MOCAP_POSE"), std::string::npos) << onto;
+  // Onto a channel of the same type that keeps its name: read that one in its place (flying on
+  // the onboard estimate). Not when both move, not across types.
+  EXPECT_EQ(remap_error({"MOCAP_POSE=ESTIMATE_POSE"}), "");
+  EXPECT_EQ(remap_error({"MOCAP_POSE=AUTOPILOT_POSE"}), "");
+  EXPECT_NE(remap_error({"MOCAP_POSE=X", "ESTIMATE_POSE=X"}).find("would both be on channel X"),
+            std::string::npos);
+  EXPECT_NE(remap_error({"IMU=ESTIMATE_POSE"}).find("would both be on channel ESTIMATE_POSE"),
+            std::string::npos);
+}
+
+TEST(ChannelsTest, EveryChannelHasItsMessageType) {
+  for (const char* c : channels::kAll) EXPECT_NE(channels::message_type(c), "") << c;
+  EXPECT_EQ(channels::message_type("NOT_A_CHANNEL"), "");
 }
 
 }  // namespace
