@@ -58,11 +58,10 @@ inline constexpr const char kAutopilotStatus[] = "AUTOPILOT_STATUS";
 
 /// Every channel above.
 inline constexpr std::array<const char*, 16> kAll = {
-    kCamera,         kMocapPose,        kImu,
-    kVisionTarget,   kVisionTiming,     kVisionDiag,       kOperatorCmd,
-    kAutonomyStatus, kPositionSetpoint, kAttitudeCmd,
-    kSimTruth,       kSimControl,       kProcessStatus,
-    kNodeStatus,     kAutopilotPose,    kAutopilotStatus};
+    kCamera,           kMocapPose,   kImu,           kVisionTarget,
+    kVisionTiming,     kVisionDiag,  kOperatorCmd,   kAutonomyStatus,
+    kPositionSetpoint, kAttitudeCmd, kSimTruth,      kSimControl,
+    kProcessStatus,    kNodeStatus,  kAutopilotPose, kAutopilotStatus};
 
 /// True when `name` is one of kAll.
 bool is_known(const std::string& name);

@@ -91,9 +91,8 @@ int main(int argc, char** argv) {
       node.reject_value(channel, why);
     };
 
-    const auto timing_message = [&](const Pending& f, const FrameResult& r,
-                                    PairingOutcome outcome, int64_t start_steady,
-                                    int64_t process_us) {
+    const auto timing_message = [&](const Pending& f, const FrameResult& r, PairingOutcome outcome,
+                                    int64_t start_steady, int64_t process_us) {
       const ChannelStats& c = node.stats(channels::kCamera);
       vision_timing_t t{};
       t.utime = r.utime;
@@ -166,21 +165,24 @@ int main(int argc, char** argv) {
     node.on<pose_t>(channels::kMocapPose, [&](const pose_t& msg) {
       if (add_mocap_pose(msg, pairing.poses(), accept_stamp, reject)) try_process();
     });
-    node.on<image_t>(channels::kCamera, [&](const image_t& msg) {
-      FrameInput in = camera_frame(msg, accept_stamp, reject);
-      if (!in.use) return;
-      Pending f;
-      f.receipt = node.receipt();
-      if (in.image) {
-        f.image = std::move(*in.image);
-      } else {
-        f.image.utime = msg.utime;
-        f.bad = true;
-      }
-      const int64_t utime = f.image.utime;
-      pairing.add_frame(std::move(f), utime);
-      try_process();
-    }, static_cast<size_t>(params.camera_queue_frames));
+    node.on<image_t>(
+        channels::kCamera,
+        [&](const image_t& msg) {
+          FrameInput in = camera_frame(msg, accept_stamp, reject);
+          if (!in.use) return;
+          Pending f;
+          f.receipt = node.receipt();
+          if (in.image) {
+            f.image = std::move(*in.image);
+          } else {
+            f.image.utime = msg.utime;
+            f.bad = true;
+          }
+          const int64_t utime = f.image.utime;
+          pairing.add_frame(std::move(f), utime);
+          try_process();
+        },
+        static_cast<size_t>(params.camera_queue_frames));
     node.every(10.0, [&](int64_t) {
       const ChannelStats& c = node.stats(channels::kCamera);
       spdlog::info(

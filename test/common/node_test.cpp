@@ -57,12 +57,10 @@ TEST(NodeTest, OnDeliversEveryMessageInOrder) {
 TEST(NodeTest, OnKeepsTheArrivalOrderAcrossChannels) {
   Node pub(kUrl, "pub"), sub(kUrl, "sub");
   std::vector<std::string> seen;
-  sub.on<imu_t>("NODE_TEST_ORDER_A", [&](const imu_t& m) {
-    seen.push_back("A" + std::to_string(m.seq));
-  });
-  sub.on<imu_t>("NODE_TEST_ORDER_B", [&](const imu_t& m) {
-    seen.push_back("B" + std::to_string(m.seq));
-  });
+  sub.on<imu_t>("NODE_TEST_ORDER_A",
+                [&](const imu_t& m) { seen.push_back("A" + std::to_string(m.seq)); });
+  sub.on<imu_t>("NODE_TEST_ORDER_B",
+                [&](const imu_t& m) { seen.push_back("B" + std::to_string(m.seq)); });
   std::vector<std::string> sent;
   for (int i = 0; i < 300; ++i) {
     const bool a = (i * 7) % 3 != 0;
