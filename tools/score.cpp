@@ -82,6 +82,7 @@ void Scorer::add(const target_t& t, int64_t received_utime) {
 
 void Scorer::add(const vision_timing_t& t) {
   process_ms_.push_back(1e-3 * static_cast<double>(t.process_us));
+  process_cpu_ms_.push_back(1e-3 * static_cast<double>(t.process_cpu_us));
   wait_ms_.push_back(1e-3 * static_cast<double>(t.wait_us));
   // Counters only grow; the logger may lose or reorder a message, so the largest wins.
   if (!last_timing_ || t.frames_processed >= last_timing_->frames_processed) last_timing_ = t;
@@ -143,6 +144,7 @@ Score Scorer::result() const {
   timing(camera_received_, target_received_, s);
   s.timing_frames = static_cast<int>(process_ms_.size());
   s.vision_process_ms = percentiles(process_ms_);
+  s.vision_process_cpu_ms = percentiles(process_cpu_ms_);
   s.vision_wait_ms = percentiles(wait_ms_);
   if (last_timing_) {
     s.vision_frames_received = last_timing_->frames_received;
@@ -282,6 +284,7 @@ std::vector<std::pair<std::string, std::string>> Score::fields() const {
       f.emplace_back(key + "_max_ms", fmt(p->max));
     };
     pct("vision_process", vision_process_ms);
+    pct("vision_process_cpu", vision_process_cpu_ms);
     pct("vision_wait", vision_wait_ms);
     pct("vision_end_to_end", vision_end_to_end_ms);
     f.emplace_back("vision_frames_received", std::to_string(vision_frames_received));

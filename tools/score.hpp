@@ -72,6 +72,7 @@ struct Score {
   };
   int timing_frames = 0;  ///< VISION_TIMING messages
   std::optional<Percentiles> vision_process_ms, vision_wait_ms, vision_end_to_end_ms;
+  std::optional<Percentiles> vision_process_cpu_ms;  ///< the CPU time of the same
   // The vision's counters in its last VISION_TIMING (vision_timing_t frames_*).
   int64_t vision_frames_received = 0, vision_frames_dropped = 0, vision_frames_refused = 0,
           vision_frames_failed = 0, vision_frames_processed = 0;
@@ -114,7 +115,7 @@ class Scorer {
   int camera_frames_ = 0, timed_found_ = 0;
   std::optional<int64_t> first_received_, last_received_;
   std::optional<std::pair<int64_t, int64_t>> first_camera_, last_camera_;  // (exposure, receipt)
-  std::vector<double> process_ms_, wait_ms_;
+  std::vector<double> process_ms_, process_cpu_ms_, wait_ms_;
   std::optional<vision_timing_t> last_timing_;  // the one with the most frames processed
   void extend_span(int64_t received_utime);
 };

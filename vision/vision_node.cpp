@@ -33,6 +33,8 @@
 #include <alight/pose_t.hpp>
 #include <alight/target_t.hpp>
 #include <alight/vision_timing_t.hpp>
+#include <ctime>
+#include <opencv2/core.hpp>
 #include <optional>
 
 #include "common/camera_mount.hpp"
@@ -46,6 +48,16 @@
 
 using namespace alight;
 using namespace alight::vision;
+
+namespace {
+// CPU time of the calling thread [us]: a frame's own cost, apart from the time other processes
+// held the core (the machine is shared).
+int64_t thread_cpu_us() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<int64_t>(ts.tv_sec) * 1'000'000 + ts.tv_nsec / 1000;
+}
+}  // namespace
 
 int main(int argc, char** argv) {
   return alight::run_node_main("alight-vision", [&]() -> int {
@@ -62,6 +74,11 @@ int main(int argc, char** argv) {
     }
     args.finalize();
 
+    // One frame at a time on this thread: OpenCV's worker threads (TBB) would only add their
+    // hand-offs and spinning to a 640x480 frame's work and compete with the camera and the
+    // other nodes for the cores (issue 15), and it leaves process_cpu_us the whole of a frame's
+    // CPU time. Pixel results do not depend on the thread count.
+    cv::setNumThreads(1);
     const Mission mission = mission_from_string(mission_name);
     const ParamNode root = ParamNode::load_file(args.config);
     const NodeParams params = load_node_params(root);
@@ -92,7 +109,8 @@ int main(int argc, char** argv) {
     };
 
     const auto timing_message = [&](const Pending& f, const FrameResult& r, PairingOutcome outcome,
-                                    int64_t start_steady, int64_t process_us) {
+                                    int64_t start_steady, int64_t process_us,
+                                    int64_t process_cpu_us) {
       const ChannelStats& c = node.stats(channels::kCamera);
       vision_timing_t t{};
       t.utime = r.utime;
@@ -100,6 +118,7 @@ int main(int argc, char** argv) {
       t.receive_utime = f.receipt.wall_utime;
       t.wait_us = start_steady - f.receipt.steady_utime;
       t.process_us = process_us;
+      t.process_cpu_us = process_cpu_us;
       t.publish_utime = wall_utime();
       t.total_us = steady_utime() - f.receipt.steady_utime;
       switch (outcome) {
@@ -129,10 +148,11 @@ int main(int argc, char** argv) {
       // Nothing is published before the frame's work is through, so a frame that throws
       // half-way is dropped whole.
       const auto error = run_guarded([&] {
-        const int64_t start = steady_utime();
+        const int64_t start = steady_utime(), start_cpu = thread_cpu_us();
         const FrameResult r = f.bad ? pipeline.process(cv::Mat(), f.image.utime, pose)
                                     : pipeline.process(f.image.pixels, f.image.utime, pose);
         const int64_t process_us = steady_utime() - start;
+        const int64_t process_cpu_us = thread_cpu_us() - start_cpu;
         const target_t target = to_msg(r);
         std::optional<image_t> diag;
         if (params.diag_rate_hz > 0 &&
@@ -145,7 +165,7 @@ int main(int argc, char** argv) {
         if (diag) node.publish(channels::kVisionDiag, *diag);
         ++n_frames;
         if (r.found()) ++n_found;
-        node.publish(channels::kVisionTiming, timing_message(f, r, outcome, start, process_us));
+        node.publish(channels::kVisionTiming, timing_message(f, r, outcome, start, process_us, process_cpu_us));
         spdlog::debug("frame {} utime {}: {} ({} features, {} matches)", r.seq, r.utime,
                       to_string(r.reason), r.n_features, r.n_matches);
       });

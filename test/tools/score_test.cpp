@@ -315,6 +315,7 @@ vision_timing_t timing(int64_t exposure, int64_t process_us, int64_t wait_us, in
   t.receive_utime = exposure + 2'000;
   t.wait_us = wait_us;
   t.process_us = process_us;
+  t.process_cpu_us = process_us / 2;
   t.publish_utime = t.receive_utime + wait_us + process_us;
   t.total_us = wait_us + process_us;
   t.frames_received = processed + 3;
@@ -347,6 +348,8 @@ TEST(ScoreTest, VisionTimingGivesProcessingWaitAndEndToEndPercentilesApart) {
   EXPECT_DOUBLE_EQ(s.vision_process_ms->p99, 9.9);
   EXPECT_DOUBLE_EQ(s.vision_process_ms->max, 10.0);
   EXPECT_DOUBLE_EQ(s.vision_wait_ms->max, 1.0);
+  ASSERT_TRUE(s.vision_process_cpu_ms);  // its own percentiles, not the wall-clock ones
+  EXPECT_DOUBLE_EQ(s.vision_process_cpu_ms->max, 5.0);
   EXPECT_DOUBLE_EQ(s.vision_end_to_end_ms->p50, 69.0);
   EXPECT_DOUBLE_EQ(s.vision_end_to_end_ms->p99, 118.0);
   EXPECT_DOUBLE_EQ(s.vision_end_to_end_ms->max, 119.0);
