@@ -237,7 +237,8 @@ struct BorderPixels {
   std::vector<cv::Point> px;
   std::vector<size_t> row_start;  // row y's pixels are px[row_start[y], row_start[y + 1])
 
-  BorderPixels(std::vector<cv::Point> pixels, int rows) : px(std::move(pixels)), row_start(rows + 1) {
+  BorderPixels(std::vector<cv::Point> pixels, int rows)
+      : px(std::move(pixels)), row_start(rows + 1) {
     size_t k = 0;
     for (int y = 0; y <= rows; ++y) {
       while (k < px.size() && px[k].y < y) ++k;

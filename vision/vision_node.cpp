@@ -165,7 +165,8 @@ int main(int argc, char** argv) {
         if (diag) node.publish(channels::kVisionDiag, *diag);
         ++n_frames;
         if (r.found()) ++n_found;
-        node.publish(channels::kVisionTiming, timing_message(f, r, outcome, start, process_us, process_cpu_us));
+        node.publish(channels::kVisionTiming,
+                     timing_message(f, r, outcome, start, process_us, process_cpu_us));
         spdlog::debug("frame {} utime {}: {} ({} features, {} matches)", r.seq, r.utime,
                       to_string(r.reason), r.n_features, r.n_matches);
       });

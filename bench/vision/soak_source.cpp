@@ -21,16 +21,15 @@
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <alight/image_t.hpp>
 #include <alight/pose_t.hpp>
-#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <fstream>
+#include <opencv2/imgcodecs.hpp>
 #include <thread>
 #include <vector>
-
-#include <opencv2/imgcodecs.hpp>
 
 #include "common/msg_convert.hpp"
 #include "common/node.hpp"
@@ -91,7 +90,7 @@ Trajectory trajectory(const sim::Truth& truth, double period_s) {
 }
 
 struct Recorded {
-  std::vector<std::pair<int64_t, cv::Mat>> frames;  // (exposure offset in the period, pixels)
+  std::vector<std::pair<int64_t, cv::Mat>> frames;    // (exposure offset in the period, pixels)
   std::vector<std::pair<int64_t, PoseSample>> poses;  // (sample offset in the period, pose)
   int64_t period_us = 0;
   int64_t frame_release_us = 0;  // exposure -> available (half the exposure + camera latency)
@@ -239,8 +238,8 @@ int main(int argc, char** argv) {
     int64_t k_a = 0, k_b = 1;
     size_t i_a = 0, i_b = 0;
     while (!node.stopping()) {
-      const bool take_a = i_a < events.size() &&
-                          (i_b >= events.size() || time_of(k_a, i_a) <= time_of(k_b, i_b));
+      const bool take_a =
+          i_a < events.size() && (i_b >= events.size() || time_of(k_a, i_a) <= time_of(k_b, i_b));
       const int64_t k = take_a ? k_a : k_b;
       const size_t i = take_a ? i_a : i_b;
       const Event& e = events[i];
@@ -252,8 +251,8 @@ int main(int argc, char** argv) {
         k_b = k_a + 1, i_b = 0;
       }
       // A frame's or pose's own time in the schedule (exposure, sample).
-      const int64_t own_us = k * rec.period_us + (e.frame ? rec.frames[e.index].first
-                                                          : rec.poses[e.index].first);
+      const int64_t own_us =
+          k * rec.period_us + (e.frame ? rec.frames[e.index].first : rec.poses[e.index].first);
       if (e.frame && own_us >= frames_end_us) continue;
       const int64_t due = steady0 + t_us;
       const int64_t wait = due - steady_utime();
