@@ -28,6 +28,7 @@
 #include <cmath>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
+#include <optional>
 #include <thread>
 #include <vector>
 
@@ -61,30 +62,39 @@ struct Trajectory {
   }
 };
 
-Trajectory trajectory(const sim::Truth& truth, double period_s) {
+// Over the platform, or in front of the opening; over the area's centre when there is no
+// platform, in front of the wall's middle when it has no opening (the families that must find
+// nothing).
+Trajectory trajectory(const sim::Truth& truth, const sim::Scenario& scenario, double period_s) {
   Trajectory tr;
   tr.period_s = period_s;
-  if (truth.platform) {
+  std::optional<sim::OpeningTruth> opening = truth.opening;
+  if (!opening && scenario.wall) {
+    opening.emplace();
+    opening->center_W =
+        Vector3d(scenario.wall->x_m, scenario.wall->center_y_m, 0.5 * scenario.wall->height_m);
+  }
+  if (!scenario.wall) {
     // 1.2 m over the platform top (the downward camera sees +-0.55 m around it), 0.3 m either
     // way along x, 0.15 m along y, 0.15 m up and down: 0.25 m/s at most with an 8 s period.
-    const Vector3d top = truth.platform->top_center_W;
+    const Vector3d top =
+        truth.platform ? truth.platform->top_center_W
+                       : Vector3d(scenario.area_center_xy_m.x(), scenario.area_center_xy_m.y(), 0);
     tr.center_W = top + Vector3d(0, 0, 1.2);
     tr.axis_a_W = Vector3d(0.3, 0, 0);
     tr.axis_b_W = Vector3d(0, 0.15, 0);
     tr.axis_c_W = Vector3d(0, 0, 0.15);
     tr.yaw_rad = 0.0;
-  } else if (truth.opening) {
+  } else {
     // 2 m in front of the opening, facing the wall: 0.3 m sideways, 0.12 m up and down, and
     // 0.3 m nearer and farther, so the wall's features change scale.
-    const Vector3d n = truth.opening->wall_normal_W;
+    const Vector3d n = opening->wall_normal_W;
     const Vector3d side = Vector3d::UnitZ().cross(n).normalized();
-    tr.center_W = truth.opening->center_W + 2.0 * n;
+    tr.center_W = opening->center_W + 2.0 * n;
     tr.axis_a_W = 0.3 * side;
     tr.axis_b_W = Vector3d(0, 0, 0.12);
     tr.axis_c_W = 0.3 * n;
     tr.yaw_rad = std::atan2(-n.y(), -n.x());
-  } else {
-    throw std::runtime_error("the scenario has neither a platform nor a wall to look at");
   }
   return tr;
 }
@@ -112,7 +122,8 @@ Recorded record_one_period(const sim::Scenario& scenario, const std::string& veh
   rec.frame_release_us = std::llround(0.5 * scenario.camera.exposure_s * 1e6) +
                          std::llround(scenario.camera.latency_s * 1e6);
   rec.pose_release_us = std::llround(scenario.mocap.latency_s * 1e6);
-  const Trajectory tr = trajectory(simulator.truth(), 1e-6 * static_cast<double>(rec.period_us));
+  const Trajectory tr =
+      trajectory(simulator.truth(), scenario, 1e-6 * static_cast<double>(rec.period_us));
 
   const int64_t t0 = simulator.now_utime();
   sim::VehicleState start;
