@@ -21,6 +21,7 @@ std::string message_type(const std::string& name) {
       {kStateEstimate, "state_estimate_t"},
       {kEstimatePose, "pose_t"},
       {kVisionTarget, "target_t"},
+      {kVisionTiming, "vision_timing_t"},
       {kVisionDiag, "image_t"},
       {kOperatorCmd, "operator_cmd_t"},
       {kAutonomyStatus, "autonomy_status_t"},

@@ -40,6 +40,9 @@ inline constexpr const char kEstimatePose[] = "ESTIMATE_POSE";
 /// target_t: one waypoint measurement per processed frame. alight-vision → autonomy, ground
 /// station.
 inline constexpr const char kVisionTarget[] = "VISION_TARGET";
+/// vision_timing_t: per processed frame, the vision's wait, processing time and frame counters
+/// (wall and steady clocks, so apart from VISION_TARGET). alight-vision → logs, alight-score.
+inline constexpr const char kVisionTiming[] = "VISION_TIMING";
 /// image_t (JPEG): diagnostic image. alight-vision → ground station.
 inline constexpr const char kVisionDiag[] = "VISION_DIAG";
 /// operator_cmd_t: signed operator commands. alight-ground-station → autonomy.
@@ -67,11 +70,11 @@ inline constexpr const char kAutopilotPose[] = "AUTOPILOT_POSE";
 inline constexpr const char kAutopilotStatus[] = "AUTOPILOT_STATUS";
 
 /// Every channel above.
-inline constexpr std::array<const char*, 19> kAll = {
-    kCamera,         kMocapPose,        kImu,           kRange,          kBaro,
-    kStateEstimate,  kEstimatePose,     kVisionTarget,  kVisionDiag,     kOperatorCmd,
-    kAutonomyStatus, kPositionSetpoint, kAttitudeCmd,   kSimTruth,       kSimControl,
-    kProcessStatus,  kNodeStatus,       kAutopilotPose, kAutopilotStatus};
+inline constexpr std::array<const char*, 20> kAll = {
+    kCamera,           kMocapPose,      kImu,          kRange,      kBaro,          kStateEstimate,
+    kEstimatePose,     kVisionTarget,   kVisionTiming, kVisionDiag, kOperatorCmd,   kAutonomyStatus,
+    kPositionSetpoint, kAttitudeCmd,    kSimTruth,     kSimControl, kProcessStatus, kNodeStatus,
+    kAutopilotPose,    kAutopilotStatus};
 
 /// True when `name` is one of kAll.
 bool is_known(const std::string& name);

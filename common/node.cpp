@@ -76,22 +76,39 @@ struct Node::Subscription {
   Node* node = nullptr;
   std::string channel;
   bool latest = false;
+  size_t source = 0;  // in the node's inbox (not latest mode)
   std::function<void(const void*, uint32_t)> dispatch;
   std::vector<uint8_t> pending;  // newest undispatched message (latest mode)
+  Receipt pending_receipt;
   bool has_pending = false;
   lcm::Subscription* handle = nullptr;
 
   void on_message(const lcm::ReceiveBuffer* rbuf, const std::string&) {
     if (!latest) {
-      dispatch(rbuf->data, rbuf->data_size);
+      node->enqueue(*this, rbuf->data, rbuf->data_size);
       return;
     }
     if (has_pending) ++node->stats_[channel].skipped;
     const auto* bytes = static_cast<const uint8_t*>(rbuf->data);
     pending.assign(bytes, bytes + rbuf->data_size);
+    pending_receipt = Receipt{wall_utime(), steady_utime()};
     has_pending = true;
   }
 };
+
+void Node::enqueue(Subscription& sub, const void* data, uint32_t size) {
+  Inbound in;
+  in.sub = &sub;
+  const auto* bytes = static_cast<const uint8_t*>(data);
+  in.bytes.assign(bytes, bytes + size);
+  in.receipt = Receipt{wall_utime(), steady_utime()};
+  if (!inbox_.push(sub.source, std::move(in))) {
+    const uint64_t n = ++stats_[sub.channel].dropped;
+    if (log_this(n))
+      spdlog::warn("{}: {} message(s) on {} dropped: {} already wait for the handler", name_, n,
+                   sub.channel, inbox_.capacity(sub.source));
+  }
+}
 
 Node::Node(const std::string& lcm_url, std::string name)
     : name_(std::move(name)), start_steady_us_(steady_utime()) {
@@ -130,15 +147,19 @@ bool Node::signalled() { return g_signalled; }
 bool Node::stopping() const { return stopping_ || g_signalled; }
 
 void Node::subscribe_raw(const std::string& channel, bool latest,
-                         std::function<void(const void*, uint32_t)> dispatch) {
+                         std::function<void(const void*, uint32_t)> dispatch, size_t capacity) {
+  // Programmer invariant: capacities come from validated parameters or constants.
+  assert(capacity >= 1);
   auto sub = std::make_unique<Subscription>();
   sub->node = this;
   sub->channel = channel;
   sub->latest = latest;
+  if (!latest) sub->source = inbox_.add_source(capacity);
   sub->dispatch = std::move(dispatch);
   sub->handle = lcm_->subscribe(channel, &Subscription::on_message, sub.get());
-  // Deep enough for every message that arrives while a callback runs (e.g. 2 s of 200 Hz IMU,
-  // or a few seconds of camera frames behind a slow vision step).
+  // LCM's queue only holds what arrives while one handler runs (each spin moves it into the
+  // inbox between handlers); its overflow is silent, so it is deep enough for several seconds
+  // of the fastest input behind one slow handler (2 s of 200 Hz IMU, 30 s of 60 Hz frames).
   sub->handle->setQueueCapacity(latest ? 256 : 2048);
   stats_[channel];
   subs_.push_back(std::move(sub));
@@ -189,6 +210,7 @@ node_status_t Node::status_message(int64_t wall) const {
     c.rejected_values = static_cast<int64_t>(st.rejected_values);
     c.rejected_stamps = static_cast<int64_t>(st.rejected_stamps);
     c.skipped = static_cast<int64_t>(st.skipped);
+    c.dropped = static_cast<int64_t>(st.dropped);
     m.channels.push_back(c);
   }
   m.n = static_cast<int32_t>(m.channels.size());
@@ -231,23 +253,41 @@ int Node::spin_once(int timeout_ms) {
     const int64_t wait_ms = std::max<int64_t>(0, (next - steady_utime() + 999) / 1000);
     timeout_ms = static_cast<int>(std::min<int64_t>(timeout_ms, wait_ms));
   }
+  // Messages read during the last spin's handlers are waiting already: no reason to wait.
+  if (inbox_.size() > 0) timeout_ms = 0;
   int handled = 0;
-  int r = lcm_->handleTimeout(timeout_ms);
-  while (r > 0) {
-    ++handled;
-    r = lcm_->handleTimeout(0);  // drain everything already queued
-  }
+  const int r = lcm_->handleTimeout(timeout_ms);
   // A signal (ours, or SIGCHLD) interrupting the wait is not an LCM failure.
   if (r < 0 && errno != EINTR) throw std::runtime_error(name_ + ": LCM handle failed");
+  if (r > 0) handled = 1 + read_pending();
+  // The messages waiting now, in arrival order. What arrives meanwhile is read into the inbox
+  // after each handler (so LCM's silent queue stays short) and handled in the next spin, so
+  // latest-only subscriptions and timers run even when input never stops.
+  for (size_t n = inbox_.size(); n > 0; --n) {
+    auto next = inbox_.pop();
+    receipt_ = next->second.receipt;
+    const std::vector<uint8_t> msg = std::move(next->second.bytes);
+    next->second.sub->dispatch(msg.data(), static_cast<uint32_t>(msg.size()));
+    handled += read_pending();
+  }
   for (auto& s : subs_) {
     if (!s->has_pending) continue;
     s->has_pending = false;
     std::vector<uint8_t> msg;
     msg.swap(s->pending);
+    receipt_ = s->pending_receipt;
     s->dispatch(msg.data(), static_cast<uint32_t>(msg.size()));
   }
   run_timers(steady_utime());
   return handled;
+}
+
+int Node::read_pending() {
+  int n = 0;
+  int r;
+  while ((r = lcm_->handleTimeout(0)) > 0) ++n;
+  if (r < 0 && errno != EINTR) throw std::runtime_error(name_ + ": LCM handle failed");
+  return n;
 }
 
 int Node::run() {

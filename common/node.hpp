@@ -6,8 +6,10 @@
 //  - a large UDP receive buffer (its default loses most of a burst of 300 KB images): the URL
 //    gets recv_buf_size unless it names one;
 //  - per-subscription queues hold 30 messages and silently drop the newest beyond that: every
-//    subscription gets a deep queue, and on_latest() drains all pending messages before
-//    calling back with the newest one, counting the ones it skipped;
+//    subscription gets a deep LCM queue, which each spin empties into the node's own Inbox
+//    (common/inbox.hpp: one arrival order across channels, a capacity per subscription, every
+//    message refused for a full queue counted in `dropped`), and on_latest() drains all pending
+//    messages before calling back with the newest one, counting the ones it skipped;
 //  - a message that fails to decode is only printed by its typed handler, and lcm-gen's
 //    decoders throw on some malformed lengths: ours decode through decode_message()
 //    (common/decode.hpp), which never throws, and count and report decode errors per channel.
@@ -30,6 +32,7 @@
 
 #include "common/channels.hpp"
 #include "common/decode.hpp"
+#include "common/inbox.hpp"
 #include "common/stamp_guard.hpp"
 
 namespace CLI {
@@ -72,6 +75,16 @@ struct ChannelStats {
   uint64_t rejected_values = 0;  ///< decoded, then refused by a conversion (non-finite, range)
   uint64_t rejected_stamps = 0;  ///< decoded, then refused by the stamp guard
   uint64_t skipped = 0;          ///< on_latest(): older messages replaced by a newer one
+  uint64_t dropped = 0;          ///< on(): refused unread, the subscription's queue was full
+};
+
+/// Messages an on() subscription may hold waiting for its handler unless told otherwise.
+inline constexpr size_t kDefaultQueueCapacity = 2048;
+
+/// When the node read the message being handled off LCM.
+struct Receipt {
+  int64_t wall_utime = 0;    ///< [us since Unix epoch]
+  int64_t steady_utime = 0;  ///< steady_utime() [us]
 };
 
 class Node {
@@ -84,14 +97,21 @@ class Node {
   Node(const Node&) = delete;
   Node& operator=(const Node&) = delete;
 
-  /// Calls `fn` for every message on `channel`, in arrival order.
+  /// Calls `fn` for every message on `channel`, in arrival order across all on() channels. At
+  /// most `capacity` messages of this channel wait for it; more arriving meanwhile are dropped
+  /// unread and counted (ChannelStats::dropped), so a handler slower than its input holds
+  /// bounded memory instead of an ever longer backlog.
   template <class Msg>
-  void on(const std::string& name, std::function<void(const Msg&)> fn) {
+  void on(const std::string& name, std::function<void(const Msg&)> fn,
+          size_t capacity = kDefaultQueueCapacity) {
     const std::string channel = remap_(name);
-    subscribe_raw(channel, false, [this, channel, fn](const void* data, uint32_t size) {
-      Msg msg;
-      if (decode(channel, msg, data, size)) fn(msg);
-    });
+    subscribe_raw(
+        channel, false,
+        [this, channel, fn](const void* data, uint32_t size) {
+          Msg msg;
+          if (decode(channel, msg, data, size)) fn(msg);
+        },
+        capacity);
   }
   /// Calls `fn` with only the newest message on `channel` each time the node catches up, so a
   /// slow consumer works on the newest frame instead of a backlog.
@@ -140,6 +160,9 @@ class Node {
   bool stopping() const;
 
   const ChannelStats& stats(const std::string& channel) const;
+  /// When the message being handled was read off LCM (valid inside an on() / on_latest()
+  /// handler; for timing, never for what a node computes).
+  const Receipt& receipt() const { return receipt_; }
   lcm::LCM& lcm() { return *lcm_; }
   /// The name on LCM of a channel named in the code (channels.hpp): its --remap target or itself.
   /// Every method above that takes a channel applies it.
@@ -153,7 +176,16 @@ class Node {
  private:
   struct Subscription;
   void subscribe_raw(const std::string& channel, bool latest,
-                     std::function<void(const void*, uint32_t)> dispatch);
+                     std::function<void(const void*, uint32_t)> dispatch,
+                     size_t capacity = kDefaultQueueCapacity);
+  // A message read off LCM, waiting in the inbox for its handler.
+  struct Inbound {
+    Subscription* sub = nullptr;
+    std::vector<uint8_t> bytes;
+    Receipt receipt;
+  };
+  int read_pending();  // empties LCM's queues without waiting; returns the messages read
+  void enqueue(Subscription& sub, const void* data, uint32_t size);
   template <class Msg>
   bool decode(const std::string& channel, Msg& msg, const void* data, uint32_t size) {
     if (!decode_message(msg, data, size)) {
@@ -170,6 +202,8 @@ class Node {
   ChannelRemap remap_;
   std::unique_ptr<lcm::LCM> lcm_;
   std::vector<std::unique_ptr<Subscription>> subs_;
+  Inbox<Inbound> inbox_;
+  Receipt receipt_;
   std::map<std::string, ChannelStats> stats_;
   struct Timer {
     int64_t period_us;

@@ -80,6 +80,14 @@ void Scorer::add(const target_t& t, int64_t received_utime) {
   add(t);
 }
 
+void Scorer::add(const vision_timing_t& t) {
+  process_ms_.push_back(1e-3 * static_cast<double>(t.process_us));
+  process_cpu_ms_.push_back(1e-3 * static_cast<double>(t.process_cpu_us));
+  wait_ms_.push_back(1e-3 * static_cast<double>(t.wait_us));
+  // Counters only grow; the logger may lose or reorder a message, so the largest wins.
+  if (!last_timing_ || t.frames_processed >= last_timing_->frames_processed) last_timing_ = t;
+}
+
 void Scorer::add_camera_frame(int64_t image_utime, int64_t received_utime) {
   ++camera_frames_;
   camera_received_.emplace(image_utime, received_utime);
@@ -94,6 +102,15 @@ void Scorer::extend_span(int64_t received_utime) {
 }
 
 namespace {
+std::optional<Score::Percentiles> percentiles(std::vector<double> v) {
+  if (v.empty()) return std::nullopt;
+  std::sort(v.begin(), v.end());
+  return Score::Percentiles{percentile(v, 50), percentile(v, 90), percentile(v, 99), v.back()};
+}
+
+// Exposure stamps further than this from the logger's clock are not wall-clock stamps.
+constexpr double kMaxEndToEndMs = 60'000.0;
+
 void timing(const std::unordered_map<int64_t, int64_t>& camera_received,
             const std::vector<std::pair<int64_t, int64_t>>& target_received, Score& s) {
   std::vector<double> latencies_ms;
@@ -125,6 +142,23 @@ Score Scorer::result() const {
   s.vision_found = vision_found_;
   s.camera_frames = camera_frames_;
   timing(camera_received_, target_received_, s);
+  s.timing_frames = static_cast<int>(process_ms_.size());
+  s.vision_process_ms = percentiles(process_ms_);
+  s.vision_process_cpu_ms = percentiles(process_cpu_ms_);
+  s.vision_wait_ms = percentiles(wait_ms_);
+  if (last_timing_) {
+    s.vision_frames_received = last_timing_->frames_received;
+    s.vision_frames_dropped = last_timing_->frames_dropped;
+    s.vision_frames_refused = last_timing_->frames_refused;
+    s.vision_frames_failed = last_timing_->frames_failed;
+    s.vision_frames_processed = last_timing_->frames_processed;
+    s.vision_frames_waiting = last_timing_->frames_waiting;
+    std::vector<double> e2e_ms;
+    for (const auto& [exposure, received] : target_received_)
+      e2e_ms.push_back(1e-3 * static_cast<double>(received - exposure));
+    const auto e2e = percentiles(e2e_ms);
+    if (e2e && e2e->p50 >= 0 && e2e->p50 <= kMaxEndToEndMs) s.vision_end_to_end_ms = e2e;
+  }
   if (first_received_ && *last_received_ > *first_received_) {
     const double span_s = 1e-6 * static_cast<double>(*last_received_ - *first_received_);
     if (camera_frames_ > 0) s.camera_frames_per_s = camera_frames_ / span_s;
@@ -241,6 +275,26 @@ std::vector<std::pair<std::string, std::string>> Score::fields() const {
   opt("vision_waypoints_per_s", vision_waypoints_per_s);
   opt("vision_frame_coverage", vision_frame_coverage);
   opt("real_time_factor", real_time_factor);
+  if (timing_frames > 0) {
+    f.emplace_back("timing_frames", std::to_string(timing_frames));
+    auto pct = [&](const std::string& key, const std::optional<Percentiles>& p) {
+      if (!p) return;
+      f.emplace_back(key + "_p50_ms", fmt(p->p50));
+      f.emplace_back(key + "_p90_ms", fmt(p->p90));
+      f.emplace_back(key + "_p99_ms", fmt(p->p99));
+      f.emplace_back(key + "_max_ms", fmt(p->max));
+    };
+    pct("vision_process", vision_process_ms);
+    pct("vision_process_cpu", vision_process_cpu_ms);
+    pct("vision_wait", vision_wait_ms);
+    pct("vision_end_to_end", vision_end_to_end_ms);
+    f.emplace_back("vision_frames_received", std::to_string(vision_frames_received));
+    f.emplace_back("vision_frames_dropped", std::to_string(vision_frames_dropped));
+    f.emplace_back("vision_frames_refused", std::to_string(vision_frames_refused));
+    f.emplace_back("vision_frames_failed", std::to_string(vision_frames_failed));
+    f.emplace_back("vision_frames_processed", std::to_string(vision_frames_processed));
+    f.emplace_back("vision_frames_waiting", std::to_string(vision_frames_waiting));
+  }
   f.emplace_back("collided", collided ? "true" : "false");
   f.emplace_back("n_collisions", std::to_string(n_collisions));
   f.emplace_back("out_of_area", out_of_area ? "true" : "false");

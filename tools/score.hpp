@@ -7,11 +7,16 @@
 // Timing (paper 4: waypoints at about 5 fps on STARMAC, 2 fps on the Pelican): given each
 // message's receipt time in the log (lcm-logger's wall-clock stamp), the scorer also measures
 // the camera -> VISION_TARGET latency and the frame and waypoint rates. All of it is wall-clock
-// time, whatever real-time factor the simulator ran at.
+// time, whatever real-time factor the simulator ran at. When the log has VISION_TIMING
+// (vision_timing_t, issue 15), the vision's own account comes apart: processing time
+// (Pipeline::process), the wait before it (queue and pose), the end-to-end latency from exposure
+// to the logger's receipt of the VISION_TARGET, and the frames it received, dropped and
+// processed.
 
 #include <alight/autonomy_status_t.hpp>
 #include <alight/sim_truth_t.hpp>
 #include <alight/target_t.hpp>
+#include <alight/vision_timing_t.hpp>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -56,6 +61,21 @@ struct Score {
   std::optional<double> vision_waypoints_per_s;  ///< ... of them with a target found
   std::optional<double> vision_frame_coverage;   ///< camera frames that got a VISION_TARGET [0, 1]
   std::optional<double> real_time_factor;        ///< camera exposure time elapsed per wall second
+
+  // From VISION_TIMING (nearest-rank percentiles over its messages) [ms]: Pipeline::process
+  // alone; the wait from the node reading the frame to processing it (its input queue, the
+  // frames ahead, the pose); and exposure -> VISION_TARGET received by the logger, reported
+  // only when the exposure stamps are on the wall clock (camera driver, alight-sim
+  // --start-now): its median within [0, 60] s.
+  struct Percentiles {
+    double p50 = 0, p90 = 0, p99 = 0, max = 0;
+  };
+  int timing_frames = 0;  ///< VISION_TIMING messages
+  std::optional<Percentiles> vision_process_ms, vision_wait_ms, vision_end_to_end_ms;
+  std::optional<Percentiles> vision_process_cpu_ms;  ///< the CPU time of the same
+  // The vision's counters in its last VISION_TIMING (vision_timing_t frames_*).
+  int64_t vision_frames_received = 0, vision_frames_dropped = 0, vision_frames_refused = 0,
+          vision_frames_failed = 0, vision_frames_processed = 0, vision_frames_waiting = 0;
   bool collided = false;
   int n_collisions = 0;
   bool out_of_area = false;  ///< the vehicle left the flying area (fails any mission)
@@ -73,6 +93,8 @@ class Scorer {
   void add(const target_t& target);
   /// A VISION_TARGET with its receipt time [us, wall clock, as the logger stamps it].
   void add(const target_t& target, int64_t received_utime);
+  /// A VISION_TIMING message (its own fields say when; the receipt is not needed).
+  void add(const vision_timing_t& timing);
   /// A CAMERA frame: its exposure time (image_t::utime) and receipt time [us].
   void add_camera_frame(int64_t image_utime, int64_t received_utime);
   Score result() const;
@@ -93,6 +115,8 @@ class Scorer {
   int camera_frames_ = 0, timed_found_ = 0;
   std::optional<int64_t> first_received_, last_received_;
   std::optional<std::pair<int64_t, int64_t>> first_camera_, last_camera_;  // (exposure, receipt)
+  std::vector<double> process_ms_, process_cpu_ms_, wait_ms_;
+  std::optional<vision_timing_t> last_timing_;  // the one with the most frames processed
   void extend_span(int64_t received_utime);
 };
 

@@ -1,8 +1,11 @@
 // alight-score LOG [--json]: the mission's figures from a session log, as `key: value` lines
 // (or one JSON object), for people and scripts. Exit status: 0 when the mission succeeded,
-// 1 when it did not, 2 when the log cannot be read or holds no SIM_TRUTH.
+// 1 when it did not, 2 when the log cannot be read or holds no SIM_TRUTH. With --vision-only
+// (a log without a simulator, e.g. bench/vision/soak's): no SIM_TRUTH needed, exit 0 when the
+// log holds VISION_TIMING, 2 when not.
 // The vision's latency and rates use each event's receipt time as lcm-logger stamped it (wall
-// clock): a VISION_TARGET's receipt minus that of the CAMERA frame with the same utime.
+// clock): a VISION_TARGET's receipt minus that of the CAMERA frame with the same utime; its
+// processing and waiting times come from VISION_TIMING.
 #include <CLI/CLI.hpp>
 #include <alight/image_t.hpp>
 #include <cstdio>
@@ -24,14 +27,19 @@ int main(int argc, char** argv) {
   CLI::App app{"alight-score: score a mission from its session log against the simulator's truth"};
   std::string log_path,
       truth_ch = alight::channels::kSimTruth, status_ch = alight::channels::kAutonomyStatus,
-      target_ch = alight::channels::kVisionTarget, camera_ch = alight::channels::kCamera;
-  bool json = false;
+      target_ch = alight::channels::kVisionTarget, camera_ch = alight::channels::kCamera,
+      timing_ch = alight::channels::kVisionTiming;
+  bool json = false, vision_only = false;
   app.add_option("log", log_path, "Session log (.lcmlog)")->required()->check(CLI::ExistingFile);
   app.add_flag("--json", json, "Print one JSON object instead of key: value lines");
   app.add_option("--truth-channel", truth_ch, "Channel of sim_truth_t");
   app.add_option("--status-channel", status_ch, "Channel of autonomy_status_t");
   app.add_option("--target-channel", target_ch, "Channel of target_t");
   app.add_option("--camera-channel", camera_ch, "Channel of image_t (raw frames)");
+  app.add_option("--timing-channel", timing_ch, "Channel of vision_timing_t");
+  app.add_flag("--vision-only", vision_only,
+               "Only the vision's figures: no SIM_TRUTH needed; exit 0 when the log holds "
+               "VISION_TIMING");
   CLI11_PARSE(app, argc, argv);
 
   lcm::LogFile log(log_path, "r");
@@ -40,7 +48,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   alight::tools::Scorer scorer;
-  int truths = 0, bad = 0;
+  int truths = 0, timings = 0, bad = 0;
   for (const lcm::LogEvent* ev = log.readNextEvent(); ev; ev = log.readNextEvent()) {
     if (ev->channel == truth_ch) {
       alight::sim_truth_t m;
@@ -56,6 +64,14 @@ int main(int argc, char** argv) {
     } else if (ev->channel == target_ch) {
       alight::target_t m;
       decode(*ev, m) ? scorer.add(m, ev->timestamp) : void(++bad);
+    } else if (ev->channel == timing_ch) {
+      alight::vision_timing_t m;
+      if (decode(*ev, m)) {
+        scorer.add(m);
+        ++timings;
+      } else {
+        ++bad;
+      }
     } else if (ev->channel == camera_ch) {
       alight::image_t m;
       decode(*ev, m) ? scorer.add_camera_frame(m.utime, ev->timestamp) : void(++bad);
@@ -63,6 +79,13 @@ int main(int argc, char** argv) {
   }
   if (bad > 0)
     std::fprintf(stderr, "alight-score: %d message(s) failed to decode (skipped)\n", bad);
+  if (vision_only) {
+    std::cout << (json ? scorer.result().to_json() : scorer.result().to_text());
+    if (timings > 0) return 0;
+    std::fprintf(stderr, "alight-score: %s holds no %s messages\n", log_path.c_str(),
+                 timing_ch.c_str());
+    return 2;
+  }
   if (truths == 0) {
     std::fprintf(stderr, "alight-score: %s holds no %s messages (not a simulated session?)\n",
                  log_path.c_str(), truth_ch.c_str());

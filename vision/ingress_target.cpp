@@ -71,18 +71,22 @@ double snap_to_edge(const cv::Mat& g, const cv::Mat& mask, bool vertical, double
   const int k_wall = static_cast<int>(std::ceil(p.snap_px));
   std::vector<double> response;  // |mean gradient| at offsets k = -1 .. k_wall towards the wall
   // Whole-pixel offsets from the line rounded at its centre, so the parabola's fraction is one
-  // of pixels, not of rounding.
+  // of pixels, not of rounding. Each offset's sum runs along the line in order; the offsets
+  // are the inner loop so a vertical line's pixels are read row by row (issue 15: reading a
+  // column per offset missed the cache on every pixel).
   const double a0 = std::round(a);
-  for (int k = -1; k <= k_wall; ++k) {
-    double sum = 0;
-    int n = 0;
-    for (int t = lo; t <= hi; ++t) {
-      const int x = static_cast<int>(std::lround(a0 + b * (t - mean_along))) + side * k;
+  const int n_k = k_wall + 2;
+  std::vector<double> sum(n_k, 0.0);
+  std::vector<int> n(n_k, 0);
+  for (int t = lo; t <= hi; ++t) {
+    const int x0 = static_cast<int>(std::lround(a0 + b * (t - mean_along)));
+    for (int j = 0; j < n_k; ++j) {
+      const int x = x0 + side * (j - 1);
       if (x < 1 || x >= n_across - 1) continue;
-      sum += at(g, t, x), ++n;
+      sum[j] += at(g, t, x), ++n[j];
     }
-    response.push_back(n > 0 ? std::abs(sum / n) : 0.0);
   }
+  for (int j = 0; j < n_k; ++j) response.push_back(n[j] > 0 ? std::abs(sum[j] / n[j]) : 0.0);
   // The face's far edge (face to room) can be the stronger step: take the peak nearest the wall
   // among those at least 0.8 of the strongest (0.5 let wall-texture steps through on rendered
   // views: widths up to 61.3 cm; the strongest alone took far edges on the synthetic face).
@@ -224,6 +228,53 @@ void line_cuts(const cv::Mat& image, const IngressParams& p, std::vector<double>
   y_cuts->front() = 0.0, y_cuts->back() = image.rows;
 }
 
+// Border pixels in cv::findNonZero's order (row by row, x increasing) and where each row's run
+// starts, so the pixels near a line are looked for only in the x-range of each row that can
+// hold them instead of among all of them for every line (issue 15: on a photographed wall the
+// border has thousands of pixels and the Hough transform dozens of lines, and testing every
+// pixel against every line took 40 % of the vision's time at 60 fps).
+struct BorderPixels {
+  std::vector<cv::Point> px;
+  std::vector<size_t> row_start;  // row y's pixels are px[row_start[y], row_start[y + 1])
+
+  BorderPixels(std::vector<cv::Point> pixels, int rows)
+      : px(std::move(pixels)), row_start(rows + 1) {
+    size_t k = 0;
+    for (int y = 0; y <= rows; ++y) {
+      while (k < px.size() && px[k].y < y) ++k;
+      row_start[y] = k;
+    }
+  }
+
+  // Appends to `out`, in px's order, every pixel q with keep(q), where keep(q) implies
+  // |cx q.x + cy q.y + c0| <= w: rows are searched only where that can hold (with a margin of
+  // two pixels for rounding), and keep() itself decides, so the selection is exactly that of
+  // testing keep() on every pixel, in the same order.
+  template <class Keep>
+  void select(double cx, double cy, double c0, double w, int cols, const Keep& keep,
+              std::vector<const cv::Point*>* out) const {
+    for (size_t y = 0; y + 1 < row_start.size(); ++y) {
+      const size_t b = row_start[y], e = row_start[y + 1];
+      if (b == e) continue;
+      const double t = cy * static_cast<double>(y) + c0;
+      double x_lo = -1.0, x_hi = cols + 1.0;
+      if (std::abs(cx) > 1e-9) {
+        const double x1 = (-w - t) / cx, x2 = (w - t) / cx;
+        x_lo = std::max(x_lo, std::min(x1, x2) - 2.0);
+        x_hi = std::min(x_hi, std::max(x1, x2) + 2.0);
+        if (!(x_lo <= x_hi)) continue;
+      } else if (std::abs(t) > w + std::abs(cx) * (cols + 1.0) + 1e-6) {
+        continue;
+      }
+      const int lo = static_cast<int>(std::floor(x_lo)), hi = static_cast<int>(std::ceil(x_hi));
+      auto it = std::lower_bound(px.begin() + b, px.begin() + e, lo,
+                                 [](const cv::Point& q, int x) { return q.x < x; });
+      for (; it != px.begin() + e && it->x <= hi; ++it)
+        if (keep(*it)) out->push_back(&*it);
+    }
+  }
+};
+
 void mask_cuts(const cv::Mat& mask, const IngressParams& p, std::vector<double>* x_cuts,
                std::vector<double>* y_cuts, std::vector<cv::Vec4i>* kept, const cv::Mat& image) {
   assert(mask.type() == CV_8UC1);
@@ -239,8 +290,10 @@ void mask_cuts(const cv::Mat& mask, const IngressParams& p, std::vector<double>*
   // pixels is the border itself.
   cv::Mat border;
   cv::morphologyEx(mask, border, cv::MORPH_GRADIENT, cv::Mat());
-  std::vector<cv::Point> px;
-  cv::findNonZero(border, px);
+  std::vector<cv::Point> nonzero;
+  cv::findNonZero(border, nonzero);
+  const BorderPixels border_px(std::move(nonzero), mask.rows);
+  const std::vector<cv::Point>& px = border_px.px;
   // The standard Hough transform (full lines, votes from anywhere along them) rather than the
   // probabilistic one: the border is ragged by a few pixels where the view beyond the wall
   // agrees with it by chance, which breaks a segment walk but barely spreads the votes.
@@ -261,8 +314,9 @@ void mask_cuts(const cv::Mat& mask, const IngressParams& p, std::vector<double>*
     const double c = std::cos(theta), s = std::sin(theta);
     double a = 0, b = 0, mean_along = 0;
     std::vector<const cv::Point*> band;
-    for (const auto& q : px)
-      if (std::abs(q.x * c + q.y * s - rho) <= 3.0) band.push_back(&q);
+    border_px.select(
+        c, s, -rho, 3.0, mask.cols,
+        [&](const cv::Point& q) { return std::abs(q.x * c + q.y * s - rho) <= 3.0; }, &band);
     for (int pass = 0; pass < 2 && band.size() >= 2; ++pass) {
       double sa = 0, sx = 0;
       for (const auto* q : band) sa += along(*q), sx += across(*q);
@@ -274,8 +328,14 @@ void mask_cuts(const cv::Mat& mask, const IngressParams& p, std::vector<double>*
       }
       b = saa > 0 ? sab / saa : 0.0;
       std::vector<const cv::Point*> next;
-      for (const auto& q : px)
-        if (std::abs(across(q) - (a + b * (along(q) - mean_along))) <= 2.0) next.push_back(&q);
+      const auto near_fit = [&](const cv::Point& q) {
+        return std::abs(across(q) - (a + b * (along(q) - mean_along))) <= 2.0;
+      };
+      // |across - b along + (b mean_along - a)| <= 2, across = x for a vertical line.
+      if (vertical)
+        border_px.select(1.0, -b, b * mean_along - a, 2.0, mask.cols, near_fit, &next);
+      else
+        border_px.select(-b, 1.0, b * mean_along - a, 2.0, mask.cols, near_fit, &next);
       band.swap(next);
     }
     if (band.empty()) continue;

@@ -292,11 +292,15 @@ const ParamSchema<NodeParams>& NodeParams::schema() {
     // Finite and bounded: `.inf` made every frame wait for its pose forever, and an infinite
     // wait converted to microseconds is undefined behaviour.
     s.add("max_pose_wait_s", &P::max_pose_wait_s, Range::closed(0, 5), "s",
-          "a frame waits this long (wall clock) for its pose");
+          "a frame waits for its pose until a frame exposed this much later has arrived "
+          "(sensor time, vision/frame_pose_pairing.hpp)");
     s.add("diag_rate_hz", &P::diag_rate_hz, Range::closed(0, 100), "Hz",
           "VISION_DIAG images per second (0: none)");
     s.add("diag_jpeg_quality", &P::diag_jpeg_quality, Range::closed(1, 100), "",
           "JPEG quality of VISION_DIAG");
+    // Up to LCM's own queue depth (common/node.cpp): beyond it LCM would drop silently first.
+    s.add("camera_queue_frames", &P::camera_queue_frames, Range::closed(1, 2048), "frames",
+          "CAMERA messages that may wait for the vision; more are dropped and counted");
     s.section("poses", &P::poses, PoseBufferParams::schema(),
               "motion-capture history, looked up at each frame's exposure time");
     s.merge(&P::pipeline, PipelineParams::schema());

@@ -176,6 +176,10 @@ struct NodeParams {
   double max_pose_wait_s = 0.2;
   double diag_rate_hz = 2.0;
   int diag_jpeg_quality = 75;
+  /// CAMERA messages that may wait undecoded for the vision (Node::on's capacity): 2 s at
+  /// 60 fps. More arriving while it is behind are dropped and counted (NODE_STATUS `dropped`,
+  /// VISION_TIMING frames_dropped): a bound on memory (~300 kB a 640x480 frame).
+  int camera_queue_frames = 120;
   static const ParamSchema<NodeParams>& schema();
   void validate() const;  ///< throws ParamError naming the full key and its value
 };

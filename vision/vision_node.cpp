@@ -9,6 +9,15 @@
 // published is stamped with the frame's exposure time, so the output is a function of the
 // message sequence alone: a replayed log gives the same bytes however busy the machine is.
 //
+// Keeping up with the camera (issue 15): CAMERA messages wait undecoded in the node's queue
+// (Node::on, at most vision.camera_queue_frames; more are dropped and counted), then decoded
+// frames wait in the pairing for their pose (at most 64, FramePosePairing's bound; a frame
+// beyond it is processed without a pose, never dropped). The first queue fills only when
+// processing is slower than the camera, the second only when poses stop while frames come.
+// For every processed frame VISION_TIMING (vision_timing_t) says how long it waited, how long
+// Pipeline::process took and what the node counted so far; it is measured on the steady and
+// wall clocks, so it is a channel of its own and VISION_TARGET stays a function of the input.
+//
 // Input boundary (issue 14, vision/inputs.hpp): a pose with a non-finite value or a non-unit
 // quaternion is refused, and so is any message whose stamp the node's StampGuard refuses (a
 // pose an hour ahead used to push every later pose out of the buffer); a frame that does not
@@ -23,6 +32,9 @@
 #include <alight/image_t.hpp>
 #include <alight/pose_t.hpp>
 #include <alight/target_t.hpp>
+#include <alight/vision_timing_t.hpp>
+#include <ctime>
+#include <opencv2/core.hpp>
 #include <optional>
 
 #include "common/camera_mount.hpp"
@@ -36,6 +48,16 @@
 
 using namespace alight;
 using namespace alight::vision;
+
+namespace {
+// CPU time of the calling thread [us]: a frame's own cost, apart from the time other processes
+// held the core (the machine is shared).
+int64_t thread_cpu_us() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<int64_t>(ts.tv_sec) * 1'000'000 + ts.tv_nsec / 1000;
+}
+}  // namespace
 
 int main(int argc, char** argv) {
   return alight::run_node_main("alight-vision", [&]() -> int {
@@ -52,6 +74,11 @@ int main(int argc, char** argv) {
     }
     args.finalize();
 
+    // One frame at a time on this thread: OpenCV's worker threads (TBB) would only add their
+    // hand-offs and spinning to a 640x480 frame's work and compete with the camera and the
+    // other nodes for the cores (issue 15), and it leaves process_cpu_us the whole of a frame's
+    // CPU time. Pixel results do not depend on the thread count.
+    cv::setNumThreads(1);
     const Mission mission = mission_from_string(mission_name);
     const ParamNode root = ParamNode::load_file(args.config);
     const NodeParams params = load_node_params(root);
@@ -66,6 +93,7 @@ int main(int argc, char** argv) {
     struct Pending {
       Image image;
       bool bad = false;
+      Receipt receipt;  // when the node read it off LCM (timing only)
     };
     FramePosePairing<Pending> pairing(params.poses,
                                       static_cast<int64_t>(params.max_pose_wait_s * 1e6));
@@ -80,12 +108,51 @@ int main(int argc, char** argv) {
       node.reject_value(channel, why);
     };
 
-    const auto process = [&](const Pending& f, const std::optional<PoseSample>& pose) {
+    const auto timing_message = [&](const Pending& f, const FrameResult& r, PairingOutcome outcome,
+                                    int64_t start_steady, int64_t process_us,
+                                    int64_t process_cpu_us) {
+      const ChannelStats& c = node.stats(channels::kCamera);
+      vision_timing_t t{};
+      t.utime = r.utime;
+      t.seq = r.seq;
+      t.receive_utime = f.receipt.wall_utime;
+      t.wait_us = start_steady - f.receipt.steady_utime;
+      t.process_us = process_us;
+      t.process_cpu_us = process_cpu_us;
+      t.publish_utime = wall_utime();
+      t.total_us = steady_utime() - f.receipt.steady_utime;
+      switch (outcome) {
+        case PairingOutcome::kWithPose:
+          t.pose = vision_timing_t::POSE_OK;
+          break;
+        case PairingOutcome::kPoseTimedOut:
+          t.pose = vision_timing_t::POSE_TIMED_OUT;
+          break;
+        case PairingOutcome::kPoseUnavailable:
+          t.pose = vision_timing_t::POSE_UNAVAILABLE;
+          break;
+        case PairingOutcome::kQueueFull:
+          t.pose = vision_timing_t::POSE_QUEUE_FULL;
+          break;
+      }
+      t.frames_received = static_cast<int64_t>(c.received + c.decode_errors + c.dropped);
+      t.frames_dropped = static_cast<int64_t>(c.dropped);
+      t.frames_refused = static_cast<int64_t>(c.decode_errors + c.rejected_stamps);
+      t.frames_failed = static_cast<int64_t>(n_frame_errors);
+      t.frames_processed = static_cast<int64_t>(n_frames);
+      t.frames_waiting = static_cast<int32_t>(pairing.waiting());
+      return t;
+    };
+    const auto process = [&](const Pending& f, const std::optional<PoseSample>& pose,
+                             PairingOutcome outcome) {
       // Nothing is published before the frame's work is through, so a frame that throws
       // half-way is dropped whole.
       const auto error = run_guarded([&] {
+        const int64_t start = steady_utime(), start_cpu = thread_cpu_us();
         const FrameResult r = f.bad ? pipeline.process(cv::Mat(), f.image.utime, pose)
                                     : pipeline.process(f.image.pixels, f.image.utime, pose);
+        const int64_t process_us = steady_utime() - start;
+        const int64_t process_cpu_us = thread_cpu_us() - start_cpu;
         const target_t target = to_msg(r);
         std::optional<image_t> diag;
         if (params.diag_rate_hz > 0 &&
@@ -98,6 +165,8 @@ int main(int argc, char** argv) {
         if (diag) node.publish(channels::kVisionDiag, *diag);
         ++n_frames;
         if (r.found()) ++n_found;
+        node.publish(channels::kVisionTiming,
+                     timing_message(f, r, outcome, start, process_us, process_cpu_us));
         spdlog::debug("frame {} utime {}: {} ({} features, {} matches)", r.seq, r.utime,
                       to_string(r.reason), r.n_features, r.n_matches);
       });
@@ -110,36 +179,41 @@ int main(int argc, char** argv) {
       while (auto r = pairing.poll()) {
         if (r->outcome != PairingOutcome::kWithPose)
           spdlog::debug("frame {} without a pose: {}", r->utime, to_string(r->outcome));
-        process(r->frame, r->pose);
+        process(r->frame, r->pose, r->outcome);
       }
     };
 
     node.on<pose_t>(channels::kMocapPose, [&](const pose_t& msg) {
       if (add_mocap_pose(msg, pairing.poses(), accept_stamp, reject)) try_process();
     });
-    node.on<image_t>(channels::kCamera, [&](const image_t& msg) {
-      FrameInput in = camera_frame(msg, accept_stamp, reject);
-      if (!in.use) return;
-      Pending f;
-      if (in.image) {
-        f.image = std::move(*in.image);
-      } else {
-        f.image.utime = msg.utime;
-        f.bad = true;
-      }
-      const int64_t utime = f.image.utime;
-      pairing.add_frame(std::move(f), utime);
-      try_process();
-    });
+    node.on<image_t>(
+        channels::kCamera,
+        [&](const image_t& msg) {
+          FrameInput in = camera_frame(msg, accept_stamp, reject);
+          if (!in.use) return;
+          Pending f;
+          f.receipt = node.receipt();
+          if (in.image) {
+            f.image = std::move(*in.image);
+          } else {
+            f.image.utime = msg.utime;
+            f.bad = true;
+          }
+          const int64_t utime = f.image.utime;
+          pairing.add_frame(std::move(f), utime);
+          try_process();
+        },
+        static_cast<size_t>(params.camera_queue_frames));
     node.every(10.0, [&](int64_t) {
       const ChannelStats& c = node.stats(channels::kCamera);
       spdlog::info(
           "{} frames, {} with a target, {} without a pose ({} timed out, {} not in the history, "
-          "{} behind a full queue), {} refused (image or stamp), {} dropped by an exception",
+          "{} behind a full queue), {} refused (image or stamp), {} dropped by an exception, "
+          "{} dropped by a full input queue",
           n_frames, n_found,
           pairing.counts().timed_out + pairing.counts().unavailable + pairing.counts().queue_full,
           pairing.counts().timed_out, pairing.counts().unavailable, pairing.counts().queue_full,
-          c.rejected_values + c.rejected_stamps, n_frame_errors);
+          c.rejected_values + c.rejected_stamps, n_frame_errors, c.dropped);
     });
     return node.run();
   });

@@ -53,6 +53,66 @@ TEST(NodeTest, OnDeliversEveryMessageInOrder) {
   EXPECT_EQ(sub.stats("NODE_TEST_ALL").received, 500u);
 }
 
+// The vision pairs frames with poses by their arrival order: on() keeps it across channels.
+TEST(NodeTest, OnKeepsTheArrivalOrderAcrossChannels) {
+  Node pub(kUrl, "pub"), sub(kUrl, "sub");
+  std::vector<std::string> seen;
+  sub.on<imu_t>("NODE_TEST_ORDER_A",
+                [&](const imu_t& m) { seen.push_back("A" + std::to_string(m.seq)); });
+  sub.on<imu_t>("NODE_TEST_ORDER_B",
+                [&](const imu_t& m) { seen.push_back("B" + std::to_string(m.seq)); });
+  std::vector<std::string> sent;
+  for (int i = 0; i < 300; ++i) {
+    const bool a = (i * 7) % 3 != 0;
+    pub.publish(a ? "NODE_TEST_ORDER_A" : "NODE_TEST_ORDER_B", imu(i));
+    sent.push_back((a ? "A" : "B") + std::to_string(i));
+  }
+  ASSERT_TRUE(spin_until(sub, [&] { return seen.size() >= sent.size(); })) << seen.size();
+  EXPECT_EQ(seen, sent);
+}
+
+// Issue 15: a handler slower than its input holds at most `capacity` messages of that channel;
+// the newest beyond it are dropped unread and counted, never silently.
+TEST(NodeTest, AFullQueueDropsTheNewestAndCountsThem) {
+  Node pub(kUrl, "pub"), sub(kUrl, "bounded");
+  std::vector<int64_t> seen;
+  Receipt first{};
+  const int64_t before = wall_utime();
+  sub.on<imu_t>(
+      "NODE_TEST_BOUNDED",
+      [&](const imu_t& m) {
+        if (seen.empty()) first = sub.receipt();
+        seen.push_back(m.seq);
+      },
+      50);
+  for (int i = 0; i < 200; ++i) pub.publish("NODE_TEST_BOUNDED", imu(i));
+  // Everything arrives before the first spin reads it: 50 fit, the rest are dropped.
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  const auto& st = sub.stats("NODE_TEST_BOUNDED");
+  ASSERT_TRUE(spin_until(sub, [&] { return seen.size() + st.dropped >= 200; }))
+      << seen.size() << " + " << st.dropped;
+  EXPECT_EQ(seen.size() + st.dropped, 200u);
+  EXPECT_GT(st.dropped, 0u);
+  EXPECT_EQ(st.received, seen.size());
+  // Nothing waiting is dropped: the first 50 always arrive, and every one in order, once.
+  ASSERT_GE(seen.size(), 50u);
+  for (size_t i = 0; i < seen.size(); ++i) {
+    if (i < 50) {
+      EXPECT_EQ(seen[i], static_cast<int64_t>(i));
+    }
+    if (i > 0) {
+      EXPECT_GT(seen[i], seen[i - 1]);
+    }
+  }
+  const node_status_t status = sub.status_message(1);
+  ASSERT_EQ(status.n, 1);
+  EXPECT_EQ(status.channels.at(0).dropped, static_cast<int64_t>(st.dropped));
+  // The receipt is when the node read the message, for the handler's timing.
+  EXPECT_GE(first.wall_utime, before);
+  EXPECT_LE(first.wall_utime, wall_utime());
+  EXPECT_GT(first.steady_utime, 0);
+}
+
 TEST(NodeTest, OnLatestCallsBackWithTheNewestAndCountsSkipped) {
   Node pub(kUrl, "pub"), sub(kUrl, "sub");
   std::vector<int64_t> seen;

@@ -308,6 +308,78 @@ TEST(ScoreTest, TargetsWithoutReceiptTimesGiveNoTimingFigures) {
   EXPECT_EQ(s.to_text().find("_per_s"), std::string::npos) << s.to_text();
 }
 
+vision_timing_t timing(int64_t exposure, int64_t process_us, int64_t wait_us, int64_t processed) {
+  vision_timing_t t{};
+  t.utime = exposure;
+  t.seq = processed;
+  t.receive_utime = exposure + 2'000;
+  t.wait_us = wait_us;
+  t.process_us = process_us;
+  t.process_cpu_us = process_us / 2;
+  t.publish_utime = t.receive_utime + wait_us + process_us;
+  t.total_us = wait_us + process_us;
+  t.frames_received = processed + 3;
+  t.frames_dropped = 2;
+  t.frames_refused = 1;
+  t.frames_processed = processed;
+  return t;
+}
+
+// Issue 15: processing, the wait before it, and exposure-to-logger latency come apart.
+TEST(ScoreTest, VisionTimingGivesProcessingWaitAndEndToEndPercentilesApart) {
+  // Given 100 frames on the wall clock: processing 1..100 tenths of a ms, waits of 10..1000 us
+  // in another order, and each target received by the logger 20 + i ms after its exposure
+  std::vector<int> order(100);
+  std::iota(order.begin(), order.end(), 1);
+  std::shuffle(order.begin(), order.end(), std::mt19937(3));
+  Scorer sc;
+  for (int i = 0; i < 100; ++i) {
+    const int64_t exposure = kT0 + i * 16'667;
+    sc.add(vision_target(exposure, true), exposure + (20 + i) * 1'000);
+    sc.add(timing(exposure, order[i] * 100, (101 - order[i]) * 10, i + 1));
+  }
+  // A message the logger delivered late does not turn the counters back
+  sc.add(timing(kT0, 50, 50, 7));
+  const Score s = sc.result();
+  EXPECT_EQ(s.timing_frames, 101);
+  ASSERT_TRUE(s.vision_process_ms && s.vision_wait_ms && s.vision_end_to_end_ms);
+  EXPECT_DOUBLE_EQ(s.vision_process_ms->p50, 5.0);  // 101 values: the extra 0.05 ms is 1st
+  EXPECT_DOUBLE_EQ(s.vision_process_ms->p90, 9.0);
+  EXPECT_DOUBLE_EQ(s.vision_process_ms->p99, 9.9);
+  EXPECT_DOUBLE_EQ(s.vision_process_ms->max, 10.0);
+  EXPECT_DOUBLE_EQ(s.vision_wait_ms->max, 1.0);
+  ASSERT_TRUE(s.vision_process_cpu_ms);  // its own percentiles, not the wall-clock ones
+  EXPECT_DOUBLE_EQ(s.vision_process_cpu_ms->max, 5.0);
+  EXPECT_DOUBLE_EQ(s.vision_end_to_end_ms->p50, 69.0);
+  EXPECT_DOUBLE_EQ(s.vision_end_to_end_ms->p99, 118.0);
+  EXPECT_DOUBLE_EQ(s.vision_end_to_end_ms->max, 119.0);
+  EXPECT_EQ(s.vision_frames_processed, 100);
+  EXPECT_EQ(s.vision_frames_received, 103);
+  EXPECT_EQ(s.vision_frames_dropped, 2);
+  EXPECT_EQ(s.vision_frames_refused, 1);
+  const std::string text = s.to_text();
+  EXPECT_NE(text.find("vision_process_p99_ms: 9.9000\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("vision_wait_p50_ms: "), std::string::npos) << text;
+  EXPECT_NE(text.find("vision_end_to_end_p90_ms: 109.0000\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("vision_frames_dropped: 2\n"), std::string::npos) << text;
+}
+
+TEST(ScoreTest, EndToEndNeedsExposureStampsOnTheWallClock) {
+  // The simulator's own clock (a scenario's start_utime, years before the logger's stamps)
+  Scorer sc;
+  for (int i = 0; i < 10; ++i) {
+    sc.add(vision_target(1'700'000'000'000'000 + i, true), kT0 + i);
+    sc.add(timing(1'700'000'000'000'000 + i, 4'000, 100, i + 1));
+  }
+  const Score s = sc.result();
+  ASSERT_TRUE(s.vision_process_ms);
+  EXPECT_DOUBLE_EQ(s.vision_process_ms->p50, 4.0);
+  EXPECT_FALSE(s.vision_end_to_end_ms.has_value());
+  EXPECT_EQ(s.to_text().find("end_to_end"), std::string::npos);
+  // And without VISION_TIMING none of these figures appear
+  EXPECT_EQ(landing_session(false).result().to_text().find("timing_frames"), std::string::npos);
+}
+
 TEST(ScoreTest, JsonQuotesStringsAndNotNumbers) {
   const std::string j = landing_session(false).result().to_json();
   EXPECT_NE(j.find("\"success\": true"), std::string::npos) << j;
@@ -341,6 +413,8 @@ TEST(ScoreTest, CommandLineReadsASessionLog) {
       write_at(channels::kCamera, img, kT0 + 1'000'000 + i * 500'000);
       write_at(channels::kVisionTarget, vision_target(img.utime, i == 1),
                kT0 + 1'120'000 + i * 500'000);
+      write_at(channels::kVisionTiming, timing(img.utime, 3'000 + i * 1'000, 500, i + 1),
+               kT0 + 1'121'000 + i * 500'000);
     }
     write(channels::kSimTruth, landing_truth(kT0 + 2, 1.0, -0.5, 0.24, true));
   }
@@ -358,10 +432,31 @@ TEST(ScoreTest, CommandLineReadsASessionLog) {
   EXPECT_NE(text.find("vision_latency_p99_ms: 120.0000\n"), std::string::npos) << text;
   EXPECT_NE(text.find("camera_frames: 2\n"), std::string::npos) << text;
   EXPECT_NE(text.find("vision_frame_coverage: 1.0000\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("vision_process_max_ms: 4.0000\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("vision_frames_processed: 2\n"), std::string::npos) << text;
   EXPECT_EQ(run(path.string() + " --json", &json), 0);
   EXPECT_EQ(json.front(), '{');
+  EXPECT_NE(json.find("\"vision_process_p50_ms\": 3.0000"), std::string::npos) << json;
   EXPECT_EQ(run("/nonexistent.lcmlog", &missing), 105);  // CLI11: the file does not exist
+
+  // --vision-only: a log with VISION_TIMING and no SIM_TRUTH is fine, one without is not
+  const auto bare = std::filesystem::temp_directory_path() / "alight_score_test_bare.lcmlog";
+  {
+    lcm::LogFile log(bare.string(), "w");
+    const vision_timing_t t = timing(kT0, 2'500, 100, 1);
+    std::vector<uint8_t> buf(t.getEncodedSize());
+    t.encode(buf.data(), 0, static_cast<int>(buf.size()));
+    lcm::LogEvent ev{0, kT0 + 5'000, channels::kVisionTiming, static_cast<int32_t>(buf.size()),
+                     buf.data()};
+    log.writeEvent(&ev);
+  }
+  std::string vision, no_truth, no_timing;
+  EXPECT_EQ(run(bare.string() + " --vision-only", &vision), 0) << vision;
+  EXPECT_NE(vision.find("vision_process_p50_ms: 2.5000\n"), std::string::npos) << vision;
+  EXPECT_EQ(run(bare.string(), &no_truth), 2) << no_truth;
+  EXPECT_EQ(run(path.string() + " --vision-only --timing-channel NONE", &no_timing), 2);
   std::filesystem::remove(path);
+  std::filesystem::remove(bare);
 }
 
 }  // namespace

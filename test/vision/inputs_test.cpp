@@ -177,5 +177,23 @@ TEST(VisionParamsRegression, InfiniteOrHugeTimeoutsAreRefusedNamingFileKeyAndVal
   EXPECT_NO_THROW(load_node_params(ParamNode::from_string("vision: {max_pose_wait_s: 5}")));
 }
 
+// Issue 15: the CAMERA queue bounds memory; no queue, or one deeper than LCM's own (whose
+// overflow is silent), is refused at its full key.
+TEST(VisionParams, CameraQueueIsBoundedOnBothSides) {
+  EXPECT_EQ(NodeParams{}.camera_queue_frames, 120);  // 2 s at 60 Hz
+  for (const char* yaml :
+       {"vision: {camera_queue_frames: 0}", "vision: {camera_queue_frames: 4096}"}) {
+    try {
+      load_node_params(ParamNode::from_string(yaml, "vehicle.yaml"));
+      ADD_FAILURE() << "accepted: " << yaml;
+    } catch (const ParamError& e) {
+      EXPECT_EQ(e.key(), "vision.camera_queue_frames") << e.what();
+    }
+  }
+  EXPECT_EQ(load_node_params(ParamNode::from_string("vision: {camera_queue_frames: 30}"))
+                .camera_queue_frames,
+            30);
+}
+
 }  // namespace
 }  // namespace alight::vision
