@@ -173,7 +173,8 @@ Outcome Estimator::add_baro(const BaroSample& m) {
 
 Outcome Estimator::add_flow(const FlowSample& m) {
   const auto& p = params_.flow;
-  if (!m.t_over_d_C1.allFinite() || !m.cov.allFinite())
+  if (!m.t_over_d_C1.allFinite() || !m.cov.allFinite() || !m.J_rotation.allFinite() ||
+      !m.J_normal.allFinite())
     return reject(Sensor::kFlow, Outcome::kNonFinite);
   if (m.utime_from <= 0 || m.utime_to <= m.utime_from || m.t_over_d_C1.norm() > p.max_t_over_d)
     return reject(Sensor::kFlow, Outcome::kAbsurd);
@@ -422,7 +423,8 @@ Outcome Estimator::apply_flow(const FlowSample& m, int64_t key, FilterState& s) 
   const auto& p = params_.flow;
   const int ci = s.clone_index(key);
   if (ci < 0) return Outcome::kNoClone;
-  const FlowModel model = flow_model(s.x, s.clones[ci], R_BC_, p.t_B_C_m);
+  FlowModel model = flow_model(s.x, s.clones[ci], R_BC_, p.t_B_C_m);
+  add_input_sensitivities(model, s.x, s.clones[ci], R_BC_, m.J_rotation, m.J_normal);
   Outcome o = Outcome::kGeometry;
   if (model.height_m >= p.min_height_m) {
     const MeasVec r = m.t_over_d_C1 - model.t_over_d;
@@ -436,6 +438,19 @@ Outcome Estimator::apply_flow(const FlowSample& m, int64_t key, FilterState& s) 
 }
 
 // ---- Output
+
+std::optional<Quaterniond> Estimator::attitude_at(int64_t utime) const {
+  if (!initialised() || utime < history_.front().s.utime || utime > newest_imu_utime())
+    return std::nullopt;
+  size_t k = history_.size() - 1;
+  while (k > 0 && history_[k].s.utime > utime) --k;
+  const FilterState& s = history_[k].s;
+  if (s.utime == utime) return s.x.q_WB;
+  // Inside the next interval: its sample's rate, as the propagation integrates it.
+  const ImuSample& next = history_[k + 1].imu;
+  return (s.x.q_WB * quat_exp((next.gyro_B - s.x.gyro_bias_B) * ((utime - s.utime) / kUsPerS)))
+      .normalized();
+}
 
 State Estimator::state() const {
   State out;

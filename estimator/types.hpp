@@ -40,12 +40,23 @@ struct BaroSample {
 /// exposures at utime_from and utime_to, in the camera frame at utime_from, divided by the distance
 /// d of that camera from the (horizontal) plane below. From the floor-plane homography
 /// H = R + t n^T / d with R known from the gyro.
+///
+/// The front end needs R_C2C1 (camera 1 to camera 2) and n_C1 (the floor's up normal in camera
+/// 1); the node takes both from this estimator's attitudes at the two exposures
+/// (Estimator::attitude_at). Their errors are then the estimate's, and the sensitivities below
+/// enter the flow update's Jacobian (zero: the output does not depend on them).
 struct FlowSample {
   int64_t utime_from = 0;
   int64_t utime_to = 0;
   Vector3d t_over_d_C1 = Vector3d::Zero();  ///< [-] (metres per metre of height)
   Matrix3d cov = Matrix3d::Identity();      ///< covariance of t_over_d_C1 [-]
   int inliers = 0;                          ///< homography inliers behind it
+  /// Given R_C2C1 Exp(theta) instead of R_C2C1 (theta in C1), the output moves by
+  /// J_rotation theta [1/rad].
+  Matrix3d J_rotation = Matrix3d::Zero();
+  /// Given (n_C1 + delta) / |n_C1 + delta| instead of n_C1, the output moves by J_normal delta.
+  Matrix3d J_normal = Matrix3d::Zero();
+  double residual_rms_px = 0.0;  ///< the front end's fit quality (not used by the filter) [px]
 };
 
 /// What the estimator did with an input. kFused and kQueued are not rejections; every other

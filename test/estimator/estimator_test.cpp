@@ -159,6 +159,14 @@ TEST(EstimatorTest, PureRotationFollowsTheAnalyticQuaternion) {
   const State s = est.state();
   const Quaterniond expected = quat_exp(omega_B * (n * kDtUs * 1e-6));
   EXPECT_LT(test::attitude_error(s.q_WB, expected).norm(), 1e-9);
+  // The attitude at a past time, between two IMU samples, for the flow front end.
+  const int64_t past = t - 37 * kDtUs - 1234;
+  const Quaterniond at_past = quat_exp(omega_B * ((n * kDtUs - (t - past)) * 1e-6));
+  ASSERT_TRUE(est.attitude_at(past).has_value());
+  EXPECT_LT(test::attitude_error(*est.attitude_at(past), at_past).norm(), 1e-9);
+  EXPECT_EQ(est.attitude_at(t)->coeffs(), s.q_WB.coeffs());
+  EXPECT_FALSE(est.attitude_at(t + 1).has_value());
+  EXPECT_FALSE(est.attitude_at(t - 2'000'000).has_value());
   EXPECT_LT((s.p_W_B - p.init.p_W_B_m).norm(), 1e-3) << s.p_W_B.transpose();
   EXPECT_LT(s.v_W_B.norm(), 1e-3);
 }
