@@ -36,8 +36,8 @@ Drift run(const test::Trajectory& traj, double duration_s, uint64_t seed) {
   const auto it = std::lower_bound(f.truth.begin(), f.truth.end(), s.utime,
                                    [](const test::Truth& t, int64_t u) { return t.utime < u; });
   const Vector3d e = s.p_W_B - it->p_W_B;
-  const double yaw_err = wrap_angle(yaw_of(s.q_WB.toRotationMatrix()) -
-                                    yaw_of(it->q_WB.toRotationMatrix()));
+  const double yaw_err =
+      wrap_angle(yaw_of(s.q_WB.toRotationMatrix()) - yaw_of(it->q_WB.toRotationMatrix()));
   return {e.head<2>().norm(),
           std::abs(e.z()),
           std::abs(yaw_err) * 180 / M_PI,
@@ -60,11 +60,12 @@ void report(const char* name, const std::vector<Drift>& d) {
     ok += x.health == Health::kOk;
   }
   auto mx = [](const std::vector<double>& v) { return *std::max_element(v.begin(), v.end()); };
-  std::printf("%s (%zu seeds): horizontal %.3f m median, %.3f m max (filter 1-sigma %.3f m); "
-              "vertical %.3f / %.3f m (sigma %.3f m); heading %.2f / %.2f deg; health OK at the "
-              "end in %d\n",
-              name, d.size(), median(h), mx(h), median(sh), median(z), mx(z), median(sz),
-              median(yaw), mx(yaw), ok);
+  std::printf(
+      "%s (%zu seeds): horizontal %.3f m median, %.3f m max (filter 1-sigma %.3f m); "
+      "vertical %.3f / %.3f m (sigma %.3f m); heading %.2f / %.2f deg; health OK at the "
+      "end in %d\n",
+      name, d.size(), median(h), mx(h), median(sh), median(z), mx(z), median(sz), median(yaw),
+      mx(yaw), ok);
 }
 
 }  // namespace
