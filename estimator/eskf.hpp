@@ -75,6 +75,8 @@ struct FilterState {
   std::array<Outcome, kSensorCount> last_outcome{};      ///< of the latest update per sensor
   int64_t last_imu_gap_utime = 0;                        ///< end of the latest IMU gap (0: none)
   int64_t terrain_resets = 0;
+  int64_t baro_gated_since_utime = 0;  ///< first of the baro's current run of refusals (0: none)
+  int64_t baro_resets = 0;
 
   int dim() const { return idx::kCore + kCloneDim * n_clones; }
   int clone_index(int64_t key) const;  ///< -1 when absent

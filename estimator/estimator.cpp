@@ -389,9 +389,15 @@ bool Estimator::vertical_ok(const FilterState& s) const {
 Outcome Estimator::apply_baro(const BaroSample& m, FilterState& s) {
   const auto& p = params_.baro;
   const double altitude_m = isa_altitude_m(m.pressure_pa);
-  if (!s.baro_initialised) {
-    // The offset starts as the first reading minus the height: b = alt - p_z, so its
-    // correlations are those of -p_z and its variance that of p_z plus the reading's.
+  // A barometer refused for reset_after_s on end (a bad first reading, a door opened, weather)
+  // disagrees with the height that range and IMU keep: its offset starts over, as at first.
+  const bool stale =
+      s.baro_gated_since_utime != 0 && m.utime - s.baro_gated_since_utime >= to_us(p.reset_after_s);
+  if (!s.baro_initialised || stale) {
+    // The offset starts as the reading minus the height: b = alt - p_z, so its correlations are
+    // those of -p_z and its variance that of p_z plus the reading's.
+    if (stale) ++s.baro_resets;
+    s.baro_gated_since_utime = 0;
     s.x.baro_offset_m = altitude_m - s.x.p_W_B.z();
     Eigen::Matrix<double, 1, Eigen::Dynamic, Eigen::RowMajor, 1, kMaxDim> row =
         -s.P.row(idx::kP + 2);
@@ -408,7 +414,10 @@ Outcome Estimator::apply_baro(const BaroSample& m, FilterState& s) {
   H(0, idx::kBaro) = 1.0;
   MeasCov R(1, 1);
   R(0, 0) = p.sigma_m * p.sigma_m;
-  return fuse(s, r, H, R, p.gate_chi2);
+  const Outcome o = fuse(s, r, H, R, p.gate_chi2);
+  if (o == Outcome::kGate && s.baro_gated_since_utime == 0) s.baro_gated_since_utime = m.utime;
+  if (o == Outcome::kFused) s.baro_gated_since_utime = 0;
+  return o;
 }
 
 // Flow spans two times. Stochastic cloning (preferred over the velocity approximation
@@ -472,6 +481,7 @@ State Estimator::state() const {
   out.terrain_height_m = s.x.terrain_m;
   out.cov = s.P.topLeftCorner<idx::kCore, idx::kCore>();
   out.counters.terrain_resets = s.terrain_resets;
+  out.counters.baro_resets = s.baro_resets;
 
   const auto& h = params_.health;
   uint32_t reasons = kReasonNone;

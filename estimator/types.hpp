@@ -94,6 +94,7 @@ const char* to_string(Sensor s);
 struct Counters {
   std::array<std::array<int64_t, kOutcomeCount>, kSensorCount> by_outcome{};
   int64_t terrain_resets = 0;  ///< platform steps: terrain state reset from the rangefinder
+  int64_t baro_resets = 0;     ///< baro offset started over after baro.reset_after_s refused
   int64_t imu_gaps = 0;        ///< IMU intervals longer than health.imu_gap_s
   int64_t replays = 0;         ///< re-propagations from the history for delayed inputs
 

@@ -484,6 +484,33 @@ TEST(EstimatorTest, TheFirstBaroReadingSetsTheOffsetWithoutMovingTheHeight) {
   EXPECT_EQ(est.add_baro({t, isa_pressure_pa(415.0)}), Outcome::kGate);
 }
 
+TEST(EstimatorTest, ABadFirstBaroReadingIsOutlivedByAnOffsetReset) {
+  // The first reading after the alignment is 30 m off: every good one after it is refused until
+  // baro.reset_after_s has passed; then the offset starts over and the baro is fused again.
+  const EstimatorParams p = default_params(1.2);
+  const Flight f = test::simulate(test::hover(1.2, 1.2), 8.0, SensorConfig{}, p, 14);
+  Estimator est(p);
+  int64_t init_utime = 0, bad_utime = 0;
+  for (const auto& in : f.inputs) {
+    if (est.initialised() && init_utime == 0) init_utime = est.state().utime;
+    if (bad_utime == 0 && init_utime != 0 && est.state().utime >= init_utime + 5 * kDtUs) {
+      bad_utime = est.state().utime;
+      EXPECT_EQ(est.add_baro({bad_utime, isa_pressure_pa(1.2 + 40 + 30)}), Outcome::kFused);
+    }
+    // The good readings up to the bad one's stamp never come.
+    if (in.kind == test::Kind::kBaro && (bad_utime == 0 || in.baro.utime <= bad_utime)) continue;
+    test::feed(est, in);
+  }
+  const State s = est.state();
+  EXPECT_EQ(s.counters.baro_resets, 1);
+  const int64_t gated = s.counters.count(Sensor::kBaro, Outcome::kGate);
+  EXPECT_GE(gated, 2.0 * 25 - 3);
+  EXPECT_LE(gated, 2.0 * 25 + 3);
+  EXPECT_NEAR(s.baro_offset_m, 40.0, 0.3);
+  EXPECT_FALSE(s.health_reasons & kNoBaro);
+  EXPECT_NEAR(s.p_W_B.z(), 1.2, 0.05);
+}
+
 TEST(EstimatorTest, OnTheFloorNoRangeIsExpectedAndHealthIsOk) {
   // Resting on the floor: the rangefinder sits in its blind zone (readings invalid), the flow
   // sees no motion, the baro reads the take-off altitude.
