@@ -162,14 +162,87 @@ bool Autonomy::hold_if_vision_silent() {
   return true;
 }
 
-void Autonomy::enter_pose_lost() {
-  failsafe_ = Failsafe::kPoseLost;
+void Autonomy::enter_failsafe_descent(Failsafe cause, std::string reason) {
+  failsafe_ = cause;
   phases::FailsafeDescent f{pose_ ? pose_->p_W_B.z() : sp_p_W_.z(), now_utime_, std::nullopt,
                             TouchdownDetector(params_.landing)};
   f.touchdown.arm(now_utime_);
   if (pose_) sp_p_W_.head<2>() = pose_->p_W_B.head<2>();
-  enter(std::move(f), "motion capture lost for > " + fmt(params_.failsafe.pose_lost_s, 1) +
-                          " s: controlled descent, disarm on touch-down");
+  enter(std::move(f), std::move(reason));
+}
+
+void Autonomy::enter_pose_lost() {
+  enter_failsafe_descent(Failsafe::kPoseLost, "motion capture lost for > " +
+                                                  fmt(params_.failsafe.pose_lost_s, 1) +
+                                                  " s: controlled descent, disarm on touch-down");
+}
+
+void Autonomy::enter_estimate_lost(const std::string& what) {
+  // The estimator goes on dead-reckoning on the IMU when it is LOST, so the pose it publishes
+  // still exists and drifts slowly: descending on it is the pose-lost failsafe's controlled
+  // descent; if it stops too, the outer loop's open-loop descent takes over as without mocap.
+  enter_failsafe_descent(Failsafe::kEstimateLost,
+                         what +
+                             ": controlled descent on the pose it still dead-reckons, disarm "
+                             "on touch-down");
+}
+
+std::optional<Autonomy::EstimateCondition> Autonomy::estimate_condition() const {
+  using L = EstimateHealth::Level;
+  if (!estimate_) return std::nullopt;
+  const double age_s = seconds(now_utime_ - estimate_->utime);
+  if (age_s > params_.failsafe.estimate_silent_s) {
+    return EstimateCondition{L::kLost, "no STATE_ESTIMATE for " + fmt(age_s, 1) + " s"};
+  }
+  const std::string why = estimate_->text.empty() ? "no reason given" : estimate_->text;
+  switch (estimate_->level) {
+    case L::kOk:
+      return EstimateCondition{L::kOk, "state estimate OK"};
+    case L::kDegraded:
+      return EstimateCondition{L::kDegraded, "state estimate degraded (" + why + ")"};
+    case L::kLost:
+      break;
+  }
+  return EstimateCondition{L::kLost, "state estimate lost (" + why + ")"};
+}
+
+std::optional<std::string> Autonomy::estimate_refusal() const {
+  const auto e = estimate_condition();
+  if (!e) {
+    if (!params_.failsafe.require_estimate) return std::nullopt;
+    return std::string("no STATE_ESTIMATE yet (failsafe.require_estimate)");
+  }
+  // Once an estimate is heard the autonomy reacts to it in flight: starting on a DEGRADED one
+  // would hold at once, on a LOST one (the estimator not yet aligned) descend at once.
+  if (e->level == EstimateHealth::Level::kOk) return std::nullopt;
+  return e->what;
+}
+
+void Autonomy::react_to_estimate() {
+  using L = EstimateHealth::Level;
+  const auto e = estimate_condition();
+  if (!e || e->level == L::kOk || !airborne()) return;
+  const Phase current = phase();
+  // A descent to touch-down is under way. The final descent is on the target (entered only
+  // within radial_tol_m of the estimate, the gear final_height_m above the platform) and a
+  // second or less from touch-down: finishing it lands on the platform. A hold instead hovers
+  // there on a degraded or dead-reckoned pose that drifts, and the descent that follows (the
+  // failsafe's, or the operator's LAND_HERE) lands where it drifted to; over a platform's edge
+  // that tips the vehicle, as the mocap_drop_2s fault did (issue 14). PX4's Land mode, too,
+  // goes on landing without a position estimate. A failsafe descent is not restarted.
+  if (current == Phase::kFailsafe || current == Phase::kFinalDescent) return;
+  if (e->level == L::kLost) {
+    enter_estimate_lost(e->what);
+    return;
+  }
+  // DEGRADED: hold and wait for the operator, unless already holding (HOLD, DONE) or landing
+  // where the operator said (LAND_HERE: the landing was the operator's answer).
+  if (current == Phase::kHold || current == Phase::kDone) return;
+  if (const auto* a = std::get_if<phases::Approach>(&state_)) {
+    const auto* landing = std::get_if<LandingApproach>(&a->how);
+    if (landing && landing->land_here) return;
+  }
+  hold(e->what + ": holding; waiting for the operator", Failsafe::kNone, 0.0);
 }
 
 RestartState Autonomy::restart_state() const {
@@ -211,6 +284,11 @@ void Autonomy::start_from_first_pose() {
     reason_ = why + ": motion-capture-lost failsafe continues, disarm on touch-down";
     return;
   }
+  if (restored_.failsafe == Failsafe::kEstimateLost) {
+    enter_failsafe_descent(Failsafe::kEstimateLost,
+                           why + ": estimate-lost failsafe continues, disarm on touch-down");
+    return;
+  }
   failsafe_ =
       restored_.failsafe == Failsafe::kOperatorAbort ? Failsafe::kOperatorAbort : Failsafe::kNone;
   enter(phases::Hold{p}, why + ": holding position, waiting for the operator");
@@ -246,6 +324,10 @@ void Autonomy::handle_command(const OperatorCommand& cmd) {
         reason_ = "TAKEOFF refused: no fresh motion-capture pose";
         return;
       }
+      if (const auto why = estimate_refusal()) {
+        reason_ = "TAKEOFF refused: " + *why;
+        return;
+      }
       yaw_sp_rad_ = yaw_of(pose_->q_WB.toRotationMatrix());
       motors_on_ = true;
       failsafe_ = Failsafe::kNone;
@@ -261,6 +343,10 @@ void Autonomy::handle_command(const OperatorCommand& cmd) {
       }
       if (cmd.mission != Mission::kLanding && cmd.mission != Mission::kIngress) {
         reason_ = "GO refused: no mission (landing or ingress) given";
+        return;
+      }
+      if (const auto why = estimate_refusal()) {
+        reason_ = "GO refused: " + *why;
         return;
       }
       profile_ = MissionProfile::make(cmd.mission, params_);
@@ -561,20 +647,29 @@ void Autonomy::step(phases::FinalDescent& s, const Vector3d& /*p*/, double dt_s)
 
 void Autonomy::step(phases::FailsafeDescent& s, const Vector3d& /*p*/, double /*dt_s*/) {
   if (!motors_on_) return;
-  if (failsafe_ == Failsafe::kPoseLost && pose_fresh() && !s.touchdown.detected()) {
-    // Pose back for good: stop descending where the failsafe happened to be (over a
-    // platform's edge it tips the vehicle) and hold; the operator decides, as after any
-    // failsafe whose cause has cleared.
-    if (!s.pose_back_since_utime) s.pose_back_since_utime = now_utime_;
-    const double back_s = seconds(now_utime_ - *s.pose_back_since_utime);
+  // The cause cleared: the pose fresh again (and the estimate, if any, not LOST: a hold would
+  // fail over to its failsafe at once), or the estimate OK again on a fresh pose.
+  const auto e = estimate_condition();
+  const bool estimate_ok = e && e->level == EstimateHealth::Level::kOk;
+  const bool estimate_lost = e && e->level == EstimateHealth::Level::kLost;
+  const bool cleared = pose_fresh() && (failsafe_ == Failsafe::kPoseLost       ? !estimate_lost
+                                        : failsafe_ == Failsafe::kEstimateLost ? estimate_ok
+                                                                               : false);
+  if (cleared && !s.touchdown.detected()) {
+    // Cleared for good: stop descending where the failsafe happened to be (over a platform's
+    // edge it tips the vehicle) and hold; the operator decides, as after any failsafe whose
+    // cause has cleared.
+    if (!s.recovered_since_utime) s.recovered_since_utime = now_utime_;
+    const double back_s = seconds(now_utime_ - *s.recovered_since_utime);
     if (back_s >= params_.failsafe.pose_recovered_s) {
-      hold("motion capture back for " + fmt(back_s, 1) +
-               " s: failsafe descent stopped, holding; waiting for the operator",
+      hold((failsafe_ == Failsafe::kPoseLost ? "motion capture back for "
+                                             : "state estimate OK again for ") +
+               fmt(back_s, 1) + " s: failsafe descent stopped, holding; waiting for the operator",
            Failsafe::kNone, 0.0);
       return;
     }
-  } else if (!pose_fresh()) {
-    s.pose_back_since_utime.reset();
+  } else if (!cleared) {
+    s.recovered_since_utime.reset();
   }
   if (pose_fresh()) {
     // Pose back: a controlled descent on it instead of the outer loop's open-loop one.
@@ -651,8 +746,14 @@ Output Autonomy::update(const Inputs& in, int64_t now_utime) {
   if (in.imu && in.imu->accel_B.allFinite() && in.imu->gyro_B.allFinite()) {
     if (TouchdownDetector* td = touchdown()) td->add_imu(*in.imu);
   }
+  if (in.estimate && (!estimate_ || in.estimate->utime >= estimate_->utime)) {
+    estimate_ = in.estimate;
+  }
   if (!started_ && pose_) start_from_first_pose();
   if (in.command) handle_command(*in.command);
+  // Before the pose's checks: a stale pose freezes the mission for up to pose_lost_s, and a LOST
+  // estimate must not wait behind it.
+  react_to_estimate();
 
   if (airborne() && phase() != Phase::kFailsafe) {
     const double age_s = pose_ ? seconds(now_utime_ - pose_->utime) : 1e9;

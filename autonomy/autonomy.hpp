@@ -21,11 +21,22 @@
 //  - Failsafes: pose older than pose_stale_s freezes the mission (the outer loop levels and
 //    holds hover thrust); older than pose_lost_s: FAILSAFE, controlled descent, motors off at
 //    touch-down. ABORT: climb to abort_height and HOLD. KILL: motors off at once, for good.
+//  - The onboard estimate's health (STATE_ESTIMATE, issue 17; flying without motion capture the
+//    pose is that estimate's): in flight, DEGRADED holds and waits for the operator (not in the
+//    final descent, which finishes the landing; not a hold, a descent or a LAND_HERE already
+//    under way); LOST, or no STATE_ESTIMATE for estimate_silent_s once one was heard, is the
+//    failsafe descent of a lost pose on the pose the estimator still dead-reckons, stopped into
+//    a hold when the estimate is OK again for pose_recovered_s. TAKEOFF and GO wait for an OK
+//    estimate once one was heard (with require_estimate, also before). Never heard: nothing
+//    changes (flying on motion capture). As PX4 does: its Land mode, in a failsafe, needs only
+//    the altitude and goes on landing without a position estimate, and a vehicle that loses its
+//    position descends where it is (docs.px4.io v1.14, flight_modes_mc/land; the Descend flight
+//    task, PX4 pull request 13143).
 //  - Restart (issue 14, as PX4 does after an in-flight reboot of a module): nothing is
 //    commanded before the first pose. If it (or the restored state) shows the vehicle flying,
 //    the autonomy holds there with the motors on and waits for the operator (GO, NUDGE, ABORT,
 //    LAND_HERE, KILL); it never takes off again. A restored KILL keeps the motors off; a
-//    restored pose-lost failsafe continues its controlled descent.
+//    restored pose-lost or estimate-lost failsafe continues its controlled descent.
 //  - Structure: the state that matters in one phase only lives in that phase's struct
 //    (phases:: below, one alternative of a std::variant per Phase): entering a phase constructs
 //    it, leaving destroys it, so nothing is reset by hand. What differs between landing and
@@ -91,10 +102,11 @@ struct Hold {
   Vector3d hold_p_W = Vector3d::Zero();
 };
 struct FailsafeDescent {
-  double z0_m = 0.0;  ///< altitude when the pose was lost
+  double z0_m = 0.0;  ///< altitude when the pose (or the estimate) was lost
   int64_t since_utime = 0;
-  std::optional<int64_t> pose_back_since_utime;  ///< pose fresh again since
-  TouchdownDetector touchdown;                   ///< armed on entry
+  /// The cause cleared since: the pose fresh again (pose lost), the estimate OK (estimate lost).
+  std::optional<int64_t> recovered_since_utime;
+  TouchdownDetector touchdown;  ///< armed on entry
 };
 struct Killed {};
 }  // namespace phases
@@ -141,6 +153,17 @@ class Autonomy {
  private:
   bool airborne() const;
   bool pose_fresh() const;
+  /// The estimate's level now and what to say about it: its own level, or kLost once it has been
+  /// silent for estimate_silent_s; nullopt when no STATE_ESTIMATE was ever heard.
+  struct EstimateCondition {
+    EstimateHealth::Level level = EstimateHealth::Level::kOk;
+    std::string what;  ///< "state estimate degraded (no_flow)", "no STATE_ESTIMATE for 0.6 s"
+  };
+  std::optional<EstimateCondition> estimate_condition() const;
+  /// Why TAKEOFF / GO must wait for the estimate (nullopt: they need not).
+  std::optional<std::string> estimate_refusal() const;
+  /// In flight: DEGRADED holds, LOST (or silent) starts the failsafe descent.
+  void react_to_estimate();
   /// Seconds since the target was last in sight (since the phase began when it never was).
   double since_found_s(const std::optional<int64_t>& last_found_utime) const;
   /// Leaves the current phase (destroying its state) for `state`.
@@ -169,6 +192,9 @@ class Autonomy {
   void target_lost(const std::string& what);
   void hold(const std::string& reason, Failsafe failsafe, double min_z_m);
   void enter_pose_lost();
+  void enter_estimate_lost(const std::string& what);
+  /// FAILSAFE for `cause` (kPoseLost, kEstimateLost): controlled descent from here.
+  void enter_failsafe_descent(Failsafe cause, std::string reason);
   void start_from_first_pose();
   Output make_output();
 
@@ -188,6 +214,7 @@ class Autonomy {
   std::optional<int64_t> last_step_utime_;
   std::optional<PoseSample> pose_;
   std::optional<int64_t> last_vision_utime_;  // any VISION_TARGET, found or not
+  std::optional<EstimateHealth> estimate_;    // the newest STATE_ESTIMATE's health
 
   PhaseState state_;
   int64_t phase_start_utime_ = 0;

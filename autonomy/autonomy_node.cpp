@@ -1,8 +1,9 @@
-// alight-autonomy: MOCAP_POSE, IMU, VISION_TARGET, OPERATOR_CMD -> POSITION_SETPOINT,
-// AUTONOMY_STATUS (paper 3.4). Time comes from the sensors: pose and IMU messages advance the
-// autonomy's clock to their utime; vision measurements (stamped at exposure, in the past) and
-// operator commands (stamped by the ground station's clock) are handled at the current sensor
-// time and never move it, so a replayed log gives the same setpoints.
+// alight-autonomy: MOCAP_POSE, IMU, VISION_TARGET, OPERATOR_CMD, STATE_ESTIMATE ->
+// POSITION_SETPOINT, AUTONOMY_STATUS (paper 3.4). Time comes from the sensors: pose and IMU
+// messages advance the autonomy's clock to their utime; vision measurements (stamped at
+// exposure, in the past), the onboard estimate's health (stamped with the estimator's newest IMU
+// sample) and operator commands (stamped by the ground station's clock) are handled at the
+// current sensor time and never move it, so a replayed log gives the same setpoints.
 //
 // Input boundary (issue 14): every message goes through a validating conversion (non-finite or
 // absurd values are counted with reject_value and dropped; the autonomy keeps the last good
@@ -122,14 +123,26 @@ int main(int argc, char** argv) {
     std::string last_phase_reason;
     alight::autonomy_status_t last_status{};
     int64_t internal_seq = 0;
-    bool takeoff_sent = false, go_sent = false;
+    // --auto-go tries TAKEOFF in IDLE and GO in HOVER once a second of sensor time until obeyed:
+    // the autonomy refuses them while the onboard estimate is not OK (the estimator aligns on
+    // the ground for a while after it starts).
+    std::optional<int64_t> takeoff_tried_utime, go_tried_utime;
+    bool took_off = false, went = false;
+    const auto retry_due = [&](const std::optional<int64_t>& tried_utime) {
+      return !tried_utime || now_utime - *tried_utime >= 1'000'000;
+    };
+
+    std::optional<au::EstimateHealth> pending_estimate;  // the newest STATE_ESTIMATE's health
 
     const auto step = [&](au::Inputs in) {
       if (now_utime == 0) return;  // no sensor time yet
+      in.estimate = std::move(pending_estimate);
+      pending_estimate.reset();
       // --auto-go only for an autonomy that started on the ground: never after a restart in
       // flight or a latched KILL (the first pose decides, so TAKEOFF waits for the second).
       const bool auto_go_now = !auto_go.empty() && autonomy.started() && !autonomy.resumed();
-      if (auto_go_now && in.pose && !takeoff_sent) {
+      if (auto_go_now && in.pose && !took_off && autonomy.phase() == au::Phase::kIdle &&
+          retry_due(takeoff_tried_utime)) {
         in.command = au::OperatorCommand{now_utime,
                                          ++internal_seq,
                                          "auto-go",
@@ -137,8 +150,9 @@ int main(int argc, char** argv) {
                                          au::Mission::kNone,
                                          alight::Vector3d::Zero(),
                                          au::CommandAuth::kInternal};
-        takeoff_sent = true;
-      } else if (auto_go_now && !go_sent && autonomy.phase() == au::Phase::kHover && !in.command) {
+        takeoff_tried_utime = now_utime;
+      } else if (auto_go_now && !went && autonomy.phase() == au::Phase::kHover && !in.command &&
+                 retry_due(go_tried_utime)) {
         in.command = au::OperatorCommand{
             now_utime,
             ++internal_seq,
@@ -147,9 +161,12 @@ int main(int argc, char** argv) {
             auto_go == "landing" ? au::Mission::kLanding : au::Mission::kIngress,
             alight::Vector3d::Zero(),
             au::CommandAuth::kInternal};
-        go_sent = true;
+        go_tried_utime = now_utime;
       }
       const au::Output out = autonomy.update(in, now_utime);
+      // Obeyed (or overtaken: a hold, a KILL): never again.
+      if (takeoff_tried_utime && autonomy.phase() != au::Phase::kIdle) took_off = true;
+      if (go_tried_utime && autonomy.phase() != au::Phase::kHover) went = true;
       if (autonomy.restart_state() != saved_state) save_state();
       // Nothing before the first pose: a motors-off setpoint would disarm a flying vehicle.
       if (out.has_setpoint)
@@ -198,6 +215,17 @@ int main(int argc, char** argv) {
       if (!in.target) return (void)node.reject_value(ch::kVisionTarget, why);
       if (!node.accept_stamp(ch::kVisionTarget, m.utime)) return;
       step(in);
+    });
+    // The onboard estimate's health (issue 17; its pose arrives as the pose, remapped). It comes
+    // at the IMU rate and goes with the next step rather than making one: a step per estimate
+    // would add 200 setpoints a second, and as many attitude commands from the outer loop,
+    // without new information for either (the IMU steps the autonomy as often).
+    node.on<alight::state_estimate_t>(ch::kStateEstimate, [&](const alight::state_estimate_t& m) {
+      std::string why;
+      auto estimate = au::estimate_from_msg(m, &why);
+      if (!estimate) return (void)node.reject_value(ch::kStateEstimate, why);
+      if (!node.accept_stamp(ch::kStateEstimate, m.utime)) return;
+      pending_estimate = std::move(estimate);
     });
     node.on<alight::operator_cmd_t>(ch::kOperatorCmd, [&](const alight::operator_cmd_t& m) {
       au::Inputs in;

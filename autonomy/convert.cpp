@@ -1,6 +1,7 @@
 #include "autonomy/convert.hpp"
 
 #include <cmath>
+#include <utility>
 
 namespace alight::autonomy {
 
@@ -66,6 +67,8 @@ int8_t failsafe_to_msg(Failsafe f) {
       return S::FAILSAFE_OPERATOR_ABORT;
     case Failsafe::kKill:
       return S::FAILSAFE_KILL;
+    case Failsafe::kEstimateLost:
+      return S::FAILSAFE_ESTIMATE_LOST;
   }
   return S::FAILSAFE_NONE;
 }
@@ -216,6 +219,95 @@ static_assert(static_cast<int8_t>(CommandReject::kUnsigned) == autonomy_status_t
                   autonomy_status_t::REJECT_WRONG_SESSION);
 static_assert(kCommandRejectSlots ==
               sizeof(autonomy_status_t::cmds_rejected_by_reason) / sizeof(int32_t));
+
+std::string estimate_reasons_text(uint32_t reasons) {
+  using E = state_estimate_t;
+  static constexpr std::pair<int32_t, const char*> kNames[] = {
+      {E::REASON_NOT_INITIALISED, "not_initialised"},
+      {E::REASON_NO_FLOW, "no_flow"},
+      {E::REASON_NO_RANGE, "no_range"},
+      {E::REASON_NO_BARO, "no_baro"},
+      {E::REASON_POSITION_UNCERTAIN, "position_uncertain"},
+      {E::REASON_VELOCITY_UNCERTAIN, "velocity_uncertain"},
+      {E::REASON_IMU_GAP, "imu_gap"},
+      {E::REASON_IMU_STOPPED, "imu_stopped"},
+      {E::REASON_HEIGHT_UNCERTAIN, "height_uncertain"}};
+  std::string out;
+  uint32_t known = 0;
+  for (const auto& [bit, name] : kNames) {
+    known |= static_cast<uint32_t>(bit);
+    if (reasons & static_cast<uint32_t>(bit)) out += (out.empty() ? "" : "|") + std::string(name);
+  }
+  // A newer estimator's reasons: named by their bit rather than dropped.
+  for (int b = 0; b < 32; ++b) {
+    const uint32_t bit = 1u << b;
+    if ((reasons & bit) && !(known & bit))
+      out += (out.empty() ? "" : "|") + std::string("bit_") + std::to_string(b);
+  }
+  return out;
+}
+
+EstimateHealth from_msg(const state_estimate_t& msg) {
+  EstimateHealth e;
+  e.utime = msg.utime;
+  e.level = msg.health == state_estimate_t::HEALTH_OK         ? EstimateHealth::Level::kOk
+            : msg.health == state_estimate_t::HEALTH_DEGRADED ? EstimateHealth::Level::kDegraded
+                                                              : EstimateHealth::Level::kLost;
+  e.reasons = static_cast<uint32_t>(msg.health_reasons);
+  e.text = estimate_reasons_text(e.reasons);
+  return e;
+}
+
+state_estimate_t to_msg(const EstimateHealth& e, int64_t seq) {
+  state_estimate_t m{};
+  m.utime = e.utime;
+  m.seq = seq;
+  m.orientation[0] = 1.0;
+  for (int i = 0; i < 9; ++i) m.cov_pva[10 * i] = 1e-4;  // a small diagonal: a healthy filter
+  switch (e.level) {
+    case EstimateHealth::Level::kOk:
+      m.health = state_estimate_t::HEALTH_OK;
+      break;
+    case EstimateHealth::Level::kDegraded:
+      m.health = state_estimate_t::HEALTH_DEGRADED;
+      break;
+    case EstimateHealth::Level::kLost:
+      m.health = state_estimate_t::HEALTH_LOST;
+      break;
+  }
+  m.health_reasons = static_cast<int32_t>(e.reasons);
+  return m;
+}
+
+std::optional<EstimateHealth> estimate_from_msg(const state_estimate_t& m, std::string* why) {
+  using E = EstimateHealth;
+  if (m.health != state_estimate_t::HEALTH_OK && m.health != state_estimate_t::HEALTH_DEGRADED &&
+      m.health != state_estimate_t::HEALTH_LOST) {
+    return refuse<E>(why, "estimate: unknown health " + std::to_string(m.health));
+  }
+  // The autonomy reads only the health, but an estimate with NaN in it is broken whatever its
+  // health says: refused here, it is silent, and silence is LOST after estimate_silent_s.
+  if (!finite(m.pos, 3)) return refuse<E>(why, "estimate: non-finite pos");
+  if (!finite(m.vel, 3)) return refuse<E>(why, "estimate: non-finite vel");
+  if (!finite(m.orientation, 4)) return refuse<E>(why, "estimate: non-finite orientation");
+  if (!finite(m.angular_velocity_B, 3))
+    return refuse<E>(why, "estimate: non-finite angular_velocity_B");
+  if (!finite(m.accel_bias_B, 3) || !finite(m.gyro_bias_B, 3))
+    return refuse<E>(why, "estimate: non-finite accel_bias_B / gyro_bias_B");
+  if (!std::isfinite(m.terrain_height_m) || !std::isfinite(m.baro_offset_m))
+    return refuse<E>(why, "estimate: non-finite terrain_height_m / baro_offset_m");
+  if (!finite(m.cov_pva, 81)) return refuse<E>(why, "estimate: non-finite cov_pva");
+  double q2 = 0.0;
+  for (const double q : m.orientation) q2 += q * q;
+  if (std::abs(std::sqrt(q2) - 1.0) > kMaxQuaternionNormError)
+    return refuse<E>(why, "estimate: orientation not a unit quaternion");
+  for (int i = 0; i < 9; ++i) {
+    if (m.cov_pva[10 * i] < 0) return refuse<E>(why, "estimate: negative variance in cov_pva");
+  }
+  if (!within(m.pos, 3, kMaxEstimatePositionM))
+    return refuse<E>(why, "estimate: pos beyond any flying area");
+  return from_msg(m);
+}
 
 autonomy_status_t to_msg(const Status& s) {
   autonomy_status_t m{};

@@ -211,6 +211,15 @@ const ParamSchema<FailsafeParams>& FailsafeParams::schema() {
     s.add("abort_height_m", &P::abort_height_m, Range::gt(0.3), "m",
           "ABORT climbs to at least this height, world z");
     s.add("max_nudge_m", &P::max_nudge_m, Range::closed(0, 5), "m", "largest NUDGE offset");
+    s.add("estimate_silent_s", &P::estimate_silent_s, Range::open_closed(0, 5), "s",
+          "STATE_ESTIMATE heard once, then its newest estimate older than this: the estimate is "
+          "LOST (failsafe descent), as if the estimator had said so (it publishes at the IMU "
+          "rate, so 0.5 s is ~100 estimates missed)");
+    s.add("require_estimate", &P::require_estimate, Range::any(), "",
+          "true (flying without motion capture): TAKEOFF and GO are refused until a "
+          "STATE_ESTIMATE says OK, also before the first one arrives; false: refused only while "
+          "an estimate once heard is not OK, and without any STATE_ESTIMATE the autonomy flies "
+          "on the pose alone");
     return s;
   }();
   return schema;
@@ -272,7 +281,8 @@ const ParamSchema<AutonomyParams>& AutonomyParams::schema() {
               "approach, landing: paper 3.4.1 Descent and Landing");
     s.section("ingress", &P::ingress, IngressParams::schema(),
               "approach, ingress: paper 3.4.2 (not flown in the paper)");
-    s.section("failsafe", &P::failsafe, FailsafeParams::schema(), "lost motion capture");
+    s.section("failsafe", &P::failsafe, FailsafeParams::schema(),
+              "lost motion capture, silent vision, the onboard estimate's health (issue 17)");
     s.section("restart", &P::restart, RestartParams::schema(),
               "a restart in flight holds and waits for the operator (issue 14)");
     s.check(

@@ -103,6 +103,7 @@ struct IngressParams {
   void validate() const;
 };
 
+/// Lost motion capture, silent vision, and the onboard estimate's health (issue 17).
 struct FailsafeParams {
   double pose_stale_s = 0.3;
   double pose_lost_s = 1.0;
@@ -111,6 +112,8 @@ struct FailsafeParams {
   double vision_silent_s = 5.0;
   double abort_height_m = 1.5;
   double max_nudge_m = 0.5;
+  double estimate_silent_s = 0.5;
+  bool require_estimate = false;
   static const ParamSchema<FailsafeParams>& schema();
   void validate() const;
 };

@@ -28,13 +28,15 @@ const char* failsafe_key(Failsafe f) {
       return "OPERATOR_ABORT";
     case Failsafe::kKill:
       return "KILL";
+    case Failsafe::kEstimateLost:
+      return "ESTIMATE_LOST";
   }
   return "NONE";
 }
 
 std::optional<Failsafe> failsafe_from_key(const std::string& s) {
   for (Failsafe f : {Failsafe::kNone, Failsafe::kPoseStale, Failsafe::kPoseLost,
-                     Failsafe::kOperatorAbort, Failsafe::kKill}) {
+                     Failsafe::kOperatorAbort, Failsafe::kKill, Failsafe::kEstimateLost}) {
     if (s == failsafe_key(f)) return f;
   }
   return std::nullopt;

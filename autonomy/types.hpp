@@ -1,6 +1,7 @@
 #pragma once
 // Domain inputs and outputs of the autonomy loop (paper 3.4): middleware-free forms of imu_t,
-// target_t, operator_cmd_t and autonomy_status_t (conversions in autonomy/convert.hpp).
+// target_t, operator_cmd_t, state_estimate_t's health and autonomy_status_t (conversions in
+// autonomy/convert.hpp).
 
 #include <array>
 #include <cstdint>
@@ -27,11 +28,12 @@ enum class Phase {
   kLanded,
   kDone,
   kHold,      ///< mission suspended: retries exhausted, refusal, abort; hovering
-  kFailsafe,  ///< motion capture lost: controlled descent, disarm on touch-down
+  kFailsafe,  ///< pose or state estimate lost: controlled descent, disarm on touch-down
   kKilled,
 };
 
-enum class Failsafe { kNone, kPoseStale, kPoseLost, kOperatorAbort, kKill };
+/// kEstimateLost: the onboard estimate (STATE_ESTIMATE, issue 17) LOST or silent.
+enum class Failsafe { kNone, kPoseStale, kPoseLost, kOperatorAbort, kKill, kEstimateLost };
 
 const char* mission_name(Mission m);
 const char* phase_name(Phase p);
@@ -90,12 +92,24 @@ struct OperatorCommand {
   CommandReject link_reject = CommandReject::kNone;
 };
 
+/// The onboard state estimate's health (state_estimate_t, alight-estimator, issue 17): all the
+/// autonomy takes from STATE_ESTIMATE. Its pose reaches the autonomy as the pose (ESTIMATE_POSE
+/// remapped onto MOCAP_POSE when flying without motion capture).
+struct EstimateHealth {
+  enum class Level { kOk, kDegraded, kLost };
+  int64_t utime = 0;  ///< the estimate's time: its newest IMU sample [us]
+  Level level = Level::kOk;
+  uint32_t reasons = 0;  ///< state_estimate_t.REASON_* bits
+  std::string text;      ///< the reasons as names, "no_flow|no_range" ("" for none)
+};
+
 /// What arrived since the last step (each optional is a new message, consumed by the step).
 struct Inputs {
   std::optional<PoseSample> pose;
   std::optional<ImuSample> imu;
   std::optional<TargetMeasurement> target;
   std::optional<OperatorCommand> command;
+  std::optional<EstimateHealth> estimate;  ///< STATE_ESTIMATE (none ever: flying on mocap)
 };
 
 struct Status {
@@ -134,7 +148,7 @@ struct Output {
 /// motors on. A fresh start gets the defaults.
 struct RestartState {
   bool killed = false;                  ///< KILL: the motors stay off for good
-  Failsafe failsafe = Failsafe::kNone;  ///< latched failsafe (pose lost, operator abort)
+  Failsafe failsafe = Failsafe::kNone;  ///< latched failsafe (pose or estimate lost, abort)
   bool motors_on = false;               ///< the previous instance was flying the vehicle
   bool operator==(const RestartState& o) const {
     return killed == o.killed && failsafe == o.failsafe && motors_on == o.motors_on;

@@ -24,6 +24,19 @@ inline constexpr const char kCamera[] = "CAMERA";
 inline constexpr const char kMocapPose[] = "MOCAP_POSE";
 /// imu_t: accelerometer and gyro. alight-sim (or the autopilot) → autonomy.
 inline constexpr const char kImu[] = "IMU";
+/// range_t: distance along a body-fixed rangefinder's beam (downward), with its mounting.
+/// alight-sim → the onboard estimator.
+inline constexpr const char kRange[] = "RANGE";
+/// baro_t: static pressure and temperature from a barometer. alight-sim → the onboard
+/// estimator.
+inline constexpr const char kBaro[] = "BARO";
+/// state_estimate_t: the onboard estimate (pose, velocity, covariance, health) at the IMU rate.
+/// alight-estimator → autonomy, ground station, logs.
+inline constexpr const char kStateEstimate[] = "STATE_ESTIMATE";
+/// pose_t: the onboard estimate's pose, the same as STATE_ESTIMATE's. alight-estimator → vision,
+/// autonomy and outer loop in place of MOCAP_POSE when flying without motion capture (their
+/// `--remap MOCAP_POSE=ESTIMATE_POSE`).
+inline constexpr const char kEstimatePose[] = "ESTIMATE_POSE";
 /// target_t: one waypoint measurement per processed frame. alight-vision → autonomy, ground
 /// station.
 inline constexpr const char kVisionTarget[] = "VISION_TARGET";
@@ -54,12 +67,11 @@ inline constexpr const char kAutopilotPose[] = "AUTOPILOT_POSE";
 inline constexpr const char kAutopilotStatus[] = "AUTOPILOT_STATUS";
 
 /// Every channel above.
-inline constexpr std::array<const char*, 15> kAll = {
-    kCamera,         kMocapPose,        kImu,
-    kVisionTarget,   kVisionDiag,       kOperatorCmd,
-    kAutonomyStatus, kPositionSetpoint, kAttitudeCmd,
-    kSimTruth,       kSimControl,       kProcessStatus,
-    kNodeStatus,     kAutopilotPose,    kAutopilotStatus};
+inline constexpr std::array<const char*, 19> kAll = {
+    kCamera,         kMocapPose,        kImu,           kRange,          kBaro,
+    kStateEstimate,  kEstimatePose,     kVisionTarget,  kVisionDiag,     kOperatorCmd,
+    kAutonomyStatus, kPositionSetpoint, kAttitudeCmd,   kSimTruth,       kSimControl,
+    kProcessStatus,  kNodeStatus,       kAutopilotPose, kAutopilotStatus};
 
 /// True when `name` is one of kAll.
 bool is_known(const std::string& name);

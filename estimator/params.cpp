@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "common/camera_mount.hpp"
+
 namespace alight::estimator {
 
 const ParamSchema<ImuNoiseParams>& ImuNoiseParams::schema() {
@@ -129,12 +131,8 @@ const ParamSchema<FlowParams>& FlowParams::schema() {
   using P = FlowParams;
   static const ParamSchema<P> schema = [] {
     ParamSchema<P> s;
-    s.add("mount", &P::mount, Range::any(), "",
-          "the flow camera's standard mounting R_BC (common/geometry.hpp)")
-        .one_of({"downward", "forward"});
-    s.add("rpy_offset_deg", &P::rpy_offset_deg, Range::closed(-30, 30), "deg",
-          "small calibrated rotation applied after the mount");
-    s.add("t_B_C_m", &P::t_B_C_m, Range::closed(-2, 2), "m", "camera centre in body");
+    s.section("front", &P::front, FlowFrontParams::schema(),
+              "the front end: feature tracking and the robust fit of t/d");
     s.add("min_inliers", &P::min_inliers, Range::closed(0, 100000), "",
           "fewer homography inliers: refused");
     s.add("max_span_s", &P::max_span_s, Range::open_closed(0, 2), "s",
@@ -223,6 +221,16 @@ EstimatorParams load_estimator_params(const ParamNode& vehicle_root) {
   EstimatorParams p;
   if (const auto section = vehicle_root.optional_child("estimator"))
     EstimatorParams::schema().read(*section, p);
+  // The flow camera is the vehicle's downward camera, declared once under cameras.downward
+  // (common/camera_mount.hpp), as vision and the simulator read it.
+  if (const auto cameras = vehicle_root.optional_child("cameras")) {
+    if (cameras->optional_child("downward")) {
+      const CameraMountParams m = load_camera_mount_params(vehicle_root, "downward");
+      p.flow.mount = m.mount;
+      p.flow.rpy_offset_deg = m.rpy_offset_deg;
+      p.flow.t_B_C_m = m.t_B_C_m;
+    }
+  }
   return p;
 }
 

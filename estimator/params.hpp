@@ -9,6 +9,7 @@
 
 #include "common/geometry.hpp"
 #include "common/param_schema.hpp"
+#include "estimator/flow_params.hpp"
 
 namespace alight::estimator {
 
@@ -77,6 +78,9 @@ struct BaroParams {
 
 /// Flow front end's measurements and the camera that makes them.
 struct FlowParams {
+  FlowFrontParams front;  ///< the front end (flow_odometry.hpp): tracking and the fit
+  /// The next three are not keys of `estimator.flow`: load_estimator_params takes them from the
+  /// vehicle's cameras.downward (common/camera_mount.hpp), the one camera vision also uses.
   std::string mount = "downward";                 ///< R_BC: downward | forward (geometry.hpp)
   std::array<double, 3> rpy_offset_deg{0, 0, 0};  ///< calibrated rotation after the mount [deg]
   Vector3d t_B_C_m{0.0, 0.0, -0.06};              ///< camera centre in body [m]

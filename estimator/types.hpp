@@ -42,21 +42,22 @@ struct BaroSample {
 /// H = R + t n^T / d with R known from the gyro.
 ///
 /// The front end needs R_C2C1 (camera 1 to camera 2) and n_C1 (the floor's up normal in camera
-/// 1); the node takes both from this estimator's attitudes at the two exposures
-/// (Estimator::attitude_at). Their errors are then the estimate's, and the sensitivities below
-/// enter the flow update's Jacobian (zero: the output does not depend on them).
+/// 1); both come from this estimate (Onboard: the gyro less the estimated bias between the
+/// frames, the estimated attitude at the first; Estimator::attitude_at gives the same to first
+/// order). Their errors are then the estimate's attitude errors, and the sensitivities below enter
+/// the flow update's Jacobian (add_input_sensitivities; zero: no dependence).
 struct FlowSample {
   int64_t utime_from = 0;
   int64_t utime_to = 0;
   Vector3d t_over_d_C1 = Vector3d::Zero();  ///< [-] (metres per metre of height)
   Matrix3d cov = Matrix3d::Identity();      ///< covariance of t_over_d_C1 [-]
   int inliers = 0;                          ///< homography inliers behind it
-  /// Given R_C2C1 Exp(theta) instead of R_C2C1 (theta in C1), the output moves by
-  /// J_rotation theta [1/rad].
+  /// The front end's sensitivities (flow_odometry.hpp): given R_C2C1 Exp(theta) instead of the
+  /// rotation passed in (theta in C1), t_over_d_C1 moves by J_rotation theta [1/rad]; given the
+  /// normal n_C1 + delta (normalised), by J_normal delta [-].
   Matrix3d J_rotation = Matrix3d::Zero();
-  /// Given (n_C1 + delta) / |n_C1 + delta| instead of n_C1, the output moves by J_normal delta.
   Matrix3d J_normal = Matrix3d::Zero();
-  double residual_rms_px = 0.0;  ///< the front end's fit quality (not used by the filter) [px]
+  double residual_rms_px = 0.0;  ///< inliers' reprojection error, root mean square [px]
 };
 
 /// What the estimator did with an input. kFused and kQueued are not rejections; every other

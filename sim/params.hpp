@@ -115,6 +115,7 @@ struct WindParams {
 };
 
 struct MocapParams {
+  bool enabled = true;  ///< false: no MOCAP_POSE at all (flying on the onboard estimator)
   double rate_hz = 100.0;
   double latency_s = 0.010;
   double pos_sigma_m = 0.0003;
@@ -127,13 +128,57 @@ struct MocapParams {
   void validate() const;
 };
 
+/// A strapdown MEMS IMU; sim/README.md ("Sensors") relates the defaults to the TDK
+/// ICM-42688-P's data sheet.
 struct ImuParams {
+  bool enabled = true;
   double rate_hz = 200.0;
   double accel_sigma_mps2 = 0.04;
   double gyro_sigma_radps = 0.003;
   double accel_bias_sigma_mps2 = 0.05;
   double gyro_bias_sigma_radps = 0.005;
+  /// Bias random walk: the bias moves by this times sqrt(t) (standard deviation) after t seconds.
+  double accel_bias_walk_mps2_per_sqrt_s = 4e-4;
+  double gyro_bias_walk_radps_per_sqrt_s = 3e-5;
   static const ParamSchema<ImuParams>& schema();
+  void validate() const;
+};
+
+/// A single-beam rangefinder fixed to the body (LIDAR-Lite / TFmini class): one ray cast into
+/// the scene per sample, Gaussian noise growing with the distance, lost returns in bursts.
+struct RangefinderParams {
+  bool enabled = true;
+  double rate_hz = 100.0;
+  double min_range_m = 0.1;
+  double max_range_m = 8.0;
+  double sigma_m = 0.01;  ///< noise sigma = sigma_m + sigma_frac * distance
+  double sigma_frac = 0.01;
+  double dropout_prob = 0.01;     ///< long-run fraction of samples whose return is lost
+  double dropout_burst_s = 0.03;  ///< mean length of a run of lost returns
+  double latency_s = 0.01;
+  Vector3d offset_B_m = Vector3d(0.0, 0.0, -0.05);  ///< t_B_R: sensor origin in body
+  Vector3d direction_B = Vector3d(0.0, 0.0, -1.0);  ///< beam in body (normalised on use)
+  static const ParamSchema<RangefinderParams>& schema();
+  void validate() const;
+};
+
+/// A MEMS barometer at the body origin in a standard atmosphere (ISA), with white noise, a
+/// constant offset per run and a slowly wandering drift (first-order Gauss-Markov).
+struct BaroParams {
+  bool enabled = true;
+  double rate_hz = 50.0;
+  double latency_s = 0.01;
+  double sigma_pa = 2.0;
+  double offset_sigma_pa = 100.0;
+  /// Drift: first-order Gauss-Markov b' = -b / drift_tau_s + w; it moves by
+  /// drift_pa_per_sqrt_s * sqrt(t) for t well below drift_tau_s and stays within
+  /// drift_pa_per_sqrt_s * sqrt(drift_tau_s / 2) (its standard deviation) for ever.
+  double drift_pa_per_sqrt_s = 0.2;
+  double drift_tau_s = 300.0;
+  double ground_altitude_m = 0.0;  ///< world z = 0 above mean sea level
+  double sea_level_pressure_pa = 101325.0;
+  double sea_level_temperature_c = 15.0;
+  static const ParamSchema<BaroParams>& schema();
   void validate() const;
 };
 
@@ -195,6 +240,8 @@ struct Scenario {
   WindParams wind;
   MocapParams mocap;
   ImuParams imu;
+  RangefinderParams rangefinder;
+  BaroParams baro;
   CameraParams camera;
   LightingParams lighting;
   RandomizeParams randomize;

@@ -172,6 +172,8 @@ const ParamSchema<MocapParams>& MocapParams::schema() {
   using P = MocapParams;
   static const ParamSchema<P> schema = [] {
     ParamSchema<P> s;
+    s.add("enabled", &P::enabled, Range::any(), "",
+          "publish MOCAP_POSE (false: fly without motion capture; SIM_TRUTH is still sent)");
     s.add("rate_hz", &P::rate_hz, Range::open_closed(0, 1000), "Hz", "MOCAP_POSE rate");
     s.add("latency_s", &P::latency_s, Range::closed_open(0, 1), "s", "sample time to availability");
     s.add("pos_sigma_m", &P::pos_sigma_m, Range::ge(0), "m", "position noise");
@@ -198,15 +200,80 @@ const ParamSchema<ImuParams>& ImuParams::schema() {
   using P = ImuParams;
   static const ParamSchema<P> schema = [] {
     ParamSchema<P> s;
+    s.add("enabled", &P::enabled, Range::any(), "", "publish IMU");
     s.add("rate_hz", &P::rate_hz, Range::open_closed(0, 1000), "Hz", "IMU rate");
     s.add("accel_sigma_mps2", &P::accel_sigma_mps2, Range::ge(0), "m/s^2",
           "white noise per sample");
     s.add("gyro_sigma_radps", &P::gyro_sigma_radps, Range::ge(0), "rad/s",
           "white noise per sample");
     s.add("accel_bias_sigma_mps2", &P::accel_bias_sigma_mps2, Range::ge(0), "m/s^2",
-          "constant bias drawn per run");
+          "bias at the start, drawn per run");
     s.add("gyro_bias_sigma_radps", &P::gyro_bias_sigma_radps, Range::ge(0), "rad/s",
-          "constant bias drawn per run");
+          "bias at the start, drawn per run");
+    s.add("accel_bias_walk_mps2_per_sqrt_s", &P::accel_bias_walk_mps2_per_sqrt_s,
+          Range::closed(0, 0.1), "m/s^2/sqrt(s)",
+          "bias random walk: the bias moves by this x sqrt(t) in t seconds (standard deviation)");
+    s.add("gyro_bias_walk_radps_per_sqrt_s", &P::gyro_bias_walk_radps_per_sqrt_s,
+          Range::closed(0, 0.01), "rad/s/sqrt(s)",
+          "bias random walk: the bias moves by this x sqrt(t) in t seconds (standard deviation)");
+    return s;
+  }();
+  return schema;
+}
+
+const ParamSchema<RangefinderParams>& RangefinderParams::schema() {
+  using P = RangefinderParams;
+  static const ParamSchema<P> schema = [] {
+    ParamSchema<P> s;
+    s.add("enabled", &P::enabled, Range::any(), "", "publish RANGE");
+    s.add("rate_hz", &P::rate_hz, Range::open_closed(0, 1000), "Hz", "samples per second");
+    s.add("min_range_m", &P::min_range_m, Range::ge(0), "m",
+          "shortest measurable distance: nearer surfaces give STATUS_TOO_NEAR");
+    s.add("max_range_m", &P::max_range_m, Range::open_closed(0, 200), "m",
+          "longest measurable distance: beyond it STATUS_OUT_OF_RANGE")
+        .check([](const P& p) { return p.max_range_m > p.min_range_m; }, "must exceed min_range_m");
+    s.add("sigma_m", &P::sigma_m, Range::closed(0, 1), "m",
+          "noise: sigma = sigma_m + sigma_frac x distance");
+    s.add("sigma_frac", &P::sigma_frac, Range::closed(0, 0.5), "",
+          "noise growing with the distance (0.01: 1 %)");
+    s.add("dropout_prob", &P::dropout_prob, Range::closed(0, 0.5), "",
+          "long-run fraction of samples whose return is lost (STATUS_NO_ECHO)");
+    s.add("dropout_burst_s", &P::dropout_burst_s, Range::closed(0, 10), "s",
+          "mean length of a run of lost returns (at most one period: isolated losses)");
+    s.add("latency_s", &P::latency_s, Range::closed_open(0, 1), "s", "sample time to availability");
+    s.add("offset_B_m", &P::offset_B_m, Range::closed(-2, 2), "m",
+          "t_B_R: the sensor's origin in body (x forward, y left, z up)");
+    s.add("direction_B", &P::direction_B, Range::any(), "",
+          "the beam in body, normalised on use ([0, 0, -1]: straight down)")
+        .check([](const P& p) { return p.direction_B.norm() > 1e-6; }, "must not be zero");
+    return s;
+  }();
+  return schema;
+}
+
+const ParamSchema<BaroParams>& BaroParams::schema() {
+  using P = BaroParams;
+  static const ParamSchema<P> schema = [] {
+    ParamSchema<P> s;
+    s.add("enabled", &P::enabled, Range::any(), "", "publish BARO");
+    s.add("rate_hz", &P::rate_hz, Range::open_closed(0, 1000), "Hz", "samples per second");
+    s.add("latency_s", &P::latency_s, Range::closed_open(0, 1), "s", "sample time to availability");
+    s.add("sigma_pa", &P::sigma_pa, Range::closed(0, 1000), "Pa",
+          "white noise per sample (12 Pa is about 1 m near sea level)");
+    s.add("offset_sigma_pa", &P::offset_sigma_pa, Range::closed(0, 1000), "Pa",
+          "constant offset drawn per run (the sensor's absolute accuracy)");
+    s.add("drift_pa_per_sqrt_s", &P::drift_pa_per_sqrt_s, Range::closed(0, 100), "Pa/sqrt(s)",
+          "drift, a first-order Gauss-Markov process started at 0: it moves by this x sqrt(t) "
+          "in t seconds well below drift_tau_s");
+    s.add("drift_tau_s", &P::drift_tau_s, Range::open_closed(0, 1e6), "s",
+          "the drift's correlation time: its standard deviation stays below "
+          "drift_pa_per_sqrt_s x sqrt(drift_tau_s / 2)");
+    s.add("ground_altitude_m", &P::ground_altitude_m, Range::closed(-500, 8000), "m",
+          "altitude of the floor (world z = 0) above mean sea level");
+    s.add("sea_level_pressure_pa", &P::sea_level_pressure_pa, Range::closed(80000, 110000), "Pa",
+          "the day's pressure reduced to sea level (ISA: 101325)");
+    s.add("sea_level_temperature_c", &P::sea_level_temperature_c, Range::closed(-60, 60), "deg C",
+          "the day's temperature reduced to sea level (ISA: 15)");
     return s;
   }();
   return schema;
@@ -313,6 +380,9 @@ const ParamSchema<Scenario>& Scenario::schema() {
     s.section("wind", &P::wind, WindParams::schema(), "wind");
     s.section("mocap", &P::mocap, MocapParams::schema(), "motion capture (MOCAP_POSE)");
     s.section("imu", &P::imu, ImuParams::schema(), "IMU");
+    s.section("rangefinder", &P::rangefinder, RangefinderParams::schema(),
+              "a rangefinder fixed to the body, looking down by default (RANGE)");
+    s.section("baro", &P::baro, BaroParams::schema(), "a barometer (BARO)");
     s.section("camera", &P::camera, CameraParams::schema(), "the rendered camera (CAMERA)");
     s.section("lighting", &P::lighting, LightingParams::schema(), "the renderer's light");
     s.section("randomize", &P::randomize, RandomizeParams::schema(),
@@ -354,6 +424,8 @@ void WallParams::validate() const { schema().validate(*this); }
 void WindParams::validate() const { schema().validate(*this); }
 void MocapParams::validate() const { schema().validate(*this); }
 void ImuParams::validate() const { schema().validate(*this); }
+void RangefinderParams::validate() const { schema().validate(*this); }
+void BaroParams::validate() const { schema().validate(*this); }
 void CameraParams::validate() const { schema().validate(*this); }
 void LightingParams::validate() const { schema().validate(*this); }
 void RandomizeParams::validate() const { schema().validate(*this); }

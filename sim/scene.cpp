@@ -1,6 +1,7 @@
 #include "sim/scene.hpp"
 
 #include <cmath>
+#include <limits>
 #include <random>
 
 namespace alight::sim {
@@ -12,6 +13,57 @@ bool Scene::near_opening_frame(const Vector3d& p_W) const {
   const double dy = std::abs(d.y()) - 0.5 * opening->size_m.x();
   const double dz = std::abs(d.z()) - 0.5 * opening->size_m.y();
   return std::max(dy, dz) < frame_margin_m;
+}
+
+std::optional<RayHit> Scene::cast_ray(const Vector3d& origin_W, const Vector3d& dir_W,
+                                      double max_distance_m) const {
+  const double len = dir_W.norm();
+  if (!origin_W.allFinite() || !(len > 0) || !std::isfinite(len) || !(max_distance_m >= 0))
+    return std::nullopt;
+  const Vector3d d = dir_W / len;
+  std::optional<RayHit> best;
+  auto take = [&](double t, const Vector3d& n, int box) {
+    if (t <= max_distance_m && (!best || t < best->distance_m)) best = RayHit{t, n, box};
+  };
+
+  if (origin_W.z() < 0.0)
+    take(0.0, -d, -1);
+  else if (d.z() < 0.0)
+    take(-origin_W.z() / d.z(), Vector3d::UnitZ(), -1);
+
+  for (size_t i = 0; i < boxes.size(); ++i) {
+    const Box& b = boxes[i];
+    const Vector3d o = b.to_local(origin_W);
+    const Vector3d u = b.R_WO().transpose() * d;
+    // Entry and exit along the ray through the three slabs; the entry's axis is the face hit.
+    double t_in = -std::numeric_limits<double>::infinity();
+    double t_out = std::numeric_limits<double>::infinity();
+    int axis = -1;
+    bool miss = false;
+    for (int k = 0; k < 3 && !miss; ++k) {
+      const double h = b.half_size_m[k];
+      if (u[k] == 0.0) {
+        miss = std::abs(o[k]) > h;  // parallel to the slab and outside it
+        continue;
+      }
+      double t0 = (-h - o[k]) / u[k], t1 = (h - o[k]) / u[k];
+      if (t0 > t1) std::swap(t0, t1);
+      if (t0 > t_in) {
+        t_in = t0;
+        axis = k;
+      }
+      t_out = std::min(t_out, t1);
+    }
+    if (miss || t_in > t_out || t_out <= 0.0) continue;
+    if (t_in <= 0.0 || axis < 0) {  // the origin is inside (or on) the box
+      take(0.0, -d, static_cast<int>(i));
+      continue;
+    }
+    Vector3d n_O = Vector3d::Zero();
+    n_O[axis] = u[axis] > 0 ? -1.0 : 1.0;
+    take(t_in, b.R_WO() * n_O, static_cast<int>(i));
+  }
+  return best;
 }
 
 SeededLayout draw_layout(const Scenario& sc, uint64_t seed) {

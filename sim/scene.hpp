@@ -50,6 +50,13 @@ struct OpeningTruth {
   Vector3d wall_normal_W = -Vector3d::UnitX();  ///< towards the approach side
 };
 
+/// Where a ray first meets the scene (Scene::cast_ray).
+struct RayHit {
+  double distance_m = 0.0;                ///< along the ray from its origin [m]
+  Vector3d normal_W = Vector3d::UnitZ();  ///< outward normal of the surface hit
+  int box = -1;                           ///< index into Scene::boxes; -1: the floor
+};
+
 struct Scene {
   std::vector<Texture> textures;
   int floor_texture = 0;
@@ -69,6 +76,14 @@ struct Scene {
 
   /// Where a wall contact at `p_W` counts as the opening's frame.
   bool near_opening_frame(const Vector3d& p_W) const;
+
+  /// The first surface along the ray from `origin_W` in direction `dir_W` (any length, not 0)
+  /// within `max_distance_m`: the floor (z = 0, infinite) or a face of a box (slab test, Kay
+  /// and Kajiya, SIGGRAPH 1986). An origin inside a box or below the floor is blocked: a hit at
+  /// distance 0 whose normal faces the ray. nullopt when nothing is that near, or for a
+  /// non-finite or zero ray.
+  std::optional<RayHit> cast_ray(const Vector3d& origin_W, const Vector3d& dir_W,
+                                 double max_distance_m) const;
 };
 
 /// What a seed draws within the scenario's `randomize:` ranges (textures aside).

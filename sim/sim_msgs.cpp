@@ -23,6 +23,34 @@ imu_t to_msg(const ImuSample& s) {
   return m;
 }
 
+range_t to_msg(const RangeSample& s) {
+  static_assert(static_cast<int8_t>(RangeStatus::kOk) == range_t::STATUS_OK);
+  static_assert(static_cast<int8_t>(RangeStatus::kOutOfRange) == range_t::STATUS_OUT_OF_RANGE);
+  static_assert(static_cast<int8_t>(RangeStatus::kTooNear) == range_t::STATUS_TOO_NEAR);
+  static_assert(static_cast<int8_t>(RangeStatus::kNoEcho) == range_t::STATUS_NO_ECHO);
+  range_t m{};
+  m.utime = s.utime;
+  m.seq = s.seq;
+  m.status = static_cast<int8_t>(s.status);
+  m.distance_m = s.status == RangeStatus::kOk ? s.distance_m : 0.0;
+  m.min_range_m = s.min_range_m;
+  m.max_range_m = s.max_range_m;
+  for (int i = 0; i < 3; ++i) {
+    m.t_B_R[i] = s.t_B_R[i];
+    m.beam_B[i] = s.beam_B[i];
+  }
+  return m;
+}
+
+baro_t to_msg(const BaroSample& s) {
+  baro_t m{};
+  m.utime = s.utime;
+  m.seq = s.seq;
+  m.pressure_pa = s.pressure_pa;
+  m.temperature_c = s.temperature_c;
+  return m;
+}
+
 image_t to_msg(const CameraFrame& frame) {
   image_t m = image_to_msg(frame.pixels, frame.utime, frame.seq);
   set_metadata_int(m, "exposure_us", static_cast<int64_t>(frame.exposure_s * 1e6 + 0.5));

@@ -1,11 +1,13 @@
 #pragma once
 // Conversions between the simulator's domain structs and the LCM messages the node publishes
-// (MOCAP_POSE, IMU, CAMERA, SIM_TRUTH) and consumes (ATTITUDE_CMD).
+// (MOCAP_POSE, IMU, RANGE, BARO, CAMERA, SIM_TRUTH) and consumes (ATTITUDE_CMD).
 
 #include <alight/attitude_cmd_t.hpp>
+#include <alight/baro_t.hpp>
 #include <alight/image_t.hpp>
 #include <alight/imu_t.hpp>
 #include <alight/pose_t.hpp>
+#include <alight/range_t.hpp>
 #include <alight/sim_truth_t.hpp>
 #include <optional>
 #include <string>
@@ -16,6 +18,9 @@ namespace alight::sim {
 
 pose_t to_msg(const MocapSample& sample);
 imu_t to_msg(const ImuSample& sample);
+/// RangeStatus maps onto range_t::STATUS_* (same values).
+range_t to_msg(const RangeSample& sample);
+baro_t to_msg(const BaroSample& sample);
 /// mono8 frame stamped at mid-exposure, with "seq" and "exposure_us" metadata.
 image_t to_msg(const CameraFrame& frame);
 sim_truth_t to_msg(const Truth& truth);

@@ -1,5 +1,7 @@
-// alight-sim: the simulated vehicle, motion-capture room, IMU and camera on LCM. The only file
-// of sim/ that knows LCM, files or the wall clock; the simulation itself is the Simulator.
+// alight-sim: the simulated vehicle, motion-capture room, IMU, rangefinder, barometer and camera
+// on LCM. The only file of sim/ that knows LCM, files or the wall clock; the simulation itself
+// is the Simulator. Each sensor is switched in the scenario (`enabled:`); one switched off
+// publishes nothing (SIM_TRUTH is always published).
 //
 //   alight-sim --scenario config/scenarios/landing_a.yaml [--vehicle FILE] [--seed N]
 //              [--rate X] [--duration S] [--lcm-url URL] [--mavlink ADDRESS]
@@ -8,6 +10,7 @@
 // (sim/offboard_endpoint.hpp) on that link (e.g. udp:127.0.0.1:14540:14580, where alight-mavlink
 // listens, as PX4 SITL's onboard link does): commands come as SET_ATTITUDE_TARGET instead of
 // ATTITUDE_CMD, and IMU goes out as HIGHRES_IMU (alight-mavlink publishes it) instead of on LCM.
+// RANGE and BARO are published on LCM either way (alight-mavlink does not bridge them).
 
 #include <spdlog/spdlog.h>
 
@@ -39,7 +42,9 @@ constexpr int64_t kTruthPeriodUs = 20000;  // SIM_TRUTH at 50 Hz
 int main(int argc, char** argv) {
   return alight::run_node_main("alight-sim", [&]() -> int {
     using namespace alight;
-    CLI::App app("alight-sim: quadrotor, motion capture, IMU and camera, simulated");
+    CLI::App app(
+        "alight-sim: quadrotor, motion capture, IMU, rangefinder, barometer and camera, "
+        "simulated");
     std::string scenario_file, vehicle_file;
     uint64_t seed = 0;
     double rate = 1.0, duration_s = 0.0;
@@ -64,6 +69,10 @@ int main(int argc, char** argv) {
                  "Start the sim clock at the wall clock, not the scenario's start_utime");
     app.add_option("--render-threads", threads, "Threads for the camera renderer")
         ->check(CLI::Range(1, 16));
+    bool no_mocap = false;
+    app.add_flag("--no-mocap", no_mocap,
+                 "No MOCAP_POSE whatever the scenario says (mocap.enabled: false): the vehicle "
+                 "flies on its onboard estimate; SIM_TRUTH still scores it");
     args.add_to(app, false);
     try {
       app.parse(argc, argv);
@@ -79,6 +88,7 @@ int main(int argc, char** argv) {
     std::optional<sim::CameraRig> rig;
     if (scenario.camera.enabled) rig = sim::load_camera_rig(vehicle_file, scenario.camera.mount);
     if (start_now) scenario.start_utime = wall_utime();
+    if (no_mocap) scenario.mocap.enabled = false;
 
     std::optional<mavlink::LinkAddress> mavlink_address;
     if (!mavlink_link.empty()) {
@@ -253,6 +263,8 @@ int main(int argc, char** argv) {
       } else {
         for (const auto& m : imu) node.publish(channels::kImu, sim::to_msg(m));
       }
+      for (const auto& m : simulator.take_range()) node.publish(channels::kRange, sim::to_msg(m));
+      for (const auto& m : simulator.take_baro()) node.publish(channels::kBaro, sim::to_msg(m));
       if (auto frame = simulator.take_camera())
         if (gates.camera.on(now)) node.publish(channels::kCamera, sim::to_msg(*frame));
       if (simulator.now_utime() >= next_truth) {

@@ -46,6 +46,8 @@ Simulator::Simulator(const Scenario& scenario, const VehicleParams& vehicle, uin
       wind_rng_(substream(seed, 1)),
       mocap_(scenario.mocap, scenario.start_utime, substream(seed, 2)),
       imu_(scenario.imu, scenario.start_utime, substream(seed, 3)),
+      rangefinder_(scenario.rangefinder, scenario.start_utime, substream(seed, 5)),
+      baro_(scenario.baro, scenario.start_utime, substream(seed, 6)),
       camera_(std::move(camera)),
       history_(history_params()),
       camera_rng_(substream(seed, 4)) {
@@ -68,7 +70,7 @@ Simulator::Simulator(const Scenario& scenario, const VehicleParams& vehicle, uin
   }
   last_command_utime_ = now_utime_;
   history_.add(to_pose(state_, now_utime_));
-  mocap_.update(now_utime_, to_pose(state_, now_utime_));
+  if (scenario.mocap.enabled) mocap_.update(now_utime_, to_pose(state_, now_utime_));
   if (camera_ && scenario.camera.enabled) {
     renderer_ = std::make_unique<Renderer>(camera_->model, scenario.camera.supersample);
     camera_period_us_ = std::llround(1e6 / scenario.camera.rate_hz);
@@ -199,8 +201,11 @@ void Simulator::physics_step() {
 
   const PoseSample truth = to_pose(state_, now_utime_);
   history_.add(truth);
-  mocap_.update(now_utime_, truth);
-  imu_.update(now_utime_, dt_us_, last_.specific_force_B, state_.omega_B);
+  if (scenario_.mocap.enabled) mocap_.update(now_utime_, truth);
+  if (scenario_.imu.enabled)
+    imu_.update(now_utime_, dt_us_, last_.specific_force_B, state_.omega_B);
+  if (scenario_.rangefinder.enabled) rangefinder_.update(now_utime_, truth.X_WB(), *scene_);
+  if (scenario_.baro.enabled) baro_.update(now_utime_, state_.p_W_B);
   if (renderer_) schedule_camera();
 }
 
@@ -232,6 +237,10 @@ void Simulator::schedule_camera() {
 std::vector<MocapSample> Simulator::take_mocap() { return mocap_.take(now_utime_); }
 
 std::vector<ImuSample> Simulator::take_imu() { return imu_.take(); }
+
+std::vector<RangeSample> Simulator::take_range() { return rangefinder_.take(now_utime_); }
+
+std::vector<BaroSample> Simulator::take_baro() { return baro_.take(now_utime_); }
 
 std::optional<CameraFrame> Simulator::take_camera() {
   if (!pending_) return std::nullopt;

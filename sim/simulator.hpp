@@ -1,6 +1,7 @@
 #pragma once
-// alight-sim's pure library: the quadrotor (dynamics.hpp), the motion-capture room and the IMU
-// (sensors.hpp) and the camera (renderer.hpp) in one deterministic simulation. No LCM, no clock,
+// alight-sim's pure library: the quadrotor (dynamics.hpp), the motion-capture room, the IMU, the
+// rangefinder and the barometer (sensors.hpp) and the camera (renderer.hpp) in one deterministic
+// simulation. No LCM, no clock,
 // no files: the caller passes commands and the utime to advance to, and takes the sensor samples
 // that became due. Same scenario, seed and command sequence give identical outputs.
 //
@@ -89,10 +90,17 @@ class Simulator {
   /// Specific force of the last physics step in body (noise-free IMU) [m/s^2].
   const Vector3d& specific_force_B() const { return last_.specific_force_B; }
 
-  /// Motion-capture samples whose latency has elapsed, oldest first.
+  /// Motion-capture samples whose latency has elapsed, oldest first (none when the scenario's
+  /// mocap.enabled is false).
   std::vector<MocapSample> take_mocap();
-  /// IMU samples taken since the last call, oldest first.
+  /// IMU samples taken since the last call, oldest first (none when imu.enabled is false).
   std::vector<ImuSample> take_imu();
+  /// Rangefinder samples whose latency has elapsed, oldest first, with and without a
+  /// measurement (none when rangefinder.enabled is false).
+  std::vector<RangeSample> take_range();
+  /// Barometer samples whose latency has elapsed, oldest first (none when baro.enabled is
+  /// false).
+  std::vector<BaroSample> take_baro();
   /// The newest camera frame completed since the last call, rendered now (older unrendered
   /// frames are skipped: rendering is what costs). Nothing without a camera.
   std::optional<CameraFrame> take_camera();
@@ -136,6 +144,8 @@ class Simulator {
   Vector3d gust_W_ = Vector3d::Zero();
   MocapEmulator mocap_;
   ImuEmulator imu_;
+  RangefinderEmulator rangefinder_;
+  BaroEmulator baro_;
 
   bool landed_ = false, tipped_ = false, collided_ = false, wall_contact_ = false;
   bool out_of_area_ = false;

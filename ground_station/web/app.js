@@ -5,7 +5,9 @@
 
 const $ = (id) => document.getElementById(id);
 const MISSIONS = { 0: 'none', 1: 'landing', 2: 'ingress' };
-const FAILSAFES = { 0: 'none', 1: 'pose stale', 2: 'pose lost', 3: 'operator abort', 4: 'kill' };
+const FAILSAFES = {
+  0: 'none', 1: 'pose stale', 2: 'pose lost', 3: 'operator abort', 4: 'kill', 5: 'estimate lost',
+};
 const NUDGE_STEP_M = 0.1;
 
 let latest = null;          // newest state document

@@ -7,6 +7,7 @@
 
 #include <limits>
 
+#include "autonomy/convert.hpp"
 #include "kinematic_world.hpp"
 
 namespace alight::autonomy {
@@ -837,6 +838,315 @@ TEST(AutonomyRegression, NoVisionWhileSearchingHoldsAndSaysWhy) {
         << w.out.status.reason;
     EXPECT_TRUE(w.out.setpoint.motors_on);
   }
+}
+
+// --- Issue 17: the onboard estimate's health (STATE_ESTIMATE): DEGRADED holds, LOST (or silent)
+// descends, and nothing changes without one.
+
+using Level = EstimateHealth::Level;
+using E = state_estimate_t;
+
+EstimateHealth health(Level level, int32_t reasons = 0) {
+  EstimateHealth e;
+  e.level = level;
+  e.reasons = static_cast<uint32_t>(reasons);
+  e.text = estimate_reasons_text(e.reasons);
+  return e;
+}
+
+bool has(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
+
+TEST(AutonomyEstimateTest, DegradedHoldsInDetectionRefinementAndApproachAndWaitsForTheOperator) {
+  for (const Phase degrade_in : {Phase::kDetection, Phase::kRefinement, Phase::kApproach}) {
+    SCOPED_TRACE(phase_name(degrade_in));
+    KinematicWorld w;
+    w.estimate = health(Level::kOk);
+    w.takeoff_and_hover();
+    w.send(Command::kGo, Mission::kLanding);
+    ASSERT_TRUE(w.run_until_phase(degrade_in, 120)) << w.out.status.reason;
+    w.estimate = health(Level::kDegraded, E::REASON_NO_FLOW);
+    w.step();
+    EXPECT_EQ(w.autonomy.phase(), Phase::kHold);
+    EXPECT_TRUE(has(w.out.status.reason, "state estimate degraded (no_flow): holding"))
+        << w.out.status.reason;
+    EXPECT_EQ(w.out.status.failsafe, Failsafe::kNone);
+    EXPECT_TRUE(w.out.setpoint.motors_on);
+    const Vector3d held = w.out.setpoint.p_W;
+    for (int i = 0; i < 100; ++i) w.step();
+    // Cleared: still holding, waiting for the operator, as after every other hold.
+    w.estimate = health(Level::kOk);
+    for (int i = 0; i < 300; ++i) w.step();
+    EXPECT_EQ(w.autonomy.phase(), Phase::kHold);
+    EXPECT_LT((w.out.setpoint.p_W - held).norm(), 1e-9);
+    EXPECT_LT((w.p - held).norm(), 0.03);
+    w.send(Command::kGo, Mission::kLanding);
+    EXPECT_EQ(w.autonomy.phase(), Phase::kDetection) << w.out.status.reason;
+  }
+}
+
+TEST(AutonomyEstimateTest, DegradedWhileTakingOffHoldsWhereItIs) {
+  KinematicWorld w;
+  w.estimate = health(Level::kOk);
+  w.step();
+  w.send(Command::kTakeoff);
+  ASSERT_TRUE(w.run_until([&] { return w.p.z() > 0.6; }, 5));
+  w.estimate = health(Level::kDegraded, int32_t{E::REASON_NO_RANGE} | E::REASON_HEIGHT_UNCERTAIN);
+  w.step();
+  EXPECT_EQ(w.autonomy.phase(), Phase::kHold);
+  EXPECT_TRUE(has(w.out.status.reason, "(no_range|height_uncertain)")) << w.out.status.reason;
+  const double z = w.p.z();
+  for (int i = 0; i < 300; ++i) w.step();
+  EXPECT_NEAR(w.p.z(), z, 0.2) << "no longer climbing to takeoff.height_m";
+  EXPECT_TRUE(w.out.setpoint.motors_on);
+}
+
+// A degraded or lost estimate in the last 25 cm: the landing goes on (autonomy.cpp,
+// react_to_estimate, says why).
+TEST(AutonomyEstimateTest, DegradedOrLostInTheFinalDescentKeepsLanding) {
+  for (const Level level : {Level::kDegraded, Level::kLost}) {
+    SCOPED_TRACE(static_cast<int>(level));
+    KinematicWorld w;
+    w.estimate = health(Level::kOk);
+    w.takeoff_and_hover();
+    w.send(Command::kGo, Mission::kLanding);
+    ASSERT_TRUE(w.run_until_phase(Phase::kFinalDescent, 150)) << w.out.status.reason;
+    w.estimate = health(level, int32_t{E::REASON_NO_FLOW} | E::REASON_POSITION_UNCERTAIN);
+    bool interrupted = false;
+    ASSERT_TRUE(w.run_until(
+        [&] {
+          const Phase ph = w.autonomy.phase();
+          interrupted |= ph != Phase::kFinalDescent && ph != Phase::kLanded;
+          return ph == Phase::kLanded;
+        },
+        10))
+        << w.out.status.reason;
+    EXPECT_FALSE(interrupted);
+    EXPECT_FALSE(w.out.setpoint.motors_on);
+    EXPECT_EQ(w.out.status.failsafe, Failsafe::kNone);
+    EXPECT_LT((w.p - w.truth.platform_center_W).head<2>().norm(), 0.05);
+    // On the ground the health changes nothing.
+    for (int i = 0; i < 200; ++i) w.step();
+    EXPECT_EQ(w.autonomy.phase(), Phase::kLanded);
+    EXPECT_FALSE(w.out.setpoint.motors_on);
+  }
+}
+
+TEST(AutonomyEstimateTest, LostDescendsOnThePoseItStillHasAndDisarmsOnTouchdown) {
+  KinematicWorld w;
+  w.estimate = health(Level::kOk);
+  w.takeoff_and_hover();
+  w.send(Command::kGo, Mission::kLanding);
+  ASSERT_TRUE(w.run_until_phase(Phase::kRefinement, 120));
+  w.estimate = health(Level::kLost, E::REASON_IMU_STOPPED);
+  w.step();
+  ASSERT_EQ(w.autonomy.phase(), Phase::kFailsafe);
+  EXPECT_EQ(w.out.status.failsafe, Failsafe::kEstimateLost);
+  EXPECT_EQ(to_msg(w.out.status).failsafe, autonomy_status_t::FAILSAFE_ESTIMATE_LOST);
+  EXPECT_TRUE(has(w.out.status.reason, "state estimate lost (imu_stopped): controlled descent"))
+      << w.out.status.reason;
+  EXPECT_TRUE(w.out.setpoint.motors_on);
+  // The controlled descent of the pose-lost failsafe, on the (dead-reckoned) pose: the setpoint
+  // sinks at failsafe.descent_mps from where it was, over the same x, y.
+  const Vector3d entry = w.p;
+  for (int i = 0; i < 100; ++i) w.step();
+  EXPECT_NEAR(w.out.setpoint.p_W.z(), entry.z() - w.autonomy.params().failsafe.descent_mps * 1.0,
+              1e-6);
+  EXPECT_LT((w.out.setpoint.p_W - entry).head<2>().norm(), 1e-9);
+  ASSERT_TRUE(w.run_until([&] { return !w.out.setpoint.motors_on; }, 10)) << w.out.status.reason;
+  EXPECT_EQ(w.autonomy.phase(), Phase::kFailsafe);
+  EXPECT_TRUE(has(w.out.status.reason, "touch-down")) << w.out.status.reason;
+  EXPECT_NEAR(w.p.z(), w.ground_z(w.p), 1e-9) << "motors off only on the ground";
+  EXPECT_EQ(w.out.status.failsafe, Failsafe::kEstimateLost);
+  EXPECT_EQ(w.autonomy.restart_state().failsafe, Failsafe::kEstimateLost);
+  EXPECT_FALSE(w.autonomy.restart_state().motors_on);
+}
+
+// The issue's sequence: hold when it degrades, the failsafe descent when it is lost; and the
+// way back: OK again for failsafe.pose_recovered_s stops the descent into a hold (DEGRADED is
+// not enough), as when motion capture comes back.
+TEST(AutonomyEstimateTest, HoldWhenDegradedDescentWhenLostHoldWhenOkAgain) {
+  KinematicWorld w;
+  w.estimate = health(Level::kOk);
+  w.takeoff_and_hover();
+  w.estimate = health(Level::kDegraded, E::REASON_NO_FLOW);
+  w.step();
+  ASSERT_EQ(w.autonomy.phase(), Phase::kHold) << w.out.status.reason;
+  for (int i = 0; i < 50; ++i) w.step();
+  w.estimate = health(Level::kLost, E::REASON_POSITION_UNCERTAIN);
+  w.step();
+  ASSERT_EQ(w.autonomy.phase(), Phase::kFailsafe) << w.out.status.reason;
+  EXPECT_EQ(w.out.status.failsafe, Failsafe::kEstimateLost);
+  for (int i = 0; i < 50; ++i) w.step();
+  w.estimate = health(Level::kDegraded, E::REASON_NO_FLOW);
+  for (int i = 0; i < 100; ++i) w.step();
+  EXPECT_EQ(w.autonomy.phase(), Phase::kFailsafe) << "DEGRADED does not stop the descent";
+  w.estimate = health(Level::kOk);
+  const int recovered_steps =
+      static_cast<int>(w.autonomy.params().failsafe.pose_recovered_s * 100) - 20;
+  for (int i = 0; i < recovered_steps; ++i) w.step();
+  EXPECT_EQ(w.autonomy.phase(), Phase::kFailsafe) << "OK, not yet for long enough";
+  ASSERT_TRUE(w.run_until_phase(Phase::kHold, 0.3)) << w.out.status.reason;
+  EXPECT_TRUE(has(w.out.status.reason, "state estimate OK again")) << w.out.status.reason;
+  EXPECT_EQ(w.out.status.failsafe, Failsafe::kNone);
+  EXPECT_TRUE(w.out.setpoint.motors_on);
+  const double z = w.p.z();
+  EXPECT_GT(z, 0.5) << "stopped in the air";
+  for (int i = 0; i < 300; ++i) w.step();
+  EXPECT_EQ(w.autonomy.phase(), Phase::kHold);
+  EXPECT_NEAR(w.p.z(), z, 0.05) << "holds, no longer descends";
+}
+
+TEST(AutonomyEstimateTest, SilenceAfterTheFirstEstimateIsLost) {
+  KinematicWorld w;
+  w.estimate = health(Level::kOk);
+  w.takeoff_and_hover();
+  w.send(Command::kGo, Mission::kLanding);
+  ASSERT_EQ(w.autonomy.phase(), Phase::kDetection);
+  w.estimate.reset();  // the estimator died (or its messages stopped)
+  const double silent_s = w.autonomy.params().failsafe.estimate_silent_s;
+  for (int i = 0; i < static_cast<int>(silent_s * 100) - 1; ++i) w.step();
+  EXPECT_EQ(w.autonomy.phase(), Phase::kDetection) << "not before estimate_silent_s";
+  ASSERT_TRUE(w.run_until_phase(Phase::kFailsafe, 0.05)) << w.out.status.reason;
+  EXPECT_EQ(w.out.status.failsafe, Failsafe::kEstimateLost);
+  EXPECT_TRUE(has(w.out.status.reason, "no STATE_ESTIMATE for")) << w.out.status.reason;
+}
+
+TEST(AutonomyEstimateTest, WithoutAnyEstimateNothingChanges) {
+  KinematicWorld w;  // flying on motion capture: no STATE_ESTIMATE ever
+  w.takeoff_and_hover();
+  w.send(Command::kGo, Mission::kLanding);
+  bool held = false;
+  ASSERT_TRUE(w.run_until(
+      [&] {
+        held |= w.autonomy.phase() == Phase::kHold || w.autonomy.phase() == Phase::kFailsafe;
+        return w.autonomy.phase() == Phase::kLanded;
+      },
+      150))
+      << w.out.status.reason;
+  EXPECT_FALSE(held);
+  EXPECT_EQ(w.out.status.failsafe, Failsafe::kNone);
+  // And the motion-capture failsafe is still the pose's.
+  KinematicWorld m;
+  m.takeoff_and_hover();
+  m.mocap = false;
+  ASSERT_TRUE(m.run_until_phase(Phase::kFailsafe, 3));
+  EXPECT_EQ(m.out.status.failsafe, Failsafe::kPoseLost);
+}
+
+TEST(AutonomyEstimateTest, RequireEstimateRefusesTakeoffAndGoUntilItIsOk) {
+  auto params = test::test_params();
+  params.failsafe.require_estimate = true;
+  KinematicWorld w(params);
+  w.step();
+  w.send(Command::kTakeoff);
+  EXPECT_EQ(w.autonomy.phase(), Phase::kIdle);
+  EXPECT_EQ(w.out.status.reason,
+            "TAKEOFF refused: no STATE_ESTIMATE yet (failsafe.require_estimate)");
+  w.estimate = health(Level::kLost, E::REASON_NOT_INITIALISED);
+  w.send(Command::kTakeoff);
+  EXPECT_EQ(w.autonomy.phase(), Phase::kIdle);
+  EXPECT_EQ(w.out.status.reason, "TAKEOFF refused: state estimate lost (not_initialised)");
+  w.estimate = health(Level::kDegraded, E::REASON_NO_FLOW);
+  w.send(Command::kTakeoff);
+  EXPECT_EQ(w.autonomy.phase(), Phase::kIdle);
+  EXPECT_EQ(w.out.status.reason, "TAKEOFF refused: state estimate degraded (no_flow)");
+  w.estimate = health(Level::kOk);
+  w.send(Command::kTakeoff);
+  EXPECT_EQ(w.autonomy.phase(), Phase::kTakeoff) << w.out.status.reason;
+  ASSERT_TRUE(w.run_until_phase(Phase::kHover, 10));
+  // Degraded in the hover: HOLD, and GO waits for an OK estimate.
+  w.estimate = health(Level::kDegraded, E::REASON_NO_FLOW);
+  w.step();
+  ASSERT_EQ(w.autonomy.phase(), Phase::kHold);
+  w.send(Command::kGo, Mission::kLanding);
+  EXPECT_EQ(w.autonomy.phase(), Phase::kHold);
+  EXPECT_EQ(w.out.status.reason, "GO refused: state estimate degraded (no_flow)");
+  w.estimate = health(Level::kOk);
+  w.send(Command::kGo, Mission::kLanding);
+  EXPECT_EQ(w.autonomy.phase(), Phase::kDetection) << w.out.status.reason;
+}
+
+// Without require_estimate an estimate once heard gates TAKEOFF all the same: taking off on a
+// LOST one (an estimator still aligning) would only start the failsafe descent.
+TEST(AutonomyEstimateTest, AnEstimateOnceHeardMustBeOkForTakeoff) {
+  KinematicWorld w;
+  w.estimate = health(Level::kLost, E::REASON_NOT_INITIALISED);
+  w.step();
+  w.send(Command::kTakeoff);
+  EXPECT_EQ(w.autonomy.phase(), Phase::kIdle);
+  EXPECT_EQ(w.out.status.reason, "TAKEOFF refused: state estimate lost (not_initialised)");
+  for (int i = 0; i < 100; ++i) w.step();
+  EXPECT_EQ(w.autonomy.phase(), Phase::kIdle) << "on the ground a LOST estimate changes nothing";
+  EXPECT_FALSE(w.out.setpoint.motors_on);
+  w.estimate.reset();  // silent: LOST as well
+  for (int i = 0; i < 60; ++i) w.step();
+  w.send(Command::kTakeoff);
+  EXPECT_EQ(w.autonomy.phase(), Phase::kIdle);
+  EXPECT_TRUE(has(w.out.status.reason, "TAKEOFF refused: no STATE_ESTIMATE for"))
+      << w.out.status.reason;
+  w.estimate = health(Level::kOk);
+  w.send(Command::kTakeoff);
+  EXPECT_EQ(w.autonomy.phase(), Phase::kTakeoff) << w.out.status.reason;
+}
+
+// LAND_HERE is the operator's answer to a degraded estimate: the hold does not interrupt it.
+TEST(AutonomyEstimateTest, LandHereOnADegradedEstimateLands) {
+  KinematicWorld w;
+  w.estimate = health(Level::kOk);
+  w.takeoff_and_hover();
+  w.estimate = health(Level::kDegraded, E::REASON_NO_FLOW);
+  w.step();
+  ASSERT_EQ(w.autonomy.phase(), Phase::kHold);
+  w.send(Command::kLandHere);
+  ASSERT_EQ(w.autonomy.phase(), Phase::kApproach) << w.out.status.reason;
+  bool held = false;
+  ASSERT_TRUE(w.run_until(
+      [&] {
+        held |= w.autonomy.phase() == Phase::kHold;
+        return w.autonomy.phase() == Phase::kLanded;
+      },
+      30))
+      << w.out.status.reason;
+  EXPECT_FALSE(held);
+  EXPECT_NEAR(w.p.z(), w.gear_height_m, 1e-9);
+}
+
+// A late STATE_ESTIMATE (stamped before the newest one) never replaces it.
+TEST(AutonomyEstimateTest, AnOlderEstimateDoesNotReplaceTheNewestOne) {
+  KinematicWorld w;
+  w.estimate = health(Level::kOk);
+  w.takeoff_and_hover();
+  Inputs in;
+  in.estimate = health(Level::kLost, E::REASON_IMU_STOPPED);
+  in.estimate->utime = w.t - 200'000;
+  w.t += 10'000;
+  w.out = w.autonomy.update(in, w.t);
+  EXPECT_EQ(w.autonomy.phase(), Phase::kHover) << w.out.status.reason;
+}
+
+// An estimate-lost failsafe latched before a restart continues (the restarted instance has not
+// heard an estimate yet), and ends in a hold once the estimate is OK again.
+TEST(AutonomyRestart, EstimateLostFailsafeSurvivesARestart) {
+  RestartState r;
+  r.motors_on = true;
+  r.failsafe = Failsafe::kEstimateLost;
+  KinematicWorld w(test::test_params(), {}, r);
+  w.p = Vector3d(0.2, 0.1, 1.0);
+  w.step();
+  ASSERT_EQ(w.autonomy.phase(), Phase::kFailsafe) << w.out.status.reason;
+  EXPECT_EQ(w.out.status.failsafe, Failsafe::kEstimateLost);
+  EXPECT_TRUE(has(w.out.status.reason, "estimate-lost failsafe continues")) << w.out.status.reason;
+  EXPECT_TRUE(w.out.setpoint.motors_on);
+  EXPECT_EQ(w.autonomy.restart_state().failsafe, Failsafe::kEstimateLost);
+  for (int i = 0; i < 100; ++i) w.step();
+  EXPECT_LT(w.p.z(), 0.9) << "descending";
+  EXPECT_EQ(w.autonomy.phase(), Phase::kFailsafe);
+  w.estimate = health(Level::kOk);
+  ASSERT_TRUE(w.run_until_phase(Phase::kHold, 1)) << w.out.status.reason;
+  EXPECT_EQ(w.autonomy.restart_state().failsafe, Failsafe::kNone);
+  EXPECT_TRUE(w.out.setpoint.motors_on);
 }
 
 }  // namespace

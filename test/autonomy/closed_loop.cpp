@@ -63,6 +63,7 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
   int64_t terminal_since = -1;
   const bool trace = std::getenv("CLOSED_LOOP_TRACE") != nullptr;  // contact trace on stderr
   bool event = false;  // a scripted action happened  // first time a terminal phase was seen
+  std::optional<EstimateHealth> estimate;  // scripted STATE_ESTIMATE health
   ClosedLoopResult r;
 
   const auto step_autonomy = [&](Inputs in) {
@@ -110,6 +111,10 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
       now = std::max(now, s.utime);
       Inputs in;
       in.imu = ImuSample{s.utime, s.accel_B, s.gyro_B};
+      if (estimate) {
+        in.estimate = estimate;
+        in.estimate->utime = s.utime;
+      }
       step_autonomy(in);
     }
     now = std::max(now, until);
@@ -163,7 +168,13 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
       ScriptActions act;
       act.vision_silent = vision.silent;
       act.p_W_true = truth.state.p_W_B;
+      act.estimate = estimate;
       config.script(autonomy, (now - t0) * 1e-6, act);
+      if (act.estimate.has_value() != estimate.has_value() ||
+          (act.estimate && act.estimate->level != estimate->level)) {
+        event = true;
+      }
+      estimate = act.estimate;
       if (act.vision_silent && !vision.silent) event = true;
       vision.silent = act.vision_silent;
       if (act.drop_mocap_for_s) {

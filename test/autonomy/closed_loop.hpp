@@ -26,7 +26,7 @@ struct ClosedLoopConfig {
   double time_limit_s = 240;  ///< sim time limit after the start [s]
   OracleVisionParams vision;  ///< mission, mount and seed are filled in from the above
   /// Called every 5 ms of sim time; may issue an operator command (ABORT, KILL), silence the
-  /// vision or cut motion capture.
+  /// vision, cut motion capture or set the onboard estimate's health.
   std::function<void(const Autonomy&, double t_s, struct ScriptActions&)> script;
   /// Overrides the scenario's opening size (width, height) [m].
   std::optional<Vector2d> opening_size_m;
@@ -47,6 +47,9 @@ struct ScriptActions {
   std::optional<OperatorCommand> command;  ///< sent to autonomy now
   bool vision_silent = false;              ///< sticky: the oracle stops publishing
   std::optional<double> drop_mocap_for_s;  ///< motion capture lost from now on for this long
+  /// Sticky: the onboard estimate's health (issue 17), sent with every IMU sample from now on,
+  /// as alight-estimator publishes STATE_ESTIMATE; none: no STATE_ESTIMATE (the default).
+  std::optional<EstimateHealth> estimate;
 };
 
 struct ClosedLoopResult {

@@ -177,5 +177,50 @@ TEST(ClosedLoopFailsafeTest, KillStopsTheMotorsAtOnce) {
   EXPECT_LT(r.final_z_m, 0.3) << "fell";
 }
 
+// Issue 17: the onboard estimate's health with the simulator and the real outer loop. The
+// pose is motion capture's here, standing in for the one the estimator dead-reckons.
+EstimateHealth estimate_health(EstimateHealth::Level level, uint32_t reasons, const char* text) {
+  EstimateHealth e;
+  e.level = level;
+  e.reasons = reasons;
+  e.text = text;
+  return e;
+}
+
+TEST(ClosedLoopEstimateTest, LostMidDescentDescendsAndDisarmsOnTouchdown) {
+  auto c = landing("pelican", "a", 8);
+  bool lost = false;
+  c.script = [&](const Autonomy& a, double, ScriptActions& act) {
+    if (!act.estimate) act.estimate = estimate_health(EstimateHealth::Level::kOk, 0, "");
+    if (!lost && a.phase() == Phase::kApproach && act.p_W_true.z() < 0.9) {  // mid-descent
+      act.estimate = estimate_health(EstimateHealth::Level::kLost, 16, "position_uncertain");
+      lost = true;
+    }
+  };
+  const auto r = fly_closed_loop(c);
+  EXPECT_TRUE(lost);
+  EXPECT_EQ(r.phase, Phase::kFailsafe) << r.reason;
+  EXPECT_NE(r.reason.find("touch-down"), std::string::npos) << r.reason;
+  EXPECT_FALSE(r.armed) << "disarmed on touch-down";
+  EXPECT_FALSE(r.tipped);
+  EXPECT_LT(r.final_z_m, 0.5) << "on the platform or the floor";
+}
+
+TEST(ClosedLoopEstimateTest, DegradedInRefinementHoldsInTheAir) {
+  auto c = landing("starmac", "b", 9);
+  c.script = [&](const Autonomy& a, double, ScriptActions& act) {
+    if (!act.estimate) act.estimate = estimate_health(EstimateHealth::Level::kOk, 0, "");
+    if (a.phase() == Phase::kRefinement)
+      act.estimate = estimate_health(EstimateHealth::Level::kDegraded, 2, "no_flow");
+  };
+  const auto r = fly_closed_loop(c);
+  EXPECT_EQ(r.phase, Phase::kHold) << r.reason;
+  EXPECT_NE(r.reason.find("state estimate degraded (no_flow): holding"), std::string::npos)
+      << r.reason;
+  EXPECT_TRUE(r.armed);
+  EXPECT_GT(r.final_z_m, 1.0);
+  EXPECT_FALSE(r.collided);
+}
+
 }  // namespace
 }  // namespace alight::autonomy::test

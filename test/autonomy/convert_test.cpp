@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <limits>
+#include <utility>
 
 #include "common/msg_convert.hpp"
 
@@ -111,6 +112,9 @@ TEST(AutonomyConvertTest, StatusCarriesEveryField) {
   }
   EXPECT_EQ(phase_to_msg(Phase::kKilled), autonomy_status_t::PHASE_KILLED);
   EXPECT_EQ(failsafe_to_msg(Failsafe::kKill), autonomy_status_t::FAILSAFE_KILL);
+  EXPECT_EQ(failsafe_to_msg(Failsafe::kEstimateLost), autonomy_status_t::FAILSAFE_ESTIMATE_LOST);
+  s.failsafe = Failsafe::kEstimateLost;
+  EXPECT_EQ(wire(to_msg(s)).failsafe, autonomy_status_t::FAILSAFE_ESTIMATE_LOST);
 }
 
 // --- Issue 14: the validating conversions the node uses for every input.
@@ -259,6 +263,118 @@ TEST(AutonomyConvertRegression, PoseWithNonFiniteValuesOrBadQuaternionIsRefused)
   pose_t twice = good;
   twice.orientation[0] = 2.0;
   expect_refused(twice, "quaternion");
+}
+
+// --- Issue 17: the onboard estimate's health.
+
+state_estimate_t good_estimate() {
+  EstimateHealth e;
+  e.utime = 77;
+  return to_msg(e, 5);
+}
+
+TEST(AutonomyConvertTest, EstimateHealthAndItsReasonsFromTheWire) {
+  using E = state_estimate_t;
+  using L = EstimateHealth::Level;
+  for (const auto& [code, level] :
+       {std::pair{E::HEALTH_OK, L::kOk}, std::pair{E::HEALTH_DEGRADED, L::kDegraded},
+        std::pair{E::HEALTH_LOST, L::kLost}}) {
+    state_estimate_t m = good_estimate();
+    m.health = code;
+    m.health_reasons = int32_t{E::REASON_NO_FLOW} | E::REASON_NO_RANGE;
+    std::string why;
+    const auto e = estimate_from_msg(wire(m), &why);
+    ASSERT_TRUE(e) << why;
+    EXPECT_EQ(e->utime, 77);
+    EXPECT_EQ(e->level, level);
+    EXPECT_EQ(e->reasons, static_cast<uint32_t>(int32_t{E::REASON_NO_FLOW} | E::REASON_NO_RANGE));
+    EXPECT_EQ(e->text, "no_flow|no_range");
+    // And back: the message form tests and tools send.
+    EstimateHealth h;
+    h.utime = 9;
+    h.level = level;
+    h.reasons = 4;
+    const auto back = estimate_from_msg(wire(to_msg(h, 1)), &why);
+    ASSERT_TRUE(back) << why;
+    EXPECT_EQ(back->level, level);
+    EXPECT_EQ(back->reasons, 4u);
+    EXPECT_EQ(back->utime, 9);
+  }
+  EXPECT_EQ(estimate_reasons_text(0), "");
+  EXPECT_EQ(estimate_reasons_text(511),
+            "not_initialised|no_flow|no_range|no_baro|position_uncertain|velocity_uncertain|"
+            "imu_gap|imu_stopped|height_uncertain");
+  // A newer estimator's reasons are named by their bit, not dropped.
+  EXPECT_EQ(estimate_reasons_text(uint32_t{E::REASON_IMU_STOPPED} | (1u << 12)),
+            "imu_stopped|bit_12");
+  state_estimate_t top = good_estimate();
+  top.health = E::HEALTH_DEGRADED;
+  top.health_reasons = std::numeric_limits<int32_t>::min();  // bit 31 on the wire
+  std::string why;
+  EXPECT_EQ(estimate_from_msg(top, &why)->text, "bit_31");
+}
+
+// Every field of a state_estimate_t is checked, not only the health the autonomy reads: NaN
+// anywhere is a broken estimator, refused (so silent, so LOST after estimate_silent_s).
+TEST(AutonomyConvertRegression, EstimateWithNonFiniteOrAbsurdValuesIsRefused) {
+  std::string why;
+  ASSERT_TRUE(estimate_from_msg(good_estimate(), &why)) << why;
+  const auto expect_refused = [&](const state_estimate_t& m, const char* field) {
+    std::string w;
+    EXPECT_FALSE(estimate_from_msg(m, &w)) << field;
+    EXPECT_NE(w.find(field), std::string::npos) << field << ": " << w;
+  };
+  for (const double bad : {kNan, kInf, -kInf}) {
+    for (int i = 0; i < 3; ++i) {
+      state_estimate_t m = good_estimate();
+      m.pos[i] = bad;
+      expect_refused(m, "pos");
+      m = good_estimate();
+      m.vel[i] = bad;
+      expect_refused(m, "vel");
+      m = good_estimate();
+      m.angular_velocity_B[i] = bad;
+      expect_refused(m, "angular_velocity_B");
+      m = good_estimate();
+      m.accel_bias_B[i] = bad;
+      expect_refused(m, "accel_bias_B");
+      m = good_estimate();
+      m.gyro_bias_B[i] = bad;
+      expect_refused(m, "gyro_bias_B");
+    }
+    for (int i = 0; i < 4; ++i) {
+      state_estimate_t m = good_estimate();
+      m.orientation[i] = bad;
+      expect_refused(m, "orientation");
+    }
+    for (const int k : {0, 1, 40, 80}) {
+      state_estimate_t m = good_estimate();
+      m.cov_pva[k] = bad;
+      expect_refused(m, "cov_pva");
+    }
+    state_estimate_t m = good_estimate();
+    m.terrain_height_m = bad;
+    expect_refused(m, "terrain_height_m");
+    m = good_estimate();
+    m.baro_offset_m = bad;
+    expect_refused(m, "baro_offset_m");
+  }
+  for (const int8_t code : {int8_t{3}, int8_t{-1}, int8_t{127}}) {
+    state_estimate_t m = good_estimate();
+    m.health = code;
+    expect_refused(m, "unknown health");
+  }
+  state_estimate_t m = good_estimate();
+  m.orientation[0] = 0.0;
+  expect_refused(m, "unit quaternion");
+  m.orientation[0] = 2.0;
+  expect_refused(m, "unit quaternion");
+  m = good_estimate();
+  m.cov_pva[40] = -1e-3;
+  expect_refused(m, "negative variance");
+  m = good_estimate();
+  m.pos[1] = -1e6;
+  expect_refused(m, "pos beyond");
 }
 
 }  // namespace

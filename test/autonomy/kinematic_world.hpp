@@ -64,6 +64,9 @@ struct KinematicWorld {
   int64_t last_mocap_t = kT0;
   /// Applied to every measurement of the oracle vision (a corrupt VISION_TARGET).
   std::function<void(TargetMeasurement&)> corrupt_target;
+  /// The onboard estimate's health (STATE_ESTIMATE, issue 17), sent every step stamped with its
+  /// time; none: no STATE_ESTIMATE at all (flying on motion capture).
+  std::optional<EstimateHealth> estimate;
 
   double ground_z(const Vector3d& q) const {
     if (truth.has_platform) {
@@ -121,6 +124,10 @@ struct KinematicWorld {
     if (cmd) {
       cmd->utime = t;
       in.command = cmd;
+    }
+    if (estimate) {
+      in.estimate = estimate;
+      in.estimate->utime = t;
     }
     truth.vehicle = pose();
     if (target) {

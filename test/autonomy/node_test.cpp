@@ -14,13 +14,17 @@
 #include <alight/attitude_cmd_t.hpp>
 #include <alight/autonomy_status_t.hpp>
 #include <alight/imu_t.hpp>
+#include <alight/node_status_t.hpp>
 #include <alight/operator_cmd_t.hpp>
 #include <alight/pose_t.hpp>
 #include <alight/position_setpoint_t.hpp>
+#include <alight/state_estimate_t.hpp>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <lcm/lcm-cpp.hpp>
+#include <limits>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -252,6 +256,8 @@ struct Bench {
   int64_t t = 1'700'000'000'000'000;
   Eigen::Vector3d p{0, 0, 0.12};
   Eigen::Vector3d v{0, 0, 0};
+  /// STATE_ESTIMATE with each pose (issue 17) when set: its health and reasons.
+  std::optional<alight::state_estimate_t> estimate;
   Bench() {
     lcm.subscribe(alight::channels::kAutonomyStatus, &Recorder::on_status, &rec);
     lcm.subscribe(alight::channels::kPositionSetpoint, &Recorder::on_sp, &rec);
@@ -271,6 +277,11 @@ struct Bench {
       imu.utime = t;
       imu.accel_B[2] = 9.81;
       lcm.publish(alight::channels::kImu, &imu);
+      if (estimate) {
+        estimate->utime = t;
+        ++estimate->seq;
+        lcm.publish(alight::channels::kStateEstimate, &*estimate);
+      }
       std::this_thread::sleep_for(std::chrono::milliseconds(2));
       while (lcm.handleTimeout(0) > 0) {
       }
@@ -429,6 +440,70 @@ TEST(AutonomyNodeRegression, RestartedInFlightHoldsAndKillSurvivesRestarts) {
   }
   std::filesystem::remove(state);
   std::filesystem::remove(key_path);
+}
+
+// Issue 17: the node hears STATE_ESTIMATE. A LOST estimate (the estimator still aligning)
+// holds --auto-go's TAKEOFF back, and --auto-go tries again once it is OK; a NaN estimate is
+// refused at the boundary; LOST in flight is the estimate-lost failsafe on AUTONOMY_STATUS.
+TEST(AutonomyNodeTest, StateEstimateHealthGatesTakeoffAndLostIsTheFailsafe) {
+  using S = alight::autonomy_status_t;
+  using E = alight::state_estimate_t;
+  const std::string bin = std::string(ALIGHT_BINARY_DIR) + "/bin/";
+  const std::string config = std::string(ALIGHT_SOURCE_DIR) + "/config/vehicles/starmac.yaml";
+  const std::string state = temp_file("estimate.state");
+  Bench b;
+  ASSERT_TRUE(b.lcm.good());
+  E lost{};
+  lost.orientation[0] = 1.0;
+  lost.health = E::HEALTH_LOST;
+  lost.health_reasons = E::REASON_NOT_INITIALISED;
+  b.estimate = lost;
+  Process autonomy({bin + "alight-autonomy", "--config", config, "--lcm-url", kUrl, "--auto-go",
+                    "landing", "--log-level", "error", "--state-file", state});
+  ASSERT_TRUE(autonomy.ok());
+  ASSERT_TRUE(b.wait_for_status()) << "alight-autonomy never answered";
+  b.publish_sensors(150);  // 1.5 s of sensor time: TAKEOFF tried and refused
+  for (int i = 0; i < 20; ++i) b.lcm.handleTimeout(10);
+  ASSERT_FALSE(b.rec.status.empty());
+  EXPECT_EQ(b.rec.status.back().phase, S::PHASE_IDLE) << b.rec.status.back().reason;
+  EXPECT_NE(b.rec.status.back().reason.find("TAKEOFF refused: state estimate lost "
+                                            "(not_initialised)"),
+            std::string::npos)
+      << b.rec.status.back().reason;
+  b.estimate->health = E::HEALTH_OK;
+  b.estimate->health_reasons = 0;
+  ASSERT_TRUE(b.sensors_until([&] { return b.rec.status.back().phase == S::PHASE_TAKEOFF; }))
+      << b.rec.status.back().reason;
+  // Flying: a NaN estimate saying OK is refused, the last good one stands.
+  b.p.z() = 0.8;
+  b.estimate->pos[0] = std::numeric_limits<double>::quiet_NaN();
+  b.publish_sensors(20);
+  for (int i = 0; i < 10; ++i) b.lcm.handleTimeout(10);
+  EXPECT_EQ(b.rec.status.back().phase, S::PHASE_TAKEOFF) << b.rec.status.back().reason;
+  b.estimate->pos[0] = 0.0;
+  // ... and counted on NODE_STATUS (once a second of wall time).
+  struct NodeStatus {
+    int64_t rejected = 0;
+    void on(const lcm::ReceiveBuffer*, const std::string&, const alight::node_status_t* m) {
+      if (m->node != "alight-autonomy") return;
+      for (const auto& c : m->channels)
+        if (c.channel == alight::channels::kStateEstimate) rejected = c.rejected_values;
+    }
+  } node_status;
+  auto* sub = b.lcm.subscribe(alight::channels::kNodeStatus, &NodeStatus::on, &node_status);
+  EXPECT_TRUE(b.sensors_until([&] { return node_status.rejected > 0; }))
+      << "the NaN estimates were not counted";
+  b.lcm.unsubscribe(sub);
+  b.estimate->health = E::HEALTH_LOST;
+  b.estimate->health_reasons = E::REASON_IMU_STOPPED;
+  ASSERT_TRUE(b.sensors_until([&] { return b.rec.status.back().phase == S::PHASE_FAILSAFE; }))
+      << b.rec.status.back().reason;
+  EXPECT_EQ(b.rec.status.back().failsafe, S::FAILSAFE_ESTIMATE_LOST);
+  EXPECT_NE(b.rec.status.back().reason.find("state estimate lost (imu_stopped)"), std::string::npos)
+      << b.rec.status.back().reason;
+  EXPECT_EQ(b.rec.setpoints.back().motors, alight::position_setpoint_t::MOTORS_ON)
+      << "a controlled descent, motors on until touch-down";
+  std::filesystem::remove(state);
 }
 
 // Bug: command_max_age_s: 1e-7 reached an assert (SIGABRT, exit 134) that the launcher

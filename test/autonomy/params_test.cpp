@@ -82,7 +82,7 @@ TEST(AutonomyParamsRegression, InfiniteOrHugeTimeoutsAreRefusedNamingTheKey) {
       {"landing", "touchdown_still_s"},  {"landing", "lost_timeout_s"},
       {"ingress", "align_settle_s"},     {"ingress", "lost_timeout_s"},
       {"restart", "state_max_age_s"},    {"", "status_period_s"},
-      {"", "command_max_age_s"}};
+      {"", "command_max_age_s"},         {"failsafe", "estimate_silent_s"}};
   for (const auto& [section, key] : timeouts) {
     const std::string full = "autonomy." + (section.empty() ? key : section + "." + key);
     for (const char* v : {".inf", ".nan", "1e7"}) {
@@ -119,6 +119,39 @@ TEST(AutonomyParamsRegression, NonFiniteNumbersAreRefusedNamingTheKey) {
     } catch (const ParamError& e) {
       EXPECT_EQ(e.key(), key) << e.what();
     }
+  }
+}
+
+// Issue 17: the onboard estimate's parameters, at their full keys.
+TEST(AutonomyParamsTest, EstimateHealthParametersLoadAndAreCheckedAtTheirFullKeys) {
+  const auto defaults = load_params(ParamNode::from_string("autonomy: {}", "v.yaml"));
+  EXPECT_DOUBLE_EQ(defaults.failsafe.estimate_silent_s, 0.5);
+  EXPECT_FALSE(defaults.failsafe.require_estimate) << "flights on motion capture need none";
+  const auto set = load_params(ParamNode::from_string(
+      "autonomy: {failsafe: {estimate_silent_s: 0.2, require_estimate: true}}", "v.yaml"));
+  EXPECT_DOUBLE_EQ(set.failsafe.estimate_silent_s, 0.2);
+  EXPECT_TRUE(set.failsafe.require_estimate);
+  for (const auto& [yaml, key] : std::vector<std::pair<std::string, std::string>>{
+           {"autonomy: {failsafe: {estimate_silent_s: 0}}", "autonomy.failsafe.estimate_silent_s"},
+           {"autonomy: {failsafe: {estimate_silent_s: -1}}", "autonomy.failsafe.estimate_silent_s"},
+           {"autonomy: {failsafe: {estimate_silent_s: 6}}", "autonomy.failsafe.estimate_silent_s"},
+           {"autonomy: {failsafe: {require_estimate: maybe}}",
+            "autonomy.failsafe.require_estimate"},
+           {"autonomy: {failsafe: {require_estimate: 0.5}}",
+            "autonomy.failsafe.require_estimate"}}) {
+    try {
+      load_params(ParamNode::from_string(yaml, "v.yaml"));
+      ADD_FAILURE() << yaml << " accepted";
+    } catch (const ParamError& e) {
+      EXPECT_EQ(e.key(), key) << e.what();
+      EXPECT_EQ(e.file(), "v.yaml");
+    }
+  }
+  // The shipped vehicles fly on motion capture: no estimate required.
+  for (const char* v : {"starmac", "pelican"}) {
+    const auto p = load_params(std::string(ALIGHT_SOURCE_DIR) + "/config/vehicles/" + v + ".yaml");
+    EXPECT_FALSE(p.failsafe.require_estimate) << v;
+    EXPECT_DOUBLE_EQ(p.failsafe.estimate_silent_s, 0.5) << v;
   }
 }
 

@@ -39,6 +39,9 @@ TEST(RestartStateTest, RecordRoundTripsAndCorruptOnesAreRefused) {
   flying.state.motors_on = true;
   flying.state.failsafe = Failsafe::kPoseLost;
   EXPECT_EQ(parse_record(format_record(flying), &why)->state, flying.state);
+  flying.state.failsafe = Failsafe::kEstimateLost;  // issue 17
+  EXPECT_NE(format_record(flying).find("failsafe ESTIMATE_LOST"), std::string::npos);
+  EXPECT_EQ(parse_record(format_record(flying), &why)->state, flying.state);
 
   const std::string text = format_record(r);
   EXPECT_FALSE(parse_record("", &why));

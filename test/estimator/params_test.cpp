@@ -27,10 +27,10 @@ TEST(EstimatorParamsTest, DefaultsAreValidAndAbsentSectionKeepsThem) {
 TEST(EstimatorParamsTest, ReadsNestedKeys) {
   const EstimatorParams p = load_estimator_params(ParamNode::from_string(
       "estimator:\n  history_s: 0.8\n  range:\n    t_B_R_m: [0.1, 0, -0.04]\n"
-      "  flow:\n    mount: forward\n  init:\n    yaw_deg: 90\n"));
+      "  flow:\n    min_inliers: 20\n  init:\n    yaw_deg: 90\n"));
   EXPECT_EQ(p.history_s, 0.8);
   EXPECT_EQ(p.range.t_B_R_m, Vector3d(0.1, 0, -0.04));
-  EXPECT_TRUE(p.flow.R_BC().isApprox(R_BC_forward()));
+  EXPECT_EQ(p.flow.min_inliers, 20);
   EXPECT_EQ(p.init.yaw_deg, 90);
 }
 
@@ -43,11 +43,21 @@ TEST(EstimatorParamsTest, ErrorsNameTheFullKey) {
   EXPECT_NE(error_of("estimator:\n  health:\n    pos_sigma_lost_m: 0.5\n")
                 .find("estimator.health.pos_sigma_lost_m"),
             std::string::npos);
-  EXPECT_NE(error_of("estimator:\n  flow:\n    mount: sideways\n").find("estimator.flow.mount"),
+  // The flow camera's mounting is cameras.downward's, not a key of its own.
+  EXPECT_NE(error_of("estimator:\n  flow:\n    mount: forward\n").find("estimator.flow.mount"),
             std::string::npos);
   EXPECT_NE(error_of("estimator:\n  baro:\n    sigma: 1\n").find("sigma"), std::string::npos);
   EXPECT_NE(error_of("estimator:\n  max_ahead_s: 0.1\n").find("estimator.health.imu_lost_s"),
             std::string::npos);
+}
+
+TEST(EstimatorParamsTest, TheFlowCameraIsTheVehiclesDownwardCamera) {
+  const EstimatorParams p = load_estimator_params(
+      ParamNode::from_string("cameras:\n  downward:\n    camera_info: c.yaml\n    mount: downward\n"
+                             "    rpy_offset_deg: [1, 0, 0]\n    t_B_C_m: [0.05, 0, -0.06]\n"));
+  EXPECT_EQ(p.flow.t_B_C_m, Vector3d(0.05, 0, -0.06));
+  EXPECT_FALSE(p.flow.R_BC().isApprox(R_BC_downward()));  // the 1 degree offset is applied
+  EXPECT_TRUE(p.flow.R_BC().isApprox(R_BC_downward() * rotation_from_rpy(M_PI / 180, 0, 0)));
 }
 
 TEST(EstimatorParamsTest, TheEstimatorRefusesInvalidParameters) {

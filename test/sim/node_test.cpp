@@ -2,9 +2,11 @@
 #include <sys/wait.h>
 
 #include <alight/attitude_cmd_t.hpp>
+#include <alight/baro_t.hpp>
 #include <alight/image_t.hpp>
 #include <alight/imu_t.hpp>
 #include <alight/pose_t.hpp>
+#include <alight/range_t.hpp>
 #include <alight/sim_truth_t.hpp>
 #include <atomic>
 #include <filesystem>
@@ -42,10 +44,23 @@ int run(const std::string& args, std::string* stderr_text = nullptr) {
 }
 
 struct Counter {
-  std::atomic<int> mocap{0}, imu{0}, camera{0}, truth{0};
+  std::atomic<int> mocap{0}, imu{0}, camera{0}, truth{0}, range{0}, range_ok{0}, baro{0};
   std::atomic<int64_t> pose_utime{0};
   sim_truth_t last_truth{};
   image_t last_image{};
+  range_t last_range{}, last_range_ok{};
+  baro_t last_baro{};
+  void on_range(const lcm::ReceiveBuffer*, const std::string&, const range_t* m) {
+    last_range = *m;
+    ++range;
+    if (m->status != range_t::STATUS_OK) return;
+    last_range_ok = *m;
+    ++range_ok;
+  }
+  void on_baro(const lcm::ReceiveBuffer*, const std::string&, const baro_t* m) {
+    last_baro = *m;
+    ++baro;
+  }
   void on_pose(const lcm::ReceiveBuffer*, const std::string&, const pose_t* m) {
     pose_utime = m->utime;
     ++mocap;
@@ -69,6 +84,8 @@ TEST(SimNodeTest, PublishesEveryChannelAndFollowsAttitudeCommands) {
   lcm.subscribe(channels::kImu, &Counter::on_imu, &c);
   lcm.subscribe(channels::kCamera, &Counter::on_image, &c)->setQueueCapacity(100);
   lcm.subscribe(channels::kSimTruth, &Counter::on_truth, &c);
+  lcm.subscribe(channels::kRange, &Counter::on_range, &c);
+  lcm.subscribe(channels::kBaro, &Counter::on_baro, &c);
   std::atomic<int> code{-1};
   std::thread node([&] {
     code = run("--scenario " + scenario("landing_a") + " --seed 3 --duration 1.5 --lcm-url '" +
@@ -93,6 +110,15 @@ TEST(SimNodeTest, PublishesEveryChannelAndFollowsAttitudeCommands) {
   EXPECT_GE(c.imu, 270);    // 200 Hz
   EXPECT_GE(c.camera, 35);  // 30 Hz
   EXPECT_GE(c.truth, 65);   // 50 Hz
+  EXPECT_GE(c.range, 130);  // 100 Hz
+  EXPECT_GE(c.baro, 65);    // 50 Hz
+  // On the ground the rangefinder, 5 cm above the floor, is too near; flying, it measures.
+  EXPECT_GE(c.range_ok, 20);
+  // (a sample or two behind the last truth, climbing at a few m/s)
+  EXPECT_NEAR(c.last_range_ok.distance_m, c.last_truth.pos[2] - 0.05, 0.5);
+  EXPECT_EQ(c.last_range.max_range_m, 8.0);
+  EXPECT_EQ(c.last_range.beam_B[2], -1.0);
+  EXPECT_NEAR(c.last_baro.pressure_pa, 101325.0 - 12.0 * c.last_truth.pos[2], 600.0);
   EXPECT_EQ(c.last_truth.scenario, "landing_a");
   EXPECT_TRUE(c.last_truth.has_platform);
   EXPECT_TRUE(c.last_truth.armed);
@@ -138,6 +164,40 @@ TEST(SimNodeTest, RemappedChannelsAreUsedUnderTheirNewNames) {
   EXPECT_GT(renamed.last_truth.pos[2], 0.5);
   EXPECT_EQ(original.truth, 0);  // nothing on the old names
   EXPECT_EQ(original.mocap, 0);
+}
+
+TEST(SimNodeTest, SensorsSwitchedOffPublishNothingWhileTheTruthGoesOn) {
+  const auto path = std::filesystem::path(ALIGHT_BINARY_DIR) / "test_tmp" / "sim_sensors_off.yaml";
+  std::filesystem::create_directories(path.parent_path());
+  std::ofstream(path) << "name: sensors_off\nmocap: {enabled: false}\nimu: {enabled: false}\n"
+                         "rangefinder: {enabled: false}\nbaro: {enabled: false}\n"
+                         "camera: {enabled: false}\n";
+  lcm::LCM lcm(kUrl + "&recv_buf_size=8388608");
+  ASSERT_TRUE(lcm.good());
+  Counter c;
+  lcm.subscribe(channels::kMocapPose, &Counter::on_pose, &c);
+  lcm.subscribe(channels::kImu, &Counter::on_imu, &c);
+  lcm.subscribe(channels::kCamera, &Counter::on_image, &c);
+  lcm.subscribe(channels::kSimTruth, &Counter::on_truth, &c);
+  lcm.subscribe(channels::kRange, &Counter::on_range, &c);
+  lcm.subscribe(channels::kBaro, &Counter::on_baro, &c);
+  std::atomic<int> code{-1};
+  std::thread node([&] {
+    code = run("--scenario " + path.string() + " --vehicle " + std::string(ALIGHT_SOURCE_DIR) +
+               "/config/vehicles/starmac.yaml --duration 1.0 --lcm-url '" + kUrl + "'");
+  });
+  while (code == -1) lcm.handleTimeout(5);
+  node.join();
+  while (lcm.handleTimeout(50) > 0) {
+  }
+  EXPECT_EQ(code, 0);
+  EXPECT_GE(c.truth, 40);
+  EXPECT_EQ(c.last_truth.scenario, "sensors_off");
+  EXPECT_EQ(c.mocap, 0);
+  EXPECT_EQ(c.imu, 0);
+  EXPECT_EQ(c.camera, 0);
+  EXPECT_EQ(c.range, 0);
+  EXPECT_EQ(c.baro, 0);
 }
 
 TEST(SimNodeTest, ABadRemapExitsWithCode2NamingTheKnownChannels) {

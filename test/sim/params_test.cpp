@@ -5,6 +5,8 @@
 #include <filesystem>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
+#include <utility>
+#include <vector>
 
 #include "sim/params.hpp"
 #include "sim_test_util.hpp"
@@ -112,6 +114,50 @@ TEST(SimParamsTest, AVehicleWithTooLittleThrustIsRejected) {
   const std::string path =
       write_temp("weak.yaml", "vehicle:\n  mass_kg: 3.0\n  max_thrust_N: 20\n");
   EXPECT_THROW(load_vehicle_params(path), ParamError);
+}
+
+TEST(SimParamsTest, SensorSwitchesAndBadSensorValuesNameTheirFullKey) {
+  const Scenario s = load_scenario(write_temp(
+      "sensors_off.yaml",
+      "name: off\nmocap: {enabled: false}\nimu: {enabled: false}\n"
+      "rangefinder: {enabled: false}\nbaro: {enabled: false, ground_altitude_m: 1000}\n"));
+  EXPECT_FALSE(s.mocap.enabled);
+  EXPECT_FALSE(s.imu.enabled);
+  EXPECT_FALSE(s.rangefinder.enabled);
+  EXPECT_FALSE(s.baro.enabled);
+  EXPECT_EQ(s.baro.ground_altitude_m, 1000.0);
+  // Absent sections: every sensor on, at its defaults.
+  const Scenario d = load_scenario(write_temp("sensors_default.yaml", "name: d\n"));
+  EXPECT_TRUE(d.mocap.enabled && d.imu.enabled && d.rangefinder.enabled && d.baro.enabled);
+
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"rangefinder: {min_range_m: 0.5, max_range_m: 0.4}", "rangefinder.max_range_m"},
+      {"rangefinder: {rate_hz: 0}", "rangefinder.rate_hz"},
+      {"rangefinder: {sigma_frac: -0.01}", "rangefinder.sigma_frac"},
+      {"rangefinder: {dropout_prob: 0.7}", "rangefinder.dropout_prob"},
+      {"rangefinder: {direction_B: [0, 0, 0]}", "rangefinder.direction_B"},
+      {"rangefinder: {offset_B_m: [0, 0, .nan]}", "rangefinder.offset_B_m"},
+      {"rangefinder: {enabled: maybe}", "rangefinder.enabled"},
+      {"baro: {rate_hz: -50}", "baro.rate_hz"},
+      {"baro: {drift_tau_s: 0}", "baro.drift_tau_s"},
+      {"baro: {sea_level_pressure_pa: 50000}", "baro.sea_level_pressure_pa"},
+      {"baro: {ground_altitude_m: 12000}", "baro.ground_altitude_m"},
+      {"mocap: {enabled: 3}", "mocap.enabled"},
+      {"imu: {gyro_bias_walk_radps_per_sqrt_s: -1}", "imu.gyro_bias_walk_radps_per_sqrt_s"},
+  };
+  for (const auto& [text, key] : cases) {
+    SCOPED_TRACE(text);
+    const std::string path = write_temp("bad_sensor.yaml", "name: bad\n" + text + "\n");
+    try {
+      load_scenario(path);
+      ADD_FAILURE() << "no error";
+    } catch (const ParamError& e) {
+      EXPECT_EQ(e.key(), key) << e.what();
+      EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_THROW(load_scenario(write_temp("typo_sensor.yaml", "name: t\nbaro: {sigma_p: 1}\n")),
+               ParamError);
 }
 
 }  // namespace

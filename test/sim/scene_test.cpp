@@ -167,5 +167,115 @@ TEST(SimSceneTest, LeavingTheFlyingAreaIsReportedAndStaysReported) {
   }
 }
 
+// Known answers of Scene::cast_ray (what the rangefinder sees).
+TEST(SimSceneTest, ARayMeetsTheFloorAtTheKnownDistance) {
+  const Scene scene = build_scene(test::quiet(test::scenario("landing_none")), 1);
+  auto hit = scene.cast_ray(Vector3d(0.3, -0.2, 2.0), Vector3d(0, 0, -1), 10.0);
+  ASSERT_TRUE(hit);
+  EXPECT_NEAR(hit->distance_m, 2.0, 1e-12);
+  EXPECT_EQ(hit->box, -1);
+  EXPECT_TRUE(hit->normal_W.isApprox(Vector3d::UnitZ()));
+  // Tilted by 30 deg: 2 / cos 30; the direction's length does not matter.
+  const double a = 30.0 * M_PI / 180.0;
+  hit = scene.cast_ray(Vector3d(0, 0, 2.0), 5.0 * Vector3d(0, std::sin(a), -std::cos(a)), 10.0);
+  ASSERT_TRUE(hit);
+  EXPECT_NEAR(hit->distance_m, 2.0 / std::cos(a), 1e-12);
+  // Out of reach: pointing up, level, or farther than max_distance_m.
+  EXPECT_FALSE(scene.cast_ray(Vector3d(0, 0, 2.0), Vector3d(0, 0.1, 1), 100.0));
+  EXPECT_FALSE(scene.cast_ray(Vector3d(0, 0, 2.0), Vector3d(1, 0, 0), 100.0));
+  EXPECT_FALSE(scene.cast_ray(Vector3d(0, 0, 2.0), Vector3d(0, 0, -1), 1.999));
+  // Below the floor: blocked at once.
+  hit = scene.cast_ray(Vector3d(0, 0, -0.01), Vector3d(0, 0, -1), 10.0);
+  ASSERT_TRUE(hit);
+  EXPECT_EQ(hit->distance_m, 0.0);
+  // Not a ray.
+  EXPECT_FALSE(scene.cast_ray(Vector3d(0, 0, 2.0), Vector3d::Zero(), 10.0));
+  EXPECT_FALSE(scene.cast_ray(Vector3d(0, 0, 2.0), Vector3d(0, 0, NAN), 10.0));
+  EXPECT_FALSE(scene.cast_ray(Vector3d(NAN, 0, 2.0), Vector3d(0, 0, -1), 10.0));
+  EXPECT_FALSE(scene.cast_ray(Vector3d(0, 0, 2.0), Vector3d(0, 0, -1), NAN));
+}
+
+TEST(SimSceneTest, ARayOverThePlatformMeetsItsTopAndPastItsEdgeTheFloor) {
+  // landing_a unrandomised: 43.2 x 27.9 x 10.9 cm, centred at (1.0, 0.5), not turned.
+  const Scene scene = build_scene(test::quiet(test::scenario("landing_a")), 1);
+  const Vector3d down(0, 0, -1);
+  auto hit = scene.cast_ray(Vector3d(1.0, 0.5, 1.5), down, 10.0);
+  ASSERT_TRUE(hit);
+  EXPECT_NEAR(hit->distance_m, 1.5 - 0.109, 1e-12);
+  EXPECT_EQ(hit->box, 0);
+  EXPECT_TRUE(hit->normal_W.isApprox(Vector3d::UnitZ()));
+  // A millimetre inside and outside the edges along x and y.
+  for (const Vector2d& in : {Vector2d(1.0 + 0.215, 0.5), Vector2d(1.0 - 0.215, 0.5),
+                             Vector2d(1.0, 0.5 + 0.1385), Vector2d(1.0, 0.5 - 0.1385)}) {
+    hit = scene.cast_ray(Vector3d(in.x(), in.y(), 1.5), down, 10.0);
+    ASSERT_TRUE(hit);
+    EXPECT_NEAR(hit->distance_m, 1.5 - 0.109, 1e-12) << in.transpose();
+  }
+  for (const Vector2d& out : {Vector2d(1.0 + 0.217, 0.5), Vector2d(1.0 - 0.217, 0.5),
+                              Vector2d(1.0, 0.5 + 0.1405), Vector2d(1.0, 0.5 - 0.1405)}) {
+    hit = scene.cast_ray(Vector3d(out.x(), out.y(), 1.5), down, 10.0);
+    ASSERT_TRUE(hit);
+    EXPECT_NEAR(hit->distance_m, 1.5, 1e-12) << out.transpose();
+    EXPECT_EQ(hit->box, -1);
+  }
+  // Level, at 5 cm, towards the platform's near side (x = 1.0 - 0.216).
+  hit = scene.cast_ray(Vector3d(0.0, 0.5, 0.05), Vector3d(1, 0, 0), 10.0);
+  ASSERT_TRUE(hit);
+  EXPECT_NEAR(hit->distance_m, 0.784, 1e-12);
+  EXPECT_TRUE(hit->normal_W.isApprox(-Vector3d::UnitX()));
+  // Slanting down across the edge: the side face, not the top, is met first below its rim.
+  hit = scene.cast_ray(Vector3d(0.684, 0.5, 0.15), Vector3d(1, 0, -1), 10.0);
+  ASSERT_TRUE(hit);
+  EXPECT_NEAR(hit->distance_m, 0.1 * std::sqrt(2.0), 1e-12);  // at x = 0.784, z = 0.05
+  EXPECT_TRUE(hit->normal_W.isApprox(-Vector3d::UnitX()));
+  // From inside the box: blocked.
+  hit = scene.cast_ray(Vector3d(1.0, 0.5, 0.05), down, 10.0);
+  ASSERT_TRUE(hit);
+  EXPECT_EQ(hit->distance_m, 0.0);
+  EXPECT_EQ(hit->box, 0);
+}
+
+TEST(SimSceneTest, ARayMeetsATurnedBoxOnTheFaceItReaches) {
+  Scene scene;
+  Box b;
+  b.center_W = Vector3d(0, 0, 0.5);
+  b.half_size_m = Vector3d(0.5, 0.5, 0.5);
+  b.set_yaw(M_PI / 4);
+  scene.boxes.push_back(b);
+  // Along +x at y = 0.1: the face whose local y is +0.5 (x + y = ... in world: -x + y = 0.5
+  // sqrt(2)), at x = 0.1 - 0.5 sqrt(2).
+  const auto hit = scene.cast_ray(Vector3d(-2, 0.1, 0.5), Vector3d(1, 0, 0), 10.0);
+  ASSERT_TRUE(hit);
+  EXPECT_NEAR(hit->distance_m, 2.0 + 0.1 - 0.5 * std::sqrt(2.0), 1e-12);
+  EXPECT_TRUE(hit->normal_W.isApprox(Vector3d(-1, 1, 0).normalized()));
+  // Down onto its top from above a corner region still inside the turned footprint.
+  const auto top = scene.cast_ray(Vector3d(0.6, 0.0, 2.0), Vector3d(0, 0, -1), 10.0);
+  ASSERT_TRUE(top);
+  EXPECT_NEAR(top->distance_m, 1.0, 1e-12);  // 0.6 < 0.5 sqrt(2): over the top
+  const auto past = scene.cast_ray(Vector3d(0.6, 0.2, 2.0), Vector3d(0, 0, -1), 10.0);
+  ASSERT_TRUE(past);
+  EXPECT_NEAR(past->distance_m, 2.0, 1e-12);  // 0.6 + 0.2 > 0.5 sqrt(2): the floor
+}
+
+TEST(SimSceneTest, ALevelRayMeetsTheWallOrPassesTheOpeningToTheRoomBehind) {
+  // ingress: approach face at x = 3, opening 60 x 60 cm centred at (y 0, z 1.2), back wall of
+  // the room 3 m behind.
+  const Scene scene = build_scene(test::quiet(test::scenario("ingress")), 1);
+  auto hit = scene.cast_ray(Vector3d(1.0, 0.0, 0.5), Vector3d(1, 0, 0), 10.0);
+  ASSERT_TRUE(hit);
+  EXPECT_NEAR(hit->distance_m, 2.0, 1e-12);
+  ASSERT_GE(hit->box, 0);
+  EXPECT_EQ(scene.boxes[hit->box].kind, Box::Kind::kWall);
+  hit = scene.cast_ray(Vector3d(1.0, 0.0, 1.2), Vector3d(1, 0, 0), 10.0);
+  ASSERT_TRUE(hit);
+  EXPECT_NEAR(hit->distance_m, 5.0, 1e-12);
+  EXPECT_EQ(scene.boxes[hit->box].kind, Box::Kind::kRoom);
+  // Looking up inside the room: its ceiling at 2.5 m.
+  hit = scene.cast_ray(Vector3d(4.5, 0.0, 1.0), Vector3d(0, 0, 1), 10.0);
+  ASSERT_TRUE(hit);
+  EXPECT_NEAR(hit->distance_m, 1.5, 1e-12);
+  EXPECT_TRUE(hit->normal_W.isApprox(-Vector3d::UnitZ()));
+}
+
 }  // namespace
 }  // namespace alight::sim
