@@ -279,4 +279,16 @@ FlowModel flow_model(const Nominal& x, const Clone& c, const Matrix3d& R_BC,
   return m;
 }
 
+void add_input_sensitivities(FlowModel& m, const Nominal& x, const Clone& c, const Matrix3d& R_BC,
+                             const Matrix3d& J_rotation, const Matrix3d& J_normal) {
+  const Matrix3d R1 = c.q_WB.toRotationMatrix();
+  const Matrix3d R2 = x.q_WB.toRotationMatrix();
+  const Matrix3d R_CB = R_BC.transpose();
+  // R_C2C1 from estimates R^_i = R_i Exp(-dtheta_i) is the true one times
+  // Exp(R_CB (R1^T R2 dtheta2 - dtheta1)); n_C1 = R_CB R^_1^T e_z is the true one minus
+  // R_CB [R1^T e_z]x dtheta1.
+  m.H_core.block<3, 3>(0, idx::kTheta) += J_rotation * R_CB * R1.transpose() * R2;
+  m.H_clone.block<3, 3>(0, 3) += -J_rotation * R_CB - J_normal * R_CB * skew(R1.transpose().col(2));
+}
+
 }  // namespace alight::estimator

@@ -75,6 +75,8 @@ struct FilterState {
   std::array<Outcome, kSensorCount> last_outcome{};      ///< of the latest update per sensor
   int64_t last_imu_gap_utime = 0;                        ///< end of the latest IMU gap (0: none)
   int64_t terrain_resets = 0;
+  int64_t baro_gated_since_utime = 0;  ///< first of the baro's current run of refusals (0: none)
+  int64_t baro_resets = 0;
 
   int dim() const { return idx::kCore + kCloneDim * n_clones; }
   int clone_index(int64_t key) const;  ///< -1 when absent
@@ -128,6 +130,12 @@ struct FlowModel {
   Eigen::Matrix<double, 3, kCloneDim> H_clone = Eigen::Matrix<double, 3, kCloneDim>::Zero();
 };
 FlowModel flow_model(const Nominal& x, const Clone& c, const Matrix3d& R_BC, const Vector3d& t_B_C);
+/// Adds to the Jacobians what the front end's inputs R_C2C1 and n_C1, computed from the
+/// estimate (the clone's attitude and the current one), carry of the attitude errors: the
+/// measurement is z = u + J_rotation theta + J_normal delta with theta = R_CB (R1^T R2 dtheta2 -
+/// dtheta1) and delta = -R_CB [R1^T e_z]x dtheta1 (the inputs' errors against the truth).
+void add_input_sensitivities(FlowModel& m, const Nominal& x, const Clone& c, const Matrix3d& R_BC,
+                             const Matrix3d& J_rotation, const Matrix3d& J_normal);
 
 /// exp map of a rotation vector (Sola eq. 101).
 Quaterniond quat_exp(const Vector3d& theta);

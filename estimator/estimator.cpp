@@ -173,7 +173,8 @@ Outcome Estimator::add_baro(const BaroSample& m) {
 
 Outcome Estimator::add_flow(const FlowSample& m) {
   const auto& p = params_.flow;
-  if (!m.t_over_d_C1.allFinite() || !m.cov.allFinite())
+  if (!m.t_over_d_C1.allFinite() || !m.cov.allFinite() || !m.J_rotation.allFinite() ||
+      !m.J_normal.allFinite())
     return reject(Sensor::kFlow, Outcome::kNonFinite);
   if (m.utime_from <= 0 || m.utime_to <= m.utime_from || m.t_over_d_C1.norm() > p.max_t_over_d)
     return reject(Sensor::kFlow, Outcome::kAbsurd);
@@ -388,9 +389,15 @@ bool Estimator::vertical_ok(const FilterState& s) const {
 Outcome Estimator::apply_baro(const BaroSample& m, FilterState& s) {
   const auto& p = params_.baro;
   const double altitude_m = isa_altitude_m(m.pressure_pa);
-  if (!s.baro_initialised) {
-    // The offset starts as the first reading minus the height: b = alt - p_z, so its
-    // correlations are those of -p_z and its variance that of p_z plus the reading's.
+  // A barometer refused for reset_after_s on end (a bad first reading, a door opened, weather)
+  // disagrees with the height that range and IMU keep: its offset starts over, as at first.
+  const bool stale =
+      s.baro_gated_since_utime != 0 && m.utime - s.baro_gated_since_utime >= to_us(p.reset_after_s);
+  if (!s.baro_initialised || stale) {
+    // The offset starts as the reading minus the height: b = alt - p_z, so its correlations are
+    // those of -p_z and its variance that of p_z plus the reading's.
+    if (stale) ++s.baro_resets;
+    s.baro_gated_since_utime = 0;
     s.x.baro_offset_m = altitude_m - s.x.p_W_B.z();
     Eigen::Matrix<double, 1, Eigen::Dynamic, Eigen::RowMajor, 1, kMaxDim> row =
         -s.P.row(idx::kP + 2);
@@ -407,7 +414,10 @@ Outcome Estimator::apply_baro(const BaroSample& m, FilterState& s) {
   H(0, idx::kBaro) = 1.0;
   MeasCov R(1, 1);
   R(0, 0) = p.sigma_m * p.sigma_m;
-  return fuse(s, r, H, R, p.gate_chi2);
+  const Outcome o = fuse(s, r, H, R, p.gate_chi2);
+  if (o == Outcome::kGate && s.baro_gated_since_utime == 0) s.baro_gated_since_utime = m.utime;
+  if (o == Outcome::kFused) s.baro_gated_since_utime = 0;
+  return o;
 }
 
 // Flow spans two times. Stochastic cloning (preferred over the velocity approximation
@@ -422,7 +432,8 @@ Outcome Estimator::apply_flow(const FlowSample& m, int64_t key, FilterState& s) 
   const auto& p = params_.flow;
   const int ci = s.clone_index(key);
   if (ci < 0) return Outcome::kNoClone;
-  const FlowModel model = flow_model(s.x, s.clones[ci], R_BC_, p.t_B_C_m);
+  FlowModel model = flow_model(s.x, s.clones[ci], R_BC_, p.t_B_C_m);
+  add_input_sensitivities(model, s.x, s.clones[ci], R_BC_, m.J_rotation, m.J_normal);
   Outcome o = Outcome::kGeometry;
   if (model.height_m >= p.min_height_m) {
     const MeasVec r = m.t_over_d_C1 - model.t_over_d;
@@ -436,6 +447,19 @@ Outcome Estimator::apply_flow(const FlowSample& m, int64_t key, FilterState& s) 
 }
 
 // ---- Output
+
+std::optional<Quaterniond> Estimator::attitude_at(int64_t utime) const {
+  if (!initialised() || utime < history_.front().s.utime || utime > newest_imu_utime())
+    return std::nullopt;
+  size_t k = history_.size() - 1;
+  while (k > 0 && history_[k].s.utime > utime) --k;
+  const FilterState& s = history_[k].s;
+  if (s.utime == utime) return s.x.q_WB;
+  // Inside the next interval: its sample's rate, as the propagation integrates it.
+  const ImuSample& next = history_[k + 1].imu;
+  return (s.x.q_WB * quat_exp((next.gyro_B - s.x.gyro_bias_B) * ((utime - s.utime) / kUsPerS)))
+      .normalized();
+}
 
 State Estimator::state() const {
   State out;
@@ -457,6 +481,7 @@ State Estimator::state() const {
   out.terrain_height_m = s.x.terrain_m;
   out.cov = s.P.topLeftCorner<idx::kCore, idx::kCore>();
   out.counters.terrain_resets = s.terrain_resets;
+  out.counters.baro_resets = s.baro_resets;
 
   const auto& h = params_.health;
   uint32_t reasons = kReasonNone;

@@ -16,6 +16,7 @@
 // ahead are counted per sensor and reason (State::counters) and dropped; nothing throws.
 
 #include <cstddef>
+#include <optional>
 #include <vector>
 
 #include "estimator/eskf.hpp"
@@ -83,6 +84,9 @@ class Estimator {
 
   /// The estimate at the newest IMU sample, with health and counters.
   State state() const;
+  /// The attitude q_WB at a time within the history (for the flow front end's R_C2C1 and n_C1);
+  /// nullopt outside it.
+  std::optional<Quaterniond> attitude_at(int64_t utime) const;
   bool initialised() const { return !history_.empty(); }
   const EstimatorParams& params() const { return params_; }
 

@@ -112,6 +112,9 @@ const ParamSchema<BaroParams>& BaroParams::schema() {
     s.add("offset_rw", &P::offset_rw, Range::open_closed(0, 10), "m/sqrt(s)",
           "random walk of the baro offset (weather, temperature)");
     s.add("gate_chi2", &P::gate_chi2, Range::gt(0), "", "chi-square gate (1 dof: 25 = 5 sigma)");
+    s.add("reset_after_s", &P::reset_after_s, Range::open_closed(0, 600), "s",
+          "refused by the gate this long on end: the offset starts over from the reading (the "
+          "height from range and IMU wins)");
     return s;
   }();
   return schema;

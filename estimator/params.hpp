@@ -68,9 +68,10 @@ struct RangeParams {
 
 /// Barometer: ISA altitude, white noise, and an offset state that drifts.
 struct BaroParams {
-  double sigma_m = 0.1;     ///< altitude noise incl. prop wash [m]
-  double offset_rw = 0.02;  ///< offset random walk [m/sqrt(s)] (BMP388: ~6 cm per kelvin)
-  double gate_chi2 = 25.0;  ///< chi-square gate (1 dof)
+  double sigma_m = 0.1;        ///< altitude noise incl. prop wash [m]
+  double offset_rw = 0.02;     ///< offset random walk [m/sqrt(s)] (BMP388: ~6 cm per kelvin)
+  double gate_chi2 = 25.0;     ///< chi-square gate (1 dof)
+  double reset_after_s = 2.0;  ///< refused this long on end: the offset starts over [s]
 
   static const ParamSchema<BaroParams>& schema();
 };

@@ -40,6 +40,12 @@ struct BaroSample {
 /// exposures at utime_from and utime_to, in the camera frame at utime_from, divided by the distance
 /// d of that camera from the (horizontal) plane below. From the floor-plane homography
 /// H = R + t n^T / d with R known from the gyro.
+///
+/// The front end needs R_C2C1 (camera 1 to camera 2) and n_C1 (the floor's up normal in camera
+/// 1); both come from this estimate (Onboard: the gyro less the estimated bias between the
+/// frames, the estimated attitude at the first; Estimator::attitude_at gives the same to first
+/// order). Their errors are then the estimate's attitude errors, and the sensitivities below enter
+/// the flow update's Jacobian (add_input_sensitivities; zero: no dependence).
 struct FlowSample {
   int64_t utime_from = 0;
   int64_t utime_to = 0;
@@ -89,6 +95,7 @@ const char* to_string(Sensor s);
 struct Counters {
   std::array<std::array<int64_t, kOutcomeCount>, kSensorCount> by_outcome{};
   int64_t terrain_resets = 0;  ///< platform steps: terrain state reset from the rangefinder
+  int64_t baro_resets = 0;     ///< baro offset started over after baro.reset_after_s refused
   int64_t imu_gaps = 0;        ///< IMU intervals longer than health.imu_gap_s
   int64_t replays = 0;         ///< re-propagations from the history for delayed inputs
 

@@ -107,6 +107,51 @@ TEST(EskfTest, FlowJacobiansMatchFiniteDifferences) {
   }
 }
 
+TEST(EskfTest, FrontEndInputSensitivitiesEnterTheJacobianAsTheEstimateMovesTheInputs) {
+  // The front end was given R_C2C1 and n_C1 computed from the estimate; an estimate off by
+  // -dx from the truth moves them, and the output by J_rotation theta + J_normal delta. The
+  // added Jacobian columns are the derivative of that with respect to the true-minus-estimate dx.
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> N;
+  Matrix3d J_rot, J_n;
+  for (int i = 0; i < 9; ++i) J_rot.data()[i] = N(rng), J_n.data()[i] = N(rng);
+  const Matrix3d R_BC = R_BC_downward(), R_CB = R_BC.transpose();
+  const Nominal x = some_state();
+  Clone c;
+  c.p_W_B = x.p_W_B - Vector3d(0.03, 0.01, -0.005);
+  c.q_WB = Quaterniond(rotation_from_rpy(0.08, -0.12, 0.78));
+  auto inputs_error = [&](const Nominal& x_hat, const Clone& c_hat) {
+    const Matrix3d R_true =
+        R_CB * x.q_WB.toRotationMatrix().transpose() * c.q_WB.toRotationMatrix() * R_BC;
+    const Matrix3d R_used =
+        R_CB * x_hat.q_WB.toRotationMatrix().transpose() * c_hat.q_WB.toRotationMatrix() * R_BC;
+    const Eigen::AngleAxisd aa(R_true.transpose() * R_used);
+    const Vector3d n_true = R_CB * c.q_WB.toRotationMatrix().transpose() * Vector3d::UnitZ();
+    const Vector3d n_used = R_CB * c_hat.q_WB.toRotationMatrix().transpose() * Vector3d::UnitZ();
+    return Vector3d(J_rot * (aa.angle() * aa.axis()) + J_n * (n_used - n_true));
+  };
+  const FlowModel plain = flow_model(x, c, R_BC, Vector3d::Zero());
+  FlowModel m = plain;
+  add_input_sensitivities(m, x, c, R_BC, J_rot, J_n);
+  const double eps = 1e-6;
+  for (int i = 0; i < 3; ++i) {  // current attitude
+    const Vector3d d = (inputs_error(perturbed(x, idx::kTheta + i, eps), c) -
+                        inputs_error(perturbed(x, idx::kTheta + i, -eps), c)) /
+                       (2 * eps);
+    EXPECT_LT((m.H_core.col(idx::kTheta + i) - plain.H_core.col(idx::kTheta + i) + d).norm(), 1e-6);
+  }
+  for (int i = 0; i < 3; ++i) {  // clone attitude
+    auto moved = [&](double e) {
+      Clone cc = c;
+      cc.q_WB = cc.q_WB * quat_exp(Vector3d::Unit(i) * e);
+      return inputs_error(x, cc);
+    };
+    const Vector3d d = (moved(eps) - moved(-eps)) / (2 * eps);
+    EXPECT_LT((m.H_clone.col(3 + i) - plain.H_clone.col(3 + i) + d).norm(), 1e-6);
+  }
+  EXPECT_EQ(m.H_clone.leftCols<3>(), plain.H_clone.leftCols<3>());
+}
+
 TEST(EskfTest, FlowOfAPureTranslationIsTheTranslationOverHeightInCamera1) {
   // Level, heading 0, downward camera at the body origin, 2 m above the floor: moving 0.1 m
   // forward (+x_B) is -0.1 / 2 along y_C (image up is the nose).

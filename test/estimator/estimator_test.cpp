@@ -159,6 +159,14 @@ TEST(EstimatorTest, PureRotationFollowsTheAnalyticQuaternion) {
   const State s = est.state();
   const Quaterniond expected = quat_exp(omega_B * (n * kDtUs * 1e-6));
   EXPECT_LT(test::attitude_error(s.q_WB, expected).norm(), 1e-9);
+  // The attitude at a past time, between two IMU samples, for the flow front end.
+  const int64_t past = t - 37 * kDtUs - 1234;
+  const Quaterniond at_past = quat_exp(omega_B * ((n * kDtUs - (t - past)) * 1e-6));
+  ASSERT_TRUE(est.attitude_at(past).has_value());
+  EXPECT_LT(test::attitude_error(*est.attitude_at(past), at_past).norm(), 1e-9);
+  EXPECT_EQ(est.attitude_at(t)->coeffs(), s.q_WB.coeffs());
+  EXPECT_FALSE(est.attitude_at(t + 1).has_value());
+  EXPECT_FALSE(est.attitude_at(t - 2'000'000).has_value());
   EXPECT_LT((s.p_W_B - p.init.p_W_B_m).norm(), 1e-3) << s.p_W_B.transpose();
   EXPECT_LT(s.v_W_B.norm(), 1e-3);
 }
@@ -474,6 +482,33 @@ TEST(EstimatorTest, TheFirstBaroReadingSetsTheOffsetWithoutMovingTheHeight) {
   EXPECT_EQ(est.add_baro({t, isa_pressure_pa(412.05)}), Outcome::kFused);
   est.add_imu(at_rest(t += kDtUs, p));
   EXPECT_EQ(est.add_baro({t, isa_pressure_pa(415.0)}), Outcome::kGate);
+}
+
+TEST(EstimatorTest, ABadFirstBaroReadingIsOutlivedByAnOffsetReset) {
+  // The first reading after the alignment is 30 m off: every good one after it is refused until
+  // baro.reset_after_s has passed; then the offset starts over and the baro is fused again.
+  const EstimatorParams p = default_params(1.2);
+  const Flight f = test::simulate(test::hover(1.2, 1.2), 8.0, SensorConfig{}, p, 14);
+  Estimator est(p);
+  int64_t init_utime = 0, bad_utime = 0;
+  for (const auto& in : f.inputs) {
+    if (est.initialised() && init_utime == 0) init_utime = est.state().utime;
+    if (bad_utime == 0 && init_utime != 0 && est.state().utime >= init_utime + 5 * kDtUs) {
+      bad_utime = est.state().utime;
+      EXPECT_EQ(est.add_baro({bad_utime, isa_pressure_pa(1.2 + 40 + 30)}), Outcome::kFused);
+    }
+    // The good readings up to the bad one's stamp never come.
+    if (in.kind == test::Kind::kBaro && (bad_utime == 0 || in.baro.utime <= bad_utime)) continue;
+    test::feed(est, in);
+  }
+  const State s = est.state();
+  EXPECT_EQ(s.counters.baro_resets, 1);
+  const int64_t gated = s.counters.count(Sensor::kBaro, Outcome::kGate);
+  EXPECT_GE(gated, 2.0 * 25 - 3);
+  EXPECT_LE(gated, 2.0 * 25 + 3);
+  EXPECT_NEAR(s.baro_offset_m, 40.0, 0.3);
+  EXPECT_FALSE(s.health_reasons & kNoBaro);
+  EXPECT_NEAR(s.p_W_B.z(), 1.2, 0.05);
 }
 
 TEST(EstimatorTest, OnTheFloorNoRangeIsExpectedAndHealthIsOk) {
