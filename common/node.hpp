@@ -153,8 +153,10 @@ class Node {
 
   /// Handles messages and timers until SIGINT / SIGTERM or stop(). Returns 0.
   int run();
-  /// Waits up to `timeout_ms` for messages, handles all that are pending, calls back the latest
-  /// ones, and runs due timers. Returns the number of messages handled.
+  /// Waits up to `timeout_ms` for messages (not at all when some already wait), hands every
+  /// message waiting in the inbox to its on() handler in arrival order (what arrives meanwhile
+  /// is read into the inbox and waits for the next spin), calls back the latest ones, and runs
+  /// due timers. Returns the number of messages read off LCM.
   int spin_once(int timeout_ms);
   void stop() { stopping_ = true; }
   bool stopping() const;
