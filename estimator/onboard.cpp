@@ -25,9 +25,9 @@ Onboard::Onboard(const EstimatorParams& params, const CameraModel& camera)
 
 Outcome Onboard::add_imu(const ImuSample& imu) {
   const Outcome out = filter_.add_imu(imu);
-  if (out != Outcome::kFused && filter_.initialised()) return out;
-  // Alignment consumes samples without fusing them; the gyro history is kept either way.
-  if (!imu_.empty() && imu.utime <= imu_.back().utime) return out;
+  // Only what the filter took (alignment included) goes into the gyro history: a refused
+  // sample (non-finite, absurd, out of order) never reaches the rotation between frames.
+  if (out != Outcome::kFused) return out;
   imu_.push_back(imu);
   while (imu_.size() > 2 && imu_.back().utime - imu_.front().utime > kImuKeepUs) imu_.pop_front();
   drain();

@@ -53,6 +53,22 @@ TEST(OnboardTest, BodyRotationIntegratesTheGyroOverExactlyTheInterval) {
   const auto unbiased = o.body_rotation(t_end - 200'000, t_end, Vector3d(0, 0, 0.5));
   ASSERT_TRUE(unbiased);
   EXPECT_TRUE(unbiased->isApprox(Matrix3d::Identity(), 1e-12));
+  // Refused samples never enter the history (regression: a NaN during the alignment did).
+  Onboard fresh(EstimatorParams{}, camera());
+  ImuSample bad;
+  bad.utime = 1000;
+  bad.gyro_B = Vector3d(NAN, 0, 0);
+  EXPECT_EQ(fresh.add_imu(bad), Outcome::kNonFinite);
+  ImuSample good;
+  good.utime = 2000;
+  good.accel_B = Vector3d(0, 0, 9.80665);
+  fresh.add_imu(good);
+  good.utime = 7000;
+  fresh.add_imu(good);
+  const auto rest = fresh.body_rotation(2000, 7000, Vector3d::Zero());
+  ASSERT_TRUE(rest);
+  EXPECT_TRUE(rest->allFinite());
+  EXPECT_FALSE(fresh.body_rotation(1000, 7000, Vector3d::Zero()));
   // Not covered by the samples: none.
   EXPECT_FALSE(o.body_rotation(t_end - 100'000, t_end + 1, Vector3d::Zero()));
   EXPECT_FALSE(o.body_rotation(0, t_end, Vector3d::Zero()));
