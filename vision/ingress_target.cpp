@@ -130,8 +130,11 @@ cv::Mat off_wall_mask(const cv::Mat& image, const cv::Mat& reference, const Matr
     a = image, b = reference;
   }
   if (p.parallax_blur_sigma_px > 0) {
-    cv::GaussianBlur(a, a, cv::Size(), p.parallax_blur_sigma_px / d);
-    cv::GaussianBlur(b, b, cv::Size(), p.parallax_blur_sigma_px / d);
+    // Into new images: at full size a and b share the caller's pixels.
+    cv::Mat a_blur, b_blur;
+    cv::GaussianBlur(a, a_blur, cv::Size(), p.parallax_blur_sigma_px / d);
+    cv::GaussianBlur(b, b_blur, cv::Size(), p.parallax_blur_sigma_px / d);
+    a = a_blur, b = b_blur;
   }
   // Where each current pixel's wall point lies in the reference image.
   cv::Mat warped, seen;
