@@ -5,6 +5,7 @@
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 #include <optional>
+#include <utility>
 
 #include "vision/decomposition.hpp"
 #include "vision/homography.hpp"
@@ -112,46 +113,69 @@ cv::Mat off_wall_mask(const cv::Mat& image, const cv::Mat& reference, const Matr
                       const IngressParams& p) {
   assert(image.type() == CV_8UC1 && reference.type() == CV_8UC1);
   assert(image.size() == reference.size());
+  // The mask is made on a grid parallax_decimation times coarser and scaled back up (issue 15:
+  // the warp, blurs and morphology at full size were a fifth of the vision's time on a
+  // photographed wall). Its border moves by up to half a coarse pixel; mask_cuts fits lines to
+  // it and snaps them to the wall's edge in the full-size image.
+  const int d = p.parallax_decimation;
+  const cv::Size small_size((image.cols + d - 1) / d, (image.rows + d - 1) / d);
+  // Pixel centres: full u = sx (u_small + 0.5) - 0.5.
+  const double sx = static_cast<double>(image.cols) / small_size.width;
+  const double sy = static_cast<double>(image.rows) / small_size.height;
   cv::Mat a, b;
-  if (p.parallax_blur_sigma_px > 0) {
-    cv::GaussianBlur(image, a, cv::Size(), p.parallax_blur_sigma_px);
-    cv::GaussianBlur(reference, b, cv::Size(), p.parallax_blur_sigma_px);
+  if (d > 1) {
+    cv::resize(image, a, small_size, 0, 0, cv::INTER_AREA);
+    cv::resize(reference, b, small_size, 0, 0, cv::INTER_AREA);
   } else {
     a = image, b = reference;
   }
+  if (p.parallax_blur_sigma_px > 0) {
+    // Into new images: at full size a and b share the caller's pixels.
+    cv::Mat a_blur, b_blur;
+    cv::GaussianBlur(a, a_blur, cv::Size(), p.parallax_blur_sigma_px / d);
+    cv::GaussianBlur(b, b_blur, cv::Size(), p.parallax_blur_sigma_px / d);
+    a = a_blur, b = b_blur;
+  }
   // Where each current pixel's wall point lies in the reference image.
   cv::Mat warped, seen;
-  const cv::Mat seen_ref(reference.size(), CV_8UC1, cv::Scalar(255));
+  const cv::Mat seen_ref(small_size, CV_8UC1, cv::Scalar(255));
   if (!camera.has_distortion()) {
+    Matrix3d S = Matrix3d::Identity(), S_inv = Matrix3d::Identity();  // full -> small, back
+    S(0, 0) = 1 / sx, S(1, 1) = 1 / sy, S(0, 2) = 0.5 / sx - 0.5, S(1, 2) = 0.5 / sy - 0.5;
+    S_inv(0, 0) = sx, S_inv(1, 1) = sy, S_inv(0, 2) = 0.5 * sx - 0.5, S_inv(1, 2) = 0.5 * sy - 0.5;
+    const Matrix3d H_small = S * H_21 * S_inv;
     cv::Mat H(3, 3, CV_64F);
     for (int r = 0; r < 3; ++r)
-      for (int k = 0; k < 3; ++k) H.at<double>(r, k) = H_21(r, k);
-    cv::warpPerspective(b, warped, H, image.size(), cv::INTER_LINEAR, cv::BORDER_CONSTANT);
-    cv::warpPerspective(seen_ref, seen, H, image.size(), cv::INTER_NEAREST, cv::BORDER_CONSTANT);
+      for (int k = 0; k < 3; ++k) H.at<double>(r, k) = H_small(r, k);
+    cv::warpPerspective(b, warped, H, small_size, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
+    cv::warpPerspective(seen_ref, seen, H, small_size, cv::INTER_NEAREST, cv::BORDER_CONSTANT);
   } else {
     // Raw current pixel -> undistorted -> H^-1 -> raw reference pixel, exactly on a grid every
-    // kStep pixels and bilinearly between (the map is smooth; undistorting every pixel by
-    // iteration would cost ~100 ms a frame).
-    constexpr int kStep = 8;
+    // kStep (coarse) pixels and bilinearly between (the map is smooth; undistorting every pixel
+    // by iteration would cost ~100 ms a frame).
+    const int kStep = std::max(2, 8 / d);
     const Matrix3d K = camera.K(), K_inv = K.inverse(), H_12 = H_21.inverse();
-    const int gw = (image.cols - 1 + kStep - 1) / kStep + 1;
-    const int gh = (image.rows - 1 + kStep - 1) / kStep + 1;
+    const int cols = small_size.width, rows = small_size.height;
+    const int gw = (cols - 1 + kStep - 1) / kStep + 1;
+    const int gh = (rows - 1 + kStep - 1) / kStep + 1;
     std::vector<cv::Point2f> grid(gw * gh);
     for (int j = 0; j < gh; ++j)
       for (int i = 0; i < gw; ++i) {
-        const Vector2d u2(std::min(i * kStep, image.cols - 1), std::min(j * kStep, image.rows - 1));
+        const double us = std::min(i * kStep, cols - 1), vs = std::min(j * kStep, rows - 1);
+        const Vector2d u2(sx * (us + 0.5) - 0.5, sy * (vs + 0.5) - 0.5);
         const Vector3d r1 = K_inv * (H_12 * (K * camera.ray(u2)));
         const auto u1 = r1.z() > 0 ? camera.project(r1) : std::nullopt;
-        grid[j * gw + i] = u1 ? cv::Point2f(u1->x(), u1->y()) : cv::Point2f(-1e6f, -1e6f);
+        grid[j * gw + i] = u1 ? cv::Point2f((u1->x() + 0.5) / sx - 0.5, (u1->y() + 0.5) / sy - 0.5)
+                              : cv::Point2f(-1e6f, -1e6f);
       }
-    cv::Mat map_x(image.size(), CV_32FC1), map_y(image.size(), CV_32FC1);
-    for (int v = 0; v < image.rows; ++v) {
+    cv::Mat map_x(small_size, CV_32FC1), map_y(small_size, CV_32FC1);
+    for (int v = 0; v < rows; ++v) {
       const int j = std::min(v / kStep, gh - 2);
-      const float y0 = j * kStep, y1 = std::min((j + 1) * kStep, image.rows - 1);
+      const float y0 = j * kStep, y1 = std::min((j + 1) * kStep, rows - 1);
       const float fy = (v - y0) / (y1 - y0);
-      for (int u = 0; u < image.cols; ++u) {
+      for (int u = 0; u < cols; ++u) {
         const int i = std::min(u / kStep, gw - 2);
-        const float x0 = i * kStep, x1 = std::min((i + 1) * kStep, image.cols - 1);
+        const float x0 = i * kStep, x1 = std::min((i + 1) * kStep, cols - 1);
         const float fx = (u - x0) / (x1 - x0);
         const cv::Point2f q =
             (1 - fy) * ((1 - fx) * grid[j * gw + i] + fx * grid[j * gw + i + 1]) +
@@ -170,7 +194,10 @@ cv::Mat off_wall_mask(const cv::Mat& image, const cv::Mat& reference, const Matr
   // homography), measured at the wall's inlier features.
   std::vector<uint8_t> on_wall;
   for (const auto& px : wall_px) {
-    const int u = static_cast<int>(std::lround(px.x())), v = static_cast<int>(std::lround(px.y()));
+    if (!px.allFinite()) continue;
+    const double us = (px.x() + 0.5) / sx - 0.5, vs = (px.y() + 0.5) / sy - 0.5;
+    if (!(std::abs(us) < 1e6 && std::abs(vs) < 1e6)) continue;
+    const int u = static_cast<int>(std::lround(us)), v = static_cast<int>(std::lround(vs));
     if (u >= 0 && v >= 0 && u < diff.cols && v < diff.rows)
       on_wall.push_back(diff.at<uint8_t>(v, u));
   }
@@ -183,15 +210,23 @@ cv::Mat off_wall_mask(const cv::Mat& image, const cv::Mat& reference, const Matr
   cv::threshold(diff, mask, threshold, 255, cv::THRESH_BINARY);
   // Closing fills the holes where the view beyond the wall has little texture (two samples of
   // it agree by chance); opening removes specks on the wall. Both keep a rectangle's border.
-  if (p.parallax_close_px > 1)
-    cv::morphologyEx(
-        mask, mask, cv::MORPH_CLOSE,
-        cv::getStructuringElement(cv::MORPH_RECT, {p.parallax_close_px, p.parallax_close_px}));
-  if (p.parallax_open_px > 1)
-    cv::morphologyEx(
-        mask, mask, cv::MORPH_OPEN,
-        cv::getStructuringElement(cv::MORPH_RECT, {p.parallax_open_px, p.parallax_open_px}));
-  return mask;
+  // On the coarse grid, the odd size nearest below size / d.
+  auto coarse = [d](int size_px) { return d == 1 ? size_px : 2 * (size_px / (2 * d)) + 1; };
+  if (p.parallax_close_px > 1 && coarse(p.parallax_close_px) > 1) {
+    const int k = coarse(p.parallax_close_px);
+    cv::morphologyEx(mask, mask, cv::MORPH_CLOSE,
+                     cv::getStructuringElement(cv::MORPH_RECT, {k, k}));
+  }
+  if (p.parallax_open_px > 1 && coarse(p.parallax_open_px) > 1) {
+    const int k = coarse(p.parallax_open_px);
+    cv::morphologyEx(mask, mask, cv::MORPH_OPEN, cv::getStructuringElement(cv::MORPH_RECT, {k, k}));
+  }
+  if (d == 1) return mask;
+  // Bilinear up and halfway: the border lies between the coarse pixels' centres.
+  cv::Mat full;
+  cv::resize(mask, full, image.size(), 0, 0, cv::INTER_LINEAR);
+  cv::threshold(full, full, 127, 255, cv::THRESH_BINARY);
+  return full;
 }
 
 void line_cuts(const cv::Mat& image, const IngressParams& p, std::vector<double>* x_cuts,
@@ -297,16 +332,58 @@ void mask_cuts(const cv::Mat& mask, const IngressParams& p, std::vector<double>*
   // The standard Hough transform (full lines, votes from anywhere along them) rather than the
   // probabilistic one: the border is ragged by a few pixels where the view beyond the wall
   // agrees with it by chance, which breaks a segment walk but barely spreads the votes.
-  std::vector<cv::Vec2f> lines;
-  if (!px.empty()) cv::HoughLines(border, lines, 1.0, CV_PI / 180.0, p.hough_threshold);
+  // Only the angles a cut can have are voted on (near 0, pi and pi/2: a tenth of the 180 the
+  // full transform accumulates; issue 15), strongest line first.
   const double tilt = p.max_line_tilt_deg * M_PI / 180.0;
+  constexpr double kThetaStep = CV_PI / 180.0;
+  std::vector<cv::Vec3f> lines;  // rho, theta, votes
+  if (!px.empty()) {
+    std::vector<cv::Vec3f> part;
+    for (const auto& [lo, hi] : {std::pair{0.0, tilt + kThetaStep}, std::pair{CV_PI - tilt, CV_PI},
+                                 std::pair{CV_PI / 2 - tilt, CV_PI / 2 + tilt + kThetaStep}}) {
+      cv::HoughLines(border, part, 1.0, kThetaStep, p.hough_threshold, 0, 0, lo, hi);
+      lines.insert(lines.end(), part.begin(), part.end());
+    }
+    std::stable_sort(lines.begin(), lines.end(),
+                     [](const cv::Vec3f& l, const cv::Vec3f& r) { return l[2] > r[2]; });
+  }
   const double min_length = p.hough_min_length_frac * mask.cols;
   std::vector<double> xs{0.0, static_cast<double>(mask.cols)};
   std::vector<double> ys{0.0, static_cast<double>(mask.rows)};
+  // The lines already refined, as across = a + b (along - mean_along) over [lo, hi]. One border
+  // side gets dozens of Hough lines (neighbouring rho and theta bins of a two-pixel-wide,
+  // ragged border); one that stays within kSamePx of a refined line where that line has border
+  // pixels would select the same pixels and give the same cut, so it is not refined again
+  // (issue 15: refining them all was a quarter of the vision's time on a photographed wall).
+  struct Fitted {
+    bool vertical;
+    double a, b, mean_along;
+    int lo, hi;
+  };
+  std::vector<Fitted> fitted;
+  constexpr double kSamePx = 2.0;
   for (const auto& l : lines) {
     const double rho = l[0], theta = l[1];
     const bool vertical = std::min(theta, CV_PI - theta) <= tilt;
     if (!vertical && std::abs(theta - CV_PI / 2) > tilt) continue;
+    {
+      // The Hough line's across-coordinate at `along`: x at row y for a vertical line.
+      const double c = std::cos(theta), s = std::sin(theta);
+      auto hough_across = [&](double t) {
+        return vertical ? (rho - t * s) / c : (rho - t * c) / s;
+      };
+      const bool seen = std::any_of(fitted.begin(), fitted.end(), [&](const Fitted& f) {
+        if (f.vertical != vertical) return false;
+        for (const int t : {f.lo, f.hi})
+          if (std::abs(hough_across(t) - (f.a + f.b * (t - f.mean_along))) > kSamePx) return false;
+        return true;
+      });
+      if (seen) continue;
+    }
+    // The strongest distinct lines only: a mask left ragged all over (the view off the wall
+    // with little texture, a poor homography) gives hundreds, and refining every one made the
+    // slowest frames 3x the median (issue 15); an opening's sides are among the strongest.
+    if (static_cast<int>(fitted.size()) >= p.max_border_lines) break;
     // Refine on the border pixels near the line: fit the across-coordinate a + b * along by
     // least squares twice, narrowing the band; the cut is its mean (the fit at the centre).
     auto along = [&](const cv::Point& q) { return vertical ? q.y : q.x; };
@@ -346,6 +423,7 @@ void mask_cuts(const cv::Mat& mask, const IngressParams& p, std::vector<double>*
       covered[along(*q)] = 1;
       lo = std::min(lo, along(*q)), hi = std::max(hi, along(*q));
     }
+    fitted.push_back({vertical, a, b, mean_along, lo, hi});
     if (std::count(covered.begin(), covered.end(), 1) < min_length) continue;
     if (!gx.empty())
       a = snap_to_edge(vertical ? gx : gy, mask, vertical, a, b, mean_along, lo, hi, p);

@@ -212,6 +212,10 @@ const ParamSchema<IngressParams>& IngressParams::schema() {
           "the wall plane) instead of on the grey image, whose wall texture and the frame's "
           "inner faces give edges of their own while the opening's border can lack contrast. "
           "false: the paper's edges");
+    s.add("parallax_decimation", &P::parallax_decimation, Range::closed(1, 4), "",
+          "the mask is made on a grid this many times coarser and scaled back up (1: full "
+          "size; 2 costs a quarter of the warp, blurs and morphology, but on ingress_photo "
+          "widened the width and height errors' tails: issue 15)");
     s.add("parallax_blur_sigma_px", &P::parallax_blur_sigma_px, Range::closed(0, 10), "px",
           "smoothing of both images before the difference");
     s.add("parallax_min_diff", &P::parallax_min_diff, Range::open(0, 255), "grey levels",
@@ -222,6 +226,8 @@ const ParamSchema<IngressParams>& IngressParams::schema() {
           "closing fills texture-poor holes off the wall");
     s.add("parallax_open_px", &P::parallax_open_px, Range::closed(0, 101), "px",
           "opening drops specks on the wall");
+    s.add("max_border_lines", &P::max_border_lines, Range::closed(1, 1000), "",
+          "the mask border's strongest distinct Hough lines refined into cuts, no more");
     s.add("snap_px", &P::snap_px, Range::closed(0, 30), "px",
           "a cut snaps to the wall's edge within this (0: off)");
     s.add("snap_min_gradient", &P::snap_min_gradient, Range::ge(0), "Sobel units",

@@ -122,11 +122,13 @@ struct LandingParams {
 /// with no wall inliers and the most off-wall features is the opening.
 struct IngressParams {
   bool parallax_mask = true;
+  int parallax_decimation = 1;
   double parallax_blur_sigma_px = 1.5;
   double parallax_min_diff = 8;
   double parallax_noise_k = 4;
   int parallax_close_px = 15;
   int parallax_open_px = 7;
+  int max_border_lines = 32;
   double snap_px = 6;
   double snap_min_gradient = 8;
   double blur_sigma_px = 2.0;
