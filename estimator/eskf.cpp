@@ -16,10 +16,10 @@ constexpr double kIsaT0OverL = 288.15 / 0.0065;
 constexpr double kIsaExponent = 0.190263;
 }  // namespace
 
-void RangeStreak::add(int64_t t, double h) {
-  if (count == 0 && start_utime == 0) start_utime = t;
+void RangeStreak::add(int64_t t, double h, bool was_refused) {
   utime[head] = t;
   implied_terrain_m[head] = h;
+  refused[head] = was_refused;
   head = (head + 1) % kCapacity;
   if (count < kCapacity) ++count;
 }
@@ -153,19 +153,32 @@ Outcome fuse(FilterState& s, const MeasVec& r, const MeasJac& H, const MeasCov& 
     // No sensor here measures the heading, yet the EKF's linearisation at changing estimates
     // hands it spurious information through the correlations (Huang, Mourikis, Roumeliotis 2010;
     // Hesch et al. 2014), and the heading and the gyro bias about the vertical then wander far
-    // beyond their variance. So the update leaves the heading alone: the gain's components of
-    // the attitude errors (core and clones) and of the gyro bias along the world vertical
-    // (expressed in body) are removed, a consider (Schmidt) update of that subspace.
-    auto drop_vertical = [&K](int row, const Matrix3d& R_WB) {
-      const Vector3d u = R_WB.transpose().col(2);
-      K.middleRows(row, 3) =
-          ((Matrix3d::Identity() - u * u.transpose()) * K.middleRows(row, 3)).eval();
-    };
+    // beyond their variance. So the update leaves the heading alone, a consider (Schmidt) update
+    // of that direction. The heading is one direction of the whole state: turning the world about
+    // the vertical (through W's origin, the take-off spot) by an angle turns the attitude (core
+    // and clones) and also swings the positions and the velocity about it. Its gain is removed
+    // along that whole direction N, not from the attitude alone: removing only the attitude's
+    // part left the positions' part, and every flow update then shifted them (a few mm, all the
+    // same way: 0.4 m after a 40 m square) as if the heading had changed while it had not. The
+    // gyro bias about the vertical is dropped on its own.
+    const Vector3d e_z = Vector3d::UnitZ();
     const Matrix3d R_WB = s.x.q_WB.toRotationMatrix();
-    drop_vertical(idx::kTheta, R_WB);
-    drop_vertical(idx::kBg, R_WB);
-    for (int i = 0; i < s.n_clones; ++i)
-      drop_vertical(idx::kCore + kCloneDim * i + 3, s.clones[i].q_WB.toRotationMatrix());
+    ErrVec N = ErrVec::Zero(n);
+    N.segment<3>(idx::kP) = e_z.cross(s.x.p_W_B);
+    N.segment<3>(idx::kV) = e_z.cross(s.x.v_W_B);
+    N.segment<3>(idx::kTheta) = R_WB.transpose() * e_z;
+    for (int i = 0; i < s.n_clones; ++i) {
+      const int c = idx::kCore + kCloneDim * i;
+      N.segment<3>(c) = e_z.cross(s.clones[i].p_W_B);
+      N.segment<3>(c + 3) = s.clones[i].q_WB.toRotationMatrix().transpose() * e_z;
+    }
+    // The heading part of the gain (its attitude rows along the body's vertical; N's is 1).
+    const Eigen::Matrix<double, 1, Eigen::Dynamic, Eigen::RowMajor, 1, 3> heading =
+        N.segment<3>(idx::kTheta).transpose() * K.middleRows(idx::kTheta, 3);
+    K -= N * heading;
+    const Vector3d u = R_WB.transpose().col(2);
+    K.middleRows(idx::kBg, 3) =
+        ((Matrix3d::Identity() - u * u.transpose()) * K.middleRows(idx::kBg, 3)).eval();
   }
   const ErrVec dx = K.lazyProduct(r);
   if (!dx.allFinite()) return Outcome::kNumerical;

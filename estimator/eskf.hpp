@@ -49,17 +49,18 @@ struct Clone {
   Quaterniond q_WB = Quaterniond::Identity();
 };
 
-/// Gate-rejected range readings since the last fused one: the platform-step detector's memory.
+/// The latest range readings, fused or refused by a gate (the chi-square or the step gate): the
+/// platform-step detector's memory. Cleared by a terrain reset.
 struct RangeStreak {
   static constexpr int kCapacity = 32;
-  int64_t start_utime = 0;  ///< first rejection of the streak (0: no streak)
-  int count = 0;            ///< entries held (at most kCapacity, the newest)
-  int head = 0;             ///< next slot
+  int count = 0;  ///< entries held (at most kCapacity, the newest)
+  int head = 0;   ///< next slot
   std::array<int64_t, kCapacity> utime{};
   std::array<double, kCapacity> implied_terrain_m{};
+  std::array<bool, kCapacity> refused{};
 
-  void clear() { start_utime = 0, count = 0, head = 0; }
-  void add(int64_t t, double h);
+  void clear() { count = 0, head = 0; }
+  void add(int64_t t, double h, bool was_refused);
 };
 
 /// Everything the estimate depends on: what a history checkpoint holds and a replay restores.
@@ -75,6 +76,7 @@ struct FilterState {
   std::array<Outcome, kSensorCount> last_outcome{};      ///< of the latest update per sensor
   int64_t last_imu_gap_utime = 0;                        ///< end of the latest IMU gap (0: none)
   int64_t terrain_resets = 0;
+  int64_t flow_on_floor = 0;           ///< flow samples judged against the floor, not the terrain
   int64_t baro_gated_since_utime = 0;  ///< first of the baro's current run of refusals (0: none)
   int64_t baro_resets = 0;
 

@@ -329,15 +329,37 @@ Outcome Estimator::apply_range(const RangeSample& m, FilterState& s) {
   H.leftCols<idx::kCore>() = model.H;
   MeasCov R(1, 1);
   R(0, 0) = sigma * sigma;
-  const Outcome o = fuse(s, r, H, R, p.gate_chi2);
-  if (o == Outcome::kFused) s.range_streak.clear();
+  // The step gate: a platform's top (10-50 cm) is within the chi-square gate of a noisy reading
+  // at flight height (1 cm + 1 %, 5 sigma), and fused it would pull the vehicle's height down
+  // instead of moving the terrain. So while the predicted range is known to better than
+  // step_min_m / 2, a reading implying a terrain step_min_m off is not fused: it witnesses a
+  // step. Noise alone puts a reading there rarely (2 sigma at 1.5 m), on both sides alike.
+  const double predicted_sigma_m = std::sqrt(
+      (model.H * s.P.topLeftCorner<idx::kCore, idx::kCore>() * model.H.transpose())(0, 0));
+  const bool step = p.step_min_m > 0 && predicted_sigma_m < 0.5 * p.step_min_m &&
+                    std::abs(r[0]) * model.cos_tilt > p.step_min_m;
+  const Outcome o = step ? Outcome::kGate : fuse(s, r, H, R, p.gate_chi2);
+  if (o != Outcome::kFused && o != Outcome::kGate) return o;
+  s.range_streak.add(m.utime, implied_terrain_m(s.x, p.t_B_R_m, range_d_B_, m.range_m),
+                     o == Outcome::kGate);
   if (o != Outcome::kGate) return o;
 
   // Platform step: the readings jump and stay consistent with a new surface while the vehicle's
   // height (IMU, baro) has not moved. The terrain, not the vehicle, is reset to what they imply.
-  s.range_streak.add(m.utime, implied_terrain_m(s.x, p.t_B_R_m, range_d_B_, m.range_m));
   double terrain_m = 0.0;
   if (!terrain_reset_due(s, &terrain_m) || !vertical_ok(s)) return Outcome::kGate;
+  ++s.terrain_resets;
+  s.range_streak.clear();
+  if (std::abs(terrain_m) < p.step_min_m) {
+    // Back over the floor, which defines height 0: the terrain is the floor again, as known as
+    // at take-off, and the next readings take the vehicle's height back from it (after a while
+    // over a platform, anchored by nothing better than the barometer, it has drifted).
+    s.P.row(idx::kTerrain).setZero();
+    s.P.col(idx::kTerrain).setZero();
+    s.P(idx::kTerrain, idx::kTerrain) = params_.init.sigma_terrain_m * params_.init.sigma_terrain_m;
+    s.x.terrain_m = 0.0;
+    return Outcome::kFused;
+  }
   CoreRow J;
   implied_terrain_m(s.x, p.t_B_R_m, range_d_B_, m.range_m, &J);
   // The new terrain is a function of p_z and the attitude (J has no terrain column): its
@@ -350,32 +372,41 @@ Outcome Estimator::apply_range(const RangeSample& m, FilterState& s) {
   s.P.row(idx::kTerrain) = row;
   s.P.col(idx::kTerrain) = row.transpose();
   s.x.terrain_m = terrain_m;
-  s.range_streak.clear();
-  ++s.terrain_resets;
   return Outcome::kFused;
 }
 
 bool Estimator::terrain_reset_due(const FilterState& s, double* terrain_m) const {
+  // Over the last reset_window_s of readings: enough refused ones, most of the readings, for at
+  // least half the window, on one surface: the older and the newer half of the refused readings
+  // agree on average (averages, so that the noise of single readings, 2.6 cm at 1.6 m, does not
+  // count; a surface that changed, or a wild reading, does). The new terrain is their median.
   const RangeStreak& st = s.range_streak;
   if (st.count == 0) return false;
   const auto& p = params_.range;
   const int newest_slot = (st.head + RangeStreak::kCapacity - 1) % RangeStreak::kCapacity;
   const int64_t newest = st.utime[newest_slot];
   const int64_t window = to_us(p.reset_window_s);
-  if (newest - st.start_utime < window) return false;
-  int n = 0;
-  double lo = 0, hi = 0, sum = 0;
+  std::array<double, RangeStreak::kCapacity> h{};  // refused readings' terrain, newest first
+  int n = 0, n_refused = 0;
+  int64_t first_refused = newest;
   for (int i = 0; i < st.count; ++i) {
     const int slot = (newest_slot - i + RangeStreak::kCapacity) % RangeStreak::kCapacity;
     if (newest - st.utime[slot] > window) break;
-    const double h = st.implied_terrain_m[slot];
-    lo = n ? std::min(lo, h) : h;
-    hi = n ? std::max(hi, h) : h;
-    sum += h;
     ++n;
+    if (!st.refused[slot]) continue;
+    h[n_refused++] = st.implied_terrain_m[slot];
+    first_refused = st.utime[slot];
   }
-  if (n < p.reset_min_samples || hi - lo > p.reset_spread_m) return false;
-  *terrain_m = sum / n;
+  if (n_refused < p.reset_min_samples || n_refused < p.reset_min_fraction * n ||
+      newest - first_refused < window / 2)
+    return false;
+  const int half = n_refused / 2;
+  double newer = 0, older = 0;
+  for (int i = 0; i < half; ++i) newer += h[i] / half;
+  for (int i = n_refused - half; i < n_refused; ++i) older += h[i] / half;
+  if (std::abs(newer - older) > p.reset_spread_m) return false;
+  std::nth_element(h.begin(), h.begin() + half, h.begin() + n_refused);
+  *terrain_m = h[half];
   return true;
 }
 
@@ -432,15 +463,49 @@ Outcome Estimator::apply_flow(const FlowSample& m, int64_t key, FilterState& s) 
   const auto& p = params_.flow;
   const int ci = s.clone_index(key);
   if (ci < 0) return Outcome::kNoClone;
-  FlowModel model = flow_model(s.x, s.clones[ci], R_BC_, p.t_B_C_m);
-  add_input_sensitivities(model, s.x, s.clones[ci], R_BC_, m.J_rotation, m.J_normal);
+  // The model over a plane at the terrain's height (a state) or at the floor's (height 0).
+  const auto model_over = [&](bool floor, MeasVec* r, MeasJac* H) {
+    Nominal x = s.x;
+    if (floor) x.terrain_m = 0.0;
+    FlowModel model = flow_model(x, s.clones[ci], R_BC_, p.t_B_C_m);
+    add_input_sensitivities(model, x, s.clones[ci], R_BC_, m.J_rotation, m.J_normal);
+    if (floor) model.H_core.col(idx::kTerrain).setZero();
+    *r = m.t_over_d_C1 - model.t_over_d;
+    *H = MeasJac::Zero(3, s.dim());
+    H->leftCols<idx::kCore>() = model.H_core;
+    H->middleCols<kCloneDim>(idx::kCore + kCloneDim * ci) = model.H_clone;
+    return model.height_m;
+  };
+  MeasVec r;
+  MeasJac H;
   Outcome o = Outcome::kGeometry;
-  if (model.height_m >= p.min_height_m) {
-    const MeasVec r = m.t_over_d_C1 - model.t_over_d;
-    MeasJac H = MeasJac::Zero(3, s.dim());
-    H.leftCols<idx::kCore>() = model.H_core;
-    H.middleCols<kCloneDim>(idx::kCore + kCloneDim * ci) = model.H_clone;
-    o = fuse(s, r, H, flow_noise(m, p), p.gate_chi2);
+  if (model_over(false, &r, &H) >= p.min_height_m) {
+    MeasCov R = flow_noise(m, p);
+    // Over a platform the rangefinder's terrain is its top, while the front end's dominant plane
+    // stays the floor until the platform fills most of the view (below about 0.5 m over it), and
+    // in between its fit may take features of both: the two planes give t/d apart by the
+    // platform's height over the camera's (7 % at 1.5 m over paper's platform a, most of the
+    // divergence in a descent onto it). Which plane the sample saw is not known, so the
+    // difference between the two predictions enters the noise (one sigma: half of it; nothing
+    // when hovering, where they agree), and the sample is fused against the plane it fits
+    // better, the floor being the take-off floor, height 0 (README, "The platform step").
+    const double step_m = params_.range.step_min_m;
+    MeasVec r_floor;
+    MeasJac H_floor;
+    if (step_m > 0 && std::abs(s.x.terrain_m) >= step_m &&
+        model_over(true, &r_floor, &H_floor) >= p.min_height_m) {
+      const MeasVec between = r_floor - r;  // prediction over the terrain minus over the floor
+      R += 0.25 * between * between.transpose();
+      double nis_terrain = 0, nis_floor = 0;
+      fuse(s, r, H, R, -1.0, &nis_terrain);  // a negative gate refuses: only the NIS
+      fuse(s, r_floor, H_floor, R, -1.0, &nis_floor);
+      if (nis_floor < nis_terrain) {
+        r = r_floor;
+        H = H_floor;
+        ++s.flow_on_floor;
+      }
+    }
+    o = fuse(s, r, H, R, p.gate_chi2);
   }
   remove_clone(s, ci);
   return o;
@@ -481,6 +546,7 @@ State Estimator::state() const {
   out.terrain_height_m = s.x.terrain_m;
   out.cov = s.P.topLeftCorner<idx::kCore, idx::kCore>();
   out.counters.terrain_resets = s.terrain_resets;
+  out.counters.flow_on_floor = s.flow_on_floor;
   out.counters.baro_resets = s.baro_resets;
 
   const auto& h = params_.health;

@@ -109,6 +109,7 @@ FrameOutcome Onboard::process(const Frame& f) {
   if (r.reason != FlowReason::kBadImage && r.reason != FlowReason::kBadTime)
     prev_frame_utime_ = f.utime;
   if (r.sample) out.fused = filter_.add_flow(*r.sample);
+  out.sample = r.sample;
   return out;
 }
 

@@ -23,6 +23,7 @@ struct FrameOutcome {
   bool dropped = false;  ///< the frame queue was full (the IMU stalled): the oldest dropped
   FlowReason flow = FlowReason::kNoPrevious;  ///< the front end's verdict (when processed)
   Outcome fused = Outcome::kQueued;           ///< the filter's verdict on the flow sample
+  std::optional<FlowSample> sample;           ///< the front end's sample (diagnostics)
   int processed = 0;                          ///< frames taken from the queue by this call
 };
 

@@ -95,9 +95,11 @@ const char* to_string(Sensor s);
 struct Counters {
   std::array<std::array<int64_t, kOutcomeCount>, kSensorCount> by_outcome{};
   int64_t terrain_resets = 0;  ///< platform steps: terrain state reset from the rangefinder
-  int64_t baro_resets = 0;     ///< baro offset started over after baro.reset_after_s refused
-  int64_t imu_gaps = 0;        ///< IMU intervals longer than health.imu_gap_s
-  int64_t replays = 0;         ///< re-propagations from the history for delayed inputs
+  /// Flow samples fused against the floor while the rangefinder's terrain was a platform's top.
+  int64_t flow_on_floor = 0;
+  int64_t baro_resets = 0;  ///< baro offset started over after baro.reset_after_s refused
+  int64_t imu_gaps = 0;     ///< IMU intervals longer than health.imu_gap_s
+  int64_t replays = 0;      ///< re-propagations from the history for delayed inputs
 
   int64_t count(Sensor s, Outcome o) const {
     return by_outcome[static_cast<int>(s)][static_cast<int>(o)];

@@ -3,12 +3,16 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <memory>
+#include <stdexcept>
 
+#include "autonomy/convert.hpp"
 #include "autonomy/params.hpp"
 #include "outer_loop/params.hpp"
 #include "outer_loop/position_controller.hpp"
 #include "sim/params.hpp"
 #include "sim/simulator.hpp"
+#include "sim_onboard.hpp"
 #include "vision/frame_pose_pairing.hpp"
 
 namespace alight::autonomy::test {
@@ -31,6 +35,13 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
     au_params.ingress.vehicle_span_m = *config.rotor_span_m;
   }
   sim::Scenario scenario = sim::load_scenario(config.scenario_file);
+  std::unique_ptr<estimator::test::SimOnboard> onboard;
+  if (config.onboard_estimate) {
+    if (config.mission != Mission::kLanding || !config.camera_vision)
+      throw std::invalid_argument("fly_closed_loop: onboard_estimate needs landing, real vision");
+    scenario.mocap.enabled = false;
+    onboard = std::make_unique<estimator::test::SimOnboard>(config.vehicle_file);
+  }
   if (config.opening_size_m && scenario.wall)
     scenario.wall->opening_size_m = *config.opening_size_m;
   const CameraMount mount =
@@ -62,8 +73,12 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
   bool takeoff_sent = false, go_sent = false;
   int64_t terminal_since = -1;
   const bool trace = std::getenv("CLOSED_LOOP_TRACE") != nullptr;  // contact trace on stderr
+  // The onboard estimate against the truth every 0.1 s on stderr.
+  const bool onboard_trace = std::getenv("ONBOARD_TRACE") != nullptr;
   bool event = false;  // a scripted action happened  // first time a terminal phase was seen
   std::optional<EstimateHealth> estimate;  // scripted STATE_ESTIMATE health
+  uint32_t estimate_reasons = 0;           // onboard: every reason seen in flight
+  bool approach_seen = false;
   ClosedLoopResult r;
 
   const auto step_autonomy = [&](Inputs in) {
@@ -91,6 +106,8 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
     setpoint = out.setpoint;
     r.mission_time_s = out.status.mission_time_s;
     r.reason = out.status.reason;
+    if (autonomy.retries() > static_cast<int>(r.retry_reasons.size()))
+      r.retry_reasons.push_back(out.status.reason);
   };
 
   while (now < t_end) {
@@ -111,11 +128,36 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
       now = std::max(now, s.utime);
       Inputs in;
       in.imu = ImuSample{s.utime, s.accel_B, s.gyro_B};
+      // alight-estimator publishes STATE_ESTIMATE and ESTIMATE_POSE on the same IMU sample;
+      // autonomy takes the health with the pose's step.
+      std::optional<estimator::test::Published> published;
+      if (onboard) published = onboard->add_imu(s);
+      if (published) {
+        pose = published->pose;
+        frames.add_pose(published->pose);
+        in.pose = published->pose;
+        in.estimate = estimate_from_msg(published->estimate, nullptr);
+        const sim::Truth truth = simulator.truth();
+        if (truth.contact == sim::Contact::kNone && in.estimate) {
+          r.estimate_degraded_steps += in.estimate->level == EstimateHealth::Level::kDegraded;
+          r.estimate_lost_steps += in.estimate->level == EstimateHealth::Level::kLost;
+          estimate_reasons |= in.estimate->reasons;
+          const Vector3d e = published->pose.p_W_B - truth.state.p_W_B;
+          r.max_pose_error_h_m = std::max(r.max_pose_error_h_m, e.head<2>().norm());
+          r.max_pose_error_z_m = std::max(r.max_pose_error_z_m, std::abs(e.z()));
+        }
+      }
       if (estimate) {
         in.estimate = estimate;
         in.estimate->utime = s.utime;
       }
       step_autonomy(in);
+      if (published) att = controller.update(setpoint, pose, now);
+    }
+    if (onboard) {
+      // Range and baro arrive their latency after sampling, behind the IMU samples above.
+      for (const auto& s : simulator.take_range()) onboard->add_range(s);
+      for (const auto& s : simulator.take_baro()) onboard->add_baro(s);
     }
     now = std::max(now, until);
     // The outer loop also steps on setpoints (the node does), so the pose-lost failsafe runs.
@@ -148,6 +190,7 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
     }
     if (config.camera_vision) {
       if (auto f = simulator.take_camera()) {
+        if (onboard) onboard->add_frame(*f);  // the estimator and the vision share the frame
         const int64_t exposure_utime = f->utime;
         frames.add_frame(std::move(*f), exposure_utime);
       }
@@ -191,6 +234,26 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
         event = true;
       }
     }
+    if (onboard && onboard_trace && truth.utime % 100000 == 0) {
+      const estimator::State es = onboard->state();
+      double under_m = 0.0;  // true height of what the rangefinder sees (platform top or floor)
+      if (truth.platform) {
+        const Vector3d d = truth.state.p_W_B - truth.platform->top_center_W;
+        const double c = std::cos(truth.platform->yaw_rad), sn = std::sin(truth.platform->yaw_rad);
+        if (std::abs(c * d.x() + sn * d.y()) < truth.platform->size_m.x() / 2 &&
+            std::abs(-sn * d.x() + c * d.y()) < truth.platform->size_m.y() / 2)
+          under_m = truth.platform->top_center_W.z();
+      }
+      const Vector3d e = es.p_W_B - truth.state.p_W_B;
+      std::fprintf(stderr,
+                   "ONB %.1f %-15s true %.3f %.3f %.3f err %+.3f %+.3f %+.3f v_err %+.3f %+.3f "
+                   "terrain %.3f (true %.3f) health %d %s\n",
+                   (now - t0) * 1e-6, phase_name(autonomy.phase()), truth.state.p_W_B.x(),
+                   truth.state.p_W_B.y(), truth.state.p_W_B.z(), e.x(), e.y(), e.z(),
+                   es.v_W_B.x() - truth.state.v_W_B.x(), es.v_W_B.y() - truth.state.v_W_B.y(),
+                   es.terrain_height_m, under_m, static_cast<int>(es.health),
+                   estimator::health_reasons_text(es.health_reasons).c_str());
+    }
     if (event) r.min_z_after_event_m = std::min(r.min_z_after_event_m, truth.state.p_W_B.z());
     const Phase ph = autonomy.phase();
     if (trace && (truth.contact != sim::Contact::kNone || truth.tipped) &&
@@ -204,6 +267,16 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
                    truth.state.v_W_B.z(), rpy.x() * 57.3, rpy.y() * 57.3, rpy.z() * 57.3,
                    truth.state.thrust_N, static_cast<int>(truth.contact), truth.state.armed,
                    truth.tipped);
+    }
+    if (onboard && truth.platform && ph == Phase::kApproach && !approach_seen) {
+      approach_seen = true;
+      const estimator::State es = onboard->state();
+      r.pose_error_at_approach_W = es.p_W_B - truth.state.p_W_B;
+      r.estimate_error_rel_at_approach_W = truth.state.p_W_B +
+                                           truth.state.q_WB.toRotationMatrix() *
+                                               es.q_WB.toRotationMatrix().transpose() *
+                                               (autonomy.final_estimate() - es.p_W_B) -
+                                           truth.platform->top_center_W;
     }
     if (truth.platform) {
       const double e =
@@ -245,6 +318,23 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
     r.estimate_error_W = autonomy.final_estimate() - truth.platform->top_center_W;
   } else if (truth.opening) {
     r.estimate_error_W = autonomy.final_estimate() - truth.opening->center_W;
+  }
+  if (onboard) {
+    const estimator::State s = onboard->state();
+    r.pose_error_W = s.p_W_B - truth.state.p_W_B;
+    r.estimate_reasons = estimate_reasons_text(estimate_reasons);
+    r.flow_fused = s.counters.fused(estimator::Sensor::kFlow);
+    r.flow_rejected = s.counters.rejected(estimator::Sensor::kFlow);
+    r.terrain_resets = static_cast<int>(s.counters.terrain_resets);
+    r.flow_on_floor = s.counters.flow_on_floor;
+    if (truth.platform) {
+      // The target as the vehicle sees it (relative to itself), put back in the true frame.
+      const Matrix3d R_true_est =
+          truth.state.q_WB.toRotationMatrix() * s.q_WB.toRotationMatrix().transpose();
+      const Vector3d p_target_true =
+          truth.state.p_W_B + R_true_est * (autonomy.final_estimate() - s.p_W_B);
+      r.estimate_error_rel_W = p_target_true - truth.platform->top_center_W;
+    }
   }
   return r;
 }

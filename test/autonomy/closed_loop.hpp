@@ -5,11 +5,14 @@
 // with camera_vision set, the caller's real vision on rendered frames. Used by the ctest
 // closed-loop tests (a few seeds) and by bench/autonomy (20 seeds per platform). Commands are
 // issued as the node's --auto-go does: TAKEOFF once a pose arrived, GO once hovering.
+// With onboard_estimate it flies without motion capture (issue 17): the onboard estimator
+// (test/estimator/sim_onboard.hpp: alight-estimator's work) gives the pose and its health.
 
 #include <cstdint>
 #include <functional>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "autonomy/autonomy.hpp"
 #include "common/pose_buffer.hpp"
@@ -40,6 +43,15 @@ struct ClosedLoopConfig {
   std::function<std::optional<TargetMeasurement>(const sim::CameraFrame&,
                                                  const std::optional<PoseSample>&)>
       camera_vision;
+  /// Flies without motion capture (issue 17), as config/launch/sim_landing_nomocap.yaml: the
+  /// scenario's motion capture is off; the simulator's IMU, rangefinder, barometer and
+  /// downward frames feed the onboard estimator as alight-estimator does (its parameters from
+  /// the vehicle file), and its ESTIMATE_POSE (one per fused IMU sample) is the pose that
+  /// vision's pairing, autonomy and the outer loop read, its STATE_ESTIMATE health goes to
+  /// autonomy with the same step (a scripted `estimate` overrides it). The truth only scores.
+  /// Landing with camera_vision only (the flow and the vision share the downward camera; the
+  /// oracle measures in the true frame, not the estimate's).
+  bool onboard_estimate = false;
 };
 
 struct ScriptActions {
@@ -66,6 +78,7 @@ struct ClosedLoopResult {
   Vector3d final_p_W = Vector3d::Zero();
   Vector3d estimate_error_W = Vector3d::Zero();  ///< final estimate - true target [m]
   int n_measurements = 0, n_rejected = 0, retries = 0;
+  std::vector<std::string> retry_reasons;  ///< autonomy's reason at each retry
   double max_lateral_in_wall_m = 0;  ///< ingress: largest offset from the opening centre while
                                      ///< the body crossed the wall plane [m]
   bool crossed_wall = false;
@@ -77,6 +90,21 @@ struct ClosedLoopResult {
   bool tipped_before_go = false;  ///< sim's sticky "tipped" already set when GO was issued (a
                                   ///< scenario whose random platform overlaps the start spot)
   bool on_platform_top = false;   ///< sim contact at the end is the platform top
+  // Flying on the onboard estimate (onboard_estimate):
+  /// Autonomy's final target estimate taken into the true frame through the final estimated and
+  /// true poses, minus the true target: the relative error that matters without motion capture
+  /// (estimate_error_W above also holds the estimator's drift then) [m].
+  Vector3d estimate_error_rel_W = Vector3d::Zero();
+  Vector3d estimate_error_rel_at_approach_W = Vector3d::Zero();  ///< the same entering APPROACH
+  Vector3d pose_error_W = Vector3d::Zero();  ///< final estimated - true body position [m]
+  Vector3d pose_error_at_approach_W = Vector3d::Zero();  ///< ... entering APPROACH [m]
+  double max_pose_error_h_m = 0;  ///< largest horizontal estimated - true position in flight [m]
+  double max_pose_error_z_m = 0;  ///< largest vertical ... [m]
+  int estimate_degraded_steps = 0, estimate_lost_steps = 0;  ///< airborne IMU steps not OK
+  std::string estimate_reasons;  ///< every health reason seen in flight, "no_flow|no_range"
+  int64_t flow_fused = 0, flow_rejected = 0;  ///< the filter's verdicts on flow samples
+  int64_t flow_on_floor = 0;  ///< ... judged against the floor while over the platform
+  int terrain_resets = 0;     ///< platform steps on and off
 };
 
 ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config);

@@ -280,6 +280,42 @@ TEST(EskfTest, UpdatesLeaveTheHeadingAndTheVerticalGyroBiasAlone) {
   EXPECT_GT(var_after, var_before * 0.999);
 }
 
+TEST(EskfTest, TheHeadingsShareOfAnUpdateMovesNeitherTheHeadingNorThePositionsItSwings) {
+  // Regression: only the attitude's part of the heading's gain was removed, so an update still
+  // moved the positions as if the heading had turned (while it had not): a few mm per flow
+  // sample, all the same way, 0.2-0.4 m after a 40 m square. Here the covariance is mostly the
+  // heading's uncertainty swinging position and velocity about W's origin, 10 m away, and the
+  // measurement is the velocity across the path: what it says through the heading is dropped
+  // whole, what it says of the velocity itself is kept.
+  FilterState s;
+  s.x = some_state();
+  s.x.p_W_B = Vector3d(10, 0, 1.5);
+  s.x.v_W_B = Vector3d(1, 0, 0);
+  s.x.q_WB = Quaterniond::Identity();
+  ErrVec N = ErrVec::Zero(idx::kCore);  // turning the world about its vertical by 1 rad
+  N.segment<3>(idx::kP) = Vector3d::UnitZ().cross(s.x.p_W_B);
+  N.segment<3>(idx::kV) = Vector3d::UnitZ().cross(s.x.v_W_B);
+  N.segment<3>(idx::kTheta) = Vector3d::UnitZ();
+  s.P = 1e-4 * Cov::Identity(idx::kCore, idx::kCore) + 1e-3 * N * N.transpose();
+  const FilterState before = s;
+  MeasVec r(1);
+  r[0] = 0.01;
+  MeasJac H = MeasJac::Zero(1, idx::kCore);
+  H(0, idx::kV + 1) = 1.0;  // v_y
+  MeasCov R(1, 1);
+  R(0, 0) = 1e-4;
+  ASSERT_EQ(fuse(s, r, H, R, 1e9), Outcome::kFused);
+  EXPECT_NEAR((s.x.p_W_B - before.x.p_W_B).norm(), 0.0, 1e-12);
+  EXPECT_NEAR(test_log(before.x.q_WB.conjugate() * s.x.q_WB).z(), 0.0, 1e-12);
+  // The velocity's own share: its prior variance 1e-4 against the reading's 1e-4 over the
+  // whole innovation variance 1e-4 + 1e-3 + 1e-4.
+  EXPECT_NEAR(s.x.v_W_B.y() - before.x.v_W_B.y(), 0.01 * 1e-4 / 1.2e-3, 1e-9);
+  // Without the heading's removal the position would have swung by 10 m x the heading's share.
+  FilterState plain = before;
+  ASSERT_EQ(fuse(plain, r, H, R, 1e9, nullptr, false), Outcome::kFused);
+  EXPECT_NEAR(plain.x.p_W_B.y() - before.x.p_W_B.y(), 10 * 0.01 * 1e-3 / 1.2e-3, 1e-9);
+}
+
 TEST(EskfTest, IsaAltitudeKnownValuesAndRoundTrip) {
   EXPECT_NEAR(isa_altitude_m(101325.0), 0.0, 1e-9);
   EXPECT_NEAR(isa_altitude_m(89874.6), 1000.0, 0.1);  // ISA table: 1000 m

@@ -236,6 +236,62 @@ TEST(EstimatorTest, RangeStepOntoAPlatformResetsTheTerrainNotTheVehicleHeight) {
   EXPECT_GT(s.counters.count(Sensor::kRange, Outcome::kGate), 0);
 }
 
+TEST(EstimatorTest, PaperPlatformAIsAStepOfTheTerrainNotAPullOnTheHeight) {
+  // Regression: the 10.9 cm of the paper's platform a is within the chi-square gate of a reading
+  // at 1.6 m (1 cm + 1 %, 5 sigma), so its readings were fused and pulled the height down by
+  // about the platform's height (the vehicle climbed to hold it). The step gate refuses them and
+  // they reset the terrain. The flow sees the floor all along (the platform small in the view).
+  const EstimatorParams p = default_params();
+  SensorConfig cfg;
+  cfg.range_rate_hz = 100;  // the simulator's TFmini
+  cfg.platform = test::Platform{3.0, 3.4, -1.0, 1.0, 0.109};
+  cfg.flow_sees_floor = true;
+  const Flight f = test::simulate(test::square(kRestZ, 1.6, 6.0, 10.0, 0.3), 25.0, cfg, p, 5);
+  Estimator est(p);
+  double max_z_error = 0, terrain_on_platform = -1, terrain_after = -1;
+  for (const auto& in : f.inputs) {
+    test::feed(est, in);
+    if (in.kind != test::Kind::kImu || !est.initialised()) continue;
+    const State s = est.state();
+    const test::Truth& truth = truth_at(f, s.utime);
+    max_z_error = std::max(max_z_error, std::abs(s.p_W_B.z() - truth.p_W_B.z()));
+    if (truth.p_W_B.x() > 3.25 && truth.p_W_B.x() < 3.3) terrain_on_platform = s.terrain_height_m;
+    if (truth.p_W_B.x() > 4.0 && truth.p_W_B.x() < 4.1) terrain_after = s.terrain_height_m;
+  }
+  const State s = est.state();
+  EXPECT_EQ(s.counters.terrain_resets, 2);  // onto and off
+  EXPECT_NEAR(terrain_on_platform, 0.109, 0.02);
+  EXPECT_NEAR(terrain_after, 0.0, 0.01);  // back on the floor: height 0 again
+  EXPECT_LT(max_z_error, 0.02);
+  EXPECT_GT(s.counters.flow_on_floor, 0);  // over the platform, the floor fitted the flow
+}
+
+TEST(EstimatorTest, ABeamGoingBackAndForthOverAnEdgeIsNoStepAndMovesNothing) {
+  // Hovering over the platform's edge, every other reading sees its top (10.9 cm up): those are
+  // refused, the floor's are fused, the terrain is not reset and the height does not move.
+  const EstimatorParams p = default_params();
+  SensorConfig cfg;
+  cfg.range_rate_hz = 100;
+  Flight f = test::simulate(test::hover(kRestZ, 1.5), 12.0, cfg, p, 9);
+  int k = 0;
+  for (auto& in : f.inputs)
+    if (in.kind == test::Kind::kRange && in.range.utime > kT0 + 5'000'000 && ++k % 2 == 0)
+      in.range.range_m -= 0.109;
+  Estimator est(p);
+  double max_z_error = 0;
+  for (const auto& in : f.inputs) {
+    test::feed(est, in);
+    if (in.kind != test::Kind::kImu || !est.initialised()) continue;
+    const State s = est.state();
+    max_z_error = std::max(max_z_error, std::abs(s.p_W_B.z() - truth_at(f, s.utime).p_W_B.z()));
+  }
+  const State s = est.state();
+  EXPECT_EQ(s.counters.terrain_resets, 0);
+  EXPECT_NEAR(s.terrain_height_m, 0.0, 0.01);
+  EXPECT_LT(max_z_error, 0.02);
+  EXPECT_GT(s.counters.count(Sensor::kRange, Outcome::kGate), 300);
+}
+
 // ---- Gating
 
 TEST(EstimatorTest, AnOutlierOfEachSensorIsGatedAndChangesNothing) {

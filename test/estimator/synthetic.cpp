@@ -206,7 +206,8 @@ Flight simulate(const Trajectory& traj, double duration_s, const SensorConfig& c
     for (double t1 = t0 + dt; t1 <= cfg.start_s + duration_s; t0 = t1, t1 += dt) {
       const Kin k0 = kinematics(traj, t0, g), k1 = kinematics(traj, t1, g);
       const Vector3d p_C1 = k0.p + k0.R * fp.t_B_C_m, p_C2 = k1.p + k1.R * fp.t_B_C_m;
-      const double d1 = p_C1.z() - terrain_at(cfg.platform, p_C1.x(), p_C1.y());
+      const double d1 =
+          p_C1.z() - (cfg.flow_sees_floor ? 0.0 : terrain_at(cfg.platform, p_C1.x(), p_C1.y()));
       Input in;
       in.kind = Kind::kFlow;
       in.flow.utime_from = utime_of(t0);

@@ -48,6 +48,9 @@ struct SensorConfig {
   double flow_sigma = 0.003;  ///< front end's sigma of t_over_d on each axis [-]
   double baro_offset0_m = 40.0;
   std::optional<Platform> platform;
+  /// The flow's plane is the floor even over the platform (a platform small in the camera's
+  /// view), not the surface under the camera.
+  bool flow_sees_floor = false;
   double start_s = 0.0;  ///< first IMU time (utime 1e9 us + this)
 };
 

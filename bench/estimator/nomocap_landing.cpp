@@ -1,0 +1,171 @@
+// Landing without motion capture, Monte Carlo (issue 17): for each of the paper's platforms
+// (config/scenarios/landing_a/b/c.yaml), N seeded landings flown in process on the onboard
+// estimate (test/autonomy/closed_loop.hpp with onboard_estimate: the simulator's IMU,
+// rangefinder, barometer and downward frames through alight-estimator's work, real vision on
+// the same frames; no motion capture; the truth only scores). Deterministic per seed: the same
+// seed gives the same flight at any --jobs.
+//
+// Per platform: landings, touchdown lateral error (body origin to the platform top's centre)
+// p50 / p95 / max, the platform estimate's error relative to the vehicle (what flying on the
+// estimate needs), the estimate's largest error against the truth in flight, retries and every
+// failure's and retry's reason.
+//
+//   build/bin/estimator_nomocap_landing [--seeds 20] [--first-seed 1] [--jobs 2]
+//       [--scenarios landing_a,landing_b,landing_c] [--vehicle config/vehicles/pelican.yaml]
+
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <mutex>
+#include <opencv2/core.hpp>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "closed_loop.hpp"
+#include "real_vision.hpp"
+
+using namespace alight;
+using namespace alight::autonomy;
+using namespace alight::autonomy::test;
+
+namespace {
+
+double quantile(std::vector<double> v, double q) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const double pos = q * (v.size() - 1);
+  const size_t i = static_cast<size_t>(pos);
+  const double f = pos - i;
+  return i + 1 < v.size() ? v[i] * (1 - f) + v[i + 1] * f : v[i];
+}
+
+struct Run {
+  std::string scenario;
+  int seed = 0;
+  ClosedLoopResult r;
+  bool ok = false;
+};
+
+bool success(const ClosedLoopResult& r) {
+  // As bench/autonomy: a platform overlapping the start spot flags "tipped" before take-off.
+  return r.phase == Phase::kLanded && !r.armed &&
+         (r.tipped_before_go ? r.on_platform_top : r.landed && !r.tipped);
+}
+
+std::string one_line(const Run& x) {
+  const auto& r = x.r;
+  char buf[512];
+  std::snprintf(buf, sizeof buf,
+                "%s seed %2d: %s touchdown %.2f cm, platform rel. error %.2f cm (z %+.2f), pose "
+                "error max %.2f cm (z %.2f), retries %d, mission %.1f s, flow on floor %lld, "
+                "terrain resets %d, health not OK %d+%d steps%s%s",
+                x.scenario.c_str(), x.seed, x.ok ? "landed" : "FAILED", 100 * r.touchdown_error_m,
+                100 * r.estimate_error_rel_W.norm(), 100 * r.estimate_error_rel_W.z(),
+                100 * r.max_pose_error_h_m, 100 * r.max_pose_error_z_m, r.retries, r.mission_time_s,
+                static_cast<long long>(r.flow_on_floor), r.terrain_resets,
+                r.estimate_degraded_steps, r.estimate_lost_steps,
+                r.estimate_reasons.empty() ? "" : (" (" + r.estimate_reasons + ")").c_str(),
+                x.ok ? "" : (": " + r.reason).c_str());
+  return buf;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"landing without motion capture on the onboard estimate, real vision, Monte Carlo"};
+  int seeds = 20, first = 1, jobs = 1;
+  std::string scenarios = "landing_a,landing_b,landing_c";
+  std::string vehicle = std::string(ALIGHT_SOURCE_DIR) + "/config/vehicles/pelican.yaml";
+  double time_limit_s = 150;
+  app.add_option("--seeds", seeds, "landings per platform")->check(CLI::Range(1, 1000));
+  app.add_option("--first-seed", first, "seed of the first landing");
+  app.add_option("--jobs", jobs, "landings flown at once (threads)")->check(CLI::Range(1, 64));
+  app.add_option("--scenarios", scenarios,
+                 "scenario names under config/scenarios, comma-separated");
+  app.add_option("--vehicle", vehicle, "vehicle file");
+  app.add_option("--time-limit", time_limit_s, "simulated seconds per landing at most");
+  CLI11_PARSE(app, argc, argv);
+  cv::setNumThreads(1);  // the jobs are the parallelism
+
+  std::vector<std::string> names;
+  for (std::stringstream ss(scenarios); ss.good();) {
+    std::string n;
+    std::getline(ss, n, ',');
+    if (!n.empty()) names.push_back(n);
+  }
+  std::vector<Run> runs;
+  for (const auto& n : names)
+    for (int s = first; s < first + seeds; ++s) runs.push_back(Run{n, s, {}, false});
+
+  std::atomic<size_t> next{0};
+  std::mutex out;
+  const auto worker = [&] {
+    for (size_t i = next++; i < runs.size(); i = next++) {
+      Run& x = runs[i];
+      RealVision vision(vehicle, Mission::kLanding);
+      ClosedLoopConfig c;
+      c.vehicle_file = vehicle;
+      c.scenario_file =
+          std::string(ALIGHT_SOURCE_DIR) + "/config/scenarios/" + x.scenario + ".yaml";
+      c.mission = Mission::kLanding;
+      c.seed = static_cast<uint64_t>(x.seed);
+      c.time_limit_s = time_limit_s;
+      c.onboard_estimate = true;
+      c.camera_vision = [&vision](const sim::CameraFrame& f, const std::optional<PoseSample>& p) {
+        return vision(f, p);
+      };
+      x.r = fly_closed_loop(c);
+      x.ok = success(x.r);
+      std::lock_guard<std::mutex> lock(out);
+      std::printf("%s\n", one_line(x).c_str());
+      for (const auto& why : x.r.retry_reasons) std::printf("    retry: %s\n", why.c_str());
+      std::fflush(stdout);
+    }
+  };
+  std::vector<std::thread> threads;
+  for (int j = 0; j < jobs; ++j) threads.emplace_back(worker);
+  for (auto& t : threads) t.join();
+
+  std::printf("\nwithout motion capture, %s, seeds %d-%d:\n", vehicle.c_str(), first,
+              first + seeds - 1);
+  for (const auto& n : names) {
+    std::vector<double> err_cm, rel_cm, rel_z_cm, pose_h_cm, pose_z_cm, time_s;
+    int ok = 0, n_runs = 0, retries = 0;
+    std::map<std::string, int> failures, retry_reasons;
+    for (const auto& x : runs) {
+      if (x.scenario != n) continue;
+      ++n_runs;
+      retries += x.r.retries;
+      for (const auto& why : x.r.retry_reasons) ++retry_reasons[why.substr(0, why.find(':'))];
+      rel_cm.push_back(100 * x.r.estimate_error_rel_W.norm());
+      rel_z_cm.push_back(100 * std::abs(x.r.estimate_error_rel_W.z()));
+      pose_h_cm.push_back(100 * x.r.max_pose_error_h_m);
+      pose_z_cm.push_back(100 * x.r.max_pose_error_z_m);
+      if (x.ok) {
+        ++ok;
+        err_cm.push_back(100 * x.r.touchdown_error_m);
+        time_s.push_back(x.r.mission_time_s);
+      } else {
+        ++failures[x.r.reason];
+      }
+    }
+    std::printf(
+        "%s: %d/%d landed; touchdown lateral error p50 %.2f p95 %.2f max %.2f cm; platform "
+        "estimate relative to the vehicle p50 %.2f max %.2f cm (|z| p50 %.2f max %.2f); estimate "
+        "error in flight, largest per run: horizontal p50 %.2f max %.2f cm, vertical p50 %.2f max "
+        "%.2f cm; mission p50 %.1f s; retries %d\n",
+        n.c_str(), ok, n_runs, quantile(err_cm, 0.5), quantile(err_cm, 0.95), quantile(err_cm, 1.0),
+        quantile(rel_cm, 0.5), quantile(rel_cm, 1.0), quantile(rel_z_cm, 0.5),
+        quantile(rel_z_cm, 1.0), quantile(pose_h_cm, 0.5), quantile(pose_h_cm, 1.0),
+        quantile(pose_z_cm, 0.5), quantile(pose_z_cm, 1.0), quantile(time_s, 0.5), retries);
+    for (const auto& [why, k] : failures) std::printf("    failed %dx: %s\n", k, why.c_str());
+    for (const auto& [why, k] : retry_reasons) std::printf("    retry %dx: %s\n", k, why.c_str());
+  }
+  std::fflush(stdout);
+  return 0;
+}

@@ -1,0 +1,30 @@
+#include "real_vision.hpp"
+
+#include "autonomy/convert.hpp"
+#include "sim/params.hpp"
+#include "vision/convert.hpp"
+#include "vision/params.hpp"
+#include "vision/pipeline.hpp"
+
+namespace alight::autonomy::test {
+
+RealVision::RealVision(const std::string& vehicle_file, Mission mission) {
+  const auto params = vision::load_node_params(vehicle_file);
+  const auto rig =
+      sim::load_camera_rig(vehicle_file, mission == Mission::kLanding ? "downward" : "forward");
+  pipeline_ = std::make_unique<vision::Pipeline>(
+      mission == Mission::kLanding ? vision::Mission::kLanding : vision::Mission::kIngress,
+      params.pipeline, rig.model, rig.mount);
+}
+
+RealVision::~RealVision() = default;
+
+std::optional<TargetMeasurement> RealVision::operator()(const sim::CameraFrame& f,
+                                                        const std::optional<PoseSample>& pose) {
+  const auto r = pipeline_->process(f.pixels, f.utime, pose);
+  ++frames;
+  found += r.found();
+  return from_msg(vision::to_msg(r));
+}
+
+}  // namespace alight::autonomy::test

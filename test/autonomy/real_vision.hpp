@@ -1,0 +1,36 @@
+#pragma once
+// The vision node's per-frame work for the in-process closed loop (closed_loop.hpp,
+// camera_vision): the pipeline on the frame with the pose interpolated at its exposure, then the
+// node's message conversion (VISION_TARGET) and autonomy's. Used by the closed-loop tests with
+// real vision (test/integration) and the benches that fly them (bench/estimator).
+
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "autonomy/types.hpp"
+#include "common/pose_buffer.hpp"
+#include "sim/simulator.hpp"
+
+namespace alight::vision {
+class Pipeline;
+}
+
+namespace alight::autonomy::test {
+
+class RealVision {
+ public:
+  /// The vehicle file's vision parameters and the mission's camera (downward for landing).
+  RealVision(const std::string& vehicle_file, Mission mission);
+  ~RealVision();
+  std::optional<TargetMeasurement> operator()(const sim::CameraFrame& f,
+                                              const std::optional<PoseSample>& pose);
+
+  int frames = 0;  ///< frames processed
+  int found = 0;   ///< ... in which the target was found
+
+ private:
+  std::unique_ptr<vision::Pipeline> pipeline_;
+};
+
+}  // namespace alight::autonomy::test
