@@ -77,6 +77,30 @@ const test::Truth& truth_at(const Flight& f, int64_t utime) {
 
 // ---- Initialisation
 
+/// A flight over a platform: the largest height error, and the terrain estimate while the truth
+/// is over [on_x0, on_x1) and after it, over [after_x0, after_x1) (-1 when never there).
+struct PlatformPass {
+  double max_z_error = 0, terrain_on_platform = -1, terrain_after = -1;
+  State final_state;
+};
+PlatformPass fly_over(const Flight& f, const EstimatorParams& p, double on_x0, double on_x1,
+                      double after_x0, double after_x1) {
+  Estimator est(p);
+  PlatformPass r;
+  for (const auto& in : f.inputs) {
+    test::feed(est, in);
+    if (in.kind != test::Kind::kImu || !est.initialised()) continue;
+    const State s = est.state();
+    const test::Truth& truth = truth_at(f, s.utime);
+    r.max_z_error = std::max(r.max_z_error, std::abs(s.p_W_B.z() - truth.p_W_B.z()));
+    const double x = truth.p_W_B.x();
+    if (x > on_x0 && x < on_x1) r.terrain_on_platform = s.terrain_height_m;
+    if (x > after_x0 && x < after_x1) r.terrain_after = s.terrain_height_m;
+  }
+  r.final_state = est.state();
+  return r;
+}
+
 TEST(EstimatorTest, NotInitialisedUntilStillForTheAlignmentTimeThenLevelledFromTheAccelerometer) {
   EstimatorParams p = default_params();
   p.init.yaw_deg = 30;
@@ -217,22 +241,12 @@ TEST(EstimatorTest, RangeStepOntoAPlatformResetsTheTerrainNotTheVehicleHeight) {
   SensorConfig cfg;
   cfg.platform = test::Platform{3.0, 5.0, -1.0, 1.0, 0.5};
   const Flight f = test::simulate(test::square(kRestZ, 1.5, 6.0, 10.0, 1.0), 14.0, cfg, p, 5);
-  Estimator est(p);
-  double max_z_error = 0, terrain_on_platform = -1, terrain_after = -1;
-  for (const auto& in : f.inputs) {
-    test::feed(est, in);
-    if (in.kind != test::Kind::kImu || !est.initialised()) continue;
-    const State s = est.state();
-    const test::Truth& truth = truth_at(f, s.utime);
-    max_z_error = std::max(max_z_error, std::abs(s.p_W_B.z() - truth.p_W_B.z()));
-    if (truth.p_W_B.x() > 4.5 && truth.p_W_B.x() < 4.6) terrain_on_platform = s.terrain_height_m;
-    if (truth.p_W_B.x() > 6.5 && truth.p_W_B.x() < 6.6) terrain_after = s.terrain_height_m;
-  }
-  const State s = est.state();
+  const PlatformPass r = fly_over(f, p, 4.5, 4.6, 6.5, 6.6);
+  const State& s = r.final_state;
   EXPECT_EQ(s.counters.terrain_resets, 2);  // onto and off
-  EXPECT_NEAR(terrain_on_platform, 0.5, 0.05);
-  EXPECT_NEAR(terrain_after, 0.0, 0.05);
-  EXPECT_LT(max_z_error, 0.1);
+  EXPECT_NEAR(r.terrain_on_platform, 0.5, 0.05);
+  EXPECT_NEAR(r.terrain_after, 0.0, 0.05);
+  EXPECT_LT(r.max_z_error, 0.1);
   EXPECT_GT(s.counters.count(Sensor::kRange, Outcome::kGate), 0);
 }
 
@@ -247,22 +261,12 @@ TEST(EstimatorTest, PaperPlatformAIsAStepOfTheTerrainNotAPullOnTheHeight) {
   cfg.platform = test::Platform{3.0, 3.4, -1.0, 1.0, 0.109};
   cfg.flow_sees_floor = true;
   const Flight f = test::simulate(test::square(kRestZ, 1.6, 6.0, 10.0, 0.3), 25.0, cfg, p, 5);
-  Estimator est(p);
-  double max_z_error = 0, terrain_on_platform = -1, terrain_after = -1;
-  for (const auto& in : f.inputs) {
-    test::feed(est, in);
-    if (in.kind != test::Kind::kImu || !est.initialised()) continue;
-    const State s = est.state();
-    const test::Truth& truth = truth_at(f, s.utime);
-    max_z_error = std::max(max_z_error, std::abs(s.p_W_B.z() - truth.p_W_B.z()));
-    if (truth.p_W_B.x() > 3.25 && truth.p_W_B.x() < 3.3) terrain_on_platform = s.terrain_height_m;
-    if (truth.p_W_B.x() > 4.0 && truth.p_W_B.x() < 4.1) terrain_after = s.terrain_height_m;
-  }
-  const State s = est.state();
+  const PlatformPass r = fly_over(f, p, 3.25, 3.3, 4.0, 4.1);
+  const State& s = r.final_state;
   EXPECT_EQ(s.counters.terrain_resets, 2);  // onto and off
-  EXPECT_NEAR(terrain_on_platform, 0.109, 0.02);
-  EXPECT_NEAR(terrain_after, 0.0, 0.01);  // back on the floor: height 0 again
-  EXPECT_LT(max_z_error, 0.02);
+  EXPECT_NEAR(r.terrain_on_platform, 0.109, 0.02);
+  EXPECT_NEAR(r.terrain_after, 0.0, 0.01);  // back on the floor: height 0 again
+  EXPECT_LT(r.max_z_error, 0.02);
   EXPECT_GT(s.counters.flow_on_floor, 0);  // over the platform, the floor fitted the flow
 }
 
