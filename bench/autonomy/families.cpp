@@ -17,9 +17,9 @@
 //   build/bin/alight_families_bench [--families landing_tiles,ingress_photo] [--runs 20]
 //       [--seed0 S] [--jobs 2] [--no-mocap] [--vehicle config/vehicles/pelican.yaml] [--verbose]
 
-#include <CLI/CLI.hpp>
 #include <time.h>
 
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <atomic>
 #include <cmath>
@@ -76,8 +76,8 @@ struct Run {
   ClosedLoopResult r;
   bool ok = false;
   int frames = 0, found = 0;
-  std::vector<double> widths_m;     ///< full views' opening widths (ingress)
-  std::vector<double> cpu_ms;       ///< the vision's thread CPU time per frame
+  std::vector<double> widths_m;  ///< full views' opening widths (ingress)
+  std::vector<double> cpu_ms;    ///< the vision's thread CPU time per frame
   double true_width_m = std::nan("");
 };
 
@@ -259,14 +259,14 @@ int main(int argc, char** argv) {
       }
     }
     std::printf("%s: %d/%d %s", fam.c_str(), ok, n,
-                targetless(fam)                   ? "without a false target"
+                targetless(fam)                        ? "without a false target"
                 : mission_of(fam) == Mission::kLanding ? "landed"
                                                        : "through");
     if (targetless(fam))
       std::printf(" (false targets in %d runs, %d frames)", false_runs, false_frames);
     else if (mission_of(fam) == Mission::kLanding)
-      std::printf("; touchdown lateral error p50 %.2f p95 %.2f max %.2f cm", quantile(touch_cm, 0.5),
-                  quantile(touch_cm, 0.95), quantile(touch_cm, 1.0));
+      std::printf("; touchdown lateral error p50 %.2f p95 %.2f max %.2f cm",
+                  quantile(touch_cm, 0.5), quantile(touch_cm, 0.95), quantile(touch_cm, 1.0));
     else
       std::printf(
           "; width error |.| p50 %.2f p95 %.2f max %.2f cm (signed p50 %+.2f, %zu runs measured); "
@@ -274,10 +274,11 @@ int main(int argc, char** argv) {
           quantile(wabs_cm, 0.5), quantile(wabs_cm, 0.95), quantile(wabs_cm, 1.0),
           quantile(werr_cm, 0.5), werr_cm.size(), quantile(centre_cm, 0.5),
           quantile(centre_cm, 0.95), quantile(offset_cm, 0.5), quantile(offset_cm, 1.0));
-    std::printf("; mission p50 %.1f s; retries %d; vision CPU per frame p50 %.2f p99 %.2f max %.2f ms"
-                " over %zu frames\n",
-                quantile(time_s, 0.5), retries, quantile(cpu, 0.5), quantile(cpu, 0.99),
-                quantile(cpu, 1.0), cpu.size());
+    std::printf(
+        "; mission p50 %.1f s; retries %d; vision CPU per frame p50 %.2f p99 %.2f max %.2f ms"
+        " over %zu frames\n",
+        quantile(time_s, 0.5), retries, quantile(cpu, 0.5), quantile(cpu, 0.99), quantile(cpu, 1.0),
+        cpu.size());
     for (const auto& [why, k] : failures) std::printf("    failed %dx: %s\n", k, why.c_str());
   }
   std::fflush(stdout);
