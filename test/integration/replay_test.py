@@ -118,14 +118,15 @@ def run(args):
     log = os.path.join(session, "session.lcmlog")
     print("live session %s: %d %s" % (log, found, what))
     if args.node == "estimator":
-        return replay_estimator(args, env, log, log_root)
+        script, extra = "replay-estimator", []
+    else:
+        # Real time: the node processes every frame it gets and queues behind a slow one, so
+        # the replay needs no slow motion to match (the default 0.5x is for a slower machine).
+        script, extra = "replay-vision", ["--mission", args.mission, "--speed", "1.0"]
     replay = subprocess.run(
-        [sys.executable, os.path.join(args.source, "scripts", "replay-vision"), log,
-         "--config", env["ALIGHT_VEHICLE"], "--mission", args.mission, "--build", args.build,
-         "--keep", os.path.join(log_root, "replay"),
-         # Real time: the node processes every frame it gets and queues behind a slow one, so
-         # the replay needs no slow motion to match (the default 0.5x is for a slower machine).
-         "--speed", "1.0"],
+        [sys.executable, os.path.join(args.source, "scripts", script), log,
+         "--config", env["ALIGHT_VEHICLE"], "--build", args.build,
+         "--keep", os.path.join(log_root, "replay")] + extra,
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
         env=dict(os.environ, ALIGHT_LCMTYPES_PYTHON=os.environ.get(
             "ALIGHT_LCMTYPES_PYTHON", os.path.join(args.build, "lcmtypes", "python"))))
@@ -133,13 +134,22 @@ def run(args):
     if replay.returncode == 3:
         return 3
     if replay.returncode != 0:
-        print("FAIL: replay-vision exited with %d" % replay.returncode)
+        print("FAIL: %s exited with %d" % (script, replay.returncode))
         return 1
-    m = re.search(r"identical: (\d+) VISION_TARGET messages \((\d+) with a target\)", replay.stdout)
-    if not m or int(m.group(2)) < MIN_FOUND:
-        print("FAIL: the replay compared fewer than %d targets with the target found" % MIN_FOUND)
-        return 1
-    print("PASS: %s targets identical, %s with the target found" % (m.group(1), m.group(2)))
+    if args.node == "estimator":
+        m = re.search(r"identical: (\d+) STATE_ESTIMATE messages", replay.stdout)
+        if not m or int(m.group(1)) < MIN_ESTIMATES // 2:
+            print("FAIL: the replay compared fewer than %d estimates" % (MIN_ESTIMATES // 2))
+            return 1
+        print("PASS: %s estimates identical" % m.group(1))
+    else:
+        m = re.search(r"identical: (\d+) VISION_TARGET messages \((\d+) with a target\)",
+                      replay.stdout)
+        if not m or int(m.group(2)) < MIN_FOUND:
+            print("FAIL: the replay compared fewer than %d targets with the target found"
+                  % MIN_FOUND)
+            return 1
+        print("PASS: %s targets identical, %s with the target found" % (m.group(1), m.group(2)))
     shutil.rmtree(log_root, ignore_errors=True)  # a failing run keeps its logs for a look
     return 0
 
@@ -158,29 +168,6 @@ def progress(lcmlog, log, node):
 
 def need(node):
     return MIN_ESTIMATES if node == "estimator" else MIN_FOUND
-
-
-def replay_estimator(args, env, log, log_root):
-    replay = subprocess.run(
-        [sys.executable, os.path.join(args.source, "scripts", "replay-estimator"), log,
-         "--config", env["ALIGHT_VEHICLE"], "--build", args.build,
-         "--keep", os.path.join(log_root, "replay")],
-        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-        env=dict(os.environ, ALIGHT_LCMTYPES_PYTHON=os.environ.get(
-            "ALIGHT_LCMTYPES_PYTHON", os.path.join(args.build, "lcmtypes", "python"))))
-    print(replay.stdout)
-    if replay.returncode == 3:
-        return 3
-    if replay.returncode != 0:
-        print("FAIL: replay-estimator exited with %d" % replay.returncode)
-        return 1
-    m = re.search(r"identical: (\d+) STATE_ESTIMATE messages", replay.stdout)
-    if not m or int(m.group(1)) < MIN_ESTIMATES // 2:
-        print("FAIL: the replay compared fewer than %d estimates" % (MIN_ESTIMATES // 2))
-        return 1
-    print("PASS: %s estimates identical" % m.group(1))
-    shutil.rmtree(log_root, ignore_errors=True)  # a failing run keeps its logs for a look
-    return 0
 
 
 if __name__ == "__main__":
