@@ -58,7 +58,22 @@ struct Run {
   bool ok = false;
 };
 
-bool is_ingress(const std::string& scenario) { return scenario.rfind("ingress", 0) == 0; }
+// A name under config/scenarios, or a scenario file (ends in .yaml).
+bool is_file(const std::string& scenario) {
+  return scenario.size() > 5 && scenario.compare(scenario.size() - 5, 5, ".yaml") == 0;
+}
+
+std::string scenario_file(const std::string& scenario) {
+  return is_file(scenario)
+             ? scenario
+             : std::string(ALIGHT_SOURCE_DIR) + "/config/scenarios/" + scenario + ".yaml";
+}
+
+// Ingress scenarios are named ingress*; a file by its name.
+bool is_ingress(const std::string& scenario) {
+  const std::string base = scenario.substr(scenario.find_last_of('/') + 1);
+  return base.rfind("ingress", 0) == 0;
+}
 
 bool success(const std::string& scenario, const ClosedLoopResult& r) {
   // Through the opening without touching the wall or its frame (the referee's rule).
@@ -116,8 +131,10 @@ int main(int argc, char** argv) {
   app.add_option("--seeds", seeds, "missions per scenario")->check(CLI::Range(1, 1000));
   app.add_option("--first-seed", first, "seed of the first mission");
   app.add_option("--jobs", jobs, "missions flown at once (threads)")->check(CLI::Range(1, 64));
-  app.add_option("--scenarios", scenarios,
-                 "scenario names under config/scenarios, comma-separated (ingress* fly ingress)");
+  app.add_option(
+      "--scenarios", scenarios,
+      "scenario names under config/scenarios or scenario files (*.yaml), comma-separated "
+      "(ingress* fly ingress)");
   app.add_option("--vehicle", vehicle, "vehicle file");
   app.add_option("--time-limit", time_limit_s, "simulated seconds per mission at most");
   bool mocap = false;
@@ -146,8 +163,7 @@ int main(int argc, char** argv) {
       RealVision vision(vehicle, mission);
       ClosedLoopConfig c;
       c.vehicle_file = vehicle;
-      c.scenario_file =
-          std::string(ALIGHT_SOURCE_DIR) + "/config/scenarios/" + x.scenario + ".yaml";
+      c.scenario_file = scenario_file(x.scenario);
       c.mission = mission;
       c.seed = static_cast<uint64_t>(x.seed);
       c.time_limit_s = time_limit_s;
