@@ -43,23 +43,23 @@ def session(imu_seqs, frames=(), estimates=()):
 # The start: the first estimate at IMU seq 30 after 21 samples received -> the node began at 10.
 evs = session(range(0, 100), frames=range(0, 500000, 33333), estimates=range(30, 100))
 live = [e.data for e in evs if e.channel == "STATE_ESTIMATE"]
-start_seq, inputs, comparable, loss = re_.plan(evs, live, 5000 * 30, 21)
+start_seq, inputs, comparable, loss = re_.plan(evs, live, 5000 * 30, 21, "CAMERA")
 check(start_seq == 10, "start seq %d, expected 10" % start_seq)
 check(inputs[0].channel == "IMU" and re_.seq_of(inputs[0].data) == 10,
       "the replay starts at the node's first IMU sample")
-check(all(e.channel in re_.INPUTS for e in inputs), "estimates are not replayed")
+check(all(e.channel in re_.SENSORS + ("CAMERA",) for e in inputs), "estimates are not replayed")
 check(loss is None and len(comparable) == len(live), "a complete log compares everything")
 
 # The logger started after the node: not reproducible.
 try:
-    re_.plan(evs, live, 5000 * 30, 40)
+    re_.plan(evs, live, 5000 * 30, 40, "CAMERA")
     check(False, "a start before the log must be refused")
 except re_.NotReproducible:
     pass
 
 # An IMU sample the logger lost at seq 80: estimates from its predecessor's stamp on are left out.
 gappy = [e for e in evs if not (e.channel == "IMU" and re_.seq_of(e.data) == 80)]
-_, _, comparable, loss = re_.plan(gappy, live, 5000 * 30, 21)
+_, _, comparable, loss = re_.plan(gappy, live, 5000 * 30, 21, "CAMERA")
 check(loss is not None and loss[0] == 5000 * 79, "IMU gap found at %s" % (loss,))
 check(all(re_.utime_of(d) < 5000 * 79 for d in comparable) and len(comparable) == 49,
       "estimates before the gap: %d" % len(comparable))
@@ -67,7 +67,7 @@ check(all(re_.utime_of(d) < 5000 * 79 for d in comparable) and len(comparable) =
 # A camera frame the logger lost (a hole in the frame train) is a loss too; early: refused.
 holed = [e for e in evs if not (e.channel == "CAMERA" and e.utime == 133332)]
 try:
-    re_.plan(holed, live, 5000 * 30, 21)
+    re_.plan(holed, live, 5000 * 30, 21, "CAMERA")
     check(False, "a loss before half the estimates must be refused")
 except re_.NotReproducible as e:
     check("CAMERA" in str(e), "names the camera: %s" % e)
