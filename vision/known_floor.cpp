@@ -39,7 +39,7 @@ bool residual(const Vector3d& p, const Vector3d& x2, double f, Vector2d* r,
 }
 
 struct PerMatch {
-  double err_floor = 1e9;  // transfer error under the floor [px]
+  double err_floor = 1e9;                         // transfer error under the floor [px]
   double rho = 0, half_width = 0, err_rho = 1e9;  // best inverse distance, its tolerance
 };
 
@@ -128,8 +128,7 @@ Matrix3d plane_homography(const KnownMotion& m, const Vector3d& n_1, double rho_
 Result<KnownFloorPlanes> fit_known_floor_planes(const std::vector<Vector3d>& x1,
                                                 const std::vector<Vector3d>& x2,
                                                 const KnownMotion& motion, const KnownPlane& floor,
-                                                double f, const LandingParams& params,
-                                                double thr) {
+                                                double f, const LandingParams& params, double thr) {
   using R_ = Result<KnownFloorPlanes>;
   const size_t N = x1.size();
   if (N != x2.size() || !(f > 0) || !(thr > 0)) return R_::fail(Reason::kTooFewMatches);

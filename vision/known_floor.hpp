@@ -65,12 +65,12 @@ std::optional<KnownPlane> known_floor(const PoseSample& pose_1, const CameraMoun
 Matrix3d plane_homography(const KnownMotion& m, const Vector3d& n_1, double rho_per_m);
 
 struct KnownFloorPlanes {
-  KnownMotion motion;            ///< with the fitted rotation correction
+  KnownMotion motion;  ///< with the fitted rotation correction
   double rotation_correction_rad = 0;
-  Vector3d n_1 = Vector3d::UnitZ();  ///< floor normal in camera 1 (shared by the top)
-  double rho_floor = 0, rho_top = 0;  ///< inverse distances from camera 1 [1/m]
+  Vector3d n_1 = Vector3d::UnitZ();           ///< floor normal in camera 1 (shared by the top)
+  double rho_floor = 0, rho_top = 0;          ///< inverse distances from camera 1 [1/m]
   Vector3d n_top_free_1 = Vector3d::UnitZ();  ///< the top's unit normal, 3-DOF fit
-  std::vector<uint8_t> floor, top;    ///< per match: inlier of the plane
+  std::vector<uint8_t> floor, top;            ///< per match: inlier of the plane
   int n_floor = 0, n_top = 0;
   double height_m() const { return 1.0 / rho_floor - 1.0 / rho_top; }
 };

@@ -95,7 +95,8 @@ Result<Planes> known_floor_planes(const Correspondences& c, const PipelineParams
 
 // The paper's floor is the known one: distance from camera 1 within floor_tol_frac, normals
 // within max_normal_angle_deg.
-bool floor_agrees(const PlaneMotion& floor, const Correspondences& c, const PipelineParams& params) {
+bool floor_agrees(const PlaneMotion& floor, const Correspondences& c,
+                  const PipelineParams& params) {
   const auto known = known_floor(c.pose_1, *c.mount, params.landing.floor_z_m);
   if (!known) return false;
   const double d_m = floor.distance_1() * mocap_motion(c.pose_1, c.pose_2, *c.mount).baseline_m;

@@ -211,8 +211,7 @@ const ParamSchema<LandingParams>& LandingParams::schema() {
           "max_normal_angle_deg)");
     s.add("min_floor_inliers", &P::min_floor_inliers, Range::ge(1), "",
           "known floor: fewer matches on it, no planes (the rotation correction rests on them)");
-    s.add("max_rotation_correction_deg", &P::max_rotation_correction_deg, Range::open(0, 10),
-          "deg",
+    s.add("max_rotation_correction_deg", &P::max_rotation_correction_deg, Range::open(0, 10), "deg",
           "known floor: motion capture's R21 is corrected by at most this (its orientation noise, "
           "0.1 deg a sample, moves the image by 1-2 px; a correction the size of the "
           "platform's parallax would take the top for the floor)");

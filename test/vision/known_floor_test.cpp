@@ -51,9 +51,8 @@ TEST(KnownFloorTest, HomographyFromPosesMapsFloorPointsExactly) {
   EXPECT_NEAR(floor->d_1_m, X_WC1.translation().z() - floor_z, 1e-12);
   EXPECT_LT(direction_angle(floor->n_1, Vector3d::UnitZ()), 5 * kDeg);
   const MocapMotion m = mocap_motion(p1, p2, mount);
-  const Matrix3d H = K * plane_homography({m.R_21, m.t_12}, floor->n_1,
-                                          1.0 / floor->d_1_m) *
-                     K.inverse();
+  const Matrix3d H =
+      K * plane_homography({m.R_21, m.t_12}, floor->n_1, 1.0 / floor->d_1_m) * K.inverse();
   int n = 0;
   for (double x = -0.6; x <= 1.2; x += 0.15)
     for (double y = -0.8; y <= 0.4; y += 0.15) {
@@ -92,8 +91,8 @@ Scene make_scene(uint64_t seed, double height_m, int n_floor, int n_top, int n_o
   const Matrix3d K = CameraModel::firefly_mv_4mm().K();
   const double f = K(0, 0);
   const CameraMount mount = downward();
-  const PoseSample p1 = pose({0.1 * U(rng), 0.1 * U(rng), 1.35 + 0.1 * U(rng)}, 0.02 * U(rng),
-                             0.02 * U(rng), U(rng));
+  const PoseSample p1 =
+      pose({0.1 * U(rng), 0.1 * U(rng), 1.35 + 0.1 * U(rng)}, 0.02 * U(rng), 0.02 * U(rng), U(rng));
   // The pipeline's references are up to 0.3 m back (max_reference_baseline_m): 12-28 cm here.
   const double dir = M_PI * U(rng), len = 0.12 + 0.08 * (1 + U(rng));
   const Vector3d step(len * std::cos(dir), len * std::sin(dir), 0.03 * U(rng));
@@ -102,8 +101,7 @@ Scene make_scene(uint64_t seed, double height_m, int n_floor, int n_top, int n_o
   s.floor = *known_floor(p1, mount, 0.0);
   const MocapMotion m = mocap_motion(p1, p2, mount);
   const Vector3d w(G(rng), G(rng), G(rng));
-  s.mocap = {Eigen::AngleAxisd(rot_err_rad, w.normalized()).toRotationMatrix() * m.R_21,
-             m.t_12};
+  s.mocap = {Eigen::AngleAxisd(rot_err_rad, w.normalized()).toRotationMatrix() * m.R_21, m.t_12};
   const Vector3d below = p1.p_W_B;
   const auto add = [&](const Vector3d& X_W, int label) {
     const auto u1 = project(K, p1, mount, X_W), u2 = project(K, p2, mount, X_W);
