@@ -155,11 +155,28 @@ Result<KnownFloorPlanes> fit_known_floor_planes(const std::vector<Vector3d>& x1,
     return nf;
   };
 
-  // 1-2. One hypothesis per match taken for floor.
+  // 1-2. One hypothesis per match taken for floor. Only a match within the largest correction
+  // (plus the threshold) of the uncorrected floor can be floor; of those at most
+  // kMaxHypotheses, evenly spread in match order (every floor match gives nearly the same
+  // correction, so a few of them are as good as all).
+  std::vector<size_t> hyp;
+  {
+    std::vector<PerMatch> pm0;
+    classify(x1, x2, motion.R_21, t, n, rho_f, f, thr, &pm0);
+    for (size_t i = 0; i < N; ++i)
+      if (pm0[i].err_floor <= thr + f * max_w) hyp.push_back(i);
+    constexpr size_t kMaxHypotheses = 96;
+    if (hyp.size() > kMaxHypotheses) {
+      std::vector<size_t> spread;
+      for (size_t k = 0; k < kMaxHypotheses; ++k)
+        spread.push_back(hyp[k * hyp.size() / kMaxHypotheses]);
+      hyp = std::move(spread);
+    }
+  }
   int best_score = -1, best_floor = 0;
   Vector3d best_w = Vector3d::Zero();
   TopMode best_top;
-  for (size_t h = 0; h < N; ++h) {
+  for (const size_t h : hyp) {
     Vector3d w = Vector3d::Zero();
     bool ok = true;
     for (int it = 0; it < 2 && ok; ++it) {
