@@ -316,6 +316,10 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
     r.touchdown_error_m =
         (truth.state.p_W_B.head<2>() - truth.platform->top_center_W.head<2>()).norm();
     r.estimate_error_W = autonomy.final_estimate() - truth.platform->top_center_W;
+    const Vector2d d = truth.state.p_W_B.head<2>() - truth.platform->top_center_W.head<2>();
+    const double c = std::cos(truth.platform->yaw_rad), s = std::sin(truth.platform->yaw_rad);
+    r.final_in_platform_m = Vector2d(c * d.x() + s * d.y(), -s * d.x() + c * d.y());
+    r.platform_size_m = truth.platform->size_m.head<2>();
   } else if (truth.opening) {
     r.estimate_error_W = autonomy.final_estimate() - truth.opening->center_W;
   }

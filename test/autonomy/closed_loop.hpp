@@ -87,6 +87,10 @@ struct ClosedLoopResult {
   double error_at_final_descent_m = -1;  ///< lateral body - platform centre entering FINAL_DESCENT
   double error_at_touchdown_m = -1;      ///< ... when autonomy detected the touch-down
   double platform_yaw_rad = 0;
+  /// Final body position relative to the platform top's centre, in the platform's frame (x along
+  /// its length), and the platform's length and width: touchdown plots over the outline [m].
+  Vector2d final_in_platform_m = Vector2d::Zero();
+  Vector2d platform_size_m = Vector2d::Zero();
   bool tipped_before_go = false;  ///< sim's sticky "tipped" already set when GO was issued (a
                                   ///< scenario whose random platform overlaps the start spot)
   bool on_platform_top = false;   ///< sim contact at the end is the platform top

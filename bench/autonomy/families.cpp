@@ -1,0 +1,337 @@
+// Scene families, Monte Carlo in process (issue 15): for each family (scripts/scene_families.py)
+// N scenes freshly drawn (scripts/scenes, seed0 .. seed0 + N - 1; seed0 random unless given, and
+// printed so a run can be redone), each flown with the real vision pipeline in the tests' closed
+// loop (test/autonomy/closed_loop.hpp: simulator, outer loop, autonomy; motion capture, or the
+// onboard estimate with --no-mocap). Deterministic per scene: the same family, seed and vehicle
+// give the same flight at any --jobs.
+//
+// Per family: missions completed (landed on the platform top, motors off / through the opening
+// without contact), touchdown lateral error p50 / p95 / max (landing), opening width error (the
+// median of the full views' widths minus the true width, as alight-score) p50 / p95 of |error| and
+// its sign, opening centre error and the largest offset from the opening centre while crossing
+// (ingress), false targets (families without a target: any frame the vision reported found),
+// retries and every failure's reason, and the vision's thread CPU time per frame p50 / p99 / max
+// (the in-process pipeline on the frames of the flights; at --jobs 2 the two flights share the
+// machine's caches).
+//
+//   build/bin/alight_families_bench [--families landing_tiles,ingress_photo] [--runs 20]
+//       [--seed0 S] [--jobs 2] [--no-mocap] [--vehicle config/vehicles/pelican.yaml] [--verbose]
+//       [--csv FILE]
+//
+// --csv writes one row per run with scripts/montecarlo's column names (it runs this bench with
+// --in-process and summarises and plots the rows as it does its flights over LCM).
+
+#include <time.h>
+
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <mutex>
+#include <opencv2/core.hpp>
+#include <random>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "closed_loop.hpp"
+#include "real_vision.hpp"
+#include "sim/params.hpp"
+
+using namespace alight;
+using namespace alight::autonomy;
+using namespace alight::autonomy::test;
+
+namespace {
+
+double quantile(std::vector<double> v, double q) {
+  if (v.empty()) return std::nan("");
+  std::sort(v.begin(), v.end());
+  const double pos = q * (v.size() - 1);
+  const size_t i = static_cast<size_t>(pos);
+  const double f = pos - i;
+  return i + 1 < v.size() ? v[i] * (1 - f) + v[i + 1] * f : v[i];
+}
+
+double thread_cpu_ms() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
+}
+
+Mission mission_of(const std::string& family) {
+  return family.rfind("ingress", 0) == 0 ? Mission::kIngress : Mission::kLanding;
+}
+
+/// A family without a target: the vision must never report one.
+bool targetless(const std::string& family) {
+  return family.find("_none") != std::string::npos || family.find("_solid") != std::string::npos;
+}
+
+struct Run {
+  std::string family;
+  uint64_t seed = 0;
+  std::string scenario_file;
+  ClosedLoopResult r;
+  bool ok = false;
+  int frames = 0, found = 0;
+  std::vector<double> widths_m;  ///< full views' opening widths (ingress)
+  std::vector<double> cpu_ms;    ///< the vision's thread CPU time per frame
+  double true_width_m = std::nan("");
+};
+
+bool success(const Run& x) {
+  const auto& r = x.r;
+  if (targetless(x.family)) return x.found == 0 && !r.collided;
+  if (mission_of(x.family) == Mission::kIngress)
+    return r.phase == Phase::kDone && r.crossed_wall && !r.collided;
+  // As bench/autonomy: a platform overlapping the start spot flags "tipped" before take-off.
+  return r.phase == Phase::kLanded && !r.armed &&
+         (r.tipped_before_go ? r.on_platform_top : r.landed && !r.tipped);
+}
+
+double width_error_m(const Run& x) {
+  if (x.widths_m.empty() || !std::isfinite(x.true_width_m)) return std::nan("");
+  return quantile(x.widths_m, 0.5) - x.true_width_m;
+}
+
+std::string one_line(const Run& x) {
+  const auto& r = x.r;
+  char what[256];
+  if (targetless(x.family))
+    std::snprintf(what, sizeof what, "found %d of %d frames", x.found, x.frames);
+  else if (mission_of(x.family) == Mission::kLanding)
+    std::snprintf(what, sizeof what, "touchdown %.2f cm, platform estimate error %.2f cm",
+                  100 * r.touchdown_error_m, 100 * r.estimate_error_W.norm());
+  else
+    std::snprintf(what, sizeof what,
+                  "width error %+.2f cm (true %.3f m), centre error %.2f cm, max offset in the "
+                  "wall %.2f cm",
+                  100 * width_error_m(x), x.true_width_m, 100 * r.estimate_error_W.norm(),
+                  100 * r.max_lateral_in_wall_m);
+  char buf[768];
+  std::snprintf(buf, sizeof buf, "%s seed %llu: %s, %s; %s; retries %d, mission %.1f s",
+                x.family.c_str(), static_cast<unsigned long long>(x.seed), x.ok ? "ok" : "FAILED",
+                r.reason.c_str(), what, r.retries, r.mission_time_s);
+  return buf;
+}
+
+/// One row per run; empty cells where a figure does not apply (as alight-score leaves it out).
+bool write_csv(const std::string& path, const std::vector<Run>& all) {
+  std::ofstream f(path);
+  f << "scenario,seed,mission,success,outcome,touchdown_lateral_error_m,touchdown_along_m,"
+       "touchdown_across_m,platform_length_m,platform_width_m,opening_width_error_m,"
+       "opening_width_m,opening_center_error_m,crossing_offset_m,retries,mission_time_s,"
+       "vision_frames,vision_found,vision_process_cpu_p50_ms,vision_process_cpu_p99_ms,"
+       "vision_process_cpu_max_ms\n";
+  const auto num = [](double v) {
+    char b[32];
+    std::snprintf(b, sizeof b, "%.6g", v);
+    return std::isfinite(v) ? std::string(b) : std::string();
+  };
+  for (const auto& x : all) {
+    const auto& r = x.r;
+    const bool landing = mission_of(x.family) == Mission::kLanding && !targetless(x.family);
+    const bool ingress = mission_of(x.family) == Mission::kIngress && !targetless(x.family);
+    std::string reason = r.reason;
+    std::replace(reason.begin(), reason.end(), ',', ';');
+    std::replace(reason.begin(), reason.end(), '"', '\'');
+    f << x.family << ',' << x.seed << ','
+      << (mission_of(x.family) == Mission::kLanding ? "landing" : "ingress") << ','
+      << (x.ok ? "True" : "False") << ",\"" << reason << "\","
+      << (landing && x.ok ? num(r.touchdown_error_m) : "") << ','
+      << (landing ? num(r.final_in_platform_m.x()) : "") << ','
+      << (landing ? num(r.final_in_platform_m.y()) : "") << ','
+      << (landing ? num(r.platform_size_m.x()) : "") << ','
+      << (landing ? num(r.platform_size_m.y()) : "") << ','
+      << (ingress ? num(width_error_m(x)) : "") << ',' << (ingress ? num(x.true_width_m) : "")
+      << ',' << (ingress ? num(r.estimate_error_W.norm()) : "") << ','
+      << (ingress && r.crossed_wall ? num(r.max_lateral_in_wall_m) : "") << ',' << r.retries << ','
+      << (x.ok ? num(r.mission_time_s) : "") << ',' << x.frames << ',' << x.found << ','
+      << num(quantile(x.cpu_ms, 0.5)) << ',' << num(quantile(x.cpu_ms, 0.99)) << ','
+      << num(quantile(x.cpu_ms, 1.0)) << '\n';
+  }
+  return static_cast<bool>(f);
+}
+
+std::vector<std::string> split(const std::string& s) {
+  std::vector<std::string> out;
+  for (std::stringstream ss(s); ss.good();) {
+    std::string n;
+    std::getline(ss, n, ',');
+    if (!n.empty()) out.push_back(n);
+  }
+  return out;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"scene families: real-vision closed-loop Monte Carlo over freshly drawn scenes"};
+  int runs = 20, jobs = 1;
+  int64_t seed0 = -1;
+  bool no_mocap = false, verbose = false;
+  std::string families =
+      "landing_photo,landing_tiles,landing_lowtex,landing_none_photo,ingress_photo,"
+      "ingress_solid_photo";
+  std::string vehicle = std::string(ALIGHT_SOURCE_DIR) + "/config/vehicles/pelican.yaml";
+  double time_limit_s = 240;
+  app.add_option("--families", families, "comma-separated families (scripts/scenes --list)");
+  app.add_option("--runs", runs, "scenes drawn and flown per family")->check(CLI::Range(1, 10000));
+  app.add_option("--seed0", seed0, "first seed (default: a fresh random one)")
+      ->check(CLI::Range(int64_t{0}, int64_t{1} << 40));
+  app.add_option("--jobs", jobs, "flights at once (threads)")->check(CLI::Range(1, 64));
+  app.add_flag("--no-mocap", no_mocap, "fly on the onboard estimate instead of motion capture");
+  app.add_option("--vehicle", vehicle, "vehicle file");
+  app.add_option("--time-limit", time_limit_s, "simulated seconds per mission at most")
+      ->check(CLI::Range(10.0, 3600.0));
+  app.add_flag("--verbose", verbose, "print each run's retries");
+  std::string csv_path;
+  app.add_option("--csv", csv_path, "write one row per run to this file");
+  CLI11_PARSE(app, argc, argv);
+  cv::setNumThreads(1);  // the jobs are the parallelism
+
+  if (seed0 < 0) seed0 = std::random_device{}() % 1000000;
+  const auto names = split(families);
+  namespace fs = std::filesystem;
+  std::string dir_template = (fs::temp_directory_path() / "alight-families-XXXXXX").string();
+  if (!mkdtemp(dir_template.data())) {
+    std::fprintf(stderr, "alight_families_bench: cannot create a temporary folder\n");
+    return 2;
+  }
+  const fs::path dir = dir_template;
+  std::printf("families %s, seeds %lld..%lld, %s, scenes in %s\n", families.c_str(),
+              static_cast<long long>(seed0), static_cast<long long>(seed0 + runs - 1),
+              no_mocap ? "on the onboard estimate" : "on motion capture", dir.c_str());
+
+  std::vector<Run> all;
+  for (const auto& fam : names) {
+    for (int i = 0; i < runs; ++i) {
+      const uint64_t seed = static_cast<uint64_t>(seed0 + i);
+      const std::string cmd = "'" + std::string(ALIGHT_SOURCE_DIR) + "/scripts/scenes' '" + fam +
+                              "' --seed " + std::to_string(seed) + " --out '" + dir.string() +
+                              "' > /dev/null";
+      if (std::system(cmd.c_str()) != 0) {
+        std::fprintf(stderr, "alight_families_bench: scripts/scenes failed for family '%s'\n",
+                     fam.c_str());
+        return 2;
+      }
+      Run x;
+      x.family = fam;
+      x.seed = seed;
+      x.scenario_file = (dir / (fam + "-" + std::to_string(seed) + ".yaml")).string();
+      const auto scenario = sim::load_scenario(x.scenario_file);
+      if (scenario.wall && scenario.wall->has_opening)
+        x.true_width_m = scenario.wall->opening_size_m.x();
+      all.push_back(std::move(x));
+    }
+  }
+
+  std::atomic<size_t> next{0};
+  std::mutex out;
+  const auto worker = [&] {
+    for (size_t i = next++; i < all.size(); i = next++) {
+      Run& x = all[i];
+      const Mission mission = mission_of(x.family);
+      RealVision vision(vehicle, mission);
+      ClosedLoopConfig c;
+      c.vehicle_file = vehicle;
+      c.scenario_file = x.scenario_file;
+      c.mission = mission;
+      c.seed = x.seed;
+      c.time_limit_s = time_limit_s;
+      c.onboard_estimate = no_mocap;
+      c.camera_vision = [&](const sim::CameraFrame& f, const std::optional<PoseSample>& p) {
+        const double t0 = thread_cpu_ms();
+        auto m = vision(f, p);
+        x.cpu_ms.push_back(thread_cpu_ms() - t0);
+        if (m && m->found && !m->partial && mission == Mission::kIngress)
+          x.widths_m.push_back(m->size_m.x());
+        return m;
+      };
+      x.r = fly_closed_loop(c);
+      x.frames = vision.frames;
+      x.found = vision.found;
+      x.ok = success(x);
+      std::lock_guard<std::mutex> lock(out);
+      std::printf("%s\n", one_line(x).c_str());
+      if (verbose)
+        for (const auto& why : x.r.retry_reasons) std::printf("    retry: %s\n", why.c_str());
+      std::fflush(stdout);
+    }
+  };
+  std::vector<std::thread> threads;
+  for (int j = 0; j < jobs; ++j) threads.emplace_back(worker);
+  for (auto& t : threads) t.join();
+
+  std::printf("\n%s, seeds %lld..%lld, %s:\n", vehicle.c_str(), static_cast<long long>(seed0),
+              static_cast<long long>(seed0 + runs - 1),
+              no_mocap ? "on the onboard estimate" : "on motion capture");
+  for (const auto& fam : names) {
+    std::vector<double> touch_cm, werr_cm, wabs_cm, centre_cm, offset_cm, cpu, time_s;
+    int ok = 0, n = 0, retries = 0, false_runs = 0, false_frames = 0;
+    std::map<std::string, int> failures;
+    for (const auto& x : all) {
+      if (x.family != fam) continue;
+      ++n;
+      retries += x.r.retries;
+      cpu.insert(cpu.end(), x.cpu_ms.begin(), x.cpu_ms.end());
+      false_runs += targetless(fam) && x.found > 0;
+      false_frames += targetless(fam) ? x.found : 0;
+      if (x.ok) {
+        ++ok;
+        time_s.push_back(x.r.mission_time_s);
+      } else {
+        ++failures[x.r.reason.empty() ? "(no reason)" : x.r.reason];
+      }
+      if (targetless(fam)) continue;
+      if (mission_of(fam) == Mission::kLanding) {
+        if (x.ok) touch_cm.push_back(100 * x.r.touchdown_error_m);
+      } else {
+        const double w = width_error_m(x);
+        if (std::isfinite(w)) {
+          werr_cm.push_back(100 * w);
+          wabs_cm.push_back(100 * std::abs(w));
+        }
+        centre_cm.push_back(100 * x.r.estimate_error_W.norm());
+        if (x.r.crossed_wall) offset_cm.push_back(100 * x.r.max_lateral_in_wall_m);
+      }
+    }
+    std::printf("%s: %d/%d %s", fam.c_str(), ok, n,
+                targetless(fam)                        ? "without a false target"
+                : mission_of(fam) == Mission::kLanding ? "landed"
+                                                       : "through");
+    if (targetless(fam))
+      std::printf(" (false targets in %d runs, %d frames)", false_runs, false_frames);
+    else if (mission_of(fam) == Mission::kLanding)
+      std::printf("; touchdown lateral error p50 %.2f p95 %.2f max %.2f cm",
+                  quantile(touch_cm, 0.5), quantile(touch_cm, 0.95), quantile(touch_cm, 1.0));
+    else
+      std::printf(
+          "; width error |.| p50 %.2f p95 %.2f max %.2f cm (signed p50 %+.2f, %zu runs measured); "
+          "centre error p50 %.2f p95 %.2f cm; offset in the wall p50 %.2f max %.2f cm",
+          quantile(wabs_cm, 0.5), quantile(wabs_cm, 0.95), quantile(wabs_cm, 1.0),
+          quantile(werr_cm, 0.5), werr_cm.size(), quantile(centre_cm, 0.5),
+          quantile(centre_cm, 0.95), quantile(offset_cm, 0.5), quantile(offset_cm, 1.0));
+    std::printf(
+        "; mission p50 %.1f s; retries %d; vision CPU per frame p50 %.2f p99 %.2f max %.2f ms"
+        " over %zu frames\n",
+        quantile(time_s, 0.5), retries, quantile(cpu, 0.5), quantile(cpu, 0.99), quantile(cpu, 1.0),
+        cpu.size());
+    for (const auto& [why, k] : failures) std::printf("    failed %dx: %s\n", k, why.c_str());
+  }
+  std::fflush(stdout);
+  if (!csv_path.empty() && !write_csv(csv_path, all)) {
+    std::fprintf(stderr, "alight_families_bench: cannot write %s\n", csv_path.c_str());
+    return 2;
+  }
+  std::error_code ec;
+  fs::remove_all(dir, ec);
+  return 0;
+}
