@@ -108,7 +108,8 @@ class LandingProfile final : public MissionProfile {
         if (seconds(in.now_utime - *a.held_since_utime) > L.final_hold_timeout_s) {
           out.next = ApproachStep::Next::kTargetLost;
           out.reason = "final descent held " + fmt(L.final_hold_timeout_s, 0) +
-                       " s without a calm moment (e_r within " + fmt(L.radial_tol_m, 3) +
+                       " s without a calm moment (e_r within " +
+                       fmt(std::min(L.radial_tol_m, L.final_hold_radial_m), 3) +
                        " m, speed within " + fmt(L.final_hold_speed_mps, 2) + " m/s)";
           return out;
         }
@@ -124,12 +125,13 @@ class LandingProfile final : public MissionProfile {
   double lost_hold_min_z_m() const override { return p_.detection.landing_height_m; }
 
   // At final_height_m: the rapid final descent starts only in a calm moment, e_r within
-  // radial_tol_m and the horizontal speed within final_hold_speed_mps for final_hold_settle_s.
+  // final_hold_radial_m (and radial_tol_m) and the horizontal speed within final_hold_speed_mps for
+  // final_hold_settle_s.
   bool final_descent_allowed(LandingApproach& a, double e_r, const ApproachInputs& in) const {
     const auto& L = p_.landing;
     if (L.final_hold_speed_mps <= 0 || a.land_here) return true;
     if (!a.held_since_utime) a.held_since_utime = in.now_utime;
-    const bool calm = in.pose && e_r <= L.radial_tol_m &&
+    const bool calm = in.pose && e_r <= std::min(L.radial_tol_m, L.final_hold_radial_m) &&
                       in.pose->v_W_B.head<2>().norm() <= L.final_hold_speed_mps;
     if (!calm) {
       a.calm_since_utime.reset();

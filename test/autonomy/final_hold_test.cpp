@@ -41,6 +41,7 @@ AutonomyParams with_hold() {
   p.landing.align_yaw_tol_deg = 0;
   p.landing.radial_tol_m = 0.015;
   p.landing.final_hold_speed_mps = 0.05;
+  p.landing.final_hold_radial_m = 0.008;
   p.landing.final_hold_settle_s = 0.2;
   p.landing.final_hold_timeout_s = 5.0;
   return p;
@@ -57,9 +58,12 @@ TEST(FinalHoldTest, WaitsAtTheFinalHeightUntilCalmForTheSettleTime) {
     EXPECT_EQ(s.sp_v_W.z(), 0.0);
     EXPECT_NE(s.reason.find("held"), std::string::npos);
   }
-  // Calm but off the centre by more than radial_tol_m: still held.
+  // Calm but off the centre by more than radial_tol_m, or within it but not within
+  // final_hold_radial_m: still held.
   for (int i = 0; i < 50; ++i)
     ASSERT_EQ(a.step(Vector2d(0.03, 0), Vector2d::Zero()).next, ApproachStep::Next::kContinue);
+  for (int i = 0; i < 50; ++i)
+    ASSERT_EQ(a.step(Vector2d(0.009, 0.006), Vector2d::Zero()).next, ApproachStep::Next::kContinue);
   // Calm and centred: the final descent after final_hold_settle_s (20 steps), not before.
   int steps = 0;
   ApproachStep s;
