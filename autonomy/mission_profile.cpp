@@ -97,8 +97,25 @@ class LandingProfile final : public MissionProfile {
       a.z_sp_m -= L.descent_rate_mps * in.dt_s;
       out.sp_v_W.z() = -L.descent_rate_mps;
     }
+    const bool may_hold = L.final_hold_speed_mps > 0 && !a.land_here;
+    if (may_hold && a.z_sp_m - z_touch <= L.final_height_m) {
+      a.z_sp_m = z_touch + L.final_height_m;  // waits here (final_descent_allowed)
+      out.sp_v_W.z() = 0.0;
+    }
     out.sp_p_W = Vector3d(target.x(), target.y(), a.z_sp_m);
-    if (a.z_sp_m - z_touch <= L.final_height_m) {
+    if (a.z_sp_m - z_touch <= L.final_height_m + 1e-6) {
+      if (!final_descent_allowed(a, e_r, in)) {
+        if (seconds(in.now_utime - *a.held_since_utime) > L.final_hold_timeout_s) {
+          out.next = ApproachStep::Next::kTargetLost;
+          out.reason = "final descent held " + fmt(L.final_hold_timeout_s, 0) +
+                       " s without a calm moment (e_r within " +
+                       fmt(std::min(L.radial_tol_m, L.final_hold_radial_m), 3) +
+                       " m, speed within " + fmt(L.final_hold_speed_mps, 2) + " m/s)";
+          return out;
+        }
+        out.reason = "final descent held: waiting for calm";
+        return out;
+      }
       out.next = ApproachStep::Next::kFinalDescent;
       out.reason = "final descent: " + fmt(L.final_height_m, 2) + " m above the platform";
     }
@@ -106,6 +123,23 @@ class LandingProfile final : public MissionProfile {
   }
 
   double lost_hold_min_z_m() const override { return p_.detection.landing_height_m; }
+
+  // At final_height_m: the rapid final descent starts only in a calm moment, e_r within
+  // final_hold_radial_m (and radial_tol_m) and the horizontal speed within final_hold_speed_mps for
+  // final_hold_settle_s.
+  bool final_descent_allowed(LandingApproach& a, double e_r, const ApproachInputs& in) const {
+    const auto& L = p_.landing;
+    if (L.final_hold_speed_mps <= 0 || a.land_here) return true;
+    if (!a.held_since_utime) a.held_since_utime = in.now_utime;
+    const bool calm = in.pose && e_r <= std::min(L.radial_tol_m, L.final_hold_radial_m) &&
+                      in.pose->v_W_B.head<2>().norm() <= L.final_hold_speed_mps;
+    if (!calm) {
+      a.calm_since_utime.reset();
+      return false;
+    }
+    if (!a.calm_since_utime) a.calm_since_utime = in.now_utime;
+    return seconds(in.now_utime - *a.calm_since_utime) >= L.final_hold_settle_s;
+  }
 
  private:
   AutonomyParams p_;

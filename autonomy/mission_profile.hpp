@@ -35,6 +35,8 @@ inline constexpr double kPathLeadM = 0.3;
 struct LandingApproach {
   double z_sp_m = 0.0;     ///< x3(t), the altitude setpoint [m]
   bool land_here = false;  ///< operator LAND_HERE: onto the floor below, no target to lose
+  std::optional<int64_t> held_since_utime;  ///< at final_height_m, waiting for calm
+  std::optional<int64_t> calm_since_utime;  ///< ... calm (speed and e_r within) since
 };
 
 /// The ingress approach's own state: aligning at the standoff, then through the opening.

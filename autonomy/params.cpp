@@ -151,6 +151,19 @@ const ParamSchema<LandingParams>& LandingParams::schema() {
           "and descends only within this yaw error; 0: no turn. A corner of a 15 cm gear turned "
           "25 deg on a 21.6 cm wide ream lands within mm of the edge (Monte Carlo landing_c: 3 of "
           "20 tipped off it after touch-down)");
+    s.add("final_hold_speed_mps", &P::final_hold_speed_mps, Range::ge(0), "m/s",
+          "beyond the paper: at final_height_m the final descent waits, holding above the "
+          "platform, until the horizontal speed is within this and e_r within "
+          "final_hold_radial_m for final_hold_settle_s (a gust that pushes the vehicle now carries "
+          "it off the centre "
+          "during the half second of the rapid descent); 0: never held (the paper)");
+    s.add("final_hold_radial_m", &P::final_hold_radial_m, Range::gt(0), "m",
+          "... and e_r within this (and within radial_tol_m): the rapid descent starts nearer "
+          "the centre than the slow one needs");
+    s.add("final_hold_settle_s", &P::final_hold_settle_s, Range::ge(0), "s",
+          "... both within for this long");
+    s.add("final_hold_timeout_s", &P::final_hold_timeout_s, Range::gt(0), "s",
+          "held this long without a calm moment: target lost (detection retry, then hold)");
     return s;
   }();
   return schema;

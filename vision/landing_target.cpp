@@ -8,6 +8,7 @@
 
 #include "vision/alignment.hpp"
 #include "vision/homography.hpp"
+#include "vision/known_floor.hpp"
 #include "vision/waypoint.hpp"
 
 namespace alight::vision {
@@ -21,25 +22,24 @@ std::vector<Vector3d> rays_of(const std::vector<Vector2d>& x, const std::vector<
   return r;
 }
 
-}  // namespace
+// The two planes of one frame, however found.
+struct Planes {
+  PlaneMotion top, floor;
+  std::vector<uint8_t> top_in, floor_in;
+  int n_top = 0, n_floor = 0;
+};
 
-TargetOutcome find_landing_target(const Correspondences& c, const PipelineParams& params) {
-  assert(c.camera && c.mount);
-  TargetOutcome out;
-  out.labels.assign(c.size(), Label::kOutlier);
+// Paper 3.2: two free homographies, aligned; the nearer plane is the top.
+Result<Planes> paper_planes(const Correspondences& c, const PipelineParams& params,
+                            TargetOutcome* out) {
   const auto pair = fit_two_homographies(c.x1, c.x2, params.homography);
-  if (!pair) {
-    out.reason = pair.reason();
-    return out;
-  }
+  if (!pair) return Result<Planes>::fail(pair.reason());
   const HomographyFit& first = pair->first;
   for (size_t i = 0; i < c.size(); ++i)
-    if (first.inlier[i]) out.labels[i] = Label::kDominant;
-  out.estimate.n_inliers_dominant = first.n_inliers;
-  if (!pair->second || pair->second->n_inliers < params.landing.min_platform_inliers) {
-    out.reason = Reason::kNoTargetPlane;
-    return out;
-  }
+    if (first.inlier[i]) out->labels[i] = Label::kDominant;
+  out->estimate.n_inliers_dominant = first.n_inliers;
+  if (!pair->second || pair->second->n_inliers < params.landing.min_platform_inliers)
+    return Result<Planes>::fail(Reason::kNoTargetPlane);
   const HomographyFit& second = *pair->second;
 
   const Matrix3d K = c.camera->K();
@@ -50,22 +50,113 @@ TargetOutcome find_landing_target(const Correspondences& c, const PipelineParams
       rays_of(c.x2, first.inlier, K_inv), calibrate_homography(second.H, K),
       rays_of(c.x1, second.inlier, K_inv), rays_of(c.x2, second.inlier, K_inv), params.align,
       params.decomposition, rotation_prior(mocap.R_21, params.align, K(0, 0)));
-  if (!al) {
-    out.reason = al.reason();
-    return out;
-  }
+  if (!al) return Result<Planes>::fail(al.reason());
   // The nearer of the two planes is the platform top.
   const bool first_is_top = al->plane_a().distance_1() < al->plane_b().distance_1();
-  const PlaneMotion top = first_is_top ? al->plane_a() : al->plane_b();
-  const PlaneMotion floor = first_is_top ? al->plane_b() : al->plane_a();
+  Planes p;
+  p.top = first_is_top ? al->plane_a() : al->plane_b();
+  p.floor = first_is_top ? al->plane_b() : al->plane_a();
   const HomographyFit& top_fit = first_is_top ? first : second;
   const HomographyFit& floor_fit = first_is_top ? second : first;
+  p.top_in = top_fit.inlier;
+  p.floor_in = floor_fit.inlier;
+  p.n_top = top_fit.n_inliers;
+  p.n_floor = floor_fit.n_inliers;
+  return Result<Planes>::ok(std::move(p));
+}
+
+// Beyond the paper: the floor known, the motion known up to a small rotation (known_floor.hpp).
+Result<Planes> known_floor_planes(const Correspondences& c, const PipelineParams& params) {
+  const auto floor = known_floor(c.pose_1, *c.mount, params.landing.floor_z_m);
+  if (!floor) return Result<Planes>::fail(Reason::kNoDominantPlane);
+  const MocapMotion mocap = mocap_motion(c.pose_1, c.pose_2, *c.mount);
+  if (mocap.baseline_m < params.waypoint.min_baseline_m)
+    return Result<Planes>::fail(Reason::kSmallBaseline);
+  const Matrix3d K_inv = c.camera->K().inverse();
+  std::vector<Vector3d> r1, r2;
+  for (size_t i = 0; i < c.size(); ++i) {
+    r1.push_back(K_inv * c.x1[i].homogeneous());
+    r2.push_back(K_inv * c.x2[i].homogeneous());
+  }
+  const KnownMotion motion{mocap.R_21, mocap.t_12};  // t12 in metres (eq. 3)
+  const auto fit = fit_known_floor_planes(r1, r2, motion, *floor, c.camera->K()(0, 0),
+                                          params.landing, params.homography.threshold_px);
+  if (!fit) return Result<Planes>::fail(fit.reason());
+  const double s = mocap.baseline_m;  // PlaneMotion's lengths are in baselines
+  Planes p;
+  p.top = {fit->motion.R_21, fit->motion.t_12_m / s, fit->n_1 * fit->rho_top * s};
+  p.floor = {fit->motion.R_21, fit->motion.t_12_m / s, fit->n_1 * fit->rho_floor * s};
+  p.top_in = fit->top;
+  p.floor_in = fit->floor;
+  p.n_top = fit->n_top;
+  p.n_floor = fit->n_floor;
+  return Result<Planes>::ok(std::move(p));
+}
+
+// The paper's floor is the known one: distance from camera 1 within floor_tol_frac, normals
+// within max_normal_angle_deg.
+bool floor_agrees(const PlaneMotion& floor, const Correspondences& c,
+                  const PipelineParams& params) {
+  const auto known = known_floor(c.pose_1, *c.mount, params.landing.floor_z_m);
+  if (!known) return false;
+  const double d_m = floor.distance_1() * mocap_motion(c.pose_1, c.pose_2, *c.mount).baseline_m;
+  return std::abs(d_m - known->d_1_m) <= params.landing.floor_tol_frac * known->d_1_m &&
+         direction_angle(floor.unit_normal_1(), known->n_1) <=
+             params.landing.max_normal_angle_deg * M_PI / 180.0;
+}
+
+TargetOutcome platform_of(const Correspondences& c, const PipelineParams& params,
+                          const Planes& planes, TargetOutcome out);
+
+}  // namespace
+
+TargetOutcome find_landing_target(const Correspondences& c, const PipelineParams& params) {
+  assert(c.camera && c.mount);
+  TargetOutcome out;
+  out.labels.assign(c.size(), Label::kOutlier);
+  const auto found = [](const TargetOutcome& o) {
+    return o.reason == Reason::kOk || o.reason == Reason::kPartialView;
+  };
+  const std::string& mode = params.landing.floor_prior;
+  TargetOutcome paper = out;
+  if (mode != "always") {
+    const auto planes = paper_planes(c, params, &paper);
+    bool floor_known = false;
+    if (!planes) {
+      paper.reason = planes.reason();
+    } else {
+      paper = platform_of(c, params, *planes, paper);
+      floor_known = floor_agrees(planes->floor, c, params);
+    }
+    if (mode == "off" || (found(paper) && floor_known)) return paper;
+  }
+  // The paper's planes gave no platform, or their floor is not the floor: the known floor's turn.
+  TargetOutcome known = out;
+  if (const auto planes = known_floor_planes(c, params)) {
+    known = platform_of(c, params, *planes, out);
+  } else {
+    known.reason = planes.reason();
+  }
+  // Where the prior finds nothing either, the paper's outcome stands (a floor a few percent off
+  // is the paper's bas-relief ambiguity, not a false platform).
+  return mode == "always" || found(known) ? known : paper;
+}
+
+namespace {
+
+TargetOutcome platform_of(const Correspondences& c, const PipelineParams& params,
+                          const Planes& planes, TargetOutcome out) {
+  const PlaneMotion& top = planes.top;
+  const PlaneMotion& floor = planes.floor;
+  const Matrix3d K = c.camera->K();
+  const Matrix3d K_inv = K.inverse();
+  const MocapMotion mocap = mocap_motion(c.pose_1, c.pose_2, *c.mount);
   for (size_t i = 0; i < c.size(); ++i)
-    out.labels[i] = top_fit.inlier[i]     ? Label::kTarget
-                    : floor_fit.inlier[i] ? Label::kDominant
-                                          : Label::kOutlier;
-  out.estimate.n_inliers_dominant = floor_fit.n_inliers;
-  out.estimate.n_inliers_target = top_fit.n_inliers;
+    out.labels[i] = planes.top_in[i]     ? Label::kTarget
+                    : planes.floor_in[i] ? Label::kDominant
+                                         : Label::kOutlier;
+  out.estimate.n_inliers_dominant = planes.n_floor;
+  out.estimate.n_inliers_target = planes.n_top;
   if (direction_angle(top.unit_normal_1(), floor.unit_normal_1()) >
       params.landing.max_normal_angle_deg * M_PI / 180.0) {
     out.reason = Reason::kNoTargetPlane;
@@ -81,7 +172,7 @@ TargetOutcome find_landing_target(const Correspondences& c, const PipelineParams
   const Vector3d n2 = top.n_2() / mocap.baseline_m;  // n2~ in [1/m]
   std::vector<Vector3d> pts_W;
   for (size_t i = 0; i < c.size(); ++i) {
-    if (!top_fit.inlier[i]) continue;
+    if (!planes.top_in[i]) continue;
     const Vector3d ray = K_inv * c.x2[i].homogeneous();
     const double denom = n2.dot(ray);
     if (denom <= 0) continue;
@@ -177,11 +268,12 @@ TargetOutcome find_landing_target(const Correspondences& c, const PipelineParams
   };
   int at_border = 0;
   for (size_t i = 0; i < c.size(); ++i)
-    if (top_fit.inlier[i] && (near_border(c.u2[i]) || (!c.u1.empty() && near_border(c.u1[i]))))
+    if (planes.top_in[i] && (near_border(c.u2[i]) || (!c.u1.empty() && near_border(c.u1[i]))))
       ++at_border;
   const bool cut = at_border >= 2;
   out.reason = cut ? Reason::kPartialView : Reason::kOk;
   return out;
 }
 
+}  // namespace
 }  // namespace alight::vision

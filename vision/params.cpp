@@ -197,6 +197,24 @@ const ParamSchema<LandingParams>& LandingParams::schema() {
           "(REASON_PARTIAL_VIEW). Matched features thin out well inside the STAR border "
           "(2 max_size + 1 px): in flight logs a 24 px band let cut platforms through (waypoints "
           "5-17 cm off), 40 px none beyond 5 cm");
+    s.add("floor_z_m", &P::floor_z_m, Range::any(), "m",
+          "beyond the paper (known_floor.hpp): the floor is the plane z = floor_z_m of the "
+          "motion-capture (world) frame");
+    s.add("floor_prior", &P::floor_prior, Range::any(), "",
+          "when the known floor and motion find the planes: off = never (the paper's two free "
+          "homographies only); fallback = when the paper's planes give no platform, or their "
+          "floor is not the known one (floor_tol_frac); always = instead of the paper's")
+        .one_of({"off", "fallback", "always"});
+    s.add("floor_tol_frac", &P::floor_tol_frac, Range::open(0, 1), "",
+          "fallback: the paper's floor is the known floor when their distances from the "
+          "reference camera agree within this fraction (and the normals within "
+          "max_normal_angle_deg)");
+    s.add("min_floor_inliers", &P::min_floor_inliers, Range::ge(1), "",
+          "known floor: fewer matches on it, no planes (the rotation correction rests on them)");
+    s.add("max_rotation_correction_deg", &P::max_rotation_correction_deg, Range::open(0, 10), "deg",
+          "known floor: motion capture's R21 is corrected by at most this (its orientation noise, "
+          "0.1 deg a sample, moves the image by 1-2 px; a correction the size of the "
+          "platform's parallax would take the top for the floor)");
     return s;
   }();
   return schema;

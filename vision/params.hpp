@@ -114,6 +114,12 @@ struct LandingParams {
   double max_normal_angle_deg = 15;
   double max_tilt_deg = 3.0;
   double edge_margin_px = 40.0;
+  // Beyond the paper: the known floor and the known motion (known_floor.hpp).
+  double floor_z_m = 0.0;
+  std::string floor_prior = "fallback";
+  double floor_tol_frac = 0.08;
+  int min_floor_inliers = 4;
+  double max_rotation_correction_deg = 0.5;
   static const ParamSchema<LandingParams>& schema();
   void validate() const;
 };

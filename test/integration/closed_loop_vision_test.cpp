@@ -50,6 +50,35 @@ TEST_P(RealVisionLandingTest, LandsOnThePlatform) {
 INSTANTIATE_TEST_SUITE_P(PapersPlatforms, RealVisionLandingTest,
                          ::testing::Values("landing_a", "landing_b", "landing_c"));
 
+// Where the floor gives little (issue 15): flat grey tiles with features only at their corners.
+// Drawn by `scripts/scenes landing_tiles --seed 101` and `--seed 103` (copied here so a change of
+// the family does not change the test). With the paper's planes alone
+// (vision.landing.floor_prior: off) both failed: the platform was found in 839 of 3022 and 1 of
+// 1190 frames, the target lost three times, no landing. The known floor and motion
+// (vision/known_floor.hpp) find the platform where the dominant fit fails.
+class RealVisionWeakFloorTest : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(RealVisionWeakFloorTest, LandsOnThePlatformOverTiles) {
+  RealVision vision(path("config/vehicles/pelican.yaml"), Mission::kLanding);
+  ClosedLoopConfig c = config("landing_a", Mission::kLanding, 7, &vision);
+  c.scenario_file = path("test/integration/scenarios/" + GetParam() + ".yaml");
+  const auto r = fly_closed_loop(c);
+  std::printf(
+      "%s: %s, touchdown error %.4f m, estimate error %.4f m (z %+.4f), retries %d, n %d, "
+      "mission %.1f s, vision found %d of %d frames\n",
+      GetParam().c_str(), r.reason.c_str(), r.touchdown_error_m, r.estimate_error_W.norm(),
+      r.estimate_error_W.z(), r.retries, r.n_measurements, r.mission_time_s, vision.found,
+      vision.frames);
+  EXPECT_EQ(r.phase, Phase::kLanded) << r.reason;
+  EXPECT_TRUE(r.landed) << r.reason;
+  EXPECT_FALSE(r.tipped);
+  EXPECT_LT(r.touchdown_error_m, 0.025);
+  EXPECT_LT(r.estimate_error_W.norm(), 0.01) << "platform centre and height at convergence";
+}
+
+INSTANTIATE_TEST_SUITE_P(TilesSeeds, RealVisionWeakFloorTest,
+                         ::testing::Values("landing_tiles_101", "landing_tiles_103"));
+
 // Without motion capture (issue 17): the onboard estimator's pose flies the mission, vision
 // measures the platform in the estimator's frame, the truth only scores. Relative accuracy is
 // what matters: the touch-down is judged against the true platform, the platform estimate through

@@ -1,0 +1,121 @@
+// The landing approach's hold before the final descent (issue 15, gusts): at final_height_m the
+// rapid descent waits for a calm moment, horizontal speed and e_r within their bounds for
+// final_hold_settle_s, and gives up (target lost: the retry) after final_hold_timeout_s.
+
+#include <gtest/gtest.h>
+
+#include "autonomy/mission_profile.hpp"
+#include "kinematic_world.hpp"
+
+namespace alight::autonomy {
+namespace {
+
+struct Approach {
+  explicit Approach(AutonomyParams params) : p(std::move(params)) {
+    profile = MissionProfile::make(Mission::kLanding, p);
+    // Just above the final height over a platform top at z 0.2.
+    state = LandingApproach{target.z() + p.landing.gear_height_m + p.landing.final_height_m + 1e-3,
+                            false};
+  }
+  // One 10 ms step with the vehicle over the target offset by e_W, moving at v_W.
+  ApproachStep step(const Vector2d& e_W, const Vector2d& v_W) {
+    t += 10'000;
+    PoseSample s;
+    s.utime = t;
+    s.p_W_B = Vector3d(target.x() + e_W.x(), target.y() + e_W.y(), std::get<0>(state).z_sp_m);
+    s.v_W_B = Vector3d(v_W.x(), v_W.y(), 0);
+    pose = s;
+    const ApproachInputs in{pose, s.p_W_B, target, 0.0, 0.0, 0.01, t};
+    return profile->step_approach(state, in);
+  }
+  AutonomyParams p;
+  std::unique_ptr<const MissionProfile> profile;
+  ApproachState state;
+  Vector3d target{1.0, 0.5, 0.2};
+  std::optional<PoseSample> pose;
+  int64_t t = test::kT0;
+};
+
+AutonomyParams with_hold() {
+  AutonomyParams p = test::test_params();
+  p.landing.align_yaw_tol_deg = 0;
+  p.landing.radial_tol_m = 0.015;
+  p.landing.final_hold_speed_mps = 0.05;
+  p.landing.final_hold_radial_m = 0.008;
+  p.landing.final_hold_settle_s = 0.2;
+  p.landing.final_hold_timeout_s = 5.0;
+  return p;
+}
+
+TEST(FinalHoldTest, WaitsAtTheFinalHeightUntilCalmForTheSettleTime) {
+  Approach a(with_hold());
+  const double z_final = a.target.z() + a.p.landing.gear_height_m + a.p.landing.final_height_m;
+  // Inside the radial tolerance but drifting at 0.2 m/s: held at the final height for 2 s.
+  for (int i = 0; i < 200; ++i) {
+    const ApproachStep s = a.step(Vector2d(0.005, 0), Vector2d(0.2, 0));
+    ASSERT_EQ(s.next, ApproachStep::Next::kContinue) << i;
+    EXPECT_NEAR(s.sp_p_W.z(), z_final, 1e-9);
+    EXPECT_EQ(s.sp_v_W.z(), 0.0);
+    EXPECT_NE(s.reason.find("held"), std::string::npos);
+  }
+  // Calm but off the centre by more than radial_tol_m, or within it but not within
+  // final_hold_radial_m: still held.
+  for (int i = 0; i < 50; ++i)
+    ASSERT_EQ(a.step(Vector2d(0.03, 0), Vector2d::Zero()).next, ApproachStep::Next::kContinue);
+  for (int i = 0; i < 50; ++i)
+    ASSERT_EQ(a.step(Vector2d(0.009, 0.006), Vector2d::Zero()).next, ApproachStep::Next::kContinue);
+  // Calm and centred: the final descent after final_hold_settle_s (20 steps), not before.
+  int steps = 0;
+  ApproachStep s;
+  do {
+    s = a.step(Vector2d(0.002, 0.001), Vector2d(0.01, -0.01));
+    ++steps;
+  } while (s.next == ApproachStep::Next::kContinue && steps < 100);
+  EXPECT_EQ(s.next, ApproachStep::Next::kFinalDescent);
+  EXPECT_GE(steps, 20);
+  EXPECT_LE(steps, 22);
+  EXPECT_NEAR(s.sp_p_W.z(), z_final, 1e-9);
+}
+
+TEST(FinalHoldTest, AGustDuringTheSettleTimeRestartsIt) {
+  Approach a(with_hold());
+  for (int i = 0; i < 15; ++i)
+    ASSERT_EQ(a.step(Vector2d::Zero(), Vector2d::Zero()).next, ApproachStep::Next::kContinue);
+  ASSERT_EQ(a.step(Vector2d::Zero(), Vector2d(0, 0.08)).next, ApproachStep::Next::kContinue);
+  int steps = 0;
+  while (a.step(Vector2d::Zero(), Vector2d::Zero()).next == ApproachStep::Next::kContinue) ++steps;
+  EXPECT_GE(steps, 19);  // the full settle time again
+}
+
+TEST(FinalHoldTest, NoCalmMomentWithinTheTimeoutIsATargetLost) {
+  Approach a(with_hold());
+  ApproachStep s;
+  int steps = 0;
+  do {
+    s = a.step(Vector2d::Zero(), Vector2d(0.1, 0.1));
+    ++steps;
+  } while (s.next == ApproachStep::Next::kContinue && steps < 10'000);
+  EXPECT_EQ(s.next, ApproachStep::Next::kTargetLost);
+  EXPECT_NEAR(steps * 0.01, a.p.landing.final_hold_timeout_s, 0.03);
+  EXPECT_NE(s.reason.find("final descent held"), std::string::npos) << s.reason;
+}
+
+TEST(FinalHoldTest, OffByDefaultThePapersImmediateFinalDescent) {
+  AutonomyParams p = with_hold();
+  p.landing.final_hold_speed_mps = 0.0;
+  Approach a(p);
+  EXPECT_EQ(a.step(Vector2d::Zero(), Vector2d(0.3, 0)).next, ApproachStep::Next::kFinalDescent);
+  EXPECT_EQ(AutonomyParams{}.landing.final_hold_speed_mps, 0.0);
+}
+
+TEST(FinalHoldTest, ALandingMissionWithTheHoldLands) {
+  test::KinematicWorld w(with_hold());
+  w.takeoff_and_hover();
+  w.send(Command::kGo, Mission::kLanding);
+  ASSERT_TRUE(w.run_until_phase(Phase::kApproach, 120)) << w.out.status.reason;
+  ASSERT_TRUE(w.run_until_phase(Phase::kLanded, 60)) << w.out.status.reason;
+  EXPECT_LT((w.p - w.truth.platform_center_W).head<2>().norm(), 0.05);
+}
+
+}  // namespace
+}  // namespace alight::autonomy
