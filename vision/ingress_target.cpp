@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <opencv2/imgproc.hpp>
 #include <optional>
 #include <utility>
@@ -446,21 +447,45 @@ TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image
   const IngressParams& p = params.ingress;
   TargetOutcome out;
   out.labels.assign(c.size(), Label::kOutlier);
-  const auto wall = fit_homography(c.x1, c.x2, params.homography);
-  if (!wall) {
-    out.reason = wall.reason();
+  const auto planes = fit_two_homographies(c.x1, c.x2, params.homography);
+  if (!planes) {
+    out.reason = planes.reason();
     return out;
   }
-  for (size_t i = 0; i < c.size(); ++i)
-    if (wall->inlier[i]) out.labels[i] = Label::kDominant;
-  out.estimate.n_inliers_dominant = wall->n_inliers;
-
   // The wall plane; motion capture's rotation picks the physical decomposition.
   const MocapMotion mocap = mocap_motion(c.pose_1, c.pose_2, *c.mount);
   if (mocap.baseline_m < params.waypoint.min_baseline_m) {
     out.reason = Reason::kSmallBaseline;
     return out;
   }
+  const Isometry3d X_WC1 = camera_in_world(c.pose_1.X_WB(), c.mount->X_BC());
+  const Isometry3d X_WC2 = camera_in_world(c.pose_2.X_WB(), c.mount->X_BC());
+  // The wall is the nearer of the dominant plane and the one among its outliers (issue 15: where
+  // the wall's photograph is dark and flat and the room's bright, the room's back wall seen
+  // through the opening holds more matches than the wall around it; its homography made the
+  // opening the only part of the view that agreed with the reference, and the behind check then
+  // threw away nearly every frame). Nearer: the median depth of its triangulated inliers.
+  const HomographyFit* wall = &planes->first;
+  if (p.nearer_plane && planes->second) {
+    const Isometry3d X_C2W = X_WC2.inverse();
+    auto median_depth = [&](const HomographyFit& f) {
+      std::vector<double> z;
+      for (size_t k = 0; k < c.size(); ++k) {
+        if (!f.inlier[k]) continue;
+        const auto X_W = triangulate_midpoint(X_WC1, X_WC1.linear() * c.camera->ray(c.u1[k]),
+                                              X_WC2, X_WC2.linear() * c.camera->ray(c.u2[k]));
+        if (X_W) z.push_back((X_C2W * *X_W).z());
+      }
+      if (z.empty()) return std::numeric_limits<double>::infinity();
+      std::nth_element(z.begin(), z.begin() + z.size() / 2, z.end());
+      return z[z.size() / 2];
+    };
+    if (median_depth(*planes->second) < median_depth(planes->first)) wall = &*planes->second;
+  }
+  for (size_t i = 0; i < c.size(); ++i)
+    if (wall->inlier[i]) out.labels[i] = Label::kDominant;
+  out.estimate.n_inliers_dominant = wall->n_inliers;
+
   const Matrix3d K = c.camera->K(), K_inv = K.inverse();
   std::vector<Vector3d> r1, r2;
   for (size_t i = 0; i < c.size(); ++i)
@@ -568,12 +593,10 @@ TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image
     out.reason = Reason::kNoOpening;
     return out;
   }
-  // What is seen through an opening lies behind the wall. When the dominant plane is something
-  // seen through the opening instead (a large opening shows the room's back wall, which then
-  // holds more matches than the wall around it), the features in the block are the wall itself,
-  // in front of that plane: no opening in this frame.
-  const Isometry3d X_WC1 = camera_in_world(c.pose_1.X_WB(), c.mount->X_BC());
-  const Isometry3d X_WC2 = camera_in_world(c.pose_2.X_WB(), c.mount->X_BC());
+  // What is seen through an opening lies behind the wall. When the wall plane is something
+  // seen through the opening instead (the nearer of two planes can still be one beyond the
+  // wall when the wall itself has too few matches for a plane), the features in the block are
+  // the wall itself, in front of that plane: no opening in this frame.
   int behind = 0, in_block = 0;
   for (size_t k = 0; k < c.size(); ++k) {
     if (out.labels[k] != Label::kTarget) continue;
@@ -587,7 +610,13 @@ TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image
     out.reason = Reason::kNoOpening;
     return out;
   }
-  out.reason = Reason::kOk;
+  // A block reaching the image border has no cut there: the opening may go on out of view, so
+  // its centre and size are not known (issue 15: at the refinement's vantages the family's
+  // larger openings overflowed the view, and the visible part's centre, up to 40 cm off, was
+  // averaged into the estimate). Reported as a partial view, which locates it but is never
+  // averaged (as the landing platform's, landing_target.cpp).
+  const bool cut = b[0] == 0 || b[1] == 0 || b[2] == nx || b[3] == ny;
+  out.reason = cut && p.border_is_partial ? Reason::kPartialView : Reason::kOk;
   return out;
 }
 
