@@ -464,51 +464,66 @@ TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image
   // the wall's photograph is dark and flat and the room's bright, the room's back wall seen
   // through the opening holds more matches than the wall around it; its homography made the
   // opening the only part of the view that agreed with the reference, and the behind check then
-  // threw away nearly every frame). Nearer: the median depth of its triangulated inliers.
-  const HomographyFit* wall = &planes->first;
-  if (p.nearer_plane && planes->second) {
-    const Isometry3d X_C2W = X_WC2.inverse();
-    auto median_depth = [&](const HomographyFit& f) {
-      std::vector<double> z;
-      for (size_t k = 0; k < c.size(); ++k) {
-        if (!f.inlier[k]) continue;
-        const auto X_W = triangulate_midpoint(X_WC1, X_WC1.linear() * c.camera->ray(c.u1[k]),
-                                              X_WC2, X_WC2.linear() * c.camera->ray(c.u2[k]));
-        if (X_W) z.push_back((X_C2W * *X_W).z());
-      }
-      if (z.empty()) return std::numeric_limits<double>::infinity();
+  // threw away nearly every frame). Nearer: the median depth of its triangulated inliers. Only a
+  // plane whose decomposition agrees with motion capture's motion (as compute_waypoint checks)
+  // counts: the second search also finds a dozen stray matches that fit some homography.
+  const Matrix3d K = c.camera->K(), K_inv = K.inverse();
+  const Isometry3d X_C2W = X_WC2.inverse();
+  struct Candidate {
+    const HomographyFit* fit;
+    Result<PlaneMotion> plane;
+    double depth_m;
+  };
+  auto candidate = [&](const HomographyFit& f) {
+    std::vector<Vector3d> r1, r2;
+    std::vector<double> z;
+    for (size_t k = 0; k < c.size(); ++k) {
+      if (!f.inlier[k]) continue;
+      r1.push_back(K_inv * c.x1[k].homogeneous());
+      r2.push_back(K_inv * c.x2[k].homogeneous());
+      const auto X_W = triangulate_midpoint(X_WC1, X_WC1.linear() * c.camera->ray(c.u1[k]), X_WC2,
+                                            X_WC2.linear() * c.camera->ray(c.u2[k]));
+      if (X_W) z.push_back((X_C2W * *X_W).z());
+    }
+    DecompositionPrior prior;
+    prior.R_21 = mocap.R_21;
+    auto plane = decompose(calibrate_homography(f.H, K), r1, r2, prior, params.decomposition);
+    if (plane) {
+      constexpr double kDeg = M_PI / 180.0;
+      if (direction_angle(plane->t_12, mocap.t_12) >
+              params.waypoint.max_translation_angle_deg * kDeg ||
+          rotation_angle(plane->R_21, mocap.R_21) > params.waypoint.max_rotation_error_deg * kDeg)
+        plane = Result<PlaneMotion>::fail(Reason::kDecompositionFailed);
+    }
+    double depth = std::numeric_limits<double>::infinity();
+    if (!z.empty()) {
       std::nth_element(z.begin(), z.begin() + z.size() / 2, z.end());
-      return z[z.size() / 2];
-    };
-    if (median_depth(*planes->second) < median_depth(planes->first)) wall = &*planes->second;
+      depth = z[z.size() / 2];
+    }
+    return Candidate{&f, std::move(plane), depth};
+  };
+  Candidate wall = candidate(planes->first);
+  if (p.nearer_plane && planes->second) {
+    Candidate other = candidate(*planes->second);
+    if (other.plane && (!wall.plane || other.depth_m < wall.depth_m)) wall = std::move(other);
   }
   for (size_t i = 0; i < c.size(); ++i)
-    if (wall->inlier[i]) out.labels[i] = Label::kDominant;
-  out.estimate.n_inliers_dominant = wall->n_inliers;
-
-  const Matrix3d K = c.camera->K(), K_inv = K.inverse();
-  std::vector<Vector3d> r1, r2;
-  for (size_t i = 0; i < c.size(); ++i)
-    if (wall->inlier[i]) {
-      r1.push_back(K_inv * c.x1[i].homogeneous());
-      r2.push_back(K_inv * c.x2[i].homogeneous());
-    }
-  DecompositionPrior prior;
-  prior.R_21 = mocap.R_21;
-  const auto plane =
-      decompose(calibrate_homography(wall->H, K), r1, r2, prior, params.decomposition);
-  if (!plane) {
-    out.reason = plane.reason();
+    if (wall.fit->inlier[i]) out.labels[i] = Label::kDominant;
+  out.estimate.n_inliers_dominant = wall.fit->n_inliers;
+  if (!wall.plane) {
+    out.reason = wall.plane.reason();
     return out;
   }
+  const PlaneMotion& plane = *wall.plane;
+  const HomographyFit* const fit = wall.fit;
 
   // 2D histogram of wall inliers and off-wall features over the cells of the line cuts.
   std::vector<double> xc, yc;
   if (p.parallax_mask && !reference.empty()) {
     std::vector<Vector2d> wall_px;
     for (size_t k = 0; k < c.size(); ++k)
-      if (wall->inlier[k]) wall_px.push_back(c.u2[k]);
-    mask_cuts(off_wall_mask(image, reference, wall->H, *c.camera, wall_px, p), p, &xc, &yc,
+      if (fit->inlier[k]) wall_px.push_back(c.u2[k]);
+    mask_cuts(off_wall_mask(image, reference, fit->H, *c.camera, wall_px, p), p, &xc, &yc,
               &out.lines, image);
   } else {
     line_cuts(image, p, &xc, &yc, &out.lines);
@@ -527,7 +542,7 @@ TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image
   };
   for (size_t k = 0; k < c.size(); ++k) {
     const int i = cell_of(xc, c.u2[k].x()), j = cell_of(yc, c.u2[k].y());
-    if (!wall->inlier[k])
+    if (!fit->inlier[k])
       ++at(off, i + 1, j + 1);
     else if (!near_cut(xc, c.u2[k].x()) && !near_cut(yc, c.u2[k].y()))
       ++at(in, i + 1, j + 1);
@@ -564,14 +579,14 @@ TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image
     return out;
   }
   for (size_t k = 0; k < c.size(); ++k)
-    if (!wall->inlier[k]) {
+    if (!fit->inlier[k]) {
       const int i = cell_of(xc, c.u2[k].x()), j = cell_of(yc, c.u2[k].y());
       if (i >= b[0] && i < b[2] && j >= b[1] && j < b[3]) out.labels[k] = Label::kTarget;
     }
   const double left = xc[b[0]], right = xc[b[2]], top = yc[b[1]], bottom = yc[b[3]];
   const Vector2d centre(0.5 * (left + right), 0.5 * (top + bottom));
   auto on_wall = [&](const Vector2d& px) {
-    return compute_waypoint(*plane, c.camera->ray(px), c.pose_1, c.pose_2, *c.mount,
+    return compute_waypoint(plane, c.camera->ray(px), c.pose_1, c.pose_2, *c.mount,
                             params.waypoint);
   };
   const auto w_c = on_wall(centre);
