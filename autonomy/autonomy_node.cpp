@@ -32,12 +32,8 @@
 #include "common/operator_auth.hpp"
 #include "outer_loop/convert.hpp"
 
-// The verifier's reasons are the gate's (both are autonomy_status_t.REJECT_*).
-static_assert(static_cast<int>(alight::CommandVerdict::Reason::kWrongSession) ==
-                  static_cast<int>(alight::autonomy::CommandReject::kWrongSession) &&
-              static_cast<int>(alight::CommandVerdict::Reason::kReplayed) ==
-                  static_cast<int>(alight::autonomy::CommandReject::kReplayed) &&
-              alight::CommandVerdict::kReasonCount <= alight::autonomy::kCommandRejectSlots);
+// The verifier and the gate share alight::CommandReject; AUTONOMY_STATUS has a slot for each.
+static_assert(alight::kCommandRejectCount <= alight::autonomy::kCommandRejectSlots);
 
 int main(int argc, char** argv) {
   return alight::run_node_main("alight-autonomy", [&]() -> int {
@@ -238,8 +234,8 @@ int main(int argc, char** argv) {
         const auto verdict = verifier->check(m, alight::wall_utime());
         if (!verdict.accepted()) {
           spdlog::warn("OPERATOR_CMD from '{}' for '{}' seq {} rejected: {}", m.sender,
-                       m.vehicle_id, m.seq, alight::reason_name(verdict.reason));
-          in.command->link_reject = static_cast<au::CommandReject>(verdict.reason);
+                       m.vehicle_id, m.seq, alight::command_reject_name(verdict.reason));
+          in.command->link_reject = verdict.reason;
           return autonomy.refused_at_link(*in.command);
         }
         in.command->auth = au::CommandAuth::kVerified;

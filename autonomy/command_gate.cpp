@@ -2,26 +2,6 @@
 
 namespace alight::autonomy {
 
-const char* reject_name(CommandReject reason) {
-  switch (reason) {
-    case CommandReject::kNone:
-      return "none";
-    case CommandReject::kUnsigned:
-      return "unsigned";
-    case CommandReject::kBadSignature:
-      return "bad signature";
-    case CommandReject::kStale:
-      return "stale";
-    case CommandReject::kReplayed:
-      return "replayed";
-    case CommandReject::kWrongVehicle:
-      return "wrong vehicle";
-    case CommandReject::kWrongSession:
-      return "wrong session";
-  }
-  return "?";
-}
-
 CommandGate::Verdict CommandGate::refuse(const OperatorCommand& cmd, CommandReject reason,
                                          std::string why) {
   ++n_rejected_;
@@ -43,7 +23,7 @@ CommandGate::Verdict CommandGate::check(const OperatorCommand& cmd) {
                       "signed command, but no operator key to verify it "
                       "(autonomy.operator_key_file)");
       }
-      Verdict v = refuse(cmd, cmd.link_reject, reject_name(cmd.link_reject));
+      Verdict v = refuse(cmd, cmd.link_reject, command_reject_name(cmd.link_reject));
       v.at_link = true;
       return v;
     }

@@ -64,6 +64,4 @@ class CommandGate {
   int64_t last_accepted_seq_ = -1;
 };
 
-const char* reject_name(CommandReject reason);
-
 }  // namespace alight::autonomy

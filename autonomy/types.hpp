@@ -8,6 +8,7 @@
 #include <optional>
 #include <string>
 
+#include "common/command_reject.hpp"
 #include "common/geometry.hpp"
 #include "common/pose_buffer.hpp"
 #include "outer_loop/setpoint.hpp"
@@ -65,17 +66,6 @@ enum class CommandAuth {
   kHmacSha256,  ///< signed: refused unless the link's CommandVerifier accepted it (kVerified)
   kVerified,    ///< HMAC-SHA256 verified by the node (common/operator_auth CommandVerifier)
   kInternal,    ///< issued by the node itself (--auto-go in simulation launch files)
-};
-/// Why an operator command was refused; the values are autonomy_status_t.REJECT_* (and
-/// common/operator_auth's CommandVerdict::Reason).
-enum class CommandReject : int8_t {
-  kNone = 0,
-  kUnsigned = 1,
-  kBadSignature = 2,
-  kStale = 3,
-  kReplayed = 4,
-  kWrongVehicle = 5,
-  kWrongSession = 6,
 };
 inline constexpr int kCommandRejectSlots = 8;  ///< autonomy_status_t.cmds_rejected_by_reason
 

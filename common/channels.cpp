@@ -14,6 +14,7 @@ bool is_known(const std::string& name) {
 std::string message_type(const std::string& name) {
   static const std::map<std::string, std::string> kTypes = {
       {kCamera, "image_t"},
+      {kFlowCamera, "image_t"},
       {kMocapPose, "pose_t"},
       {kImu, "imu_t"},
       {kRange, "range_t"},

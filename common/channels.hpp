@@ -19,6 +19,11 @@ namespace alight::channels {
 /// image_t: raw frames, stamped at exposure. alight-camera or alight-sim → vision, ground
 /// station.
 inline constexpr const char kCamera[] = "CAMERA";
+/// image_t: the downward camera's frames for the onboard estimator's flow when CAMERA carries
+/// another camera (ingress without motion capture flies the forward one). alight-sim
+/// (`flow_camera:`) → alight-estimator. Where the downward camera is the mission's, the estimator
+/// reads CAMERA in its place (`--remap FLOW_CAMERA=CAMERA`).
+inline constexpr const char kFlowCamera[] = "FLOW_CAMERA";
 /// pose_t: vehicle pose and velocity in the world frame. alight-sim or alight-mocap → vision,
 /// autonomy, outer loop, ground station.
 inline constexpr const char kMocapPose[] = "MOCAP_POSE";
@@ -70,11 +75,11 @@ inline constexpr const char kAutopilotPose[] = "AUTOPILOT_POSE";
 inline constexpr const char kAutopilotStatus[] = "AUTOPILOT_STATUS";
 
 /// Every channel above.
-inline constexpr std::array<const char*, 20> kAll = {
-    kCamera,           kMocapPose,      kImu,          kRange,      kBaro,          kStateEstimate,
-    kEstimatePose,     kVisionTarget,   kVisionTiming, kVisionDiag, kOperatorCmd,   kAutonomyStatus,
-    kPositionSetpoint, kAttitudeCmd,    kSimTruth,     kSimControl, kProcessStatus, kNodeStatus,
-    kAutopilotPose,    kAutopilotStatus};
+inline constexpr std::array<const char*, 21> kAll = {
+    kCamera,         kFlowCamera,       kMocapPose,      kImu,          kRange,      kBaro,
+    kStateEstimate,  kEstimatePose,     kVisionTarget,   kVisionTiming, kVisionDiag, kOperatorCmd,
+    kAutonomyStatus, kPositionSetpoint, kAttitudeCmd,    kSimTruth,     kSimControl, kProcessStatus,
+    kNodeStatus,     kAutopilotPose,    kAutopilotStatus};
 
 /// True when `name` is one of kAll.
 bool is_known(const std::string& name);

@@ -133,26 +133,6 @@ bool signature_valid(const operator_cmd_t& cmd, const OperatorKey& key) {
   return CRYPTO_memcmp(tag.data(), cmd.hmac, tag.size()) == 0;
 }
 
-const char* reason_name(CommandVerdict::Reason reason) {
-  switch (reason) {
-    case CommandVerdict::Reason::kAccepted:
-      return "accepted";
-    case CommandVerdict::Reason::kUnsigned:
-      return "unsigned";
-    case CommandVerdict::Reason::kBadSignature:
-      return "bad_signature";
-    case CommandVerdict::Reason::kStale:
-      return "stale";
-    case CommandVerdict::Reason::kReplayed:
-      return "replayed";
-    case CommandVerdict::Reason::kWrongVehicle:
-      return "wrong_vehicle";
-    case CommandVerdict::Reason::kWrongSession:
-      return "wrong_session";
-  }
-  return "unknown";
-}
-
 int64_t draw_session_nonce() {
   for (;;) {
     uint64_t v = 0;
@@ -206,7 +186,7 @@ CommandVerdict CommandVerifier::check(const operator_cmd_t& cmd, int64_t now_uti
   auto it = last_seq_.find(cmd.sender);
   if (it != last_seq_.end() && cmd.seq <= it->second) return reject(R::kReplayed);
   last_seq_[cmd.sender] = cmd.seq;
-  return CommandVerdict{R::kAccepted};
+  return CommandVerdict{R::kNone};
 }
 
 int64_t CommandVerifier::last_seq(const std::string& sender) const {

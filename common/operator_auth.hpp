@@ -41,6 +41,8 @@
 #include <string>
 #include <vector>
 
+#include "common/command_reject.hpp"
+
 namespace alight {
 
 /// Shared secret. At least kMinKeyBytes long.
@@ -78,22 +80,13 @@ void sign(operator_cmd_t& cmd, const OperatorKey& key);
 /// True when auth = AUTH_HMAC_SHA256 and the tag matches (constant-time comparison).
 bool signature_valid(const operator_cmd_t& cmd, const OperatorKey& key);
 
-/// Outcome of CommandVerifier::check. The values are autonomy_status_t.REJECT_*.
+/// Outcome of CommandVerifier::check.
 struct CommandVerdict {
-  enum class Reason : int8_t {
-    kAccepted = 0,
-    kUnsigned = 1,
-    kBadSignature = 2,
-    kStale = 3,
-    kReplayed = 4,
-    kWrongVehicle = 5,
-    kWrongSession = 6,
-  };
-  static constexpr int kReasonCount = 7;
-  Reason reason = Reason::kAccepted;
-  bool accepted() const { return reason == Reason::kAccepted; }
+  using Reason = CommandReject;
+  static constexpr int kReasonCount = kCommandRejectCount;
+  Reason reason = Reason::kNone;
+  bool accepted() const { return reason == Reason::kNone; }
 };
-const char* reason_name(CommandVerdict::Reason reason);
 
 /// A fresh session nonce for a CommandVerifier: 63 random bits from OpenSSL's RAND_bytes (seeded
 /// by the operating system, never by the vehicle's configured seed), never 0. Not pure: the
@@ -121,7 +114,7 @@ class CommandVerifier {
   uint64_t n_rejected(CommandVerdict::Reason reason) const {
     return by_reason_[static_cast<size_t>(reason)];
   }
-  /// seq and reason of the last rejected command (-1 and kAccepted when none was rejected).
+  /// seq and reason of the last rejected command (-1 and kNone when none was rejected).
   int64_t last_rejected_seq() const { return last_rejected_seq_; }
   CommandVerdict::Reason last_reject_reason() const { return last_reject_reason_; }
   /// Last accepted seq of `sender`, or INT64_MIN when none was accepted.
@@ -136,7 +129,7 @@ class CommandVerifier {
   uint64_t n_rejected_ = 0;
   std::array<uint64_t, CommandVerdict::kReasonCount> by_reason_{};
   int64_t last_rejected_seq_ = -1;
-  CommandVerdict::Reason last_reject_reason_ = CommandVerdict::Reason::kAccepted;
+  CommandVerdict::Reason last_reject_reason_ = CommandVerdict::Reason::kNone;
 };
 
 }  // namespace alight

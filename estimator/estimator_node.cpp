@@ -1,6 +1,10 @@
-// alight-estimator: IMU + RANGE + BARO + CAMERA -> STATE_ESTIMATE and ESTIMATE_POSE (issue 17,
-// the paper's future work: flying without motion capture). Glue only: the filter and the flow
+// alight-estimator: IMU + RANGE + BARO + FLOW_CAMERA -> STATE_ESTIMATE and ESTIMATE_POSE (issue
+// 17, the paper's future work: flying without motion capture). Glue only: the filter and the flow
 // front end are estimator::Onboard (pure); this file owns LCM, the parameters and the logging.
+//
+// The flow takes the vehicle file's downward camera on FLOW_CAMERA: alight-sim --flow-camera
+// renders it there while CAMERA carries the forward one (ingress); where the mission's camera is
+// the downward one (landing), `--remap FLOW_CAMERA=CAMERA` reads that in its place.
 //
 // Runs on the utime of its inputs, so a replayed log gives the same estimates. Publishes one
 // estimate per IMU sample fused, once static alignment has finished.
@@ -22,7 +26,7 @@ int main(int argc, char** argv) {
   return run_node_main("alight-estimator", [&]() -> int {
     CLI::App app{
         "alight estimator: onboard state from IMU, rangefinder, barometer and the downward "
-        "camera (IMU, RANGE, BARO, CAMERA -> STATE_ESTIMATE, ESTIMATE_POSE)"};
+        "camera (IMU, RANGE, BARO, FLOW_CAMERA -> STATE_ESTIMATE, ESTIMATE_POSE)"};
     NodeArgs args;
     args.add_to(app, true);
     try {
@@ -77,12 +81,12 @@ int main(int argc, char** argv) {
       count(channels::kBaro, onboard.add_baro(estimator::from_msg(m)));
     });
     estimator::FlowReason last_flow = estimator::FlowReason::kNoPrevious;
-    node.on<image_t>(channels::kCamera, [&](const image_t& m) {
-      if (!accept_stamp(channels::kCamera, m.utime)) return;
+    node.on<image_t>(channels::kFlowCamera, [&](const image_t& m) {
+      if (!accept_stamp(channels::kFlowCamera, m.utime)) return;
       std::string error;
       const auto image = image_from_msg(m, true, &error);
       if (!image) {
-        node.reject_value(channels::kCamera, error);
+        node.reject_value(channels::kFlowCamera, error);
         return;
       }
       const estimator::FrameOutcome o = onboard.add_frame(image->pixels, image->utime);
@@ -90,8 +94,8 @@ int main(int argc, char** argv) {
         last_flow = onboard.last_frame().flow;
         spdlog::info("estimator: flow {}", estimator::to_string(last_flow));
       }
-      if (o.dropped) node.reject_value(channels::kCamera, "frame queue full (IMU stalled?)");
-      if (o.processed > 0) count(channels::kCamera, o.fused);
+      if (o.dropped) node.reject_value(channels::kFlowCamera, "frame queue full (IMU stalled?)");
+      if (o.processed > 0) count(channels::kFlowCamera, o.fused);
     });
     node.every(10.0, [&](int64_t) {
       const estimator::State s = onboard.state();
@@ -99,8 +103,9 @@ int main(int argc, char** argv) {
                    estimator::to_string(s.health), estimator::health_reasons_text(s.health_reasons),
                    s.p_W_B.x(), s.p_W_B.y(), s.p_W_B.z(), s.terrain_height_m);
     });
-    spdlog::info("alight-estimator: camera {} ({}x{}), publishing {} and {}", mount.name,
-                 camera.width, camera.height, channels::kStateEstimate, channels::kEstimatePose);
+    spdlog::info("alight-estimator: camera {} ({}x{}) on {}, publishing {} and {}", mount.name,
+                 camera.width, camera.height, node.channel_name(channels::kFlowCamera),
+                 channels::kStateEstimate, channels::kEstimatePose);
     return node.run();
   });
 }

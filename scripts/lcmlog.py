@@ -51,6 +51,20 @@ def read_events(path, channel_regex=None):
                 yield Event(eventnum, utime, channel, data)
 
 
+def write_events(path, events):
+    """Writes Events (their channel, data and utime; renumbered from 0) as an LCM log that
+    lcm-logplayer plays; returns how many."""
+    n = 0
+    with open(path, "wb") as f:
+        for ev in events:
+            channel = ev.channel.encode()
+            f.write(_HEADER.pack(SYNC, n, ev.utime, len(channel), len(ev.data)))
+            f.write(channel)
+            f.write(ev.data)
+            n += 1
+    return n
+
+
 def _types_dir():
     env = os.environ.get("ALIGHT_LCMTYPES_PYTHON")
     if env:

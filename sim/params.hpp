@@ -243,6 +243,15 @@ struct Scenario {
   RangefinderParams rangefinder;
   BaroParams baro;
   CameraParams camera;
+  /// The downward camera once more, for the onboard estimator's flow (FLOW_CAMERA), when
+  /// `camera` is another one: ingress without motion capture renders the forward camera for the
+  /// vision and this one for the estimator (issue 17). Off unless enabled here or by
+  /// alight-sim --flow-camera.
+  CameraParams flow_camera = [] {
+    CameraParams c;
+    c.enabled = false;
+    return c;
+  }();
   LightingParams lighting;
   RandomizeParams randomize;
   Vector3d start_position_m = Vector3d::Zero();  ///< `start.position_m`

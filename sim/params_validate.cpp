@@ -283,7 +283,7 @@ const ParamSchema<CameraParams>& CameraParams::schema() {
   using P = CameraParams;
   static const ParamSchema<P> schema = [] {
     ParamSchema<P> s;
-    s.add("enabled", &P::enabled, Range::any(), "", "render and publish CAMERA");
+    s.add("enabled", &P::enabled, Range::any(), "", "render and publish its frames");
     s.add("mount", &P::mount, Range::any(), "", "the camera of the vehicle file's cameras:")
         .one_of({"downward", "forward"});
     s.add("rate_hz", &P::rate_hz, Range::open_closed(0, 60), "Hz", "frames per second");
@@ -384,6 +384,9 @@ const ParamSchema<Scenario>& Scenario::schema() {
               "a rangefinder fixed to the body, looking down by default (RANGE)");
     s.section("baro", &P::baro, BaroParams::schema(), "a barometer (BARO)");
     s.section("camera", &P::camera, CameraParams::schema(), "the rendered camera (CAMERA)");
+    s.section("flow_camera", &P::flow_camera, CameraParams::schema(),
+              "the downward camera rendered besides `camera` for the onboard estimator's flow "
+              "(FLOW_CAMERA; ingress without motion capture); enabled: false by default");
     s.section("lighting", &P::lighting, LightingParams::schema(), "the renderer's light");
     s.section("randomize", &P::randomize, RandomizeParams::schema(),
               "what a seed changes: platform pose, texture seeds (always) and lighting");
@@ -392,6 +395,10 @@ const ParamSchema<Scenario>& Scenario::schema() {
             "the gear stands on the floor below this point");
       g.add("yaw_deg", &P::start_yaw_deg, Range::any(), "deg", "heading at the start");
     });
+    // The estimator's flow takes the vehicle file's downward camera (estimator_node.cpp).
+    s.check(
+        "flow_camera.mount", [](const P& p) { return p.flow_camera.mount == "downward"; },
+        "must be downward: the onboard estimator's flow looks at the floor");
     s.check(
         "start.position_m",
         [](const P& p) {

@@ -11,6 +11,11 @@
 // listens, as PX4 SITL's onboard link does): commands come as SET_ATTITUDE_TARGET instead of
 // ATTITUDE_CMD, and IMU goes out as HIGHRES_IMU (alight-mavlink publishes it) instead of on LCM.
 // RANGE and BARO are published on LCM either way (alight-mavlink does not bridge them).
+//
+// --flow-camera (or the scenario's flow_camera.enabled): the downward camera is rendered besides
+// the scenario's camera and published on FLOW_CAMERA for alight-estimator, at flow_camera.rate_hz
+// (ingress without motion capture: the vision flies the forward camera, the estimator's flow
+// needs the floor; issue 17). SIM_CONTROL's camera dropouts silence CAMERA only.
 
 #include <spdlog/spdlog.h>
 
@@ -73,6 +78,11 @@ int main(int argc, char** argv) {
     app.add_flag("--no-mocap", no_mocap,
                  "No MOCAP_POSE whatever the scenario says (mocap.enabled: false): the vehicle "
                  "flies on its onboard estimate; SIM_TRUTH still scores it");
+    bool flow_camera = false;
+    app.add_flag("--flow-camera", flow_camera,
+                 "Also render the downward camera on FLOW_CAMERA for the onboard estimator's flow "
+                 "(flow_camera.enabled: true), when CAMERA carries another camera (ingress "
+                 "without motion capture)");
     args.add_to(app, false);
     try {
       app.parse(argc, argv);
@@ -89,6 +99,10 @@ int main(int argc, char** argv) {
     if (scenario.camera.enabled) rig = sim::load_camera_rig(vehicle_file, scenario.camera.mount);
     if (start_now) scenario.start_utime = wall_utime();
     if (no_mocap) scenario.mocap.enabled = false;
+    if (flow_camera) scenario.flow_camera.enabled = true;
+    std::optional<sim::CameraRig> flow_rig;
+    if (scenario.flow_camera.enabled)
+      flow_rig = sim::load_camera_rig(vehicle_file, scenario.flow_camera.mount);
 
     std::optional<mavlink::LinkAddress> mavlink_address;
     if (!mavlink_link.empty()) {
@@ -97,7 +111,7 @@ int main(int argc, char** argv) {
       if (!mavlink_address) throw ParamError("--mavlink", "mavlink", mavlink_link, why);
     }
 
-    sim::Simulator simulator(scenario, vehicle, seed, rig);
+    sim::Simulator simulator(scenario, vehicle, seed, rig, flow_rig);
     simulator.set_render_threads(threads);
     Node node(args, "alight-sim");
     // Disarmed until the outer loop says otherwise; its silence is the autopilot's command-loss
@@ -126,6 +140,10 @@ int main(int argc, char** argv) {
 
     spdlog::info("alight-sim: scenario {} ({}), vehicle {} ({}), seed {}, rate {}", scenario.name,
                  scenario_file, vehicle.name, vehicle_file, seed, rate);
+    if (flow_rig)
+      spdlog::info("alight-sim: the {} camera on {} at {} Hz besides {} on {}",
+                   scenario.flow_camera.mount, channels::kFlowCamera, scenario.flow_camera.rate_hz,
+                   scenario.camera.mount, channels::kCamera);
     const int64_t sim0 = simulator.now_utime();
     // The MAVLink autopilot: its link, reopened when it fails (a bridge that is not up yet).
     std::optional<mavlink::LinkIo> link;
@@ -267,6 +285,8 @@ int main(int argc, char** argv) {
       for (const auto& m : simulator.take_baro()) node.publish(channels::kBaro, sim::to_msg(m));
       if (auto frame = simulator.take_camera())
         if (gates.camera.on(now)) node.publish(channels::kCamera, sim::to_msg(*frame));
+      if (auto frame = simulator.take_flow_camera())
+        node.publish(channels::kFlowCamera, sim::to_msg(*frame));
       if (simulator.now_utime() >= next_truth) {
         node.publish(channels::kSimTruth, sim::to_msg(simulator.truth()));
         next_truth += kTruthPeriodUs;

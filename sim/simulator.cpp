@@ -36,7 +36,7 @@ PoseSample to_pose(const VehicleState& s, int64_t utime) {
 }  // namespace
 
 Simulator::Simulator(const Scenario& scenario, const VehicleParams& vehicle, uint64_t seed,
-                     std::optional<CameraRig> camera)
+                     std::optional<CameraRig> camera, std::optional<CameraRig> flow_camera)
     : scenario_(scenario),
       vehicle_(vehicle),
       scene_(std::make_unique<Scene>(build_scene(scenario, substream(seed, 0)))),
@@ -48,9 +48,7 @@ Simulator::Simulator(const Scenario& scenario, const VehicleParams& vehicle, uin
       imu_(scenario.imu, scenario.start_utime, substream(seed, 3)),
       rangefinder_(scenario.rangefinder, scenario.start_utime, substream(seed, 5)),
       baro_(scenario.baro, scenario.start_utime, substream(seed, 6)),
-      camera_(std::move(camera)),
-      history_(history_params()),
-      camera_rng_(substream(seed, 4)) {
+      history_(history_params()) {
   const double rotor_radius_m = 0.5 * vehicle.rotor_tip_span_m;
   if (scenario.platform && scenario.randomize.start_clearance_m < rotor_radius_m &&
       (scenario.randomize.platform_xy_m > 0 || scenario.randomize.platform_yaw_deg > 0))
@@ -71,17 +69,27 @@ Simulator::Simulator(const Scenario& scenario, const VehicleParams& vehicle, uin
   last_command_utime_ = now_utime_;
   history_.add(to_pose(state_, now_utime_));
   if (scenario.mocap.enabled) mocap_.update(now_utime_, to_pose(state_, now_utime_));
-  if (camera_ && scenario.camera.enabled) {
-    renderer_ = std::make_unique<Renderer>(camera_->model, scenario.camera.supersample);
-    camera_period_us_ = std::llround(1e6 / scenario.camera.rate_hz);
-    next_frame_utime_ = now_utime_ + camera_period_us_;
-    // A table of unit normal noise, read at a random offset per frame: per-pixel Gaussian draws
-    // would cost more than the rendering.
-    const size_t n = static_cast<size_t>(camera_->model.width) * camera_->model.height;
-    noise_.resize(2 * n);
-    std::normal_distribution<float> g(0.f, 1.f);
-    for (auto& v : noise_) v = g(camera_rng_);
-  }
+  camera_.params = scenario.camera;
+  camera_.rig = std::move(camera);
+  camera_.rng.seed(substream(seed, 4));
+  start_camera(camera_);
+  flow_camera_.params = scenario.flow_camera;
+  flow_camera_.rig = std::move(flow_camera);
+  flow_camera_.rng.seed(substream(seed, 7));
+  start_camera(flow_camera_);
+}
+
+void Simulator::start_camera(CameraStream& c) {
+  if (!c.rig || !c.params.enabled) return;
+  c.renderer = std::make_unique<Renderer>(c.rig->model, c.params.supersample);
+  c.period_us = std::llround(1e6 / c.params.rate_hz);
+  c.next_frame_utime = now_utime_ + c.period_us;
+  // A table of unit normal noise, read at a random offset per frame: per-pixel Gaussian draws
+  // would cost more than the rendering.
+  const size_t n = static_cast<size_t>(c.rig->model.width) * c.rig->model.height;
+  c.noise.resize(2 * n);
+  std::normal_distribution<float> g(0.f, 1.f);
+  for (auto& v : c.noise) v = g(c.rng);
 }
 
 void Simulator::set_state(const VehicleState& state) {
@@ -93,7 +101,8 @@ void Simulator::set_state(const VehicleState& state) {
 
 void Simulator::set_render_threads(int n) {
   render_threads_ = std::max(1, n);
-  if (renderer_) renderer_->set_threads(render_threads_);
+  if (camera_.renderer) camera_.renderer->set_threads(render_threads_);
+  if (flow_camera_.renderer) flow_camera_.renderer->set_threads(render_threads_);
 }
 
 void Simulator::inject_mocap_dropout(int64_t from_utime, int64_t to_utime) {
@@ -206,22 +215,23 @@ void Simulator::physics_step() {
     imu_.update(now_utime_, dt_us_, last_.specific_force_B, state_.omega_B);
   if (scenario_.rangefinder.enabled) rangefinder_.update(now_utime_, truth.X_WB(), *scene_);
   if (scenario_.baro.enabled) baro_.update(now_utime_, state_.p_W_B);
-  if (renderer_) schedule_camera();
+  if (camera_.renderer) schedule_camera(camera_);
+  if (flow_camera_.renderer) schedule_camera(flow_camera_);
 }
 
-void Simulator::schedule_camera() {
-  const CameraParams& c = scenario_.camera;
+void Simulator::schedule_camera(CameraStream& cam) {
+  const CameraParams& c = cam.params;
   const int64_t half_exposure = std::llround(0.5 * c.exposure_s * 1e6);
-  if (now_utime_ < next_frame_utime_ + half_exposure) return;
+  if (now_utime_ < cam.next_frame_utime + half_exposure) return;
   PendingFrame f;
-  f.utime = next_frame_utime_;
-  f.seq = ++frame_seq_;
-  next_frame_utime_ += camera_period_us_;
+  f.utime = cam.next_frame_utime;
+  f.seq = ++cam.frame_seq;
+  cam.next_frame_utime += cam.period_us;
   std::normal_distribution<double> g(0.0, 1.0);
-  f.gain = std::clamp(1.0 + c.gain_jitter * g(camera_rng_), 0.2, 3.0);
-  f.noise_offset = std::uniform_int_distribution<size_t>(0, noise_.size() / 2)(camera_rng_);
+  f.gain = std::clamp(1.0 + c.gain_jitter * g(cam.rng), 0.2, 3.0);
+  f.noise_offset = std::uniform_int_distribution<size_t>(0, cam.noise.size() / 2)(cam.rng);
   const int k = c.motion_blur_samples;
-  const Isometry3d X_BC = camera_->mount.X_BC();
+  const Isometry3d X_BC = cam.rig->mount.X_BC();
   for (int i = 0; i < k; ++i) {
     const int64_t t =
         k == 1 ? f.utime : f.utime - half_exposure + (2 * half_exposure * i) / (k - 1);
@@ -230,8 +240,8 @@ void Simulator::schedule_camera() {
         pose ? pose->X_WB() : make_transform(state_.q_WB.toRotationMatrix(), state_.p_W_B);
     f.X_WC.push_back(camera_in_world(X_WB, X_BC));
   }
-  if (pending_) ++frames_skipped_;
-  pending_ = std::move(f);
+  if (cam.pending) ++cam.frames_skipped;
+  cam.pending = std::move(f);
 }
 
 std::vector<MocapSample> Simulator::take_mocap() { return mocap_.take(now_utime_); }
@@ -242,26 +252,30 @@ std::vector<RangeSample> Simulator::take_range() { return rangefinder_.take(now_
 
 std::vector<BaroSample> Simulator::take_baro() { return baro_.take(now_utime_); }
 
-std::optional<CameraFrame> Simulator::take_camera() {
-  if (!pending_) return std::nullopt;
-  const int64_t latency = std::llround(scenario_.camera.latency_s * 1e6);
-  const int64_t half_exposure = std::llround(0.5 * scenario_.camera.exposure_s * 1e6);
-  if (now_utime_ < pending_->utime + half_exposure + latency) return std::nullopt;
-  const PendingFrame f = std::move(*pending_);
-  pending_.reset();
-  const CameraModel& model = camera_->model;
+std::optional<CameraFrame> Simulator::take_camera() { return take_frame(camera_); }
+
+std::optional<CameraFrame> Simulator::take_flow_camera() { return take_frame(flow_camera_); }
+
+std::optional<CameraFrame> Simulator::take_frame(CameraStream& cam) {
+  if (!cam.pending) return std::nullopt;
+  const int64_t latency = std::llround(cam.params.latency_s * 1e6);
+  const int64_t half_exposure = std::llround(0.5 * cam.params.exposure_s * 1e6);
+  if (now_utime_ < cam.pending->utime + half_exposure + latency) return std::nullopt;
+  const PendingFrame f = std::move(*cam.pending);
+  cam.pending.reset();
+  const CameraModel& model = cam.rig->model;
   cv::Mat acc(model.height, model.width, CV_32F, cv::Scalar(0));
   const float w = static_cast<float>(f.gain / f.X_WC.size());
-  for (const auto& X_WC : f.X_WC) renderer_->accumulate(*scene_, X_WC, w, acc);
-  const float sigma = static_cast<float>(scenario_.camera.noise_sigma);
+  for (const auto& X_WC : f.X_WC) cam.renderer->accumulate(*scene_, X_WC, w, acc);
+  const float sigma = static_cast<float>(cam.params.noise_sigma);
   CameraFrame out;
   out.utime = f.utime;
   out.seq = f.seq;
-  out.exposure_s = scenario_.camera.exposure_s;
+  out.exposure_s = cam.params.exposure_s;
   out.gain = f.gain;
   out.X_WC = f.X_WC[f.X_WC.size() / 2];
   out.pixels.create(model.height, model.width, CV_8U);
-  const float* noise = noise_.data() + f.noise_offset;
+  const float* noise = cam.noise.data() + f.noise_offset;
   for (int v = 0; v < model.height; ++v) {
     const float* a = acc.ptr<float>(v);
     uchar* o = out.pixels.ptr<uchar>(v);
@@ -278,8 +292,8 @@ cv::Mat Simulator::render(const CameraMount& mount, const CameraModel& model,
     return m.width == model.width && m.height == model.height && m.fx == model.fx &&
            m.fy == model.fy && m.cx == model.cx && m.cy == model.cy && m.D == model.D;
   };
-  if (renderer_ && same(renderer_->model()) && scenario_.camera.supersample == 1) {
-    r = renderer_.get();
+  if (camera_.renderer && same(camera_.renderer->model()) && camera_.params.supersample == 1) {
+    r = camera_.renderer.get();
   } else {
     if (!adhoc_renderer_ || !same(adhoc_renderer_->model()))
       adhoc_renderer_ = std::make_unique<Renderer>(model, 1);

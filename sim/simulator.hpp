@@ -9,6 +9,7 @@
 //   sim.step(cmd, sim.now_utime() + 10000);   // 10 ms under cmd
 //   for (const auto& m : sim.take_mocap()) ...;
 //   if (auto frame = sim.take_camera()) ...;
+//   if (auto frame = sim.take_flow_camera()) ...;   // with a flow_camera rig (issue 17)
 
 #include <cstdint>
 #include <memory>
@@ -61,10 +62,14 @@ struct CameraFrame {
 class Simulator {
  public:
   /// `camera`: the camera to render (extrinsics and intrinsics); without it take_camera()
-  /// returns nothing. Throws ParamError when the scenario's randomize.start_clearance_m leaves
-  /// less room than the vehicle's rotor-tip radius.
+  /// returns nothing. `flow_camera`: the downward camera rendered besides it for the onboard
+  /// estimator when the scenario's flow_camera.enabled (take_flow_camera()); its frames have
+  /// their own noise stream, so rendering it or not changes nothing else. Throws ParamError when
+  /// the scenario's randomize.start_clearance_m leaves less room than the vehicle's rotor-tip
+  /// radius.
   Simulator(const Scenario& scenario, const VehicleParams& vehicle, uint64_t seed,
-            std::optional<CameraRig> camera = std::nullopt);
+            std::optional<CameraRig> camera = std::nullopt,
+            std::optional<CameraRig> flow_camera = std::nullopt);
 
   /// Holds `cmd` from now until `until_utime`, as if it were received all the while (fixed
   /// physics steps; time never goes back).
@@ -105,7 +110,10 @@ class Simulator {
   /// frames are skipped: rendering is what costs). Nothing without a camera.
   std::optional<CameraFrame> take_camera();
   /// Number of frames skipped by take_camera() so far.
-  int64_t camera_frames_skipped() const { return frames_skipped_; }
+  int64_t camera_frames_skipped() const { return camera_.frames_skipped; }
+  /// The same for the flow camera (scenario flow_camera, FLOW_CAMERA).
+  std::optional<CameraFrame> take_flow_camera();
+  int64_t flow_camera_frames_skipped() const { return flow_camera_.frames_skipped; }
   /// Motion capture delivers nothing sampled in [from, to) (failsafe tests).
   void inject_mocap_dropout(int64_t from_utime, int64_t to_utime);
 
@@ -121,10 +129,22 @@ class Simulator {
     size_t noise_offset = 0;
     std::vector<Isometry3d> X_WC;  // over the exposure
   };
+  // One rendered camera: its parameters, rig, renderer, noise and frame schedule.
+  struct CameraStream {
+    CameraParams params;
+    std::optional<CameraRig> rig;
+    std::unique_ptr<Renderer> renderer;  // set when the camera is rendered
+    std::mt19937_64 rng;
+    std::vector<float> noise;
+    int64_t period_us = 0, next_frame_utime = 0, frame_seq = 0, frames_skipped = 0;
+    std::optional<PendingFrame> pending;
+  };
   void physics_step();
   // What the autopilot's inner loop follows: the last command, or its command-loss failsafe.
   AttitudeCommand autopilot_command();
-  void schedule_camera();
+  void start_camera(CameraStream& c);
+  void schedule_camera(CameraStream& c);
+  std::optional<CameraFrame> take_frame(CameraStream& c);
 
   Scenario scenario_;
   VehicleParams vehicle_;
@@ -152,14 +172,9 @@ class Simulator {
   int n_collisions_ = 0;
   double rest_s_ = 0.0;
 
-  std::optional<CameraRig> camera_;
-  std::unique_ptr<Renderer> renderer_;
+  CameraStream camera_, flow_camera_;
   mutable std::unique_ptr<Renderer> adhoc_renderer_;  // for render() with another model
   PoseBuffer history_;
-  std::mt19937_64 camera_rng_;
-  std::vector<float> noise_;
-  int64_t camera_period_us_ = 0, next_frame_utime_ = 0, frame_seq_ = 0, frames_skipped_ = 0;
-  std::optional<PendingFrame> pending_;
   int render_threads_ = 1;
 };
 

@@ -16,6 +16,10 @@
 //
 //   build/bin/alight_families_bench [--families landing_tiles,ingress_photo] [--runs 20]
 //       [--seed0 S] [--jobs 2] [--no-mocap] [--vehicle config/vehicles/pelican.yaml] [--verbose]
+//       [--csv FILE]
+//
+// --csv writes one row per run with scripts/montecarlo's column names (it runs this bench with
+// --in-process and summarises and plots the rows as it does its flights over LCM).
 
 #include <time.h>
 
@@ -26,6 +30,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <mutex>
 #include <opencv2/core.hpp>
@@ -117,6 +122,44 @@ std::string one_line(const Run& x) {
   return buf;
 }
 
+/// One row per run; empty cells where a figure does not apply (as alight-score leaves it out).
+bool write_csv(const std::string& path, const std::vector<Run>& all) {
+  std::ofstream f(path);
+  f << "scenario,seed,mission,success,outcome,touchdown_lateral_error_m,touchdown_along_m,"
+       "touchdown_across_m,platform_length_m,platform_width_m,opening_width_error_m,"
+       "opening_width_m,opening_center_error_m,crossing_offset_m,retries,mission_time_s,"
+       "vision_frames,vision_found,vision_process_cpu_p50_ms,vision_process_cpu_p99_ms,"
+       "vision_process_cpu_max_ms\n";
+  const auto num = [](double v) {
+    char b[32];
+    std::snprintf(b, sizeof b, "%.6g", v);
+    return std::isfinite(v) ? std::string(b) : std::string();
+  };
+  for (const auto& x : all) {
+    const auto& r = x.r;
+    const bool landing = mission_of(x.family) == Mission::kLanding && !targetless(x.family);
+    const bool ingress = mission_of(x.family) == Mission::kIngress && !targetless(x.family);
+    std::string reason = r.reason;
+    std::replace(reason.begin(), reason.end(), ',', ';');
+    std::replace(reason.begin(), reason.end(), '"', '\'');
+    f << x.family << ',' << x.seed << ','
+      << (mission_of(x.family) == Mission::kLanding ? "landing" : "ingress") << ','
+      << (x.ok ? "True" : "False") << ",\"" << reason << "\","
+      << (landing && x.ok ? num(r.touchdown_error_m) : "") << ','
+      << (landing ? num(r.final_in_platform_m.x()) : "") << ','
+      << (landing ? num(r.final_in_platform_m.y()) : "") << ','
+      << (landing ? num(r.platform_size_m.x()) : "") << ','
+      << (landing ? num(r.platform_size_m.y()) : "") << ','
+      << (ingress ? num(width_error_m(x)) : "") << ',' << (ingress ? num(x.true_width_m) : "")
+      << ',' << (ingress ? num(r.estimate_error_W.norm()) : "") << ','
+      << (ingress && r.crossed_wall ? num(r.max_lateral_in_wall_m) : "") << ',' << r.retries << ','
+      << (x.ok ? num(r.mission_time_s) : "") << ',' << x.frames << ',' << x.found << ','
+      << num(quantile(x.cpu_ms, 0.5)) << ',' << num(quantile(x.cpu_ms, 0.99)) << ','
+      << num(quantile(x.cpu_ms, 1.0)) << '\n';
+  }
+  return static_cast<bool>(f);
+}
+
 std::vector<std::string> split(const std::string& s) {
   std::vector<std::string> out;
   for (std::stringstream ss(s); ss.good();) {
@@ -149,6 +192,8 @@ int main(int argc, char** argv) {
   app.add_option("--time-limit", time_limit_s, "simulated seconds per mission at most")
       ->check(CLI::Range(10.0, 3600.0));
   app.add_flag("--verbose", verbose, "print each run's retries");
+  std::string csv_path;
+  app.add_option("--csv", csv_path, "write one row per run to this file");
   CLI11_PARSE(app, argc, argv);
   cv::setNumThreads(1);  // the jobs are the parallelism
 
@@ -282,6 +327,10 @@ int main(int argc, char** argv) {
     for (const auto& [why, k] : failures) std::printf("    failed %dx: %s\n", k, why.c_str());
   }
   std::fflush(stdout);
+  if (!csv_path.empty() && !write_csv(csv_path, all)) {
+    std::fprintf(stderr, "alight_families_bench: cannot write %s\n", csv_path.c_str());
+    return 2;
+  }
   std::error_code ec;
   fs::remove_all(dir, ec);
   return 0;

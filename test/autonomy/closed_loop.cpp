@@ -36,11 +36,18 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
   }
   sim::Scenario scenario = sim::load_scenario(config.scenario_file);
   std::unique_ptr<estimator::test::SimOnboard> onboard;
+  // Ingress without motion capture renders the downward camera for the flow besides the
+  // forward one for the vision (alight-sim --flow-camera); landing shares its downward frames.
+  std::optional<sim::CameraRig> flow_rig;
   if (config.onboard_estimate) {
-    if (config.mission != Mission::kLanding || !config.camera_vision)
-      throw std::invalid_argument("fly_closed_loop: onboard_estimate needs landing, real vision");
+    if (!config.camera_vision)
+      throw std::invalid_argument("fly_closed_loop: onboard_estimate needs real vision");
     scenario.mocap.enabled = false;
     onboard = std::make_unique<estimator::test::SimOnboard>(config.vehicle_file);
+    if (config.mission != Mission::kLanding) {
+      scenario.flow_camera.enabled = true;
+      flow_rig = sim::load_camera_rig(config.vehicle_file, scenario.flow_camera.mount);
+    }
   }
   if (config.opening_size_m && scenario.wall)
     scenario.wall->opening_size_m = *config.opening_size_m;
@@ -51,7 +58,7 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
   if (config.camera_vision)
     rig = sim::load_camera_rig(config.vehicle_file,
                                config.mission == Mission::kLanding ? "downward" : "forward");
-  sim::Simulator simulator(scenario, vehicle, config.seed, rig);
+  sim::Simulator simulator(scenario, vehicle, config.seed, rig, flow_rig);
   // The vision node's frame-to-pose policy (vision/frame_pose_pairing.hpp).
   vision::FramePosePairing<sim::CameraFrame> frames(PoseBufferParams{}, kMaxPoseWaitUs);
   outer_loop::PositionController controller(ol_params);
@@ -79,6 +86,7 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
   std::optional<EstimateHealth> estimate;  // scripted STATE_ESTIMATE health
   uint32_t estimate_reasons = 0;           // onboard: every reason seen in flight
   bool approach_seen = false;
+  std::optional<double> prev_along;  // ingress: body from the opening's plane along its normal
   ClosedLoopResult r;
 
   const auto step_autonomy = [&](Inputs in) {
@@ -181,16 +189,31 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
       ot.opening_size_m = truth.opening->size_m;
       ot.wall_normal_W = truth.opening->wall_normal_W;
       const Vector3d d = truth.state.p_W_B - truth.opening->center_W;
-      if (std::abs(d.dot(truth.opening->wall_normal_W)) < 0.1) {
+      const double along = d.dot(truth.opening->wall_normal_W);
+      const Vector3d t = Vector3d::UnitZ().cross(truth.opening->wall_normal_W).normalized();
+      if (std::abs(along) < 0.1) {
         r.crossed_wall = true;
-        const Vector3d t = Vector3d::UnitZ().cross(truth.opening->wall_normal_W).normalized();
         r.max_lateral_in_wall_m =
             std::max({r.max_lateral_in_wall_m, std::abs(d.dot(t)), std::abs(d.z())});
       }
+      // The step that crosses the opening's plane (the normal points out of the wall's face,
+      // towards the approaching vehicle).
+      if (prev_along && *prev_along > 0 && along <= 0 && !r.crossing_offset_m) {
+        r.crossing_offset_m = Vector2d(d.dot(t), d.z());
+        if (onboard) {
+          const estimator::State es = onboard->state();
+          r.pose_error_at_crossing_W = es.p_W_B - truth.state.p_W_B;
+        }
+      }
+      prev_along = along;
+    }
+    if (onboard && flow_rig) {
+      if (auto f = simulator.take_flow_camera()) onboard->add_frame(*f);
     }
     if (config.camera_vision) {
       if (auto f = simulator.take_camera()) {
-        if (onboard) onboard->add_frame(*f);  // the estimator and the vision share the frame
+        // Landing: the estimator and the vision share the downward frame.
+        if (onboard && !flow_rig) onboard->add_frame(*f);
         const int64_t exposure_utime = f->utime;
         frames.add_frame(std::move(*f), exposure_utime);
       }
@@ -244,6 +267,13 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
             std::abs(-sn * d.x() + c * d.y()) < truth.platform->size_m.y() / 2)
           under_m = truth.platform->top_center_W.z();
       }
+      if (truth.opening && scenario.wall) {
+        // Over the wall's thickness the beam sees the opening's sill.
+        const double into =
+            -(truth.state.p_W_B - truth.opening->center_W).dot(truth.opening->wall_normal_W);
+        if (into >= 0 && into <= scenario.wall->thickness_m)
+          under_m = truth.opening->center_W.z() - 0.5 * truth.opening->size_m.y();
+      }
       const Vector3d e = es.p_W_B - truth.state.p_W_B;
       std::fprintf(stderr,
                    "ONB %.1f %-15s true %.3f %.3f %.3f err %+.3f %+.3f %+.3f v_err %+.3f %+.3f "
@@ -268,15 +298,15 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
                    truth.state.thrust_N, static_cast<int>(truth.contact), truth.state.armed,
                    truth.tipped);
     }
-    if (onboard && truth.platform && ph == Phase::kApproach && !approach_seen) {
+    if (onboard && (truth.platform || truth.opening) && ph == Phase::kApproach && !approach_seen) {
       approach_seen = true;
       const estimator::State es = onboard->state();
       r.pose_error_at_approach_W = es.p_W_B - truth.state.p_W_B;
-      r.estimate_error_rel_at_approach_W = truth.state.p_W_B +
-                                           truth.state.q_WB.toRotationMatrix() *
-                                               es.q_WB.toRotationMatrix().transpose() *
-                                               (autonomy.final_estimate() - es.p_W_B) -
-                                           truth.platform->top_center_W;
+      r.estimate_error_rel_at_approach_W =
+          truth.state.p_W_B +
+          truth.state.q_WB.toRotationMatrix() * es.q_WB.toRotationMatrix().transpose() *
+              (autonomy.final_estimate() - es.p_W_B) -
+          (truth.platform ? truth.platform->top_center_W : truth.opening->center_W);
     }
     if (truth.platform) {
       const double e =
@@ -316,6 +346,10 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
     r.touchdown_error_m =
         (truth.state.p_W_B.head<2>() - truth.platform->top_center_W.head<2>()).norm();
     r.estimate_error_W = autonomy.final_estimate() - truth.platform->top_center_W;
+    const Vector2d d = truth.state.p_W_B.head<2>() - truth.platform->top_center_W.head<2>();
+    const double c = std::cos(truth.platform->yaw_rad), s = std::sin(truth.platform->yaw_rad);
+    r.final_in_platform_m = Vector2d(c * d.x() + s * d.y(), -s * d.x() + c * d.y());
+    r.platform_size_m = truth.platform->size_m.head<2>();
   } else if (truth.opening) {
     r.estimate_error_W = autonomy.final_estimate() - truth.opening->center_W;
   }
@@ -327,13 +361,14 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
     r.flow_rejected = s.counters.rejected(estimator::Sensor::kFlow);
     r.terrain_resets = static_cast<int>(s.counters.terrain_resets);
     r.flow_on_floor = s.counters.flow_on_floor;
-    if (truth.platform) {
+    if (truth.platform || truth.opening) {
       // The target as the vehicle sees it (relative to itself), put back in the true frame.
       const Matrix3d R_true_est =
           truth.state.q_WB.toRotationMatrix() * s.q_WB.toRotationMatrix().transpose();
       const Vector3d p_target_true =
           truth.state.p_W_B + R_true_est * (autonomy.final_estimate() - s.p_W_B);
-      r.estimate_error_rel_W = p_target_true - truth.platform->top_center_W;
+      r.estimate_error_rel_W =
+          p_target_true - (truth.platform ? truth.platform->top_center_W : truth.opening->center_W);
     }
   }
   return r;

@@ -43,14 +43,16 @@ struct ClosedLoopConfig {
   std::function<std::optional<TargetMeasurement>(const sim::CameraFrame&,
                                                  const std::optional<PoseSample>&)>
       camera_vision;
-  /// Flies without motion capture (issue 17), as config/launch/sim_landing_nomocap.yaml: the
-  /// scenario's motion capture is off; the simulator's IMU, rangefinder, barometer and
-  /// downward frames feed the onboard estimator as alight-estimator does (its parameters from
-  /// the vehicle file), and its ESTIMATE_POSE (one per fused IMU sample) is the pose that
-  /// vision's pairing, autonomy and the outer loop read, its STATE_ESTIMATE health goes to
-  /// autonomy with the same step (a scripted `estimate` overrides it). The truth only scores.
-  /// Landing with camera_vision only (the flow and the vision share the downward camera; the
-  /// oracle measures in the true frame, not the estimate's).
+  /// Flies without motion capture (issue 17), as config/launch/sim_landing_nomocap.yaml and
+  /// sim_ingress_nomocap.yaml: the scenario's motion capture is off; the simulator's IMU,
+  /// rangefinder, barometer and downward frames feed the onboard estimator as alight-estimator
+  /// does (its parameters from the vehicle file), and its ESTIMATE_POSE (one per fused IMU
+  /// sample) is the pose that vision's pairing, autonomy and the outer loop read, its
+  /// STATE_ESTIMATE health goes to autonomy with the same step (a scripted `estimate` overrides
+  /// it). The truth only scores. Landing: the flow and the vision share the downward camera.
+  /// Ingress: the simulator renders the downward camera besides the forward one (the scenario's
+  /// flow_camera, alight-sim --flow-camera) and only the estimator sees it. With camera_vision
+  /// only (the oracle measures in the true frame, not the estimate's).
   bool onboard_estimate = false;
 };
 
@@ -87,6 +89,10 @@ struct ClosedLoopResult {
   double error_at_final_descent_m = -1;  ///< lateral body - platform centre entering FINAL_DESCENT
   double error_at_touchdown_m = -1;      ///< ... when autonomy detected the touch-down
   double platform_yaw_rad = 0;
+  /// Final body position relative to the platform top's centre, in the platform's frame (x along
+  /// its length), and the platform's length and width: touchdown plots over the outline [m].
+  Vector2d final_in_platform_m = Vector2d::Zero();
+  Vector2d platform_size_m = Vector2d::Zero();
   bool tipped_before_go = false;  ///< sim's sticky "tipped" already set when GO was issued (a
                                   ///< scenario whose random platform overlaps the start spot)
   bool on_platform_top = false;   ///< sim contact at the end is the platform top
@@ -105,6 +111,10 @@ struct ClosedLoopResult {
   int64_t flow_fused = 0, flow_rejected = 0;  ///< the filter's verdicts on flow samples
   int64_t flow_on_floor = 0;  ///< ... judged against the floor while over the platform
   int terrain_resets = 0;     ///< platform steps on and off
+  /// Ingress: the body origin's offset from the opening's centre (lateral along the wall, up)
+  /// at the step it crossed the opening's plane; none when it never did [m].
+  std::optional<Vector2d> crossing_offset_m;
+  Vector3d pose_error_at_crossing_W = Vector3d::Zero();  ///< onboard: estimated - true there [m]
 };
 
 ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config);

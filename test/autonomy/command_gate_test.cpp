@@ -83,8 +83,8 @@ TEST(CommandGateTest, LinkRefusalsAreCountedByTheVerifiersReason) {
     EXPECT_FALSE(v.accepted);
     EXPECT_TRUE(v.at_link);
     EXPECT_EQ(v.reason, r);
-    EXPECT_EQ(v.why, reject_name(r));
-    EXPECT_EQ(gate.n_rejected(r), 1) << reject_name(r);
+    EXPECT_EQ(v.why, command_reject_name(r));
+    EXPECT_EQ(gate.n_rejected(r), 1) << command_reject_name(r);
     EXPECT_EQ(gate.last_rejected_seq(), seq);
     EXPECT_EQ(gate.last_reject_reason(), r);
   }

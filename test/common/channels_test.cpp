@@ -95,6 +95,8 @@ TEST(ChannelRemapTest, ConflictingRenamesAreRefused) {
   // the onboard estimate). Not when both move, not across types.
   EXPECT_EQ(remap_error({"MOCAP_POSE=ESTIMATE_POSE"}), "");
   EXPECT_EQ(remap_error({"MOCAP_POSE=AUTOPILOT_POSE"}), "");
+  // The estimator's flow on the mission's camera when that is the downward one (landing).
+  EXPECT_EQ(remap_error({"FLOW_CAMERA=CAMERA"}), "");
   EXPECT_NE(remap_error({"MOCAP_POSE=X", "ESTIMATE_POSE=X"}).find("would both be on channel X"),
             std::string::npos);
   EXPECT_NE(remap_error({"IMU=ESTIMATE_POSE"}).find("would both be on channel ESTIMATE_POSE"),

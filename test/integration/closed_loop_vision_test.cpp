@@ -105,6 +105,46 @@ TEST(RealVisionIngressTest, FliesThroughTheWindowWithoutContact) {
   EXPECT_LT(r.estimate_error_W.norm(), 0.02) << "opening centre";
 }
 
+// Ingress without motion capture (issue 17): the simulator renders the forward camera for the
+// vision and the downward one for the estimator's flow; vision measures the window in the
+// estimator's frame, the vehicle flies through it on the estimate, the truth only scores.
+class RealVisionNoMocapIngressTest : public ::testing::TestWithParam<uint64_t> {};
+
+TEST_P(RealVisionNoMocapIngressTest, FliesThroughThe90x60cmWindowOnTheOnboardEstimate) {
+  RealVision vision(path("config/vehicles/pelican.yaml"), Mission::kIngress);
+  ClosedLoopConfig c = config("ingress_wide", Mission::kIngress, GetParam(), &vision);
+  c.onboard_estimate = true;
+  const auto r = fly_closed_loop(c);
+  const Vector2d off = r.crossing_offset_m.value_or(Vector2d::Constant(NAN));
+  std::printf(
+      "ingress_wide seed %d without motion capture: %s, crossing offset lateral %+.4f m, "
+      "vertical %+.4f m, max offset in the wall %.4f m, relative estimate error %.4f m, pose "
+      "error at the crossing %+.3f %+.3f %+.3f m (largest in flight %.3f m, z %.3f m), retries "
+      "%d, n %d, mission %.1f s, vision found %d of %d frames, flow fused %lld refused %lld, "
+      "terrain resets %d, health not OK in %d+%d steps (%s)\n",
+      static_cast<int>(GetParam()), r.reason.c_str(), off.x(), off.y(), r.max_lateral_in_wall_m,
+      r.estimate_error_rel_W.norm(), r.pose_error_at_crossing_W.x(), r.pose_error_at_crossing_W.y(),
+      r.pose_error_at_crossing_W.z(), r.max_pose_error_h_m, r.max_pose_error_z_m, r.retries,
+      r.n_measurements, r.mission_time_s, vision.found, vision.frames,
+      static_cast<long long>(r.flow_fused), static_cast<long long>(r.flow_rejected),
+      r.terrain_resets, r.estimate_degraded_steps, r.estimate_lost_steps,
+      r.estimate_reasons.c_str());
+  EXPECT_EQ(r.phase, Phase::kDone) << r.reason;
+  EXPECT_TRUE(r.crossed_wall);
+  ASSERT_TRUE(r.crossing_offset_m.has_value());
+  EXPECT_FALSE(r.collided);
+  EXPECT_EQ(r.n_collisions, 0);
+  // The pelican's 67 cm rotor span in the 90 cm window leaves 11.5 cm each side.
+  EXPECT_LT(std::abs(off.x()), 0.06);
+  EXPECT_LT(std::abs(off.y()), 0.06);
+  EXPECT_LT(r.estimate_error_rel_W.norm(), 0.05) << "opening centre relative to the vehicle";
+  EXPECT_LT(r.max_pose_error_h_m, 0.10);
+  EXPECT_LT(r.max_pose_error_z_m, 0.05);
+  EXPECT_EQ(r.estimate_lost_steps, 0) << r.estimate_reasons;
+}
+
+INSTANTIATE_TEST_SUITE_P(Seeds, RealVisionNoMocapIngressTest, ::testing::Values(1u, 2u));
+
 // No false target (issue 6): whole flights with real vision over the bare floor and along the
 // solid wall. The search is flown, and flown again on each retry, without a single detection;
 // autonomy ends in HOLD with nothing measured.

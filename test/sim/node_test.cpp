@@ -200,6 +200,34 @@ TEST(SimNodeTest, SensorsSwitchedOffPublishNothingWhileTheTruthGoesOn) {
   EXPECT_EQ(c.baro, 0);
 }
 
+// Ingress without motion capture (issue 17): the forward camera on CAMERA for the vision, the
+// downward one on FLOW_CAMERA for the estimator, no MOCAP_POSE.
+TEST(SimNodeTest, FlowCameraPublishesTheDownwardCameraBesidesTheForwardOne) {
+  lcm::LCM lcm(kUrl + "&recv_buf_size=8388608");
+  ASSERT_TRUE(lcm.good());
+  Counter c, flow;
+  lcm.subscribe(channels::kMocapPose, &Counter::on_pose, &c);
+  lcm.subscribe(channels::kCamera, &Counter::on_image, &c)->setQueueCapacity(100);
+  lcm.subscribe(channels::kFlowCamera, &Counter::on_image, &flow)->setQueueCapacity(100);
+  std::atomic<int> code{-1};
+  std::thread node([&] {
+    code = run("--scenario " + scenario("ingress_wide") + " --vehicle " +
+               std::string(ALIGHT_SOURCE_DIR) +
+               "/config/vehicles/pelican.yaml --no-mocap --flow-camera --duration 1.0 --lcm-url '" +
+               kUrl + "'");
+  });
+  while (code == -1) lcm.handleTimeout(5);
+  node.join();
+  while (lcm.handleTimeout(50) > 0) {
+  }
+  EXPECT_EQ(code, 0);
+  EXPECT_EQ(c.mocap, 0);
+  EXPECT_GE(c.camera, 25);  // 30 Hz each
+  EXPECT_GE(flow.camera, 25);
+  EXPECT_EQ(flow.last_image.width, 640);
+  EXPECT_EQ(flow.last_image.pixelformat, image_t::PIXEL_FORMAT_GRAY);
+}
+
 TEST(SimNodeTest, ABadRemapExitsWithCode2NamingTheKnownChannels) {
   std::string err;
   EXPECT_EQ(

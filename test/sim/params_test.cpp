@@ -129,6 +129,9 @@ TEST(SimParamsTest, SensorSwitchesAndBadSensorValuesNameTheirFullKey) {
   // Absent sections: every sensor on, at its defaults.
   const Scenario d = load_scenario(write_temp("sensors_default.yaml", "name: d\n"));
   EXPECT_TRUE(d.mocap.enabled && d.imu.enabled && d.rangefinder.enabled && d.baro.enabled);
+  // ... but the second, downward camera for the estimator's flow (issue 17) is off.
+  EXPECT_FALSE(d.flow_camera.enabled);
+  EXPECT_EQ(d.flow_camera.mount, "downward");
 
   const std::vector<std::pair<std::string, std::string>> cases = {
       {"rangefinder: {min_range_m: 0.5, max_range_m: 0.4}", "rangefinder.max_range_m"},
@@ -144,6 +147,8 @@ TEST(SimParamsTest, SensorSwitchesAndBadSensorValuesNameTheirFullKey) {
       {"baro: {ground_altitude_m: 12000}", "baro.ground_altitude_m"},
       {"mocap: {enabled: 3}", "mocap.enabled"},
       {"imu: {gyro_bias_walk_radps_per_sqrt_s: -1}", "imu.gyro_bias_walk_radps_per_sqrt_s"},
+      {"flow_camera: {enabled: true, mount: forward}", "flow_camera.mount"},
+      {"flow_camera: {rate_hz: 0}", "flow_camera.rate_hz"},
   };
   for (const auto& [text, key] : cases) {
     SCOPED_TRACE(text);

@@ -426,6 +426,58 @@ TEST(SimRendererTest, SameSeedGivesIdenticalFramesOnAnyNumberOfThreads) {
   }
 }
 
+// Ingress without motion capture (issue 17): the forward camera for the vision and the downward
+// one for the estimator's flow, each at its own rate; the flow camera's frames are the downward
+// view, and rendering them leaves the forward camera's frames bit for bit as they were.
+TEST(SimRendererTest, TheFlowCameraRendersTheFloorBesidesTheForwardCameraChangingNothingElse) {
+  Scenario sc = test::scenario("ingress_wide");
+  sc.flow_camera.enabled = true;
+  sc.flow_camera.rate_hz = 20;
+  const std::string vehicle = test::config_path("vehicles/starmac.yaml");
+  const CameraRig forward = load_camera_rig(vehicle, "forward");
+  const CameraRig downward = load_camera_rig(vehicle, "downward");
+  struct Frames {
+    std::vector<CameraFrame> camera, flow;
+  };
+  auto fly = [&](bool with_flow) {
+    Simulator sim(sc, test::starmac(), 5, forward,
+                  with_flow ? std::optional<CameraRig>(downward) : std::nullopt);
+    test::place(sim, Vector3d(1.0, 0.1, 1.2));
+    Frames out;
+    for (int i = 0; i < 100; ++i) {  // 0.5 s, polled every 5 ms
+      sim.step(test::hover(test::starmac()), sim.now_utime() + 5000);
+      if (auto f = sim.take_camera()) out.camera.push_back(*f);
+      if (auto f = sim.take_flow_camera()) out.flow.push_back(*f);
+    }
+    if (with_flow) {
+      // The flow camera's last frame is the downward view from its mid-exposure pose.
+      const Isometry3d X_WB = out.flow.back().X_WC * downward.mount.X_BC().inverse();
+      const cv::Mat clean = sim.render(downward.mount, downward.model, X_WB);
+      cv::Mat d;
+      cv::subtract(out.flow.back().pixels, clean, d, cv::noArray(), CV_32F);
+      cv::Scalar mu, sd;
+      cv::meanStdDev(d, mu, sd);
+      EXPECT_NEAR(sd[0], sc.flow_camera.noise_sigma, 0.4);
+    }
+    return out;
+  };
+  const Frames with = fly(true), without = fly(false);
+  EXPECT_TRUE(without.flow.empty());
+  ASSERT_GE(with.flow.size(), 9u);  // 20 Hz
+  for (size_t i = 1; i < with.flow.size(); ++i)
+    EXPECT_NEAR(with.flow[i].utime - with.flow[i - 1].utime, 50000, 1);
+  EXPECT_EQ(with.flow[0].pixels.size(), cv::Size(downward.model.width, downward.model.height));
+  // Downward: the optical axis points at the floor; forward: at the wall.
+  EXPECT_LT(with.flow[0].X_WC.rotation().col(2).z(), -0.9);
+  EXPECT_GT(with.camera[0].X_WC.rotation().col(2).x(), 0.9);
+  ASSERT_GE(with.camera.size(), 14u);  // 30 Hz
+  ASSERT_EQ(with.camera.size(), without.camera.size());
+  for (size_t i = 0; i < with.camera.size(); ++i) {
+    EXPECT_EQ(with.camera[i].utime, without.camera[i].utime);
+    EXPECT_EQ(cv::norm(with.camera[i].pixels, without.camera[i].pixels, cv::NORM_INF), 0.0) << i;
+  }
+}
+
 TEST(SimRendererTest, MotionBlurSmearsAFastMovingView) {
   Scenario sc = test::quiet(test::scenario("landing_none"));
   sc.camera.enabled = true;
