@@ -505,7 +505,11 @@ TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image
   Candidate wall = candidate(planes->first);
   if (p.nearer_plane && planes->second) {
     Candidate other = candidate(*planes->second);
-    if (other.plane && (!wall.plane || other.depth_m < wall.depth_m)) wall = std::move(other);
+    // Nearer by a margin: on a solid wall the second search can find the wall again, a worse
+    // fit of the same plane at the same depth, whose off-wall mask then shows false openings
+    // (issue 15, ingress_solid_photo seed 3015).
+    if (other.plane && (!wall.plane || other.depth_m < wall.depth_m - p.nearer_plane_margin_m))
+      wall = std::move(other);
   }
   for (size_t i = 0; i < c.size(); ++i)
     if (wall.fit->inlier[i]) out.labels[i] = Label::kDominant;

@@ -211,6 +211,9 @@ const ParamSchema<IngressParams>& IngressParams::schema() {
           "plane and a second one among its outliers: a dark, flat wall photograph has fewer "
           "matches than the room seen through a large opening (issue 15). false: the dominant "
           "plane");
+    s.add("nearer_plane_margin_m", &P::nearer_plane_margin_m, Range::ge(0), "m",
+          "the second plane is the wall only when nearer than the dominant by this (a room's "
+          "back wall lies metres behind; a second fit of the wall itself at the same depth)");
     s.add("border_is_partial", &P::border_is_partial, Range::any(), "",
           "an opening block reaching the image border is a partial view (REASON_PARTIAL_VIEW: "
           "located, never averaged into the estimate), its true extent unknown");

@@ -122,6 +122,7 @@ struct LandingParams {
 /// with no wall inliers and the most off-wall features is the opening.
 struct IngressParams {
   bool nearer_plane = true;
+  double nearer_plane_margin_m = 0.5;
   bool border_is_partial = true;
   bool parallax_mask = true;
   int parallax_decimation = 1;
