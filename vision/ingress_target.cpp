@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <opencv2/imgproc.hpp>
 #include <optional>
 #include <utility>
@@ -446,44 +447,87 @@ TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image
   const IngressParams& p = params.ingress;
   TargetOutcome out;
   out.labels.assign(c.size(), Label::kOutlier);
-  const auto wall = fit_homography(c.x1, c.x2, params.homography);
-  if (!wall) {
-    out.reason = wall.reason();
+  const auto planes = fit_two_homographies(c.x1, c.x2, params.homography);
+  if (!planes) {
+    out.reason = planes.reason();
     return out;
   }
-  for (size_t i = 0; i < c.size(); ++i)
-    if (wall->inlier[i]) out.labels[i] = Label::kDominant;
-  out.estimate.n_inliers_dominant = wall->n_inliers;
-
   // The wall plane; motion capture's rotation picks the physical decomposition.
   const MocapMotion mocap = mocap_motion(c.pose_1, c.pose_2, *c.mount);
   if (mocap.baseline_m < params.waypoint.min_baseline_m) {
     out.reason = Reason::kSmallBaseline;
     return out;
   }
+  const Isometry3d X_WC1 = camera_in_world(c.pose_1.X_WB(), c.mount->X_BC());
+  const Isometry3d X_WC2 = camera_in_world(c.pose_2.X_WB(), c.mount->X_BC());
+  // The wall is the nearer of the dominant plane and the one among its outliers (issue 15: where
+  // the wall's photograph is dark and flat and the room's bright, the room's back wall seen
+  // through the opening holds more matches than the wall around it; its homography made the
+  // opening the only part of the view that agreed with the reference, and the behind check then
+  // threw away nearly every frame). Nearer: the median depth of its triangulated inliers. Only a
+  // plane whose decomposition agrees with motion capture's motion (as compute_waypoint checks)
+  // counts: the second search also finds a dozen stray matches that fit some homography.
   const Matrix3d K = c.camera->K(), K_inv = K.inverse();
-  std::vector<Vector3d> r1, r2;
-  for (size_t i = 0; i < c.size(); ++i)
-    if (wall->inlier[i]) {
-      r1.push_back(K_inv * c.x1[i].homogeneous());
-      r2.push_back(K_inv * c.x2[i].homogeneous());
+  const Isometry3d X_C2W = X_WC2.inverse();
+  struct Candidate {
+    const HomographyFit* fit;
+    Result<PlaneMotion> plane;
+    double depth_m;
+  };
+  auto candidate = [&](const HomographyFit& f) {
+    std::vector<Vector3d> r1, r2;
+    std::vector<double> z;
+    for (size_t k = 0; k < c.size(); ++k) {
+      if (!f.inlier[k]) continue;
+      r1.push_back(K_inv * c.x1[k].homogeneous());
+      r2.push_back(K_inv * c.x2[k].homogeneous());
+      const auto X_W = triangulate_midpoint(X_WC1, X_WC1.linear() * c.camera->ray(c.u1[k]), X_WC2,
+                                            X_WC2.linear() * c.camera->ray(c.u2[k]));
+      if (X_W) z.push_back((X_C2W * *X_W).z());
     }
-  DecompositionPrior prior;
-  prior.R_21 = mocap.R_21;
-  const auto plane =
-      decompose(calibrate_homography(wall->H, K), r1, r2, prior, params.decomposition);
-  if (!plane) {
-    out.reason = plane.reason();
+    DecompositionPrior prior;
+    prior.R_21 = mocap.R_21;
+    auto plane = decompose(calibrate_homography(f.H, K), r1, r2, prior, params.decomposition);
+    if (plane) {
+      constexpr double kDeg = M_PI / 180.0;
+      if (direction_angle(plane->t_12, mocap.t_12) >
+              params.waypoint.max_translation_angle_deg * kDeg ||
+          rotation_angle(plane->R_21, mocap.R_21) > params.waypoint.max_rotation_error_deg * kDeg)
+        plane = Result<PlaneMotion>::fail(Reason::kDecompositionFailed);
+    }
+    double depth = std::numeric_limits<double>::infinity();
+    if (!z.empty()) {
+      std::nth_element(z.begin(), z.begin() + z.size() / 2, z.end());
+      depth = z[z.size() / 2];
+    }
+    return Candidate{&f, std::move(plane), depth};
+  };
+  Candidate wall = candidate(planes->first);
+  if (p.nearer_plane && planes->second) {
+    Candidate other = candidate(*planes->second);
+    // Nearer by a margin: on a solid wall the second search can find the wall again, a worse
+    // fit of the same plane at the same depth, whose off-wall mask then shows false openings
+    // (issue 15, ingress_solid_photo seed 3015).
+    if (other.plane && (!wall.plane || other.depth_m < wall.depth_m - p.nearer_plane_margin_m))
+      wall = std::move(other);
+  }
+  for (size_t i = 0; i < c.size(); ++i)
+    if (wall.fit->inlier[i]) out.labels[i] = Label::kDominant;
+  out.estimate.n_inliers_dominant = wall.fit->n_inliers;
+  if (!wall.plane) {
+    out.reason = wall.plane.reason();
     return out;
   }
+  const PlaneMotion& plane = *wall.plane;
+  const HomographyFit* const fit = wall.fit;
 
   // 2D histogram of wall inliers and off-wall features over the cells of the line cuts.
   std::vector<double> xc, yc;
   if (p.parallax_mask && !reference.empty()) {
     std::vector<Vector2d> wall_px;
     for (size_t k = 0; k < c.size(); ++k)
-      if (wall->inlier[k]) wall_px.push_back(c.u2[k]);
-    mask_cuts(off_wall_mask(image, reference, wall->H, *c.camera, wall_px, p), p, &xc, &yc,
+      if (fit->inlier[k]) wall_px.push_back(c.u2[k]);
+    mask_cuts(off_wall_mask(image, reference, fit->H, *c.camera, wall_px, p), p, &xc, &yc,
               &out.lines, image);
   } else {
     line_cuts(image, p, &xc, &yc, &out.lines);
@@ -502,7 +546,7 @@ TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image
   };
   for (size_t k = 0; k < c.size(); ++k) {
     const int i = cell_of(xc, c.u2[k].x()), j = cell_of(yc, c.u2[k].y());
-    if (!wall->inlier[k])
+    if (!fit->inlier[k])
       ++at(off, i + 1, j + 1);
     else if (!near_cut(xc, c.u2[k].x()) && !near_cut(yc, c.u2[k].y()))
       ++at(in, i + 1, j + 1);
@@ -539,14 +583,14 @@ TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image
     return out;
   }
   for (size_t k = 0; k < c.size(); ++k)
-    if (!wall->inlier[k]) {
+    if (!fit->inlier[k]) {
       const int i = cell_of(xc, c.u2[k].x()), j = cell_of(yc, c.u2[k].y());
       if (i >= b[0] && i < b[2] && j >= b[1] && j < b[3]) out.labels[k] = Label::kTarget;
     }
   const double left = xc[b[0]], right = xc[b[2]], top = yc[b[1]], bottom = yc[b[3]];
   const Vector2d centre(0.5 * (left + right), 0.5 * (top + bottom));
   auto on_wall = [&](const Vector2d& px) {
-    return compute_waypoint(*plane, c.camera->ray(px), c.pose_1, c.pose_2, *c.mount,
+    return compute_waypoint(plane, c.camera->ray(px), c.pose_1, c.pose_2, *c.mount,
                             params.waypoint);
   };
   const auto w_c = on_wall(centre);
@@ -568,12 +612,10 @@ TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image
     out.reason = Reason::kNoOpening;
     return out;
   }
-  // What is seen through an opening lies behind the wall. When the dominant plane is something
-  // seen through the opening instead (a large opening shows the room's back wall, which then
-  // holds more matches than the wall around it), the features in the block are the wall itself,
-  // in front of that plane: no opening in this frame.
-  const Isometry3d X_WC1 = camera_in_world(c.pose_1.X_WB(), c.mount->X_BC());
-  const Isometry3d X_WC2 = camera_in_world(c.pose_2.X_WB(), c.mount->X_BC());
+  // What is seen through an opening lies behind the wall. When the wall plane is something
+  // seen through the opening instead (the nearer of two planes can still be one beyond the
+  // wall when the wall itself has too few matches for a plane), the features in the block are
+  // the wall itself, in front of that plane: no opening in this frame.
   int behind = 0, in_block = 0;
   for (size_t k = 0; k < c.size(); ++k) {
     if (out.labels[k] != Label::kTarget) continue;
@@ -587,7 +629,13 @@ TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image
     out.reason = Reason::kNoOpening;
     return out;
   }
-  out.reason = Reason::kOk;
+  // A block reaching the image border has no cut there: the opening may go on out of view, so
+  // its centre and size are not known (issue 15: at the refinement's vantages the family's
+  // larger openings overflowed the view, and the visible part's centre, up to 40 cm off, was
+  // averaged into the estimate). Reported as a partial view, which locates it but is never
+  // averaged (as the landing platform's, landing_target.cpp).
+  const bool cut = b[0] == 0 || b[1] == 0 || b[2] == nx || b[3] == ny;
+  out.reason = cut && p.border_is_partial ? Reason::kPartialView : Reason::kOk;
   return out;
 }
 

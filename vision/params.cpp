@@ -224,6 +224,17 @@ const ParamSchema<IngressParams>& IngressParams::schema() {
   using P = IngressParams;
   static const ParamSchema<P> schema = [] {
     ParamSchema<P> s;
+    s.add("nearer_plane", &P::nearer_plane, Range::any(), "",
+          "the wall is the nearer (median depth of its triangulated inliers) of the dominant "
+          "plane and a second one among its outliers: a dark, flat wall photograph has fewer "
+          "matches than the room seen through a large opening (issue 15). false: the dominant "
+          "plane");
+    s.add("nearer_plane_margin_m", &P::nearer_plane_margin_m, Range::ge(0), "m",
+          "the second plane is the wall only when nearer than the dominant by this (a room's "
+          "back wall lies metres behind; a second fit of the wall itself at the same depth)");
+    s.add("border_is_partial", &P::border_is_partial, Range::any(), "",
+          "an opening block reaching the image border is a partial view (REASON_PARTIAL_VIEW: "
+          "located, never averaged into the estimate), its true extent unknown");
     s.add("parallax_mask", &P::parallax_mask, Range::any(), "",
           "beyond the paper: Canny and Hough run on the off-wall mask (the reference image "
           "warped by the wall homography disagrees with the current one wherever the view passes "

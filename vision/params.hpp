@@ -127,6 +127,9 @@ struct LandingParams {
 /// Ingress target (paper 3.3): Hough lines split the image into cells; the block of cells
 /// with no wall inliers and the most off-wall features is the opening.
 struct IngressParams {
+  bool nearer_plane = true;
+  double nearer_plane_margin_m = 0.5;
+  bool border_is_partial = true;
   bool parallax_mask = true;
   int parallax_decimation = 1;
   double parallax_blur_sigma_px = 1.5;

@@ -207,10 +207,11 @@ struct WallScene {
   cv::Mat image;
   Correspondences c;
 
-  WallScene(int n_wall, int n_back) {
+  /// dy_m: both views moved along the wall.
+  WallScene(int n_wall, int n_back, double dy_m = 0.0) {
     mount.R_BC = R_BC_forward();
-    pose_1.p_W_B = Vector3d(1.5, -0.15, 1.2);
-    pose_2.p_W_B = Vector3d(1.5, 0.15, 1.2);
+    pose_1.p_W_B = Vector3d(1.5, -0.15 + dy_m, 1.2);
+    pose_2.p_W_B = Vector3d(1.5, 0.15 + dy_m, 1.2);
     pose_2.utime = 100'000;
     c.camera = &camera;
     c.mount = &mount;
@@ -268,13 +269,49 @@ TEST(IngressTargetTest, BackWallAsDominantPlaneIsNoOpening) {
   const WallScene s(60, 150);
   PipelineParams params;
   params.ingress.parallax_mask = false;
+  params.ingress.nearer_plane = false;  // the dominant plane is taken for the wall
   const TargetOutcome t = find_ingress_target(s.c, s.image, cv::Mat(), params);
   EXPECT_EQ(t.reason, Reason::kNoOpening) << "at " << t.estimate.p_W.transpose();
   // Without the check the same frame gives an opening on the back wall's plane.
   params.ingress.min_behind_share = 0.0;
+  params.ingress.border_is_partial = false;
   const TargetOutcome unchecked = find_ingress_target(s.c, s.image, cv::Mat(), params);
   ASSERT_EQ(unchecked.reason, Reason::kOk) << to_string(unchecked.reason);
   EXPECT_GT(unchecked.estimate.p_W.x(), 5.0);
+}
+
+// Regression (issue 15, ingress_photo: a dark, flat wall photograph, the room's bright and
+// textured): the room's back wall seen through the opening out-matched the wall, became the
+// dominant plane, and the behind check then refused nearly every frame, so the opening was lost
+// in refinement. The wall is the nearer of the dominant plane and the second.
+TEST(IngressTargetTest, RoomOutmatchingTheWallIsNotTakenForTheWall) {
+  const WallScene s(60, 150);
+  PipelineParams params;
+  params.ingress.parallax_mask = false;
+  ASSERT_TRUE(params.ingress.nearer_plane);
+  const TargetOutcome t = find_ingress_target(s.c, s.image, cv::Mat(), params);
+  ASSERT_EQ(t.reason, Reason::kOk) << to_string(t.reason);
+  EXPECT_LT((t.estimate.p_W - Vector3d(3.0, 0.0, 1.2)).norm(), 0.01);
+  EXPECT_NEAR(t.estimate.size_m[0], 0.6, 0.01);
+  EXPECT_NEAR(t.estimate.size_m[1], 0.6, 0.01);
+  EXPECT_EQ(t.estimate.n_inliers_dominant, 60);  // the wall's features, not the room's
+}
+
+// Regression (issue 15, ingress_photo: openings up to 1.3 x 1.1 m seen from the vantages): an
+// opening running out of the image was reported found, its centre and width those of the
+// visible part (up to 40 cm off), and averaged into the estimate. Now a partial view.
+TEST(IngressTargetTest, OpeningCutByTheImageBorderIsAPartialView) {
+  // Both views 55 cm along the wall: part of the hole is out of the current image.
+  const WallScene s(150, 60, 0.55);
+  PipelineParams params;
+  params.ingress.parallax_mask = false;
+  const TargetOutcome t = find_ingress_target(s.c, s.image, cv::Mat(), params);
+  EXPECT_EQ(t.reason, Reason::kPartialView) << to_string(t.reason);
+  EXPECT_EQ(t.estimate.outline[1].x(), s.camera.width);  // the block reaches the image's edge
+  params.ingress.border_is_partial = false;
+  const TargetOutcome before = find_ingress_target(s.c, s.image, cv::Mat(), params);
+  ASSERT_EQ(before.reason, Reason::kOk) << to_string(before.reason);
+  EXPECT_LT(before.estimate.size_m[0], 0.5);  // the visible part only
 }
 
 TEST(IngressParamsTest, LoadedFromTheVehicleFileAndValidated) {

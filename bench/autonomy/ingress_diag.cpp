@@ -1,0 +1,113 @@
+// Ingress diagnostics (issue 15): one scene flown in process with the real vision, every frame's
+// outcome printed against the simulator's truth: reason, the opening's box in the image against
+// the true opening's front-face box projected with the true camera pose, width / height and the
+// centre's error, and autonomy's phase. With --dump DIR the frames (and the truth box) are
+// written as PNG for a look.
+//
+//   build/bin/alight_ingress_diag --scenario FILE [--seed N] [--dump DIR] [--every K]
+
+#include <CLI/CLI.hpp>
+#include <cmath>
+#include <cstdio>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "closed_loop.hpp"
+#include "autonomy/convert.hpp"
+#include "sim/params.hpp"
+#include "vision/convert.hpp"
+#include "vision/params.hpp"
+#include "vision/pipeline.hpp"
+
+using namespace alight;
+using namespace alight::autonomy;
+using namespace alight::autonomy::test;
+
+int main(int argc, char** argv) {
+  CLI::App app{"ingress diagnostics: per-frame vision against the truth"};
+  std::string scenario_file, dump;
+  std::string vehicle = std::string(ALIGHT_SOURCE_DIR) + "/config/vehicles/pelican.yaml";
+  uint64_t seed = 1;
+  int every = 1;
+  app.add_option("--scenario", scenario_file)->required();
+  app.add_option("--seed", seed);
+  app.add_option("--vehicle", vehicle);
+  app.add_option("--dump", dump);
+  app.add_option("--every", every);
+  CLI11_PARSE(app, argc, argv);
+  cv::setNumThreads(1);
+
+  const auto scenario = sim::load_scenario(scenario_file);
+  const auto& w = *scenario.wall;
+  const Vector3d centre_W(w.x_m, w.center_y_m + w.opening_center_yz_m.x(),
+                          w.opening_center_yz_m.y());
+  const Vector2d size = w.opening_size_m;
+  std::printf("# opening centre (%.3f %.3f %.3f) size %.3f x %.3f thickness %.3f\n", centre_W.x(),
+              centre_W.y(), centre_W.z(), size.x(), size.y(), w.thickness_m);
+  const auto params = vision::load_node_params(vehicle);
+  const auto rig = sim::load_camera_rig(vehicle, "forward");
+  vision::Pipeline pipeline(vision::Mission::kIngress, params.pipeline, rig.model, rig.mount);
+  Phase phase = Phase::kIdle;
+  ClosedLoopConfig c;
+  c.vehicle_file = vehicle;
+  c.scenario_file = scenario_file;
+  c.mission = Mission::kIngress;
+  c.seed = seed;
+  c.script = [&](const Autonomy& a, double, ScriptActions&) { phase = a.phase(); };
+  int n = 0;
+  c.camera_vision = [&](const sim::CameraFrame& f, const std::optional<PoseSample>& pose) {
+    const auto r = pipeline.process(f.pixels, f.utime, pose);
+    // True box: the front face's corners in the image.
+    const Isometry3d X_CW = f.X_WC.inverse();
+    double tl = 1e9, tr = -1e9, tt = 1e9, tb = -1e9;
+    bool all = true;
+    for (int sy : {-1, 1})
+      for (int sz : {-1, 1}) {
+        const Vector3d p = centre_W + Vector3d(0, sy * size.x() / 2, sz * size.y() / 2);
+        const auto px = rig.model.project(X_CW * p);
+        if (!px) {
+          all = false;
+          continue;
+        }
+        tl = std::min(tl, px->x()), tr = std::max(tr, px->x());
+        tt = std::min(tt, px->y()), tb = std::max(tb, px->y());
+      }
+    const Vector3d cam = f.X_WC.translation();
+    std::printf("%7.3f %-12s cam(%.2f %.2f %.2f) %-16s", (f.utime - 1700000000000000) * 1e-6,
+                phase_name(phase), cam.x(), cam.y(), cam.z(), vision::to_string(r.reason));
+    std::printf(" truth[%.0f %.0f %.0f %.0f]%s", tl, tr, tt, tb, all ? "" : "?");
+    if (r.found()) {
+      const auto& o = r.target.outline;
+      const Vector3d e = r.target.p_W - centre_W;
+      std::printf(" box[%.1f %.1f %.1f %.1f] dW %+.3f dH %+.3f dC(%+.3f %+.3f %+.3f) in %d/%d",
+                  o[0].x(), o[1].x(), o[0].y(), o[2].y(), r.target.size_m[0] - size.x(),
+                  r.target.size_m[1] - size.y(), e.x(), e.y(), e.z(), r.target.n_inliers_target,
+                  r.target.n_inliers_dominant);
+    } else {
+      std::printf(" in %d/%d", r.target.n_inliers_target, r.target.n_inliers_dominant);
+    }
+    std::printf(" lines %zu base %.2f\n", r.lines.size(), r.baseline_m);
+    if (!dump.empty() && n % every == 0) {
+      cv::Mat bgr;
+      cv::cvtColor(f.pixels, bgr, cv::COLOR_GRAY2BGR);
+      cv::rectangle(bgr, cv::Point(tl, tt), cv::Point(tr, tb), {0, 255, 0});
+      if (r.found())
+        cv::rectangle(bgr, cv::Point(r.target.outline[0].x(), r.target.outline[0].y()),
+                      cv::Point(r.target.outline[2].x(), r.target.outline[2].y()), {0, 0, 255});
+      for (const auto& l : r.lines)
+        cv::line(bgr, {l[0], l[1]}, {l[2], l[3]}, {255, 0, 0});
+      char name[64];
+      std::snprintf(name, sizeof name, "/f%05d.png", n);
+      cv::imwrite(dump + name, bgr);
+      std::snprintf(name, sizeof name, "/raw%05d.png", n);
+      cv::imwrite(dump + name, f.pixels);
+    }
+    ++n;
+    return from_msg(vision::to_msg(r));
+  };
+  const auto r = fly_closed_loop(c);
+  std::printf("# result %s: %s crossed %d collided %d offset %.3f est err %.3f retries %d\n",
+              phase_name(r.phase), r.reason.c_str(), r.crossed_wall, r.collided,
+              r.max_lateral_in_wall_m, r.estimate_error_W.norm(), r.retries);
+  return 0;
+}
