@@ -12,8 +12,8 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "closed_loop.hpp"
 #include "autonomy/convert.hpp"
+#include "closed_loop.hpp"
 #include "sim/params.hpp"
 #include "vision/convert.hpp"
 #include "vision/params.hpp"
@@ -94,8 +94,7 @@ int main(int argc, char** argv) {
       if (r.found())
         cv::rectangle(bgr, cv::Point(r.target.outline[0].x(), r.target.outline[0].y()),
                       cv::Point(r.target.outline[2].x(), r.target.outline[2].y()), {0, 0, 255});
-      for (const auto& l : r.lines)
-        cv::line(bgr, {l[0], l[1]}, {l[2], l[3]}, {255, 0, 0});
+      for (const auto& l : r.lines) cv::line(bgr, {l[0], l[1]}, {l[2], l[3]}, {255, 0, 0});
       char name[64];
       std::snprintf(name, sizeof name, "/f%05d.png", n);
       cv::imwrite(dump + name, bgr);
