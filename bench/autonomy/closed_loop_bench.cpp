@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "closed_loop.hpp"
+#include "support/stats.hpp"
 
 using namespace alight;
 using namespace alight::autonomy;
@@ -24,14 +25,7 @@ using namespace alight::autonomy::test;
 
 namespace {
 
-double quantile(std::vector<double> v, double q) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  const double pos = q * (v.size() - 1);
-  const size_t i = static_cast<size_t>(pos);
-  const double f = pos - i;
-  return i + 1 < v.size() ? v[i] * (1 - f) + v[i + 1] * f : v[i];
-}
+using alight::test::quantile;
 
 struct Summary {
   int ok = 0, n = 0, collided = 0, tipped = 0;

@@ -43,6 +43,7 @@
 #include "closed_loop.hpp"
 #include "real_vision.hpp"
 #include "sim/params.hpp"
+#include "support/stats.hpp"
 
 using namespace alight;
 using namespace alight::autonomy;
@@ -50,14 +51,7 @@ using namespace alight::autonomy::test;
 
 namespace {
 
-double quantile(std::vector<double> v, double q) {
-  if (v.empty()) return std::nan("");
-  std::sort(v.begin(), v.end());
-  const double pos = q * (v.size() - 1);
-  const size_t i = static_cast<size_t>(pos);
-  const double f = pos - i;
-  return i + 1 < v.size() ? v[i] * (1 - f) + v[i + 1] * f : v[i];
-}
+using alight::test::quantile;
 
 double thread_cpu_ms() {
   timespec ts{};

@@ -35,10 +35,13 @@
 #include "sim/params.hpp"
 #include "sim/simulator.hpp"
 #include "sim_onboard.hpp"
+#include "support/stats.hpp"
 
 using namespace alight;
 
 namespace {
+
+using alight::test::quantile;
 
 constexpr double kHeightM = 1.5;
 constexpr double kRestS = 1.5;   // on the floor: the estimator's static alignment (1 s)
@@ -252,15 +255,6 @@ Result fly(const std::string& vehicle_file, const std::string& scenario_file, ui
     res.flow_sigma_mmps /= res.n_flow;
   }
   return res;
-}
-
-double quantile(std::vector<double> v, double q) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  const double pos = q * (v.size() - 1);
-  const size_t i = static_cast<size_t>(pos);
-  const double f = pos - i;
-  return i + 1 < v.size() ? v[i] * (1 - f) + v[i + 1] * f : v[i];
 }
 
 void report(const char* name, const std::vector<Result>& rs) {
