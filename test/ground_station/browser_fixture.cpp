@@ -57,9 +57,9 @@ int main(int argc, char** argv) {
     std::printf(
         "{\"event\":\"cmd\",\"verdict\":\"%s\",\"command\":%d,\"mission\":%d,\"seq\":%lld,"
         "\"sender\":\"%s\",\"nudge\":[%.3f,%.3f,%.3f]}\n",
-        alight::command_reject_name(verdict.reason), cmd.command, cmd.mission,
-        static_cast<long long>(cmd.seq), cmd.sender.c_str(), cmd.nudge_W[0], cmd.nudge_W[1],
-        cmd.nudge_W[2]);
+        verdict.accepted() ? "accepted" : alight::command_reject_name(verdict.reason), cmd.command,
+        cmd.mission, static_cast<long long>(cmd.seq), cmd.sender.c_str(), cmd.nudge_W[0],
+        cmd.nudge_W[1], cmd.nudge_W[2]);
     std::fflush(stdout);
   });
 
