@@ -180,26 +180,19 @@ Result fly(const std::string& vehicle_file, const std::string& scenario_file, ui
           res.flow_sigma_mmps += std::sqrt(sample->cov(k, k)) * to_mmps;
           ++res.n_flow;
         }
-      }
-      if (trace_flow && sample && prev_frame && prev_frame->utime == sample->utime_from &&
-          f->utime == sample->utime_to) {
-        const Isometry3d& X1 = prev_frame->X_WC;
-        const Vector3d t_true = X1.linear().transpose() *
-                                (f->X_WC.translation() - X1.translation()) / X1.translation().z();
-        const Vector3d e = sample->t_over_d_C1 - t_true;
-        const double dt = (sample->utime_to - sample->utime_from) * 1e-6;
-        const Vector3d pe = onboard.state().p_W_B - simulator.truth().state.p_W_B;
-        const Vector3d ve = onboard.state().v_W_B - simulator.truth().state.v_W_B;
-        std::fprintf(stderr, "STATE %.3f perr %+.4f %+.4f verr %+.4f %+.4f outcome %s\n",
-                     (f->utime - t0) * 1e-6, pe.x(), pe.y(), ve.x(), ve.y(),
-                     estimator::to_string(onboard.onboard().last_frame().fused));
-        std::fprintf(
-            stderr,
-            "FLOW %.3f td_err %+.5f %+.5f %+.5f (v_err mm/s %+.1f %+.1f %+.1f) sigma "
-            "%.5f inliers %d\n",
-            (f->utime - t0) * 1e-6, e.x(), e.y(), e.z(), 1e3 * e.x() * X1.translation().z() / dt,
-            1e3 * e.y() * X1.translation().z() / dt, 1e3 * e.z() * X1.translation().z() / dt,
-            std::sqrt(sample->cov(0, 0)), sample->inliers);
+        if (trace_flow) {
+          const Vector3d pe = onboard.state().p_W_B - simulator.truth().state.p_W_B;
+          const Vector3d ve = onboard.state().v_W_B - simulator.truth().state.v_W_B;
+          std::fprintf(stderr, "STATE %.3f perr %+.4f %+.4f verr %+.4f %+.4f outcome %s\n",
+                       (f->utime - t0) * 1e-6, pe.x(), pe.y(), ve.x(), ve.y(),
+                       estimator::to_string(onboard.onboard().last_frame().fused));
+          std::fprintf(stderr,
+                       "FLOW %.3f td_err %+.5f %+.5f %+.5f (v_err mm/s %+.1f %+.1f %+.1f) sigma "
+                       "%.5f inliers %d\n",
+                       (f->utime - t0) * 1e-6, e.x(), e.y(), e.z(), e.x() * to_mmps,
+                       e.y() * to_mmps, e.z() * to_mmps, std::sqrt(sample->cov(0, 0)),
+                       sample->inliers);
+        }
       }
       prev_frame = CameraPose{f->utime, f->X_WC};
     }
