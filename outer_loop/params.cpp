@@ -73,6 +73,9 @@ const ParamSchema<OuterLoopParams>& OuterLoopParams::schema() {
           "(the ground holds the vehicle up)")
         .check([](const P& p) { return p.land_accel_mps2 < p.max_accel_z_mps2; },
                "must be in (0, max_accel_z_mps2)");
+    s.add("land_max_descent_mps", &P::land_max_descent_mps, Range::open_closed(0, 2), "m/s",
+          "a refused motors-off keeps descending at the speed autonomy last commanded, at most "
+          "this (at least setpoint_lost_descent_mps)");
     s.add("i_zone_m", &P::i_zone_m, Range::gt(0), "m",
           "integrate only while the error is smaller (no windup during large steps)");
     s.add("i_still_mps", &P::i_still_mps, Range::ge(0), "m/s",

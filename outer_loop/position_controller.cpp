@@ -191,12 +191,34 @@ AttitudeCommand PositionController::land(const PoseSample& pose, int64_t now_uti
     landing_since_ = now_utime;
     landing_p_W_ = pose.p_W_B;
     landing_yaw_rad_ = yaw_of(pose.q_WB.toRotationMatrix());
+    // Autonomy's motors-off comes at the touch-down of its final descent, while the pose still
+    // shows the descent (motion capture's velocity lags the impact). Braking to a slower descent
+    // there lifts the vehicle off the top it has just touched, and it lands again elsewhere. So
+    // the descent goes on at the speed autonomy last commanded (bounded); a motors-off in a hover
+    // descends slowly.
+    const double commanded_mps = last_motors_on_ ? -last_motors_on_->v_W.z() : 0.0;
+    landing_descent_mps_ =
+        std::clamp(commanded_mps, P.setpoint_lost_descent_mps,
+                   std::max(P.setpoint_lost_descent_mps, P.land_max_descent_mps));
+    // Its altitude setpoint led the vehicle down, so the thrust was below hover at the impact:
+    // taking the pose's altitude instead would raise the thrust as the gear meets the top. The
+    // lead kept is bounded by the one that already saturates the vertical demand.
+    if (last_motors_on_) {
+      const double lead_max_m = P.max_accel_z_mps2 / P.kp_z_per_s2;
+      landing_p_W_.z() =
+          std::clamp(last_motors_on_->p_W.z(), pose.p_W_B.z() - lead_max_m, pose.p_W_B.z());
+    }
   }
   const double t_s = std::max(0.0, age_s(*landing_since_, now_utime));
   Vector3d p_sp = landing_p_W_;
-  p_sp.z() -= P.setpoint_lost_descent_mps * t_s;
-  auto c = track(p_sp, Vector3d(0, 0, -P.setpoint_lost_descent_mps), landing_yaw_rad_, pose, dt_s,
-                 false);
+  p_sp.z() -= landing_descent_mps_ * t_s;
+  auto c = track(p_sp, Vector3d(0, 0, -landing_descent_mps_), landing_yaw_rad_, pose, dt_s, false);
+  if (land_since_) {
+    // Ground contact (PX4 stops horizontal control there too): the gear's friction holds the
+    // vehicle where it stands, and tilting against it only drags it across the top.
+    c.roll_rad = 0.0;
+    c.pitch_rad = 0.0;
+  }
   c.mode = Mode::kSetpointLostDescent;
   c.reason = "motors off without KILL, not judged on the ground yet: landing";
   return c;
@@ -227,7 +249,10 @@ AttitudeCommand PositionController::step(const std::optional<PositionSetpoint>& 
     disarm_latched_ = false;  // autonomy acknowledged: the next motors-on may arm again
     return disarmed(armed_ ? "setpoint: motors off, landed" : "setpoint: motors off");
   }
-  if (setpoint->motors_on) landing_since_.reset();
+  if (setpoint->motors_on) {
+    landing_since_.reset();
+    last_motors_on_ = *setpoint;
+  }
   if (disarm_latched_) {
     return disarmed("failsafe disarmed; waiting for autonomy to send motors off");
   }

@@ -21,8 +21,9 @@
 // vehicle is not armed, or when the land detector judges it on the ground (the position loop
 // asks for a clear downward acceleration and the vehicle does not move vertically, for
 // land_detect_s), or during the blind pose-lost descent (where autonomy's IMU touch-down is the
-// only land detector left). Otherwise the outer loop lands: a slow descent on the pose from
-// where it is, disarming once the land detector says it is down.
+// only land detector left). Otherwise the outer loop lands from where it is, at the descent
+// speed autonomy last commanded (a motors-off in a hover descends slowly), level once in ground
+// contact, disarming once the land detector says it is down.
 //
 // Defence in depth: the node refuses non-finite input, but update() also never lets one
 // through: a non-finite setpoint or pose is replaced by the last finite one, a non-finite
@@ -91,6 +92,7 @@ class PositionController {
   std::optional<int64_t> landing_since_;            // refused motors-off: landing since
   Vector3d landing_p_W_ = Vector3d::Zero();
   double landing_yaw_rad_ = 0.0;
+  double landing_descent_mps_ = 0.0;
   std::optional<int64_t> pose_lost_since_;
   std::optional<int64_t> setpoint_lost_since_;
   std::optional<int64_t> still_since_;

@@ -101,8 +101,11 @@ std::string one_line(const Run& x) {
   if (targetless(x.family))
     std::snprintf(what, sizeof what, "found %d of %d frames", x.found, x.frames);
   else if (mission_of(x.family) == Mission::kLanding)
-    std::snprintf(what, sizeof what, "touchdown %.2f cm, platform estimate error %.2f cm",
-                  100 * r.touchdown_error_m, 100 * r.estimate_error_W.norm());
+    std::snprintf(what, sizeof what,
+                  "touchdown %.2f cm (entering the final descent %.2f, at the detected "
+                  "touch-down %.2f), platform estimate error %.2f cm",
+                  100 * r.touchdown_error_m, 100 * r.error_at_final_descent_m,
+                  100 * r.error_at_touchdown_m, 100 * r.estimate_error_W.norm());
   else
     std::snprintf(what, sizeof what,
                   "width error %+.2f cm (true %.3f m), centre error %.2f cm, max offset in the "

@@ -372,6 +372,89 @@ TEST(PositionControllerTest, MotorsOffAfterATouchDownDisarmsWithinASecond) {
   EXPECT_LE(t - t_off, 1'000 * kMs);
 }
 
+TEST(OuterLoopRegression, MotorsOffAtTheImpactDoesNotBrakeTheDescent) {
+  // Autonomy's final descent leads the vehicle down at 1 m/s; its motors-off comes as the gear
+  // meets the top, while the pose still shows the descent. Braking there (the old landing took
+  // the pose's altitude and the slow setpoint-lost speed) raised the thrust at the impact, and
+  // the vehicle bounced off the platform and came to rest centimetres away.
+  PositionController c(params());
+  test::LagModel model;
+  model.hover_at({0, 0, 1.0});
+  int64_t t = kT0;
+  fly(c, model, setpoint_at({0, 0, 1.0}, 0, t), t, 1.0);
+  auto sp = setpoint_at({0, 0, 1.0}, 0, t);
+  sp.v_W = Vector3d(0, 0, -1.0);
+  AttitudeCommand cmd;
+  for (int i = 0; i < 50; ++i, t += 10 * kMs) {  // 0.5 s of the led descent, still airborne
+    sp.utime = t;
+    sp.p_W.z() = 1.0 - 1.0 * 0.01 * i;
+    cmd = c.update(sp, model.pose(t), t);
+    for (int k = 0; k < 10; ++k) model.step(cmd, 0.001);
+  }
+  ASSERT_GT(model.p.z(), 0.1);
+  ASSERT_LT(model.v.z(), -0.5);
+  auto off = sp;
+  off.motors_on = false;
+  off.v_W.setZero();
+  double highest_thrust_N = 0;
+  for (int i = 0; i < 10; ++i, t += 10 * kMs) {  // the next 0.1 s, the pose still descending
+    off.utime = t;
+    cmd = c.update(off, model.pose(t), t);
+    EXPECT_TRUE(cmd.armed);
+    EXPECT_EQ(cmd.mode, Mode::kSetpointLostDescent);
+    highest_thrust_N = std::max(highest_thrust_N, cmd.thrust_N);
+    for (int k = 0; k < 10; ++k) model.step(cmd, 0.001);
+  }
+  // Below hover thrust all along: the landing keeps pushing down, it never brakes.
+  EXPECT_LT(highest_thrust_N, 1.2 * 9.81);
+}
+
+TEST(PositionControllerTest, AMotorsOffInAHoverStillDescendsSlowly) {
+  // No descent was commanded: the refused motors-off lands at setpoint_lost_descent_mps.
+  auto p = params();
+  PositionController c(p);
+  test::LagModel model;
+  model.hover_at({0, 0, 2.0});
+  int64_t t = kT0;
+  fly(c, model, setpoint_at({0, 0, 2.0}, 0, t), t, 1.0);
+  auto off = setpoint_at({0, 0, 2.0}, 0, t);
+  off.motors_on = false;
+  fly(c, model, off, t, 2.0);
+  EXPECT_NEAR(model.v.z(), -p.setpoint_lost_descent_mps, 0.05);
+}
+
+TEST(PositionControllerTest, InGroundContactARefusedMotorsOffLandsLevel) {
+  // A refused motors-off lands from a hover at 0.3 m while the pose reads 5 cm off the landing's
+  // start: in the air the loop tilts to correct it, on the ground the friction holds the
+  // vehicle and tilting against it would only drag it, so the landing goes level there.
+  PositionController c(params());
+  test::LagModel model;
+  model.hover_at({0, 0, 0.3});
+  int64_t t = kT0;
+  fly(c, model, setpoint_at({0, 0, 0.3}, 0, t), t, 1.0);
+  auto off = setpoint_at({0, 0, 0.3}, 0, t);
+  off.motors_on = false;
+  AttitudeCommand cmd = c.update(off, model.pose(t), t);  // the landing begins here
+  bool tilted_in_the_air = false, level_on_the_ground = false;
+  for (int i = 0; i < 500 && cmd.armed; ++i) {
+    t += 10 * kMs;
+    off.utime = t;
+    auto pose = model.pose(t);
+    pose.p_W_B.x() += 0.05;
+    cmd = c.update(off, pose, t);
+    if (!cmd.armed) break;
+    EXPECT_EQ(cmd.mode, Mode::kSetpointLostDescent);
+    const bool level = cmd.pitch_rad == 0.0 && cmd.roll_rad == 0.0;
+    if (model.p.z() > 0.05 && !level) tilted_in_the_air = true;
+    if (model.p.z() == 0.0 && model.v.norm() == 0.0 && level) level_on_the_ground = true;
+    for (int k = 0; k < 10; ++k) model.step(cmd, 0.001);
+  }
+  EXPECT_TRUE(tilted_in_the_air);
+  EXPECT_TRUE(level_on_the_ground);
+  EXPECT_FALSE(cmd.armed);  // and the land detector still disarms it
+  EXPECT_NEAR(model.p.z(), 0.0, 1e-9);
+}
+
 TEST(PositionControllerTest, HoverWithAMassErrorIsNotTakenForLanded) {
   // The nominal mass 20 % above the true one: hover thrust well below m g, yet airborne.
   auto p = params();
