@@ -24,7 +24,9 @@ std::optional<TargetMeasurement> RealVision::operator()(const sim::CameraFrame& 
   const auto r = pipeline_->process(f.pixels, f.utime, pose);
   ++frames;
   found += r.found();
-  return from_msg(vision::to_msg(r));
+  const TargetMeasurement m = from_msg(vision::to_msg(r));
+  partial += m.partial;
+  return m;
 }
 
 }  // namespace alight::autonomy::test

@@ -28,6 +28,7 @@ class RealVision {
 
   int frames = 0;  ///< frames processed
   int found = 0;   ///< ... in which the target was found
+  int partial = 0;  ///< ... reported as a partial view (autonomy refines on these too)
 
  private:
   std::unique_ptr<vision::Pipeline> pipeline_;
