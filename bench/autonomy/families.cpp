@@ -127,7 +127,8 @@ bool write_csv(const std::string& path, const std::vector<Run>& all) {
   f << "scenario,seed,mission,success,outcome,touchdown_lateral_error_m,touchdown_along_m,"
        "touchdown_across_m,platform_length_m,platform_width_m,opening_width_error_m,"
        "opening_width_m,opening_center_error_m,crossing_offset_m,retries,mission_time_s,"
-       "vision_frames,vision_found,vision_partial,vision_process_cpu_p50_ms,vision_process_cpu_p99_ms,"
+       "vision_frames,vision_found,vision_partial,vision_process_cpu_p50_ms,vision_process_cpu_p99_"
+       "ms,"
        "vision_process_cpu_max_ms\n";
   const auto num = [](double v) {
     char b[32];
@@ -152,9 +153,9 @@ bool write_csv(const std::string& path, const std::vector<Run>& all) {
       << (ingress ? num(width_error_m(x)) : "") << ',' << (ingress ? num(x.true_width_m) : "")
       << ',' << (ingress ? num(r.estimate_error_W.norm()) : "") << ','
       << (ingress && r.crossed_wall ? num(r.max_lateral_in_wall_m) : "") << ',' << r.retries << ','
-      << (x.ok ? num(r.mission_time_s) : "") << ',' << x.frames << ',' << x.found << ',' << x.partial
-      << ',' << num(quantile(x.cpu_ms, 0.5)) << ',' << num(quantile(x.cpu_ms, 0.99)) << ','
-      << num(quantile(x.cpu_ms, 1.0)) << '\n';
+      << (x.ok ? num(r.mission_time_s) : "") << ',' << x.frames << ',' << x.found << ','
+      << x.partial << ',' << num(quantile(x.cpu_ms, 0.5)) << ',' << num(quantile(x.cpu_ms, 0.99))
+      << ',' << num(quantile(x.cpu_ms, 1.0)) << '\n';
   }
   return static_cast<bool>(f);
 }

@@ -313,7 +313,17 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
           (truth.state.p_W_B.head<2>() - truth.platform->top_center_W.head<2>()).norm();
       if (ph == Phase::kFinalDescent && r.error_at_final_descent_m < 0)
         r.error_at_final_descent_m = e;
-      if (ph == Phase::kLanded && r.error_at_touchdown_m < 0) r.error_at_touchdown_m = e;
+      if (ph == Phase::kLanded && r.error_at_touchdown_m < 0) {
+        r.error_at_touchdown_m = e;
+        if (onboard) {
+          const estimator::State es = onboard->state();
+          r.estimate_error_rel_at_touchdown_W = truth.state.p_W_B +
+                                                truth.state.q_WB.toRotationMatrix() *
+                                                    es.q_WB.toRotationMatrix().transpose() *
+                                                    (autonomy.final_estimate() - es.p_W_B) -
+                                                truth.platform->top_center_W;
+        }
+      }
       r.platform_yaw_rad = truth.platform->yaw_rad;
     }
     const bool terminal = ph == Phase::kLanded || ph == Phase::kDone || ph == Phase::kKilled ||

@@ -102,6 +102,9 @@ struct ClosedLoopResult {
   /// (estimate_error_W above also holds the estimator's drift then) [m].
   Vector3d estimate_error_rel_W = Vector3d::Zero();
   Vector3d estimate_error_rel_at_approach_W = Vector3d::Zero();  ///< the same entering APPROACH
+  /// ... and at the detected touch-down (the estimate the landing used; after it the estimator
+  /// keeps running on the ground until the flight ends).
+  Vector3d estimate_error_rel_at_touchdown_W = Vector3d::Zero();
   Vector3d pose_error_W = Vector3d::Zero();  ///< final estimated - true body position [m]
   Vector3d pose_error_at_approach_W = Vector3d::Zero();  ///< ... entering APPROACH [m]
   double max_pose_error_h_m = 0;  ///< largest horizontal estimated - true position in flight [m]

@@ -26,8 +26,8 @@ class RealVision {
   std::optional<TargetMeasurement> operator()(const sim::CameraFrame& f,
                                               const std::optional<PoseSample>& pose);
 
-  int frames = 0;  ///< frames processed
-  int found = 0;   ///< ... in which the target was found
+  int frames = 0;   ///< frames processed
+  int found = 0;    ///< ... in which the target was found
   int partial = 0;  ///< ... reported as a partial view (autonomy refines on these too)
 
  private:
