@@ -91,8 +91,8 @@ void print_stats(const std::string& name, const Stats& s) {
       name.c_str(), s.frames, quantile(c, 0.5), quantile(c, 0.9), quantile(c, 0.99),
       quantile(c, 1.0), quantile(m, 0.5), quantile(m, 0.9), quantile(m, 0.99), quantile(m, 1.0),
       s.found, s.partial, quantile(s.dw_m, 0.05), quantile(s.dw_m, 0.5), quantile(s.dw_m, 0.95),
-      quantile(s.dh_m, 0.05), quantile(s.dh_m, 0.5), quantile(s.dh_m, 0.95),
-      quantile(s.dc_m, 0.5), quantile(s.dc_m, 0.95));
+      quantile(s.dh_m, 0.05), quantile(s.dh_m, 0.5), quantile(s.dh_m, 0.95), quantile(s.dc_m, 0.5),
+      quantile(s.dc_m, 0.95));
 }
 
 void append(Stats* all, const Stats& s) {
@@ -146,8 +146,7 @@ int main(int argc, char** argv) {
                      fam.c_str());
         return 2;
       }
-      scenes.push_back({fam + "-" + s, (dir / (fam + "-" + s + ".yaml")).string(),
-                        std::stoull(s)});
+      scenes.push_back({fam + "-" + s, (dir / (fam + "-" + s + ".yaml")).string(), std::stoull(s)});
     }
   for (const auto& f : scenario_files) scenes.push_back({fs::path(f).stem().string(), f, 1});
 

@@ -44,8 +44,8 @@ struct Trajectory {
 // Over the platform, or in front of the opening; over the area's centre when there is no
 // platform, in front of the wall's middle when it has no opening (the families that must find
 // nothing).
-inline Trajectory trajectory(const sim::Truth& truth, const sim::Scenario& scenario, double period_s,
-                             double standoff_m = 2.0) {
+inline Trajectory trajectory(const sim::Truth& truth, const sim::Scenario& scenario,
+                             double period_s, double standoff_m = 2.0) {
   Trajectory tr;
   tr.period_s = period_s;
   std::optional<sim::OpeningTruth> opening = truth.opening;
@@ -66,8 +66,8 @@ inline Trajectory trajectory(const sim::Truth& truth, const sim::Scenario& scena
     tr.axis_c_W = Vector3d(0, 0, 0.15);
     tr.yaw_rad = 0.0;
   } else {
-    // standoff_m (2 m) in front of the opening, facing the wall: 0.3 m sideways, 0.12 m up and down, and
-    // 0.3 m nearer and farther, so the wall's features change scale.
+    // standoff_m (2 m) in front of the opening, facing the wall: 0.3 m sideways, 0.12 m up and
+    // down, and 0.3 m nearer and farther, so the wall's features change scale.
     const Vector3d n = opening->wall_normal_W;
     const Vector3d side = Vector3d::UnitZ().cross(n).normalized();
     tr.center_W = opening->center_W + standoff_m * n;
@@ -104,8 +104,8 @@ inline Recorded record_one_period(const sim::Scenario& scenario, const std::stri
   rec.frame_release_us = std::llround(0.5 * scenario.camera.exposure_s * 1e6) +
                          std::llround(scenario.camera.latency_s * 1e6);
   rec.pose_release_us = std::llround(scenario.mocap.latency_s * 1e6);
-  const Trajectory tr =
-      trajectory(simulator.truth(), scenario, 1e-6 * static_cast<double>(rec.period_us), standoff_m);
+  const Trajectory tr = trajectory(simulator.truth(), scenario,
+                                   1e-6 * static_cast<double>(rec.period_us), standoff_m);
 
   const int64_t t0 = simulator.now_utime();
   sim::VehicleState start;

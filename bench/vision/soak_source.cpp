@@ -43,8 +43,8 @@
 namespace {
 
 using namespace alight;
-using bench::Recorded;
 using bench::record_one_period;
+using bench::Recorded;
 
 // The publications of one period, by release time within it (may run past the period's end).
 struct Event {
