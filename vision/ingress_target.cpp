@@ -10,6 +10,7 @@
 
 #include "vision/decomposition.hpp"
 #include "vision/homography.hpp"
+#include "vision/mask_border.hpp"
 #include "vision/warp_diff.hpp"
 #include "vision/waypoint.hpp"
 
@@ -387,11 +388,7 @@ void mask_cuts(const cv::Mat& mask, const IngressParams& p, std::vector<double>*
   if (!image.empty() && p.snap_px > 0) cv::GaussianBlur(image, smooth, cv::Size(), 1.0);
   // The mask's border, two pixels wide and straddling it, so the mean of a border line's
   // pixels is the border itself.
-  cv::Mat border;
-  cv::morphologyEx(mask, border, cv::MORPH_GRADIENT, cv::Mat());
-  std::vector<cv::Point> nonzero;
-  cv::findNonZero(border, nonzero);
-  const BorderPixels border_px(std::move(nonzero), mask.rows);
+  const BorderPixels border_px(mask_border_pixels(mask), mask.rows);
   const std::vector<cv::Point>& px = border_px.px;
   // The standard Hough transform (full lines, votes from anywhere along them) rather than the
   // probabilistic one: the border is ragged by a few pixels where the view beyond the wall
@@ -404,7 +401,7 @@ void mask_cuts(const cv::Mat& mask, const IngressParams& p, std::vector<double>*
   if (!px.empty()) {
     for (const auto& [lo, hi] : {std::pair{0.0, tilt + kThetaStep}, std::pair{CV_PI - tilt, CV_PI},
                                  std::pair{CV_PI / 2 - tilt, CV_PI / 2 + tilt + kThetaStep}})
-      hough_lines(px, border.size(), lo, hi, kThetaStep, p.hough_threshold, &lines);
+      hough_lines(px, mask.size(), lo, hi, kThetaStep, p.hough_threshold, &lines);
     std::stable_sort(lines.begin(), lines.end(),
                      [](const cv::Vec3f& l, const cv::Vec3f& r) { return l[2] > r[2]; });
   }
