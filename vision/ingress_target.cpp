@@ -53,54 +53,26 @@ std::optional<Vector3d> triangulate_midpoint(const Isometry3d& X_WA, const Vecto
 // (the face turns away from the light): along the line, the mean signed gradient across it
 // peaks there, while the texture's gradients cancel. Searched on the wall's side of the cut
 // (where the mask is clear), up to snap_px; sub-pixel by a parabola through the peak.
-// The grey image blurred (Gaussian, sigma 1 px), made where it is read: around the few lines
-// snapped rather than over the whole image (issue 15). A region is blurred with a margin past
-// the filter's reach, so inside it the result is the whole image's blur to the bit; once the
-// regions would add up to more than the image, the whole image is blurred once instead.
-class SmoothedImage {
- public:
-  explicit SmoothedImage(const cv::Mat& image) : image_(image) {}
-
-  // Pixels of `region` (clipped to the image) readable as at(y, x) in image coordinates.
-  struct View {
-    const cv::Mat* m;
-    cv::Point origin;
-    int at(int y, int x) const { return m->at<uint8_t>(y - origin.y, x - origin.x); }
-  };
-  View view(cv::Rect region) {
-    const cv::Rect all(0, 0, image_.cols, image_.rows);
-    if (!full_.empty()) return {&full_, {0, 0}};
-    constexpr int kMargin = 4;  // the sigma-1 kernel reaches 3 px
-    const cv::Rect padded = cv::Rect(region.x - kMargin, region.y - kMargin,
-                                     region.width + 2 * kMargin, region.height + 2 * kMargin) &
-                            all;
-    area_ += padded.area();
-    if (area_ > all.area()) {
-      blur(image_, &full_);
-      return {&full_, {0, 0}};
-    }
-    blur(image_(padded).clone(), &part_);  // a copy: the filter sees only the region
-    return {&part_, padded.tl()};
-  }
-
- private:
-  static void blur(const cv::Mat& in, cv::Mat* out) {
-    cv::GaussianBlur(in, *out, cv::Size(), 1.0, 0.0, cv::BORDER_REFLECT_101);
-  }
-  const cv::Mat& image_;
-  cv::Mat full_, part_;
-  int64_t area_ = 0;
-};
-
-// Returns a unchanged when no step stands out. The gradient across the line is the 3x3 Sobel
-// derivative of the blurred image (as cv::Sobel, border reflected), taken only at the pixels
-// searched (issue 15: two whole-image Sobel passes for a few lines' pixels).
-double snap_to_edge(SmoothedImage& smoothed, const cv::Mat& mask, bool vertical, double a, double b,
+// Returns a unchanged when no step stands out. `smooth` is the grey image blurred; the gradient
+// across the line is its 3x3 Sobel derivative (as cv::Sobel, border reflected), taken only at
+// the pixels searched (issue 15: two whole-image Sobel passes for a few lines' pixels).
+double snap_to_edge(const cv::Mat& smooth, const cv::Mat& mask, bool vertical, double a, double b,
                     double mean_along, int lo, int hi, const IngressParams& p) {
   const int n_across = vertical ? mask.cols : mask.rows;
   const int n_along = vertical ? mask.rows : mask.cols;
   auto reflect = [](int i, int n) {
     return i < 0 ? std::min(1, n - 1) : i >= n ? std::max(n - 2, 0) : i;
+  };
+  // d/d(across) at (along, across), 1 <= across <= n_across - 2.
+  auto at = [&](int along, int across) -> float {
+    const int m = reflect(along - 1, n_along), q = reflect(along + 1, n_along);
+    auto px = [&](int al, int ac) -> int {
+      return vertical ? smooth.at<uint8_t>(al, ac) : smooth.at<uint8_t>(ac, al);
+    };
+    const int d = (px(m, across + 1) - px(m, across - 1)) +
+                  2 * (px(along, across + 1) - px(along, across - 1)) +
+                  (px(q, across + 1) - px(q, across - 1));
+    return static_cast<float>(d);
   };
   auto mask_at = [&](int along, int across) {
     return vertical ? mask.at<uint8_t>(along, across) : mask.at<uint8_t>(across, along);
@@ -115,31 +87,12 @@ double snap_to_edge(SmoothedImage& smoothed, const cv::Mat& mask, bool vertical,
   if (clear_minus == clear_plus) return a;
   const int side = clear_minus > clear_plus ? -1 : 1;
   const int k_wall = static_cast<int>(std::ceil(p.snap_px));
-  const double a0 = std::round(a);
-  // What the search below reads: along lo - 1 .. hi + 1, across k_wall + 2 either side of the
-  // line (it is straight: its ends bound it).
-  const SmoothedImage::View view = [&] {
-    const int x_lo = static_cast<int>(std::lround(a0 + b * (lo - mean_along)));
-    const int x_hi = static_cast<int>(std::lround(a0 + b * (hi - mean_along)));
-    const int c0 = std::min(x_lo, x_hi) - k_wall - 3, c1 = std::max(x_lo, x_hi) + k_wall + 3;
-    const cv::Rect r = vertical ? cv::Rect(c0, lo - 1, c1 - c0 + 1, hi - lo + 3)
-                                : cv::Rect(lo - 1, c0, hi - lo + 3, c1 - c0 + 1);
-    return smoothed.view(r);
-  }();
-  // d/d(across) at (along, across), 1 <= across <= n_across - 2.
-  auto at = [&](int along, int across) -> float {
-    const int m = reflect(along - 1, n_along), q = reflect(along + 1, n_along);
-    auto px = [&](int al, int ac) -> int { return vertical ? view.at(al, ac) : view.at(ac, al); };
-    const int d = (px(m, across + 1) - px(m, across - 1)) +
-                  2 * (px(along, across + 1) - px(along, across - 1)) +
-                  (px(q, across + 1) - px(q, across - 1));
-    return static_cast<float>(d);
-  };
   std::vector<double> response;  // |mean gradient| at offsets k = -1 .. k_wall towards the wall
   // Whole-pixel offsets from the line rounded at its centre, so the parabola's fraction is one
   // of pixels, not of rounding. Each offset's sum runs along the line in order; the offsets
   // are the inner loop so a vertical line's pixels are read row by row (issue 15: reading a
   // column per offset missed the cache on every pixel).
+  const double a0 = std::round(a);
   const int n_k = k_wall + 2;
   std::vector<double> sum(n_k, 0.0);
   std::vector<int> n(n_k, 0);
@@ -431,8 +384,8 @@ void mask_cuts(const cv::Mat& mask, const IngressParams& p, std::vector<double>*
                std::vector<double>* y_cuts, std::vector<cv::Vec4i>* kept, const cv::Mat& image) {
   assert(mask.type() == CV_8UC1);
   assert(image.empty() || (image.type() == CV_8UC1 && image.size() == mask.size()));
-  SmoothedImage smoothed(image);
-  const bool snap = !image.empty() && p.snap_px > 0;
+  cv::Mat smooth;
+  if (!image.empty() && p.snap_px > 0) cv::GaussianBlur(image, smooth, cv::Size(), 1.0);
   // The mask's border, two pixels wide and straddling it, so the mean of a border line's
   // pixels is the border itself.
   const BorderPixels border_px(mask_border_pixels(mask), mask.rows);
@@ -530,7 +483,7 @@ void mask_cuts(const cv::Mat& mask, const IngressParams& p, std::vector<double>*
     }
     fitted.push_back({vertical, a, b, mean_along, lo, hi});
     if (std::count(covered.begin(), covered.end(), 1) < min_length) continue;
-    if (snap) a = snap_to_edge(smoothed, mask, vertical, a, b, mean_along, lo, hi, p);
+    if (!smooth.empty()) a = snap_to_edge(smooth, mask, vertical, a, b, mean_along, lo, hi, p);
     (vertical ? xs : ys).push_back(a);
     if (kept) {
       const double e0 = a + b * (lo - mean_along), e1 = a + b * (hi - mean_along);
