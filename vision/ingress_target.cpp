@@ -10,6 +10,8 @@
 
 #include "vision/decomposition.hpp"
 #include "vision/homography.hpp"
+#include "vision/mask_border.hpp"
+#include "vision/warp_diff.hpp"
 #include "vision/waypoint.hpp"
 
 namespace alight::vision {
@@ -51,12 +53,26 @@ std::optional<Vector3d> triangulate_midpoint(const Isometry3d& X_WA, const Vecto
 // (the face turns away from the light): along the line, the mean signed gradient across it
 // peaks there, while the texture's gradients cancel. Searched on the wall's side of the cut
 // (where the mask is clear), up to snap_px; sub-pixel by a parabola through the peak.
-// Returns a unchanged when no step stands out.
-double snap_to_edge(const cv::Mat& g, const cv::Mat& mask, bool vertical, double a, double b,
+// Returns a unchanged when no step stands out. `smooth` is the grey image blurred; the gradient
+// across the line is its 3x3 Sobel derivative (as cv::Sobel, border reflected), taken only at
+// the pixels searched (issue 15: two whole-image Sobel passes for a few lines' pixels).
+double snap_to_edge(const cv::Mat& smooth, const cv::Mat& mask, bool vertical, double a, double b,
                     double mean_along, int lo, int hi, const IngressParams& p) {
   const int n_across = vertical ? mask.cols : mask.rows;
-  auto at = [&](const cv::Mat& m, int along, int across) {
-    return vertical ? m.at<float>(along, across) : m.at<float>(across, along);
+  const int n_along = vertical ? mask.rows : mask.cols;
+  auto reflect = [](int i, int n) {
+    return i < 0 ? std::min(1, n - 1) : i >= n ? std::max(n - 2, 0) : i;
+  };
+  // d/d(across) at (along, across), 1 <= across <= n_across - 2.
+  auto at = [&](int along, int across) -> float {
+    const int m = reflect(along - 1, n_along), q = reflect(along + 1, n_along);
+    auto px = [&](int al, int ac) -> int {
+      return vertical ? smooth.at<uint8_t>(al, ac) : smooth.at<uint8_t>(ac, al);
+    };
+    const int d = (px(m, across + 1) - px(m, across - 1)) +
+                  2 * (px(along, across + 1) - px(along, across - 1)) +
+                  (px(q, across + 1) - px(q, across - 1));
+    return static_cast<float>(d);
   };
   auto mask_at = [&](int along, int across) {
     return vertical ? mask.at<uint8_t>(along, across) : mask.at<uint8_t>(across, along);
@@ -85,7 +101,7 @@ double snap_to_edge(const cv::Mat& g, const cv::Mat& mask, bool vertical, double
     for (int j = 0; j < n_k; ++j) {
       const int x = x0 + side * (j - 1);
       if (x < 1 || x >= n_across - 1) continue;
-      sum[j] += at(g, t, x), ++n[j];
+      sum[j] += at(t, x), ++n[j];
     }
   }
   for (int j = 0; j < n_k; ++j) response.push_back(n[j] > 0 ? std::abs(sum[j] / n[j]) : 0.0);
@@ -107,50 +123,104 @@ double snap_to_edge(const cv::Mat& g, const cv::Mat& mask, bool vertical, double
   return a0 + side * ((i - 1) + frac);
 }
 
+// The standard Hough transform (Duda & Hart, CACM 1972) of a list of points, on the
+// conventions of cv::HoughLines with a 1 px rho step (rho = x cos(theta) + y sin(theta), theta
+// from theta_lo in steps of theta_step, round((theta_hi - theta_lo) / theta_step) of them; the
+// tables in float, the angle summed in float; a line is a bin with more than `threshold` votes,
+// strictly above its neighbours before it in rho and in theta and at least those after; the most
+// votes first, ties in theta then rho order), so the lines are cv::HoughLines' own, but the
+// points are the border's list rather than a scan of the whole image for them (issue 15: three
+// scans of the image's 300 000 pixels per frame). Appends (rho, theta, votes) to `out`.
+void hough_lines(const std::vector<cv::Point>& px, cv::Size size, double theta_lo, double theta_hi,
+                 double theta_step, int threshold, std::vector<cv::Vec3f>* out) {
+  const int n_theta = cvRound((theta_hi - theta_lo) / theta_step);
+  const int n_rho = 2 * (size.width + size.height) + 1;
+  if (n_theta <= 0) return;
+  const int stride = n_rho + 2;  // a zero bin before and after each row and angle
+  std::vector<int> votes(static_cast<size_t>(n_theta + 2) * stride, 0);
+  const int rho_offset = (n_rho - 1) / 2;
+  float theta = static_cast<float>(theta_lo);
+  for (int k = 0; k < n_theta; ++k, theta += static_cast<float>(theta_step)) {
+    const float c = static_cast<float>(std::cos(static_cast<double>(theta)));
+    const float s = static_cast<float>(std::sin(static_cast<double>(theta)));
+    int* row = votes.data() + static_cast<size_t>(k + 1) * stride + 1 + rho_offset;
+    for (const cv::Point& q : px)
+      ++row[cvRound(static_cast<float>(q.x) * c + static_cast<float>(q.y) * s)];
+  }
+  std::vector<int> peaks;
+  for (int k = 0; k < n_theta; ++k)
+    for (int r = 0; r < n_rho; ++r) {
+      const int i = (k + 1) * stride + r + 1, v = votes[i];
+      if (v > threshold && v > votes[i - 1] && v >= votes[i + 1] && v > votes[i - stride] &&
+          v >= votes[i + stride])
+        peaks.push_back(i);
+    }
+  std::sort(peaks.begin(), peaks.end(),
+            [&](int l, int r) { return votes[l] > votes[r] || (votes[l] == votes[r] && l < r); });
+  for (const int i : peaks) {
+    const int k = i / stride - 1, r = i - (k + 1) * stride - 1;
+    out->emplace_back(
+        static_cast<float>(r) - static_cast<float>(n_rho - 1) * 0.5f,
+        static_cast<float>(theta_lo) + static_cast<float>(k) * static_cast<float>(theta_step),
+        static_cast<float>(votes[i]));
+  }
+}
+
 }  // namespace
+
+cv::Mat parallax_image(const cv::Mat& gray, const IngressParams& p) {
+  assert(gray.type() == CV_8UC1);
+  // The mask can be made on a grid parallax_decimation times coarser and scaled back up (issue
+  // 15: the warp, blurs and morphology at full size were a fifth of the vision's time on a
+  // photographed wall). Its border moves by up to half a coarse pixel; mask_cuts fits lines to
+  // it and snaps them to the wall's edge in the full-size image.
+  const int d = p.parallax_decimation;
+  cv::Mat small;
+  if (d > 1)
+    cv::resize(gray, small, cv::Size((gray.cols + d - 1) / d, (gray.rows + d - 1) / d), 0, 0,
+               cv::INTER_AREA);
+  else
+    small = gray;
+  cv::Mat out;
+  if (p.parallax_blur_sigma_px > 0)
+    cv::GaussianBlur(small, out, cv::Size(), p.parallax_blur_sigma_px / d);
+  else
+    out = small.clone();  // never the caller's pixels
+  return out;
+}
 
 cv::Mat off_wall_mask(const cv::Mat& image, const cv::Mat& reference, const Matrix3d& H_21,
                       const CameraModel& camera, const std::vector<Vector2d>& wall_px,
                       const IngressParams& p) {
-  assert(image.type() == CV_8UC1 && reference.type() == CV_8UC1);
   assert(image.size() == reference.size());
-  // The mask is made on a grid parallax_decimation times coarser and scaled back up (issue 15:
-  // the warp, blurs and morphology at full size were a fifth of the vision's time on a
-  // photographed wall). Its border moves by up to half a coarse pixel; mask_cuts fits lines to
-  // it and snaps them to the wall's edge in the full-size image.
+  return off_wall_mask_of_parallax_images(parallax_image(image, p), parallax_image(reference, p),
+                                          image.size(), H_21, camera, wall_px, p);
+}
+
+cv::Mat off_wall_mask_of_parallax_images(const cv::Mat& a, const cv::Mat& b, cv::Size size,
+                                         const Matrix3d& H_21, const CameraModel& camera,
+                                         const std::vector<Vector2d>& wall_px,
+                                         const IngressParams& p) {
+  assert(a.type() == CV_8UC1 && b.type() == CV_8UC1);
   const int d = p.parallax_decimation;
-  const cv::Size small_size((image.cols + d - 1) / d, (image.rows + d - 1) / d);
+  const cv::Size small_size((size.width + d - 1) / d, (size.height + d - 1) / d);
+  assert(a.size() == small_size && b.size() == small_size);
   // Pixel centres: full u = sx (u_small + 0.5) - 0.5.
-  const double sx = static_cast<double>(image.cols) / small_size.width;
-  const double sy = static_cast<double>(image.rows) / small_size.height;
-  cv::Mat a, b;
-  if (d > 1) {
-    cv::resize(image, a, small_size, 0, 0, cv::INTER_AREA);
-    cv::resize(reference, b, small_size, 0, 0, cv::INTER_AREA);
-  } else {
-    a = image, b = reference;
-  }
-  if (p.parallax_blur_sigma_px > 0) {
-    // Into new images: at full size a and b share the caller's pixels.
-    cv::Mat a_blur, b_blur;
-    cv::GaussianBlur(a, a_blur, cv::Size(), p.parallax_blur_sigma_px / d);
-    cv::GaussianBlur(b, b_blur, cv::Size(), p.parallax_blur_sigma_px / d);
-    a = a_blur, b = b_blur;
-  }
-  // Where each current pixel's wall point lies in the reference image.
-  cv::Mat warped, seen;
-  const cv::Mat seen_ref(small_size, CV_8UC1, cv::Scalar(255));
+  const double sx = static_cast<double>(size.width) / small_size.width;
+  const double sy = static_cast<double>(size.height) / small_size.height;
+  // Where each current pixel's wall point lies in the reference image, and how much the two
+  // images differ there; a pixel the reference did not see differs by 0: no evidence, counts as
+  // wall.
+  cv::Mat diff;
   if (!camera.has_distortion()) {
     Matrix3d S = Matrix3d::Identity(), S_inv = Matrix3d::Identity();  // full -> small, back
     S(0, 0) = 1 / sx, S(1, 1) = 1 / sy, S(0, 2) = 0.5 / sx - 0.5, S(1, 2) = 0.5 / sy - 0.5;
     S_inv(0, 0) = sx, S_inv(1, 1) = sy, S_inv(0, 2) = 0.5 * sx - 0.5, S_inv(1, 2) = 0.5 * sy - 0.5;
     const Matrix3d H_small = S * H_21 * S_inv;
-    cv::Mat H(3, 3, CV_64F);
-    for (int r = 0; r < 3; ++r)
-      for (int k = 0; k < 3; ++k) H.at<double>(r, k) = H_small(r, k);
-    cv::warpPerspective(b, warped, H, small_size, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
-    cv::warpPerspective(seen_ref, seen, H, small_size, cv::INTER_NEAREST, cv::BORDER_CONSTANT);
+    diff = warp_abs_diff(a, b, H_small.inverse());
   } else {
+    cv::Mat warped, seen;
+    const cv::Mat seen_ref(small_size, CV_8UC1, cv::Scalar(255));
     // Raw current pixel -> undistorted -> H^-1 -> raw reference pixel, exactly on a grid every
     // kStep (coarse) pixels and bilinearly between (the map is smooth; undistorting every pixel
     // by iteration would cost ~100 ms a frame).
@@ -187,10 +257,9 @@ cv::Mat off_wall_mask(const cv::Mat& image, const cv::Mat& reference, const Matr
     }
     cv::remap(b, warped, map_x, map_y, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
     cv::remap(seen_ref, seen, map_x, map_y, cv::INTER_NEAREST, cv::BORDER_CONSTANT);
+    cv::absdiff(a, warped, diff);
+    diff.setTo(0, seen == 0);
   }
-  cv::Mat diff;
-  cv::absdiff(a, warped, diff);
-  diff.setTo(0, seen == 0);  // unseen in the reference: no evidence, counts as wall
   // The threshold follows the difference on the wall itself (noise, lighting, a slightly off
   // homography), measured at the wall's inlier features.
   std::vector<uint8_t> on_wall;
@@ -225,7 +294,7 @@ cv::Mat off_wall_mask(const cv::Mat& image, const cv::Mat& reference, const Matr
   if (d == 1) return mask;
   // Bilinear up and halfway: the border lies between the coarse pixels' centres.
   cv::Mat full;
-  cv::resize(mask, full, image.size(), 0, 0, cv::INTER_LINEAR);
+  cv::resize(mask, full, size, 0, 0, cv::INTER_LINEAR);
   cv::threshold(full, full, 127, 255, cv::THRESH_BINARY);
   return full;
 }
@@ -315,20 +384,11 @@ void mask_cuts(const cv::Mat& mask, const IngressParams& p, std::vector<double>*
                std::vector<double>* y_cuts, std::vector<cv::Vec4i>* kept, const cv::Mat& image) {
   assert(mask.type() == CV_8UC1);
   assert(image.empty() || (image.type() == CV_8UC1 && image.size() == mask.size()));
-  cv::Mat gx, gy;
-  if (!image.empty() && p.snap_px > 0) {
-    cv::Mat smooth;
-    cv::GaussianBlur(image, smooth, cv::Size(), 1.0);
-    cv::Sobel(smooth, gx, CV_32F, 1, 0);
-    cv::Sobel(smooth, gy, CV_32F, 0, 1);
-  }
+  cv::Mat smooth;
+  if (!image.empty() && p.snap_px > 0) cv::GaussianBlur(image, smooth, cv::Size(), 1.0);
   // The mask's border, two pixels wide and straddling it, so the mean of a border line's
   // pixels is the border itself.
-  cv::Mat border;
-  cv::morphologyEx(mask, border, cv::MORPH_GRADIENT, cv::Mat());
-  std::vector<cv::Point> nonzero;
-  cv::findNonZero(border, nonzero);
-  const BorderPixels border_px(std::move(nonzero), mask.rows);
+  const BorderPixels border_px(mask_border_pixels(mask), mask.rows);
   const std::vector<cv::Point>& px = border_px.px;
   // The standard Hough transform (full lines, votes from anywhere along them) rather than the
   // probabilistic one: the border is ragged by a few pixels where the view beyond the wall
@@ -339,12 +399,9 @@ void mask_cuts(const cv::Mat& mask, const IngressParams& p, std::vector<double>*
   constexpr double kThetaStep = CV_PI / 180.0;
   std::vector<cv::Vec3f> lines;  // rho, theta, votes
   if (!px.empty()) {
-    std::vector<cv::Vec3f> part;
     for (const auto& [lo, hi] : {std::pair{0.0, tilt + kThetaStep}, std::pair{CV_PI - tilt, CV_PI},
-                                 std::pair{CV_PI / 2 - tilt, CV_PI / 2 + tilt + kThetaStep}}) {
-      cv::HoughLines(border, part, 1.0, kThetaStep, p.hough_threshold, 0, 0, lo, hi);
-      lines.insert(lines.end(), part.begin(), part.end());
-    }
+                                 std::pair{CV_PI / 2 - tilt, CV_PI / 2 + tilt + kThetaStep}})
+      hough_lines(px, mask.size(), lo, hi, kThetaStep, p.hough_threshold, &lines);
     std::stable_sort(lines.begin(), lines.end(),
                      [](const cv::Vec3f& l, const cv::Vec3f& r) { return l[2] > r[2]; });
   }
@@ -426,8 +483,7 @@ void mask_cuts(const cv::Mat& mask, const IngressParams& p, std::vector<double>*
     }
     fitted.push_back({vertical, a, b, mean_along, lo, hi});
     if (std::count(covered.begin(), covered.end(), 1) < min_length) continue;
-    if (!gx.empty())
-      a = snap_to_edge(vertical ? gx : gy, mask, vertical, a, b, mean_along, lo, hi, p);
+    if (!smooth.empty()) a = snap_to_edge(smooth, mask, vertical, a, b, mean_along, lo, hi, p);
     (vertical ? xs : ys).push_back(a);
     if (kept) {
       const double e0 = a + b * (lo - mean_along), e1 = a + b * (hi - mean_along);
@@ -443,6 +499,14 @@ void mask_cuts(const cv::Mat& mask, const IngressParams& p, std::vector<double>*
 
 TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image,
                                   const cv::Mat& reference, const PipelineParams& params) {
+  const bool mask = params.ingress.parallax_mask && !reference.empty();
+  return find_ingress_target(c, image, mask ? parallax_image(image, params.ingress) : cv::Mat(),
+                             mask ? parallax_image(reference, params.ingress) : cv::Mat(), params);
+}
+
+TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image,
+                                  const cv::Mat& image_parallax, const cv::Mat& reference_parallax,
+                                  const PipelineParams& params) {
   assert(c.camera && c.mount);
   const IngressParams& p = params.ingress;
   TargetOutcome out;
@@ -523,12 +587,13 @@ TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image
 
   // 2D histogram of wall inliers and off-wall features over the cells of the line cuts.
   std::vector<double> xc, yc;
-  if (p.parallax_mask && !reference.empty()) {
+  if (p.parallax_mask && !reference_parallax.empty()) {
     std::vector<Vector2d> wall_px;
     for (size_t k = 0; k < c.size(); ++k)
       if (fit->inlier[k]) wall_px.push_back(c.u2[k]);
-    mask_cuts(off_wall_mask(image, reference, fit->H, *c.camera, wall_px, p), p, &xc, &yc,
-              &out.lines, image);
+    mask_cuts(off_wall_mask_of_parallax_images(image_parallax, reference_parallax, image.size(),
+                                               fit->H, *c.camera, wall_px, p),
+              p, &xc, &yc, &out.lines, image);
   } else {
     line_cuts(image, p, &xc, &yc, &out.lines);
   }

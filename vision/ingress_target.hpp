@@ -22,21 +22,37 @@
 
 namespace alight::vision {
 
+/// A grey image as the off-wall mask compares it: parallax_decimation times smaller, blurred
+/// by parallax_blur_sigma_px. The pipeline keeps each frame's, so a reference is smoothed once
+/// rather than once for every later frame compared with it.
+cv::Mat parallax_image(const cv::Mat& gray, const IngressParams& params);
+
 /// `image` is the current grey image (raw pixels, as c.u2), `reference` the reference frame's
 /// (as c.u1; empty: the paper's edges of `image`, as with params.ingress.parallax_mask false).
 /// Fails with kTooFewMatches / kNoDominantPlane (no wall), kSmallBaseline /
 /// kDecompositionFailed, or kNoOpening.
 TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image,
                                   const cv::Mat& reference, const PipelineParams& params);
+/// The same with both frames' parallax_image() already made (`image_parallax`,
+/// `reference_parallax`; an empty reference_parallax: the paper's edges of `image`).
+TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image,
+                                  const cv::Mat& image_parallax, const cv::Mat& reference_parallax,
+                                  const PipelineParams& params);
 
 /// Off-wall mask (CV_8UC1, 255 off the wall): both images smoothed, the reference warped into
-/// the current view by H_21 (undistorted pixels, x2 ~ H_21 x1), the absolute difference
-/// thresholded at max(parallax_min_diff, parallax_noise_k x its median at the wall inliers
-/// `wall_px` (raw current pixels)), then closed and opened. Pixels the reference did not see
-/// count as wall. Exposed for tests.
+/// the current view by H_21 (undistorted pixels, x2 ~ H_21 x1; warp_diff.hpp), the absolute
+/// difference thresholded at max(parallax_min_diff, parallax_noise_k x its median at the wall
+/// inliers `wall_px` (raw current pixels)), then closed and opened. Pixels the reference did
+/// not see count as wall. Exposed for tests.
 cv::Mat off_wall_mask(const cv::Mat& image, const cv::Mat& reference, const Matrix3d& H_21,
                       const CameraModel& camera, const std::vector<Vector2d>& wall_px,
                       const IngressParams& params);
+/// The same on both images' parallax_image(); `size` is the full-size images' size.
+cv::Mat off_wall_mask_of_parallax_images(const cv::Mat& image_parallax,
+                                         const cv::Mat& reference_parallax, cv::Size size,
+                                         const Matrix3d& H_21, const CameraModel& camera,
+                                         const std::vector<Vector2d>& wall_px,
+                                         const IngressParams& params);
 
 /// The near-vertical (x) and near-horizontal (y) cut positions of the image's straight edges
 /// (Canny, probabilistic Hough), sorted, merged, including the image borders. Exposed for tests.

@@ -55,8 +55,10 @@ FrameResult Pipeline::process(const cv::Mat& gray, int64_t utime,
   frame.pattern_angle_rad = pattern_angle(X_WC.linear(), d_W);
   frame.descriptors = describe_surf(integral, *kps, params_.surf, frame.pattern_angle_rad);
   frame.keypoints = std::move(*kps);
-  // Ingress compares the current image with the reference's warped by the wall homography.
-  if (mission_ == Mission::kIngress) frame.image = gray.clone();
+  // Ingress compares the current image with the reference's warped by the wall homography: each
+  // frame keeps its image smoothed as that comparison wants it, made once (issue 15).
+  const bool parallax = mission_ == Mission::kIngress && params_.ingress.parallax_mask;
+  if (parallax) frame.image = parallax_image(gray, params_.ingress);
 
   const auto up = tracker_.add(std::move(frame));
   if (up.reset) poses_.clear();
@@ -112,7 +114,8 @@ FrameResult Pipeline::process(const cv::Mat& gray, int64_t utime,
   r.matched_px = c.u2;
   const TargetOutcome t = mission_ == Mission::kLanding
                               ? find_landing_target(c, params_)
-                              : find_ingress_target(c, gray, a.image, params_);
+                              : find_ingress_target(c, gray, parallax ? b.image : cv::Mat(),
+                                                    parallax ? a.image : cv::Mat(), params_);
   r.target = t.estimate;
   r.labels = t.labels;
   r.lines = t.lines;

@@ -38,7 +38,7 @@ struct TrackedFrame {
   std::vector<Keypoint> keypoints;
   cv::Mat descriptors;             ///< CV_32F, one row per keypoint
   double pattern_angle_rad = 0.0;  ///< SURF pattern rotation used for the descriptors
-  cv::Mat image;                   ///< the grey image when the mission needs it (ingress)
+  cv::Mat image;                   ///< ingress: the grey image smoothed (parallax_image)
   std::vector<int64_t> track_id;   ///< filled by ReferenceTracker::add
 };
 
