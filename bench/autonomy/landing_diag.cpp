@@ -40,6 +40,8 @@ int main(int argc, char** argv) {
   app.add_option("--vehicle", vehicle);
   app.add_option("--dump", dump);
   app.add_option("--every", every);
+  double time_limit_s = 240;
+  app.add_option("--time-limit", time_limit_s, "simulated seconds after the start at most");
   CLI11_PARSE(app, argc, argv);
   cv::setNumThreads(1);
 
@@ -72,6 +74,7 @@ int main(int argc, char** argv) {
   cfg.scenario_file = scenario_file;
   cfg.mission = Mission::kLanding;
   cfg.seed = seed;
+  cfg.time_limit_s = time_limit_s;
   cfg.script = [&](const Autonomy& a, double, ScriptActions&) {
     if (a.phase() != phase)
       std::printf("# phase %s -> %s (retries %d)\n", phase_name(phase), phase_name(a.phase()),
