@@ -99,6 +99,22 @@ int main(int argc, char** argv) {
                 (f.utime - 1700000000000000) * 1e-6, phase_name(phase), n_waypoints, cam.x(),
                 cam.y(), cam.z(), vision::to_string(r.reason), r.n_matches,
                 r.target.n_inliers_target, r.target.n_inliers_dominant, in_image);
+    {  // floor inliers inside the hull of the top's inliers (a top hides the floor under it)
+      std::vector<cv::Point2f> top_px, hull;
+      for (size_t i = 0; i < r.matched_px.size() && i < r.labels.size(); ++i)
+        if (r.labels[i] == vision::Label::kTarget)
+          top_px.emplace_back(r.matched_px[i].x(), r.matched_px[i].y());
+      int inside = 0;
+      if (top_px.size() >= 3) {
+        cv::convexHull(top_px, hull);
+        for (size_t i = 0; i < r.matched_px.size() && i < r.labels.size(); ++i)
+          if (r.labels[i] == vision::Label::kDominant &&
+              cv::pointPolygonTest(hull, cv::Point2f(r.matched_px[i].x(), r.matched_px[i].y()),
+                                   true) > 2.0)
+            ++inside;
+      }
+      std::printf(" fin %d", inside);
+    }
     if (r.found() || r.reason == vision::Reason::kPartialView) {
       const Vector3d e = r.target.p_W - P.top_center_W;
       std::printf(" dC(%+.3f %+.3f %+.3f) size %.3f x %.3f (%+.3f %+.3f) dh %+.3f base %.2f", e.x(),
