@@ -168,27 +168,6 @@ TargetOutcome platform_of(const Correspondences& c, const PipelineParams& params
     return out;
   }
 
-  // A top hides the floor beneath it: floor inliers well inside the hull of the top's inliers
-  // in the current image say the "top" is a chance set of matches spread over the floor (the
-  // known floor's fit over a photographed floor with few matches), not a surface.
-  {
-    std::vector<cv::Point2f> top_px, hull;
-    for (size_t i = 0; i < c.size(); ++i)
-      if (planes.top_in[i]) top_px.emplace_back(c.x2[i].x(), c.x2[i].y());
-    int under = 0;
-    if (top_px.size() >= 3) {
-      cv::convexHull(top_px, hull);
-      for (size_t i = 0; i < c.size(); ++i)
-        under += planes.floor_in[i] && !planes.top_in[i] &&
-                 cv::pointPolygonTest(hull, cv::Point2f(c.x2[i].x(), c.x2[i].y()), true) >
-                     params.homography.threshold_px;
-    }
-    if (under >= 2 && under > params.landing.max_floor_under_top_frac * planes.n_top) {
-      out.reason = Reason::kNoTargetPlane;
-      return out;
-    }
-  }
-
   // Platform features on the platform plane, in world (eqs. 4-6 with the motion-capture scale).
   if (mocap.baseline_m < params.waypoint.min_baseline_m) {
     out.reason = Reason::kSmallBaseline;

@@ -197,12 +197,6 @@ const ParamSchema<LandingParams>& LandingParams::schema() {
           "(REASON_PARTIAL_VIEW). Matched features thin out well inside the STAR border "
           "(2 max_size + 1 px): in flight logs a 24 px band let cut platforms through (waypoints "
           "5-17 cm off), 40 px none beyond 5 cm");
-    s.add("max_floor_under_top_frac", &P::max_floor_under_top_frac, Range::ge(0), "",
-          "the top hides the floor beneath it: floor inliers inside the image hull of the top's "
-          "inliers (more than homography.threshold_px in), at least 2 and more than this share "
-          "of the top's inliers, and it is no platform. In flight chance tops over a "
-          "photographed floor (12-35 inliers spread over the image) had 2-23 such floor "
-          "inliers, true tops 0-1 with 85-260");
     s.add("floor_z_m", &P::floor_z_m, Range::any(), "m",
           "beyond the paper (known_floor.hpp): the floor is the plane z = floor_z_m of the "
           "motion-capture (world) frame");

@@ -114,7 +114,6 @@ struct LandingParams {
   double max_normal_angle_deg = 15;
   double max_tilt_deg = 3.0;
   double edge_margin_px = 40.0;
-  double max_floor_under_top_frac = 0.05;
   // Beyond the paper: the known floor and the known motion (known_floor.hpp).
   double floor_z_m = 0.0;
   std::string floor_prior = "fallback";
