@@ -110,6 +110,11 @@ TargetOutcome platform_of(const Correspondences& c, const PipelineParams& params
 
 }  // namespace
 
+double side_from_extent(double range_m, size_t n) {
+  if (n < 2) return range_m;
+  return range_m * static_cast<double>(n + 1) / static_cast<double>(n - 1);
+}
+
 TargetOutcome find_landing_target(const Correspondences& c, const PipelineParams& params) {
   assert(c.camera && c.mount);
   TargetOutcome out;
@@ -240,8 +245,8 @@ TargetOutcome platform_of(const Correspondences& c, const PipelineParams& params
   e.p_W = w_top->p_W;
   e.n_W = w_top->n_W;
   e.height_m = w_floor->distance_m - w_top->distance_m;
-  e.size_m[0] = hi[0] - lo[0];
-  e.size_m[1] = hi[1] - lo[1];
+  e.size_m[0] = side_from_extent(hi[0] - lo[0], pts_W.size());
+  e.size_m[1] = side_from_extent(hi[1] - lo[1], pts_W.size());
   // The plane is level (max_tilt_deg), so the long axis' direction in the world xy plane is the
   // platform's yaw; autonomy aligns the gear with the edges before touch-down.
   e.yaw_rad = std::atan2(ax_long.y(), ax_long.x());

@@ -4,7 +4,8 @@
 // fit_two_homographies); both are aligned and decomposed together (alignment.hpp). The nearer
 // plane, parallel to the other and above it by a plausible step, is the elevated platform. Its
 // inliers in the current image, intersected with its plane (paper 3.1.3, eqs. 4-6), give the
-// platform's visible extent; the centre of that extent is the aiming point and its 3D waypoint.
+// platform's visible extent; the centre of that extent is the aiming point and its 3D waypoint,
+// the extent widened by the features' expected shortfall (side_from_extent) its size.
 // The platform height is the difference of the two planes' distances along the aiming ray.
 //
 // The paper takes the first homography as the floor; here the roles follow the geometry,
@@ -14,6 +15,14 @@
 #include "vision/target.hpp"
 
 namespace alight::vision {
+
+/// A side of the platform top from the extent (range) of its n features along it. Features
+/// never sit on the top's edges (none where the detector's support reaches the floor, and n
+/// draws over a side of length L span on average L (n - 1) / (n + 1): order statistics of the
+/// uniform distribution), so the range falls short of the side; range (n + 1) / (n - 1) is its
+/// unbiased estimate for features spread uniformly over the top (the minimum-variance unbiased
+/// estimator of a uniform distribution's width). n < 2: the range itself.
+double side_from_extent(double range_m, size_t n);
 
 /// Fails with kTooFewMatches / kNoDominantPlane (no first plane), kNoTargetPlane (no second
 /// plane, or it is no platform), kSmallBaseline / kDecompositionFailed.

@@ -33,7 +33,8 @@ struct TargetEstimate {
   Vector3d n_W = Vector3d::UnitZ();   ///< unit normal of the target plane, towards the camera
   Vector2d pixel = Vector2d::Zero();  ///< aiming point in the current (raw) image [px]
   double height_m = 0.0;              ///< landing: platform top above the floor [m]
-  double size_m[2] = {0, 0};          ///< landing: extent (long, short); ingress: width, height [m]
+  double size_m[2] = {0, 0};  ///< landing: size (long, short), side_from_extent of the features'
+                              ///< extent; ingress: width, height [m]
   double yaw_rad = 0.0;  ///< landing: long axis direction about world z, in (-pi/2, pi/2] [rad]
   int n_inliers_dominant = 0;     ///< floor / wall inliers
   int n_inliers_target = 0;       ///< platform inliers / off-wall features in the opening

@@ -83,18 +83,26 @@ struct Scene {
   KnownPlane floor;
 };
 
+struct SceneShape {
+  double camera_z_m = 1.35;  ///< camera 1 height, +-0.1 [m]
+  double baseline_min_m = 0.12, baseline_max_m = 0.28;
+  Vector2d top_half_m = Vector2d(0.15, 0.12);
+};
+
 Scene make_scene(uint64_t seed, double height_m, int n_floor, int n_top, int n_out,
-                 double rot_err_rad) {
+                 double rot_err_rad, const SceneShape& shape = {}) {
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> U(-1, 1);
   std::normal_distribution<double> G(0, 1);
   const Matrix3d K = CameraModel::firefly_mv_4mm().K();
   const double f = K(0, 0);
   const CameraMount mount = downward();
-  const PoseSample p1 =
-      pose({0.1 * U(rng), 0.1 * U(rng), 1.35 + 0.1 * U(rng)}, 0.02 * U(rng), 0.02 * U(rng), U(rng));
+  const PoseSample p1 = pose({0.1 * U(rng), 0.1 * U(rng), shape.camera_z_m + 0.1 * U(rng)},
+                             0.02 * U(rng), 0.02 * U(rng), U(rng));
   // The pipeline's references are up to 0.3 m back (max_reference_baseline_m): 12-28 cm here.
-  const double dir = M_PI * U(rng), len = 0.12 + 0.08 * (1 + U(rng));
+  const double dir = M_PI * U(rng),
+               len = shape.baseline_min_m +
+                     0.5 * (shape.baseline_max_m - shape.baseline_min_m) * (1 + U(rng));
   const Vector3d step(len * std::cos(dir), len * std::sin(dir), 0.03 * U(rng));
   const PoseSample p2 = pose(p1.p_W_B + step, 0.02 * U(rng), 0.02 * U(rng), U(rng) * 0.05);
   Scene s;
@@ -115,7 +123,9 @@ Scene make_scene(uint64_t seed, double height_m, int n_floor, int n_top, int n_o
   for (int k = 0; k < n_floor;)
     k += add(Vector3d(below.x() + 0.7 * U(rng), below.y() + 0.55 * U(rng), 0.0), 0);
   for (int k = 0; k < n_top;)  // a 30 x 25 cm top under the camera
-    k += add(Vector3d(below.x() + 0.15 * U(rng), below.y() + 0.12 * U(rng), height_m), 1);
+    k += add(Vector3d(below.x() + shape.top_half_m.x() * U(rng),
+                      below.y() + shape.top_half_m.y() * U(rng), height_m),
+             1);
   for (int k = 0; k < n_out; ++k) {  // mismatches: random pixel pairs
     s.r1.push_back(K.inverse() * Vector2d(320 + 300 * U(rng), 240 + 220 * U(rng)).homogeneous());
     s.r2.push_back(K.inverse() * Vector2d(320 + 300 * U(rng), 240 + 220 * U(rng)).homogeneous());
@@ -147,6 +157,32 @@ TEST(KnownFloorTest, RecoversThePlatformHeightFromNoisyMatchesWithOutliers) {
     n_ok += std::abs(fit->height_m() - h) < 0.01;
   }
   EXPECT_GE(n_ok, 36);  // most within 1 cm
+}
+
+// Regression (issue 15, landing_tiles seed 8001: target lost in approach): over flat tiles the
+// platform top holds 20 times the floor's matches, and from 1.5 m over a 12-18 cm baseline a
+// 9 cm top moves 3-5 px against the floor, about twice the threshold. The hypothesis that took
+// the top for the floor (its rotation correction absorbing the parallax) outscored the truth,
+// and the refinement, fitted to the top's matches off the floor's band only, drifted into it.
+TEST(KnownFloorTest, LowTopWithMostMatchesIsNotTakenForTheFloor) {
+  const double f = CameraModel::firefly_mv_4mm().K()(0, 0);
+  LandingParams params;
+  SceneShape shape;
+  shape.camera_z_m = 1.5;
+  shape.baseline_min_m = 0.12;
+  shape.baseline_max_m = 0.18;
+  shape.top_half_m = Vector2d(0.13, 0.11);
+  int n_ok = 0;
+  for (uint64_t seed = 1; seed <= 40; ++seed) {
+    const Scene s = make_scene(seed, 0.09, 15, 300, 20, 0.1 * kDeg, shape);
+    const auto fit = fit_known_floor_planes(s.r1, s.r2, s.mocap, s.floor, f, params, 2.0);
+    if (!fit) continue;  // the top inside the floor's band: honestly no platform
+    int top_wrong = 0;
+    for (size_t i = 0; i < s.label.size(); ++i) top_wrong += fit->top[i] && s.label[i] != 1;
+    EXPECT_LE(top_wrong, 1) << "seed " << seed;
+    n_ok += std::abs(fit->height_m() - 0.09) < 0.01 && fit->n_top >= params.min_platform_inliers;
+  }
+  EXPECT_GE(n_ok, 36);  // was 22
 }
 
 TEST(KnownFloorTest, BareFloorWithMismatchesHasNoTop) {

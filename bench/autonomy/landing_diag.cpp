@@ -1,0 +1,164 @@
+// Landing diagnostics (issue 15): one scene flown in process with the real vision, every frame's
+// outcome printed against the simulator's truth: reason, the platform's inliers and the floor's,
+// how much of the true platform top is in the image, and when found the waypoint's error, the
+// measured extent (long, short) minus the true size and the height error; autonomy's phase and
+// waypoint count. With --dump DIR the frames (true top outline green, measured red, features
+// coloured by label) are written as PNG for a look.
+//
+//   build/bin/alight_landing_diag --scenario FILE [--seed N] [--dump DIR] [--every K]
+
+#include <CLI/CLI.hpp>
+#include <cmath>
+#include <cstdio>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "autonomy/convert.hpp"
+#include "closed_loop.hpp"
+#include "sim/params.hpp"
+#include "sim/scene.hpp"
+#include "vision/convert.hpp"
+#include "vision/params.hpp"
+#include "vision/pipeline.hpp"
+
+using namespace alight;
+using namespace alight::autonomy;
+using namespace alight::autonomy::test;
+
+int main(int argc, char** argv) {
+  CLI::App app{"landing diagnostics: per-frame vision against the truth"};
+  std::string scenario_file, dump;
+  std::string vehicle = std::string(ALIGHT_SOURCE_DIR) + "/config/vehicles/pelican.yaml";
+  uint64_t seed = 1;
+  std::string shadow_prior;
+  int every = 1;
+  app.add_option("--scenario", scenario_file)->required();
+  app.add_option("--shadow-prior", shadow_prior,
+                 "also run a second pipeline with this vision.landing.floor_prior on the frames "
+                 "(its outcome printed after 'shadow'; the flight uses the vehicle file's)");
+  app.add_option("--seed", seed);
+  app.add_option("--vehicle", vehicle);
+  app.add_option("--dump", dump);
+  app.add_option("--every", every);
+  double time_limit_s = 240;
+  app.add_option("--time-limit", time_limit_s, "simulated seconds after the start at most");
+  CLI11_PARSE(app, argc, argv);
+  cv::setNumThreads(1);
+
+  const auto scenario = sim::load_scenario(scenario_file);
+  const auto scene = sim::build_scene(scenario, seed);
+  if (!scene.platform) {
+    std::fprintf(stderr, "alight_landing_diag: the scenario has no platform\n");
+    return 2;
+  }
+  const auto& P = *scene.platform;
+  std::printf("# platform top centre (%.3f %.3f %.3f) size %.3f x %.3f x %.3f yaw %.1f deg\n",
+              P.top_center_W.x(), P.top_center_W.y(), P.top_center_W.z(), P.size_m.x(),
+              P.size_m.y(), P.size_m.z(), P.yaw_rad * 180 / M_PI);
+  const double c = std::cos(P.yaw_rad), s = std::sin(P.yaw_rad);
+  std::vector<Vector3d> corners_W;
+  for (const auto& [a, b] : {std::pair{-1, -1}, {1, -1}, {1, 1}, {-1, 1}}) {
+    const double x = a * P.size_m.x() / 2, y = b * P.size_m.y() / 2;
+    corners_W.push_back(P.top_center_W + Vector3d(c * x - s * y, s * x + c * y, 0));
+  }
+  const auto params = vision::load_node_params(vehicle);
+  const auto rig = sim::load_camera_rig(vehicle, "downward");
+  vision::Pipeline pipeline(vision::Mission::kLanding, params.pipeline, rig.model, rig.mount);
+  auto shadow_params = params.pipeline;
+  if (!shadow_prior.empty()) shadow_params.landing.floor_prior = shadow_prior;
+  vision::Pipeline shadow(vision::Mission::kLanding, shadow_params, rig.model, rig.mount);
+  Phase phase = Phase::kIdle;
+  int n_waypoints = 0;
+  ClosedLoopConfig cfg;
+  cfg.vehicle_file = vehicle;
+  cfg.scenario_file = scenario_file;
+  cfg.mission = Mission::kLanding;
+  cfg.seed = seed;
+  cfg.time_limit_s = time_limit_s;
+  cfg.script = [&](const Autonomy& a, double, ScriptActions&) {
+    if (a.phase() != phase)
+      std::printf("# phase %s -> %s (retries %d)\n", phase_name(phase), phase_name(a.phase()),
+                  a.retries());
+    phase = a.phase();
+    n_waypoints = a.estimator().n();
+  };
+  int n = 0;
+  cfg.camera_vision = [&](const sim::CameraFrame& f, const std::optional<PoseSample>& pose) {
+    const auto r = pipeline.process(f.pixels, f.utime, pose);
+    const Isometry3d X_CW = f.X_WC.inverse();
+    std::vector<cv::Point> truth_px;
+    int in_image = 0;
+    for (const auto& p : corners_W)
+      if (const auto px = rig.model.project(X_CW * p)) {
+        truth_px.emplace_back(static_cast<int>(px->x()), static_cast<int>(px->y()));
+        in_image +=
+            px->x() >= 0 && px->y() >= 0 && px->x() < rig.model.width && px->y() < rig.model.height;
+      }
+    const Vector3d cam = f.X_WC.translation();
+    std::printf("%7.3f %-13s n%-2d cam(%+.2f %+.2f %.2f) %-18s m %3d in %3d/%3d corners %d",
+                (f.utime - 1700000000000000) * 1e-6, phase_name(phase), n_waypoints, cam.x(),
+                cam.y(), cam.z(), vision::to_string(r.reason), r.n_matches,
+                r.target.n_inliers_target, r.target.n_inliers_dominant, in_image);
+    {  // floor inliers inside the hull of the top's inliers (a top hides the floor under it)
+      std::vector<cv::Point2f> top_px, hull;
+      for (size_t i = 0; i < r.matched_px.size() && i < r.labels.size(); ++i)
+        if (r.labels[i] == vision::Label::kTarget)
+          top_px.emplace_back(r.matched_px[i].x(), r.matched_px[i].y());
+      int inside = 0;
+      if (top_px.size() >= 3) {
+        cv::convexHull(top_px, hull);
+        for (size_t i = 0; i < r.matched_px.size() && i < r.labels.size(); ++i)
+          if (r.labels[i] == vision::Label::kDominant &&
+              cv::pointPolygonTest(hull, cv::Point2f(r.matched_px[i].x(), r.matched_px[i].y()),
+                                   true) > 2.0)
+            ++inside;
+      }
+      std::printf(" fin %d", inside);
+    }
+    if (r.found() || r.reason == vision::Reason::kPartialView) {
+      const Vector3d e = r.target.p_W - P.top_center_W;
+      std::printf(" dC(%+.3f %+.3f %+.3f) size %.3f x %.3f (%+.3f %+.3f) dh %+.3f base %.2f", e.x(),
+                  e.y(), e.z(), r.target.size_m[0], r.target.size_m[1],
+                  r.target.size_m[0] - P.size_m.x(), r.target.size_m[1] - P.size_m.y(),
+                  r.target.height_m - P.size_m.z(), r.baseline_m);
+    }
+    if (!shadow_prior.empty()) {
+      const auto q = shadow.process(f.pixels, f.utime, pose);
+      std::printf(" | shadow %s in %d/%d", vision::to_string(q.reason), q.target.n_inliers_target,
+                  q.target.n_inliers_dominant);
+      if (q.found()) {
+        const Vector3d e = q.target.p_W - P.top_center_W;
+        std::printf(" dC(%+.3f %+.3f %+.3f) size %.3f x %.3f", e.x(), e.y(), e.z(),
+                    q.target.size_m[0], q.target.size_m[1]);
+      }
+    }
+    std::printf("\n");
+    if (!dump.empty() && n % every == 0) {
+      cv::Mat bgr;
+      cv::cvtColor(f.pixels, bgr, cv::COLOR_GRAY2BGR);
+      if (truth_px.size() == 4) cv::polylines(bgr, truth_px, true, {0, 255, 0});
+      std::vector<cv::Point> o;
+      for (const auto& q : r.target.outline)
+        o.emplace_back(static_cast<int>(q.x()), static_cast<int>(q.y()));
+      if (o.size() == 4) cv::polylines(bgr, o, true, {0, 0, 255});
+      for (size_t i = 0; i < r.matched_px.size() && i < r.labels.size(); ++i) {
+        const cv::Scalar colour = r.labels[i] == vision::Label::kTarget ? cv::Scalar(0, 0, 255)
+                                  : r.labels[i] == vision::Label::kDominant
+                                      ? cv::Scalar(255, 0, 0)
+                                      : cv::Scalar(0, 255, 255);
+        cv::circle(bgr, cv::Point(r.matched_px[i].x(), r.matched_px[i].y()), 2, colour, -1);
+      }
+      char name[64];
+      std::snprintf(name, sizeof name, "/f%05d.png", n);
+      cv::imwrite(dump + name, bgr);
+    }
+    ++n;
+    return from_msg(vision::to_msg(r));
+  };
+  const auto r = fly_closed_loop(cfg);
+  std::printf("# result %s: %s landed %d touchdown %.3f est err %.3f retries %d\n",
+              phase_name(r.phase), r.reason.c_str(), r.landed, r.touchdown_error_m,
+              r.estimate_error_W.norm(), r.retries);
+  for (const auto& why : r.retry_reasons) std::printf("#   retry: %s\n", why.c_str());
+  return 0;
+}
