@@ -20,6 +20,17 @@ namespace alight::autonomy::test {
 namespace {
 // Longest wait for a frame's pose, in exposure time of the frames after it (closed_loop.hpp).
 constexpr int64_t kMaxPoseWaitUs = 100'000;
+
+// Autonomy's target estimate as the vehicle sees it (relative to its own estimated pose), put
+// back in the true frame through the true pose, minus the true target: what the onboard
+// estimate's drift does not cancel. Needs a platform or an opening in the scene.
+Vector3d estimate_error_rel_W(const sim::Truth& truth, const estimator::State& es,
+                              const Vector3d& target_estimate_W) {
+  const Matrix3d R_true_est =
+      truth.state.q_WB.toRotationMatrix() * es.q_WB.toRotationMatrix().transpose();
+  return truth.state.p_W_B + R_true_est * (target_estimate_W - es.p_W_B) -
+         (truth.platform ? truth.platform->top_center_W : truth.opening->center_W);
+}
 }  // namespace
 
 ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
@@ -303,10 +314,7 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
       const estimator::State es = onboard->state();
       r.pose_error_at_approach_W = es.p_W_B - truth.state.p_W_B;
       r.estimate_error_rel_at_approach_W =
-          truth.state.p_W_B +
-          truth.state.q_WB.toRotationMatrix() * es.q_WB.toRotationMatrix().transpose() *
-              (autonomy.final_estimate() - es.p_W_B) -
-          (truth.platform ? truth.platform->top_center_W : truth.opening->center_W);
+          estimate_error_rel_W(truth, es, autonomy.final_estimate());
     }
     if (truth.platform) {
       const double e =
@@ -315,14 +323,9 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
         r.error_at_final_descent_m = e;
       if (ph == Phase::kLanded && r.error_at_touchdown_m < 0) {
         r.error_at_touchdown_m = e;
-        if (onboard) {
-          const estimator::State es = onboard->state();
-          r.estimate_error_rel_at_touchdown_W = truth.state.p_W_B +
-                                                truth.state.q_WB.toRotationMatrix() *
-                                                    es.q_WB.toRotationMatrix().transpose() *
-                                                    (autonomy.final_estimate() - es.p_W_B) -
-                                                truth.platform->top_center_W;
-        }
+        if (onboard)
+          r.estimate_error_rel_at_touchdown_W =
+              estimate_error_rel_W(truth, onboard->state(), autonomy.final_estimate());
       }
       r.platform_yaw_rad = truth.platform->yaw_rad;
     }
@@ -371,15 +374,8 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
     r.flow_rejected = s.counters.rejected(estimator::Sensor::kFlow);
     r.terrain_resets = static_cast<int>(s.counters.terrain_resets);
     r.flow_on_floor = s.counters.flow_on_floor;
-    if (truth.platform || truth.opening) {
-      // The target as the vehicle sees it (relative to itself), put back in the true frame.
-      const Matrix3d R_true_est =
-          truth.state.q_WB.toRotationMatrix() * s.q_WB.toRotationMatrix().transpose();
-      const Vector3d p_target_true =
-          truth.state.p_W_B + R_true_est * (autonomy.final_estimate() - s.p_W_B);
-      r.estimate_error_rel_W =
-          p_target_true - (truth.platform ? truth.platform->top_center_W : truth.opening->center_W);
-    }
+    if (truth.platform || truth.opening)
+      r.estimate_error_rel_W = estimate_error_rel_W(truth, s, autonomy.final_estimate());
   }
   return r;
 }
