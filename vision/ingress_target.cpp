@@ -47,6 +47,23 @@ std::optional<Vector3d> triangulate_midpoint(const Isometry3d& X_WA, const Vecto
   return 0.5 * (X_WA.translation() + s * d_a + X_WB.translation() + t * d_b);
 }
 
+// Which side of a border line the wall is on (-1: lower across-coordinates, +1: higher, 0:
+// undecided): the one where the mask is clear 4 px off the line.
+int wall_side(const cv::Mat& mask, bool vertical, double a, double b, double mean_along, int lo,
+              int hi) {
+  const int n_across = vertical ? mask.cols : mask.rows;
+  auto mask_at = [&](int along, int across) {
+    return vertical ? mask.at<uint8_t>(along, across) : mask.at<uint8_t>(across, along);
+  };
+  int clear_minus = 0, clear_plus = 0;
+  for (int t = lo; t <= hi; ++t) {
+    const int x = static_cast<int>(std::lround(a + b * (t - mean_along)));
+    if (x - 4 >= 0) clear_minus += mask_at(t, x - 4) == 0;
+    if (x + 4 < n_across) clear_plus += mask_at(t, x + 4) == 0;
+  }
+  return clear_minus == clear_plus ? 0 : clear_minus > clear_plus ? -1 : 1;
+}
+
 // The mask's border lies where the parallax first exceeds the threshold: on a frame's inner
 // face (jamb, sill, lintel) next to the wall's edge it stays below it for a few pixels, so the
 // cut sits that far inside the opening. The wall's edge itself is a straight step in the image
@@ -74,18 +91,8 @@ double snap_to_edge(const cv::Mat& smooth, const cv::Mat& mask, bool vertical, d
                   (px(q, across + 1) - px(q, across - 1));
     return static_cast<float>(d);
   };
-  auto mask_at = [&](int along, int across) {
-    return vertical ? mask.at<uint8_t>(along, across) : mask.at<uint8_t>(across, along);
-  };
-  // Which side is the wall: the one where the mask is clear 4 px off the line.
-  int clear_minus = 0, clear_plus = 0;
-  for (int t = lo; t <= hi; ++t) {
-    const int x = static_cast<int>(std::lround(a + b * (t - mean_along)));
-    if (x - 4 >= 0) clear_minus += mask_at(t, x - 4) == 0;
-    if (x + 4 < n_across) clear_plus += mask_at(t, x + 4) == 0;
-  }
-  if (clear_minus == clear_plus) return a;
-  const int side = clear_minus > clear_plus ? -1 : 1;
+  const int side = wall_side(mask, vertical, a, b, mean_along, lo, hi);
+  if (side == 0) return a;
   const int k_wall = static_cast<int>(std::ceil(p.snap_px));
   std::vector<double> response;  // |mean gradient| at offsets k = -1 .. k_wall towards the wall
   // Whole-pixel offsets from the line rounded at its centre, so the parabola's fraction is one
@@ -168,6 +175,88 @@ void hough_lines(const std::vector<cv::Point>& px, cv::Size size, double theta_l
 
 }  // namespace
 
+// The wall's front edge beyond a frame's inner face (jamb, sill, lintel; issue 15, the thickness
+// bias). A face of a wall t thick runs from the front edge, on the wall plane, straight back
+// along the wall's normal; its points' parallax against the wall's homography grows from zero
+// at the front edge with the depth behind it, so the mean difference between the image and the
+// warped reference, along lines parallel to the cut, falls from the mask's border (where it
+// passes the threshold) to the wall's own level at the front edge and stays there. A hinge,
+// D(k) = floor + slope max(0, e - k) for k px from the cut towards the wall, fitted by least
+// squares, puts the front edge at e. Searched as far as a face can reach: a face's far edge at
+// `across` from the principal point has its front edge `across` t / Z further out, and it shows
+// only on the side away from the principal point (beyond, the front edge hides it). The first
+// 2 sigma of the mask's blur are left out (the room's difference spread over the border). Returns
+// a unchanged when no falling ramp stands out of the differences' scatter.
+double face_front_edge(const cv::Mat& diff, const cv::Mat& mask, bool vertical, double a, double b,
+                       double mean_along, int lo, int hi, const CutGeometry& g,
+                       const IngressParams& p) {
+  const int side = wall_side(mask, vertical, a, b, mean_along, lo, hi);
+  const double centre = vertical ? g.principal_px.x() : g.principal_px.y();
+  if (side == 0 || (a - centre) * side <= 0) return a;
+  const int n_across = vertical ? diff.cols : diff.rows;
+  const double reach =
+      std::min(std::abs(a - centre) * p.max_wall_thickness_m / g.wall_depth_m, 0.25 * n_across);
+  const int k0 = static_cast<int>(std::ceil(2 * p.parallax_blur_sigma_px)) + 1;
+  const int k_end = static_cast<int>(std::ceil(reach)) + k0 + 8;  // beyond: the wall's level
+  if (reach < k0) return a;
+  std::vector<double> d;  // mean difference at k = k0 .. k_end
+  const double a0 = std::round(a);
+  // Only where the reference saw the wall: elsewhere the difference is 0 by convention, no
+  // evidence (mapped by the homography of the undistorted pixels, a few pixels' margin).
+  auto seen = [&](int u, int v) {
+    const Vector3d q = g.H_12 * Vector3d(u, v, 1);
+    if (!(q.z() > 0)) return false;
+    const double x = q.x() / q.z(), y = q.y() / q.z();
+    return x >= 3 && y >= 3 && x <= diff.cols - 4 && y <= diff.rows - 4;
+  };
+  for (int k = k0; k <= k_end; ++k) {
+    double sum = 0;
+    int n = 0;
+    for (int t = lo; t <= hi; ++t) {
+      const int x = static_cast<int>(std::lround(a0 + b * (t - mean_along))) + side * k;
+      if (x < 0 || x >= n_across) continue;
+      if (!(vertical ? seen(x, t) : seen(t, x))) continue;
+      sum += vertical ? diff.at<uint8_t>(t, x) : diff.at<uint8_t>(x, t);
+      ++n;
+    }
+    if (n < (hi - lo + 1) / 2) break;  // off either image
+    d.push_back(sum / n);
+  }
+  const int m = static_cast<int>(d.size());
+  if (m < 8) return a;
+  double mean = 0;
+  for (const double v : d) mean += v;
+  mean /= m;
+  double sse_flat = 0;
+  for (const double v : d) sse_flat += (v - mean) * (v - mean);
+  // e in quarter pixels from k0 to the reach: for each, floor and slope by least squares on the
+  // regressor g_k = max(0, e - k).
+  double best_sse = sse_flat, best_e = 0, best_rise = 0;
+  for (double e = k0 + 0.25; e <= std::min(reach, static_cast<double>(k0 + m - 1)); e += 0.25) {
+    double sg = 0, sgg = 0, sgd = 0, sd = 0;
+    for (int i = 0; i < m; ++i) {
+      const double gk = std::max(0.0, e - (k0 + i));
+      sg += gk, sgg += gk * gk, sgd += gk * d[i], sd += d[i];
+    }
+    const double cov = sgd - sg * sd / m, var = sgg - sg * sg / m;
+    if (var <= 0 || cov <= 0) continue;  // a rising profile: no face
+    const double slope = cov / var, floor = (sd - slope * sg) / m;
+    double sse = 0;
+    for (int i = 0; i < m; ++i) {
+      const double r = d[i] - floor - slope * std::max(0.0, e - (k0 + i));
+      sse += r * r;
+    }
+    if (sse < best_sse) best_sse = sse, best_e = e, best_rise = slope * (e - k0);
+  }
+  // The ramp must stand out of the residual's scatter and be a difference the eye could see (on
+  // a smooth wall seen over a short baseline the mean along a line is steady to a tenth of a
+  // grey level, and the wall's own slow drifts fit a ramp of a few tenths).
+  const double sigma = std::sqrt(best_sse / std::max(1, m - 3));
+  if (best_e <= 0 || best_rise < p.face_min_rise_sigma * sigma || best_rise < p.face_min_rise)
+    return a;
+  return a0 + side * best_e;
+}
+
 cv::Mat parallax_image(const cv::Mat& gray, const IngressParams& p) {
   assert(gray.type() == CV_8UC1);
   // The mask can be made on a grid parallax_decimation times coarser and scaled back up (issue
@@ -200,7 +289,7 @@ cv::Mat off_wall_mask(const cv::Mat& image, const cv::Mat& reference, const Matr
 cv::Mat off_wall_mask_of_parallax_images(const cv::Mat& a, const cv::Mat& b, cv::Size size,
                                          const Matrix3d& H_21, const CameraModel& camera,
                                          const std::vector<Vector2d>& wall_px,
-                                         const IngressParams& p) {
+                                         const IngressParams& p, cv::Mat* diff_out) {
   assert(a.type() == CV_8UC1 && b.type() == CV_8UC1);
   const int d = p.parallax_decimation;
   const cv::Size small_size((size.width + d - 1) / d, (size.height + d - 1) / d);
@@ -276,6 +365,7 @@ cv::Mat off_wall_mask_of_parallax_images(const cv::Mat& a, const cv::Mat& b, cv:
     std::nth_element(on_wall.begin(), on_wall.begin() + on_wall.size() / 2, on_wall.end());
     threshold = std::max(threshold, p.parallax_noise_k * on_wall[on_wall.size() / 2]);
   }
+  if (diff_out) *diff_out = diff;
   cv::Mat mask;
   cv::threshold(diff, mask, threshold, 255, cv::THRESH_BINARY);
   // Closing fills the holes where the view beyond the wall has little texture (two samples of
@@ -587,13 +677,16 @@ TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image
 
   // 2D histogram of wall inliers and off-wall features over the cells of the line cuts.
   std::vector<double> xc, yc;
+  cv::Mat mask;
+  CutGeometry geometry;
   if (p.parallax_mask && !reference_parallax.empty()) {
     std::vector<Vector2d> wall_px;
     for (size_t k = 0; k < c.size(); ++k)
       if (fit->inlier[k]) wall_px.push_back(c.u2[k]);
-    mask_cuts(off_wall_mask_of_parallax_images(image_parallax, reference_parallax, image.size(),
-                                               fit->H, *c.camera, wall_px, p),
-              p, &xc, &yc, &out.lines, image);
+    geometry = CutGeometry{Vector2d(K(0, 2), K(1, 2)), wall.depth_m, cv::Mat(), fit->H.inverse()};
+    mask = off_wall_mask_of_parallax_images(image_parallax, reference_parallax, image.size(),
+                                            fit->H, *c.camera, wall_px, p, &geometry.diff);
+    mask_cuts(mask, p, &xc, &yc, &out.lines, image);
   } else {
     line_cuts(image, p, &xc, &yc, &out.lines);
   }
@@ -652,7 +745,29 @@ TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image
       const int i = cell_of(xc, c.u2[k].x()), j = cell_of(yc, c.u2[k].y());
       if (i >= b[0] && i < b[2] && j >= b[1] && j < b[3]) out.labels[k] = Label::kTarget;
     }
-  const double left = xc[b[0]], right = xc[b[2]], top = yc[b[1]], bottom = yc[b[3]];
+  double left = xc[b[0]], right = xc[b[2]], top = yc[b[1]], bottom = yc[b[3]];
+  // Each side of the block out across the wall's inner face to its front edge, on the middle
+  // of the side (the corners hold the neighbouring faces too).
+  if (!mask.empty() && p.max_wall_thickness_m > 0 && geometry.wall_depth_m > 0 &&
+      std::isfinite(geometry.wall_depth_m) && geometry.diff.size() == mask.size()) {
+    const double w = right - left, h = bottom - top;
+    auto span = [](double from, double to, int n) {
+      return std::pair{std::clamp(static_cast<int>(std::ceil(from)), 0, n - 1),
+                       std::clamp(static_cast<int>(std::floor(to)), 0, n - 1)};
+    };
+    const auto [y_lo, y_hi] = span(top + 0.1 * h, bottom - 0.1 * h, mask.rows);
+    const auto [x_lo, x_hi] = span(left + 0.1 * w, right - 0.1 * w, mask.cols);
+    const double y_mid = 0.5 * (top + bottom), x_mid = 0.5 * (left + right);
+    const double l =
+        face_front_edge(geometry.diff, mask, true, left, 0, y_mid, y_lo, y_hi, geometry, p);
+    const double r =
+        face_front_edge(geometry.diff, mask, true, right, 0, y_mid, y_lo, y_hi, geometry, p);
+    const double t =
+        face_front_edge(geometry.diff, mask, false, top, 0, x_mid, x_lo, x_hi, geometry, p);
+    const double bo =
+        face_front_edge(geometry.diff, mask, false, bottom, 0, x_mid, x_lo, x_hi, geometry, p);
+    left = l, right = r, top = t, bottom = bo;
+  }
   const Vector2d centre(0.5 * (left + right), 0.5 * (top + bottom));
   auto on_wall = [&](const Vector2d& px) {
     return compute_waypoint(plane, c.camera->ray(px), c.pose_1, c.pose_2, *c.mount,

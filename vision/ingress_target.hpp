@@ -52,7 +52,7 @@ cv::Mat off_wall_mask_of_parallax_images(const cv::Mat& image_parallax,
                                          const cv::Mat& reference_parallax, cv::Size size,
                                          const Matrix3d& H_21, const CameraModel& camera,
                                          const std::vector<Vector2d>& wall_px,
-                                         const IngressParams& params);
+                                         const IngressParams& params, cv::Mat* diff = nullptr);
 
 /// The near-vertical (x) and near-horizontal (y) cut positions of the image's straight edges
 /// (Canny, probabilistic Hough), sorted, merged, including the image borders. Exposed for tests.
@@ -62,6 +62,23 @@ cv::Mat off_wall_mask_of_parallax_images(const cv::Mat& image_parallax,
 void mask_cuts(const cv::Mat& mask, const IngressParams& params, std::vector<double>* x_cuts,
                std::vector<double>* y_cuts, std::vector<cv::Vec4i>* kept_segments,
                const cv::Mat& image = cv::Mat());
+
+/// Where the wall's inner faces (jambs, sill, lintel) can show, and what they look like against
+/// the wall's homography.
+struct CutGeometry {
+  Vector2d principal_px = Vector2d::Zero();
+  double wall_depth_m = 0;  ///< along the optical axis
+  cv::Mat diff;  ///< |current - reference warped by the wall's homography| (the mask's, CV_8UC1)
+  Matrix3d H_12 = Matrix3d::Identity();  ///< current pixel -> reference pixel on the wall
+};
+
+/// The across-coordinate of the wall's front edge beyond the inner face next to the cut
+/// a + b (along - mean_along), along in [lo, hi] (x of a vertical cut at row y): where the
+/// face's parallax against the wall's homography ends. `a` unchanged when no face shows.
+/// Exposed for tests.
+double face_front_edge(const cv::Mat& diff, const cv::Mat& mask, bool vertical, double a, double b,
+                       double mean_along, int lo, int hi, const CutGeometry& geometry,
+                       const IngressParams& params);
 
 void line_cuts(const cv::Mat& image, const IngressParams& params, std::vector<double>* x_cuts,
                std::vector<double>* y_cuts, std::vector<cv::Vec4i>* kept_segments);

@@ -72,10 +72,22 @@ int main(int argc, char** argv) {
         tl = std::min(tl, px->x()), tr = std::max(tr, px->x());
         tt = std::min(tt, px->y()), tb = std::max(tb, px->y());
       }
+    // The inner faces' far edges (the wall's back face), where the mask's border sits when the
+    // faces look flat (the thickness bias, README).
+    double bl = 1e9, br = -1e9, bt = 1e9, bb = -1e9;
+    for (int sy : {-1, 1})
+      for (int sz : {-1, 1}) {
+        const Vector3d p = centre_W + Vector3d(w.thickness_m, sy * size.x() / 2, sz * size.y() / 2);
+        if (const auto px = rig.model.project(X_CW * p)) {
+          bl = std::min(bl, px->x()), br = std::max(br, px->x());
+          bt = std::min(bt, px->y()), bb = std::max(bb, px->y());
+        }
+      }
     const Vector3d cam = f.X_WC.translation();
     std::printf("%7.3f %-12s cam(%.2f %.2f %.2f) %-16s", (f.utime - 1700000000000000) * 1e-6,
                 phase_name(phase), cam.x(), cam.y(), cam.z(), vision::to_string(r.reason));
-    std::printf(" truth[%.0f %.0f %.0f %.0f]%s", tl, tr, tt, tb, all ? "" : "?");
+    std::printf(" truth[%.1f %.1f %.1f %.1f]%s back[%.1f %.1f %.1f %.1f]", tl, tr, tt, tb,
+                all ? "" : "?", bl, br, bt, bb);
     if (r.found()) {
       const auto& o = r.target.outline;
       const Vector3d e = r.target.p_W - centre_W;

@@ -189,6 +189,68 @@ TEST(MaskCutsTest, CutsSnapToTheWallsEdgeOnTheWallSide) {
   EXPECT_NEAR(yc[2], 355.5, 1.0);
 }
 
+// The warped reference's difference next to an opening's left side in a wall t thick: the room
+// (x < 180, off the wall, masked), then the jamb from its far edge (x = 180) to the wall's front
+// edge (x = front_px), whose parallax, and so the difference, falls linearly to zero there, then
+// the wall's own level. Seeded noise on every pixel.
+struct FaceProfile {
+  cv::Mat diff, mask;
+  CutGeometry geometry;
+};
+
+FaceProfile face_profile(double front_px, double rise, double wall_level, uint64_t seed) {
+  FaceProfile f;
+  f.diff = cv::Mat(480, 640, CV_8UC1);
+  f.mask = cv::Mat(480, 640, CV_8UC1, cv::Scalar(0));
+  f.mask(cv::Rect(180, 0, 300, 480)).setTo(255);
+  cv::RNG rng(seed);
+  for (int y = 0; y < 480; ++y)
+    for (int x = 0; x < 640; ++x) {
+      double v = wall_level;
+      if (x >= 180 && x < 480)
+        v = 40;  // the room
+      else if (x < 180 && x > front_px)
+        v += rise * (x - front_px) / (180 - front_px);  // the jamb
+      f.diff.at<uint8_t>(y, x) = cv::saturate_cast<uint8_t>(v + rng.gaussian(1.5));
+    }
+  f.geometry.principal_px = Vector2d(320, 240);
+  f.geometry.wall_depth_m = 2.0;  // a 40 cm wall's face reaches 140 x 0.4 / 2 = 28 px out
+  f.geometry.diff = f.diff;
+  return f;
+}
+
+// Regression (issue 15, ingress_photo: the width 4-6 cm short at the median): the mask's border
+// sits on the wall's inner faces (textured like the wall and seen at a grazing angle, they
+// agree with the wall's homography near the front edge). The side moves out to where the face's
+// parallax ends.
+TEST(FaceFrontEdgeTest, MovesAcrossTheFaceToTheFrontEdge) {
+  IngressParams p;
+  for (const double front : {158.0, 165.5, 172.0})
+    for (const uint64_t seed : {1, 2, 3}) {
+      const FaceProfile f = face_profile(front, 8.0, 3.0, seed);
+      const double x =
+          face_front_edge(f.diff, f.mask, true, 179.5, 0.0, 240, 40, 440, f.geometry, p);
+      EXPECT_NEAR(x, front, 1.0) << "front " << front << " seed " << seed;
+    }
+}
+
+// Regression (the face search's first version, the paper's wall in ingress_mission_test): on a
+// smooth wall over a short baseline the differences drift by a few tenths of a grey level, which
+// a hinge fits as a "face" far out: widths 61-66 cm for 60. Such a ramp is no face.
+TEST(FaceFrontEdgeTest, NoFaceWhereTheDifferenceBarelyFalls) {
+  IngressParams p;
+  const FaceProfile f = face_profile(155.0, 0.6, 3.0, 4);
+  EXPECT_EQ(face_front_edge(f.diff, f.mask, true, 179.5, 0.0, 240, 40, 440, f.geometry, p), 179.5);
+  // Nor on the side facing the principal point (the front edge hides the face there), nor with
+  // the search off.
+  const FaceProfile g = face_profile(158.0, 8.0, 3.0, 5);
+  CutGeometry beyond = g.geometry;
+  beyond.principal_px.x() = 100;
+  EXPECT_EQ(face_front_edge(g.diff, g.mask, true, 179.5, 0.0, 240, 40, 440, beyond, p), 179.5);
+  p.max_wall_thickness_m = 0.0;
+  EXPECT_EQ(face_front_edge(g.diff, g.mask, true, 179.5, 0.0, 240, 40, 440, g.geometry, p), 179.5);
+}
+
 TEST(MaskCutsTest, EmptyMaskGivesOnlyTheImageBorders) {
   const cv::Mat mask(480, 640, CV_8UC1, cv::Scalar(0));
   std::vector<double> xc, yc;
