@@ -215,6 +215,12 @@ const ParamSchema<LandingParams>& LandingParams::schema() {
           "known floor: motion capture's R21 is corrected by at most this (its orientation noise, "
           "0.1 deg a sample, moves the image by 1-2 px; a correction the size of the "
           "platform's parallax would take the top for the floor)");
+    s.add("hold_reference", &P::hold_reference, Range::any(), "",
+          "beyond the paper: while the camera hovers, keep the previous frame's reference when "
+          "it is farther from the camera than the tracked one (within max_reference_baseline_m "
+          "and tracker.max_reference_age_s) and still matches tracker.min_tracked features: "
+          "continuous tracks die within 1-2 s of hovering (or max_history frames pass), and the "
+          "tracked reference's baseline then shrinks until the top's parallax is lost");
     return s;
   }();
   return schema;

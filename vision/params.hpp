@@ -120,6 +120,7 @@ struct LandingParams {
   double floor_tol_frac = 0.08;
   int min_floor_inliers = 4;
   double max_rotation_correction_deg = 0.5;
+  bool hold_reference = true;  ///< keep a longer-baseline reference while hovering (pipeline.hpp)
   static const ParamSchema<LandingParams>& schema();
   void validate() const;
 };
