@@ -218,9 +218,16 @@ const ParamSchema<LandingParams>& LandingParams::schema() {
     s.add("hold_reference", &P::hold_reference, Range::any(), "",
           "beyond the paper: while the camera hovers, keep the previous frame's reference when "
           "it is farther from the camera than the tracked one (within max_reference_baseline_m "
-          "and tracker.max_reference_age_s) and still matches tracker.min_tracked features: "
-          "continuous tracks die within 1-2 s of hovering (or max_history frames pass), and the "
-          "tracked reference's baseline then shrinks until the top's parallax is lost");
+          "and hold_max_age_s) and still matches tracker.min_tracked features: continuous "
+          "tracks die within 1-2 s of hovering (or max_history frames pass), and the tracked "
+          "reference's baseline then shrinks until the top's parallax is lost");
+    // Finite and bounded, as tracker.max_reference_age_s.
+    s.add("hold_max_age_s", &P::hold_max_age_s, Range::open_closed(0, 600), "s",
+          "a held reference older than this is dropped. Longer than tracker.max_reference_age_s: "
+          "the held one must still match min_tracked features directly, which is the check "
+          "that it shows the same scene, and an approach held by gusts hovered 10 s with the "
+          "target in view (landing_lowtex seed 8002), then lost it when a 10 s bound dropped "
+          "the reference");
     return s;
   }();
   return schema;

@@ -106,7 +106,7 @@ FrameResult Pipeline::process(const cv::Mat& gray, int64_t utime,
   bool matched = false;
   const bool hold = mission_ == Mission::kLanding && params_.landing.hold_reference;
   if (hold && held_ && held_->utime < utime &&
-      double(utime - held_->utime) * 1e-6 <= params_.tracker.max_reference_age_s) {
+      double(utime - held_->utime) * 1e-6 <= params_.landing.hold_max_age_s) {
     const double held_baseline_m = mocap_motion(held_pose_, *pose, mount_).baseline_m;
     if (held_baseline_m > baseline_m && held_baseline_m <= params_.max_reference_baseline_m) {
       auto m = match_to_current(*held_);

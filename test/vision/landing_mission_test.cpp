@@ -209,6 +209,19 @@ TEST(TargetLostWhileHovering, AHeldReferenceOutOfViewIsNotHeld) {
   for (int i = n_move; i < n_move + n_hover; ++i) EXPECT_LE(results[i].baseline_m, 0.2 + 1e-9) << i;
 }
 
+TEST(TargetLostWhileHovering, AHeldReferenceExpiresAfterHoldMaxAge) {
+  const int n_move = 7, n_hover = 25;
+  auto params = short_history(true);
+  params.landing.hold_max_age_s = 1.5;  // frames 0.1 s apart: held from before the hover
+  const auto seq = move_then_hover(n_move, n_hover);
+  const auto results = run(seq, Mission::kLanding, params);
+  for (int i = n_move; i < n_move + n_hover; ++i) {
+    const double age_s = (results[i].utime - results[i].ref_utime) * 1e-6;
+    if (results[i].ref_held) EXPECT_LE(age_s, 1.5 + 1e-9) << i;
+  }
+  EXPECT_EQ(results.back().reason, Reason::kSmallBaseline) << to_string(results.back().reason);
+}
+
 TEST(TargetLostWhileHovering, ReplayGivesIdenticalResults) {
   const auto seq = move_then_hover(7, 12);
   const auto a = run(seq, Mission::kLanding, short_history(true));
