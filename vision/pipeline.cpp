@@ -100,12 +100,12 @@ FrameResult Pipeline::process(const cv::Mat& gray, int64_t utime,
     const auto sa = response_signs(a.keypoints);
     return match_descriptors(a.descriptors, b.descriptors, params_.match, &sa, &sb);
   };
-  // Hovering: the held reference while it has the longer baseline and still overlaps
-  // (pipeline.hpp).
+  // Hovering: the held reference while the tracked one is too close, the held one farther
+  // and still overlapping (pipeline.hpp).
   std::vector<Match> matches;
   bool matched = false;
   const bool hold = mission_ == Mission::kLanding && params_.landing.hold_reference;
-  if (hold && held_ && held_->utime < utime &&
+  if (hold && baseline_m < params_.landing.hold_baseline_m && held_ && held_->utime < utime &&
       double(utime - held_->utime) * 1e-6 <= params_.landing.hold_max_age_s) {
     const double held_baseline_m = mocap_motion(held_pose_, *pose, mount_).baseline_m;
     if (held_baseline_m > baseline_m && held_baseline_m <= params_.max_reference_baseline_m) {
