@@ -226,9 +226,9 @@ const ParamSchema<LandingParams>& LandingParams::schema() {
           "hold_reference: a tracked reference at least this far from the current camera is "
           "used as the paper has it (and becomes the held one). At max_reference_baseline_m "
           "(0.3) the held reference is used whenever it is the farther one: the measured "
-          "setting. On landing_photo seed 8001 the paper's planes failed to decompose on most "
-          "frames at 0.2-0.3 m baselines and found the top at 0.05-0.15 m; a smaller value "
-          "(0.15: a 10 cm top at 1.6 m still moves 4.5 px against the floor) is not measured");
+          "setting. 0.15 (a 10 cm top at 1.6 m moves 4.5 px against the floor) was flown on the "
+          "five draws that lost the target on main: landing_photo 9000 (a 9 cm top) was lost "
+          "again and 8001 still, landing_tiles 8014 needed a retry");
     // Finite and bounded, as tracker.max_reference_age_s.
     s.add("hold_max_age_s", &P::hold_max_age_s, Range::open_closed(0, 600), "s",
           "a held reference older than this is dropped. Longer than tracker.max_reference_age_s: "
