@@ -215,6 +215,27 @@ const ParamSchema<LandingParams>& LandingParams::schema() {
           "known floor: motion capture's R21 is corrected by at most this (its orientation noise, "
           "0.1 deg a sample, moves the image by 1-2 px; a correction the size of the "
           "platform's parallax would take the top for the floor)");
+    s.add("hold_reference", &P::hold_reference, Range::any(), "",
+          "beyond the paper: while the tracked reference is closer than hold_baseline_m (the "
+          "camera hovers), keep the previous frame's reference when it is farther from the "
+          "camera (within max_reference_baseline_m and hold_max_age_s) and still matches "
+          "tracker.min_tracked features: continuous tracks die within 1-2 s of hovering (or "
+          "max_history frames pass), and the tracked reference's baseline then shrinks until the "
+          "top's parallax is lost");
+    s.add("hold_baseline_m", &P::hold_baseline_m, Range::gt(0), "m",
+          "hold_reference: a tracked reference at least this far from the current camera is "
+          "used as the paper has it (and becomes the held one). At max_reference_baseline_m "
+          "(0.3) the held reference is used whenever it is the farther one: the measured "
+          "setting. 0.15 (a 10 cm top at 1.6 m moves 4.5 px against the floor) was flown on the "
+          "five draws that lost the target on main: landing_photo 9000 (a 9 cm top) was lost "
+          "again and 8001 still, landing_tiles 8014 needed a retry");
+    // Finite and bounded, as tracker.max_reference_age_s.
+    s.add("hold_max_age_s", &P::hold_max_age_s, Range::open_closed(0, 600), "s",
+          "a held reference older than this is dropped. Longer than tracker.max_reference_age_s: "
+          "the held one must still match min_tracked features directly, which is the check "
+          "that it shows the same scene, and an approach held by gusts hovered 10 s with the "
+          "target in view (landing_lowtex seed 8002), then lost it when a 10 s bound dropped "
+          "the reference");
     return s;
   }();
   return schema;

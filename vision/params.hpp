@@ -120,6 +120,9 @@ struct LandingParams {
   double floor_tol_frac = 0.08;
   int min_floor_inliers = 4;
   double max_rotation_correction_deg = 0.5;
+  bool hold_reference = true;  ///< keep a longer-baseline reference while hovering (pipeline.hpp)
+  double hold_baseline_m = 0.3;
+  double hold_max_age_s = 30.0;
   static const ParamSchema<LandingParams>& schema();
   void validate() const;
 };

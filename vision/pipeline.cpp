@@ -22,6 +22,7 @@ Pipeline::Pipeline(Mission mission, const PipelineParams& params, const CameraMo
 void Pipeline::reset() {
   tracker_.reset();
   poses_.clear();
+  held_.reset();
 }
 
 FrameResult Pipeline::process(const cv::Mat& gray, int64_t utime,
@@ -61,7 +62,10 @@ FrameResult Pipeline::process(const cv::Mat& gray, int64_t utime,
   if (parallax) frame.image = parallax_image(gray, params_.ingress);
 
   const auto up = tracker_.add(std::move(frame));
-  if (up.reset) poses_.clear();
+  if (up.reset) {
+    poses_.clear();
+    held_.reset();  // a gap, a jump or a changed view: the held reference goes with the tracks
+  }
   if (up.current) poses_.emplace_back(utime, *pose);
   // Keep only the poses of frames the tracker can still pick.
   const int64_t oldest = up.reference ? up.reference->utime : utime;
@@ -84,23 +88,54 @@ FrameResult Pipeline::process(const cv::Mat& gray, int64_t utime,
         break;
     }
   }
-  r.ref_utime = ref->utime;
   const auto ref_pose = std::find_if(poses_.begin(), poses_.end(),
-                                     [&](const auto& e) { return e.first == r.ref_utime; });
+                                     [&](const auto& e) { return e.first == ref->utime; });
   assert(ref_pose != poses_.end());
+  PoseSample pose_1 = ref_pose->second;
+  double baseline_m = mocap_motion(pose_1, *pose, mount_).baseline_m;
+
+  const TrackedFrame& b = *up.current;
+  const auto sb = response_signs(b.keypoints);
+  auto match_to_current = [&](const TrackedFrame& a) {
+    const auto sa = response_signs(a.keypoints);
+    return match_descriptors(a.descriptors, b.descriptors, params_.match, &sa, &sb);
+  };
+  // Hovering: the held reference while the tracked one is too close, the held one farther
+  // and still overlapping (pipeline.hpp).
+  std::vector<Match> matches;
+  bool matched = false;
+  const bool hold = mission_ == Mission::kLanding && params_.landing.hold_reference;
+  if (hold && baseline_m < params_.landing.hold_baseline_m && held_ && held_->utime < utime &&
+      double(utime - held_->utime) * 1e-6 <= params_.landing.hold_max_age_s) {
+    const double held_baseline_m = mocap_motion(held_pose_, *pose, mount_).baseline_m;
+    if (held_baseline_m > baseline_m && held_baseline_m <= params_.max_reference_baseline_m) {
+      auto m = match_to_current(*held_);
+      if (static_cast<int>(m.size()) >= params_.tracker.min_tracked) {
+        ref = held_;
+        pose_1 = held_pose_;
+        baseline_m = held_baseline_m;
+        matches = std::move(m);
+        matched = true;
+        r.ref_held = true;
+      }
+    }
+  }
+  if (hold) {
+    held_ = ref;
+    held_pose_ = pose_1;
+  }
+  r.ref_utime = ref->utime;
 
   Correspondences c;
   c.camera = &camera_;
   c.mount = &mount_;
-  c.pose_1 = ref_pose->second;
+  c.pose_1 = pose_1;
   c.pose_2 = *pose;
-  r.baseline_m = mocap_motion(c.pose_1, c.pose_2, mount_).baseline_m;
+  r.baseline_m = baseline_m;
   if (r.baseline_m < params_.waypoint.min_baseline_m) return fail(Reason::kSmallBaseline);
 
   const TrackedFrame& a = *ref;
-  const TrackedFrame& b = *up.current;
-  const auto sa = response_signs(a.keypoints), sb = response_signs(b.keypoints);
-  const auto matches = match_descriptors(a.descriptors, b.descriptors, params_.match, &sa, &sb);
+  if (!matched) matches = match_to_current(a);
   r.n_matches = static_cast<int>(matches.size());
   const Matrix3d K = camera_.K();
   for (const auto& m : matches) {

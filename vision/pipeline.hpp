@@ -5,6 +5,22 @@
 // two homographies, platform; ingress: wall homography, opening) and its waypoint. Pure: the
 // caller passes the image, its exposure time and the pose interpolated at that time; same
 // inputs in the same order give the same results (all RANSAC seeded, no clock).
+//
+// Beyond the paper (landing.hold_reference, issue 15): the paper's reference is the oldest frame
+// with N features tracked continuously to now. While the vehicle hovers (a refinement vantage's
+// dwell, an approach waiting for e_r), that frame moves forward in time: tracks break (a feature
+// missed in one frame ends its track for good) and max_history frames pass in 2 s, so within 1-2 s
+// of hovering every frame left was taken from the hover point and the baseline falls towards
+// zero. The platform top's parallax over the floor, f b (1/Z_top - 1/Z_floor), then falls under
+// the 2 x threshold that tells it from the floor (4 px: b ~ 9 cm for a 15 cm top at 1.5 m, 15 cm
+// for a 9 cm top), and the target is lost although it has not moved. So while the tracked
+// reference is closer than landing.hold_baseline_m, the previous frame's reference is held when
+// it is farther from the current camera, no farther than max_reference_baseline_m, younger than
+// landing.hold_max_age_s, and still matches N features directly (the overlap the paper's tracking
+// rule asks for): the longer baseline still in view, which is what the paper's rule aims at. A
+// tracked reference at hold_baseline_m or more is used as the paper has it (and becomes the held
+// one). The held reference is a function of the frames and poses received, as the tracker is; a
+// reset of the tracker drops it.
 
 #include <deque>
 #include <optional>
@@ -30,6 +46,7 @@ struct FrameResult {
   TargetEstimate target;    ///< valid when found(); counts always
   double baseline_m = 0.0;  ///< camera translation reference -> current [m]
   int n_features = 0, n_matches = 0, n_tracked = 0;
+  bool ref_held = false;  ///< the reference is the held one (landing.hold_reference)
   // For the diagnostic image:
   std::vector<Vector2d> features_px;  ///< all current features (raw pixels)
   std::vector<Vector2d> matched_px;   ///< matched current features (raw pixels)
@@ -57,6 +74,10 @@ class Pipeline {
   CameraMount mount_;
   ReferenceTracker tracker_;
   std::deque<std::pair<int64_t, PoseSample>> poses_;  // of the frames the tracker keeps
+  // The previous frame's reference and its pose (landing.hold_reference): it may be older than
+  // every frame the tracker still keeps.
+  std::shared_ptr<const TrackedFrame> held_;
+  PoseSample held_pose_;
   int64_t seq_ = 0;
 };
 

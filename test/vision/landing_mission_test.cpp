@@ -121,5 +121,119 @@ TEST(LandingMissionTest, ReplayGivesIdenticalResults) {
   EXPECT_TRUE(a.back().found()) << to_string(a.back().reason);
 }
 
+// Issue 15, "target lost while hovering": the paper's reference is the oldest frame with N
+// features tracked to now, so once the camera has hovered for max_history frames (or its tracks
+// have broken) every candidate was taken from the hover point, the baseline vanishes and the
+// platform with it. A short history (8 frames) stands for the 1-2 s after which that happened in
+// flight; the hover's frames are the last moving frame's image at later times.
+testing::Sequence move_then_hover(int n_move, int n_hover) {
+  const std::string root = ALIGHT_SOURCE_DIR;
+  const Vector3d top =
+      sim::build_scene(sim::load_scenario(root + "/config/scenarios/landing_b.yaml"), 4)
+          .platform->top_center_W;
+  auto seq =
+      render_sequence("landing_b.yaml", 4, "downward", Vector3d(top.x() - 0.12, top.y(), 1.7),
+                      Vector3d(0.04, -0.01, 0.0), Vector3d(0.01, -0.02, 0.2), n_move);
+  const testing::Frame last = seq.frames.back();
+  for (int i = 1; i <= n_hover; ++i) {
+    testing::Frame f = last;
+    f.utime = last.utime + i * 100'000;
+    f.pose.utime = f.utime;
+    seq.frames.push_back(f);
+  }
+  return seq;
+}
+
+PipelineParams short_history(bool hold) {
+  PipelineParams p;
+  p.tracker.max_history = 8;
+  p.landing.hold_reference = hold;
+  return p;
+}
+
+TEST(TargetLostWhileHovering, TheHeldReferenceKeepsThePlatform) {
+  const int n_move = 7, n_hover = 20;
+  const auto seq = move_then_hover(n_move, n_hover);
+  const Vector3d top = seq.scene.platform->top_center_W;
+  const auto results = run(seq, Mission::kLanding, short_history(true));
+  ASSERT_TRUE(results[n_move - 1].found()) << to_string(results[n_move - 1].reason);
+  for (int i = n_move; i < n_move + n_hover; ++i) {
+    const FrameResult& r = results[i];
+    ASSERT_TRUE(r.found()) << "hover frame " << i - n_move << ": " << to_string(r.reason)
+                           << " baseline " << r.baseline_m;
+    EXPECT_LT((r.target.p_W - top).norm(), 0.02) << "hover frame " << i - n_move;
+    EXPECT_GT(r.baseline_m, 0.2);
+    EXPECT_LE(r.baseline_m, PipelineParams{}.max_reference_baseline_m);
+  }
+  // Beyond the tracker's history the reference is the held one, from before the hover.
+  EXPECT_TRUE(results.back().ref_held);
+  EXPECT_LT(results.back().ref_utime, seq.frames[n_move - 1].utime);
+}
+
+TEST(TargetLostWhileHovering, WithoutTheHoldTheBaselineVanishes) {
+  const int n_move = 7, n_hover = 20;
+  const auto seq = move_then_hover(n_move, n_hover);
+  const auto results = run(seq, Mission::kLanding, short_history(false));
+  ASSERT_TRUE(results[n_move - 1].found()) << to_string(results[n_move - 1].reason);
+  // The bug: once the history holds only hover frames, nothing is found.
+  EXPECT_EQ(results.back().reason, Reason::kSmallBaseline) << to_string(results.back().reason);
+  EXPECT_FALSE(results.back().ref_held);
+}
+
+TEST(TargetLostWhileHovering, AGapInTheFramesDropsTheHeldReference) {
+  const int n_move = 7, n_hover = 12;
+  auto seq = move_then_hover(n_move, n_hover);
+  // A gap longer than tracker.max_frame_gap_s before the hover's last frames: tracks across it
+  // are not trusted, and neither is the reference held from before it.
+  for (int i = n_move + 4; i < n_move + n_hover; ++i) {
+    seq.frames[i].utime += 2'000'000;
+    seq.frames[i].pose.utime = seq.frames[i].utime;
+  }
+  const auto results = run(seq, Mission::kLanding, short_history(true));
+  EXPECT_TRUE(results[n_move + 3].found()) << to_string(results[n_move + 3].reason);
+  EXPECT_EQ(results[n_move + 4].reason, Reason::kNoReference);
+  for (int i = n_move + 5; i < n_move + n_hover; ++i) {
+    EXPECT_FALSE(results[i].ref_held) << i;
+    EXPECT_EQ(results[i].reason, Reason::kSmallBaseline) << i;
+  }
+}
+
+TEST(TargetLostWhileHovering, AHeldReferenceOutOfViewIsNotHeld) {
+  // Hovering far from where the reference was held: beyond max_reference_baseline_m it gives
+  // way to the tracked reference.
+  const int n_move = 7, n_hover = 12;
+  auto params = short_history(true);
+  params.max_reference_baseline_m = 0.2;  // the move is 24 cm
+  const auto seq = move_then_hover(n_move, n_hover);
+  const auto results = run(seq, Mission::kLanding, params);
+  for (int i = n_move; i < n_move + n_hover; ++i) EXPECT_LE(results[i].baseline_m, 0.2 + 1e-9) << i;
+}
+
+TEST(TargetLostWhileHovering, AHeldReferenceExpiresAfterHoldMaxAge) {
+  const int n_move = 7, n_hover = 25;
+  auto params = short_history(true);
+  params.landing.hold_max_age_s = 1.5;  // frames 0.1 s apart: held from before the hover
+  const auto seq = move_then_hover(n_move, n_hover);
+  const auto results = run(seq, Mission::kLanding, params);
+  for (int i = n_move; i < n_move + n_hover; ++i) {
+    const double age_s = (results[i].utime - results[i].ref_utime) * 1e-6;
+    if (results[i].ref_held) EXPECT_LE(age_s, 1.5 + 1e-9) << i;
+  }
+  EXPECT_EQ(results.back().reason, Reason::kSmallBaseline) << to_string(results.back().reason);
+}
+
+TEST(TargetLostWhileHovering, ReplayGivesIdenticalResults) {
+  const auto seq = move_then_hover(7, 12);
+  const auto a = run(seq, Mission::kLanding, short_history(true));
+  const auto b = run(seq, Mission::kLanding, short_history(true));
+  ASSERT_EQ(a.size(), b.size());
+  for (size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(a[i].reason, b[i].reason);
+    EXPECT_EQ(a[i].ref_utime, b[i].ref_utime);
+    EXPECT_EQ(a[i].ref_held, b[i].ref_held);
+    EXPECT_EQ(a[i].target.p_W, b[i].target.p_W);  // bit-identical
+  }
+}
+
 }  // namespace
 }  // namespace alight::vision
