@@ -235,6 +235,11 @@ const ParamSchema<IngressParams>& IngressParams::schema() {
     s.add("border_is_partial", &P::border_is_partial, Range::any(), "",
           "an opening block reaching the image border is a partial view (REASON_PARTIAL_VIEW: "
           "located, never averaged into the estimate), its true extent unknown");
+    s.add("partial_frame_inliers", &P::partial_frame_inliers, Range::ge(0), "",
+          "a partial view must be framed by the wall in one direction: its block's two opposite "
+          "sides (left and right, or top and bottom) inside the image, with at least this many "
+          "wall inliers beyond each; else no opening (the space past the wall's end, above its "
+          "top, or a poor plane's stray block: issue 15, ingress_solid_photo). 0: no check");
     s.add("parallax_mask", &P::parallax_mask, Range::any(), "",
           "beyond the paper: Canny and Hough run on the off-wall mask (the reference image "
           "warped by the wall homography disagrees with the current one wherever the view passes "
