@@ -700,20 +700,20 @@ TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image
   // averaged into the estimate). Reported as a partial view, which locates it but is never
   // averaged (as the landing platform's, landing_target.cpp).
   const bool cut = b[0] == 0 || b[1] == 0 || b[2] == nx || b[3] == ny;
-  // A partial view must show what a whole opening shows in at least one direction: a hole in
-  // the wall, the wall on both sides of it. Its inliers beyond a side, over the block's span
-  // along it, are the evidence that side is the wall's edge (issue 15, ingress_solid_photo: the
-  // false targets' blocks ran to the image border on two or three sides, with the wall beyond
-  // one side only: the space past the wall's end or above its top, or a poor homography's stray
-  // wall features; autonomy then refined on them for 60 s). A space bounded by the wall on one
-  // side and something else on the other (the gap between the wall's end and the room's side
-  // wall) lacks the inliers on that side.
-  const int in_left = block(in, 0, b[1], b[0], b[3]), in_right = block(in, b[2], b[1], nx, b[3]);
-  const int in_top = block(in, b[0], 0, b[2], b[1]), in_bottom = block(in, b[0], b[3], b[2], ny);
+  // A partial view must show what a whole opening shows at one of its corners at least: the
+  // wall beyond two of its sides, a hole's concave corner (two adjacent sides) or its two
+  // edges in one direction (opposite sides). The wall's inliers beyond a side, over the block's
+  // span along it, are the evidence that side is the wall's edge (issue 15,
+  // ingress_solid_photo: the false targets' blocks ran to the image border on three sides, the
+  // wall beyond the fourth: the space past the wall's end or above its top, or a poor
+  // homography's stray wall features; autonomy then refined on them for 60 s). The space past
+  // the wall's end and above its top has the wall beyond neither of its two sides in view.
   const int k_frame = p.partial_frame_inliers;
-  const bool framed = (b[0] > 0 && b[2] < nx && in_left >= k_frame && in_right >= k_frame) ||
-                      (b[1] > 0 && b[3] < ny && in_top >= k_frame && in_bottom >= k_frame);
-  if (cut && p.border_is_partial && k_frame > 0 && !framed) {
+  const int framed = (b[0] > 0 && block(in, 0, b[1], b[0], b[3]) >= k_frame) +
+                     (b[2] < nx && block(in, b[2], b[1], nx, b[3]) >= k_frame) +
+                     (b[1] > 0 && block(in, b[0], 0, b[2], b[1]) >= k_frame) +
+                     (b[3] < ny && block(in, b[0], b[3], b[2], ny) >= k_frame);
+  if (cut && p.border_is_partial && k_frame > 0 && framed < 2) {
     out.reason = Reason::kNoOpening;
     return out;
   }

@@ -236,10 +236,10 @@ const ParamSchema<IngressParams>& IngressParams::schema() {
           "an opening block reaching the image border is a partial view (REASON_PARTIAL_VIEW: "
           "located, never averaged into the estimate), its true extent unknown");
     s.add("partial_frame_inliers", &P::partial_frame_inliers, Range::ge(0), "",
-          "a partial view must be framed by the wall in one direction: its block's two opposite "
-          "sides (left and right, or top and bottom) inside the image, with at least this many "
-          "wall inliers beyond each; else no opening (the space past the wall's end, above its "
-          "top, or a poor plane's stray block: issue 15, ingress_solid_photo). 0: no check");
+          "a block at the image border is a partial view only with at least this many wall "
+          "inliers beyond each of two of its sides (a hole's corner, or its two edges in one "
+          "direction); else no opening: the space past the wall's end or above its top, or a "
+          "poor homography's stray wall features (issue 15, ingress_solid_photo). 0: no check");
     s.add("parallax_mask", &P::parallax_mask, Range::any(), "",
           "beyond the paper: Canny and Hough run on the off-wall mask (the reference image "
           "warped by the wall homography disagrees with the current one wherever the view passes "

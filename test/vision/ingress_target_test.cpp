@@ -374,9 +374,8 @@ struct WallGapScene {
 // Regression (issue 15, ingress_solid_photo seeds 9004, 3000, 3015: false targets on a wall
 // without an opening): a block of off-wall features reaching the image border on three sides
 // was reported as a partial view of an opening, and autonomy refined on it for 60 s. Here it is
-// the space past the wall's end (the same block came from the gap between the wall's end and
-// the room's side wall, and from a poor homography's stray wall features): only one side of
-// it is the wall's, so nothing shows it is a hole in the wall.
+// the space past the wall's end (the same blocks came from poor homographies' stray wall
+// features): only one side of it is the wall's, so nothing shows it is a hole in the wall.
 TEST(IngressTargetTest, SpaceBeyondTheWallsEndIsNoPartialView) {
   const WallGapScene s(-std::numeric_limits<double>::infinity());
   PipelineParams params;
@@ -395,7 +394,8 @@ TEST(IngressTargetTest, SpaceBeyondTheWallsEndIsNoPartialView) {
 
 // The check's other side: a door taller than the view, its jambs both in the image with the
 // wall beyond each, is a partial view (as one cut on the right by the image is, with its sill
-// and lintel seen: OpeningCutByTheImageBorderIsAPartialView).
+// and lintel seen: OpeningCutByTheImageBorderIsAPartialView; and as one seen at a corner, the
+// wall beyond two adjacent sides).
 TEST(IngressTargetTest, DoorFramedByTheWallOnBothSidesIsAPartialView) {
   const WallGapScene s(-2.45);
   PipelineParams params;
