@@ -131,6 +131,7 @@ struct IngressParams {
   double nearer_plane_margin_m = 0.5;
   bool border_is_partial = true;
   int partial_frame_inliers = 3;
+  double partial_behind_margin_m = 0.25;
   bool parallax_mask = true;
   int parallax_decimation = 1;
   double parallax_blur_sigma_px = 1.5;

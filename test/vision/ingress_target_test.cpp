@@ -316,16 +316,18 @@ TEST(IngressTargetTest, OpeningCutByTheImageBorderIsAPartialView) {
 }
 
 // Two views of a solid wall at x = 3 m near a gap in it: the wall lies at y > -2 m and, when
-// gap_lo_y_m is finite, also at y < gap_lo_y_m; a back wall at x = 6.1 m is seen through the
-// gap. The views are those of WallScene moved to y = -2 m, so the gap, running from the floor
-// to above the view, crosses the current image's top and bottom: a bright strip on a dark wall.
+// gap_lo_y_m is finite, also at y < gap_lo_y_m; a back wall (at x = 6.1 m unless given) is
+// seen through the gap. The views are those of WallScene moved to y = -2 m, so the gap, running
+// from the floor to above the view, crosses the current image's top and bottom: a bright strip on a
+// dark wall.
 struct WallGapScene {
   CameraModel camera;
   CameraMount mount;
   cv::Mat image;
   Correspondences c;
 
-  explicit WallGapScene(double gap_lo_y_m) {
+  /// back_x_m: the plane seen through the gap.
+  explicit WallGapScene(double gap_lo_y_m, double back_x_m = 6.1) {
     constexpr double kGapHiY = -2.0;
     mount.R_BC = R_BC_forward();
     PoseSample pose_1, pose_2;
@@ -359,7 +361,7 @@ struct WallGapScene {
     }
     std::uniform_real_distribution<double> y_back(-4.0, -1.5), z_back(0.0, 2.4);
     for (int k = 0; k < 60;) {
-      const Vector3d p(6.1, y_back(rng), z_back(rng));
+      const Vector3d p(back_x_m, y_back(rng), z_back(rng));
       if (through_gap(pose_1.p_W_B, p) && through_gap(pose_2.p_W_B, p) && add(p)) ++k;
     }
     image = cv::Mat(camera.height, camera.width, CV_8UC1, cv::Scalar(60));
@@ -403,6 +405,23 @@ TEST(IngressTargetTest, DoorFramedByTheWallOnBothSidesIsAPartialView) {
   const TargetOutcome t = find_ingress_target(s.c, s.image, cv::Mat(), params);
   ASSERT_EQ(t.reason, Reason::kPartialView) << to_string(t.reason);
   EXPECT_NEAR(t.estimate.size_m[0], 0.45, 0.02);
+}
+
+// Regression (issue 15, ingress_solid_photo seeds 3015, 9004, 3000): a poor homography's
+// plane, up to 46 cm in front of the wall, left bands of the wall's own features off it, all
+// "behind" its plane, and they made partial views. A partial view's features must lie well
+// behind the wall's own triangulated features: here a recess 5 cm deep, framed by the wall,
+// its features off the wall's homography and behind its plane, is no opening.
+TEST(IngressTargetTest, FeaturesBarelyBehindTheWallAreNoPartialView) {
+  const WallGapScene s(-2.45, 3.05);
+  PipelineParams params;
+  params.ingress.parallax_mask = false;
+  ASSERT_GT(params.ingress.partial_behind_margin_m, 0.05);
+  const TargetOutcome t = find_ingress_target(s.c, s.image, cv::Mat(), params);
+  EXPECT_EQ(t.reason, Reason::kNoOpening) << to_string(t.reason);
+  params.ingress.partial_behind_margin_m = 0;
+  const TargetOutcome unchecked = find_ingress_target(s.c, s.image, cv::Mat(), params);
+  EXPECT_EQ(unchecked.reason, Reason::kPartialView) << to_string(unchecked.reason);
 }
 
 TEST(IngressParamsTest, LoadedFromTheVehicleFileAndValidated) {
