@@ -734,16 +734,18 @@ TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image
     for (size_t k = 0; k < c.size(); ++k)
       if (fit->inlier[k])
         if (const auto d = offset(k)) wall_offset.push_back(*d);
-    int deep = 0;
-    if (!wall_offset.empty()) {
-      std::nth_element(wall_offset.begin(), wall_offset.begin() + wall_offset.size() / 2,
-                       wall_offset.end());
-      const double wall_m = wall_offset[wall_offset.size() / 2];
-      for (size_t k = 0; k < c.size(); ++k)
-        if (out.labels[k] == Label::kTarget)
-          if (const auto d = offset(k); d && *d < wall_m - p.partial_behind_margin_m) ++deep;
-    }
-    if (deep < p.min_outliers || deep < p.min_behind_share * in_block) {
+    std::vector<double> block_offset;
+    for (size_t k = 0; k < c.size(); ++k)
+      if (out.labels[k] == Label::kTarget)
+        if (const auto d = offset(k)) block_offset.push_back(*d);
+    auto median = [](std::vector<double>& v) {
+      std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+      return v[v.size() / 2];
+    };
+    // The median, not a share: an opening's inner faces (jambs, sill) lie within the wall's
+    // thickness behind it, and at the vantages they can hold a third of the block's features.
+    if (wall_offset.empty() || static_cast<int>(block_offset.size()) < p.min_outliers ||
+        median(block_offset) > median(wall_offset) - p.partial_behind_margin_m) {
       out.reason = Reason::kNoOpening;
       return out;
     }

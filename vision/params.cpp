@@ -241,10 +241,9 @@ const ParamSchema<IngressParams>& IngressParams::schema() {
           "direction); else no opening: the space past the wall's end or above its top, or a "
           "poor homography's stray wall features (issue 15, ingress_solid_photo). 0: no check");
     s.add("partial_behind_margin_m", &P::partial_behind_margin_m, Range::ge(0), "m",
-          "and min_behind_share of its block's features (min_outliers at least) lie this far "
-          "behind the median of the wall's inliers, triangulated with motion capture's poses (a "
-          "poor homography's plane in front of the wall leaves wall features behind it). 0: no "
-          "check");
+          "and the median of its block's features lies this far behind the median of the "
+          "wall's inliers, both triangulated with motion capture's poses (a poor homography's "
+          "plane in front of the wall leaves wall features behind it). 0: no check");
     s.add("parallax_mask", &P::parallax_mask, Range::any(), "",
           "beyond the paper: Canny and Hough run on the off-wall mask (the reference image "
           "warped by the wall homography disagrees with the current one wherever the view passes "
