@@ -815,6 +815,56 @@ TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image
   // averaged into the estimate). Reported as a partial view, which locates it but is never
   // averaged (as the landing platform's, landing_target.cpp).
   const bool cut = b[0] == 0 || b[1] == 0 || b[2] == nx || b[3] == ny;
+  // A partial view must show what a whole opening shows at one of its corners at least: the
+  // wall beyond two of its sides, a hole's concave corner (two adjacent sides) or its two
+  // edges in one direction (opposite sides). The wall's inliers beyond a side, over the block's
+  // span along it, are the evidence that side is the wall's edge (issue 15,
+  // ingress_solid_photo: the false targets' blocks ran to the image border on three sides, the
+  // wall beyond the fourth: the space past the wall's end or above its top, or a poor
+  // homography's stray wall features; autonomy then refined on them for 60 s). The space past
+  // the wall's end and above its top has the wall beyond neither of its two sides in view.
+  const int k_frame = p.partial_frame_inliers;
+  const int framed = (b[0] > 0 && block(in, 0, b[1], b[0], b[3]) >= k_frame) +
+                     (b[2] < nx && block(in, b[2], b[1], nx, b[3]) >= k_frame) +
+                     (b[1] > 0 && block(in, b[0], 0, b[2], b[1]) >= k_frame) +
+                     (b[3] < ny && block(in, b[0], b[3], b[2], ny) >= k_frame);
+  if (cut && p.border_is_partial && k_frame > 0 && framed < 2) {
+    out.reason = Reason::kNoOpening;
+    return out;
+  }
+  // And its features must lie well behind the wall's own features, triangulated with motion
+  // capture's poses, not only behind the plane the homography's decomposition gives: a poor
+  // homography (few inliers, its plane in front of the wall) leaves the wall's own features off
+  // it, all "behind" its plane (issue 15, ingress_solid_photo: seeds 9004 and 3000, the false
+  // blocks' features 18 and 15 cm behind the plane, 3 and 5 cm behind the wall's inliers'
+  // median; seed 3015, bands across the image with the plane 27-46 cm in front of the wall).
+  if (cut && p.border_is_partial && p.partial_behind_margin_m > 0) {
+    auto offset = [&](size_t k) -> std::optional<double> {
+      const auto X_W = triangulate_midpoint(X_WC1, X_WC1.linear() * c.camera->ray(c.u1[k]), X_WC2,
+                                            X_WC2.linear() * c.camera->ray(c.u2[k]));
+      if (!X_W) return std::nullopt;
+      return e.n_W.dot(*X_W - e.p_W);
+    };
+    std::vector<double> wall_offset;
+    for (size_t k = 0; k < c.size(); ++k)
+      if (fit->inlier[k])
+        if (const auto d = offset(k)) wall_offset.push_back(*d);
+    std::vector<double> block_offset;
+    for (size_t k = 0; k < c.size(); ++k)
+      if (out.labels[k] == Label::kTarget)
+        if (const auto d = offset(k)) block_offset.push_back(*d);
+    auto median = [](std::vector<double>& v) {
+      std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+      return v[v.size() / 2];
+    };
+    // The median, not a share: an opening's inner faces (jambs, sill) lie within the wall's
+    // thickness behind it, and at the vantages they can hold a third of the block's features.
+    if (wall_offset.empty() || static_cast<int>(block_offset.size()) < p.min_outliers ||
+        median(block_offset) > median(wall_offset) - p.partial_behind_margin_m) {
+      out.reason = Reason::kNoOpening;
+      return out;
+    }
+  }
   out.reason = cut && p.border_is_partial ? Reason::kPartialView : Reason::kOk;
   return out;
 }

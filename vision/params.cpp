@@ -256,6 +256,15 @@ const ParamSchema<IngressParams>& IngressParams::schema() {
     s.add("border_is_partial", &P::border_is_partial, Range::any(), "",
           "an opening block reaching the image border is a partial view (REASON_PARTIAL_VIEW: "
           "located, never averaged into the estimate), its true extent unknown");
+    s.add("partial_frame_inliers", &P::partial_frame_inliers, Range::ge(0), "",
+          "a block at the image border is a partial view only with at least this many wall "
+          "inliers beyond each of two of its sides (a hole's corner, or its two edges in one "
+          "direction); else no opening: the space past the wall's end or above its top, or a "
+          "poor homography's stray wall features (issue 15, ingress_solid_photo). 0: no check");
+    s.add("partial_behind_margin_m", &P::partial_behind_margin_m, Range::ge(0), "m",
+          "and the median of its block's features lies this far behind the median of the "
+          "wall's inliers, both triangulated with motion capture's poses (a poor homography's "
+          "plane in front of the wall leaves wall features behind it). 0: no check");
     s.add("parallax_mask", &P::parallax_mask, Range::any(), "",
           "beyond the paper: Canny and Hough run on the off-wall mask (the reference image "
           "warped by the wall homography disagrees with the current one wherever the view passes "

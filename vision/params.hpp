@@ -133,6 +133,8 @@ struct IngressParams {
   bool nearer_plane = true;
   double nearer_plane_margin_m = 0.5;
   bool border_is_partial = true;
+  int partial_frame_inliers = 3;
+  double partial_behind_margin_m = 0.25;
   bool parallax_mask = true;
   int parallax_decimation = 1;
   double parallax_blur_sigma_px = 1.5;
