@@ -623,6 +623,12 @@ TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image
   // counts: the second search also finds a dozen stray matches that fit some homography.
   const Matrix3d K = c.camera->K(), K_inv = K.inverse();
   const Isometry3d X_C2W = X_WC2.inverse();
+  // Every match triangulated once with motion capture's poses (the planes' depths, the behind
+  // and partial-view checks).
+  std::vector<std::optional<Vector3d>> X_W_match(c.size());
+  for (size_t k = 0; k < c.size(); ++k)
+    X_W_match[k] = triangulate_midpoint(X_WC1, X_WC1.linear() * c.camera->ray(c.u1[k]), X_WC2,
+                                        X_WC2.linear() * c.camera->ray(c.u2[k]));
   struct Candidate {
     const HomographyFit* fit;
     Result<PlaneMotion> plane;
@@ -635,9 +641,7 @@ TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image
       if (!f.inlier[k]) continue;
       r1.push_back(K_inv * c.x1[k].homogeneous());
       r2.push_back(K_inv * c.x2[k].homogeneous());
-      const auto X_W = triangulate_midpoint(X_WC1, X_WC1.linear() * c.camera->ray(c.u1[k]), X_WC2,
-                                            X_WC2.linear() * c.camera->ray(c.u2[k]));
-      if (X_W) z.push_back((X_C2W * *X_W).z());
+      if (X_W_match[k]) z.push_back((X_C2W * *X_W_match[k]).z());
     }
     DecompositionPrior prior;
     prior.R_21 = mocap.R_21;
@@ -800,8 +804,7 @@ TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image
   for (size_t k = 0; k < c.size(); ++k) {
     if (out.labels[k] != Label::kTarget) continue;
     ++in_block;
-    const auto X_W = triangulate_midpoint(X_WC1, X_WC1.linear() * c.camera->ray(c.u1[k]), X_WC2,
-                                          X_WC2.linear() * c.camera->ray(c.u2[k]));
+    const auto& X_W = X_W_match[k];
     if (X_W && e.n_W.dot(*X_W - e.p_W) < -p.behind_margin_m) ++behind;
   }
   if (p.min_behind_share > 0 &&
@@ -840,8 +843,7 @@ TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image
   // median; seed 3015, bands across the image with the plane 27-46 cm in front of the wall).
   if (cut && p.border_is_partial && p.partial_behind_margin_m > 0) {
     auto offset = [&](size_t k) -> std::optional<double> {
-      const auto X_W = triangulate_midpoint(X_WC1, X_WC1.linear() * c.camera->ray(c.u1[k]), X_WC2,
-                                            X_WC2.linear() * c.camera->ray(c.u2[k]));
+      const auto& X_W = X_W_match[k];
       if (!X_W) return std::nullopt;
       return e.n_W.dot(*X_W - e.p_W);
     };
