@@ -103,7 +103,6 @@ FrameResult Pipeline::process(const cv::Mat& gray, int64_t utime,
   // Hovering: the held reference while the tracked one is too close, the held one farther
   // and still overlapping (pipeline.hpp).
   std::vector<Match> matches;
-  bool matched = false;
   const bool hold = mission_ == Mission::kLanding && params_.landing.hold_reference;
   if (hold && baseline_m < params_.landing.hold_baseline_m && held_ && held_->utime < utime &&
       double(utime - held_->utime) * 1e-6 <= params_.landing.hold_max_age_s) {
@@ -115,7 +114,6 @@ FrameResult Pipeline::process(const cv::Mat& gray, int64_t utime,
         pose_1 = held_pose_;
         baseline_m = held_baseline_m;
         matches = std::move(m);
-        matched = true;
         r.ref_held = true;
       }
     }
@@ -135,7 +133,7 @@ FrameResult Pipeline::process(const cv::Mat& gray, int64_t utime,
   if (r.baseline_m < params_.waypoint.min_baseline_m) return fail(Reason::kSmallBaseline);
 
   const TrackedFrame& a = *ref;
-  if (!matched) matches = match_to_current(a);
+  if (!r.ref_held) matches = match_to_current(a);
   r.n_matches = static_cast<int>(matches.size());
   const Matrix3d K = camera_.K();
   for (const auto& m : matches) {
