@@ -34,9 +34,12 @@ int cell_of(const std::vector<double>& cuts, double x) {
 }
 
 // The point nearest both rays c_a + s d_a and c_b + t d_b (world); nullopt when the rays are
-// near parallel or it lies behind either camera.
+// near parallel, it lies behind either camera, or the rays pass farther apart than
+// max_gap_rad seen from camera B (a mismatch: two views of one point meet, up to the poses'
+// noise; 0 disables).
 std::optional<Vector3d> triangulate_midpoint(const Isometry3d& X_WA, const Vector3d& d_a,
-                                             const Isometry3d& X_WB, const Vector3d& d_b) {
+                                             const Isometry3d& X_WB, const Vector3d& d_b,
+                                             double max_gap_rad) {
   const Vector3d w = X_WA.translation() - X_WB.translation();
   const double a = d_a.dot(d_a), b = d_a.dot(d_b), c = d_b.dot(d_b);
   const double d = d_a.dot(w), e = d_b.dot(w);
@@ -44,7 +47,9 @@ std::optional<Vector3d> triangulate_midpoint(const Isometry3d& X_WA, const Vecto
   if (den < 1e-12 * a * c) return std::nullopt;
   const double s = (b * e - c * d) / den, t = (a * e - b * d) / den;
   if (s <= 0 || t <= 0) return std::nullopt;
-  return 0.5 * (X_WA.translation() + s * d_a + X_WB.translation() + t * d_b);
+  const Vector3d p_a = X_WA.translation() + s * d_a, p_b = X_WB.translation() + t * d_b;
+  if (max_gap_rad > 0 && (p_a - p_b).norm() > max_gap_rad * t * std::sqrt(c)) return std::nullopt;
+  return 0.5 * (p_a + p_b);
 }
 
 // Which side of a border line the wall is on (-1: lower across-coordinates, +1: higher, 0:
@@ -625,10 +630,11 @@ TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image
   const Isometry3d X_C2W = X_WC2.inverse();
   // Every match triangulated once with motion capture's poses (the planes' depths, the behind
   // and partial-view checks).
+  const double max_gap_rad = p.max_ray_gap_px / K(0, 0);
   std::vector<std::optional<Vector3d>> X_W_match(c.size());
   for (size_t k = 0; k < c.size(); ++k)
     X_W_match[k] = triangulate_midpoint(X_WC1, X_WC1.linear() * c.camera->ray(c.u1[k]), X_WC2,
-                                        X_WC2.linear() * c.camera->ray(c.u2[k]));
+                                        X_WC2.linear() * c.camera->ray(c.u2[k]), max_gap_rad);
   struct Candidate {
     const HomographyFit* fit;
     Result<PlaneMotion> plane;
@@ -799,13 +805,14 @@ TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image
   // What is seen through an opening lies behind the wall. When the wall plane is something
   // seen through the opening instead (the nearer of two planes can still be one beyond the
   // wall when the wall itself has too few matches for a plane), the features in the block are
-  // the wall itself, in front of that plane: no opening in this frame.
+  // the wall itself, in front of that plane: no opening in this frame. The share is of the
+  // block's matches that have a 3-D point: a mismatch has none, wherever its rays cross.
   int behind = 0, in_block = 0;
   for (size_t k = 0; k < c.size(); ++k) {
-    if (out.labels[k] != Label::kTarget) continue;
-    ++in_block;
     const auto& X_W = X_W_match[k];
-    if (X_W && e.n_W.dot(*X_W - e.p_W) < -p.behind_margin_m) ++behind;
+    if (out.labels[k] != Label::kTarget || !X_W) continue;
+    ++in_block;
+    if (e.n_W.dot(*X_W - e.p_W) < -p.behind_margin_m) ++behind;
   }
   if (p.min_behind_share > 0 &&
       (behind < p.min_outliers || behind < p.min_behind_share * in_block)) {

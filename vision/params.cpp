@@ -265,6 +265,12 @@ const ParamSchema<IngressParams>& IngressParams::schema() {
           "and the median of its block's features lies this far behind the median of the "
           "wall's inliers, both triangulated with motion capture's poses (a poor homography's "
           "plane in front of the wall leaves wall features behind it). 0: no check");
+    s.add("max_ray_gap_px", &P::max_ray_gap_px, Range::ge(0), "px",
+          "a match whose two rays (motion capture's poses) pass farther apart than this, seen "
+          "from the current camera, is a mismatch: it has no 3-D point, so it counts in neither "
+          "the planes' depths nor the behind checks (issue 15, ingress_photo seed 3000: a "
+          "repeated room texture matched 60-560 px off its epipolar line and triangulated in "
+          "front of the wall). 0: no check");
     s.add("parallax_mask", &P::parallax_mask, Range::any(), "",
           "beyond the paper: Canny and Hough run on the off-wall mask (the reference image "
           "warped by the wall homography disagrees with the current one wherever the view passes "

@@ -135,6 +135,7 @@ struct IngressParams {
   bool border_is_partial = true;
   int partial_frame_inliers = 3;
   double partial_behind_margin_m = 0.25;
+  double max_ray_gap_px = 8;
   bool parallax_mask = true;
   int parallax_decimation = 1;
   double parallax_blur_sigma_px = 1.5;
