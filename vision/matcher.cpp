@@ -61,7 +61,7 @@ void scan_scalar(const cv::Mat& d1, const std::vector<int>& idx1, const float* b
 }
 
 #ifdef ALIGHT_MATCHER_AVX2
-constexpr int kRows = 4;   // rows of d1 per register tile
+constexpr int kRows = 4;   // rows of d1 per register tile (the code below names four)
 constexpr int kCols = 16;  // columns of bt per register tile (two vectors)
 
 // dot_row and scan_row, four rows at a time, 16 columns at a time: each column vector of bt is
@@ -84,17 +84,28 @@ __attribute__((target("avx2"))) void scan_avx2(const cv::Mat& d1, const std::vec
     for (int r = 0; r < kRows; ++r)
       best[r] = lowest, second[r] = lowest, arg[r] = _mm256_set1_epi32(-1);
     for (int j0 = 0; j0 < stride; j0 += kCols) {
-      __m256 acc[kRows][2];
-      for (int r = 0; r < kRows; ++r) acc[r][0] = acc[r][1] = _mm256_setzero_ps();
+      // Eight named sums (an array indexed below would live on the stack, not in registers).
+      __m256 s00 = _mm256_setzero_ps(), s01 = s00, s10 = s00, s11 = s00, s20 = s00, s21 = s00,
+             s30 = s00, s31 = s00;
       const float* b = bt + j0;
       for (int k = 0; k < len; ++k, b += stride) {
         const __m256 b0 = _mm256_load_ps(b), b1 = _mm256_load_ps(b + 8);
-        for (int r = 0; r < kRows; ++r) {
-          const __m256 ak = _mm256_broadcast_ss(a[r] + k);
-          acc[r][0] = _mm256_add_ps(acc[r][0], _mm256_mul_ps(ak, b0));
-          acc[r][1] = _mm256_add_ps(acc[r][1], _mm256_mul_ps(ak, b1));
-        }
+        const __m256 a0 = _mm256_broadcast_ss(a[0] + k), a1 = _mm256_broadcast_ss(a[1] + k);
+        const __m256 a2 = _mm256_broadcast_ss(a[2] + k), a3 = _mm256_broadcast_ss(a[3] + k);
+        s00 = _mm256_add_ps(s00, _mm256_mul_ps(a0, b0));
+        s01 = _mm256_add_ps(s01, _mm256_mul_ps(a0, b1));
+        s10 = _mm256_add_ps(s10, _mm256_mul_ps(a1, b0));
+        s11 = _mm256_add_ps(s11, _mm256_mul_ps(a1, b1));
+        s20 = _mm256_add_ps(s20, _mm256_mul_ps(a2, b0));
+        s21 = _mm256_add_ps(s21, _mm256_mul_ps(a2, b1));
+        s30 = _mm256_add_ps(s30, _mm256_mul_ps(a3, b0));
+        s31 = _mm256_add_ps(s31, _mm256_mul_ps(a3, b1));
       }
+      alignas(32) float dot[kRows][kCols];
+      _mm256_store_ps(dot[0], s00), _mm256_store_ps(dot[0] + 8, s01);
+      _mm256_store_ps(dot[1], s10), _mm256_store_ps(dot[1] + 8, s11);
+      _mm256_store_ps(dot[2], s20), _mm256_store_ps(dot[2] + 8, s21);
+      _mm256_store_ps(dot[3], s30), _mm256_store_ps(dot[3] + 8, s31);
       for (int h = 0; h < 2; ++h) {
         const int j = j0 + 8 * h;
         if (j >= n2) break;
@@ -104,7 +115,7 @@ __attribute__((target("avx2"))) void scan_avx2(const cv::Mat& d1, const std::vec
         __m256 cb = _mm256_loadu_ps(&s.col_best[j]);
         __m256i ca = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(&s.col_arg[j]));
         for (int r = 0; r < rows; ++r) {
-          const __m256 v = _mm256_blendv_ps(lowest, acc[r][h], valid);
+          const __m256 v = _mm256_blendv_ps(lowest, _mm256_load_ps(dot[r] + 8 * h), valid);
           const __m256 gt = _mm256_cmp_ps(v, best[r], _CMP_GT_OQ);
           second[r] = _mm256_blendv_ps(_mm256_max_ps(v, second[r]), best[r], gt);
           best[r] = _mm256_blendv_ps(best[r], v, gt);

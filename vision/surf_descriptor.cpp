@@ -180,9 +180,9 @@ void describe_scalar(const Pattern& p, const Keypoint& kp, float s, int h, float
 #ifdef ALIGHT_SURF_AVX2
 constexpr int kLanes = 24;  // a row of 20 samples as three vectors of 8 (the last 4 unused)
 
-// describe_scalar's arithmetic for a window inside the image (window_inside), eight samples at
-// a time: the same float operations in the same order, multiplies and adds kept apart (this
-// target does not enable FMA), so the result equals describe_scalar's bit for bit.
+// describe_scalar's arithmetic, eight samples at a time: the same float operations in the same
+// order, multiplies and adds kept apart (this target does not enable FMA), the same integers,
+// so the result equals describe_scalar's bit for bit.
 __attribute__((target("avx2"))) void describe_avx2(const Pattern& p, const Keypoint& kp, float s,
                                                    int h, float* d) {
   const AxisWeights& aw = *p.aw;
@@ -203,11 +203,17 @@ __attribute__((target("avx2"))) void describe_avx2(const Pattern& p, const Keypo
   }
   alignas(32) float wrow[kLanes];
   alignas(32) int corner[kLanes], gxi[kLanes] = {}, gyi[kLanes] = {};
+  alignas(32) int cxl[kLanes], cxm[kLanes], cxr[kLanes], cyt[kLanes], cym[kLanes], cyb[kLanes];
+  const bool inside = window_inside(p, kp, s, h);
+  const __m256i zero = _mm256_setzero_si256();
+  const __m256i vW = _mm256_set1_epi32(p.W), vH = _mm256_set1_epi32(p.H);
+  const __m256i first_four = _mm256_setr_epi32(-1, -1, -1, -1, 0, 0, 0, 0);
   const int h2 = 2 * h, hs = h * p.stride, hs2 = 2 * hs;
   alignas(16) float quad[kLanes][4];  // per sample: dx, dy, |dx|, |dy|
   float row_sum[kGrid][4][4];
   for (int j = 0; j < kGrid; ++j) {
     const __m256 v = _mm256_set1_ps((float(j) - 9.5f) * s);
+    bool clamped = false;
     for (int i = 0; i < kLanes; ++i) wrow[i] = i < kGrid ? ww[j * kGrid + i] : 0.f;
     for (int b = 0; b < 3; ++b) {
       const __m256i px = _mm256_sub_epi32(
@@ -220,21 +226,60 @@ __attribute__((target("avx2"))) void describe_avx2(const Pattern& p, const Keypo
               _mm256_add_ps(_mm256_add_ps(ky, _mm256_mul_ps(vsn, u[b])), _mm256_mul_ps(vc, v)),
               bias)),
           unbias);
-      // The wavelet's top-left corner; the window lies inside the image (no clamping).
+      // The wavelet's top-left corner, used when no sample of the row needs clamping.
       _mm256_store_si256(reinterpret_cast<__m256i*>(corner + 8 * b),
                          _mm256_add_epi32(_mm256_mullo_epi32(_mm256_sub_epi32(py, vh), vstride),
                                           _mm256_sub_epi32(px, vh)));
+      if (inside) continue;
+      // Near the border: the scalar variant's clamped positions (clamping a position inside
+      // the image changes nothing, so only rows that reach past it take the slower reads).
+      const __m256i xl = _mm256_sub_epi32(px, vh), xr = _mm256_add_epi32(px, vh);
+      const __m256i yt = _mm256_sub_epi32(py, vh), yb = _mm256_add_epi32(py, vh);
+      __m256i out = _mm256_or_si256(
+          _mm256_or_si256(_mm256_cmpgt_epi32(zero, xl), _mm256_cmpgt_epi32(xr, vW)),
+          _mm256_or_si256(_mm256_cmpgt_epi32(zero, yt), _mm256_cmpgt_epi32(yb, vH)));
+      if (b == 2) out = _mm256_and_si256(out, first_four);  // lanes 20-23 are no samples
+      clamped = clamped || !_mm256_testz_si256(out, out);
+      _mm256_store_si256(reinterpret_cast<__m256i*>(cxl + 8 * b),
+                         _mm256_min_epi32(_mm256_max_epi32(xl, zero), vW));
+      _mm256_store_si256(reinterpret_cast<__m256i*>(cxm + 8 * b),
+                         _mm256_min_epi32(_mm256_max_epi32(px, zero), vW));
+      _mm256_store_si256(reinterpret_cast<__m256i*>(cxr + 8 * b),
+                         _mm256_min_epi32(_mm256_max_epi32(xr, zero), vW));
+      _mm256_store_si256(
+          reinterpret_cast<__m256i*>(cyt + 8 * b),
+          _mm256_mullo_epi32(_mm256_min_epi32(_mm256_max_epi32(yt, zero), vH), vstride));
+      _mm256_store_si256(
+          reinterpret_cast<__m256i*>(cym + 8 * b),
+          _mm256_mullo_epi32(_mm256_min_epi32(_mm256_max_epi32(py, zero), vH), vstride));
+      _mm256_store_si256(
+          reinterpret_cast<__m256i*>(cyb + 8 * b),
+          _mm256_mullo_epi32(_mm256_min_epi32(_mm256_max_epi32(yb, zero), vH), vstride));
     }
-    // Eight reads per sample at fixed distances from its corner: plain loads (a gather of eight
-    // is slower than eight loads on the CPUs measured). right - left and bottom - top, exact in
-    // 32-bit integers as the scalar sums (an integral image of 8-bit pixels stays below 2^31).
-    for (int i = 0; i < kGrid; ++i) {
-      const int* q = p.S + corner[i];
-      const int t_l = q[0], t_m = q[h], t_r = q[h2];
-      const int m_l = q[hs], m_r = q[hs + h2];
-      const int b_l = q[hs2], b_m = q[hs2 + h], b_r = q[hs2 + h2];
-      gxi[i] = (b_r - t_r) - 2 * (b_m - t_m) + (b_l - t_l);
-      gyi[i] = (b_r - b_l) + (t_r - t_l) - 2 * (m_r - m_l);
+    if (clamped) {
+      for (int i = 0; i < kGrid; ++i) {
+        const int* rt = p.S + cyt[i];
+        const int* rm = p.S + cym[i];
+        const int* rb = p.S + cyb[i];
+        const int xl = cxl[i], xm = cxm[i], xr = cxr[i];
+        const int right = rb[xr] - rt[xr] - rb[xm] + rt[xm];
+        const int left = rb[xm] - rt[xm] - rb[xl] + rt[xl];
+        const int bottom = rb[xr] - rm[xr] - rb[xl] + rm[xl];
+        const int top = rm[xr] - rt[xr] - rm[xl] + rt[xl];
+        gxi[i] = right - left, gyi[i] = bottom - top;
+      }
+    } else {
+      // Eight reads per sample at fixed distances from its corner: plain loads (a gather of eight
+      // is slower than eight loads on the CPUs measured). right - left and bottom - top, exact in
+      // 32-bit integers as the scalar sums (an integral image of 8-bit pixels stays below 2^31).
+      for (int i = 0; i < kGrid; ++i) {
+        const int* q = p.S + corner[i];
+        const int t_l = q[0], t_m = q[h], t_r = q[h2];
+        const int m_l = q[hs], m_r = q[hs + h2];
+        const int b_l = q[hs2], b_m = q[hs2 + h], b_r = q[hs2 + h2];
+        gxi[i] = (b_r - t_r) - 2 * (b_m - t_m) + (b_l - t_l);
+        gyi[i] = (b_r - b_l) + (t_r - t_l) - 2 * (m_r - m_l);
+      }
     }
     for (int b = 0; b < 3; ++b) {
       const __m256 gx =
@@ -310,7 +355,7 @@ cv::Mat describe_impl(const cv::Mat& integral, const std::vector<Keypoint>& keyp
     const int h = std::max(1, int(std::lround(s)));  // Haar wavelet half-size
     float* d = desc.ptr<float>(k);
 #ifdef ALIGHT_SURF_AVX2
-    if (avx2 && window_inside(p, kp, s, h)) {
+    if (avx2) {
       describe_avx2(p, kp, s, h, d);
       continue;
     }
