@@ -183,8 +183,11 @@ constexpr int kLanes = 24;  // a row of 20 samples as three vectors of 8 (the la
 // describe_scalar's arithmetic, eight samples at a time: the same float operations in the same
 // order, multiplies and adds kept apart (this target does not enable FMA), the same integers,
 // so the result equals describe_scalar's bit for bit.
+template <bool kOverlapping>
 __attribute__((target("avx2"))) void describe_avx2(const Pattern& p, const Keypoint& kp, float s,
                                                    int h, float* d) {
+  // The sub-regions' spans as constants, so that their sums unroll.
+  constexpr int kSpanStep = kOverlapping ? 4 : 5, kSpanLength = kOverlapping ? 8 : 5;
   const AxisWeights& aw = *p.aw;
   const auto& ww = *p.ww;
   const __m256 vc = _mm256_set1_ps(p.c), vsn = _mm256_set1_ps(p.sn);
@@ -201,7 +204,12 @@ __attribute__((target("avx2"))) void describe_avx2(const Pattern& p, const Keypo
         _mm256_add_epi32(_mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7), _mm256_set1_epi32(8 * b)));
     u[b] = _mm256_mul_ps(_mm256_sub_ps(fi, half_grid), vs);
   }
-  alignas(32) float wrow[kLanes];
+  static const std::array<float, kGrid* kLanes> padded_ww = [&ww] {
+    std::array<float, kGrid * kLanes> t{};
+    for (int j = 0; j < kGrid; ++j)
+      for (int i = 0; i < kGrid; ++i) t[j * kLanes + i] = ww[j * kGrid + i];
+    return t;
+  }();
   alignas(32) int corner[kLanes], gxi[kLanes] = {}, gyi[kLanes] = {};
   alignas(32) int cxl[kLanes], cxm[kLanes], cxr[kLanes], cyt[kLanes], cym[kLanes], cyb[kLanes];
   const bool inside = window_inside(p, kp, s, h);
@@ -214,7 +222,6 @@ __attribute__((target("avx2"))) void describe_avx2(const Pattern& p, const Keypo
   for (int j = 0; j < kGrid; ++j) {
     const __m256 v = _mm256_set1_ps((float(j) - 9.5f) * s);
     bool clamped = false;
-    for (int i = 0; i < kLanes; ++i) wrow[i] = i < kGrid ? ww[j * kGrid + i] : 0.f;
     for (int b = 0; b < 3; ++b) {
       const __m256i px = _mm256_sub_epi32(
           _mm256_cvttps_epi32(_mm256_add_ps(
@@ -286,11 +293,12 @@ __attribute__((target("avx2"))) void describe_avx2(const Pattern& p, const Keypo
           _mm256_cvtepi32_ps(_mm256_load_si256(reinterpret_cast<const __m256i*>(gxi + 8 * b)));
       const __m256 gy =
           _mm256_cvtepi32_ps(_mm256_load_si256(reinterpret_cast<const __m256i*>(gyi + 8 * b)));
-      const __m256 wt = _mm256_load_ps(wrow + 8 * b);
-      const __m256 du =
-          _mm256_mul_ps(wt, _mm256_add_ps(_mm256_mul_ps(vc, gx), _mm256_mul_ps(vsn, gy)));
-      const __m256 dv =
-          _mm256_mul_ps(wt, _mm256_add_ps(_mm256_mul_ps(vnsn, gx), _mm256_mul_ps(vc, gy)));
+      __m256 du = _mm256_add_ps(_mm256_mul_ps(vc, gx), _mm256_mul_ps(vsn, gy));
+      __m256 dv = _mm256_add_ps(_mm256_mul_ps(vnsn, gx), _mm256_mul_ps(vc, gy));
+      if constexpr (!kOverlapping) {  // the overlapping layout's window weight is 1
+        const __m256 wt = _mm256_loadu_ps(padded_ww.data() + j * kLanes + 8 * b);
+        du = _mm256_mul_ps(wt, du), dv = _mm256_mul_ps(wt, dv);
+      }
       const __m256 adu = _mm256_andnot_ps(sign, du), adv = _mm256_andnot_ps(sign, dv);
       // Transpose to one (dx, dy, |dx|, |dy|) quad per sample.
       const __m256 t0 = _mm256_unpacklo_ps(du, dv), t1 = _mm256_unpackhi_ps(du, dv);
@@ -309,8 +317,10 @@ __attribute__((target("avx2"))) void describe_avx2(const Pattern& p, const Keypo
     }
     for (int ru = 0; ru < 4; ++ru) {
       __m128 a = _mm_setzero_ps();
-      for (int i = p.span[ru][0]; i < p.span[ru][1]; ++i)
+      for (int t = 0; t < kSpanLength; ++t) {
+        const int i = kSpanStep * ru + t;
         a = _mm_add_ps(a, _mm_mul_ps(_mm_set1_ps(aw[ru][i]), _mm_load_ps(quad[i])));
+      }
       _mm_storeu_ps(row_sum[j][ru], a);
     }
   }
@@ -356,7 +366,10 @@ cv::Mat describe_impl(const cv::Mat& integral, const std::vector<Keypoint>& keyp
     float* d = desc.ptr<float>(k);
 #ifdef ALIGHT_SURF_AVX2
     if (avx2) {
-      describe_avx2(p, kp, s, h, d);
+      if (ov)
+        describe_avx2<true>(p, kp, s, h, d);
+      else
+        describe_avx2<false>(p, kp, s, h, d);
       continue;
     }
 #endif
