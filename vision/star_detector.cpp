@@ -10,10 +10,13 @@
 namespace alight::vision {
 namespace {
 
-/// One row of the response at filter index n: mean(inner (2n+1)^2) - mean(ring).
+/// One row of the response at filter index n, mean(inner (2n+1)^2) - mean(ring), merged into
+/// best_abs: per pixel the largest |response| over the scales seen so far (computed and merged
+/// in one loop, without a row of responses in between).
 ALIGHT_MULTIVERSION
-void response_row(const int* __restrict o0, const int* __restrict o1, const int* __restrict i0,
-                  const int* __restrict i1, int n, int x_begin, int x_end, float* __restrict out) {
+void merge_response_row(const int* __restrict o0, const int* __restrict o1,
+                        const int* __restrict i0, const int* __restrict i1, int n, int x_begin,
+                        int x_end, float* __restrict best_abs) {
   const int a = n, b = 2 * n;
   const float in_area = float((2 * a + 1) * (2 * a + 1));
   const float out_area = float((2 * b + 1) * (2 * b + 1));
@@ -22,14 +25,9 @@ void response_row(const int* __restrict o0, const int* __restrict o1, const int*
   for (int x = x_begin; x < x_end; ++x) {
     const int inner = i1[x + a + 1] - i1[x - a] - i0[x + a + 1] + i0[x - a];
     const int outer = o1[x + b + 1] - o1[x - b] - o0[x + b + 1] + o0[x - b];
-    out[x] = w_in * float(inner) - w_out * float(outer);
+    const float r = w_in * float(inner) - w_out * float(outer);
+    best_abs[x] = std::max(best_abs[x], std::abs(r));
   }
-}
-
-/// Keeps per pixel the largest response magnitude over the scales seen so far.
-ALIGHT_MULTIVERSION
-void merge_row(const float* __restrict r, int x_begin, int x_end, float* __restrict best_abs) {
-  for (int x = x_begin; x < x_end; ++x) best_abs[x] = std::max(best_abs[x], std::abs(r[x]));
 }
 
 /// Quadratic peak offset from three samples, clamped to half a sample.
@@ -72,14 +70,11 @@ Result<std::vector<Keypoint>> detect_star(const cv::Mat& gray, const cv::Mat& in
 
   // Non-maximum suppression over scale: each pixel keeps its largest |response|.
   cv::Mat best_abs(h, w, CV_32F, cv::Scalar(0));
-  std::vector<float> row(w);
   for (int y = y0; y < y1; ++y) {
     float* ba = best_abs.ptr<float>(y);
-    for (int n = params.min_size; n <= params.max_size; ++n) {
-      response_row(integral.ptr<int>(y - 2 * n), integral.ptr<int>(y + 2 * n + 1),
-                   integral.ptr<int>(y - n), integral.ptr<int>(y + n + 1), n, x0, x1, row.data());
-      merge_row(row.data(), x0, x1, ba);
-    }
+    for (int n = params.min_size; n <= params.max_size; ++n)
+      merge_response_row(integral.ptr<int>(y - 2 * n), integral.ptr<int>(y + 2 * n + 1),
+                         integral.ptr<int>(y - n), integral.ptr<int>(y + n + 1), n, x0, x1, ba);
   }
 
   // Over space: peaks of |response| in a (2r+1)^2 window, above the threshold.

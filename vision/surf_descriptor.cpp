@@ -183,6 +183,29 @@ constexpr int kLanes = 24;  // a row of 20 samples as three vectors of 8 (the la
 // describe_scalar's arithmetic, eight samples at a time: the same float operations in the same
 // order, multiplies and adds kept apart (this target does not enable FMA), the same integers,
 // so the result equals describe_scalar's bit for bit.
+// finish's arithmetic with the sub-regions' spans as constants and the four sums of a
+// sub-region as one vector; the norm is summed in finish's order.
+template <bool kOverlapping>
+__attribute__((target("avx2"))) void finish_avx2(const Pattern& p, const float (*row_sum)[4][4],
+                                                 float* d) {
+  constexpr int kSpanStep = kOverlapping ? 4 : 5, kSpanLength = kOverlapping ? 8 : 5;
+  const AxisWeights& aw = *p.aw;
+  for (int rv = 0; rv < 4; ++rv)
+    for (int ru = 0; ru < 4; ++ru) {
+      __m128 a = _mm_setzero_ps();
+      for (int t = 0; t < kSpanLength; ++t) {
+        const int j = kSpanStep * rv + t;
+        a = _mm_add_ps(a, _mm_mul_ps(_mm_set1_ps(aw[rv][j]), _mm_loadu_ps(row_sum[j][ru])));
+      }
+      _mm_storeu_ps(d + (rv * 4 + ru) * 4, _mm_mul_ps(a, _mm_set1_ps(p.rw[rv][ru])));
+    }
+  double norm2 = 0;
+  for (int q = 0; q < kSurfLength; ++q) norm2 += double(d[q]) * d[q];
+  const __m256 inv = _mm256_set1_ps(norm2 > 0 ? float(1.0 / std::sqrt(norm2)) : 0.f);
+  for (int q = 0; q < kSurfLength; q += 8)
+    _mm256_storeu_ps(d + q, _mm256_mul_ps(_mm256_loadu_ps(d + q), inv));
+}
+
 template <bool kOverlapping>
 __attribute__((target("avx2"))) void describe_avx2(const Pattern& p, const Keypoint& kp, float s,
                                                    int h, float* d) {
@@ -324,7 +347,7 @@ __attribute__((target("avx2"))) void describe_avx2(const Pattern& p, const Keypo
       _mm_storeu_ps(row_sum[j][ru], a);
     }
   }
-  finish(p, row_sum, d);
+  finish_avx2<kOverlapping>(p, row_sum, d);
 }
 #endif
 
