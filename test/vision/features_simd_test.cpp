@@ -1,8 +1,9 @@
-// The AVX2 variants of SURF description and descriptor matching against their scalar
-// reference: bit for bit equal on random images, keypoints (near and at the border too, any
-// pattern rotation, both sub-region layouts) and descriptor sets (ties, near duplicates, set
-// sizes that are not multiples of the vector width). On a CPU without AVX2 both calls take the
-// scalar path and the tests hold trivially.
+// The AVX2 variants of SURF description, descriptor matching and STAR's peak collection against
+// their scalar references: bit for bit equal on random images, keypoints (near and at the
+// border too, any pattern rotation, both sub-region layouts), descriptor sets (ties, near
+// duplicates, set sizes that are not multiples of the vector width) and response images
+// (plateaus), and the peaks equal to the OpenCV comparisons they replace. On a CPU without AVX2
+// both calls take the scalar path.
 #include <gtest/gtest.h>
 
 #include <cstring>
@@ -132,6 +133,49 @@ TEST(MatcherSimdTest, EqualsScalarOnRandomSetsWithTiesAndNearDuplicates) {
     matched += int(fast.size());
   }
   EXPECT_GT(matched, 100);  // the sets did produce matches to compare
+}
+
+}  // namespace
+}  // namespace alight::vision
+
+namespace alight::vision {
+namespace {
+
+/// The formulation star_peaks replaces: compare twice, and, collect.
+std::vector<cv::Point> peaks_by_comparison(const cv::Mat& best_abs, const cv::Mat& dilated,
+                                           const cv::Rect& inner, float threshold) {
+  cv::Mat is_max, above;
+  cv::compare(best_abs(inner), dilated(inner), is_max, cv::CMP_GE);
+  cv::compare(best_abs(inner), threshold, above, cv::CMP_GT);
+  cv::bitwise_and(is_max, above, is_max);
+  std::vector<cv::Point> where;
+  cv::findNonZero(is_max, where);
+  for (auto& q : where) q += inner.tl();
+  return where;
+}
+
+TEST(StarPeaksTest, EqualsTheComparisonsWithPlateausAndOddWidths) {
+  std::mt19937_64 rng(5);
+  size_t total = 0;
+  for (int trial = 0; trial < 40; ++trial) {
+    const int rows = 8 + int(rng() % 100), cols = 8 + int(rng() % 150);
+    cv::Mat b(rows, cols, CV_32F);
+    // Few levels, so that a pixel equal to its window's maximum (a plateau) is common.
+    std::uniform_int_distribution<int> level(0, trial % 2 ? 6 : 60);
+    for (int y = 0; y < rows; ++y)
+      for (int x = 0; x < cols; ++x) b.at<float>(y, x) = 0.5f * float(level(rng));
+    const int k = 2 * int(rng() % 3) + 1;
+    cv::Mat dilated;
+    cv::dilate(b, dilated, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(k, k)));
+    const int mx = int(rng() % 4), my = int(rng() % 4);
+    const cv::Rect inner(mx, my, cols - mx - int(rng() % 4), rows - my - int(rng() % 4));
+    const float threshold = trial % 3 == 0 ? 0.f : 1.5f;
+    const auto expected = peaks_by_comparison(b, dilated, inner, threshold);
+    EXPECT_EQ(star_peaks(b, dilated, inner, threshold), expected) << "trial " << trial;
+    EXPECT_EQ(star_peaks(b, dilated, inner, threshold, false), expected) << "trial " << trial;
+    total += expected.size();
+  }
+  EXPECT_GT(total, 1000u);
 }
 
 }  // namespace
