@@ -180,9 +180,6 @@ void describe_scalar(const Pattern& p, const Keypoint& kp, float s, int h, float
 #ifdef ALIGHT_SURF_AVX2
 constexpr int kLanes = 24;  // a row of 20 samples as three vectors of 8 (the last 4 unused)
 
-// describe_scalar's arithmetic, eight samples at a time: the same float operations in the same
-// order, multiplies and adds kept apart (this target does not enable FMA), the same integers,
-// so the result equals describe_scalar's bit for bit.
 // finish's arithmetic with the sub-regions' spans as constants and the four sums of a
 // sub-region as one vector; the norm is summed in finish's order.
 template <bool kOverlapping>
@@ -206,6 +203,9 @@ __attribute__((target("avx2"))) void finish_avx2(const Pattern& p, const float (
     _mm256_storeu_ps(d + q, _mm256_mul_ps(_mm256_loadu_ps(d + q), inv));
 }
 
+// describe_scalar's arithmetic, eight samples at a time: the same float operations in the same
+// order, multiplies and adds kept apart (this target does not enable FMA), the same integers,
+// so the result equals describe_scalar's bit for bit.
 template <bool kOverlapping>
 __attribute__((target("avx2"))) void describe_avx2(const Pattern& p, const Keypoint& kp, float s,
                                                    int h, float* d) {
