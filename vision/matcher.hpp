@@ -28,6 +28,12 @@ std::vector<Match> match_descriptors(const cv::Mat& d1, const cv::Mat& d2,
                                      const std::vector<int8_t>* signs1 = nullptr,
                                      const std::vector<int8_t>* signs2 = nullptr);
 
+/// The same without the AVX2 variant (exposed for the test that both agree bit for bit).
+std::vector<Match> match_descriptors_scalar(const cv::Mat& d1, const cv::Mat& d2,
+                                            const MatchParams& params,
+                                            const std::vector<int8_t>* signs1 = nullptr,
+                                            const std::vector<int8_t>* signs2 = nullptr);
+
 /// Signs of keypoint responses, for match_descriptors.
 std::vector<int8_t> response_signs(const std::vector<Keypoint>& kps);
 

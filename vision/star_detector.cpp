@@ -7,13 +7,21 @@
 
 #include "vision/simd.hpp"
 
+#if defined(__x86_64__) && defined(__GNUC__)
+#include <immintrin.h>
+#define ALIGHT_STAR_AVX2 1
+#endif
+
 namespace alight::vision {
 namespace {
 
-/// One row of the response at filter index n: mean(inner (2n+1)^2) - mean(ring).
+/// One row of the response at filter index n, mean(inner (2n+1)^2) - mean(ring), merged into
+/// best_abs: per pixel the largest |response| over the scales seen so far (computed and merged
+/// in one loop, without a row of responses in between).
 ALIGHT_MULTIVERSION
-void response_row(const int* __restrict o0, const int* __restrict o1, const int* __restrict i0,
-                  const int* __restrict i1, int n, int x_begin, int x_end, float* __restrict out) {
+void merge_response_row(const int* __restrict o0, const int* __restrict o1,
+                        const int* __restrict i0, const int* __restrict i1, int n, int x_begin,
+                        int x_end, float* __restrict best_abs) {
   const int a = n, b = 2 * n;
   const float in_area = float((2 * a + 1) * (2 * a + 1));
   const float out_area = float((2 * b + 1) * (2 * b + 1));
@@ -22,14 +30,9 @@ void response_row(const int* __restrict o0, const int* __restrict o1, const int*
   for (int x = x_begin; x < x_end; ++x) {
     const int inner = i1[x + a + 1] - i1[x - a] - i0[x + a + 1] + i0[x - a];
     const int outer = o1[x + b + 1] - o1[x - b] - o0[x + b + 1] + o0[x - b];
-    out[x] = w_in * float(inner) - w_out * float(outer);
+    const float r = w_in * float(inner) - w_out * float(outer);
+    best_abs[x] = std::max(best_abs[x], std::abs(r));
   }
-}
-
-/// Keeps per pixel the largest response magnitude over the scales seen so far.
-ALIGHT_MULTIVERSION
-void merge_row(const float* __restrict r, int x_begin, int x_end, float* __restrict best_abs) {
-  for (int x = x_begin; x < x_end; ++x) best_abs[x] = std::max(best_abs[x], std::abs(r[x]));
 }
 
 /// Quadratic peak offset from three samples, clamped to half a sample.
@@ -45,6 +48,61 @@ cv::Mat integral_image(const cv::Mat& gray) {
   cv::Mat sum;
   cv::integral(gray, sum, CV_32S);
   return sum;
+}
+
+namespace {
+
+/// Appends the x in [x_begin, x_end) with v[x] >= d[x] and v[x] > threshold, in order.
+void peaks_row_scalar(const float* v, const float* d, int x_begin, int x_end, float threshold,
+                      int y, std::vector<cv::Point>& out) {
+  for (int x = x_begin; x < x_end; ++x)
+    if (v[x] >= d[x] && v[x] > threshold) out.emplace_back(x, y);
+}
+
+#ifdef ALIGHT_STAR_AVX2
+// peaks_row_scalar eight pixels at a time: the same two comparisons (ordered, so NaN is never
+// a peak, as with cv::compare), the few survivors collected from the bit mask in order.
+__attribute__((target("avx2"))) void peaks_row_avx2(const float* v, const float* d, int x_begin,
+                                                    int x_end, float threshold, int y,
+                                                    std::vector<cv::Point>& out) {
+  const __m256 thr = _mm256_set1_ps(threshold);
+  int x = x_begin;
+  for (; x + 8 <= x_end; x += 8) {
+    const __m256 a = _mm256_loadu_ps(v + x);
+    const __m256 m = _mm256_and_ps(_mm256_cmp_ps(a, _mm256_loadu_ps(d + x), _CMP_GE_OQ),
+                                   _mm256_cmp_ps(a, thr, _CMP_GT_OQ));
+    for (unsigned bits = unsigned(_mm256_movemask_ps(m)); bits != 0; bits &= bits - 1)
+      out.emplace_back(x + __builtin_ctz(bits), y);
+  }
+  peaks_row_scalar(v, d, x, x_end, threshold, y, out);
+}
+#endif
+
+}  // namespace
+
+std::vector<cv::Point> star_peaks(const cv::Mat& best_abs, const cv::Mat& dilated,
+                                  const cv::Rect& inner, float threshold, bool allow_avx2) {
+  assert(best_abs.type() == CV_32F && dilated.type() == CV_32F);
+  assert(best_abs.size() == dilated.size());
+  const cv::Rect r = inner & cv::Rect(0, 0, best_abs.cols, best_abs.rows);
+  bool avx2 = false;
+#ifdef ALIGHT_STAR_AVX2
+  avx2 = allow_avx2 && __builtin_cpu_supports("avx2");
+#endif
+  (void)allow_avx2;
+  std::vector<cv::Point> out;
+  for (int y = r.y; y < r.y + r.height; ++y) {
+    const float* v = best_abs.ptr<float>(y);
+    const float* d = dilated.ptr<float>(y);
+#ifdef ALIGHT_STAR_AVX2
+    if (avx2) {
+      peaks_row_avx2(v, d, r.x, r.x + r.width, threshold, y, out);
+      continue;
+    }
+#endif
+    peaks_row_scalar(v, d, r.x, r.x + r.width, threshold, y, out);
+  }
+  return out;
 }
 
 float star_response(const cv::Mat& integral, int x, int y, int n) {
@@ -72,14 +130,11 @@ Result<std::vector<Keypoint>> detect_star(const cv::Mat& gray, const cv::Mat& in
 
   // Non-maximum suppression over scale: each pixel keeps its largest |response|.
   cv::Mat best_abs(h, w, CV_32F, cv::Scalar(0));
-  std::vector<float> row(w);
   for (int y = y0; y < y1; ++y) {
     float* ba = best_abs.ptr<float>(y);
-    for (int n = params.min_size; n <= params.max_size; ++n) {
-      response_row(integral.ptr<int>(y - 2 * n), integral.ptr<int>(y + 2 * n + 1),
-                   integral.ptr<int>(y - n), integral.ptr<int>(y + n + 1), n, x0, x1, row.data());
-      merge_row(row.data(), x0, x1, ba);
-    }
+    for (int n = params.min_size; n <= params.max_size; ++n)
+      merge_response_row(integral.ptr<int>(y - 2 * n), integral.ptr<int>(y + 2 * n + 1),
+                         integral.ptr<int>(y - n), integral.ptr<int>(y + n + 1), n, x0, x1, ba);
   }
 
   // Over space: peaks of |response| in a (2r+1)^2 window, above the threshold.
@@ -87,20 +142,13 @@ Result<std::vector<Keypoint>> detect_star(const cv::Mat& gray, const cv::Mat& in
   const int k = 2 * params.nms_radius_px + 1;
   cv::dilate(best_abs, dilated, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(k, k)));
   const float thr = float(params.response_threshold);
-  // (SIMD comparisons in OpenCV, then the few survivors are collected.)
+  // (Both comparisons in one vectorised pass, then the few survivors are collected.)
   const cv::Rect inner(x0 + 1, y0 + 1, x1 - x0 - 2, y1 - y0 - 2);
-  cv::Mat is_max, above;
-  cv::compare(best_abs(inner), dilated(inner), is_max, cv::CMP_GE);
-  cv::compare(best_abs(inner), thr, above, cv::CMP_GT);
-  cv::bitwise_and(is_max, above, is_max);
-  std::vector<cv::Point> where;
-  cv::findNonZero(is_max, where);
+  std::vector<cv::Point> where = star_peaks(best_abs, dilated, inner, thr);
   std::vector<Keypoint> peaks;
   peaks.reserve(where.size());
-  for (const cv::Point& q : where) {
-    const int x = q.x + inner.x, y = q.y + inner.y;
-    peaks.push_back({float(x), float(y), 0.f, best_abs.at<float>(y, x)});
-  }
+  for (const cv::Point& q : where)
+    peaks.push_back({float(q.x), float(q.y), 0.f, best_abs.at<float>(q.y, q.x)});
   // Strongest first; the line test runs only until max_features peaks have passed it.
   std::sort(peaks.begin(), peaks.end(),
             [](const Keypoint& a, const Keypoint& b) { return a.response > b.response; });

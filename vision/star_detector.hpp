@@ -35,6 +35,13 @@ cv::Mat integral_image(const cv::Mat& gray);
 Result<std::vector<Keypoint>> detect_star(const cv::Mat& gray, const cv::Mat& integral,
                                           const StarParams& params);
 
+/// Non-maximum suppression over space, given best_abs dilated by the (2r+1)^2 rectangle: the
+/// pixels of `inner`, row by row, with best_abs >= dilated (the window's maximum) and
+/// best_abs > threshold; as cv::compare twice, cv::bitwise_and and cv::findNonZero would give.
+/// allow_avx2 = false: the scalar variant (for the test that both agree).
+std::vector<cv::Point> star_peaks(const cv::Mat& best_abs, const cv::Mat& dilated,
+                                  const cv::Rect& inner, float threshold, bool allow_avx2 = true);
+
 /// Centre-surround response at an integer pixel and filter index (for tests and refinement).
 float star_response(const cv::Mat& integral, int x, int y, int n);
 

@@ -37,6 +37,10 @@ constexpr int kSurfLength = 64;
 cv::Mat describe_surf(const cv::Mat& integral, const std::vector<Keypoint>& keypoints,
                       const SurfParams& params, double pattern_angle_rad = 0.0);
 
+/// The same without the AVX2 variant (exposed for the test that both agree bit for bit).
+cv::Mat describe_surf_scalar(const cv::Mat& integral, const std::vector<Keypoint>& keypoints,
+                             const SurfParams& params, double pattern_angle_rad = 0.0);
+
 /// The SURF scale s of a keypoint.
 double surf_scale(const Keypoint& kp, const SurfParams& params);
 
