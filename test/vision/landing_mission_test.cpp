@@ -217,7 +217,9 @@ TEST(TargetLostWhileHovering, AHeldReferenceExpiresAfterHoldMaxAge) {
   const auto results = run(seq, Mission::kLanding, params);
   for (int i = n_move; i < n_move + n_hover; ++i) {
     const double age_s = (results[i].utime - results[i].ref_utime) * 1e-6;
-    if (results[i].ref_held) EXPECT_LE(age_s, 1.5 + 1e-9) << i;
+    if (results[i].ref_held) {
+      EXPECT_LE(age_s, 1.5 + 1e-9) << i;
+    }
   }
   EXPECT_EQ(results.back().reason, Reason::kSmallBaseline) << to_string(results.back().reason);
 }
