@@ -136,6 +136,17 @@ bool Autonomy::airborne() const {
   }
 }
 
+bool Autonomy::precise_setpoint() const {
+  const auto& L = params_.landing;
+  if (!L.precise_final) return false;
+  if (phase() == Phase::kFinalDescent) return true;
+  const auto* a = std::get_if<phases::Approach>(&state_);
+  if (!a) return false;
+  const auto* l = std::get_if<LandingApproach>(&a->how);
+  return l && !l->land_here &&
+         l->z_sp_m - (estimate_W_.z() + L.gear_height_m) <= L.final_height_m + 1e-6;
+}
+
 bool Autonomy::pose_fresh() const {
   return pose_ && seconds(now_utime_ - pose_->utime) <= params_.failsafe.pose_stale_s;
 }
@@ -709,6 +720,7 @@ Output Autonomy::make_output() {
   sp.kill =
       phase() == Phase::kKilled;  // the outer loop disarms in the air only on an explicit KILL
   sp.idle = false;
+  sp.precise = motors_on_ && precise_setpoint();
 
   out.has_setpoint = started_;
   auto& st = out.status;

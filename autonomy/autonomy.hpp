@@ -153,6 +153,8 @@ class Autonomy {
  private:
   bool airborne() const;
   bool pose_fresh() const;
+  /// Landing's final hold and descent with landing.precise_final: setpoints marked precise.
+  bool precise_setpoint() const;
   /// The estimate's level now and what to say about it: its own level, or kLost once it has been
   /// silent for estimate_silent_s; nullopt when no STATE_ESTIMATE was ever heard.
   struct EstimateCondition {

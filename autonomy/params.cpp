@@ -164,6 +164,11 @@ const ParamSchema<LandingParams>& LandingParams::schema() {
           "... both within for this long");
     s.add("final_hold_timeout_s", &P::final_hold_timeout_s, Range::gt(0), "s",
           "held this long without a calm moment: target lost (detection retry, then hold)");
+    s.add("precise_final", &P::precise_final, Range::any(), "",
+          "beyond the paper: from the final hold (final_height_m above the platform) through the "
+          "final descent the setpoints are marked precise (position_setpoint_t.MODE_PRECISE): "
+          "the outer loop flies them on its precise lateral gains, so a gust moves the vehicle "
+          "less there, where its offset becomes the touch-down's error");
     return s;
   }();
   return schema;

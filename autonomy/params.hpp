@@ -85,6 +85,7 @@ struct LandingParams {
   double final_hold_radial_m = 0.01;
   double final_hold_settle_s = 0.2;
   double final_hold_timeout_s = 10.0;
+  bool precise_final = false;
   static const ParamSchema<LandingParams>& schema();
   void validate() const;
 };

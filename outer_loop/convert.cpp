@@ -13,6 +13,7 @@ PositionSetpoint from_msg(const position_setpoint_t& msg) {
   sp.motors_on = msg.motors == position_setpoint_t::MOTORS_ON;
   sp.kill = msg.motors == position_setpoint_t::MOTORS_KILL;
   sp.idle = msg.mode == position_setpoint_t::MODE_IDLE;
+  sp.precise = msg.mode == position_setpoint_t::MODE_PRECISE;
   return sp;
 }
 
@@ -31,7 +32,8 @@ std::optional<PositionSetpoint> setpoint_from_msg(const position_setpoint_t& msg
       msg.motors != position_setpoint_t::MOTORS_ON &&
       msg.motors != position_setpoint_t::MOTORS_KILL)
     return refuse("setpoint: unknown motors value " + std::to_string(msg.motors));
-  if (msg.mode != position_setpoint_t::MODE_POSITION && msg.mode != position_setpoint_t::MODE_IDLE)
+  if (msg.mode != position_setpoint_t::MODE_POSITION &&
+      msg.mode != position_setpoint_t::MODE_IDLE && msg.mode != position_setpoint_t::MODE_PRECISE)
     return refuse("setpoint: unknown mode value " + std::to_string(msg.mode));
   return from_msg(msg);
 }
@@ -47,7 +49,9 @@ position_setpoint_t to_msg(const PositionSetpoint& sp) {
   msg.motors = sp.kill        ? position_setpoint_t::MOTORS_KILL
                : sp.motors_on ? position_setpoint_t::MOTORS_ON
                               : position_setpoint_t::MOTORS_OFF;
-  msg.mode = sp.idle ? position_setpoint_t::MODE_IDLE : position_setpoint_t::MODE_POSITION;
+  msg.mode = sp.idle      ? position_setpoint_t::MODE_IDLE
+             : sp.precise ? position_setpoint_t::MODE_PRECISE
+                          : position_setpoint_t::MODE_POSITION;
   return msg;
 }
 

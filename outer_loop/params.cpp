@@ -20,6 +20,16 @@ const ParamSchema<OuterLoopParams>& OuterLoopParams::schema() {
           "lateral integral gain; 0 disables the integrator");
     s.add("i_limit_xy_mps2", &P::i_limit_xy_mps2, Range::ge(0), "m/s^2",
           "anti-windup: largest lateral integral contribution");
+    // Stiffer lateral gains where autonomy asks for them (landing's final hold and descent):
+    // there a gust's offset is the touch-down's error, while elsewhere the vision wants the
+    // vehicle's own motion (its baseline) more than a tight hold.
+    s.add("precise_kp_xy_per_s2", &P::precise_kp_xy_per_s2, Range::gt(0), "1/s^2",
+          "kp_xy_per_s2 for setpoints marked precise (MODE_PRECISE)");
+    s.add("precise_kd_xy_per_s", &P::precise_kd_xy_per_s, Range::gt(0), "1/s",
+          "kd_xy_per_s for setpoints marked precise");
+    s.add("precise_ki_xy_per_s3", &P::precise_ki_xy_per_s3, Range::ge(0), "1/s^3",
+          "ki_xy_per_s3 for setpoints marked precise (the integral carries over: it is an "
+          "acceleration, so switching gains does not step it)");
 
     // Altitude PD + I with gravity feed-forward.
     s.add("kp_z_per_s2", &P::kp_z_per_s2, Range::gt(0), "1/s^2", "altitude position gain");

@@ -18,6 +18,10 @@ struct OuterLoopParams {
   double kd_xy_per_s = 3.2;
   double ki_xy_per_s3 = 1.0;
   double i_limit_xy_mps2 = 1.0;
+  // The same for setpoints marked precise (position_setpoint_t.MODE_PRECISE).
+  double precise_kp_xy_per_s2 = 9.0;
+  double precise_kd_xy_per_s = 4.8;
+  double precise_ki_xy_per_s3 = 3.0;
 
   // Altitude PD + I with gravity feed-forward.
   double kp_z_per_s2 = 6.0;

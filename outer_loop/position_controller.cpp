@@ -90,8 +90,12 @@ AttitudeCommand PositionController::disarmed(const char* reason) {
 }
 
 AttitudeCommand PositionController::track(const Vector3d& p_sp, const Vector3d& v_sp, double yaw_sp,
-                                          const PoseSample& pose, double dt_s, bool integrate) {
+                                          const PoseSample& pose, double dt_s, bool integrate,
+                                          bool precise) {
   const auto& P = params_;
+  const double kp_xy = precise ? P.precise_kp_xy_per_s2 : P.kp_xy_per_s2;
+  const double kd_xy = precise ? P.precise_kd_xy_per_s : P.kd_xy_per_s;
+  const double ki_xy = precise ? P.precise_ki_xy_per_s3 : P.ki_xy_per_s3;
   const Vector3d e_p = p_sp - pose.p_W_B;
   const Vector3d e_v = v_sp - pose.v_W_B;
 
@@ -99,7 +103,7 @@ AttitudeCommand PositionController::track(const Vector3d& p_sp, const Vector3d& 
   // wrong mass, larger than the zone), so that flying a large step does not wind it up.
   const bool still = pose.v_W_B.norm() < P.i_still_mps;
   if (integrate && (still || e_p.head<2>().norm() < P.i_zone_m)) {
-    integral_mps2_.head<2>() += P.ki_xy_per_s3 * e_p.head<2>() * dt_s;
+    integral_mps2_.head<2>() += ki_xy * e_p.head<2>() * dt_s;
     clamp_norm(integral_mps2_.head<2>(), P.i_limit_xy_mps2);
   }
   if (integrate && (still || std::abs(e_p.z()) < P.i_zone_m)) {
@@ -107,8 +111,7 @@ AttitudeCommand PositionController::track(const Vector3d& p_sp, const Vector3d& 
                                     -P.i_limit_z_mps2, P.i_limit_z_mps2);
   }
 
-  Vector2d a_xy =
-      P.kp_xy_per_s2 * e_p.head<2>() + P.kd_xy_per_s * e_v.head<2>() + integral_mps2_.head<2>();
+  Vector2d a_xy = kp_xy * e_p.head<2>() + kd_xy * e_v.head<2>() + integral_mps2_.head<2>();
   last_demand_z_mps2_ = P.kp_z_per_s2 * e_p.z() + P.kd_z_per_s * e_v.z();
   const double a_z =
       std::clamp(last_demand_z_mps2_ + integral_mps2_.z(), -P.max_accel_z_mps2, P.max_accel_z_mps2);
@@ -306,8 +309,9 @@ AttitudeCommand PositionController::step(const std::optional<PositionSetpoint>& 
     holding_ = false;
     setpoint_lost_since_.reset();
     still_since_.reset();
-    auto c = track(setpoint->p_W, setpoint->v_W, setpoint->yaw_rad, *pose, dt_s, true);
-    c.reason = "tracking";
+    auto c = track(setpoint->p_W, setpoint->v_W, setpoint->yaw_rad, *pose, dt_s, true,
+                   setpoint->precise);
+    c.reason = setpoint->precise ? "tracking (precise)" : "tracking";
     return c;
   }
 

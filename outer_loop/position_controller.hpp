@@ -67,7 +67,7 @@ class PositionController {
 
  private:
   AttitudeCommand track(const Vector3d& p_sp, const Vector3d& v_sp, double yaw_sp,
-                        const PoseSample& pose, double dt_s, bool integrate);
+                        const PoseSample& pose, double dt_s, bool integrate, bool precise = false);
   AttitudeCommand level(double thrust_N) const;
   AttitudeCommand disarmed(const char* reason);
   double hover_thrust_N() const;

@@ -18,6 +18,8 @@ struct PositionSetpoint {
                                     ///< in the air only with kill
   bool kill = false;                ///< operator KILL: disarm at once, even in the air
   bool idle = false;                ///< on the ground with motors at idle (no position control)
+  bool precise = false;  ///< track with the precise lateral gains (landing's final hold and
+                         ///< descent: a gust's offset there is the touch-down's error)
 };
 
 /// What the outer loop is doing, and why (maps onto attitude_cmd_t.MODE_*).

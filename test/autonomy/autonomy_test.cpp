@@ -125,6 +125,40 @@ TEST(AutonomyTest, DescendsOnlyWhileInsideTheRadialTolerance) {
               1e-9);
 }
 
+// Issue 15 (touch-down in gusts): the final hold and the final descent are flown on the outer
+// loop's precise lateral gains; nothing before them is (the vision wants the vehicle's own
+// motion in the search and refinement), and nothing is without landing.precise_final.
+TEST(AutonomyTest, FinalHoldAndDescentAreMarkedPreciseAndNothingBefore) {
+  for (const bool on : {true, false}) {
+    AutonomyParams params = test::test_params();
+    params.landing.precise_final = on;
+    params.landing.final_hold_speed_mps = 0.05;  // a hold at the final height
+    KinematicWorld w(params);
+    w.takeoff_and_hover();
+    w.send(Command::kGo, Mission::kLanding);
+    bool precise_before_final_height = false, precise_at_final_height = false;
+    while (w.autonomy.phase() != Phase::kFinalDescent && w.t < test::kT0 + 300'000'000) {
+      w.step();
+      const double above_m = w.out.setpoint.p_W.z() - (w.autonomy.final_estimate().z() +
+                                                       w.autonomy.params().landing.gear_height_m);
+      const Phase ph = w.autonomy.phase();
+      if (w.out.setpoint.precise && ph != Phase::kFinalDescent) {
+        precise_before_final_height |=
+            ph != Phase::kApproach || above_m > w.autonomy.params().landing.final_height_m + 1e-6;
+        precise_at_final_height = true;
+      }
+    }
+    ASSERT_EQ(w.autonomy.phase(), Phase::kFinalDescent) << on;
+    EXPECT_FALSE(precise_before_final_height) << on;
+    EXPECT_EQ(precise_at_final_height, on);
+    while (w.autonomy.phase() == Phase::kFinalDescent) {
+      EXPECT_EQ(w.out.setpoint.precise, on);
+      w.step();
+    }
+    EXPECT_FALSE(w.out.setpoint.precise) << "landed: motors off";
+  }
+}
+
 TEST(AutonomyTest, RefusesAPlatformSmallerThanTheGearFootprint) {
   KinematicWorld w;
   w.truth.platform_size_m = Vector3d(0.3, 0.12, 0.2);  // short side 12 cm < 15 cm gear

@@ -40,6 +40,13 @@ TEST(OuterLoopConvertTest, SetpointRoundTrips) {
   const auto off = from_msg(to_msg(sp));
   EXPECT_FALSE(off.motors_on);
   EXPECT_TRUE(off.idle);
+  sp.motors_on = true;
+  sp.idle = false;
+  sp.precise = true;
+  EXPECT_EQ(to_msg(sp).mode, position_setpoint_t::MODE_PRECISE);
+  const auto precise = from_msg(to_msg(sp));
+  EXPECT_TRUE(precise.precise);
+  EXPECT_FALSE(precise.idle);
 }
 
 TEST(OuterLoopConvertTest, AttitudeCommandRoundTripsEveryMode) {
@@ -106,6 +113,11 @@ TEST(OuterLoopRegression, NonFiniteSetpointIsRefusedAtConversion) {
   m = good;
   m.mode = -1;
   EXPECT_FALSE(setpoint_from_msg(m, &why));
+  m.mode = position_setpoint_t::MODE_PRECISE + 1;
+  EXPECT_FALSE(setpoint_from_msg(m, &why));
+  EXPECT_NE(why.find("unknown mode"), std::string::npos) << why;
+  m.mode = position_setpoint_t::MODE_PRECISE;
+  EXPECT_TRUE(setpoint_from_msg(m, &why)) << why;
 }
 
 TEST(OuterLoopRegression, NonFiniteOrNonUnitPoseIsRefusedAtConversion) {

@@ -66,6 +66,33 @@ TEST(PositionControllerTest, ForwardErrorPitchesNoseDownAndLeftErrorRollsLeft) {
   EXPECT_NEAR(cmd.thrust_N, 1.2 * std::hypot(0.4, 9.81), 1e-9);
 }
 
+TEST(PositionControllerTest, PreciseSetpointsUseThePreciseLateralGains) {
+  auto p = params();
+  p.precise_kp_xy_per_s2 = 9.0;
+  p.precise_kd_xy_per_s = 5.0;
+  // 0.1 m ahead, moving back at 0.02 m/s: kp 0.1 + kd 0.02.
+  auto pose = pose_at({0, 0, 1}, 0, kT0);
+  pose.v_W_B = Vector3d(-0.02, 0, 0);
+  auto sp = setpoint_at({0.1, 0, 1}, 0, kT0);
+  PositionController normal(p);
+  auto cmd = normal.update(sp, pose, kT0);
+  EXPECT_NEAR(cmd.pitch_rad, std::atan2(4.0 * 0.1 + 3.2 * 0.02, 9.81), 1e-9);
+  EXPECT_STREQ(cmd.reason, "tracking");
+  sp.precise = true;
+  PositionController precise(p);
+  cmd = precise.update(sp, pose, kT0);
+  EXPECT_NEAR(cmd.pitch_rad, std::atan2(9.0 * 0.1 + 5.0 * 0.02, 9.81), 1e-9);
+  EXPECT_STREQ(cmd.reason, "tracking (precise)");
+  // The altitude loop is the same either way.
+  sp.p_W.z() = 1.2;
+  PositionController a(p), b(p);
+  sp.precise = false;
+  const double thrust_normal = a.update(sp, pose, kT0).thrust_N;
+  sp.precise = true;
+  EXPECT_NEAR(b.update(sp, pose, kT0).thrust_N, thrust_normal, 1e-9 * thrust_normal + 1.0)
+      << "only the lateral gains differ";
+}
+
 TEST(PositionControllerTest, LateralCommandIsInTheHeadingFrame) {
   // Facing +y (yaw 90 deg), an error along world +x is to the vehicle's right (-y_B): roll right.
   PositionController c(params());
