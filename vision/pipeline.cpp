@@ -123,7 +123,6 @@ FrameResult Pipeline::process(const cv::Mat& gray, int64_t utime,
   // Hovering: the held reference while the tracked one is too close, the held one farther
   // and still overlapping (pipeline.hpp).
   std::vector<Match> matches;
-  bool keep_held = false;
   if (hold && baseline_m < params_.landing.hold_baseline_m && held_ && held_->utime < utime &&
       double(utime - held_->utime) * 1e-6 <= params_.landing.hold_max_age_s) {
     const double held_baseline_m = mocap_motion(held_pose_, *pose, mount_).baseline_m;
@@ -135,17 +134,15 @@ FrameResult Pipeline::process(const cv::Mat& gray, int64_t utime,
         baseline_m = held_baseline_m;
         matches = std::move(m);
         r.ref_held = true;
-      } else {
-        // One frame that matches little (over a pale floor the matches of consecutive frames
-        // ran 40-400) does not make the held reference's baseline worthless: it stays held for
-        // the next frame instead of giving way to a tracked reference a few frames old, from
-        // which the baseline would have to grow again (landing_lowtex 9306).
-        keep_held = true;
       }
+      // A frame that matches the held reference with fewer than N features hands the hold to
+      // the tracked one. Keeping it held for the next frames instead (over landing_lowtex's floor
+      // such frames come every few frames) saved none of the lowtex draws and turned
+      // landing_none_photo 9501's 2 false targets into 28 (found) + 17 (partial).
     }
   }
   if (!ref) return fail(up.status);  // the held reference no longer serves either
-  if (hold && !keep_held) {
+  if (hold) {
     held_ = ref;
     held_pose_ = pose_1;
   }

@@ -24,9 +24,6 @@
 // view, a frame of few features) does not: over a pale floor the tracks break every 1-2 s while
 // the held frame still matches, and where the tracker has no reference at all the held one
 // serves alone (landing_lowtex 9306, 9309, 9314 lost the top in refinement with every retry).
-// A frame that matches the held reference with fewer than N features uses the tracked one but
-// leaves the held one held (such frames came every few frames over that floor, and each used to
-// hand the hold to a reference a few frames old).
 
 #include <deque>
 #include <optional>
