@@ -23,6 +23,7 @@ void Pipeline::reset() {
   tracker_.reset();
   poses_.clear();
   held_.reset();
+  last_utime_ = 0;
 }
 
 FrameResult Pipeline::process(const cv::Mat& gray, int64_t utime,
@@ -39,6 +40,12 @@ FrameResult Pipeline::process(const cv::Mat& gray, int64_t utime,
   if (gray.empty() || gray.type() != CV_8UC1 || gray.cols != camera_.width ||
       gray.rows != camera_.height)
     return fail(Reason::kBadImage);
+  // A gap or a jump in the frames' times: nothing from before it is trusted, the held reference
+  // included (the tracker sees such a gap only while its history holds frames).
+  if (last_utime_ != 0 && (utime <= last_utime_ ||
+                           double(utime - last_utime_) * 1e-6 > params_.tracker.max_frame_gap_s))
+    held_.reset();
+  last_utime_ = utime;
 
   const cv::Mat integral = integral_image(gray);
   auto kps = detect_star(gray, integral, params_.star);
@@ -62,20 +69,31 @@ FrameResult Pipeline::process(const cv::Mat& gray, int64_t utime,
   if (parallax) frame.image = parallax_image(gray, params_.ingress);
 
   const auto up = tracker_.add(std::move(frame));
+  const bool hold = mission_ == Mission::kLanding && params_.landing.hold_reference;
   if (up.reset) {
     poses_.clear();
-    held_.reset();  // a gap, a jump or a changed view: the held reference goes with the tracks
+    // Tracks broken by a changed view or a frame of few features (a pale floor loses its weak
+    // features from frame to frame) say nothing about the held reference: it is used only where
+    // it still matches min_tracked features directly (a gap in time dropped it above). Dropping
+    // it with every reset restarted the baseline from zero every 1-2 s over landing_lowtex's
+    // floor, short of the top's parallax in refinement (seeds 9306, 9309, 9314: target lost with
+    // every retry).
+    if (!hold) held_.reset();
   }
   if (up.current) poses_.emplace_back(utime, *pose);
   // Keep only the poses of frames the tracker can still pick.
   const int64_t oldest = up.reference ? up.reference->utime : utime;
   while (!poses_.empty() && poses_.front().first < oldest) poses_.pop_front();
   r.n_tracked = up.n_tracked;
-  if (up.status != Reason::kOk) return fail(up.status);
+  // No tracked reference (the tracks just broke): only the held one can serve.
+  const bool held_only = up.status == Reason::kNoReference && up.current && hold && held_;
+  if (up.status != Reason::kOk && !held_only) return fail(up.status);
   // The oldest qualifying frame within max_reference_baseline_m of the current camera (the
   // newest previous frame when even that one is farther).
   std::shared_ptr<const TrackedFrame> ref = up.reference;
-  {
+  PoseSample pose_1;
+  double baseline_m = 0.0;  // none tracked: any held baseline is longer
+  if (ref) {
     const auto& h = tracker_.history();
     const Vector3d c_now = X_WC.translation();
     for (size_t k = 0; k + 1 < h.size(); ++k) {
@@ -88,11 +106,13 @@ FrameResult Pipeline::process(const cv::Mat& gray, int64_t utime,
         break;
     }
   }
-  const auto ref_pose = std::find_if(poses_.begin(), poses_.end(),
-                                     [&](const auto& e) { return e.first == ref->utime; });
-  assert(ref_pose != poses_.end());
-  PoseSample pose_1 = ref_pose->second;
-  double baseline_m = mocap_motion(pose_1, *pose, mount_).baseline_m;
+  if (ref) {
+    const auto ref_pose = std::find_if(poses_.begin(), poses_.end(),
+                                       [&](const auto& e) { return e.first == ref->utime; });
+    assert(ref_pose != poses_.end());
+    pose_1 = ref_pose->second;
+    baseline_m = mocap_motion(pose_1, *pose, mount_).baseline_m;
+  }
 
   const TrackedFrame& b = *up.current;
   const auto sb = response_signs(b.keypoints);
@@ -103,7 +123,6 @@ FrameResult Pipeline::process(const cv::Mat& gray, int64_t utime,
   // Hovering: the held reference while the tracked one is too close, the held one farther
   // and still overlapping (pipeline.hpp).
   std::vector<Match> matches;
-  const bool hold = mission_ == Mission::kLanding && params_.landing.hold_reference;
   if (hold && baseline_m < params_.landing.hold_baseline_m && held_ && held_->utime < utime &&
       double(utime - held_->utime) * 1e-6 <= params_.landing.hold_max_age_s) {
     const double held_baseline_m = mocap_motion(held_pose_, *pose, mount_).baseline_m;
@@ -116,8 +135,13 @@ FrameResult Pipeline::process(const cv::Mat& gray, int64_t utime,
         matches = std::move(m);
         r.ref_held = true;
       }
+      // A frame that matches the held reference with fewer than N features hands the hold to
+      // the tracked one. Keeping it held for the next frames instead (over landing_lowtex's floor
+      // such frames come every few frames) saved none of the lowtex draws and turned
+      // landing_none_photo 9501's 2 false targets into 28 (found) + 17 (partial).
     }
   }
+  if (!ref) return fail(up.status);  // the held reference no longer serves either
   if (hold) {
     held_ = ref;
     held_pose_ = pose_1;

@@ -20,7 +20,10 @@
 // rule asks for): the longer baseline still in view, which is what the paper's rule aims at. A
 // tracked reference at hold_baseline_m or more is used as the paper has it (and becomes the held
 // one). The held reference is a function of the frames and poses received, as the tracker is; a
-// reset of the tracker drops it.
+// gap or jump in the frames' times drops it. A reset of the tracker for broken tracks (a changed
+// view, a frame of few features) does not: over a pale floor the tracks break every 1-2 s while
+// the held frame still matches, and where the tracker has no reference at all the held one
+// serves alone (landing_lowtex 9306, 9309, 9314 lost the top in refinement with every retry).
 
 #include <deque>
 #include <optional>
@@ -78,6 +81,7 @@ class Pipeline {
   // every frame the tracker still keeps.
   std::shared_ptr<const TrackedFrame> held_;
   PoseSample held_pose_;
+  int64_t last_utime_ = 0;  // the previous frame's time: a gap drops the held reference
   int64_t seq_ = 0;
 };
 
