@@ -135,10 +135,9 @@ FrameResult Pipeline::process(const cv::Mat& gray, int64_t utime,
         matches = std::move(m);
         r.ref_held = true;
       }
-      // A frame that matches the held reference with fewer than N features hands the hold to
-      // the tracked one. Keeping it held for the next frames instead (over landing_lowtex's floor
-      // such frames come every few frames) saved none of the lowtex draws and turned
-      // landing_none_photo 9501's 2 false targets into 28 (found) + 17 (partial).
+      // A frame that matches the held reference with fewer than min_tracked features hands the
+      // hold to the tracked one: keeping it held through such frames saved no pale-floor draw
+      // and multiplied the false targets over floors without a platform.
     }
   }
   if (!ref) return fail(up.status);  // the held reference no longer serves either
