@@ -144,7 +144,7 @@ bool Autonomy::precise_setpoint() const {
   if (!a) return false;
   const auto* l = std::get_if<LandingApproach>(&a->how);
   return l && !l->land_here &&
-         l->z_sp_m - (estimate_W_.z() + L.gear_height_m) <= L.final_height_m + 1e-6;
+         l->at_final_height(estimate_W_.z(), L.gear_height_m, L.final_height_m);
 }
 
 bool Autonomy::pose_fresh() const {

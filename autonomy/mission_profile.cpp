@@ -103,7 +103,7 @@ class LandingProfile final : public MissionProfile {
       out.sp_v_W.z() = 0.0;
     }
     out.sp_p_W = Vector3d(target.x(), target.y(), a.z_sp_m);
-    if (a.z_sp_m - z_touch <= L.final_height_m + 1e-6) {
+    if (a.at_final_height(target.z(), L.gear_height_m, L.final_height_m)) {
       if (!final_descent_allowed(a, e_r, in)) {
         if (seconds(in.now_utime - *a.held_since_utime) > L.final_hold_timeout_s) {
           out.next = ApproachStep::Next::kTargetLost;

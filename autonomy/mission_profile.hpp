@@ -37,6 +37,12 @@ struct LandingApproach {
   bool land_here = false;  ///< operator LAND_HERE: onto the floor below, no target to lose
   std::optional<int64_t> held_since_utime;  ///< at final_height_m, waiting for calm
   std::optional<int64_t> calm_since_utime;  ///< ... calm (speed and e_r within) since
+
+  /// The altitude setpoint is down to final_height_m above the platform top at top_z_m (the
+  /// final hold, then the rapid descent).
+  bool at_final_height(double top_z_m, double gear_height_m, double final_height_m) const {
+    return z_sp_m - (top_z_m + gear_height_m) <= final_height_m + 1e-6;
+  }
 };
 
 /// The ingress approach's own state: aligning at the standoff, then through the opening.
