@@ -85,12 +85,17 @@ TEST(PositionControllerTest, PreciseSetpointsUseThePreciseLateralGains) {
   EXPECT_STREQ(cmd.reason, "tracking (precise)");
   // The altitude loop is the same either way.
   sp.p_W.z() = 1.2;
+  // The vertical part of the thrust (thrust cos(roll) cos(pitch)) is the altitude loop's alone.
+  auto vertical_N = [](const AttitudeCommand& c) {
+    return c.thrust_N * std::cos(c.roll_rad) * std::cos(c.pitch_rad);
+  };
   PositionController a(p), b(p);
   sp.precise = false;
-  const double thrust_normal = a.update(sp, pose, kT0).thrust_N;
+  const double vertical_normal_N = vertical_N(a.update(sp, pose, kT0));
   sp.precise = true;
-  EXPECT_NEAR(b.update(sp, pose, kT0).thrust_N, thrust_normal, 1e-9 * thrust_normal + 1.0)
+  EXPECT_NEAR(vertical_N(b.update(sp, pose, kT0)), vertical_normal_N, 1e-9)
       << "only the lateral gains differ";
+  EXPECT_GT(vertical_normal_N, 1.2 * 9.81) << "the altitude error asks for a climb";
 }
 
 TEST(PositionControllerTest, LateralCommandIsInTheHeadingFrame) {
