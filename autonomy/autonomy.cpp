@@ -383,7 +383,7 @@ void Autonomy::handle_command(const OperatorCommand& cmd) {
       profile_ = MissionProfile::make(Mission::kLanding, params_);
       estimate_W_ = Vector3d(pose_->p_W_B.x(), pose_->p_W_B.y(), params_.geofence.min_W_m.z());
       failsafe_ = Failsafe::kNone;
-      enter(phases::Approach{LandingApproach{pose_->p_W_B.z(), true}, std::nullopt},
+      enter(phases::Approach{LandingApproach{pose_->p_W_B.z(), true, {}, {}}, std::nullopt},
             "LAND_HERE: landing on the floor below");
       return;
     case Command::kNudge: {

@@ -64,7 +64,7 @@ class LandingProfile final : public MissionProfile {
 
   Start begin_approach(const PoseSample& pose, double yaw_sp_rad, const Vector3d& /*normal_sum_W*/,
                        const Vector2d& yaw4_sum) const override {
-    Start s{LandingApproach{pose.p_W_B.z(), false}, yaw_sp_rad};
+    Start s{LandingApproach{pose.p_W_B.z(), false, {}, {}}, yaw_sp_rad};
     if (p_.landing.align_yaw_tol_deg > 0 && yaw4_sum.norm() > 1e-9) {
       // The platform's edges modulo 90 deg (the gear is square): the turn of at most 45 deg.
       const double edges = std::atan2(yaw4_sum.y(), yaw4_sum.x()) / 4;

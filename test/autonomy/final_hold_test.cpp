@@ -14,8 +14,8 @@ struct Approach {
   explicit Approach(AutonomyParams params) : p(std::move(params)) {
     profile = MissionProfile::make(Mission::kLanding, p);
     // Just above the final height over a platform top at z 0.2.
-    state = LandingApproach{target.z() + p.landing.gear_height_m + p.landing.final_height_m + 1e-3,
-                            false};
+    state = LandingApproach{
+        target.z() + p.landing.gear_height_m + p.landing.final_height_m + 1e-3, false, {}, {}};
   }
   // One 10 ms step with the vehicle over the target offset by e_W, moving at v_W.
   ApproachStep step(const Vector2d& e_W, const Vector2d& v_W) {
