@@ -50,8 +50,9 @@ struct TargetMeasurement {
   int64_t utime = 0;  ///< exposure time of the image [us]
   Mission mission = Mission::kNone;
   bool found = false;
-  /// Not found, but seen cut by the image border (target_t REASON_PARTIAL_VIEW): p_W_target is
-  /// the centre of its visible part, good enough to fly to, not to average.
+  /// Not found, but located: seen cut by the image border (target_t REASON_PARTIAL_VIEW:
+  /// p_W_target is the centre of its visible part), or an opening seen with too little parallax
+  /// to measure it (REASON_LOW_PARALLAX). Good enough to fly to, not to average.
   bool partial = false;
   Vector3d p_W_target = Vector3d::Zero();  ///< platform centre / opening centre [m]
   Vector3d n_W = Vector3d::UnitZ();        ///< target plane normal, towards the camera

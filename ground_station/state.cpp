@@ -115,6 +115,8 @@ const char* target_reason_name(int8_t reason) {
       return "bad image";
     case target_t::REASON_PARTIAL_VIEW:
       return "target partly out of view";
+    case target_t::REASON_LOW_PARALLAX:
+      return "too little parallax to measure the opening";
   }
   return "unknown";
 }

@@ -108,7 +108,7 @@ int main(int argc, char** argv) {
           std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
       ++reasons[r.reason];
       double lat = -1, dh = 0;
-      if (truth && (r.found() || r.reason == Reason::kPartialView)) {
+      if (truth && (r.found() || located_only(r.reason))) {
         const double* c =
             mission == Mission::kLanding ? truth->platform_center_W : truth->opening_center_W;
         const Vector3d c_W(c[0], c[1], c[2]);

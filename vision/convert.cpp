@@ -10,7 +10,7 @@ target_t to_msg(const FrameResult& r) {
   m.mission = static_cast<int8_t>(r.mission);
   m.found = r.found();
   m.reason = static_cast<int8_t>(r.reason);
-  const bool has = r.found() || r.reason == Reason::kPartialView;
+  const bool has = r.found() || located_only(r.reason);
   for (int i = 0; i < 3; ++i) {
     m.p_W_target[i] = has ? r.target.p_W[i] : 0.0;
     m.n_W[i] = has ? r.target.n_W[i] : 0.0;

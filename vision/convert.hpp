@@ -9,7 +9,8 @@
 
 namespace alight::vision {
 
-/// Found targets carry every field; a target cut by the image border (REASON_PARTIAL_VIEW)
+/// Found targets carry every field; a target located only (cut by the image border,
+/// REASON_PARTIAL_VIEW, or an opening seen with too little parallax, REASON_LOW_PARALLAX)
 /// still says where to look (waypoint, normal, pixel, sizes); other failures carry the reason
 /// and the counts only.
 target_t to_msg(const FrameResult& r);

@@ -327,6 +327,12 @@ const ParamSchema<IngressParams>& IngressParams::schema() {
           "a block feature this far behind the wall is seen through it");
     s.add("min_behind_share", &P::min_behind_share, Range::closed(0, 1), "",
           "fewer of the block's features behind the wall: no opening (0: no check)");
+    s.add(
+        "min_opening_parallax_px", &P::min_opening_parallax_px, Range::ge(0), "px",
+        "a whole opening is measured only when what is seen through it (the block's features "
+        "behind the wall) moves at least this much against the wall homography, median; less, "
+        "REASON_LOW_PARALLAX (located, not measured): the mask covers part of the opening. Tied to "
+        "parallax_close_px, the gaps the mask's closing joins (0: no check)");
     s.add("min_size_m", &P::min_size_m, Range::gt(0), "m", "smaller width or height: no opening");
     return s;
   }();

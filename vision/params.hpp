@@ -160,6 +160,7 @@ struct IngressParams {
   int min_outliers = 8;
   double behind_margin_m = 0.02;
   double min_behind_share = 0.7;
+  double min_opening_parallax_px = 15;
   double min_size_m = 0.1;
   static const ParamSchema<IngressParams>& schema();
   void validate() const;

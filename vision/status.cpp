@@ -28,6 +28,8 @@ const char* to_string(Reason r) {
       return "bad image";
     case Reason::kPartialView:
       return "target partly out of view";
+    case Reason::kLowParallax:
+      return "too little parallax to measure the opening";
   }
   return "unknown";
 }

@@ -24,9 +24,15 @@ enum class Reason : int8_t {
   kDecompositionFailed = 9,  ///< no physically valid decomposition, or planes disagree
   kBadImage = 10,            ///< empty, wrong type or too small
   kPartialView = 11,         ///< target found but cut by the image border: its centre is unknown
+  kLowParallax = 12,  ///< ingress: the opening in view, but too little parallax to measure it
 };
 
 const char* to_string(Reason r);
+
+/// Not found, but located: in view and worth flying to, never averaged into an estimate.
+inline bool located_only(Reason r) {
+  return r == Reason::kPartialView || r == Reason::kLowParallax;
+}
 
 /// A value or the reason there is none.
 template <class T>

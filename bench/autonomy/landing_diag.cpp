@@ -119,7 +119,7 @@ int main(int argc, char** argv) {
     std::printf(" b %.3f age %.2f tr %d%s", r.baseline_m,
                 r.ref_utime > 0 ? (f.utime - r.ref_utime) * 1e-6 : -1.0, r.n_tracked,
                 r.ref_held ? " held" : "");
-    if (r.found() || r.reason == vision::Reason::kPartialView) {
+    if (r.found() || vision::located_only(r.reason)) {
       const Vector3d e = r.target.p_W - P.top_center_W;
       std::printf(" dC(%+.3f %+.3f %+.3f) size %.3f x %.3f (%+.3f %+.3f) dh %+.3f base %.2f", e.x(),
                   e.y(), e.z(), r.target.size_m[0], r.target.size_m[1],

@@ -199,7 +199,7 @@ int main(int argc, char** argv) {
         digest.add(static_cast<int>(r.reason));
         digest.add(r.n_features), digest.add(r.n_matches);
         double dw = NAN, dh = NAN, dc = NAN;
-        if (r.found() || r.reason == vision::Reason::kPartialView) {
+        if (r.found() || vision::located_only(r.reason)) {
           for (int k = 0; k < 3; ++k) digest.add(r.target.p_W[k]);
           digest.add(r.target.size_m[0]), digest.add(r.target.size_m[1]);
         }
@@ -211,7 +211,7 @@ int main(int argc, char** argv) {
             dc = (r.target.p_W - rec.opening->center_W).norm();
             st.dw_m.push_back(dw), st.dh_m.push_back(dh), st.dc_m.push_back(dc);
           }
-        } else if (r.reason == vision::Reason::kPartialView) {
+        } else if (vision::located_only(r.reason)) {
           ++st.partial;
         }
         if (csv.is_open())

@@ -46,6 +46,28 @@ TEST(AutonomyConvertTest, ImuAndTargetRoundTrip) {
   EXPECT_EQ(t2.size_m, t.size_m);
 }
 
+// Located but not measured: a partial view, and an opening seen with too little parallax. Both
+// keep the target in sight; neither is averaged (autonomy_test's refinement tests).
+TEST(AutonomyConvertTest, LocatedOnlyTargetsArePartial) {
+  target_t m{};
+  m.utime = 5;
+  m.mission = target_t::MISSION_INGRESS;
+  m.found = false;
+  m.p_W_target[0] = 3.0;
+  m.n_W[0] = -1.0;
+  for (const int8_t reason : {target_t::REASON_PARTIAL_VIEW, target_t::REASON_LOW_PARALLAX}) {
+    m.reason = reason;
+    const TargetMeasurement t = from_msg(wire(m));
+    EXPECT_FALSE(t.found);
+    EXPECT_TRUE(t.partial) << int(reason);
+    EXPECT_EQ(t.p_W_target.x(), 3.0);
+  }
+  for (const int8_t reason : {target_t::REASON_NO_OPENING, target_t::REASON_SMALL_BASELINE}) {
+    m.reason = reason;
+    EXPECT_FALSE(from_msg(wire(m)).partial) << int(reason);
+  }
+}
+
 TEST(AutonomyConvertTest, OperatorCommandFromTheWireIsNeverInternal) {
   operator_cmd_t m{};
   m.utime = 5;

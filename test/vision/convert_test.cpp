@@ -53,6 +53,14 @@ TEST(VisionConvertTest, PartialViewSaysWhereToLookButIsNotFound) {
   EXPECT_DOUBLE_EQ(m.size_m[1], 0.27);
 }
 
+TEST(VisionConvertTest, OpeningWithTooLittleParallaxSaysWhereToLookButIsNotFound) {
+  const target_t m = to_msg(result(Reason::kLowParallax));
+  EXPECT_FALSE(m.found);
+  EXPECT_EQ(m.reason, target_t::REASON_LOW_PARALLAX);
+  EXPECT_DOUBLE_EQ(m.p_W_target[0], 1.0);
+  EXPECT_DOUBLE_EQ(m.size_m[1], 0.27);
+}
+
 TEST(VisionConvertTest, OtherFailuresCarryReasonAndCountsOnly) {
   const target_t m = to_msg(result(Reason::kNoTargetPlane));
   EXPECT_FALSE(m.found);

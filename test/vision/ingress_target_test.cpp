@@ -270,11 +270,12 @@ struct WallScene {
   cv::Mat image;
   Correspondences c;
 
-  /// dy_m: both views moved along the wall.
-  WallScene(int n_wall, int n_back, double dy_m = 0.0) {
+  /// dy_m: both views moved along the wall; half_baseline_m: each view this far from their
+  /// midpoint.
+  WallScene(int n_wall, int n_back, double dy_m = 0.0, double half_baseline_m = 0.15) {
     mount.R_BC = R_BC_forward();
-    pose_1.p_W_B = Vector3d(1.5, -0.15 + dy_m, 1.2);
-    pose_2.p_W_B = Vector3d(1.5, 0.15 + dy_m, 1.2);
+    pose_1.p_W_B = Vector3d(1.5, -half_baseline_m + dy_m, 1.2);
+    pose_2.p_W_B = Vector3d(1.5, half_baseline_m + dy_m, 1.2);
     pose_2.utime = 100'000;
     c.camera = &camera;
     c.mount = &mount;
@@ -401,6 +402,32 @@ TEST(IngressTargetTest, MismatchesInTheRoomDoNotHideThatItIsBehind) {
   params.ingress.max_ray_gap_px = 0;
   const TargetOutcome unchecked = find_ingress_target(s.c, s.image, cv::Mat(), params);
   EXPECT_EQ(unchecked.reason, Reason::kNoOpening) << to_string(unchecked.reason);
+}
+
+// Regression (issue 15, ingress_photo seed 9401: refused, its measured width 17 cm short): at
+// the refinement's vantages the vehicle hovers, the reference frame comes closer, and the room
+// behind the opening moved 5-12 px against the wall; such frames' blocks covered part of the
+// opening (widths 20-40 cm short), outnumbered the others and set the median. A frame whose
+// room moves less than min_opening_parallax_px is not a measurement of the opening.
+TEST(IngressTargetTest, OpeningSeenWithTooLittleParallaxIsNotMeasured) {
+  PipelineParams params;
+  params.ingress.parallax_mask = false;
+  // Views 4 cm apart (above min_baseline_m): the room 3.1 m behind the wall moves
+  // 667 px x 0.04 m x (1 / 1.5 m - 1 / 4.6 m) = 12 px against it.
+  const WallScene near(150, 60, 0.0, 0.02);
+  ASSERT_GT(0.04, params.waypoint.min_baseline_m);
+  ASSERT_GT(params.ingress.min_opening_parallax_px, 12.5);
+  const TargetOutcome t = find_ingress_target(near.c, near.image, cv::Mat(), params);
+  EXPECT_EQ(t.reason, Reason::kLowParallax) << to_string(t.reason);
+  // The same views 30 cm apart (90 px): measured.
+  const WallScene far(150, 60);
+  const TargetOutcome f = find_ingress_target(far.c, far.image, cv::Mat(), params);
+  ASSERT_EQ(f.reason, Reason::kOk) << to_string(f.reason);
+  EXPECT_NEAR(f.estimate.size_m[0], 0.6, 0.01);
+  // Without the check the near frame is reported as a whole opening.
+  params.ingress.min_opening_parallax_px = 0;
+  const TargetOutcome unchecked = find_ingress_target(near.c, near.image, cv::Mat(), params);
+  EXPECT_EQ(unchecked.reason, Reason::kOk) << to_string(unchecked.reason);
 }
 
 // Regression (issue 15, ingress_photo: openings up to 1.3 x 1.1 m seen from the vantages): an

@@ -22,6 +22,7 @@ TEST(StatusTest, ReasonValuesAreTheTargetMessageConstants) {
   EXPECT_EQ(int(Reason::kDecompositionFailed), T::REASON_DECOMPOSITION_FAILED);
   EXPECT_EQ(int(Reason::kBadImage), T::REASON_BAD_IMAGE);
   EXPECT_EQ(int(Reason::kPartialView), T::REASON_PARTIAL_VIEW);
+  EXPECT_EQ(int(Reason::kLowParallax), T::REASON_LOW_PARALLAX);
 }
 
 TEST(StatusTest, ResultCarriesEitherAValueOrAReason) {
