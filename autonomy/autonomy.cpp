@@ -362,7 +362,6 @@ void Autonomy::handle_command(const OperatorCommand& cmd) {
       }
       profile_ = MissionProfile::make(cmd.mission, params_);
       retries_ = 0;
-      empty_passes_ = 0;
       failsafe_ = Failsafe::kNone;
       go_utime_ = now_utime_;
       end_utime_.reset();
@@ -410,7 +409,7 @@ void Autonomy::handle_command(const OperatorCommand& cmd) {
 
 void Autonomy::start_detection(const std::string& reason) {
   assert(pose_ && profile_);
-  auto search = profile_->search(pose_->p_W_B, empty_passes_);
+  auto search = profile_->search(pose_->p_W_B);
   if (search.yaw_rad) yaw_sp_rad_ = *search.yaw_rad;
   phases::Detection d;
   d.path.start(pose_->p_W_B, std::move(search.path_W));
@@ -566,7 +565,6 @@ void Autonomy::step(phases::Detection& s, const Vector3d& p, double dt_s) {
   sp_p_W_ = s.path.carrot();
   sp_v_W_ = s.path.carrot_velocity();
   if (s.path.finished(p, params_.hover_tol_m)) {
-    ++empty_passes_;
     target_lost("search path flown without a detection");
   }
 }

@@ -234,7 +234,6 @@ class Autonomy {
   // The mission (from GO or LAND_HERE; none after TAKEOFF).
   std::unique_ptr<const MissionProfile> profile_;
   int retries_ = 0;
-  int empty_passes_ = 0;  ///< searches of this mission flown without a detection
   std::optional<int64_t> go_utime_;
   std::optional<int64_t> end_utime_;
   Vector3d estimate_W_ = Vector3d::Zero();  // the final estimate, from APPROACH on

@@ -30,7 +30,7 @@ class LandingProfile final : public MissionProfile {
 
   Mission mission() const override { return Mission::kLanding; }
 
-  Search search(const Vector3d& p_W, int /*empty_passes*/) const override {
+  Search search(const Vector3d& p_W) const override {
     // Up (or down) to the search height above where we are: a safe hover, then the lawnmower.
     const auto& d = p_.detection;
     Search s;
@@ -151,15 +151,9 @@ class IngressProfile final : public MissionProfile {
 
   Mission mission() const override { return Mission::kIngress; }
 
-  Search search(const Vector3d& /*p_W*/, int empty_passes) const override {
+  Search search(const Vector3d& /*p_W*/) const override {
     const auto& d = p_.detection;
-    const double yaw_rad = d.ingress_yaw_deg * M_PI / 180.0;
-    // Back from the wall: against the heading the camera faces it with.
-    const Vector3d back_W = -Vector3d(std::cos(yaw_rad), std::sin(yaw_rad), 0.0) *
-                            d.ingress_retry_backoff_m * std::max(0, empty_passes);
-    const auto& g = p_.geofence;
-    auto inside = [&](const Vector3d& p_W) { return p_W.cwiseMax(g.min_W_m).cwiseMin(g.max_W_m); };
-    return {{inside(d.ingress_start_W_m + back_W), inside(d.ingress_end_W_m + back_W)}, yaw_rad};
+    return {{d.ingress_start_W_m, d.ingress_end_W_m}, d.ingress_yaw_deg * M_PI / 180.0};
   }
 
   Vantage vantage(const Vector3d& mu_W, const Matrix3d& S_W, int n, const Vector3d& /*here_W*/,

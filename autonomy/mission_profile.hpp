@@ -88,13 +88,13 @@ class MissionProfile {
 
   virtual Mission mission() const = 0;
 
-  /// Detection: the search path from the vehicle at p_W, after empty_passes searches of this
-  /// mission flown without a detection, and the yaw to fly it with (none: keep the current one).
+  /// Detection: the search path from the vehicle at p_W, and the yaw to fly it with (none: keep
+  /// the current one).
   struct Search {
     std::vector<Vector3d> path_W;
     std::optional<double> yaw_rad;
   };
-  virtual Search search(const Vector3d& p_W, int empty_passes) const = 0;
+  virtual Search search(const Vector3d& p_W) const = 0;
 
   /// Refinement: the next vantage point around mu_W with covariance S_W of n waypoints; here_W:
   /// the vehicle (mu_W without a pose); normal_sum_W: the sum of the measured target normals.

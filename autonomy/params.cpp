@@ -61,11 +61,6 @@ const ParamSchema<DetectionParams>& DetectionParams::schema() {
                "must be > 0.1 m from ingress_start_W_m");
     s.add("ingress_yaw_deg", &P::ingress_yaw_deg, Range::any(), "deg",
           "heading during the pass (camera at the wall)");
-    s.add("ingress_retry_backoff_m", &P::ingress_retry_backoff_m, Range::closed(0, 5), "m",
-          "beyond the paper: each pass flown without a detection moves the next one this much "
-          "farther from the wall (against the pass's heading, kept inside the geofence). An "
-          "opening that fills the view leaves no wall around it to find it by (issue 15, "
-          "ingress_photo seed 9407: 1.30 m wide, seen from 1.4 m). 0: the same pass every time");
     s.add("max_retries", &P::max_retries, Range::closed(0, 20), "",
           "detections retried after a lost target");
     return s;

@@ -38,7 +38,6 @@ struct DetectionParams {
   Vector3d ingress_start_W_m = Vector3d(1.5, -1.2, 1.2);
   Vector3d ingress_end_W_m = Vector3d(1.5, 1.2, 1.2);
   double ingress_yaw_deg = 0.0;
-  double ingress_retry_backoff_m = 0.0;
   int max_retries = 2;
   static const ParamSchema<DetectionParams>& schema();
   void validate() const;
