@@ -136,9 +136,11 @@ std::vector<size_t> hull_indices(const std::vector<Vector2d>& p) {
 }
 
 // The image region (camera 2, normalised coordinates) that a top hides: the convex hull of its
-// matches. A mismatch joins a top far from it only by falling within the threshold of the
-// top's one inverse distance along its epipolar line (a few px of hundreds, ~1e-4 a mismatch),
-// so the hull is the top's outline (within its feature spacing).
+// matches. A random mismatch joins a top far from it only by falling within the threshold of
+// the top's one inverse distance along its epipolar line (a few px of hundreds), so the hull is
+// the top's outline within its feature spacing. (Matches tracked a few px wrong along their
+// parallax do share one inverse distance by chance, scattered over the view, landing_none_photo
+// 9501: their hull then holds floor matches, which count against them below.)
 struct TopRegion {
   std::vector<Vector2d> polygon;  // counter-clockwise; fewer than 3 corners: hides nothing
   // q inside by more than margin (from every edge).
