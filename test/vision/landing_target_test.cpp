@@ -51,7 +51,8 @@ struct View {
     if (!a || !b) return false;
     const Vector2d x1 = *a + Vector2d(G(rng), G(rng));
     Vector2d x2 = *b + Vector2d(G(rng), G(rng));
-    if (shift_2.norm() > 0) x2 += shift_2.norm() * -(x2 - x1).normalized();
+    // Along the parallax: shift_2.x() > 0 shortens it (a farther point), < 0 lengthens it.
+    if (shift_2.x() != 0) x2 += shift_2.x() * -(x2 - x1).normalized();
     c.x1.push_back(x1);
     c.x2.push_back(x2);
     c.u1.push_back(x1);
@@ -122,6 +123,35 @@ TEST(FalseTargetOverABareFloor, KnownFloorFindsNoPairOverTheBareFloor) {
       EXPECT_FALSE(fit) << "seed " << seed << ", " << n_chance << " chance matches: a top "
                         << fit->height_m() << " m up, " << fit->n_top << " matches";
     }
+}
+
+// Regression (issue 15, landing_none_photo 9505: a partial view in 2 frames, autonomy sent into
+// refinement). The paper's planes split a bare floor into a "top" 4 cm up that holds most of
+// the matches (130, over the whole view, 1.2 x 1.0 m) and a "floor" of the rest (22), all of it
+// inside that "top"; the "floor" is the known floor, so the fallback kept the paper's planes.
+// Here most matches of the floor, over the whole view, are 4 px long of their parallax, the
+// rest, amid them, exact: no target, with either planes.
+TEST(FalseTargetOverABareFloor, FloorSplitByThePaperPlanesIsNoTarget) {
+  for (uint64_t seed = 1; seed <= 20; ++seed) {
+    std::mt19937_64 rng(3000 + seed);
+    std::uniform_real_distribution<double> U(-1, 1);
+    View v = bare_floor(rng, 0, 0);
+    for (int k = 0; k < 22;)  // the "floor" all inside the "top", as in 9505
+      k += v.add(
+          Vector3d(v.c.pose_2.p_W_B.x() + 0.45 * U(rng), v.c.pose_2.p_W_B.y() + 0.35 * U(rng), 0.0),
+          rng);
+    for (int k = 0; k < 130;)
+      k += v.add(
+          Vector3d(v.c.pose_2.p_W_B.x() + 0.7 * U(rng), v.c.pose_2.p_W_B.y() + 0.55 * U(rng), 0.0),
+          rng, Vector2d(-4.0, 0.0));
+    PipelineParams params;
+    for (const std::string mode : {"off", "fallback", "always"}) {
+      params.landing.floor_prior = mode;
+      const TargetOutcome o = find_landing_target(v.c, params);
+      EXPECT_FALSE(found(o)) << "seed " << seed << " " << mode << ": a top " << o.estimate.height_m
+                             << " m up, " << o.estimate.n_inliers_target << " matches";
+    }
+  }
 }
 
 // A real top as low as the landing families draw (8 cm), 30 x 24 cm, over the same floor from
