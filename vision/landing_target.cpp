@@ -105,6 +105,30 @@ bool floor_agrees(const PlaneMotion& floor, const Correspondences& c,
              params.landing.max_normal_angle_deg * M_PI / 180.0;
 }
 
+// A platform top is opaque: the floor is seen around it, never through it (the known floor's
+// hypotheses keep to the same rule, known_floor.cpp). The paper's planes split a bare floor into
+// a "top" 4 cm up that holds most of the view and a "floor" of the rest, all of it inside that
+// "top" (landing_none_photo 9505: 130 and 22 matches, the "top" 1.2 x 1.0 m). The floor's
+// matches seen outside the convex hull of the top's in image 2 (by more than the threshold, or
+// inside it but off the top's plane: a match near the epipole fits both planes).
+int floor_seen_around_top(const Correspondences& c, const Planes& planes, const Matrix3d& H_top_px,
+                          double threshold_px) {
+  std::vector<cv::Point2f> top_px, hull;
+  for (size_t i = 0; i < c.size(); ++i)
+    if (planes.top_in[i])
+      top_px.emplace_back(static_cast<float>(c.x2[i].x()), static_cast<float>(c.x2[i].y()));
+  int n = 0;
+  if (top_px.size() >= 3) cv::convexHull(top_px, hull);
+  for (size_t i = 0; i < c.size(); ++i) {
+    if (!planes.floor_in[i] || planes.top_in[i]) continue;
+    const cv::Point2f q(static_cast<float>(c.x2[i].x()), static_cast<float>(c.x2[i].y()));
+    const Vector3d p = H_top_px * c.x1[i].homogeneous();
+    const bool fits_top = p.z() > 0 && (p.hnormalized() - c.x2[i]).norm() <= threshold_px;
+    n += hull.size() < 3 || fits_top || cv::pointPolygonTest(hull, q, true) <= threshold_px;
+  }
+  return n;
+}
+
 TargetOutcome platform_of(const Correspondences& c, const PipelineParams& params,
                           const Planes& planes, TargetOutcome out);
 
@@ -164,6 +188,14 @@ TargetOutcome platform_of(const Correspondences& c, const PipelineParams& params
   out.estimate.n_inliers_target = planes.n_top;
   if (direction_angle(top.unit_normal_1(), floor.unit_normal_1()) >
       params.landing.max_normal_angle_deg * M_PI / 180.0) {
+    out.reason = Reason::kNoTargetPlane;
+    return out;
+  }
+
+  // The floor seen around the top in fewer than min_floor_inliers places: the "top" is the
+  // floor, or most of it (floor_seen_around_top).
+  if (floor_seen_around_top(c, planes, K * top.homography() * K_inv,
+                            params.homography.threshold_px) < params.landing.min_floor_inliers) {
     out.reason = Reason::kNoTargetPlane;
     return out;
   }

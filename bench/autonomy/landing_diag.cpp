@@ -10,6 +10,7 @@
 #include <CLI/CLI.hpp>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -47,17 +48,24 @@ int main(int argc, char** argv) {
 
   const auto scenario = sim::load_scenario(scenario_file);
   const auto scene = sim::build_scene(scenario, seed);
-  if (!scene.platform) {
-    std::fprintf(stderr, "alight_landing_diag: the scenario has no platform\n");
-    return 2;
+  // A scene without a platform (landing_none_photo) is flown against a zero-size "platform" at
+  // the world origin on the floor: every target found is false, its errors are its position,
+  // size and height.
+  sim::PlatformTruth P;
+  P.top_center_W = Vector3d::Zero();
+  P.size_m = Vector3d::Zero();
+  if (scene.platform) {
+    P = *scene.platform;
+    std::printf("# platform top centre (%.3f %.3f %.3f) size %.3f x %.3f x %.3f yaw %.1f deg\n",
+                P.top_center_W.x(), P.top_center_W.y(), P.top_center_W.z(), P.size_m.x(),
+                P.size_m.y(), P.size_m.z(), P.yaw_rad * 180 / M_PI);
+  } else {
+    std::printf("# no platform: a target's dC is its position, its size and dh its own\n");
   }
-  const auto& P = *scene.platform;
-  std::printf("# platform top centre (%.3f %.3f %.3f) size %.3f x %.3f x %.3f yaw %.1f deg\n",
-              P.top_center_W.x(), P.top_center_W.y(), P.top_center_W.z(), P.size_m.x(),
-              P.size_m.y(), P.size_m.z(), P.yaw_rad * 180 / M_PI);
   const double c = std::cos(P.yaw_rad), s = std::sin(P.yaw_rad);
   std::vector<Vector3d> corners_W;
   for (const auto& [a, b] : {std::pair{-1, -1}, {1, -1}, {1, 1}, {-1, 1}}) {
+    if (!scene.platform) break;  // no corners in view
     const double x = a * P.size_m.x() / 2, y = b * P.size_m.y() / 2;
     corners_W.push_back(P.top_center_W + Vector3d(c * x - s * y, s * x + c * y, 0));
   }
@@ -83,8 +91,13 @@ int main(int argc, char** argv) {
     n_waypoints = a.estimator().n();
   };
   int n = 0;
+  // Each frame's camera pose from motion capture (as the vision gets it) and the truth, to tell
+  // how far the motion the vision assumes between reference and current is off.
+  std::map<int64_t, std::pair<Isometry3d, Isometry3d>> cams;
   cfg.camera_vision = [&](const sim::CameraFrame& f, const std::optional<PoseSample>& pose) {
     const auto r = pipeline.process(f.pixels, f.utime, pose);
+    if (pose) cams[f.utime] = {camera_in_world(pose->X_WB(), rig.mount.X_BC()), f.X_WC};
+    while (!cams.empty() && cams.begin()->first < f.utime - 5000000) cams.erase(cams.begin());
     const Isometry3d X_CW = f.X_WC.inverse();
     std::vector<cv::Point> truth_px;
     int in_image = 0;
@@ -125,6 +138,16 @@ int main(int argc, char** argv) {
                   e.y(), e.z(), r.target.size_m[0], r.target.size_m[1],
                   r.target.size_m[0] - P.size_m.x(), r.target.size_m[1] - P.size_m.y(),
                   r.target.height_m - P.size_m.z(), r.baseline_m);
+      // Motion capture's camera motion reference -> current against the truth's: its translation
+      // error [mm] and rotation error [deg].
+      const auto a = cams.find(r.ref_utime), b = cams.find(f.utime);
+      if (a != cams.end() && b != cams.end()) {
+        const Isometry3d m_mocap = a->second.first.inverse() * b->second.first;
+        const Isometry3d m_true = a->second.second.inverse() * b->second.second;
+        const Isometry3d d = m_true.inverse() * m_mocap;
+        std::printf(" mocap motion err %.1f mm %.3f deg", 1e3 * d.translation().norm(),
+                    Eigen::AngleAxisd(d.linear()).angle() * 180 / M_PI);
+      }
     }
     if (!shadow_prior.empty()) {
       const auto q = shadow.process(f.pixels, f.utime, pose);
