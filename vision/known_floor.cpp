@@ -4,6 +4,7 @@
 #include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
+#include <opencv2/imgproc.hpp>
 
 #include "common/geometry.hpp"
 
@@ -108,33 +109,6 @@ TopMode top_mode(const std::vector<PerMatch>& m, double lo, double hi, double ma
   return best;
 }
 
-// Convex hull of points (Andrew 1979, monotone chain): indices, counter-clockwise, collinear
-// points left out.
-std::vector<size_t> hull_indices(const std::vector<Vector2d>& p) {
-  std::vector<size_t> idx(p.size());
-  for (size_t i = 0; i < p.size(); ++i) idx[i] = i;
-  std::sort(idx.begin(), idx.end(), [&](size_t a, size_t b) {
-    return p[a].x() < p[b].x() || (p[a].x() == p[b].x() && p[a].y() < p[b].y());
-  });
-  if (idx.size() < 3) return idx;
-  const auto cross = [&](size_t o, size_t a, size_t b) {
-    const Vector2d u = p[a] - p[o], v = p[b] - p[o];
-    return u.x() * v.y() - u.y() * v.x();
-  };
-  std::vector<size_t> h(2 * idx.size());
-  size_t k = 0;
-  for (size_t i = 0; i < idx.size(); ++i) {  // lower chain
-    while (k >= 2 && cross(h[k - 2], h[k - 1], idx[i]) <= 0) --k;
-    h[k++] = idx[i];
-  }
-  for (size_t i = idx.size() - 1, lo = k + 1; i-- > 0;) {  // upper chain
-    while (k >= lo && cross(h[k - 2], h[k - 1], idx[i]) <= 0) --k;
-    h[k++] = idx[i];
-  }
-  h.resize(k - 1);  // the last is the first
-  return h;
-}
-
 // The image region (camera 2, normalised coordinates) that a top hides: the convex hull of its
 // matches. A random mismatch joins a top far from it only by falling within the threshold of
 // the top's one inverse distance along its epipolar line (a few px of hundreds), so the hull is
@@ -150,7 +124,8 @@ struct TopRegion {
       const Vector2d& a = polygon[j];
       const Vector2d e = polygon[(j + 1) % polygon.size()] - a, v = q - a;
       const double len = e.norm();
-      if (!(len > 0) || (e.x() * v.y() - e.y() * v.x()) / len <= margin) return false;
+      if (!(len > 0)) continue;  // a repeated corner bounds nothing
+      if ((e.x() * v.y() - e.y() * v.x()) / len <= margin) return false;
     }
     return true;
   }
@@ -158,7 +133,21 @@ struct TopRegion {
 
 TopRegion top_region(const std::vector<Vector2d>& top_px) {
   TopRegion r;
-  for (const size_t i : hull_indices(top_px)) r.polygon.push_back(top_px[i]);
+  if (top_px.size() < 3) return r;
+  std::vector<cv::Point2f> pts;
+  for (const auto& q : top_px)
+    pts.emplace_back(static_cast<float>(q.x()), static_cast<float>(q.y()));
+  std::vector<int> idx;
+  cv::convexHull(pts, idx, /*clockwise=*/false, /*returnPoints=*/false);
+  for (const int i : idx) r.polygon.push_back(top_px[i]);
+  // hides() wants the corners counter-clockwise (positive area, x right, y up).
+  double area2 = 0;
+  for (size_t j = 0; j < r.polygon.size(); ++j) {
+    const Vector2d& a = r.polygon[j];
+    const Vector2d& b = r.polygon[(j + 1) % r.polygon.size()];
+    area2 += a.x() * b.y() - a.y() * b.x();
+  }
+  if (area2 < 0) std::reverse(r.polygon.begin(), r.polygon.end());
   return r;
 }
 
