@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <utility>
+
 namespace alight::vision {
 namespace {
 
@@ -45,20 +47,17 @@ TEST(VisionConvertTest, FoundTargetCarriesEveryField) {
   EXPECT_EQ(m.n_inliers_target, 60);
 }
 
-TEST(VisionConvertTest, PartialViewSaysWhereToLookButIsNotFound) {
-  const target_t m = to_msg(result(Reason::kPartialView));
-  EXPECT_FALSE(m.found);
-  EXPECT_EQ(m.reason, target_t::REASON_PARTIAL_VIEW);
-  EXPECT_DOUBLE_EQ(m.p_W_target[0], 1.0);
-  EXPECT_DOUBLE_EQ(m.size_m[1], 0.27);
-}
-
-TEST(VisionConvertTest, OpeningWithTooLittleParallaxSaysWhereToLookButIsNotFound) {
-  const target_t m = to_msg(result(Reason::kLowParallax));
-  EXPECT_FALSE(m.found);
-  EXPECT_EQ(m.reason, target_t::REASON_LOW_PARALLAX);
-  EXPECT_DOUBLE_EQ(m.p_W_target[0], 1.0);
-  EXPECT_DOUBLE_EQ(m.size_m[1], 0.27);
+// A partial view, and an opening seen with too little parallax to measure it.
+TEST(VisionConvertTest, LocatedOnlyTargetsSayWhereToLookButAreNotFound) {
+  for (const auto [reason, constant] :
+       {std::pair{Reason::kPartialView, target_t::REASON_PARTIAL_VIEW},
+        std::pair{Reason::kLowParallax, target_t::REASON_LOW_PARALLAX}}) {
+    const target_t m = to_msg(result(reason));
+    EXPECT_FALSE(m.found);
+    EXPECT_EQ(m.reason, constant);
+    EXPECT_DOUBLE_EQ(m.p_W_target[0], 1.0);
+    EXPECT_DOUBLE_EQ(m.size_m[1], 0.27);
+  }
 }
 
 TEST(VisionConvertTest, OtherFailuresCarryReasonAndCountsOnly) {
