@@ -883,10 +883,10 @@ TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image
   // against the wall, differs from itself: bands about its edges as wide as the displacement,
   // which the closing joins across parallax_close_px. Moved by less, the smooth parts of what is
   // seen through the opening stay wall and the block covers part of it (issue 15, ingress_photo
-  // seed 9401: hovering at the vantages, the frames' room parallax fell to 5-12 px, their
-  // widths 20-40 cm short, and their median refused the opening). The outline of such a frame
-  // is not a measurement of the opening, but it is the opening, checked as a whole one is: it
-  // locates it (autonomy keeps it in sight and never averages it).
+  // seed 9401: hovering at the vantages, the room moved a few pixels against the wall in most
+  // frames, their blocks held part of the opening, and their median refused it). The outline of
+  // such a frame is not a measurement of the opening, but it is the opening, checked as a whole one
+  // is: it locates it (autonomy keeps it in sight and never averages it).
   if (!cut && p.min_opening_parallax_px > 0) {
     auto& v = behind_parallax_px;
     const auto mid = v.begin() + v.size() / 2;
