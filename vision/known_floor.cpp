@@ -226,10 +226,10 @@ Result<KnownFloorPlanes> fit_known_floor_planes(const std::vector<Vector3d>& x1,
     // A top is opaque: the floor is seen around it, never through it. Floor matches inside the
     // top's region that its plane does not explain contradict the pair and count for neither;
     // a pair whose floor is seen in fewer than min_floor_inliers places outside its top is no
-    // pair, only its floor counts. Over a bare floor (landing_none_photo 9500-9509) the
-    // hypothesis that took 5 chance matches for the floor, all amid the real floor, made the
-    // whole floor a level "top" 4-6 cm up under a 0.4 deg correction and outscored the truth by
-    // those 5 matches (180 to 175).
+    // pair, only its floor counts. Over a bare floor (landing_none_photo) the hypothesis that
+    // took a few chance matches for the floor, all amid the real floor, made the whole floor a
+    // level "top" a few centimetres up under a small rotation correction, and outscored the
+    // truth by those few matches.
     const int hidden =
         hidden_floor(top_px, [&](size_t i) { return pm[i].err_floor <= thr && !on_top(i); });
     if (top->count > 0 && nf - hidden < params.min_floor_inliers) {

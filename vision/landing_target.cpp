@@ -107,8 +107,8 @@ bool floor_agrees(const PlaneMotion& floor, const Correspondences& c,
 
 // A platform top is opaque: the floor is seen around it, never through it (the known floor's
 // hypotheses keep to the same rule, known_floor.cpp). The paper's planes split a bare floor into
-// a "top" 4 cm up that holds most of the view and a "floor" of the rest, all of it inside that
-// "top" (landing_none_photo 9505: 130 and 22 matches, the "top" 1.2 x 1.0 m). The floor's
+// a "top" a few centimetres up that holds most of the view and a "floor" of the rest, all of it
+// inside that "top" (landing_none_photo 9505). The floor's
 // matches seen outside the convex hull of the top's in image 2 (by more than the threshold, or
 // inside it but off the top's plane: a match near the epipole fits both planes).
 int floor_seen_around_top(const Correspondences& c, const Planes& planes, const Matrix3d& H_top_px,
