@@ -115,40 +115,20 @@ TopMode top_mode(const std::vector<PerMatch>& m, double lo, double hi, double ma
 // the top's outline within its feature spacing. (Matches tracked a few px wrong along their
 // parallax do share one inverse distance by chance, scattered over the view, landing_none_photo
 // 9501: their hull then holds floor matches, which count against them below.)
-struct TopRegion {
-  std::vector<Vector2d> polygon;  // counter-clockwise; fewer than 3 corners: hides nothing
-  // q inside by more than margin (from every edge).
-  bool hides(const Vector2d& q, double margin) const {
-    if (polygon.size() < 3) return false;
-    for (size_t j = 0; j < polygon.size(); ++j) {
-      const Vector2d& a = polygon[j];
-      const Vector2d e = polygon[(j + 1) % polygon.size()] - a, v = q - a;
-      const double len = e.norm();
-      if (!(len > 0)) continue;  // a repeated corner bounds nothing
-      if ((e.x() * v.y() - e.y() * v.x()) / len <= margin) return false;
-    }
-    return true;
-  }
-};
-
-TopRegion top_region(const std::vector<Vector2d>& top_px) {
-  TopRegion r;
-  if (top_px.size() < 3) return r;
-  std::vector<cv::Point2f> pts;
+std::vector<cv::Point2f> top_hull(const std::vector<Vector2d>& top_px) {
+  std::vector<cv::Point2f> pts, hull;
   for (const auto& q : top_px)
     pts.emplace_back(static_cast<float>(q.x()), static_cast<float>(q.y()));
-  std::vector<int> idx;
-  cv::convexHull(pts, idx, /*clockwise=*/false, /*returnPoints=*/false);
-  for (const int i : idx) r.polygon.push_back(top_px[i]);
-  // hides() wants the corners counter-clockwise (positive area, x right, y up).
-  double area2 = 0;
-  for (size_t j = 0; j < r.polygon.size(); ++j) {
-    const Vector2d& a = r.polygon[j];
-    const Vector2d& b = r.polygon[(j + 1) % r.polygon.size()];
-    area2 += a.x() * b.y() - a.y() * b.x();
-  }
-  if (area2 < 0) std::reverse(r.polygon.begin(), r.polygon.end());
-  return r;
+  if (pts.size() >= 3) cv::convexHull(pts, hull);
+  return hull;
+}
+
+// q inside the hull by more than margin; fewer than 3 corners hide nothing.
+bool hides(const std::vector<cv::Point2f>& hull, const Vector2d& q, double margin) {
+  return hull.size() >= 3 &&
+         cv::pointPolygonTest(hull,
+                              cv::Point2f(static_cast<float>(q.x()), static_cast<float>(q.y())),
+                              true) > margin;
 }
 
 }  // namespace
@@ -192,10 +172,10 @@ Result<KnownFloorPlanes> fit_known_floor_planes(const std::vector<Vector3d>& x1,
   // Floor matches (is_floor) hidden by the top whose matches in image 2 are top_px.
   const double margin = thr / f;
   const auto hidden_floor = [&](const std::vector<Vector2d>& top_px, const auto& is_floor) {
-    const TopRegion region = top_region(top_px);
+    const auto hull = top_hull(top_px);
     int n = 0;
-    if (region.polygon.empty()) return n;
-    for (size_t i = 0; i < N; ++i) n += is_floor(i) && region.hides(x2[i].head<2>(), margin);
+    if (hull.empty()) return n;
+    for (size_t i = 0; i < N; ++i) n += is_floor(i) && hides(hull, x2[i].head<2>(), margin);
     return n;
   };
 
