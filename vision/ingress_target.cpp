@@ -712,11 +712,22 @@ TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image
     return (it != cuts.end() && *it - x < p.cut_margin_px) ||
            (it != cuts.begin() && x - *(it - 1) < p.cut_margin_px);
   };
+  // An outlier of the wall's homography where the dense comparison finds the wall (the mask
+  // clear at its pixel) is not seen through an opening: a wall feature the homography's fit
+  // missed, or a mismatch (issue 15, ingress_photo seed 9805: a second-plane fit over a dark
+  // wall's few features left 2-16 of them off it beside and above the opening, and they
+  // carried the block to the image border).
+  auto off_wall = [&](size_t k) {
+    if (fit->inlier[k]) return false;
+    if (mask.empty() || !p.off_features_on_mask) return true;
+    const int u = cvRound(c.u2[k].x()), v = cvRound(c.u2[k].y());
+    return u < 0 || v < 0 || u >= mask.cols || v >= mask.rows || mask.at<uint8_t>(v, u) != 0;
+  };
   for (size_t k = 0; k < c.size(); ++k) {
     const int i = cell_of(xc, c.u2[k].x()), j = cell_of(yc, c.u2[k].y());
-    if (!fit->inlier[k])
+    if (off_wall(k))
       ++at(off, i + 1, j + 1);
-    else if (!near_cut(xc, c.u2[k].x()) && !near_cut(yc, c.u2[k].y()))
+    else if (fit->inlier[k] && !near_cut(xc, c.u2[k].x()) && !near_cut(yc, c.u2[k].y()))
       ++at(in, i + 1, j + 1);
   }
   for (int j = 1; j <= ny; ++j)
@@ -727,6 +738,27 @@ TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image
   auto block = [&](std::vector<int>& v, int i0, int j0, int i1, int j1) {  // cells [i0,i1)x[j0,j1)
     return at(v, i1, j1) - at(v, i0, j1) - at(v, i1, j0) + at(v, i0, j0);
   };
+  // A cell without off-wall features that the off-wall mask leaves mostly clear is wall as
+  // much as one with inliers (issue 15, ingress_photo seed 9805: on a dark, flat wall
+  // photograph the wall beside the opening holds no features at all, and the tie rule below
+  // carried the block across it to the image border: a partial view in 609 of 1800 refinement
+  // frames). Off-wall features keep a cell: a smooth room's mask covers a third of a cell that
+  // holds 20 of them (seed 9800).
+  std::vector<int> clear((nx + 1) * (ny + 1), 0);
+  if (!mask.empty() && p.min_cell_mask_share > 0) {
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i) {
+        const cv::Rect cell = cv::Rect(cv::Point(cvRound(xc[i]), cvRound(yc[j])),
+                                       cv::Point(cvRound(xc[i + 1]), cvRound(yc[j + 1]))) &
+                              cv::Rect(0, 0, mask.cols, mask.rows);
+        if (cell.area() > 0 && block(off, i, j, i + 1, j + 1) == 0)
+          at(clear, i + 1, j + 1) =
+              cv::countNonZero(mask(cell)) < p.min_cell_mask_share * cell.area();
+      }
+    for (int j = 1; j <= ny; ++j)
+      for (int i = 1; i <= nx; ++i)
+        at(clear, i, j) += at(clear, i - 1, j) + at(clear, i, j - 1) - at(clear, i - 1, j - 1);
+  }
   int best = 0;
   double best_area = 0;
   int b[4] = {0, 0, 0, 0};
@@ -734,8 +766,17 @@ TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image
     for (int i1 = i0 + 1; i1 <= nx; ++i1)
       for (int j0 = 0; j0 < ny; ++j0)
         for (int j1 = j0 + 1; j1 <= ny; ++j1) {
-          if (block(in, i0, j0, i1, j1) > 0) break;  // growing j1 only adds inliers
+          if (block(clear, i0, j0, i1, j1) > 0) break;  // growing j1 only adds wall cells
+          const int n_in = block(in, i0, j0, i1, j1);
           const int n = block(off, i0, j0, i1, j1);
+          // A few inliers among many features seen through the opening do not make it wall:
+          // features on the inner faces near the front edge, within the wall's thickness behind
+          // it, fit the wall's homography (issue 15, seed 9805: one such inlier in the
+          // opening's cell of 160-210 off-wall features refused the opening in 347 frames).
+          if (n_in > p.block_inlier_share * n) {
+            if (p.block_inlier_share > 0) continue;
+            break;  // growing j1 only adds inliers
+          }
           const double area = (xc[i1] - xc[i0]) * (yc[j1] - yc[j0]);
           // Ties: the larger block. The frame's inner faces (wall thickness) hold no wall
           // inliers, so their far edges bound a smaller block with the same features; the
@@ -751,7 +792,7 @@ TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image
     return out;
   }
   for (size_t k = 0; k < c.size(); ++k)
-    if (!fit->inlier[k]) {
+    if (off_wall(k)) {
       const int i = cell_of(xc, c.u2[k].x()), j = cell_of(yc, c.u2[k].y());
       if (i >= b[0] && i < b[2] && j >= b[1] && j < b[3]) out.labels[k] = Label::kTarget;
     }

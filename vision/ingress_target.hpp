@@ -11,7 +11,11 @@
 // reference image warped by the wall homography (plane-induced parallax, Irani & Anandan,
 // ECCV 1996) disagrees with the current image exactly where the view leaves the wall plane, so
 // the mask's border is the opening's border in the wall plane (the frame's inner faces, off the
-// plane, fall inside it).
+// plane, fall inside it). The mask also decides what the features alone cannot (issue 15, a
+// dark, flat wall photograph): an outlier of the wall's homography where the mask finds the
+// wall is not seen through the opening, a cell without off-wall features that the mask leaves
+// mostly clear is wall, and a block may hold a few inliers (block_inlier_share of its
+// off-wall features: the inner faces' features fit the wall's homography).
 
 #include <opencv2/core.hpp>
 #include <vector>

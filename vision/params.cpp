@@ -321,6 +321,17 @@ const ParamSchema<IngressParams>& IngressParams::schema() {
     s.add("merge_px", &P::merge_px, Range::ge(0), "px", "cuts closer than this are one cut");
     s.add("cut_margin_px", &P::cut_margin_px, Range::closed(0, 50), "px",
           "wall inliers this close to a cut do not count");
+    s.add("off_features_on_mask", &P::off_features_on_mask, Range::any(), "",
+          "an outlier of the wall's homography counts as an off-wall feature only where the "
+          "off-wall mask marks its pixel (elsewhere the dense comparison finds the wall there)");
+    s.add("min_cell_mask_share", &P::min_cell_mask_share, Range::closed(0, 1), "",
+          "a cell without off-wall features whose share of off-wall mask pixels is below this "
+          "is wall, as a cell with inliers: never part of the opening's block (0: only "
+          "inliers decide)");
+    s.add("block_inlier_share", &P::block_inlier_share, Range::closed(0, 1), "",
+          "a block may hold wall inliers up to this share of its off-wall features (inner-face "
+          "features within the wall's thickness fit the wall's homography; 0: none, the paper's "
+          "rule)");
     s.add("min_outliers", &P::min_outliers, Range::ge(1), "",
           "fewer off-wall features in the block: no opening");
     s.add("behind_margin_m", &P::behind_margin_m, Range::ge(0), "m",

@@ -157,6 +157,9 @@ struct IngressParams {
   double max_line_tilt_deg = 8;
   double merge_px = 6;
   double cut_margin_px = 6;
+  bool off_features_on_mask = true;
+  double min_cell_mask_share = 0.5;
+  double block_inlier_share = 0.02;
   int min_outliers = 8;
   double behind_margin_m = 0.02;
   double min_behind_share = 0.7;
