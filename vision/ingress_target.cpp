@@ -738,12 +738,13 @@ TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image
   auto block = [&](std::vector<int>& v, int i0, int j0, int i1, int j1) {  // cells [i0,i1)x[j0,j1)
     return at(v, i1, j1) - at(v, i0, j1) - at(v, i1, j0) + at(v, i0, j0);
   };
-  // A cell without off-wall features that the off-wall mask leaves mostly clear is wall as
-  // much as one with inliers (issue 15, ingress_photo seed 9805: on a dark, flat wall
+  // A block whose outermost row or column of cells holds no off-wall features and is mostly
+  // clear in the off-wall mask is not bounded by the opening: the same block without that row
+  // holds the same features (issue 15, ingress_photo seed 9805: on a dark, flat wall
   // photograph the wall beside the opening holds no features at all, and the tie rule below
   // carried the block across it to the image border: a partial view in 609 of 1800 refinement
-  // frames). Off-wall features keep a cell: a smooth room's mask covers a third of a cell that
-  // holds 20 of them (seed 9800).
+  // frames). Inside the block such cells stay: a smooth room's mask covers 5-45 % of cells
+  // between the ones holding its few features (seed 9401).
   std::vector<int> clear((nx + 1) * (ny + 1), 0);
   if (!mask.empty() && p.min_cell_mask_share > 0) {
     for (int j = 0; j < ny; ++j)
@@ -759,6 +760,9 @@ TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image
       for (int i = 1; i <= nx; ++i)
         at(clear, i, j) += at(clear, i - 1, j) + at(clear, i, j - 1) - at(clear, i - 1, j - 1);
   }
+  auto clear_strip = [&](int i0, int j0, int i1, int j1) {
+    return block(clear, i0, j0, i1, j1) == (i1 - i0) * (j1 - j0);
+  };
   int best = 0;
   double best_area = 0;
   int b[4] = {0, 0, 0, 0};
@@ -766,7 +770,9 @@ TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image
     for (int i1 = i0 + 1; i1 <= nx; ++i1)
       for (int j0 = 0; j0 < ny; ++j0)
         for (int j1 = j0 + 1; j1 <= ny; ++j1) {
-          if (block(clear, i0, j0, i1, j1) > 0) break;  // growing j1 only adds wall cells
+          if (clear_strip(i0, j0, i0 + 1, j1) || clear_strip(i1 - 1, j0, i1, j1) ||
+              clear_strip(i0, j0, i1, j0 + 1) || clear_strip(i0, j1 - 1, i1, j1))
+            continue;
           const int n_in = block(in, i0, j0, i1, j1);
           const int n = block(off, i0, j0, i1, j1);
           // A few inliers among many features seen through the opening do not make it wall:

@@ -13,9 +13,10 @@
 // the mask's border is the opening's border in the wall plane (the frame's inner faces, off the
 // plane, fall inside it). The mask also decides what the features alone cannot (issue 15, a
 // dark, flat wall photograph): an outlier of the wall's homography where the mask finds the
-// wall is not seen through the opening, a cell without off-wall features that the mask leaves
-// mostly clear is wall, and a block may hold a few inliers (block_inlier_share of its
-// off-wall features: the inner faces' features fit the wall's homography).
+// wall is not seen through the opening, a block is not bounded by a row or column of cells
+// without off-wall features that the mask leaves mostly clear, and it may hold a few inliers
+// (block_inlier_share of its off-wall features: the inner faces' features fit the wall's
+// homography).
 
 #include <opencv2/core.hpp>
 #include <vector>

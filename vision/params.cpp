@@ -326,8 +326,8 @@ const ParamSchema<IngressParams>& IngressParams::schema() {
           "off-wall mask marks its pixel (elsewhere the dense comparison finds the wall there)");
     s.add("min_cell_mask_share", &P::min_cell_mask_share, Range::closed(0, 1), "",
           "a cell without off-wall features whose share of off-wall mask pixels is below this "
-          "is wall, as a cell with inliers: never part of the opening's block (0: only "
-          "inliers decide)");
+          "is clear; a block with a row or column of clear cells on its border is not the "
+          "opening (the block without it holds the same features; 0: no check)");
     s.add("block_inlier_share", &P::block_inlier_share, Range::closed(0, 1), "",
           "a block may hold wall inliers up to this share of its off-wall features (inner-face "
           "features within the wall's thickness fit the wall's homography; 0: none, the paper's "

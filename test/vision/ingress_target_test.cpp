@@ -450,7 +450,9 @@ TEST(IngressTargetTest, OpeningCutByTheImageBorderIsAPartialView) {
 // The views of WallScene rendered (issue 15, ingress_photo seed 9805): a flat, featureless wall
 // (grey 60, as the dark parts of a photograph) with the 60 x 60 cm hole, a textured back wall at
 // x = 6.1 m seen through it, so the off-wall mask marks the hole alone. The wall's features
-// (its photograph's few bright marks) lie only where `wall_feature` allows them.
+// (its photograph's few bright marks) lie right of the hole only when asked; with
+// room_flat_y_m > 0 the back wall is flat grey 60 over |y| < room_flat_y_m (a smooth room: the
+// mask misses the middle of the hole), and no features come from there.
 struct FlatWallScene {
   CameraModel camera;
   CameraMount mount;
@@ -458,7 +460,7 @@ struct FlatWallScene {
   Correspondences c;
   double hole_right_px = 0;  ///< the hole's right edge in the current image
 
-  explicit FlatWallScene(bool features_right_of_the_hole) {
+  explicit FlatWallScene(bool features_right_of_the_hole, double room_flat_y_m = 0) {
     mount.R_BC = R_BC_forward();
     PoseSample pose_1, pose_2;
     pose_1.p_W_B = Vector3d(1.5, -0.15, 1.2);
@@ -484,7 +486,8 @@ struct FlatWallScene {
           const Vector3d b = o + (6.1 - o.x()) / d.x() * d;
           const int col = static_cast<int>((b.y() + 3.0) / 0.005);
           const int row = static_cast<int>((2.4 - b.z()) / 0.005);
-          if (col >= 0 && col < room.cols && row >= 0 && row < room.rows)
+          if (col >= 0 && col < room.cols && row >= 0 && row < room.rows &&
+              std::abs(b.y()) >= room_flat_y_m)
             out.at<uint8_t>(v, u) = room.at<uint8_t>(row, col);
         }
       return out;
@@ -513,8 +516,8 @@ struct FlatWallScene {
     }
     for (int k = 0; k < 80;) {
       const Vector3d p(6.1, y(rng), z(rng));
-      if (through_hole(X_WC1.translation(), p) && through_hole(X_WC2.translation(), p) &&
-          add(p, false))
+      if (std::abs(p.y()) >= room_flat_y_m && through_hole(X_WC1.translation(), p) &&
+          through_hole(X_WC2.translation(), p) && add(p, false))
         ++k;
     }
   }
@@ -549,6 +552,21 @@ TEST(IngressTargetTest, FeaturelessWallBesideTheOpeningIsNotPartOfIt) {
   const TargetOutcome unchecked = find_ingress_target(s.c, s.image, s.reference, params);
   EXPECT_EQ(unchecked.reason, Reason::kPartialView) << to_string(unchecked.reason);
   EXPECT_GT(unchecked.estimate.outline[1].x(), s.hole_right_px + 20);
+}
+
+// The other side of the clear-strip rule (issue 15, ingress_photo seed 9401: a smooth room
+// whose few features lie apart): cells inside the opening that hold no features and that the
+// mask misses stay in the block; only a row or column of them on its border is left out
+// (a first version that took every such cell for the wall measured 9401's opening 22 cm short
+// and refused it). Here the room is flat behind the middle of the hole.
+TEST(IngressTargetTest, SmoothRoomBehindTheMiddleOfTheOpeningDoesNotSplitIt) {
+  const FlatWallScene s(true, 0.5);
+  PipelineParams params;
+  const TargetOutcome t = find_ingress_target(s.c, s.image, s.reference, params);
+  ASSERT_EQ(t.reason, Reason::kOk) << to_string(t.reason);
+  EXPECT_LT((t.estimate.p_W - Vector3d(3.0, 0.0, 1.2)).norm(), 0.02);
+  EXPECT_NEAR(t.estimate.size_m[0], 0.6, 0.02);
+  EXPECT_NEAR(t.estimate.size_m[1], 0.6, 0.02);
 }
 
 // Regression (issue 15, ingress_photo seed 9805): a second-plane fit over the dark wall's few
