@@ -715,7 +715,7 @@ TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image
   // An outlier of the wall's homography where the dense comparison finds the wall (the mask
   // clear at its pixel) is not seen through an opening: a wall feature the homography's fit
   // missed, or a mismatch (issue 15, ingress_photo seed 9805: a second-plane fit over a dark
-  // wall's few features left 2-16 of them off it beside and above the opening, and they
+  // wall's few features left some of them off it beside and above the opening, and they
   // carried the block to the image border).
   auto off_wall = [&](size_t k) {
     if (fit->inlier[k]) return false;
@@ -742,8 +742,8 @@ TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image
   // clear in the off-wall mask is not bounded by the opening: the same block without that row
   // holds the same features (issue 15, ingress_photo seed 9805: on a dark, flat wall
   // photograph the wall beside the opening holds no features at all, and the tie rule below
-  // carried the block across it to the image border: a partial view in 609 of 1800 refinement
-  // frames). Inside the block such cells stay: a smooth room's mask covers 5-45 % of cells
+  // carried the block across it to the image border, a partial view of a whole opening).
+  // Inside the block such cells stay: a smooth room's mask covers only part of the cells
   // between the ones holding its few features (seed 9401).
   std::vector<int> clear((nx + 1) * (ny + 1), 0);
   if (!mask.empty() && p.min_cell_mask_share > 0) {
@@ -777,8 +777,8 @@ TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image
           const int n = block(off, i0, j0, i1, j1);
           // A few inliers among many features seen through the opening do not make it wall:
           // features on the inner faces near the front edge, within the wall's thickness behind
-          // it, fit the wall's homography (issue 15, seed 9805: one such inlier in the
-          // opening's cell of 160-210 off-wall features refused the opening in 347 frames).
+          // it, fit the wall's homography (issue 15, seed 9805: one such inlier among the
+          // opening's off-wall features refused the opening).
           if (n_in > p.block_inlier_share * n) {
             if (p.block_inlier_share > 0) continue;
             break;  // growing j1 only adds inliers
