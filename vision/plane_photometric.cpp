@@ -1,0 +1,97 @@
+// Dense photometric check of a platform top (see plane_photometric.hpp).
+#include "vision/plane_photometric.hpp"
+
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+
+namespace alight::vision {
+namespace {
+
+// Bilinear sample; the caller keeps (x, y) at least one pixel inside.
+double sample(const cv::Mat& g, double x, double y) {
+  const int x0 = static_cast<int>(std::floor(x)), y0 = static_cast<int>(std::floor(y));
+  const double fx = x - x0, fy = y - y0;
+  const uint8_t* r0 = g.ptr<uint8_t>(y0);
+  const uint8_t* r1 = g.ptr<uint8_t>(y0 + 1);
+  return (1 - fy) * ((1 - fx) * r0[x0] + fx * r0[x0 + 1]) +
+         fy * ((1 - fx) * r1[x0] + fx * r1[x0 + 1]);
+}
+
+double ncc(const std::vector<double>& a, const std::vector<double>& b) {
+  const size_t n = a.size();
+  double ma = 0, mb = 0;
+  for (size_t i = 0; i < n; ++i) ma += a[i], mb += b[i];
+  ma /= n, mb /= n;
+  double sab = 0, saa = 0, sbb = 0;
+  for (size_t i = 0; i < n; ++i) {
+    const double da = a[i] - ma, db = b[i] - mb;
+    sab += da * db, saa += da * da, sbb += db * db;
+  }
+  return saa > 0 && sbb > 0 ? sab / std::sqrt(saa * sbb) : 0.0;
+}
+
+}  // namespace
+
+std::optional<PlanePhotometry> plane_photometry(const cv::Mat& gray_1, const cv::Mat& gray_2,
+                                                const CameraModel& camera,
+                                                const Matrix3d& H_floor_px,
+                                                const Matrix3d& H_top_px,
+                                                const std::vector<cv::Point>& pixels_u2,
+                                                int min_pixels) {
+  if (gray_1.empty() || gray_2.empty()) return std::nullopt;
+  const Matrix3d K = camera.K(), K_inv = K.inverse();
+  const Matrix3d Hf_inv = H_floor_px.inverse(), Ht_inv = H_top_px.inverse();
+  constexpr int kSteps = 25;  // gamma -1 .. 2 by 0.125
+  auto gamma_of = [](int k) { return -1.0 + 0.125 * k; };
+  std::vector<double> i2;
+  std::vector<std::vector<double>> i1(kSteps);
+  // A pixel's reference position at gamma 0 and 1; between and beyond, along the straight line
+  // through them (the lens bends it by a negligible amount over a parallax of a few pixels).
+  const double x_max = gray_1.cols - 1, y_max = gray_1.rows - 1;
+  for (const cv::Point& q : pixels_u2) {
+    if (q.x < 0 || q.y < 0 || q.x >= gray_2.cols || q.y >= gray_2.rows) continue;
+    const Vector3d x2 = K * camera.ray(Vector2d(q.x, q.y));
+    const Vector3d a = Hf_inv * x2, b = Ht_inv * x2;
+    if (!(a.z() > 0 && b.z() > 0)) continue;
+    const auto u_floor = camera.project(K_inv * a), u_top = camera.project(K_inv * b);
+    if (!u_floor || !u_top) continue;
+    const Vector2d step = *u_top - *u_floor;
+    const Vector2d lo = *u_floor + gamma_of(0) * step, hi = *u_floor + gamma_of(kSteps - 1) * step;
+    if (!(std::min(lo.x(), hi.x()) >= 0 && std::min(lo.y(), hi.y()) >= 0 &&
+          std::max(lo.x(), hi.x()) < x_max && std::max(lo.y(), hi.y()) < y_max))
+      continue;  // out of the reference at some gamma: left out at all, so every gamma sees the same
+    i2.push_back(gray_2.at<uint8_t>(q.y, q.x));
+    for (int k = 0; k < kSteps; ++k) {
+      const Vector2d u1 = *u_floor + gamma_of(k) * step;
+      i1[k].push_back(sample(gray_1, u1.x(), u1.y()));
+    }
+  }
+  if (static_cast<int>(i2.size()) < min_pixels) return std::nullopt;
+  PlanePhotometry out;
+  out.n = static_cast<int>(i2.size());
+  double c[kSteps];
+  int best = 0;
+  for (int k = 0; k < kSteps; ++k) {
+    c[k] = ncc(i1[k], i2);
+    if (c[k] > c[best]) best = k;
+  }
+  out.ncc_floor = c[8];
+  out.ncc_top = c[16];
+  out.ncc_best = c[best];
+  double frac = 0;
+  out.sigma_gamma = 1e9;  // at the grid's end, or flat: no information
+  if (best > 0 && best < kSteps - 1) {
+    const double den = c[best - 1] - 2 * c[best] + c[best + 1];
+    if (den < 0) {
+      frac = 0.5 * (c[best - 1] - c[best + 1]) / den;
+      // 1 - ncc ~ (1 - ncc*) + curv (gamma - gamma*)^2; var(gamma*) = (1 - ncc*) / (n_eff curv)
+      const double curv = -den / (2 * 0.125 * 0.125);
+      const double n_eff = out.n / 4.0;
+      out.sigma_gamma = std::sqrt(std::max(1e-6, 1 - c[best]) / (n_eff * curv));
+    }
+  }
+  out.gamma = gamma_of(best) + 0.125 * frac;
+  return out;
+}
+
+}  // namespace alight::vision
