@@ -141,7 +141,7 @@ bool follows_its_planes(const Correspondences& c, const Planes& planes, const Ma
                         const LandingParams& p) {
   // Samples: the hull's inside at a stride that keeps about kHullPixels; kPatches floor
   // patches of (2 kPatchHalf + 1)^2 pixels, clear of the hull by the threshold's margin.
-  constexpr int kHullPixels = 1500, kPatches = 30, kPatchHalf = 5;
+  constexpr int kHullPixels = 1000, kPatches = 20, kPatchHalf = 5;
   constexpr double kClear = 4.0;  // [px] a patch's pixels this far outside the hull at least
   std::vector<cv::Point2f> top_u2, hull;
   for (size_t i = 0; i < c.size(); ++i)

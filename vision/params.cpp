@@ -229,7 +229,8 @@ const ParamSchema<LandingParams>& LandingParams::schema() {
           "fit's curvature and residual) gives no verdict; a floor patch's may be 3 times it");
     s.add("photometric_min_patches", &P::photometric_min_patches, Range::ge(1), "",
           "photometric_tol: the floor's verdict is the median of at least this many patches "
-          "around its features (fewer: none)");
+          "around its features (fewer: none). A false top that covers most of the view leaves "
+          "one or two of the floor's features clear of it");
     s.add("hold_reference", &P::hold_reference, Range::any(), "",
           "beyond the paper: while the tracked reference is closer than hold_baseline_m (the "
           "camera hovers), keep the previous frame's reference when it is farther from the "

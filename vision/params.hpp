@@ -124,7 +124,7 @@ struct LandingParams {
   double photometric_tol = 0.25;
   double photometric_min_ncc = 0.5;
   double photometric_max_sigma = 0.1;
-  int photometric_min_patches = 3;
+  int photometric_min_patches = 1;
   bool hold_reference = true;  ///< keep a longer-baseline reference while hovering (pipeline.hpp)
   double hold_baseline_m = 0.3;
   double hold_max_age_s = 30.0;

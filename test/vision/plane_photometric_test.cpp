@@ -90,8 +90,10 @@ TEST(PlanePhotometry, GainAndOffsetBetweenTheFramesChangeNothing) {
   const cv::Mat ref = texture(11, 640, 480);
   cv::Mat cur = current_at(ref, p, 1.0), brighter;
   cur.convertTo(brighter, CV_8U, 0.8, 20);
-  const auto a = plane_photometry(ref, cur, p.camera, p.H_floor, p.H_top, block(100, 100, 120, 120, 2), 100);
-  const auto b = plane_photometry(ref, brighter, p.camera, p.H_floor, p.H_top, block(100, 100, 120, 120, 2), 100);
+  const auto a =
+      plane_photometry(ref, cur, p.camera, p.H_floor, p.H_top, block(100, 100, 120, 120, 2), 100);
+  const auto b = plane_photometry(ref, brighter, p.camera, p.H_floor, p.H_top,
+                                  block(100, 100, 120, 120, 2), 100);
   ASSERT_TRUE(a && b);
   EXPECT_NEAR(a->gamma, b->gamma, 0.02);
 }
@@ -107,7 +109,8 @@ TEST(PlanePhotometry, BlankSurfaceGivesNoConfidentHeight) {
   ref += noise;
   rng.fill(noise, cv::RNG::NORMAL, 0, 2);
   cur += noise;
-  const auto r = plane_photometry(ref, cur, p.camera, p.H_floor, p.H_top, block(200, 150, 200, 150, 3), 100);
+  const auto r =
+      plane_photometry(ref, cur, p.camera, p.H_floor, p.H_top, block(200, 150, 200, 150, 3), 100);
   ASSERT_TRUE(r);
   EXPECT_LT(r->ncc_best, 0.2);
 }
@@ -119,8 +122,10 @@ TEST(PlanePhotometry, PixelsOutOfTheReferenceAreLeftOut) {
   const cv::Mat cur = current_at(ref, p, 1.0);
   // Camera 2 is 0.25 m to the side: its right edge's pixels map out of the reference (x1 = x2
   // + 111 px on the floor).
-  EXPECT_FALSE(plane_photometry(ref, cur, p.camera, p.H_floor, p.H_top, block(600, 100, 40, 200, 2), 100));
-  EXPECT_TRUE(plane_photometry(ref, cur, p.camera, p.H_floor, p.H_top, block(0, 100, 40, 200, 2), 100));
+  EXPECT_FALSE(
+      plane_photometry(ref, cur, p.camera, p.H_floor, p.H_top, block(600, 100, 40, 200, 2), 100));
+  EXPECT_TRUE(
+      plane_photometry(ref, cur, p.camera, p.H_floor, p.H_top, block(0, 100, 40, 200, 2), 100));
   EXPECT_FALSE(plane_photometry(ref, cur, p.camera, p.H_floor, p.H_top, {}, 1));
 }
 
