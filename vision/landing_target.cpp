@@ -9,6 +9,7 @@
 #include "vision/alignment.hpp"
 #include "vision/homography.hpp"
 #include "vision/known_floor.hpp"
+#include "vision/plane_photometric.hpp"
 #include "vision/waypoint.hpp"
 
 namespace alight::vision {
@@ -129,8 +130,69 @@ int floor_seen_around_top(const Correspondences& c, const Planes& planes, const 
   return n;
 }
 
+// The images' verdict on the planes the features found (plane_photometric.hpp): the pixels
+// inside the top's features (their convex hull in the current image) must follow the top's
+// plane, and the pixels around the floor's features outside it the floor's. False tops over a
+// bare floor are features tracked a few pixels wrong: every other pixel of their "top" and
+// their "floor" lies on one surface, at one gamma, and rarely at 1 and 0. A pixel set too bland
+// or too uncertain to tell gives no verdict (blank paper, a grey tile): the features decide.
+bool follows_its_planes(const Correspondences& c, const Planes& planes, const Matrix3d& H_floor_px,
+                        const Matrix3d& H_top_px, const cv::Mat& gray_1, const cv::Mat& gray_2,
+                        const LandingParams& p) {
+  // Samples: the hull's inside at a stride that keeps about kHullPixels; kPatches floor
+  // patches of (2 kPatchHalf + 1)^2 pixels, clear of the hull by the threshold's margin.
+  constexpr int kHullPixels = 1000, kPatches = 20, kPatchHalf = 5;
+  constexpr double kClear = 4.0;  // [px] a patch's pixels this far outside the hull at least
+  std::vector<cv::Point2f> top_u2, hull;
+  for (size_t i = 0; i < c.size(); ++i)
+    if (planes.top_in[i]) top_u2.emplace_back(c.u2[i].x(), c.u2[i].y());
+  if (top_u2.size() < 3) return true;
+  cv::convexHull(top_u2, hull);
+  const cv::Rect inside(0, 0, gray_2.cols, gray_2.rows);
+  const auto informative = [&](const std::optional<PlanePhotometry>& f, double max_sigma) {
+    return f && f->ncc_best >= p.photometric_min_ncc && f->sigma_gamma <= max_sigma;
+  };
+
+  std::vector<cv::Point> px;
+  const cv::Rect box = cv::boundingRect(hull) & inside;
+  const double area = std::max(1.0, cv::contourArea(hull));
+  const int stride = std::max(1, static_cast<int>(std::ceil(std::sqrt(area / kHullPixels))));
+  for (int v = box.y; v < box.y + box.height; v += stride)
+    for (int u = box.x; u < box.x + box.width; u += stride)
+      if (cv::pointPolygonTest(hull, cv::Point2f(u, v), true) >= kClear) px.emplace_back(u, v);
+  const auto on_top =
+      plane_photometry(gray_1, gray_2, *c.camera, H_floor_px, H_top_px, px, kHullPixels / 10);
+  if (informative(on_top, p.photometric_max_sigma) &&
+      std::abs(on_top->gamma - 1.0) > p.photometric_tol)
+    return false;
+
+  std::vector<size_t> floor_i;
+  for (size_t i = 0; i < c.size(); ++i)
+    if (planes.floor_in[i] && !planes.top_in[i] &&
+        cv::pointPolygonTest(hull, cv::Point2f(c.u2[i].x(), c.u2[i].y()), true) <
+            -(kPatchHalf * M_SQRT2 + kClear))
+      floor_i.push_back(i);
+  const size_t step = std::max<size_t>(1, floor_i.size() / kPatches);
+  std::vector<double> gammas;
+  for (size_t k = 0; k < floor_i.size(); k += step) {
+    const int u0 = static_cast<int>(std::lround(c.u2[floor_i[k]].x()));
+    const int v0 = static_cast<int>(std::lround(c.u2[floor_i[k]].y()));
+    px.clear();
+    for (int dv = -kPatchHalf; dv <= kPatchHalf; ++dv)
+      for (int du = -kPatchHalf; du <= kPatchHalf; ++du)
+        if (inside.contains(cv::Point(u0 + du, v0 + dv))) px.emplace_back(u0 + du, v0 + dv);
+    const auto patch = plane_photometry(gray_1, gray_2, *c.camera, H_floor_px, H_top_px, px,
+                                        (kPatchHalf + 1) * (kPatchHalf + 1));
+    if (informative(patch, 3 * p.photometric_max_sigma)) gammas.push_back(patch->gamma);
+  }
+  if (static_cast<int>(gammas.size()) < p.photometric_min_patches) return true;
+  std::nth_element(gammas.begin(), gammas.begin() + gammas.size() / 2, gammas.end());
+  return std::abs(gammas[gammas.size() / 2]) <= p.photometric_tol;
+}
+
 TargetOutcome platform_of(const Correspondences& c, const PipelineParams& params,
-                          const Planes& planes, TargetOutcome out);
+                          const Planes& planes, TargetOutcome out, const cv::Mat& gray_1,
+                          const cv::Mat& gray_2);
 
 }  // namespace
 
@@ -139,7 +201,8 @@ double side_from_extent(double range_m, size_t n) {
   return range_m * static_cast<double>(n + 1) / static_cast<double>(n - 1);
 }
 
-TargetOutcome find_landing_target(const Correspondences& c, const PipelineParams& params) {
+TargetOutcome find_landing_target(const Correspondences& c, const PipelineParams& params,
+                                  const cv::Mat& gray_1, const cv::Mat& gray_2) {
   assert(c.camera && c.mount);
   TargetOutcome out;
   out.labels.assign(c.size(), Label::kOutlier);
@@ -154,7 +217,7 @@ TargetOutcome find_landing_target(const Correspondences& c, const PipelineParams
     if (!planes) {
       paper.reason = planes.reason();
     } else {
-      paper = platform_of(c, params, *planes, paper);
+      paper = platform_of(c, params, *planes, paper, gray_1, gray_2);
       floor_known = floor_agrees(planes->floor, c, params);
     }
     if (mode == "off" || (found(paper) && floor_known)) return paper;
@@ -162,7 +225,7 @@ TargetOutcome find_landing_target(const Correspondences& c, const PipelineParams
   // The paper's planes gave no platform, or their floor is not the floor: the known floor's turn.
   TargetOutcome known = out;
   if (const auto planes = known_floor_planes(c, params)) {
-    known = platform_of(c, params, *planes, out);
+    known = platform_of(c, params, *planes, out, gray_1, gray_2);
   } else {
     known.reason = planes.reason();
   }
@@ -174,7 +237,8 @@ TargetOutcome find_landing_target(const Correspondences& c, const PipelineParams
 namespace {
 
 TargetOutcome platform_of(const Correspondences& c, const PipelineParams& params,
-                          const Planes& planes, TargetOutcome out) {
+                          const Planes& planes, TargetOutcome out, const cv::Mat& gray_1,
+                          const cv::Mat& gray_2) {
   const PlaneMotion& top = planes.top;
   const PlaneMotion& floor = planes.floor;
   const Matrix3d K = c.camera->K();
@@ -308,6 +372,12 @@ TargetOutcome platform_of(const Correspondences& c, const PipelineParams& params
     if (planes.top_in[i] && (near_border(c.u2[i]) || (!c.u1.empty() && near_border(c.u1[i]))))
       ++at_border;
   const bool cut = at_border >= 2;
+  if (!gray_1.empty() && !gray_2.empty() && params.landing.photometric_tol > 0 &&
+      !follows_its_planes(c, planes, K * floor.homography() * K_inv, K * top.homography() * K_inv,
+                          gray_1, gray_2, params.landing)) {
+    out.reason = Reason::kNoTargetPlane;
+    return out;
+  }
   out.reason = cut ? Reason::kPartialView : Reason::kOk;
   return out;
 }

@@ -11,6 +11,8 @@
 // The paper takes the first homography as the floor; here the roles follow the geometry,
 // because a richly textured platform top can hold more matches than the floor in view.
 
+#include <opencv2/core.hpp>
+
 #include "vision/params.hpp"
 #include "vision/target.hpp"
 
@@ -26,6 +28,8 @@ double side_from_extent(double range_m, size_t n);
 
 /// Fails with kTooFewMatches / kNoDominantPlane (no first plane), kNoTargetPlane (no second
 /// plane, or it is no platform), kSmallBaseline / kDecompositionFailed.
-TargetOutcome find_landing_target(const Correspondences& c, const PipelineParams& params);
+TargetOutcome find_landing_target(const Correspondences& c, const PipelineParams& params,
+                                  const cv::Mat& gray_1 = cv::Mat(),
+                                  const cv::Mat& gray_2 = cv::Mat());
 
 }  // namespace alight::vision

@@ -215,6 +215,22 @@ const ParamSchema<LandingParams>& LandingParams::schema() {
           "known floor: motion capture's R21 is corrected by at most this (its orientation noise, "
           "0.1 deg a sample, moves the image by 1-2 px; a correction the size of the "
           "platform's parallax would take the top for the floor)");
+    s.add("photometric_tol", &P::photometric_tol, Range::closed(0, 0.5), "",
+          "beyond the paper (plane_photometric.hpp): the pixels inside the top's features and "
+          "around the floor's must each follow their own plane's homography within this share "
+          "of the height between the planes (gamma: 0 the floor, 1 the top); a top whose pixels "
+          "sit elsewhere is refused. Features tracked a few pixels wrong make \"tops\" the images "
+          "show to be floor. 0: off");
+    s.add("photometric_min_ncc", &P::photometric_min_ncc, Range::open(0, 1), "",
+          "photometric_tol: a pixel set whose best normalised cross-correlation between the "
+          "images is lower shares too little texture to say where it is (no verdict)");
+    s.add("photometric_max_sigma", &P::photometric_max_sigma, Range::gt(0), "",
+          "photometric_tol: a gamma less certain than this (its standard deviation, from the "
+          "fit's curvature and residual) gives no verdict; a floor patch's may be 3 times it");
+    s.add("photometric_min_patches", &P::photometric_min_patches, Range::ge(1), "",
+          "photometric_tol: the floor's verdict is the median of at least this many patches "
+          "around its features (fewer: none). A false top that covers most of the view leaves "
+          "one or two of the floor's features clear of it");
     s.add("hold_reference", &P::hold_reference, Range::any(), "",
           "beyond the paper: while the tracked reference is closer than hold_baseline_m (the "
           "camera hovers), keep the previous frame's reference when it is farther from the "

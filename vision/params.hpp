@@ -120,6 +120,11 @@ struct LandingParams {
   double floor_tol_frac = 0.08;
   int min_floor_inliers = 4;
   double max_rotation_correction_deg = 0.5;
+  // Beyond the paper: the images check the planes the features found (plane_photometric.hpp).
+  double photometric_tol = 0.25;
+  double photometric_min_ncc = 0.5;
+  double photometric_max_sigma = 0.1;
+  int photometric_min_patches = 1;
   bool hold_reference = true;  ///< keep a longer-baseline reference while hovering (pipeline.hpp)
   double hold_baseline_m = 0.3;
   double hold_max_age_s = 30.0;

@@ -67,6 +67,7 @@ FrameResult Pipeline::process(const cv::Mat& gray, int64_t utime,
   // frame keeps its image smoothed as that comparison wants it, made once (issue 15).
   const bool parallax = mission_ == Mission::kIngress && params_.ingress.parallax_mask;
   if (parallax) frame.image = parallax_image(gray, params_.ingress);
+  if (mission_ == Mission::kLanding) frame.image = gray.clone();
 
   const auto up = tracker_.add(std::move(frame));
   const bool hold = mission_ == Mission::kLanding && params_.landing.hold_reference;
@@ -169,7 +170,7 @@ FrameResult Pipeline::process(const cv::Mat& gray, int64_t utime,
   }
   r.matched_px = c.u2;
   const TargetOutcome t = mission_ == Mission::kLanding
-                              ? find_landing_target(c, params_)
+                              ? find_landing_target(c, params_, a.image, gray)
                               : find_ingress_target(c, gray, parallax ? b.image : cv::Mat(),
                                                     parallax ? a.image : cv::Mat(), params_);
   r.target = t.estimate;
