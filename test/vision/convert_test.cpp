@@ -49,7 +49,7 @@ TEST(VisionConvertTest, FoundTargetCarriesEveryField) {
 
 // A partial view, and an opening seen with too little parallax to measure it.
 TEST(VisionConvertTest, LocatedOnlyTargetsSayWhereToLookButAreNotFound) {
-  for (const auto [reason, constant] :
+  for (const auto& [reason, constant] :
        {std::pair{Reason::kPartialView, target_t::REASON_PARTIAL_VIEW},
         std::pair{Reason::kLowParallax, target_t::REASON_LOW_PARALLAX}}) {
     const target_t m = to_msg(result(reason));
