@@ -8,6 +8,7 @@
 #include <random>
 
 #include "common/camera_model.hpp"
+#include "test/vision/test_images.hpp"
 #include "vision/known_floor.hpp"
 #include "vision/waypoint.hpp"
 
@@ -158,27 +159,44 @@ TEST(FalseTargetOverABareFloor, FloorSplitByThePaperPlanesIsNoTarget) {
 // A real top as low as the landing families draw (8 cm), 30 x 24 cm, over the same floor from
 // the same search height and baseline, the same chance matches among the floor's: found in
 // every draw, its height within 2 cm.
+// A 30 x 24 cm top h up under camera 2, seen from the search height (1.54 m) over a 24-30 cm
+// baseline: 140 matches on the floor around it, 40 on it.
+struct LowTop {
+  View v;
+  Vector3d p_W_B2;
+  bool on_top(const Vector3d& X) const {
+    return std::abs(X.x() - p_W_B2.x()) < 0.15 && std::abs(X.y() - p_W_B2.y()) < 0.12;
+  }
+};
+
+LowTop low_top(std::mt19937_64& rng, double h) {
+  std::uniform_real_distribution<double> U(-1, 1);
+  const double yaw = 0.3 * U(rng);
+  const PoseSample p1 = level_pose({0.1 * U(rng), 0.1 * U(rng), 1.54}, yaw);
+  const double dir = M_PI * U(rng), len = 0.27 + 0.03 * U(rng);
+  const PoseSample p2 =
+      level_pose(p1.p_W_B + Vector3d(len * std::cos(dir), len * std::sin(dir), 0.0), yaw + 0.01);
+  LowTop t{View(p1, p2), p2.p_W_B};
+  for (int k = 0; k < 140;) {  // the floor around the top (hidden under it)
+    const Vector3d X(p2.p_W_B.x() + 0.7 * U(rng), p2.p_W_B.y() + 0.55 * U(rng), 0.0);
+    if (!t.on_top(X)) k += t.v.add(X, rng);
+  }
+  for (int k = 0; k < 40;)
+    k += t.v.add(Vector3d(p2.p_W_B.x() + 0.15 * U(rng), p2.p_W_B.y() + 0.12 * U(rng), h), rng);
+  return t;
+}
+
 TEST(FalseTargetOverABareFloor, LowestDrawnTopOverTheSameFloorIsFound) {
   for (uint64_t seed = 1; seed <= 20; ++seed) {
     std::mt19937_64 rng(500 + seed);
     std::uniform_real_distribution<double> U(-1, 1);
-    const double yaw = 0.3 * U(rng), h = 0.08;
-    const PoseSample p1 = level_pose({0.1 * U(rng), 0.1 * U(rng), 1.54}, yaw);
-    const double dir = M_PI * U(rng), len = 0.27 + 0.03 * U(rng);
-    const PoseSample p2 =
-        level_pose(p1.p_W_B + Vector3d(len * std::cos(dir), len * std::sin(dir), 0.0), yaw + 0.01);
-    View v(p1, p2);
-    const auto on_top = [&](const Vector3d& X) {
-      return std::abs(X.x() - p2.p_W_B.x()) < 0.15 && std::abs(X.y() - p2.p_W_B.y()) < 0.12;
-    };
-    for (int k = 0; k < 140;) {  // the floor around the top (hidden under it)
-      const Vector3d X(p2.p_W_B.x() + 0.7 * U(rng), p2.p_W_B.y() + 0.55 * U(rng), 0.0);
-      if (!on_top(X)) k += v.add(X, rng);
-    }
-    for (int k = 0; k < 40;)
-      k += v.add(Vector3d(p2.p_W_B.x() + 0.15 * U(rng), p2.p_W_B.y() + 0.12 * U(rng), h), rng);
+    const double h = 0.08;
+    LowTop t = low_top(rng, h);
+    View& v = t.v;
+    const Vector3d p2 = t.p_W_B2;
+    const auto on_top = [&](const Vector3d& X) { return t.on_top(X); };
     for (int k = 0; k < 5;) {
-      const Vector3d X(p2.p_W_B.x() + 0.6 * U(rng), p2.p_W_B.y() + 0.45 * U(rng), 0.0);
+      const Vector3d X(p2.x() + 0.6 * U(rng), p2.y() + 0.45 * U(rng), 0.0);
       if (!on_top(X)) k += v.add(X, rng, Vector2d(4.0, 0.0));
     }
     PipelineParams params;
@@ -233,22 +251,6 @@ TEST(FalseTargetOverABareFloor, TopsOverFewFloorMatchesAreFound) {
   EXPECT_GE(n_found, 39);  // as on main (seed 28: no target plane there too)
 }
 
-// A photograph-like texture for the reference image: noise smoothed at a few scales.
-cv::Mat texture(uint64_t seed) {
-  cv::Mat out(480, 640, CV_32F, cv::Scalar(0));
-  cv::RNG rng(seed);
-  for (const double sigma : {1.0, 3.0, 8.0}) {
-    cv::Mat n(480, 640, CV_32F);
-    rng.fill(n, cv::RNG::NORMAL, 0, 1);
-    cv::GaussianBlur(n, n, cv::Size(), sigma);
-    cv::normalize(n, n, -40, 40, cv::NORM_MINMAX);
-    out += n;
-  }
-  cv::Mat u8;
-  out.convertTo(u8, CV_8U, 1.0, 128);
-  return u8;
-}
-
 // The current image of a world textured by what camera 1 saw: each current pixel's ray meets
 // the top (z = h where on_top) or the floor (z = 0), and takes the reference's pixel of that
 // point. h = 0: a bare floor.
@@ -283,23 +285,11 @@ TEST(FalseTargetOverABareFloor, TopTheImagesShowToBeFloorIsNoTarget) {
   const cv::Mat blank(480, 640, CV_8U, cv::Scalar(200));
   for (uint64_t seed = 1; seed <= 6; ++seed) {
     std::mt19937_64 rng(700 + seed);
-    std::uniform_real_distribution<double> U(-1, 1);
-    const double yaw = 0.3 * U(rng), h = 0.08;
-    const PoseSample p1 = level_pose({0.1 * U(rng), 0.1 * U(rng), 1.54}, yaw);
-    const double dir = M_PI * U(rng), len = 0.27 + 0.03 * U(rng);
-    const PoseSample p2 =
-        level_pose(p1.p_W_B + Vector3d(len * std::cos(dir), len * std::sin(dir), 0.0), yaw + 0.01);
-    View v(p1, p2);
-    const auto on_top = [&](const Vector3d& X) {
-      return std::abs(X.x() - p2.p_W_B.x()) < 0.15 && std::abs(X.y() - p2.p_W_B.y()) < 0.12;
-    };
-    for (int k = 0; k < 140;) {
-      const Vector3d X(p2.p_W_B.x() + 0.7 * U(rng), p2.p_W_B.y() + 0.55 * U(rng), 0.0);
-      if (!on_top(X)) k += v.add(X, rng);
-    }
-    for (int k = 0; k < 40;)
-      k += v.add(Vector3d(p2.p_W_B.x() + 0.15 * U(rng), p2.p_W_B.y() + 0.12 * U(rng), h), rng);
-    const cv::Mat ref = texture(seed);
+    const double h = 0.08;
+    const LowTop t = low_top(rng, h);
+    const View& v = t.v;
+    const auto on_top = [&](const Vector3d& X) { return t.on_top(X); };
+    const cv::Mat ref = testing::procedural_photo(640, 480, seed);
     const cv::Mat with_top = render_current(ref, v, h, on_top);
     const cv::Mat bare = render_current(ref, v, 0.0, on_top);
     PipelineParams params;

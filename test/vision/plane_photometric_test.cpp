@@ -7,24 +7,10 @@
 #include <opencv2/imgproc.hpp>
 #include <random>
 
+#include "test/vision/test_images.hpp"
+
 namespace alight::vision {
 namespace {
-
-// A photograph-like texture: noise smoothed at a few scales, 8 bit.
-cv::Mat texture(uint64_t seed, int w, int h) {
-  cv::Mat out(h, w, CV_32F, cv::Scalar(0));
-  cv::RNG rng(seed);
-  for (const double sigma : {1.0, 3.0, 8.0}) {
-    cv::Mat n(h, w, CV_32F);
-    rng.fill(n, cv::RNG::NORMAL, 0, 1);
-    cv::GaussianBlur(n, n, cv::Size(), sigma);
-    cv::normalize(n, n, -40, 40, cv::NORM_MINMAX);
-    out += n;
-  }
-  cv::Mat u8;
-  out.convertTo(u8, CV_8U, 1.0, 128);
-  return u8;
-}
 
 struct Pair {
   CameraModel camera = CameraModel::firefly_mv_4mm();
@@ -71,7 +57,7 @@ std::vector<cv::Point> block(int u0, int v0, int w, int h, int stride) {
 // to a few hundredths of the top's height, with an uncertainty that says so.
 TEST(PlanePhotometry, FindsTheHeightOfEveryPixelSetBetweenTheTwoPlanes) {
   const Pair p = planes();
-  const cv::Mat ref = texture(7, 640, 480);
+  const cv::Mat ref = testing::procedural_photo(640, 480, 7);
   for (const double gamma : {0.0, 0.5, 1.0, 1.4}) {
     const cv::Mat cur = current_at(ref, p, gamma);
     const auto r =
@@ -87,7 +73,7 @@ TEST(PlanePhotometry, FindsTheHeightOfEveryPixelSetBetweenTheTwoPlanes) {
 // between the frames (gain flicker) move nothing.
 TEST(PlanePhotometry, GainAndOffsetBetweenTheFramesChangeNothing) {
   const Pair p = planes();
-  const cv::Mat ref = texture(11, 640, 480);
+  const cv::Mat ref = testing::procedural_photo(640, 480, 11);
   cv::Mat cur = current_at(ref, p, 1.0), brighter;
   cur.convertTo(brighter, CV_8U, 0.8, 20);
   const auto a =
@@ -118,7 +104,7 @@ TEST(PlanePhotometry, BlankSurfaceGivesNoConfidentHeight) {
 // Pixels mapped out of the reference at some height are not compared; too few left: no answer.
 TEST(PlanePhotometry, PixelsOutOfTheReferenceAreLeftOut) {
   const Pair p = planes();
-  const cv::Mat ref = texture(5, 640, 480);
+  const cv::Mat ref = testing::procedural_photo(640, 480, 5);
   const cv::Mat cur = current_at(ref, p, 1.0);
   // Camera 2 is 0.25 m to the side: its right edge's pixels map out of the reference (x1 = x2
   // + 111 px on the floor).
