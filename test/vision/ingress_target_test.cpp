@@ -532,6 +532,14 @@ struct FlatWallScene {
   }
 };
 
+// The flat wall's 60 x 60 cm opening centred at (3, 0, 1.2) m, found whole.
+void expect_the_whole_opening(const TargetOutcome& t) {
+  ASSERT_EQ(t.reason, Reason::kOk) << to_string(t.reason);
+  EXPECT_LT((t.estimate.p_W - Vector3d(3.0, 0.0, 1.2)).norm(), 0.02);
+  EXPECT_NEAR(t.estimate.size_m[0], 0.6, 0.02);
+  EXPECT_NEAR(t.estimate.size_m[1], 0.6, 0.02);
+}
+
 // Regression (issue 15, ingress_photo seed 9805: a dark, flat wall photograph; not converged in
 // 60 s): the wall beside the opening held no features at all, so its cells held no inliers, and
 // the tie rule (the larger block) carried the block across them to the image border: a partial
@@ -542,11 +550,7 @@ TEST(IngressTargetTest, FeaturelessWallBesideTheOpeningIsNotPartOfIt) {
   PipelineParams params;
   ASSERT_TRUE(params.ingress.parallax_mask);
   ASSERT_GT(params.ingress.min_cell_mask_share, 0);
-  const TargetOutcome t = find_ingress_target(s.c, s.image, s.reference, params);
-  ASSERT_EQ(t.reason, Reason::kOk) << to_string(t.reason);
-  EXPECT_LT((t.estimate.p_W - Vector3d(3.0, 0.0, 1.2)).norm(), 0.02);
-  EXPECT_NEAR(t.estimate.size_m[0], 0.6, 0.02);
-  EXPECT_NEAR(t.estimate.size_m[1], 0.6, 0.02);
+  expect_the_whole_opening(find_ingress_target(s.c, s.image, s.reference, params));
   // Where only inliers make the wall, the block runs on to the image's right edge.
   params.ingress.min_cell_mask_share = 0;
   const TargetOutcome unchecked = find_ingress_target(s.c, s.image, s.reference, params);
@@ -562,11 +566,7 @@ TEST(IngressTargetTest, FeaturelessWallBesideTheOpeningIsNotPartOfIt) {
 TEST(IngressTargetTest, SmoothRoomBehindTheMiddleOfTheOpeningDoesNotSplitIt) {
   const FlatWallScene s(true, 0.5);
   PipelineParams params;
-  const TargetOutcome t = find_ingress_target(s.c, s.image, s.reference, params);
-  ASSERT_EQ(t.reason, Reason::kOk) << to_string(t.reason);
-  EXPECT_LT((t.estimate.p_W - Vector3d(3.0, 0.0, 1.2)).norm(), 0.02);
-  EXPECT_NEAR(t.estimate.size_m[0], 0.6, 0.02);
-  EXPECT_NEAR(t.estimate.size_m[1], 0.6, 0.02);
+  expect_the_whole_opening(find_ingress_target(s.c, s.image, s.reference, params));
 }
 
 // Regression (issue 15, ingress_photo seed 9805): a second-plane fit over the dark wall's few
@@ -601,11 +601,7 @@ TEST(IngressTargetTest, AStrayWallInlierInTheOpeningDoesNotHideIt) {
   s.add_wall_match(0.25, 1.2);
   PipelineParams params;
   ASSERT_GT(params.ingress.block_inlier_share, 0);
-  const TargetOutcome t = find_ingress_target(s.c, s.image, s.reference, params);
-  ASSERT_EQ(t.reason, Reason::kOk) << to_string(t.reason);
-  EXPECT_LT((t.estimate.p_W - Vector3d(3.0, 0.0, 1.2)).norm(), 0.02);
-  EXPECT_NEAR(t.estimate.size_m[0], 0.6, 0.02);
-  EXPECT_NEAR(t.estimate.size_m[1], 0.6, 0.02);
+  expect_the_whole_opening(find_ingress_target(s.c, s.image, s.reference, params));
   // The paper's rule (no inlier at all in the block) refuses it.
   params.ingress.block_inlier_share = 0;
   const TargetOutcome unchecked = find_ingress_target(s.c, s.image, s.reference, params);
