@@ -204,6 +204,12 @@ double side_from_extent(double range_m, size_t n) {
 TargetOutcome find_landing_target(const Correspondences& c, const PipelineParams& params,
                                   const cv::Mat& gray_1, const cv::Mat& gray_2) {
   assert(c.camera && c.mount);
+  const auto usable = [&](const cv::Mat& m) {
+    return !m.empty() && m.type() == CV_8UC1 && m.cols == c.camera->width &&
+           m.rows == c.camera->height;
+  };
+  if ((!gray_1.empty() || !gray_2.empty()) && !(usable(gray_1) && usable(gray_2)))
+    return find_landing_target(c, params);
   TargetOutcome out;
   out.labels.assign(c.size(), Label::kOutlier);
   const auto found = [](const TargetOutcome& o) {

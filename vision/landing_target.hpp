@@ -27,7 +27,10 @@ namespace alight::vision {
 double side_from_extent(double range_m, size_t n);
 
 /// Fails with kTooFewMatches / kNoDominantPlane (no first plane), kNoTargetPlane (no second
-/// plane, or it is no platform), kSmallBaseline / kDecompositionFailed.
+/// plane, or it is no platform, or the images show its pixels or its floor's on another plane:
+/// vision.landing.photometric_tol), kSmallBaseline / kDecompositionFailed. gray_1 / gray_2: the
+/// reference and current raw images, CV_8UC1 of the camera's size; either empty or of another
+/// kind: the features alone decide.
 TargetOutcome find_landing_target(const Correspondences& c, const PipelineParams& params,
                                   const cv::Mat& gray_1 = cv::Mat(),
                                   const cv::Mat& gray_2 = cv::Mat());

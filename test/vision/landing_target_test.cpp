@@ -280,7 +280,8 @@ cv::Mat render_current(const cv::Mat& ref, const View& v, double h, OnTop on_top
 // a few pixels wrong, found by the features' rules alone). The same matches as a true 8 cm top
 // over the floor; the images decide (vision.landing.photometric_tol): where they show the top,
 // it is found; where they show a bare floor, every pixel of the "top" follows the floor's plane
-// and it is refused; where they are blank, they say nothing and the features decide.
+// and it is refused; where they are blank or not of the camera's size, they say nothing and the
+// features decide.
 TEST(FalseTargetOverABareFloor, TopTheImagesShowToBeFloorIsNoTarget) {
   const cv::Mat blank(480, 640, CV_8U, cv::Scalar(200));
   for (uint64_t seed = 1; seed <= 6; ++seed) {
@@ -302,6 +303,10 @@ TEST(FalseTargetOverABareFloor, TopTheImagesShowToBeFloorIsNoTarget) {
       EXPECT_FALSE(found(find_landing_target(v.c, params, ref, bare)))
           << "seed " << seed << " " << mode;
       EXPECT_TRUE(found(find_landing_target(v.c, params, blank, blank)))
+          << "seed " << seed << " " << mode;
+      cv::Mat half;  // images not of the camera's size say nothing
+      cv::resize(bare, half, cv::Size(320, 240));
+      EXPECT_TRUE(found(find_landing_target(v.c, params, ref, half)))
           << "seed " << seed << " " << mode;
       params.landing.photometric_tol = 0;  // off: the features alone
       EXPECT_TRUE(found(find_landing_target(v.c, params, ref, bare)))
