@@ -1,8 +1,8 @@
 // Dense photometric check of a platform top (see plane_photometric.hpp).
 #include "vision/plane_photometric.hpp"
 
+#include <algorithm>
 #include <cmath>
-#include <opencv2/imgproc.hpp>
 
 namespace alight::vision {
 namespace {
@@ -46,10 +46,10 @@ std::optional<PlanePhotometry> plane_photometry(const cv::Mat& gray_1, const cv:
     if (!u_floor || !u_top) continue;
     const Vector2d step = *u_top - *u_floor;
     const Vector2d lo = *u_floor + gamma_of(0) * step, hi = *u_floor + gamma_of(kSteps - 1) * step;
+    // Out of the reference at some gamma: left out at every gamma, so all compare one set.
     if (!(std::min(lo.x(), hi.x()) >= 0 && std::min(lo.y(), hi.y()) >= 0 &&
           std::max(lo.x(), hi.x()) < x_max && std::max(lo.y(), hi.y()) < y_max))
-      continue;  // out of the reference at some gamma: left out at all, so every gamma sees the
-                 // same
+      continue;
     const double v2 = gray_2.at<uint8_t>(q.y, q.x);
     s_b += v2, s_bb += v2 * v2, ++n;
     for (int k = 0; k < kSteps; ++k) {
@@ -69,8 +69,6 @@ std::optional<PlanePhotometry> plane_photometry(const cv::Mat& gray_1, const cv:
     c[k] = var_a > 0 && var_b > 0 ? cov / std::sqrt(var_a * var_b) : 0.0;
     if (c[k] > c[best]) best = k;
   }
-  out.ncc_floor = c[4];
-  out.ncc_top = c[8];
   out.ncc_best = c[best];
   double frac = 0;
   out.sigma_gamma = 1e9;  // at the grid's end, or flat: no information

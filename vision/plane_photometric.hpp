@@ -21,9 +21,7 @@ namespace alight::vision {
 struct PlanePhotometry {
   double gamma = 0;        ///< best fit between floor (0) and top (1), parabola-refined
   double sigma_gamma = 0;  ///< its standard deviation from the fit's curvature and residual
-  double ncc_floor = 0;    ///< zero-mean normalised cross-correlation at gamma 0
-  double ncc_top = 0;      ///< ... at gamma 1
-  double ncc_best = 0;     ///< ... at the best grid gamma
+  double ncc_best = 0;     ///< zero-mean normalised cross-correlation at the best grid gamma
   int n = 0;               ///< pixels compared
 };
 
