@@ -67,7 +67,10 @@ FrameResult Pipeline::process(const cv::Mat& gray, int64_t utime,
   // frame keeps its image smoothed as that comparison wants it, made once (issue 15).
   const bool parallax = mission_ == Mission::kIngress && params_.ingress.parallax_mask;
   if (parallax) frame.image = parallax_image(gray, params_.ingress);
-  if (mission_ == Mission::kLanding) frame.image = gray.clone();
+  // Landing checks its planes against both images (landing_target.hpp): the caller's pixels are
+  // not ours to keep, and with the check off no copy is made.
+  const bool landing_images = mission_ == Mission::kLanding && params_.landing.photometric_tol > 0;
+  if (landing_images) frame.image = gray.clone();
 
   const auto up = tracker_.add(std::move(frame));
   const bool hold = mission_ == Mission::kLanding && params_.landing.hold_reference;
