@@ -152,6 +152,15 @@ bool follows_its_planes(const Correspondences& c, const Planes& planes, const Ma
   const auto informative = [&](const std::optional<PlanePhotometry>& f, double max_sigma) {
     return f && f->ncc_best >= p.photometric_min_ncc && f->sigma_gamma <= max_sigma;
   };
+  // A certain gamma decides alone; a less certain one only when it sits photometric_far_sigmas
+  // standard deviations beyond the tolerance: a hull on a false top over a busy floor can be
+  // blurred to a wide fit that still places it nowhere near the top's plane.
+  const auto off_the_top = [&](const std::optional<PlanePhotometry>& f) {
+    if (!f || f->ncc_best < p.photometric_min_ncc) return false;
+    const double beyond = std::abs(f->gamma - 1.0) - p.photometric_tol;
+    return beyond > 0 && (f->sigma_gamma <= p.photometric_max_sigma ||
+                          beyond > p.photometric_far_sigmas * f->sigma_gamma);
+  };
 
   std::vector<cv::Point> px;
   const cv::Rect box = cv::boundingRect(hull) & inside;
@@ -162,9 +171,7 @@ bool follows_its_planes(const Correspondences& c, const Planes& planes, const Ma
       if (cv::pointPolygonTest(hull, cv::Point2f(u, v), true) >= kClear) px.emplace_back(u, v);
   const auto on_top =
       plane_photometry(gray_1, gray_2, *c.camera, H_floor_px, H_top_px, px, kHullPixels / 10);
-  if (informative(on_top, p.photometric_max_sigma) &&
-      std::abs(on_top->gamma - 1.0) > p.photometric_tol)
-    return false;
+  if (off_the_top(on_top)) return false;
 
   std::vector<size_t> floor_i;
   for (size_t i = 0; i < c.size(); ++i)

@@ -227,6 +227,10 @@ const ParamSchema<LandingParams>& LandingParams::schema() {
     s.add("photometric_max_sigma", &P::photometric_max_sigma, Range::gt(0), "",
           "photometric_tol: a gamma less certain than this (its standard deviation, from the "
           "fit's curvature and residual) gives no verdict; a floor patch's may be 3 times it");
+    s.add("photometric_far_sigmas", &P::photometric_far_sigmas, Range::gt(0), "",
+          "photometric_tol: the top's pixels less certain than photometric_max_sigma still "
+          "refuse it when their gamma is farther from 1 than the tolerance by this many of "
+          "its standard deviations");
     s.add("photometric_min_patches", &P::photometric_min_patches, Range::ge(1), "",
           "photometric_tol: the floor's verdict is the median of at least this many patches "
           "around its features (fewer: none). A false top that covers most of the view leaves "

@@ -124,6 +124,7 @@ struct LandingParams {
   double photometric_tol = 0.25;
   double photometric_min_ncc = 0.5;
   double photometric_max_sigma = 0.1;
+  double photometric_far_sigmas = 3.0;
   int photometric_min_patches = 1;
   bool hold_reference = true;  ///< keep a longer-baseline reference while hovering (pipeline.hpp)
   double hold_baseline_m = 0.3;

@@ -316,5 +316,30 @@ TEST(FalseTargetOverABareFloor, TopTheImagesShowToBeFloorIsNoTarget) {
   }
 }
 
+// Regression (landing_none_photo 9506): a false top's pixels fitted gamma 0.21 with a standard
+// deviation of 0.12, just over photometric_max_sigma, so they gave no verdict and the top was
+// taken. An uncertain gamma still refuses when it sits photometric_far_sigmas standard
+// deviations beyond the tolerance. With every estimate counted uncertain (max_sigma tiny, which
+// also silences the floor's patches), the bare floor is refused by that rule alone, the true top
+// is still found, and without the rule (far_sigmas huge) the bare floor passes.
+TEST(FalseTargetOverABareFloor, UncertainTopFarFromItsPlaneIsStillRefused) {
+  for (uint64_t seed = 1; seed <= 6; ++seed) {
+    std::mt19937_64 rng(700 + seed);
+    const double h = 0.08;
+    const LowTop t = low_top(rng, h);
+    const View& v = t.v;
+    const auto on_top = [&](const Vector3d& X) { return t.on_top(X); };
+    const cv::Mat ref = testing::procedural_photo(640, 480, seed);
+    const cv::Mat with_top = render_current(ref, v, h, on_top);
+    const cv::Mat bare = render_current(ref, v, 0.0, on_top);
+    PipelineParams params;
+    params.landing.photometric_max_sigma = 1e-9;
+    EXPECT_TRUE(found(find_landing_target(v.c, params, ref, with_top))) << "seed " << seed;
+    EXPECT_FALSE(found(find_landing_target(v.c, params, ref, bare))) << "seed " << seed;
+    params.landing.photometric_far_sigmas = 1e9;
+    EXPECT_TRUE(found(find_landing_target(v.c, params, ref, bare))) << "seed " << seed;
+  }
+}
+
 }  // namespace
 }  // namespace alight::vision
