@@ -414,7 +414,8 @@ struct BoxViews {
   cv::Mat image_1, image_2;
 };
 BoxViews box_views(const BoxScene& scene, uint64_t seed, double inset_long, double inset_short,
-                   std::optional<double> baseline_dir = std::nullopt) {
+                   std::optional<double> baseline_dir = std::nullopt,
+                   double features_turn_rad = 0.0) {
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> U(-1, 1);
   const PoseSample p2 = level_pose(
@@ -427,9 +428,10 @@ BoxViews box_views(const BoxScene& scene, uint64_t seed, double inset_long, doub
   View& v = b.view;
   const Isometry3d X_WO = scene.X_WO();
   for (int k = 0; k < 80;) {
-    const Vector3d q((0.5 * scene.length - inset_long) * U(rng),
-                     (0.5 * scene.width - inset_short) * U(rng), 0.5 * scene.height);
-    k += v.add(X_WO * q, rng);
+    const Eigen::Vector2d q = Eigen::Rotation2Dd(features_turn_rad) *
+                              Eigen::Vector2d((0.5 * scene.length - inset_long) * U(rng),
+                                              (0.5 * scene.width - inset_short) * U(rng));
+    k += v.add(X_WO * Vector3d(q.x(), q.y(), 0.5 * scene.height), rng);
   }
   for (int k = 0; k < 140;) {
     const Vector3d X(p2.p_W_B.x() + 0.7 * U(rng), p2.p_W_B.y() + 0.55 * U(rng), 0.0);
@@ -460,6 +462,35 @@ TEST(TopRim, FeaturesShortOfTheEdgesMeasureTheTopToItsRim) {
     EXPECT_LT((o.estimate.p_W - top_W).head<2>().norm(), 0.005) << "seed " << seed;
     const TargetOutcome features = find_landing_target(b.view.c, params);
     EXPECT_LT(features.estimate.size_m[1], scene.width - 0.02) << "seed " << seed;
+  }
+}
+
+// A nearly blank top whose features' rectangle is turned 6 deg from its edges (as a minimum-area
+// rectangle of a few dozen features can be): each side's rim is read along its own turn, fitted
+// to where stretches of the side step, and the rims' agreement turns the rectangle onto the
+// top's edges: its yaw within 1.5 deg, its sides as square to the edges.
+TEST(TopRim, RimsTurnedFromTheFeaturesTurnTheRectangleOntoTheEdges) {
+  const BoxScene scene;
+  const double turn = 6.0 * M_PI / 180.0;
+  const auto yaw_error_deg = [&](double yaw) {  // the long axis' direction, modulo a half turn
+    double d = std::remainder(yaw - scene.yaw, M_PI);
+    return std::abs(d) * 180.0 / M_PI;
+  };
+  for (uint64_t seed = 1; seed <= 4; ++seed) {
+    // Half-extents 12 x 6.5 cm turned 6 deg: 2.3 cm inside the long sides, 2.5 cm inside the
+    // short ones at the nearest corner.
+    const BoxViews b = box_views(scene, seed, 0.03, 0.037, std::nullopt, turn);
+    PipelineParams params;
+    const TargetOutcome features = find_landing_target(b.view.c, params);
+    ASSERT_TRUE(found(features)) << "seed " << seed << ": " << to_string(features.reason);
+    EXPECT_GT(yaw_error_deg(features.estimate.yaw_rad), 3.0) << "seed " << seed;
+    const TargetOutcome o = find_landing_target(b.view.c, params, b.image_1, b.image_2);
+    ASSERT_TRUE(found(o)) << "seed " << seed << ": " << to_string(o.reason);
+    EXPECT_LT(yaw_error_deg(o.estimate.yaw_rad), 1.5) << "seed " << seed;
+    EXPECT_NEAR(o.estimate.size_m[0], scene.length, 0.01) << "seed " << seed;
+    EXPECT_NEAR(o.estimate.size_m[1], scene.width, 0.005) << "seed " << seed;
+    const Vector3d top_W(scene.centre_xy.x(), scene.centre_xy.y(), scene.height);
+    EXPECT_LT((o.estimate.p_W - top_W).head<2>().norm(), 0.005) << "seed " << seed;
   }
 }
 
