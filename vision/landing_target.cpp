@@ -1,10 +1,12 @@
-// Landing target, paper 3.2 (see landing_target.hpp).
+// Landing target, paper 3.2, and beyond it the top's rim (see landing_target.hpp).
 #include "vision/landing_target.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
+#include <optional>
+#include <utility>
 
 #include "vision/alignment.hpp"
 #include "vision/homography.hpp"
@@ -249,6 +251,297 @@ TargetOutcome find_landing_target(const Correspondences& c, const PipelineParams
 
 namespace {
 
+// The top's rectangle in its plane: its axes (long, short) and its sides' places along them from
+// origin_W [m].
+struct Rect {
+  Vector3d origin_W, axis[2];
+  double lo[2], hi[2];
+};
+
+// The features' extent along the axes, from their mean.
+Rect features_rect(const std::vector<Vector3d>& pts_W, const Vector3d& mean,
+                   const Vector3d& ax_long, const Vector3d& ax_short) {
+  Rect r{mean, {ax_long, ax_short}, {1e9, 1e9}, {-1e9, -1e9}};
+  for (const auto& p : pts_W)
+    for (int k = 0; k < 2; ++k) {
+      const double s = (p - mean).dot(r.axis[k]);
+      r.lo[k] = std::min(r.lo[k], s), r.hi[k] = std::max(r.hi[k], s);
+    }
+  return r;
+}
+
+// The extent widened by side_from_extent's (n + 1) / (n - 1), half on each side: the features'
+// expected shortfall of the top's edges.
+Rect widened_by_shortfall(Rect r, size_t n) {
+  for (int k = 0; k < 2; ++k) {
+    const double range = r.hi[k] - r.lo[k];
+    const double widen = 0.5 * (side_from_extent(range, n) - range);
+    r.lo[k] -= widen, r.hi[k] += widen;
+  }
+  return r;
+}
+
+// The estimate of a top measured as r: the waypoint of its centre on the top's plane and the
+// height above the floor's along the same ray (eqs. 4-6), its sizes, yaw and outline; the
+// waypoint's failure as the reason.
+Reason measure_top(const Correspondences& c, const Planes& planes, const Rect& r,
+                   const Isometry3d& X_WC2, const PipelineParams& params, TargetEstimate* e) {
+  const Vector3d centre_W =
+      r.origin_W + 0.5 * (r.lo[0] + r.hi[0]) * r.axis[0] + 0.5 * (r.lo[1] + r.hi[1]) * r.axis[1];
+  const Vector3d centre_C2 = X_WC2.inverse() * centre_W;
+  if (centre_C2.z() <= 0) return Reason::kDecompositionFailed;
+  const Vector3d aim_ray = centre_C2 / centre_C2.z();
+  const auto w_top =
+      compute_waypoint(planes.top, aim_ray, c.pose_1, c.pose_2, *c.mount, params.waypoint);
+  if (!w_top) return w_top.reason();
+  const auto w_floor =
+      compute_waypoint(planes.floor, aim_ray, c.pose_1, c.pose_2, *c.mount, params.waypoint);
+  if (!w_floor) return w_floor.reason();
+  e->p_W = w_top->p_W;
+  e->n_W = w_top->n_W;
+  e->height_m = w_floor->distance_m - w_top->distance_m;
+  e->size_m[0] = r.hi[0] - r.lo[0];
+  e->size_m[1] = r.hi[1] - r.lo[1];
+  // The rims can make the features' short axis the longer one.
+  const bool swapped = e->size_m[1] > e->size_m[0];
+  if (swapped) std::swap(e->size_m[0], e->size_m[1]);
+  const Vector3d& long_W = r.axis[swapped ? 1 : 0];
+  // The plane is level (max_tilt_deg), so the long axis' direction in the world xy plane is the
+  // platform's yaw; autonomy aligns the gear with the edges before touch-down.
+  e->yaw_rad = std::atan2(long_W.y(), long_W.x());
+  if (e->yaw_rad <= -M_PI / 2) e->yaw_rad += M_PI;
+  if (e->yaw_rad > M_PI / 2) e->yaw_rad -= M_PI;
+  const auto px = c.camera->project(w_top->p_C2);
+  e->pixel = px ? *px : (c.camera->K() * aim_ray).hnormalized();
+  e->outline.clear();
+  for (int k = 0; k < 4; ++k) {  // the measured rectangle, for the diagnostic image
+    const double s0 = (k == 0 || k == 3) ? r.lo[0] : r.hi[0], s1 = k < 2 ? r.lo[1] : r.hi[1];
+    const Vector3d corner_C2 = X_WC2.inverse() * (r.origin_W + s0 * r.axis[0] + s1 * r.axis[1]);
+    if (const auto q = c.camera->project(corner_C2)) e->outline.push_back(*q);
+  }
+  return Reason::kOk;
+}
+
+// Bilinear grey level at a raw pixel; false within a pixel of the border (or non-finite).
+bool sample(const cv::Mat& m, const Vector2d& u, double* value) {
+  if (!(u.x() >= 0 && u.y() >= 0 && u.x() < m.cols - 1 && u.y() < m.rows - 1)) return false;
+  const int x = static_cast<int>(u.x()), y = static_cast<int>(u.y());
+  const double fx = u.x() - x, fy = u.y() - y;
+  const uint8_t* p = m.ptr<uint8_t>(y) + x;
+  const uint8_t* q = p + m.step[0];
+  *value = (1 - fy) * ((1 - fx) * p[0] + fx * p[1]) + fy * ((1 - fx) * q[0] + fx * q[1]);
+  return true;
+}
+
+// One side of the features' extent in the top's plane (world): the line base_W + t along_W,
+// t in [t_lo, t_hi], moved outward by d along out_W.
+struct Side {
+  Vector3d base_W, out_W, along_W;
+  double t_lo, t_hi;
+};
+
+// Where a profile P (P[j] at offset j steps) darkens outward: G_j = P[j - k] - P[j + k], its
+// local maxima over j >= j0 at least min_step and at least half the strongest, innermost first,
+// each to a fraction of a step by a parabola through it (offset in steps, G).
+std::vector<std::pair<double, double>> darkening_steps(const std::vector<double>& P, int j0, int k,
+                                                       double min_step) {
+  const int n = static_cast<int>(P.size());
+  std::vector<double> g(n, 0.0);
+  double strongest = 0;
+  for (int j = std::max(j0, k); j + k < n; ++j) {
+    g[j] = P[j - k] - P[j + k];
+    strongest = std::max(strongest, g[j]);
+  }
+  std::vector<std::pair<double, double>> steps;
+  for (int j = std::max(j0, k) + 1; j + k + 1 < n; ++j) {
+    const double l = g[j - 1], c = g[j], r = g[j + 1];
+    if (c < min_step || c < 0.5 * strongest || c < l || c < r) continue;
+    const double den = l - 2 * c + r;
+    steps.emplace_back(j + (den < 0 ? 0.5 * (l - r) / den : 0.0), c);
+  }
+  return steps;
+}
+
+// The side's rim, or nullopt when the two images do not show one step at the same place of the
+// top's plane (landing_target.hpp). step_m is half a pixel of the current image on the top.
+struct Rim {
+  double d_m;       // outward from the side where the rim crosses the middle of the stretch read
+  double turn_rad;  // the rim's turn from the side: offset d_m + (t - mid) tan(turn_rad)
+};
+std::optional<Rim> rim_offset(const Correspondences& c, const cv::Mat& gray_1,
+                              const cv::Mat& gray_2, const Matrix3d& H_12, const Isometry3d& X_WC2,
+                              const Side& side, double step_m, const LandingParams& p) {
+  const int k = 2;   // G across one pixel either side
+  const int j0 = 8;  // four pixels inside the side: the top's own level
+  // A line a pixel along the side at least, at most kMaxLines of them: a long side's mean is
+  // steady with fewer, and every line is read at every offset (the vision's p99 per frame was
+  // 52 ms on landing_lowtex with a line every pixel and a search over 37 turns, 25-29 ms with 96
+  // lines).
+  constexpr int kMaxLines = 48;
+  // The turn from kStretches stretches of the side: each a sixth of a 14 cm side, across which
+  // a rim turned 15 deg spreads its step over 6 mm, a pixel and a half at the search height.
+  constexpr int kStretches = 6;
+  const double t_step_m = std::max(2 * step_m, (side.t_hi - side.t_lo) / (kMaxLines - 1));
+  const int n_t = static_cast<int>(std::floor((side.t_hi - side.t_lo) / t_step_m)) + 1;
+  if (n_t < 2 * kStretches) return std::nullopt;
+  const double t_mid = 0.5 * (side.t_lo + side.t_hi);
+  const double max_tan = std::tan(p.rim_max_turn_deg * M_PI / 180.0);
+  const int margin =
+      static_cast<int>(std::ceil(0.5 * (side.t_hi - side.t_lo) * max_tan / step_m)) + 1;
+  const int n_d = j0 + static_cast<int>(std::ceil(p.rim_search_m / step_m)) + k + 1;
+  const int n_g = n_d + 2 * margin;  // grid columns: offsets (j - margin - j0) step_m
+  constexpr float kUnseen = -1.0f;
+  std::vector<float> g1(static_cast<size_t>(n_t) * n_g, kUnseen), g2(g1.size(), kUnseen);
+  // The grid is affine in the top's plane, and so in camera 2's frame.
+  const Isometry3d X_C2W = X_WC2.inverse();
+  const Vector3d corner_C2 =
+      X_C2W * (side.base_W - (margin + j0) * step_m * side.out_W + side.t_lo * side.along_W);
+  const Vector3d dj_C2 = X_C2W.linear() * (step_m * side.out_W);
+  const Vector3d di_C2 = X_C2W.linear() * (t_step_m * side.along_W);
+  for (int i = 0; i < n_t; ++i)
+    for (int j = 0; j < n_g; ++j) {
+      const Vector3d X_C2 = corner_C2 + i * di_C2 + j * dj_C2;
+      if (X_C2.z() <= 0) continue;
+      const Vector3d r1 = H_12 * (X_C2 / X_C2.z());
+      if (r1.z() <= 0) continue;
+      const auto u1 = c.camera->project(r1), u2 = c.camera->project(X_C2);
+      double v1, v2;
+      if (!u1 || !u2 || !sample(gray_1, *u1, &v1) || !sample(gray_2, *u2, &v2)) continue;
+      g1[static_cast<size_t>(i) * n_g + j] = static_cast<float>(v1);
+      g2[static_cast<size_t>(i) * n_g + j] = static_cast<float>(v2);
+    }
+  // The mean over lines [i0, i1) turned by tan_turn at each offset; it ends where most of them
+  // are out of either view (a side cut by the border).
+  const auto profile = [&](const std::vector<float>& g, double tan_turn, int i0, int i1) {
+    std::vector<double> P;
+    for (int j = 0; j < n_d; ++j) {
+      double sum = 0;
+      int n = 0;
+      for (int i = i0; i < i1; ++i) {
+        const double x = j + margin + (side.t_lo + i * t_step_m - t_mid) * tan_turn / step_m;
+        const int x0 = std::clamp(static_cast<int>(std::floor(x)), 0, n_g - 2);
+        const double f = std::clamp(x - x0, 0.0, 1.0);
+        const float a = g[static_cast<size_t>(i) * n_g + x0],
+                    b = g[static_cast<size_t>(i) * n_g + x0 + 1];
+        if (a < 0 || b < 0) continue;
+        sum += (1 - f) * a + f * b, ++n;
+      }
+      if (5 * n < 4 * (i1 - i0)) break;
+      P.push_back(sum / n);
+    }
+    return P;
+  };
+  // The turn: the strongest darkening of each stretch in the current image, unturned, and a
+  // straight line through them (least squares; the stretches more than a pixel off it dropped
+  // once). Fewer than three stretches that step, or a turn beyond rim_max_turn_deg: none.
+  std::vector<Eigen::Vector2d> at;  // (t - t_mid [m], offset [steps])
+  for (int s = 0; s < kStretches; ++s) {
+    const int i0 = s * n_t / kStretches, i1 = (s + 1) * n_t / kStretches;
+    const auto steps = darkening_steps(profile(g2, 0.0, i0, i1), j0, k, p.rim_min_step);
+    if (steps.empty()) continue;
+    const auto strongest =
+        std::max_element(steps.begin(), steps.end(),
+                         [](const auto& a, const auto& b) { return a.second < b.second; });
+    at.emplace_back(side.t_lo + 0.5 * (i0 + i1 - 1) * t_step_m - t_mid, strongest->first);
+  }
+  const auto fit_slope = [](const std::vector<Eigen::Vector2d>& v, double* a, double* b) {
+    const double n = static_cast<double>(v.size());
+    double sx = 0, sy = 0, sxx = 0, sxy = 0;
+    for (const auto& q : v) sx += q.x(), sy += q.y(), sxx += q.x() * q.x(), sxy += q.x() * q.y();
+    const double den = n * sxx - sx * sx;
+    if (v.size() < 3 || den <= 0) return false;
+    *b = (n * sxy - sx * sy) / den;
+    *a = (sy - *b * sx) / n;
+    return true;
+  };
+  double tan_turn = 0, a = 0, b = 0;
+  if (fit_slope(at, &a, &b)) {
+    std::vector<Eigen::Vector2d> near;
+    for (const auto& q : at)
+      if (std::abs(q.y() - (a + b * q.x())) <= 2.0) near.push_back(q);
+    if (near.size() < at.size() && !fit_slope(near, &a, &b)) b = 0;
+    if (std::abs(b * step_m) <= max_tan) tan_turn = b * step_m;
+  }
+  const std::vector<double> P1 = profile(g1, tan_turn, 0, n_t), P2 = profile(g2, tan_turn, 0, n_t);
+  const auto steps_1 = darkening_steps(P1, j0, k, p.rim_min_step);
+  const int n = static_cast<int>(P2.size());
+  for (const auto& [j2, g2_step] : darkening_steps(P2, j0, k, p.rim_min_step)) {
+    // A dark band on the top (a row of print) darkens and brightens again: beyond the rim the
+    // profile stays below the top's level (its median inside the step) to the search's end.
+    const int inner = static_cast<int>(std::floor(j2)) - k;
+    const int outer = static_cast<int>(std::ceil(j2)) + k;
+    if (inner < 1 || outer + 4 * k > n) break;  // too near the search's end to tell
+    std::vector<double> in(P2.begin(), P2.begin() + inner);
+    std::nth_element(in.begin(), in.begin() + in.size() / 2, in.end());
+    const double level = in[in.size() / 2];
+    const double beyond = *std::max_element(P2.begin() + outer, P2.end());
+    if (beyond > level - 0.5 * p.rim_min_step) continue;
+    // The first step that stays dark is the rim or nothing: the reference must step there too.
+    for (const auto& step_1 : steps_1)
+      if (std::abs(step_1.first - j2) <= 2 * p.rim_max_disagreement_px)
+        return Rim{std::max(0.0, (j2 - j0) * step_m), std::atan(tan_turn)};
+    return std::nullopt;
+  }
+  return std::nullopt;
+}
+
+// The top out to its rims (landing_target.hpp): each side of the features' extent moved to its
+// rim where both images show one, else widened as `widened`; nullopt where no side has a rim.
+// Two or more rims that agree on a turn turn the rectangle onto them, each side with a rim then
+// where its rim crosses the middle of the stretch read.
+std::optional<Rect> rim_rect(const Correspondences& c, const cv::Mat& gray_1, const cv::Mat& gray_2,
+                             const PlaneMotion& top, const Isometry3d& X_WC2,
+                             const std::vector<Vector3d>& pts_W, const Rect& features,
+                             const Rect& widened, const LandingParams& p) {
+  // The reference's point of the top's plane seen at a current ray: the top's homography
+  // (calibrated, x2 ~ H x1), which explains the top's features, not the poses' motion.
+  const Matrix3d H_12 = top.homography().inverse();
+  const double step_m =
+      0.5 * (X_WC2.inverse() * features.origin_W).z() / c.camera->K()(0, 0);  // half a pixel
+  struct Found {
+    int k, sign;
+    Vector3d at_W;    // from origin_W: where the rim crosses the middle of the stretch read
+    double turn_rad;  // the whole rectangle's turn that squares it to this rim
+  };
+  std::vector<Found> found;
+  Rect r = widened;
+  for (int k = 0; k < 2; ++k) {
+    // Along the middle of the other axis' extent: near the corners the lines run into the
+    // neighbouring sides' rims.
+    const int o = 1 - k;
+    const double span = features.hi[o] - features.lo[o];
+    const double t_lo = features.lo[o] + 0.15 * span, t_hi = features.hi[o] - 0.15 * span;
+    for (const int sign : {-1, 1}) {
+      const double at = sign < 0 ? features.lo[k] : features.hi[k];
+      const Side side{features.origin_W + at * features.axis[k], sign * features.axis[k],
+                      features.axis[o], t_lo, t_hi};
+      const auto rim = rim_offset(c, gray_1, gray_2, H_12, X_WC2, side, step_m, p);
+      if (!rim) continue;
+      const double s = at + sign * rim->d_m;
+      (sign < 0 ? r.lo[k] : r.hi[k]) = s;
+      // The turn that takes axis k's side onto the rim, as a turn of the whole rectangle about
+      // the top's normal (from the long axis towards the short one).
+      found.push_back({k, sign, s * features.axis[k] + 0.5 * (t_lo + t_hi) * features.axis[o],
+                       (k == 1 ? sign : -sign) * rim->turn_rad});
+    }
+  }
+  if (found.empty()) return std::nullopt;
+  if (found.size() < 2) return r;
+  std::vector<double> turns;
+  for (const auto& f : found) turns.push_back(f.turn_rad);
+  std::sort(turns.begin(), turns.end());
+  const double turn = turns[turns.size() / 2];
+  if (turns.back() - turns.front() > 4.0 * M_PI / 180.0 || std::abs(turn) <= 0.5 * M_PI / 180.0)
+    return r;
+  // Turned: the features' extent along the turned axes (widened where no rim is), each rim's
+  // side where its crossing lies along them.
+  const Vector3d l = std::cos(turn) * features.axis[0] + std::sin(turn) * features.axis[1];
+  const Vector3d sh = -std::sin(turn) * features.axis[0] + std::cos(turn) * features.axis[1];
+  Rect t = widened_by_shortfall(features_rect(pts_W, features.origin_W, l, sh), pts_W.size());
+  for (const auto& f : found) (f.sign < 0 ? t.lo[f.k] : t.hi[f.k]) = f.at_W.dot(t.axis[f.k]);
+  return t;
+}
+
 TargetOutcome platform_of(const Correspondences& c, const PipelineParams& params,
                           const Planes& planes, TargetOutcome out, const cv::Mat& gray_1,
                           const cv::Mat& gray_2) {
@@ -324,50 +617,15 @@ TargetOutcome platform_of(const Correspondences& c, const PipelineParams& params
   }
   const Eigen::Vector2d a_long = side_a.normalized();
   const Eigen::Vector2d a_short(-a_long.y(), a_long.x());
-  const Vector3d ax_long = a_long.x() * e1 + a_long.y() * e2;
-  const Vector3d ax_short = a_short.x() * e1 + a_short.y() * e2;
-  double lo[2] = {1e9, 1e9}, hi[2] = {-1e9, -1e9};
-  for (const auto& p : pts_W) {
-    const double s[2] = {(p - mean).dot(ax_long), (p - mean).dot(ax_short)};
-    for (int k = 0; k < 2; ++k) lo[k] = std::min(lo[k], s[k]), hi[k] = std::max(hi[k], s[k]);
-  }
-  const Vector3d centre_W =
-      mean + 0.5 * (lo[0] + hi[0]) * ax_long + 0.5 * (lo[1] + hi[1]) * ax_short;
-  const Vector3d centre_C2 = X_WC2.inverse() * centre_W;
-  if (centre_C2.z() <= 0) {
-    out.reason = Reason::kDecompositionFailed;
+  const Rect features = features_rect(pts_W, mean, a_long.x() * e1 + a_long.y() * e2,
+                                      a_short.x() * e1 + a_short.y() * e2);
+  const Rect widened = widened_by_shortfall(features, pts_W.size());
+  if (const Reason r = measure_top(c, planes, widened, X_WC2, params, &out.estimate);
+      r != Reason::kOk) {
+    out.reason = r;
     return out;
   }
-  const Vector3d aim_ray = centre_C2 / centre_C2.z();
-  const auto w_top = compute_waypoint(top, aim_ray, c.pose_1, c.pose_2, *c.mount, params.waypoint);
-  if (!w_top) {
-    out.reason = w_top.reason();
-    return out;
-  }
-  const auto w_floor =
-      compute_waypoint(floor, aim_ray, c.pose_1, c.pose_2, *c.mount, params.waypoint);
-  if (!w_floor) {
-    out.reason = w_floor.reason();
-    return out;
-  }
-  TargetEstimate& e = out.estimate;
-  e.p_W = w_top->p_W;
-  e.n_W = w_top->n_W;
-  e.height_m = w_floor->distance_m - w_top->distance_m;
-  e.size_m[0] = side_from_extent(hi[0] - lo[0], pts_W.size());
-  e.size_m[1] = side_from_extent(hi[1] - lo[1], pts_W.size());
-  // The plane is level (max_tilt_deg), so the long axis' direction in the world xy plane is the
-  // platform's yaw; autonomy aligns the gear with the edges before touch-down.
-  e.yaw_rad = std::atan2(ax_long.y(), ax_long.x());
-  if (e.yaw_rad <= -M_PI / 2) e.yaw_rad += M_PI;
-  if (e.yaw_rad > M_PI / 2) e.yaw_rad -= M_PI;
-  const auto px = c.camera->project(w_top->p_C2);
-  e.pixel = px ? *px : (K * aim_ray).hnormalized();
-  for (int k = 0; k < 4; ++k) {  // the extent's rectangle, for the diagnostic image
-    const double s0 = (k == 0 || k == 3) ? lo[0] : hi[0], s1 = k < 2 ? lo[1] : hi[1];
-    const Vector3d corner_C2 = X_WC2.inverse() * (mean + s0 * ax_long + s1 * ax_short);
-    if (const auto q = c.camera->project(corner_C2)) e.outline.push_back(*q);
-  }
+  const TargetEstimate& e = out.estimate;
   if (e.height_m < params.landing.min_height_m || e.height_m > params.landing.max_height_m) {
     out.reason = Reason::kNoTargetPlane;
     return out;
@@ -392,6 +650,19 @@ TargetOutcome platform_of(const Correspondences& c, const PipelineParams& params
     return out;
   }
   out.reason = cut ? Reason::kPartialView : Reason::kOk;
+  // The top's rim, on a top seen whole (a cut top's size is never used, landing_target.hpp):
+  // where the rims give no estimate (a waypoint fails, the height leaves its range), the
+  // features' stands.
+  if (!cut && !gray_1.empty() && !gray_2.empty() && params.landing.rim_search_m > 0) {
+    if (const auto rim =
+            rim_rect(c, gray_1, gray_2, top, X_WC2, pts_W, features, widened, params.landing)) {
+      TargetEstimate at_rim = out.estimate;
+      if (measure_top(c, planes, *rim, X_WC2, params, &at_rim) == Reason::kOk &&
+          at_rim.height_m >= params.landing.min_height_m &&
+          at_rim.height_m <= params.landing.max_height_m)
+        out.estimate = at_rim;
+    }
+  }
   return out;
 }
 

@@ -8,6 +8,29 @@
 // the extent widened by the features' expected shortfall (side_from_extent) its size.
 // The platform height is the difference of the two planes' distances along the aiming ray.
 //
+// Beyond the paper (issue 15, landing_lowtex): the rim search. The paper (Brockers et al., SPIE
+// 2011, 3.2) finds the top's plane and its centre from the top's features and measures no size;
+// its Fig. 6b notes that features alone fall short of a featureless region's true size, which is
+// what a nearly blank top does here: its extent fell short by more than side_from_extent
+// restores (20.4 and 22.1 cm tops measured 18.8 and 17.9 cm, refused as too narrow). Given both
+// images, each side of the extent of a top seen whole (a cut top's size is never used) is
+// searched outward in the top's plane (rim_search_m) for the top's rim: the mean grey level
+// along lines parallel to the side, at offsets from it, read in the current image and in the
+// reference at the same points of the top's plane (the top's homography: the plane-induced
+// comparison of Irani & Anandan, ECCV 1996, as in warp_diff.hpp, but only along the lines
+// searched). The rim is the first step outward that darkens (the top is lit as the floor is and
+// the side faces, turned from the light, less; a top darker than what lies beyond keeps its
+// features' extent) and stays dark to the search's end (a row of print on the top darkens and
+// brightens again), and the reference must show it within rim_max_disagreement_px on the top's
+// plane: the rim lies on the plane, while an edge of the floor or of a side face beyond moves
+// differently between the views. The features' rectangle can be turned from the top's edges, and
+// a line across a turned rim spreads its step: the rim's turn (at most rim_max_turn_deg) is the
+// straight line through the steps of short stretches of the side, and the lines are read along
+// it. Rims that agree on a turn turn the rectangle onto them. A side without a rim keeps the
+// features' extent and its half of side_from_extent's widening (never wider than the evidence
+// shows); with one, the side ends at the rim. The plane check (plane_photometric.hpp) reads the
+// features' hull, not the rim's rectangle: the rim is measured only on a top the check accepts.
+//
 // The paper takes the first homography as the floor; here the roles follow the geometry,
 // because a richly textured platform top can hold more matches than the floor in view.
 
@@ -29,8 +52,9 @@ double side_from_extent(double range_m, size_t n);
 /// Fails with kTooFewMatches / kNoDominantPlane (no first plane), kNoTargetPlane (no second
 /// plane, or it is no platform, or the images show its pixels or its floor's on another plane:
 /// vision.landing.photometric_tol), kSmallBaseline / kDecompositionFailed. gray_1 / gray_2: the
-/// reference and current raw images, CV_8UC1 of the camera's size; either empty or of another
-/// kind: the features alone decide.
+/// reference and current raw images, CV_8UC1 of the camera's size (the plane check, and the
+/// extent's sides out to the top's rim: rim_search_m); either empty or of another kind: the
+/// features alone decide.
 TargetOutcome find_landing_target(const Correspondences& c, const PipelineParams& params,
                                   const cv::Mat& gray_1 = cv::Mat(),
                                   const cv::Mat& gray_2 = cv::Mat());

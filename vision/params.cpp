@@ -256,6 +256,23 @@ const ParamSchema<LandingParams>& LandingParams::schema() {
           "that it shows the same scene, and an approach held by gusts hovered 10 s with the "
           "target in view (landing_lowtex seed 8002), then lost it when a 10 s bound dropped "
           "the reference");
+    s.add("rim_search_m", &P::rim_search_m, Range::closed(0, 0.2), "m",
+          "each side of the top's features' extent is searched outward this far in the top's "
+          "plane for the top's rim, an intensity step that both images show at the same place "
+          "on that plane (0: off, the extent widened by side_from_extent). A nearly blank top "
+          "has no features near its edges: its extent fell 1.5-4 cm short (landing_lowtex "
+          "9913, 9919, 9612: refused as too narrow)");
+    s.add("rim_min_step", &P::rim_min_step, Range::gt(0), "grey levels",
+          "rim_search_m: the mean step across the rim, along the side, in both images at least");
+    s.add("rim_max_disagreement_px", &P::rim_max_disagreement_px, Range::gt(0), "px",
+          "rim_search_m: the two images' steps at most this far apart on the top's plane (in "
+          "pixels of the current image): farther, the step is not on the top (the floor or a "
+          "side face beyond it moves differently) and the side keeps the features' extent");
+    s.add("rim_max_turn_deg", &P::rim_max_turn_deg, Range::closed(0, 45), "deg",
+          "rim_search_m: the rim may be turned this far from the features' rectangle's side (a "
+          "minimum-area rectangle of a few dozen features on a blank top can be 10 deg or more "
+          "off its edges); the turn is fitted to where short stretches of the side step, and "
+          "two or more rims that agree on a turn turn the rectangle onto them");
     return s;
   }();
   return schema;

@@ -129,6 +129,11 @@ struct LandingParams {
   bool hold_reference = true;  ///< keep a longer-baseline reference while hovering (pipeline.hpp)
   double hold_baseline_m = 0.3;
   double hold_max_age_s = 30.0;
+  // Beyond the paper: each side of the features' extent out to the top's rim (landing_target.hpp).
+  double rim_search_m = 0.05;
+  double rim_min_step = 6.0;
+  double rim_max_disagreement_px = 1.5;
+  double rim_max_turn_deg = 15.0;
   static const ParamSchema<LandingParams>& schema();
   void validate() const;
 };

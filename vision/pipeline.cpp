@@ -67,9 +67,12 @@ FrameResult Pipeline::process(const cv::Mat& gray, int64_t utime,
   // frame keeps its image smoothed as that comparison wants it, made once (issue 15).
   const bool parallax = mission_ == Mission::kIngress && params_.ingress.parallax_mask;
   if (parallax) frame.image = parallax_image(gray, params_.ingress);
-  // Landing checks its planes against both images (landing_target.hpp): the caller's pixels are
-  // not ours to keep, and with the check off no copy is made.
-  const bool landing_images = mission_ == Mission::kLanding && params_.landing.photometric_tol > 0;
+  // Landing checks its planes against both images and looks for the top's rim in them
+  // (landing_target.hpp): the caller's pixels are not ours to keep, and with both off no copy
+  // is made.
+  const bool landing_images =
+      mission_ == Mission::kLanding &&
+      (params_.landing.photometric_tol > 0 || params_.landing.rim_search_m > 0);
   if (landing_images) frame.image = gray.clone();
 
   const auto up = tracker_.add(std::move(frame));

@@ -38,8 +38,9 @@ struct TrackedFrame {
   std::vector<Keypoint> keypoints;
   cv::Mat descriptors;             ///< CV_32F, one row per keypoint
   double pattern_angle_rad = 0.0;  ///< SURF pattern rotation used for the descriptors
-  cv::Mat image;                   ///< ingress: the grey image smoothed (parallax_image)
-  std::vector<int64_t> track_id;   ///< filled by ReferenceTracker::add
+  cv::Mat image;  ///< ingress: the grey image smoothed (parallax_image); landing: the grey image
+                  ///< as captured (the rim search, landing_target.hpp)
+  std::vector<int64_t> track_id;  ///< filled by ReferenceTracker::add
 };
 
 class ReferenceTracker {

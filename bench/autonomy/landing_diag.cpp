@@ -128,6 +128,18 @@ int main(int argc, char** argv) {
       }
       std::printf(" fin %d", inside);
     }
+    {  // matches on the true top (inside its outline by more than 2 px), and of them the top's
+      // inliers: few on the top is a blank top, many but none labelled is the planes' doing
+      int on = 0, on_labelled = 0;
+      if (truth_px.size() == 4)
+        for (size_t i = 0; i < r.matched_px.size(); ++i)
+          if (cv::pointPolygonTest(truth_px, cv::Point2f(r.matched_px[i].x(), r.matched_px[i].y()),
+                                   true) > 2.0) {
+            ++on;
+            on_labelled += i < r.labels.size() && r.labels[i] == vision::Label::kTarget;
+          }
+      std::printf(" on %d/%d", on_labelled, on);
+    }
     // The reference's baseline and age (the top's parallax falls with the baseline).
     std::printf(" b %.3f age %.2f tr %d%s", r.baseline_m,
                 r.ref_utime > 0 ? (f.utime - r.ref_utime) * 1e-6 : -1.0, r.n_tracked,
