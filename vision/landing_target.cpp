@@ -194,9 +194,7 @@ bool follows_its_planes(const Correspondences& c, const Planes& planes, const Ma
                                         (kPatchHalf + 1) * (kPatchHalf + 1));
     if (informative(patch, 3 * p.photometric_max_sigma)) gammas.push_back(patch->gamma);
   }
-  if (static_cast<int>(gammas.size()) < p.photometric_min_patches) return true;
-  std::nth_element(gammas.begin(), gammas.begin() + gammas.size() / 2, gammas.end());
-  return std::abs(gammas[gammas.size() / 2]) <= p.photometric_tol;
+  return floor_patches_agree(std::move(gammas), p);
 }
 
 TargetOutcome platform_of(const Correspondences& c, const PipelineParams& params,
@@ -204,6 +202,19 @@ TargetOutcome platform_of(const Correspondences& c, const PipelineParams& params
                           const cv::Mat& gray_2);
 
 }  // namespace
+
+bool floor_patches_agree(std::vector<double> gammas, const LandingParams& params) {
+  if (static_cast<int>(gammas.size()) < params.photometric_min_patches) return true;
+  std::nth_element(gammas.begin(), gammas.begin() + gammas.size() / 2, gammas.end());
+  const double median = gammas[gammas.size() / 2];
+  if (std::abs(median) > params.photometric_tol) return false;
+  constexpr size_t kSpreadPatches = 5;  // fewer have no spread to speak of
+  if (gammas.size() < kSpreadPatches) return true;
+  std::vector<double> dev;
+  for (const double g : gammas) dev.push_back(std::abs(g - median));
+  std::nth_element(dev.begin(), dev.begin() + dev.size() / 2, dev.end());
+  return 1.4826 * dev[dev.size() / 2] <= params.photometric_max_floor_spread;
+}
 
 double side_from_extent(double range_m, size_t n) {
   if (n < 2) return range_m;

@@ -35,6 +35,7 @@
 // because a richly textured platform top can hold more matches than the floor in view.
 
 #include <opencv2/core.hpp>
+#include <vector>
 
 #include "vision/params.hpp"
 #include "vision/target.hpp"
@@ -48,6 +49,15 @@ namespace alight::vision {
 /// unbiased estimate for features spread uniformly over the top (the minimum-variance unbiased
 /// estimator of a uniform distribution's width). n < 2: the range itself.
 double side_from_extent(double range_m, size_t n);
+
+/// The plane check's verdict on the floor (beyond the paper, plane_photometric.hpp) from the
+/// gammas of the patches around the floor's features (0 the floor's plane, 1 the top's): false
+/// when their median is farther than photometric_tol from 0, or when 5 or more spread wider than
+/// photometric_max_floor_spread (1.4826 times their median absolute deviation). A floor
+/// homography that does not register the floor (a plane turned about a line through the view)
+/// puts its patches on both sides of 0 while their median may still sit near it. Fewer than
+/// photometric_min_patches: no verdict (true).
+bool floor_patches_agree(std::vector<double> gammas, const LandingParams& params);
 
 /// Fails with kTooFewMatches / kNoDominantPlane (no first plane), kNoTargetPlane (no second
 /// plane, or it is no platform, or the images show its pixels or its floor's on another plane:

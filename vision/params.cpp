@@ -231,6 +231,10 @@ const ParamSchema<LandingParams>& LandingParams::schema() {
           "photometric_tol: the top's pixels less certain than photometric_max_sigma still "
           "refuse it when their gamma is farther from 1 than the tolerance by this many of "
           "its standard deviations");
+    s.add("photometric_max_floor_spread", &P::photometric_max_floor_spread, Range::gt(0), "",
+          "photometric_tol: the floor's patches (5 or more) spread at most this far in gamma "
+          "(1.4826 times their median absolute deviation); wider, the floor's homography does "
+          "not register the floor's pixels and the planes are refused");
     s.add("photometric_min_patches", &P::photometric_min_patches, Range::ge(1), "",
           "photometric_tol: the floor's verdict is the median of at least this many patches "
           "around its features (fewer: none). A false top that covers most of the view leaves "

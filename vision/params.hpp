@@ -125,6 +125,7 @@ struct LandingParams {
   double photometric_min_ncc = 0.5;
   double photometric_max_sigma = 0.1;
   double photometric_far_sigmas = 3.0;
+  double photometric_max_floor_spread = 0.5;
   int photometric_min_patches = 1;
   bool hold_reference = true;  ///< keep a longer-baseline reference while hovering (pipeline.hpp)
   double hold_baseline_m = 0.3;

@@ -345,6 +345,37 @@ TEST(FalseTargetOverABareFloor, UncertainTopFarFromItsPlaneIsStillRefused) {
   }
 }
 
+// Regression (landing_none_photo 9725, 9730: "tops" of 12-14 matches over a photographed floor
+// whose hull sat at gamma 0.43-0.54, uncertain, so no verdict; the floor's patches ran from -0.7
+// to 1.6 around a median near 0: the floor's homography did not register the floor). Known
+// answers: the traced frames' patches are refused by their spread alone, a true top's floor
+// (landing_photo 9910-9919, 6698 frames with 5 or more patches: spread p99 0.10) agrees, a
+// floor off 0 is refused by its median, and too few patches give no verdict.
+TEST(FalseTargetOverABareFloor, FloorPatchesSpreadOnBothSidesOfZeroAreRefused) {
+  const LandingParams p;
+  const std::vector<double> none_9725 = {-0.31, -0.66, -0.69, -0.32, -0.34, -0.39,
+                                         -0.21, -0.26, -0.29, -0.02, -0.00, 1.60,
+                                         0.41,  0.43,  1.15,  0.77,  0.45,  0.67};
+  const std::vector<double> none_9730 = {-0.54, -0.62, -0.64, -0.28, -0.51, -0.28, -0.07,
+                                         -0.02, 0.30,  0.35,  0.60,  0.92,  0.09};
+  const std::vector<double> photo_9910 = {-0.05, -0.05, -0.07, -0.07, -0.10, -0.06, -0.06,
+                                          -0.05, -0.05, -0.04, -0.01, 0.00,  0.02,  0.01,
+                                          0.02,  0.03,  0.06,  0.04,  0.04,  0.07,  0.04};
+  EXPECT_FALSE(floor_patches_agree(none_9725, p));
+  EXPECT_FALSE(floor_patches_agree(none_9730, p));
+  EXPECT_TRUE(floor_patches_agree(photo_9910, p));
+  LandingParams no_spread = p;  // their medians alone pass
+  no_spread.photometric_max_floor_spread = 1e9;
+  EXPECT_TRUE(floor_patches_agree(none_9725, no_spread));
+  EXPECT_TRUE(floor_patches_agree(none_9730, no_spread));
+  std::vector<double> raised = photo_9910;  // the whole floor a third of the way up
+  for (double& g : raised) g += 0.33;
+  EXPECT_FALSE(floor_patches_agree(raised, p));
+  EXPECT_TRUE(floor_patches_agree({-0.9, 0.0, 0.9, 0.1}, p));  // 4: no spread to speak of
+  EXPECT_FALSE(floor_patches_agree({-0.9, 0.0, 0.9, 0.1, 0.8}, p));
+  EXPECT_TRUE(floor_patches_agree({}, p));  // no patch: no verdict
+}
+
 // Faint paper grain: value noise (a hash of each 6 mm cell, bilinear between cells) of +-1
 // grey level. Not a grating: a single sinusoid's correlation repeats along the parallax, every
 // 0.75 of the top's parallax at 1.3 cm, and left the plane check (plane_photometric.hpp) peaks
