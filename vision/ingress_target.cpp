@@ -307,25 +307,29 @@ double face_front_edge(const cv::Mat& mask, bool vertical, double a, double b, d
       }
     if (ok) cost[e - k0] = sum;
   }
-  // The least cost is flat across a face whose texture is faint (both models explain it), and
-  // rises once the face's model takes in the wall beyond its front edge: the front edge is the
-  // farthest candidate within face_tolerance of the least, interpolated where the cost crosses
-  // it. A strip whose cost never rises by face_min_rise tells the face from the wall nowhere (a
-  // smooth wall).
+  // The front edge is the least cost's candidate, to a fraction of a pixel by the parabola
+  // through it and its neighbours (the cost falls as the face's model takes in more of the face
+  // and rises once it takes in the wall beyond its front edge). Not the farthest candidate near
+  // the least: where the face's texture is faint the cost is flat over pixels either side of
+  // the front edge, and the farthest of them put the flown widths 1-3 cm wide (issue 15,
+  // ingress_photo seeds 9802-9805, 9 cm walls). A strip whose cost never rises by
+  // face_min_rise tells the face from the wall nowhere (a smooth wall).
   double least = kNone, most = 0;
-  for (const double v : cost)
-    if (std::isfinite(v)) least = std::min(least, v), most = std::max(most, v);
-  if (!std::isfinite(least) || (most - least) / n_rows < p.face_min_rise) return a;
-  const double level = least + p.face_tolerance * n_rows;
-  int far = 0;
+  int best = -1;
   for (int i = 0; i < static_cast<int>(cost.size()); ++i)
-    if (cost[i] <= level) far = i;
-  if (far == 0) return a;
+    if (std::isfinite(cost[i])) {
+      if (cost[i] < least) least = cost[i], best = i;
+      most = std::max(most, cost[i]);
+    }
+  if (best <= 0 || (most - least) / n_rows < p.face_min_rise) return a;
   double frac = 0;
-  if (far + 1 < static_cast<int>(cost.size()) && std::isfinite(cost[far + 1]) &&
-      cost[far + 1] > cost[far])
-    frac = (level - cost[far]) / (cost[far + 1] - cost[far]);
-  return a0 + side * (far + k0 + frac);
+  if (best + 1 < static_cast<int>(cost.size()) && std::isfinite(cost[best + 1]) &&
+      std::isfinite(cost[best - 1])) {
+    const double curvature = cost[best - 1] - 2 * cost[best] + cost[best + 1];
+    if (curvature > 0)
+      frac = std::clamp(0.5 * (cost[best - 1] - cost[best + 1]) / curvature, -0.5, 0.5);
+  }
+  return a0 + side * (best + k0 + frac);
 }
 
 cv::Mat parallax_image(const cv::Mat& gray, const IngressParams& p) {

@@ -318,11 +318,9 @@ const ParamSchema<IngressParams>& IngressParams::schema() {
           "to the wall's front edge, where a face plane and the wall explain both views best (the "
           "mask's border sits "
           "inside the face; 0: no face search)");
-    s.add("face_tolerance", &P::face_tolerance, Range::ge(0), "grey levels",
-          "the front edge is the farthest whose two views' difference (summed along a line "
-          "across the side) stays within this of the least");
     s.add("face_min_rise", &P::face_min_rise, Range::ge(0), "grey levels",
-          "... and the difference must rise by this over the search (else no face shows)");
+          "the two views' difference (summed along a line across the side) must rise by this over "
+          "the search, else no face shows; the front edge is at its least");
     s.add("blur_sigma_px", &P::blur_sigma_px, Range::closed(0, 10), "px",
           "Gaussian smoothing before Canny (0: none)");
     s.add("canny_low", &P::canny_low, Range::gt(0), "grey levels", "Canny hysteresis: low");
