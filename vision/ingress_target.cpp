@@ -276,6 +276,14 @@ double face_front_edge(const cv::Mat& mask, bool vertical, double a, double b, d
   constexpr double kNone = std::numeric_limits<double>::infinity();
   std::vector<double> cost(e_max - k0 + 1, kNone);
   cost[0] = wall_from[0];
+  // Past the least the cost only rises (the face's model takes in more of the wall): the search
+  // stops once a candidate two or more beyond the least has risen face_stop_rise a line above
+  // it, and a candidate's sum stops there too (issue 15: the candidates' pixels grow with the
+  // square of the reach; the search's vision CPU p99 was 11 ms against 7 ms without it).
+  double least_so_far = cost[0];
+  int best_so_far = 0;
+  const double stop = p.face_stop_rise * n_rows;
+  bool risen = false;  // stopped: the cost rose face_stop_rise above its least
   const double along_lo = lo, along_hi = hi;
   for (int e = k0 + 1; e <= e_max; ++e) {
     // The front edge's line on the wall plane, and the face plane through it along the wall's
@@ -296,7 +304,9 @@ double face_front_edge(const cv::Mat& mask, bool vertical, double a, double b, d
     if (!(face.dot(c1_2) < 1)) continue;  // camera 1 on the face's far side: hidden from it
     double sum = wall_from[e - k0];
     bool ok = true;
-    for (int r = 0; r < n_rows && ok; ++r)
+    const bool may_stop = p.face_stop_rise > 0 && e - k0 >= best_so_far + 2;
+    bool stopped = false;
+    for (int r = 0; r < n_rows && ok && !stopped; ++r) {
       for (int j = 0; j < e - k0; ++j) {
         const auto ref = reference_at(face, ray[r * n_k + j]);
         if (!ref) {
@@ -305,7 +315,15 @@ double face_front_edge(const cv::Mat& mask, bool vertical, double a, double b, d
         }
         sum += std::abs(current[r * n_k + j] - *ref);
       }
-    if (ok) cost[e - k0] = sum;
+      stopped = may_stop && sum - least_so_far >= stop;
+    }
+    if (stopped) {
+      risen = true;
+      break;
+    }
+    if (!ok) continue;
+    cost[e - k0] = sum;
+    if (sum < least_so_far) least_so_far = sum, best_so_far = e - k0;
   }
   // The front edge is the least cost's candidate, to a fraction of a pixel by the parabola
   // through it and its neighbours (the cost falls as the face's model takes in more of the face
@@ -321,7 +339,7 @@ double face_front_edge(const cv::Mat& mask, bool vertical, double a, double b, d
       if (cost[i] < least) least = cost[i], best = i;
       most = std::max(most, cost[i]);
     }
-  if (best <= 0 || (most - least) / n_rows < p.face_min_rise) return a;
+  if (best <= 0 || (!risen && (most - least) / n_rows < p.face_min_rise)) return a;
   double frac = 0;
   if (best + 1 < static_cast<int>(cost.size()) && std::isfinite(cost[best + 1]) &&
       std::isfinite(cost[best - 1])) {

@@ -321,6 +321,9 @@ const ParamSchema<IngressParams>& IngressParams::schema() {
     s.add("face_min_rise", &P::face_min_rise, Range::ge(0), "grey levels",
           "the two views' difference (summed along a line across the side) must rise by this over "
           "the search, else no face shows; the front edge is at its least");
+    s.add("face_stop_rise", &P::face_stop_rise, Range::ge(0), "grey levels",
+          "the face search stops once the difference a line has risen this far above its least "
+          "(it only rises further out; 0: the whole reach)");
     s.add("blur_sigma_px", &P::blur_sigma_px, Range::closed(0, 10), "px",
           "Gaussian smoothing before Canny (0: none)");
     s.add("canny_low", &P::canny_low, Range::gt(0), "grey levels", "Canny hysteresis: low");

@@ -153,6 +153,7 @@ struct IngressParams {
   double snap_min_gradient = 8;
   double max_wall_thickness_m = 0.4;
   double face_min_rise = 2.0;
+  double face_stop_rise = 20.0;
   double blur_sigma_px = 2.0;
   double canny_low = 50, canny_high = 150;
   int hough_threshold = 60;
