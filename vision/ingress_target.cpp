@@ -182,84 +182,172 @@ void hough_lines(const std::vector<cv::Point>& px, cv::Size size, double theta_l
 
 // The wall's front edge beyond a frame's inner face (jamb, sill, lintel; issue 15, the thickness
 // bias). A face of a wall t thick runs from the front edge, on the wall plane, straight back
-// along the wall's normal; its points' parallax against the wall's homography grows from zero
-// at the front edge with the depth behind it, so the mean difference between the image and the
-// warped reference, along lines parallel to the cut, falls from the mask's border (where it
-// passes the threshold) to the wall's own level at the front edge and stays there. A hinge,
-// D(k) = floor + slope max(0, e - k) for k px from the cut towards the wall, fitted by least
-// squares, puts the front edge at e. Searched as far as a face can reach: a face's far edge at
-// `across` from the principal point has its front edge `across` t / Z further out, and it shows
-// only on the side away from the principal point (beyond, the front edge hides it). The first
-// 2 sigma of the mask's blur are left out (the room's difference spread over the border). Returns
-// a unchanged when no falling ramp stands out of the differences' scatter.
-double face_front_edge(const cv::Mat& diff, const cv::Mat& mask, bool vertical, double a, double b,
-                       double mean_along, int lo, int hi, const CutGeometry& g,
-                       const IngressParams& p) {
+// along the wall's normal, so given where its front edge lies in the image the face is a known
+// plane: the one through that edge's line on the wall plane that holds the wall's normal. Its
+// homography (paper eq. 2 with the face's n~) maps the reference onto the current image across
+// the face as the wall's does beyond it; the front edge is where the two models together explain
+// the views (a change point, as in Irani & Anandan's plane + parallax, ECCV 1996).
+// Searched as far as a face can reach: a face's far edge at `across` from the principal point
+// has its front edge `across` t / Z further out, and it shows only on the side away from the
+// principal point (beyond, the front edge hides it). The first 2 sigma of the mask's blur are
+// left out (the room's difference spread over the border). Returns a unchanged when no face
+// shows.
+double face_front_edge(const cv::Mat& mask, bool vertical, double a, double b, double mean_along,
+                       int lo, int hi, const CutGeometry& g, const IngressParams& p) {
+  if (!g.camera || g.image.empty() || g.reference.size() != g.image.size() ||
+      g.image.size() != mask.size() || !(g.wall_depth_m > 0) || !std::isfinite(g.wall_depth_m))
+    return a;
   const int side = wall_side(mask, vertical, a, b, mean_along, lo, hi);
   const double centre = vertical ? g.principal_px.x() : g.principal_px.y();
   if (side == 0 || (a - centre) * side <= 0) return a;
-  const int n_across = vertical ? diff.cols : diff.rows;
+  const int n_across = vertical ? mask.cols : mask.rows;
   const double reach =
       std::min(std::abs(a - centre) * p.max_wall_thickness_m / g.wall_depth_m, 0.25 * n_across);
   const int k0 = static_cast<int>(std::ceil(2 * p.parallax_blur_sigma_px)) + 1;
-  const int k_end = static_cast<int>(std::ceil(reach)) + k0 + 8;  // beyond: the wall's level
-  if (reach < k0) return a;
-  std::vector<double> d;  // mean difference at k = k0 .. k_end
-  const double a0 = std::round(a);
-  // Only where the reference saw the wall: elsewhere the difference is 0 by convention, no
-  // evidence (mapped by the homography of the undistorted pixels, a few pixels' margin).
-  auto seen = [&](int u, int v) {
-    const Vector3d q = g.H_12 * Vector3d(u, v, 1);
-    if (!(q.z() > 0)) return false;
-    const double x = q.x() / q.z(), y = q.y() / q.z();
-    return x >= 3 && y >= 3 && x <= diff.cols - 4 && y <= diff.rows - 4;
+  const int e_max = static_cast<int>(std::floor(reach));
+  const int k_end = e_max + k0 + 8;  // beyond the farthest front edge: the wall's own level
+  if (e_max <= k0) return a;
+  const CameraModel& camera = *g.camera;
+  const Matrix3d R_12 = g.wall.R_21.transpose();
+  const Vector3d& t_12 = g.wall.t_12;
+  const Vector3d n2 = g.wall.n_2();  // n2~: n2~^T X2 = 1 on the wall
+  if (!n2.allFinite()) return a;
+  const Vector3d c1_2 = -(g.wall.R_21 * t_12);  // camera 1's centre in camera 2
+  auto pixel = [&](double along, double across) {
+    return vertical ? Vector2d(across, along) : Vector2d(along, across);
   };
-  for (int k = k0; k <= k_end; ++k) {
-    double sum = 0;
-    int n = 0;
-    for (int t = lo; t <= hi; ++t) {
-      const int x = static_cast<int>(std::lround(a0 + b * (t - mean_along))) + side * k;
-      if (x < 0 || x >= n_across) continue;
-      if (!(vertical ? seen(x, t) : seen(t, x))) continue;
-      sum += vertical ? diff.at<uint8_t>(t, x) : diff.at<uint8_t>(x, t);
-      ++n;
+  // The reference's value where the plane n~ (camera 2, n~^T X = 1) puts the point seen along
+  // ray r2, bilinear; nullopt off the reference or behind a camera.
+  auto reference_at = [&](const Vector3d& n, const Vector3d& r2) -> std::optional<float> {
+    const double den = n.dot(r2);
+    if (!(den > 0)) return std::nullopt;
+    const auto u1 = camera.project(R_12 * (r2 / den) + t_12);
+    if (!u1 || !(u1->x() >= 0 && u1->y() >= 0 && u1->x() <= g.reference.cols - 2 &&
+                 u1->y() <= g.reference.rows - 2))
+      return std::nullopt;
+    const int x = static_cast<int>(u1->x()), y = static_cast<int>(u1->y());
+    const float fx = static_cast<float>(u1->x() - x), fy = static_cast<float>(u1->y() - y);
+    const uint8_t* r0 = g.reference.ptr<uint8_t>(y) + x;
+    const uint8_t* r1 = g.reference.ptr<uint8_t>(y + 1) + x;
+    return (1 - fy) * ((1 - fx) * r0[0] + fx * r0[1]) + fy * ((1 - fx) * r1[0] + fx * r1[1]);
+  };
+  // The strip: whole rows (lines across the side) of k0 .. k_end px towards the wall, every
+  // few along the side (the cost, not the answer, grows with them), kept only where the wall
+  // model sees every pixel, so every candidate sums the same pixels.
+  const int n_k = k_end - k0 + 1;
+  constexpr int kMaxRows = 48;
+  const int step = std::max(1, (hi - lo + 1 + kMaxRows - 1) / kMaxRows);
+  const double a0 = std::round(a);
+  std::vector<Vector3d> ray;  // row-major, n_k a row
+  std::vector<float> current, wall_diff;
+  for (int t = lo; t <= hi; t += step) {
+    const int x0 = static_cast<int>(std::lround(a0 + b * (t - mean_along)));
+    bool whole = true;
+    const size_t begin = ray.size();
+    for (int k = k0; k <= k_end && whole; ++k) {
+      const int x = x0 + side * k;
+      if (x < 0 || x >= n_across) {
+        whole = false;
+        break;
+      }
+      const Vector2d u = pixel(t, x);
+      const Vector3d r = camera.ray(u);
+      const auto ref = reference_at(n2, r);
+      if (!ref) {
+        whole = false;
+        break;
+      }
+      const float cur = g.image.at<uint8_t>(static_cast<int>(u.y()), static_cast<int>(u.x()));
+      ray.push_back(r), current.push_back(cur), wall_diff.push_back(std::abs(cur - *ref));
     }
-    if (n < (hi - lo + 1) / 2) break;  // off either image
-    d.push_back(sum / n);
+    if (!whole) {
+      ray.resize(begin), current.resize(begin), wall_diff.resize(begin);
+    }
   }
-  const int m = static_cast<int>(d.size());
-  if (m < 8) return a;
-  double mean = 0;
-  for (const double v : d) mean += v;
-  mean /= m;
-  double sse_flat = 0;
-  for (const double v : d) sse_flat += (v - mean) * (v - mean);
-  // e in quarter pixels from k0 to the reach: for each, floor and slope by least squares on the
-  // regressor g_k = max(0, e - k).
-  double best_sse = sse_flat, best_e = 0, best_rise = 0;
-  for (double e = k0 + 0.25; e <= std::min(reach, static_cast<double>(k0 + m - 1)); e += 0.25) {
-    double sg = 0, sgg = 0, sgd = 0, sd = 0;
-    for (int i = 0; i < m; ++i) {
-      const double gk = std::max(0.0, e - (k0 + i));
-      sg += gk, sgg += gk * gk, sgd += gk * d[i], sd += d[i];
-    }
-    const double cov = sgd - sg * sd / m, var = sgg - sg * sg / m;
-    if (var <= 0 || cov <= 0) continue;  // a rising profile: no face
-    const double slope = cov / var, floor = (sd - slope * sg) / m;
-    double sse = 0;
-    for (int i = 0; i < m; ++i) {
-      const double r = d[i] - floor - slope * std::max(0.0, e - (k0 + i));
-      sse += r * r;
-    }
-    if (sse < best_sse) best_sse = sse, best_e = e, best_rise = slope * (e - k0);
+  const int n_rows = static_cast<int>(ray.size()) / n_k;
+  if (n_rows < 4) return a;
+  // wall_from[j]: the wall model's difference summed over k >= k0 + j.
+  std::vector<double> wall_from(n_k + 1, 0.0);
+  for (int j = n_k - 1; j >= 0; --j) {
+    wall_from[j] = wall_from[j + 1];
+    for (int r = 0; r < n_rows; ++r) wall_from[j] += wall_diff[r * n_k + j];
   }
-  // The ramp must stand out of the residual's scatter and be a difference the eye could see (on
-  // a smooth wall seen over a short baseline the mean along a line is steady to a tenth of a
-  // grey level, and the wall's own slow drifts fit a ramp of a few tenths).
-  const double sigma = std::sqrt(best_sse / std::max(1, m - 3));
-  if (best_e <= 0 || best_rise < p.face_min_rise_sigma * sigma || best_rise < p.face_min_rise)
-    return a;
-  return a0 + side * best_e;
+  // cost[e - k0]: the face's model over k0 <= k < e, the wall's beyond; e = k0: no face.
+  constexpr double kNone = std::numeric_limits<double>::infinity();
+  std::vector<double> cost(e_max - k0 + 1, kNone);
+  cost[0] = wall_from[0];
+  // Past the least the cost only rises (the face's model takes in more of the wall): the search
+  // stops once a candidate two or more beyond the least has risen face_stop_rise a line above
+  // it, and a candidate's sum stops there too (issue 15: the candidates' pixels grow with the
+  // square of the reach; the search's vision CPU p99 was 11 ms against 7 ms without it).
+  double least_so_far = cost[0];
+  int best_so_far = 0;
+  const double stop = p.face_stop_rise * n_rows;
+  bool risen = false;  // stopped: the cost rose face_stop_rise above its least
+  const double along_lo = lo, along_hi = hi;
+  for (int e = k0 + 1; e <= e_max; ++e) {
+    // The front edge's line on the wall plane, and the face plane through it along the wall's
+    // normal.
+    auto on_wall = [&](double along) -> std::optional<Vector3d> {
+      const Vector3d r =
+          camera.ray(pixel(along, a0 + b * (along - mean_along) + side * static_cast<double>(e)));
+      const double den = n2.dot(r);
+      if (!(den > 0)) return std::nullopt;
+      return Vector3d(r / den);
+    };
+    const auto X_lo = on_wall(along_lo), X_hi = on_wall(along_hi);
+    if (!X_lo || !X_hi) continue;
+    const Vector3d m = n2.normalized().cross(*X_hi - *X_lo);
+    const double offset = m.dot(*X_lo);
+    if (!(std::abs(offset) > 1e-9 * m.norm() * X_lo->norm())) continue;  // seen edge-on
+    const Vector3d face = m / offset;                                    // n~ of the face
+    if (!(face.dot(c1_2) < 1)) continue;  // camera 1 on the face's far side: hidden from it
+    double sum = wall_from[e - k0];
+    bool ok = true;
+    const bool may_stop = p.face_stop_rise > 0 && e - k0 >= best_so_far + 2;
+    bool stopped = false;
+    for (int r = 0; r < n_rows && ok && !stopped; ++r) {
+      for (int j = 0; j < e - k0; ++j) {
+        const auto ref = reference_at(face, ray[r * n_k + j]);
+        if (!ref) {
+          ok = false;
+          break;
+        }
+        sum += std::abs(current[r * n_k + j] - *ref);
+      }
+      stopped = may_stop && sum - least_so_far >= stop;
+    }
+    if (stopped) {
+      risen = true;
+      break;
+    }
+    if (!ok) continue;
+    cost[e - k0] = sum;
+    if (sum < least_so_far) least_so_far = sum, best_so_far = e - k0;
+  }
+  // The front edge is the least cost's candidate, to a fraction of a pixel by the parabola
+  // through it and its neighbours (the cost falls as the face's model takes in more of the face
+  // and rises once it takes in the wall beyond its front edge). Not the farthest candidate near
+  // the least: where the face's texture is faint the cost is flat over pixels either side of
+  // the front edge, and the farthest of them put the flown widths 1-3 cm wide (issue 15,
+  // ingress_photo seeds 9802-9805, 9 cm walls). A strip whose cost never rises by
+  // face_min_rise tells the face from the wall nowhere (a smooth wall).
+  double least = kNone, most = 0;
+  int best = -1;
+  for (int i = 0; i < static_cast<int>(cost.size()); ++i)
+    if (std::isfinite(cost[i])) {
+      if (cost[i] < least) least = cost[i], best = i;
+      most = std::max(most, cost[i]);
+    }
+  if (best <= 0 || (!risen && (most - least) / n_rows < p.face_min_rise)) return a;
+  double frac = 0;
+  if (best + 1 < static_cast<int>(cost.size()) && std::isfinite(cost[best + 1]) &&
+      std::isfinite(cost[best - 1])) {
+    const double curvature = cost[best - 1] - 2 * cost[best] + cost[best + 1];
+    if (curvature > 0)
+      frac = std::clamp(0.5 * (cost[best - 1] - cost[best + 1]) / curvature, -0.5, 0.5);
+  }
+  return a0 + side * (best + k0 + frac);
 }
 
 cv::Mat parallax_image(const cv::Mat& gray, const IngressParams& p) {
@@ -693,9 +781,12 @@ TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image
     std::vector<Vector2d> wall_px;
     for (size_t k = 0; k < c.size(); ++k)
       if (fit->inlier[k]) wall_px.push_back(c.u2[k]);
-    geometry = CutGeometry{Vector2d(K(0, 2), K(1, 2)), wall.depth_m, cv::Mat(), fit->H.inverse()};
     mask = off_wall_mask_of_parallax_images(image_parallax, reference_parallax, image.size(),
-                                            fit->H, *c.camera, wall_px, p, &geometry.diff);
+                                            fit->H, *c.camera, wall_px, p);
+    if (image_parallax.size() == image.size())  // the faces are searched at full size only
+      geometry =
+          CutGeometry{Vector2d(K(0, 2), K(1, 2)), wall.depth_m, plane, c.camera, image_parallax,
+                      reference_parallax};
     mask_cuts(mask, p, &xc, &yc, &out.lines, image);
   } else {
     line_cuts(image, p, &xc, &yc, &out.lines);
@@ -805,8 +896,7 @@ TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image
   double left = xc[b[0]], right = xc[b[2]], top = yc[b[1]], bottom = yc[b[3]];
   // Each side of the block out across the wall's inner face to its front edge, on the middle
   // of the side (the corners hold the neighbouring faces too).
-  if (!mask.empty() && p.max_wall_thickness_m > 0 && geometry.wall_depth_m > 0 &&
-      std::isfinite(geometry.wall_depth_m) && geometry.diff.size() == mask.size()) {
+  if (!mask.empty() && p.max_wall_thickness_m > 0 && geometry.camera) {
     const double w = right - left, h = bottom - top;
     auto span = [](double from, double to, int n) {
       return std::pair{std::clamp(static_cast<int>(std::ceil(from)), 0, n - 1),
@@ -815,14 +905,10 @@ TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image
     const auto [y_lo, y_hi] = span(top + 0.1 * h, bottom - 0.1 * h, mask.rows);
     const auto [x_lo, x_hi] = span(left + 0.1 * w, right - 0.1 * w, mask.cols);
     const double y_mid = 0.5 * (top + bottom), x_mid = 0.5 * (left + right);
-    const double l =
-        face_front_edge(geometry.diff, mask, true, left, 0, y_mid, y_lo, y_hi, geometry, p);
-    const double r =
-        face_front_edge(geometry.diff, mask, true, right, 0, y_mid, y_lo, y_hi, geometry, p);
-    const double t =
-        face_front_edge(geometry.diff, mask, false, top, 0, x_mid, x_lo, x_hi, geometry, p);
-    const double bo =
-        face_front_edge(geometry.diff, mask, false, bottom, 0, x_mid, x_lo, x_hi, geometry, p);
+    const double l = face_front_edge(mask, true, left, 0, y_mid, y_lo, y_hi, geometry, p);
+    const double r = face_front_edge(mask, true, right, 0, y_mid, y_lo, y_hi, geometry, p);
+    const double t = face_front_edge(mask, false, top, 0, x_mid, x_lo, x_hi, geometry, p);
+    const double bo = face_front_edge(mask, false, bottom, 0, x_mid, x_lo, x_hi, geometry, p);
     left = l, right = r, top = t, bottom = bo;
   }
   const Vector2d centre(0.5 * (left + right), 0.5 * (top + bottom));

@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "common/camera_model.hpp"
+#include "vision/decomposition.hpp"
 #include "vision/params.hpp"
 #include "vision/target.hpp"
 
@@ -68,22 +69,21 @@ void mask_cuts(const cv::Mat& mask, const IngressParams& params, std::vector<dou
                std::vector<double>* y_cuts, std::vector<cv::Vec4i>* kept_segments,
                const cv::Mat& image = cv::Mat());
 
-/// Where the wall's inner faces (jambs, sill, lintel) can show, and what they look like against
-/// the wall's homography.
+/// Where the wall's inner faces (jambs, sill, lintel) can show, and the two views to test them.
 struct CutGeometry {
   Vector2d principal_px = Vector2d::Zero();
-  double wall_depth_m = 0;  ///< along the optical axis
-  cv::Mat diff;  ///< |current - reference warped by the wall's homography| (the mask's, CV_8UC1)
-  Matrix3d H_12 = Matrix3d::Identity();  ///< current pixel -> reference pixel on the wall
+  double wall_depth_m = 0;              ///< along the optical axis
+  PlaneMotion wall;                     ///< the wall's homography, decomposed (camera 1: reference)
+  const CameraModel* camera = nullptr;  ///< nullptr: no face search
+  cv::Mat image, reference;             ///< both frames' parallax_image(), full size
 };
 
 /// The across-coordinate of the wall's front edge beyond the inner face next to the cut
-/// a + b (along - mean_along), along in [lo, hi] (x of a vertical cut at row y): where the
-/// face's parallax against the wall's homography ends. `a` unchanged when no face shows.
-/// Exposed for tests.
-double face_front_edge(const cv::Mat& diff, const cv::Mat& mask, bool vertical, double a, double b,
-                       double mean_along, int lo, int hi, const CutGeometry& geometry,
-                       const IngressParams& params);
+/// a + b (along - mean_along), along in [lo, hi] (x of a vertical cut at row y): where a face
+/// plane through that edge along the wall's normal and the wall beyond it explain the two views
+/// best. `a` unchanged when no face shows. Exposed for tests.
+double face_front_edge(const cv::Mat& mask, bool vertical, double a, double b, double mean_along,
+                       int lo, int hi, const CutGeometry& geometry, const IngressParams& params);
 
 void line_cuts(const cv::Mat& image, const IngressParams& params, std::vector<double>* x_cuts,
                std::vector<double>* y_cuts, std::vector<cv::Vec4i>* kept_segments);

@@ -340,12 +340,15 @@ const ParamSchema<IngressParams>& IngressParams::schema() {
           "a weaker mean step along the cut is no edge");
     s.add("max_wall_thickness_m", &P::max_wall_thickness_m, Range::closed(0, 2), "m",
           "a cut moves out across an inner face (jamb, sill, lintel) of a wall up to this thick "
-          "to the wall's front edge, where the face's parallax ends (the mask's border sits "
+          "to the wall's front edge, where a face plane and the wall explain both views best (the "
+          "mask's border sits "
           "inside the face; 0: no face search)");
-    s.add("face_min_rise_sigma", &P::face_min_rise_sigma, Range::ge(0), "",
-          "an inner face's parallax ramp must rise this many times the differences' scatter");
     s.add("face_min_rise", &P::face_min_rise, Range::ge(0), "grey levels",
-          "... and by at least this much");
+          "the two views' difference (summed along a line across the side) must rise by this over "
+          "the search, else no face shows; the front edge is at its least");
+    s.add("face_stop_rise", &P::face_stop_rise, Range::ge(0), "grey levels",
+          "the face search stops once the difference a line has risen this far above its least "
+          "(it only rises further out; 0: the whole reach)");
     s.add("blur_sigma_px", &P::blur_sigma_px, Range::closed(0, 10), "px",
           "Gaussian smoothing before Canny (0: none)");
     s.add("canny_low", &P::canny_low, Range::gt(0), "grey levels", "Canny hysteresis: low");

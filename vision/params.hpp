@@ -159,8 +159,8 @@ struct IngressParams {
   double snap_px = 6;
   double snap_min_gradient = 8;
   double max_wall_thickness_m = 0.4;
-  double face_min_rise_sigma = 3;
-  double face_min_rise = 1.5;
+  double face_min_rise = 2.0;
+  double face_stop_rise = 20.0;
   double blur_sigma_px = 2.0;
   double canny_low = 50, canny_high = 150;
   int hough_threshold = 60;

@@ -91,10 +91,20 @@ int main(int argc, char** argv) {
     if (r.found()) {
       const auto& o = r.target.outline;
       const Vector3d e = r.target.p_W - centre_W;
+      // The box's width and height on the true wall plane from the true pose: the box's own
+      // error, apart from the estimated plane's depth.
+      auto on_wall = [&](double u, double v) {
+        const Vector3d d = f.X_WC.linear() * rig.model.ray(Vector2d(u, v));
+        return Vector3d(cam + (w.x_m - cam.x()) / d.x() * d);
+      };
+      const Vector2d mid = r.target.pixel;
+      const double box_w = (on_wall(o[1].x(), mid.y()) - on_wall(o[0].x(), mid.y())).norm();
+      const double box_h = (on_wall(mid.x(), o[2].y()) - on_wall(mid.x(), o[0].y())).norm();
       std::printf(" box[%.1f %.1f %.1f %.1f] dW %+.3f dH %+.3f dC(%+.3f %+.3f %+.3f) in %d/%d",
                   o[0].x(), o[1].x(), o[0].y(), o[2].y(), r.target.size_m[0] - size.x(),
                   r.target.size_m[1] - size.y(), e.x(), e.y(), e.z(), r.target.n_inliers_target,
                   r.target.n_inliers_dominant);
+      std::printf(" boxW %+.3f boxH %+.3f", box_w - size.x(), box_h - size.y());
     } else {
       std::printf(" in %d/%d", r.target.n_inliers_target, r.target.n_inliers_dominant);
     }
