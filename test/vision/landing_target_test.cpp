@@ -280,6 +280,24 @@ cv::Mat render_current(const cv::Mat& ref, const View& v, double h, OnTop on_top
   return out;
 }
 
+// An 8 cm top's matches (low_top, drawn from seed) with a procedural photograph as the reference
+// image and the current image rendered twice: showing the top, and showing a bare floor.
+struct RenderedTop {
+  static constexpr double kHeight_m = 0.08;
+  LowTop t;
+  cv::Mat ref, with_top, bare;
+};
+
+RenderedTop rendered_top(uint64_t seed) {
+  std::mt19937_64 rng(700 + seed);
+  RenderedTop r{low_top(rng, RenderedTop::kHeight_m), {}, {}, {}};
+  const auto on_top = [&](const Vector3d& X) { return r.t.on_top(X); };
+  r.ref = testing::procedural_photo(640, 480, seed);
+  r.with_top = render_current(r.ref, r.t.v, RenderedTop::kHeight_m, on_top);
+  r.bare = render_current(r.ref, r.t.v, 0.0, on_top);
+  return r;
+}
+
 // Regression (issue 15, landing_none_photo 9501, 9505: "tops" 4-9 cm up from matches tracked
 // a few pixels wrong, found by the features' rules alone). The same matches as a true 8 cm top
 // over the floor; the images decide (vision.landing.photometric_tol): where they show the top,
@@ -289,14 +307,9 @@ cv::Mat render_current(const cv::Mat& ref, const View& v, double h, OnTop on_top
 TEST(FalseTargetOverABareFloor, TopTheImagesShowToBeFloorIsNoTarget) {
   const cv::Mat blank(480, 640, CV_8U, cv::Scalar(200));
   for (uint64_t seed = 1; seed <= 6; ++seed) {
-    std::mt19937_64 rng(700 + seed);
-    const double h = 0.08;
-    const LowTop t = low_top(rng, h);
-    const View& v = t.v;
-    const auto on_top = [&](const Vector3d& X) { return t.on_top(X); };
-    const cv::Mat ref = testing::procedural_photo(640, 480, seed);
-    const cv::Mat with_top = render_current(ref, v, h, on_top);
-    const cv::Mat bare = render_current(ref, v, 0.0, on_top);
+    const RenderedTop r = rendered_top(seed);
+    const View& v = r.t.v;
+    const cv::Mat &ref = r.ref, &with_top = r.with_top, &bare = r.bare;
     PipelineParams params;
     for (const std::string mode : {"fallback", "always"}) {
       params.landing.floor_prior = mode;
@@ -328,14 +341,9 @@ TEST(FalseTargetOverABareFloor, TopTheImagesShowToBeFloorIsNoTarget) {
 // is still found, and without the rule (far_sigmas huge) the bare floor passes.
 TEST(FalseTargetOverABareFloor, UncertainTopFarFromItsPlaneIsStillRefused) {
   for (uint64_t seed = 1; seed <= 6; ++seed) {
-    std::mt19937_64 rng(700 + seed);
-    const double h = 0.08;
-    const LowTop t = low_top(rng, h);
-    const View& v = t.v;
-    const auto on_top = [&](const Vector3d& X) { return t.on_top(X); };
-    const cv::Mat ref = testing::procedural_photo(640, 480, seed);
-    const cv::Mat with_top = render_current(ref, v, h, on_top);
-    const cv::Mat bare = render_current(ref, v, 0.0, on_top);
+    const RenderedTop r = rendered_top(seed);
+    const View& v = r.t.v;
+    const cv::Mat &ref = r.ref, &with_top = r.with_top, &bare = r.bare;
     PipelineParams params;
     params.landing.photometric_max_sigma = 1e-9;
     EXPECT_TRUE(found(find_landing_target(v.c, params, ref, with_top))) << "seed " << seed;
