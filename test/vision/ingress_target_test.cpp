@@ -393,25 +393,33 @@ TEST(IngressTargetTest, OpeningCutByTheImageBorderIsAPartialView) {
 // (its photograph's few bright marks) lie right of the hole only when asked; with
 // room_flat_y_m > 0 the back wall is flat grey 60 over |y| < room_flat_y_m (a smooth room: the
 // mask misses the middle of the hole), and no features come from there.
-struct FlatWallScene {
+// Two views of a wall from a forward-looking camera, 0.1 s apart: the scenes below render their
+// images and draw their matches.
+struct WallViews {
   CameraModel camera;
   CameraMount mount;
   cv::Mat image, reference;
   Correspondences c;
-  double hole_right_px = 0;  ///< the hole's right edge in the current image
 
-  explicit FlatWallScene(bool features_right_of_the_hole, double room_flat_y_m = 0) {
+  WallViews(const Vector3d& p_W_B1, const Vector3d& p_W_B2) {
     mount.R_BC = R_BC_forward();
-    PoseSample pose_1, pose_2;
-    pose_1.p_W_B = Vector3d(1.5, -0.15, 1.2);
-    pose_2.p_W_B = Vector3d(1.5, 0.15, 1.2);
-    pose_2.utime = 100'000;
     c.camera = &camera;
     c.mount = &mount;
-    c.pose_1 = pose_1;
-    c.pose_2 = pose_2;
-    const Isometry3d X_WC1 = camera_in_world(pose_1.X_WB(), mount.X_BC());
-    const Isometry3d X_WC2 = camera_in_world(pose_2.X_WB(), mount.X_BC());
+    c.pose_1.p_W_B = p_W_B1;
+    c.pose_2.p_W_B = p_W_B2;
+    c.pose_2.utime = 100'000;
+  }
+  WallViews(const WallViews&) = delete;  // c points at its own camera and mount
+  WallViews& operator=(const WallViews&) = delete;
+};
+
+struct FlatWallScene : WallViews {
+  double hole_right_px = 0;  ///< the hole's right edge in the current image
+
+  explicit FlatWallScene(bool features_right_of_the_hole, double room_flat_y_m = 0)
+      : WallViews(Vector3d(1.5, -0.15, 1.2), Vector3d(1.5, 0.15, 1.2)) {
+    const Isometry3d X_WC1 = camera_in_world(c.pose_1.X_WB(), mount.X_BC());
+    const Isometry3d X_WC2 = camera_in_world(c.pose_2.X_WB(), mount.X_BC());
     const Isometry3d X_CW1 = X_WC1.inverse(), X_CW2 = X_WC2.inverse();
     auto in_hole = [](double y, double z) { return std::abs(y) < 0.3 && std::abs(z - 1.2) < 0.3; };
     // The back wall's texture, 5 mm texels over y in [-3, 3] m, z in [0, 2.4] m.
@@ -536,24 +544,11 @@ TEST(IngressTargetTest, OutliersWhereTheMaskFindsTheWallAreNotSeenThroughTheOpen
 // faces (jambs, sill, lintel) carry the wall's texture, shaded a little apart from the front,
 // and a textured back wall at x = 6.1 m shows through; half the texture's contrast, and noise. Both
 // views lie within the opening's width, so both jambs' faces are in view.
-struct ThickWallScene {
-  CameraModel camera;
-  CameraMount mount;
-  cv::Mat image, reference;
-  Correspondences c;
-
-  explicit ThickWallScene(double thickness_m) {
-    mount.R_BC = R_BC_forward();
-    PoseSample pose_1, pose_2;
-    pose_1.p_W_B = Vector3d(0.7, -0.1, 1.25);
-    pose_2.p_W_B = Vector3d(0.7, 0.1, 1.2);
-    pose_2.utime = 100'000;
-    c.camera = &camera;
-    c.mount = &mount;
-    c.pose_1 = pose_1;
-    c.pose_2 = pose_2;
-    const Isometry3d X_WC1 = camera_in_world(pose_1.X_WB(), mount.X_BC());
-    const Isometry3d X_WC2 = camera_in_world(pose_2.X_WB(), mount.X_BC());
+struct ThickWallScene : WallViews {
+  explicit ThickWallScene(double thickness_m)
+      : WallViews(Vector3d(0.7, -0.1, 1.25), Vector3d(0.7, 0.1, 1.2)) {
+    const Isometry3d X_WC1 = camera_in_world(c.pose_1.X_WB(), mount.X_BC());
+    const Isometry3d X_WC2 = camera_in_world(c.pose_2.X_WB(), mount.X_BC());
     const double x0 = 3.0, x1 = 3.0 + thickness_m;
     auto in_hole = [](double y, double z) { return std::abs(y) < 0.3 && std::abs(z - 1.2) < 0.3; };
     // 5 mm texels: the wall over y in [-3, 3], z in [0, 3] m (its faces read it at (x, z) and
