@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "vision/alignment.hpp"
+#include "vision/bilinear.hpp"
 #include "vision/homography.hpp"
 #include "vision/known_floor.hpp"
 #include "vision/plane_photometric.hpp"
@@ -333,17 +334,6 @@ Reason measure_top(const Correspondences& c, const Planes& planes, const Rect& r
   return Reason::kOk;
 }
 
-// Bilinear grey level at a raw pixel; false within a pixel of the border (or non-finite).
-bool sample(const cv::Mat& m, const Vector2d& u, double* value) {
-  if (!(u.x() >= 0 && u.y() >= 0 && u.x() < m.cols - 1 && u.y() < m.rows - 1)) return false;
-  const int x = static_cast<int>(u.x()), y = static_cast<int>(u.y());
-  const double fx = u.x() - x, fy = u.y() - y;
-  const uint8_t* p = m.ptr<uint8_t>(y) + x;
-  const uint8_t* q = p + m.step[0];
-  *value = (1 - fy) * ((1 - fx) * p[0] + fx * p[1]) + fy * ((1 - fx) * q[0] + fx * q[1]);
-  return true;
-}
-
 // One side of the features' extent in the top's plane (world): the line base_W + t along_W,
 // t in [t_lo, t_hi], moved outward by d along out_W.
 struct Side {
@@ -417,7 +407,8 @@ std::optional<Rim> rim_offset(const Correspondences& c, const cv::Mat& gray_1,
       if (r1.z() <= 0) continue;
       const auto u1 = c.camera->project(r1), u2 = c.camera->project(X_C2);
       double v1, v2;
-      if (!u1 || !u2 || !sample(gray_1, *u1, &v1) || !sample(gray_2, *u2, &v2)) continue;
+      if (!u1 || !u2 || !bilinear_inside(gray_1, *u1, &v1) || !bilinear_inside(gray_2, *u2, &v2))
+        continue;
       g1[static_cast<size_t>(i) * n_g + j] = static_cast<float>(v1);
       g2[static_cast<size_t>(i) * n_g + j] = static_cast<float>(v2);
     }

@@ -4,20 +4,9 @@
 #include <algorithm>
 #include <cmath>
 
+#include "vision/bilinear.hpp"
+
 namespace alight::vision {
-namespace {
-
-// Bilinear sample; the caller keeps (x, y) at least one pixel inside.
-double sample(const cv::Mat& g, double x, double y) {
-  const int x0 = static_cast<int>(std::floor(x)), y0 = static_cast<int>(std::floor(y));
-  const double fx = x - x0, fy = y - y0;
-  const uint8_t* r0 = g.ptr<uint8_t>(y0);
-  const uint8_t* r1 = g.ptr<uint8_t>(y0 + 1);
-  return (1 - fy) * ((1 - fx) * r0[x0] + fx * r0[x0 + 1]) +
-         fy * ((1 - fx) * r1[x0] + fx * r1[x0 + 1]);
-}
-
-}  // namespace
 
 std::optional<PlanePhotometry> plane_photometry(const cv::Mat& gray_1, const cv::Mat& gray_2,
                                                 const CameraModel& camera,
@@ -54,7 +43,7 @@ std::optional<PlanePhotometry> plane_photometry(const cv::Mat& gray_1, const cv:
     s_b += v2, s_bb += v2 * v2, ++n;
     for (int k = 0; k < kSteps; ++k) {
       const Vector2d u1 = lo + (kStep * k) * step;
-      const double v1 = sample(gray_1, u1.x(), u1.y());
+      const double v1 = bilinear(gray_1, u1.x(), u1.y());
       s_a[k] += v1, s_aa[k] += v1 * v1, s_ab[k] += v1 * v2;
     }
   }
