@@ -131,6 +131,31 @@ bool hides(const std::vector<cv::Point2f>& hull, const Vector2d& q, double margi
                               true) > margin;
 }
 
+// The unit normal of the matches in `mask` with the plane free (n1~ = n1 / d1, 3 unknowns,
+// linear given R21 and t12): x2 ~ a - g s with a = R x1, g = R t, s = n1~^T x1.
+std::optional<Vector3d> free_normal(const std::vector<Vector3d>& x1,
+                                    const std::vector<Vector3d>& x2, const Matrix3d& R,
+                                    const Vector3d& t, const std::vector<uint8_t>& mask) {
+  const Vector3d g = R * t;
+  Matrix3d AtA = Matrix3d::Zero();
+  Vector3d Atb = Vector3d::Zero();
+  for (size_t i = 0; i < x1.size(); ++i) {
+    if (!mask[i]) continue;
+    const Vector3d a = R * x1[i];
+    const double u = x2[i].x(), v = x2[i].y();
+    const double rows[2][2] = {{g.x() - u * g.z(), a.x() - u * a.z()},
+                               {g.y() - v * g.z(), a.y() - v * a.z()}};
+    for (const auto& row : rows) {
+      const Vector3d Ak = row[0] * x1[i];
+      AtA += Ak * Ak.transpose();
+      Atb += Ak * row[1];
+    }
+  }
+  const Vector3d n_free = AtA.ldlt().solve(Atb);
+  if (!n_free.allFinite() || !(n_free.norm() > 0)) return std::nullopt;
+  return n_free.normalized();
+}
+
 }  // namespace
 
 std::optional<KnownPlane> known_floor(const PoseSample& pose_1, const CameraMount& mount,
@@ -354,30 +379,86 @@ Result<KnownFloorPlanes> fit_known_floor_planes(const std::vector<Vector3d>& x1,
   out.n_floor = counts.first;
   out.n_top = counts.second;
 
-  // The top's normal free (n1~ = n1 / d1, 3 unknowns, linear given R21 and t12): x2 ~ a - g s
-  // with a = R x1, g = R t, s = n1~^T x1.
-  const Matrix3d& R = out.motion.R_21;
-  const Vector3d g = R * t;
-  Matrix3d AtA = Matrix3d::Zero();
-  Vector3d Atb = Vector3d::Zero();
-  for (size_t i = 0; i < N; ++i) {
-    if (!tp[i]) continue;
-    const Vector3d a = R * x1[i];
-    const double u = x2[i].x(), v = x2[i].y();
-    const double rows[2][2] = {{g.x() - u * g.z(), a.x() - u * a.z()},
-                               {g.y() - v * g.z(), a.y() - v * a.z()}};
-    for (const auto& row : rows) {
-      const Vector3d Ak = row[0] * x1[i];
-      AtA += Ak * Ak.transpose();
-      Atb += Ak * row[1];
-    }
-  }
-  const Vector3d n_free = AtA.ldlt().solve(Atb);
-  if (!n_free.allFinite() || !(n_free.norm() > 0)) return R_::fail(Reason::kNoTargetPlane);
-  out.n_top_free_1 = n_free.normalized();
+  const auto n_free = free_normal(x1, x2, out.motion.R_21, t, tp);
+  if (!n_free) return R_::fail(Reason::kNoTargetPlane);
+  out.n_top_free_1 = *n_free;
   if (std::acos(std::clamp(out.n_top_free_1.dot(n), -1.0, 1.0)) >
       params.max_normal_angle_deg * M_PI / 180.0)
     return R_::fail(Reason::kNoTargetPlane);
+  return R_::ok(std::move(out));
+}
+
+Result<KnownFloorPlanes> fit_known_top_alone(const std::vector<Vector3d>& x1,
+                                             const std::vector<Vector3d>& x2,
+                                             const KnownMotion& motion, const KnownPlane& floor,
+                                             double f, const LandingParams& params, double thr) {
+  using R_ = Result<KnownFloorPlanes>;
+  const size_t N = x1.size();
+  if (N != x2.size() || !(f > 0) || !(thr > 0)) return R_::fail(Reason::kTooFewMatches);
+  if (!(motion.t_12_m.norm() > 1e-6)) return R_::fail(Reason::kSmallBaseline);
+  if (!(params.top_alone_min_share > 0) || static_cast<int>(N) < params.min_platform_inliers)
+    return R_::fail(Reason::kNoTargetPlane);
+  const Vector3d& n = floor.n_1;
+  const Vector3d& t = motion.t_12_m;
+  const double rho_f = 1.0 / floor.d_1_m;
+  const double rho_lo = 1.0 / std::max(0.05, floor.d_1_m - params.min_height_m);
+  const double rho_hi = 1.0 / std::max(0.05, floor.d_1_m - params.max_height_m);
+  std::vector<PerMatch> pm;
+  classify(x1, x2, motion.R_21, t, n, rho_f, f, thr, &pm);
+  const double max_half_width = 0.1 * rho_f;  // as the pair's
+  const TopMode mode = top_mode(pm, rho_lo, rho_hi, max_half_width, thr);
+  if (mode.count == 0) return R_::fail(Reason::kNoTargetPlane);
+
+  KnownFloorPlanes out;
+  out.motion = motion;
+  out.n_1 = n;
+  out.rho_floor = rho_f;
+  out.rho_top = mode.rho;
+  out.floor.assign(N, 0);
+  out.top.assign(N, 0);
+  // The share is of the matches whose rho says where they are: near the epipole (the
+  // descent's focus of expansion, amid the top) a match fits any plane.
+  int informative = 0, on_mode = 0;
+  for (size_t i = 0; i < N; ++i) {
+    out.floor[i] = pm[i].err_floor <= thr;
+    out.n_floor += out.floor[i];
+    if (pm[i].err_rho > thr || pm[i].half_width > max_half_width) continue;
+    ++informative;
+    if (std::abs(pm[i].rho - mode.rho) > pm[i].half_width) continue;
+    ++on_mode;
+    // As the pair's reported top: off the floor's band.
+    out.top[i] = !out.floor[i] && pm[i].err_floor >= 2 * thr;
+    out.n_top += out.top[i];
+  }
+  if (out.n_top < params.min_platform_inliers ||
+      on_mode < params.top_alone_min_share * static_cast<double>(informative))
+    return R_::fail(Reason::kNoTargetPlane);
+  // The floor seen: a floor match off the top's transfer by twice the threshold (the top's own
+  // rule against the floor's band: near the epipole a match fits both), anywhere. A top is
+  // opaque, so a floor inside its hull contradicts it: over a bare floor whose matches are
+  // mostly tracked a few px long of their parallax, the long ones made a "top" 4-5 cm up over
+  // the whole view and the exact ones, amid them, its "floor" (landing_none_photo 9505).
+  int floor_seen = 0;
+  for (size_t i = 0; i < N; ++i) {
+    Vector2d r;
+    floor_seen +=
+        out.floor[i] &&
+        (!residual(carry(motion.R_21, t, n, mode.rho, x1[i]), x2[i], f, &r) || r.norm() > 2 * thr);
+  }
+  if (floor_seen >= params.min_floor_inliers) return R_::fail(Reason::kNoTargetPlane);
+  // With no floor in sight to compare, a bias in the tracking is the rival of a plane: the top's
+  // matches must stand off the floor's transfer by far more than a few pixels (median at least
+  // four thresholds; close over a top its parallax is tens of pixels).
+  std::vector<double> off;
+  for (size_t i = 0; i < N; ++i)
+    if (out.top[i]) off.push_back(pm[i].err_floor);
+  std::nth_element(off.begin(), off.begin() + off.size() / 2, off.end());
+  if (off[off.size() / 2] < 4 * thr) return R_::fail(Reason::kNoTargetPlane);
+  const auto n_free = free_normal(x1, x2, motion.R_21, t, out.top);
+  if (!n_free ||
+      std::acos(std::clamp(n_free->dot(n), -1.0, 1.0)) > params.max_normal_angle_deg * M_PI / 180.0)
+    return R_::fail(Reason::kNoTargetPlane);
+  out.n_top_free_1 = *n_free;
   return R_::ok(std::move(out));
 }
 

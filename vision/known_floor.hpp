@@ -86,4 +86,20 @@ Result<KnownFloorPlanes> fit_known_floor_planes(const std::vector<Vector3d>& ray
                                                 double focal_px, const LandingParams& params,
                                                 double threshold_px);
 
+/// Beyond the pair (issue 15): close over a top on a floor too bland for features (the
+/// approach's last metre over a paper top on a pale floor) the view holds the top alone, and the
+/// pair has no floor to stand on. A level top is still one rho under the known motion: the
+/// largest set of matches sharing one rho of a platform height (step 2 without the rotation
+/// correction: with no floor it would trade against rho, and over the approach's baselines
+/// motion capture's 0.1 deg moves rho by well under a percent). That set is the top alone when
+/// it holds at least top_alone_min_share of the matches and min_platform_inliers, its free
+/// normal is level with the floor's, and the floor is seen outside it in fewer than
+/// min_floor_inliers places (where it is seen, the pair decides). The floor's fields hold the
+/// known floor and its matches; n_floor counts them all.
+Result<KnownFloorPlanes> fit_known_top_alone(const std::vector<Vector3d>& rays_1,
+                                             const std::vector<Vector3d>& rays_2,
+                                             const KnownMotion& motion, const KnownPlane& floor,
+                                             double focal_px, const LandingParams& params,
+                                             double threshold_px);
+
 }  // namespace alight::vision

@@ -31,6 +31,7 @@ struct Planes {
   PlaneMotion top, floor;
   std::vector<uint8_t> top_in, floor_in;
   int n_top = 0, n_floor = 0;
+  bool top_alone = false;  ///< the view holds the top alone (fit_known_top_alone)
 };
 
 // Paper 3.2: two free homographies, aligned; the nearer plane is the top.
@@ -83,11 +84,20 @@ Result<Planes> known_floor_planes(const Correspondences& c, const PipelineParams
     r2.push_back(K_inv * c.x2[i].homogeneous());
   }
   const KnownMotion motion{mocap.R_21, mocap.t_12};  // t12 in metres (eq. 3)
-  const auto fit = fit_known_floor_planes(r1, r2, motion, *floor, c.camera->K()(0, 0),
-                                          params.landing, params.homography.threshold_px);
+  const double f = c.camera->K()(0, 0);
+  const double thr = params.homography.threshold_px;
+  auto fit = fit_known_floor_planes(r1, r2, motion, *floor, f, params.landing, thr);
+  bool top_alone = false;
+  if (!fit && fit.reason() != Reason::kSmallBaseline) {
+    if (auto alone = fit_known_top_alone(r1, r2, motion, *floor, f, params.landing, thr)) {
+      fit = std::move(alone);
+      top_alone = true;
+    }
+  }
   if (!fit) return Result<Planes>::fail(fit.reason());
   const double s = mocap.baseline_m;  // PlaneMotion's lengths are in baselines
   Planes p;
+  p.top_alone = top_alone;
   p.top = {fit->motion.R_21, fit->motion.t_12_m / s, fit->n_1 * fit->rho_top * s};
   p.floor = {fit->motion.R_21, fit->motion.t_12_m / s, fit->n_1 * fit->rho_floor * s};
   p.top_in = fit->top;
@@ -565,8 +575,10 @@ TargetOutcome platform_of(const Correspondences& c, const PipelineParams& params
   }
 
   // The floor seen around the top in fewer than min_floor_inliers places: the "top" is the
-  // floor, or most of it (floor_seen_around_top).
-  if (floor_seen_around_top(c, planes, K * top.homography() * K_inv,
+  // floor, or most of it (floor_seen_around_top). A top alone has no floor in sight by
+  // definition: its plane was told from the floor by the known floor's rho instead.
+  if (!planes.top_alone &&
+      floor_seen_around_top(c, planes, K * top.homography() * K_inv,
                             params.homography.threshold_px) < params.landing.min_floor_inliers) {
     out.reason = Reason::kNoTargetPlane;
     return out;
@@ -651,11 +663,14 @@ TargetOutcome platform_of(const Correspondences& c, const PipelineParams& params
     out.reason = Reason::kNoTargetPlane;
     return out;
   }
-  out.reason = cut ? Reason::kPartialView : Reason::kOk;
+  // A top alone is in sight, but nothing shows where it ends: its features' centre is no
+  // centre, as a cut top's.
+  out.reason = cut || planes.top_alone ? Reason::kPartialView : Reason::kOk;
   // The top's rim, on a top seen whole (a cut top's size is never used, landing_target.hpp):
   // where the rims give no estimate (a waypoint fails, the height leaves its range), the
   // features' stands.
-  if (!cut && !gray_1.empty() && !gray_2.empty() && params.landing.rim_search_m > 0) {
+  if (out.reason == Reason::kOk && !gray_1.empty() && !gray_2.empty() &&
+      params.landing.rim_search_m > 0) {
     if (const auto rim =
             rim_rect(c, gray_1, gray_2, top, X_WC2, pts_W, features, widened, params.landing)) {
       TargetEstimate at_rim = out.estimate;

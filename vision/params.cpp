@@ -215,6 +215,12 @@ const ParamSchema<LandingParams>& LandingParams::schema() {
           "known floor: motion capture's R21 is corrected by at most this (its orientation noise, "
           "0.1 deg a sample, moves the image by 1-2 px; a correction the size of the "
           "platform's parallax would take the top for the floor)");
+    s.add("top_alone_min_share", &P::top_alone_min_share, Range::closed(0, 1), "",
+          "known floor: where the floor shows too few features for the pair, the view may hold "
+          "the top alone (close over it in the approach): one level plane at a platform height "
+          "explaining at least this share of the matches, the floor seen outside it in fewer "
+          "than min_floor_inliers places, is the top in sight (REASON_PARTIAL_VIEW: its extent "
+          "is unknown). 0: off");
     s.add("photometric_tol", &P::photometric_tol, Range::closed(0, 0.5), "",
           "beyond the paper (plane_photometric.hpp): the pixels inside the top's features and "
           "around the floor's must each follow their own plane's homography within this share "

@@ -120,6 +120,7 @@ struct LandingParams {
   double floor_tol_frac = 0.08;
   int min_floor_inliers = 4;
   double max_rotation_correction_deg = 0.5;
+  double top_alone_min_share = 0.6;
   // Beyond the paper: the images check the planes the features found (plane_photometric.hpp).
   double photometric_tol = 0.25;
   double photometric_min_ncc = 0.5;

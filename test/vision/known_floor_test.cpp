@@ -87,6 +87,7 @@ struct SceneShape {
   double camera_z_m = 1.35;  ///< camera 1 height, +-0.1 [m]
   double baseline_min_m = 0.12, baseline_max_m = 0.28;
   Vector2d top_half_m = Vector2d(0.15, 0.12);
+  double descent_m = 0.0;  ///< camera 2 this much lower than camera 1 (the approach) [m]
 };
 
 Scene make_scene(uint64_t seed, double height_m, int n_floor, int n_top, int n_out,
@@ -103,7 +104,7 @@ Scene make_scene(uint64_t seed, double height_m, int n_floor, int n_top, int n_o
   const double dir = M_PI * U(rng),
                len = shape.baseline_min_m +
                      0.5 * (shape.baseline_max_m - shape.baseline_min_m) * (1 + U(rng));
-  const Vector3d step(len * std::cos(dir), len * std::sin(dir), 0.03 * U(rng));
+  const Vector3d step(len * std::cos(dir), len * std::sin(dir), 0.03 * U(rng) - shape.descent_m);
   const PoseSample p2 = pose(p1.p_W_B + step, 0.02 * U(rng), 0.02 * U(rng), U(rng) * 0.05);
   Scene s;
   s.floor = *known_floor(p1, mount, 0.0);
@@ -194,6 +195,69 @@ TEST(KnownFloorTest, BareFloorWithMismatchesHasNoTop) {
     ASSERT_FALSE(fit) << "seed " << seed << ": a top of " << fit->n_top;
     EXPECT_EQ(fit.reason(), Reason::kNoTargetPlane);
   }
+}
+
+// The approach's last metre over a top on a bland floor (landing_lowtex seed 9917, lost in the
+// approach with the camera 0.65 m over a paper top: every match on the top, none on the floor):
+// the pair has no floor, the top alone is found at its height.
+SceneShape close_over_the_top() {
+  SceneShape shape;
+  shape.camera_z_m = 0.85;      // 0.53-0.87 m over the tops
+  shape.baseline_min_m = 0.03;  // mostly the descent: 0.25 m/s over the reference's age
+  shape.baseline_max_m = 0.10;
+  shape.descent_m = 0.25;
+  shape.top_half_m = Vector2d(0.25, 0.2);  // filling most of the view
+  return shape;
+}
+
+TEST(KnownFloorTest, TopFillingTheViewOverABlandFloorIsFoundAlone) {
+  const double f = CameraModel::firefly_mv_4mm().K()(0, 0);
+  LandingParams params;
+  int n_ok = 0;
+  for (uint64_t seed = 1; seed <= 30; ++seed) {
+    const double h = 0.08 + 0.14 * static_cast<double>(seed % 7) / 6.0;
+    const Scene s = make_scene(200 + seed, h, 2, 120, 10, 0.1 * kDeg, close_over_the_top());
+    EXPECT_FALSE(fit_known_floor_planes(s.r1, s.r2, s.mocap, s.floor, f, params, 2.0))
+        << "seed " << seed << ": the pair needs a floor";
+    const auto fit = fit_known_top_alone(s.r1, s.r2, s.mocap, s.floor, f, params, 2.0);
+    ASSERT_TRUE(fit) << "seed " << seed << ": " << to_string(fit.reason());
+    EXPECT_NEAR(fit->height_m(), h, 0.02) << "seed " << seed;
+    int top_right = 0, top_wrong = 0;
+    for (size_t i = 0; i < s.label.size(); ++i) {
+      top_right += fit->top[i] && s.label[i] == 1;
+      top_wrong += fit->top[i] && s.label[i] != 1;
+    }
+    // Of 120: those near the descent's epipole fit both planes and count for neither.
+    EXPECT_GE(top_right, 50) << "seed " << seed;
+    EXPECT_LE(top_wrong, 1) << "seed " << seed;
+    EXPECT_LT(direction_angle(fit->n_top_free_1, s.floor.n_1), 5 * kDeg) << "seed " << seed;
+    n_ok += std::abs(fit->height_m() - h) < 0.01;
+  }
+  EXPECT_GE(n_ok, 27);  // most within 1 cm
+}
+
+// Where the floor is seen around the top, the pair decides; a floor alone, textured or bland
+// with mismatches, is never a top alone; 0 turns it off.
+TEST(KnownFloorTest, TopAloneOnlyWhereTheFloorIsOutOfSight) {
+  const double f = CameraModel::firefly_mv_4mm().K()(0, 0);
+  LandingParams params;
+  for (uint64_t seed = 1; seed <= 20; ++seed) {
+    const Scene with_floor = make_scene(300 + seed, 0.15, 30, 100, 10, 0.1 * kDeg);
+    EXPECT_FALSE(fit_known_top_alone(with_floor.r1, with_floor.r2, with_floor.mocap,
+                                     with_floor.floor, f, params, 2.0))
+        << "seed " << seed;
+    const Scene bare = make_scene(400 + seed, 0.15, 80, 0, 20, 0.15 * kDeg);
+    EXPECT_FALSE(fit_known_top_alone(bare.r1, bare.r2, bare.mocap, bare.floor, f, params, 2.0))
+        << "seed " << seed;
+    const Scene bland = make_scene(500 + seed, 0.15, 3, 0, 25, 0.15 * kDeg, close_over_the_top());
+    EXPECT_FALSE(fit_known_top_alone(bland.r1, bland.r2, bland.mocap, bland.floor, f, params, 2.0))
+        << "seed " << seed;
+  }
+  LandingParams off = params;
+  off.top_alone_min_share = 0;
+  const Scene s = make_scene(201, 0.15, 2, 120, 10, 0.1 * kDeg, close_over_the_top());
+  EXPECT_TRUE(fit_known_top_alone(s.r1, s.r2, s.mocap, s.floor, f, params, 2.0));
+  EXPECT_FALSE(fit_known_top_alone(s.r1, s.r2, s.mocap, s.floor, f, off, 2.0));
 }
 
 TEST(KnownFloorTest, DeterministicAndRefusesAbsurdInput) {
