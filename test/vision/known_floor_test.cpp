@@ -253,6 +253,22 @@ TEST(KnownFloorTest, TopAloneOnlyWhereTheFloorIsOutOfSight) {
     EXPECT_FALSE(fit_known_top_alone(bland.r1, bland.r2, bland.mocap, bland.floor, f, params, 2.0))
         << "seed " << seed;
   }
+  // Deterministic; non-finite rays are outliers, no input a crash.
+  {
+    const Scene s = make_scene(202, 0.15, 2, 120, 10, 0.1 * kDeg, close_over_the_top());
+    const auto a = fit_known_top_alone(s.r1, s.r2, s.mocap, s.floor, f, params, 2.0);
+    const auto b = fit_known_top_alone(s.r1, s.r2, s.mocap, s.floor, f, params, 2.0);
+    ASSERT_TRUE(a && b);
+    EXPECT_EQ(a->rho_top, b->rho_top);
+    EXPECT_EQ(a->top, b->top);
+    Scene bad = s;
+    for (size_t i = 0; i < bad.r1.size(); i += 5) bad.r2[i] = Vector3d::Constant(NAN);
+    const auto c = fit_known_top_alone(bad.r1, bad.r2, bad.mocap, bad.floor, f, params, 2.0);
+    ASSERT_TRUE(c) << to_string(c.reason());
+    EXPECT_NEAR(c->height_m(), 0.15, 0.02);
+    EXPECT_FALSE(fit_known_top_alone({}, {}, s.mocap, s.floor, f, params, 2.0));
+    EXPECT_FALSE(fit_known_top_alone(s.r1, {}, s.mocap, s.floor, f, params, 2.0));
+  }
   LandingParams off = params;
   off.top_alone_min_share = 0;
   const Scene s = make_scene(201, 0.15, 2, 120, 10, 0.1 * kDeg, close_over_the_top());
