@@ -156,6 +156,36 @@ std::optional<Vector3d> free_normal(const std::vector<Vector3d>& x1,
   return n_free.normalized();
 }
 
+// What both fits take from the floor: its inverse distance and the range of a top's.
+struct TopRange {
+  double rho_f = 0, rho_lo = 0, rho_hi = 0, max_half_width = 0;
+};
+
+// The inputs both fits refuse (Reason::kOk: none).
+Reason refused(size_t n1, size_t n2, const KnownMotion& motion, double f, double thr) {
+  if (n1 != n2 || !(f > 0) || !(thr > 0)) return Reason::kTooFewMatches;
+  if (!(motion.t_12_m.norm() > 1e-6)) return Reason::kSmallBaseline;
+  return Reason::kOk;
+}
+
+TopRange top_range(const KnownPlane& floor, const LandingParams& params) {
+  TopRange r;
+  r.rho_f = 1.0 / floor.d_1_m;
+  // A top between min_height_m and max_height_m above the floor (at most 5 cm below camera 1).
+  r.rho_lo = 1.0 / std::max(0.05, floor.d_1_m - params.min_height_m);
+  r.rho_hi = 1.0 / std::max(0.05, floor.d_1_m - params.max_height_m);
+  // A match whose rho is more uncertain than a tenth of the floor's (near the epipole, little
+  // parallax) would join any top: it joins none.
+  r.max_half_width = 0.1 * r.rho_f;
+  return r;
+}
+
+// The top's free normal within max_normal_angle_deg of the floor's.
+bool level(const Vector3d& n_free, const Vector3d& n, const LandingParams& params) {
+  return std::acos(std::clamp(n_free.dot(n), -1.0, 1.0)) <=
+         params.max_normal_angle_deg * M_PI / 180.0;
+}
+
 }  // namespace
 
 std::optional<KnownPlane> known_floor(const PoseSample& pose_1, const CameraMount& mount,
@@ -179,19 +209,12 @@ Result<KnownFloorPlanes> fit_known_floor_planes(const std::vector<Vector3d>& x1,
                                                 double f, const LandingParams& params, double thr) {
   using R_ = Result<KnownFloorPlanes>;
   const size_t N = x1.size();
-  if (N != x2.size() || !(f > 0) || !(thr > 0)) return R_::fail(Reason::kTooFewMatches);
-  if (!(motion.t_12_m.norm() > 1e-6)) return R_::fail(Reason::kSmallBaseline);
+  if (const Reason r = refused(N, x2.size(), motion, f, thr); r != Reason::kOk) return R_::fail(r);
   if (static_cast<int>(N) < params.min_floor_inliers + params.min_platform_inliers)
     return R_::fail(Reason::kTooFewMatches);
   const Vector3d& n = floor.n_1;
   const Vector3d& t = motion.t_12_m;
-  const double rho_f = 1.0 / floor.d_1_m;
-  // A top between min_height_m and max_height_m above the floor (at most 5 cm below camera 1).
-  const double rho_lo = 1.0 / std::max(0.05, floor.d_1_m - params.min_height_m);
-  const double rho_hi = 1.0 / std::max(0.05, floor.d_1_m - params.max_height_m);
-  // A match whose rho is more uncertain than a tenth of the floor's (near the epipole, little
-  // parallax) would join any top: it joins none.
-  const double max_half_width = 0.1 * rho_f;
+  const auto [rho_f, rho_lo, rho_hi, max_half_width] = top_range(floor, params);
   const double max_w = params.max_rotation_correction_deg * M_PI / 180.0;
 
   // Floor matches (is_floor) hidden by the top whose matches in image 2 are top_px.
@@ -382,9 +405,7 @@ Result<KnownFloorPlanes> fit_known_floor_planes(const std::vector<Vector3d>& x1,
   const auto n_free = free_normal(x1, x2, out.motion.R_21, t, tp);
   if (!n_free) return R_::fail(Reason::kNoTargetPlane);
   out.n_top_free_1 = *n_free;
-  if (std::acos(std::clamp(out.n_top_free_1.dot(n), -1.0, 1.0)) >
-      params.max_normal_angle_deg * M_PI / 180.0)
-    return R_::fail(Reason::kNoTargetPlane);
+  if (!level(out.n_top_free_1, n, params)) return R_::fail(Reason::kNoTargetPlane);
   return R_::ok(std::move(out));
 }
 
@@ -394,18 +415,14 @@ Result<KnownFloorPlanes> fit_known_top_alone(const std::vector<Vector3d>& x1,
                                              double f, const LandingParams& params, double thr) {
   using R_ = Result<KnownFloorPlanes>;
   const size_t N = x1.size();
-  if (N != x2.size() || !(f > 0) || !(thr > 0)) return R_::fail(Reason::kTooFewMatches);
-  if (!(motion.t_12_m.norm() > 1e-6)) return R_::fail(Reason::kSmallBaseline);
+  if (const Reason r = refused(N, x2.size(), motion, f, thr); r != Reason::kOk) return R_::fail(r);
   if (!(params.top_alone_min_share > 0) || static_cast<int>(N) < params.min_platform_inliers)
     return R_::fail(Reason::kNoTargetPlane);
   const Vector3d& n = floor.n_1;
   const Vector3d& t = motion.t_12_m;
-  const double rho_f = 1.0 / floor.d_1_m;
-  const double rho_lo = 1.0 / std::max(0.05, floor.d_1_m - params.min_height_m);
-  const double rho_hi = 1.0 / std::max(0.05, floor.d_1_m - params.max_height_m);
+  const auto [rho_f, rho_lo, rho_hi, max_half_width] = top_range(floor, params);
   std::vector<PerMatch> pm;
   classify(x1, x2, motion.R_21, t, n, rho_f, f, thr, &pm);
-  const double max_half_width = 0.1 * rho_f;  // as the pair's
   const TopMode mode = top_mode(pm, rho_lo, rho_hi, max_half_width, thr);
   if (mode.count == 0) return R_::fail(Reason::kNoTargetPlane);
 
@@ -455,9 +472,7 @@ Result<KnownFloorPlanes> fit_known_top_alone(const std::vector<Vector3d>& x1,
   std::nth_element(off.begin(), off.begin() + off.size() / 2, off.end());
   if (off[off.size() / 2] < 4 * thr) return R_::fail(Reason::kNoTargetPlane);
   const auto n_free = free_normal(x1, x2, motion.R_21, t, out.top);
-  if (!n_free ||
-      std::acos(std::clamp(n_free->dot(n), -1.0, 1.0)) > params.max_normal_angle_deg * M_PI / 180.0)
-    return R_::fail(Reason::kNoTargetPlane);
+  if (!n_free || !level(*n_free, n, params)) return R_::fail(Reason::kNoTargetPlane);
   out.n_top_free_1 = *n_free;
   return R_::ok(std::move(out));
 }
