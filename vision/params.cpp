@@ -180,10 +180,7 @@ const ParamSchema<LandingParams>& LandingParams::schema() {
     s.add("min_platform_inliers", &P::min_platform_inliers, Range::ge(4), "",
           "fewer second-plane inliers: no platform");
     s.add("min_height_m", &P::min_height_m, Range::gt(0), "m",
-          "the platform top is at least this far above the floor. From the search height (1.5 m, "
-          "a 25 cm baseline) a top 5 cm up moves under 4 px against the floor, inside the known "
-          "floor's band of twice the threshold: a lower \"top\" is more likely the floor's "
-          "tracking noise than a platform");
+          "the platform top is at least this far above the floor");
     s.add("max_height_m", &P::max_height_m, Range::gt(0), "m",
           "and at most this far (a larger step is no landing platform)")
         .check([](const P& p) { return p.max_height_m > p.min_height_m; },

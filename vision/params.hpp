@@ -109,7 +109,7 @@ struct WaypointParams {
 /// floor by more than min_height_m, roughly parallel to it, and has enough inliers.
 struct LandingParams {
   int min_platform_inliers = 12;
-  double min_height_m = 0.05;
+  double min_height_m = 0.03;
   double max_height_m = 1.0;
   double max_normal_angle_deg = 15;
   double max_tilt_deg = 3.0;
