@@ -214,6 +214,18 @@ TargetOutcome platform_of(const Correspondences& c, const PipelineParams& params
 
 }  // namespace
 
+bool top_told_from_floor(const Correspondences& c, const std::vector<uint8_t>& top_in,
+                         const Matrix3d& H_floor_px, double threshold_px, double max_share) {
+  int n = 0, on_floor = 0;
+  for (size_t i = 0; i < c.size(); ++i) {
+    if (!top_in[i]) continue;
+    ++n;
+    const Vector3d p = H_floor_px * c.x1[i].homogeneous();
+    on_floor += p.z() > 0 && (p.hnormalized() - c.x2[i]).norm() <= threshold_px;
+  }
+  return on_floor <= max_share * n;
+}
+
 bool floor_patches_agree(std::vector<double> gammas, const LandingParams& params) {
   if (static_cast<int>(gammas.size()) < params.photometric_min_patches) return true;
   std::nth_element(gammas.begin(), gammas.begin() + gammas.size() / 2, gammas.end());
@@ -580,6 +592,12 @@ TargetOutcome platform_of(const Correspondences& c, const PipelineParams& params
   if (!planes.top_alone &&
       floor_seen_around_top(c, planes, K * top.homography() * K_inv,
                             params.homography.threshold_px) < params.landing.min_floor_inliers) {
+    out.reason = Reason::kNoTargetPlane;
+    return out;
+  }
+
+  if (!top_told_from_floor(c, planes.top_in, K * floor.homography() * K_inv,
+                           params.homography.threshold_px, params.landing.max_top_on_floor_share)) {
     out.reason = Reason::kNoTargetPlane;
     return out;
   }

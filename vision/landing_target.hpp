@@ -59,6 +59,14 @@ double side_from_extent(double range_m, size_t n);
 /// photometric_min_patches: no verdict (true).
 bool floor_patches_agree(std::vector<double> gammas, const LandingParams& params);
 
+/// Beyond the paper: a second plane is told from the floor by its inliers that the floor's
+/// homography (pixels, image 1 to 2) does not carry within threshold_px. False when more than
+/// max_share of the top's inliers (top_in) fit the floor too: the "top" is the floor split by
+/// tracking noise into two planes a few centimetres apart, or a plane fitted through the top and
+/// the floor beside it. A true top's matches lie off the floor's transfer.
+bool top_told_from_floor(const Correspondences& c, const std::vector<uint8_t>& top_in,
+                         const Matrix3d& H_floor_px, double threshold_px, double max_share);
+
 /// Fails with kTooFewMatches / kNoDominantPlane (no first plane), kNoTargetPlane (no second
 /// plane, or it is no platform, or the images show its pixels or its floor's on another plane:
 /// vision.landing.photometric_tol), kSmallBaseline / kDecompositionFailed. gray_1 / gray_2: the

@@ -215,6 +215,11 @@ const ParamSchema<LandingParams>& LandingParams::schema() {
           "known floor: motion capture's R21 is corrected by at most this (its orientation noise, "
           "0.1 deg a sample, moves the image by 1-2 px; a correction the size of the "
           "platform's parallax would take the top for the floor)");
+    s.add("max_top_on_floor_share", &P::max_top_on_floor_share, Range::closed(0, 1), "",
+          "a top's inliers that the floor's homography also carries within the threshold tell "
+          "the planes by nothing; more than this share of them, and the \"top\" is the floor "
+          "split by tracking noise, or a plane fitted through the top and the floor: no target. "
+          "1: off");
     s.add("top_alone_min_share", &P::top_alone_min_share, Range::closed(0, 1), "",
           "known floor: where the floor shows too few features for the pair, the view may hold "
           "the top alone (close over it in the approach): one level plane at a platform height "
