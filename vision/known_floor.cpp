@@ -462,15 +462,16 @@ Result<KnownFloorPlanes> fit_known_top_alone(const std::vector<Vector3d>& x1,
         out.floor[i] &&
         (!residual(carry(motion.R_21, t, n, mode.rho, x1[i]), x2[i], f, &r) || r.norm() > 2 * thr);
   }
-  if (floor_seen >= params.min_floor_inliers) return R_::fail(Reason::kNoTargetPlane);
-  // With no floor in sight to compare, a bias in the tracking is the rival of a plane: the top's
-  // matches must stand off the floor's transfer by far more than a few pixels (median at least
-  // four thresholds; close over a top its parallax is tens of pixels).
-  std::vector<double> off;
-  for (size_t i = 0; i < N; ++i)
-    if (out.top[i]) off.push_back(pm[i].err_floor);
-  std::nth_element(off.begin(), off.begin() + off.size() / 2, off.end());
-  if (off[off.size() / 2] < 4 * thr) return R_::fail(Reason::kNoTargetPlane);
+  // Seen in a few places (a tile's corners beside a top that fills the view), the floor does not
+  // contradict a top that holds ten times its matches; the pair then fails for want of them
+  // (its rotation correction rests on the floor).
+  if (floor_seen >= params.min_floor_inliers && 10 * floor_seen > on_mode)
+    return R_::fail(Reason::kNoTargetPlane);
+  // With little floor in sight to compare, a bias of the whole view's parallax (a pose a few
+  // milliseconds off its image, features dragged by blur) is the rival of a plane: it scales
+  // every match's inverse distance alike. The top must stand off the floor by more than such a
+  // bias: its inverse distance top_alone_min_rise above the floor's.
+  if (mode.rho < (1.0 + params.top_alone_min_rise) * rho_f) return R_::fail(Reason::kNoTargetPlane);
   const auto n_free = free_normal(x1, x2, motion.R_21, t, out.top);
   if (!n_free || !level(*n_free, n, params)) return R_::fail(Reason::kNoTargetPlane);
   out.n_top_free_1 = *n_free;

@@ -226,6 +226,11 @@ const ParamSchema<LandingParams>& LandingParams::schema() {
           "explaining at least this share of the matches, the floor seen outside it in fewer "
           "than min_floor_inliers places, is the top in sight (REASON_PARTIAL_VIEW: its extent "
           "is unknown). 0: off");
+    s.add("top_alone_min_rise", &P::top_alone_min_rise, Range::open_closed(0, 1), "",
+          "top_alone_min_share: the top alone's inverse distance at least this fraction above "
+          "the floor's (its height at least this share of its distance from the camera), so that "
+          "a bias of every match's parallax alike (a pose a few milliseconds off its image) is "
+          "no top");
     s.add("photometric_tol", &P::photometric_tol, Range::closed(0, 0.5), "",
           "beyond the paper (plane_photometric.hpp): the pixels inside the top's features and "
           "around the floor's must each follow their own plane's homography within this share "

@@ -121,6 +121,7 @@ struct LandingParams {
   int min_floor_inliers = 4;
   double max_rotation_correction_deg = 0.5;
   double top_alone_min_share = 0.6;
+  double top_alone_min_rise = 0.06;
   double max_top_on_floor_share = 0.25;
   // Beyond the paper: the images check the planes the features found (plane_photometric.hpp).
   double photometric_tol = 0.25;

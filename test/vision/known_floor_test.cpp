@@ -269,6 +269,21 @@ TEST(KnownFloorTest, TopAloneOnlyWhereTheFloorIsOutOfSight) {
     EXPECT_FALSE(fit_known_top_alone({}, {}, s.mocap, s.floor, f, params, 2.0));
     EXPECT_FALSE(fit_known_top_alone(s.r1, {}, s.mocap, s.floor, f, params, 2.0));
   }
+  // A floor alone whose every parallax is 4 % long (motion capture's baseline 4 % short: a pose a
+  // few milliseconds off its image) looks like one plane 4 % nearer: no top.
+  LandingParams no_rise = params;
+  no_rise.top_alone_min_rise = 1e-3;
+  int taken_without_rise = 0;
+  for (uint64_t seed = 1; seed <= 20; ++seed) {
+    Scene biased = make_scene(600 + seed, 0.15, 80, 0, 5, 0.05 * kDeg, close_over_the_top());
+    biased.mocap.t_12_m *= 1.0 / 1.04;
+    EXPECT_FALSE(
+        fit_known_top_alone(biased.r1, biased.r2, biased.mocap, biased.floor, f, params, 2.0))
+        << "seed " << seed;
+    taken_without_rise += static_cast<bool>(
+        fit_known_top_alone(biased.r1, biased.r2, biased.mocap, biased.floor, f, no_rise, 2.0));
+  }
+  EXPECT_GE(taken_without_rise, 10);  // the rule, not another, refuses them
   LandingParams off = params;
   off.top_alone_min_share = 0;
   const Scene s = make_scene(201, 0.15, 2, 120, 10, 0.1 * kDeg, close_over_the_top());
