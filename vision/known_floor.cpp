@@ -472,6 +472,12 @@ Result<KnownFloorPlanes> fit_known_top_alone(const std::vector<Vector3d>& x1,
   // every match's inverse distance alike. The top must stand off the floor by more than such a
   // bias: its inverse distance top_alone_min_rise above the floor's.
   if (mode.rho < (1.0 + params.top_alone_min_rise) * rho_f) return R_::fail(Reason::kNoTargetPlane);
+  // And with no floor to correct motion capture's rotation by, its error is the other rival: the
+  // top's parallax against the floor, as an angle (baseline times the inverse distances'
+  // difference), must exceed the largest correction the pair would make. Over a 3 cm baseline a
+  // 0.4 deg error made a bland floor a "top" 36 cm up.
+  if (t.norm() * (mode.rho - rho_f) < params.max_rotation_correction_deg * M_PI / 180.0)
+    return R_::fail(Reason::kNoTargetPlane);
   const auto n_free = free_normal(x1, x2, motion.R_21, t, out.top);
   if (!n_free || !level(*n_free, n, params)) return R_::fail(Reason::kNoTargetPlane);
   out.n_top_free_1 = *n_free;

@@ -284,6 +284,23 @@ TEST(KnownFloorTest, TopAloneOnlyWhereTheFloorIsOutOfSight) {
         fit_known_top_alone(biased.r1, biased.r2, biased.mocap, biased.floor, f, no_rise, 2.0));
   }
   EXPECT_GE(taken_without_rise, 10);  // the rule, not another, refuses them
+  // A bland floor over a 3 cm baseline with motion capture's rotation 0.4 deg off (landing_lowtex
+  // 9917, sim seed 1: a "top" 36 cm up in detection, refinement sent after it): no top alone.
+  SceneShape short_base = close_over_the_top();
+  short_base.camera_z_m = 1.5;
+  short_base.baseline_min_m = short_base.baseline_max_m = 0.03;
+  short_base.descent_m = 0;
+  LandingParams no_angle = params;
+  no_angle.max_rotation_correction_deg = 1e-6;
+  int taken_without_angle = 0;
+  for (uint64_t seed = 1; seed <= 20; ++seed) {
+    const Scene s = make_scene(700 + seed, 0.15, 60, 0, 5, 0.4 * kDeg, short_base);
+    EXPECT_FALSE(fit_known_top_alone(s.r1, s.r2, s.mocap, s.floor, f, params, 2.0))
+        << "seed " << seed;
+    taken_without_angle +=
+        static_cast<bool>(fit_known_top_alone(s.r1, s.r2, s.mocap, s.floor, f, no_angle, 2.0));
+  }
+  EXPECT_GE(taken_without_angle, 2);  // the rule, not another, refuses these
   LandingParams off = params;
   off.top_alone_min_share = 0;
   const Scene s = make_scene(201, 0.15, 2, 120, 10, 0.1 * kDeg, close_over_the_top());
