@@ -465,7 +465,8 @@ Result<KnownFloorPlanes> fit_known_top_alone(const std::vector<Vector3d>& x1,
   // Seen in a few places (a tile's corners beside a top that fills the view), the floor does not
   // contradict a top that holds ten times its matches; the pair then fails for want of them
   // (its rotation correction rests on the floor).
-  if (floor_seen >= params.min_floor_inliers && 10 * floor_seen > on_mode)
+  constexpr int kTopPerFloor = 10;
+  if (floor_seen >= params.min_floor_inliers && kTopPerFloor * floor_seen > on_mode)
     return R_::fail(Reason::kNoTargetPlane);
   // With little floor in sight to compare, a bias of the whole view's parallax (a pose a few
   // milliseconds off its image, features dragged by blur) is the rival of a plane: it scales
@@ -474,8 +475,8 @@ Result<KnownFloorPlanes> fit_known_top_alone(const std::vector<Vector3d>& x1,
   if (mode.rho < (1.0 + params.top_alone_min_rise) * rho_f) return R_::fail(Reason::kNoTargetPlane);
   // And with no floor to correct motion capture's rotation by, its error is the other rival: the
   // top's parallax against the floor, as an angle (baseline times the inverse distances'
-  // difference), must exceed the largest correction the pair would make. Over a 3 cm baseline a
-  // 0.4 deg error made a bland floor a "top" 36 cm up.
+  // difference), must exceed the largest correction the pair would make: over a short baseline
+  // a fraction of a degree makes a bland floor a tall "top".
   if (t.norm() * (mode.rho - rho_f) < params.max_rotation_correction_deg * M_PI / 180.0)
     return R_::fail(Reason::kNoTargetPlane);
   const auto n_free = free_normal(x1, x2, motion.R_21, t, out.top);
