@@ -200,6 +200,18 @@ TEST(MaskCutsTest, EmptyMaskGivesOnlyTheImageBorders) {
   EXPECT_EQ(yc, (std::vector<double>{0.0, 480.0}));
 }
 
+// Appends the match of p_W when both views see it at least 10 px inside the image (and camera
+// 2 left of max_u2_x px); false when they do not.
+bool add_match(const CameraModel& camera, const Isometry3d& X_CW1, const Isometry3d& X_CW2,
+               const Vector3d& p_W, Correspondences* c,
+               double max_u2_x = std::numeric_limits<double>::infinity()) {
+  const auto u1 = camera.project(X_CW1 * p_W), u2 = camera.project(X_CW2 * p_W);
+  if (!u1 || !u2 || !camera.in_image(*u1, 10) || !camera.in_image(*u2, 10)) return false;
+  if (u2->x() > max_u2_x) return false;
+  c->x1.push_back(*u1), c->x2.push_back(*u2), c->u1.push_back(*u1), c->u2.push_back(*u2);
+  return true;
+}
+
 // Two views of the wall at x = 3 m with a 60 x 60 cm hole (centre y = 0, z = 1.2) from 1.5 m,
 // 30 cm apart, and of a back wall at x = 6.1 m seen through the hole; the current image shows
 // the hole as a bright square, so Canny and Hough find its borders.
@@ -230,12 +242,7 @@ struct WallScene {
       const Vector3d q = c_W + f * (p_W - c_W);
       return std::abs(q.y()) < 0.27 && std::abs(q.z() - 1.2) < 0.27;
     };
-    auto add = [&](const Vector3d& p_W) {
-      const auto u1 = camera.project(X_CW1 * p_W), u2 = camera.project(X_CW2 * p_W);
-      if (!u1 || !u2 || !camera.in_image(*u1, 10) || !camera.in_image(*u2, 10)) return false;
-      c.x1.push_back(*u1), c.x2.push_back(*u2), c.u1.push_back(*u1), c.u2.push_back(*u2);
-      return true;
-    };
+    auto add = [&](const Vector3d& p_W) { return add_match(camera, X_CW1, X_CW2, p_W, &c); };
     std::mt19937_64 rng(3);
     std::uniform_real_distribution<double> y(-1.0, 1.0), z(0.6, 1.8);
     for (int k = 0; k < n_wall;) {
@@ -450,11 +457,10 @@ struct FlatWallScene : WallViews {
       return std::abs(q.y()) < 0.27 && std::abs(q.z() - 1.2) < 0.27;
     };
     auto add = [&](const Vector3d& p_W, bool wall) {
-      const auto u1 = camera.project(X_CW1 * p_W), u2 = camera.project(X_CW2 * p_W);
-      if (!u1 || !u2 || !camera.in_image(*u1, 10) || !camera.in_image(*u2, 10)) return false;
-      if (wall && !features_right_of_the_hole && u2->x() > hole_right_px) return false;
-      c.x1.push_back(*u1), c.x2.push_back(*u2), c.u1.push_back(*u1), c.u2.push_back(*u2);
-      return true;
+      return add_match(camera, X_CW1, X_CW2, p_W, &c,
+                       wall && !features_right_of_the_hole
+                           ? hole_right_px
+                           : std::numeric_limits<double>::infinity());
     };
     std::mt19937_64 rng(3);
     std::uniform_real_distribution<double> y(-1.0, 1.0), z(0.6, 1.8);
@@ -608,12 +614,7 @@ struct ThickWallScene : WallViews {
       }
       return true;
     };
-    auto add = [&](const Vector3d& p_W) {
-      const auto u1 = camera.project(X_CW1 * p_W), u2 = camera.project(X_CW2 * p_W);
-      if (!u1 || !u2 || !camera.in_image(*u1, 10) || !camera.in_image(*u2, 10)) return false;
-      c.x1.push_back(*u1), c.x2.push_back(*u2), c.u1.push_back(*u1), c.u2.push_back(*u2);
-      return true;
-    };
+    auto add = [&](const Vector3d& p_W) { return add_match(camera, X_CW1, X_CW2, p_W, &c); };
     std::mt19937_64 rng(5);
     std::uniform_real_distribution<double> y(-1.0, 1.0), z(0.6, 1.8);
     for (int k = 0; k < 150;) {
@@ -725,12 +726,7 @@ struct WallGapScene {
       const double f = (3.0 - c_W.x()) / (p_W.x() - c_W.x());
       return in_gap(c_W.y() + f * (p_W.y() - c_W.y()), 0.03);
     };
-    auto add = [&](const Vector3d& p_W) {
-      const auto u1 = camera.project(X_CW1 * p_W), u2 = camera.project(X_CW2 * p_W);
-      if (!u1 || !u2 || !camera.in_image(*u1, 10) || !camera.in_image(*u2, 10)) return false;
-      c.x1.push_back(*u1), c.x2.push_back(*u2), c.u1.push_back(*u1), c.u2.push_back(*u2);
-      return true;
-    };
+    auto add = [&](const Vector3d& p_W) { return add_match(camera, X_CW1, X_CW2, p_W, &c); };
     std::mt19937_64 rng(5);
     std::uniform_real_distribution<double> y_wall(-2.9, -1.0), z_wall(0.6, 1.8);
     for (int k = 0; k < 150;) {
