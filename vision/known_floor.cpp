@@ -7,6 +7,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "common/geometry.hpp"
+#include "vision/convex_hull.hpp"
 
 namespace alight::vision {
 namespace {
@@ -124,11 +125,8 @@ std::vector<cv::Point2f> top_hull(const std::vector<Vector2d>& top_px) {
 }
 
 // q inside the hull by more than margin; fewer than 3 corners hide nothing.
-bool hides(const std::vector<cv::Point2f>& hull, const Vector2d& q, double margin) {
-  return hull.size() >= 3 &&
-         cv::pointPolygonTest(hull,
-                              cv::Point2f(static_cast<float>(q.x()), static_cast<float>(q.y())),
-                              true) > margin;
+bool hides(const ConvexHullDepth& hull, const Vector2d& q, double margin) {
+  return hull.inside_by(static_cast<float>(q.x()), static_cast<float>(q.y()), margin);
 }
 
 // The unit normal of the matches in `mask` with the plane free (n1~ = n1 / d1, 3 unknowns,
@@ -220,7 +218,7 @@ Result<KnownFloorPlanes> fit_known_floor_planes(const std::vector<Vector3d>& x1,
   // Floor matches (is_floor) hidden by the top whose matches in image 2 are top_px.
   const double margin = thr / f;
   const auto hidden_floor = [&](const std::vector<Vector2d>& top_px, const auto& is_floor) {
-    const auto hull = top_hull(top_px);
+    const ConvexHullDepth hull(top_hull(top_px));
     int n = 0;
     if (hull.empty()) return n;
     for (size_t i = 0; i < N; ++i) n += is_floor(i) && hides(hull, x2[i].head<2>(), margin);

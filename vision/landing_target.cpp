@@ -10,6 +10,7 @@
 
 #include "vision/alignment.hpp"
 #include "vision/bilinear.hpp"
+#include "vision/convex_hull.hpp"
 #include "vision/homography.hpp"
 #include "vision/known_floor.hpp"
 #include "vision/plane_photometric.hpp"
@@ -133,12 +134,13 @@ int floor_seen_around_top(const Correspondences& c, const Planes& planes, const 
       top_px.emplace_back(static_cast<float>(c.x2[i].x()), static_cast<float>(c.x2[i].y()));
   int n = 0;
   if (top_px.size() >= 3) cv::convexHull(top_px, hull);
+  const ConvexHullDepth depth(hull);
   for (size_t i = 0; i < c.size(); ++i) {
     if (!planes.floor_in[i] || planes.top_in[i]) continue;
     const cv::Point2f q(static_cast<float>(c.x2[i].x()), static_cast<float>(c.x2[i].y()));
     const Vector3d p = H_top_px * c.x1[i].homogeneous();
     const bool fits_top = p.z() > 0 && (p.hnormalized() - c.x2[i]).norm() <= threshold_px;
-    n += hull.size() < 3 || fits_top || cv::pointPolygonTest(hull, q, true) <= threshold_px;
+    n += depth.empty() || fits_top || !depth.inside_by(q.x, q.y, threshold_px);
   }
   return n;
 }
@@ -179,9 +181,10 @@ bool follows_its_planes(const Correspondences& c, const Planes& planes, const Ma
   const cv::Rect box = cv::boundingRect(hull) & inside;
   const double area = std::max(1.0, cv::contourArea(hull));
   const int stride = std::max(1, static_cast<int>(std::ceil(std::sqrt(area / kHullPixels))));
+  const ConvexHullDepth depth(hull);
   for (int v = box.y; v < box.y + box.height; v += stride)
     for (int u = box.x; u < box.x + box.width; u += stride)
-      if (cv::pointPolygonTest(hull, cv::Point2f(u, v), true) >= kClear) px.emplace_back(u, v);
+      if (depth.depth(u, v) >= kClear) px.emplace_back(u, v);
   const auto on_top =
       plane_photometry(gray_1, gray_2, *c.camera, H_floor_px, H_top_px, px, kHullPixels / 10);
   if (off_the_top(on_top)) return false;
