@@ -35,6 +35,7 @@
 #include <map>
 #include <mutex>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <random>
 #include <sstream>
 #include <string>
@@ -42,6 +43,7 @@
 #include <vector>
 
 #include "closed_loop.hpp"
+#include "common/params.hpp"
 #include "real_vision.hpp"
 #include "sim/params.hpp"
 #include "support/stats.hpp"
@@ -172,7 +174,7 @@ std::vector<std::string> split(const std::string& s) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
+int main(int argc, char** argv) try {
   CLI::App app{"scene families: real-vision closed-loop Monte Carlo over freshly drawn scenes"};
   int runs = 20, jobs = 1;
   int64_t seed0 = -1;
@@ -235,7 +237,8 @@ int main(int argc, char** argv) {
 
   std::atomic<size_t> next{0};
   std::mutex out;
-  const auto worker = [&] {
+  std::optional<alight::ParamError> config_error;  // the first run's (under `out`): no more runs
+  const auto run_all = [&] {
     for (size_t i = next++; i < all.size(); i = next++) {
       Run& x = all[i];
       const Mission mission = mission_of(x.family);
@@ -267,9 +270,19 @@ int main(int argc, char** argv) {
       std::fflush(stdout);
     }
   };
+  const auto worker = [&] {
+    try {
+      run_all();
+    } catch (const alight::ParamError& e) {
+      std::lock_guard<std::mutex> lock(out);
+      if (!config_error) config_error = e;
+      next = all.size();
+    }
+  };
   std::vector<std::thread> threads;
   for (int j = 0; j < jobs; ++j) threads.emplace_back(worker);
   for (auto& t : threads) t.join();
+  if (config_error) throw *config_error;
 
   std::printf("\n%s, seeds %lld..%lld, %s:\n", vehicle.c_str(), static_cast<long long>(seed0),
               static_cast<long long>(seed0 + runs - 1),
@@ -337,4 +350,8 @@ int main(int argc, char** argv) {
   std::error_code ec;
   fs::remove_all(dir, ec);
   return 0;
+} catch (const alight::ParamError& e) {
+  // A bad scenario or vehicle file: the message names the file, the key and the value.
+  std::fprintf(stderr, "alight_families_bench: configuration error: %s\n", e.what());
+  return 2;
 }

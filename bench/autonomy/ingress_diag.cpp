@@ -14,6 +14,7 @@
 
 #include "autonomy/convert.hpp"
 #include "closed_loop.hpp"
+#include "common/params.hpp"
 #include "sim/params.hpp"
 #include "vision/convert.hpp"
 #include "vision/params.hpp"
@@ -23,7 +24,7 @@ using namespace alight;
 using namespace alight::autonomy;
 using namespace alight::autonomy::test;
 
-int main(int argc, char** argv) {
+int main(int argc, char** argv) try {
   CLI::App app{"ingress diagnostics: per-frame vision against the truth"};
   std::string scenario_file, dump;
   std::string vehicle = std::string(ALIGHT_SOURCE_DIR) + "/config/vehicles/pelican.yaml";
@@ -131,4 +132,8 @@ int main(int argc, char** argv) {
               phase_name(r.phase), r.reason.c_str(), r.crossed_wall, r.collided,
               r.max_lateral_in_wall_m, r.estimate_error_W.norm(), r.retries);
   return 0;
+} catch (const alight::ParamError& e) {
+  // A bad scenario or vehicle file: the message names the file, the key and the value.
+  std::fprintf(stderr, "alight_ingress_diag: configuration error: %s\n", e.what());
+  return 2;
 }

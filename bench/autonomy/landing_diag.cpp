@@ -16,6 +16,7 @@
 
 #include "autonomy/convert.hpp"
 #include "closed_loop.hpp"
+#include "common/params.hpp"
 #include "sim/params.hpp"
 #include "sim/scene.hpp"
 #include "vision/convert.hpp"
@@ -26,7 +27,7 @@ using namespace alight;
 using namespace alight::autonomy;
 using namespace alight::autonomy::test;
 
-int main(int argc, char** argv) {
+int main(int argc, char** argv) try {
   CLI::App app{"landing diagnostics: per-frame vision against the truth"};
   std::string scenario_file, dump;
   std::string vehicle = std::string(ALIGHT_SOURCE_DIR) + "/config/vehicles/pelican.yaml";
@@ -200,4 +201,8 @@ int main(int argc, char** argv) {
               r.estimate_error_W.norm(), r.retries);
   for (const auto& why : r.retry_reasons) std::printf("#   retry: %s\n", why.c_str());
   return 0;
+} catch (const alight::ParamError& e) {
+  // A bad scenario or vehicle file: the message names the file, the key and the value.
+  std::fprintf(stderr, "alight_landing_diag: configuration error: %s\n", e.what());
+  return 2;
 }

@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "common/heap.hpp"
+#include "common/params.hpp"
 #include "common/pose_buffer.hpp"
 #include "soak_flight.hpp"
 #include "support/stats.hpp"
@@ -106,7 +107,7 @@ void append(Stats* all, const Stats& s) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
+int main(int argc, char** argv) try {
   CLI::App app{"alight_vision_cpu_bench: the vision's CPU time per frame and its accuracy"};
   std::string families = "ingress_photo,ingress_solid_photo", seeds = "1";
   std::vector<std::string> scenario_files;
@@ -230,4 +231,8 @@ int main(int argc, char** argv) {
   std::error_code ec;
   fs::remove_all(dir, ec);
   return 0;
+} catch (const alight::ParamError& e) {
+  // A bad scenario or vehicle file: the message names the file, the key and the value.
+  std::fprintf(stderr, "alight_vision_cpu_bench: configuration error: %s\n", e.what());
+  return 2;
 }
