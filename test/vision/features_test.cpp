@@ -131,6 +131,56 @@ TEST(StarDetectorTest, KeepsAtMostMaxFeaturesStrongestFirst) {
   EXPECT_LE(stronger, 100);
 }
 
+// Regression, landing_photo 9901 (issue 15): a smooth photographed top over a busy printed floor
+// kept 4-11 matches (12 needed) because the floor's stronger peaks took the feature budget of
+// every grid cell the top shares with it. The pipeline's default budget (finer grid, more
+// features) leaves a smooth top of about a cell its share in both views.
+TEST(StarDetectorTest, PipelineBudgetLeavesASmoothTopOverABusyFloorItsMatches) {
+  const StarParams legacy = [] {
+    StarParams s;
+    s.grid_cols = 4, s.grid_rows = 3, s.max_features = 600;
+    return s;
+  }();
+  const StarParams now = PipelineParams{}.star;
+  const cv::Rect top(400, 110, 140, 190);  // about the 9901 top's size at 1.4 m
+  const Matrix3d H_ab = view_homography(640, 480, 2 * kDeg, 1.03, 6, -4, 0, 0);
+  int legacy_fewer = 0;
+  for (uint64_t seed = 1; seed <= 5; ++seed) {
+    cv::Mat scene = procedural_photo(640, 480, seed);
+    cv::Mat busy;  // the floor: contrast doubled, as a circuit board against fruit
+    scene.convertTo(busy, CV_8U, 2.0, -128.0);
+    cv::Mat smooth;  // the top: another texture, a quarter of the contrast, out of focus
+    procedural_photo(top.width, top.height, 100 + seed).convertTo(smooth, CV_8U, 0.25, 96.0);
+    cv::GaussianBlur(smooth, smooth, cv::Size(0, 0), 1.5);
+    smooth.copyTo(busy(top));
+    const cv::Mat a = busy;
+    cv::Mat b;
+    cv::warpPerspective(a, b, testing::to_cv(H_ab), a.size(), cv::INTER_LINEAR,
+                        cv::BORDER_REFLECT101);
+    auto correct_on_top = [&](const StarParams& sp) {
+      const cv::Mat ia = integral_image(a), ib = integral_image(b);
+      const auto ka = detect_star(a, ia, sp), kb = detect_star(b, ib, sp);
+      if (!ka || !kb) return 0;
+      const auto sa = response_signs(*ka), sb = response_signs(*kb);
+      const auto m = match_descriptors(describe_surf(ia, *ka, {}), describe_surf(ib, *kb, {}),
+                                       MatchParams{}, &sa, &sb);
+      int n = 0;
+      for (const auto& mm : m) {
+        const Vector2d x1((*ka)[mm.i1].x, (*ka)[mm.i1].y), x2((*kb)[mm.i2].x, (*kb)[mm.i2].y);
+        n +=
+            top.contains(cv::Point(int(x1.x()), int(x1.y()))) && transfer_error(H_ab, x1, x2) < 1.5;
+      }
+      return n;
+    };
+    const int n_now = correct_on_top(now), n_legacy = correct_on_top(legacy);
+    EXPECT_GE(n_now, 2 * LandingParams{}.min_platform_inliers) << "seed " << seed;
+    legacy_fewer += n_legacy < n_now;
+    std::printf("seed %d: correct matches on the top %d (legacy budget %d)\n", int(seed), n_now,
+                n_legacy);
+  }
+  EXPECT_EQ(legacy_fewer, 5);  // the budget is what this measures
+}
+
 TEST(MatcherTest, MatchesAPermutationOfItselfExactly) {
   std::mt19937_64 rng(2);
   std::normal_distribution<float> g(0, 1);
