@@ -301,6 +301,29 @@ TEST(KnownFloorTest, TopAloneOnlyWhereTheFloorIsOutOfSight) {
         static_cast<bool>(fit_known_top_alone(s.r1, s.r2, s.mocap, s.floor, f, no_angle, 2.0));
   }
   EXPECT_GE(taken_without_angle, 2);  // the rule, not another, refuses these
+  // A photographed floor seen climbing (the baseline along the optical axis) with the rotation
+  // 0.4 deg off (landing_none_photo 9776, after take-off: a "top" 25 cm up on 36 matches). A
+  // plane's parallax grows from nothing at the epipole, the view's centre: the angle rule
+  // measures it where the top's matches are, not as baseline times the inverse distances'
+  // difference, which passes every one of the tops below.
+  SceneShape climb = short_base;
+  climb.camera_z_m = 1.45;
+  climb.baseline_min_m = 0.0;
+  climb.baseline_max_m = 0.02;
+  climb.descent_m = -0.17;
+  int taken_in_climb = 0, across_axis_passes = 0;
+  for (uint64_t seed = 1; seed <= 40; ++seed) {
+    const Scene s = make_scene(800 + seed, 0.15, 120, 0, 5, 0.4 * kDeg, climb);
+    EXPECT_FALSE(fit_known_top_alone(s.r1, s.r2, s.mocap, s.floor, f, params, 2.0))
+        << "seed " << seed;
+    const auto taken = fit_known_top_alone(s.r1, s.r2, s.mocap, s.floor, f, no_angle, 2.0);
+    if (!taken) continue;
+    ++taken_in_climb;
+    across_axis_passes += s.mocap.t_12_m.norm() * (taken->rho_top - taken->rho_floor) >=
+                          params.max_rotation_correction_deg * kDeg;
+  }
+  EXPECT_GE(taken_in_climb, 2);
+  EXPECT_EQ(across_axis_passes, taken_in_climb);
   LandingParams off = params;
   off.top_alone_min_share = 0;
   const Scene s = make_scene(201, 0.15, 2, 120, 10, 0.1 * kDeg, close_over_the_top());
