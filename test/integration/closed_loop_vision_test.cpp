@@ -97,10 +97,7 @@ TEST(RealVisionCloseViewTest, ApproachKeepsATopThatFillsTheViewOverABlandFloor) 
   EXPECT_EQ(r.retries, 0) << "the approach lost the top";
   EXPECT_FALSE(r.tipped);
   EXPECT_LT(r.estimate_error_W.norm(), 0.01) << "platform centre and height at convergence";
-  // The gusts' share of the touch-down is a matter of their phase in one flight (1.4 cm and
-  // 2.9 cm on two feature budgets, the estimate within 0.5 cm both times); its percentiles are
-  // measured over many draws (alight_families_bench). Here: on the top, clear of its edges.
-  EXPECT_LT(r.touchdown_error_m, 0.04);
+  EXPECT_LT(r.touchdown_error_m, 0.025);
 }
 
 // Without motion capture (issue 17): the onboard estimator's pose flies the mission, vision
