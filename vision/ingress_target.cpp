@@ -854,6 +854,71 @@ TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image
   auto clear_strip = [&](int i0, int j0, int i1, int j1) {
     return block(clear, i0, j0, i1, j1) == (i1 - i0) * (j1 - j0);
   };
+  // Unless the cut beyond the strip is the opening's edge (issue 15, ingress_photo seed 9604: the
+  // room seen through part of the opening flat grey, a strip with no features and 7-15 % mask
+  // between the jamb's cut and the room's first features, and the block stopped 80-100 px
+  // inside the jamb). The opening's edge is a border of the mask: along it the mask is set on
+  // the block's side (what is seen past the edge moves against the wall) and clear 4 px out on
+  // the wall's side, and the wall's inliers lie in the cell beyond. A line on a flat wall beside
+  // the opening has no mask on either side (the strip is wall), and the image border has no
+  // wall beyond (seed 9805).
+  // edge_run[v][s][i][t]: how many lines t' < t across cut i (v 0: x cuts, lines are rows; 1: y
+  // cuts) show that pattern for a block on side s (0: towards higher coordinates, 1: lower);
+  // made when a clear strip first asks.
+  const bool edge_test = !mask.empty() && p.min_cell_mask_share > 0 && p.edge_band_min_share > 0;
+  const int edge_reach = static_cast<int>(std::ceil(p.snap_px)) + 4;  // the snap moved it out
+  std::vector<std::vector<int>> edge_run[2][2];
+  for (auto& v : edge_run)
+    for (auto& s : v) s.resize(std::max(nx, ny) + 1);
+  auto edge_lines = [&](bool vertical, int i, int s) -> const std::vector<int>& {
+    std::vector<int>& run = edge_run[vertical ? 0 : 1][s][i];
+    if (!run.empty()) return run;
+    const int n_along = vertical ? mask.rows : mask.cols;
+    const int n_across = vertical ? mask.cols : mask.rows;
+    auto set = [&](int t, int x) {
+      return x >= 0 && x < n_across &&
+             (vertical ? mask.at<uint8_t>(t, x) : mask.at<uint8_t>(x, t)) != 0;
+    };
+    const int dir = s == 0 ? 1 : -1;  // towards the block
+    const int a = static_cast<int>(std::lround(vertical ? xc[i] : yc[i]));
+    const int x_wall = a - 4 * dir;
+    run.assign(n_along + 1, 0);
+    for (int t = 0; t < n_along; ++t) {
+      bool edge = x_wall >= 0 && x_wall < n_across && !set(t, x_wall);
+      if (edge) {
+        bool band = false;
+        for (int k = 0; k <= edge_reach && !band; ++k) band = set(t, a + k * dir);
+        edge = band;
+      }
+      run[t + 1] = run[t] + edge;
+    }
+    return run;
+  };
+  // Cut i (of the x cuts when vertical) is the opening's edge for a block on side s spanning
+  // cells [c0, c1) along it.
+  auto opening_edge = [&](bool vertical, int i, int s, int c0, int c1) {
+    if (!edge_test || i <= 0 || i >= (vertical ? nx : ny)) return false;
+    // The wall's inliers in the cell beyond, over the block's span.
+    const int beyond = s == 0 ? i - 1 : i;
+    const int n_beyond =
+        vertical ? block(in, beyond, c0, beyond + 1, c1) : block(in, c0, beyond, c1, beyond + 1);
+    if (n_beyond < std::max(1, p.partial_frame_inliers)) return false;
+    // The middle of the span: its ends hold the neighbouring sides.
+    const std::vector<double>& along = vertical ? yc : xc;
+    const double len = along[c1] - along[c0];
+    const std::vector<int>& run = edge_lines(vertical, i, s);
+    const int lo = std::max(0, static_cast<int>(std::ceil(along[c0] + 0.1 * len)));
+    const int hi = std::min(static_cast<int>(run.size()) - 1,
+                            static_cast<int>(std::floor(along[c1] - 0.1 * len)));
+    return hi > lo && run[hi] - run[lo] >= p.edge_band_min_share * (hi - lo);
+  };
+  // The block's outermost column or row that is clear and not bounded by the opening's edge.
+  auto wall_strip = [&](int i0, int j0, int i1, int j1) {
+    return (clear_strip(i0, j0, i0 + 1, j1) && !opening_edge(true, i0, 0, j0, j1)) ||
+           (clear_strip(i1 - 1, j0, i1, j1) && !opening_edge(true, i1, 1, j0, j1)) ||
+           (clear_strip(i0, j0, i1, j0 + 1) && !opening_edge(false, j0, 0, i0, i1)) ||
+           (clear_strip(i0, j1 - 1, i1, j1) && !opening_edge(false, j1, 1, i0, i1));
+  };
   int best = 0;
   double best_area = 0;
   int b[4] = {0, 0, 0, 0};
@@ -861,9 +926,7 @@ TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image
     for (int i1 = i0 + 1; i1 <= nx; ++i1)
       for (int j0 = 0; j0 < ny; ++j0)
         for (int j1 = j0 + 1; j1 <= ny; ++j1) {
-          if (clear_strip(i0, j0, i0 + 1, j1) || clear_strip(i1 - 1, j0, i1, j1) ||
-              clear_strip(i0, j0, i1, j0 + 1) || clear_strip(i0, j1 - 1, i1, j1))
-            continue;
+          if (wall_strip(i0, j0, i1, j1)) continue;
           const int n_in = block(in, i0, j0, i1, j1);
           const int n = block(off, i0, j0, i1, j1);
           // A few inliers among many features seen through the opening do not make it wall:

@@ -14,7 +14,8 @@
 // plane, fall inside it). The mask also decides what the features alone cannot (issue 15, a
 // dark, flat wall photograph): an outlier of the wall's homography where the mask finds the
 // wall is not seen through the opening, a block is not bounded by a row or column of cells
-// without off-wall features that the mask leaves mostly clear, and it may hold a few inliers
+// without off-wall features that the mask leaves mostly clear (unless the cut beyond them is
+// the opening's edge: mask along it on their side, the wall beyond), and it may hold a few inliers
 // (block_inlier_share of its off-wall features: the inner faces' features fit the wall's
 // homography).
 

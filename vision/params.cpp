@@ -388,6 +388,10 @@ const ParamSchema<IngressParams>& IngressParams::schema() {
           "a cell without off-wall features whose share of off-wall mask pixels is below this "
           "is clear; a block with a row or column of clear cells on its border is not the "
           "opening (the block without it holds the same features; 0: no check)");
+    s.add("edge_band_min_share", &P::edge_band_min_share, Range::closed(0, 1), "",
+          "a clear row or column on a block's border stays when the cut beyond it is the "
+          "opening's edge: wall inliers in the cell beyond, and along this share of the cut "
+          "the mask clear 4 px out and set within snap_px + 4 px in (0: never)");
     s.add("block_inlier_share", &P::block_inlier_share, Range::closed(0, 1), "",
           "a block may hold wall inliers up to this share of its off-wall features (inner-face "
           "features within the wall's thickness fit the wall's homography; 0: none, the paper's "

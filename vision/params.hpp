@@ -174,6 +174,7 @@ struct IngressParams {
   double cut_margin_px = 6;
   bool off_features_on_mask = true;
   double min_cell_mask_share = 0.5;
+  double edge_band_min_share = 0.5;
   double block_inlier_share = 0.02;
   int min_outliers = 8;
   double behind_margin_m = 0.02;
