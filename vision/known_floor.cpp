@@ -40,6 +40,26 @@ bool residual(const Vector3d& p, const Vector3d& x2, double f, Vector2d* r,
   return std::isfinite(r->x()) && std::isfinite(r->y());
 }
 
+// The median over the matches in `mask` of the angle between where the planes at inverse
+// distances rho_a and rho_b carry x1 (seen from camera 2): a rotation error w shifts a ray by w
+// and, off the axis, its normalised coordinates by w (1 + |x|^2), hence the division.
+double median_parallax_angle(const std::vector<Vector3d>& x1, const std::vector<Vector3d>& x2,
+                             const Matrix3d& R, const Vector3d& t, const Vector3d& n, double rho_a,
+                             double rho_b, const std::vector<uint8_t>& mask) {
+  std::vector<double> angle;
+  for (size_t i = 0; i < x1.size(); ++i) {
+    if (!mask[i]) continue;
+    const Vector3d a = carry(R, t, n, rho_a, x1[i]), b = carry(R, t, n, rho_b, x1[i]);
+    if (!(a.z() > 1e-9) || !(b.z() > 1e-9)) continue;
+    const double off_axis = 1.0 + x2[i].head<2>().squaredNorm();
+    angle.push_back((a.head<2>() / a.z() - b.head<2>() / b.z()).norm() / off_axis);
+  }
+  if (angle.empty()) return 0.0;
+  auto mid = angle.begin() + static_cast<std::ptrdiff_t>(angle.size() / 2);
+  std::nth_element(angle.begin(), mid, angle.end());
+  return *mid;
+}
+
 struct PerMatch {
   double err_floor = 1e9;                         // transfer error under the floor [px]
   double rho = 0, half_width = 0, err_rho = 1e9;  // best inverse distance, its tolerance
@@ -407,30 +427,6 @@ Result<KnownFloorPlanes> fit_known_floor_planes(const std::vector<Vector3d>& x1,
   return R_::ok(std::move(out));
 }
 
-namespace {
-
-// The median over the matches in `mask` of the angle between where the planes at inverse
-// distances rho_a and rho_b carry x1 (seen from camera 2): a rotation error w shifts a ray by w
-// and, off the axis, its normalised coordinates by w (1 + |x|^2), hence the division.
-double median_parallax_angle(const std::vector<Vector3d>& x1, const std::vector<Vector3d>& x2,
-                             const Matrix3d& R, const Vector3d& t, const Vector3d& n, double rho_a,
-                             double rho_b, const std::vector<uint8_t>& mask) {
-  std::vector<double> angle;
-  for (size_t i = 0; i < x1.size(); ++i) {
-    if (!mask[i]) continue;
-    const Vector3d a = carry(R, t, n, rho_a, x1[i]), b = carry(R, t, n, rho_b, x1[i]);
-    if (!(a.z() > 1e-9) || !(b.z() > 1e-9)) continue;
-    const double off_axis = 1.0 + x2[i].head<2>().squaredNorm();
-    angle.push_back((a.head<2>() / a.z() - b.head<2>() / b.z()).norm() / off_axis);
-  }
-  if (angle.empty()) return 0.0;
-  auto mid = angle.begin() + static_cast<std::ptrdiff_t>(angle.size() / 2);
-  std::nth_element(angle.begin(), mid, angle.end());
-  return *mid;
-}
-
-}  // namespace
-
 Result<KnownFloorPlanes> fit_known_top_alone(const std::vector<Vector3d>& x1,
                                              const std::vector<Vector3d>& x2,
                                              const KnownMotion& motion, const KnownPlane& floor,
@@ -500,9 +496,8 @@ Result<KnownFloorPlanes> fit_known_top_alone(const std::vector<Vector3d>& x1,
   // largest correction the pair would make: over a short baseline a fraction of a degree makes a
   // bland floor a tall "top". Where its matches are: along the optical axis (the climb after
   // take-off, the descent) a plane's parallax grows from nothing at the epipole, so baseline
-  // times the inverse distances' difference, the parallax across the axis, overstates it
-  // (landing_none_photo 9776, climbing 17 cm with the rotation 0.39 deg off: a "top" 25 cm up
-  // at 1.06 deg by that product, 36 of the photographed floor's matches).
+  // times the inverse distances' difference, the parallax across the axis, overstates it and
+  // passed a photographed floor seen climbing for a top (landing_none_photo 9776).
   if (median_parallax_angle(x1, x2, motion.R_21, t, n, mode.rho, rho_f, out.top) <
       params.max_rotation_correction_deg * M_PI / 180.0)
     return R_::fail(Reason::kNoTargetPlane);
