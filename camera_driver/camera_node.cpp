@@ -10,7 +10,9 @@
 // exposure when the exposure is known, plus one CLOCK_REALTIME - CLOCK_MONOTONIC offset
 // measured at start and kept; metadata "seq" (capture sequence, monotonic across reconnects,
 // so gaps show every lost frame), "dropped" (frames the kernel dropped since start) and
-// "skipped" (frames this process skipped to publish the newest one when it fell behind).
+// "skipped" (frames this process skipped to publish the newest one when it fell behind), and
+// "exposure_us" when the camera took the configured manual exposure (the vision's motion blur
+// guard uses it).
 //
 // Exit codes (the launcher and the user act on them):
 //   0  stopped by SIGINT / SIGTERM, or the stored source ended (or --max-frames reached)
@@ -110,13 +112,15 @@ struct Publisher {
   int64_t last_report_us = 0;
   uint64_t last_report_count = 0;
 
+  /// exposure_us: the exposure the camera was set to, published as metadata when known.
   void publish(const cv::Mat& pixels, int64_t utime, int64_t seq, uint64_t dropped,
-               uint64_t skipped) {
+               uint64_t skipped, std::optional<int64_t> exposure_us = std::nullopt) {
     image_t msg = image_to_msg(pixels, utime, seq);
     // image_to_msg copies bytes as they are and labels 3 channels BGR; rgb8 holds RGB bytes.
     if (encoding == OutputEncoding::kRgb8) msg.pixelformat = image_t::PIXEL_FORMAT_RGB;
     set_metadata_int(msg, "dropped", static_cast<int64_t>(dropped));
     set_metadata_int(msg, "skipped", static_cast<int64_t>(skipped));
+    if (exposure_us) set_metadata_int(msg, "exposure_us", *exposure_us);
     node.publish(channel, msg);
     ++published;
   }
@@ -285,7 +289,8 @@ int run_camera(const Options& o, const CameraParams& p) {
         warned_clock = true;
       }
       const CaptureCounters& c = sup.capture().counters();
-      pub.publish(step.frame->pixels, label.utime, label.seq, c.dropped, c.skipped);
+      pub.publish(step.frame->pixels, label.utime, label.seq, c.dropped, c.skipped,
+                  sup.capture().exposure_us());
       pub.report(now, c.dropped, c.skipped);
     }
     sleep_us(std::min<int64_t>(step.sleep_us, 100'000));

@@ -232,12 +232,14 @@ Status V4l2Capture::negotiate() {
 
 void V4l2Capture::set_controls() {
   // Controls are best effort: a camera without manual exposure still streams, with a warning.
-  auto set = [&](uint32_t id, int value, const char* name) {
+  // Each returns the value set, nullopt when it could not be.
+  exposure_us_.reset();
+  auto set = [&](uint32_t id, int value, const char* name) -> std::optional<int> {
     v4l2_queryctrl q{};
     q.id = id;
     if (io_.ioctl(fd_, VIDIOC_QUERYCTRL, &q) < 0 || (q.flags & V4L2_CTRL_FLAG_DISABLED)) {
       warnings_.push_back(node_.path + ": no control " + name);
-      return;
+      return std::nullopt;
     }
     int v = value;
     if (v < q.minimum || v > q.maximum) {
@@ -247,14 +249,18 @@ void V4l2Capture::set_controls() {
                           "], using " + std::to_string(v));
     }
     v4l2_control c{id, v};
-    if (io_.ioctl(fd_, VIDIOC_S_CTRL, &c) < 0)
+    if (io_.ioctl(fd_, VIDIOC_S_CTRL, &c) < 0) {
       warnings_.push_back(node_.path + ": setting " + name + " failed");
+      return std::nullopt;
+    }
+    return v;
   };
   if (config_.exposure_us > 0) {
-    set(V4L2_CID_EXPOSURE_AUTO, V4L2_EXPOSURE_MANUAL, "exposure_auto");
+    const auto manual = set(V4L2_CID_EXPOSURE_AUTO, V4L2_EXPOSURE_MANUAL, "exposure_auto");
     // V4L2_CID_EXPOSURE_ABSOLUTE counts 100 us units.
-    set(V4L2_CID_EXPOSURE_ABSOLUTE, std::max(1, (config_.exposure_us + 50) / 100),
-        "exposure_absolute");
+    const auto units = set(V4L2_CID_EXPOSURE_ABSOLUTE,
+                           std::max(1, (config_.exposure_us + 50) / 100), "exposure_absolute");
+    if (manual && units) exposure_us_ = int64_t{*units} * 100;
   } else {
     set(V4L2_CID_EXPOSURE_AUTO, V4L2_EXPOSURE_APERTURE_PRIORITY, "exposure_auto");
   }

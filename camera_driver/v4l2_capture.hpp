@@ -132,6 +132,10 @@ class V4l2Capture {
   const VideoNode& node() const { return node_; }
   /// Non-fatal findings of the last open(): size changed by the driver, missing controls.
   const std::vector<std::string>& warnings() const { return warnings_; }
+  /// The exposure time the camera was set to [us] when open() set a manual exposure (after any
+  /// clamping to the control's range); nullopt on automatic exposure or when a control failed.
+  /// Published with each frame as "exposure_us" metadata (the vision's motion blur guard).
+  std::optional<int64_t> exposure_us() const { return exposure_us_; }
 
  private:
   struct Buffer {
@@ -156,6 +160,7 @@ class V4l2Capture {
   int64_t last_returned_us_ = -1;  ///< timestamp of the last frame returned
   CaptureCounters counters_;
   std::vector<std::string> warnings_;
+  std::optional<int64_t> exposure_us_;
 };
 
 }  // namespace alight::camera

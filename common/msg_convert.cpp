@@ -135,6 +135,14 @@ std::optional<Image> decode_image(const image_t& m, bool mono, std::string* erro
   Image img;
   img.utime = m.utime;
   img.seq = metadata_int(m, "seq").value_or(-1);
+  if (const auto exposure_us = metadata_int(m, "exposure_us")) {
+    if (*exposure_us <= 0 || *exposure_us > kMaxExposureUs) {
+      fail(error, "exposure_us metadata of " + std::to_string(*exposure_us) + " is outside (0, " +
+                      std::to_string(kMaxExposureUs) + "] us");
+      return std::nullopt;
+    }
+    img.exposure_s = double(*exposure_us) * 1e-6;
+  }
   if (static_cast<int64_t>(m.data.size()) > kMaxImageBytes) {
     fail(error, "image data of " + std::to_string(m.data.size()) + " bytes exceeds " +
                     std::to_string(kMaxImageBytes));

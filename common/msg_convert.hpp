@@ -24,7 +24,9 @@ std::optional<PoseSample> pose_from_msg(const pose_t& msg, std::string* why);
 struct Image {
   int64_t utime = 0;  ///< exposure time [us]
   int64_t seq = -1;   ///< capture sequence number ("seq" metadata), -1 when absent
-  cv::Mat pixels;     ///< CV_8UC1 (mono8) or CV_8UC3 (BGR)
+  /// exposure time ("exposure_us" metadata, (0, kMaxExposureUs]) [s]; nullopt when absent
+  std::optional<double> exposure_s;
+  cv::Mat pixels;  ///< CV_8UC1 (mono8) or CV_8UC3 (BGR)
 };
 
 /// Largest image side image_from_msg accepts [px]. 8192 covers every camera alight flies (the
@@ -33,6 +35,9 @@ struct Image {
 inline constexpr int kMaxImageSide = 8192;
 /// Largest image_t data buffer accepted [bytes]: a raw 8192 x 8192 BGRA frame (256 MiB).
 inline constexpr int64_t kMaxImageBytes = int64_t{kMaxImageSide} * kMaxImageSide * 4;
+/// Longest exposure an "exposure_us" metadata entry may give [us]: one second, longer than any
+/// exposure a flying camera takes; beyond it (or <= 0) the frame is malformed.
+inline constexpr int64_t kMaxExposureUs = 1'000'000;
 /// Most scans a JPEG may have (a progressive JPEG has about 10; each scan costs a pass over the
 /// whole image, so thousands of tiny scans would make a small message expensive to decode).
 inline constexpr int kMaxJpegScans = 100;
@@ -56,7 +61,8 @@ std::optional<JpegInfo> jpeg_info(const uint8_t* data, size_t size, std::string*
 
 /// Decodes GRAY, RGB, BGR, RGBA, BGRA and MJPEG/JPEG frames. `mono` converts colour to mono8.
 /// Returns nullopt and sets *error (naming the problem) for malformed, truncated, oversize
-/// (beyond kMaxImageSide / kMaxImageBytes) or unsupported frames; never throws (OpenCV's
+/// (beyond kMaxImageSide / kMaxImageBytes) or unsupported frames, and for an "exposure_us"
+/// outside (0, kMaxExposureUs]; never throws (OpenCV's
 /// exceptions, bad_alloc included, become an error text). A JPEG's size is read from its header
 /// (jpeg_info) before it is decoded.
 std::optional<Image> image_from_msg(const image_t& msg, bool mono, std::string* error);

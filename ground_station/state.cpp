@@ -117,6 +117,8 @@ const char* target_reason_name(int8_t reason) {
       return "target partly out of view";
     case target_t::REASON_LOW_PARALLAX:
       return "too little parallax to measure the opening";
+    case target_t::REASON_MOTION_BLUR:
+      return "motion blur";
   }
   return "unknown";
 }

@@ -1,5 +1,6 @@
 #include "sim/sim_msgs.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "common/msg_convert.hpp"
@@ -53,7 +54,9 @@ baro_t to_msg(const BaroSample& s) {
 
 image_t to_msg(const CameraFrame& frame) {
   image_t m = image_to_msg(frame.pixels, frame.utime, frame.seq);
-  set_metadata_int(m, "exposure_us", static_cast<int64_t>(frame.exposure_s * 1e6 + 0.5));
+  // At least 1 us: the receiver refuses a frame that says it was not exposed at all.
+  set_metadata_int(m, "exposure_us",
+                   std::max<int64_t>(1, static_cast<int64_t>(frame.exposure_s * 1e6 + 0.5)));
   return m;
 }
 

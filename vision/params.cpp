@@ -293,6 +293,17 @@ const ParamSchema<LandingParams>& LandingParams::schema() {
           "minimum-area rectangle of a few dozen features on a blank top can be 10 deg or more "
           "off its edges); the turn is fitted to where short stretches of the side step, and "
           "two or more rims that agree on a turn turn the rectangle onto them");
+    s.add("max_motion_blur_px", &P::max_motion_blur_px, Range::ge(0), "px",
+          "beyond the paper (motion_blur.hpp): a frame whose exposure smeared the floor's image "
+          "farther than this anywhere in the view (from motion capture's velocity and angular "
+          "rate, the camera's exposure time and the floor's plane) is neither measured nor "
+          "taken as a reference (REASON_MOTION_BLUR). The turns of the search path smear the "
+          "floor several times as far as the frames a platform is found in, and the matches of "
+          "such frames made false tops over bare photographed floors (README, issue 15). 0: off");
+    s.add("assumed_exposure_s", &P::assumed_exposure_s, Range::open_closed(0, 1), "s",
+          "max_motion_blur_px: the exposure time of a frame that does not carry its own (no "
+          "exposure_us metadata: a camera on automatic exposure); the longest a camera indoors "
+          "would expose, so that the guard errs on the side of refusing");
     return s;
   }();
   return schema;

@@ -6,6 +6,7 @@
 #include "vision/ingress_target.hpp"
 #include "vision/landing_target.hpp"
 #include "vision/matcher.hpp"
+#include "vision/motion_blur.hpp"
 #include "vision/star_detector.hpp"
 #include "vision/surf_descriptor.hpp"
 #include "vision/waypoint.hpp"
@@ -27,7 +28,8 @@ void Pipeline::reset() {
 }
 
 FrameResult Pipeline::process(const cv::Mat& gray, int64_t utime,
-                              const std::optional<PoseSample>& pose) {
+                              const std::optional<PoseSample>& pose,
+                              std::optional<double> exposure_s) {
   FrameResult r;
   r.utime = utime;
   r.seq = ++seq_;
@@ -63,6 +65,13 @@ FrameResult Pipeline::process(const cv::Mat& gray, int64_t utime,
   frame.pattern_angle_rad = pattern_angle(X_WC.linear(), d_W);
   frame.descriptors = describe_surf(integral, *kps, params_.surf, frame.pattern_angle_rad);
   frame.keypoints = std::move(*kps);
+  const double max_blur_px = mission_ == Mission::kLanding ? params_.landing.max_motion_blur_px : 0;
+  if (max_blur_px > 0)
+    frame.blur_px = floor_motion_blur_px(camera_, mount_, *pose, params_.landing.floor_z_m,
+                                         exposure_s.value_or(params_.landing.assumed_exposure_s));
+  const auto smeared = [&](const TrackedFrame& f) {
+    return max_blur_px > 0 && f.blur_px > max_blur_px;
+  };
   // Ingress compares the current image with the reference's warped by the wall homography: each
   // frame keeps its image smoothed as that comparison wants it, made once (issue 15).
   const bool parallax = mission_ == Mission::kIngress && params_.ingress.parallax_mask;
@@ -92,21 +101,28 @@ FrameResult Pipeline::process(const cv::Mat& gray, int64_t utime,
   const int64_t oldest = up.reference ? up.reference->utime : utime;
   while (!poses_.empty() && poses_.front().first < oldest) poses_.pop_front();
   r.n_tracked = up.n_tracked;
+  if (up.current && smeared(*up.current)) return fail(Reason::kMotionBlur);
   // No tracked reference (the tracks just broke): only the held one can serve.
   const bool held_only = up.status == Reason::kNoReference && up.current && hold && held_;
   if (up.status != Reason::kOk && !held_only) return fail(up.status);
   // The oldest qualifying frame within max_reference_baseline_m of the current camera (the
-  // newest previous frame when even that one is farther).
-  std::shared_ptr<const TrackedFrame> ref = up.reference;
+  // newest previous frame when even that one is farther); never a smeared one.
+  std::shared_ptr<const TrackedFrame> ref =
+      up.reference && !smeared(*up.reference) ? up.reference : nullptr;
   PoseSample pose_1;
   double baseline_m = 0.0;  // none tracked: any held baseline is longer
-  if (ref) {
+  bool skipped_smeared = false;
+  if (up.reference) {
     const auto& h = tracker_.history();
     const Vector3d c_now = X_WC.translation();
     for (size_t k = 0; k + 1 < h.size(); ++k) {
       const auto pose_k = std::find_if(poses_.begin(), poses_.end(),
                                        [&](const auto& e) { return e.first == h[k]->utime; });
       if (pose_k == poses_.end()) continue;
+      if (smeared(*h[k])) {
+        skipped_smeared = true;
+        continue;
+      }
       ref = h[k];
       if ((camera_in_world(pose_k->second.X_WB(), mount_.X_BC()).translation() - c_now).norm() <=
           params_.max_reference_baseline_m)
@@ -147,7 +163,11 @@ FrameResult Pipeline::process(const cv::Mat& gray, int64_t utime,
       // and multiplied the false targets over floors without a platform.
     }
   }
-  if (!ref) return fail(up.status);  // the held reference no longer serves either
+  // Neither a tracked nor the held reference serves.
+  if (!ref)
+    return fail(skipped_smeared            ? Reason::kMotionBlur
+                : up.status != Reason::kOk ? up.status
+                                           : Reason::kNoReference);
   if (hold) {
     held_ = ref;
     held_pose_ = pose_1;

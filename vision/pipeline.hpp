@@ -24,6 +24,12 @@
 // view, a frame of few features) does not: over a pale floor the tracks break every 1-2 s while
 // the held frame still matches, and where the tracker has no reference at all the held one
 // serves alone (landing_lowtex 9306, 9309, 9314 lost the top in refinement with every retry).
+//
+// Beyond the paper (landing.max_motion_blur_px, issue 15): a frame exposed while the floor's image
+// moved farther than that (motion_blur.hpp) is tracked through, so the tracks and the held
+// reference live on, but it is never measured and never the reference: its features are smears,
+// placed where no plane puts them, and such frames at the search path's turns made tops of a
+// bare floor.
 
 #include <deque>
 #include <optional>
@@ -63,8 +69,10 @@ class Pipeline {
            const CameraMount& mount);
 
   /// Processes one frame (CV_8UC1). `pose` is the body pose at the exposure time; nullopt gives
-  /// kNoPose and leaves the history untouched.
-  FrameResult process(const cv::Mat& gray, int64_t utime, const std::optional<PoseSample>& pose);
+  /// kNoPose and leaves the history untouched. `exposure_s`: the frame's exposure time [s]
+  /// (nullopt: landing.assumed_exposure_s), for the motion blur guard.
+  FrameResult process(const cv::Mat& gray, int64_t utime, const std::optional<PoseSample>& pose,
+                      std::optional<double> exposure_s = std::nullopt);
   void reset();
 
   Mission mission() const { return mission_; }

@@ -41,6 +41,9 @@ struct TrackedFrame {
   cv::Mat image;  ///< ingress: the grey image smoothed (parallax_image); landing: the grey image
                   ///< as captured (the rim search, landing_target.hpp)
   std::vector<int64_t> track_id;  ///< filled by ReferenceTracker::add
+  /// The floor's smear over the exposure [px] (motion_blur.hpp): a smeared frame is tracked
+  /// through but never the reference (landing.max_motion_blur_px).
+  double blur_px = 0.0;
 };
 
 class ReferenceTracker {

@@ -30,6 +30,8 @@ const char* to_string(Reason r) {
       return "target partly out of view";
     case Reason::kLowParallax:
       return "too little parallax to measure the opening";
+    case Reason::kMotionBlur:
+      return "motion blur";
   }
   return "unknown";
 }

@@ -25,6 +25,7 @@ enum class Reason : int8_t {
   kBadImage = 10,            ///< empty, wrong type or too small
   kPartialView = 11,         ///< target found but cut by the image border: its centre is unknown
   kLowParallax = 12,  ///< ingress: the opening in view, but too little parallax to measure it
+  kMotionBlur = 13,   ///< landing: the frame or its reference smeared by the camera's motion
 };
 
 const char* to_string(Reason r);

@@ -20,6 +20,7 @@
 #include "sim/params.hpp"
 #include "sim/scene.hpp"
 #include "vision/convert.hpp"
+#include "vision/motion_blur.hpp"
 #include "vision/params.hpp"
 #include "vision/pipeline.hpp"
 
@@ -96,7 +97,7 @@ int main(int argc, char** argv) try {
   // how far the motion the vision assumes between reference and current is off.
   std::map<int64_t, std::pair<Isometry3d, Isometry3d>> cams;
   cfg.camera_vision = [&](const sim::CameraFrame& f, const std::optional<PoseSample>& pose) {
-    const auto r = pipeline.process(f.pixels, f.utime, pose);
+    const auto r = pipeline.process(f.pixels, f.utime, pose, f.exposure_s);
     if (pose) cams[f.utime] = {camera_in_world(pose->X_WB(), rig.mount.X_BC()), f.X_WC};
     while (!cams.empty() && cams.begin()->first < f.utime - 5000000) cams.erase(cams.begin());
     const Isometry3d X_CW = f.X_WC.inverse();
@@ -142,6 +143,11 @@ int main(int argc, char** argv) try {
       std::printf(" on %d/%d", on_labelled, on);
     }
     // The reference's baseline and age (the top's parallax falls with the baseline).
+    // The floor's smear over this frame's exposure from motion capture's rates [px].
+    std::printf(" blur %.1f",
+                pose ? vision::floor_motion_blur_px(rig.model, rig.mount, *pose,
+                                                    params.pipeline.landing.floor_z_m, f.exposure_s)
+                     : -1.0);
     std::printf(" b %.3f age %.2f tr %d%s", r.baseline_m,
                 r.ref_utime > 0 ? (f.utime - r.ref_utime) * 1e-6 : -1.0, r.n_tracked,
                 r.ref_held ? " held" : "");
@@ -163,7 +169,7 @@ int main(int argc, char** argv) try {
       }
     }
     if (!shadow_prior.empty()) {
-      const auto q = shadow.process(f.pixels, f.utime, pose);
+      const auto q = shadow.process(f.pixels, f.utime, pose, f.exposure_s);
       std::printf(" | shadow %s in %d/%d", vision::to_string(q.reason), q.target.n_inliers_target,
                   q.target.n_inliers_dominant);
       if (q.found()) {

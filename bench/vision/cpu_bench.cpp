@@ -189,7 +189,8 @@ int main(int argc, char** argv) try {
         }
         const auto pose = poses.at(t);
         const double t0 = thread_cpu_ms();
-        const vision::FrameResult r = pipeline.process(rec.frames[i].second, t, pose);
+        const vision::FrameResult r =
+            pipeline.process(rec.frames[i].second, t, pose, scenario.camera.exposure_s);
         const double cpu = thread_cpu_ms() - t0;
         st.cpu_ms.push_back(cpu);
         if (pass == 0)

@@ -85,6 +85,8 @@ int main(int argc, char** argv) {
     args.finalize();
 
     sim::Scenario scenario = sim::load_scenario(scenario_file);
+    const int64_t exposure_us =
+        std::max<int64_t>(1, std::llround(scenario.camera.exposure_s * 1e6));
     scenario.camera.rate_hz = rate_hz;
     const auto t_render = std::chrono::steady_clock::now();
     const Recorded rec = record_one_period(scenario, vehicle_file, seed, loop_s, rate_hz);
@@ -141,8 +143,9 @@ int main(int argc, char** argv) {
       late_max_us = std::max(late_max_us, late);
       if (late > 5'000) ++late_over_5ms;
       if (e.frame) {
-        node.publish(channels::kCamera,
-                     image_to_msg(rec.frames[e.index].second, wall0 + own_us, n_frames));
+        image_t msg = image_to_msg(rec.frames[e.index].second, wall0 + own_us, n_frames);
+        set_metadata_int(msg, "exposure_us", exposure_us);
+        node.publish(channels::kCamera, msg);
         ++n_frames;
         lateness_us.push_back(late);
       } else {

@@ -285,6 +285,7 @@ TEST_F(CaptureTest, ExposureAndGainAreSetThroughControls) {
   const auto ctrls = io.controls(dev);
   EXPECT_EQ(ctrls.at(V4L2_CID_EXPOSURE_AUTO), V4L2_EXPOSURE_MANUAL);
   EXPECT_EQ(ctrls.at(V4L2_CID_EXPOSURE_ABSOLUTE), 80);  // 100 us units
+  EXPECT_EQ(cap.exposure_us(), 8000);                   // what frames will say they had
   EXPECT_EQ(ctrls.at(V4L2_CID_GAIN), 255);
   bool clamped = false, no_autogain = false;
   for (const auto& w : cap.warnings()) {
@@ -293,6 +294,30 @@ TEST_F(CaptureTest, ExposureAndGainAreSetThroughControls) {
   }
   EXPECT_TRUE(clamped);
   EXPECT_TRUE(no_autogain);
+}
+
+// A frame says how long it was exposed only when the camera was set to that: on automatic
+// exposure, or without the controls, the vision assumes its own figure.
+TEST_F(CaptureTest, ExposureIsKnownOnlyWhenManualExposureWasSet) {
+  V4l2Capture automatic(io, grey_config());  // exposure_us -1
+  ASSERT_TRUE(automatic.open().ok());
+  EXPECT_EQ(automatic.exposure_us(), std::nullopt);
+  automatic.close();
+
+  FakeV4l2 io2;
+  FakeV4l2::Device d;
+  d.has_exposure = false;
+  io2.add_device(d);
+  CaptureConfig c = grey_config();
+  c.exposure_us = 8000;
+  V4l2Capture without(io2, c);
+  ASSERT_TRUE(without.open().ok());  // still streams, with a warning
+  EXPECT_EQ(without.exposure_us(), std::nullopt);
+
+  c.exposure_us = 900'000;  // beyond the fake's 5000 units: clamped, and the clamped value said
+  V4l2Capture clamped(io, c);
+  ASSERT_TRUE(clamped.open().ok());
+  EXPECT_EQ(clamped.exposure_us(), 500'000);
 }
 
 TEST_F(CaptureTest, ListsModesOfAnOpenDevice) {

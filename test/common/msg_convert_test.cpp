@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdint>
 #include <opencv2/imgproc.hpp>
 
 namespace alight {
@@ -49,6 +50,25 @@ TEST(MsgConvertTest, MonoImageRoundTripThroughLcmEncoding) {
   EXPECT_EQ(img->utime, 99);
   EXPECT_EQ(img->seq, 7);
   EXPECT_EQ(cv::norm(img->pixels, px, cv::NORM_INF), 0.0);
+}
+
+// The exposure a camera publishes reaches the vision's blur guard; a frame without one says
+// nothing, and one that gives an impossible exposure is refused with the value named.
+TEST(MsgConvertTest, ExposureMetadataIsReadAndCheckedAtTheBoundary) {
+  image_t msg = image_to_msg(gradient(64, 48), 99, 7);
+  std::string err;
+  EXPECT_EQ(image_from_msg(msg, true, &err)->exposure_s, std::nullopt);
+  set_metadata_int(msg, "exposure_us", 8000);
+  const auto img = image_from_msg(encode_decode(msg), true, &err);
+  ASSERT_TRUE(img) << err;
+  ASSERT_TRUE(img->exposure_s);
+  EXPECT_DOUBLE_EQ(*img->exposure_s, 0.008);
+  for (const int64_t bad : {int64_t{0}, int64_t{-5}, kMaxExposureUs + 1, INT64_MIN}) {
+    set_metadata_int(msg, "exposure_us", bad);
+    err.clear();
+    EXPECT_FALSE(image_from_msg(msg, true, &err)) << bad;
+    EXPECT_NE(err.find("exposure_us metadata of " + std::to_string(bad)), std::string::npos) << err;
+  }
 }
 
 TEST(MsgConvertTest, ColourImageDecodesToMonoOrBgr) {

@@ -23,6 +23,7 @@ TEST(StatusTest, ReasonValuesAreTheTargetMessageConstants) {
   EXPECT_EQ(int(Reason::kBadImage), T::REASON_BAD_IMAGE);
   EXPECT_EQ(int(Reason::kPartialView), T::REASON_PARTIAL_VIEW);
   EXPECT_EQ(int(Reason::kLowParallax), T::REASON_LOW_PARALLAX);
+  EXPECT_EQ(int(Reason::kMotionBlur), T::REASON_MOTION_BLUR);
 }
 
 TEST(StatusTest, ResultCarriesEitherAValueOrAReason) {
