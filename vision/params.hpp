@@ -190,14 +190,17 @@ struct IngressParams {
 
 /// Everything the pipeline uses, one struct per stage.
 struct PipelineParams {
-  /// Features spread over a 4 x 3 grid: the floor keeps enough for its homography when the
-  /// platform top (richer texture) fills part of the view (star_detector.hpp). An 8 x 6 grid of
-  /// 900 gives a top smoother than the floor its share (landing_photo 9901 lands) but took
-  /// blurred frames at the search path's turns for tops over bare floors (README, issue 15).
+  /// Features spread over an 8 x 6 grid, 900 in all: the floor keeps enough for its homography
+  /// when the platform top (richer texture) fills part of the view, and a top smoother than the
+  /// floor keeps its share of a cell it shares with the floor (star_detector.hpp; issue 15:
+  /// with 4 x 3 and 600 a photographed top over a printed circuit board kept 4-11 matches).
+  /// The tops it made of frames smeared at the search path's turns are refused by
+  /// landing.max_motion_blur_px.
   StarParams star = [] {
     StarParams s;
-    s.grid_cols = 4;
-    s.grid_rows = 3;
+    s.grid_cols = 8;
+    s.grid_rows = 6;
+    s.max_features = 900;
     return s;
   }();
   SurfParams surf{};

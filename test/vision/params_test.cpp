@@ -118,7 +118,7 @@ TEST(VisionParamsTest, EveryValidatedFieldIsSettableFromTheVehicleFile) {
   EXPECT_FALSE(q.match.mutual);
   EXPECT_FALSE(q.match.same_sign_only);
   EXPECT_EQ(q.star.min_size, 3);
-  EXPECT_EQ(q.star.grid_cols, 4);  // the pipeline's default, not StarParams'
+  EXPECT_EQ(q.star.grid_cols, 8);  // the pipeline's default, not StarParams'
   EXPECT_FALSE(q.star.subpixel);
   EXPECT_EQ(p.poses.max_extrapolation_s, 0.01);
   EXPECT_EQ(vision_error("vision: {homography: {confidence: 1}}").key(),
@@ -132,7 +132,7 @@ TEST(VisionParamsTest, EveryValidatedFieldIsSettableFromTheVehicleFile) {
 
 TEST(VisionParamsTest, WithoutAVisionSectionTheDefaultsApply) {
   const NodeParams p = load_node_params(ParamNode::from_string("autonomy: {}\n", "vehicle.yaml"));
-  EXPECT_EQ(p.pipeline.star.grid_rows, 3);
+  EXPECT_EQ(p.pipeline.star.grid_rows, 6);
   EXPECT_EQ(p.max_pose_wait_s, NodeParams{}.max_pose_wait_s);
 }
 
