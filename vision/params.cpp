@@ -436,7 +436,11 @@ const ParamSchema<PipelineParams>& PipelineParams::schema() {
         .check([](const P& p) { return p.max_reference_baseline_m > p.waypoint.min_baseline_m; },
                "must exceed waypoint.min_baseline_m");
     s.section("star", &P::star, StarParams::schema(),
-              "STAR / CenSurE detector (paper 3.1.1; Agrawal, Konolige & Blas 2008)");
+              "STAR / CenSurE detector (paper 3.1.1; Agrawal, Konolige & Blas 2008) of the "
+              "landing mission (the downward camera); ingress has its own, ingress_star");
+    s.section("ingress_star", &P::ingress_star, StarParams::schema(),
+              "the STAR detector of the ingress mission (the forward camera): the keys of star, "
+              "with a coarser grid and a smaller budget by default");
     s.section("surf", &P::surf, SurfParams::schema(),
               "upright SURF descriptor (Bay, Tuytelaars & Van Gool 2006)");
     s.section("tracker", &P::tracker, TrackerParams::schema(),

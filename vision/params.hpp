@@ -190,7 +190,8 @@ struct IngressParams {
 
 /// Everything the pipeline uses, one struct per stage.
 struct PipelineParams {
-  /// Features spread over an 8 x 6 grid, 900 in all: the floor keeps enough for its homography
+  /// The landing mission's detector (the downward camera). Features spread over an 8 x 6 grid,
+  /// 900 in all: the floor keeps enough for its homography
   /// when the platform top (richer texture) fills part of the view, and a top smoother than the
   /// floor keeps its share of a cell it shares with the floor (star_detector.hpp; issue 15:
   /// with 4 x 3 and 600 a photographed top over a printed circuit board kept 4-11 matches).
@@ -201,6 +202,16 @@ struct PipelineParams {
     s.grid_cols = 8;
     s.grid_rows = 6;
     s.max_features = 900;
+    return s;
+  }();
+  /// The ingress mission's detector (the forward camera): a 4 x 3 grid of 600. The wall needs
+  /// no share kept for a smoother surface in front of it, and the finer budget widened the
+  /// opening's width error on ingress_photo (README, issue 15).
+  StarParams ingress_star = [] {
+    StarParams s;
+    s.grid_cols = 4;
+    s.grid_rows = 3;
+    s.max_features = 600;
     return s;
   }();
   SurfParams surf{};

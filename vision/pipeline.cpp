@@ -50,7 +50,8 @@ FrameResult Pipeline::process(const cv::Mat& gray, int64_t utime,
   last_utime_ = utime;
 
   const cv::Mat integral = integral_image(gray);
-  auto kps = detect_star(gray, integral, params_.star);
+  auto kps = detect_star(gray, integral,
+                         mission_ == Mission::kIngress ? params_.ingress_star : params_.star);
   if (!kps) return fail(kps.reason());
   r.n_features = static_cast<int>(kps->size());
   for (const auto& k : *kps) r.features_px.emplace_back(k.x, k.y);

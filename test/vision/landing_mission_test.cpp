@@ -109,9 +109,9 @@ TEST(LandingMissionTest, ASmearedFrameIsNeitherMeasuredNorTheReference) {
   const Vector3d top =
       sim::build_scene(sim::load_scenario(root + "/config/scenarios/landing_a.yaml"), 3)
           .platform->top_center_W;
-  auto seq =
-      render_sequence("landing_a.yaml", 3, "downward", Vector3d(top.x() - 0.12, top.y() + 0.04, 1.7),
-                      Vector3d(0.04, -0.01, 0.0), Vector3d(0.01, -0.02, 0.2), 7);
+  auto seq = render_sequence("landing_a.yaml", 3, "downward",
+                             Vector3d(top.x() - 0.12, top.y() + 0.04, 1.7),
+                             Vector3d(0.04, -0.01, 0.0), Vector3d(0.01, -0.02, 0.2), 7);
   // Frames 0 (the first reference) and 3 pitch at 2 rad/s: 13 px at the image's centre over the
   // assumed 10 ms exposure. The images themselves are sharp: only the poses say so.
   for (const int i : {0, 3}) seq.frames[i].pose.omega_B = Vector3d(0, 2.0, 0);

@@ -100,6 +100,7 @@ TEST(VisionParamsTest, EveryValidatedFieldIsSettableFromTheVehicleFile) {
       "  tracker: {frame_threshold_px: 5, match: {ratio: 0.7, mutual: false}}\n"
       "  match: {mutual: false, same_sign_only: false}\n"
       "  star: {min_size: 3, line_threshold: 12, nms_radius_px: 3, subpixel: false}\n"
+      "  ingress_star: {grid_cols: 6, max_features: 700}\n"
       "  poses: {max_extrapolation_s: 0.01}\n",
       "vehicle.yaml"));
   const PipelineParams& q = p.pipeline;
@@ -120,6 +121,9 @@ TEST(VisionParamsTest, EveryValidatedFieldIsSettableFromTheVehicleFile) {
   EXPECT_EQ(q.star.min_size, 3);
   EXPECT_EQ(q.star.grid_cols, 8);  // the pipeline's default, not StarParams'
   EXPECT_FALSE(q.star.subpixel);
+  EXPECT_EQ(q.ingress_star.grid_cols, 6);
+  EXPECT_EQ(q.ingress_star.max_features, 700);
+  EXPECT_EQ(q.ingress_star.min_size, StarParams{}.min_size);  // star's keys are star's alone
   EXPECT_EQ(p.poses.max_extrapolation_s, 0.01);
   EXPECT_EQ(vision_error("vision: {homography: {confidence: 1}}").key(),
             "vision.homography.confidence");
@@ -133,6 +137,8 @@ TEST(VisionParamsTest, EveryValidatedFieldIsSettableFromTheVehicleFile) {
 TEST(VisionParamsTest, WithoutAVisionSectionTheDefaultsApply) {
   const NodeParams p = load_node_params(ParamNode::from_string("autonomy: {}\n", "vehicle.yaml"));
   EXPECT_EQ(p.pipeline.star.grid_rows, 6);
+  EXPECT_EQ(p.pipeline.ingress_star.grid_rows, 3);  // each mission's camera its own budget
+  EXPECT_EQ(p.pipeline.ingress_star.max_features, 600);
   EXPECT_EQ(p.max_pose_wait_s, NodeParams{}.max_pose_wait_s);
 }
 
