@@ -8,8 +8,13 @@
 
 namespace alight::autonomy::test {
 
-RealVision::RealVision(const std::string& vehicle_file, Mission mission) {
-  const auto params = vision::load_node_params(vehicle_file);
+RealVision::RealVision(const std::string& vehicle_file, Mission mission)
+    : RealVision(vehicle_file, mission, [](vision::PipelineParams&) {}) {}
+
+RealVision::RealVision(const std::string& vehicle_file, Mission mission,
+                       const std::function<void(vision::PipelineParams&)>& adjust) {
+  auto params = vision::load_node_params(vehicle_file);
+  adjust(params.pipeline);
   const auto rig =
       sim::load_camera_rig(vehicle_file, mission == Mission::kLanding ? "downward" : "forward");
   pipeline_ = std::make_unique<vision::Pipeline>(

@@ -4,6 +4,7 @@
 // node's message conversion (VISION_TARGET) and autonomy's. Used by the closed-loop tests with
 // real vision (test/integration) and the benches that fly them (bench/estimator).
 
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -14,7 +15,8 @@
 
 namespace alight::vision {
 class Pipeline;
-}
+struct PipelineParams;
+}  // namespace alight::vision
 
 namespace alight::autonomy::test {
 
@@ -22,6 +24,9 @@ class RealVision {
  public:
   /// The vehicle file's vision parameters and the mission's camera (downward for landing).
   RealVision(const std::string& vehicle_file, Mission mission);
+  /// ... with `adjust` applied to the vehicle file's pipeline parameters (a rule switched off).
+  RealVision(const std::string& vehicle_file, Mission mission,
+             const std::function<void(vision::PipelineParams&)>& adjust);
   ~RealVision();
   std::optional<TargetMeasurement> operator()(const sim::CameraFrame& f,
                                               const std::optional<PoseSample>& pose);
