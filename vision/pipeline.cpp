@@ -70,6 +70,7 @@ FrameResult Pipeline::process(const cv::Mat& gray, int64_t utime,
   if (max_blur_px > 0)
     frame.blur_px = floor_motion_blur_px(camera_, mount_, *pose, params_.landing.floor_z_m,
                                          exposure_s.value_or(params_.landing.assumed_exposure_s));
+  r.blur_px = frame.blur_px;
   const auto smeared = [&](const TrackedFrame& f) {
     return max_blur_px > 0 && f.blur_px > max_blur_px;
   };

@@ -56,6 +56,7 @@ struct FrameResult {
   double baseline_m = 0.0;  ///< camera translation reference -> current [m]
   int n_features = 0, n_matches = 0, n_tracked = 0;
   bool ref_held = false;  ///< the reference is the held one (landing.hold_reference)
+  double blur_px = 0.0;   ///< the floor's smear over the exposure (0: guard off; motion_blur.hpp)
   // For the diagnostic image:
   std::vector<Vector2d> features_px;  ///< all current features (raw pixels)
   std::vector<Vector2d> matched_px;   ///< matched current features (raw pixels)

@@ -20,7 +20,6 @@
 #include "sim/params.hpp"
 #include "sim/scene.hpp"
 #include "vision/convert.hpp"
-#include "vision/motion_blur.hpp"
 #include "vision/params.hpp"
 #include "vision/pipeline.hpp"
 
@@ -142,12 +141,10 @@ int main(int argc, char** argv) try {
           }
       std::printf(" on %d/%d", on_labelled, on);
     }
+    // The floor's smear over this frame's exposure [px], as the pipeline's guard saw it (0 with
+    // the guard off).
+    std::printf(" blur %.1f", r.blur_px);
     // The reference's baseline and age (the top's parallax falls with the baseline).
-    // The floor's smear over this frame's exposure from motion capture's rates [px].
-    std::printf(" blur %.1f",
-                pose ? vision::floor_motion_blur_px(rig.model, rig.mount, *pose,
-                                                    params.pipeline.landing.floor_z_m, f.exposure_s)
-                     : -1.0);
     std::printf(" b %.3f age %.2f tr %d%s", r.baseline_m,
                 r.ref_utime > 0 ? (f.utime - r.ref_utime) * 1e-6 : -1.0, r.n_tracked,
                 r.ref_held ? " held" : "");
