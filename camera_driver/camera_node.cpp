@@ -120,7 +120,7 @@ struct Publisher {
     if (encoding == OutputEncoding::kRgb8) msg.pixelformat = image_t::PIXEL_FORMAT_RGB;
     set_metadata_int(msg, "dropped", static_cast<int64_t>(dropped));
     set_metadata_int(msg, "skipped", static_cast<int64_t>(skipped));
-    if (exposure_us) set_metadata_int(msg, "exposure_us", *exposure_us);
+    if (exposure_us) set_exposure_metadata(msg, double(*exposure_us) * 1e-6);
     node.publish(channel, msg);
     ++published;
   }

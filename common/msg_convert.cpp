@@ -1,5 +1,6 @@
 #include "common/msg_convert.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <opencv2/imgcodecs.hpp>
@@ -332,6 +333,10 @@ void set_metadata_int(image_t& m, const std::string& key, int64_t value) {
   for (int i = 0; i < 8; ++i)
     e->value[i] = static_cast<uint8_t>((static_cast<uint64_t>(value) >> (8 * i)) & 0xff);
   e->n = 8;
+}
+
+void set_exposure_metadata(image_t& m, double exposure_s) {
+  set_metadata_int(m, "exposure_us", std::max<int64_t>(1, std::llround(exposure_s * 1e6)));
 }
 
 std::optional<int64_t> metadata_int(const image_t& m, const std::string& key) {

@@ -73,6 +73,9 @@ image_t image_to_msg(const cv::Mat& pixels, int64_t utime, int64_t seq = -1);
 image_t jpeg_image_to_msg(const cv::Mat& pixels, int64_t utime, int quality = 80);
 
 void set_metadata_int(image_t& msg, const std::string& key, int64_t value);
+/// The frame's exposure time [s] as "exposure_us" metadata (Image::exposure_s once decoded), in
+/// whole microseconds and at least 1: image_from_msg refuses a frame that says it had none.
+void set_exposure_metadata(image_t& msg, double exposure_s);
 std::optional<int64_t> metadata_int(const image_t& msg, const std::string& key);
 void set_metadata_string(image_t& msg, const std::string& key, const std::string& value);
 std::optional<std::string> metadata_string(const image_t& msg, const std::string& key);

@@ -1,6 +1,5 @@
 #include "sim/sim_msgs.hpp"
 
-#include <algorithm>
 #include <cmath>
 
 #include "common/msg_convert.hpp"
@@ -54,9 +53,7 @@ baro_t to_msg(const BaroSample& s) {
 
 image_t to_msg(const CameraFrame& frame) {
   image_t m = image_to_msg(frame.pixels, frame.utime, frame.seq);
-  // At least 1 us: the receiver refuses a frame that says it was not exposed at all.
-  set_metadata_int(m, "exposure_us",
-                   std::max<int64_t>(1, static_cast<int64_t>(frame.exposure_s * 1e6 + 0.5)));
+  set_exposure_metadata(m, frame.exposure_s);
   return m;
 }
 

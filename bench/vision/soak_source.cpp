@@ -85,8 +85,7 @@ int main(int argc, char** argv) {
     args.finalize();
 
     sim::Scenario scenario = sim::load_scenario(scenario_file);
-    const int64_t exposure_us =
-        std::max<int64_t>(1, std::llround(scenario.camera.exposure_s * 1e6));
+    const double exposure_s = scenario.camera.exposure_s;
     scenario.camera.rate_hz = rate_hz;
     const auto t_render = std::chrono::steady_clock::now();
     const Recorded rec = record_one_period(scenario, vehicle_file, seed, loop_s, rate_hz);
@@ -144,7 +143,7 @@ int main(int argc, char** argv) {
       if (late > 5'000) ++late_over_5ms;
       if (e.frame) {
         image_t msg = image_to_msg(rec.frames[e.index].second, wall0 + own_us, n_frames);
-        set_metadata_int(msg, "exposure_us", exposure_us);
+        set_exposure_metadata(msg, exposure_s);
         node.publish(channels::kCamera, msg);
         ++n_frames;
         lateness_us.push_back(late);

@@ -63,6 +63,11 @@ TEST(MsgConvertTest, ExposureMetadataIsReadAndCheckedAtTheBoundary) {
   ASSERT_TRUE(img) << err;
   ASSERT_TRUE(img->exposure_s);
   EXPECT_DOUBLE_EQ(*img->exposure_s, 0.008);
+  // The writers' helper: whole microseconds, never 0.
+  set_exposure_metadata(msg, 0.0123456);
+  EXPECT_EQ(metadata_int(msg, "exposure_us"), 12346);
+  set_exposure_metadata(msg, 1e-9);
+  EXPECT_DOUBLE_EQ(*image_from_msg(msg, true, &err)->exposure_s, 1e-6);
   for (const int64_t bad : {int64_t{0}, int64_t{-5}, kMaxExposureUs + 1, INT64_MIN}) {
     set_metadata_int(msg, "exposure_us", bad);
     err.clear();
