@@ -86,6 +86,13 @@ const ParamSchema<OuterLoopParams>& OuterLoopParams::schema() {
     s.add("land_max_descent_mps", &P::land_max_descent_mps, Range::open_closed(0, 2), "m/s",
           "a refused motors-off keeps descending at the speed autonomy last commanded, at most "
           "this (at least setpoint_lost_descent_mps)");
+    s.add("land_contact_cut", &P::land_contact_cut, Range::any(), "",
+          "beyond the land detector: a landing (a refused motors-off) that has descended and is "
+          "then held up by the ground cuts the thrust to thrust_min_N at once (PX4's "
+          "maybe-landed). Otherwise the thrust stays near hover until the detector's verdict, "
+          "the gear carries almost no weight and the wind slides the levelled vehicle across the "
+          "top. A contact that was not the ground ends itself: the vehicle falls, and faster than "
+          "land_vz_mps it is no longer held up");
     s.add("i_zone_m", &P::i_zone_m, Range::gt(0), "m",
           "integrate only while the error is smaller (no windup during large steps)");
     s.add("i_still_mps", &P::i_still_mps, Range::ge(0), "m/s",

@@ -54,6 +54,7 @@ struct OuterLoopParams {
   double land_vz_mps = 0.1;
   double land_accel_mps2 = 0.5;
   double land_max_descent_mps = 1.0;
+  bool land_contact_cut = false;
 
   double i_zone_m = 0.3;
   double i_still_mps = 0.1;

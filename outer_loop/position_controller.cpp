@@ -203,6 +203,9 @@ AttitudeCommand PositionController::land(const PoseSample& pose, int64_t now_uti
     landing_descent_mps_ =
         std::clamp(commanded_mps, P.setpoint_lost_descent_mps,
                    std::max(P.setpoint_lost_descent_mps, P.land_max_descent_mps));
+    // Autonomy was leading a descent: its motors-off is an arrival (at the impact, or once it saw
+    // the vehicle stopped on the ground).
+    landing_arrived_ = commanded_mps > P.land_vz_mps;
     // Its altitude setpoint led the vehicle down, so the thrust was below hover at the impact:
     // taking the pose's altitude instead would raise the thrust as the gear meets the top. The
     // lead kept is bounded by the one that already saturates the vertical demand.
@@ -212,6 +215,7 @@ AttitudeCommand PositionController::land(const PoseSample& pose, int64_t now_uti
           std::clamp(last_motors_on_->p_W.z(), pose.p_W_B.z() - lead_max_m, pose.p_W_B.z());
     }
   }
+  landing_arrived_ = landing_arrived_ || pose.v_W_B.z() < -P.land_vz_mps;
   const double t_s = std::max(0.0, age_s(*landing_since_, now_utime));
   Vector3d p_sp = landing_p_W_;
   p_sp.z() -= landing_descent_mps_ * t_s;
@@ -221,6 +225,10 @@ AttitudeCommand PositionController::land(const PoseSample& pose, int64_t now_uti
     // vehicle where it stands, and tilting against it only drags it across the top.
     c.roll_rad = 0.0;
     c.pitch_rad = 0.0;
+    // Arrived there descending: the gear carries the vehicle (maybe landed), so the thrust goes
+    // and the friction of its full weight holds it. A landing that began in a hover is first
+    // held up by nothing but its own start (the demand leads, the vehicle has not moved yet).
+    if (P.land_contact_cut && landing_arrived_) c.thrust_N = P.thrust_min_N;
   }
   c.mode = Mode::kSetpointLostDescent;
   c.reason = "motors off without KILL, not judged on the ground yet: landing";

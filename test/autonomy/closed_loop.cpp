@@ -297,17 +297,25 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
     }
     if (event) r.min_z_after_event_m = std::min(r.min_z_after_event_m, truth.state.p_W_B.z());
     const Phase ph = autonomy.phase();
-    if (trace && (truth.contact != sim::Contact::kNone || truth.tipped) &&
+    if (trace &&
+        (truth.contact != sim::Contact::kNone || truth.tipped || ph == Phase::kFinalDescent ||
+         (ph == Phase::kApproach && truth.platform &&
+          truth.state.p_W_B.z() - truth.platform->top_center_W.z() < 0.5)) &&
         truth.utime % 50000 == 0) {
       const Vector3d rpy = rpy_from_rotation(truth.state.q_WB.toRotationMatrix());
       std::fprintf(stderr,
                    "%.3f %s p %.3f %.3f %.3f v %.2f %.2f %.2f rpy %.1f %.1f %.1f thr %.2f contact "
-                   "%d armed %d tipped %d\n",
+                   "%d armed %d tipped %d wind %.2f %.2f",
                    (now - t0) * 1e-6, phase_name(ph), truth.state.p_W_B.x(), truth.state.p_W_B.y(),
                    truth.state.p_W_B.z(), truth.state.v_W_B.x(), truth.state.v_W_B.y(),
                    truth.state.v_W_B.z(), rpy.x() * 57.3, rpy.y() * 57.3, rpy.z() * 57.3,
                    truth.state.thrust_N, static_cast<int>(truth.contact), truth.state.armed,
-                   truth.tipped);
+                   truth.tipped, truth.wind_W.x(), truth.wind_W.y());
+      if (truth.platform)  // the lateral offset from the top's centre [cm]
+        std::fprintf(
+            stderr, " e %.2f cm",
+            100 * (truth.state.p_W_B.head<2>() - truth.platform->top_center_W.head<2>()).norm());
+      std::fprintf(stderr, "\n");
     }
     if (onboard && (truth.platform || truth.opening) && ph == Phase::kApproach && !approach_seen) {
       approach_seen = true;

@@ -4,8 +4,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
+#include <vector>
 
 #include "lag_model.hpp"
 
@@ -484,6 +486,86 @@ TEST(PositionControllerTest, InGroundContactARefusedMotorsOffLandsLevel) {
   EXPECT_TRUE(tilted_in_the_air);
   EXPECT_TRUE(level_on_the_ground);
   EXPECT_FALSE(cmd.armed);  // and the land detector still disarms it
+  EXPECT_NEAR(model.p.z(), 0.0, 1e-9);
+}
+
+// A led descent (as autonomy's final descent) meets the ground and autonomy's motors-off comes
+// at the impact; returns the thrust commanded over the landing, 10 ms apart, up to the disarm.
+std::vector<double> thrust_over_an_arrival(const OuterLoopParams& p) {
+  PositionController c(p);
+  test::LagModel model;
+  model.hover_at({0, 0, 0.3});
+  int64_t t = kT0;
+  fly(c, model, setpoint_at({0, 0, 0.3}, 0, t), t, 1.0);
+  auto sp = setpoint_at({0, 0, 0.3}, 0, t);
+  sp.v_W = Vector3d(0, 0, -0.5);
+  while (model.p.z() > 0.0) {  // the led descent, until the gear meets the ground
+    sp.utime = t;
+    sp.p_W.z() -= 0.5 * 0.01;
+    const auto cmd = c.update(sp, model.pose(t), t);
+    for (int k = 0; k < 10; ++k) model.step(cmd, 0.001);
+    t += 10 * kMs;
+    EXPECT_LT(t, kT0 + 5'000'000 * kMs) << "never reached the ground";
+    if (t > kT0 + 5'000'000 * kMs) return {};
+  }
+  auto off = sp;
+  off.motors_on = false;
+  off.v_W.setZero();
+  std::vector<double> thrust_N;
+  for (int i = 0; i < 200; ++i, t += 10 * kMs) {
+    off.utime = t;
+    const auto cmd = c.update(off, model.pose(t), t);
+    if (!cmd.armed) break;
+    thrust_N.push_back(cmd.thrust_N);
+    for (int k = 0; k < 10; ++k) model.step(cmd, 0.001);
+  }
+  return thrust_N;
+}
+
+TEST(PositionControllerTest, ALandingThatArrivesOnTheGroundCutsTheThrustAtOnce) {
+  // With land_contact_cut the thrust goes to its minimum as soon as the ground holds the vehicle
+  // up (a few cycles after the impact), long before the land detector's verdict disarms it;
+  // without, it stays on the position loop's demand (well above the minimum) until then.
+  auto p = params();
+  p.land_contact_cut = true;
+  const auto cut = thrust_over_an_arrival(p);
+  ASSERT_GE(cut.size(), 20u);  // still armed for land_detect_s
+  const auto first_min = std::find(cut.begin(), cut.end(), p.thrust_min_N);
+  ASSERT_NE(first_min, cut.end());
+  EXPECT_LE(first_min - cut.begin(), 10);  // within 0.1 s of the motors-off
+  EXPECT_TRUE(std::all_of(first_min, cut.end(), [&](double f) { return f == p.thrust_min_N; }));
+
+  p.land_contact_cut = false;
+  const auto kept = thrust_over_an_arrival(p);
+  ASSERT_GE(kept.size(), 20u);
+  EXPECT_GT(*std::min_element(kept.begin(), kept.end()), 4 * p.thrust_min_N);
+}
+
+TEST(PositionControllerTest, ALandingFromAHoverIsNotCutAtItsStart) {
+  // A refused motors-off in a hover: the demand leads down before the vehicle moves, so it looks
+  // held up for a moment; cutting there would drop it. Only the ground at the end cuts.
+  auto p = params();
+  p.land_contact_cut = true;
+  PositionController c(p);
+  test::LagModel model;
+  model.hover_at({0, 0, 0.5});
+  int64_t t = kT0;
+  fly(c, model, setpoint_at({0, 0, 0.5}, 0, t), t, 1.0);
+  auto off = setpoint_at({0, 0, 0.5}, 0, t);
+  off.motors_on = false;
+  bool cut_in_the_air = false, cut_on_the_ground = false;
+  AttitudeCommand cmd;
+  for (int i = 0; i < 1000; ++i, t += 10 * kMs) {
+    off.utime = t;
+    cmd = c.update(off, model.pose(t), t);
+    if (!cmd.armed) break;
+    if (cmd.thrust_N == p.thrust_min_N)
+      (model.p.z() > 0.0 ? cut_in_the_air : cut_on_the_ground) = true;
+    for (int k = 0; k < 10; ++k) model.step(cmd, 0.001);
+  }
+  EXPECT_FALSE(cut_in_the_air);
+  EXPECT_TRUE(cut_on_the_ground);
+  EXPECT_FALSE(cmd.armed);
   EXPECT_NEAR(model.p.z(), 0.0, 1e-9);
 }
 
