@@ -624,8 +624,8 @@ void Autonomy::step(phases::Approach& a, const Vector3d& p, double dt_s) {
       if (!next.reason.empty()) reason_ = std::move(next.reason);
       return;
     case ApproachStep::Next::kFinalDescent: {
-      phases::FinalDescent f{std::get<LandingApproach>(a.how).z_sp_m,
-                             TouchdownDetector(params_.landing)};
+      const auto& l = std::get<LandingApproach>(a.how);
+      phases::FinalDescent f{l.z_sp_m, TouchdownDetector(params_.landing), !l.land_here, {}, {}};
       f.touchdown.arm(now_utime_);
       enter(std::move(f), std::move(next.reason));
       return;
@@ -643,7 +643,17 @@ void Autonomy::step(phases::FinalDescent& s, const Vector3d& /*p*/, double dt_s)
   const auto& L = params_.landing;
   const double z_touch = estimate_W_.z() + L.gear_height_m;
   const double z_floor = z_touch - L.final_depth_m;
-  if (s.z_sp_m > z_floor) {
+  const FinalPause pause = pause_final_descent(s, z_touch);
+  if (pause == FinalPause::kGaveUp) {  // leaves the phase: s is gone after this
+    target_lost("final descent paused " + fmt(L.final_hold_timeout_s, 0) +
+                " s without a calm moment (e_r within " +
+                fmt(std::min(L.radial_tol_m, L.final_hold_radial_m), 3) + " m, speed within " +
+                fmt(L.final_hold_speed_mps, 2) + " m/s)");
+    return;
+  }
+  if (pause == FinalPause::kPaused) {
+    sp_v_W_.z() = 0.0;  // s.z_sp_m was set where the pause began
+  } else if (s.z_sp_m > z_floor) {
     s.z_sp_m = std::max(z_floor, s.z_sp_m - L.final_descent_rate_mps * dt_s);
     sp_v_W_.z() = -L.final_descent_rate_mps;
   }
@@ -654,6 +664,39 @@ void Autonomy::step(phases::FinalDescent& s, const Vector3d& /*p*/, double dt_s)
     end_utime_ = now_utime_;
     enter(phases::Landed{}, std::string("touch-down (") + s.touchdown.cue() + "): motors off");
   }
+}
+
+Autonomy::FinalPause Autonomy::pause_final_descent(phases::FinalDescent& s, double z_touch_m) {
+  const auto& L = params_.landing;
+  // Only on a fresh pose and a sound estimate: otherwise finishing the descent is the safe end
+  // (react_to_estimate leaves the final descent alone for that reason), not hovering on it.
+  const auto e = estimate_condition();
+  if (!s.may_pause || L.final_pause_radial_m <= 0 || !pose_fresh() ||
+      (e && e->level != EstimateHealth::Level::kOk)) {
+    s.paused_since_utime.reset();
+    return FinalPause::kNone;
+  }
+  const double e_r = (pose_->p_W_B.head<2>() - estimate_W_.head<2>()).norm();
+  if (!s.paused_since_utime) {
+    if (e_r <= L.final_pause_radial_m || pose_->p_W_B.z() - z_touch_m <= L.final_pause_min_height_m)
+      return FinalPause::kNone;
+    s.paused_since_utime = now_utime_;
+    s.calm_since_utime.reset();
+    // Stopped where the vehicle is, not below it where the setpoint led: the altitude loop still
+    // overshoots by its lag (about 15 cm from 0.5 m/s on the vehicle files' gains), hence
+    // final_pause_min_height_m.
+    s.z_sp_m = std::max(s.z_sp_m, pose_->p_W_B.z());
+  }
+  if (calm_for_final_descent(L, e_r, pose_, seconds(now_utime_ - *s.paused_since_utime), now_utime_,
+                             s.calm_since_utime)) {
+    s.paused_since_utime.reset();
+    reason_ = "final descent resumed: calm again";
+    return FinalPause::kNone;
+  }
+  if (seconds(now_utime_ - *s.paused_since_utime) > L.final_hold_timeout_s)
+    return FinalPause::kGaveUp;
+  reason_ = "final descent paused: carried " + fmt(e_r, 3) + " m off, waiting for calm";
+  return FinalPause::kPaused;
 }
 
 void Autonomy::step(phases::FailsafeDescent& s, const Vector3d& /*p*/, double /*dt_s*/) {

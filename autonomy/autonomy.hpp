@@ -92,7 +92,10 @@ struct Approach {
 };
 struct FinalDescent {
   double z_sp_m = 0.0;
-  TouchdownDetector touchdown;  ///< armed on entry
+  TouchdownDetector touchdown;                ///< armed on entry
+  bool may_pause = false;                     ///< onto a target (not the operator's LAND_HERE)
+  std::optional<int64_t> paused_since_utime;  ///< a gust carried the vehicle off: stopped since
+  std::optional<int64_t> calm_since_utime;    ///< ... and calm again since
 };
 struct Landed {};
 struct Done {
@@ -185,6 +188,10 @@ class Autonomy {
   void step(phases::Refinement& s, const Vector3d& p, double dt_s);
   void step(phases::Approach& s, const Vector3d& p, double dt_s);
   void step(phases::FinalDescent& s, const Vector3d& p, double dt_s);
+  /// The final descent stopped by a gust (final_pause_radial_m) until calm again, or given up
+  /// after final_hold_timeout_s.
+  enum class FinalPause { kNone, kPaused, kGaveUp };
+  FinalPause pause_final_descent(phases::FinalDescent& s, double z_touch_m);
   void step(phases::FailsafeDescent& s, const Vector3d& p, double dt_s);
   void start_detection(const std::string& reason);
   void start_refinement(const TargetMeasurement& m);

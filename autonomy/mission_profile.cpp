@@ -131,14 +131,8 @@ class LandingProfile final : public MissionProfile {
     const auto& L = p_.landing;
     if (L.final_hold_speed_mps <= 0 || a.land_here) return true;
     if (!a.held_since_utime) a.held_since_utime = in.now_utime;
-    const bool calm = in.pose && e_r <= std::min(L.radial_tol_m, L.final_hold_radial_m) &&
-                      in.pose->v_W_B.head<2>().norm() <= L.final_hold_speed_mps;
-    if (!calm) {
-      a.calm_since_utime.reset();
-      return false;
-    }
-    if (!a.calm_since_utime) a.calm_since_utime = in.now_utime;
-    return seconds(in.now_utime - *a.calm_since_utime) >= L.final_hold_settle_s;
+    return calm_for_final_descent(L, e_r, in.pose, seconds(in.now_utime - *a.held_since_utime),
+                                  in.now_utime, a.calm_since_utime);
   }
 
  private:
@@ -241,6 +235,23 @@ class IngressProfile final : public MissionProfile {
 };
 
 }  // namespace
+
+bool calm_for_final_descent(const LandingParams& L, double e_r,
+                            const std::optional<PoseSample>& pose, double held_s, int64_t now_utime,
+                            std::optional<int64_t>& calm_since_utime) {
+  const double relaxed = std::clamp(held_s / (0.5 * L.final_hold_timeout_s), 0.0, 1.0);
+  const double speed_mps =
+      L.final_hold_speed_mps +
+      std::max(0.0, L.final_hold_speed_max_mps - L.final_hold_speed_mps) * relaxed;
+  const bool calm = pose && e_r <= std::min(L.radial_tol_m, L.final_hold_radial_m) &&
+                    pose->v_W_B.head<2>().norm() <= speed_mps;
+  if (!calm) {
+    calm_since_utime.reset();
+    return false;
+  }
+  if (!calm_since_utime) calm_since_utime = now_utime;
+  return seconds(now_utime - *calm_since_utime) >= L.final_hold_settle_s;
+}
 
 std::unique_ptr<const MissionProfile> MissionProfile::make(Mission mission,
                                                            const AutonomyParams& params) {

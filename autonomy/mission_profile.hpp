@@ -45,6 +45,16 @@ struct LandingApproach {
   }
 };
 
+/// The final hold's calm moment (beyond the paper, issue 15): e_r within radial_tol_m and
+/// final_hold_radial_m, and the horizontal speed within its bound, for final_hold_settle_s. The
+/// bound is final_hold_speed_mps at first and grows to final_hold_speed_max_mps over half of
+/// final_hold_timeout_s of waiting (held_s): a still moment is worth waiting for, but in steady
+/// fast gusts the vehicle is rarely both centred and still. calm_since_utime is the window's own
+/// state; true once it has lasted.
+bool calm_for_final_descent(const LandingParams& L, double e_r,
+                            const std::optional<PoseSample>& pose, double held_s, int64_t now_utime,
+                            std::optional<int64_t>& calm_since_utime);
+
 /// The ingress approach's own state: aligning at the standoff, then through the opening.
 struct IngressApproach {
   Vector3d n_W = Vector3d(-1, 0, 0);  ///< horizontal normal of the opening, towards the vehicle

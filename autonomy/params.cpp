@@ -157,6 +157,16 @@ const ParamSchema<LandingParams>& LandingParams::schema() {
           "final_hold_radial_m for final_hold_settle_s (a gust that pushes the vehicle now carries "
           "it off the centre "
           "during the half second of the rapid descent); 0: never held (the paper)");
+    s.add("final_hold_speed_max_mps", &P::final_hold_speed_max_mps, Range::ge(0), "m/s",
+          "... the speed bound grows from final_hold_speed_mps to this over half of "
+          "final_hold_timeout_s of waiting (a still moment is worth some wait, but in fast gusts "
+          "the vehicle is rarely both centred and still); 0: it never grows")
+        .check(
+            [](const P& p) {
+              return p.final_hold_speed_max_mps == 0 ||
+                     p.final_hold_speed_max_mps >= p.final_hold_speed_mps;
+            },
+            "must be 0 or at least final_hold_speed_mps");
     s.add("final_hold_radial_m", &P::final_hold_radial_m, Range::gt(0), "m",
           "... and e_r within this (and within radial_tol_m): the rapid descent starts nearer "
           "the centre than the slow one needs");
@@ -164,6 +174,23 @@ const ParamSchema<LandingParams>& LandingParams::schema() {
           "... both within for this long");
     s.add("final_hold_timeout_s", &P::final_hold_timeout_s, Range::gt(0), "s",
           "held this long without a calm moment: target lost (detection retry, then hold)");
+    s.add("final_pause_radial_m", &P::final_pause_radial_m, Range::ge(0), "m",
+          "beyond the paper (as ArduPilot's PLND_XY_DIST_MAX): a gust that carries the vehicle "
+          "more than this off the estimate during the final descent, with the gear still more "
+          "than final_pause_min_height_m above the platform, stops the descent there until the "
+          "final hold's calm moment comes again (final_hold_timeout_s without one: target lost); "
+          "0: never paused")
+        .check(
+            [](const P& p) {
+              return p.final_pause_radial_m == 0 ||
+                     (p.final_hold_speed_mps > 0 && p.final_pause_radial_m > p.final_hold_radial_m);
+            },
+            "needs the final hold (final_hold_speed_mps > 0) and must exceed final_hold_radial_m");
+    s.add("final_pause_min_height_m", &P::final_pause_min_height_m, Range::ge(0), "m",
+          "... and only with the gear higher above the platform than this: lower, the descent is "
+          "committed (the altitude loop's stop from final_descent_rate_mps would end on the top)")
+        .check([](const P& p) { return p.final_pause_min_height_m < p.final_height_m; },
+               "must be below final_height_m");
     s.add("precise_final", &P::precise_final, Range::any(), "",
           "beyond the paper: from the final hold (final_height_m above the platform) through the "
           "final descent the setpoints are marked precise (position_setpoint_t.MODE_PRECISE): "

@@ -81,10 +81,13 @@ struct LandingParams {
   double lost_timeout_s = 3.0;
   double lost_check_height_m = 0.6;
   double align_yaw_tol_deg = 3.0;
-  double final_hold_speed_mps = 0.0;  // 0: the final descent is never held
+  double final_hold_speed_mps = 0.0;      // 0: the final descent is never held
+  double final_hold_speed_max_mps = 0.0;  // 0: the bound never grows
   double final_hold_radial_m = 0.01;
   double final_hold_settle_s = 0.2;
   double final_hold_timeout_s = 10.0;
+  double final_pause_radial_m = 0.0;  // 0: the final descent never pauses
+  double final_pause_min_height_m = 0.1;
   bool precise_final = false;
   static const ParamSchema<LandingParams>& schema();
   void validate() const;

@@ -100,6 +100,33 @@ TEST(FinalHoldTest, NoCalmMomentWithinTheTimeoutIsATargetLost) {
   EXPECT_NE(s.reason.find("final descent held"), std::string::npos) << s.reason;
 }
 
+TEST(FinalHoldTest, TheSpeedBoundGrowsWhileTheHoldWaits) {
+  // 0.02 m/s at first, 0.05 m/s after half the 5 s timeout: a vehicle centred but never slower
+  // than 0.04 m/s descends once the bound passes 0.04 m/s, 2.5 s x (0.04 - 0.02) / 0.03 = 1.67 s
+  // into the hold, plus the settle time; never before.
+  AutonomyParams p = with_hold();
+  p.landing.final_hold_speed_mps = 0.02;
+  p.landing.final_hold_speed_max_mps = 0.05;
+  Approach a(p);
+  int steps = 0;
+  ApproachStep s;
+  do {
+    s = a.step(Vector2d(0.002, 0.0), Vector2d(0.04, 0.0));
+    ++steps;
+  } while (s.next == ApproachStep::Next::kContinue && steps < 1000);
+  EXPECT_EQ(s.next, ApproachStep::Next::kFinalDescent);
+  EXPECT_NEAR(steps * 0.01, 2.5 * 2.0 / 3.0 + p.landing.final_hold_settle_s, 0.03);
+  // Without the growth the same vehicle waits out the timeout: a target lost.
+  p.landing.final_hold_speed_max_mps = 0.0;
+  Approach b(p);
+  steps = 0;
+  do {
+    s = b.step(Vector2d(0.002, 0.0), Vector2d(0.04, 0.0));
+    ++steps;
+  } while (s.next == ApproachStep::Next::kContinue && steps < 1000);
+  EXPECT_EQ(s.next, ApproachStep::Next::kTargetLost);
+}
+
 TEST(FinalHoldTest, OffByDefaultThePapersImmediateFinalDescent) {
   AutonomyParams p = with_hold();
   p.landing.final_hold_speed_mps = 0.0;
@@ -115,6 +142,94 @@ TEST(FinalHoldTest, ALandingMissionWithTheHoldLands) {
   ASSERT_TRUE(w.run_until_phase(Phase::kApproach, 120)) << w.out.status.reason;
   ASSERT_TRUE(w.run_until_phase(Phase::kLanded, 60)) << w.out.status.reason;
   EXPECT_LT((w.p - w.truth.platform_center_W).head<2>().norm(), 0.05);
+}
+
+// The final descent's pause (final_pause_radial_m): a gust that carries the vehicle off during
+// the descent stops it there until the hold's calm moment comes again.
+AutonomyParams with_pause() {
+  AutonomyParams p = with_hold();
+  p.landing.final_descent_rate_mps = 0.5;
+  p.landing.final_pause_radial_m = 0.012;
+  p.landing.final_pause_min_height_m = 0.1;
+  p.landing.final_hold_timeout_s = 2.0;
+  return p;
+}
+
+// Flies a landing into its final descent until the gear is `above_m` over the estimate.
+void descend_to(test::KinematicWorld& w, double above_m) {
+  w.takeoff_and_hover();
+  w.send(Command::kGo, Mission::kLanding);
+  ASSERT_TRUE(w.run_until_phase(Phase::kFinalDescent, 150)) << w.out.status.reason;
+  const auto gear_above = [&] {
+    return w.p.z() - (w.autonomy.final_estimate().z() + w.autonomy.params().landing.gear_height_m);
+  };
+  ASSERT_TRUE(w.run_until([&] { return gear_above() < above_m; }, 5)) << w.out.status.reason;
+  ASSERT_EQ(w.autonomy.phase(), Phase::kFinalDescent);
+}
+
+TEST(FinalDescentPauseTest, AGustHighInTheDescentStopsItUntilCalmThenItLands) {
+  test::KinematicWorld w(with_pause());
+  descend_to(w, 0.2);
+  w.p.x() += 0.03;  // the gust
+  w.step();
+  EXPECT_EQ(w.autonomy.phase(), Phase::kFinalDescent);
+  EXPECT_NE(w.out.status.reason.find("final descent paused"), std::string::npos)
+      << w.out.status.reason;
+  EXPECT_EQ(w.out.setpoint.v_W.z(), 0.0);
+  // Stopped: the setpoint stays while the vehicle returns over the estimate and settles.
+  const double z_stop = w.out.setpoint.p_W.z();
+  int paused_steps = 0;
+  while (w.out.status.reason.find("final descent paused") != std::string::npos &&
+         paused_steps < 500) {
+    EXPECT_NEAR(w.out.setpoint.p_W.z(), z_stop, 1e-9);
+    w.step();
+    ++paused_steps;
+  }
+  // The calm moment takes final_hold_settle_s (20 steps) after e_r and the speed are within.
+  EXPECT_GE(paused_steps, 20);
+  EXPECT_LT(paused_steps, 200);
+  EXPECT_EQ(w.autonomy.phase(), Phase::kFinalDescent);
+  ASSERT_TRUE(w.run_until_phase(Phase::kLanded, 5)) << w.out.status.reason;
+  EXPECT_EQ(w.autonomy.retries(), 0);
+  EXPECT_LT((w.p - w.truth.platform_center_W).head<2>().norm(), 0.01);
+}
+
+TEST(FinalDescentPauseTest, BelowTheMinimumHeightTheDescentIsCommitted) {
+  test::KinematicWorld w(with_pause());
+  descend_to(w, 0.08);
+  w.p.x() += 0.03;
+  w.step();
+  EXPECT_EQ(w.out.status.reason.find("paused"), std::string::npos) << w.out.status.reason;
+  EXPECT_LT(w.out.setpoint.v_W.z(), 0.0);
+  ASSERT_TRUE(w.run_until_phase(Phase::kLanded, 2)) << w.out.status.reason;
+}
+
+TEST(FinalDescentPauseTest, NoCalmMomentWithinTheTimeoutIsATargetLost) {
+  test::KinematicWorld w(with_pause());
+  descend_to(w, 0.2);
+  const double x_off = w.autonomy.final_estimate().x() + 0.03;
+  ASSERT_TRUE(w.run_until(
+      [&] {
+        w.p.x() = x_off;  // a wind that never lets up
+        return w.autonomy.phase() != Phase::kFinalDescent;
+      },
+      w.autonomy.params().landing.final_hold_timeout_s + 0.5));
+  EXPECT_EQ(w.autonomy.phase(), Phase::kDetection);
+  EXPECT_EQ(w.autonomy.retries(), 1);
+  EXPECT_NE(w.out.status.reason.find("final descent paused"), std::string::npos)
+      << w.out.status.reason;
+  EXPECT_TRUE(w.out.setpoint.motors_on);
+}
+
+TEST(FinalDescentPauseTest, OffTheDescentIsNeverPaused) {
+  AutonomyParams p = with_pause();
+  p.landing.final_pause_radial_m = 0.0;
+  test::KinematicWorld w(p);
+  descend_to(w, 0.2);
+  w.p.x() += 0.03;
+  w.step();
+  EXPECT_LT(w.out.setpoint.v_W.z(), 0.0);
+  EXPECT_EQ(AutonomyParams{}.landing.final_pause_radial_m, 0.0);
 }
 
 }  // namespace

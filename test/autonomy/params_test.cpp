@@ -52,6 +52,34 @@ TEST(AutonomyParamsTest, ErrorsNameTheNestedKey) {
                ParamError);
 }
 
+TEST(AutonomyParamsTest, TheFinalHoldAndPauseAreCheckedAtTheirFullKeys) {
+  const auto expect_refused = [](const std::string& landing, const std::string& key) {
+    try {
+      load_params(ParamNode::from_string("autonomy: {landing: {" + landing + "}}", "v.yaml"));
+      ADD_FAILURE() << landing;
+    } catch (const ParamError& e) {
+      EXPECT_EQ(e.key(), key) << e.what();
+      EXPECT_EQ(e.file(), "v.yaml");
+    }
+  };
+  // A pause waits for the hold's calm moment: without the hold there is none to wait for.
+  expect_refused("final_pause_radial_m: 0.012", "autonomy.landing.final_pause_radial_m");
+  // Within the calm radius the pause would end as it began.
+  expect_refused(
+      "final_hold_speed_mps: 0.02, final_hold_radial_m: 0.01, final_pause_radial_m: 0.008",
+      "autonomy.landing.final_pause_radial_m");
+  expect_refused("final_pause_min_height_m: 0.3", "autonomy.landing.final_pause_min_height_m");
+  // The hold's speed bound grows, never shrinks.
+  expect_refused("final_hold_speed_mps: 0.05, final_hold_speed_max_mps: 0.02",
+                 "autonomy.landing.final_hold_speed_max_mps");
+  const auto p = load_params(ParamNode::from_string(
+      "autonomy: {landing: {final_hold_speed_mps: 0.02, final_pause_radial_m: 0.012, "
+      "final_pause_min_height_m: 0.1}}",
+      "v.yaml"));
+  EXPECT_DOUBLE_EQ(p.landing.final_pause_radial_m, 0.012);
+  EXPECT_DOUBLE_EQ(p.landing.final_pause_min_height_m, 0.1);
+}
+
 TEST(AutonomyParamsTest, UnsignedCommandsAreRefusedByDefault) {
   const auto p = load_params(ParamNode::from_string("autonomy: {}", "v.yaml"));
   EXPECT_FALSE(p.accept_unsigned_commands);
