@@ -40,6 +40,13 @@ PositionSetpoint setpoint_at(const Vector3d& p, double yaw, int64_t utime) {
   return sp;
 }
 
+// A motors-off setpoint (without KILL) at p.
+PositionSetpoint motors_off_at(const Vector3d& p, int64_t t) {
+  auto off = setpoint_at(p, 0, t);
+  off.motors_on = false;
+  return off;
+}
+
 TEST(PositionControllerTest, AtTheSetpointCommandsLevelHoverThrust) {
   PositionController c(params());
   const auto cmd = c.update(setpoint_at({1, 2, 1}, 0.3, kT0), pose_at({1, 2, 1}, 0.3, kT0), kT0);
@@ -212,8 +219,7 @@ TEST(PositionControllerTest, LostPoseDescendsSlowlyOpenLoopThenDisarmsAndLatches
   // Pose back and a motors-on setpoint: stays disarmed until autonomy acknowledges with motors off.
   cmd = c.update(setpoint_at({0, 0, 3}, 0, t), model.pose(t), t);
   EXPECT_FALSE(cmd.armed);
-  auto off = setpoint_at({0, 0, 0}, 0, t);
-  off.motors_on = false;
+  auto off = motors_off_at({0, 0, 0}, t);
   c.update(off, model.pose(t), t);
   cmd = c.update(setpoint_at({0, 0, 1}, 0, t), model.pose(t), t);
   EXPECT_TRUE(cmd.armed);
@@ -291,6 +297,14 @@ AttitudeCommand fly(PositionController& c, test::LagModel& model, PositionSetpoi
   return cmd;
 }
 
+// Hovers the model at p0 for a second on a setpoint there; returns the time it is then.
+int64_t hover_for_a_second(PositionController& c, test::LagModel& model, const Vector3d& p0) {
+  model.hover_at(p0);
+  int64_t t = kT0;
+  fly(c, model, setpoint_at(p0, 0, t), t, 1.0);
+  return t;
+}
+
 bool finite(const AttitudeCommand& c) {
   return std::isfinite(c.roll_rad) && std::isfinite(c.pitch_rad) &&
          std::isfinite(c.yaw_rate_radps) && std::isfinite(c.thrust_N);
@@ -300,9 +314,7 @@ TEST(OuterLoopRegression, NanPoseNeverReachesThrust) {
   // Given a vehicle hovering under control
   PositionController c(params());
   test::LagModel model;
-  model.hover_at({0, 0, 1});
-  int64_t t = kT0;
-  fly(c, model, setpoint_at({0, 0, 1}, 0, t), t, 1.0);
+  int64_t t = hover_for_a_second(c, model, {0, 0, 1});
   // When one pose has a NaN position, one a NaN velocity and one a NaN quaternion
   for (int field = 0; field < 3; ++field) {
     auto bad = model.pose(t);
@@ -326,9 +338,7 @@ TEST(OuterLoopRegression, NanPoseNeverReachesThrust) {
 TEST(OuterLoopRegression, NanSetpointNeverReachesThrust) {
   PositionController c(params());
   test::LagModel model;
-  model.hover_at({0, 0, 1});
-  int64_t t = kT0;
-  fly(c, model, setpoint_at({0, 0, 1}, 0, t), t, 1.0);
+  int64_t t = hover_for_a_second(c, model, {0, 0, 1});
   auto bad = setpoint_at({0, 0, std::numeric_limits<double>::infinity()}, 0, t);
   bad.v_W.x() = std::nan("");
   bad.yaw_rad = std::nan("");
@@ -346,12 +356,9 @@ TEST(OuterLoopRegression, MotorsOffWithoutKillLandsInsteadOfDisarmingInTheAir) {
   auto p = params();
   PositionController c(p);
   test::LagModel model;
-  model.hover_at({0.3, 0.2, 1.5});
-  int64_t t = kT0;
-  fly(c, model, setpoint_at({0.3, 0.2, 1.5}, 0, t), t, 1.0);
+  int64_t t = hover_for_a_second(c, model, {0.3, 0.2, 1.5});
   // When motors off arrives without KILL
-  auto off = setpoint_at({0, 0, 0}, 0, t);
-  off.motors_on = false;
+  auto off = motors_off_at({0, 0, 0}, t);
   AttitudeCommand cmd;
   double lowest_armed_m = 10;
   bool disarmed_in_air = false;
@@ -373,9 +380,7 @@ TEST(OuterLoopRegression, MotorsOffWithoutKillLandsInsteadOfDisarmingInTheAir) {
 TEST(OuterLoopRegression, KillDisarmsAtOnceInTheAir) {
   PositionController c(params());
   test::LagModel model;
-  model.hover_at({0, 0, 1.5});
-  int64_t t = kT0;
-  fly(c, model, setpoint_at({0, 0, 1.5}, 0, t), t, 1.0);
+  int64_t t = hover_for_a_second(c, model, {0, 0, 1.5});
   auto kill = setpoint_at({0, 0, 1.5}, 0, t);
   kill.motors_on = false;
   kill.kill = true;
@@ -392,8 +397,7 @@ TEST(PositionControllerTest, MotorsOffAfterATouchDownDisarmsWithinASecond) {
   int64_t t = kT0;
   fly(c, model, setpoint_at({0, 0, -0.3}, 0, t), t, 1.5);
   ASSERT_NEAR(model.p.z(), 0.0, 1e-9);
-  auto off = setpoint_at({0, 0, -0.3}, 0, t);
-  off.motors_on = false;
+  auto off = motors_off_at({0, 0, -0.3}, t);
   const int64_t t_off = t;
   AttitudeCommand cmd;
   for (; t < t_off + 2'000 * kMs; t += 10 * kMs) {
@@ -413,9 +417,7 @@ TEST(OuterLoopRegression, MotorsOffAtTheImpactDoesNotBrakeTheDescent) {
   // the vehicle bounced off the platform and came to rest centimetres away.
   PositionController c(params());
   test::LagModel model;
-  model.hover_at({0, 0, 1.0});
-  int64_t t = kT0;
-  fly(c, model, setpoint_at({0, 0, 1.0}, 0, t), t, 1.0);
+  int64_t t = hover_for_a_second(c, model, {0, 0, 1.0});
   auto sp = setpoint_at({0, 0, 1.0}, 0, t);
   sp.v_W = Vector3d(0, 0, -1.0);
   AttitudeCommand cmd;
@@ -448,11 +450,8 @@ TEST(PositionControllerTest, AMotorsOffInAHoverStillDescendsSlowly) {
   auto p = params();
   PositionController c(p);
   test::LagModel model;
-  model.hover_at({0, 0, 2.0});
-  int64_t t = kT0;
-  fly(c, model, setpoint_at({0, 0, 2.0}, 0, t), t, 1.0);
-  auto off = setpoint_at({0, 0, 2.0}, 0, t);
-  off.motors_on = false;
+  int64_t t = hover_for_a_second(c, model, {0, 0, 2.0});
+  auto off = motors_off_at({0, 0, 2.0}, t);
   fly(c, model, off, t, 2.0);
   EXPECT_NEAR(model.v.z(), -p.setpoint_lost_descent_mps, 0.05);
 }
@@ -463,11 +462,8 @@ TEST(PositionControllerTest, InGroundContactARefusedMotorsOffLandsLevel) {
   // vehicle and tilting against it would only drag it, so the landing goes level there.
   PositionController c(params());
   test::LagModel model;
-  model.hover_at({0, 0, 0.3});
-  int64_t t = kT0;
-  fly(c, model, setpoint_at({0, 0, 0.3}, 0, t), t, 1.0);
-  auto off = setpoint_at({0, 0, 0.3}, 0, t);
-  off.motors_on = false;
+  int64_t t = hover_for_a_second(c, model, {0, 0, 0.3});
+  auto off = motors_off_at({0, 0, 0.3}, t);
   AttitudeCommand cmd = c.update(off, model.pose(t), t);  // the landing begins here
   bool tilted_in_the_air = false, level_on_the_ground = false;
   for (int i = 0; i < 500 && cmd.armed; ++i) {
@@ -494,9 +490,7 @@ TEST(PositionControllerTest, InGroundContactARefusedMotorsOffLandsLevel) {
 std::vector<double> thrust_over_an_arrival(const OuterLoopParams& p) {
   PositionController c(p);
   test::LagModel model;
-  model.hover_at({0, 0, 0.3});
-  int64_t t = kT0;
-  fly(c, model, setpoint_at({0, 0, 0.3}, 0, t), t, 1.0);
+  int64_t t = hover_for_a_second(c, model, {0, 0, 0.3});
   auto sp = setpoint_at({0, 0, 0.3}, 0, t);
   sp.v_W = Vector3d(0, 0, -0.5);
   while (model.p.z() > 0.0) {  // the led descent, until the gear meets the ground
@@ -548,11 +542,8 @@ TEST(PositionControllerTest, ALandingFromAHoverIsNotCutAtItsStart) {
   p.land_contact_cut = true;
   PositionController c(p);
   test::LagModel model;
-  model.hover_at({0, 0, 0.5});
-  int64_t t = kT0;
-  fly(c, model, setpoint_at({0, 0, 0.5}, 0, t), t, 1.0);
-  auto off = setpoint_at({0, 0, 0.5}, 0, t);
-  off.motors_on = false;
+  int64_t t = hover_for_a_second(c, model, {0, 0, 0.5});
+  auto off = motors_off_at({0, 0, 0.5}, t);
   bool cut_in_the_air = false, cut_on_the_ground = false;
   AttitudeCommand cmd;
   for (int i = 0; i < 1000; ++i, t += 10 * kMs) {
@@ -579,8 +570,7 @@ TEST(PositionControllerTest, HoverWithAMassErrorIsNotTakenForLanded) {
   int64_t t = kT0;
   fly(c, model, setpoint_at({0, 0, 1}, 0, t), t, 15.0);
   EXPECT_FALSE(c.landed());
-  auto off = setpoint_at({0, 0, 1}, 0, t);
-  off.motors_on = false;
+  auto off = motors_off_at({0, 0, 1}, t);
   EXPECT_TRUE(c.update(off, model.pose(t), t).armed);
 }
 
