@@ -645,10 +645,7 @@ void Autonomy::step(phases::FinalDescent& s, const Vector3d& /*p*/, double dt_s)
   const double z_floor = z_touch - L.final_depth_m;
   const FinalPause pause = pause_final_descent(s, z_touch);
   if (pause == FinalPause::kGaveUp) {  // leaves the phase: s is gone after this
-    target_lost("final descent paused " + fmt(L.final_hold_timeout_s, 0) +
-                " s without a calm moment (e_r within " +
-                fmt(std::min(L.radial_tol_m, L.final_hold_radial_m), 3) + " m, speed within " +
-                fmt(L.final_hold_speed_mps, 2) + " m/s)");
+    target_lost(no_calm_moment(L, "paused"));
     return;
   }
   if (pause == FinalPause::kPaused) {
@@ -683,8 +680,7 @@ Autonomy::FinalPause Autonomy::pause_final_descent(phases::FinalDescent& s, doub
     s.paused_since_utime = now_utime_;
     s.calm_since_utime.reset();
     // Stopped where the vehicle is, not below it where the setpoint led: the altitude loop still
-    // overshoots by its lag (about 15 cm from 0.5 m/s on the vehicle files' gains), hence
-    // final_pause_min_height_m.
+    // overshoots by its lag, hence final_pause_min_height_m.
     s.z_sp_m = std::max(s.z_sp_m, pose_->p_W_B.z());
   }
   if (calm_for_final_descent(L, e_r, pose_, seconds(now_utime_ - *s.paused_since_utime), now_utime_,

@@ -107,10 +107,7 @@ class LandingProfile final : public MissionProfile {
       if (!final_descent_allowed(a, e_r, in)) {
         if (seconds(in.now_utime - *a.held_since_utime) > L.final_hold_timeout_s) {
           out.next = ApproachStep::Next::kTargetLost;
-          out.reason = "final descent held " + fmt(L.final_hold_timeout_s, 0) +
-                       " s without a calm moment (e_r within " +
-                       fmt(std::min(L.radial_tol_m, L.final_hold_radial_m), 3) +
-                       " m, speed within " + fmt(L.final_hold_speed_mps, 2) + " m/s)";
+          out.reason = no_calm_moment(L, "held");
           return out;
         }
         out.reason = "final descent held: waiting for calm";
@@ -235,6 +232,15 @@ class IngressProfile final : public MissionProfile {
 };
 
 }  // namespace
+
+std::string no_calm_moment(const LandingParams& L, const std::string& what) {
+  const double speed_max_mps = std::max(L.final_hold_speed_mps, L.final_hold_speed_max_mps);
+  return "final descent " + what + " " + fmt(L.final_hold_timeout_s, 0) +
+         " s without a calm moment (e_r within " +
+         fmt(std::min(L.radial_tol_m, L.final_hold_radial_m), 3) + " m, speed within " +
+         fmt(L.final_hold_speed_mps, 2) +
+         (speed_max_mps > L.final_hold_speed_mps ? " to " + fmt(speed_max_mps, 2) : "") + " m/s)";
+}
 
 bool calm_for_final_descent(const LandingParams& L, double e_r,
                             const std::optional<PoseSample>& pose, double held_s, int64_t now_utime,

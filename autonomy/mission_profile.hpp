@@ -55,6 +55,9 @@ bool calm_for_final_descent(const LandingParams& L, double e_r,
                             const std::optional<PoseSample>& pose, double held_s, int64_t now_utime,
                             std::optional<int64_t>& calm_since_utime);
 
+/// Why a final hold ("held") or a paused final descent ("paused") gave up: the target-lost reason.
+std::string no_calm_moment(const LandingParams& L, const std::string& what);
+
 /// The ingress approach's own state: aligning at the standoff, then through the opening.
 struct IngressApproach {
   Vector3d n_W = Vector3d(-1, 0, 0);  ///< horizontal normal of the opening, towards the vehicle

@@ -93,8 +93,7 @@ class PositionController {
   Vector3d landing_p_W_ = Vector3d::Zero();
   double landing_yaw_rad_ = 0.0;
   double landing_descent_mps_ = 0.0;
-  bool landing_arrived_ =
-      false;  // this landing has seen the vehicle descend (a contact is the ground)
+  bool landing_arrived_ = false;  // led down or seen descending: a contact now is the ground
   std::optional<int64_t> pose_lost_since_;
   std::optional<int64_t> setpoint_lost_since_;
   std::optional<int64_t> still_since_;
