@@ -331,6 +331,7 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
         r.error_at_final_descent_m = e;
       if (ph == Phase::kLanded && r.error_at_touchdown_m < 0) {
         r.error_at_touchdown_m = e;
+        r.p_W_at_touchdown = truth.state.p_W_B;
         if (onboard)
           r.estimate_error_rel_at_touchdown_W =
               estimate_error_rel_W(truth, onboard->state(), autonomy.final_estimate());

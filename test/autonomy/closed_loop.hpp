@@ -88,6 +88,7 @@ struct ClosedLoopResult {
   double final_z_m = 0;
   double error_at_final_descent_m = -1;  ///< lateral body - platform centre entering FINAL_DESCENT
   double error_at_touchdown_m = -1;      ///< ... when autonomy detected the touch-down
+  Vector3d p_W_at_touchdown = Vector3d::Zero();  ///< the body then (the slide: final_p_W - this)
   double platform_yaw_rad = 0;
   /// Final body position relative to the platform top's centre, in the platform's frame (x along
   /// its length), and the platform's length and width: touchdown plots over the outline [m].
