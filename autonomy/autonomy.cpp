@@ -683,14 +683,13 @@ Autonomy::FinalPause Autonomy::pause_final_descent(phases::FinalDescent& s, doub
     // overshoots by its lag, hence final_pause_min_height_m.
     s.z_sp_m = std::max(s.z_sp_m, pose_->p_W_B.z());
   }
-  if (calm_for_final_descent(L, e_r, pose_, seconds(now_utime_ - *s.paused_since_utime), now_utime_,
-                             s.calm_since_utime)) {
+  const double paused_s = seconds(now_utime_ - *s.paused_since_utime);
+  if (calm_for_final_descent(L, e_r, pose_, paused_s, now_utime_, s.calm_since_utime)) {
     s.paused_since_utime.reset();
     reason_ = "final descent resumed: calm again";
     return FinalPause::kNone;
   }
-  if (seconds(now_utime_ - *s.paused_since_utime) > L.final_hold_timeout_s)
-    return FinalPause::kGaveUp;
+  if (paused_s > L.final_hold_timeout_s) return FinalPause::kGaveUp;
   reason_ = "final descent paused: carried " + fmt(e_r, 3) + " m off, waiting for calm";
   return FinalPause::kPaused;
 }

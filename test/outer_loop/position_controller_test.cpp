@@ -493,14 +493,15 @@ std::vector<double> thrust_over_an_arrival(const OuterLoopParams& p) {
   int64_t t = hover_for_a_second(c, model, {0, 0, 0.3});
   auto sp = setpoint_at({0, 0, 0.3}, 0, t);
   sp.v_W = Vector3d(0, 0, -0.5);
-  while (model.p.z() > 0.0) {  // the led descent, until the gear meets the ground
+  for (int i = 0; model.p.z() > 0.0; ++i, t += 10 * kMs) {  // led down until the gear meets it
+    if (i == 500) {
+      ADD_FAILURE() << "never reached the ground in 5 s";
+      return {};
+    }
     sp.utime = t;
     sp.p_W.z() -= 0.5 * 0.01;
     const auto cmd = c.update(sp, model.pose(t), t);
     for (int k = 0; k < 10; ++k) model.step(cmd, 0.001);
-    t += 10 * kMs;
-    EXPECT_LT(t, kT0 + 5'000'000 * kMs) << "never reached the ground";
-    if (t > kT0 + 5'000'000 * kMs) return {};
   }
   auto off = sp;
   off.motors_on = false;
