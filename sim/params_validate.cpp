@@ -300,6 +300,21 @@ const ParamSchema<CameraParams>& CameraParams::schema() {
           "per-frame exposure / gain change, standard deviation");
     s.add("supersample", &P::supersample, Range::closed(1, 4), "",
           "rays per pixel side (1 = mip-mapping only, 2 = 4 rays)");
+    s.add("auto_gain", &P::auto_gain, Range::any(), "",
+          "the sensor's automatic gain, as a camera on automatic exposure (the camera driver's "
+          "default) meters its highlights: a scene that would clip more than 1 - "
+          "auto_gain_quantile of the view is dimmed until it does not; the exposure time, and "
+          "so the blur, stays exposure_s. Below the target nothing changes (gain 1). false: a "
+          "fixed gain that clips a bright scene white, top and texture alike");
+    s.add("auto_gain_quantile", &P::auto_gain_quantile, Range::open(0.5, 1), "",
+          "share of the view's pixels metered below auto_gain_target");
+    s.add("auto_gain_target", &P::auto_gain_target, Range::open_closed(64, 255), "grey levels",
+          "where that quantile is held at most");
+    s.add("auto_gain_min", &P::auto_gain_min, Range::open_closed(0, 1), "",
+          "the lowest gain it dims to");
+    s.add("auto_gain_rate", &P::auto_gain_rate, Range::open_closed(0, 1), "",
+          "share of the gain's error (in its logarithm) corrected per frame: a camera's "
+          "automatic exposure settles over a few frames, not at once");
     return s;
   }();
   return schema;

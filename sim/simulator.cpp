@@ -265,14 +265,16 @@ std::optional<CameraFrame> Simulator::take_frame(CameraStream& cam) {
   cam.pending.reset();
   const CameraModel& model = cam.rig->model;
   cv::Mat acc(model.height, model.width, CV_32F, cv::Scalar(0));
-  const float w = static_cast<float>(f.gain / f.X_WC.size());
+  const double gain = f.gain * cam.auto_gain;
+  const float w = static_cast<float>(gain / f.X_WC.size());
   for (const auto& X_WC : f.X_WC) cam.renderer->accumulate(*scene_, X_WC, w, acc);
+  cam.auto_gain = next_auto_gain(acc, gain, cam.auto_gain, cam.params);
   const float sigma = static_cast<float>(cam.params.noise_sigma);
   CameraFrame out;
   out.utime = f.utime;
   out.seq = f.seq;
   out.exposure_s = cam.params.exposure_s;
-  out.gain = f.gain;
+  out.gain = gain;
   out.X_WC = f.X_WC[f.X_WC.size() / 2];
   out.pixels.create(model.height, model.width, CV_8U);
   const float* noise = cam.noise.data() + f.noise_offset;
@@ -283,6 +285,28 @@ std::optional<CameraFrame> Simulator::take_frame(CameraStream& cam) {
     for (int u = 0; u < model.width; ++u) o[u] = cv::saturate_cast<uchar>(a[u] + sigma * nz[u]);
   }
   return out;
+}
+
+double next_auto_gain(const cv::Mat& linear, double frame_gain, double gain,
+                      const CameraParams& params) {
+  assert(linear.type() == CV_32F && frame_gain > 0 && gain > 0);
+  if (!params.auto_gain || linear.empty()) return gain;
+  std::vector<float> samples;
+  samples.reserve(static_cast<size_t>((linear.rows + 3) / 4) * ((linear.cols + 3) / 4));
+  for (int v = 0; v < linear.rows; v += 4) {
+    const float* a = linear.ptr<float>(v);
+    for (int u = 0; u < linear.cols; u += 4) samples.push_back(a[u]);
+  }
+  const size_t k =
+      std::min(samples.size() - 1, static_cast<size_t>(params.auto_gain_quantile * samples.size()));
+  std::nth_element(samples.begin(), samples.begin() + k, samples.end());
+  const double unit_brightness = samples[k] / frame_gain;
+  const double wanted = unit_brightness > 0 ? std::clamp(params.auto_gain_target / unit_brightness,
+                                                         params.auto_gain_min, 1.0)
+                                            : 1.0;
+  if (wanted == gain) return gain;
+  return std::clamp(gain * std::pow(wanted / gain, params.auto_gain_rate), params.auto_gain_min,
+                    1.0);
 }
 
 cv::Mat Simulator::render(const CameraMount& mount, const CameraModel& model,

@@ -54,10 +54,21 @@ struct CameraFrame {
   int64_t utime = 0;  ///< middle of the exposure [us]
   int64_t seq = 0;    ///< frame counter
   double exposure_s = 0.0;
-  double gain = 1.0;                         ///< exposure / gain factor applied to this frame
+  double gain = 1.0;  ///< gain applied to this frame (flicker times the automatic gain)
   Isometry3d X_WC = Isometry3d::Identity();  ///< camera pose at mid-exposure
   cv::Mat pixels;                            ///< mono8
 };
+
+/// The sensor's automatic gain after a frame (a camera on automatic exposure, the camera
+/// driver's default, with highlight protection): `linear` is the frame as the light reached the
+/// sensor (CV_32F grey levels, before noise and clipping) under the total gain `frame_gain`, of
+/// which `gain` is the automatic part. The view's brightness at unit gain is metered at
+/// auto_gain_quantile (on every fourth pixel of every fourth row); the gain that would hold it
+/// at auto_gain_target, bounded to [auto_gain_min, 1], is approached by auto_gain_rate of the
+/// way (in its logarithm) per frame. A view whose quantile stays below the target keeps gain 1,
+/// so such a scene renders as without it. Returns `gain` when params.auto_gain is false.
+double next_auto_gain(const cv::Mat& linear, double frame_gain, double gain,
+                      const CameraParams& params);
 
 class Simulator {
  public:
@@ -137,6 +148,7 @@ class Simulator {
     std::mt19937_64 rng;
     std::vector<float> noise;
     int64_t period_us = 0, next_frame_utime = 0, frame_seq = 0, frames_skipped = 0;
+    double auto_gain = 1.0;  // next_auto_gain's state
     std::optional<PendingFrame> pending;
   };
   void physics_step();

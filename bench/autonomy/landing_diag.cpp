@@ -144,6 +144,7 @@ int main(int argc, char** argv) try {
     // The floor's smear over this frame's exposure [px], as the pipeline's guard saw it (0 with
     // the guard off).
     std::printf(" blur %.1f", r.blur_px);
+    std::printf(" gain %.2f", f.gain);  // the camera's, flicker and automatic gain
     // The reference's baseline and age (the top's parallax falls with the baseline).
     std::printf(" b %.3f age %.2f tr %d%s", r.baseline_m,
                 r.ref_utime > 0 ? (f.utime - r.ref_utime) * 1e-6 : -1.0, r.n_tracked,

@@ -402,6 +402,79 @@ TEST(SimRendererTest, CameraFramesArriveAtTheirRateStampedAtMidExposureWithNoise
   EXPECT_NEAR(sd[0], 3.0, 0.4);
 }
 
+// The camera's automatic gain (issue 15, landing_lowtex: a bright scene drawn with the light's
+// gain 1.3 clipped a paper top white, 255 from rim to rim, and no feature was left on it).
+cv::Mat ramp_image(double top_grey) {  // grey levels rising from 0 to top_grey, row by row
+  cv::Mat m(120, 160, CV_32F);
+  for (int v = 0; v < m.rows; ++v) m.row(v).setTo(top_grey * v / (m.rows - 1));
+  return m;
+}
+
+TEST(AutoGainTest, AViewBelowTheTargetKeepsTheGainAtOne) {
+  const CameraParams p;
+  EXPECT_EQ(next_auto_gain(ramp_image(240), 1.0, 1.0, p), 1.0);
+  // Flicker scales the frame, not the scene: metered at unit gain it stays below the target.
+  EXPECT_EQ(next_auto_gain(1.1 * ramp_image(240), 1.1, 1.0, p), 1.0);
+}
+
+TEST(AutoGainTest, ABrightViewIsDimmedUntilItsHighlightsFitAndRecoversWhenTheViewDarkens) {
+  CameraParams p;
+  const cv::Mat scene = ramp_image(400);  // at unit gain: its 99th percentile near 396
+  double gain = 1.0, last = 1.0;
+  for (int frame = 0; frame < 30; ++frame) {
+    gain = next_auto_gain(gain * scene, gain, gain, p);
+    EXPECT_LE(gain, last) << frame;  // approached from above, never overshooting
+    last = gain;
+  }
+  std::vector<float> v(scene.begin<float>(), scene.end<float>());
+  std::sort(v.begin(), v.end());
+  const double q99 = v[static_cast<size_t>(0.99 * v.size())];
+  // Within 2 %: the quantile is metered on every fourth pixel of every fourth row.
+  EXPECT_NEAR(gain * q99, p.auto_gain_target, 0.02 * p.auto_gain_target);
+  // Half the way per frame: after one frame the gain has not yet reached its end value.
+  EXPECT_GT(next_auto_gain(scene, 1.0, 1.0, p), p.auto_gain_target / q99 + 0.1);
+  // The view darkens (the bright top leaves it): the gain climbs back to 1 and stays there.
+  const cv::Mat dark = ramp_image(150);
+  for (int frame = 0; frame < 40; ++frame) gain = next_auto_gain(gain * dark, gain, gain, p);
+  EXPECT_NEAR(gain, 1.0, 1e-6);
+  // Never below auto_gain_min, however bright; and off, the gain is left alone.
+  p.auto_gain_min = 0.5;
+  gain = 1.0;
+  for (int frame = 0; frame < 30; ++frame) gain = next_auto_gain(gain * 4 * scene, gain, gain, p);
+  EXPECT_NEAR(gain, 0.5, 1e-6);
+  p.auto_gain = false;
+  EXPECT_EQ(next_auto_gain(scene, 1.0, 1.0, p), 1.0);
+}
+
+TEST(SimRendererTest, ABrightSceneIsDimmedSoItsTopIsNotClippedWhite) {
+  Scenario sc = test::quiet(test::scenario("landing_c"));
+  sc.camera.enabled = true;
+  sc.lighting.gain = 1.6;  // the paper top and much of the floor past full scale at unit gain
+  const CameraRig rig = load_camera_rig(test::config_path("vehicles/starmac.yaml"), "downward");
+  auto last_frame = [&](bool auto_gain) {
+    Scenario s = sc;
+    s.camera.auto_gain = auto_gain;
+    Simulator sim(s, test::starmac(), 3, rig);
+    test::place(sim, Vector3d(sc.platform->center_xy_m.x(), sc.platform->center_xy_m.y(), 1.3));
+    std::optional<CameraFrame> last;
+    for (int i = 0; i < 100; ++i) {  // 1 s, polled every 10 ms
+      sim.step(test::hover(test::starmac()), sim.now_utime() + 10000);
+      if (auto f = sim.take_camera()) last = std::move(f);
+    }
+    return last.value();  // throws (the test fails) when no frame came
+  };
+  auto clipped_share = [](const cv::Mat& m) {
+    return static_cast<double>(cv::countNonZero(m >= 255)) / m.total();
+  };
+  const CameraFrame fixed = last_frame(false), dimmed = last_frame(true);
+  EXPECT_EQ(fixed.gain, 1.0);
+  EXPECT_GT(clipped_share(fixed.pixels), 0.1);
+  EXPECT_LT(dimmed.gain, 0.9);
+  EXPECT_LT(clipped_share(dimmed.pixels), 0.02);
+  // The exposure time, and so the blur, is the scene's.
+  EXPECT_EQ(dimmed.exposure_s, fixed.exposure_s);
+}
+
 TEST(SimRendererTest, SameSeedGivesIdenticalFramesOnAnyNumberOfThreads) {
   Scenario sc = test::scenario("landing_c");
   sc.camera.gain_jitter = 0.05;
