@@ -192,12 +192,13 @@ struct CameraParams {
   int motion_blur_samples = 1;
   double gain_jitter = 0.0;
   int supersample = 1;
-  /// The sensor's automatic gain with highlight protection (simulator.hpp next_auto_gain).
+  /// The sensor's automatic gain with highlight protection (simulator.hpp AutoGain).
   bool auto_gain = true;
   double auto_gain_quantile = 0.99;
-  double auto_gain_target = 245.0;  ///< grey levels
+  double auto_gain_target = 240.0;  ///< grey levels
   double auto_gain_min = 0.25;
-  double auto_gain_rate = 0.5;
+  double auto_gain_rate = 0.1;
+  double auto_gain_tolerance = 0.05;
   static const ParamSchema<CameraParams>& schema();
   void validate() const;
 };

@@ -301,11 +301,12 @@ const ParamSchema<CameraParams>& CameraParams::schema() {
     s.add("supersample", &P::supersample, Range::closed(1, 4), "",
           "rays per pixel side (1 = mip-mapping only, 2 = 4 rays)");
     s.add("auto_gain", &P::auto_gain, Range::any(), "",
-          "the sensor's automatic gain, as a camera on automatic exposure (the camera driver's "
-          "default) meters its highlights: a scene that would clip more than 1 - "
-          "auto_gain_quantile of the view is dimmed until it does not; the exposure time, and "
-          "so the blur, stays exposure_s. Below the target nothing changes (gain 1). false: a "
-          "fixed gain that clips a bright scene white, top and texture alike");
+          "the sensor's automatic gain (simulator.hpp AutoGain), as a camera on automatic "
+          "exposure (the camera driver's default) meters its highlights: a view that would put "
+          "more than 1 - auto_gain_quantile of its pixels above auto_gain_target is dimmed over "
+          "a few frames until it does not; the exposure time, and so the blur, stays "
+          "exposure_s. A view that never passes the target keeps gain 1. false: a fixed gain "
+          "that clips a bright scene white, top and texture alike");
     s.add("auto_gain_quantile", &P::auto_gain_quantile, Range::open(0.5, 1), "",
           "share of the view's pixels metered below auto_gain_target");
     s.add("auto_gain_target", &P::auto_gain_target, Range::open_closed(64, 255), "grey levels",
@@ -313,8 +314,12 @@ const ParamSchema<CameraParams>& CameraParams::schema() {
     s.add("auto_gain_min", &P::auto_gain_min, Range::open_closed(0, 1), "",
           "the lowest gain it dims to");
     s.add("auto_gain_rate", &P::auto_gain_rate, Range::open_closed(0, 1), "",
-          "share of the gain's error (in its logarithm) corrected per frame: a camera's "
-          "automatic exposure settles over a few frames, not at once");
+          "the newest frame's weight in the metering averaged over frames (in its logarithm): "
+          "a camera's automatic exposure settles over a few frames, not at once");
+    s.add("auto_gain_tolerance", &P::auto_gain_tolerance, Range::closed_open(0, 1), "",
+          "the gain changes only once the metering wants it this much higher or lower "
+          "(hysteresis: a still view keeps one gain instead of hunting frame to frame; the "
+          "target leaves room for it below full scale)");
     return s;
   }();
   return schema;

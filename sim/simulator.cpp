@@ -82,6 +82,7 @@ Simulator::Simulator(const Scenario& scenario, const VehicleParams& vehicle, uin
 void Simulator::start_camera(CameraStream& c) {
   if (!c.rig || !c.params.enabled) return;
   c.renderer = std::make_unique<Renderer>(c.rig->model, c.params.supersample);
+  c.auto_gain = AutoGain(c.params);
   c.period_us = std::llround(1e6 / c.params.rate_hz);
   c.next_frame_utime = now_utime_ + c.period_us;
   // A table of unit normal noise, read at a random offset per frame: per-pixel Gaussian draws
@@ -265,10 +266,10 @@ std::optional<CameraFrame> Simulator::take_frame(CameraStream& cam) {
   cam.pending.reset();
   const CameraModel& model = cam.rig->model;
   cv::Mat acc(model.height, model.width, CV_32F, cv::Scalar(0));
-  const double gain = f.gain * cam.auto_gain;
+  const double gain = f.gain * cam.auto_gain.gain();
   const float w = static_cast<float>(gain / f.X_WC.size());
   for (const auto& X_WC : f.X_WC) cam.renderer->accumulate(*scene_, X_WC, w, acc);
-  cam.auto_gain = next_auto_gain(acc, gain, cam.auto_gain, cam.params);
+  cam.auto_gain.update(acc, gain);
   const float sigma = static_cast<float>(cam.params.noise_sigma);
   CameraFrame out;
   out.utime = f.utime;
@@ -287,26 +288,27 @@ std::optional<CameraFrame> Simulator::take_frame(CameraStream& cam) {
   return out;
 }
 
-double next_auto_gain(const cv::Mat& linear, double frame_gain, double gain,
-                      const CameraParams& params) {
-  assert(linear.type() == CV_32F && frame_gain > 0 && gain > 0);
-  if (!params.auto_gain || linear.empty()) return gain;
+AutoGain::AutoGain(const CameraParams& params)
+    : params_(params), log_brightness_(std::log(params.auto_gain_target)) {}
+
+void AutoGain::update(const cv::Mat& linear, double frame_gain) {
+  assert(linear.type() == CV_32F && frame_gain > 0);
+  if (!params_.auto_gain || linear.empty()) return;
   std::vector<float> samples;
   samples.reserve(static_cast<size_t>((linear.rows + 3) / 4) * ((linear.cols + 3) / 4));
   for (int v = 0; v < linear.rows; v += 4) {
     const float* a = linear.ptr<float>(v);
     for (int u = 0; u < linear.cols; u += 4) samples.push_back(a[u]);
   }
-  const size_t k =
-      std::min(samples.size() - 1, static_cast<size_t>(params.auto_gain_quantile * samples.size()));
+  const size_t k = std::min(samples.size() - 1,
+                            static_cast<size_t>(params_.auto_gain_quantile * samples.size()));
   std::nth_element(samples.begin(), samples.begin() + k, samples.end());
-  const double unit_brightness = samples[k] / frame_gain;
-  const double wanted = unit_brightness > 0 ? std::clamp(params.auto_gain_target / unit_brightness,
-                                                         params.auto_gain_min, 1.0)
-                                            : 1.0;
-  if (wanted == gain) return gain;
-  return std::clamp(gain * std::pow(wanted / gain, params.auto_gain_rate), params.auto_gain_min,
-                    1.0);
+  // A black view meters as 1 grey level: its logarithm stays finite.
+  const double unit_brightness = std::max(1.0, samples[k] / frame_gain);
+  log_brightness_ += params_.auto_gain_rate * (std::log(unit_brightness) - log_brightness_);
+  const double wanted =
+      std::clamp(params_.auto_gain_target / std::exp(log_brightness_), params_.auto_gain_min, 1.0);
+  if (std::abs(std::log(wanted / gain_)) > std::log1p(params_.auto_gain_tolerance)) gain_ = wanted;
 }
 
 cv::Mat Simulator::render(const CameraMount& mount, const CameraModel& model,

@@ -59,16 +59,30 @@ struct CameraFrame {
   cv::Mat pixels;                            ///< mono8
 };
 
-/// The sensor's automatic gain after a frame (a camera on automatic exposure, the camera
-/// driver's default, with highlight protection): `linear` is the frame as the light reached the
-/// sensor (CV_32F grey levels, before noise and clipping) under the total gain `frame_gain`, of
-/// which `gain` is the automatic part. The view's brightness at unit gain is metered at
-/// auto_gain_quantile (on every fourth pixel of every fourth row); the gain that would hold it
-/// at auto_gain_target, bounded to [auto_gain_min, 1], is approached by auto_gain_rate of the
-/// way (in its logarithm) per frame. A view whose quantile stays below the target keeps gain 1,
-/// so such a scene renders as without it. Returns `gain` when params.auto_gain is false.
-double next_auto_gain(const cv::Mat& linear, double frame_gain, double gain,
-                      const CameraParams& params);
+/// The sensor's automatic gain (a camera on automatic exposure, the camera driver's default)
+/// with highlight protection. After each frame it meters the view's brightness at unit gain at
+/// auto_gain_quantile (on every fourth pixel of every fourth row) and averages its logarithm
+/// over frames (auto_gain_rate: the newest frame's weight), as a camera's exposure control
+/// smooths its metering: a small bright patch at the quantile flips it frame to frame. The gain
+/// that holds the averaged brightness at auto_gain_target, bounded to [auto_gain_min, 1], is
+/// taken once it differs from the gain by more than auto_gain_tolerance (hysteresis: a still
+/// view keeps one gain). A view whose quantile never passes the target keeps gain 1, so such a
+/// scene renders as without it.
+class AutoGain {
+ public:
+  explicit AutoGain(const CameraParams& params = {});
+  /// The gain for the next frame: 1 until a view has been too bright.
+  double gain() const { return gain_; }
+  /// After a frame: `linear` is the frame as the light reached the sensor (CV_32F grey levels,
+  /// before noise and clipping) under the total gain `frame_gain` (flicker times gain()). Does
+  /// nothing when params.auto_gain is false.
+  void update(const cv::Mat& linear, double frame_gain);
+
+ private:
+  CameraParams params_;
+  double gain_ = 1.0;
+  double log_brightness_;  // the averaged metering at unit gain, log grey levels
+};
 
 class Simulator {
  public:
@@ -148,7 +162,7 @@ class Simulator {
     std::mt19937_64 rng;
     std::vector<float> noise;
     int64_t period_us = 0, next_frame_utime = 0, frame_seq = 0, frames_skipped = 0;
-    double auto_gain = 1.0;  // next_auto_gain's state
+    AutoGain auto_gain;
     std::optional<PendingFrame> pending;
   };
   void physics_step();
