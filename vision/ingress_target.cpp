@@ -192,15 +192,14 @@ void hough_lines(const std::vector<cv::Point>& px, cv::Size size, double theta_l
 // principal point (beyond, the front edge hides it). The first 2 sigma of the mask's blur are
 // left out (the room's difference spread over the border). Returns a unchanged when no face
 // shows.
-double face_front_edge(const cv::Mat& mask, bool vertical, double a, double b, double mean_along,
-                       int lo, int hi, const CutGeometry& g, const IngressParams& p) {
+double face_front_edge(int side, bool vertical, double a, double b, double mean_along, int lo,
+                       int hi, const CutGeometry& g, const IngressParams& p) {
   if (!g.camera || g.image.empty() || g.reference.size() != g.image.size() ||
-      g.image.size() != mask.size() || !(g.wall_depth_m > 0) || !std::isfinite(g.wall_depth_m))
+      !(g.wall_depth_m > 0) || !std::isfinite(g.wall_depth_m))
     return a;
-  const int side = wall_side(mask, vertical, a, b, mean_along, lo, hi);
   const double centre = vertical ? g.principal_px.x() : g.principal_px.y();
   if (side == 0 || (a - centre) * side <= 0) return a;
-  const int n_across = vertical ? mask.cols : mask.rows;
+  const int n_across = vertical ? g.image.cols : g.image.rows;
   const double reach =
       std::min(std::abs(a - centre) * p.max_wall_thickness_m / g.wall_depth_m, 0.25 * n_across);
   const int k0 = static_cast<int>(std::ceil(2 * p.parallax_blur_sigma_px)) + 1;
@@ -968,10 +967,13 @@ TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image
     const auto [y_lo, y_hi] = span(top + 0.1 * h, bottom - 0.1 * h, mask.rows);
     const auto [x_lo, x_hi] = span(left + 0.1 * w, right - 0.1 * w, mask.cols);
     const double y_mid = 0.5 * (top + bottom), x_mid = 0.5 * (left + right);
-    const double l = face_front_edge(mask, true, left, 0, y_mid, y_lo, y_hi, geometry, p);
-    const double r = face_front_edge(mask, true, right, 0, y_mid, y_lo, y_hi, geometry, p);
-    const double t = face_front_edge(mask, false, top, 0, x_mid, x_lo, x_hi, geometry, p);
-    const double bo = face_front_edge(mask, false, bottom, 0, x_mid, x_lo, x_hi, geometry, p);
+    // The wall lies outside the block on every side (not read from the mask beside the cut: a
+    // flat room next to a cut on the face's far edge leaves the mask clear on the opening's side
+    // too; issue 15, ingress_photo seed 10411).
+    const double l = face_front_edge(-1, true, left, 0, y_mid, y_lo, y_hi, geometry, p);
+    const double r = face_front_edge(+1, true, right, 0, y_mid, y_lo, y_hi, geometry, p);
+    const double t = face_front_edge(-1, false, top, 0, x_mid, x_lo, x_hi, geometry, p);
+    const double bo = face_front_edge(+1, false, bottom, 0, x_mid, x_lo, x_hi, geometry, p);
     left = l, right = r, top = t, bottom = bo;
   }
   const Vector2d centre(0.5 * (left + right), 0.5 * (top + bottom));

@@ -80,11 +80,12 @@ struct CutGeometry {
 };
 
 /// The across-coordinate of the wall's front edge beyond the inner face next to the cut
-/// a + b (along - mean_along), along in [lo, hi] (x of a vertical cut at row y): where a face
-/// plane through that edge along the wall's normal and the wall beyond it explain the two views
-/// best. `a` unchanged when no face shows. Exposed for tests.
-double face_front_edge(const cv::Mat& mask, bool vertical, double a, double b, double mean_along,
-                       int lo, int hi, const CutGeometry& geometry, const IngressParams& params);
+/// a + b (along - mean_along), along in [lo, hi] (x of a vertical cut at row y), the wall on
+/// the cut's `side` (-1: lower across-coordinates, +1: higher): where a face plane through that
+/// edge along the wall's normal and the wall beyond it explain the two views best. `a`
+/// unchanged when no face shows. Exposed for tests.
+double face_front_edge(int side, bool vertical, double a, double b, double mean_along, int lo,
+                       int hi, const CutGeometry& geometry, const IngressParams& params);
 
 void line_cuts(const cv::Mat& image, const IngressParams& params, std::vector<double>* x_cuts,
                std::vector<double>* y_cuts, std::vector<cv::Vec4i>* kept_segments);

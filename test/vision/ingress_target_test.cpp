@@ -695,15 +695,53 @@ TEST(IngressTargetTest, FlatRoomBesideTheJambDoesNotMoveTheSideIn) {
   EXPECT_LT(strip.estimate.size_m[0], 0.6 - 0.05);
 }
 
+// Regression (issue 15, ingress_photo seed 10411: a 29 cm wall, widths 7 cm short at the
+// median): the face search read which side of a cut the wall lies on from the mask 4 px either
+// side of it. On a side cut on the face's far edge with the room flat next to it, the mask was
+// clear on the opening's side too, and set on the face: the wall was taken to lie inside the
+// block, and a face facing the principal point shows none, so the side stayed on the far edge
+// in about half of the refinement frames. The block's sides have the wall outside them; given
+// that, the search goes from each jamb's far edge to its front edge.
+TEST(FaceFrontEdgeTest, FindsEachJambsFrontEdgeFromItsFarEdge) {
+  const double thickness_m = 0.25;
+  const ThickWallScene s(thickness_m);
+  const Isometry3d X_WC1 = camera_in_world(s.c.pose_1.X_WB(), s.mount.X_BC());
+  const Isometry3d X_WC2 = camera_in_world(s.c.pose_2.X_WB(), s.mount.X_BC());
+  const Isometry3d X_CW2 = X_WC2.inverse();
+  const double baseline_m = (X_WC2.translation() - X_WC1.translation()).norm();
+  // The wall's plane motion from the truth, in the decomposition's terms (baselines).
+  PlaneMotion wall;
+  wall.R_21 = X_WC2.linear().transpose() * X_WC1.linear();
+  wall.t_12 = X_WC1.inverse() * X_WC2.translation() / baseline_m;
+  const double d1_m = 3.0 - X_WC1.translation().x();
+  wall.n_1 = X_WC1.linear().transpose() * Vector3d::UnitX() / (d1_m / baseline_m);
+  IngressParams p;
+  CutGeometry g;
+  g.principal_px = Vector2d(s.camera.K()(0, 2), s.camera.K()(1, 2));
+  g.wall_depth_m = (X_CW2 * Vector3d(3.0, 0.0, 1.2)).z();
+  g.wall = wall;
+  g.camera = &s.camera;
+  g.image = parallax_image(s.image, p);
+  g.reference = parallax_image(s.reference, p);
+  const auto px = [&](double x, double y) {
+    return *s.camera.project(X_CW2 * Vector3d(x, y, 1.2));
+  };
+  const int lo = static_cast<int>(px(3.0, 0.0).y()) - 40, hi = lo + 80;
+  for (const double y_jamb : {-0.3, 0.3}) {
+    const double front = px(3.0, y_jamb).x(), far = px(3.0 + thickness_m, y_jamb).x();
+    const int side = front > far ? 1 : -1;  // the wall beyond the front edge
+    ASSERT_GT(std::abs(front - far), 5) << "the face shows " << y_jamb;
+    const double e = face_front_edge(side, true, far, 0, 0.5 * (lo + hi), lo, hi, g, p);
+    EXPECT_NEAR(e, front, 1.5) << "jamb at y = " << y_jamb << ": far edge " << far;
+    // The wall taken to lie on the opening's side: no face there, the side stays.
+    EXPECT_EQ(face_front_edge(-side, true, far, 0, 0.5 * (lo + hi), lo, hi, g, p), far);
+  }
+}
+
 // Nor does the face search move a side of a smooth wall (the paper's: no texture to tell a
 // face from the wall), nor the side facing the principal point (the front edge hides its face).
 TEST(FaceFrontEdgeTest, NoFaceWithoutEvidence) {
   const ThickWallScene s(0.25);
-  const cv::Mat mask = [] {
-    cv::Mat m(480, 640, CV_8UC1, cv::Scalar(0));
-    m(cv::Rect(200, 100, 240, 280)).setTo(255);
-    return m;
-  }();
   CutGeometry g;
   g.principal_px = Vector2d(319.5, 239.5);
   g.wall_depth_m = 1.5;
@@ -711,10 +749,10 @@ TEST(FaceFrontEdgeTest, NoFaceWithoutEvidence) {
   g.image = cv::Mat(480, 640, CV_8UC1, cv::Scalar(90));
   g.reference = g.image.clone();
   IngressParams p;
-  EXPECT_EQ(face_front_edge(mask, true, 199.5, 0.0, 240, 120, 360, g, p), 199.5);
+  EXPECT_EQ(face_front_edge(-1, true, 199.5, 0.0, 240, 120, 360, g, p), 199.5);
   g.principal_px.x() = 100;
   g.image = s.image, g.reference = s.reference;
-  EXPECT_EQ(face_front_edge(mask, true, 199.5, 0.0, 240, 120, 360, g, p), 199.5);
+  EXPECT_EQ(face_front_edge(-1, true, 199.5, 0.0, 240, 120, 360, g, p), 199.5);
 }
 
 // Regression (issue 15, ingress_photo seed 9805): features on the inner faces (sill, jambs)
