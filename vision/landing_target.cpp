@@ -145,6 +145,73 @@ int floor_seen_around_top(const Correspondences& c, const Planes& planes, const 
   return n;
 }
 
+// The top's features without the strays that stretch them over the floor (issue 15,
+// landing_photo seed 10405: one floor match that fitted the top's homography put a side of the
+// features' rectangle 21 cm out over the floor for a whole vantage, the centre 9 cm off). The
+// top is opaque, so no floor match off its plane lies inside the hull of its features (as in
+// floor_seen_around_top). While some do, the hull's corner whose removal leaves the fewest of
+// them inside goes (the one farthest from the features' centroid on a tie), while one does, up
+// to max_stray_top_share of the features; at that limit with floor still inside, the features
+// are left as they were (the features, not a few strays, cover the floor: the checks before
+// decide about those).
+std::vector<uint8_t> without_strays(const Correspondences& c, const Planes& planes,
+                                    const Matrix3d& H_top_px, double threshold_px,
+                                    double max_share) {
+  std::vector<uint8_t> top_in = planes.top_in;
+  std::vector<cv::Point2f> floor_px;  // floor matches off the top's plane
+  for (size_t i = 0; i < c.size(); ++i) {
+    if (!planes.floor_in[i] || planes.top_in[i]) continue;
+    const Vector3d p = H_top_px * c.x1[i].homogeneous();
+    if (p.z() > 0 && (p.hnormalized() - c.x2[i]).norm() <= threshold_px) continue;
+    floor_px.emplace_back(static_cast<float>(c.x2[i].x()), static_cast<float>(c.x2[i].y()));
+  }
+  if (floor_px.empty()) return top_in;
+  std::vector<size_t> index;  // of the top's features still kept
+  std::vector<cv::Point2f> pts;
+  for (size_t i = 0; i < c.size(); ++i)
+    if (top_in[i]) {
+      index.push_back(i);
+      pts.emplace_back(static_cast<float>(c.x2[i].x()), static_cast<float>(c.x2[i].y()));
+    }
+  const auto inside = [&](const std::vector<cv::Point2f>& p) {
+    if (p.size() < 3) return 0;
+    std::vector<cv::Point2f> hull;
+    cv::convexHull(p, hull);
+    const ConvexHullDepth depth(hull);
+    int n = 0;
+    for (const auto& q : floor_px) n += depth.inside_by(q.x, q.y, threshold_px);
+    return n;
+  };
+  const int max_removed = static_cast<int>(std::floor(max_share * static_cast<double>(pts.size())));
+  int covered = inside(pts);
+  std::vector<uint8_t> pruned = top_in;
+  for (int removed = 0; covered > 0; ++removed) {
+    if (removed >= max_removed || pts.size() <= 4) return top_in;
+    cv::Point2f centroid(0, 0);
+    for (const auto& q : pts) centroid += q;
+    centroid *= 1.0f / static_cast<float>(pts.size());
+    std::vector<int> corners;
+    cv::convexHull(pts, corners);
+    int best = -1, best_covered = covered;
+    float best_far = -1;
+    for (const int k : corners) {
+      std::vector<cv::Point2f> rest = pts;
+      rest.erase(rest.begin() + k);
+      const int n = inside(rest);
+      const cv::Point2f d = pts[static_cast<size_t>(k)] - centroid;
+      const float far = d.dot(d);
+      if (n < best_covered || (n == best_covered && best >= 0 && far > best_far))
+        best = k, best_covered = n, best_far = far;
+    }
+    if (best < 0) break;  // no corner alone uncovers any: the rest are no strays
+    pruned[index[static_cast<size_t>(best)]] = 0;
+    index.erase(index.begin() + best);
+    pts.erase(pts.begin() + best);
+    covered = best_covered;
+  }
+  return pruned;
+}
+
 // The images' verdict on the planes the features found (plane_photometric.hpp): the pixels
 // inside the top's features (their convex hull in the current image) must follow the top's
 // plane, and the pixels around the floor's features outside it the floor's. False tops over a
@@ -612,9 +679,14 @@ TargetOutcome platform_of(const Correspondences& c, const PipelineParams& params
   }
   const Isometry3d X_WC2 = camera_in_world(c.pose_2.X_WB(), c.mount->X_BC());
   const Vector3d n2 = top.n_2() / mocap.baseline_m;  // n2~ in [1/m]
+  const std::vector<uint8_t> top_features =
+      params.landing.max_stray_top_share > 0
+          ? without_strays(c, planes, K * top.homography() * K_inv, params.homography.threshold_px,
+                           params.landing.max_stray_top_share)
+          : planes.top_in;
   std::vector<Vector3d> pts_W;
   for (size_t i = 0; i < c.size(); ++i) {
-    if (!planes.top_in[i]) continue;
+    if (!top_features[i]) continue;
     const Vector3d ray = K_inv * c.x2[i].homogeneous();
     const double denom = n2.dot(ray);
     if (denom <= 0) continue;

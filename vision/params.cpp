@@ -220,6 +220,10 @@ const ParamSchema<LandingParams>& LandingParams::schema() {
           "the planes by nothing; more than this share of them, and the \"top\" is the floor "
           "split by tracking noise, or a plane fitted through the top and the floor: no target. "
           "1: off");
+    s.add("max_stray_top_share", &P::max_stray_top_share, Range::closed(0, 0.5), "",
+          "the top is opaque: top features whose removal leaves fewer floor matches (off the "
+          "top's plane) inside the hull of the top's are dropped before its extent is measured, "
+          "up to this share of them (0: none)");
     s.add("top_alone_min_share", &P::top_alone_min_share, Range::closed(0, 1), "",
           "known floor: where the floor shows too few features for the pair, the view may hold "
           "the top alone (close over it in the approach): one level plane at a platform height "

@@ -123,6 +123,7 @@ struct LandingParams {
   double top_alone_min_share = 0.6;
   double top_alone_min_rise = 0.06;
   double max_top_on_floor_share = 0.25;
+  double max_stray_top_share = 0.1;
   // Beyond the paper: the images check the planes the features found (plane_photometric.hpp).
   double photometric_tol = 0.25;
   double photometric_min_ncc = 0.5;

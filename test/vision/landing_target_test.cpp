@@ -259,6 +259,44 @@ TEST(FalseTargetOverABareFloor, LowestDrawnTopOverTheSameFloorIsFound) {
   }
 }
 
+// Regression (issue 15, landing_photo seed 10405: one floor match that fitted the top's
+// homography stretched the features' rectangle 21 cm over the floor for a whole vantage, the
+// centre 9 cm off, the touch-down 2.7 cm off). The top is opaque: a top feature whose hull takes
+// in floor matches off the top's plane is a stray and is left out of the extent.
+TEST(LandingTopExtent, AStrayTopMatchOnTheFloorDoesNotStretchTheTop) {
+  for (uint64_t seed = 1; seed <= 10; ++seed) {
+    std::mt19937_64 rng(700 + seed);
+    const double h = 0.15;
+    LowTop t = low_top(rng, h);
+    const Vector3d p2 = t.p_W_B2;
+    // On the top's plane, 18-20 cm beyond one of its sides (one in view), with the floor seen
+    // between (three matches on the way out: the evidence that it is floor there).
+    bool added = false;
+    for (const Vector2d& d : {Vector2d(0.35, 0.02), Vector2d(-0.35, 0.02), Vector2d(0.02, 0.30),
+                              Vector2d(0.02, -0.30)}) {
+      if (added || !t.v.add(Vector3d(p2.x() + d.x(), p2.y() + d.y(), h), rng)) continue;
+      added = true;
+      for (const double f : {0.6, 0.75, 0.9})
+        t.v.add(Vector3d(p2.x() + f * d.x(), p2.y() + f * d.y() + 0.03, 0.0), rng);
+    }
+    ASSERT_TRUE(added) << seed;
+    PipelineParams params;
+    ASSERT_GT(params.landing.max_stray_top_share, 0);
+    const TargetOutcome o = find_landing_target(t.v.c, params);
+    ASSERT_TRUE(found(o)) << "seed " << seed << ": " << to_string(o.reason);
+    // 40 features widened over a 30 x 24 cm top (the shortfall's spread: a few cm).
+    EXPECT_LT(o.estimate.size_m[0], 0.34) << "seed " << seed;
+    EXPECT_LT(o.estimate.size_m[1], 0.28) << "seed " << seed;
+    const Vector2d centre_error = (o.estimate.p_W - Vector3d(p2.x(), p2.y(), h)).head<2>();
+    EXPECT_LT(centre_error.norm(), 0.02) << "seed " << seed;
+    params.landing.max_stray_top_share = 0;
+    const TargetOutcome stretched = find_landing_target(t.v.c, params);
+    ASSERT_TRUE(found(stretched)) << "seed " << seed << ": " << to_string(stretched.reason);
+    EXPECT_GT(stretched.estimate.size_m[0] + stretched.estimate.size_m[1], 0.30 + 0.24 + 0.15)
+        << "seed " << seed;
+  }
+}
+
 // Over the tile floor (few floor matches around the top, many on it, a fifth mismatches, some of
 // random pixel pairs) 8-22 cm tops are found, at their height.
 TEST(FalseTargetOverABareFloor, TopsOverFewFloorMatchesAreFound) {
