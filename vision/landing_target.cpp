@@ -120,6 +120,12 @@ bool floor_agrees(const PlaneMotion& floor, const Correspondences& c,
              params.landing.max_normal_angle_deg * M_PI / 180.0;
 }
 
+// Whether the plane of pixel homography H_px carries match i's x1 to its x2 within threshold_px.
+bool carries(const Matrix3d& H_px, const Correspondences& c, size_t i, double threshold_px) {
+  const Vector3d p = H_px * c.x1[i].homogeneous();
+  return p.z() > 0 && (p.hnormalized() - c.x2[i]).norm() <= threshold_px;
+}
+
 // A platform top is opaque: the floor is seen around it, never through it (the known floor's
 // hypotheses keep to the same rule, known_floor.cpp). The paper's planes split a bare floor into
 // a "top" a few centimetres up that holds most of the view and a "floor" of the rest, all of it
@@ -138,9 +144,8 @@ int floor_seen_around_top(const Correspondences& c, const Planes& planes, const 
   for (size_t i = 0; i < c.size(); ++i) {
     if (!planes.floor_in[i] || planes.top_in[i]) continue;
     const cv::Point2f q(static_cast<float>(c.x2[i].x()), static_cast<float>(c.x2[i].y()));
-    const Vector3d p = H_top_px * c.x1[i].homogeneous();
-    const bool fits_top = p.z() > 0 && (p.hnormalized() - c.x2[i]).norm() <= threshold_px;
-    n += depth.empty() || fits_top || !depth.inside_by(q.x, q.y, threshold_px);
+    n += depth.empty() || carries(H_top_px, c, i, threshold_px) ||
+         !depth.inside_by(q.x, q.y, threshold_px);
   }
   return n;
 }
@@ -149,27 +154,23 @@ int floor_seen_around_top(const Correspondences& c, const Planes& planes, const 
 // landing_photo seed 10405: one floor match that fitted the top's homography put a side of the
 // features' rectangle 21 cm out over the floor for a whole vantage, the centre 9 cm off). The
 // top is opaque, so no floor match off its plane lies inside the hull of its features (as in
-// floor_seen_around_top). While some do, the hull's corner whose removal leaves the fewest of
-// them inside goes (the one farthest from the features' centroid on a tie), while one does, up
-// to max_stray_top_share of the features; at that limit with floor still inside, the features
-// are left as they were (the features, not a few strays, cover the floor: the checks before
-// decide about those).
+// floor_seen_around_top). While some do and removing one hull corner leaves fewer inside, the
+// corner that leaves the fewest goes (the one farthest from the features' centroid on a tie),
+// up to max_stray_top_share of the features; at that limit with floor still inside, the
+// features are left as they were (the features, not a few strays, cover the floor: the checks
+// before decide about those).
 std::vector<uint8_t> without_strays(const Correspondences& c, const Planes& planes,
                                     const Matrix3d& H_top_px, double threshold_px,
                                     double max_share) {
-  std::vector<uint8_t> top_in = planes.top_in;
   std::vector<cv::Point2f> floor_px;  // floor matches off the top's plane
-  for (size_t i = 0; i < c.size(); ++i) {
-    if (!planes.floor_in[i] || planes.top_in[i]) continue;
-    const Vector3d p = H_top_px * c.x1[i].homogeneous();
-    if (p.z() > 0 && (p.hnormalized() - c.x2[i]).norm() <= threshold_px) continue;
-    floor_px.emplace_back(static_cast<float>(c.x2[i].x()), static_cast<float>(c.x2[i].y()));
-  }
-  if (floor_px.empty()) return top_in;
+  for (size_t i = 0; i < c.size(); ++i)
+    if (planes.floor_in[i] && !planes.top_in[i] && !carries(H_top_px, c, i, threshold_px))
+      floor_px.emplace_back(static_cast<float>(c.x2[i].x()), static_cast<float>(c.x2[i].y()));
+  if (floor_px.empty()) return planes.top_in;
   std::vector<size_t> index;  // of the top's features still kept
   std::vector<cv::Point2f> pts;
   for (size_t i = 0; i < c.size(); ++i)
-    if (top_in[i]) {
+    if (planes.top_in[i]) {
       index.push_back(i);
       pts.emplace_back(static_cast<float>(c.x2[i].x()), static_cast<float>(c.x2[i].y()));
     }
@@ -184,9 +185,9 @@ std::vector<uint8_t> without_strays(const Correspondences& c, const Planes& plan
   };
   const int max_removed = static_cast<int>(std::floor(max_share * static_cast<double>(pts.size())));
   int covered = inside(pts);
-  std::vector<uint8_t> pruned = top_in;
+  std::vector<uint8_t> pruned = planes.top_in;
   for (int removed = 0; covered > 0; ++removed) {
-    if (removed >= max_removed || pts.size() <= 4) return top_in;
+    if (removed >= max_removed || pts.size() <= 4) return planes.top_in;
     cv::Point2f centroid(0, 0);
     for (const auto& q : pts) centroid += q;
     centroid *= 1.0f / static_cast<float>(pts.size());
@@ -290,8 +291,7 @@ bool top_told_from_floor(const Correspondences& c, const std::vector<uint8_t>& t
   for (size_t i = 0; i < c.size(); ++i) {
     if (!top_in[i]) continue;
     ++n;
-    const Vector3d p = H_floor_px * c.x1[i].homogeneous();
-    on_floor += p.z() > 0 && (p.hnormalized() - c.x2[i]).norm() <= threshold_px;
+    on_floor += carries(H_floor_px, c, i, threshold_px);
   }
   return on_floor <= max_share * n;
 }
