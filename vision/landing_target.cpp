@@ -643,6 +643,8 @@ TargetOutcome platform_of(const Correspondences& c, const PipelineParams& params
   const PlaneMotion& floor = planes.floor;
   const Matrix3d K = c.camera->K();
   const Matrix3d K_inv = K.inverse();
+  const Matrix3d H_top_px = K * top.homography() * K_inv;
+  const Matrix3d H_floor_px = K * floor.homography() * K_inv;
   const MocapMotion mocap = mocap_motion(c.pose_1, c.pose_2, *c.mount);
   for (size_t i = 0; i < c.size(); ++i)
     out.labels[i] = planes.top_in[i]     ? Label::kTarget
@@ -660,14 +662,14 @@ TargetOutcome platform_of(const Correspondences& c, const PipelineParams& params
   // floor, or most of it (floor_seen_around_top). A top alone has no floor in sight by
   // definition: its plane was told from the floor by the known floor's rho instead.
   if (!planes.top_alone &&
-      floor_seen_around_top(c, planes, K * top.homography() * K_inv,
-                            params.homography.threshold_px) < params.landing.min_floor_inliers) {
+      floor_seen_around_top(c, planes, H_top_px, params.homography.threshold_px) <
+          params.landing.min_floor_inliers) {
     out.reason = Reason::kNoTargetPlane;
     return out;
   }
 
-  if (!top_told_from_floor(c, planes.top_in, K * floor.homography() * K_inv,
-                           params.homography.threshold_px, params.landing.max_top_on_floor_share)) {
+  if (!top_told_from_floor(c, planes.top_in, H_floor_px, params.homography.threshold_px,
+                           params.landing.max_top_on_floor_share)) {
     out.reason = Reason::kNoTargetPlane;
     return out;
   }
@@ -681,7 +683,7 @@ TargetOutcome platform_of(const Correspondences& c, const PipelineParams& params
   const Vector3d n2 = top.n_2() / mocap.baseline_m;  // n2~ in [1/m]
   const std::vector<uint8_t> top_features =
       params.landing.max_stray_top_share > 0
-          ? without_strays(c, planes, K * top.homography() * K_inv, params.homography.threshold_px,
+          ? without_strays(c, planes, H_top_px, params.homography.threshold_px,
                            params.landing.max_stray_top_share)
           : planes.top_in;
   std::vector<Vector3d> pts_W;
@@ -751,8 +753,7 @@ TargetOutcome platform_of(const Correspondences& c, const PipelineParams& params
       ++at_border;
   const bool cut = at_border >= 2;
   if (!gray_1.empty() && !gray_2.empty() && params.landing.photometric_tol > 0 &&
-      !follows_its_planes(c, planes, K * floor.homography() * K_inv, K * top.homography() * K_inv,
-                          gray_1, gray_2, params.landing)) {
+      !follows_its_planes(c, planes, H_floor_px, H_top_px, gray_1, gray_2, params.landing)) {
     out.reason = Reason::kNoTargetPlane;
     return out;
   }
