@@ -579,17 +579,208 @@ std::optional<Rim> rim_offset(const Correspondences& c, const cv::Mat& gray_1,
   return std::nullopt;
 }
 
+// Where the top's plane stops explaining the images beyond a side (landing_target.hpp, the top's
+// end): the side's offset and turn, or nullopt where the floor beyond shows no texture to tell
+// it by, or its lines do not end along one straight line. H_12_top / H_12_floor take a current
+// ray to the reference's ray of the same point on the top's / the floor's plane; px_m is a
+// pixel of the current image on the top.
+std::optional<Rim> top_end_offset(const Correspondences& c, const cv::Mat& gray_1,
+                                  const cv::Mat& gray_2, const Matrix3d& H_12_top,
+                                  const Matrix3d& H_12_floor, const Isometry3d& X_WC2,
+                                  const Side& side, double px_m, const LandingParams& p) {
+  constexpr int kInside = 4;   // [px] the strip inside the side that calibrates the threshold
+  constexpr int kBeyond = 30;  // [px] the floor read beyond an end, in kParts parts
+  constexpr int kParts = 3;
+  constexpr int kWindow = 3;  // [px] the shares' box means either side of a step
+  constexpr int kMaxLines = 36;
+  constexpr int kStretches = 6;
+  const double t_step_m = std::max(px_m, (side.t_hi - side.t_lo) / (kMaxLines - 1));
+  const int n_t = static_cast<int>(std::floor((side.t_hi - side.t_lo) / t_step_m)) + 1;
+  if (n_t < 2 * kStretches) return std::nullopt;
+  const double t_mid = 0.5 * (side.t_lo + side.t_hi);
+  const double max_tan = std::tan(p.rim_max_turn_deg * M_PI / 180.0);
+  // Offsets j (pixels past the side) from -kInside to n_search + kBeyond, read along lines
+  // turned by up to max_tan: the grid's columns reach margin further either way.
+  const int margin =
+      static_cast<int>(std::ceil(0.5 * (side.t_hi - side.t_lo) * max_tan / px_m)) + 1;
+  const int n_search = static_cast<int>(std::ceil(p.top_end_search_m / px_m));
+  const int j_lo = -kInside, j_hi = n_search + kBeyond;  // offsets [j_lo, j_hi)
+  const int n_g = (j_hi - j_lo) + 2 * margin;
+  const auto cell = [&](int i, int j) {  // line i at offset j, or -1 outside the grid
+    const int col = j - j_lo + margin;
+    return col < 0 || col >= n_g ? std::ptrdiff_t{-1} : static_cast<std::ptrdiff_t>(i) * n_g + col;
+  };
+  const size_t n = static_cast<size_t>(n_t) * n_g;
+  constexpr float kUnseen = -1.0f;
+  std::vector<float> v2(n, kUnseen), v1_top(n, kUnseen);
+  const Isometry3d X_C2W = X_WC2.inverse();
+  const Vector3d corner_C2 =
+      X_C2W * (side.base_W + (j_lo - margin) * px_m * side.out_W + side.t_lo * side.along_W);
+  const Vector3d dj_C2 = X_C2W.linear() * (px_m * side.out_W);
+  const Vector3d di_C2 = X_C2W.linear() * (t_step_m * side.along_W);
+  const auto seen_in_1 = [&](const Matrix3d& H, const Vector3d& ray_2, double* v) {
+    const Vector3d r1 = H * ray_2;
+    if (r1.z() <= 0) return false;
+    const auto u1 = c.camera->project(r1);
+    return u1 && bilinear_inside(gray_1, *u1, v);
+  };
+  for (int i = 0; i < n_t; ++i)
+    for (int col = 0; col < n_g; ++col) {
+      const Vector3d X_C2 = corner_C2 + i * di_C2 + col * dj_C2;
+      if (X_C2.z() <= 0) continue;
+      const Vector3d ray_2 = X_C2 / X_C2.z();
+      const auto u2 = c.camera->project(ray_2);
+      double a, b;
+      if (!u2 || !bilinear_inside(gray_2, *u2, &a) || !seen_in_1(H_12_top, ray_2, &b)) continue;
+      const size_t at = static_cast<size_t>(i) * n_g + col;
+      v2[at] = static_cast<float>(a), v1_top[at] = static_cast<float>(b);
+    }
+  // The images' gains differ (automatic gain, flicker): the inside strip's ratio evens them.
+  double sum_2 = 0, sum_1 = 0;
+  std::vector<std::ptrdiff_t> inside;
+  for (int i = 0; i < n_t; ++i)
+    for (int j = j_lo; j < 0; ++j)
+      if (const auto at = cell(i, j); v2[at] >= 0) {
+        inside.push_back(at);
+        sum_2 += v2[at], sum_1 += v1_top[at];
+      }
+  if (5 * inside.size() < 4 * static_cast<size_t>(n_t * kInside) || sum_1 <= 0) return std::nullopt;
+  const double gain = sum_2 / sum_1;
+  const auto e_top = [&](std::ptrdiff_t at) { return std::abs(v2[at] - gain * v1_top[at]); };
+  // The threshold: above the top's own disagreement in the inside strip (noise, blur, the
+  // plane's error across its texture): twice its 90th percentile, and top_end_min_diff.
+  std::vector<double> e_inside;
+  for (const auto at : inside) e_inside.push_back(e_top(at));
+  const auto q90 = e_inside.begin() + static_cast<std::ptrdiff_t>(0.9 * (e_inside.size() - 1));
+  std::nth_element(e_inside.begin(), q90, e_inside.end());
+  const double tau = std::max(p.top_end_min_diff, 2.0 * *q90);
+  // The share of the pixels the top's plane does not explain over lines [i0, i1) read along a
+  // turn (offsets grow by slope_px pixels per metre along the side): f[k] at offset k + j_lo,
+  // from the inside strip on. It ends where more than a fifth of the lines are out of either
+  // view.
+  const auto share_off_top = [&](double slope_px, int i0, int i1) {
+    std::vector<double> f;
+    for (int j = j_lo; j < j_hi; ++j) {
+      int off = 0, seen = 0;
+      for (int i = i0; i < i1; ++i) {
+        const auto at = cell(
+            i, j + static_cast<int>(std::lround((side.t_lo + i * t_step_m - t_mid) * slope_px)));
+        if (at < 0 || v2[at] < 0) continue;
+        ++seen;
+        off += e_top(at) > tau;
+      }
+      if (5 * seen < 4 * (i1 - i0)) break;
+      f.push_back(static_cast<double>(off) / seen);
+    }
+    return f;
+  };
+  // The end: the innermost offset within the search where that share steps up (box means of
+  // kWindow pixels either side) by at least half its strongest step there (beyond a rim a side
+  // face or a second texture can step again), to a fraction of a pixel by a parabola;
+  // (offset [px], rise).
+  const auto step_up = [&](const std::vector<double>& f) -> std::optional<Eigen::Vector2d> {
+    const int n_k = std::min(static_cast<int>(f.size()), n_search - j_lo + kWindow);
+    std::vector<double> rise(n_k, -1.0);
+    for (int k = kWindow; k + kWindow <= n_k; ++k) {
+      double in = 0, out = 0;
+      for (int w = 1; w <= kWindow; ++w) in += f[k - w], out += f[k + w - 1];
+      rise[k] = (out - in) / kWindow;
+    }
+    const auto best = std::max_element(rise.begin(), rise.end());
+    if (best == rise.end() || *best <= 0) return std::nullopt;
+    int k = static_cast<int>(best - rise.begin());
+    for (int q = 1; q + 1 < k; ++q)
+      if (rise[q] >= 0.5 * *best && rise[q] >= rise[q - 1] && rise[q] >= rise[q + 1]) {
+        k = q;
+        break;
+      }
+    double at = k;
+    if (k > 0 && k + 1 < n_k && rise[k - 1] >= 0 && rise[k + 1] >= 0) {
+      const double den = rise[k - 1] - 2 * rise[k] + rise[k + 1];
+      if (den < 0) at += 0.5 * (rise[k - 1] - rise[k + 1]) / den;
+    }
+    return Eigen::Vector2d(at - 0.5 + j_lo, rise[k]);  // the step lies between k - 1 and k
+  };
+  // The turn, as rim_offset's: the stretches' ends unturned and a least-squares line through
+  // them. A straight end steps in most stretches: the one farthest off is dropped while it lies
+  // more than two pixels off, down to kStretches - 2 of them.
+  std::vector<Eigen::Vector2d> at_stretch;  // (t - t_mid [m], end [px])
+  for (int s = 0; s < kStretches; ++s) {
+    const int i0 = s * n_t / kStretches, i1 = (s + 1) * n_t / kStretches;
+    const auto e = step_up(share_off_top(0.0, i0, i1));
+    if (e && e->y() >= p.top_end_min_rise)
+      at_stretch.emplace_back(side.t_lo + 0.5 * (i0 + i1 - 1) * t_step_m - t_mid, e->x());
+  }
+  double slope = 0;  // [px / m]
+  for (;;) {
+    if (at_stretch.size() + 2 < kStretches) return std::nullopt;
+    const double m = static_cast<double>(at_stretch.size());
+    double sx = 0, sy = 0, sxx = 0, sxy = 0;
+    for (const auto& q : at_stretch)
+      sx += q.x(), sy += q.y(), sxx += q.x() * q.x(), sxy += q.x() * q.y();
+    const double den = m * sxx - sx * sx;
+    if (den <= 0) return std::nullopt;
+    slope = (m * sxy - sx * sy) / den;
+    const double mid = (sy - slope * sx) / m;
+    const auto off = [&](const Eigen::Vector2d& q) {
+      return std::abs(q.y() - mid - slope * q.x());
+    };
+    const auto worst =
+        std::max_element(at_stretch.begin(), at_stretch.end(),
+                         [&](const auto& a, const auto& b) { return off(a) < off(b); });
+    if (off(*worst) <= 2.0) break;
+    at_stretch.erase(worst);
+  }
+  if (std::abs(slope * px_m) > max_tan) return std::nullopt;
+  const std::vector<double> f = share_off_top(slope, 0, n_t);
+  const auto e = step_up(f);
+  if (!e || e->y() < p.top_end_min_rise) return std::nullopt;
+  // The top's plane explains the images from the features' side up to the end; beyond it, it
+  // fails as often for kBeyond pixels (the floor is busy from the end on: the
+  // band an edge of a rug moves by between the views is no end), and the floor's plane
+  // explains most of those pixels (a floor, not a second top or a side face).
+  const int j_end = static_cast<int>(std::lround(e->x()));
+  const auto f_at = [&](int j) { return f[static_cast<size_t>(j - j_lo)]; };
+  if (j_end + 1 + kBeyond - j_lo > static_cast<int>(f.size())) return std::nullopt;
+  double inside_share = 0;
+  for (int j = 0; j < j_end - 1; ++j) inside_share = std::max(inside_share, f_at(j));
+  if (inside_share > 0.5 * e->y()) return std::nullopt;
+  for (int part = 0; part < kParts; ++part) {
+    double share = 0;
+    for (int j = 0; j < kBeyond / kParts; ++j)
+      share += f_at(j_end + 1 + part * kBeyond / kParts + j);
+    if (share / (kBeyond / kParts) - inside_share < p.top_end_min_rise) return std::nullopt;
+  }
+  int off_top = 0, on_floor = 0;
+  for (int i = 0; i < n_t; ++i) {
+    const int shift = static_cast<int>(std::lround((side.t_lo + i * t_step_m - t_mid) * slope));
+    for (int j = j_end + 1; j < j_end + 1 + kBeyond; ++j) {
+      const auto at = cell(i, j + shift);
+      if (at < 0 || v2[at] < 0 || e_top(at) <= tau) continue;
+      ++off_top;
+      const int col = static_cast<int>(at % n_g);
+      const Vector3d X_C2 = corner_C2 + i * di_C2 + col * dj_C2;
+      double v1_floor;
+      on_floor += seen_in_1(H_12_floor, X_C2 / X_C2.z(), &v1_floor) &&
+                  std::abs(v2[at] - gain * v1_floor) <= tau;
+    }
+  }
+  if (2 * on_floor < off_top) return std::nullopt;
+  return Rim{std::max(0.0, e->x()) * px_m, std::atan(slope * px_m)};
+}
+
 // The top out to its rims (landing_target.hpp): each side of the features' extent moved to its
 // rim where both images show one, else widened as `widened`; nullopt where no side has a rim.
 // Two or more rims that agree on a turn turn the rectangle onto them, each side with a rim then
 // where its rim crosses the middle of the stretch read.
 std::optional<Rect> rim_rect(const Correspondences& c, const cv::Mat& gray_1, const cv::Mat& gray_2,
-                             const PlaneMotion& top, const Isometry3d& X_WC2,
-                             const std::vector<Vector3d>& pts_W, const Rect& features,
-                             const Rect& widened, const LandingParams& p) {
+                             const PlaneMotion& top, const PlaneMotion& floor,
+                             const Isometry3d& X_WC2, const std::vector<Vector3d>& pts_W,
+                             const Rect& features, const Rect& widened, const LandingParams& p) {
   // The reference's point of the top's plane seen at a current ray: the top's homography
   // (calibrated, x2 ~ H x1), which explains the top's features, not the poses' motion.
   const Matrix3d H_12 = top.homography().inverse();
+  const Matrix3d H_12_floor = floor.homography().inverse();
   const double step_m =
       0.5 * (X_WC2.inverse() * features.origin_W).z() / c.camera->K()(0, 0);  // half a pixel
   struct Found {
@@ -609,7 +800,9 @@ std::optional<Rect> rim_rect(const Correspondences& c, const cv::Mat& gray_1, co
       const double at = sign < 0 ? features.lo[k] : features.hi[k];
       const Side side{features.origin_W + at * features.axis[k], sign * features.axis[k],
                       features.axis[o], t_lo, t_hi};
-      const auto rim = rim_offset(c, gray_1, gray_2, H_12, X_WC2, side, step_m, p);
+      auto rim = rim_offset(c, gray_1, gray_2, H_12, X_WC2, side, step_m, p);
+      if (!rim && p.top_end_search_m > 0)
+        rim = top_end_offset(c, gray_1, gray_2, H_12, H_12_floor, X_WC2, side, 2 * step_m, p);
       if (!rim) continue;
       const double s = at + sign * rim->d_m;
       (sign < 0 ? r.lo[k] : r.hi[k]) = s;
@@ -765,8 +958,8 @@ TargetOutcome platform_of(const Correspondences& c, const PipelineParams& params
   // features' stands.
   if (out.reason == Reason::kOk && !gray_1.empty() && !gray_2.empty() &&
       params.landing.rim_search_m > 0) {
-    if (const auto rim =
-            rim_rect(c, gray_1, gray_2, top, X_WC2, pts_W, features, widened, params.landing)) {
+    if (const auto rim = rim_rect(c, gray_1, gray_2, top, floor, X_WC2, pts_W, features, widened,
+                                  params.landing)) {
       TargetEstimate at_rim = out.estimate;
       if (measure_top(c, planes, *rim, X_WC2, params, &at_rim) == Reason::kOk &&
           at_rim.height_m >= params.landing.min_height_m &&

@@ -31,6 +31,22 @@
 // shows); with one, the side ends at the rim. The plane check (plane_photometric.hpp) reads the
 // features' hull, not the rim's rectangle: the rim is measured only on a top the check accepts.
 //
+// The top's end (issue 15, landing_photo; beyond the paper): over a busy floor the mean grey
+// beyond a rim need not step at all (a pale margin of print against a patterned floor, a
+// photograph's mid-grey against a circuit board). A side without a rim step is then searched
+// outward (top_end_search_m) for where the top's homography stops explaining the two images:
+// at each offset, the share of the pixels whose grey differs between the views, read at the
+// same point of the top's plane, by more than a threshold (top_end_min_diff, and twice the top's
+// own differences just inside the side). On the top that share is near zero, whatever its
+// texture; on a textured floor, which lies off the top's plane, it is large. The end is where
+// it steps up (by top_end_min_rise) in most stretches of the side along one straight line, the
+// line's turn read as the rim's. Where the floor beyond is flat, the top's homography explains
+// it too and the step lies wherever the floor's texture begins: an upper bound, not the rim.
+// So an end counts only where the share stays up over the 30 pixels beyond it (a busy floor,
+// not the band that the edge of a rug moves by between the views) and where the floor's
+// homography explains most of what the top's does not; a flat band of floor that ends along a
+// straight line parallel to the side still passes, and would widen the top by the band.
+//
 // The paper takes the first homography as the floor; here the roles follow the geometry,
 // because a richly textured platform top can hold more matches than the floor in view.
 

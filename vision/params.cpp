@@ -297,6 +297,20 @@ const ParamSchema<LandingParams>& LandingParams::schema() {
           "minimum-area rectangle of a few dozen features on a blank top can be 10 deg or more "
           "off its edges); the turn is fitted to where short stretches of the side step, and "
           "two or more rims that agree on a turn turn the rectangle onto them");
+    s.add("top_end_search_m", &P::top_end_search_m, Range::closed(0, 0.2), "m",
+          "a side without a rim step is searched outward this far in the top's plane for the "
+          "top's end: a straight line where the top's homography stops explaining the two "
+          "images and a textured floor, which the floor's homography explains, begins (0: off). "
+          "A top whose features cover a band of it, over a busy floor that shows no mean step "
+          "at the rim, measured 14.7 cm for 26.7 (landing_photo 10400, refused)");
+    s.add("top_end_min_diff", &P::top_end_min_diff, Range::gt(0), "grey levels",
+          "top_end_search_m: a pixel the top's homography does not explain differs between the "
+          "images by this much at least (and by twice the 90th percentile of the top's own "
+          "differences just inside the side)");
+    s.add("top_end_min_rise", &P::top_end_min_rise, Range::open_closed(0, 1), "",
+          "top_end_search_m: at the top's end, the share of pixels its homography does not "
+          "explain rises by this much at least (from the top's few to the floor's many), in "
+          "five of six stretches of the side and along the whole side");
     s.add("max_motion_blur_px", &P::max_motion_blur_px, Range::ge(0), "px",
           "beyond the paper (motion_blur.hpp): a frame whose exposure smeared the floor's image "
           "farther than this anywhere in the view (from motion capture's velocity and angular "

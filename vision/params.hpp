@@ -139,6 +139,9 @@ struct LandingParams {
   double rim_min_step = 6.0;
   double rim_max_disagreement_px = 1.5;
   double rim_max_turn_deg = 15.0;
+  double top_end_search_m = 0.1;
+  double top_end_min_diff = 12.0;
+  double top_end_min_rise = 0.4;
   // Beyond the paper: frames smeared by the camera's motion are not used (motion_blur.hpp).
   double max_motion_blur_px = 8.0;
   double assumed_exposure_s = 0.01;
