@@ -301,8 +301,10 @@ const ParamSchema<LandingParams>& LandingParams::schema() {
           "a side without a rim step is searched outward this far in the top's plane for the "
           "top's end: a straight line where the top's homography stops explaining the two "
           "images and a textured floor, which the floor's homography explains, begins (0: off). "
-          "A top whose features cover a band of it, over a busy floor that shows no mean step "
-          "at the rim, measured 14.7 cm for 26.7 (landing_photo 10400, refused)");
+          "A text-printed top whose print stops short of its edges, on a patterned floor as "
+          "pale on average, measured 19.0 cm for 20.1 and was refused (landing_photo 10416); an "
+          "apple photograph that leaves a third of its top bare put the centre 2.2 cm off "
+          "(landing_photo 10406)");
     s.add("top_end_min_diff", &P::top_end_min_diff, Range::gt(0), "grey levels",
           "top_end_search_m: a pixel the top's homography does not explain differs between the "
           "images by this much at least (and by twice the 90th percentile of the top's own "
