@@ -654,7 +654,7 @@ void Autonomy::step(phases::FinalDescent& s, const Vector3d& /*p*/, double dt_s)
     s.z_sp_m = std::max(z_floor, s.z_sp_m - L.final_descent_rate_mps * dt_s);
     sp_v_W_.z() = -L.final_descent_rate_mps;
   }
-  sp_p_W_ = Vector3d(estimate_W_.x(), estimate_W_.y(), s.z_sp_m);
+  sp_p_W_ << estimate_W_.head<2>() + body_over_gear_xy(L, pose_), s.z_sp_m;
   if (pose_fresh()) s.touchdown.add_pose(*pose_, s.z_sp_m, now_utime_);
   if (s.touchdown.detected()) {
     motors_on_ = false;
@@ -673,7 +673,8 @@ Autonomy::FinalPause Autonomy::pause_final_descent(phases::FinalDescent& s, doub
     s.paused_since_utime.reset();
     return FinalPause::kNone;
   }
-  const double e_r = (pose_->p_W_B.head<2>() - estimate_W_.head<2>()).norm();
+  const double e_r =
+      (pose_->p_W_B.head<2>() - body_over_gear_xy(L, pose_) - estimate_W_.head<2>()).norm();
   if (!s.paused_since_utime) {
     if (e_r <= L.final_pause_radial_m || pose_->p_W_B.z() - z_touch_m <= L.final_pause_min_height_m)
       return FinalPause::kNone;

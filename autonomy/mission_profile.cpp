@@ -82,7 +82,8 @@ class LandingProfile final : public MissionProfile {
     const Vector3d& target = in.target_W;
     ApproachStep out;
     const double z_touch = target.z() + L.gear_height_m;  // body z on the platform
-    const double e_r = (p.head<2>() - target.head<2>()).norm();
+    const Vector2d body_over_gear = body_over_gear_xy(L, in.pose);
+    const double e_r = (p.head<2>() - body_over_gear - target.head<2>()).norm();
     if (!a.land_here && p.z() - z_touch > L.lost_check_height_m &&
         in.since_found_s > L.lost_timeout_s) {
       out.next = ApproachStep::Next::kTargetLost;
@@ -102,7 +103,7 @@ class LandingProfile final : public MissionProfile {
       a.z_sp_m = z_touch + L.final_height_m;  // waits here (final_descent_allowed)
       out.sp_v_W.z() = 0.0;
     }
-    out.sp_p_W = Vector3d(target.x(), target.y(), a.z_sp_m);
+    out.sp_p_W << target.head<2>() + body_over_gear, a.z_sp_m;
     if (a.at_final_height(target.z(), L.gear_height_m, L.final_height_m)) {
       if (!final_descent_allowed(a, e_r, in)) {
         if (seconds(in.now_utime - *a.held_since_utime) > L.final_hold_timeout_s) {
@@ -240,6 +241,11 @@ std::string no_calm_moment(const LandingParams& L, const std::string& what) {
          fmt(std::min(L.radial_tol_m, L.final_hold_radial_m), 3) + " m, speed within " +
          fmt(L.final_hold_speed_mps, 2) +
          (speed_max_mps > L.final_hold_speed_mps ? " to " + fmt(speed_max_mps, 2) : "") + " m/s)";
+}
+
+Vector2d body_over_gear_xy(const LandingParams& L, const std::optional<PoseSample>& pose) {
+  if (!L.aim_gear || !pose) return Vector2d::Zero();
+  return L.gear_height_m * (pose->q_WB * Vector3d::UnitZ()).head<2>();
 }
 
 bool calm_for_final_descent(const LandingParams& L, double e_r,

@@ -55,6 +55,14 @@ bool calm_for_final_descent(const LandingParams& L, double e_r,
                             const std::optional<PoseSample>& pose, double held_s, int64_t now_utime,
                             std::optional<int64_t>& calm_since_utime);
 
+/// Beyond the paper (issue 15): the horizontal offset of the body origin from the gear's centre
+/// (gear_height_m below it along the body's z axis) [m]. A body tilted against the wind holds
+/// its gear downwind of the origin by gear_height_m sin(tilt); the gear lands where its feet
+/// touch, and the body levels above them. With aim_gear the landing approach and the final
+/// descent put the gear's centre, not the origin, over the target. Zero without a pose or
+/// without aim_gear.
+Vector2d body_over_gear_xy(const LandingParams& L, const std::optional<PoseSample>& pose);
+
 /// Why a final hold ("held") or a paused final descent ("paused") gave up: the target-lost reason.
 std::string no_calm_moment(const LandingParams& L, const std::string& what);
 

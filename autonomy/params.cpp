@@ -196,6 +196,11 @@ const ParamSchema<LandingParams>& LandingParams::schema() {
           "final descent the setpoints are marked precise (position_setpoint_t.MODE_PRECISE): "
           "the outer loop flies them on its precise lateral gains, so a gust moves the vehicle "
           "less there, where its offset becomes the touch-down's error");
+    s.add("aim_gear", &P::aim_gear, Range::any(), "",
+          "beyond the paper: the approach and the final descent put the gear's centre "
+          "(gear_height_m below the body origin along the body's z axis) over the target, not "
+          "the body origin. Tilted against the wind, the gear hangs downwind of the origin by "
+          "gear_height_m sin(tilt); the vehicle lands where its feet touch and levels above them");
     return s;
   }();
   return schema;

@@ -89,6 +89,7 @@ struct LandingParams {
   double final_pause_radial_m = 0.0;  // 0: the final descent never pauses
   double final_pause_min_height_m = 0.1;
   bool precise_final = false;
+  bool aim_gear = false;
   static const ParamSchema<LandingParams>& schema();
   void validate() const;
 };

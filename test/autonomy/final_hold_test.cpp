@@ -18,10 +18,12 @@ struct Approach {
         target.z() + p.landing.gear_height_m + p.landing.final_height_m + 1e-3, false, {}, {}};
   }
   // One 10 ms step with the vehicle over the target offset by e_W, moving at v_W.
-  ApproachStep step(const Vector2d& e_W, const Vector2d& v_W) {
+  ApproachStep step(const Vector2d& e_W, const Vector2d& v_W,
+                    const Eigen::Quaterniond& q_WB = Eigen::Quaterniond::Identity()) {
     t += 10'000;
     PoseSample s;
     s.utime = t;
+    s.q_WB = q_WB;
     s.p_W_B = Vector3d(target.x() + e_W.x(), target.y() + e_W.y(), std::get<0>(state).z_sp_m);
     s.v_W_B = Vector3d(v_W.x(), v_W.y(), 0);
     pose = s;
@@ -230,6 +232,55 @@ TEST(FinalDescentPauseTest, OffTheDescentIsNeverPaused) {
   w.step();
   EXPECT_LT(w.out.setpoint.v_W.z(), 0.0);
   EXPECT_EQ(AutonomyParams{}.landing.final_pause_radial_m, 0.0);
+}
+
+// Issue 15 (landing_photo 9961, 10408: the body origin 0.5-1.6 cm off the platform's centre at
+// the detected touch-down, and a centimetre further at rest): tilted against the wind, the gear
+// hangs downwind of the body origin by gear_height_m sin(tilt), and the vehicle comes to rest
+// where its feet touch. body_over_gear_xy is that offset: zero level, without a pose, or off.
+TEST(GearAimTest, TheBodyStandsOverTheGearByTheGearHeightAlongTheTilt) {
+  AutonomyParams p = with_hold();
+  p.landing.aim_gear = true;
+  p.landing.gear_height_m = 0.1;
+  PoseSample pose;
+  EXPECT_EQ(body_over_gear_xy(p.landing, pose), Vector2d::Zero());
+  const double tilt = 10.0 * M_PI / 180.0;
+  // Rolled about x by +10 deg: the body's z axis leans towards -y, the origin stands 1.74 cm
+  // towards -y of its gear's centre.
+  pose.q_WB = Eigen::Quaterniond(Eigen::AngleAxisd(tilt, Vector3d::UnitX()));
+  const Vector2d d = body_over_gear_xy(p.landing, pose);
+  EXPECT_NEAR(d.x(), 0.0, 1e-12);
+  EXPECT_NEAR(d.y(), -0.1 * std::sin(tilt), 1e-12);
+  // A yaw does not move it; a pitch leans it along x.
+  pose.q_WB = Eigen::Quaterniond(Eigen::AngleAxisd(0.7, Vector3d::UnitZ()) *
+                                 Eigen::AngleAxisd(tilt, Vector3d::UnitY()));
+  EXPECT_NEAR(body_over_gear_xy(p.landing, pose).norm(), 0.1 * std::sin(tilt), 1e-12);
+  EXPECT_EQ(body_over_gear_xy(p.landing, std::nullopt), Vector2d::Zero());
+  p.landing.aim_gear = false;
+  EXPECT_EQ(body_over_gear_xy(p.landing, pose), Vector2d::Zero());
+  EXPECT_FALSE(AutonomyParams{}.landing.aim_gear);
+}
+
+// With aim_gear the final hold's setpoint is the target moved by that offset, and a body held
+// there, its gear over the target, is centred: the final descent starts. Without it the same
+// body is 1.7 cm off (beyond final_hold_radial_m) and held.
+TEST(GearAimTest, TheFinalHoldCentresTheGearNotTheBody) {
+  const Eigen::Quaterniond tilted(Eigen::AngleAxisd(10.0 * M_PI / 180.0, Vector3d::UnitX()));
+  for (const bool aim : {true, false}) {
+    AutonomyParams p = with_hold();
+    p.landing.aim_gear = aim;
+    Approach a(p);
+    const Vector2d body_over_gear(0.0, -p.landing.gear_height_m * std::sin(10.0 * M_PI / 180.0));
+    ApproachStep s;
+    for (int i = 0; i < 40; ++i) {
+      s = a.step(body_over_gear, Vector2d::Zero(), tilted);
+      if (s.next != ApproachStep::Next::kContinue) break;
+      const Vector2d expected = a.target.head<2>() + (aim ? body_over_gear : Vector2d::Zero());
+      EXPECT_NEAR((s.sp_p_W.head<2>() - expected).norm(), 0.0, 1e-12) << i;
+    }
+    EXPECT_EQ(s.next, aim ? ApproachStep::Next::kFinalDescent : ApproachStep::Next::kContinue)
+        << "aim_gear " << aim;
+  }
 }
 
 }  // namespace
