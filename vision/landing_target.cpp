@@ -455,6 +455,55 @@ std::vector<std::pair<double, double>> darkening_steps(const std::vector<double>
   return steps;
 }
 
+// Both images' grey levels at a grid of points of the top's plane beside a side (rim_offset,
+// top_end_offset): n_t lines along the side, t_step_m apart (min_t_step_m at least, max_lines at
+// most), and n_g columns outward, col_m apart, column 0 first_col_m outward of the side. g2 is the
+// current image at the point, g1 the reference at the same point of the top's plane (H_12 takes
+// a current ray to the reference's), kUnseen where either is out of view. nullopt: fewer than
+// min_lines lines.
+struct SideGrid {
+  static constexpr float kUnseen = -1.0f;
+  int n_t = 0, n_g = 0;
+  double t_step_m = 0, t_mid = 0;    // along the side; t_mid the middle of [t_lo, t_hi]
+  Vector3d corner_C2, di_C2, dj_C2;  // the point of line i, column j: corner + i di + j dj
+  std::vector<float> g1, g2;
+  Vector3d point_C2(int i, int j) const { return corner_C2 + i * di_C2 + j * dj_C2; }
+  size_t at(int i, int j) const { return static_cast<size_t>(i) * n_g + j; }
+};
+std::optional<SideGrid> read_side(const Correspondences& c, const cv::Mat& gray_1,
+                                  const cv::Mat& gray_2, const Matrix3d& H_12,
+                                  const Isometry3d& X_WC2, const Side& side, double min_t_step_m,
+                                  int max_lines, int min_lines, double col_m, double first_col_m,
+                                  int n_g) {
+  SideGrid g;
+  g.t_step_m = std::max(min_t_step_m, (side.t_hi - side.t_lo) / (max_lines - 1));
+  g.n_t = static_cast<int>(std::floor((side.t_hi - side.t_lo) / g.t_step_m)) + 1;
+  if (g.n_t < min_lines) return std::nullopt;
+  g.n_g = n_g;
+  g.t_mid = 0.5 * (side.t_lo + side.t_hi);
+  // The grid is affine in the top's plane, and so in camera 2's frame.
+  const Isometry3d X_C2W = X_WC2.inverse();
+  g.corner_C2 = X_C2W * (side.base_W + first_col_m * side.out_W + side.t_lo * side.along_W);
+  g.dj_C2 = X_C2W.linear() * (col_m * side.out_W);
+  g.di_C2 = X_C2W.linear() * (g.t_step_m * side.along_W);
+  g.g1.assign(static_cast<size_t>(g.n_t) * n_g, SideGrid::kUnseen);
+  g.g2.assign(g.g1.size(), SideGrid::kUnseen);
+  for (int i = 0; i < g.n_t; ++i)
+    for (int j = 0; j < n_g; ++j) {
+      const Vector3d X_C2 = g.point_C2(i, j);
+      if (X_C2.z() <= 0) continue;
+      const Vector3d r1 = H_12 * (X_C2 / X_C2.z());
+      if (r1.z() <= 0) continue;
+      const auto u1 = c.camera->project(r1), u2 = c.camera->project(X_C2);
+      double v1, v2;
+      if (!u1 || !u2 || !bilinear_inside(gray_1, *u1, &v1) || !bilinear_inside(gray_2, *u2, &v2))
+        continue;
+      g.g1[g.at(i, j)] = static_cast<float>(v1);
+      g.g2[g.at(i, j)] = static_cast<float>(v2);
+    }
+  return g;
+}
+
 // The side's rim, or nullopt when the two images do not show one step at the same place of the
 // top's plane (landing_target.hpp). step_m is half a pixel of the current image on the top.
 struct Rim {
@@ -474,36 +523,17 @@ std::optional<Rim> rim_offset(const Correspondences& c, const cv::Mat& gray_1,
   // The turn from kStretches stretches of the side: each a sixth of a 14 cm side, across which
   // a rim turned 15 deg spreads its step over 6 mm, a pixel and a half at the search height.
   constexpr int kStretches = 6;
-  const double t_step_m = std::max(2 * step_m, (side.t_hi - side.t_lo) / (kMaxLines - 1));
-  const int n_t = static_cast<int>(std::floor((side.t_hi - side.t_lo) / t_step_m)) + 1;
-  if (n_t < 2 * kStretches) return std::nullopt;
-  const double t_mid = 0.5 * (side.t_lo + side.t_hi);
   const double max_tan = std::tan(p.rim_max_turn_deg * M_PI / 180.0);
   const int margin =
       static_cast<int>(std::ceil(0.5 * (side.t_hi - side.t_lo) * max_tan / step_m)) + 1;
   const int n_d = j0 + static_cast<int>(std::ceil(p.rim_search_m / step_m)) + k + 1;
-  const int n_g = n_d + 2 * margin;  // grid columns: offsets (j - margin - j0) step_m
-  constexpr float kUnseen = -1.0f;
-  std::vector<float> g1(static_cast<size_t>(n_t) * n_g, kUnseen), g2(g1.size(), kUnseen);
-  // The grid is affine in the top's plane, and so in camera 2's frame.
-  const Isometry3d X_C2W = X_WC2.inverse();
-  const Vector3d corner_C2 =
-      X_C2W * (side.base_W - (margin + j0) * step_m * side.out_W + side.t_lo * side.along_W);
-  const Vector3d dj_C2 = X_C2W.linear() * (step_m * side.out_W);
-  const Vector3d di_C2 = X_C2W.linear() * (t_step_m * side.along_W);
-  for (int i = 0; i < n_t; ++i)
-    for (int j = 0; j < n_g; ++j) {
-      const Vector3d X_C2 = corner_C2 + i * di_C2 + j * dj_C2;
-      if (X_C2.z() <= 0) continue;
-      const Vector3d r1 = H_12 * (X_C2 / X_C2.z());
-      if (r1.z() <= 0) continue;
-      const auto u1 = c.camera->project(r1), u2 = c.camera->project(X_C2);
-      double v1, v2;
-      if (!u1 || !u2 || !bilinear_inside(gray_1, *u1, &v1) || !bilinear_inside(gray_2, *u2, &v2))
-        continue;
-      g1[static_cast<size_t>(i) * n_g + j] = static_cast<float>(v1);
-      g2[static_cast<size_t>(i) * n_g + j] = static_cast<float>(v2);
-    }
+  // Grid columns: offsets (j - margin - j0) step_m.
+  const auto grid = read_side(c, gray_1, gray_2, H_12, X_WC2, side, 2 * step_m, kMaxLines,
+                              2 * kStretches, step_m, -(margin + j0) * step_m, n_d + 2 * margin);
+  if (!grid) return std::nullopt;
+  const int n_t = grid->n_t, n_g = grid->n_g;
+  const double t_step_m = grid->t_step_m, t_mid = grid->t_mid;
+  const std::vector<float>&g1 = grid->g1, &g2 = grid->g2;
   // The mean over lines [i0, i1) turned by tan_turn at each offset; it ends where most of them
   // are out of either view (a side cut by the border).
   const auto profile = [&](const std::vector<float>& g, double tan_turn, int i0, int i1) {
@@ -594,10 +624,6 @@ std::optional<Rim> top_end_offset(const Correspondences& c, const cv::Mat& gray_
   constexpr int kWindow = 3;  // [px] the shares' box means either side of a step
   constexpr int kMaxLines = 36;
   constexpr int kStretches = 6;
-  const double t_step_m = std::max(px_m, (side.t_hi - side.t_lo) / (kMaxLines - 1));
-  const int n_t = static_cast<int>(std::floor((side.t_hi - side.t_lo) / t_step_m)) + 1;
-  if (n_t < 2 * kStretches) return std::nullopt;
-  const double t_mid = 0.5 * (side.t_lo + side.t_hi);
   const double max_tan = std::tan(p.rim_max_turn_deg * M_PI / 180.0);
   // Offsets j (pixels past the side) from -kInside to n_search + kBeyond, read along lines
   // turned by up to max_tan: the grid's columns reach margin further either way.
@@ -605,36 +631,18 @@ std::optional<Rim> top_end_offset(const Correspondences& c, const cv::Mat& gray_
       static_cast<int>(std::ceil(0.5 * (side.t_hi - side.t_lo) * max_tan / px_m)) + 1;
   const int n_search = static_cast<int>(std::ceil(p.top_end_search_m / px_m));
   const int j_lo = -kInside, j_hi = n_search + kBeyond;  // offsets [j_lo, j_hi)
-  const int n_g = (j_hi - j_lo) + 2 * margin;
+  const auto grid =
+      read_side(c, gray_1, gray_2, H_12_top, X_WC2, side, px_m, kMaxLines, 2 * kStretches, px_m,
+                (j_lo - margin) * px_m, (j_hi - j_lo) + 2 * margin);
+  if (!grid) return std::nullopt;
+  const int n_t = grid->n_t, n_g = grid->n_g;
+  const double t_step_m = grid->t_step_m, t_mid = grid->t_mid;
+  const std::vector<float>&v1_top = grid->g1, &v2 = grid->g2;
   const auto cell = [&](int i, int j) {  // line i at offset j, or -1 outside the grid
     const int col = j - j_lo + margin;
-    return col < 0 || col >= n_g ? std::ptrdiff_t{-1} : static_cast<std::ptrdiff_t>(i) * n_g + col;
+    return col < 0 || col >= n_g ? std::ptrdiff_t{-1}
+                                 : static_cast<std::ptrdiff_t>(grid->at(i, col));
   };
-  const size_t n = static_cast<size_t>(n_t) * n_g;
-  constexpr float kUnseen = -1.0f;
-  std::vector<float> v2(n, kUnseen), v1_top(n, kUnseen);
-  const Isometry3d X_C2W = X_WC2.inverse();
-  const Vector3d corner_C2 =
-      X_C2W * (side.base_W + (j_lo - margin) * px_m * side.out_W + side.t_lo * side.along_W);
-  const Vector3d dj_C2 = X_C2W.linear() * (px_m * side.out_W);
-  const Vector3d di_C2 = X_C2W.linear() * (t_step_m * side.along_W);
-  const auto seen_in_1 = [&](const Matrix3d& H, const Vector3d& ray_2, double* v) {
-    const Vector3d r1 = H * ray_2;
-    if (r1.z() <= 0) return false;
-    const auto u1 = c.camera->project(r1);
-    return u1 && bilinear_inside(gray_1, *u1, v);
-  };
-  for (int i = 0; i < n_t; ++i)
-    for (int col = 0; col < n_g; ++col) {
-      const Vector3d X_C2 = corner_C2 + i * di_C2 + col * dj_C2;
-      if (X_C2.z() <= 0) continue;
-      const Vector3d ray_2 = X_C2 / X_C2.z();
-      const auto u2 = c.camera->project(ray_2);
-      double a, b;
-      if (!u2 || !bilinear_inside(gray_2, *u2, &a) || !seen_in_1(H_12_top, ray_2, &b)) continue;
-      const size_t at = static_cast<size_t>(i) * n_g + col;
-      v2[at] = static_cast<float>(a), v1_top[at] = static_cast<float>(b);
-    }
   // The images' gains differ (automatic gain, flicker): the inside strip's ratio evens them.
   double sum_2 = 0, sum_1 = 0;
   std::vector<std::ptrdiff_t> inside;
@@ -758,10 +766,10 @@ std::optional<Rim> top_end_offset(const Correspondences& c, const cv::Mat& gray_
       const auto at = cell(i, j + shift);
       if (at < 0 || v2[at] < 0 || e_top(at) <= tau) continue;
       ++off_top;
-      const int col = static_cast<int>(at % n_g);
-      const Vector3d X_C2 = corner_C2 + i * di_C2 + col * dj_C2;
+      const Vector3d r1 = H_12_floor * grid->point_C2(i, static_cast<int>(at % n_g));
       double v1_floor;
-      on_floor += seen_in_1(H_12_floor, X_C2 / X_C2.z(), &v1_floor) &&
+      const auto u1 = r1.z() > 0 ? c.camera->project(r1) : std::nullopt;
+      on_floor += u1 && bilinear_inside(gray_1, *u1, &v1_floor) &&
                   std::abs(v2[at] - gain * v1_floor) <= tau;
     }
   }
