@@ -590,6 +590,16 @@ BoxViews box_views(const BoxScene& scene, uint64_t seed, double inset_long, doub
   return b;
 }
 
+// The top measured as the scene has it: its sides within long_tol_m and short_tol_m, its
+// centre within 5 mm.
+void expect_measured(const TargetOutcome& o, const BoxScene& scene, double long_tol_m,
+                     double short_tol_m, uint64_t seed) {
+  EXPECT_NEAR(o.estimate.size_m[0], scene.length, long_tol_m) << "seed " << seed;
+  EXPECT_NEAR(o.estimate.size_m[1], scene.width, short_tol_m) << "seed " << seed;
+  const Vector3d top_W(scene.centre_xy.x(), scene.centre_xy.y(), scene.height);
+  EXPECT_LT((o.estimate.p_W - top_W).head<2>().norm(), 0.005) << "seed " << seed;
+}
+
 // Issue 15 (landing_lowtex 9913, 9919: a 20.4 cm top measured 18.8 cm and refused as too
 // narrow): the features of a nearly blank top stop 2-3 cm short of its edges. The rim, where
 // both images step at the same place of the top's plane, gives the short side within 5 mm, the
@@ -604,10 +614,7 @@ TEST(TopRim, FeaturesShortOfTheEdgesMeasureTheTopToItsRim) {
     ASSERT_TRUE(found(o)) << "seed " << seed << ": " << to_string(o.reason);
     // The top's plane, and so every length on it, is known from the features' parallax to
     // about 2 % (0.4 px of noise): a 30 cm side to 6 mm.
-    EXPECT_NEAR(o.estimate.size_m[0], scene.length, 0.01) << "seed " << seed;
-    EXPECT_NEAR(o.estimate.size_m[1], scene.width, 0.005) << "seed " << seed;
-    const Vector3d top_W(scene.centre_xy.x(), scene.centre_xy.y(), scene.height);
-    EXPECT_LT((o.estimate.p_W - top_W).head<2>().norm(), 0.005) << "seed " << seed;
+    expect_measured(o, scene, 0.01, 0.005, seed);
     const TargetOutcome features = find_landing_target(b.view.c, params);
     EXPECT_LT(features.estimate.size_m[1], scene.width - 0.02) << "seed " << seed;
   }
@@ -635,10 +642,7 @@ TEST(TopRim, RimsTurnedFromTheFeaturesTurnTheRectangleOntoTheEdges) {
     const TargetOutcome o = find_landing_target(b.view.c, params, b.image_1, b.image_2);
     ASSERT_TRUE(found(o)) << "seed " << seed << ": " << to_string(o.reason);
     EXPECT_LT(yaw_error_deg(o.estimate.yaw_rad), 1.5) << "seed " << seed;
-    EXPECT_NEAR(o.estimate.size_m[0], scene.length, 0.01) << "seed " << seed;
-    EXPECT_NEAR(o.estimate.size_m[1], scene.width, 0.005) << "seed " << seed;
-    const Vector3d top_W(scene.centre_xy.x(), scene.centre_xy.y(), scene.height);
-    EXPECT_LT((o.estimate.p_W - top_W).head<2>().norm(), 0.005) << "seed " << seed;
+    expect_measured(o, scene, 0.01, 0.005, seed);
   }
 }
 
@@ -682,10 +686,7 @@ TEST(TopEnd, ABusyFloorEndsTheTopWhereNoRimSteps) {
     PipelineParams params;
     const TargetOutcome o = find_landing_target(b.view.c, params, b.image_1, b.image_2);
     ASSERT_TRUE(found(o)) << "seed " << seed << ": " << to_string(o.reason);
-    EXPECT_NEAR(o.estimate.size_m[0], scene.length, 0.01) << "seed " << seed;
-    EXPECT_NEAR(o.estimate.size_m[1], scene.width, 0.01) << "seed " << seed;
-    const Vector3d top_W(scene.centre_xy.x(), scene.centre_xy.y(), scene.height);
-    EXPECT_LT((o.estimate.p_W - top_W).head<2>().norm(), 0.005) << "seed " << seed;
+    expect_measured(o, scene, 0.01, 0.01, seed);
     params.landing.top_end_search_m = 0;
     const TargetOutcome features = find_landing_target(b.view.c, params, b.image_1, b.image_2);
     ASSERT_TRUE(found(features)) << "seed " << seed;
