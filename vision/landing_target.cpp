@@ -648,7 +648,7 @@ std::optional<Rim> top_end_offset(const Correspondences& c, const cv::Mat& gray_
   std::vector<std::ptrdiff_t> inside;
   for (int i = 0; i < n_t; ++i)
     for (int j = j_lo; j < 0; ++j)
-      if (const auto at = cell(i, j); v2[at] >= 0) {
+      if (const auto at = cell(i, j); at >= 0 && v2[at] >= 0) {
         inside.push_back(at);
         sum_2 += v2[at], sum_1 += v1_top[at];
       }
@@ -743,10 +743,10 @@ std::optional<Rim> top_end_offset(const Correspondences& c, const cv::Mat& gray_
   const std::vector<double> f = share_off_top(slope, 0, n_t);
   const auto e = step_up(f);
   if (!e || e->y() < p.top_end_min_rise) return std::nullopt;
-  // The top's plane explains the images from the features' side up to the end; beyond it, it
-  // fails as often for kBeyond pixels (the floor is busy from the end on: the
-  // band an edge of a rug moves by between the views is no end), and the floor's plane
-  // explains most of those pixels (a floor, not a second top or a side face).
+  // The top's plane explains the images from the features' side up to the end. Beyond it, it
+  // fails as often for kBeyond pixels (the floor is busy from the end on: the band that an edge
+  // of a rug moves by between the views is no end), and the floor's plane explains most of
+  // those pixels (a floor, not a second top or a side face).
   const int j_end = static_cast<int>(std::lround(e->x()));
   const auto f_at = [&](int j) { return f[static_cast<size_t>(j - j_lo)]; };
   if (j_end + 1 + kBeyond - j_lo > static_cast<int>(f.size())) return std::nullopt;
