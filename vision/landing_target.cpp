@@ -433,6 +433,19 @@ struct Side {
   double t_lo, t_hi;
 };
 
+// The least-squares line y = a + b x through points v (x, y); false for fewer than three or all
+// at one x.
+bool fit_line(const std::vector<Eigen::Vector2d>& v, double* a, double* b) {
+  const double n = static_cast<double>(v.size());
+  double sx = 0, sy = 0, sxx = 0, sxy = 0;
+  for (const auto& q : v) sx += q.x(), sy += q.y(), sxx += q.x() * q.x(), sxy += q.x() * q.y();
+  const double den = n * sxx - sx * sx;
+  if (v.size() < 3 || den <= 0) return false;
+  *b = (n * sxy - sx * sy) / den;
+  *a = (sy - *b * sx) / n;
+  return true;
+}
+
 // Where a profile P (P[j] at offset j steps) darkens outward: G_j = P[j - k] - P[j + k], its
 // local maxima over j >= j0 at least min_step and at least half the strongest, innermost first,
 // each to a fraction of a step by a parabola through it (offset in steps, G).
@@ -568,22 +581,12 @@ std::optional<Rim> rim_offset(const Correspondences& c, const cv::Mat& gray_1,
                          [](const auto& a, const auto& b) { return a.second < b.second; });
     at.emplace_back(side.t_lo + 0.5 * (i0 + i1 - 1) * t_step_m - t_mid, strongest->first);
   }
-  const auto fit_slope = [](const std::vector<Eigen::Vector2d>& v, double* a, double* b) {
-    const double n = static_cast<double>(v.size());
-    double sx = 0, sy = 0, sxx = 0, sxy = 0;
-    for (const auto& q : v) sx += q.x(), sy += q.y(), sxx += q.x() * q.x(), sxy += q.x() * q.y();
-    const double den = n * sxx - sx * sx;
-    if (v.size() < 3 || den <= 0) return false;
-    *b = (n * sxy - sx * sy) / den;
-    *a = (sy - *b * sx) / n;
-    return true;
-  };
   double tan_turn = 0, a = 0, b = 0;
-  if (fit_slope(at, &a, &b)) {
+  if (fit_line(at, &a, &b)) {
     std::vector<Eigen::Vector2d> near;
     for (const auto& q : at)
       if (std::abs(q.y() - (a + b * q.x())) <= 2.0) near.push_back(q);
-    if (near.size() < at.size() && !fit_slope(near, &a, &b)) b = 0;
+    if (near.size() < at.size() && !fit_line(near, &a, &b)) b = 0;
     if (std::abs(b * step_m) <= max_tan) tan_turn = b * step_m;
   }
   const std::vector<double> P1 = profile(g1, tan_turn, 0, n_t), P2 = profile(g2, tan_turn, 0, n_t);
@@ -721,15 +724,9 @@ std::optional<Rim> top_end_offset(const Correspondences& c, const cv::Mat& gray_
   }
   double slope = 0;  // [px / m]
   for (;;) {
-    if (at_stretch.size() + 2 < kStretches) return std::nullopt;
-    const double m = static_cast<double>(at_stretch.size());
-    double sx = 0, sy = 0, sxx = 0, sxy = 0;
-    for (const auto& q : at_stretch)
-      sx += q.x(), sy += q.y(), sxx += q.x() * q.x(), sxy += q.x() * q.y();
-    const double den = m * sxx - sx * sx;
-    if (den <= 0) return std::nullopt;
-    slope = (m * sxy - sx * sy) / den;
-    const double mid = (sy - slope * sx) / m;
+    double mid = 0;  // [px] at t_mid
+    if (at_stretch.size() + 2 < kStretches || !fit_line(at_stretch, &mid, &slope))
+      return std::nullopt;
     const auto off = [&](const Eigen::Vector2d& q) {
       return std::abs(q.y() - mid - slope * q.x());
     };
