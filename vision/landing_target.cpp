@@ -470,13 +470,14 @@ std::vector<std::pair<double, double>> darkening_steps(const std::vector<double>
 
 // Both images' grey levels at a grid of points of the top's plane beside a side (rim_offset,
 // top_end_offset): n_t lines along the side, t_step_m apart (min_t_step_m at least, max_lines at
-// most), and n_g columns outward, col_m apart, column 0 first_col_m outward of the side. g2 is the
-// current image at the point, g1 the reference at the same point of the top's plane (H_12 takes
-// a current ray to the reference's), kUnseen where either is out of view. nullopt: fewer than
-// min_lines lines.
+// most), and columns outward col_m apart, at offsets [j_lo, j_hi) past the side and margin
+// columns further either way, so that lines read turned by up to max_tan stay on the grid
+// (offset j is column j - j_lo + margin). g2 is the current image at the point, g1 the reference
+// at the same point of the top's plane (H_12 takes a current ray to the reference's), kUnseen
+// where either is out of view. nullopt: fewer than min_lines lines.
 struct SideGrid {
   static constexpr float kUnseen = -1.0f;
-  int n_t = 0, n_g = 0;
+  int n_t = 0, n_g = 0, margin = 0;
   double t_step_m = 0, t_mid = 0;    // along the side; t_mid the middle of [t_lo, t_hi]
   Vector3d corner_C2, di_C2, dj_C2;  // the point of line i, column j: corner + i di + j dj
   std::vector<float> g1, g2;
@@ -486,13 +487,15 @@ struct SideGrid {
 std::optional<SideGrid> read_side(const Correspondences& c, const cv::Mat& gray_1,
                                   const cv::Mat& gray_2, const Matrix3d& H_12,
                                   const Isometry3d& X_WC2, const Side& side, double min_t_step_m,
-                                  int max_lines, int min_lines, double col_m, double first_col_m,
-                                  int n_g) {
+                                  int max_lines, int min_lines, double col_m, int j_lo, int j_hi,
+                                  double max_tan) {
   SideGrid g;
   g.t_step_m = std::max(min_t_step_m, (side.t_hi - side.t_lo) / (max_lines - 1));
   g.n_t = static_cast<int>(std::floor((side.t_hi - side.t_lo) / g.t_step_m)) + 1;
   if (g.n_t < min_lines) return std::nullopt;
-  g.n_g = n_g;
+  g.margin = static_cast<int>(std::ceil(0.5 * (side.t_hi - side.t_lo) * max_tan / col_m)) + 1;
+  const int n_g = g.n_g = (j_hi - j_lo) + 2 * g.margin;
+  const double first_col_m = (j_lo - g.margin) * col_m;
   g.t_mid = 0.5 * (side.t_lo + side.t_hi);
   // The grid is affine in the top's plane, and so in camera 2's frame.
   const Isometry3d X_C2W = X_WC2.inverse();
@@ -537,14 +540,12 @@ std::optional<Rim> rim_offset(const Correspondences& c, const cv::Mat& gray_1,
   // a rim turned 15 deg spreads its step over 6 mm, a pixel and a half at the search height.
   constexpr int kStretches = 6;
   const double max_tan = std::tan(p.rim_max_turn_deg * M_PI / 180.0);
-  const int margin =
-      static_cast<int>(std::ceil(0.5 * (side.t_hi - side.t_lo) * max_tan / step_m)) + 1;
   const int n_d = j0 + static_cast<int>(std::ceil(p.rim_search_m / step_m)) + k + 1;
-  // Grid columns: offsets (j - margin - j0) step_m.
+  // Profile index j is the offset (j - j0) step_m.
   const auto grid = read_side(c, gray_1, gray_2, H_12, X_WC2, side, 2 * step_m, kMaxLines,
-                              2 * kStretches, step_m, -(margin + j0) * step_m, n_d + 2 * margin);
+                              2 * kStretches, step_m, -j0, n_d - j0, max_tan);
   if (!grid) return std::nullopt;
-  const int n_t = grid->n_t, n_g = grid->n_g;
+  const int n_t = grid->n_t, n_g = grid->n_g, margin = grid->margin;
   const double t_step_m = grid->t_step_m, t_mid = grid->t_mid;
   const std::vector<float>&g1 = grid->g1, &g2 = grid->g2;
   // The mean over lines [i0, i1) turned by tan_turn at each offset; it ends where most of them
@@ -628,17 +629,13 @@ std::optional<Rim> top_end_offset(const Correspondences& c, const cv::Mat& gray_
   constexpr int kMaxLines = 36;
   constexpr int kStretches = 6;
   const double max_tan = std::tan(p.rim_max_turn_deg * M_PI / 180.0);
-  // Offsets j (pixels past the side) from -kInside to n_search + kBeyond, read along lines
-  // turned by up to max_tan: the grid's columns reach margin further either way.
-  const int margin =
-      static_cast<int>(std::ceil(0.5 * (side.t_hi - side.t_lo) * max_tan / px_m)) + 1;
+  // Offsets j (pixels past the side) from -kInside to n_search + kBeyond.
   const int n_search = static_cast<int>(std::ceil(p.top_end_search_m / px_m));
   const int j_lo = -kInside, j_hi = n_search + kBeyond;  // offsets [j_lo, j_hi)
-  const auto grid =
-      read_side(c, gray_1, gray_2, H_12_top, X_WC2, side, px_m, kMaxLines, 2 * kStretches, px_m,
-                (j_lo - margin) * px_m, (j_hi - j_lo) + 2 * margin);
+  const auto grid = read_side(c, gray_1, gray_2, H_12_top, X_WC2, side, px_m, kMaxLines,
+                              2 * kStretches, px_m, j_lo, j_hi, max_tan);
   if (!grid) return std::nullopt;
-  const int n_t = grid->n_t, n_g = grid->n_g;
+  const int n_t = grid->n_t, n_g = grid->n_g, margin = grid->margin;
   const double t_step_m = grid->t_step_m, t_mid = grid->t_mid;
   const std::vector<float>&v1_top = grid->g1, &v2 = grid->g2;
   const auto cell = [&](int i, int j) {  // line i at offset j, or -1 outside the grid
