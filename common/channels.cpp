@@ -7,6 +7,10 @@
 namespace alight {
 
 namespace channels {
+bool single_publisher(const std::string& name) {
+  return name != kNodeStatus && name != kOperatorCmd;
+}
+
 bool is_known(const std::string& name) {
   return std::any_of(kAll.begin(), kAll.end(), [&](const char* c) { return name == c; });
 }

@@ -82,6 +82,10 @@ inline constexpr std::array<const char*, 21> kAll = {
     kNodeStatus,     kAutopilotPose,    kAutopilotStatus};
 
 /// True when `name` is one of kAll.
+/// True for channels one process publishes on (all but NODE_STATUS, which every node publishes,
+/// and OPERATOR_CMD, which any ground station may sign): a second publisher on one is refused
+/// while the first is alive (common/bus_auth.hpp). Takes the name in the code (before --remap).
+bool single_publisher(const std::string& name);
 bool is_known(const std::string& name);
 /// The lcm-gen type a channel of kAll carries ("pose_t"); "" for another name.
 std::string message_type(const std::string& name);

@@ -13,6 +13,8 @@
 #include <exception>
 #include <limits>
 
+#include "common/bus_trailer.hpp"
+
 namespace alight {
 
 namespace wire {
@@ -80,11 +82,13 @@ inline bool precheck<process_status_t>(const void* data, size_t size) {
 }  // namespace wire
 
 /// Decodes `size` bytes into `msg`. False (msg unspecified) when the bytes are not exactly one
-/// well-formed message of type Msg: wrong fingerprint, truncated, trailing bytes, impossible
-/// counts or lengths.
+/// well-formed message of type Msg (followed by nothing but an origin trailer,
+/// common/bus_trailer.hpp): wrong fingerprint, truncated, trailing bytes, impossible counts or
+/// lengths. The trailer is not judged here (the node's Gatekeeper does that).
 template <class Msg>
 bool decode_message(Msg& msg, const void* data, size_t size) noexcept {
   if (data == nullptr || size > static_cast<size_t>(std::numeric_limits<int>::max())) return false;
+  size = bus::payload_size(data, size);
   if (!wire::precheck<Msg>(data, size)) return false;
   try {
     return msg.decode(data, 0, static_cast<int>(size)) == static_cast<int>(size);

@@ -12,6 +12,7 @@
 #include <fstream>
 
 #include "common/heap.hpp"
+#include "common/operator_auth.hpp"
 #include "common/params.hpp"
 
 namespace alight {
@@ -42,6 +43,9 @@ void NodeArgs::add_to(CLI::App& app, bool config_required) {
                  "FROM=TO: use channel TO where this process would use FROM (repeatable; FROM "
                  "one of the channels in common/channels.hpp)")
       ->allow_extra_args(false);
+  app.add_option("--bus-key", bus_key_file,
+                 "Bus key file (scripts/make-key): sign what this node publishes and refuse what "
+                 "is not signed with it (default: $ALIGHT_BUS_KEY_FILE, else an unsigned bus)");
 }
 
 void NodeArgs::finalize() {
@@ -52,6 +56,19 @@ void NodeArgs::finalize() {
   spdlog::set_level(spdlog::level::from_str(log_level));
   remap = parse_remaps(remap_args);
   for (const auto& [from, to] : remap.map()) spdlog::info("channel {} remapped to {}", from, to);
+  if (bus_key_file.empty()) {
+    const char* env = std::getenv("ALIGHT_BUS_KEY_FILE");
+    if (env && *env) bus_key_file = env;
+  }
+  if (!bus_key_file.empty()) {
+    std::vector<std::string> warnings;
+    try {
+      bus_key = bus::load_bus_key(bus_key_file, &warnings);
+    } catch (const KeyFileError& e) {
+      throw ParamError(bus_key_file, "--bus-key", bus_key_file, e.what());
+    }
+    for (const auto& w : warnings) spdlog::warn("{}", w);
+  }
 }
 
 std::string with_receive_buffer(const std::string& url, int bytes) {
@@ -75,11 +92,13 @@ int64_t steady_utime() {
 struct Node::Subscription {
   Node* node = nullptr;
   std::string channel;
+  bool single_publisher = true;  // the channel has one publisher (channels::single_publisher)
   bool latest = false;
   size_t source = 0;  // in the node's inbox (not latest mode)
   std::function<void(const void*, uint32_t)> dispatch;
   std::vector<uint8_t> pending;  // newest undispatched message (latest mode)
   Receipt pending_receipt;
+  uint64_t pending_source = 0;
   bool has_pending = false;
   lcm::Subscription* handle = nullptr;
 
@@ -88,20 +107,47 @@ struct Node::Subscription {
       node->enqueue(*this, rbuf->data, rbuf->data_size);
       return;
     }
+    const Receipt receipt{wall_utime(), steady_utime()};
+    uint64_t source = 0;
+    if (!node->admit(*this, rbuf->data, rbuf->data_size, receipt.steady_utime, &source)) return;
     if (has_pending) ++node->stats_[channel].skipped;
     const auto* bytes = static_cast<const uint8_t*>(rbuf->data);
     pending.assign(bytes, bytes + rbuf->data_size);
-    pending_receipt = Receipt{wall_utime(), steady_utime()};
+    pending_receipt = receipt;
+    pending_source = source;
     has_pending = true;
   }
 };
 
+bool Node::admit(Subscription& sub, const void* data, uint32_t size, int64_t steady_us,
+                 uint64_t* source) {
+  const bus::Received r = bus::split(data, size);
+  const bus::Verdict v = gatekeeper_.check(sub.channel, r, steady_us, sub.single_publisher);
+  ChannelStats& st = stats_[sub.channel];
+  const bus::ChannelAuthStats& a = gatekeeper_.stats(sub.channel);
+  st.rejected_auth = a.rejected_auth;
+  st.second_publisher = a.second_publisher;
+  if (a.owner_changes != st.owner_changes) {
+    st.owner_changes = a.owner_changes;
+    spdlog::warn("{}: {} has a new publisher ({:016x}): the last one fell silent", name_,
+                 sub.channel, a.owner);
+  }
+  *source = r.trailer ? r.trailer->source : 0;
+  if (bus::accepted(v)) return true;
+  const uint64_t n = v == bus::Verdict::kSecondPublisher ? a.second_publisher : a.rejected_auth;
+  if (log_this(n))
+    spdlog::error("{}: {} message(s) on {} refused (last: from {:016x}, {})", name_, n, sub.channel,
+                  *source, bus::verdict_name(v));
+  return false;
+}
+
 void Node::enqueue(Subscription& sub, const void* data, uint32_t size) {
   Inbound in;
   in.sub = &sub;
+  in.receipt = Receipt{wall_utime(), steady_utime()};
+  if (!admit(sub, data, size, in.receipt.steady_utime, &in.source)) return;
   const auto* bytes = static_cast<const uint8_t*>(data);
   in.bytes.assign(bytes, bytes + size);
-  in.receipt = Receipt{wall_utime(), steady_utime()};
   if (!inbox_.push(sub.source, std::move(in))) {
     const uint64_t n = ++stats_[sub.channel].dropped;
     if (log_this(n))
@@ -110,8 +156,11 @@ void Node::enqueue(Subscription& sub, const void* data, uint32_t size) {
   }
 }
 
-Node::Node(const std::string& lcm_url, std::string name)
-    : name_(std::move(name)), start_steady_us_(steady_utime()) {
+Node::Node(const std::string& lcm_url, std::string name, std::optional<bus::BusKey> bus_key)
+    : name_(std::move(name)),
+      start_steady_us_(steady_utime()),
+      sealer_(bus::draw_source_id(), bus_key),
+      gatekeeper_(bus_key) {
   install_signal_handlers();
   const std::string url = with_receive_buffer(lcm_url);
   lcm_ = std::make_unique<lcm::LCM>(url);
@@ -126,8 +175,23 @@ Node::Node(const std::string& lcm_url, std::string name)
         name_, rmem, kDefaultRecvBufBytes);
 }
 
-Node::Node(const NodeArgs& args, std::string name) : Node(args.lcm_url, std::move(name)) {
+Node::Node(const NodeArgs& args, std::string name)
+    : Node(args.lcm_url, std::move(name), args.bus_key) {
   remap_ = args.remap;
+  spdlog::info("{}: publisher {:016x} on a{} bus", name_, sealer_.source(),
+               sealer_.signing() ? " signed" : "n unsigned");
+}
+
+int Node::publish_raw(const std::string& lcm_channel, std::vector<uint8_t> bytes) {
+  // The bus time: never behind what this node has heard, so a node whose clock lags (no
+  // real-time clock before NTP) still stamps counters its peers take as fresh.
+  sealer_.seal(bytes, lcm_channel, std::max(wall_utime(), gatekeeper_.bus_time_us()));
+  return lcm_->publish(lcm_channel, bytes.data(), static_cast<unsigned>(bytes.size()));
+}
+
+bool Node::contested(const std::string& channel, double window_s) const {
+  return gatekeeper_.contested(remap_(channel), steady_utime(),
+                               static_cast<int64_t>(window_s * 1e6));
 }
 
 Node::~Node() {
@@ -147,12 +211,14 @@ bool Node::signalled() { return g_signalled; }
 bool Node::stopping() const { return stopping_ || g_signalled; }
 
 void Node::subscribe_raw(const std::string& channel, bool latest,
-                         std::function<void(const void*, uint32_t)> dispatch, size_t capacity) {
+                         std::function<void(const void*, uint32_t)> dispatch, size_t capacity,
+                         bool single_publisher) {
   // Programmer invariant: capacities come from validated parameters or constants.
   assert(capacity >= 1);
   auto sub = std::make_unique<Subscription>();
   sub->node = this;
   sub->channel = channel;
+  sub->single_publisher = single_publisher;
   sub->latest = latest;
   if (!latest) sub->source = inbox_.add_source(capacity);
   sub->dispatch = std::move(dispatch);
@@ -184,7 +250,15 @@ bool Node::reject_value(const std::string& name, const std::string& why) {
 
 bool Node::accept_stamp(const std::string& name, int64_t utime) {
   const std::string channel = remap_(name);
-  const StampVerdict v = stamps_.check(channel, utime, steady_utime(), wall_utime());
+  // Each publisher's stamps on their own: one that jumps ahead makes no other's look old.
+  const std::string source =
+      current_source_ == 0 ? channel : fmt::format("{}#{:016x}", channel, current_source_);
+  const StampVerdict v = stamps_.check(source, utime, steady_utime(), wall_utime());
+  if (v == StampVerdict::kAdopted)
+    spdlog::warn(
+        "{}: the wall clock ({}) is far behind {}'s stamps ({}): the inputs' stamps are the time "
+        "base from now on (no real-time clock, or NTP not yet synchronised?)",
+        name_, wall_utime(), channel, utime);
   if (v == StampVerdict::kRestarted)
     spdlog::warn("{}: stamps on {} went back to {} and stayed there: taken as a restart", name_,
                  channel, utime);
@@ -211,9 +285,15 @@ node_status_t Node::status_message(int64_t wall) const {
     c.rejected_stamps = static_cast<int64_t>(st.rejected_stamps);
     c.skipped = static_cast<int64_t>(st.skipped);
     c.dropped = static_cast<int64_t>(st.dropped);
+    c.rejected_auth = static_cast<int64_t>(st.rejected_auth);
+    c.second_publisher = static_cast<int64_t>(st.second_publisher);
+    c.owner_changes = static_cast<int64_t>(st.owner_changes);
     m.channels.push_back(c);
   }
   m.n = static_cast<int32_t>(m.channels.size());
+  m.source = static_cast<int64_t>(sealer_.source());
+  m.signed_bus = sealer_.signing();
+  m.clock_from_inputs = stamps_.inputs_time_base();
   return m;
 }
 
@@ -266,6 +346,7 @@ int Node::spin_once(int timeout_ms) {
   for (size_t n = inbox_.size(); n > 0; --n) {
     auto next = inbox_.pop();
     receipt_ = next->second.receipt;
+    current_source_ = next->second.source;
     const std::vector<uint8_t> msg = std::move(next->second.bytes);
     next->second.sub->dispatch(msg.data(), static_cast<uint32_t>(msg.size()));
     handled += read_pending();
@@ -276,6 +357,7 @@ int Node::spin_once(int timeout_ms) {
     std::vector<uint8_t> msg;
     msg.swap(s->pending);
     receipt_ = s->pending_receipt;
+    current_source_ = s->pending_source;
     s->dispatch(msg.data(), static_cast<uint32_t>(msg.size()));
   }
   run_timers(steady_utime());

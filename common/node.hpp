@@ -19,6 +19,16 @@
 // counters on NODE_STATUS once a second. Channels are named in the code by common/channels.hpp
 // and renamed per process by --remap FROM=TO (NodeArgs, Node(const NodeArgs&, ...)). Timers run on
 // the steady clock, so a wall-clock step neither freezes nor bursts them.
+//
+// Who published (common/bus_auth.hpp): every message a node publishes carries an origin trailer
+// (this node's random source id and a counter), signed when the node has a bus key (--bus-key,
+// else $ALIGHT_BUS_KEY_FILE, which alight-launch sets from the launch file's bus_key). Every
+// message a node receives is judged on arrival, before it takes a place in a queue: with a key,
+// unsigned, wrongly signed and replayed messages are refused; with or without one, a second
+// publisher on a channel that has one (every channel but NODE_STATUS and OPERATOR_CMD) is refused
+// while the first is alive. Both are counted per channel and reported on NODE_STATUS; contested()
+// tells flight logic that a channel has a second publisher now. The stamp guard judges each
+// publisher's stamps on their own, so one that jumps ahead cannot make the others' look old.
 
 #include <alight/node_status_t.hpp>
 #include <atomic>
@@ -27,9 +37,11 @@
 #include <lcm/lcm-cpp.hpp>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "common/bus_auth.hpp"
 #include "common/channels.hpp"
 #include "common/decode.hpp"
 #include "common/inbox.hpp"
@@ -53,11 +65,14 @@ struct NodeArgs {
   std::string log_level = "info";
   std::vector<std::string> remap_args;  ///< --remap FROM=TO, repeatable
   ChannelRemap remap;                   ///< remap_args parsed by finalize()
+  std::string bus_key_file;             ///< --bus-key FILE, else $ALIGHT_BUS_KEY_FILE, else none
+  std::optional<bus::BusKey> bus_key;   ///< read by finalize()
 
   /// Adds --config, --lcm-url, --log-level and --remap to an app that has options of its own.
   void add_to(CLI::App& app, bool config_required);
   /// Fills lcm_url from the environment when not given, applies the log level and parses the
-  /// remaps (throws RemapError, which run_node_main turns into exit code 2).
+  /// remaps (throws RemapError, which run_node_main turns into exit code 2) and reads the bus
+  /// key (a bad key file is a ParamError naming it: exit code 2).
   void finalize();
 };
 
@@ -70,12 +85,15 @@ int64_t steady_utime();
 
 /// Per-channel counters, for logs and tests.
 struct ChannelStats {
-  uint64_t received = 0;         ///< messages decoded
-  uint64_t decode_errors = 0;    ///< messages that failed to decode (malformed or wrong type)
-  uint64_t rejected_values = 0;  ///< decoded, then refused by a conversion (non-finite, range)
-  uint64_t rejected_stamps = 0;  ///< decoded, then refused by the stamp guard
-  uint64_t skipped = 0;          ///< on_latest(): older messages replaced by a newer one
-  uint64_t dropped = 0;          ///< on(): refused unread, the subscription's queue was full
+  uint64_t received = 0;          ///< messages decoded
+  uint64_t decode_errors = 0;     ///< messages that failed to decode (malformed or wrong type)
+  uint64_t rejected_values = 0;   ///< decoded, then refused by a conversion (non-finite, range)
+  uint64_t rejected_stamps = 0;   ///< decoded, then refused by the stamp guard
+  uint64_t skipped = 0;           ///< on_latest(): older messages replaced by a newer one
+  uint64_t dropped = 0;           ///< on(): refused unread, the subscription's queue was full
+  uint64_t rejected_auth = 0;     ///< refused on arrival: unsigned, wrong key, bad tag, replayed
+  uint64_t second_publisher = 0;  ///< refused on arrival: a second publisher on the channel
+  uint64_t owner_changes = 0;     ///< a silent publisher replaced by another (a restart)
 };
 
 /// Messages an on() subscription may hold waiting for its handler unless told otherwise.
@@ -89,8 +107,10 @@ struct Receipt {
 
 class Node {
  public:
-  /// Connects to LCM; throws std::runtime_error naming the URL when that fails.
-  explicit Node(const std::string& lcm_url, std::string name = "alight");
+  /// Connects to LCM; throws std::runtime_error naming the URL when that fails. `bus_key`: sign
+  /// what it publishes and refuse what is not signed with it.
+  explicit Node(const std::string& lcm_url, std::string name = "alight",
+                std::optional<bus::BusKey> bus_key = std::nullopt);
   /// Connects to args.lcm_url and renames channels by args.remap.
   Node(const NodeArgs& args, std::string name);
   ~Node();
@@ -111,22 +131,31 @@ class Node {
           Msg msg;
           if (decode(channel, msg, data, size)) fn(msg);
         },
-        capacity);
+        capacity, channels::single_publisher(name));
   }
   /// Calls `fn` with only the newest message on `channel` each time the node catches up, so a
   /// slow consumer works on the newest frame instead of a backlog.
   template <class Msg>
   void on_latest(const std::string& name, std::function<void(const Msg&)> fn) {
     const std::string channel = remap_(name);
-    subscribe_raw(channel, true, [this, channel, fn](const void* data, uint32_t size) {
-      Msg msg;
-      if (decode(channel, msg, data, size)) fn(msg);
-    });
+    subscribe_raw(
+        channel, true,
+        [this, channel, fn](const void* data, uint32_t size) {
+          Msg msg;
+          if (decode(channel, msg, data, size)) fn(msg);
+        },
+        kDefaultQueueCapacity, channels::single_publisher(name));
   }
   template <class Msg>
   int publish(const std::string& channel, const Msg& msg) {
-    return lcm_->publish(remap_(channel), &msg);
+    const int n = msg.getEncodedSize();
+    std::vector<uint8_t> bytes(static_cast<size_t>(n));
+    if (msg.encode(bytes.data(), 0, n) != n) return -1;
+    return publish_raw(remap_(channel), std::move(bytes));
   }
+  /// Publishes `bytes` (an encoded message) on `lcm_channel` (already remapped) with this node's
+  /// origin trailer.
+  int publish_raw(const std::string& lcm_channel, std::vector<uint8_t> bytes);
   /// Calls `fn(wall_utime)` every `period_s` of steady time (the argument is the wall clock, for
   /// stamping messages; never use it to measure intervals).
   void every(double period_s, std::function<void(int64_t)> fn);
@@ -142,6 +171,11 @@ class Node {
   void set_input_stats(const std::string& input, const ChannelStats& stats) {
     stats_[input] = stats;
   }
+  /// True while `channel` has a second publisher: one was refused within the last `window_s`.
+  bool contested(const std::string& channel, double window_s = 2.0) const;
+  /// This node's publisher id (in every trailer it sends) and whether it signs.
+  uint64_t source_id() const { return sealer_.source(); }
+  bool signing() const { return sealer_.signing(); }
   /// Newest stamp accepted on any channel (0 before the first).
   int64_t newest_stamp() const { return stamps_.newest_utime(); }
   void set_stamp_params(const StampGuardParams& p) { stamps_ = StampGuard(p); }
@@ -179,18 +213,23 @@ class Node {
   struct Subscription;
   void subscribe_raw(const std::string& channel, bool latest,
                      std::function<void(const void*, uint32_t)> dispatch,
-                     size_t capacity = kDefaultQueueCapacity);
+                     size_t capacity = kDefaultQueueCapacity, bool single_publisher = true);
   // A message read off LCM, waiting in the inbox for its handler.
   struct Inbound {
     Subscription* sub = nullptr;
     std::vector<uint8_t> bytes;
     Receipt receipt;
+    uint64_t source = 0;  // the trailer's publisher id (0: none)
   };
+  // Judges a message on arrival (bus_auth); counts and logs a refusal. True: keep it.
+  bool admit(Subscription& sub, const void* data, uint32_t size, int64_t steady_us,
+             uint64_t* source);
   int read_pending();  // empties LCM's queues without waiting; returns the messages read
   void enqueue(Subscription& sub, const void* data, uint32_t size);
   template <class Msg>
   bool decode(const std::string& channel, Msg& msg, const void* data, uint32_t size) {
-    if (!decode_message(msg, data, size)) {
+    const bus::Received r = bus::split(data, size);
+    if (!decode_message(msg, r.payload.data(), r.payload.size())) {
       report_decode_error(channel, size);
       return false;
     }
@@ -215,6 +254,9 @@ class Node {
   std::vector<Timer> timers_;  // next_utime on the steady clock
   std::atomic<bool> stopping_{false};
   StampGuard stamps_;
+  bus::Sealer sealer_;
+  bus::Gatekeeper gatekeeper_;
+  uint64_t current_source_ = 0;  // publisher of the message being handled
   double status_period_s_ = 1.0;
   bool status_timer_added_ = false;
   int64_t start_steady_us_ = 0;

@@ -194,4 +194,45 @@ int64_t CommandVerifier::last_seq(const std::string& sender) const {
   return it == last_seq_.end() ? INT64_MIN : it->second;
 }
 
+const char* kill_check_name(KillCheck c) {
+  switch (c) {
+    case KillCheck::kAuthorised:
+      return "authorised";
+    case KillCheck::kNoKey:
+      return "no operator key here";
+    case KillCheck::kNotKill:
+      return "no signed CMD_KILL attached";
+    case KillCheck::kUnsigned:
+      return "unsigned";
+    case KillCheck::kBadSignature:
+      return "bad signature";
+    case KillCheck::kWrongVehicle:
+      return "for another vehicle";
+    case KillCheck::kStale:
+      return "stale";
+  }
+  return "?";
+}
+
+KillVerifier::KillVerifier(std::optional<OperatorKey> key, std::string vehicle_id,
+                           int64_t max_age_us)
+    : key_(std::move(key)), vehicle_id_(std::move(vehicle_id)), max_age_us_(max_age_us) {}
+
+KillCheck KillVerifier::check(const operator_cmd_t& cmd, int64_t now_utime) {
+  if (!key_) return KillCheck::kNoKey;
+  if (cmd.command != operator_cmd_t::CMD_KILL) return KillCheck::kNotKill;
+  if (cmd.auth != operator_cmd_t::AUTH_HMAC_SHA256) return KillCheck::kUnsigned;
+  if (authorised_ && authorised_->sender == cmd.sender && authorised_->seq == cmd.seq &&
+      CRYPTO_memcmp(authorised_->hmac, cmd.hmac, sizeof cmd.hmac) == 0)
+    return KillCheck::kAuthorised;
+  if (!signature_valid(cmd, *key_)) return KillCheck::kBadSignature;
+  if (cmd.vehicle_id != vehicle_id_) return KillCheck::kWrongVehicle;
+  const uint64_t gap = cmd.utime < now_utime
+                           ? static_cast<uint64_t>(now_utime) - static_cast<uint64_t>(cmd.utime)
+                           : static_cast<uint64_t>(cmd.utime) - static_cast<uint64_t>(now_utime);
+  if (gap > static_cast<uint64_t>(max_age_us_)) return KillCheck::kStale;
+  authorised_ = cmd;
+  return KillCheck::kAuthorised;
+}
+
 }  // namespace alight

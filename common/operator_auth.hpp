@@ -37,6 +37,7 @@
 #include <array>
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -130,6 +131,37 @@ class CommandVerifier {
   std::array<uint64_t, CommandVerdict::kReasonCount> by_reason_{};
   int64_t last_rejected_seq_ = -1;
   CommandVerdict::Reason last_reject_reason_ = CommandVerdict::Reason::kNone;
+};
+
+/// Why a kill authority (the operator's signed CMD_KILL carried in POSITION_SETPOINT and
+/// ATTITUDE_CMD, position_setpoint_t.kill_authority) was or was not accepted.
+enum class KillCheck {
+  kAuthorised,
+  kNoKey,         ///< this process has no operator key: no KILL can be authorised
+  kNotKill,       ///< empty, or another command
+  kUnsigned,      ///< auth is not AUTH_HMAC_SHA256
+  kBadSignature,  ///< the tag does not match the operator key
+  kWrongVehicle,  ///< signed for another vehicle
+  kStale,         ///< further than max_age from the checker's time
+};
+const char* kill_check_name(KillCheck c);
+
+/// Checks, in every process that can stop the motors (outer loop, simulator, alight-mavlink),
+/// that a disarm in the air comes from the operator: the CMD_KILL must be signed with the
+/// operator key and name this vehicle, and be fresh when first seen. The carrier repeats the
+/// same command with every message after the KILL: once authorised, that command (sender, seq,
+/// tag) stays authorised however old. No session check: only autonomy knows its session. Pure.
+class KillVerifier {
+ public:
+  KillVerifier(std::optional<OperatorKey> key, std::string vehicle_id, int64_t max_age_us);
+  KillCheck check(const operator_cmd_t& cmd, int64_t now_utime);
+  bool has_key() const { return key_.has_value(); }
+
+ private:
+  std::optional<OperatorKey> key_;
+  std::string vehicle_id_;
+  int64_t max_age_us_;
+  std::optional<operator_cmd_t> authorised_;
 };
 
 }  // namespace alight

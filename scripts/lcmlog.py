@@ -24,6 +24,28 @@ _HEADER = struct.Struct(">IqqII")  # sync, event number, utime, channel length, 
 
 Event = collections.namedtuple("Event", "eventnum utime channel data")
 
+# The origin trailer every alight publisher appends (common/bus_auth.hpp): source id, counter,
+# key id, flags, tag, magic; lcm-gen's decoders ignore it.
+TRAILER_BYTES = 38
+TRAILER_MAGIC = b"ALB1"
+Trailer = collections.namedtuple("Trailer", "source counter key_id flags tag")
+
+
+def payload(data):
+    """The message without its origin trailer (the bytes lcm-gen encoded)."""
+    if len(data) >= TRAILER_BYTES and data[-4:] == TRAILER_MAGIC:
+        return data[:-TRAILER_BYTES]
+    return data
+
+
+def trailer(data):
+    """The message's origin trailer (publisher id, counter, key id, flags, tag), or None."""
+    if len(data) < TRAILER_BYTES or data[-4:] != TRAILER_MAGIC:
+        return None
+    t = data[-TRAILER_BYTES:]
+    source, counter, key_id, flags = struct.unpack(">QQBB", t[:18])
+    return Trailer(source, counter, key_id, flags, t[18:34])
+
 
 class LogFormatError(Exception):
     pass
@@ -98,7 +120,7 @@ def types_by_fingerprint():
 def decode(event):
     """Decodes an event's payload with the alight type whose fingerprint it carries, or None."""
     cls = types_by_fingerprint().get(event.data[:8])
-    return cls.decode(event.data) if cls else None
+    return cls.decode(payload(event.data)) if cls else None
 
 
 def summary(path, channel_regex=None):

@@ -131,7 +131,8 @@ TEST(NodeTest, MalformedMessagesAreCountedNotDelivered) {
   int delivered = 0;
   sub.on<pose_t>("NODE_TEST_BAD", [&](const pose_t&) { ++delivered; });
   const std::vector<uint8_t> junk(37, 0xAB);  // wrong fingerprint and length
-  pub.lcm().publish("NODE_TEST_BAD", junk.data(), static_cast<unsigned>(junk.size()));
+  // Through publish_raw: from the same publisher as the rest (another would be refused earlier).
+  pub.publish_raw("NODE_TEST_BAD", junk);
   pub.publish("NODE_TEST_BAD", imu(1));  // a valid message of another type
   pose_t good{};
   good.orientation[0] = 1;
@@ -153,7 +154,7 @@ TEST(NodeTest, RegressionZeroLengthStringIsADecodeErrorNotAnException) {
   c.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
   bytes.resize(28);
   for (int i = 0; i < 4; ++i) bytes[24 + i] = 0;  // the sender string's length
-  pub.lcm().publish("NODE_TEST_CMD", bytes.data(), static_cast<unsigned>(bytes.size()));
+  pub.publish_raw("NODE_TEST_CMD", bytes);
   pub.publish("NODE_TEST_CMD", c);
   ASSERT_TRUE(spin_until(
       sub, [&] { return delivered == 1 && sub.stats("NODE_TEST_CMD").decode_errors == 1; }));
@@ -175,6 +176,63 @@ TEST(NodeTest, RefusedValuesAndStampsAreCountedAndReported) {
   EXPECT_EQ(st.channels.at(0).channel, "NODE_TEST_COUNT");
   EXPECT_EQ(st.channels.at(0).rejected_values, 1);
   EXPECT_EQ(st.channels.at(0).rejected_stamps, 2);
+}
+
+// A signed bus (--bus-key): unsigned and wrongly signed messages are refused on arrival and
+// counted; the signed ones pass.
+TEST(NodeTest, ASignedNodeRefusesWhatIsNotSignedWithItsKey) {
+  const bus::BusKey key = bus::make_bus_key(std::vector<uint8_t>(32, 0x5a));
+  const bus::BusKey other = bus::make_bus_key(std::vector<uint8_t>(32, 0xa5));
+  Node sub(kUrl, "sub", key), signed_pub(kUrl, "signed", key);
+  std::vector<int64_t> seen;
+  sub.on<imu_t>("NODE_TEST_SIGNED", [&](const imu_t& m) { seen.push_back(m.seq); });
+  {
+    Node plain(kUrl, "plain"), wrong(kUrl, "wrong", other);
+    plain.publish("NODE_TEST_SIGNED", imu(1));
+    wrong.publish("NODE_TEST_SIGNED", imu(2));
+    ASSERT_TRUE(spin_until(sub, [&] { return sub.stats("NODE_TEST_SIGNED").rejected_auth == 2; }));
+  }
+  signed_pub.publish("NODE_TEST_SIGNED", imu(3));
+  ASSERT_TRUE(spin_until(sub, [&] { return seen.size() == 1; }));
+  EXPECT_EQ(seen[0], 3);
+  EXPECT_TRUE(signed_pub.signing());
+  const node_status_t st = sub.status_message(wall_utime());
+  EXPECT_TRUE(st.signed_bus);
+  EXPECT_EQ(st.source, static_cast<int64_t>(sub.source_id()));
+  bool found = false;
+  for (const auto& c : st.channels)
+    if (c.channel == "NODE_TEST_SIGNED") {
+      found = true;
+      EXPECT_EQ(c.rejected_auth, 2);
+      EXPECT_EQ(c.received, 1);
+    }
+  EXPECT_TRUE(found);
+}
+
+// Regression: a forged message stamped 0.45 s ahead was accepted and the true publisher's next
+// messages were then refused as "backwards". Now the forger is a second publisher, refused on
+// arrival, and the stamp guard judges each publisher on its own.
+TEST(NodeTest, ASecondPublisherCannotCaptureAChannelOrItsStamps) {
+  Node genuine(kUrl, "genuine"), forger(kUrl, "forger"), sub(kUrl, "sub");
+  std::vector<int64_t> used;
+  sub.on<imu_t>("NODE_TEST_SECOND", [&](const imu_t& m) {
+    if (sub.accept_stamp("NODE_TEST_SECOND", m.utime)) used.push_back(m.seq);
+  });
+  const int64_t t0 = wall_utime();
+  auto sample = [&](int64_t seq, int64_t utime) {
+    imu_t m = imu(seq);
+    m.utime = utime;
+    return m;
+  };
+  genuine.publish("NODE_TEST_SECOND", sample(1, t0));
+  ASSERT_TRUE(spin_until(sub, [&] { return used.size() == 1; }));
+  forger.publish("NODE_TEST_SECOND", sample(99, t0 + 450'000));
+  ASSERT_TRUE(spin_until(sub, [&] { return sub.stats("NODE_TEST_SECOND").second_publisher == 1; }));
+  EXPECT_TRUE(sub.contested("NODE_TEST_SECOND"));
+  genuine.publish("NODE_TEST_SECOND", sample(2, t0 + 10'000));
+  ASSERT_TRUE(spin_until(sub, [&] { return used.size() == 2; }));
+  EXPECT_EQ(used, (std::vector<int64_t>{1, 2}));
+  EXPECT_EQ(sub.stats("NODE_TEST_SECOND").rejected_stamps, 0u);
 }
 
 TEST(NodeTest, EveryNodePublishesItsStatus) {

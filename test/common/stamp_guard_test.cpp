@@ -86,5 +86,45 @@ TEST(StampGuardTest, AGapIsFineWhenTheSteadyClockAgrees) {
   EXPECT_EQ(g.check("POSE", kWall + 500 * kSec, 5 * kSec + 1000, kWall), StampVerdict::kAhead);
 }
 
+// A companion without a real-time clock boots at some old date: its inputs' stamps are far
+// ahead of its wall clock. After a second of steady stamps they are the time base, instead of
+// every first stamp being refused as "ahead" for ever.
+TEST(StampGuardTest, AWallClockFarBehindTheInputsTakesTheirTimeBase) {
+  StampGuard g;
+  const int64_t boot_wall = 86400 * kSec;  // 1970-01-02: no RTC, no NTP yet
+  int64_t steady = 0;
+  StampVerdict v = StampVerdict::kAhead;
+  int n = 0;
+  for (; n < 200 && v == StampVerdict::kAhead; ++n, steady += 10'000)
+    v = g.check("MOCAP_POSE", kWall + steady, steady, boot_wall + steady);
+  EXPECT_EQ(v, StampVerdict::kAdopted);
+  EXPECT_TRUE(g.inputs_time_base());
+  EXPECT_GE(steady, kSec);  // not before a second of steady stamps
+  EXPECT_LE(steady, kSec + 20'000);
+  // From then on the source is accepted and the others are judged against it.
+  EXPECT_EQ(g.check("MOCAP_POSE", kWall + steady, steady, boot_wall + steady),
+            StampVerdict::kAccepted);
+  EXPECT_EQ(g.check("IMU", kWall + steady + 1000, steady + 1000, boot_wall + steady),
+            StampVerdict::kAccepted);
+  EXPECT_EQ(g.check("IMU", kWall + steady + 3600 * kSec, steady + 2000, boot_wall + steady),
+            StampVerdict::kAhead);
+}
+
+// One forged stamp far ahead, or a source whose stamps jump about, never becomes the time base;
+// a source near the wall clock is accepted meanwhile and is then the reference.
+TEST(StampGuardTest, AnUnsteadyOrSingleFarAheadStampIsNotAdopted) {
+  StampGuard g;
+  int64_t steady = 0;
+  for (int i = 0; i < 300; ++i, steady += 10'000) {
+    const int64_t jump = (i % 2) ? 0 : 50 * kSec * (i + 1);  // not in step with the steady clock
+    EXPECT_EQ(g.check("FORGED", kWall + 3600 * kSec + jump, steady, kWall + steady),
+              StampVerdict::kAhead);
+  }
+  EXPECT_FALSE(g.inputs_time_base());
+  EXPECT_EQ(g.check("IMU", kWall + steady, steady, kWall + steady), StampVerdict::kAccepted);
+  EXPECT_EQ(g.check("FORGED", kWall + 3600 * kSec, steady + 10'000, kWall + steady),
+            StampVerdict::kAhead);
+}
+
 }  // namespace
 }  // namespace alight
