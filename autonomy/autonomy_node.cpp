@@ -119,6 +119,7 @@ int main(int argc, char** argv) {
     std::string last_phase_reason;
     alight::autonomy_status_t last_status{};
     int64_t internal_seq = 0;
+    std::optional<alight::operator_cmd_t> kill_authority;  // the signed KILL, once verified
     // --auto-go tries TAKEOFF in IDLE and GO in HOVER once a second of sensor time until obeyed:
     // the autonomy refuses them while the onboard estimate is not OK (the estimator aligns on
     // the ground for a while after it starts).
@@ -165,8 +166,13 @@ int main(int argc, char** argv) {
       if (go_tried_utime && autonomy.phase() != au::Phase::kHover) went = true;
       if (autonomy.restart_state() != saved_state) save_state();
       // Nothing before the first pose: a motors-off setpoint would disarm a flying vehicle.
-      if (out.has_setpoint)
-        node.publish(ch::kPositionSetpoint, alight::outer_loop::to_msg(out.setpoint));
+      if (out.has_setpoint) {
+        alight::position_setpoint_t sp = alight::outer_loop::to_msg(out.setpoint);
+        // The outer loop and alight-mavlink stop the motors in the air only for the operator's
+        // own signed KILL, which they check themselves: it goes with the verdict.
+        if (out.setpoint.kill && kill_authority) sp.kill_authority = *kill_authority;
+        node.publish(ch::kPositionSetpoint, sp);
+      }
       const std::string phase_reason =
           std::string(au::phase_name(out.status.phase)) + ": " + out.status.reason;
       const bool changed = phase_reason != last_phase_reason;
@@ -239,6 +245,7 @@ int main(int argc, char** argv) {
           return autonomy.refused_at_link(*in.command);
         }
         in.command->auth = au::CommandAuth::kVerified;
+        if (m.command == alight::operator_cmd_t::CMD_KILL) kill_authority = m;
       }
       if (now_utime == 0) {
         spdlog::warn("operator command before any sensor time: ignored");

@@ -226,6 +226,9 @@ Verdict Gatekeeper::check(const std::string& channel, const Received& msg, int64
                                                              silent_after_us(owner->second);
     if (owner_alive) {
       ++c.stats.second_publisher;
+      if (c.stats.second_publisher == 1 ||
+          steady_us - c.stats.last_second_publisher_steady_us > kContestGapUs)
+        c.stats.contest_since_steady_us = steady_us;
       c.stats.last_second_publisher_steady_us = steady_us;
       // The intruder is remembered (its counters too), so its replays are refused as such.
       remember(c, id, msg, steady_us);
@@ -249,6 +252,13 @@ const ChannelAuthStats& Gatekeeper::stats(const std::string& channel) const {
   static const ChannelAuthStats kNone;
   const auto it = channels_.find(channel);
   return it == channels_.end() ? kNone : it->second.stats;
+}
+
+int64_t Gatekeeper::contest_span_us(const std::string& channel, int64_t steady_us) const {
+  const auto& s = stats(channel);
+  if (s.second_publisher == 0 || steady_us - s.last_second_publisher_steady_us > kContestGapUs)
+    return 0;
+  return s.last_second_publisher_steady_us - s.contest_since_steady_us;
 }
 
 size_t Gatekeeper::known_sources(const std::string& channel) const {

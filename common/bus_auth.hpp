@@ -42,6 +42,8 @@ namespace alight::bus {
 inline constexpr size_t kTagBytes = 16;
 /// A new source's counter may lag the bus time by this much (MAVLink 2 signing: one minute).
 inline constexpr int64_t kMaxStaleUs = 60'000'000;
+/// Refusals of a second publisher no further apart than this belong to one contest.
+inline constexpr int64_t kContestGapUs = 2'000'000;
 /// Sources remembered per channel (an attacker drawing new source ids must not grow memory).
 inline constexpr size_t kMaxSourcesPerChannel = 8;
 
@@ -118,6 +120,8 @@ struct ChannelAuthStats {
   uint64_t second_publisher = 0;                ///< messages refused from a second source
   uint64_t owner_changes = 0;                   ///< a silent owner replaced by another source
   int64_t last_second_publisher_steady_us = 0;  ///< 0: never
+  /// First refusal of the current contest (refusals no further apart than kContestGapUs).
+  int64_t contest_since_steady_us = 0;
   uint64_t owner = 0;  ///< the owner's source id (0: untrailed messages, or none yet)
 };
 
@@ -135,6 +139,10 @@ class Gatekeeper {
   const ChannelAuthStats& stats(const std::string& channel) const;
   /// True while a second publisher was refused on `channel` within `window_us` before now.
   bool contested(const std::string& channel, int64_t steady_us, int64_t window_us) const;
+  /// How long the current contest of `channel` has lasted (first to latest refusal, refusals
+  /// no further apart than kContestGapUs) [us]; 0 when none is under way. One forged message
+  /// is a contest of 0 s; a second publisher that keeps sending makes it grow.
+  int64_t contest_span_us(const std::string& channel, int64_t steady_us) const;
   bool signing() const { return key_.has_value(); }
   /// Publishers remembered on `channel` (at most kMaxSourcesPerChannel).
   size_t known_sources(const std::string& channel) const;

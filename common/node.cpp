@@ -189,6 +189,10 @@ int Node::publish_raw(const std::string& lcm_channel, std::vector<uint8_t> bytes
   return lcm_->publish(lcm_channel, bytes.data(), static_cast<unsigned>(bytes.size()));
 }
 
+double Node::contest_span_s(const std::string& channel) const {
+  return static_cast<double>(gatekeeper_.contest_span_us(remap_(channel), steady_utime())) * 1e-6;
+}
+
 bool Node::contested(const std::string& channel, double window_s) const {
   return gatekeeper_.contested(remap_(channel), steady_utime(),
                                static_cast<int64_t>(window_s * 1e6));

@@ -173,6 +173,9 @@ class Node {
   }
   /// True while `channel` has a second publisher: one was refused within the last `window_s`.
   bool contested(const std::string& channel, double window_s = 2.0) const;
+  /// How long `channel`'s current contest by a second publisher has lasted [s] (0: none; one
+  /// forged message: 0; a second publisher that keeps sending: growing).
+  double contest_span_s(const std::string& channel) const;
   /// This node's publisher id (in every trailer it sends) and whether it signs.
   uint64_t source_id() const { return sealer_.source(); }
   bool signing() const { return sealer_.signing(); }

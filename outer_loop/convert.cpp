@@ -69,6 +69,8 @@ int8_t mode_to_msg(Mode mode) {
       return attitude_cmd_t::MODE_SETPOINT_LOST_DESCENT;
     case Mode::kDisarmed:
       return attitude_cmd_t::MODE_DISARMED;
+    case Mode::kFailsafeLand:
+      return attitude_cmd_t::MODE_FAILSAFE_LAND;
   }
   return attitude_cmd_t::MODE_DISARMED;
 }
@@ -108,6 +110,9 @@ AttitudeCommand from_msg(const attitude_cmd_t& msg) {
       break;
     case attitude_cmd_t::MODE_SETPOINT_LOST_DESCENT:
       c.mode = Mode::kSetpointLostDescent;
+      break;
+    case attitude_cmd_t::MODE_FAILSAFE_LAND:
+      c.mode = Mode::kFailsafeLand;
       break;
     default:
       c.mode = Mode::kDisarmed;

@@ -13,6 +13,7 @@
 #include <CLI/CLI.hpp>
 #include <optional>
 
+#include "autonomy/operator_identity.hpp"
 #include "common/node.hpp"
 #include "outer_loop/convert.hpp"
 #include "outer_loop/params.hpp"
@@ -57,8 +58,20 @@ int main(int argc, char** argv) {
       spdlog::warn("outer loop: restored from {}: failsafe latched {}, armed {}", state_file,
                    restored.disarm_latched, restored.armed);
 
+    std::vector<std::string> key_warnings;
+    alight::KillVerifier kill_verifier =
+        alight::autonomy::load_kill_verifier(args.config, &key_warnings);
+    for (const auto& w : key_warnings) spdlog::warn("outer loop: {}", w);
+
     alight::Node node(args, "alight-outer-loop");
     ol::InputGate gate;
+    // A KILL is checked on the wall clock, as autonomy checks the operator's commands: its
+    // stamp is the ground station's clock, not the sensors'.
+    gate.authorise_kill = [&](const alight::operator_cmd_t& cmd) -> std::string {
+      const alight::KillCheck c = kill_verifier.check(cmd, alight::wall_utime());
+      return c == alight::KillCheck::kAuthorised ? "" : alight::kill_check_name(c);
+    };
+    gate.contest_span_s = [&](const std::string& ch) { return node.contest_span_s(ch); };
     gate.reject_value = [&](const std::string& ch, const std::string& why) {
       return node.reject_value(ch, why);
     };
@@ -68,6 +81,7 @@ int main(int argc, char** argv) {
     ol::Runner runner(params, restored, gate, options);
 
     ol::Mode last_mode = ol::Mode::kDisarmed;
+    uint64_t kills_refused = 0;
     ol::PersistentState saved = restored;
     int64_t saved_steady_us = 0;
     const auto save = [&](const ol::PersistentState& s) {
@@ -84,7 +98,16 @@ int main(int argc, char** argv) {
                      ol::mode_name(cmd->mode), cmd->reason);
         last_mode = cmd->mode;
       }
-      node.publish(cmd_channel, ol::to_msg(*cmd));
+      alight::attitude_cmd_t msg = ol::to_msg(*cmd);
+      if (!cmd->armed && runner.kill_authority()) msg.kill_authority = *runner.kill_authority();
+      node.publish(cmd_channel, msg);
+      if (runner.kills_refused() != kills_refused) {
+        kills_refused = runner.kills_refused();
+        spdlog::error(
+            "outer loop: {} KILL setpoint(s) without the operator's signed KILL ({}): "
+            "flown as a motors-off (landing)",
+            kills_refused, runner.last_kill_refusal());
+      }
       const ol::PersistentState s = runner.controller().persistent_state();
       if (s.disarm_latched != saved.disarm_latched || s.armed != saved.armed) save(s);
     };

@@ -93,6 +93,29 @@ const ParamSchema<OuterLoopParams>& OuterLoopParams::schema() {
           "the gear carries almost no weight and the wind slides the levelled vehicle across the "
           "top. A contact that was not the ground ends itself: the vehicle falls, and faster than "
           "land_vz_mps it is no longer held up");
+    // The autopilot's own limits, as PX4 and ArduPilot keep them whatever the offboard
+    // setpoints say: a forged or faulty setpoint stream cannot fly the vehicle out of the room
+    // or faster than it can stop.
+    s.add("geofence_min_W_m", &P::geofence_min_W_m, Range::any(), "m",
+          "flying area's lower corner, world (setpoints are kept 0.2 m inside it; leaving it is "
+          "a failsafe: hold failsafe_hold_s, then land). Autonomy's own geofence lies inside it")
+        .required();
+    s.add("geofence_max_W_m", &P::geofence_max_W_m, Range::any(), "m",
+          "flying area's upper corner, world")
+        .required()
+        .check(
+            [](const P& p) {
+              return (p.geofence_max_W_m - p.geofence_min_W_m).minCoeff() > 2 * kFenceInsetM;
+            },
+            "must exceed geofence_min_W_m by more than 0.4 m on every axis");
+    s.add("max_speed_xy_mps", &P::max_speed_xy_mps, Range::open_closed(0, 10), "m/s",
+          "horizontal speed the position loop never asks for more of (a far setpoint is "
+          "approached at this speed)");
+    s.add("max_speed_z_mps", &P::max_speed_z_mps, Range::open_closed(0, 5), "m/s",
+          "vertical speed the position loop never asks for more of");
+    s.add("failsafe_hold_s", &P::failsafe_hold_s, Range::closed(0, 30), "s",
+          "a failsafe that lands (geofence left, a setpoint or pose channel contested by a "
+          "second publisher) first holds this long");
     s.add("i_zone_m", &P::i_zone_m, Range::gt(0), "m",
           "integrate only while the error is smaller (no windup during large steps)");
     s.add("i_still_mps", &P::i_still_mps, Range::ge(0), "m/s",

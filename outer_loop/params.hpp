@@ -5,9 +5,14 @@
 
 #include <string>
 
+#include "common/geometry.hpp"
 #include "common/param_schema.hpp"
 
 namespace alight::outer_loop {
+
+/// Setpoints are kept this far inside the geofence: a step flown at the speed limit overshoots
+/// by less, so a tracked setpoint never breaches the fence [m].
+inline constexpr double kFenceInsetM = 0.2;
 
 struct OuterLoopParams {
   double mass_kg = 1.0;
@@ -55,6 +60,14 @@ struct OuterLoopParams {
   double land_accel_mps2 = 0.5;
   double land_max_descent_mps = 1.0;
   bool land_contact_cut = false;
+
+  // The autopilot's own limits, whatever the setpoints say (PX4's GF_* and MPC_*_VEL_MAX).
+  // No default flying area: every vehicle file states its own (the schema requires it).
+  Vector3d geofence_min_W_m = Vector3d::Constant(-1e3);
+  Vector3d geofence_max_W_m = Vector3d::Constant(1e3);
+  double max_speed_xy_mps = 1.0;
+  double max_speed_z_mps = 1.0;
+  double failsafe_hold_s = 2.0;
 
   double i_zone_m = 0.3;
   double i_still_mps = 0.1;

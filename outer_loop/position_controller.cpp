@@ -21,6 +21,8 @@ const char* mode_name(Mode mode) {
       return "SETPOINT_LOST_DESCENT";
     case Mode::kDisarmed:
       return "DISARMED";
+    case Mode::kFailsafeLand:
+      return "FAILSAFE_LAND";
   }
   return "?";
 }
@@ -82,6 +84,8 @@ AttitudeCommand PositionController::disarmed(const char* reason) {
   pose_lost_since_.reset();
   setpoint_lost_since_.reset();
   still_since_.reset();
+  failsafe_reason_ = nullptr;
+  failsafe_since_.reset();
   AttitudeCommand c;
   c.armed = false;
   c.mode = Mode::kDisarmed;
@@ -96,8 +100,16 @@ AttitudeCommand PositionController::track(const Vector3d& p_sp, const Vector3d& 
   const double kp_xy = precise ? P.precise_kp_xy_per_s2 : P.kp_xy_per_s2;
   const double kd_xy = precise ? P.precise_kd_xy_per_s : P.kd_xy_per_s;
   const double ki_xy = precise ? P.precise_ki_xy_per_s3 : P.ki_xy_per_s3;
-  const Vector3d e_p = p_sp - pose.p_W_B;
-  const Vector3d e_v = v_sp - pose.v_W_B;
+  // Speed limits: at steady state the loop flies v = kp e / kd, so capping the error caps the
+  // speed it asks for; the feed-forward velocity is capped alike.
+  Vector3d e_p = p_sp - pose.p_W_B;
+  clamp_norm(e_p.head<2>(), P.max_speed_xy_mps * kd_xy / kp_xy);
+  const double e_z_max = P.max_speed_z_mps * P.kd_z_per_s / P.kp_z_per_s2;
+  e_p.z() = std::clamp(e_p.z(), -e_z_max, e_z_max);
+  Vector3d v_ff = v_sp;
+  clamp_norm(v_ff.head<2>(), P.max_speed_xy_mps);
+  v_ff.z() = std::clamp(v_ff.z(), -P.max_speed_z_mps, P.max_speed_z_mps);
+  const Vector3d e_v = v_ff - pose.v_W_B;
 
   // Conditional integration: near the setpoint, or while not moving (a steady offset, e.g. a
   // wrong mass, larger than the zone), so that flying a large step does not wind it up.
@@ -235,6 +247,68 @@ AttitudeCommand PositionController::land(const PoseSample& pose, int64_t now_uti
   return c;
 }
 
+Vector3d PositionController::inside_fence(const Vector3d& p_W) const {
+  const Vector3d inset = Vector3d::Constant(kFenceInsetM);
+  return p_W.cwiseMax(params_.geofence_min_W_m + inset).cwiseMin(params_.geofence_max_W_m - inset);
+}
+
+bool PositionController::outside_fence(const Vector3d& p_W) const {
+  return (p_W.array() < params_.geofence_min_W_m.array()).any() ||
+         (p_W.array() > params_.geofence_max_W_m.array()).any();
+}
+
+void PositionController::trigger_failsafe(const char* reason) {
+  if (!armed_ || failsafe_reason_) return;
+  failsafe_reason_ = reason;
+  failsafe_since_.reset();  // set at the next step, with its pose
+}
+
+AttitudeCommand PositionController::descend_to_ground(const Vector3d& from_W, double yaw_rad,
+                                                      int64_t since, const PoseSample& pose,
+                                                      int64_t now_utime, double dt_s, Mode mode,
+                                                      const char* reason,
+                                                      const char* landed_reason) {
+  const auto& P = params_;
+  const double t_s = age_s(since, now_utime);
+  const Vector3d v_sp(0, 0, -P.setpoint_lost_descent_mps);
+  Vector3d p_sp = from_W;
+  p_sp.z() = from_W.z() - P.setpoint_lost_descent_mps * t_s;
+  // On the ground: commanded well below the vehicle, yet it does not move down.
+  const bool blocked = p_sp.z() < pose.p_W_B.z() - 0.2 && std::abs(pose.v_W_B.z()) < 0.05;
+  if (!blocked) {
+    still_since_.reset();
+  } else if (!still_since_) {
+    still_since_ = now_utime;
+  } else if (age_s(*still_since_, now_utime) > P.landed_still_s) {
+    disarm_latched_ = true;
+    return disarmed(landed_reason);
+  }
+  auto c = track(p_sp, v_sp, yaw_rad, pose, dt_s, false);
+  c.mode = mode;
+  c.reason = reason;
+  return c;
+}
+
+AttitudeCommand PositionController::failsafe_land(const PoseSample& pose, int64_t now_utime,
+                                                  double dt_s) {
+  const auto& P = params_;
+  if (!failsafe_since_) {
+    failsafe_since_ = now_utime;
+    failsafe_p_W_ = inside_fence(pose.p_W_B);
+    failsafe_yaw_rad_ = yaw_of(pose.q_WB.toRotationMatrix());
+    still_since_.reset();
+  }
+  if (age_s(*failsafe_since_, now_utime) <= P.failsafe_hold_s) {
+    auto c = track(failsafe_p_W_, Vector3d::Zero(), failsafe_yaw_rad_, pose, dt_s, false);
+    c.mode = Mode::kFailsafeLand;
+    c.reason = failsafe_reason_;
+    return c;
+  }
+  const int64_t descent_since = *failsafe_since_ + static_cast<int64_t>(P.failsafe_hold_s * 1e6);
+  return descend_to_ground(failsafe_p_W_, failsafe_yaw_rad_, descent_since, pose, now_utime, dt_s,
+                           Mode::kFailsafeLand, failsafe_reason_, "failsafe: landed, disarmed");
+}
+
 AttitudeCommand PositionController::step(const std::optional<PositionSetpoint>& setpoint,
                                          const std::optional<PoseSample>& pose, int64_t now_utime,
                                          double dt_s) {
@@ -300,6 +374,10 @@ AttitudeCommand PositionController::step(const std::optional<PositionSetpoint>& 
     return c;
   }
 
+  if (armed_ && outside_fence(pose->p_W_B))
+    trigger_failsafe("left the geofence: holding, then landing");
+  if (failsafe_reason_) return failsafe_land(*pose, now_utime, dt_s);
+
   if (motors_off_refused) return land(*pose, now_utime, dt_s);
 
   if (setpoint->idle) {
@@ -317,7 +395,7 @@ AttitudeCommand PositionController::step(const std::optional<PositionSetpoint>& 
     holding_ = false;
     setpoint_lost_since_.reset();
     still_since_.reset();
-    auto c = track(setpoint->p_W, setpoint->v_W, setpoint->yaw_rad, *pose, dt_s, true,
+    auto c = track(inside_fence(setpoint->p_W), setpoint->v_W, setpoint->yaw_rad, *pose, dt_s, true,
                    setpoint->precise);
     c.reason = setpoint->precise ? "tracking (precise)" : "tracking";
     return c;
@@ -325,7 +403,7 @@ AttitudeCommand PositionController::step(const std::optional<PositionSetpoint>& 
 
   if (!holding_) {
     holding_ = true;
-    hold_p_W_ = pose->p_W_B;
+    hold_p_W_ = inside_fence(pose->p_W_B);
     hold_yaw_rad_ = yaw_of(pose->q_WB.toRotationMatrix());
   }
   if (sp_age_s <= P.setpoint_lost_s) {
@@ -339,24 +417,11 @@ AttitudeCommand PositionController::step(const std::optional<PositionSetpoint>& 
     setpoint_lost_since_ = now_utime;
     lost_descent_z0_m_ = pose->p_W_B.z();
   }
-  const double t_s = age_s(*setpoint_lost_since_, now_utime);
-  const Vector3d v_sp(0, 0, -P.setpoint_lost_descent_mps);
-  Vector3d p_sp = hold_p_W_;
-  p_sp.z() = lost_descent_z0_m_ - P.setpoint_lost_descent_mps * t_s;
-  // On the ground: commanded well below the vehicle, yet it does not move down.
-  const bool blocked = p_sp.z() < pose->p_W_B.z() - 0.2 && std::abs(pose->v_W_B.z()) < 0.05;
-  if (!blocked) {
-    still_since_.reset();
-  } else if (!still_since_) {
-    still_since_ = now_utime;
-  } else if (age_s(*still_since_, now_utime) > P.landed_still_s) {
-    disarm_latched_ = true;
-    return disarmed("setpoint lost: descended to the ground, disarmed");
-  }
-  auto c = track(p_sp, v_sp, hold_yaw_rad_, *pose, dt_s, false);
-  c.mode = Mode::kSetpointLostDescent;
-  c.reason = "setpoint lost: slow descent";
-  return c;
+  Vector3d from = hold_p_W_;
+  from.z() = lost_descent_z0_m_;
+  return descend_to_ground(from, hold_yaw_rad_, *setpoint_lost_since_, *pose, now_utime, dt_s,
+                           Mode::kSetpointLostDescent, "setpoint lost: slow descent",
+                           "setpoint lost: descended to the ground, disarmed");
 }
 
 }  // namespace alight::outer_loop

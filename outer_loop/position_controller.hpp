@@ -25,6 +25,13 @@
 // speed autonomy last commanded (a motors-off in a hover descends slowly), level once in ground
 // contact, disarming once the land detector says it is down.
 //
+// The autopilot's own limits, whatever the setpoints say (PX4 and ArduPilot keep them in the
+// autopilot): setpoints are kept kFenceInsetM inside the geofence; a far setpoint is approached at
+// no more than max_speed_*_mps (the position error is capped at the one that asks for that speed
+// at steady state, v = kp e / kd); leaving the fence starts the landing failsafe (hold
+// failsafe_hold_s where it is, then descend and disarm on the ground), which the runner also
+// starts when a second publisher contests the setpoint or pose channel.
+//
 // Defence in depth: the node refuses non-finite input, but update() also never lets one
 // through: a non-finite setpoint or pose is replaced by the last finite one, a non-finite
 // integrator is reset, and a non-finite command becomes level hover thrust.
@@ -59,6 +66,11 @@ class PositionController {
   bool started() const { return started_; }
   /// Land detector's verdict at the last update.
   bool landed() const { return landed_; }
+  /// Starts the failsafe that holds failsafe_hold_s where the vehicle is, then lands and disarms
+  /// (latched until disarmed). `reason` is static text. Ignored while disarmed or already in it.
+  void trigger_failsafe(const char* reason);
+  /// Why the landing failsafe is active (nullptr: it is not).
+  const char* failsafe_reason() const { return failsafe_reason_; }
   PersistentState persistent_state() const { return {disarm_latched_, armed_}; }
 
   /// Integral terms [m/s^2] (for tests and logs).
@@ -74,6 +86,14 @@ class PositionController {
   AttitudeCommand step(const std::optional<PositionSetpoint>& setpoint,
                        const std::optional<PoseSample>& pose, int64_t now_utime, double dt_s);
   AttitudeCommand land(const PoseSample& pose, int64_t now_utime, double dt_s);
+  AttitudeCommand failsafe_land(const PoseSample& pose, int64_t now_utime, double dt_s);
+  // Descends from `from_W` at setpoint_lost_descent_mps since `since`; disarms (latched) once
+  // the ground stops it. `mode` and `reason` name what is landing.
+  AttitudeCommand descend_to_ground(const Vector3d& from_W, double yaw_rad, int64_t since,
+                                    const PoseSample& pose, int64_t now_utime, double dt_s,
+                                    Mode mode, const char* reason, const char* landed_reason);
+  Vector3d inside_fence(const Vector3d& p_W) const;
+  bool outside_fence(const Vector3d& p_W) const;
   void detect_landing(const PoseSample& pose, int64_t now_utime);
 
   OuterLoopParams params_;
@@ -101,6 +121,10 @@ class PositionController {
   Vector3d hold_p_W_ = Vector3d::Zero();
   double hold_yaw_rad_ = 0.0;
   double lost_descent_z0_m_ = 0.0;
+  const char* failsafe_reason_ = nullptr;  // the landing failsafe, latched until disarmed
+  std::optional<int64_t> failsafe_since_;
+  Vector3d failsafe_p_W_ = Vector3d::Zero();
+  double failsafe_yaw_rad_ = 0.0;
 };
 
 }  // namespace alight::outer_loop

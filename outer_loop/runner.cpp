@@ -1,6 +1,7 @@
 #include "outer_loop/runner.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <utility>
 
 #include "common/msg_convert.hpp"
@@ -8,9 +9,25 @@
 
 namespace alight::outer_loop {
 
+namespace {
+// The gate's allowance for the vehicle's own acceleration: twice what the loop can command
+// (the tilt limit's horizontal and the vertical limit), the other half for what it does not
+// command (gusts, contact).
+PoseGateParams pose_gate_params(const OuterLoopParams& p) {
+  PoseGateParams g;
+  const double commanded =
+      std::hypot(p.gravity_mps2 * std::tan(p.max_tilt_deg * M_PI / 180.0), p.max_accel_z_mps2);
+  g.max_accel_mps2 = 2.0 * commanded;
+  return g;
+}
+}  // namespace
+
 Runner::Runner(const OuterLoopParams& params, const PersistentState& restored, InputGate gate,
                RunnerOptions options)
-    : controller_(params, restored), gate_(std::move(gate)), options_(std::move(options)) {}
+    : controller_(params, restored),
+      gate_(std::move(gate)),
+      pose_gate_(pose_gate_params(params)),
+      options_(std::move(options)) {}
 
 void Runner::accepted(int64_t utime, int64_t steady_us) {
   if (utime > newest_utime_) {
@@ -28,6 +45,10 @@ std::optional<AttitudeCommand> Runner::on_pose(const pose_t& msg, int64_t steady
     return std::nullopt;
   }
   if (!gate_.accept_stamp(options_.pose_channel, msg.utime)) return std::nullopt;
+  if (!pose_gate_ok(pose_gate_.check(*pose))) {
+    gate_.reject_value(options_.pose_channel, "innovation gate: " + pose_gate_.last_why());
+    return std::nullopt;
+  }
   pose_ = *pose;
   accepted(msg.utime, steady_us);
   return step(newest_utime_, steady_us);
@@ -42,6 +63,18 @@ std::optional<AttitudeCommand> Runner::on_setpoint(const position_setpoint_t& ms
     return std::nullopt;
   }
   if (!gate_.accept_stamp(options_.setpoint_channel, msg.utime)) return std::nullopt;
+  if (sp->kill) {
+    const std::string why =
+        gate_.authorise_kill ? gate_.authorise_kill(msg.kill_authority) : "no operator key";
+    if (why.empty()) {
+      kill_authority_ = msg.kill_authority;
+    } else {
+      // Not the operator's: a motors-off, which the controller honours on the ground only.
+      sp->kill = false;
+      ++kills_refused_;
+      last_kill_refusal_ = why;
+    }
+  }
   setpoint_ = *sp;
   accepted(msg.utime, steady_us);
   return step(newest_utime_, steady_us);
@@ -57,7 +90,23 @@ std::optional<AttitudeCommand> Runner::tick(int64_t steady_us) {
 std::optional<AttitudeCommand> Runner::step(int64_t now_utime, int64_t steady_us) {
   now_utime_ = now_utime;
   last_step_steady_us_ = steady_us;
-  const AttitudeCommand cmd = controller_.update(setpoint_, pose_, now_utime);
+  if (gate_.contest_span_s) {
+    if (gate_.contest_span_s(options_.setpoint_channel) >= kContestFailsafeS)
+      controller_.trigger_failsafe(
+          "setpoint channel contested by a second publisher: holding, "
+          "then landing");
+    else if (gate_.contest_span_s(options_.pose_channel) >= kContestFailsafeS)
+      controller_.trigger_failsafe(
+          "pose channel contested by a second publisher: holding, then "
+          "landing");
+  }
+  AttitudeCommand cmd = controller_.update(setpoint_, pose_, now_utime);
+  if (pose_gate_.latched() && cmd.mode == Mode::kHoldLevel)
+    cmd.reason = "pose disagrees with its prediction (innovation gate): level, hover thrust";
+  if (pose_gate_.latched() && cmd.mode == Mode::kFailsafeDescent)
+    cmd.reason = "pose disagrees with its prediction (innovation gate): open-loop slow descent";
+  // On the ground and disarmed the next flight starts with a fresh gate.
+  if (!cmd.armed && pose_gate_.latched()) pose_gate_.reset();
   if (!controller_.started()) return std::nullopt;
   return cmd;
 }

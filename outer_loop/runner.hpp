@@ -5,11 +5,23 @@
 // Node::accept_stamp), the controller stepped at the newest accepted input stamp, and a timer
 // tick that keeps the failsafe sequence running when every input has stopped.
 //
+// Beyond the boundary checks (issue: anyone on the network could steer or disarm the vehicle):
+//  - a KILL setpoint stops the motors only with the operator's signed CMD_KILL attached
+//    (position_setpoint_t.kill_authority, checked by authorise_kill); otherwise it is a plain
+//    motors-off (a landing), and counted;
+//  - poses pass an innovation gate (common/pose_gate.hpp): a pose that jumps from its prediction
+//    is refused and counted, and a refusal streak of pose_stale_s latches the gate, so the
+//    controller sees the pose lost (hold level, then the blind descent), never re-centred on the
+//    new stream;
+//  - a setpoint or pose channel contested by a second publisher for kContestFailsafeS (the
+//    node's contest_span_s) starts the controller's landing failsafe.
+//
 // Controller time: the newest accepted input stamp, so a replayed log gives the same commands.
 // When nothing arrives, tick() advances it from that stamp by the steady time elapsed since it
 // arrived (PX4 runs its failsafes on its own clock in the same way), so with motion capture and
 // setpoints both gone the vehicle still holds level, descends and disarms on the ground.
 
+#include <alight/operator_cmd_t.hpp>
 #include <alight/pose_t.hpp>
 #include <alight/position_setpoint_t.hpp>
 #include <cstdint>
@@ -19,6 +31,7 @@
 
 #include "common/channels.hpp"
 #include "common/pose_buffer.hpp"
+#include "common/pose_gate.hpp"
 #include "outer_loop/position_controller.hpp"
 
 namespace alight::outer_loop {
@@ -28,7 +41,16 @@ namespace alight::outer_loop {
 struct InputGate {
   std::function<bool(const std::string& channel, const std::string& why)> reject_value;
   std::function<bool(const std::string& channel, int64_t utime)> accept_stamp;
+  /// "" when `cmd` is the operator's signed CMD_KILL for this vehicle, else why not (unset:
+  /// nothing is ever authorised).
+  std::function<std::string(const operator_cmd_t& cmd)> authorise_kill;
+  /// How long a second publisher has been contesting `channel` [s] (unset: never).
+  std::function<double(const std::string& channel)> contest_span_s;
 };
+
+/// A second publisher contesting the setpoint or pose channel this long lands the vehicle: one
+/// forged message is reported and refused, a stream of them is an attack under way [s].
+inline constexpr double kContestFailsafeS = 1.0;
 
 struct RunnerOptions {
   std::string pose_channel = channels::kMocapPose;
@@ -50,6 +72,12 @@ class Runner {
   std::optional<AttitudeCommand> tick(int64_t steady_us);
 
   const PositionController& controller() const { return controller_; }
+  /// The operator's KILL behind the motors stopping, once authorised (ATTITUDE_CMD carries it).
+  const std::optional<operator_cmd_t>& kill_authority() const { return kill_authority_; }
+  /// KILL setpoints without a valid authority, flown as a motors-off instead; and the last why.
+  uint64_t kills_refused() const { return kills_refused_; }
+  const std::string& last_kill_refusal() const { return last_kill_refusal_; }
+  const PoseGate& pose_gate() const { return pose_gate_; }
   /// Controller time of the last step [us].
   int64_t now_utime() const { return now_utime_; }
 
@@ -59,6 +87,10 @@ class Runner {
 
   PositionController controller_;
   InputGate gate_;
+  PoseGate pose_gate_;
+  std::optional<operator_cmd_t> kill_authority_;
+  uint64_t kills_refused_ = 0;
+  std::string last_kill_refusal_;
   RunnerOptions options_;
   std::optional<PoseSample> pose_;
   std::optional<PositionSetpoint> setpoint_;

@@ -29,6 +29,7 @@ struct AttitudeCommand {
   double yaw_rate_radps = 0.0;  ///< about world z
   double thrust_N = 0.0;
   bool armed = false;
+  bool forced = false;  ///< a disarm the autopilot takes in the air (the operator's signed KILL)
 };
 
 struct VehicleState {

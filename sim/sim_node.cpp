@@ -26,6 +26,7 @@
 #include <filesystem>
 #include <thread>
 
+#include "autonomy/operator_identity.hpp"
 #include "common/node.hpp"
 #include "common/params.hpp"
 #include "mavlink/link_io.hpp"
@@ -113,15 +114,29 @@ int main(int argc, char** argv) {
 
     sim::Simulator simulator(scenario, vehicle, seed, rig, flow_rig);
     simulator.set_render_threads(threads);
+    // The autopilot stops the motors in the air only for the operator's own signed KILL.
+    std::vector<std::string> key_warnings;
+    KillVerifier kill_verifier = autonomy::load_kill_verifier(vehicle_file, &key_warnings);
+    for (const auto& w : key_warnings) spdlog::info("alight-sim: {}", w);
+    uint64_t disarms_refused = 0;
     Node node(args, "alight-sim");
     // Disarmed until the outer loop says otherwise; its silence is the autopilot's command-loss
     // failsafe's business (Simulator::advance_to).
     node.on<attitude_cmd_t>(channels::kAttitudeCmd, [&](const attitude_cmd_t& m) {
       if (mavlink_address) return;  // the autopilot takes its commands over MAVLink
       std::string why;
-      if (const auto cmd =
+      if (auto cmd =
               sim::command_from_msg(m, simulator.now_utime(), vehicle.cmd_loss_timeout_s, &why)) {
+        cmd->forced = !m.armed &&
+                      kill_verifier.check(m.kill_authority, wall_utime()) == KillCheck::kAuthorised;
         simulator.command(*cmd);
+        if (simulator.disarms_refused() != disarms_refused) {
+          disarms_refused = simulator.disarms_refused();
+          spdlog::error(
+              "alight-sim: {} disarm(s) in the air refused: not forced by the operator's signed "
+              "KILL (as an autopilot refuses a disarm in flight)",
+              disarms_refused);
+        }
       } else {
         node.reject_value(channels::kAttitudeCmd, why);
       }

@@ -119,8 +119,13 @@ void Simulator::step(const AttitudeCommand& cmd, int64_t until_utime) {
 }
 
 void Simulator::command(const AttitudeCommand& cmd) {
-  cmd_ = cmd;
   last_command_utime_ = now_utime_;
+  const bool in_the_air = last_.contact == Contact::kNone || last_.contact == Contact::kWall;
+  if (!cmd.armed && !cmd.forced && state_.armed && cmd_.armed && in_the_air) {
+    ++disarms_refused_;
+    return;
+  }
+  cmd_ = cmd;
 }
 
 AttitudeCommand Simulator::autopilot_command() {

@@ -99,8 +99,12 @@ class Simulator {
   /// Holds `cmd` from now until `until_utime`, as if it were received all the while (fixed
   /// physics steps; time never goes back).
   void step(const AttitudeCommand& cmd, int64_t until_utime);
-  /// A command received now (the node: one ATTITUDE_CMD message).
+  /// A command received now (the node: one ATTITUDE_CMD message). As PX4 and ArduPilot refuse a
+  /// disarm in flight unless it is forced, a disarm (armed false) while the vehicle is armed and
+  /// touches nothing but air (or a wall) is refused unless `forced`: the vehicle keeps flying the
+  /// last armed command, and the refusal is counted (disarms_refused()).
   void command(const AttitudeCommand& cmd);
+  uint64_t disarms_refused() const { return disarms_refused_; }
   /// The autopilot's command-loss failsafe is flying the vehicle.
   bool command_lost() const { return cmd_lost_since_.has_value(); }
   /// Advances under the last command received. When none arrived for the vehicle's
@@ -182,6 +186,7 @@ class Simulator {
   std::optional<int64_t> cmd_lost_since_;  // failsafe active since
   std::optional<int64_t> cmd_loss_rest_since_;
   bool cmd_loss_disarmed_ = false;
+  uint64_t disarms_refused_ = 0;
   int64_t now_utime_;
   int64_t dt_us_;
   StepResult last_;

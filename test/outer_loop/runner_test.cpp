@@ -11,6 +11,7 @@
 
 #include "common/channels.hpp"
 #include "common/msg_convert.hpp"
+#include "common/operator_auth.hpp"
 #include "common/stamp_guard.hpp"
 #include "lag_model.hpp"
 #include "outer_loop/convert.hpp"
@@ -38,7 +39,13 @@ struct Harness {
   std::optional<AttitudeCommand> last;
   int published = 0;
 
-  explicit Harness(PersistentState restored = {}) : runner(params(), restored, gate()) {}
+  // The operator's key and this vehicle's id, as the node loads them from the vehicle file.
+  OperatorKey key{std::vector<uint8_t>(32, 0x42)};
+  KillVerifier kills{key, "alight", 2'000'000};
+  std::map<std::string, double> contest_s;
+
+  explicit Harness(PersistentState restored = {}, OuterLoopParams p = params())
+      : runner(p, restored, gate()) {}
 
   InputGate gate() {
     InputGate g;
@@ -51,7 +58,40 @@ struct Harness {
       if (!ok) ++rejected_stamps[ch];
       return ok;
     };
+    g.authorise_kill = [this](const operator_cmd_t& cmd) -> std::string {
+      const KillCheck c = kills.check(cmd, now());
+      return c == KillCheck::kAuthorised ? "" : kill_check_name(c);
+    };
+    g.contest_span_s = [this](const std::string& ch) {
+      const auto it = contest_s.find(ch);
+      return it == contest_s.end() ? 0.0 : it->second;
+    };
     return g;
+  }
+  // The operator's KILL as the ground station signs it and autonomy passes it on.
+  operator_cmd_t signed_kill(const std::string& vehicle = "alight", int64_t age_us = 0) const {
+    operator_cmd_t k{};
+    k.utime = now() - age_us;
+    k.seq = 7;
+    k.sender = "gs";
+    k.vehicle_id = vehicle;
+    k.session = 1;
+    k.command = operator_cmd_t::CMD_KILL;
+    sign(k, key);
+    return k;
+  }
+  void kill_setpoint(const Vector3d& p, const std::optional<operator_cmd_t>& authority) {
+    for (int k = 0; k < 10; ++k) model.step(last.value_or(AttitudeCommand{}), 0.001);
+    steady_us += 10 * kMs;
+    pose();
+    PositionSetpoint sp;
+    sp.utime = now();
+    sp.p_W = p;
+    sp.kill = true;
+    position_setpoint_t m = to_msg(sp);
+    if (authority) m.kill_authority = *authority;
+    take(runner.on_setpoint(m, steady_us));
+    tick();
   }
   int64_t now() const { return kT0 + steady_us; }
   void take(const std::optional<AttitudeCommand>& c) {
@@ -178,9 +218,140 @@ TEST(OuterLoopRegression, KillFromAutonomyDisarmsInTheAirButAPlainMotorsOffLands
   off.motors_on = false;
   h.step(off);
   EXPECT_TRUE(h.last->armed);
-  off.kill = true;
-  h.step(off);
+  h.kill_setpoint({0, 0, 1.5}, h.signed_kill());
   EXPECT_FALSE(h.last->armed);
+  ASSERT_TRUE(h.runner.kill_authority());
+  EXPECT_EQ(h.runner.kill_authority()->command, operator_cmd_t::CMD_KILL);
+  EXPECT_EQ(h.runner.kills_refused(), 0u);
+}
+
+// Regression: one unsigned POSITION_SETPOINT with MOTORS_KILL sent from the network stopped the
+// motors at 1.6 m. A KILL without the operator's signature (none, forged, for another vehicle,
+// or stale) is a motors-off: the vehicle lands and disarms on the ground.
+TEST(OuterLoopRegression, AKillWithoutTheOperatorsSignatureLandsInsteadOfStoppingTheMotors) {
+  for (int variant = 0; variant < 4; ++variant) {
+    Harness h;
+    h.model.hover_at({0, 0, 1.6});
+    for (int i = 0; i < 100; ++i) h.step(hover_sp({0, 0, 1.6}));
+    std::optional<operator_cmd_t> authority;
+    if (variant == 1) {
+      authority = h.signed_kill();
+      authority->hmac[0] ^= 1;  // forged
+    }
+    if (variant == 2) authority = h.signed_kill("another-vehicle");
+    if (variant == 3) authority = h.signed_kill("alight", 10'000'000);  // recorded 10 s ago
+    bool disarmed_in_air = false;
+    for (int i = 0; i < 1500; ++i) {
+      h.kill_setpoint({0, 0, 1.6}, authority);
+      if (!h.last->armed && h.model.p.z() > 0.05) disarmed_in_air = true;
+    }
+    EXPECT_FALSE(disarmed_in_air) << "variant " << variant;
+    EXPECT_LT(h.model.p.z(), 0.01) << "landed, variant " << variant;
+    EXPECT_FALSE(h.last->armed) << "disarmed on the ground, variant " << variant;
+    EXPECT_GT(h.runner.kills_refused(), 0u);
+    EXPECT_FALSE(h.runner.kill_authority());
+  }
+}
+
+// Regression: every MOCAP_POSE re-sent shifted by 30 cm landed the vehicle beside the platform.
+// A pose off its prediction is refused; a stream that keeps disagreeing latches the gate and the
+// vehicle holds level, then descends, never re-centred on the new stream.
+TEST(OuterLoopRegression, APoseOffItsPredictionIsRefusedAndASustainedOneIsAFailsafe) {
+  Harness h;
+  h.model.hover_at({0.5, 0, 1.6});
+  for (int i = 0; i < 100; ++i) h.step(hover_sp({0.5, 0, 1.6}));
+  // Interleaved: each genuine pose followed by one shifted 30 cm.
+  for (int i = 0; i < 100; ++i) {
+    h.step(hover_sp({0.5, 0, 1.6}));
+    pose_t forged = alight::to_msg(h.model.pose(h.now()), 0);
+    forged.pos[0] += 0.3;
+    h.pose(forged);
+  }
+  EXPECT_EQ(h.rejected_values[channels::kMocapPose], 100);
+  EXPECT_EQ(h.last->mode, Mode::kNormal);
+  EXPECT_NEAR(h.model.p.x(), 0.5, 0.01) << "the forged poses moved nothing";
+  // Replaced: only shifted poses from now on.
+  bool saw_hold = false, saw_descent = false;
+  double max_dx = 0;
+  for (int i = 0; i < 300; ++i) {
+    for (int k = 0; k < 10; ++k) h.model.step(h.last.value_or(AttitudeCommand{}), 0.001);
+    h.steady_us += 10 * kMs;
+    pose_t forged = alight::to_msg(h.model.pose(h.now()), 0);
+    forged.pos[0] += 0.3;
+    h.pose(forged);
+    auto sp = hover_sp({0.5, 0, 1.6});
+    sp.utime = h.now();
+    h.setpoint(sp);
+    h.tick();
+    saw_hold |= h.last->mode == Mode::kHoldLevel;
+    saw_descent |= h.last->mode == Mode::kFailsafeDescent;
+    max_dx = std::max(max_dx, std::abs(h.model.p.x() - 0.5));
+  }
+  EXPECT_TRUE(h.runner.pose_gate().latched());
+  EXPECT_TRUE(saw_hold);
+  EXPECT_TRUE(saw_descent);
+  EXPECT_NE(std::string(h.last->reason).find("innovation gate"), std::string::npos)
+      << h.last->reason;
+  EXPECT_LT(max_dx, 0.1) << "never flown toward the shifted poses";
+}
+
+// Regression: setpoints from a second publisher for 8 s flew the vehicle out of the flying area.
+// The outer loop keeps its own geofence and speed limit: a far setpoint is approached at no more
+// than max_speed_xy_mps and stops 0.2 m inside the fence.
+TEST(OuterLoopRegression, AFarSetpointIsFlownSlowlyAndStopsInsideTheGeofence) {
+  OuterLoopParams p = params();
+  p.geofence_min_W_m = Vector3d(-3, -3, -0.5);
+  p.geofence_max_W_m = Vector3d(4.7, 3, 2.6);
+  Harness h({}, p);
+  h.model.hover_at({0, 0, 1.2});
+  double max_speed = 0, max_x = 0;
+  for (int i = 0; i < 1500; ++i) {
+    h.step(hover_sp({25, 0, 1.2}));
+    max_speed = std::max(max_speed, h.model.v.head<2>().norm());
+    max_x = std::max(max_x, h.model.p.x());
+  }
+  EXPECT_LE(max_speed, p.max_speed_xy_mps * 1.1);
+  EXPECT_LE(max_x, p.geofence_max_W_m.x());
+  EXPECT_NEAR(h.model.p.x(), p.geofence_max_W_m.x() - kFenceInsetM, 0.05);
+  EXPECT_EQ(h.last->mode, Mode::kNormal);
+}
+
+// Pushed out of the flying area (a gust, a wrong pose): hold, then land and disarm there.
+TEST(OuterLoopRegression, LeavingTheGeofenceHoldsThenLands) {
+  OuterLoopParams p = params();
+  p.geofence_min_W_m = Vector3d(-3, -3, -0.5);
+  p.geofence_max_W_m = Vector3d(4.7, 3, 2.6);
+  Harness h({}, p);
+  h.model.hover_at({4.5, 0, 1.2});
+  for (int i = 0; i < 50; ++i) h.step(hover_sp({4.5, 0, 1.2}));
+  h.model.v.x() = 1.5;  // a gust carries it out
+  bool saw_hold = false, disarmed_in_air = false;
+  for (int i = 0; i < 3000; ++i) {
+    h.step(hover_sp({4.5, 0, 1.2}));
+    if (h.last->mode == Mode::kFailsafeLand && h.steady_us < 2'500'000)
+      saw_hold |= std::abs(h.model.p.z() - 1.2) < 0.05;
+    if (!h.last->armed && h.model.p.z() > 0.05) disarmed_in_air = true;
+  }
+  EXPECT_TRUE(saw_hold);
+  EXPECT_FALSE(disarmed_in_air);
+  EXPECT_LT(h.model.p.z(), 0.01);
+  EXPECT_FALSE(h.last->armed);
+  EXPECT_LE(h.model.p.x(), p.geofence_max_W_m.x()) << "held inside the fence";
+}
+
+// A second publisher on the setpoint channel: one forged message is refused and reported (the
+// node's business); one that keeps sending for a second lands the vehicle.
+TEST(OuterLoopRegression, ASustainedSecondPublisherOnTheSetpointChannelLands) {
+  Harness h;
+  h.model.hover_at({0, 0, 1.6});
+  for (int i = 0; i < 100; ++i) h.step(hover_sp({0, 0, 1.6}));
+  h.contest_s[channels::kPositionSetpoint] = 0.0;  // one message
+  for (int i = 0; i < 50; ++i) h.step(hover_sp({0, 0, 1.6}));
+  EXPECT_EQ(h.last->mode, Mode::kNormal);
+  h.contest_s[channels::kPositionSetpoint] = 1.2;
+  for (int i = 0; i < 3000; ++i) h.step(hover_sp({0, 0, 1.6}));
+  EXPECT_FALSE(h.last->armed);
+  EXPECT_LT(h.model.p.z(), 0.01);
 }
 
 }  // namespace

@@ -74,6 +74,45 @@ TEST_F(SimCommandLossTest, CommandLossLevelsThenDescendsThenDisarmsOnTheGround) 
   EXPECT_TRUE(sim.state().armed);
 }
 
+// Regression: a forged ATTITUDE_CMD{armed = false} dropped the simulated vehicle from 1.6 m. As
+// PX4 and ArduPilot do, the simulated autopilot refuses a disarm in flight unless it is forced
+// (the node forces it only for the operator's signed KILL); on the ground it disarms.
+TEST_F(SimCommandLossTest, ADisarmInTheAirIsRefusedUnlessForced) {
+  Simulator sim(scenario_, vehicle_, 1);
+  place(sim, Vector3d(0, 0, 1.6));
+  sim.command(hover(vehicle_));
+  sim.advance_to(sim.now_utime() + 100 * kMs);
+  ASSERT_TRUE(sim.state().armed);
+  for (int i = 0; i < 50; ++i) {
+    sim.command(AttitudeCommand{sim.now_utime()});  // armed false, not forced
+    sim.advance_to(sim.now_utime() + 10 * kMs);
+  }
+  EXPECT_TRUE(sim.state().armed);
+  EXPECT_EQ(sim.disarms_refused(), 50u);
+  EXPECT_NEAR(sim.state().p_W_B.z(), 1.6, 0.05) << "kept flying the last armed command";
+  AttitudeCommand kill{sim.now_utime()};
+  kill.forced = true;
+  sim.command(kill);
+  sim.advance_to(sim.now_utime() + 10 * kMs);
+  EXPECT_FALSE(sim.state().armed);
+}
+
+TEST_F(SimCommandLossTest, ADisarmOnTheGroundIsTaken) {
+  Simulator sim(scenario_, vehicle_, 1);
+  place(sim, Vector3d(0, 0, 1.0));
+  AttitudeCommand down = hover(vehicle_);
+  down.thrust_N = 0.6 * vehicle_.hover_thrust_N();
+  for (int i = 0; i < 300; ++i) {
+    sim.command(down);
+    sim.advance_to(sim.now_utime() + 10 * kMs);
+  }
+  ASSERT_LT(sim.state().p_W_B.z(), 0.2);
+  sim.command(AttitudeCommand{sim.now_utime()});
+  sim.advance_to(sim.now_utime() + 10 * kMs);
+  EXPECT_FALSE(sim.state().armed);
+  EXPECT_EQ(sim.disarms_refused(), 0u);
+}
+
 TEST_F(SimCommandLossTest, StepHoldsACommandAsIfReceivedAllTheWhile) {
   Simulator sim(scenario_, vehicle_, 1);
   place(sim, Vector3d(0, 0, 1.5));

@@ -254,7 +254,8 @@ ToolRun run(const std::string& args) {
 
 TEST(AlightParamsTest, ABadFileExitsTwoNamingFileKeyAndValue) {
   const std::string file = write(temp_dir("tool") / "bad_vehicle.yaml",
-                                 "outer_loop: {mass_kg: 1.0}\nautonomy:\n  failsafe:\n"
+                                 "outer_loop: {mass_kg: 1.0, geofence_min_W_m: [-3, -3, -0.5], "
+                                 "geofence_max_W_m: [4.7, 3, 2.6]}\nautonomy:\n  failsafe:\n"
                                  "    pose_lost_s: 12\nvehicle: {}\n");
   const ToolRun r = run("--dump " + file);
   EXPECT_EQ(r.exit_code, 2) << r.output;
