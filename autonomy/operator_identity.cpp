@@ -20,8 +20,7 @@ KillVerifier load_kill_verifier(const std::string& vehicle_file,
   }
   try {
     LoadedKey loaded = load_key_file(p.operator_key_file);
-    if (warnings)
-      warnings->insert(warnings->end(), loaded.warnings.begin(), loaded.warnings.end());
+    if (warnings) warnings->insert(warnings->end(), loaded.warnings.begin(), loaded.warnings.end());
     return KillVerifier(std::move(loaded.key), p.vehicle_id, max_age_us);
   } catch (const KeyFileError& e) {
     throw ParamError(vehicle_file, "autonomy.operator_key_file", p.operator_key_file, e.what());

@@ -133,6 +133,19 @@ bool signature_valid(const operator_cmd_t& cmd, const OperatorKey& key) {
   return CRYPTO_memcmp(tag.data(), cmd.hmac, tag.size()) == 0;
 }
 
+std::string random_key_hex(size_t bytes) {
+  std::vector<uint8_t> raw(bytes);
+  if (RAND_bytes(raw.data(), static_cast<int>(raw.size())) != 1)
+    throw std::runtime_error("RAND_bytes failed: no key");
+  static const char* digits = "0123456789abcdef";
+  std::string hex;
+  for (uint8_t b : raw) {
+    hex.push_back(digits[b >> 4]);
+    hex.push_back(digits[b & 15]);
+  }
+  return hex + "\n";
+}
+
 int64_t draw_session_nonce() {
   for (;;) {
     uint64_t v = 0;

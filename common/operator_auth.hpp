@@ -70,6 +70,10 @@ OperatorKey parse_key(const std::string& contents, const std::string& origin);
 /// Reads and parses a key file; warns when the file is readable or writable by group or others.
 LoadedKey load_key_file(const std::string& path);
 
+/// `bytes` random bytes from the operating system (OpenSSL RAND_bytes) as lowercase hex: a key
+/// file's contents (scripts/make-key writes the same form).
+std::string random_key_hex(size_t bytes = 32);
+
 /// HMAC-SHA256 of `data` with `key` (any length; RFC 4231 uses 4 to 131 bytes).
 HmacTag hmac_sha256(const uint8_t* key, size_t key_len, const uint8_t* data, size_t data_len);
 HmacTag hmac_sha256(const std::vector<uint8_t>& key, const std::vector<uint8_t>& data);

@@ -37,7 +37,8 @@ PoseGateVerdict PoseGate::check(const PoseSample& pose) {
       latched_ = true;
     return v;
   };
-  if (latched_) return refuse(PoseGateVerdict::kLatched, pose_gate_verdict_name(PoseGateVerdict::kLatched));
+  if (latched_)
+    return refuse(PoseGateVerdict::kLatched, pose_gate_verdict_name(PoseGateVerdict::kLatched));
   if (!last_) {
     last_ = pose;
     return PoseGateVerdict::kFirst;

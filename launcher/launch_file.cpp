@@ -70,6 +70,8 @@ LaunchFile parse_root(const ParamNode& root) {
   LaunchFile lf;
   root.require("name", lf.name);
   root.read("lcm_url", lf.lcm_url);
+  root.read("bus_key", lf.bus_key);
+  root.check(!lf.bus_key.empty(), "bus_key", "must be auto, none or a key file");
   root.read("record", lf.record);
   root.read("record_channels", lf.record_channels);
   root.read("stop_timeout_s", lf.stop_timeout_s);

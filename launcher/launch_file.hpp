@@ -4,6 +4,9 @@
 //
 //   name: sim_landing
 //   lcm_url: udpm://239.255.76.67:7667?ttl=0   # every process gets it as LCM_DEFAULT_URL
+//   bus_key: auto          # auto | none | a key file (scripts/make-key): every process gets it as
+//                          # ALIGHT_BUS_KEY_FILE and signs the bus with it; auto: the file in
+//                          # $ALIGHT_BUS_KEY_FILE when set, else a fresh key for this launch
 //   record: true                               # lcm-logger into the session folder
 //   stop_timeout_s: 3.0                        # SIGINT, then SIGKILL after this long
 //   backoff: {initial_s: 0.01, max_s: 1.0, reset_after_s: 10.0,   # optional
@@ -58,6 +61,7 @@ struct ProcessSpec {
 struct LaunchFile {
   std::string name;
   std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
+  std::string bus_key = "auto";  ///< auto, none, or a key file (${VAR} substituted)
   bool record = true;
   std::string record_channels = ".*";  ///< lcm-logger channel regex
   double stop_timeout_s = 3.0;         ///< grace between SIGINT and SIGKILL [s]

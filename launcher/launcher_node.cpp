@@ -22,10 +22,14 @@
 #include <iostream>
 #include <lcm/lcm-cpp.hpp>
 #include <memory>
+#include <optional>
+#include <sstream>
 #include <thread>
 
 #include "common/node.hpp"
+#include "common/operator_auth.hpp"
 #include "common/params.hpp"
+#include "launcher/bus_exposure.hpp"
 #include "launcher/launch_file.hpp"
 #include "launcher/process_tracker.hpp"
 
@@ -54,8 +58,10 @@ std::string clock_text() {
 
 class Launcher {
  public:
-  Launcher(LaunchFile lf, fs::path session_dir, fs::path bin_dir, std::string root)
+  Launcher(LaunchFile lf, std::string lf_file, fs::path session_dir, fs::path bin_dir,
+           std::string root)
       : lf_(std::move(lf)),
+        lf_file_(std::move(lf_file)),
         session_(std::move(session_dir)),
         bin_dir_(std::move(bin_dir)),
         root_(std::move(root)) {
@@ -86,12 +92,20 @@ class Launcher {
     }
     for (const auto& p : lf_.processes)
       trackers_.push_back(std::make_unique<ProcessTracker>(p, lf_.backoff));
+    setup_bus_key();
     lcm_ = std::make_unique<lcm::LCM>(lf_.lcm_url);
     if (!lcm_->good()) say("warning: cannot open LCM at " + lf_.lcm_url + "; no PROCESS_STATUS");
   }
 
+  ~Launcher() {
+    // A key made for this launch dies with it.
+    if (!made_key_path_.empty()) std::remove(made_key_path_.c_str());
+  }
+
   int run() {
     say("session " + session_.string());
+    for (const auto& w : alight::launcher::url_warnings(lf_.lcm_url, key_.has_value()))
+      say("WARNING: " + w);
     for (size_t i = 0; i < trackers_.size() && !g_stop_signal; ++i) {
       auto& t = *trackers_[i];
       // The logger must subscribe before anyone publishes.
@@ -101,8 +115,14 @@ class Launcher {
       if (g_stop_signal || ended_) break;
       start(t);
     }
+    const int64_t check_bus_at = alight::steady_utime() + 1'000'000;
+    bool bus_checked = false;
     while (!g_stop_signal && !ended_) {
       supervise();
+      if (!bus_checked && alight::steady_utime() >= check_bus_at) {
+        bus_checked = true;
+        check_bus_joins();
+      }
       std::this_thread::sleep_for(std::chrono::milliseconds(10));
     }
     if (g_stop_signal) say(std::string("received ") + strsignal(g_stop_signal) + ", stopping");
@@ -113,6 +133,60 @@ class Launcher {
   }
 
  private:
+  // bus_key: a key file, a fresh key for this launch, or none. The children get it as
+  // ALIGHT_BUS_KEY_FILE (or no such variable at all), the launcher signs PROCESS_STATUS with it.
+  void setup_bus_key() {
+    const std::string spec = alight::launcher::substitute(lf_.bus_key, vars_);
+    std::string path;
+    if (spec == "auto") {
+      const char* env = std::getenv("ALIGHT_BUS_KEY_FILE");
+      path = env && *env ? env : make_launch_key();
+    } else if (spec != "none") {
+      path = spec;
+    }
+    if (!path.empty()) {
+      std::vector<std::string> warnings;
+      try {
+        key_ = alight::bus::load_bus_key(path, &warnings);
+      } catch (const alight::KeyFileError& e) {
+        throw alight::ParamError(lf_file_, "bus_key", spec, e.what());
+      }
+      for (const auto& w : warnings) say("warning: " + w);
+      key_path_ = path;
+      say("bus signed with key id " + std::to_string(key_->id) + " (" +
+          (made_key_path_.empty() ? path : "made for this launch") + ")");
+    }
+    sealer_.emplace(alight::bus::draw_source_id(), key_);
+  }
+
+  std::string make_launch_key() {
+    const char* xdg = std::getenv("XDG_RUNTIME_DIR");
+    const fs::path dir = xdg && *xdg ? fs::path(xdg) / "alight"
+                                     : fs::path("/tmp") / ("alight-" + std::to_string(getuid()));
+    fs::create_directories(dir);
+    fs::permissions(dir, fs::perms::owner_all, fs::perm_options::replace);
+    const fs::path file = dir / ("bus-" + std::to_string(getpid()) + ".key");
+    const int fd = open(file.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
+    if (fd < 0) throw std::runtime_error("cannot write the bus key " + file.string());
+    const std::string hex = alight::random_key_hex();
+    const bool ok = write(fd, hex.data(), hex.size()) == static_cast<ssize_t>(hex.size());
+    close(fd);
+    if (!ok) throw std::runtime_error("cannot write the bus key " + file.string());
+    made_key_path_ = file.string();
+    return made_key_path_;
+  }
+
+  void check_bus_joins() {
+    const auto u = alight::launcher::parse_udpm_url(lf_.lcm_url);
+    if (!u) return;
+    std::ifstream f("/proc/net/igmp");
+    std::stringstream text;
+    text << f.rdbuf();
+    const auto joined = alight::launcher::interfaces_joined(text.str(), u->group);
+    for (const auto& w : alight::launcher::join_warnings(lf_.lcm_url, key_.has_value(), joined))
+      say("WARNING: " + w);
+  }
+
   void say(const std::string& text) {
     const std::string line = "[alight-launch " + clock_text() + "] " + text;
     std::cout << line << std::endl;
@@ -192,6 +266,10 @@ class Launcher {
       dup2(out, 2);
       setenv("LCM_DEFAULT_URL", lf_.lcm_url.c_str(), 1);
       setenv("ALIGHT_SESSION_DIR", session_.c_str(), 1);
+      if (key_path_.empty())
+        unsetenv("ALIGHT_BUS_KEY_FILE");
+      else
+        setenv("ALIGHT_BUS_KEY_FILE", key_path_.c_str(), 1);
       for (const auto& [k, v] : t.spec().env)
         setenv(k.c_str(), alight::launcher::substitute(v, vars_).c_str(), 1);
       std::vector<char*> cargv;
@@ -287,7 +365,10 @@ class Launcher {
       msg.processes.push_back(info);
     }
     msg.n = static_cast<int32_t>(msg.processes.size());
-    lcm_->publish(lf_.status_channel, &msg);
+    std::vector<uint8_t> bytes(static_cast<size_t>(msg.getEncodedSize()));
+    msg.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+    sealer_->seal(bytes, lf_.status_channel, wall);
+    lcm_->publish(lf_.status_channel, bytes.data(), static_cast<unsigned>(bytes.size()));
   }
 
   void stop_all() {
@@ -332,6 +413,10 @@ class Launcher {
   }
 
   LaunchFile lf_;
+  std::string lf_file_;
+  std::optional<alight::bus::BusKey> key_;
+  std::string key_path_, made_key_path_;
+  std::optional<alight::bus::Sealer> sealer_;
   fs::path session_, bin_dir_;
   std::string root_;
   std::map<std::string, std::string> vars_;
@@ -390,7 +475,7 @@ int main(int argc, char** argv) {
     sigaction(SIGTERM, &sa, nullptr);
     sigaction(SIGHUP, &sa, nullptr);
     const fs::path bin_dir = fs::read_symlink("/proc/self/exe").parent_path();
-    Launcher launcher(std::move(lf), session, bin_dir, root);
+    Launcher launcher(std::move(lf), launch_path, session, bin_dir, root);
     return launcher.run();
   });
 }
