@@ -15,6 +15,8 @@ const ParamSchema<GroundStationParams>& GroundStationParams::schema() {
     channel("status_channel", &P::status_channel, "of the autonomy's status");
     channel("target_channel", &P::target_channel, "of the vision's measurements");
     channel("process_channel", &P::process_channel, "of the launcher's process states");
+    channel("node_status_channel", &P::node_status_channel,
+            "of every node's input counters (refused messages, second publishers)");
     channel("autopilot_channel", &P::autopilot_channel,
             "of the autopilot's state (alight-mavlink: mode, arming, link)");
     channel("pose_channel", &P::pose_channel, "of the motion capture");

@@ -18,6 +18,7 @@ struct GroundStationParams {
   std::string status_channel = channels::kAutonomyStatus;
   std::string target_channel = channels::kVisionTarget;
   std::string process_channel = channels::kProcessStatus;
+  std::string node_status_channel = channels::kNodeStatus;
   std::string autopilot_channel = channels::kAutopilotStatus;
   std::string pose_channel = channels::kMocapPose;
   std::string command_channel = channels::kOperatorCmd;

@@ -202,6 +202,15 @@ void StationState::on_autopilot_status(const autopilot_status_t& msg, int64_t no
   autopilot_arrival_utime_ = now_utime;
 }
 
+void StationState::on_node_status(const node_status_t& msg, int64_t now_utime) {
+  arrived(params_.node_status_channel, now_utime);
+  // Bounded: a node per name, and no more names than a launch file has processes (an attacker
+  // inventing names must not grow the page).
+  constexpr size_t kMaxNodes = 64;
+  if (nodes_.size() >= kMaxNodes && !nodes_.count(msg.node)) return;
+  nodes_[msg.node] = NodeReport{msg, now_utime};
+}
+
 void StationState::on_process_status(const process_status_t& msg, int64_t now_utime,
                                      std::optional<int64_t> wall_utime) {
   arrived(params_.process_channel, now_utime);
@@ -358,6 +367,34 @@ std::string StationState::to_json(int64_t now_utime, const std::string& extra) c
     }
     w.end_array().end_object();
   }
+
+  // The bus: which nodes sign it, and every channel where a node refused messages for their
+  // origin. Any such count is an alarm: a misconfigured node, or someone publishing on the bus.
+  w.key("bus").begin_object();
+  bool alarm = false;
+  w.key("nodes").begin_array();
+  for (const auto& [name, r] : nodes_) {
+    w.begin_object();
+    w.field("node", name);
+    w.field("signed", static_cast<bool>(r.msg.signed_bus));
+    w.field("clock_from_inputs", static_cast<bool>(r.msg.clock_from_inputs));
+    w.field("age_s", (now_utime - r.arrival_utime) * 1e-6);
+    w.key("refused").begin_array();
+    for (const auto& c : r.msg.channels) {
+      if (c.rejected_auth == 0 && c.second_publisher == 0) continue;
+      alarm = true;
+      w.begin_object();
+      w.field("channel", c.channel);
+      w.field("rejected_auth", static_cast<double>(c.rejected_auth));
+      w.field("second_publisher", static_cast<double>(c.second_publisher));
+      w.end_object();
+    }
+    w.end_array();
+    w.end_object();
+  }
+  w.end_array();
+  w.field("alarm", alarm);
+  w.end_object();
 
   // The autopilot (alight-mavlink): its heartbeat age grows with the station's clock from the
   // report's arrival, so a bridge that went silent shows an ageing link, not a frozen one.

@@ -7,6 +7,7 @@
 
 #include <alight/autonomy_status_t.hpp>
 #include <alight/autopilot_status_t.hpp>
+#include <alight/node_status_t.hpp>
 #include <alight/pose_t.hpp>
 #include <alight/process_status_t.hpp>
 #include <alight/target_t.hpp>
@@ -73,6 +74,9 @@ class StationState {
   void on_process_status(const process_status_t& msg, int64_t now_utime,
                          std::optional<int64_t> wall_utime = std::nullopt);
   void on_pose(const pose_t& msg, int64_t now_utime);
+  /// One node's input counters: the page shows which nodes sign the bus and every channel where
+  /// messages were refused for their origin (unsigned, forged, replayed, a second publisher).
+  void on_node_status(const node_status_t& msg, int64_t now_utime);
   /// The autopilot's mode, arming and link as alight-mavlink sees them (a real vehicle only).
   void on_autopilot_status(const autopilot_status_t& msg, int64_t now_utime);
   /// A frame arrived on a video channel; `frame_utime` is its exposure time.
@@ -111,6 +115,11 @@ class StationState {
   std::optional<target_t> target_;
   std::optional<process_status_t> processes_;
   std::optional<autopilot_status_t> autopilot_;
+  struct NodeReport {
+    node_status_t msg;
+    int64_t arrival_utime = 0;
+  };
+  std::map<std::string, NodeReport> nodes_;  // by node name
   int64_t autopilot_arrival_utime_ = 0;
   std::optional<pose_t> pose_;
   std::map<std::string, RateMeter> channels_;

@@ -5,6 +5,7 @@
 
 #include <alight/autonomy_status_t.hpp>
 #include <alight/image_t.hpp>
+#include <alight/node_status_t.hpp>
 #include <alight/pose_t.hpp>
 #include <alight/process_status_t.hpp>
 #include <alight/target_t.hpp>
@@ -78,6 +79,10 @@ void Station::attach(Node& node) {
   node.on<process_status_t>(params_.process_channel, [this](const process_status_t& m) {
     std::lock_guard<std::mutex> lock(state_mutex_);
     state_.on_process_status(m, steady_utime(), wall_utime());
+  });
+  node.on<node_status_t>(params_.node_status_channel, [this](const node_status_t& m) {
+    std::lock_guard<std::mutex> lock(state_mutex_);
+    state_.on_node_status(m, steady_utime());
   });
   node.on<autopilot_status_t>(params_.autopilot_channel, [this](const autopilot_status_t& m) {
     std::lock_guard<std::mutex> lock(state_mutex_);

@@ -390,6 +390,19 @@ function render(s) {
     { cells: ['battery', ap.battery_V >= 0 ? `${fmt(ap.battery_V, 2)} V` : '–'] },
   ] : [{ cells: ['no AUTOPILOT_STATUS (simulated autopilot over LCM)'] }]);
 
+  // Every node's refusals for a message's origin: unsigned or forged on a signed bus, replayed,
+  // or a second publisher on a channel. Any of them is an alarm.
+  const bus = typeof s.bus === 'object' ? s.bus : null;
+  const alarmEl = $('bus-alarm');
+  alarmEl.textContent = bus && bus.alarm ? 'ALARM: messages refused for their origin' : '';
+  alarmEl.className = bus && bus.alarm ? 'alarm' : '';
+  rows($('bus').tBodies[0], bus && bus.nodes.length ? bus.nodes.map((n) => ({
+    cells: [n.node, n.signed ? 'signed' : { text: 'UNSIGNED', cls: 'alarm' },
+      n.refused.length ? { text: n.refused.map((c) =>
+        `${c.channel}: ${c.rejected_auth} forged/unsigned, ${c.second_publisher} second publisher`)
+        .join('; '), cls: 'alarm' } : '–'],
+  })) : [{ cells: ['no NODE_STATUS'] }]);
+
   const p = typeof s.processes === 'object' ? s.processes : null;
   $('launch-name').textContent = p ? `(${p.launch_name})` : '';
   rows($('processes').tBodies[0], p ? p.list.map((q) => ({

@@ -146,6 +146,41 @@ TEST(StationStateTest, ProcessTableIsInTheDocument) {
   EXPECT_TRUE(contains(json, "\"restarts\":2"));
 }
 
+// A second publisher or a forged message refused anywhere on the bus is an alarm on the page,
+// naming the node and the channel; a node that does not sign is shown as such.
+TEST(StationStateTest, RefusalsForAMessagesOriginAreAnAlarm) {
+  StationState state{GroundStationParams{}};
+  node_status_t quiet{};
+  quiet.utime = kT0;
+  quiet.node = "alight-vision";
+  quiet.signed_bus = true;
+  channel_stats_t c{};
+  c.channel = "CAMERA";
+  c.received = 100;
+  quiet.channels.push_back(c);
+  quiet.n = 1;
+  state.on_node_status(quiet, kT0);
+  std::string doc = state.to_json(kT0);
+  EXPECT_TRUE(contains(doc, "\"alarm\":false")) << doc;
+  EXPECT_TRUE(contains(doc, "\"node\":\"alight-vision\",\"signed\":true"));
+  node_status_t attacked = quiet;
+  attacked.node = "alight-outer-loop";
+  attacked.signed_bus = false;
+  attacked.channels[0].channel = "POSITION_SETPOINT";
+  attacked.channels[0].second_publisher = 3;
+  state.on_node_status(attacked, kT0 + 1000);
+  doc = state.to_json(kT0 + 2000);
+  EXPECT_TRUE(contains(doc, "\"alarm\":true")) << doc;
+  EXPECT_TRUE(contains(doc, "\"channel\":\"POSITION_SETPOINT\"")) << doc;
+  EXPECT_TRUE(contains(doc, "\"second_publisher\":3")) << doc;
+  // Names invented by a flood do not grow the document without bound.
+  for (int i = 0; i < 1000; ++i) {
+    attacked.node = "n" + std::to_string(i);
+    state.on_node_status(attacked, kT0 + 3000);
+  }
+  EXPECT_LT(state.to_json(kT0 + 4000).size(), 64u * 400u);
+}
+
 TEST(StationStateTest, ShowsTheAutopilotsModeArmingAndAnAgeingLink) {
   StationState state{GroundStationParams{}};
   EXPECT_TRUE(contains(state.to_json(kT0), "\"autopilot\":\"none\""));
