@@ -496,6 +496,7 @@ void Autonomy::handle_target(const TargetMeasurement& m) {
     start_refinement(m);
   } else if (auto* a = std::get_if<phases::Approach>(&state_)) {
     seen(a->last_found_utime);
+    if (m.found && vision_disagrees(*a, m)) return;
   } else if (auto* r = std::get_if<phases::Refinement>(&state_)) {
     seen(r->last_found_utime);
     if (!m.found) {
@@ -515,6 +516,36 @@ void Autonomy::handle_target(const TargetMeasurement& m) {
     }
     add_waypoint(*r, m.p_W_target);
   }
+}
+
+bool Autonomy::vision_disagrees(phases::Approach& a, const TargetMeasurement& m) {
+  // The estimate is final from APPROACH on; a target found far from it is refused and counted.
+  // The gate: four of the waypoints' horizontal standard deviations (their stated noise), never
+  // tighter than kVisionGateFloorM. Every found target refused for kVisionDisagreeS is a
+  // sustained disagreement (a forged stream, or vision locked onto something else): hold, then
+  // descend; never a silent move of the estimate onto the new targets.
+  const Eigen::Matrix2d cov = estimator_.covariance().topLeftCorner<2, 2>();
+  // The larger eigenvalue of the symmetric 2x2 horizontal covariance, in closed form.
+  const double mean_var = 0.5 * (cov(0, 0) + cov(1, 1));
+  const double half_gap = std::hypot(0.5 * (cov(0, 0) - cov(1, 1)), cov(0, 1));
+  const double sigma = std::sqrt(std::max(0.0, mean_var + half_gap));
+  const double gate_m = std::max(kVisionGateFloorM, 4.0 * sigma);
+  const double off_m = (m.p_W_target - estimate_W_).head<2>().norm();
+  if (off_m <= gate_m) {
+    a.disagree_since_utime.reset();
+    return false;
+  }
+  ++vision_refused_;
+  if (!a.disagree_since_utime) a.disagree_since_utime = m.utime;
+  if (seconds(m.utime - *a.disagree_since_utime) >= kVisionDisagreeS) {
+    hold("vision disagrees with the estimate: every target for " + fmt(kVisionDisagreeS, 1) +
+             " s lay " + fmt(off_m) + " m from it (gate " + fmt(gate_m) +
+             " m): holding, then descending",
+         Failsafe::kVisionDisagrees, 0.0);
+    if (auto* h = std::get_if<phases::Hold>(&state_))
+      h->descend_at_utime = now_utime_ + static_cast<int64_t>(kFailsafeHoldS * 1e6);
+  }
+  return true;
 }
 
 void Autonomy::add_waypoint(phases::Refinement& r, const Vector3d& X_W) {
@@ -537,8 +568,13 @@ void Autonomy::step_phase(double dt_s) {
                       std::is_same_v<S, phases::Killed>) {
           motors_on_ = false;
           sp_p_W_ = p;
-        } else if constexpr (std::is_same_v<S, phases::Hover> || std::is_same_v<S, phases::Hold> ||
-                             std::is_same_v<S, phases::Done>) {
+        } else if constexpr (std::is_same_v<S, phases::Hold>) {
+          sp_p_W_ = s.hold_p_W;
+          if (s.descend_at_utime && now_utime_ >= *s.descend_at_utime)
+            enter_failsafe_descent(failsafe_,
+                                   "failsafe hold over: controlled descent, disarm on "
+                                   "touch-down");
+        } else if constexpr (std::is_same_v<S, phases::Hover> || std::is_same_v<S, phases::Done>) {
           sp_p_W_ = s.hold_p_W;
         } else {
           step(s, p, dt_s);

@@ -87,8 +87,9 @@ struct Refinement {
   std::vector<Vector3d> at_vantage_W;             ///< waypoints seen while dwelling there
 };
 struct Approach {
-  ApproachState how;                        ///< the mission profile's own approach state
-  std::optional<int64_t> last_found_utime;  ///< carried over from refinement
+  ApproachState how;                            ///< the mission profile's own approach state
+  std::optional<int64_t> last_found_utime;      ///< carried over from refinement
+  std::optional<int64_t> disagree_since_utime;  ///< every found target far from the estimate
 };
 struct FinalDescent {
   double z_sp_m = 0.0;
@@ -103,6 +104,7 @@ struct Done {
 };
 struct Hold {
   Vector3d hold_p_W = Vector3d::Zero();
+  std::optional<int64_t> descend_at_utime;  ///< a failsafe's hold: then the controlled descent
 };
 struct FailsafeDescent {
   double z0_m = 0.0;  ///< altitude when the pose (or the estimate) was lost
@@ -140,6 +142,8 @@ class Autonomy {
   const AutonomyParams& params() const { return params_; }
   /// The final estimate the approach flies to (valid from APPROACH on, kept after the mission).
   const Vector3d& final_estimate() const { return estimate_W_; }
+  /// Found targets refused in APPROACH for lying outside the gate around the final estimate.
+  uint64_t vision_refused() const { return vision_refused_; }
   /// The vantage point refinement flies to (zero outside REFINEMENT).
   Vector3d current_vantage() const;
   int retries() const { return retries_; }
@@ -180,6 +184,9 @@ class Autonomy {
   TouchdownDetector* touchdown();
   void handle_command(const OperatorCommand& cmd);
   void handle_target(const TargetMeasurement& m);
+  // APPROACH: true (and counted) when `m` lies outside the gate around the final estimate; a
+  // sustained disagreement enters the VISION_DISAGREES failsafe.
+  bool vision_disagrees(phases::Approach& a, const TargetMeasurement& m);
   /// Holds (and says so) when no VISION_TARGET came for failsafe.vision_silent_s; true then.
   bool hold_if_vision_silent();
   void step_phase(double dt_s);
@@ -244,6 +251,7 @@ class Autonomy {
   std::optional<int64_t> go_utime_;
   std::optional<int64_t> end_utime_;
   Vector3d estimate_W_ = Vector3d::Zero();  // the final estimate, from APPROACH on
+  uint64_t vision_refused_ = 0;             // found targets outside the gate in APPROACH
 };
 
 }  // namespace alight::autonomy

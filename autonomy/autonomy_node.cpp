@@ -30,7 +30,10 @@
 #include "common/msg_convert.hpp"
 #include "common/node.hpp"
 #include "common/operator_auth.hpp"
+#include "common/pose_gate.hpp"
 #include "outer_loop/convert.hpp"
+#include "outer_loop/params.hpp"
+#include "outer_loop/runner.hpp"
 
 // The verifier and the gate share alight::CommandReject; AUTONOMY_STATUS has a slot for each.
 static_assert(alight::kCommandRejectCount <= alight::autonomy::kCommandRejectSlots);
@@ -189,12 +192,29 @@ int main(int argc, char** argv) {
       }
     };
 
+    // The same innovation gate as the outer loop's: a pose off its prediction is refused, and a
+    // sustained disagreement refuses every later pose, so the pose-lost failsafe follows.
+    alight::PoseGate pose_gate(
+        alight::outer_loop::pose_gate_params(alight::outer_loop::load_params(args.config)));
     node.on<alight::pose_t>(ch::kMocapPose, [&](const alight::pose_t& m) {
       std::string why;
       au::Inputs in;
       in.pose = alight::pose_from_msg(m, &why);
       if (!in.pose) return (void)node.reject_value(ch::kMocapPose, why);
       if (!node.accept_stamp(ch::kMocapPose, m.utime)) return;
+      // On the ground a new flight starts with a fresh gate.
+      const au::Phase ph = autonomy.phase();
+      if (ph == au::Phase::kIdle || ph == au::Phase::kLanded || ph == au::Phase::kKilled)
+        pose_gate.reset();
+      const bool was_latched = pose_gate.latched();
+      if (!alight::pose_gate_ok(pose_gate.check(*in.pose))) {
+        if (pose_gate.latched() && !was_latched)
+          spdlog::error(
+              "pose disagrees with its prediction for {} s: refused from now on, the "
+              "pose-lost failsafe follows",
+              alight::PoseGateParams{}.sustained_s);
+        return (void)node.reject_value(ch::kMocapPose, "innovation gate: " + pose_gate.last_why());
+      }
       now_utime = std::max(now_utime, m.utime);
       step(in);
     });

@@ -69,6 +69,8 @@ int8_t failsafe_to_msg(Failsafe f) {
       return S::FAILSAFE_KILL;
     case Failsafe::kEstimateLost:
       return S::FAILSAFE_ESTIMATE_LOST;
+    case Failsafe::kVisionDisagrees:
+      return S::FAILSAFE_VISION_DISAGREES;
   }
   return S::FAILSAFE_NONE;
 }

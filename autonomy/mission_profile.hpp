@@ -30,6 +30,16 @@ namespace alight::autonomy {
 
 /// A carrot (the search path's, the ingress pass's) waits when the vehicle is this far behind.
 inline constexpr double kPathLeadM = 0.3;
+/// APPROACH refuses a found target further than this from the final estimate, whatever its
+/// spread: half of the smallest platform the families draw, so a target beside the platform is
+/// never taken for it [m].
+inline constexpr double kVisionGateFloorM = 0.1;
+/// Every found target refused this long is a sustained disagreement: longer than a stray plane
+/// fit lasts (it changes with the vantage every few frames) [s].
+inline constexpr double kVisionDisagreeS = 2.0;
+/// A failsafe that holds before its controlled descent holds this long: time for the operator to
+/// take over, as PX4's COM_FAIL_ACT_T [s].
+inline constexpr double kFailsafeHoldS = 5.0;
 
 /// The landing approach's own state.
 struct LandingApproach {

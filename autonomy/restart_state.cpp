@@ -30,13 +30,16 @@ const char* failsafe_key(Failsafe f) {
       return "KILL";
     case Failsafe::kEstimateLost:
       return "ESTIMATE_LOST";
+    case Failsafe::kVisionDisagrees:
+      return "VISION_DISAGREES";
   }
   return "NONE";
 }
 
 std::optional<Failsafe> failsafe_from_key(const std::string& s) {
-  for (Failsafe f : {Failsafe::kNone, Failsafe::kPoseStale, Failsafe::kPoseLost,
-                     Failsafe::kOperatorAbort, Failsafe::kKill, Failsafe::kEstimateLost}) {
+  for (Failsafe f :
+       {Failsafe::kNone, Failsafe::kPoseStale, Failsafe::kPoseLost, Failsafe::kOperatorAbort,
+        Failsafe::kKill, Failsafe::kEstimateLost, Failsafe::kVisionDisagrees}) {
     if (s == failsafe_key(f)) return f;
   }
   return std::nullopt;

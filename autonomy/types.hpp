@@ -34,7 +34,15 @@ enum class Phase {
 };
 
 /// kEstimateLost: the onboard estimate (STATE_ESTIMATE, issue 17) LOST or silent.
-enum class Failsafe { kNone, kPoseStale, kPoseLost, kOperatorAbort, kKill, kEstimateLost };
+enum class Failsafe {
+  kNone,
+  kPoseStale,
+  kPoseLost,
+  kOperatorAbort,
+  kKill,
+  kEstimateLost,
+  kVisionDisagrees,  ///< found targets far from the converged estimate: hold, then descend
+};
 
 const char* mission_name(Mission m);
 const char* phase_name(Phase p);

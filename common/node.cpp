@@ -298,6 +298,7 @@ node_status_t Node::status_message(int64_t wall) const {
   m.source = static_cast<int64_t>(sealer_.source());
   m.signed_bus = sealer_.signing();
   m.clock_from_inputs = stamps_.inputs_time_base();
+  m.wall_clock_steps = wall_clock_steps_;
   return m;
 }
 
@@ -364,6 +365,15 @@ int Node::spin_once(int timeout_ms) {
     current_source_ = s->pending_source;
     s->dispatch(msg.data(), static_cast<uint32_t>(msg.size()));
   }
+  // A wall clock that steps (NTP's first sync on a computer without a real-time clock, a hand-set
+  // clock) is said and counted: stamps and signed commands are judged on it.
+  const int64_t offset = wall_utime() - steady_utime();
+  if (wall_minus_steady_us_ != 0 && std::abs(offset - wall_minus_steady_us_) > 500'000) {
+    ++wall_clock_steps_;
+    spdlog::warn("{}: the wall clock stepped by {:.3f} s", name_,
+                 (offset - wall_minus_steady_us_) * 1e-6);
+  }
+  wall_minus_steady_us_ = offset;
   run_timers(steady_utime());
   return handled;
 }

@@ -263,6 +263,8 @@ class Node {
   double status_period_s_ = 1.0;
   bool status_timer_added_ = false;
   int64_t start_steady_us_ = 0;
+  int64_t wall_minus_steady_us_ = 0;  // the clocks' offset at the last spin
+  int32_t wall_clock_steps_ = 0;
 };
 
 /// Runs a node's body, turning exceptions into a message on stderr and an exit code: 2 for bad

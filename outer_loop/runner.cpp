@@ -9,18 +9,15 @@
 
 namespace alight::outer_loop {
 
-namespace {
-// The gate's allowance for the vehicle's own acceleration: twice what the loop can command
-// (the tilt limit's horizontal and the vertical limit), the other half for what it does not
-// command (gusts, contact).
 PoseGateParams pose_gate_params(const OuterLoopParams& p) {
+  // Twice what the loop can command (the tilt limit's horizontal and the vertical limit), the
+  // other half for what it does not command (gusts, contact).
   PoseGateParams g;
   const double commanded =
       std::hypot(p.gravity_mps2 * std::tan(p.max_tilt_deg * M_PI / 180.0), p.max_accel_z_mps2);
   g.max_accel_mps2 = 2.0 * commanded;
   return g;
 }
-}  // namespace
 
 Runner::Runner(const OuterLoopParams& params, const PersistentState& restored, InputGate gate,
                RunnerOptions options)

@@ -52,6 +52,9 @@ struct InputGate {
 /// forged message is reported and refused, a stream of them is an attack under way [s].
 inline constexpr double kContestFailsafeS = 1.0;
 
+/// The pose innovation gate's parameters for a vehicle flown with `p` (also autonomy's gate).
+PoseGateParams pose_gate_params(const OuterLoopParams& p);
+
 struct RunnerOptions {
   std::string pose_channel = channels::kMocapPose;
   std::string setpoint_channel = channels::kPositionSetpoint;

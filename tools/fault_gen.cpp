@@ -272,8 +272,8 @@ std::vector<size_t> lengths(const process_status_t& m) {
 }
 std::vector<size_t> lengths(const node_status_t& m) {
   const size_t node = 8 + 8;
-  // pid, uptime_s, source, signed_bus, clock_from_inputs
-  const size_t n = after_string(m.node, node) + 4 + 8 + 8 + 1 + 1;
+  // pid, uptime_s, source, signed_bus, clock_from_inputs, wall_clock_steps
+  const size_t n = after_string(m.node, node) + 4 + 8 + 8 + 1 + 1 + 4;
   std::vector<size_t> out{node, n};
   size_t at = n + 4;
   for (const auto& c : m.channels) {  // channel, then 9 int64 counters

@@ -28,8 +28,8 @@ bool strings_ok(const std::string& channel, const void* data, size_t size) {
     return true;
   }
   if (channel == alight::channels::kNodeStatus) {
-    // pid, uptime_s, source, signed_bus, clock_from_inputs
-    if (!r.skip(8 + 8) || !r.string() || !r.skip(4 + 8 + 8 + 1 + 1) || !r.int32(n) || n < 0)
+    // pid, uptime_s, source, signed_bus, clock_from_inputs, wall_clock_steps
+    if (!r.skip(8 + 8) || !r.string() || !r.skip(4 + 8 + 8 + 1 + 1 + 4) || !r.int32(n) || n < 0)
       return false;
     for (int32_t i = 0; i < n; ++i)  // channel, then 9 int64 counters
       if (!r.string() || !r.skip(9 * 8)) return false;

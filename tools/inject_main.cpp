@@ -9,6 +9,11 @@
 //                          imu_off_s (1e6: for good)
 //   --replay LOG           plays an old session log onto the live URL with lcm-logplayer
 //                          (every channel but SIM_TRUTH), for --replay-s at most
+// It acts as a faulty part of the vehicle, not an intruder: each message goes out as the channel's
+// own publisher (its id from the newest live message's origin trailer, a counter just above
+// it), signed with the bus key when the session has one (--bus-key, $ALIGHT_BUS_KEY_FILE), so
+// the faults reach the nodes' value and stamp checks instead of being refused for their origin.
+// (scripts/attacks is the intruder.)
 // Exit status: 0 when done, 3 when the phase never came (--wait-timeout-s), 2 on bad arguments.
 #include <signal.h>
 #include <sys/wait.h>
@@ -29,6 +34,7 @@
 
 #include "common/decode.hpp"
 #include "common/node.hpp"
+#include "common/params.hpp"
 #include "tools/fault_gen.hpp"
 
 namespace faults = alight::tools::faults;
@@ -120,6 +126,9 @@ int main(int argc, char** argv) {
   try {
     args.finalize();
   } catch (const alight::RemapError& e) {
+    std::fprintf(stderr, "alight-inject: %s\n", e.what());
+    return 2;
+  } catch (const alight::ParamError& e) {
     std::fprintf(stderr, "alight-inject: %s\n", e.what());
     return 2;
   }
@@ -218,6 +227,25 @@ int main(int argc, char** argv) {
   } handler{&live, lcm_name(alight::channels::kAutonomyStatus),
             lcm_name(alight::channels::kProcessStatus)};
   lcm.subscribe(".*", &Handler::on, &handler);
+  const uint64_t own_source = alight::bus::draw_source_id();
+  // Publishes `bytes` (an encoded message, no trailer) on `lcm_channel` as its live publisher.
+  const auto publish = [&](const std::string& lcm_channel, faults::Bytes bytes) {
+    uint64_t source = own_source, counter = 0;
+    const auto it = live.newest.find(lcm_channel);
+    if (it != live.newest.end()) {
+      const auto r = alight::bus::split(it->second.data(), it->second.size());
+      if (r.trailer) {
+        source = r.trailer->source;
+        counter = r.trailer->counter;
+      }
+    }
+    alight::bus::Sealer sealer(source, args.bus_key);
+    sealer.seal(bytes, lcm_channel,
+                std::max<int64_t>(static_cast<int64_t>(counter) + 1, alight::wall_utime()));
+    live.sent.insert(std::hash<std::string_view>{}(
+        std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size())));
+    return lcm.publish(lcm_channel, bytes.data(), static_cast<unsigned>(bytes.size()));
+  };
 
   if (phase_re) {
     const int64_t give_up = alight::steady_utime() + static_cast<int64_t>(wait_timeout_s * 1e6);
@@ -252,7 +280,9 @@ int main(int argc, char** argv) {
   }
   if (!sim_control.empty()) {
     control.utime = alight::wall_utime();
-    lcm.publish(lcm_name(alight::channels::kSimControl), &control);
+    faults::Bytes bytes(static_cast<size_t>(control.getEncodedSize()));
+    control.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+    publish(lcm_name(alight::channels::kSimControl), std::move(bytes));
     say("SIM_CONTROL " + sim_control);
   }
   if (!message_faults.empty()) {
@@ -268,9 +298,7 @@ int main(int argc, char** argv) {
           for (const auto kind : kinds)
             for (const auto& bytes :
                  faults::generate(kind, type, base, alight::wall_utime(), rng)) {
-              live.sent.insert(std::hash<std::string_view>{}(
-                  std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size())));
-              lcm.publish(lcm_name(channel), bytes.data(), static_cast<unsigned>(bytes.size()));
+              publish(lcm_name(channel), bytes);
               ++sent;
             }
         }

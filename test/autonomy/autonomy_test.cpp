@@ -211,6 +211,46 @@ TEST(AutonomyTest, TargetLostDuringApproachGoesBackToDetection) {
   EXPECT_GE(w.p.z(), 1.0) << "lost above lost_check_height_m, not during the final metres";
 }
 
+// Regression: a forged VISION_TARGET (the platform 25 cm off) became autonomy's estimate and the
+// vehicle landed beside the platform. From APPROACH on the estimate is final: targets far from it
+// are refused and counted, and a stream of them is a named failsafe (hold, then descend), never
+// a move of the estimate.
+TEST(AutonomyRegression, TargetsFarFromTheEstimateAreRefusedAndASustainedStreamIsAFailsafe) {
+  KinematicWorld w;
+  w.takeoff_and_hover();
+  w.send(Command::kGo, Mission::kLanding);
+  ASSERT_TRUE(w.run_until_phase(Phase::kApproach, 120));
+  const Vector3d est = w.autonomy.final_estimate();
+  w.corrupt_target = [](TargetMeasurement& m) { m.p_W_target.x() += 0.25; };
+  bool held = false;
+  double max_off = 0;
+  for (int i = 0; i < 4000 && w.autonomy.phase() != Phase::kFailsafe; ++i) {
+    w.step();
+    held |= w.autonomy.phase() == Phase::kHold;
+    max_off = std::max(max_off, (w.autonomy.final_estimate() - est).norm());
+  }
+  EXPECT_GT(w.autonomy.vision_refused(), 10u);
+  EXPECT_EQ(max_off, 0.0) << "the estimate never moved";
+  EXPECT_TRUE(held) << w.out.status.reason;
+  EXPECT_EQ(w.autonomy.phase(), Phase::kFailsafe) << w.out.status.reason;
+  EXPECT_EQ(w.out.status.failsafe, Failsafe::kVisionDisagrees);
+}
+
+// A target or two off the estimate among good ones (a stray plane fit) changes nothing.
+TEST(AutonomyTest, AFewStrayTargetsInApproachAreRefusedWithoutAFailsafe) {
+  KinematicWorld w;
+  w.takeoff_and_hover();
+  w.send(Command::kGo, Mission::kLanding);
+  ASSERT_TRUE(w.run_until_phase(Phase::kApproach, 120));
+  int n = 0;
+  w.corrupt_target = [&](TargetMeasurement& m) {
+    if (++n % 5 == 0) m.p_W_target.y() -= 0.3;
+  };
+  ASSERT_TRUE(w.run_until_phase(Phase::kLanded, 120)) << w.out.status.reason;
+  EXPECT_GT(w.autonomy.vision_refused(), 0u);
+  EXPECT_EQ(w.out.status.failsafe, Failsafe::kNone);
+}
+
 TEST(AutonomyTest, VisionNotNeededBelowTheLostCheckHeight) {
   KinematicWorld w;
   w.takeoff_and_hover();

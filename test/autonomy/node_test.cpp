@@ -287,6 +287,18 @@ struct Bench {
       }
     }
   }
+  /// Poses that climb (or sink) to `z` at `speed` [m/s], as a flying vehicle's do: the node's
+  /// pose innovation gate refuses a pose that jumps.
+  void glide_to_z(double z, double speed) {
+    const double dz = z - p.z();
+    const int n = std::max(1, static_cast<int>(std::abs(dz) / speed / 0.01));
+    v.z() = dz > 0 ? speed : -speed;
+    const double z0 = p.z();
+    for (int i = 1; i <= n; ++i) {
+      p.z() = z0 + dz * i / n;
+      publish_sensors(1);
+    }
+  }
   /// Sensors until the node has answered (a loaded machine may take a while to start it).
   bool wait_for_status(int seconds = 20) {
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(seconds);
@@ -385,8 +397,7 @@ TEST(AutonomyNodeRegression, RestartedInFlightHoldsAndKillSurvivesRestarts) {
     ASSERT_TRUE(b.wait_for_status()) << "alight-autonomy never answered";
     ASSERT_TRUE(
         b.sensors_until([&] { return phase_is(alight::autonomy_status_t::PHASE_TAKEOFF); }));
-    b.p.z() = 0.9;  // climbing
-    b.v.z() = 0.4;
+    b.glide_to_z(0.9, 0.4);  // climbing
     b.publish_sensors(150);
     ASSERT_TRUE(phase_is(alight::autonomy_status_t::PHASE_TAKEOFF));
     first.crash();
@@ -475,7 +486,7 @@ TEST(AutonomyNodeTest, StateEstimateHealthGatesTakeoffAndLostIsTheFailsafe) {
   ASSERT_TRUE(b.sensors_until([&] { return b.rec.status.back().phase == S::PHASE_TAKEOFF; }))
       << b.rec.status.back().reason;
   // Flying: a NaN estimate saying OK is refused, the last good one stands.
-  b.p.z() = 0.8;
+  b.glide_to_z(0.8, 0.4);
   b.estimate->pos[0] = std::numeric_limits<double>::quiet_NaN();
   b.publish_sensors(20);
   for (int i = 0; i < 10; ++i) b.lcm.handleTimeout(10);
