@@ -25,9 +25,7 @@ pose_t made_up_pose(int64_t now) {
   return p;
 }
 
-pose_t heard_pose(const Overheard& h, int64_t now) {
-  return h.pose ? *h.pose : made_up_pose(now);
-}
+pose_t heard_pose(const Overheard& h, int64_t now) { return h.pose ? *h.pose : made_up_pose(now); }
 
 position_setpoint_t heard_setpoint(const Overheard& h, int64_t now) {
   if (h.setpoint) return *h.setpoint;
@@ -102,10 +100,9 @@ const char* name(Kind k) {
 }
 
 std::vector<Kind> all() {
-  return {Kind::kKillSetpoint,  Kind::kSetpointStream, Kind::kAttitudeDisarm,
-          Kind::kKillCommand,   Kind::kPoseOffset,     Kind::kPoseGrowing,
-          Kind::kPoseAhead,     Kind::kPoseSpoofed,    Kind::kVisionTarget,
-          Kind::kFlood,         Kind::kSecondPublisher};
+  return {Kind::kKillSetpoint, Kind::kSetpointStream, Kind::kAttitudeDisarm, Kind::kKillCommand,
+          Kind::kPoseOffset,   Kind::kPoseGrowing,    Kind::kPoseAhead,      Kind::kPoseSpoofed,
+          Kind::kVisionTarget, Kind::kFlood,          Kind::kSecondPublisher};
 }
 
 std::optional<Kind> parse(const std::string& n) {

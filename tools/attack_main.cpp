@@ -47,8 +47,8 @@ struct Listener {
     if (channel == ch::kPositionSetpoint) keep(heard.setpoint);
     if (channel == ch::kAttitudeCmd) keep(heard.attitude);
     if (channel == ch::kVisionTarget) keep(heard.target);
-    for (const char* flight : {ch::kMocapPose, ch::kPositionSetpoint, ch::kAttitudeCmd, ch::kImu,
-                               ch::kVisionTarget}) {
+    for (const char* flight :
+         {ch::kMocapPose, ch::kPositionSetpoint, ch::kAttitudeCmd, ch::kImu, ch::kVisionTarget}) {
       if (channel != flight) continue;
       bool replaced = false;
       for (auto& [c, b] : heard.raw)
@@ -174,7 +174,6 @@ int main(int argc, char** argv) {
     spin(std::max(attack::period_s(kind), 0.0005));
   }
   close(sock);
-  say("done: " + std::to_string(sent) + " datagrams sent, " + std::to_string(failed) +
-      " failed");
+  say("done: " + std::to_string(sent) + " datagrams sent, " + std::to_string(failed) + " failed");
   return 0;
 }

@@ -6,6 +6,7 @@
 #include <iostream>
 #include <lcm/lcm-cpp.hpp>
 
+#include "common/bus_auth.hpp"
 #include "common/channels.hpp"
 #include "common/decode.hpp"
 #include "tools/fault_score.hpp"
@@ -50,7 +51,19 @@ int main(int argc, char** argv) {
   app.add_option("--disarm-max-height-m", params.disarm_max_height_m,
                  "Highest acceptable disarm above the surface [m]")
       ->check(CLI::Range(0.0, 10.0));
+  std::string key_file;
+  app.add_option("--bus-key", key_file,
+                 "The session's bus key: only messages signed with it are the vehicle's");
   CLI11_PARSE(app, argc, argv);
+  std::optional<alight::bus::BusKey> key;
+  if (!key_file.empty()) {
+    try {
+      key = alight::bus::load_bus_key(key_file);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "alight-fault-score: --bus-key: %s\n", e.what());
+      return 2;
+    }
+  }
 
   lcm::LogFile log(log_path, "r");
   if (!log.good()) {
@@ -58,10 +71,18 @@ int main(int argc, char** argv) {
     return 2;
   }
   alight::tools::FaultScorer scorer(params);
-  // Injected garbage fails to decode here too: skipped without a word.
+  // Injected garbage fails to decode here too: skipped without a word. What the vehicle's own
+  // processes published carries their origin trailer (signed with the bus key, when given); an
+  // outsider's message (the attack campaign's) does not, and is not the vehicle's.
   for (const lcm::LogEvent* ev = log.readNextEvent(); ev; ev = log.readNextEvent()) {
     const auto feed = [&](auto msg) {
       const auto size = static_cast<size_t>(ev->datalen);
+      const auto r = alight::bus::split(ev->data, size);
+      if (!r.trailer) return;
+      if (key &&
+          (r.trailer->key_id != key->id ||
+           alight::bus::compute_tag(*key, ev->channel, r.payload, *r.trailer) != r.trailer->tag))
+        return;
       if (strings_ok(ev->channel, ev->data, size) && alight::decode_message(msg, ev->data, size))
         scorer.add(msg, ev->timestamp);
     };
