@@ -22,6 +22,7 @@
 #include <string>
 
 #include "autonomy/types.hpp"
+#include "common/boot_id.hpp"
 
 namespace alight::autonomy {
 
@@ -48,7 +49,7 @@ RestartState restore_state(const std::optional<RestartRecord>& record, const std
 /// one per LCM network, so simulations on other ports never share a file.
 std::string default_state_path(const std::string& lcm_url);
 /// The kernel's boot id ("" when unreadable).
-std::string read_boot_id();
+using alight::read_boot_id;
 /// Reads at most 4 KiB; nullopt with *why when missing or unreadable.
 std::optional<std::string> read_state_file(const std::string& path, std::string* why);
 /// Writes `text` to path.tmp and renames it over `path` (atomic against the writer's death),

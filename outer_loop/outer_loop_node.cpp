@@ -14,6 +14,7 @@
 #include <optional>
 
 #include "autonomy/operator_identity.hpp"
+#include "common/boot_id.hpp"
 #include "common/node.hpp"
 #include "outer_loop/convert.hpp"
 #include "outer_loop/params.hpp"
@@ -52,8 +53,9 @@ int main(int argc, char** argv) {
     std::string error;
     const auto record = ol::load_state(state_file, &error);
     if (!error.empty()) spdlog::warn("outer loop: {}: starting from the ground state", error);
-    const ol::PersistentState restored =
-        ol::restored_state(record, alight::wall_utime(), state_max_age_s);
+    const std::string boot_id = alight::read_boot_id();
+    const ol::PersistentState restored = ol::restored_state(
+        record, {alight::wall_utime(), boot_id, alight::steady_utime()}, state_max_age_s);
     if (restored.disarm_latched || restored.armed)
       spdlog::warn("outer loop: restored from {}: failsafe latched {}, armed {}", state_file,
                    restored.disarm_latched, restored.armed);
@@ -86,7 +88,8 @@ int main(int argc, char** argv) {
     int64_t saved_steady_us = 0;
     const auto save = [&](const ol::PersistentState& s) {
       std::string err;
-      if (!ol::save_state(state_file, {s, alight::wall_utime()}, &err))
+      if (!ol::save_state(state_file, {s, alight::wall_utime(), boot_id, alight::steady_utime()},
+                          &err))
         spdlog::error("outer loop: state file: {}", err);
       saved = s;
       saved_steady_us = alight::steady_utime();

@@ -12,7 +12,7 @@
 namespace alight::outer_loop {
 
 namespace {
-constexpr const char* kMagic = "alight-outer-loop-state 1";
+constexpr const char* kMagic = "alight-outer-loop-state 2";
 }
 
 std::string format_state(const StateRecord& r) {
@@ -21,6 +21,8 @@ std::string format_state(const StateRecord& r) {
      << "disarm_latched " << (r.state.disarm_latched ? 1 : 0) << "\n"
      << "armed " << (r.state.armed ? 1 : 0) << "\n"
      << "wall_utime " << r.wall_utime << "\n"
+     << "boot_id " << (r.boot_id.empty() ? "-" : r.boot_id) << "\n"
+     << "steady_utime " << r.steady_utime << "\n"
      << "end\n";
   return os.str();
 }
@@ -36,6 +38,9 @@ std::optional<StateRecord> parse_state(const std::string& text) {
     return std::nullopt;
   if (!(is >> key >> armed) || key != "armed" || (armed != 0 && armed != 1)) return std::nullopt;
   if (!(is >> key >> r.wall_utime) || key != "wall_utime") return std::nullopt;
+  if (!(is >> key >> r.boot_id) || key != "boot_id") return std::nullopt;
+  if (r.boot_id == "-") r.boot_id.clear();
+  if (!(is >> key >> r.steady_utime) || key != "steady_utime") return std::nullopt;
   if (!(is >> end) || end != "end") return std::nullopt;
   r.state.disarm_latched = latched == 1;
   r.state.armed = armed == 1;
@@ -82,12 +87,15 @@ std::optional<StateRecord> load_state(const std::string& path, std::string* erro
   return r;
 }
 
-PersistentState restored_state(const std::optional<StateRecord>& record, int64_t wall_now_utime,
+PersistentState restored_state(const std::optional<StateRecord>& record, const RestoreClock& now,
                                double max_age_s) {
   PersistentState s;
   if (!record) return s;
   s.disarm_latched = record->state.disarm_latched;
-  const double age_s = static_cast<double>(wall_now_utime - record->wall_utime) * 1e-6;
+  const bool same_boot = !record->boot_id.empty() && record->boot_id == now.boot_id;
+  const double age_s = static_cast<double>(same_boot ? now.steady_utime - record->steady_utime
+                                                     : now.wall_utime - record->wall_utime) *
+                       1e-6;
   s.armed = record->state.armed && age_s >= -max_age_s && age_s <= max_age_s;
   return s;
 }

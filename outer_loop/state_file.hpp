@@ -14,7 +14,9 @@ namespace alight::outer_loop {
 
 struct StateRecord {
   PersistentState state;
-  int64_t wall_utime = 0;  ///< when it was written [us since Unix epoch]
+  int64_t wall_utime = 0;    ///< when it was written [us since Unix epoch]
+  std::string boot_id;       ///< the boot it was written in (common/boot_id.hpp)
+  int64_t steady_utime = 0;  ///< when it was written, on the steady clock [us]
 };
 
 std::string format_state(const StateRecord& record);
@@ -26,11 +28,19 @@ bool save_state(const std::string& path, const StateRecord& record, std::string*
 /// nullopt when the file is absent or unreadable (*error says which, empty when absent).
 std::optional<StateRecord> load_state(const std::string& path, std::string* error);
 
-/// What a restarted outer loop may trust at wall time `wall_now_utime`: a latched failsafe
-/// always; "armed" only from a record written within max_age_s (the node rewrites it every
-/// second while armed), so a stale file from an old session never makes a vehicle standing on
-/// the ground count as flying.
-PersistentState restored_state(const std::optional<StateRecord>& record, int64_t wall_now_utime,
+/// Now, for judging a record's age: the wall clock, and within the record's boot the steady
+/// clock, which a wall clock far off (no real-time clock, before NTP) does not disturb.
+struct RestoreClock {
+  int64_t wall_utime = 0;
+  std::string boot_id;
+  int64_t steady_utime = 0;
+};
+
+/// What a restarted outer loop may trust `now`: a latched failsafe always; "armed" only from a
+/// record written within max_age_s (the node rewrites it every second while armed), so a stale
+/// file from an old session never makes a vehicle standing on the ground count as flying. The
+/// age is on the steady clock when the record is of this boot, else on the wall clock.
+PersistentState restored_state(const std::optional<StateRecord>& record, const RestoreClock& now,
                                double max_age_s);
 
 /// /tmp/alight-<uid>/outer_loop-<tag>.state, `tag` (the LCM URL) reduced to [A-Za-z0-9_.-]: outer

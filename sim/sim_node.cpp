@@ -258,7 +258,11 @@ int main(int argc, char** argv) {
     };
     const int64_t end_utime =
         duration_s > 0 ? sim0 + static_cast<int64_t>(duration_s * 1e6) : INT64_MAX;
-    const int64_t wall0 = wall_utime();
+    // Started now, simulated time is the wall clock: the time spent building the scene and the
+    // renderer is caught up at once (on the ground), so a frame's exposure stamp is the wall time
+    // it was taken and the end-to-end latency alight-score measures from it is a latency, not
+    // the start-up delay.
+    const int64_t wall0 = start_now && rate == 1.0 ? sim0 : wall_utime();
     int64_t next_truth = sim0;
     int64_t late_warned_at = wall0;
     while (!node.stopping() && simulator.now_utime() < end_utime) {

@@ -5,11 +5,11 @@
 // anyway.
 //   build/bin/bench/bus_auth_bench --benchmark_repetitions=5 --benchmark_report_aggregates_only
 
+#include <benchmark/benchmark.h>
+
 #include <alight/attitude_cmd_t.hpp>
 #include <alight/image_t.hpp>
 #include <alight/pose_t.hpp>
-#include <benchmark/benchmark.h>
-
 #include <vector>
 
 #include "common/bus_auth.hpp"
