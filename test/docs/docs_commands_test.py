@@ -7,9 +7,9 @@
 Reads README.md, docs/*.md and the components' README.md files (or the --doc files) and checks:
 
 - Commands: every line of a shell code block (```sh, ```bash, ```shell, ```console, or a
-  fence without a language) whose program is one of alight's: `scripts/...`, `bench/...`,
-  `fuzz/...`, `build/bin/...`, `alight-...`, `cmake`, `ctest`. Output belongs in ```text
-  blocks, which are not read. For each such command the program must exist; every long option
+  fence without a language), and every code span in a table row, whose program is one of
+  alight's: `scripts/...`, `bench/...`, `fuzz/...`, `build/bin/...`, `alight-...`, `cmake`,
+  `ctest`. Output belongs in ```text blocks, which are not read. For each such command the program must exist; every long option
   it uses must be one the program lists in its --help (or, for the few programs whose --help
   is not safe to run, one its source names); every path into the source tree it names must
   exist. A command that is cheap and offline is run and must exit 0: one with --dry-run,
@@ -160,7 +160,7 @@ class Checker:
         argv = [path] + args
         if name == "scripts/demo" and "--dry-run" not in args:
             argv = argv + ["--dry-run"]
-        elif not (runnable and (name in RUN_PROGRAMS or RUN_OPTIONS & set(args))):
+        elif not (runnable and args and (name in RUN_PROGRAMS or RUN_OPTIONS & set(args))):
             self.counts["dry-run"] += 1
             return self.say("ok (dry run) %s: %s" % (where, text))
         if not runnable:
@@ -242,7 +242,9 @@ class Checker:
     # --- a whole document ------------------------------------------------------------------
 
     def commands_of(self, path):
-        """(line number, text) of every logical line in the shell blocks of a Markdown file."""
+        """(line number, text) of every logical line in the shell blocks of a Markdown file, and
+        of every code span in a table row that starts with a program: a results table's
+        commands."""
         out, fence, info, pending, start = [], None, "", "", 0
         with open(path) as f:
             lines = f.read().splitlines()
@@ -252,6 +254,10 @@ class Checker:
                 m = re.match(r"^(`{3,}|~{3,})\s*([\w+-]*)", stripped)
                 if m:
                     fence, info = m.group(1), m.group(2).lower()
+                elif stripped.startswith("|"):
+                    out += [(n, span) for span in re.findall(r"`([^`]+)`", stripped)
+                            if span.startswith(PREFIXES + ("alight-",)) and
+                            not re.match(r"^\S+\.(cpp|hpp|h|md|yaml|mjs|json)\b", span)]
                 continue
             if stripped.startswith(fence):
                 fence = None
@@ -436,6 +442,10 @@ cmake --build build --target no_such_target
 cmake -S . -B build -DALIGHT_NO_SUCH_OPTION=ON
 ```
 
+| figure | command |
+|---|---|
+| a table's command | `build/bin/alight_families_bench --runs 3 --no-such-table-option` |
+
 [gone](no-such-page.md), [no heading](bad.md#no-such-heading), `vision.landing.no_such_key`,
 `NoSuchSuite.*`, `HomographyTest.NoSuchCase`.
 """)
@@ -466,6 +476,7 @@ scripts/no-such-script                      # output, not a command
                     "scripts/montecarlo has no option --no-such-option",
                     "scripts/demo underwater --dry-run` exited",
                     "no such file: config/vehicles/no_such_vehicle.yaml", "no CTest label no_such_label",
+                    "alight_families_bench has no option --no-such-table-option",
                     "no built target no_such_target", "CMake has no option ALIGHT_NO_SUCH_OPTION",
                     "link to a missing file: no-such-page.md",
                     "link to a missing heading: bad.md#no-such-heading",
