@@ -9,17 +9,18 @@ Reads README.md, docs/*.md and the components' README.md files (or the --doc fil
 - Commands: every line of a shell code block (```sh, ```bash, ```shell, ```console, or a
   fence without a language), and every code span in a table row, whose program is one of
   alight's: `scripts/...`, `bench/...`, `fuzz/...`, `build/bin/...`, `alight-...`, `cmake`,
-  `ctest`. Output belongs in ```text blocks, which are not read. For each such command the program must exist; every long option
-  it uses must be one the program lists in its --help (or, for the few programs whose --help
-  is not safe to run, one its source names); every path into the source tree it names must
-  exist. A command that is cheap and offline is run and must exit 0: one with --dry-run,
-  --list or --help, and alight-params. `scripts/demo` is run with --dry-run added (its own
-  check of the mission, the files and the options), and nothing else that flies, builds,
-  installs or needs hardware is run. `ctest -L` labels and `-R` patterns must select tests;
-  `cmake --target`s must be built; `-D` options must be the project's.
+  `ctest`. Output belongs in ```text blocks, which are not read. For each such command the
+  program must exist; every long option it uses must be one the program lists in its --help
+  (or, for the few programs whose --help is not safe to run, one its source names); every path
+  into the source tree it names must exist. A command that is cheap and offline is run and
+  must exit 0: one with --dry-run, --list or --help, and alight-params. `scripts/demo` is run
+  with --dry-run added (its own check of the mission, the files and the options), and nothing
+  else that flies, builds, installs or needs hardware is run. `ctest -L` labels and `-R`
+  patterns must select tests; `cmake --target`s must be built; `-D` options must be the
+  project's.
 - Links: every relative link's file exists, and its #anchor is a heading there.
 - Parameter keys: every `vision.x.y`-style key in backticks whose first part is a section of a
-  configuration file is one `alight-params` prints (a `*` matches any part).
+  vehicle file is one `alight-params` prints (a `*` matches any part).
 - Test names: every `Suite.Case` (or `Suite.*`) in backticks is a GoogleTest case in test/.
 - The README's test command is `scripts/test`, exactly what CI's .ci/run runs.
 
@@ -40,8 +41,8 @@ import tempfile
 SHELL_INFOS = {"", "sh", "bash", "shell", "console"}
 # Programs never run, not even with --help: they install, build and test everything, or write
 # a key wherever their first argument says. Their options are checked against their source.
-NEVER_RUN = {"scripts/test", "scripts/setup", "scripts/make-key", "build/bin/bench/bench_lcm_images",
-             "build/bin/vision_bench"}
+NEVER_RUN = {"scripts/test", "scripts/setup", "scripts/make-key",
+             "build/bin/bench/bench_lcm_images", "build/bin/vision_bench"}
 # Programs that talk to hardware or a network: their --help is read, but they are never run.
 NEEDS_HARDWARE = {"build/bin/alight-camera", "build/bin/alight-calibrate", "build/bin/alight-mocap",
                   "build/bin/alight-mavlink", "build/bin/alight-link"}
@@ -53,7 +54,8 @@ PREFIXES = ("scripts/", "bench/", "fuzz/", "build/bin/")
 # The sections of a vehicle file: a key in backticks that starts with one of them
 # (`vision.landing.min_height_m`) must be one alight-params prints.
 PARAM_ROOTS = {"vehicle", "cameras", "outer_loop", "autonomy", "vision"}
-PROGRAM_WORD = re.compile(r"(^|[\s;&|(=])(scripts/|bench/|fuzz/|build/bin/|alight[-_]|cmake\b|ctest\b)")
+PROGRAM_WORD = re.compile(
+    r"(^|[\s;&|(=])(scripts/|bench/|fuzz/|build/bin/|alight[-_]|cmake\b|ctest\b)")
 TEST_MACRO = re.compile(r"^\s*TEST(?:_F|_P)?\(\s*(\w+)\s*,\s*(\w+)\s*\)", re.M)
 
 
@@ -377,7 +379,8 @@ class Checker:
         keys = self.param_keys()
         for m in re.finditer(r"`([a-z_]+(?:\.[A-Za-z0-9_*]+)+)`", body):
             key = m.group(1)
-            if key.split(".", 1)[0] not in PARAM_ROOTS or re.search(r"\.(ya?ml|md|[ch]pp|py)$", key):
+            if (key.split(".", 1)[0] not in PARAM_ROOTS or
+                    re.search(r"\.(ya?ml|md|[ch]pp|py)$", key)):
                 continue
             self.counts["keys"] += 1
             if not any(fnmatch.fnmatchcase(k, key) for k in keys):
@@ -459,7 +462,8 @@ cmake -S . -B build -DALIGHT_NO_SUCH_OPTION=ON
 scripts/faults --list                       # runs
 build/bin/alight-params --defaults camera
 scripts/demo ingress --seed 3               # dry-run by the demo itself
-ALIGHT_X=config/vehicles/pelican.yaml build/bin/alight-vision --config config/vehicles/pelican.yaml --mission landing
+ALIGHT_X=config/vehicles/pelican.yaml build/bin/alight-vision \\
+    --config config/vehicles/pelican.yaml --mission landing
 ip route get 239.255.76.67                  # not an alight program: not checked
 ctest -L vision
 ```
@@ -471,11 +475,13 @@ scripts/no-such-script                      # output, not a command
 [here](good.md#a-heading), `vision.landing.min_height_m`, `vision.star.*`,
 `HomographyTest.*`, `HomographyTest.SameSeedGivesIdenticalResults`.
 """)
-        expected = ["no such program: scripts/no-such-script", "no such program: build/bin/alight-no-such-binary",
+        expected = ["no such program: scripts/no-such-script",
+                    "no such program: build/bin/alight-no-such-binary",
                     "alight-params has no option --no-such-option",
                     "scripts/montecarlo has no option --no-such-option",
                     "scripts/demo underwater --dry-run` exited",
-                    "no such file: config/vehicles/no_such_vehicle.yaml", "no CTest label no_such_label",
+                    "no such file: config/vehicles/no_such_vehicle.yaml",
+                    "no CTest label no_such_label",
                     "alight_families_bench has no option --no-such-table-option",
                     "no built target no_such_target", "CMake has no option ALIGHT_NO_SUCH_OPTION",
                     "link to a missing file: no-such-page.md",
