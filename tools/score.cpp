@@ -171,6 +171,7 @@ Score Scorer::result() const {
     s.vision_frames_failed = last_timing_->frames_failed;
     s.vision_frames_processed = last_timing_->frames_processed;
     s.vision_frames_waiting = last_timing_->frames_waiting;
+    s.vision_frames_late = last_timing_->frames_late;
     std::vector<double> e2e_ms;
     for (const auto& [exposure, received] : target_received_)
       e2e_ms.push_back(1e-3 * static_cast<double>(received - exposure));
@@ -321,6 +322,7 @@ std::vector<std::pair<std::string, std::string>> Score::fields() const {
     f.emplace_back("vision_frames_failed", std::to_string(vision_frames_failed));
     f.emplace_back("vision_frames_processed", std::to_string(vision_frames_processed));
     f.emplace_back("vision_frames_waiting", std::to_string(vision_frames_waiting));
+    f.emplace_back("vision_frames_late", std::to_string(vision_frames_late));
   }
   f.emplace_back("collided", collided ? "true" : "false");
   f.emplace_back("n_collisions", std::to_string(n_collisions));

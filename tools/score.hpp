@@ -84,7 +84,8 @@ struct Score {
   std::optional<Percentiles> vision_process_cpu_ms;  ///< the CPU time of the same
   // The vision's counters in its last VISION_TIMING (vision_timing_t frames_*).
   int64_t vision_frames_received = 0, vision_frames_dropped = 0, vision_frames_refused = 0,
-          vision_frames_failed = 0, vision_frames_processed = 0, vision_frames_waiting = 0;
+          vision_frames_failed = 0, vision_frames_processed = 0, vision_frames_waiting = 0,
+          vision_frames_late = 0;
   bool collided = false;
   int n_collisions = 0;
   bool crashed = false;      ///< touched down faster than gear_max_impact_mps (fails any mission)
