@@ -15,13 +15,13 @@
 // Every message is recorded as it came, origin trailer and all (forensics needs the forgeries
 // too); none is judged. Stops on SIGINT / SIGTERM after writing what it holds.
 //   alight-record [--lcm-url URL] [-c REGEX] [--max-queue-mb N] FILE
-#include <alight/node_status_t.hpp>
 #include <pthread.h>
 #include <sched.h>
 #include <sys/resource.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <alight/node_status_t.hpp>
 #include <atomic>
 #include <condition_variable>
 #include <csignal>
@@ -88,8 +88,8 @@ struct Recorder {
   uint64_t received = 0, refused = 0;
   void on(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
     const auto* p = static_cast<const uint8_t*>(rbuf->data);
-    const bool kept = queue->push(Event{rbuf->recv_utime, channel,
-                                        std::vector<uint8_t>(p, p + rbuf->data_size)});
+    const bool kept =
+        queue->push(Event{rbuf->recv_utime, channel, std::vector<uint8_t>(p, p + rbuf->data_size)});
     std::lock_guard<std::mutex> lock(stats_mutex);
     ++received;
     if (!kept) ++refused;
@@ -116,8 +116,7 @@ uint64_t socket_drops(int port) {
   for (const auto& fd : std::filesystem::directory_iterator("/proc/self/fd")) {
     std::error_code ec;
     const auto target = std::filesystem::read_symlink(fd.path(), ec).string();
-    if (!ec && target.rfind("socket:[", 0) == 0)
-      inodes.insert(target.substr(8, target.size() - 9));
+    if (!ec && target.rfind("socket:[", 0) == 0) inodes.insert(target.substr(8, target.size() - 9));
   }
   uint64_t drops = 0;
   std::ifstream f("/proc/net/udp");
