@@ -16,8 +16,12 @@
 // machine's caches).
 //
 //   build/bin/alight_families_bench [--families landing_tiles,ingress_photo] [--runs 20]
-//       [--seed0 S] [--jobs 2] [--no-mocap] [--vehicle config/vehicles/pelican.yaml] [--verbose]
-//       [--csv FILE]
+//       [--seed0 S] [--purpose any|tune|report] [--jobs 2] [--no-mocap]
+//       [--vehicle config/vehicles/pelican.yaml] [--verbose] [--csv FILE]
+//
+// The seeds are judged against the tune/report split of config/seeds.yaml (tools/seed_split):
+// the summary says which they are, --purpose tune refuses report seeds and --purpose report
+// refuses any other, and without --seed0 a fresh block of report seeds is drawn.
 //
 // --csv writes one row per run with scripts/montecarlo's column names (it runs this bench with
 // --in-process and summarises and plots the rows as it does its flights over LCM).
@@ -42,6 +46,7 @@
 #include <thread>
 #include <vector>
 
+#include "tools/seed_split.hpp"
 #include "closed_loop.hpp"
 #include "common/params.hpp"
 #include "real_vision.hpp"
@@ -196,10 +201,24 @@ int main(int argc, char** argv) try {
   app.add_flag("--verbose", verbose, "print each run's retries");
   std::string csv_path;
   app.add_option("--csv", csv_path, "write one row per run to this file");
+  std::string purpose_text = "any";
+  app.add_option("--purpose", purpose_text,
+                 "tune (refuse report seeds), report (refuse all but report seeds) or any")
+      ->check(CLI::IsMember({"any", "tune", "report"}));
+  std::string seeds_file = std::string(ALIGHT_SOURCE_DIR) + "/config/seeds.yaml";
+  app.add_option("--seeds-file", seeds_file, "the tune/report split of scene seeds");
   CLI11_PARSE(app, argc, argv);
   cv::setNumThreads(1);  // the jobs are the parallelism
 
-  if (seed0 < 0) seed0 = std::random_device{}() % 1000000;
+  const auto seed_split = alight::tools::SeedSplit::from(alight::ParamNode::load_file(seeds_file));
+  if (seed0 < 0) seed0 = alight::tools::fresh_report_seed0(seed_split, runs, std::random_device{}());
+  if (const std::string why = alight::tools::check_seeds(
+          seed_split, alight::tools::parse_seed_purpose(purpose_text), seed0, seed0 + runs - 1);
+      !why.empty()) {
+    std::fprintf(stderr, "alight_families_bench: %s (%s)\n", why.c_str(), seeds_file.c_str());
+    return 2;
+  }
+  const std::string seed_kind = alight::tools::describe_seeds(seed_split, seed0, seed0 + runs - 1);
   const auto names = split(families);
   namespace fs = std::filesystem;
   std::string dir_template = (fs::temp_directory_path() / "alight-families-XXXXXX").string();
@@ -284,9 +303,9 @@ int main(int argc, char** argv) try {
   for (auto& t : threads) t.join();
   if (config_error) throw *config_error;
 
-  std::printf("\n%s, seeds %lld..%lld, %s:\n", vehicle.c_str(), static_cast<long long>(seed0),
-              static_cast<long long>(seed0 + runs - 1),
-              no_mocap ? "on the onboard estimate" : "on motion capture");
+  std::printf("\n%s, seeds %lld..%lld (%s), %s:\n", vehicle.c_str(),
+              static_cast<long long>(seed0), static_cast<long long>(seed0 + runs - 1),
+              seed_kind.c_str(), no_mocap ? "on the onboard estimate" : "on motion capture");
   for (const auto& fam : names) {
     std::vector<double> touch_cm, werr_cm, wabs_cm, centre_cm, offset_cm, cpu, time_s;
     int ok = 0, n = 0, retries = 0, false_runs = 0, false_frames = 0, partial_frames = 0;
