@@ -46,12 +46,12 @@
 #include <thread>
 #include <vector>
 
-#include "tools/seed_split.hpp"
 #include "closed_loop.hpp"
 #include "common/params.hpp"
 #include "real_vision.hpp"
 #include "sim/params.hpp"
 #include "support/stats.hpp"
+#include "tools/seed_split.hpp"
 
 using namespace alight;
 using namespace alight::autonomy;
@@ -211,7 +211,8 @@ int main(int argc, char** argv) try {
   cv::setNumThreads(1);  // the jobs are the parallelism
 
   const auto seed_split = alight::tools::SeedSplit::from(alight::ParamNode::load_file(seeds_file));
-  if (seed0 < 0) seed0 = alight::tools::fresh_report_seed0(seed_split, runs, std::random_device{}());
+  if (seed0 < 0)
+    seed0 = alight::tools::fresh_report_seed0(seed_split, runs, std::random_device{}());
   if (const std::string why = alight::tools::check_seeds(
           seed_split, alight::tools::parse_seed_purpose(purpose_text), seed0, seed0 + runs - 1);
       !why.empty()) {
@@ -303,9 +304,9 @@ int main(int argc, char** argv) try {
   for (auto& t : threads) t.join();
   if (config_error) throw *config_error;
 
-  std::printf("\n%s, seeds %lld..%lld (%s), %s:\n", vehicle.c_str(),
-              static_cast<long long>(seed0), static_cast<long long>(seed0 + runs - 1),
-              seed_kind.c_str(), no_mocap ? "on the onboard estimate" : "on motion capture");
+  std::printf("\n%s, seeds %lld..%lld (%s), %s:\n", vehicle.c_str(), static_cast<long long>(seed0),
+              static_cast<long long>(seed0 + runs - 1), seed_kind.c_str(),
+              no_mocap ? "on the onboard estimate" : "on motion capture");
   for (const auto& fam : names) {
     std::vector<double> touch_cm, werr_cm, wabs_cm, centre_cm, offset_cm, cpu, time_s;
     int ok = 0, n = 0, retries = 0, false_runs = 0, false_frames = 0, partial_frames = 0;
