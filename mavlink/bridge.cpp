@@ -128,6 +128,7 @@ void Bridge::reset_autopilot_state() {
   scaled_imu_asked_ = false;
   imu_source_.clear();
   origin_known_ = false;
+  prearm_ok_ = false;
   origin_attempts_ = 0;
   next_origin_us_ = 0;
   intervals_to_ask_.clear();
@@ -135,7 +136,8 @@ void Bridge::reset_autopilot_state() {
       {HighresImu::kId, params_.imu_rate_hz},
       {AttitudeQuaternion::kId, params_.attitude_rate_hz},
       {LocalPositionNed::kId, params_.position_rate_hz},
-      {ExtendedSysState::kId, params_.landed_state_rate_hz}};
+      {ExtendedSysState::kId, params_.landed_state_rate_hz},
+      {SysStatus::kId, params_.sys_status_rate_hz}};
   for (const auto& a : asks)
     if (a.second > 0) intervals_to_ask_.push_back(a);
   params_to_read_.clear();
@@ -317,6 +319,16 @@ void Bridge::handle_frame(const Frame& f, const BridgeClock& now, BridgeOutput& 
           {m.severity <= mav_severity::kWarning, "autopilot: " + last_statustext_});
     } else if constexpr (std::is_same_v<M, SysStatus>) {
       battery_V_ = m.voltage_battery == UINT16_MAX ? -1.0 : m.voltage_battery / 1000.0;
+      // MAV_SYS_STATUS_PREARM_CHECK: both autopilots report their pre-arm checks in its health
+      // bit (ArduPilot: libraries/GCS_MAVLink/GCS.cpp, marked present; PX4:
+      // src/modules/mavlink/streams/SYS_STATUS.hpp, health only: it can arm in the mode).
+      constexpr uint32_t kPrearmCheck = 0x10000000;
+      if ((m.onboard_control_sensors_present & kPrearmCheck) || flavour_ == Flavour::kPx4) {
+        const bool ok = m.onboard_control_sensors_health & kPrearmCheck;
+        if (ok && !prearm_ok_) out.events.push_back({false, "autopilot: pre-arm checks pass"});
+        if (!ok && prearm_ok_) out.events.push_back({true, "autopilot: pre-arm checks fail"});
+        prearm_ok_ = ok;
+      }
     }
   });
 }
@@ -995,6 +1007,7 @@ AutopilotStatus Bridge::status(const BridgeClock& now) const {
   s.landed_state = landed_state(now);
   s.imu_source = imu_source_;
   s.origin_known = origin_known_;
+  s.prearm_ok = prearm_ok_;
   s.stats = stats_;
   s.parser = parser_.stats();
   return s;

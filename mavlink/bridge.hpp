@@ -203,6 +203,7 @@ struct AutopilotStatus {
   uint8_t landed_state = 0;
   std::string imu_source;  ///< "HIGHRES_IMU", "SCALED_IMU" or "" (none yet)
   bool origin_known = false;  ///< GPS_GLOBAL_ORIGIN received
+  bool prearm_ok = false;     ///< SYS_STATUS: the autopilot's pre-arm checks pass
   BridgeStats stats;
   ParserStats parser;
 };
@@ -298,6 +299,7 @@ class Bridge {
   double battery_V_ = -1;
   std::string imu_source_;
   bool origin_known_ = false;
+  bool prearm_ok_ = false;
 
   // The stack.
   std::optional<AttitudeTarget> attitude_;

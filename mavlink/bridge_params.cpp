@@ -110,6 +110,8 @@ const ParamSchema<BridgeParams>& BridgeParams::schema() {
           "LOCAL_POSITION_NED asked of the autopilot (0: leave its rate)");
     s.add("landed_state_rate_hz", &P::landed_state_rate_hz, Range::closed(0, 50), "Hz",
           "EXTENDED_SYS_STATE (the autopilot's landed state) asked (0: leave its rate)");
+    s.add("sys_status_rate_hz", &P::sys_status_rate_hz, Range::closed(0, 50), "Hz",
+          "SYS_STATUS (pre-arm checks, battery) asked (0: leave its rate)");
     s.add("set_ekf_origin", &P::set_ekf_origin, Range::any(), "",
           "without GPS: send SET_GPS_GLOBAL_ORIGIN (ekf_origin) until the autopilot reports an "
           "origin (ArduPilot needs one for GUIDED, take-off and LOCAL_POSITION_NED)");

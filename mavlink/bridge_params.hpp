@@ -50,6 +50,7 @@ struct BridgeParams {
   double attitude_rate_hz = 100.0;  ///< ATTITUDE_QUATERNION asked (0: leave it) [Hz]
   double position_rate_hz = 30.0;   ///< LOCAL_POSITION_NED asked (0: leave it) [Hz]
   double landed_state_rate_hz = 4.0;  ///< EXTENDED_SYS_STATE asked (0: leave it) [Hz]
+  double sys_status_rate_hz = 2.0;    ///< SYS_STATUS asked (0: leave it) [Hz]
   double status_rate_hz = 5.0;      ///< AUTOPILOT_STATUS published [Hz]
 
   /// Without GPS: SET_GPS_GLOBAL_ORIGIN (latitude [deg], longitude [deg], altitude [m above mean

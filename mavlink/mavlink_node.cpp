@@ -203,18 +203,24 @@ int main(int argc, char** argv) {
       kill_verifier.emplace(std::move(key), ap.vehicle_id,
                             static_cast<int64_t>(std::llround(ap.command_max_age_s * 1e6)));
     }
-    const auto kill_authorised = [&](const operator_cmd_t& authority, const char* channel) {
-      if (authority.command == operator_cmd_t::CMD_NONE && authority.auth == 0) return false;
-      if (!kill_verifier) {
-        spdlog::warn("alight-mavlink: {}: a KILL authority, but no --vehicle file with the "
-                     "operator key: a plain motors-off",
-                     channel);
-        return false;
-      }
-      const KillCheck c = kill_verifier->check(authority, wall_utime());
-      if (c == KillCheck::kAuthorised) return true;
-      spdlog::warn("alight-mavlink: {}: KILL authority refused ({}): a plain motors-off", channel,
-                   kill_check_name(c));
+    // A refused authority is logged when the reason changes and every 500th time after: the
+    // carrier repeats it with every message.
+    std::string last_refusal;
+    uint64_t refusals = 0;
+    const auto kill_authorised = [&](const operator_cmd_t& authority, const char* channel,
+                                     bool is_kill) {
+      std::string why;
+      if (mav::kill_authorised(kill_verifier ? &*kill_verifier : nullptr, authority,
+                               wall_utime(), &why))
+        return true;
+      const bool empty = authority.command == operator_cmd_t::CMD_NONE &&
+                         authority.auth == operator_cmd_t::AUTH_NONE;
+      if (!is_kill && empty) return false;  // the outer loop's motors-off on the ground
+      if (why != last_refusal || ++refusals % 500 == 0)
+        spdlog::warn("alight-mavlink: {}: KILL without the operator's authority ({}): a plain "
+                     "motors-off",
+                     channel, why);
+      last_refusal = why;
       return false;
     };
     double weight_N = 0;
@@ -267,7 +273,8 @@ int main(int argc, char** argv) {
       std::string why;
       auto t = mav::attitude_from_msg(m, &why);
       if (!t) return (void)node.reject_value(channels::kAttitudeCmd, why);
-      if (!m.armed) t->kill_authorised = kill_authorised(m.kill_authority, channels::kAttitudeCmd);
+      if (!m.armed)
+        t->kill_authorised = kill_authorised(m.kill_authority, channels::kAttitudeCmd, false);
       if (const auto p = mav::setpoint_stamp_problem(m.utime, node.newest_stamp(), kMaxSetpointAgeS,
                                                      kMaxSetpointAheadS))
         return (void)node.reject_value(channels::kAttitudeCmd, *p);
@@ -280,7 +287,7 @@ int main(int argc, char** argv) {
       auto t = mav::position_from_msg(m, &why);
       if (!t) return (void)node.reject_value(channels::kPositionSetpoint, why);
       if (t->motors == mav::Motors::kKill)
-        t->kill_authorised = kill_authorised(m.kill_authority, channels::kPositionSetpoint);
+        t->kill_authorised = kill_authorised(m.kill_authority, channels::kPositionSetpoint, true);
       if (const auto p = mav::setpoint_stamp_problem(m.utime, node.newest_stamp(), kMaxSetpointAgeS,
                                                      kMaxSetpointAheadS))
         return (void)node.reject_value(channels::kPositionSetpoint, *p);

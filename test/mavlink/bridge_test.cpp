@@ -71,6 +71,7 @@ BridgeParams px4_params() {
   p.attitude_rate_hz = 0;
   p.position_rate_hz = 0;
   p.landed_state_rate_hz = 0;
+  p.sys_status_rate_hz = 0;
   p.check_params = false;
   return p;
 }
