@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 
 #include "mavlink/ned_frd.hpp"
@@ -50,11 +51,23 @@ constexpr int kParamAttempts = 3;
 /// SET_GPS_GLOBAL_ORIGIN resent this often until GPS_GLOBAL_ORIGIN comes, at most this often.
 constexpr int64_t kOriginPeriodUs = 2'000'000;
 constexpr int kOriginAttempts = 10;
+/// The offset of the autopilot's local frame from motion capture's: sampled while slower than
+/// this, with a motion-capture pose at most this old, followed with this time constant, and
+/// reported again when it moved this far.
+constexpr double kFrameOffsetMaxSpeedMps = 0.1;
+constexpr int64_t kFrameOffsetMocapAgeUs = 50'000;
+constexpr double kFrameOffsetTauS = 2.0;
+constexpr double kFrameOffsetReportM = 0.05;
 /// SCALED_IMU's units.
 constexpr double kMilliG = 9.80665e-3, kMilliRad = 1e-3;
 
 bool finite3(float a, float b, float c) {
   return std::isfinite(a) && std::isfinite(b) && std::isfinite(c);
+}
+std::string vector_text(const Vector3d& v) {
+  char b[64];
+  std::snprintf(b, sizeof b, "(%.3f, %.3f, %.3f)", v.x(), v.y(), v.z());
+  return b;
 }
 bool within(float a, float b, float c, double limit) {
   return finite3(a, b, c) && std::abs(a) <= limit && std::abs(b) <= limit && std::abs(c) <= limit;
@@ -115,6 +128,7 @@ void Bridge::reset_autopilot_state() {
   q_NED_FRD_.reset();
   local_position_.reset();
   ext_state_.reset();
+  frame_offset_NED_.reset();
   pending_.reset();
   await_heartbeat_ = false;
   override_ = false;
@@ -297,6 +311,7 @@ void Bridge::handle_frame(const Frame& f, const BridgeClock& now, BridgeOutput& 
       on_boot_time(uint64_t{m.time_boot_ms} * 1000, out);
       local_position_ = m;
       local_position_steady_us_ = now.steady_us;
+      update_frame_offset(now, out);
     } else if constexpr (std::is_same_v<M, ExtendedSysState>) {
       if (m.landed_state > mav_landed_state::kLanding) {
         ++stats_.rejected_values;
@@ -331,6 +346,31 @@ void Bridge::handle_frame(const Frame& f, const BridgeClock& now, BridgeOutput& 
       }
     }
   });
+}
+
+void Bridge::update_frame_offset(const BridgeClock& now, BridgeOutput& out) {
+  // Only at rest: the two positions are not sampled at the same instant.
+  if (!params_.align_frames || !local_position_ || !mocap_ ||
+      now.steady_us - mocap_rx_steady_us_ > kFrameOffsetMocapAgeUs)
+    return;
+  const LocalPositionNed& lp = *local_position_;
+  if (Vector3d(lp.vx, lp.vy, lp.vz).norm() > kFrameOffsetMaxSpeedMps) return;
+  const Vector3d sample = Vector3d(lp.x, lp.y, lp.z) - ned_from_enu(mocap_->p_W_B);
+  if (!frame_offset_NED_) {
+    frame_offset_NED_ = sample;
+    reported_offset_NED_ = sample;
+    out.events.push_back({false, "the autopilot's local frame (NED) is motion capture's offset by " +
+                                     vector_text(sample) + " m: position setpoints carry it"});
+  } else {
+    const double dt = std::max(0.0, (now.steady_us - frame_offset_steady_us_) * 1e-6);
+    *frame_offset_NED_ += std::min(1.0, dt / kFrameOffsetTauS) * (sample - *frame_offset_NED_);
+    if ((*frame_offset_NED_ - reported_offset_NED_).norm() > kFrameOffsetReportM) {
+      reported_offset_NED_ = *frame_offset_NED_;
+      out.events.push_back({true, "the autopilot's local frame moved: now offset by " +
+                                      vector_text(*frame_offset_NED_) + " m"});
+    }
+  }
+  frame_offset_steady_us_ = now.steady_us;
 }
 
 void Bridge::on_imu(int64_t utime, const Vector3d& accel_FRD, const Vector3d& gyro_FRD,
@@ -614,7 +654,11 @@ void Bridge::stream(const BridgeClock& now, BridgeOutput& out) {
     send(m, now, out);
   } else {
     const PositionTarget& t = *position_;
-    const Vector3d p = ned_from_enu(t.p_W), v = ned_from_enu(t.v_W);
+    // In the autopilot's local frame, which need not be motion capture's: ArduPilot's EKF3 moves
+    // its height datum (AP_NavEKF3_PosVelFusion.cpp, resetHeightDatum) and reported 0.2 m more
+    // than the external navigation it fuses in SITL.
+    const Vector3d p = ned_from_enu(t.p_W) + frame_offset_NED_.value_or(Vector3d::Zero());
+    const Vector3d v = ned_from_enu(t.v_W);
     SetPositionTargetLocalNed m;
     m.time_boot_ms = boot_ms;
     m.target_system = *sysid_;
@@ -1008,6 +1052,7 @@ AutopilotStatus Bridge::status(const BridgeClock& now) const {
   s.imu_source = imu_source_;
   s.origin_known = origin_known_;
   s.prearm_ok = prearm_ok_;
+  s.frame_offset_NED = frame_offset_NED_;
   s.stats = stats_;
   s.parser = parser_.stats();
   return s;

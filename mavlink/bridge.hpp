@@ -49,6 +49,9 @@
 //    requested message rates and the engage state start again. Non-finite or absurd values are
 //    refused and counted. Without GPS the autopilot's local frame needs a geodetic origin: with
 //    set_ekf_origin the bridge sends SET_GPS_GLOBAL_ORIGIN until GPS_GLOBAL_ORIGIN comes back.
+//  - Frames: position setpoints go out in the autopilot's local frame, which need not be motion
+//    capture's (ArduPilot's EKF3 moves its height datum): with align_frames the bridge measures
+//    the offset (LOCAL_POSITION_NED minus motion capture, at rest) and adds it.
 //  - Parameters: at link-up the bridge reads the autopilot parameters its behaviour relies on
 //    (autopilot_params.hpp) and reports each one that is missing or set otherwise.
 //
@@ -203,6 +206,8 @@ struct AutopilotStatus {
   uint8_t landed_state = 0;
   std::string imu_source;  ///< "HIGHRES_IMU", "SCALED_IMU" or "" (none yet)
   bool origin_known = false;  ///< GPS_GLOBAL_ORIGIN received
+  /// The autopilot's local frame minus motion capture's (NED) [m], when measured.
+  std::optional<Vector3d> frame_offset_NED;
   bool prearm_ok = false;     ///< SYS_STATUS: the autopilot's pre-arm checks pass
   BridgeStats stats;
   ParserStats parser;
@@ -243,6 +248,7 @@ class Bridge {
   void on_imu(int64_t utime, const Vector3d& accel_FRD, const Vector3d& gyro_FRD,
               BridgeOutput& out);
   void on_param(const ParamValue& m, BridgeOutput& out);
+  void update_frame_offset(const BridgeClock& now, BridgeOutput& out);
   std::optional<int64_t> wall_stamp(uint64_t autopilot_us, const BridgeClock& now);
   void reset_autopilot_state();
   void check_link(const BridgeClock& now, BridgeOutput& out);
@@ -294,6 +300,9 @@ class Bridge {
   std::optional<LocalPositionNed> local_position_;
   int64_t local_position_steady_us_ = 0;
   std::optional<ExtendedSysState> ext_state_;
+  std::optional<Vector3d> frame_offset_NED_;  // autopilot's local position - motion capture's
+  Vector3d reported_offset_NED_ = Vector3d::Zero();
+  int64_t frame_offset_steady_us_ = 0;
   int64_t ext_state_steady_us_ = 0;
   std::string last_statustext_;
   double battery_V_ = -1;

@@ -137,6 +137,9 @@ const ParamSchema<BridgeParams>& BridgeParams::schema() {
     s.add("check_params", &P::check_params, Range::any(), "",
           "read the autopilot parameters alight relies on at link-up and report those set "
           "otherwise (mavlink/autopilot_params.hpp)");
+    s.add("align_frames", &P::align_frames, Range::any(), "",
+          "position control: measure the offset of the autopilot's local frame from motion "
+          "capture (at rest) and send setpoints in the autopilot's frame");
     s.add("status_rate_hz", &P::status_rate_hz, Range::closed(0.5, 50), "Hz",
           "AUTOPILOT_STATUS published");
     return s;

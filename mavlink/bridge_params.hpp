@@ -62,6 +62,9 @@ struct BridgeParams {
   std::string signing_key_file;
   int signing_link_id = 1;  ///< our link id in signed frames
   bool check_params = true;  ///< read and report the autopilot parameters alight relies on
+  /// Position control: measure the autopilot's local frame against motion capture and send
+  /// setpoints in it.
+  bool align_frames = true;
 
   static const ParamSchema<BridgeParams>& schema();
   void validate() const;  ///< throws ParamError naming the field and its value

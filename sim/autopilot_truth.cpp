@@ -15,6 +15,9 @@ constexpr double kArduPilotMPerE7 = 0.011131884502145034;
 /// PX4's earth radius (src/lib/geo/geo.h, CONSTANTS_RADIUS_OF_EARTH) [m].
 constexpr double kPx4EarthRadiusM = 6371000.0;
 constexpr double kDegE7ToRad = 1e-7 * M_PI / 180.0;
+/// Samples further apart than this are not integrated between: the position restarts at the
+/// measured one [s].
+constexpr double kMaxGapS = 0.2;
 /// A sample further than this from the anchor is corrupt, not flown [m].
 constexpr double kMaxOffsetM = 10000.0;
 }  // namespace
@@ -145,13 +148,13 @@ void AutopilotTruth::on_sample(const Raw& r, int64_t now, Output& out) {
     ++n_rejected_;
     return;
   }
-  if (last_) {
-    const double dt = std::clamp((now - last_->utime) * 1e-6, 0.0, 0.2);
+  const double dt = last_ ? (now - last_->utime) * 1e-6 : kMaxGapS + 1;
+  if (dt >= 0 && dt <= kMaxGapS) {
     const Vector3d predicted = p_NED_ + 0.5 * (v_prev_NED_ + r.v_NED) * dt;
     const double a = 1.0 - std::exp(-dt / params_.position_tau_s);
     p_NED_ = predicted + a * (measured - predicted);
   } else {
-    p_NED_ = measured;
+    p_NED_ = measured;  // the first sample, or after a gap: nothing to integrate over
   }
   v_prev_NED_ = r.v_NED;
   TruthSample s;
@@ -201,6 +204,7 @@ VehicleState AutopilotTruth::raw_at(int64_t t) const {
     s.p_W_B = params_.start_W;
     s.q_WB = Quaterniond(Eigen::AngleAxisd(params_.start_yaw_rad, Vector3d::UnitZ()));
     s.yaw_des_rad = params_.start_yaw_rad;
+    s.armed = armed_;
     return s;
   }
   const double dt = std::clamp((t - last_->utime) * 1e-6, -params_.max_extrapolation_s,

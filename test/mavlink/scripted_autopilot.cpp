@@ -436,12 +436,14 @@ void ScriptedAutopilot::physics(double dt) {
         }
       }
     } else if (armed_ && guided() && sub_ == Sub::kPos) {
-      // pos_control_run: nothing while is_disarmed_or_landed() (ArduCopter/mode.cpp).
+      // pos_control_run: nothing while is_disarmed_or_landed() (ArduCopter/mode.cpp); it flies
+      // its estimate to the target.
       if (auto_armed_ && !landed_) {
         hold_ground = false;
-        vz_cmd = std::clamp(target_z_ - z_, -kClimb, kClimb);
+        vz_cmd = std::clamp(target_z_ - (z_ + c_.estimate_offset_up_m), -kClimb, kClimb);
       }
     } else if (armed_ && mode_ == copter_mode::kGuided && sub_ == Sub::kTakeoff) {
+      // Mode::do_user_takeoff: the altitude above home, home where it armed.
       if (landed_) {
         spool_s_ += dt;
         if (spool_s_ >= kSpoolS) landed_ = false;
@@ -586,7 +588,7 @@ void ScriptedAutopilot::telemetry() {
         if (local_position_valid()) {
           LocalPositionNed m;
           m.time_boot_ms = boot_ms;
-          m.z = static_cast<float>(-z_);
+          m.z = static_cast<float>(-(z_ + c_.estimate_offset_up_m));
           m.vz = static_cast<float>(-vz_);
           send(m);
         }
