@@ -58,6 +58,8 @@ constexpr double kFrameOffsetMaxSpeedMps = 0.1;
 constexpr int64_t kFrameOffsetMocapAgeUs = 50'000;
 constexpr double kFrameOffsetTauS = 2.0;
 constexpr double kFrameOffsetReportM = 0.05;
+/// PX4 counts as ready this long after its local position appeared.
+constexpr int64_t kPx4ReadyUs = 2'000'000;
 /// SCALED_IMU's units.
 constexpr double kMilliG = 9.80665e-3, kMilliRad = 1e-3;
 
@@ -129,6 +131,7 @@ void Bridge::reset_autopilot_state() {
   local_position_.reset();
   ext_state_.reset();
   frame_offset_NED_.reset();
+  local_position_since_us_.reset();
   pending_.reset();
   await_heartbeat_ = false;
   override_ = false;
@@ -309,6 +312,8 @@ void Bridge::handle_frame(const Frame& f, const BridgeClock& now, BridgeOutput& 
         return;
       }
       on_boot_time(uint64_t{m.time_boot_ms} * 1000, out);
+      if (!local_position_since_us_ || now.steady_us - local_position_steady_us_ > 1'000'000)
+        local_position_since_us_ = now.steady_us;
       local_position_ = m;
       local_position_steady_us_ = now.steady_us;
       update_frame_offset(now, out);
@@ -334,23 +339,24 @@ void Bridge::handle_frame(const Frame& f, const BridgeClock& now, BridgeOutput& 
           {m.severity <= mav_severity::kWarning, "autopilot: " + last_statustext_});
     } else if constexpr (std::is_same_v<M, SysStatus>) {
       battery_V_ = m.voltage_battery == UINT16_MAX ? -1.0 : m.voltage_battery / 1000.0;
-      // MAV_SYS_STATUS_PREARM_CHECK: both autopilots report their pre-arm checks in its health
-      // bit (ArduPilot: libraries/GCS_MAVLink/GCS.cpp, marked present; PX4:
-      // src/modules/mavlink/streams/SYS_STATUS.hpp, health only: it can arm in the mode).
+      // ArduPilot reports its pre-arm checks in MAV_SYS_STATUS_PREARM_CHECK
+      // (libraries/GCS_MAVLink/GCS.cpp); PX4 sets that bit only when it can arm in the mode it is
+      // in (src/modules/mavlink/streams/SYS_STATUS.hpp: not in Hold without a global position),
+      // so its heartbeat's STANDBY is read instead (on_heartbeat).
       constexpr uint32_t kPrearmCheck = 0x10000000;
-      if ((m.onboard_control_sensors_present & kPrearmCheck) || flavour_ == Flavour::kPx4) {
-        const bool ok = m.onboard_control_sensors_health & kPrearmCheck;
-        if (ok && !prearm_ok_) out.events.push_back({false, "autopilot: pre-arm checks pass"});
-        if (!ok && prearm_ok_) out.events.push_back({true, "autopilot: pre-arm checks fail"});
-        prearm_ok_ = ok;
-      }
+      if (flavour_ == Flavour::kArdupilot && (m.onboard_control_sensors_present & kPrearmCheck))
+        set_prearm(m.onboard_control_sensors_health & kPrearmCheck, out);
     }
   });
 }
 
 void Bridge::update_frame_offset(const BridgeClock& now, BridgeOutput& out) {
-  // Only at rest: the two positions are not sampled at the same instant.
-  if (!params_.align_frames || !local_position_ || !mocap_ ||
+  // Only at rest on the ground: the two positions are not sampled at the same instant, and in
+  // the air the motion's lag reads as an offset (it wandered by 5 cm in SITL).
+  const bool on_ground =
+      !heartbeat_ || !(heartbeat_->base_mode & mav_mode_flag::kSafetyArmed) ||
+      landed_state(now) == mav_landed_state::kOnGround;
+  if (!params_.align_frames || !local_position_ || !mocap_ || !on_ground ||
       now.steady_us - mocap_rx_steady_us_ > kFrameOffsetMocapAgeUs)
     return;
   const LocalPositionNed& lp = *local_position_;
@@ -371,6 +377,12 @@ void Bridge::update_frame_offset(const BridgeClock& now, BridgeOutput& out) {
     }
   }
   frame_offset_steady_us_ = now.steady_us;
+}
+
+void Bridge::set_prearm(bool ok, BridgeOutput& out) {
+  if (ok && !prearm_ok_) out.events.push_back({false, "autopilot: pre-arm checks pass"});
+  if (!ok && prearm_ok_) out.events.push_back({true, "autopilot: pre-arm checks fail"});
+  prearm_ok_ = ok;
 }
 
 void Bridge::on_imu(int64_t utime, const Vector3d& accel_FRD, const Vector3d& gyro_FRD,
@@ -429,6 +441,16 @@ void Bridge::on_heartbeat(const Frame& f, const Heartbeat& m, const BridgeClock&
   heartbeat_ = m;
   last_heartbeat_steady_ = now.steady_us;
   await_heartbeat_ = false;
+  // PX4 reports its pre-flight checks for the mode it is in (HEARTBEAT STANDBY,
+  // src/modules/mavlink/streams/HEARTBEAT.hpp; SYS_STATUS's PREARM_CHECK bit): without GPS they
+  // fail for want of a global position, which OFFBOARD does not need, and OFFBOARD itself cannot
+  // pass before the setpoints stream. Ready here means a local position from its estimator for
+  // kPx4ReadyUs, what OFFBOARD needs (commander/HealthAndArmingChecks/checks/offboardCheck.cpp).
+  if (flavour_ == Flavour::kPx4)
+    set_prearm(armed || (local_position_since_us_ &&
+                         now.steady_us - *local_position_since_us_ >= kPx4ReadyUs &&
+                         now.steady_us - local_position_steady_us_ < 1'000'000),
+               out);
   const bool in_fly = is_fly_mode(flavour_, control_, m.custom_mode);
   if (!link_up_) {
     link_up_ = true;
@@ -654,9 +676,8 @@ void Bridge::stream(const BridgeClock& now, BridgeOutput& out) {
     send(m, now, out);
   } else {
     const PositionTarget& t = *position_;
-    // In the autopilot's local frame, which need not be motion capture's: ArduPilot's EKF3 moves
-    // its height datum (AP_NavEKF3_PosVelFusion.cpp, resetHeightDatum) and reported 0.2 m more
-    // than the external navigation it fuses in SITL.
+    // In the autopilot's local frame, which need not be motion capture's: ArduCopter SITL's EKF3
+    // reported heights 0.2 m above the external navigation it fused, from before arming on.
     const Vector3d p = ned_from_enu(t.p_W) + frame_offset_NED_.value_or(Vector3d::Zero());
     const Vector3d v = ned_from_enu(t.v_W);
     SetPositionTargetLocalNed m;

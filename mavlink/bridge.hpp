@@ -50,8 +50,9 @@
 //    refused and counted. Without GPS the autopilot's local frame needs a geodetic origin: with
 //    set_ekf_origin the bridge sends SET_GPS_GLOBAL_ORIGIN until GPS_GLOBAL_ORIGIN comes back.
 //  - Frames: position setpoints go out in the autopilot's local frame, which need not be motion
-//    capture's (ArduPilot's EKF3 moves its height datum): with align_frames the bridge measures
-//    the offset (LOCAL_POSITION_NED minus motion capture, at rest) and adds it.
+//    capture's (ArduCopter SITL's EKF3 read 0.2 m above it): with align_frames the bridge
+//    measures the offset (LOCAL_POSITION_NED minus motion capture, at rest on the ground) and
+//    adds it.
 //  - Parameters: at link-up the bridge reads the autopilot parameters its behaviour relies on
 //    (autopilot_params.hpp) and reports each one that is missing or set otherwise.
 //
@@ -208,7 +209,9 @@ struct AutopilotStatus {
   bool origin_known = false;  ///< GPS_GLOBAL_ORIGIN received
   /// The autopilot's local frame minus motion capture's (NED) [m], when measured.
   std::optional<Vector3d> frame_offset_NED;
-  bool prearm_ok = false;     ///< SYS_STATUS: the autopilot's pre-arm checks pass
+  /// The autopilot could arm: ArduPilot's pre-arm checks pass (SYS_STATUS); PX4 has had a
+  /// local position for 2 s (its own checks are per mode, and fail without GPS).
+  bool prearm_ok = false;
   BridgeStats stats;
   ParserStats parser;
 };
@@ -249,6 +252,7 @@ class Bridge {
               BridgeOutput& out);
   void on_param(const ParamValue& m, BridgeOutput& out);
   void update_frame_offset(const BridgeClock& now, BridgeOutput& out);
+  void set_prearm(bool ok, BridgeOutput& out);
   std::optional<int64_t> wall_stamp(uint64_t autopilot_us, const BridgeClock& now);
   void reset_autopilot_state();
   void check_link(const BridgeClock& now, BridgeOutput& out);
@@ -299,6 +303,7 @@ class Bridge {
   int64_t attitude_utime_ = 0;
   std::optional<LocalPositionNed> local_position_;
   int64_t local_position_steady_us_ = 0;
+  std::optional<int64_t> local_position_since_us_;
   std::optional<ExtendedSysState> ext_state_;
   std::optional<Vector3d> frame_offset_NED_;  // autopilot's local position - motion capture's
   Vector3d reported_offset_NED_ = Vector3d::Zero();

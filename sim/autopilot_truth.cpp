@@ -62,7 +62,13 @@ AutopilotTruth::Output AutopilotTruth::update(std::span<const uint8_t> bytes, in
           sysid_ = f.sysid;
           out.events.push_back("autopilot system " + std::to_string(f.sysid) + " heard");
         }
-        armed_ = hb->base_mode & mav::mav_mode_flag::kSafetyArmed;
+        const bool armed = hb->base_mode & mav::mav_mode_flag::kSafetyArmed;
+        if (!heard_ || armed != armed_ || hb->custom_mode != custom_mode_)
+          out.events.push_back("autopilot " + mav::mode_name(params_.flavour, hb->custom_mode) +
+                               (armed ? ", armed" : ", disarmed"));
+        heard_ = true;
+        armed_ = armed;
+        custom_mode_ = hb->custom_mode;
       } else if (params_.flavour == mav::Flavour::kArdupilot && f.msgid == mav::SimState::kId) {
         const auto m = mav::decode<mav::SimState>(f);
         const auto q = mav::quat_from_wxyz_float({m->q1, m->q2, m->q3, m->q4});

@@ -73,6 +73,8 @@ class AutopilotTruth {
   bool has_sample() const { return last_.has_value(); }
   int64_t last_sample_utime() const { return last_ ? last_->utime : 0; }
   bool armed() const { return armed_; }
+  /// HEARTBEAT.custom_mode (its changes are reported as events: the failsafes' record).
+  uint32_t custom_mode() const { return custom_mode_; }
   uint64_t samples() const { return n_samples_; }
   uint64_t rejected() const { return n_rejected_; }
   const mavlink::ParserStats& parser_stats() const { return parser_.stats(); }
@@ -100,7 +102,8 @@ class AutopilotTruth {
   mavlink::Parser parser_;
   mavlink::Sender sender_;
   std::optional<uint8_t> sysid_;
-  bool armed_ = false;
+  bool armed_ = false, heard_ = false;
+  uint32_t custom_mode_ = 0;
   int64_t next_request_ = 0, next_heartbeat_ = 0;
   // The anchor: the first sample.
   std::optional<Raw> anchor_;

@@ -352,8 +352,8 @@ int main(int argc, char** argv) {
     // Started now, simulated time is the wall clock: the time spent building the scene and the
     // renderer is caught up at once (on the ground), so a frame's exposure stamp is the wall time
     // it was taken and the end-to-end latency alight-score measures from it is a latency, not
-    // the start-up delay.
-    const int64_t wall0 = start_now && rate == 1.0 ? sim0 : wall_utime();
+    // the start-up delay. Following a SITL it must be: the truth is stamped on the wall clock.
+    const int64_t wall0 = truth || (start_now && rate == 1.0) ? sim0 : wall_utime();
     int64_t next_truth = sim0;
     int64_t late_warned_at = wall0;
     while (!node.stopping() && simulator.now_utime() < end_utime) {

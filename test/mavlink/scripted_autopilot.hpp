@@ -42,9 +42,9 @@ struct ScriptedConfig {
   double atc_angle_boost = 0;
   double viso_type = 1;
   double mot_thst_hover = 0.39;
-  /// Its estimate's height minus the true one [m]: EKF3 moves its height datum at arming
-  /// (libraries/AP_NavEKF3/AP_NavEKF3_PosVelFusion.cpp, resetHeightDatum); in SITL with
-  /// external navigation LOCAL_POSITION_NED read 0.2 m above motion capture.
+  /// Its estimate's height minus the true one [m]: with external navigation ArduCopter SITL's
+  /// LOCAL_POSITION_NED read 0.2 m above motion capture (EKF3 keeps its own height datum,
+  /// libraries/AP_NavEKF3/AP_NavEKF3_PosVelFusion.cpp).
   double estimate_offset_up_m = 0.0;
   /// HIGHRES_IMU compiled in: boards with more than 1 MB of flash
   /// (libraries/GCS_MAVLink/GCS_config.h, AP_MAVLINK_MSG_HIGHRES_IMU_ENABLED).
