@@ -49,7 +49,7 @@ std::map<std::string, std::vector<fs::path>> shipped_files() {
                                                       {"mocap", "mocap"},
                                                       {"autopilot", "autopilot"}};
   for (const auto& [folder, kind] : folders) {
-    for (const auto& entry : fs::directory_iterator(kConfig / folder)) {
+    for (const auto& entry : fs::recursive_directory_iterator(kConfig / folder)) {
       if (entry.path().extension() != ".yaml") continue;
       if (kind == "camera" && YAML::LoadFile(entry.path().string())["camera_matrix"]) continue;
       out[kind].push_back(entry.path());
