@@ -63,11 +63,11 @@ std::string copter_name(uint32_t custom) {
   // ArduCopter/mode.h (Mode::Number) and each mode's name() (ArduCopter/mode.h); SMART_RTL and
   // AUTO_RTL are spelt with an underscore, as ground stations show them.
   static constexpr const char* kNames[] = {
-      "STABILIZE", "ACRO",    "ALT_HOLD",  "AUTO",         "GUIDED",     "LOITER",
-      "RTL",       "CIRCLE",  nullptr,     "LAND",         nullptr,      "DRIFT",
-      nullptr,     "SPORT",   "FLIP",      "AUTOTUNE",     "POSHOLD",    "BRAKE",
+      "STABILIZE", "ACRO",       "ALT_HOLD",     "AUTO",      "GUIDED",   "LOITER",
+      "RTL",       "CIRCLE",     nullptr,        "LAND",      nullptr,    "DRIFT",
+      nullptr,     "SPORT",      "FLIP",         "AUTOTUNE",  "POSHOLD",  "BRAKE",
       "THROW",     "AVOID_ADSB", "GUIDED_NOGPS", "SMART_RTL", "FLOWHOLD", "FOLLOW",
-      "ZIGZAG",    "SYSTEMID", "AUTOROTATE", "AUTO_RTL",    "TURTLE"};
+      "ZIGZAG",    "SYSTEMID",   "AUTOROTATE",   "AUTO_RTL",  "TURTLE"};
   if (custom < std::size(kNames) && kNames[custom]) return kNames[custom];
   return "MODE(" + std::to_string(custom) + ")";
 }
@@ -90,7 +90,8 @@ bool is_fly_mode(Flavour flavour, ControlMode control, uint32_t custom_mode) {
 }
 
 uint32_t land_custom_mode(Flavour flavour) {
-  if (flavour == Flavour::kPx4) return px4_mode::custom_mode(px4_mode::kAuto, px4_mode::auto_sub::kLand);
+  if (flavour == Flavour::kPx4)
+    return px4_mode::custom_mode(px4_mode::kAuto, px4_mode::auto_sub::kLand);
   return copter_mode::kLand;
 }
 

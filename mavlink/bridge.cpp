@@ -149,12 +149,11 @@ void Bridge::reset_autopilot_state() {
   origin_attempts_ = 0;
   next_origin_us_ = 0;
   intervals_to_ask_.clear();
-  const std::pair<uint32_t, double> asks[] = {
-      {HighresImu::kId, params_.imu_rate_hz},
-      {AttitudeQuaternion::kId, params_.attitude_rate_hz},
-      {LocalPositionNed::kId, params_.position_rate_hz},
-      {ExtendedSysState::kId, params_.landed_state_rate_hz},
-      {SysStatus::kId, params_.sys_status_rate_hz}};
+  const std::pair<uint32_t, double> asks[] = {{HighresImu::kId, params_.imu_rate_hz},
+                                              {AttitudeQuaternion::kId, params_.attitude_rate_hz},
+                                              {LocalPositionNed::kId, params_.position_rate_hz},
+                                              {ExtendedSysState::kId, params_.landed_state_rate_hz},
+                                              {SysStatus::kId, params_.sys_status_rate_hz}};
   for (const auto& a : asks)
     if (a.second > 0) intervals_to_ask_.push_back(a);
   params_to_read_.clear();
@@ -326,10 +325,10 @@ void Bridge::handle_frame(const Frame& f, const BridgeClock& now, BridgeOutput& 
       ext_state_steady_us_ = now.steady_us;
     } else if constexpr (std::is_same_v<M, GpsGlobalOrigin>) {
       if (!origin_known_)
-        out.events.push_back({false, "autopilot's local frame origin: " +
-                                         std::to_string(m.latitude * 1e-7) + ", " +
-                                         std::to_string(m.longitude * 1e-7) + ", " +
-                                         std::to_string(m.altitude * 1e-3) + " m"});
+        out.events.push_back(
+            {false, "autopilot's local frame origin: " + std::to_string(m.latitude * 1e-7) + ", " +
+                        std::to_string(m.longitude * 1e-7) + ", " +
+                        std::to_string(m.altitude * 1e-3) + " m"});
       origin_known_ = true;
     } else if constexpr (std::is_same_v<M, ParamValue>) {
       on_param(m, out);
@@ -353,9 +352,8 @@ void Bridge::handle_frame(const Frame& f, const BridgeClock& now, BridgeOutput& 
 void Bridge::update_frame_offset(const BridgeClock& now, BridgeOutput& out) {
   // Only at rest on the ground: the two positions are not sampled at the same instant, and in
   // the air the motion's lag reads as an offset (it wandered by 5 cm in SITL).
-  const bool on_ground =
-      !heartbeat_ || !(heartbeat_->base_mode & mav_mode_flag::kSafetyArmed) ||
-      landed_state(now) == mav_landed_state::kOnGround;
+  const bool on_ground = !heartbeat_ || !(heartbeat_->base_mode & mav_mode_flag::kSafetyArmed) ||
+                         landed_state(now) == mav_landed_state::kOnGround;
   if (!params_.align_frames || !local_position_ || !mocap_ || !on_ground ||
       now.steady_us - mocap_rx_steady_us_ > kFrameOffsetMocapAgeUs)
     return;
@@ -365,8 +363,9 @@ void Bridge::update_frame_offset(const BridgeClock& now, BridgeOutput& out) {
   if (!frame_offset_NED_) {
     frame_offset_NED_ = sample;
     reported_offset_NED_ = sample;
-    out.events.push_back({false, "the autopilot's local frame (NED) is motion capture's offset by " +
-                                     vector_text(sample) + " m: position setpoints carry it"});
+    out.events.push_back(
+        {false, "the autopilot's local frame (NED) is motion capture's offset by " +
+                    vector_text(sample) + " m: position setpoints carry it"});
   } else {
     const double dt = std::max(0.0, (now.steady_us - frame_offset_steady_us_) * 1e-6);
     *frame_offset_NED_ += std::min(1.0, dt / kFrameOffsetTauS) * (sample - *frame_offset_NED_);
@@ -464,7 +463,8 @@ void Bridge::on_heartbeat(const Frame& f, const Heartbeat& m, const BridgeClock&
       if (in_fly) {
         refuse_takeover_ = true;
         ++stats_.takeover_refused;
-        out.events.push_back({true, "found the vehicle armed in " + mode_name(flavour_, m.custom_mode) +
+        out.events.push_back({true, "found the vehicle armed in " +
+                                        mode_name(flavour_, m.custom_mode) +
                                         ": alight will not take it back; asking for LAND"});
       }
     }
@@ -479,11 +479,10 @@ void Bridge::on_heartbeat(const Frame& f, const Heartbeat& m, const BridgeClock&
   if (!armed && was_armed_) {
     disarmed_at_us_ = now.steady_us;
     if (flew_ || !ext_state_) need_motors_off_ = true;
-    out.events.push_back({false, std::string("disarmed") +
-                                     (need_motors_off_ ? ": no ARM before the stack's motors off"
-                                                       : "") +
-                                     " and " + std::to_string(params_.rearm_cooldown_s) +
-                                     " s of cool-down"});
+    out.events.push_back(
+        {false, std::string("disarmed") +
+                    (need_motors_off_ ? ": no ARM before the stack's motors off" : "") + " and " +
+                    std::to_string(params_.rearm_cooldown_s) + " s of cool-down"});
   }
   was_armed_ = armed;
   if (!armed) {
@@ -817,10 +816,10 @@ void Bridge::command_finished(bool ok, int result, const BridgeClock& now, Bridg
     }
     backoff_until_us_ = now.steady_us;
   }
-  out.events.push_back({!housekeeping, name + ": " +
-                                           (result < 0 ? std::string("no answer")
-                                                       : "refused, MAV_RESULT " +
-                                                             std::to_string(result))});
+  out.events.push_back(
+      {!housekeeping, name + ": " +
+                          (result < 0 ? std::string("no answer")
+                                      : "refused, MAV_RESULT " + std::to_string(result))});
 }
 
 void Bridge::service_pending(const BridgeClock& now, BridgeOutput& out) {
@@ -931,15 +930,16 @@ bool Bridge::decide_engage(const BridgeClock& now, BridgeOutput& out) {
       return true;
     }
     if (!fresh && engaged_stream_ && params_.silence_action == "land") {
-      request_land("the stack's setpoints stopped " + std::to_string(params_.setpoint_timeout_s) +
-                       " s ago",
-                   now, out);
+      request_land(
+          "the stack's setpoints stopped " + std::to_string(params_.setpoint_timeout_s) + " s ago",
+          now, out);
       return true;
     }
     if (off_in_air_since_us_ && now.steady_us - *off_in_air_since_us_ >= kInAirDisarmWaitUs) {
-      request_land("the stack said motors off but the autopilot still reports the vehicle in "
-                   "the air",
-                   now, out);
+      request_land(
+          "the stack said motors off but the autopilot still reports the vehicle in "
+          "the air",
+          now, out);
       return true;
     }
   }

@@ -144,15 +144,15 @@ struct BridgeOutput {
 
 /// What the bridge asks of the autopilot, or that it has stopped asking.
 enum class EngageState {
-  kNoLink,     ///< no autopilot heard
-  kIdle,       ///< the stack does not want the motors on
-  kStreaming,  ///< streaming, not yet long enough to ask for the offboard mode
-  kModeWait,   ///< asking for the offboard mode
-  kArmWait,    ///< in the offboard mode, asking to arm
-  kFlying,     ///< armed in the offboard mode
-  kTakeoff,    ///< ArduPilot GUIDED: armed on the ground, NAV_TAKEOFF asked, setpoints held
-  kOverride,   ///< armed, but the autopilot left the offboard mode: hands off until disarmed
-  kOperator,   ///< engage: operator; the pilot decides mode and arming
+  kNoLink,      ///< no autopilot heard
+  kIdle,        ///< the stack does not want the motors on
+  kStreaming,   ///< streaming, not yet long enough to ask for the offboard mode
+  kModeWait,    ///< asking for the offboard mode
+  kArmWait,     ///< in the offboard mode, asking to arm
+  kFlying,      ///< armed in the offboard mode
+  kTakeoff,     ///< ArduPilot GUIDED: armed on the ground, NAV_TAKEOFF asked, setpoints held
+  kOverride,    ///< armed, but the autopilot left the offboard mode: hands off until disarmed
+  kOperator,    ///< engage: operator; the pilot decides mode and arming
   kNoTakeover,  ///< found armed in the offboard mode at link-up: no setpoints, LAND asked
   kLanding,     ///< the bridge asked for LAND (stack silent, or motors off in the air)
   kCooldown,    ///< disarmed after a flight: waiting for the cool-down and the stack's motors off
@@ -174,11 +174,11 @@ struct BridgeStats {
   uint64_t commands_failed = 0;  ///< refused, or never answered
   uint64_t acks_unexpected = 0;  ///< COMMAND_ACK for nothing pending
   uint64_t frames_sent = 0;
-  uint64_t lands_requested = 0;     ///< DO_SET_MODE LAND sent (first attempts)
-  uint64_t kills_refused = 0;       ///< KILLs without a valid authority, flown as motors-off
-  uint64_t takeover_refused = 0;    ///< link-ups that found the vehicle armed in the offboard mode
-  uint64_t origin_sent = 0;         ///< SET_GPS_GLOBAL_ORIGIN frames
-  uint64_t param_problems = 0;      ///< autopilot parameters missing or set otherwise
+  uint64_t lands_requested = 0;   ///< DO_SET_MODE LAND sent (first attempts)
+  uint64_t kills_refused = 0;     ///< KILLs without a valid authority, flown as motors-off
+  uint64_t takeover_refused = 0;  ///< link-ups that found the vehicle armed in the offboard mode
+  uint64_t origin_sent = 0;       ///< SET_GPS_GLOBAL_ORIGIN frames
+  uint64_t param_problems = 0;    ///< autopilot parameters missing or set otherwise
 };
 
 /// AUTOPILOT_STATUS's content.
@@ -205,7 +205,7 @@ struct AutopilotStatus {
   /// MAV_LANDED_STATE from EXTENDED_SYS_STATE (ArduPilot without it: from the heartbeat); 0
   /// (undefined): not known.
   uint8_t landed_state = 0;
-  std::string imu_source;  ///< "HIGHRES_IMU", "SCALED_IMU" or "" (none yet)
+  std::string imu_source;     ///< "HIGHRES_IMU", "SCALED_IMU" or "" (none yet)
   bool origin_known = false;  ///< GPS_GLOBAL_ORIGIN received
   /// The autopilot's local frame minus motion capture's (NED) [m], when measured.
   std::optional<Vector3d> frame_offset_NED;
@@ -333,7 +333,7 @@ class Bridge {
   bool await_heartbeat_ = false;
   int64_t settle_until_us_ = 0;
   std::vector<std::pair<uint32_t, double>> intervals_to_ask_;  // message id, rate
-  std::optional<int64_t> highres_accepted_us_;  // HIGHRES_IMU's interval accepted at
+  std::optional<int64_t> highres_accepted_us_;                 // HIGHRES_IMU's interval accepted at
   bool scaled_imu_asked_ = false;
   std::vector<ParamRead> params_to_read_;
   int64_t next_origin_us_ = 0;
@@ -343,14 +343,14 @@ class Bridge {
   bool was_armed_ = false;
   bool was_armed_in_fly_mode_ = false;
   bool override_ = false;
-  bool refuse_takeover_ = false;    // found armed in the fly mode at link-up
-  bool landing_asked_ = false;      // LAND accepted; until the vehicle leaves the fly mode
-  bool flew_ = false;               // in the air since arming (or not known not to be)
-  bool need_motors_off_ = false;    // after a flight's disarm: until the stack says motors off
+  bool refuse_takeover_ = false;  // found armed in the fly mode at link-up
+  bool landing_asked_ = false;    // LAND accepted; until the vehicle leaves the fly mode
+  bool flew_ = false;             // in the air since arming (or not known not to be)
+  bool need_motors_off_ = false;  // after a flight's disarm: until the stack says motors off
   std::optional<int64_t> disarmed_at_us_;
-  bool engaged_stream_ = false;     // streamed fresh setpoints to the armed vehicle in fly mode
+  bool engaged_stream_ = false;  // streamed fresh setpoints to the armed vehicle in fly mode
   std::optional<int64_t> off_in_air_since_us_;  // stack's motors-off while the vehicle flies
-  bool takeoff_accepted_ = false;   // ArduPilot GUIDED: NAV_TAKEOFF accepted, not yet in the air
+  bool takeoff_accepted_ = false;  // ArduPilot GUIDED: NAV_TAKEOFF accepted, not yet in the air
   int64_t takeoff_accepted_us_ = 0;
   double takeoff_start_up_m_ = 0;
   double takeoff_alt_m_ = 0;

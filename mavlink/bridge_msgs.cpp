@@ -78,8 +78,8 @@ std::optional<std::string> setpoint_stamp_problem(int64_t utime, int64_t referen
   return std::nullopt;
 }
 
-bool kill_authorised(KillVerifier* verifier, const operator_cmd_t& authority,
-                     int64_t now_wall_us, std::string* why) {
+bool kill_authorised(KillVerifier* verifier, const operator_cmd_t& authority, int64_t now_wall_us,
+                     std::string* why) {
   if (authority.command == operator_cmd_t::CMD_NONE &&
       authority.auth == operator_cmd_t::AUTH_NONE) {
     if (why) *why = "no kill authority attached";

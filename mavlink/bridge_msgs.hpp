@@ -30,8 +30,8 @@ std::optional<std::string> setpoint_stamp_problem(int64_t utime, int64_t referen
 /// CMD_KILL, verified with the vehicle's operator key at `now_wall_us` (the command was stamped
 /// by the ground station's clock). False, and *why, for an empty authority, no verifier (no
 /// operator key configured) or one the verifier refuses: a plain motors-off then.
-bool kill_authorised(KillVerifier* verifier, const operator_cmd_t& authority,
-                     int64_t now_wall_us, std::string* why);
+bool kill_authorised(KillVerifier* verifier, const operator_cmd_t& authority, int64_t now_wall_us,
+                     std::string* why);
 imu_t to_msg(const ImuOut& imu, int64_t seq);
 /// `reopens`: how often the node reopened its device or socket.
 autopilot_status_t to_msg(const AutopilotStatus& s, int64_t wall_utime, int64_t reopens);

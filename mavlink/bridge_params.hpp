@@ -46,12 +46,12 @@ struct BridgeParams {
       "att_pos_mocap";          ///< MOCAP_POSE as "att_pos_mocap", "odometry", "none"
   double mocap_rate_hz = 50.0;  ///< at most this many poses forwarded [Hz]
 
-  double imu_rate_hz = 200.0;       ///< HIGHRES_IMU asked of the autopilot (0: leave it) [Hz]
-  double attitude_rate_hz = 100.0;  ///< ATTITUDE_QUATERNION asked (0: leave it) [Hz]
-  double position_rate_hz = 30.0;   ///< LOCAL_POSITION_NED asked (0: leave it) [Hz]
+  double imu_rate_hz = 200.0;         ///< HIGHRES_IMU asked of the autopilot (0: leave it) [Hz]
+  double attitude_rate_hz = 100.0;    ///< ATTITUDE_QUATERNION asked (0: leave it) [Hz]
+  double position_rate_hz = 30.0;     ///< LOCAL_POSITION_NED asked (0: leave it) [Hz]
   double landed_state_rate_hz = 4.0;  ///< EXTENDED_SYS_STATE asked (0: leave it) [Hz]
   double sys_status_rate_hz = 2.0;    ///< SYS_STATUS asked (0: leave it) [Hz]
-  double status_rate_hz = 5.0;      ///< AUTOPILOT_STATUS published [Hz]
+  double status_rate_hz = 5.0;        ///< AUTOPILOT_STATUS published [Hz]
 
   /// Without GPS: SET_GPS_GLOBAL_ORIGIN (latitude [deg], longitude [deg], altitude [m above mean
   /// sea level]) until the autopilot reports an origin.
@@ -60,7 +60,7 @@ struct BridgeParams {
   /// MAVLink 2 signing on the link (empty: none): 64 hex digits, or a passphrase whose SHA-256
   /// is the key (as Mission Planner and QGroundControl derive it).
   std::string signing_key_file;
-  int signing_link_id = 1;  ///< our link id in signed frames
+  int signing_link_id = 1;   ///< our link id in signed frames
   bool check_params = true;  ///< read and report the autopilot parameters alight relies on
   /// Position control: measure the autopilot's local frame against motion capture and send
   /// setpoints in it.

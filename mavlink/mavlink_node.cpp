@@ -25,9 +25,6 @@
 // stack must not need a restart because a cable was reseated. Bad configuration: exit 2.
 
 #include <poll.h>
-
-#include <chrono>
-#include <thread>
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
@@ -35,14 +32,16 @@
 #include <alight/pose_t.hpp>
 #include <alight/position_setpoint_t.hpp>
 #include <array>
+#include <chrono>
 #include <fstream>
 #include <sstream>
+#include <thread>
 
 #include "autonomy/params.hpp"
 #include "common/channels.hpp"
-#include "common/operator_auth.hpp"
 #include "common/msg_convert.hpp"
 #include "common/node.hpp"
+#include "common/operator_auth.hpp"
 #include "mavlink/bridge.hpp"
 #include "mavlink/bridge_msgs.hpp"
 #include "mavlink/link_io.hpp"
@@ -174,8 +173,9 @@ int main(int argc, char** argv) {
           if (!target) {
             target = f.sysid;
             if (hb->base_mode & mav::mav_mode_flag::kSafetyArmed) {
-              spdlog::error("alight-mavlink: the autopilot is armed; both autopilots refuse "
-                            "SETUP_SIGNING while armed");
+              spdlog::error(
+                  "alight-mavlink: the autopilot is armed; both autopilots refuse "
+                  "SETUP_SIGNING while armed");
               return 1;
             }
           }
@@ -210,16 +210,17 @@ int main(int argc, char** argv) {
     const auto kill_authorised = [&](const operator_cmd_t& authority, const char* channel,
                                      bool is_kill) {
       std::string why;
-      if (mav::kill_authorised(kill_verifier ? &*kill_verifier : nullptr, authority,
-                               wall_utime(), &why))
+      if (mav::kill_authorised(kill_verifier ? &*kill_verifier : nullptr, authority, wall_utime(),
+                               &why))
         return true;
       const bool empty = authority.command == operator_cmd_t::CMD_NONE &&
                          authority.auth == operator_cmd_t::AUTH_NONE;
       if (!is_kill && empty) return false;  // the outer loop's motors-off on the ground
       if (why != last_refusal || ++refusals % 500 == 0)
-        spdlog::warn("alight-mavlink: {}: KILL without the operator's authority ({}): a plain "
-                     "motors-off",
-                     channel, why);
+        spdlog::warn(
+            "alight-mavlink: {}: KILL without the operator's authority ({}): a plain "
+            "motors-off",
+            channel, why);
       last_refusal = why;
       return false;
     };

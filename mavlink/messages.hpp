@@ -494,10 +494,10 @@ struct ScaledImu {
   static constexpr std::string_view kName = "SCALED_IMU";
   static constexpr uint8_t kCrcExtra = 170, kBaseLength = 22, kMaxLength = 24;
 
-  uint32_t time_boot_ms = 0;              ///< [ms]
-  int16_t xacc = 0, yacc = 0, zacc = 0;   ///< [mG]
+  uint32_t time_boot_ms = 0;                ///< [ms]
+  int16_t xacc = 0, yacc = 0, zacc = 0;     ///< [mG]
   int16_t xgyro = 0, ygyro = 0, zgyro = 0;  ///< [mrad/s]
-  int16_t xmag = 0, ymag = 0, zmag = 0;   ///< [mgauss]
+  int16_t xmag = 0, ymag = 0, zmag = 0;     ///< [mgauss]
   // extensions
   int16_t temperature = 0;  ///< [cdegC], 0: not provided
 
@@ -622,14 +622,14 @@ struct HilStateQuaternion {
   static constexpr std::string_view kName = "HIL_STATE_QUATERNION";
   static constexpr uint8_t kCrcExtra = 4, kBaseLength = 64, kMaxLength = 64;
 
-  uint64_t time_usec = 0;                                 ///< [us] (PX4 leaves it 0)
+  uint64_t time_usec = 0;                                ///< [us] (PX4 leaves it 0)
   std::array<float, 4> attitude_quaternion{1, 0, 0, 0};  ///< w, x, y, z: FRD body in NED
-  float rollspeed = 0, pitchspeed = 0, yawspeed = 0;      ///< [rad/s] FRD body
-  int32_t lat = 0, lon = 0;                               ///< [degE7]
-  int32_t alt = 0;                                        ///< [mm]
-  int16_t vx = 0, vy = 0, vz = 0;                         ///< [cm/s] north, east, down
-  uint16_t ind_airspeed = 0, true_airspeed = 0;           ///< [cm/s]
-  int16_t xacc = 0, yacc = 0, zacc = 0;                   ///< [mG]
+  float rollspeed = 0, pitchspeed = 0, yawspeed = 0;     ///< [rad/s] FRD body
+  int32_t lat = 0, lon = 0;                              ///< [degE7]
+  int32_t alt = 0;                                       ///< [mm]
+  int16_t vx = 0, vy = 0, vz = 0;                        ///< [cm/s] north, east, down
+  uint16_t ind_airspeed = 0, true_airspeed = 0;          ///< [cm/s]
+  int16_t xacc = 0, yacc = 0, zacc = 0;                  ///< [mG]
 
   template <class S, class V>
   static constexpr void fields(S& m, V& v) {

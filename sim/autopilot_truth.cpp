@@ -86,8 +86,7 @@ AutopilotTruth::Output AutopilotTruth::update(std::span<const uint8_t> bytes, in
         r.q_NED_FRD = *q;
         r.omega_FRD = Vector3d(m->xgyro, m->ygyro, m->zgyro);
         on_sample(r, now, out);
-      } else if (params_.flavour == mav::Flavour::kPx4 &&
-                 f.msgid == mav::HilStateQuaternion::kId) {
+      } else if (params_.flavour == mav::Flavour::kPx4 && f.msgid == mav::HilStateQuaternion::kId) {
         const auto m = mav::decode<mav::HilStateQuaternion>(f);
         const auto q = mav::quat_from_wxyz_float(m->attitude_quaternion);
         if (!q || !std::isfinite(m->rollspeed) || !std::isfinite(m->pitchspeed) ||
@@ -136,8 +135,7 @@ void AutopilotTruth::on_sample(const Raw& r, int64_t now, Output& out) {
     anchor_ = r;
     // The heading at the anchor becomes the start yaw: world = Rz(start - heading) * ENU.
     const double heading_enu = yaw_of(mav::q_enu_flu_from_ned_frd(r.q_NED_FRD).toRotationMatrix());
-    R_W_ENU_ = Eigen::AngleAxisd(wrap_angle(params_.start_yaw_rad - heading_enu),
-                                 Vector3d::UnitZ())
+    R_W_ENU_ = Eigen::AngleAxisd(wrap_angle(params_.start_yaw_rad - heading_enu), Vector3d::UnitZ())
                    .toRotationMatrix();
     p_NED_.setZero();
     v_prev_NED_ = r.v_NED;

@@ -59,7 +59,7 @@ class AutopilotTruth {
   explicit AutopilotTruth(const AutopilotTruthParams& params);
 
   struct Output {
-    std::vector<uint8_t> bytes;       ///< to the autopilot
+    std::vector<uint8_t> bytes;        ///< to the autopilot
     std::vector<TruthSample> samples;  ///< new samples, in order
     std::vector<std::string> events;
   };

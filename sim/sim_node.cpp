@@ -217,9 +217,10 @@ int main(int argc, char** argv) {
                             simulator.dynamics().resting_height(ground_z));
       tp.start_yaw_rad = scenario.start_yaw_deg * M_PI / 180.0;
       truth.emplace(tp);
-      spdlog::info("alight-sim: the vehicle is {}'s SITL, its true state on {}; its ground at "
-                   "z = {:.3f} m",
-                   truth_from, address->text(), ground_z);
+      spdlog::info(
+          "alight-sim: the vehicle is {}'s SITL, its true state on {}; its ground at "
+          "z = {:.3f} m",
+          truth_from, address->text(), ground_z);
     }
     std::vector<uint8_t> truth_rx(65536);
     int64_t truth_next_open = 0;
@@ -374,8 +375,7 @@ int main(int argc, char** argv) {
       const int64_t chunk_end = std::min(end_utime, simulator.now_utime() + kChunkUs);
       if (truth) {
         serve_truth();
-        simulator.follow([&](int64_t t) { return truth->advance(t); }, chunk_end,
-                         contact_margin_m);
+        simulator.follow([&](int64_t t) { return truth->advance(t); }, chunk_end, contact_margin_m);
         // A vehicle whose truth stopped is not seen: nothing is published for it.
         if (!truth->has_sample() || simulator.now_utime() - truth->last_sample_utime() > 500'000) {
           simulator.take_mocap();

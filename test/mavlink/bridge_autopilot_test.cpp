@@ -311,7 +311,8 @@ TEST(BridgeAutopilotTest, Px4FusesMotionCaptureOnlyAsVisionOdometry) {
 
 // --- Defect 4: failsafes ---------------------------------------------------------------------
 
-TEST(BridgeAutopilotTest, ArduCopterHoldsAPositionTargetForeverWhenAlightStopsUnlessTheBridgeLands) {
+TEST(BridgeAutopilotTest,
+     ArduCopterHoldsAPositionTargetForeverWhenAlightStopsUnlessTheBridgeLands) {
   for (const std::string action : {"autopilot", "land"}) {
     SCOPED_TRACE(action);
     BridgeParams p = ardupilot_params("position");
@@ -519,13 +520,13 @@ TEST(BridgeAutopilotTest, ReportsTheAutopilotParametersSetOtherwise) {
 TEST(AutopilotModesTest, EveryArduCopterModeHasItsName) {
   // ArduCopter/mode.h, Mode::Number.
   const std::pair<uint32_t, const char*> modes[] = {
-      {0, "STABILIZE"},  {1, "ACRO"},       {2, "ALT_HOLD"},    {3, "AUTO"},
-      {4, "GUIDED"},     {5, "LOITER"},     {6, "RTL"},         {7, "CIRCLE"},
-      {9, "LAND"},       {11, "DRIFT"},     {13, "SPORT"},      {14, "FLIP"},
-      {15, "AUTOTUNE"},  {16, "POSHOLD"},   {17, "BRAKE"},      {18, "THROW"},
+      {0, "STABILIZE"},   {1, "ACRO"},          {2, "ALT_HOLD"},   {3, "AUTO"},
+      {4, "GUIDED"},      {5, "LOITER"},        {6, "RTL"},        {7, "CIRCLE"},
+      {9, "LAND"},        {11, "DRIFT"},        {13, "SPORT"},     {14, "FLIP"},
+      {15, "AUTOTUNE"},   {16, "POSHOLD"},      {17, "BRAKE"},     {18, "THROW"},
       {19, "AVOID_ADSB"}, {20, "GUIDED_NOGPS"}, {21, "SMART_RTL"}, {22, "FLOWHOLD"},
-      {23, "FOLLOW"},    {24, "ZIGZAG"},    {25, "SYSTEMID"},   {26, "AUTOROTATE"},
-      {27, "AUTO_RTL"},  {28, "TURTLE"}};
+      {23, "FOLLOW"},     {24, "ZIGZAG"},       {25, "SYSTEMID"},  {26, "AUTOROTATE"},
+      {27, "AUTO_RTL"},   {28, "TURTLE"}};
   for (const auto& [n, name] : modes) EXPECT_EQ(mode_name(Flavour::kArdupilot, n), name) << n;
   EXPECT_EQ(mode_name(Flavour::kArdupilot, 8), "MODE(8)");
   EXPECT_EQ(mode_name(Flavour::kArdupilot, 30), "MODE(30)");

@@ -322,8 +322,7 @@ TEST(MavlinkNodeTest, SetupSigningGivesTheAutopilotTheKeyAndEndsOnceItSigns) {
         Heartbeat hb;
         hb.type = mav_type::kQuadrotor;
         hb.autopilot = mav_autopilot::kPx4;
-        const FrameBytes b =
-            setup ? signer.pack(hb, 1'800'000'000'000'000) : plain.pack(hb, 0);
+        const FrameBytes b = setup ? signer.pack(hb, 1'800'000'000'000'000) : plain.pack(hb, 0);
         (void)!::write(pty->master, b.data.data(), b.size);
       },
       [&] { return !node.running(); });

@@ -99,11 +99,11 @@ uint8_t ScriptedAutopilot::landed_state() const {
 
 double ScriptedAutopilot::param(const std::string& name, bool* found) const {
   const std::map<std::string, double> ap = {
-      {"GUID_OPTIONS", c_.guid_options},     {"GUID_TIMEOUT", c_.guid_timeout_s},
-      {"DISARM_DELAY", c_.disarm_delay_s},   {"FS_GCS_ENABLE", c_.fs_gcs_enable},
+      {"GUID_OPTIONS", c_.guid_options},       {"GUID_TIMEOUT", c_.guid_timeout_s},
+      {"DISARM_DELAY", c_.disarm_delay_s},     {"FS_GCS_ENABLE", c_.fs_gcs_enable},
       {"FS_GCS_TIMEOUT", c_.fs_gcs_timeout_s}, {"MAV_GCS_SYSID", c_.mav_gcs_sysid},
       {"ATC_ANGLE_BOOST", c_.atc_angle_boost}, {"VISO_TYPE", c_.viso_type},
-      {"MOT_THST_HOVER", c_.mot_thst_hover}, {"GPS1_TYPE", 0}};
+      {"MOT_THST_HOVER", c_.mot_thst_hover},   {"GPS1_TYPE", 0}};
   const std::map<std::string, double> px4 = {{"COM_OF_LOSS_T", c_.com_of_loss_t},
                                              {"COM_OBL_RC_ACT", c_.com_obl_rc_act},
                                              {"COM_DISARM_LAND", c_.com_disarm_land_s},
@@ -139,8 +139,8 @@ void ScriptedAutopilot::start_flying(uint32_t custom_mode, double height_m, int6
   auto_armed_ = true;
   took_off_ = true;
   z_ = target_z_ = height_m;
-  sub_ = c_.flavour == Flavour::kArdupilot && mode_ == copter_mode::kGuided ? Sub::kPos
-                                                                            : Sub::kAngle;
+  sub_ =
+      c_.flavour == Flavour::kArdupilot && mode_ == copter_mode::kGuided ? Sub::kPos : Sub::kAngle;
   angle_update_ = now_us;
   offboard_signal_ = now_us;
   origin_set_ = true;
@@ -161,8 +161,8 @@ void ScriptedAutopilot::on_frame(const Frame& f) {
       if (m.target_system == c_.sysid) on_command(m, f);
     } else if constexpr (std::is_same_v<M, SetAttitudeTarget>) {
       using namespace attitude_target_typemask;
-      const bool roll = m.type_mask & kBodyRollRateIgnore, pitch = m.type_mask & kBodyPitchRateIgnore,
-                 yaw = m.type_mask & kBodyYawRateIgnore;
+      const bool roll = m.type_mask & kBodyRollRateIgnore,
+                 pitch = m.type_mask & kBodyPitchRateIgnore, yaw = m.type_mask & kBodyYawRateIgnore;
       const bool att_ignored = m.type_mask & kAttitudeIgnore;
       if (c_.flavour == Flavour::kArdupilot) {
         // ArduCopter/GCS_MAVLink_Copter.cpp, handle_message_set_attitude_target: guided modes
@@ -170,14 +170,14 @@ void ScriptedAutopilot::on_frame(const Frame& f) {
         if (!guided()) return void(++attitude_ignored);
         if (m.type_mask & kThrottleIgnore) return void(++attitude_dropped);
         if (!(roll && pitch && yaw) && (roll || pitch || yaw)) return void(++attitude_dropped);
-        const double n = std::sqrt(m.q[0] * m.q[0] + m.q[1] * m.q[1] + m.q[2] * m.q[2] +
-                                   m.q[3] * m.q[3]);
+        const double n =
+            std::sqrt(m.q[0] * m.q[0] + m.q[1] * m.q[1] + m.q[2] * m.q[2] + m.q[3] * m.q[3]);
         if (!att_ignored && std::abs(n - 1) > 1e-3) return void(++attitude_dropped);
         // ArduCopter/mode_guided.cpp: GUID_OPTIONS bit 3, thrust as thrust; else a climb rate
         // (0.5 holds) up to WPNAV_SPEED_UP 2.5 / WPNAV_SPEED_DN 1.5 m/s.
         use_thrust_ = (static_cast<long>(c_.guid_options) >> 3) & 1;
-        thrust_ = use_thrust_ ? std::clamp<double>(m.thrust, -1, 1)
-                              : std::clamp<double>(m.thrust, 0, 1);
+        thrust_ =
+            use_thrust_ ? std::clamp<double>(m.thrust, -1, 1) : std::clamp<double>(m.thrust, 0, 1);
         angle_update_ = now_;
         sub_ = Sub::kAngle;
         ++attitude_used;
@@ -195,9 +195,9 @@ void ScriptedAutopilot::on_frame(const Frame& f) {
         ++attitude_used;
       }
     } else if constexpr (std::is_same_v<M, SetPositionTargetLocalNed>) {
-      const bool pos_given = !(m.type_mask & (position_target_typemask::kXIgnore |
-                                              position_target_typemask::kYIgnore |
-                                              position_target_typemask::kZIgnore));
+      const bool pos_given =
+          !(m.type_mask & (position_target_typemask::kXIgnore | position_target_typemask::kYIgnore |
+                           position_target_typemask::kZIgnore));
       if (c_.flavour == Flavour::kArdupilot) {
         // ArduCopter/GCS_MAVLink_Copter.cpp, handle_message_set_position_target_local_ned: guided
         // modes only, no armed or landed check; a position target switches the submode
@@ -268,10 +268,10 @@ void ScriptedAutopilot::on_command(const CommandLong& c, const Frame& f) {
   uint8_t result = mav_result::kUnsupported;
   switch (c.command) {
     case mav_cmd::kDoSetMode: {
-      const uint32_t mode =
-          c_.flavour == Flavour::kArdupilot
-              ? static_cast<uint32_t>(c.param2)
-              : px4_mode::custom_mode(static_cast<uint8_t>(c.param2), static_cast<uint8_t>(c.param3));
+      const uint32_t mode = c_.flavour == Flavour::kArdupilot
+                                ? static_cast<uint32_t>(c.param2)
+                                : px4_mode::custom_mode(static_cast<uint8_t>(c.param2),
+                                                        static_cast<uint8_t>(c.param3));
       result = set_mode(mode);
       break;
     }
@@ -281,8 +281,8 @@ void ScriptedAutopilot::on_command(const CommandLong& c, const Frame& f) {
     case mav_cmd::kNavTakeoff:
       // ArduCopter/GCS_MAVLink_Copter.cpp handle_MAV_CMD_NAV_TAKEOFF, Mode::do_user_takeoff
       // (ArduCopter/takeoff.cpp): armed, landed, a mode with a user take-off, above the vehicle.
-      if (c_.flavour == Flavour::kArdupilot && mode_ == copter_mode::kGuided && armed_ &&
-          landed_ && c.param7 > z_) {
+      if (c_.flavour == Flavour::kArdupilot && mode_ == copter_mode::kGuided && armed_ && landed_ &&
+          c.param7 > z_) {
         sub_ = Sub::kTakeoff;
         target_z_ = c.param7;
         auto_armed_ = true;

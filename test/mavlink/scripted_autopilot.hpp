@@ -77,16 +77,16 @@ class ScriptedAutopilot {
   bool on_ground() const { return landed_; }
   bool origin_set() const { return origin_set_; }
 
-  int arms = 0;               ///< accepted ARMs
-  int forced_disarms = 0;     ///< accepted forced DISARMs
-  int refused_disarms = 0;    ///< plain DISARMs refused in the air
-  int attitude_used = 0;      ///< SET_ATTITUDE_TARGET taken as a target
-  int attitude_ignored = 0;   ///< ... outside the modes that take it
-  int attitude_dropped = 0;   ///< ... refused for its content (type_mask, quaternion)
-  int position_used = 0;      ///< SET_POSITION_TARGET_LOCAL_NED stored as a target
-  int takeoffs = 0;           ///< NAV_TAKEOFF accepted
-  int fs_gcs_triggers = 0;    ///< ArduCopter's GCS failsafe fired
-  int offboard_losses = 0;    ///< PX4's offboard-loss failsafe fired
+  int arms = 0;                     ///< accepted ARMs
+  int forced_disarms = 0;           ///< accepted forced DISARMs
+  int refused_disarms = 0;          ///< plain DISARMs refused in the air
+  int attitude_used = 0;            ///< SET_ATTITUDE_TARGET taken as a target
+  int attitude_ignored = 0;         ///< ... outside the modes that take it
+  int attitude_dropped = 0;         ///< ... refused for its content (type_mask, quaternion)
+  int position_used = 0;            ///< SET_POSITION_TARGET_LOCAL_NED stored as a target
+  int takeoffs = 0;                 ///< NAV_TAKEOFF accepted
+  int fs_gcs_triggers = 0;          ///< ArduCopter's GCS failsafe fired
+  int offboard_losses = 0;          ///< PX4's offboard-loss failsafe fired
   std::vector<std::string> events;  ///< what it did, with the time
 
  private:
@@ -118,7 +118,7 @@ class ScriptedAutopilot {
   uint32_t mode_;
   bool armed_ = false;
   double z_ = 0, vz_ = 0;
-  bool landed_ = true;      // ArduCopter land_complete / PX4 landed
+  bool landed_ = true;       // ArduCopter land_complete / PX4 landed
   bool auto_armed_ = false;  // ArduCopter ap.auto_armed
   double land_timer_s_ = 0, disarm_timer_s_ = 0, spool_s_ = 0;
   bool took_off_ = false;  // PX4 _have_taken_off_since_arming

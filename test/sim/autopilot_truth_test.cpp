@@ -69,16 +69,17 @@ AutopilotTruthParams params() {
 TEST(AutopilotTruthTest, NorthAndEastOffsetsAreTheAutopilotsOwn) {
   // ArduPilot: 0.011131884502145034 m per 1e-7 deg of latitude (libraries/AP_Common/
   // Location.h), longitude scaled by the cosine of the mean latitude.
-  const Vector2d ne = AutopilotTruth::north_east_m(mav::Flavour::kArdupilot, kLat + 100, kLon + 100,
-                                                    kLat, kLon);
+  const Vector2d ne =
+      AutopilotTruth::north_east_m(mav::Flavour::kArdupilot, kLat + 100, kLon + 100, kLat, kLon);
   EXPECT_NEAR(ne.x(), 1.1131884502145034, 1e-9);
   EXPECT_NEAR(ne.y(), 1.1131884502145034 * std::cos((kLat + 50) * 1e-7 * M_PI / 180), 1e-7);
   // PX4: a sphere of 6371 km about the reference (src/lib/geo).
   const Vector2d px = AutopilotTruth::north_east_m(mav::Flavour::kPx4, 473977420 + 100, 85455940,
-                                                    473977420, 85455940);
+                                                   473977420, 85455940);
   EXPECT_NEAR(px.x(), 6371000.0 * 1e-5 * M_PI / 180, 1e-9);
   // Across the date line.
-  const Vector2d w = AutopilotTruth::north_east_m(mav::Flavour::kPx4, 0, -1799999990, 0, 1799999990);
+  const Vector2d w =
+      AutopilotTruth::north_east_m(mav::Flavour::kPx4, 0, -1799999990, 0, 1799999990);
   EXPECT_NEAR(w.y(), 20 * 6371000.0 * 1e-7 * M_PI / 180, 1e-6);
 }
 
@@ -122,7 +123,7 @@ TEST(AutopilotTruthTest, AQuantisedPositionIsSmoothedByTheVelocity) {
     if (i > 50) max_error = std::max(max_error, std::abs(p.x() - params().start_W.x() - east));
     prev = p;
   }
-  EXPECT_LT(max_step, 0.0025);   // 2 mm per 10 ms: the speed's, never a 1.1 cm quantum
+  EXPECT_LT(max_step, 0.0025);  // 2 mm per 10 ms: the speed's, never a 1.1 cm quantum
   EXPECT_LT(max_error, 0.006);  // within the quantum of the truth
 }
 
