@@ -929,9 +929,12 @@ bool Bridge::decide_engage(const BridgeClock& now, BridgeOutput& out) {
                    now, out);
       return true;
     }
-    if (!fresh && engaged_stream_ && params_.silence_action == "land") {
+    const int64_t rx = control_ == ControlMode::kAttitude ? attitude_rx_steady_us_
+                                                          : position_rx_steady_us_;
+    if (!fresh && engaged_stream_ && params_.silence_action == "land" &&
+        now.steady_us - rx >= static_cast<int64_t>(params_.silence_land_s * 1e6)) {
       request_land(
-          "the stack's setpoints stopped " + std::to_string(params_.setpoint_timeout_s) + " s ago",
+          "the stack's setpoints stopped " + std::to_string(params_.silence_land_s) + " s ago",
           now, out);
       return true;
     }

@@ -37,9 +37,9 @@
 //    other motors-off in the offboard mode is a plain disarm, which the autopilot refuses in the
 //    air; still refused while the autopilot reports the vehicle in the air after
 //    kInAirDisarmWaitUs, it becomes LAND. When the stack's setpoints stop while the bridge flies
-//    the vehicle, silence_action land asks for LAND at once (ArduCopter has no offboard-loss
-//    failsafe of its own: GUID_TIMEOUT only levels an attitude target and holds a position target
-//    forever); the bridge's own death is the autopilot's to notice (PX4 COM_OF_LOSS_T /
+//    the vehicle, the stream stops after setpoint_timeout_s and silence_action land asks for LAND
+//    after silence_land_s (ArduCopter has no offboard-loss failsafe of its own: GUID_TIMEOUT only
+//    levels an attitude target and holds a position target forever); the bridge's own death is the autopilot's to notice (PX4 COM_OF_LOSS_T /
 //    COM_OBL_RC_ACT, ArduPilot FS_GCS_ENABLE on the bridge's heartbeat).
 //  - Telemetry: HIGHRES_IMU (or SCALED_IMU where the autopilot has no HIGHRES_IMU) becomes IMU
 //    (FRD -> FLU); ATTITUDE_QUATERNION with LOCAL_POSITION_NED the autopilot's pose (NED -> ENU),

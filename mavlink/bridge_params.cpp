@@ -88,6 +88,11 @@ const ParamSchema<BridgeParams>& BridgeParams::schema() {
           "autopilot's LAND at once; ArduCopter has no offboard-loss failsafe) or autopilot "
           "(leave it to the autopilot's own failsafe, PX4 COM_OBL_RC_ACT)")
         .one_of({"land", "autopilot"});
+    s.add("silence_land_s", &P::silence_land_s, Range::closed(0.1, 10), "s",
+          "silence_action land: the stack's setpoints silent this long (a process stalled for "
+          "0.8 s on a loaded SITL machine) before the bridge asks for LAND")
+        .check([](const P& p) { return p.silence_land_s >= p.setpoint_timeout_s; },
+               "must be at least setpoint_timeout_s");
     s.add("rearm_cooldown_s", &P::rearm_cooldown_s, Range::closed(0, 600), "s",
           "no ARM this long after the vehicle disarmed (after a flight the stack must also have "
           "said motors off since)");

@@ -37,6 +37,8 @@ struct BridgeParams {
   /// The stack's setpoints stop while the bridge flies the vehicle: "land" asks for the
   /// autopilot's LAND mode at once, "autopilot" leaves it to the autopilot's own failsafe.
   std::string silence_action = "land";
+  /// ... after the setpoints have been silent this long (the stream stops at setpoint_timeout_s).
+  double silence_land_s = 1.5;
   double rearm_cooldown_s = 5.0;  ///< no ARM this long after a disarm [s]
 
   double hover_thrust = 0.5;  ///< normalised thrust (0..1) that hovers (PX4 MPC_THR_HOVER) [-]
