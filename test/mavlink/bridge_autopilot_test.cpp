@@ -467,6 +467,20 @@ TEST(BridgeAutopilotTest, AnAuthorisedKillIsAForcedDisarmInTheAir) {
   };
   ASSERT_TRUE(l.run_until([&] { return !l.ap.armed(); }, 1.0));
   EXPECT_EQ(l.ap.forced_disarms, 1);
+  // The outer loop's motors-off carrying the same authority (ATTITUDE_CMD kill_authority).
+  Loop a(ardupilot_params(), copter());
+  bool armed = true;
+  int64_t next_a = 0;
+  a.stack = attitude_stack(a, 1.5, &armed, &next_a);
+  ASSERT_TRUE(a.run_until([&] { return a.ap.height_m() > 1.4; }, 20.0));
+  a.stack = [&](BridgeInput& in) {
+    AttitudeTarget t;
+    t.armed = false;
+    t.kill_authorised = true;
+    in.attitude = t;
+  };
+  ASSERT_TRUE(a.run_until([&] { return !a.ap.armed(); }, 1.0));
+  EXPECT_EQ(a.ap.forced_disarms, 1);
 }
 
 TEST(BridgeAutopilotTest, AttitudeMotorsOffInTheAirIsNeverAForcedDisarm) {
