@@ -15,6 +15,8 @@ constexpr double kArduPilotMPerE7 = 0.011131884502145034;
 /// PX4's earth radius (src/lib/geo/geo.h, CONSTANTS_RADIUS_OF_EARTH) [m].
 constexpr double kPx4EarthRadiusM = 6371000.0;
 constexpr double kDegE7ToRad = 1e-7 * M_PI / 180.0;
+/// HEARTBEAT asked of the autopilot on this link [Hz].
+constexpr double kHeartbeatRateHz = 10.0;
 /// Samples further apart than this are not integrated between: the position restarts at the
 /// measured one [s].
 constexpr double kMaxGapS = 0.2;
@@ -113,18 +115,27 @@ AutopilotTruth::Output AutopilotTruth::update(std::span<const uint8_t> bytes, in
     send(hb, now, out);
     next_heartbeat_ = now + 1'000'000;
   }
-  // The rate is asked until samples come (SET_MESSAGE_INTERVAL; its answer is not needed).
+  // The rate is asked until samples come (SET_MESSAGE_INTERVAL; its answer is not needed), and
+  // the heartbeat at 10 Hz: the failsafes' record of modes and arming is as fine as it is.
   const bool flowing = last_ && now - last_->utime < 500'000;
-  if (sysid_ && !flowing && now >= next_request_) {
-    mav::CommandLong c;
-    c.target_system = *sysid_;
-    c.target_component = mav::mav_component::kAutopilot1;
-    c.command = mav::mav_cmd::kSetMessageInterval;
-    c.param1 = static_cast<float>(params_.flavour == mav::Flavour::kArdupilot
-                                      ? mav::SimState::kId
-                                      : mav::HilStateQuaternion::kId);
-    c.param2 = static_cast<float>(1e6 / params_.rate_hz);
-    send(c, now, out);
+  if (sysid_ && (!flowing || heartbeat_asks_ < 3) && now >= next_request_) {
+    const auto ask = [&](uint32_t id, double rate_hz) {
+      mav::CommandLong c;
+      c.target_system = *sysid_;
+      c.target_component = mav::mav_component::kAutopilot1;
+      c.command = mav::mav_cmd::kSetMessageInterval;
+      c.param1 = static_cast<float>(id);
+      c.param2 = static_cast<float>(1e6 / rate_hz);
+      send(c, now, out);
+    };
+    if (!flowing)
+      ask(params_.flavour == mav::Flavour::kArdupilot ? mav::SimState::kId
+                                                      : mav::HilStateQuaternion::kId,
+          params_.rate_hz);
+    if (heartbeat_asks_ < 3) {
+      ask(mav::Heartbeat::kId, kHeartbeatRateHz);
+      ++heartbeat_asks_;
+    }
     next_request_ = now + 1'000'000;
   }
   return out;

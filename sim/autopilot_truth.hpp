@@ -103,6 +103,7 @@ class AutopilotTruth {
   mavlink::Sender sender_;
   std::optional<uint8_t> sysid_;
   bool armed_ = false, heard_ = false;
+  int heartbeat_asks_ = 0;
   uint32_t custom_mode_ = 0;
   int64_t next_request_ = 0, next_heartbeat_ = 0;
   // The anchor: the first sample.
