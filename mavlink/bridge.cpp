@@ -617,9 +617,11 @@ std::optional<double> Bridge::heading_enu(const BridgeClock& now) const {
 }
 
 std::optional<double> Bridge::height_up(const BridgeClock& now) const {
-  if (local_position_ && now.steady_us - local_position_steady_us_ <= 1'000'000)
-    return -static_cast<double>(local_position_->z);
+  // In the setpoints' frame (motion capture's): the autopilot's own height only less its offset.
   if (mocap_ && now.steady_us - mocap_rx_steady_us_ <= 1'000'000) return mocap_->p_W_B.z();
+  if (local_position_ && now.steady_us - local_position_steady_us_ <= 1'000'000)
+    return -(static_cast<double>(local_position_->z) -
+             frame_offset_NED_.value_or(Vector3d::Zero()).z());
   return std::nullopt;
 }
 
