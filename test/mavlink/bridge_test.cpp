@@ -581,6 +581,27 @@ TEST(BridgeTest, ImuIsPublishedInFluWithUnixStampsKeptAndBootStampsMapped) {
   EXPECT_EQ(b.imu[1].utime - b.imu[0].utime, 10'000 - 4000 + 0);
 }
 
+TEST(BridgeTest, BootStampsFollowAnAutopilotClockThatRunsSlowerThanTheWallClock) {
+  // PX4 SIH's lockstep clock ran at 0.93 of the wall clock on a loaded machine: its IMU must
+  // not fall behind motion capture (stamped on the wall clock) as the minutes go by.
+  Harness h;
+  h.ap.heartbeat(kPosctl, false);
+  h.step();
+  HighresImu imu;
+  imu.zacc = -9.81f;
+  const int64_t t0 = h.t_us;
+  for (int i = 0; i < 12'000; ++i) {  // 60 s at 200 Hz
+    imu.time_usec = 5'000'000 + static_cast<uint64_t>(0.93 * (h.t_us - t0));
+    h.ap.say(imu);
+    h.step();
+    h.t_us += 4000;  // 5 ms a sample with the step's 1 ms
+  }
+  ASSERT_GT(h.imu.size(), 11'000u);
+  // The last sample was received at the previous step's wall time.
+  const int64_t received = h.clock().wall_us - 5000;
+  EXPECT_NEAR(static_cast<double>(h.imu.back().utime), static_cast<double>(received), 2000.0);
+}
+
 TEST(BridgeTest, ARebootIsNoticedAndTheMappingStartsAgain) {
   Harness h;
   h.ap.heartbeat(kPosctl, false);
