@@ -43,7 +43,10 @@ struct AutopilotTruthParams {
   double start_yaw_rad = 0.0;           ///< heading at the start, world (from x, about z up)
   double rate_hz = 100.0;               ///< truth messages asked of the autopilot [Hz]
   double position_tau_s = 1.0;          ///< pull of the quantised position [s]
-  double max_extrapolation_s = 0.1;     ///< raw_at() extrapolates the newest sample this far
+  /// raw_at() extrapolates the newest sample this far: three periods of the asked rate. PX4 SIH's
+  /// lockstep clock stalls on a loaded machine; extrapolated on the wall clock through a stall,
+  /// motion capture ran ahead of the vehicle and EKF2 fused a pose 5 cm off.
+  double max_extrapolation_s = 0.03;
   double smooth_hz = 8.0;               ///< advance(): natural frequency of the position [Hz]
   double attitude_gain_per_s = 30.0;    ///< advance(): pull of the attitude error [1/s]
   uint8_t own_sysid = 200, own_compid = 190;
