@@ -39,13 +39,15 @@
 //    kInAirDisarmWaitUs, it becomes LAND. When the stack's setpoints stop while the bridge flies
 //    the vehicle, the stream stops after setpoint_timeout_s and silence_action land asks for LAND
 //    after silence_land_s (ArduCopter has no offboard-loss failsafe of its own: GUID_TIMEOUT only
-//    levels an attitude target and holds a position target forever); the bridge's own death is the autopilot's to notice (PX4 COM_OF_LOSS_T /
-//    COM_OBL_RC_ACT, ArduPilot FS_GCS_ENABLE on the bridge's heartbeat).
+//    levels an attitude target and holds a position target forever); the bridge's own death is
+//    the autopilot's to notice (PX4 COM_OF_LOSS_T / COM_OBL_RC_ACT, ArduPilot FS_GCS_ENABLE on
+//    the bridge's heartbeat).
 //  - Telemetry: HIGHRES_IMU (or SCALED_IMU where the autopilot has no HIGHRES_IMU) becomes IMU
 //    (FRD -> FLU); ATTITUDE_QUATERNION with LOCAL_POSITION_NED the autopilot's pose (NED -> ENU),
 //    attitude alone while the autopilot has no local position; EXTENDED_SYS_STATE its landed
 //    state. time_usec in the Unix epoch (> 2001) is kept; boot time is moved onto the wall clock
-//    by the smallest receipt delay seen. A boot time that jumps back is a reboot: the mapping, the
+//    by the smallest recent receipt delay (a SITL's clock may run 10% slow). A boot time that
+//    jumps back is a reboot: the mapping, the
 //    requested message rates and the engage state start again. Non-finite or absurd values are
 //    refused and counted. Without GPS the autopilot's local frame needs a geodetic origin: with
 //    set_ekf_origin the bridge sends SET_GPS_GLOBAL_ORIGIN until GPS_GLOBAL_ORIGIN comes back.
