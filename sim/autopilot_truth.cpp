@@ -158,24 +158,33 @@ void AutopilotTruth::on_sample(const Raw& r, int64_t now, Output& out) {
   }
   const Vector2d ne =
       north_east_m(params_.flavour, r.lat_e7, r.lon_e7, anchor_->lat_e7, anchor_->lon_e7);
-  const Vector3d measured(ne.x(), ne.y(), -(r.alt_m - anchor_->alt_m));
+  Vector3d measured(ne.x(), ne.y(), -(r.alt_m - anchor_->alt_m));
+  // The ground is where the vehicle stood at the anchor. PX4 SIH's ground holds the vehicle only
+  // while the net force points down (src/modules/simulation/simulator_sih/sih.cpp, "fake
+  // ground"): one arriving at hover thrust sank 0.16 m through it. Held at the ground here.
+  Vector3d v_NED = r.v_NED;
+  if (measured.z() > 0) {
+    measured.z() = 0;
+    v_NED.z() = std::min(v_NED.z(), 0.0);
+  }
   if (!measured.allFinite() || measured.norm() > kMaxOffsetM) {
     ++n_rejected_;
     return;
   }
   const double dt = last_ ? (now - last_->utime) * 1e-6 : kMaxGapS + 1;
   if (dt >= 0 && dt <= kMaxGapS) {
-    const Vector3d predicted = p_NED_ + 0.5 * (v_prev_NED_ + r.v_NED) * dt;
+    const Vector3d predicted = p_NED_ + 0.5 * (v_prev_NED_ + v_NED) * dt;
     const double a = 1.0 - std::exp(-dt / params_.position_tau_s);
     p_NED_ = predicted + a * (measured - predicted);
   } else {
     p_NED_ = measured;  // the first sample, or after a gap: nothing to integrate over
   }
-  v_prev_NED_ = r.v_NED;
+  p_NED_.z() = std::min(p_NED_.z(), 0.0);
+  v_prev_NED_ = v_NED;
   TruthSample s;
   s.utime = now;
   s.state.p_W_B = params_.start_W + R_W_ENU_ * mav::enu_from_ned(p_NED_);
-  s.state.v_W_B = R_W_ENU_ * mav::enu_from_ned(r.v_NED);
+  s.state.v_W_B = R_W_ENU_ * mav::enu_from_ned(v_NED);
   s.state.q_WB = Quaterniond(R_W_ENU_) * mav::q_enu_flu_from_ned_frd(r.q_NED_FRD);
   s.state.q_WB.normalize();
   s.state.omega_B = mav::flu_from_frd(r.omega_FRD);

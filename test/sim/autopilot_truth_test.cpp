@@ -150,6 +150,22 @@ TEST(AutopilotTruthTest, TheSmoothedTrajectoryFollowsLateSamplesWithoutSteps) {
   EXPECT_NEAR(prev.v_W_B.z(), 1.0, 0.05);
 }
 
+TEST(AutopilotTruthTest, AVehicleBelowTheSitlsGroundIsHeldAtIt) {
+  // PX4 SIH's ground holds a vehicle only while the net force points down: one that arrives at
+  // hover thrust sinks through it. The anchor stood on that ground.
+  AutopilotTruth truth(params());
+  Sitl sitl;
+  sitl.sim_state(0, 0, 0, 0.0);
+  truth.update(sitl.take(), kT0);
+  for (int i = 1; i <= 50; ++i) {
+    sitl.sim_state(0, 0, -0.16 * i / 50.0, 0.0, Vector3d(0, 0, 0.25));
+    const auto out = truth.update(sitl.take(), kT0 + i * 10'000);
+    ASSERT_EQ(out.samples.size(), 1u);
+    EXPECT_NEAR(out.samples[0].state.p_W_B.z(), params().start_W.z(), 1e-9);
+    EXPECT_LE(out.samples[0].state.v_W_B.z(), 1e-9);  // not sinking
+  }
+}
+
 TEST(AutopilotTruthTest, AsksForTheTruthAndFollowsTheArmedState) {
   AutopilotTruth truth(params());
   Sitl sitl;
