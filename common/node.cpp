@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cassert>
 #include <cerrno>
 #include <chrono>
@@ -330,6 +331,16 @@ int Node::spin_once(int timeout_ms) {
     if (status_period_s_ > 0)
       every(status_period_s_,
             [this](int64_t wall) { publish(channels::kNodeStatus, status_message(wall)); });
+    // On a signed bus a node learns the bus time from what it hears, and stamps its counters no
+    // lower (a new publisher far behind it is taken for a recording). One that subscribes to
+    // nothing (a camera) would go on from its own wall clock, which after a boot without a
+    // real-time clock is decades behind: it hears every node's NODE_STATUS instead.
+    const std::string status = remap_(channels::kNodeStatus);
+    const bool hears_status = std::any_of(subs_.begin(), subs_.end(),
+                                          [&](const auto& s) { return s->channel == status; });
+    if (gatekeeper_.signing() && !hears_status)
+      subscribe_raw(
+          status, true, [](const void*, uint32_t) {}, kDefaultQueueCapacity, false);
   }
   if (!timers_.empty()) {
     int64_t next = timers_.front().next_utime;

@@ -176,6 +176,8 @@ class Node {
   /// How long `channel`'s current contest by a second publisher has lasted [s] (0: none; one
   /// forged message: 0; a second publisher that keeps sending: growing).
   double contest_span_s(const std::string& channel) const;
+  /// The newest counter (bus time) this node has accepted from any publisher [us], 0 before.
+  int64_t bus_time_us() const { return gatekeeper_.bus_time_us(); }
   /// This node's publisher id (in every trailer it sends) and whether it signs.
   uint64_t source_id() const { return sealer_.source(); }
   bool signing() const { return sealer_.signing(); }

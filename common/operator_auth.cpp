@@ -1,17 +1,19 @@
 #include "common/operator_auth.hpp"
 
+#include <fcntl.h>
 #include <openssl/crypto.h>
 #include <openssl/evp.h>
 #include <openssl/hmac.h>
 #include <openssl/rand.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <cassert>
 #include <cctype>
 #include <climits>
+#include <cstdint>
+#include <cstdio>
 #include <cstring>
-#include <fstream>
-#include <sstream>
 
 namespace alight {
 
@@ -61,16 +63,51 @@ OperatorKey parse_key(const std::string& contents, const std::string& origin) {
 }
 
 LoadedKey load_key_file(const std::string& path) {
+  // HMAC-SHA256 hashes a key longer than its 64-byte block down to 32 bytes, so a longer file
+  // adds no strength; the bound keeps a mistaken path (a log, an image) from being read whole.
+  constexpr size_t kMaxKeyFileBytes = 4096;
+  // stat() before open() so that a device is never opened, O_NONBLOCK so that a FIFO swapped in
+  // since cannot block the open, fstat() of the opened file, which is what gets read (as
+  // ParamNode::load_file; this library does not link the parameter loader).
+  const auto check = [&path](const struct stat& st) {
+    if (!S_ISREG(st.st_mode))
+      throw KeyFileError(path +
+                         ": key file is not a regular file (a FIFO or a device could "
+                         "block the read or never end)");
+    if (static_cast<uint64_t>(st.st_size) > kMaxKeyFileBytes)
+      throw KeyFileError(path + ": key file too large: " + std::to_string(st.st_size) +
+                         " bytes, at most " + std::to_string(kMaxKeyFileBytes));
+  };
   struct stat st {};
   if (::stat(path.c_str(), &st) != 0)
     throw KeyFileError(path + ": key file missing or unreadable: " + std::strerror(errno));
-  if (!S_ISREG(st.st_mode)) throw KeyFileError(path + ": key file is not a regular file");
-  std::ifstream f(path, std::ios::binary);
-  if (!f) throw KeyFileError(path + ": cannot open key file: " + std::strerror(errno));
-  std::ostringstream ss;
-  ss << f.rdbuf();
+  check(st);
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK | O_NOCTTY);
+  if (fd < 0) throw KeyFileError(path + ": cannot open key file: " + std::strerror(errno));
+  std::string contents(kMaxKeyFileBytes + 1, '\0');
+  size_t n = 0;
+  try {
+    if (::fstat(fd, &st) != 0)
+      throw KeyFileError(path + ": cannot stat key file: " + std::strerror(errno));
+    check(st);
+    while (n < contents.size()) {
+      const ssize_t r = ::read(fd, contents.data() + n, contents.size() - n);
+      if (r < 0 && errno == EINTR) continue;
+      if (r < 0) throw KeyFileError(path + ": cannot read key file: " + std::strerror(errno));
+      if (r == 0) break;
+      n += static_cast<size_t>(r);
+    }
+  } catch (...) {
+    ::close(fd);
+    throw;
+  }
+  ::close(fd);
+  if (n > kMaxKeyFileBytes)
+    throw KeyFileError(path + ": key file too large: more than " +
+                       std::to_string(kMaxKeyFileBytes) + " bytes");
+  contents.resize(n);
   LoadedKey loaded;
-  loaded.key = parse_key(ss.str(), path);
+  loaded.key = parse_key(contents, path);
   if (st.st_mode & (S_IRWXG | S_IRWXO)) {
     char mode[8];
     std::snprintf(mode, sizeof mode, "%03o", static_cast<unsigned>(st.st_mode & 0777));

@@ -1,7 +1,14 @@
 #include "common/params.hpp"
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+#include <yaml-cpp/eventhandler.h>
+
+#include <cerrno>
+#include <cstdint>
+#include <cstring>
 #include <filesystem>
-#include <fstream>
 
 namespace alight {
 
@@ -12,6 +19,120 @@ std::string compose(const std::string& file, const std::string& key, const std::
   if (!key.empty()) msg += key + (value.empty() ? std::string() : " = " + value) + ": ";
   return msg + problem;
 }
+
+std::string file_kind(mode_t mode) {
+  if (S_ISDIR(mode)) return "a directory";
+  if (S_ISFIFO(mode)) return "a FIFO";
+  if (S_ISCHR(mode)) return "a character device";
+  if (S_ISBLK(mode)) return "a block device";
+  if (S_ISSOCK(mode)) return "a socket";
+  return "a special file";
+}
+
+std::string size_text(size_t bytes) {
+  return bytes % (1 << 20) == 0 ? std::to_string(bytes >> 20) + " MiB"
+                                : std::to_string(bytes) + " bytes";
+}
+
+// A FIFO without a writer blocks its reader for good, a device can stream without end: only a
+// regular file has a known, bounded length.
+void check_regular(const std::string& path, const struct stat& st, size_t max_bytes) {
+  if (!S_ISREG(st.st_mode))
+    throw ParamError(path, "", "", "not a regular file (" + file_kind(st.st_mode) + ")");
+  if (static_cast<uint64_t>(st.st_size) > max_bytes)
+    throw ParamError(path, "", "",
+                     "file too large: " + std::to_string(st.st_size) + " bytes, at most " +
+                         size_text(max_bytes));
+}
+
+// The file's text. stat() first, so that a device is never opened (opening a serial port can
+// reset the board on it, a tape rewinds); O_NONBLOCK, so that a FIFO swapped in after the stat
+// cannot block the open; fstat() of what was opened, which is what gets read.
+std::string read_bounded(const std::string& path, size_t max_bytes) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0)
+    throw ParamError(path, "", "", std::string("cannot open the file: ") + std::strerror(errno));
+  check_regular(path, st, max_bytes);
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK | O_NOCTTY);
+  if (fd < 0)
+    throw ParamError(path, "", "", std::string("cannot open the file: ") + std::strerror(errno));
+  std::string text;
+  try {
+    if (::fstat(fd, &st) != 0)
+      throw ParamError(path, "", "", std::string("cannot stat the file: ") + std::strerror(errno));
+    check_regular(path, st, max_bytes);
+    // One byte beyond the limit tells a file that grew since the fstat from one that fits.
+    text.resize(max_bytes + 1);
+    size_t n = 0;
+    while (n < text.size()) {
+      const ssize_t r = ::read(fd, text.data() + n, text.size() - n);
+      if (r < 0 && errno == EINTR) continue;
+      if (r < 0)
+        throw ParamError(path, "", "",
+                         std::string("cannot read the file: ") + std::strerror(errno));
+      if (r == 0) break;
+      n += static_cast<size_t>(r);
+    }
+    if (n > max_bytes)
+      throw ParamError(path, "", "", "file too large: more than " + size_text(max_bytes));
+    text.resize(n);
+  } catch (...) {
+    ::close(fd);
+    throw;
+  }
+  ::close(fd);
+  return text;
+}
+
+// A first pass over the parser's events, before any tree is built: refuses aliases and anchors
+// and bounds the node count and the nesting, each at the line where the limit is crossed.
+class StructureCheck : public YAML::EventHandler {
+ public:
+  explicit StructureCheck(std::string name) : name_(std::move(name)) {}
+
+  void OnDocumentStart(const YAML::Mark&) override {}
+  void OnDocumentEnd() override {}
+  void OnNull(const YAML::Mark& mark, YAML::anchor_t anchor) override { node(mark, anchor); }
+  void OnAlias(const YAML::Mark& mark, YAML::anchor_t) override {
+    refuse(mark, "YAML aliases (*name) are not accepted in parameter files: write the values out");
+  }
+  void OnScalar(const YAML::Mark& mark, const std::string&, YAML::anchor_t anchor,
+                const std::string&) override {
+    node(mark, anchor);
+  }
+  void OnSequenceStart(const YAML::Mark& mark, const std::string&, YAML::anchor_t anchor,
+                       YAML::EmitterStyle::value) override {
+    open(mark, anchor);
+  }
+  void OnSequenceEnd() override { --depth_; }
+  void OnMapStart(const YAML::Mark& mark, const std::string&, YAML::anchor_t anchor,
+                  YAML::EmitterStyle::value) override {
+    open(mark, anchor);
+  }
+  void OnMapEnd() override { --depth_; }
+
+ private:
+  void node(const YAML::Mark& mark, YAML::anchor_t anchor) {
+    if (anchor != YAML::NullAnchor)
+      refuse(mark,
+             "YAML anchors (&name) are not accepted in parameter files: write the values "
+             "out");
+    if (++nodes_ > ParamNode::kMaxNodes)
+      refuse(mark, "more than " + std::to_string(ParamNode::kMaxNodes) + " values");
+  }
+  void open(const YAML::Mark& mark, YAML::anchor_t anchor) {
+    node(mark, anchor);
+    if (++depth_ > ParamNode::kMaxDepth)
+      refuse(mark, "nested deeper than " + std::to_string(ParamNode::kMaxDepth) + " levels");
+  }
+  [[noreturn]] void refuse(const YAML::Mark& mark, const std::string& problem) const {
+    throw ParamError(name_, "", "", "line " + std::to_string(mark.line + 1) + ": " + problem);
+  }
+
+  std::string name_;
+  size_t nodes_ = 0;
+  int depth_ = 0;
+};
 
 // Walks every mapping and sequence; `path` is the dotted key of `node`.
 void reject_duplicate_keys(const YAML::Node& node, const std::string& path,
@@ -61,16 +182,20 @@ ParamNode::ParamNode(std::shared_ptr<const std::string> file, YAML::Node node, s
       read_keys_(std::make_shared<std::set<std::string>>()) {}
 
 ParamNode ParamNode::load_file(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw ParamError(path, "", "", "cannot open the file");
-  std::stringstream text;
-  text << in.rdbuf();
-  return from_string(text.str(), path);
+  return from_string(read_bounded(path, kMaxFileBytes), path);
 }
 
 ParamNode ParamNode::from_string(const std::string& yaml, const std::string& name) {
+  if (yaml.size() > kMaxFileBytes)
+    throw ParamError(name, "", "",
+                     "too large: " + std::to_string(yaml.size()) + " bytes, at most " +
+                         size_text(kMaxFileBytes));
   YAML::Node root;
   try {
+    std::istringstream in(yaml);
+    YAML::Parser parser(in);
+    StructureCheck check(name);
+    parser.HandleNextDocument(check);
     root = YAML::Load(yaml);
   } catch (const YAML::Exception& e) {
     throw ParamError(name, "", "",

@@ -9,6 +9,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <cmath>
+#include <cstddef>
 #include <memory>
 #include <optional>
 #include <set>
@@ -56,11 +57,27 @@ void param_check(bool ok, const std::string& key, const T& value, const std::str
 /// a typo never silently leaves a default in place.
 class ParamNode {
  public:
-  /// Loads a YAML file whose top level must be a mapping. Throws ParamError when the file is
-  /// missing, unreadable or not valid YAML, or when a mapping anywhere in it repeats a key
-  /// (yaml-cpp keeps both and lookups see the first: a later edit would silently do nothing).
+  /// Limits on what a parameter file may be, so that no file can hang or exhaust a node: it is
+  /// read whole, parsed into a tree and walked, all before the node starts. The largest shipped
+  /// file (a vehicle) is 13 kB, 370 values (keys count) and 5 levels deep.
+  static constexpr size_t kMaxFileBytes = 1 << 20;
+  /// Scalars (keys too), mappings and lists. yaml-cpp builds 500,000 of them, 1 MiB of
+  /// `[0,0,...]`, in 0.7 s and 240 MB; 100,000 take 50 MB.
+  static constexpr size_t kMaxNodes = 100'000;
+  /// Nesting of mappings and lists (the top level is 1); yaml-cpp parses, copies and frees a
+  /// tree by recursion, as does the duplicate-key check.
+  static constexpr int kMaxDepth = 32;
+
+  /// Loads a YAML file whose top level must be a mapping. Throws ParamError naming the file when
+  /// it is missing or unreadable, not a regular file (a FIFO, a device: reading either can block
+  /// forever or never end), larger than kMaxFileBytes, or when its text fails from_string.
   static ParamNode load_file(const std::string& path);
-  /// Parses YAML text; `name` stands in for the file name in errors.
+  /// Parses YAML text; `name` stands in for the file name in errors. Refuses text longer than
+  /// kMaxFileBytes, invalid YAML, anchors and aliases (&a, *a, and so `<<: *a`: an alias shares
+  /// a node, so a few hundred bytes of nested aliases expand to billions of values when walked
+  /// or printed; no parameter file needs them), more than kMaxNodes nodes, nesting deeper than
+  /// kMaxDepth, and a mapping anywhere that repeats a key (yaml-cpp keeps both and lookups see
+  /// the first: a later edit would silently do nothing).
   static ParamNode from_string(const std::string& yaml, const std::string& name = "<string>");
 
   const std::string& file() const { return *file_; }

@@ -37,9 +37,13 @@ const ParamSchema<GroundStationParams>& GroundStationParams::schema() {
           "workers kept for POST /api/command only: a request reaches a worker only once its head "
           "(and a command's body) has arrived, so slow clients hold no worker and a KILL never "
           "waits behind page traffic");
-    s.add("max_queued_connections", &P::max_queued_connections, Range::ge(1), "",
-          "connections waiting for a worker beyond which new ones are closed at once (bounds "
-          "memory under load)");
+    // Each waiting connection is an open socket, in each of the two pools: 2 x 256 of them,
+    // the default max_pending_heads (256) and the workers stay within the 1024 open files a
+    // process gets by default (ulimit -n); past that accept() fails for the page and a KILL
+    // alike.
+    s.add("max_queued_connections", &P::max_queued_connections, Range::closed(1, 256), "",
+          "connections waiting for a worker, per pool, beyond which new ones are closed at once "
+          "(bounds memory and open files under load)");
     s.add("client_timeout_s", &P::client_timeout_s, Range::open_closed(0, 60), "s",
           "read / write / keep-alive idle timeout per connection");
     s.add("head_deadline_s", &P::head_deadline_s, Range::open_closed(0, 60), "s",
@@ -57,10 +61,17 @@ const ParamSchema<GroundStationParams>& GroundStationParams::schema() {
           "request line plus headers");
     s.add("max_payload_bytes", &P::max_payload_bytes, Range::closed(1024, 1 << 24), "bytes",
           "request body");
-    s.add("frame_wait_s", &P::frame_wait_s, Range::ge(0), "s",
+    // The wait only has to span one frame interval of the slowest video (the vision's
+    // diagnostic image: 2 Hz on the paper's Pelican); a longer one only keeps a worker busy and
+    // the page waiting. The answer is written after the wait, within both the connection's I/O
+    // timeout and the request's deadline.
+    s.add("frame_wait_s", &P::frame_wait_s, Range::closed(0, 2), "s",
           "a frame request waits this long for a newer frame")
-        .check([](const P& p) { return p.frame_wait_s < p.client_timeout_s; },
-               "must be in [0, client_timeout_s)");
+        .check(
+            [](const P& p) {
+              return p.frame_wait_s < p.client_timeout_s && p.frame_wait_s < p.request_deadline_s;
+            },
+            "must be below client_timeout_s and request_deadline_s");
     s.add("jpeg_quality", &P::jpeg_quality, Range::closed(1, 100), "",
           "JPEG quality of re-encoded CAMERA frames");
     s.add("track_period_s", &P::track_period_s, Range::open_closed(0, 60), "s",

@@ -1,8 +1,8 @@
 // alight-launch: the onboard launcher. Starts the processes of a launch file in order, writes each
 // one's output to its own file in the session folder, restarts crashed ones with backoff, records
-// the session with lcm-logger, reports every process's state on stdout and PROCESS_STATUS, and on
-// SIGINT / SIGTERM stops everything in reverse order (SIGINT, then SIGKILL after a timeout).
-// The anchor is libbot's bot-procman deputy.
+// the session with alight-record, reports every process's state on stdout and PROCESS_STATUS, and
+// on SIGINT / SIGTERM stops everything in reverse order (SIGINT, then SIGKILL after a timeout). The
+// anchor is libbot's bot-procman deputy.
 #include <fcntl.h>
 #include <sys/prctl.h>
 #include <sys/stat.h>
@@ -78,15 +78,12 @@ class Launcher {
     vars_["LCM_URL"] = lf_.lcm_url;
     if (lf_.record) {
       ProcessSpec logger;
-      logger.name = "lcm-logger";
-      // The nodes' large receive buffer for the logger too: it takes every camera frame and
-      // falls behind first on a loaded machine.
-      logger.command = {"lcm-logger",
-                        "--lcm-url=" + alight::with_receive_buffer(lf_.lcm_url),
-                        "-q",
-                        "-c",
-                        lf_.record_channels,
-                        (session_ / "session.lcmlog").string()};
+      logger.name = "recorder";
+      // alight-record, not lcm-logger: it keeps every message with both cores busy, and counts
+      // what it could not keep (tools/record_main.cpp). Its log is lcm-logger's format.
+      logger.command = {"alight-record",     "--lcm-url",
+                        lf_.lcm_url,         "-c",
+                        lf_.record_channels, (session_ / "session.lcmlog").string()};
       logger.restart = alight::launcher::RestartPolicy::kAlways;
       trackers_.push_back(std::make_unique<ProcessTracker>(logger, lf_.backoff));
     }
@@ -452,7 +449,7 @@ int main(int argc, char** argv) {
   app.add_option("--log-root", log_root,
                  "Folder for session folders (default: $ALIGHT_LOG_ROOT, else <source>/logs)");
   app.add_option("--lcm-url", lcm_url, "Override the launch file's LCM URL");
-  app.add_flag("--no-record", no_record, "Do not run lcm-logger");
+  app.add_flag("--no-record", no_record, "Do not record the session (alight-record)");
   CLI11_PARSE(app, argc, argv);
 
   return alight::run_node_main("alight-launch", [&]() -> int {

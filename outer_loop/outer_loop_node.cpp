@@ -73,7 +73,6 @@ int main(int argc, char** argv) {
       const alight::KillCheck c = kill_verifier.check(cmd, alight::wall_utime());
       return c == alight::KillCheck::kAuthorised ? "" : alight::kill_check_name(c);
     };
-    gate.contest_span_s = [&](const std::string& ch) { return node.contest_span_s(ch); };
     gate.reject_value = [&](const std::string& ch, const std::string& why) {
       return node.reject_value(ch, why);
     };

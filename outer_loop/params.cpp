@@ -114,8 +114,7 @@ const ParamSchema<OuterLoopParams>& OuterLoopParams::schema() {
     s.add("max_speed_z_mps", &P::max_speed_z_mps, Range::open_closed(0, 5), "m/s",
           "vertical speed the position loop never asks for more of");
     s.add("failsafe_hold_s", &P::failsafe_hold_s, Range::closed(0, 30), "s",
-          "a failsafe that lands (geofence left, a setpoint or pose channel contested by a "
-          "second publisher) first holds this long");
+          "the landing failsafe (the geofence left) first holds this long");
     s.add("i_zone_m", &P::i_zone_m, Range::gt(0), "m",
           "integrate only while the error is smaller (no windup during large steps)");
     s.add("i_still_mps", &P::i_still_mps, Range::ge(0), "m/s",

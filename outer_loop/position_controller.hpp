@@ -29,8 +29,7 @@
 // autopilot): setpoints are kept kFenceInsetM inside the geofence; a far setpoint is approached at
 // no more than max_speed_*_mps (the position error is capped at the one that asks for that speed
 // at steady state, v = kp e / kd); leaving the fence starts the landing failsafe (hold
-// failsafe_hold_s where it is, then descend and disarm on the ground), which the runner also
-// starts when a second publisher contests the setpoint or pose channel.
+// failsafe_hold_s where it is, then descend and disarm on the ground).
 //
 // Defence in depth: the node refuses non-finite input, but update() also never lets one
 // through: a non-finite setpoint or pose is replaced by the last finite one, a non-finite

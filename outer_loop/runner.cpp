@@ -87,16 +87,6 @@ std::optional<AttitudeCommand> Runner::tick(int64_t steady_us) {
 std::optional<AttitudeCommand> Runner::step(int64_t now_utime, int64_t steady_us) {
   now_utime_ = now_utime;
   last_step_steady_us_ = steady_us;
-  if (gate_.contest_span_s) {
-    if (gate_.contest_span_s(options_.setpoint_channel) >= kContestFailsafeS)
-      controller_.trigger_failsafe(
-          "setpoint channel contested by a second publisher: holding, "
-          "then landing");
-    else if (gate_.contest_span_s(options_.pose_channel) >= kContestFailsafeS)
-      controller_.trigger_failsafe(
-          "pose channel contested by a second publisher: holding, then "
-          "landing");
-  }
   AttitudeCommand cmd = controller_.update(setpoint_, pose_, now_utime);
   if (pose_gate_.latched() && cmd.mode == Mode::kHoldLevel)
     cmd.reason = "pose disagrees with its prediction (innovation gate): level, hover thrust";

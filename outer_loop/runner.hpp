@@ -10,11 +10,14 @@
 //    (position_setpoint_t.kill_authority, checked by authorise_kill); otherwise it is a plain
 //    motors-off (a landing), and counted;
 //  - poses pass an innovation gate (common/pose_gate.hpp): a pose that jumps from its prediction
-//    is refused and counted, and a refusal streak of pose_stale_s latches the gate, so the
-//    controller sees the pose lost (hold level, then the blind descent), never re-centred on the
-//    new stream;
-//  - a setpoint or pose channel contested by a second publisher for kContestFailsafeS (the
-//    node's contest_span_s) starts the controller's landing failsafe.
+//    is refused and counted, and a refusal streak of 0.1 s latches the gate, so the controller
+//    sees the pose lost (hold level, then the blind descent), never re-centred on the new
+//    stream.
+// A second publisher on the setpoint or pose channel is refused by the node before any of this
+// (common/bus_auth.hpp) and shown on the ground station; the loop goes on with the channel's own
+// publisher. Landing on a contest would be worse: a vertical landing from wherever the vehicle
+// happens to be comes down on the platform's edge as often as not, which a refused forgery
+// never does.
 //
 // Controller time: the newest accepted input stamp, so a replayed log gives the same commands.
 // When nothing arrives, tick() advances it from that stamp by the steady time elapsed since it
@@ -44,13 +47,7 @@ struct InputGate {
   /// "" when `cmd` is the operator's signed CMD_KILL for this vehicle, else why not (unset:
   /// nothing is ever authorised).
   std::function<std::string(const operator_cmd_t& cmd)> authorise_kill;
-  /// How long a second publisher has been contesting `channel` [s] (unset: never).
-  std::function<double(const std::string& channel)> contest_span_s;
 };
-
-/// A second publisher contesting the setpoint or pose channel this long lands the vehicle: one
-/// forged message is reported and refused, a stream of them is an attack under way [s].
-inline constexpr double kContestFailsafeS = 1.0;
 
 /// The pose innovation gate's parameters for a vehicle flown with `p` (also autonomy's gate).
 PoseGateParams pose_gate_params(const OuterLoopParams& p);

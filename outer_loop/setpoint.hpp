@@ -30,7 +30,7 @@ enum class Mode {
   kHoldPosition,         ///< setpoint stale: hold the position where it went stale
   kSetpointLostDescent,  ///< setpoint lost: slow descent on the pose, disarm when on the ground
   kDisarmed,             ///< motors off
-  kFailsafeLand,         ///< geofence left or an input contested: hold, then land, then disarm
+  kFailsafeLand,         ///< geofence left: hold, then land, then disarm
 };
 
 const char* mode_name(Mode mode);

@@ -118,9 +118,15 @@ def types_by_fingerprint():
 
 
 def decode(event):
-    """Decodes an event's payload with the alight type whose fingerprint it carries, or None."""
+    """Decodes an event's payload with the alight type whose fingerprint it carries; None for an
+    unknown type or bytes that do not decode."""
     cls = types_by_fingerprint().get(event.data[:8])
-    return cls.decode(payload(event.data)) if cls else None
+    if cls is None:
+        return None
+    try:
+        return cls.decode(payload(event.data))
+    except Exception:  # noqa: BLE001 - a malformed message (garbage in a log) decodes to nothing
+        return None
 
 
 def summary(path, channel_regex=None):

@@ -32,6 +32,7 @@ struct VehicleParams {
   double rotor_tip_span_m = 0.6;
   double gear_footprint_m = 0.15;
   double gear_height_m = 0.1;
+  double gear_max_impact_mps = 1.5;
   double rotor_height_m = 0.02;
   double motor_tau_s = 0.03;
   double attitude_bandwidth_hz = 4.0;

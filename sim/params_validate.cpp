@@ -42,6 +42,9 @@ const ParamSchema<VehicleParams>& VehicleParams::schema() {
     s.add("gear_footprint_m", &P::gear_footprint_m, Range::open(0.02, 1), "m",
           "side of the square landing gear");
     s.add("gear_height_m", &P::gear_height_m, Range::gt(0), "m", "body origin above the gear feet");
+    s.add("gear_max_impact_mps", &P::gear_max_impact_mps, Range::open_closed(0, 10), "m/s",
+          "fastest sink rate at touch-down the landing gear takes; alight-score counts a faster "
+          "touch-down as a crash");
     s.add("rotor_height_m", &P::rotor_height_m, Range::any(), "m",
           "rotor plane above the body origin");
     s.add("motor_tau_s", &P::motor_tau_s, Range::closed_open(0, 1), "s", "thrust first-order lag");

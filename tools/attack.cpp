@@ -227,10 +227,13 @@ std::vector<Datagram> round(Kind k, double t_s, int64_t now, const Overheard& h,
       break;
     }
     case Kind::kFlood: {
-      // A burst per round: copies of what was overheard, and garbage of plausible sizes.
+      // A burst per round: copies of what was overheard (without its publisher's trailer), and
+      // garbage of plausible sizes.
       for (const char* ch : {channels::kMocapPose, channels::kPositionSetpoint,
                              channels::kAttitudeCmd, channels::kImu, channels::kVisionTarget}) {
-        auto copy = raw_of(h, ch);
+        const auto raw = raw_of(h, ch);
+        const auto r = bus::split(raw.data(), raw.size());
+        std::vector<uint8_t> copy(r.payload.begin(), r.payload.end());
         if (copy.empty()) copy.resize(64 + rng() % 256);
         for (size_t i = 8; i < copy.size(); i += 1 + rng() % 16)
           copy[i] = static_cast<uint8_t>(rng());

@@ -6,6 +6,8 @@
 #include <sstream>
 #include <unordered_set>
 
+#include "sim/params.hpp"
+
 namespace alight::tools {
 
 namespace {
@@ -29,6 +31,10 @@ double wall_side(const sim_truth_t& t) {
   for (int i = 0; i < 3; ++i) s += (t.pos[i] - t.opening_center_W[i]) * t.wall_normal_W[i];
   return s;
 }
+bool on_ground(int8_t contact) {
+  return contact == sim_truth_t::CONTACT_FLOOR || contact == sim_truth_t::CONTACT_PLATFORM_TOP ||
+         contact == sim_truth_t::CONTACT_PLATFORM_EDGE;
+}
 std::string fmt(double v) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.4f", v);
@@ -36,8 +42,19 @@ std::string fmt(double v) {
 }
 }  // namespace
 
+Scorer::Scorer() : Scorer(sim::VehicleParams{}.gear_max_impact_mps) {}
+
+Scorer::Scorer(double gear_max_impact_mps) : gear_max_impact_mps_(gear_max_impact_mps) {}
+
 void Scorer::add(const sim_truth_t& t) {
   tipped_ = tipped_ || t.tipped;
+  if (last_truth_ && on_ground(t.contact) && !on_ground(last_truth_->contact)) {
+    // SIM_TRUTH comes every 20 ms: the sample before the contact may be up to 20 ms short of
+    // the impact (falling faster by then), the one after up to 20 ms into the gear's springs
+    // (already slowed); the faster of the two is the nearer to the impact.
+    const double sink = std::max({0.0, -last_truth_->vel[2], -t.vel[2]});
+    max_touchdown_speed_mps_ = std::max(max_touchdown_speed_mps_.value_or(0.0), sink);
+  }
   if (t.has_platform && !touchdown_truth_ && (t.landed || t.tipped)) touchdown_truth_ = t;
   if (t.has_opening && !after_crossing_) {
     if (wall_side(t) >= 0) {
@@ -138,6 +155,7 @@ void timing(const std::unordered_map<int64_t, int64_t>& camera_received,
 
 Score Scorer::result() const {
   Score s;
+  s.gear_max_impact_mps = gear_max_impact_mps_;
   s.vision_frames = vision_frames_;
   s.vision_found = vision_found_;
   s.camera_frames = camera_frames_;
@@ -153,6 +171,7 @@ Score Scorer::result() const {
     s.vision_frames_failed = last_timing_->frames_failed;
     s.vision_frames_processed = last_timing_->frames_processed;
     s.vision_frames_waiting = last_timing_->frames_waiting;
+    s.vision_frames_late = last_timing_->frames_late;
     std::vector<double> e2e_ms;
     for (const auto& [exposure, received] : target_received_)
       e2e_ms.push_back(1e-3 * static_cast<double>(received - exposure));
@@ -184,6 +203,8 @@ Score Scorer::result() const {
   s.scenario = truth.scenario;
   s.collided = truth.collided;
   s.n_collisions = truth.n_collisions;
+  s.max_touchdown_speed_mps = max_touchdown_speed_mps_;
+  s.crashed = max_touchdown_speed_mps_ && *max_touchdown_speed_mps_ > gear_max_impact_mps_;
   s.out_of_area = truth.out_of_area;
   s.mission = mission_ ? mission_
                        : (truth.has_platform ? target_t::MISSION_LANDING
@@ -234,6 +255,11 @@ Score Scorer::result() const {
   } else {
     s.outcome = "incomplete";
   }
+  // Upright and on target or not: a real vehicle would have broken its gear, or worse.
+  if (s.crashed) {
+    s.outcome = "crashed";
+    s.success = false;
+  }
   // Out there a real flight would have lost its motion capture or hit the hall: whatever
   // happened afterwards does not count.
   if (truth.out_of_area && s.mission != 0) {
@@ -257,6 +283,8 @@ std::vector<std::pair<std::string, std::string>> Score::fields() const {
   };
   opt("mission_time_s", mission_time_s);
   opt("touchdown_lateral_error_m", touchdown_lateral_error_m);
+  opt("max_touchdown_speed_mps", max_touchdown_speed_mps);
+  if (max_touchdown_speed_mps) f.emplace_back("gear_max_impact_mps", fmt(gear_max_impact_mps));
   opt("platform_height_error_m", platform_height_error_m);
   opt("vision_height_error_m", vision_height_error_m);
   opt("opening_width_error_m", opening_width_error_m);
@@ -294,9 +322,11 @@ std::vector<std::pair<std::string, std::string>> Score::fields() const {
     f.emplace_back("vision_frames_failed", std::to_string(vision_frames_failed));
     f.emplace_back("vision_frames_processed", std::to_string(vision_frames_processed));
     f.emplace_back("vision_frames_waiting", std::to_string(vision_frames_waiting));
+    f.emplace_back("vision_frames_late", std::to_string(vision_frames_late));
   }
   f.emplace_back("collided", collided ? "true" : "false");
   f.emplace_back("n_collisions", std::to_string(n_collisions));
+  f.emplace_back("crashed", crashed ? "true" : "false");
   f.emplace_back("out_of_area", out_of_area ? "true" : "false");
   return f;
 }

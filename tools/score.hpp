@@ -12,6 +12,12 @@
 // (Pipeline::process), the wait before it (queue and pose), the end-to-end latency from exposure
 // to the logger's receipt of the VISION_TARGET, and the frames it received, dropped and
 // processed.
+//
+// Crash: a touch-down (SIM_TRUTH's contact going from nothing, the wall or the frame to the
+// floor or the platform) sinking faster than the vehicle's gear takes, the vehicle file's
+// vehicle.gear_max_impact_mps, is a crash whatever the attitude and wherever it happens: the
+// mission fails with outcome `crashed`. max_touchdown_speed_mps is the fastest sink rate of any
+// touch-down in the log.
 
 #include <alight/autonomy_status_t.hpp>
 #include <alight/sim_truth_t.hpp>
@@ -31,10 +37,13 @@ struct Score {
   int mission = 0;          ///< target_t::MISSION_*
   bool success = false;     ///< landed on the platform / flew through without contact
   std::string outcome;      ///< landed, tipped, not_landed, through, refused (autonomy refused
-                            ///< the target: too small), collided, left_area, incomplete
+                            ///< the target: too small), collided, crashed, left_area,
+                            ///< incomplete
   std::string final_phase;  ///< last AUTONOMY_STATUS phase name
   std::optional<double> mission_time_s;             ///< GO (detection starts) to LANDED / DONE
   std::optional<double> touchdown_lateral_error_m;  ///< body origin to platform centre, in xy
+  std::optional<double> max_touchdown_speed_mps;    ///< fastest sink rate on touching down
+  double gear_max_impact_mps = 0;                   ///< a faster touch-down is a crash [m/s]
   std::optional<double> platform_height_error_m;    ///< converged estimate z - true top z
   std::optional<double> vision_height_error_m;      ///< median vision platform height - truth
   std::optional<double> opening_width_error_m;      ///< median vision opening width - truth
@@ -75,9 +84,11 @@ struct Score {
   std::optional<Percentiles> vision_process_cpu_ms;  ///< the CPU time of the same
   // The vision's counters in its last VISION_TIMING (vision_timing_t frames_*).
   int64_t vision_frames_received = 0, vision_frames_dropped = 0, vision_frames_refused = 0,
-          vision_frames_failed = 0, vision_frames_processed = 0, vision_frames_waiting = 0;
+          vision_frames_failed = 0, vision_frames_processed = 0, vision_frames_waiting = 0,
+          vision_frames_late = 0;
   bool collided = false;
   int n_collisions = 0;
+  bool crashed = false;      ///< touched down faster than gear_max_impact_mps (fails any mission)
   bool out_of_area = false;  ///< the vehicle left the flying area (fails any mission)
 
   /// `key: value` lines (absent figures are left out).
@@ -88,6 +99,12 @@ struct Score {
 
 class Scorer {
  public:
+  /// Judges touch-downs against the default vehicle's gear (sim::VehicleParams), for callers
+  /// that do not know which vehicle flew.
+  Scorer();
+  /// `gear_max_impact_mps`: vehicle.gear_max_impact_mps of the vehicle that flew.
+  explicit Scorer(double gear_max_impact_mps);
+
   void add(const sim_truth_t& truth);
   void add(const autonomy_status_t& status);
   void add(const target_t& target);
@@ -100,7 +117,9 @@ class Scorer {
   Score result() const;
 
  private:
+  double gear_max_impact_mps_;
   std::optional<sim_truth_t> last_truth_, touchdown_truth_;
+  std::optional<double> max_touchdown_speed_mps_;
   std::optional<sim_truth_t> before_crossing_, after_crossing_;
   std::optional<autonomy_status_t> last_status_, converged_status_;
   std::optional<int64_t> go_utime_, end_utime_;

@@ -1,8 +1,11 @@
-// alight-score LOG [--json]: the mission's figures from a session log, as `key: value` lines
-// (or one JSON object), for people and scripts. Exit status: 0 when the mission succeeded,
-// 1 when it did not, 2 when the log cannot be read or holds no SIM_TRUTH. With --vision-only
-// (a log without a simulator, e.g. bench/vision/soak's): no SIM_TRUTH needed, exit 0 when the
-// log holds VISION_TIMING, 2 when not.
+// alight-score LOG [--json] [--vehicle FILE]: the mission's figures from a session log, as
+// `key: value` lines (or one JSON object), for people and scripts. Exit status: 0 when the
+// mission succeeded, 1 when it did not, 2 when the log cannot be read or holds no SIM_TRUTH, or
+// the vehicle file is refused. With --vision-only (a log without a simulator, e.g.
+// bench/vision/soak's): no SIM_TRUTH needed, exit 0 when the log holds VISION_TIMING, 2 when not.
+// A touch-down sinking faster than the vehicle's gear takes (vehicle.gear_max_impact_mps of
+// --vehicle; the log does not say which vehicle flew, so without it the default vehicle's) is a
+// crash: outcome `crashed`, whatever the attitude; `max_touchdown_speed_mps` is the fastest one.
 // The vision's latency and rates use each event's receipt time as lcm-logger stamped it (wall
 // clock): a VISION_TARGET's receipt minus that of the CAMERA frame with the same utime; its
 // processing and waiting times come from VISION_TIMING.
@@ -11,9 +14,13 @@
 #include <cstdio>
 #include <iostream>
 #include <lcm/lcm-cpp.hpp>
+#include <optional>
+#include <string>
 
 #include "common/channels.hpp"
 #include "common/decode.hpp"
+#include "common/params.hpp"
+#include "sim/params.hpp"
 #include "tools/score.hpp"
 
 namespace {
@@ -29,8 +36,16 @@ int main(int argc, char** argv) {
       truth_ch = alight::channels::kSimTruth, status_ch = alight::channels::kAutonomyStatus,
       target_ch = alight::channels::kVisionTarget, camera_ch = alight::channels::kCamera,
       timing_ch = alight::channels::kVisionTiming;
+  std::string vehicle_file;
   bool json = false, vision_only = false;
   app.add_option("log", log_path, "Session log (.lcmlog)")->required()->check(CLI::ExistingFile);
+  char default_impact[32];
+  std::snprintf(default_impact, sizeof default_impact, "%g",
+                alight::sim::VehicleParams{}.gear_max_impact_mps);
+  app.add_option("--vehicle", vehicle_file,
+                 std::string("Vehicle file of the flight: a touch-down sinking faster than its "
+                             "vehicle.gear_max_impact_mps is a crash (without it: ") +
+                     default_impact + " m/s, the default vehicle's)");
   app.add_flag("--json", json, "Print one JSON object instead of key: value lines");
   app.add_option("--truth-channel", truth_ch, "Channel of sim_truth_t");
   app.add_option("--status-channel", status_ch, "Channel of autonomy_status_t");
@@ -42,12 +57,23 @@ int main(int argc, char** argv) {
                "VISION_TIMING");
   CLI11_PARSE(app, argc, argv);
 
+  std::optional<alight::tools::Scorer> scorer_or;
+  try {
+    scorer_or = vehicle_file.empty()
+                    ? alight::tools::Scorer()
+                    : alight::tools::Scorer(
+                          alight::sim::load_vehicle_params(vehicle_file).gear_max_impact_mps);
+  } catch (const alight::ParamError& e) {
+    std::fprintf(stderr, "alight-score: configuration error: %s\n", e.what());
+    return 2;
+  }
+  alight::tools::Scorer& scorer = *scorer_or;
+
   lcm::LogFile log(log_path, "r");
   if (!log.good()) {
     std::fprintf(stderr, "alight-score: cannot read %s\n", log_path.c_str());
     return 2;
   }
-  alight::tools::Scorer scorer;
   int truths = 0, timings = 0, bad = 0;
   for (const lcm::LogEvent* ev = log.readNextEvent(); ev; ev = log.readNextEvent()) {
     if (ev->channel == truth_ch) {

@@ -235,6 +235,36 @@ TEST(NodeTest, ASecondPublisherCannotCaptureAChannelOrItsStamps) {
   EXPECT_EQ(sub.stats("NODE_TEST_SECOND").rejected_stamps, 0u);
 }
 
+// A signed node that subscribes to nothing (a camera) still stamps its counters no lower than the
+// bus time it hears on NODE_STATUS: after a boot without a real-time clock its own wall clock is
+// decades behind, and signed peers would take its messages for an old recording.
+TEST(NodeTest, ASignedNodeWithoutSubscriptionsLearnsTheBusTime) {
+  const bus::BusKey key = bus::make_bus_key(std::vector<uint8_t>(32, 0x77));
+  Node quiet(kUrl, "quiet", key), ahead(kUrl, "ahead", key), listener(kUrl, "listener", key);
+  struct Counters {
+    std::vector<uint64_t> seen;
+    void on(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+      const auto r = bus::split(rbuf->data, rbuf->data_size);
+      if (r.trailer) seen.push_back(r.trailer->counter);
+    }
+  } counters;
+  listener.lcm().subscribe("NODE_TEST_BUS_TIME", &Counters::on, &counters);
+  quiet.spin_once(0);  // adds its NODE_STATUS listener
+  // A peer whose clock is an hour ahead publishes its status.
+  node_status_t st{};
+  st.node = "ahead";
+  std::vector<uint8_t> status(static_cast<size_t>(st.getEncodedSize()));
+  st.encode(status.data(), 0, static_cast<int>(status.size()));
+  bus::Sealer far(99, key);
+  far.seal(status, channels::kNodeStatus, wall_utime() + 3'600'000'000LL);
+  ahead.lcm().publish(channels::kNodeStatus, status.data(), static_cast<unsigned>(status.size()));
+  ASSERT_TRUE(
+      spin_until(quiet, [&] { return quiet.bus_time_us() > wall_utime() + 3'000'000'000LL; }));
+  quiet.publish("NODE_TEST_BUS_TIME", imu(1));
+  ASSERT_TRUE(spin_until(listener, [&] { return !counters.seen.empty(); }));
+  EXPECT_GT(counters.seen[0], static_cast<uint64_t>(wall_utime() + 3'000'000'000LL));
+}
+
 TEST(NodeTest, EveryNodePublishesItsStatus) {
   Node pub(kUrl, "status-pub"), sub(kUrl, "sub");
   pub.set_status_period(0.05);

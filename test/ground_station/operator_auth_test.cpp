@@ -3,6 +3,7 @@
 
 #include "common/operator_auth.hpp"
 
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -349,6 +350,38 @@ TEST_F(KeyFileTest, WarnsWhenOthersCanReadTheKey) {
 
 TEST_F(KeyFileTest, DirectoryIsNotAKeyFile) {
   EXPECT_THROW(load_key_file(dir.string()), KeyFileError);
+}
+
+std::string key_file_error(const std::string& path) {
+  try {
+    load_key_file(path);
+  } catch (const KeyFileError& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << path << ": no KeyFileError";
+  return "";
+}
+
+// A FIFO without a writer would block the open or the read for good, /dev/zero never ends.
+TEST_F(KeyFileTest, FifosAndDevicesAreRefusedUnopened) {
+  const std::string fifo = (dir / "fifo.key").string();
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  EXPECT_EQ(key_file_error(fifo).rfind(fifo + ": key file is not a regular file", 0), 0u);
+  EXPECT_EQ(key_file_error("/dev/zero").rfind("/dev/zero: key file is not a regular file", 0), 0u);
+}
+
+TEST_F(KeyFileTest, LargeFilesAreRefused) {
+  const std::string huge = (dir / "huge.key").string();
+  const int fd = ::open(huge.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
+  ASSERT_GE(fd, 0);
+  ASSERT_EQ(::ftruncate(fd, off_t{300} << 20), 0);  // sparse: no disk
+  ::close(fd);
+  EXPECT_EQ(key_file_error(huge), huge + ": key file too large: 314572800 bytes, at most 4096");
+  EXPECT_NE(key_file_error(write("over", std::string(4097, 'a'))).find("too large"),
+            std::string::npos);
+  // At the limit: read whole, then judged as a key (an odd number of hex digits here).
+  EXPECT_NE(key_file_error(write("limit", std::string(4095, 'a') + "\n")).find("odd number"),
+            std::string::npos);
 }
 
 }  // namespace

@@ -74,5 +74,48 @@ TEST(GroundStationParamsTest, OperatorLinkAndServerLimitsAreReadAndBounded) {
   }
 }
 
+TEST(GroundStationParamsTest, FrameWaitAndQueuedConnectionsHaveUpperBounds) {
+  const auto ok = write_yaml("bounds_ok",
+                             "ground_station:\n  frame_wait_s: 2\n  client_timeout_s: 3\n"
+                             "  max_queued_connections: 256\n");
+  const GroundStationParams p = load_params(ok);
+  EXPECT_DOUBLE_EQ(p.frame_wait_s, 2.0);
+  EXPECT_EQ(p.max_queued_connections, 256);
+  std::filesystem::remove(ok);
+  struct Bad {
+    const char* yaml;
+    const char* key;
+    const char* value;
+    const char* problem;
+  };
+  for (const Bad& bad : {
+           Bad{"frame_wait_s: 2.5\n  client_timeout_s: 60", "ground_station.frame_wait_s", "2.5",
+               "must be in [0, 2] s"},
+           Bad{"frame_wait_s: 30\n  client_timeout_s: 60", "ground_station.frame_wait_s", "30",
+               "must be in [0, 2] s"},
+           // The answer is written after the wait: past the request's deadline it never is.
+           Bad{"frame_wait_s: 1.5\n  head_deadline_s: 1\n  request_deadline_s: 1",
+               "ground_station.frame_wait_s", "1.5",
+               "must be below client_timeout_s and request_deadline_s"},
+           Bad{"max_queued_connections: 257", "ground_station.max_queued_connections", "257",
+               "must be in [1, 256]"},
+           Bad{"max_queued_connections: 2000000000", "ground_station.max_queued_connections",
+               "2000000000", "must be in [1, 256]"},
+       }) {
+    const auto path =
+        write_yaml("bounds_bad", std::string("ground_station:\n  ") + bad.yaml + "\n");
+    try {
+      load_params(path);
+      ADD_FAILURE() << bad.yaml << ": no exception";
+    } catch (const ParamError& e) {
+      EXPECT_EQ(e.file(), path) << bad.yaml;
+      EXPECT_EQ(e.key(), bad.key) << bad.yaml;
+      EXPECT_EQ(e.value(), bad.value) << bad.yaml;
+      EXPECT_EQ(e.problem(), bad.problem) << bad.yaml;
+    }
+    std::filesystem::remove(path);
+  }
+}
+
 }  // namespace
 }  // namespace alight::ground_station

@@ -189,11 +189,11 @@ processes:
     ++statuses;
   }
   EXPECT_GE(statuses, 5);
-  ASSERT_EQ(last.n, 4);  // lcm-logger + 3
+  ASSERT_EQ(last.n, 4);  // the recorder + 3
   for (const auto& p : last.processes) {
     if (p.name == "crasher") {
       EXPECT_GE(p.restarts, 4);
-    } else if (p.name != "lcm-logger") {
+    } else if (p.name != "recorder") {
       EXPECT_EQ(p.state, process_info_t::STATE_STOPPED) << p.name;
     }
   }

@@ -42,7 +42,6 @@ struct Harness {
   // The operator's key and this vehicle's id, as the node loads them from the vehicle file.
   OperatorKey key{std::vector<uint8_t>(32, 0x42)};
   KillVerifier kills{key, "alight", 2'000'000};
-  std::map<std::string, double> contest_s;
 
   explicit Harness(PersistentState restored = {}, OuterLoopParams p = params())
       : runner(p, restored, gate()) {}
@@ -61,10 +60,6 @@ struct Harness {
     g.authorise_kill = [this](const operator_cmd_t& cmd) -> std::string {
       const KillCheck c = kills.check(cmd, now());
       return c == KillCheck::kAuthorised ? "" : kill_check_name(c);
-    };
-    g.contest_span_s = [this](const std::string& ch) {
-      const auto it = contest_s.find(ch);
-      return it == contest_s.end() ? 0.0 : it->second;
     };
     return g;
   }
@@ -337,21 +332,6 @@ TEST(OuterLoopRegression, LeavingTheGeofenceHoldsThenLands) {
   EXPECT_LT(h.model.p.z(), 0.01);
   EXPECT_FALSE(h.last->armed);
   EXPECT_LE(h.model.p.x(), p.geofence_max_W_m.x()) << "held inside the fence";
-}
-
-// A second publisher on the setpoint channel: one forged message is refused and reported (the
-// node's business); one that keeps sending for a second lands the vehicle.
-TEST(OuterLoopRegression, ASustainedSecondPublisherOnTheSetpointChannelLands) {
-  Harness h;
-  h.model.hover_at({0, 0, 1.6});
-  for (int i = 0; i < 100; ++i) h.step(hover_sp({0, 0, 1.6}));
-  h.contest_s[channels::kPositionSetpoint] = 0.0;  // one message
-  for (int i = 0; i < 50; ++i) h.step(hover_sp({0, 0, 1.6}));
-  EXPECT_EQ(h.last->mode, Mode::kNormal);
-  h.contest_s[channels::kPositionSetpoint] = 1.2;
-  for (int i = 0; i < 3000; ++i) h.step(hover_sp({0, 0, 1.6}));
-  EXPECT_FALSE(h.last->armed);
-  EXPECT_LT(h.model.p.z(), 0.01);
 }
 
 }  // namespace

@@ -1,12 +1,15 @@
 #include "tools/score.hpp"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <alight/image_t.hpp>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <lcm/lcm-cpp.hpp>
 #include <numeric>
 #include <random>
@@ -109,6 +112,95 @@ TEST(ScoreTest, LeavingTheFlyingAreaFailsEvenALanding) {
   EXPECT_EQ(s.outcome, "left_area");
   EXPECT_TRUE(s.out_of_area);
   EXPECT_NE(s.to_text().find("out_of_area: true"), std::string::npos) << s.to_text();
+}
+
+// A landing that ends upright, landed and 5 cm from the centre, touching the top while sinking
+// at `sink_mps` (the samples either side of the contact 20 ms apart, as the sim sends them).
+Scorer touchdown_at(double sink_mps, Scorer sc = Scorer(1.0)) {
+  auto sample = [](int64_t utime, double z, double vz, int8_t contact, bool landed) {
+    sim_truth_t t = landing_truth(utime, 1.03, -0.46, z, landed);
+    t.vel[2] = vz;
+    t.contact = contact;
+    return t;
+  };
+  sc.add(status(kT0 + 1'000'000, autonomy_status_t::PHASE_DETECTION, "DETECTION"));
+  // Resting on the floor at the start is no touch-down.
+  sc.add(sample(kT0, 0.1, 0, sim_truth_t::CONTACT_FLOOR, false));
+  sc.add(sample(kT0 + 2'000'000, 1.5, 0, sim_truth_t::CONTACT_NONE, false));
+  sc.add(sample(kT0 + 12'000'000, 0.34, -sink_mps, sim_truth_t::CONTACT_NONE, false));
+  sc.add(sample(kT0 + 12'020'000, 0.32, -0.5 * sink_mps, sim_truth_t::CONTACT_PLATFORM_TOP, false));
+  sc.add(sample(kT0 + 14'000'000, 0.32, 0, sim_truth_t::CONTACT_PLATFORM_TOP, true));
+  sc.add(status(kT0 + 14'000'000, autonomy_status_t::PHASE_LANDED, "LANDED", 0.3));
+  return sc;
+}
+
+TEST(ScoreTest, TouchdownFasterThanTheGearTakesIsACrashEvenUprightOnTarget) {
+  const Score s = touchdown_at(2.0).result();
+  EXPECT_FALSE(s.success);
+  EXPECT_EQ(s.outcome, "crashed");
+  EXPECT_TRUE(s.crashed);
+  ASSERT_TRUE(s.max_touchdown_speed_mps);
+  EXPECT_DOUBLE_EQ(*s.max_touchdown_speed_mps, 2.0);  // the sample before the contact: the faster
+  ASSERT_TRUE(s.touchdown_lateral_error_m);
+  EXPECT_NEAR(*s.touchdown_lateral_error_m, 0.05, 1e-9);  // on target all the same
+  const std::string text = s.to_text();
+  EXPECT_NE(text.find("max_touchdown_speed_mps: 2.0000\ngear_max_impact_mps: 1.0000\n"),
+            std::string::npos)
+      << text;
+  EXPECT_NE(text.find("n_collisions: 0\ncrashed: true\nout_of_area: false\n"), std::string::npos)
+      << text;
+}
+
+TEST(ScoreTest, TouchdownWithinTheGearsImpactSpeedLands) {
+  const Score s = touchdown_at(0.9).result();
+  EXPECT_TRUE(s.success);
+  EXPECT_EQ(s.outcome, "landed");
+  EXPECT_FALSE(s.crashed);
+  ASSERT_TRUE(s.max_touchdown_speed_mps);
+  EXPECT_DOUBLE_EQ(*s.max_touchdown_speed_mps, 0.9);
+  EXPECT_NE(s.to_text().find("crashed: false\n"), std::string::npos);
+  // The limit is the vehicle's: a sturdier gear takes the 2 m/s above.
+  EXPECT_TRUE(touchdown_at(2.0, Scorer(2.5)).result().success);
+}
+
+TEST(ScoreTest, EveryTouchdownCountsAndTheFastestIsReported) {
+  Scorer sc = touchdown_at(0.5);
+  // Knocked off the top afterwards and dropped onto the floor: a second touch-down, after the
+  // landing, at whatever attitude.
+  sim_truth_t fall = landing_truth(kT0 + 15'000'000, 1.4, -0.46, 0.5, false);
+  fall.vel[2] = -3.0;
+  fall.orientation[0] = 0;
+  fall.orientation[1] = 1;  // upside down
+  sc.add(fall);
+  fall.utime += 20'000;
+  fall.contact = sim_truth_t::CONTACT_FLOOR;
+  fall.vel[2] = 0.4;  // bouncing back already
+  sc.add(fall);
+  const Score s = sc.result();
+  EXPECT_EQ(s.outcome, "crashed");
+  EXPECT_DOUBLE_EQ(*s.max_touchdown_speed_mps, 3.0);
+}
+
+TEST(ScoreTest, ContactSampleFasterThanTheOneBeforeCounts) {
+  // Still accelerating when the contact sample was taken (thrust cut at contact).
+  Scorer sc(1.0);
+  sim_truth_t t = landing_truth(kT0, 1.0, -0.5, 0.4, false);
+  t.vel[2] = -0.8;
+  sc.add(t);
+  t.utime += 20'000;
+  t.vel[2] = -1.1;
+  t.contact = sim_truth_t::CONTACT_PLATFORM_EDGE;
+  sc.add(t);
+  EXPECT_DOUBLE_EQ(*sc.result().max_touchdown_speed_mps, 1.1);
+  EXPECT_TRUE(sc.result().crashed);
+}
+
+TEST(ScoreTest, NoTouchdownNoSpeedFigure) {
+  const Score s = landing_session(false).result();  // SIM_TRUTH without contacts
+  EXPECT_FALSE(s.max_touchdown_speed_mps.has_value());
+  EXPECT_FALSE(s.crashed);
+  EXPECT_EQ(s.to_text().find("max_touchdown_speed_mps"), std::string::npos);
+  EXPECT_EQ(s.to_text().find("gear_max_impact_mps"), std::string::npos);
 }
 
 TEST(ScoreTest, IngressThroughTheOpening) {
@@ -457,6 +549,59 @@ TEST(ScoreTest, CommandLineReadsASessionLog) {
   EXPECT_EQ(run(path.string() + " --vision-only --timing-channel NONE", &no_timing), 2);
   std::filesystem::remove(path);
   std::filesystem::remove(bare);
+}
+
+// The vehicle's gear from --vehicle; without it the default vehicle's; a refused vehicle file is
+// a configuration error (exit 2) naming the file.
+TEST(ScoreTest, CommandLineJudgesTouchdownsAgainstTheVehiclesGear) {
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("alight_score_gear_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const auto log_path = (dir / "crash.lcmlog").string();
+  {
+    lcm::LogFile log(log_path, "w");
+    auto write = [&](const char* ch, const auto& msg) {
+      std::vector<uint8_t> buf(msg.getEncodedSize());
+      msg.encode(buf.data(), 0, static_cast<int>(buf.size()));
+      lcm::LogEvent ev{0, msg.utime, ch, static_cast<int32_t>(buf.size()), buf.data()};
+      log.writeEvent(&ev);
+    };
+    write(channels::kAutonomyStatus,
+          status(kT0 + 1, autonomy_status_t::PHASE_DETECTION, "DETECTION"));
+    sim_truth_t t = landing_truth(kT0, 1.0, -0.5, 0.5, false);
+    t.vel[2] = -2.0;
+    write(channels::kSimTruth, t);
+    t = landing_truth(kT0 + 20'000, 1.0, -0.5, 0.32, true);
+    t.contact = sim_truth_t::CONTACT_PLATFORM_TOP;
+    write(channels::kSimTruth, t);
+  }
+  std::ofstream(dir / "sturdy.yaml") << "vehicle:\n  gear_max_impact_mps: 3.0\n";
+  const std::string fifo = (dir / "fifo.yaml").string();
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  const std::string bin = std::string(ALIGHT_BINARY_DIR) + "/bin/alight-score " + log_path;
+  auto run = [&](const std::string& args, std::string* out) {
+    FILE* p = popen((bin + args + " 2>&1").c_str(), "r");
+    char buf[512];
+    while (fgets(buf, sizeof buf, p)) *out += buf;
+    return WEXITSTATUS(pclose(p));
+  };
+  std::string plain, pelican, sturdy, refused, help;
+  EXPECT_EQ(run("", &plain), 1) << plain;
+  EXPECT_NE(plain.find("outcome: crashed\n"), std::string::npos) << plain;
+  EXPECT_NE(plain.find("max_touchdown_speed_mps: 2.0000\n"), std::string::npos) << plain;
+  EXPECT_EQ(run(" --vehicle " + std::string(ALIGHT_SOURCE_DIR) + "/config/vehicles/pelican.yaml",
+                &pelican),
+            1)
+      << pelican;
+  EXPECT_NE(pelican.find("crashed: true\n"), std::string::npos) << pelican;
+  EXPECT_EQ(run(" --vehicle " + (dir / "sturdy.yaml").string(), &sturdy), 0) << sturdy;
+  EXPECT_NE(sturdy.find("outcome: landed\n"), std::string::npos) << sturdy;
+  EXPECT_NE(sturdy.find("gear_max_impact_mps: 3.0000\n"), std::string::npos) << sturdy;
+  EXPECT_EQ(run(" --vehicle " + fifo, &refused), 2) << refused;
+  EXPECT_NE(refused.find(fifo + ": not a regular file (a FIFO)"), std::string::npos) << refused;
+  EXPECT_EQ(run(" --help", &help), 0);
+  EXPECT_NE(help.find("gear_max_impact_mps"), std::string::npos) << help;
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace
