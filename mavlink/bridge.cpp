@@ -935,13 +935,13 @@ bool Bridge::decide_engage(const BridgeClock& now, BridgeOutput& out) {
                    now, out);
       return true;
     }
-    const int64_t rx = control_ == ControlMode::kAttitude ? attitude_rx_steady_us_
-                                                          : position_rx_steady_us_;
+    const int64_t rx =
+        control_ == ControlMode::kAttitude ? attitude_rx_steady_us_ : position_rx_steady_us_;
     if (!fresh && engaged_stream_ && params_.silence_action == "land" &&
         now.steady_us - rx >= static_cast<int64_t>(params_.silence_land_s * 1e6)) {
       request_land(
-          "the stack's setpoints stopped " + std::to_string(params_.silence_land_s) + " s ago",
-          now, out);
+          "the stack's setpoints stopped " + std::to_string(params_.silence_land_s) + " s ago", now,
+          out);
       return true;
     }
     if (off_in_air_since_us_ && now.steady_us - *off_in_air_since_us_ >= kInAirDisarmWaitUs) {

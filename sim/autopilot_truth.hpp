@@ -47,8 +47,8 @@ struct AutopilotTruthParams {
   /// lockstep clock stalls on a loaded machine; extrapolated on the wall clock through a stall,
   /// motion capture ran ahead of the vehicle and EKF2 fused a pose 5 cm off.
   double max_extrapolation_s = 0.03;
-  double smooth_hz = 8.0;               ///< advance(): natural frequency of the position [Hz]
-  double attitude_gain_per_s = 30.0;    ///< advance(): pull of the attitude error [1/s]
+  double smooth_hz = 8.0;             ///< advance(): natural frequency of the position [Hz]
+  double attitude_gain_per_s = 30.0;  ///< advance(): pull of the attitude error [1/s]
   uint8_t own_sysid = 200, own_compid = 190;
 };
 
