@@ -635,8 +635,11 @@ bool Bridge::hold_setpoints() const {
   const bool in_fly = is_fly_mode(flavour_, control_, heartbeat_->custom_mode);
   // Not this bridge's vehicle to fly; or ArduCopter climbing on NAV_TAKEOFF, which the first
   // position target would cut short while it still counts as landed (ArduCopter/mode_guided.cpp:
-  // pos_control_run does nothing while is_disarmed_or_landed()).
-  return (refuse_takeover_ && armed && in_fly) || (takeoff_accepted_ && armed && in_fly);
+  // pos_control_run does nothing while is_disarmed_or_landed()). Held from the command's sending,
+  // not its ACK: a target sent while the ACK is on its way arrives after the take-off began.
+  const bool takeoff_pending = pending_ && pending_->cmd.command == mav_cmd::kNavTakeoff;
+  return (refuse_takeover_ && armed && in_fly) ||
+         ((takeoff_accepted_ || takeoff_pending) && armed && in_fly);
 }
 
 void Bridge::stream(const BridgeClock& now, BridgeOutput& out) {

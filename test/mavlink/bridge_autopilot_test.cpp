@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <deque>
 #include <functional>
 
 #include "mavlink/bridge.hpp"
@@ -77,7 +78,13 @@ struct Loop {
       for (auto& p : out.autopilot_pose) poses.push_back(p);
       imu += out.imu.size();
     }
-    to_bridge = ap.step(from_bridge, t_us);
+    replies.emplace_back(t_us + reply_delay_us, ap.step(from_bridge, t_us));
+    to_bridge.clear();
+    while (!replies.empty() && replies.front().first <= t_us) {
+      to_bridge.insert(to_bridge.end(), replies.front().second.begin(),
+                       replies.front().second.end());
+      replies.pop_front();
+    }
     t_us += 2000;
   }
   void run(double s) {
@@ -101,7 +108,9 @@ struct Loop {
   std::unique_ptr<Bridge> bridge;
   ScriptedAutopilot ap;
   bool bridge_alive = true;
+  int64_t reply_delay_us = 0;  // the autopilot's bytes on their way to the bridge
   int64_t t_us = 1'000'000, next_mocap = 0;
+  std::deque<std::pair<int64_t, std::vector<uint8_t>>> replies;
   std::vector<uint8_t> to_bridge;
   std::vector<std::string> events;
   std::vector<AutopilotPose> poses;
@@ -200,6 +209,23 @@ TEST(BridgeAutopilotTest, ArduCopterTakesOffInGuidedThroughNavTakeoffAndIsNeverR
   EXPECT_EQ(l.ap.arms, 1);
   EXPECT_TRUE(l.ap.armed());
   EXPECT_GT(l.ap.position_used, 0);
+}
+
+TEST(BridgeAutopilotTest, ArduCopterTakesOffThoughItsNavTakeoffAckComesAfterTheNextSetpoints) {
+  // The ACK 40 ms on its way (a loaded companion, a slow link), two setpoint periods at 50 Hz: a
+  // position target sent after NAV_TAKEOFF but before its ACK arrives switches GUIDED from the
+  // take-off to position control while still landed, where it stays on the ground until
+  // DISARM_DELAY disarms it (ArduCopter/mode_guided.cpp: set_destination leaves SubMode::TakeOff,
+  // pos_control_run does nothing while is_disarmed_or_landed()).
+  Loop l(ardupilot_params("position"), copter());
+  l.reply_delay_us = 40'000;
+  Motors motors = Motors::kOn;
+  int64_t next = 0;
+  l.stack = position_stack(l, 1.2, &motors, &next);
+  ASSERT_TRUE(l.run_until([&] { return l.ap.height_m() > 1.1; }, 30.0))
+      << "height " << l.ap.height_m() << ", takeoffs " << l.ap.takeoffs << ", arms " << l.ap.arms;
+  EXPECT_EQ(l.ap.takeoffs, 1);
+  EXPECT_EQ(l.ap.arms, 1);
 }
 
 TEST(BridgeAutopilotTest, WithoutNavTakeoffArduCoptersGuidedDisarmsOnTheGround) {
