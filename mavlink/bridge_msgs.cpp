@@ -78,6 +78,23 @@ std::optional<std::string> setpoint_stamp_problem(int64_t utime, int64_t referen
   return std::nullopt;
 }
 
+bool kill_authorised(KillVerifier* verifier, const operator_cmd_t& authority, int64_t now_wall_us,
+                     std::string* why) {
+  if (authority.command == operator_cmd_t::CMD_NONE &&
+      authority.auth == operator_cmd_t::AUTH_NONE) {
+    if (why) *why = "no kill authority attached";
+    return false;
+  }
+  if (!verifier) {
+    if (why) *why = "no operator key here (the vehicle file's autonomy.operator_key_file)";
+    return false;
+  }
+  const KillCheck c = verifier->check(authority, now_wall_us);
+  if (c == KillCheck::kAuthorised) return true;
+  if (why) *why = kill_check_name(c);
+  return false;
+}
+
 imu_t to_msg(const ImuOut& imu, int64_t seq) {
   imu_t m{};
   m.utime = imu.utime;

@@ -10,6 +10,7 @@
 #include <optional>
 #include <string>
 
+#include "common/operator_auth.hpp"
 #include "mavlink/bridge.hpp"
 
 namespace alight::mavlink {
@@ -24,6 +25,13 @@ std::optional<PositionTarget> position_from_msg(const position_setpoint_t& msg, 
 /// the reference or `max_ahead_s` after it.
 std::optional<std::string> setpoint_stamp_problem(int64_t utime, int64_t reference_utime,
                                                   double max_age_s, double max_ahead_s);
+/// Whether a KILL (POSITION_SETPOINT motors KILL, ATTITUDE_CMD armed = false) carries the
+/// operator's authority for a forced disarm (issue 37): its kill_authority, the operator's signed
+/// CMD_KILL, verified with the vehicle's operator key at `now_wall_us` (the command was stamped
+/// by the ground station's clock). False, and *why, for an empty authority, no verifier (no
+/// operator key configured) or one the verifier refuses: a plain motors-off then.
+bool kill_authorised(KillVerifier* verifier, const operator_cmd_t& authority, int64_t now_wall_us,
+                     std::string* why);
 imu_t to_msg(const ImuOut& imu, int64_t seq);
 /// `reopens`: how often the node reopened its device or socket.
 autopilot_status_t to_msg(const AutopilotStatus& s, int64_t wall_utime, int64_t reopens);

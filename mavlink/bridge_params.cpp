@@ -1,5 +1,7 @@
 #include "mavlink/bridge_params.hpp"
 
+#include <cmath>
+
 #include "mavlink/frame.hpp"
 #include "mavlink/link_address.hpp"
 
@@ -81,6 +83,19 @@ const ParamSchema<BridgeParams>& BridgeParams::schema() {
           "resends before a command counts as failed");
     s.add("command_backoff_s", &P::command_backoff_s, Range::closed(0, 60), "s",
           "after a refused or failed command, wait this long before asking again");
+    s.add("silence_action", &P::silence_action, Range::any(), "",
+          "the stack's setpoints stop while alight flies the vehicle: land (ask for the "
+          "autopilot's LAND at once; ArduCopter has no offboard-loss failsafe) or autopilot "
+          "(leave it to the autopilot's own failsafe, PX4 COM_OBL_RC_ACT)")
+        .one_of({"land", "autopilot"});
+    s.add("silence_land_s", &P::silence_land_s, Range::closed(0.1, 10), "s",
+          "silence_action land: the stack's setpoints silent this long (a process stalled for "
+          "0.8 s on a loaded SITL machine) before the bridge asks for LAND")
+        .check([](const P& p) { return p.silence_land_s >= p.setpoint_timeout_s; },
+               "must be at least setpoint_timeout_s");
+    s.add("rearm_cooldown_s", &P::rearm_cooldown_s, Range::closed(0, 600), "s",
+          "no ARM this long after the vehicle disarmed (after a flight the stack must also have "
+          "said motors off since)");
     s.add("hover_thrust", &P::hover_thrust, Range::open(0, 1), "",
           "attitude: normalised thrust that hovers the vehicle (PX4: MPC_THR_HOVER); ATTITUDE_CMD "
           "thrust_N is scaled by it over the vehicle's weight");
@@ -98,6 +113,38 @@ const ParamSchema<BridgeParams>& BridgeParams::schema() {
           "ATTITUDE_QUATERNION asked of the autopilot (0: leave its rate)");
     s.add("position_rate_hz", &P::position_rate_hz, Range::closed(0, 1000), "Hz",
           "LOCAL_POSITION_NED asked of the autopilot (0: leave its rate)");
+    s.add("landed_state_rate_hz", &P::landed_state_rate_hz, Range::closed(0, 50), "Hz",
+          "EXTENDED_SYS_STATE (the autopilot's landed state) asked (0: leave its rate)");
+    s.add("sys_status_rate_hz", &P::sys_status_rate_hz, Range::closed(0, 50), "Hz",
+          "SYS_STATUS (pre-arm checks, battery) asked (0: leave its rate)");
+    s.add("set_ekf_origin", &P::set_ekf_origin, Range::any(), "",
+          "without GPS: send SET_GPS_GLOBAL_ORIGIN (ekf_origin) until the autopilot reports an "
+          "origin (ArduPilot needs one for GUIDED, take-off and LOCAL_POSITION_NED)");
+    s.add("ekf_origin", &P::ekf_origin, Range::any(), "",
+          "latitude [deg], longitude [deg], altitude above mean sea level [m] of the local "
+          "frame's origin (the motion-capture room's, roughly)")
+        .check_with([](const P& p) -> std::string {
+          if (p.ekf_origin.size() != 3) return "must be [latitude, longitude, altitude]";
+          if (std::abs(p.ekf_origin[0]) > 90 || std::abs(p.ekf_origin[1]) > 180)
+            return "latitude must be within 90 deg, longitude within 180 deg";
+          if (p.ekf_origin[2] < -500 || p.ekf_origin[2] > 10000)
+            return "altitude must be within -500 .. 10000 m";
+          if (p.set_ekf_origin && p.ekf_origin[0] == 0 && p.ekf_origin[1] == 0)
+            return "set_ekf_origin needs a real origin (ArduPilot refuses 0, 0)";
+          return "";
+        });
+    s.add("signing_key_file", &P::signing_key_file, Range::any(), "",
+          "MAVLink 2 signing key (64 hex digits, or a passphrase: SHA-256 of it); empty: the "
+          "link is not signed")
+        .path();
+    s.add("signing_link_id", &P::signing_link_id, Range::closed(0, 255), "",
+          "alight's link id in signed frames");
+    s.add("check_params", &P::check_params, Range::any(), "",
+          "read the autopilot parameters alight relies on at link-up and report those set "
+          "otherwise (mavlink/autopilot_params.hpp)");
+    s.add("align_frames", &P::align_frames, Range::any(), "",
+          "position control: measure the offset of the autopilot's local frame from motion "
+          "capture (at rest) and send setpoints in the autopilot's frame");
     s.add("status_rate_hz", &P::status_rate_hz, Range::closed(0.5, 50), "Hz",
           "AUTOPILOT_STATUS published");
     return s;

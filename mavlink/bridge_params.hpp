@@ -6,6 +6,7 @@
 // what telemetry comes back.
 
 #include <string>
+#include <vector>
 
 #include "common/param_schema.hpp"
 #include "mavlink/autopilot_modes.hpp"
@@ -33,6 +34,12 @@ struct BridgeParams {
   double command_timeout_s = 0.5;   ///< COMMAND_LONG unanswered this long: sent again [s]
   int command_retries = 4;          ///< resends before a command counts as failed
   double command_backoff_s = 1.0;   ///< after a refused / failed command, wait this long [s]
+  /// The stack's setpoints stop while the bridge flies the vehicle: "land" asks for the
+  /// autopilot's LAND mode at once, "autopilot" leaves it to the autopilot's own failsafe.
+  std::string silence_action = "land";
+  /// ... after the setpoints have been silent this long (the stream stops at setpoint_timeout_s).
+  double silence_land_s = 1.5;
+  double rearm_cooldown_s = 5.0;  ///< no ARM this long after a disarm [s]
 
   double hover_thrust = 0.5;  ///< normalised thrust (0..1) that hovers (PX4 MPC_THR_HOVER) [-]
   double yaw_lead_s = 0.35;   ///< attitude: heading setpoint = heading + yaw rate x this [s]
@@ -41,10 +48,25 @@ struct BridgeParams {
       "att_pos_mocap";          ///< MOCAP_POSE as "att_pos_mocap", "odometry", "none"
   double mocap_rate_hz = 50.0;  ///< at most this many poses forwarded [Hz]
 
-  double imu_rate_hz = 200.0;       ///< HIGHRES_IMU asked of the autopilot (0: leave it) [Hz]
-  double attitude_rate_hz = 100.0;  ///< ATTITUDE_QUATERNION asked (0: leave it) [Hz]
-  double position_rate_hz = 30.0;   ///< LOCAL_POSITION_NED asked (0: leave it) [Hz]
-  double status_rate_hz = 5.0;      ///< AUTOPILOT_STATUS published [Hz]
+  double imu_rate_hz = 200.0;         ///< HIGHRES_IMU asked of the autopilot (0: leave it) [Hz]
+  double attitude_rate_hz = 100.0;    ///< ATTITUDE_QUATERNION asked (0: leave it) [Hz]
+  double position_rate_hz = 30.0;     ///< LOCAL_POSITION_NED asked (0: leave it) [Hz]
+  double landed_state_rate_hz = 4.0;  ///< EXTENDED_SYS_STATE asked (0: leave it) [Hz]
+  double sys_status_rate_hz = 2.0;    ///< SYS_STATUS asked (0: leave it) [Hz]
+  double status_rate_hz = 5.0;        ///< AUTOPILOT_STATUS published [Hz]
+
+  /// Without GPS: SET_GPS_GLOBAL_ORIGIN (latitude [deg], longitude [deg], altitude [m above mean
+  /// sea level]) until the autopilot reports an origin.
+  bool set_ekf_origin = false;
+  std::vector<double> ekf_origin = {0.0, 0.0, 0.0};
+  /// MAVLink 2 signing on the link (empty: none): 64 hex digits, or a passphrase whose SHA-256
+  /// is the key (as Mission Planner and QGroundControl derive it).
+  std::string signing_key_file;
+  int signing_link_id = 1;   ///< our link id in signed frames
+  bool check_params = true;  ///< read and report the autopilot parameters alight relies on
+  /// Position control: measure the autopilot's local frame against motion capture and send
+  /// setpoints in it.
+  bool align_frames = true;
 
   static const ParamSchema<BridgeParams>& schema();
   void validate() const;  ///< throws ParamError naming the field and its value

@@ -6,6 +6,7 @@
 #include <poll.h>
 #include <sys/ioctl.h>
 #include <sys/socket.h>
+#include <sys/time.h>
 #include <termios.h>
 #include <unistd.h>
 
@@ -118,6 +119,9 @@ bool LinkIo::open_udp(std::string* error) {
   }
   const int one = 1;
   setsockopt(fd_, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one);
+  // The kernel's arrival time of each datagram (last_receipt_wall_us()): a reader busy
+  // elsewhere for milliseconds would otherwise stamp a queue of them all at once.
+  setsockopt(fd_, SOL_SOCKET, SO_TIMESTAMP, &one, sizeof one);
   sockaddr_in local{};
   local.sin_family = AF_INET;
   if (address_.kind == LinkAddress::Kind::kUdpListen) {
@@ -164,9 +168,25 @@ long LinkIo::read(std::span<uint8_t> out, std::string* error) {
       }
     } else {
       sockaddr_in from{};
-      socklen_t len = sizeof from;
-      n = recvfrom(fd_, out.data(), out.size(), 0, reinterpret_cast<sockaddr*>(&from), &len);
+      iovec iov{out.data(), out.size()};
+      alignas(cmsghdr) char control[CMSG_SPACE(sizeof(timeval))];
+      msghdr msg{};
+      msg.msg_name = &from;
+      msg.msg_namelen = sizeof from;
+      msg.msg_iov = &iov;
+      msg.msg_iovlen = 1;
+      msg.msg_control = control;
+      msg.msg_controllen = sizeof control;
+      n = recvmsg(fd_, &msg, 0);
       if (n >= 0) {
+        last_receipt_wall_us_ = 0;
+        for (cmsghdr* c = CMSG_FIRSTHDR(&msg); c; c = CMSG_NXTHDR(&msg, c)) {
+          if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SCM_TIMESTAMP) {
+            timeval tv;
+            std::memcpy(&tv, CMSG_DATA(c), sizeof tv);
+            last_receipt_wall_us_ = int64_t{tv.tv_sec} * 1'000'000 + tv.tv_usec;
+          }
+        }
         if (address_.kind == LinkAddress::Kind::kUdpPeer) {
           if (!same_address(from, *peer_)) {
             ++stats_.datagrams_foreign;

@@ -46,6 +46,9 @@ class LinkIo {
   const LinkIoStats& stats() const { return stats_; }
   /// udp-listen: whether a peer has been heard (replies go to it).
   bool has_peer() const { return peer_.has_value(); }
+  /// udp: when the kernel received the datagram the last read() returned (Unix time [us]; 0
+  /// for a serial port or when the kernel gave no time).
+  int64_t last_receipt_wall_us() const { return last_receipt_wall_us_; }
 
  private:
   bool open_serial(std::string* error);
@@ -54,6 +57,7 @@ class LinkIo {
   LinkAddress address_;
   int fd_ = -1;
   std::optional<sockaddr_in> peer_;  // udp: where datagrams go
+  int64_t last_receipt_wall_us_ = 0;
   LinkIoStats stats_;
 };
 

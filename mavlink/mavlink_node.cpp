@@ -10,6 +10,16 @@
 // MOCAP_POSE (to the autopilot's estimator). Out: IMU, AUTOPILOT_POSE, AUTOPILOT_STATUS, and
 // NODE_STATUS with the link as the input "mavlink:<link>".
 //
+// A forced disarm needs the operator: a KILL (POSITION_SETPOINT motors KILL, ATTITUDE_CMD
+// armed = false) is forced only when its kill_authority, the operator's signed CMD_KILL, verifies
+// with the vehicle file's operator key (autonomy.operator_key_file, vehicle_id,
+// command_max_age_s, judged on this node's wall clock: the command was stamped by the ground
+// station's); otherwise it is a plain motors-off.
+//
+//   alight-mavlink --config FILE --setup-signing   gives the autopilot the file's signing key
+//   (SETUP_SIGNING, unsigned, while it is disarmed; on a link the autopilot trusts, e.g. its USB
+//   port) and exits 0 once the autopilot's HEARTBEAT comes signed with it, 1 after 10 s.
+//
 // A device that cannot be opened, disappears (USB unplugged) or fails is closed and reopened
 // every reopen_delay_s, forever: the autopilot flies its own failsafe meanwhile, and a flight
 // stack must not need a restart because a cable was reseated. Bad configuration: exit 2.
@@ -22,10 +32,16 @@
 #include <alight/pose_t.hpp>
 #include <alight/position_setpoint_t.hpp>
 #include <array>
+#include <chrono>
+#include <fstream>
+#include <sstream>
+#include <thread>
 
+#include "autonomy/params.hpp"
 #include "common/channels.hpp"
 #include "common/msg_convert.hpp"
 #include "common/node.hpp"
+#include "common/operator_auth.hpp"
 #include "mavlink/bridge.hpp"
 #include "mavlink/bridge_msgs.hpp"
 #include "mavlink/link_io.hpp"
@@ -38,6 +54,31 @@ namespace {
 constexpr double kMaxSetpointAgeS = 1.0;
 /// The outer loop's clock runs ahead of the inputs' while a loaded machine delays them [s].
 constexpr double kMaxSetpointAheadS = 10.0;
+
+/// The signing key of the file's signing_key_file: 64 hex digits, or a passphrase.
+std::optional<alight::mavlink::SigningConfig> load_signing(const alight::mavlink::BridgeParams& p,
+                                                           const std::string& config) {
+  if (p.signing_key_file.empty()) return std::nullopt;
+  std::ifstream f(p.signing_key_file);
+  if (!f)
+    throw alight::ParamError(config, "mavlink.signing_key_file", p.signing_key_file,
+                             "cannot be read");
+  std::stringstream ss;
+  ss << f.rdbuf();
+  std::string text = ss.str();
+  while (!text.empty() && (text.back() == '\n' || text.back() == '\r' || text.back() == ' '))
+    text.pop_back();
+  alight::mavlink::SigningConfig c;
+  c.link_id = static_cast<uint8_t>(p.signing_link_id);
+  if (const auto k = alight::mavlink::signing_key_from_hex(text)) {
+    c.key = *k;
+  } else if (!text.empty()) {
+    c.key = alight::mavlink::signing_key_from_passphrase(text);
+  } else {
+    throw alight::ParamError(config, "mavlink.signing_key_file", p.signing_key_file, "is empty");
+  }
+  return c;
+}
 
 alight::ChannelStats link_stats(const alight::mavlink::AutopilotStatus& s) {
   alight::ChannelStats c;
@@ -60,10 +101,14 @@ int main(int argc, char** argv) {
     NodeArgs args;
     args.add_to(app, true);
     std::string vehicle_file, link;
+    bool setup_signing = false;
     app.add_option("--vehicle", vehicle_file,
                    "Vehicle file: its outer_loop.mass_kg turns ATTITUDE_CMD thrust [N] into the "
                    "autopilot's normalised thrust (needed for control: attitude)");
     app.add_option("--link", link, "instead of the file's mavlink.link");
+    app.add_flag("--setup-signing", setup_signing,
+                 "give the autopilot mavlink.signing_key_file's key (SETUP_SIGNING), check that "
+                 "it signs with it, and exit");
     try {
       app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
@@ -79,6 +124,106 @@ int main(int argc, char** argv) {
       params.link = link;
       params.validate();
     }
+    const auto signing = load_signing(params, args.config);
+    if (setup_signing) {
+      if (!signing)
+        throw ParamError(args.config, "mavlink.signing_key_file", "",
+                         "--setup-signing needs a key file");
+      mav::LinkIo io(*mav::parse_link_address(params.link, nullptr));
+      std::string error;
+      if (!io.open(&error)) {
+        spdlog::error("alight-mavlink: {}", error);
+        return 1;
+      }
+      mav::Parser parser(mav::ParserOptions{signing->key, true});
+      mav::Sender plain(static_cast<uint8_t>(params.own_sysid),
+                        static_cast<uint8_t>(params.own_compid));
+      std::array<uint8_t, 4096> buffer;
+      const int64_t start = steady_utime();
+      int64_t next_send = start;
+      std::optional<uint8_t> target;
+      while (steady_utime() - start < 10'000'000) {
+        const int64_t now = steady_utime();
+        if (target && now >= next_send) {
+          mav::SetupSigning m;
+          m.target_system = *target;
+          m.target_component = static_cast<uint8_t>(params.target_compid);
+          m.secret_key = signing->key;
+          m.initial_timestamp = mav::signing_timestamp_from_unix_utime(wall_utime());
+          const auto f = plain.pack(m, wall_utime());
+          io.write(f.bytes(), &error);
+          next_send = now + 1'000'000;
+        }
+        const long n = io.read(buffer, &error);
+        if (n < 0) {
+          spdlog::error("alight-mavlink: {}", error);
+          return 1;
+        }
+        if (n == 0) {
+          std::this_thread::sleep_for(std::chrono::milliseconds(5));
+          continue;
+        }
+        parser.observe_time(wall_utime());
+        parser.push(std::span<const uint8_t>(buffer.data(), static_cast<size_t>(n)));
+        mav::Frame f;
+        while (parser.next(f)) {
+          if (f.msgid != mav::Heartbeat::kId || f.compid != params.target_compid) continue;
+          const auto hb = mav::decode<mav::Heartbeat>(f);
+          if (!hb || hb->autopilot == mav::mav_autopilot::kInvalid) continue;
+          if (!target) {
+            target = f.sysid;
+            if (hb->base_mode & mav::mav_mode_flag::kSafetyArmed) {
+              spdlog::error(
+                  "alight-mavlink: the autopilot is armed; both autopilots refuse "
+                  "SETUP_SIGNING while armed");
+              return 1;
+            }
+          }
+          if (f.signature_verified) {
+            spdlog::info("alight-mavlink: system {} signs with the key of {}", f.sysid,
+                         params.signing_key_file);
+            return 0;
+          }
+        }
+      }
+      spdlog::error("alight-mavlink: no HEARTBEAT signed with the key within 10 s{}",
+                    target ? "" : " (no autopilot heard)");
+      return 1;
+    }
+    // The operator's key, as autonomy reads it, for a KILL's authority.
+    std::optional<KillVerifier> kill_verifier;
+    if (!vehicle_file.empty()) {
+      const auto ap = autonomy::load_params(vehicle_file);
+      std::optional<OperatorKey> key;
+      if (!ap.operator_key_file.empty()) {
+        auto loaded = load_key_file(ap.operator_key_file);
+        for (const auto& w : loaded.warnings) spdlog::warn("alight-mavlink: {}", w);
+        key = std::move(loaded.key);
+      }
+      kill_verifier.emplace(std::move(key), ap.vehicle_id,
+                            static_cast<int64_t>(std::llround(ap.command_max_age_s * 1e6)));
+    }
+    // A refused authority is logged when the reason changes and every 500th time after: the
+    // carrier repeats it with every message.
+    std::string last_refusal;
+    uint64_t refusals = 0;
+    const auto kill_authorised = [&](const operator_cmd_t& authority, const char* channel,
+                                     bool is_kill) {
+      std::string why;
+      if (mav::kill_authorised(kill_verifier ? &*kill_verifier : nullptr, authority, wall_utime(),
+                               &why))
+        return true;
+      const bool empty = authority.command == operator_cmd_t::CMD_NONE &&
+                         authority.auth == operator_cmd_t::AUTH_NONE;
+      if (!is_kill && empty) return false;  // the outer loop's motors-off on the ground
+      if (why != last_refusal || ++refusals % 500 == 0)
+        spdlog::warn(
+            "alight-mavlink: {}: KILL without the operator's authority ({}): a plain "
+            "motors-off",
+            channel, why);
+      last_refusal = why;
+      return false;
+    };
     double weight_N = 0;
     if (!vehicle_file.empty()) {
       const auto ol = outer_loop::load_params(vehicle_file);
@@ -94,7 +239,7 @@ int main(int argc, char** argv) {
     const mav::LinkAddress address = *mav::parse_link_address(params.link, nullptr);
     const std::string input = "mavlink:" + address.text();
     Node node(args, "alight-mavlink");
-    mav::Bridge bridge(params, weight_N);
+    mav::Bridge bridge(params, weight_N, signing);
     mav::LinkIo io(address);
     int64_t imu_seq = 0, pose_seq = 0, reopens = 0;
     spdlog::info("alight-mavlink: {} over {}, {} control, engage {}, setpoints at {} Hz",
@@ -112,8 +257,11 @@ int main(int argc, char** argv) {
         }
       }
       for (const auto& s : out.imu) node.publish(channels::kImu, mav::to_msg(s, imu_seq++));
-      for (const auto& p : out.autopilot_pose)
-        node.publish(channels::kAutopilotPose, to_msg(p, pose_seq++));
+      for (const auto& p : out.autopilot_pose) {
+        pose_t m = to_msg(p.pose, pose_seq++);
+        if (!p.position_known) m.status = pose_t::STATUS_ATTITUDE_ONLY;
+        node.publish(channels::kAutopilotPose, m);
+      }
       for (const auto& e : out.events) {
         if (e.warning)
           spdlog::warn("alight-mavlink: {}", e.text);
@@ -126,6 +274,8 @@ int main(int argc, char** argv) {
       std::string why;
       auto t = mav::attitude_from_msg(m, &why);
       if (!t) return (void)node.reject_value(channels::kAttitudeCmd, why);
+      if (!m.armed)
+        t->kill_authorised = kill_authorised(m.kill_authority, channels::kAttitudeCmd, false);
       if (const auto p = mav::setpoint_stamp_problem(m.utime, node.newest_stamp(), kMaxSetpointAgeS,
                                                      kMaxSetpointAheadS))
         return (void)node.reject_value(channels::kAttitudeCmd, *p);
@@ -137,6 +287,8 @@ int main(int argc, char** argv) {
       std::string why;
       auto t = mav::position_from_msg(m, &why);
       if (!t) return (void)node.reject_value(channels::kPositionSetpoint, why);
+      if (t->motors == mav::Motors::kKill)
+        t->kill_authorised = kill_authorised(m.kill_authority, channels::kPositionSetpoint, true);
       if (const auto p = mav::setpoint_stamp_problem(m.utime, node.newest_stamp(), kMaxSetpointAgeS,
                                                      kMaxSetpointAheadS))
         return (void)node.reject_value(channels::kPositionSetpoint, *p);

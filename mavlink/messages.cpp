@@ -37,4 +37,14 @@ void set_statustext(Statustext& m, std::string_view text) {
   std::memcpy(m.text.data(), text.data(), std::min(text.size(), m.text.size()));
 }
 
+std::string param_id_string(const std::array<char, 16>& id) {
+  const auto end = std::find(id.begin(), id.end(), '\0');
+  return std::string(id.begin(), end);
+}
+
+void set_param_id(std::array<char, 16>& id, std::string_view name) {
+  id.fill('\0');
+  std::memcpy(id.data(), name.data(), std::min(name.size(), id.size()));
+}
+
 }  // namespace alight::mavlink

@@ -52,6 +52,9 @@ namespace mav_result {
 inline constexpr uint8_t kAccepted = 0, kTemporarilyRejected = 1, kDenied = 2, kUnsupported = 3,
                          kFailed = 4, kInProgress = 5, kCancelled = 6;
 }
+namespace mav_landed_state {
+inline constexpr uint8_t kUndefined = 0, kOnGround = 1, kInAir = 2, kTakeoff = 3, kLanding = 4;
+}
 namespace mav_severity {
 inline constexpr uint8_t kEmergency = 0, kAlert = 1, kCritical = 2, kError = 3, kWarning = 4,
                          kNotice = 5, kInfo = 6, kDebug = 7;
@@ -484,6 +487,254 @@ struct Odometry {
   bool operator==(const Odometry&) const = default;
 };
 
+/// SCALED_IMU (26): the first IMU in integer units (mG, mrad/s), FRD body. Every ArduPilot board
+/// can send it; HIGHRES_IMU only those with more than 1 MB of flash.
+struct ScaledImu {
+  static constexpr uint32_t kId = 26;
+  static constexpr std::string_view kName = "SCALED_IMU";
+  static constexpr uint8_t kCrcExtra = 170, kBaseLength = 22, kMaxLength = 24;
+
+  uint32_t time_boot_ms = 0;                ///< [ms]
+  int16_t xacc = 0, yacc = 0, zacc = 0;     ///< [mG]
+  int16_t xgyro = 0, ygyro = 0, zgyro = 0;  ///< [mrad/s]
+  int16_t xmag = 0, ymag = 0, zmag = 0;     ///< [mgauss]
+  // extensions
+  int16_t temperature = 0;  ///< [cdegC], 0: not provided
+
+  template <class S, class V>
+  static constexpr void fields(S& m, V& v) {
+    v("time_boot_ms", m.time_boot_ms);
+    v("xacc", m.xacc);
+    v("yacc", m.yacc);
+    v("zacc", m.zacc);
+    v("xgyro", m.xgyro);
+    v("ygyro", m.ygyro);
+    v("zgyro", m.zgyro);
+    v("xmag", m.xmag);
+    v("ymag", m.ymag);
+    v("zmag", m.zmag);
+    v.extensions();
+    v("temperature", m.temperature);
+  }
+  bool operator==(const ScaledImu&) const = default;
+};
+
+/// SET_GPS_GLOBAL_ORIGIN (48): the geodetic origin of the autopilot's local frame (its EKF), for
+/// a vehicle without GPS.
+struct SetGpsGlobalOrigin {
+  static constexpr uint32_t kId = 48;
+  static constexpr std::string_view kName = "SET_GPS_GLOBAL_ORIGIN";
+  static constexpr uint8_t kCrcExtra = 41, kBaseLength = 13, kMaxLength = 21;
+
+  uint8_t target_system = 0;
+  int32_t latitude = 0;   ///< [degE7]
+  int32_t longitude = 0;  ///< [degE7]
+  int32_t altitude = 0;   ///< [mm] above mean sea level
+  // extensions
+  uint64_t time_usec = 0;  ///< [us]
+
+  template <class S, class V>
+  static constexpr void fields(S& m, V& v) {
+    v("latitude", m.latitude);
+    v("longitude", m.longitude);
+    v("altitude", m.altitude);
+    v("target_system", m.target_system);
+    v.extensions();
+    v("time_usec", m.time_usec);
+  }
+  bool operator==(const SetGpsGlobalOrigin&) const = default;
+};
+
+/// GPS_GLOBAL_ORIGIN (49): the origin the autopilot's local frame has (sent once it is set).
+struct GpsGlobalOrigin {
+  static constexpr uint32_t kId = 49;
+  static constexpr std::string_view kName = "GPS_GLOBAL_ORIGIN";
+  static constexpr uint8_t kCrcExtra = 39, kBaseLength = 12, kMaxLength = 20;
+
+  int32_t latitude = 0;   ///< [degE7]
+  int32_t longitude = 0;  ///< [degE7]
+  int32_t altitude = 0;   ///< [mm] above mean sea level
+  // extensions
+  uint64_t time_usec = 0;  ///< [us]
+
+  template <class S, class V>
+  static constexpr void fields(S& m, V& v) {
+    v("latitude", m.latitude);
+    v("longitude", m.longitude);
+    v("altitude", m.altitude);
+    v.extensions();
+    v("time_usec", m.time_usec);
+  }
+  bool operator==(const GpsGlobalOrigin&) const = default;
+};
+
+/// SIM_STATE (108): a simulator's true state (ArduPilot SITL): attitude FRD in NED, body rates,
+/// geodetic position, NED velocity.
+struct SimState {
+  static constexpr uint32_t kId = 108;
+  static constexpr std::string_view kName = "SIM_STATE";
+  static constexpr uint8_t kCrcExtra = 32, kBaseLength = 84, kMaxLength = 92;
+
+  float q1 = 1, q2 = 0, q3 = 0, q4 = 0;   ///< w, x, y, z
+  float roll = 0, pitch = 0, yaw = 0;     ///< [rad]
+  float xacc = 0, yacc = 0, zacc = 0;     ///< [m/s^2]
+  float xgyro = 0, ygyro = 0, zgyro = 0;  ///< [rad/s] FRD body
+  float lat = 0, lon = 0;                 ///< [deg] (ArduPilot fills degE7 here: use lat_int)
+  float alt = 0;                          ///< [m] above mean sea level
+  float std_dev_horz = 0, std_dev_vert = 0;
+  float vn = 0, ve = 0, vd = 0;  ///< [m/s] NED
+  // extensions
+  int32_t lat_int = 0, lon_int = 0;  ///< [degE7]; 0: use lat / lon
+
+  template <class S, class V>
+  static constexpr void fields(S& m, V& v) {
+    v("q1", m.q1);
+    v("q2", m.q2);
+    v("q3", m.q3);
+    v("q4", m.q4);
+    v("roll", m.roll);
+    v("pitch", m.pitch);
+    v("yaw", m.yaw);
+    v("xacc", m.xacc);
+    v("yacc", m.yacc);
+    v("zacc", m.zacc);
+    v("xgyro", m.xgyro);
+    v("ygyro", m.ygyro);
+    v("zgyro", m.zgyro);
+    v("lat", m.lat);
+    v("lon", m.lon);
+    v("alt", m.alt);
+    v("std_dev_horz", m.std_dev_horz);
+    v("std_dev_vert", m.std_dev_vert);
+    v("vn", m.vn);
+    v("ve", m.ve);
+    v("vd", m.vd);
+    v.extensions();
+    v("lat_int", m.lat_int);
+    v("lon_int", m.lon_int);
+  }
+  bool operator==(const SimState&) const = default;
+};
+
+/// HIL_STATE_QUATERNION (115): PX4 SIH's true state (its ground truth topics).
+struct HilStateQuaternion {
+  static constexpr uint32_t kId = 115;
+  static constexpr std::string_view kName = "HIL_STATE_QUATERNION";
+  static constexpr uint8_t kCrcExtra = 4, kBaseLength = 64, kMaxLength = 64;
+
+  uint64_t time_usec = 0;                                ///< [us] (PX4 leaves it 0)
+  std::array<float, 4> attitude_quaternion{1, 0, 0, 0};  ///< w, x, y, z: FRD body in NED
+  float rollspeed = 0, pitchspeed = 0, yawspeed = 0;     ///< [rad/s] FRD body
+  int32_t lat = 0, lon = 0;                              ///< [degE7]
+  int32_t alt = 0;                                       ///< [mm]
+  int16_t vx = 0, vy = 0, vz = 0;                        ///< [cm/s] north, east, down
+  uint16_t ind_airspeed = 0, true_airspeed = 0;          ///< [cm/s]
+  int16_t xacc = 0, yacc = 0, zacc = 0;                  ///< [mG]
+
+  template <class S, class V>
+  static constexpr void fields(S& m, V& v) {
+    v("time_usec", m.time_usec);
+    v("attitude_quaternion", m.attitude_quaternion);
+    v("rollspeed", m.rollspeed);
+    v("pitchspeed", m.pitchspeed);
+    v("yawspeed", m.yawspeed);
+    v("lat", m.lat);
+    v("lon", m.lon);
+    v("alt", m.alt);
+    v("vx", m.vx);
+    v("vy", m.vy);
+    v("vz", m.vz);
+    v("ind_airspeed", m.ind_airspeed);
+    v("true_airspeed", m.true_airspeed);
+    v("xacc", m.xacc);
+    v("yacc", m.yacc);
+    v("zacc", m.zacc);
+  }
+  bool operator==(const HilStateQuaternion&) const = default;
+};
+
+/// EXTENDED_SYS_STATE (245): whether the autopilot thinks the vehicle is on the ground.
+struct ExtendedSysState {
+  static constexpr uint32_t kId = 245;
+  static constexpr std::string_view kName = "EXTENDED_SYS_STATE";
+  static constexpr uint8_t kCrcExtra = 130, kBaseLength = 2, kMaxLength = 2;
+
+  uint8_t vtol_state = 0;    ///< MAV_VTOL_STATE
+  uint8_t landed_state = 0;  ///< MAV_LANDED_STATE
+
+  template <class S, class V>
+  static constexpr void fields(S& m, V& v) {
+    v("vtol_state", m.vtol_state);
+    v("landed_state", m.landed_state);
+  }
+  bool operator==(const ExtendedSysState&) const = default;
+};
+
+/// SETUP_SIGNING (256): gives an autopilot the signing key (sent over a secure link).
+struct SetupSigning {
+  static constexpr uint32_t kId = 256;
+  static constexpr std::string_view kName = "SETUP_SIGNING";
+  static constexpr uint8_t kCrcExtra = 71, kBaseLength = 42, kMaxLength = 42;
+
+  uint8_t target_system = 0;
+  uint8_t target_component = 0;
+  std::array<uint8_t, 32> secret_key{};
+  uint64_t initial_timestamp = 0;  ///< signing timestamp (10 us since 2015)
+
+  template <class S, class V>
+  static constexpr void fields(S& m, V& v) {
+    v("initial_timestamp", m.initial_timestamp);
+    v("target_system", m.target_system);
+    v("target_component", m.target_component);
+    v("secret_key", m.secret_key);
+  }
+  bool operator==(const SetupSigning&) const = default;
+};
+
+/// PARAM_REQUEST_READ (20): asks for one parameter by name (param_index -1).
+struct ParamRequestRead {
+  static constexpr uint32_t kId = 20;
+  static constexpr std::string_view kName = "PARAM_REQUEST_READ";
+  static constexpr uint8_t kCrcExtra = 214, kBaseLength = 20, kMaxLength = 20;
+
+  uint8_t target_system = 0;
+  uint8_t target_component = 0;
+  std::array<char, 16> param_id{};  ///< NUL-terminated only when shorter than 16
+  int16_t param_index = -1;         ///< -1: by param_id
+
+  template <class S, class V>
+  static constexpr void fields(S& m, V& v) {
+    v("param_index", m.param_index);
+    v("target_system", m.target_system);
+    v("target_component", m.target_component);
+    v("param_id", m.param_id);
+  }
+  bool operator==(const ParamRequestRead&) const = default;
+};
+
+/// PARAM_VALUE (22): one parameter's value (as a float whatever its type).
+struct ParamValue {
+  static constexpr uint32_t kId = 22;
+  static constexpr std::string_view kName = "PARAM_VALUE";
+  static constexpr uint8_t kCrcExtra = 220, kBaseLength = 25, kMaxLength = 25;
+
+  std::array<char, 16> param_id{};
+  float param_value = 0;
+  uint8_t param_type = 0;  ///< MAV_PARAM_TYPE
+  uint16_t param_count = 0;
+  uint16_t param_index = 0;
+
+  template <class S, class V>
+  static constexpr void fields(S& m, V& v) {
+    v("param_value", m.param_value);
+    v("param_count", m.param_count);
+    v("param_index", m.param_index);
+    v("param_id", m.param_id);
+    v("param_type", m.param_type);
+  }
+  bool operator==(const ParamValue&) const = default;
+};
+
 // --- The set, and what the parser needs to know of each --------------------------------------
 
 template <class... Ms>
@@ -491,7 +742,8 @@ struct MessageList {};
 using KnownMessages =
     MessageList<Heartbeat, SysStatus, AttitudeQuaternion, LocalPositionNed, CommandLong, CommandAck,
                 SetAttitudeTarget, SetPositionTargetLocalNed, HighresImu, Timesync, AttPosMocap,
-                Statustext, Odometry>;
+                Statustext, Odometry, ScaledImu, SetGpsGlobalOrigin, GpsGlobalOrigin, SimState,
+                HilStateQuaternion, ExtendedSysState, SetupSigning, ParamRequestRead, ParamValue>;
 
 /// Calls f(M{}) for every known message type M.
 template <class F, class... Ms>
@@ -542,6 +794,10 @@ M decode_payload(const uint8_t* payload) {
 std::string statustext_string(const Statustext& m);
 /// Fills STATUSTEXT text, cut to 50 bytes.
 void set_statustext(Statustext& m, std::string_view text);
+/// A parameter's name (PARAM_VALUE, PARAM_REQUEST_READ: up to the first NUL or 16 bytes).
+std::string param_id_string(const std::array<char, 16>& id);
+/// Fills a parameter name, cut to 16 bytes.
+void set_param_id(std::array<char, 16>& id, std::string_view name);
 
 // The published lengths and CRC_EXTRA values agree with the field lists (and so with the wire
 // order: CRC_EXTRA hashes the base fields' types and names in the order they are sent).
@@ -566,5 +822,14 @@ static_assert(detail::layout_matches<Timesync>());
 static_assert(detail::layout_matches<AttPosMocap>());
 static_assert(detail::layout_matches<Statustext>());
 static_assert(detail::layout_matches<Odometry>());
+static_assert(detail::layout_matches<ScaledImu>());
+static_assert(detail::layout_matches<SetGpsGlobalOrigin>());
+static_assert(detail::layout_matches<GpsGlobalOrigin>());
+static_assert(detail::layout_matches<SimState>());
+static_assert(detail::layout_matches<HilStateQuaternion>());
+static_assert(detail::layout_matches<ExtendedSysState>());
+static_assert(detail::layout_matches<SetupSigning>());
+static_assert(detail::layout_matches<ParamRequestRead>());
+static_assert(detail::layout_matches<ParamValue>());
 
 }  // namespace alight::mavlink

@@ -37,6 +37,50 @@ Dynamics::Dynamics(const VehicleParams& vehicle, const Scene& scene)
   rim_B_.emplace_back(0, 0, vehicle.rotor_height_m + 0.03);  // top of the body
 }
 
+template <class F>
+void Dynamics::penetrations(const Vector3d& p_W, double margin_m, F&& visit) const {
+  if (p_W.z() < margin_m) visit(Vector3d::UnitZ(), margin_m - p_W.z(), Contact::kFloor);
+  for (const Box& b : scene_.boxes) {
+    if ((p_W - b.center_W).cwiseAbs().maxCoeff() > b.half_size_m.maxCoeff() * 1.7321 + margin_m)
+      continue;
+    const Vector3d q = b.to_local(p_W);
+    // The margin widens the box upwards only: a point that close above its top touches it.
+    Vector3d depth = b.half_size_m - q.cwiseAbs();
+    if (q.z() > 0) depth.z() += margin_m;
+    if (depth.minCoeff() <= 0.0) continue;
+    int a;
+    const double pen = depth.minCoeff(&a);
+    Vector3d n_O = Vector3d::Zero();
+    n_O[a] = q[a] >= 0 ? 1.0 : -1.0;
+    Contact c;
+    if (b.kind == Box::Kind::kPlatform)
+      c = a == 2 && q.z() > 0 ? Contact::kPlatformTop : Contact::kPlatformEdge;
+    else
+      c = scene_.near_opening_frame(p_W) ? Contact::kFrame : Contact::kWall;
+    visit(b.R_WO() * n_O, pen, c);
+  }
+}
+
+StepResult Dynamics::contacts(const VehicleState& s, double margin_m) const {
+  StepResult res;
+  const Matrix3d R = s.q_WB.toRotationMatrix();
+  int severity = 0;
+  auto check = [&](const Vector3d& r_B, bool is_foot) {
+    bool ground = false;
+    penetrations(s.p_W_B + R * r_B, margin_m, [&](const Vector3d&, double, Contact c) {
+      severity = std::max(severity, static_cast<int>(c));
+      if (c == Contact::kFloor || c == Contact::kPlatformTop || c == Contact::kPlatformEdge)
+        ground = true;
+      if (c == Contact::kPlatformTop && is_foot) ++res.feet_on_platform_top;
+    });
+    if (ground && !is_foot) res.rim_touch = true;
+  };
+  for (const auto& r : feet_B_) check(r, true);
+  for (const auto& r : rim_B_) check(r, false);
+  res.contact = static_cast<Contact>(severity);
+  return res;
+}
+
 double Dynamics::resting_height(double surface_z_m) const {
   // Feet sink until the springs carry the weight.
   const double pen = vehicle_.mass_kg * kG / (4.0 * vehicle_.contact_stiffness_Npm);
@@ -101,30 +145,13 @@ StepResult Dynamics::step(VehicleState& s, const AttitudeCommand& cmd, const Vec
     const Vector3d v_W = s.v_W_B + R * s.omega_B.cross(r_B);
     Vector3d f = Vector3d::Zero();
     bool ground = false;  // floor or platform, not the wall
-    if (p_W.z() < 0.0) {
-      f += contact_force(Vector3d::UnitZ(), -p_W.z(), v_W, p);
-      touch(Contact::kFloor);
-      ground = true;
-    }
-    for (const Box& b : scene_.boxes) {
-      if ((p_W - b.center_W).cwiseAbs().maxCoeff() > b.half_size_m.maxCoeff() * 1.7321) continue;
-      const Vector3d q = b.to_local(p_W);
-      const Vector3d depth = b.half_size_m - q.cwiseAbs();
-      if (depth.minCoeff() <= 0.0) continue;
-      int a;
-      const double pen = depth.minCoeff(&a);
-      Vector3d n_O = Vector3d::Zero();
-      n_O[a] = q[a] >= 0 ? 1.0 : -1.0;
-      f += contact_force(b.R_WO() * n_O, pen, v_W, p);
-      if (b.kind == Box::Kind::kPlatform) {
+    penetrations(p_W, 0.0, [&](const Vector3d& n_W, double pen, Contact c) {
+      f += contact_force(n_W, pen, v_W, p);
+      touch(c);
+      if (c == Contact::kFloor || c == Contact::kPlatformTop || c == Contact::kPlatformEdge)
         ground = true;
-        const bool top = a == 2 && q.z() > 0;
-        touch(top ? Contact::kPlatformTop : Contact::kPlatformEdge);
-        if (top && is_foot) ++res.feet_on_platform_top;
-      } else {
-        touch(scene_.near_opening_frame(p_W) ? Contact::kFrame : Contact::kWall);
-      }
-    }
+      if (c == Contact::kPlatformTop && is_foot) ++res.feet_on_platform_top;
+    });
     if (ground && !is_foot) res.rim_touch = true;
     F_W += f;
     tau_B += r_B.cross(R.transpose() * f);

@@ -68,6 +68,10 @@ class Dynamics {
   StepResult step(VehicleState& state, const AttitudeCommand& cmd, const Vector3d& wind_W,
                   double dt_s) const;
 
+  /// What the vehicle touches in `state`, without moving it: for a state that comes from another
+  /// simulator (Simulator::follow). A point up to `margin_m` above the floor or a box's top
+  /// counts as touching it. specific_force_B is left zero.
+  StepResult contacts(const VehicleState& state, double margin_m = 0.0) const;
   /// Body height of a level vehicle resting with its gear on a surface at height z [m].
   double resting_height(double surface_z_m) const;
   /// Inner-loop torque for a command (exposed for tests) [N m, body].
@@ -75,6 +79,11 @@ class Dynamics {
   const VehicleParams& vehicle() const { return vehicle_; }
 
  private:
+  // Calls visit(outward normal, depth, contact) for the floor and each box a point is inside of
+  // (boxes widened upwards by margin_m), in a fixed order.
+  template <class F>
+  void penetrations(const Vector3d& p_W, double margin_m, F&& visit) const;
+
   VehicleParams vehicle_;
   const Scene& scene_;
   std::vector<Vector3d> feet_B_;

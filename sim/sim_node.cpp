@@ -12,6 +12,15 @@
 // ATTITUDE_CMD, and IMU goes out as HIGHRES_IMU (alight-mavlink publishes it) instead of on LCM.
 // RANGE and BARO are published on LCM either way (alight-mavlink does not bridge them).
 //
+// --truth-from ardupilot|px4 --truth-link ADDRESS: the vehicle is a real autopilot's SITL
+// (issue 38: ArduCopter's own physics, PX4's SIH), flown by it; alight-sim only renders the
+// sensors from its true state (SIM_STATE / HIL_STATE_QUATERNION over MAVLink on ADDRESS,
+// sim/autopilot_truth.hpp) and judges contact with the scene. The SITL's ground is flat: it is
+// the platform's top in a landing scenario (the top's height above the floor: 11 to 22 cm),
+// the floor otherwise, so that a touch-down on the top is the autopilot's own ground contact.
+// No IMU (the autopilot's comes through alight-mavlink), no ATTITUDE_CMD; nothing is published
+// while the truth is older than 0.5 s. Implies --start-now.
+//
 // --flow-camera (or the scenario's flow_camera.enabled): the downward camera is rendered besides
 // the scenario's camera and published on FLOW_CAMERA for alight-estimator, at flow_camera.rate_hz
 // (ingress without motion capture: the vision flies the forward camera, the estimator's flow
@@ -30,6 +39,7 @@
 #include "common/node.hpp"
 #include "common/params.hpp"
 #include "mavlink/link_io.hpp"
+#include "sim/autopilot_truth.hpp"
 #include "sim/offboard_endpoint.hpp"
 #ifdef ALIGHT_SIM_POSITION_CONTROL
 #include "outer_loop/params.hpp"
@@ -57,11 +67,24 @@ int main(int argc, char** argv) {
     bool start_now = false;
     int threads = 1;
     NodeArgs args;
-    std::string mavlink_link;
+    std::string mavlink_link, truth_from, truth_link;
+    double truth_rate_hz = 100.0, contact_margin_m = 0.01;
     app.add_option("--mavlink", mavlink_link,
                    "The autopilot speaks MAVLink (PX4 offboard) on this link instead of taking "
                    "ATTITUDE_CMD: udp:HOST:PORT[:LOCAL_PORT], udp-listen:HOST:PORT or "
                    "serial:DEVICE:BAUD");
+    app.add_option("--truth-from", truth_from,
+                   "The vehicle is this autopilot's SITL (its own physics): render the sensors "
+                   "from its true state instead of simulating it")
+        ->check(CLI::IsMember({"ardupilot", "px4"}));
+    app.add_option("--truth-link", truth_link,
+                   "MAVLink link to the SITL for --truth-from (ArduPilot: a serial port as "
+                   "udp-listen:127.0.0.1:PORT; PX4 SIH: udp:127.0.0.1:19450:19410)");
+    app.add_option("--truth-rate", truth_rate_hz, "Truth messages asked of the SITL [Hz]")
+        ->check(CLI::Range(10.0, 400.0));
+    app.add_option("--contact-margin", contact_margin_m,
+                   "--truth-from: a point this close above a surface touches it [m]")
+        ->check(CLI::Range(0.0, 0.05));
     app.add_option("--scenario", scenario_file, "Scenario file (config/scenarios/*.yaml)")
         ->required();
     app.add_option("--vehicle", vehicle_file,
@@ -92,6 +115,13 @@ int main(int argc, char** argv) {
     }
     args.finalize();
 
+    if (truth_from.empty() != truth_link.empty())
+      throw ParamError("--truth-from", "truth-link", truth_link,
+                       "--truth-from and --truth-link go together");
+    if (!truth_from.empty() && !mavlink_link.empty())
+      throw ParamError("--truth-from", "mavlink", mavlink_link,
+                       "the SITL is the autopilot: no --mavlink endpoint with --truth-from");
+    if (!truth_from.empty()) start_now = true;
     sim::Scenario scenario = sim::load_scenario(scenario_file);
     if (vehicle_file.empty())
       vehicle_file = resolve_relative(scenario_file, "../vehicles/starmac.yaml");
@@ -169,6 +199,68 @@ int main(int argc, char** argv) {
       spdlog::info("alight-sim: the autopilot speaks MAVLink (PX4 offboard) on {}",
                    mavlink_address->text());
     }
+    // The SITL whose true state the sensors render (--truth-from).
+    std::optional<mavlink::LinkIo> truth_io;
+    std::optional<sim::AutopilotTruth> truth;
+    if (!truth_from.empty()) {
+      std::string why;
+      const auto address = mavlink::parse_link_address(truth_link, &why);
+      if (!address) throw ParamError("--truth-link", "truth-link", truth_link, why);
+      truth_io.emplace(*address);
+      sim::AutopilotTruthParams tp;
+      tp.flavour = truth_from == "px4" ? mavlink::Flavour::kPx4 : mavlink::Flavour::kArdupilot;
+      tp.rate_hz = truth_rate_hz;
+      // At rest on the SITL's flat ground: the platform's top in a landing scenario.
+      const double ground_z =
+          simulator.scene().platform ? simulator.scene().platform->top_center_W.z() : 0.0;
+      tp.start_W = Vector3d(scenario.start_position_m.x(), scenario.start_position_m.y(),
+                            simulator.dynamics().resting_height(ground_z));
+      tp.start_yaw_rad = scenario.start_yaw_deg * M_PI / 180.0;
+      truth.emplace(tp);
+      spdlog::info(
+          "alight-sim: the vehicle is {}'s SITL, its true state on {}; its ground at "
+          "z = {:.3f} m",
+          truth_from, address->text(), ground_z);
+    }
+    std::vector<uint8_t> truth_rx(65536);
+    int64_t truth_next_open = 0;
+    const auto serve_truth = [&]() {
+      if (!truth_io->is_open() && wall_utime() >= truth_next_open) {
+        std::string error;
+        if (!truth_io->open(&error)) {
+          spdlog::warn("alight-sim: {}", error);
+          truth_next_open = wall_utime() + 1'000'000;
+        }
+      }
+      // One update per datagram, at the kernel's time of its arrival.
+      std::vector<uint8_t> reply;
+      const auto handle = [&](std::span<const uint8_t> bytes, int64_t at) {
+        auto out = truth->update(bytes, at);
+        for (const auto& e : out.events) spdlog::info("alight-sim: truth: {}", e);
+        reply.insert(reply.end(), out.bytes.begin(), out.bytes.end());
+      };
+      for (int i = 0; truth_io->is_open() && i < 256; ++i) {
+        std::string error;
+        const long n = truth_io->read(truth_rx, &error);
+        if (n < 0) {
+          spdlog::warn("alight-sim: {}", error);
+          truth_io->close();
+        }
+        if (n <= 0) break;
+        const int64_t at = truth_io->last_receipt_wall_us();
+        handle(std::span<const uint8_t>(truth_rx.data(), static_cast<size_t>(n)),
+               at > 0 ? at : wall_utime());
+      }
+      handle({}, wall_utime());
+      const auto& out_bytes = reply;
+      if (truth_io->is_open() && !out_bytes.empty()) {
+        std::string error;
+        if (truth_io->write(out_bytes, &error) < 0) {
+          spdlog::warn("alight-sim: {}", error);
+          truth_io->close();
+        }
+      }
+    };
 #ifdef ALIGHT_SIM_POSITION_CONTROL
     // The autopilot's own position controller for SET_POSITION_TARGET_LOCAL_NED: alight's outer
     // loop with the vehicle file's gains, on the true state (the autopilot's estimate).
@@ -261,8 +353,8 @@ int main(int argc, char** argv) {
     // Started now, simulated time is the wall clock: the time spent building the scene and the
     // renderer is caught up at once (on the ground), so a frame's exposure stamp is the wall time
     // it was taken and the end-to-end latency alight-score measures from it is a latency, not
-    // the start-up delay.
-    const int64_t wall0 = start_now && rate == 1.0 ? sim0 : wall_utime();
+    // the start-up delay. Following a SITL it must be: the truth is stamped on the wall clock.
+    const int64_t wall0 = truth || (start_now && rate == 1.0) ? sim0 : wall_utime();
     int64_t next_truth = sim0;
     int64_t late_warned_at = wall0;
     while (!node.stopping() && simulator.now_utime() < end_utime) {
@@ -280,7 +372,23 @@ int main(int argc, char** argv) {
                      (target - simulator.now_utime()) / 1e3, rate);
         late_warned_at = wall;
       }
-      simulator.advance_to(std::min(end_utime, simulator.now_utime() + kChunkUs));
+      const int64_t chunk_end = std::min(end_utime, simulator.now_utime() + kChunkUs);
+      if (truth) {
+        serve_truth();
+        simulator.follow([&](int64_t t) { return truth->advance(t); }, chunk_end, contact_margin_m);
+        // A vehicle whose truth stopped is not seen: nothing is published for it.
+        if (!truth->has_sample() || simulator.now_utime() - truth->last_sample_utime() > 500'000) {
+          simulator.take_mocap();
+          simulator.take_camera();
+          simulator.take_flow_camera();
+          simulator.take_range();
+          simulator.take_baro();
+          simulator.take_imu();
+          continue;
+        }
+      } else {
+        simulator.advance_to(chunk_end);
+      }
       if (simulator.command_lost() != command_lost) {
         command_lost = !command_lost;
         if (command_lost)
@@ -295,7 +403,9 @@ int main(int argc, char** argv) {
       std::vector<sim::ImuSample> imu;
       for (const auto& m : simulator.take_imu())
         if (gates.imu.on(now)) imu.push_back(m);
-      if (autopilot) {
+      if (truth) {
+        // The autopilot's own IMU comes through alight-mavlink.
+      } else if (autopilot) {
         serve_autopilot(std::move(imu));
       } else {
         for (const auto& m : imu) node.publish(channels::kImu, sim::to_msg(m));

@@ -193,7 +193,21 @@ void Simulator::physics_step() {
 
   last_ = dynamics_->step(state_, autopilot_command(), wind, dt);
   now_utime_ += dt_us_;
+  after_step(dt, true);
+}
 
+void Simulator::follow(const std::function<VehicleState(int64_t)>& state_at, int64_t until_utime,
+                       double contact_margin_m) {
+  const double dt = dt_us_ * 1e-6;
+  while (now_utime_ + dt_us_ <= until_utime) {
+    now_utime_ += dt_us_;
+    state_ = state_at(now_utime_);
+    last_ = dynamics_->contacts(state_, contact_margin_m);
+    after_step(dt, false);
+  }
+}
+
+void Simulator::after_step(double dt, bool imu) {
   // Outcome flags.
   const Matrix3d R = state_.q_WB.toRotationMatrix();
   const double tilt = std::acos(std::clamp(R(2, 2), -1.0, 1.0));
@@ -217,7 +231,7 @@ void Simulator::physics_step() {
   const PoseSample truth = to_pose(state_, now_utime_);
   history_.add(truth);
   if (scenario_.mocap.enabled) mocap_.update(now_utime_, truth);
-  if (scenario_.imu.enabled)
+  if (scenario_.imu.enabled && imu)
     imu_.update(now_utime_, dt_us_, last_.specific_force_B, state_.omega_B);
   if (scenario_.rangefinder.enabled) rangefinder_.update(now_utime_, truth.X_WB(), *scene_);
   if (scenario_.baro.enabled) baro_.update(now_utime_, state_.p_W_B);

@@ -12,6 +12,7 @@
 //   if (auto frame = sim.take_flow_camera()) ...;   // with a flow_camera rig (issue 17)
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <opencv2/core.hpp>
 #include <optional>
@@ -113,6 +114,14 @@ class Simulator {
   /// armed again only after a disarmed command.
   void advance_to(int64_t until_utime);
 
+  /// The vehicle flown by another simulator (an autopilot's SITL, issue 38): every physics step
+  /// takes `state_at(t)` instead of integrating the dynamics, and contact (a point within
+  /// `contact_margin_m` above a surface touches it: that simulator's ground is flat, its heights
+  /// are its own), the outcome flags, motion capture, the rangefinder, the barometer and the
+  /// cameras follow it. The IMU is not simulated (the autopilot has its own); no wind.
+  void follow(const std::function<VehicleState(int64_t)>& state_at, int64_t until_utime,
+              double contact_margin_m);
+
   int64_t now_utime() const { return now_utime_; }
   const VehicleState& state() const { return state_; }
   /// Places the vehicle (tests: start in a hover, above a platform...).
@@ -170,6 +179,9 @@ class Simulator {
     std::optional<PendingFrame> pending;
   };
   void physics_step();
+  // Outcome flags and sensors after the state moved to now_utime_ (the IMU only when this
+  // simulator flew the step).
+  void after_step(double dt, bool imu);
   // What the autopilot's inner loop follows: the last command, or its command-loss failsafe.
   AttitudeCommand autopilot_command();
   void start_camera(CameraStream& c);

@@ -88,5 +88,50 @@ TEST(BridgeMsgsTest, SetpointStampsMayStepBackALittleButNotReplayOrRunFarAhead) 
   EXPECT_TRUE(setpoint_stamp_problem(INT64_MAX, ref, 1.0, 10.0));
 }
 
+// Issue 37: a forced disarm only for the operator's signed CMD_KILL, as the outer loop and the
+// simulator check it (common/operator_auth.hpp, KillVerifier).
+TEST(BridgeMsgsTest, OnlyTheOperatorsSignedKillForThisVehicleAuthorisesAForcedDisarm) {
+  OperatorKey key{std::vector<uint8_t>(32, 0x5a)};
+  const int64_t now = 1'800'000'000'000'000;
+  const auto kill = [&](const std::string& vehicle, int64_t utime, int8_t command) {
+    operator_cmd_t c{};
+    c.utime = utime;
+    c.seq = utime;
+    c.sender = "station";
+    c.vehicle_id = vehicle;
+    c.command = command;
+    sign(c, key);
+    return c;
+  };
+  KillVerifier verifier(key, "pelican-1", 2'000'000);
+  std::string why;
+  EXPECT_TRUE(kill_authorised(&verifier, kill("pelican-1", now - 500'000, operator_cmd_t::CMD_KILL),
+                              now, &why));
+  // Repeated with every setpoint after it: still authorised, however old.
+  EXPECT_TRUE(kill_authorised(&verifier, kill("pelican-1", now - 500'000, operator_cmd_t::CMD_KILL),
+                              now + 60'000'000, &why));
+
+  KillVerifier v(key, "pelican-1", 2'000'000);
+  EXPECT_FALSE(kill_authorised(&v, operator_cmd_t{}, now, &why));
+  EXPECT_EQ(why, "no kill authority attached");
+  EXPECT_FALSE(kill_authorised(&v, kill("pelican-2", now, operator_cmd_t::CMD_KILL), now, &why));
+  EXPECT_EQ(why, kill_check_name(KillCheck::kWrongVehicle));
+  EXPECT_FALSE(
+      kill_authorised(&v, kill("pelican-1", now - 5'000'000, operator_cmd_t::CMD_KILL), now, &why));
+  EXPECT_EQ(why, kill_check_name(KillCheck::kStale));
+  EXPECT_FALSE(kill_authorised(&v, kill("pelican-1", now, operator_cmd_t::CMD_ABORT), now, &why));
+  EXPECT_EQ(why, kill_check_name(KillCheck::kNotKill));
+  operator_cmd_t forged = kill("pelican-1", now, operator_cmd_t::CMD_KILL);
+  forged.hmac[0] ^= 1;
+  EXPECT_FALSE(kill_authorised(&v, forged, now, &why));
+  EXPECT_EQ(why, kill_check_name(KillCheck::kBadSignature));
+  operator_cmd_t unsigned_kill = kill("pelican-1", now, operator_cmd_t::CMD_KILL);
+  unsigned_kill.auth = operator_cmd_t::AUTH_NONE;
+  EXPECT_FALSE(kill_authorised(&v, unsigned_kill, now, &why));
+  // No operator key configured: no KILL is ever forced.
+  EXPECT_FALSE(
+      kill_authorised(nullptr, kill("pelican-1", now, operator_cmd_t::CMD_KILL), now, &why));
+}
+
 }  // namespace
 }  // namespace alight::mavlink

@@ -70,6 +70,27 @@ TEST(BridgeParamsTest, ReadsAFileAndNamesTheKeyOfABadValue) {
   e = expect_param_error([] { load("mavlink:\n  unknown_key: 1\n"); });
 }
 
+TEST(BridgeParamsTest, TheEkfOriginTheFailsafeAndTheSigningKeyAreChecked) {
+  const auto p = load(
+      "mavlink:\n  autopilot: ardupilot\n  set_ekf_origin: true\n"
+      "  ekf_origin: [-35.36, 149.16, 584]\n  silence_action: autopilot\n"
+      "  signing_key_file: keys/link.key\n");
+  EXPECT_EQ(p.ekf_origin, (std::vector<double>{-35.36, 149.16, 584}));
+  EXPECT_EQ(p.silence_action, "autopilot");
+  EXPECT_EQ(p.signing_key_file.substr(p.signing_key_file.size() - 13), "keys/link.key");
+  // ArduPilot refuses an origin at 0, 0 (GCS_Common.cpp, handle_set_gps_global_origin).
+  auto e = expect_param_error([] { load("mavlink:\n  set_ekf_origin: true\n"); });
+  EXPECT_EQ(e.key(), "mavlink.ekf_origin");
+  e = expect_param_error([] { load("mavlink:\n  ekf_origin: [91, 0, 0]\n"); });
+  EXPECT_EQ(e.key(), "mavlink.ekf_origin");
+  e = expect_param_error([] { load("mavlink:\n  ekf_origin: [1, 2]\n"); });
+  EXPECT_EQ(e.key(), "mavlink.ekf_origin");
+  e = expect_param_error([] { load("mavlink:\n  silence_action: hover\n"); });
+  EXPECT_EQ(e.key(), "mavlink.silence_action");
+  e = expect_param_error([] { load("mavlink:\n  rearm_cooldown_s: -1\n"); });
+  EXPECT_EQ(e.key(), "mavlink.rearm_cooldown_s");
+}
+
 TEST(BridgeParamsTest, StreamsThatDoNotFitTheSerialLinkAreRefused) {
   // 50 Hz attitude setpoints and 50 Hz ATT_POS_MOCAP need about 9 kB/s; 57600 baud carries 5.76.
   const auto e = expect_param_error([] { load("mavlink:\n  link: serial:/dev/ttyUSB0:57600\n"); });

@@ -82,14 +82,25 @@ class Process {
     }
   }
   bool ok() const { return pid_ > 0; }
+  /// Waits for it to exit by itself (up to kGenerous): its exit code, -1 when it did not.
+  int wait_exit() {
+    const auto deadline = std::chrono::steady_clock::now() + kGenerous;
+    while (running() && std::chrono::steady_clock::now() < deadline) usleep(10'000);
+    return exit_code_;
+  }
   /// Whether it is still running (it must not exit by itself).
   bool running() const {
     int status = 0;
-    return pid_ > 0 && waitpid(pid_, &status, WNOHANG) == 0;
+    if (pid_ <= 0) return false;
+    if (waitpid(pid_, &status, WNOHANG) == 0) return true;
+    exit_code_ = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    pid_ = -1;  // reaped
+    return false;
   }
 
  private:
-  pid_t pid_ = -1;
+  mutable pid_t pid_ = -1;
+  mutable int exit_code_ = -1;
 };
 
 /// A pseudo-terminal: the test is the autopilot on the master side.
@@ -272,6 +283,55 @@ TEST(MavlinkNodeTest, OverAPtyItSendsHeartbeatsReportsTheLinkAndReopensALostDevi
                         << slurp(output);
   EXPECT_TRUE(node.running()) << slurp(output);
   EXPECT_NE(slurp(output).find("reopening"), std::string::npos) << slurp(output);
+  std::filesystem::remove(link);
+}
+
+TEST(MavlinkNodeTest, SetupSigningGivesTheAutopilotTheKeyAndEndsOnceItSigns) {
+  const std::string hex = "000102030405060708090a0b0c0d0e0f101112131415161718191a1b1c1d1e1f";
+  const auto key_file = tmp("mavlink_node_signing.key");
+  std::ofstream(key_file) << hex << "\n";
+  auto pty = std::make_unique<Pty>();
+  ASSERT_TRUE(pty->ok());
+  const auto link = tmp("mavlink_node_test_tty_signing");
+  point(link, *pty);
+  const auto config = tmp("mavlink_node_signing.yaml");
+  std::ofstream(config) << "mavlink:\n  autopilot: px4\n  link: serial:" << link.string()
+                        << ":921600\n  signing_key_file: " << key_file.string() << "\n";
+  const auto output = tmp("mavlink_node_" + test_name() + ".txt");
+  Process node({bin(), "--config", config.string(), "--setup-signing", "--lcm-url", kUrl}, output);
+  ASSERT_TRUE(node.ok());
+  const SigningKey key = *signing_key_from_hex(hex);
+  Parser parser;
+  std::optional<SetupSigning> setup;
+  Sender plain{1, 1};
+  Sender signer{1, 1, SigningConfig{key, 0}};
+  lcm::LCM lcm(kUrl);
+  // The autopilot's unsigned heartbeats until SETUP_SIGNING comes, then signed ones.
+  const bool done = wait_for(
+      lcm,
+      [&] {
+        uint8_t buf[1024];
+        for (;;) {
+          const ssize_t n = ::read(pty->master, buf, sizeof buf);
+          if (n <= 0) break;
+          parser.push(std::span<const uint8_t>(buf, static_cast<size_t>(n)));
+        }
+        Frame f;
+        while (parser.next(f))
+          if (const auto m = decode<SetupSigning>(f)) setup = m;
+        Heartbeat hb;
+        hb.type = mav_type::kQuadrotor;
+        hb.autopilot = mav_autopilot::kPx4;
+        const FrameBytes b = setup ? signer.pack(hb, 1'800'000'000'000'000) : plain.pack(hb, 0);
+        (void)!::write(pty->master, b.data.data(), b.size);
+      },
+      [&] { return !node.running(); });
+  ASSERT_TRUE(done) << slurp(output);
+  ASSERT_TRUE(setup) << slurp(output);
+  EXPECT_EQ(setup->secret_key, key);
+  EXPECT_EQ(setup->target_system, 1);
+  EXPECT_GT(setup->initial_timestamp, 0u);
+  EXPECT_EQ(node.wait_exit(), 0) << slurp(output);
   std::filesystem::remove(link);
 }
 

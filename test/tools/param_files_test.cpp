@@ -49,7 +49,7 @@ std::map<std::string, std::vector<fs::path>> shipped_files() {
                                                       {"mocap", "mocap"},
                                                       {"autopilot", "autopilot"}};
   for (const auto& [folder, kind] : folders) {
-    for (const auto& entry : fs::directory_iterator(kConfig / folder)) {
+    for (const auto& entry : fs::recursive_directory_iterator(kConfig / folder)) {
       if (entry.path().extension() != ".yaml") continue;
       if (kind == "camera" && YAML::LoadFile(entry.path().string())["camera_matrix"]) continue;
       out[kind].push_back(entry.path());
@@ -65,7 +65,7 @@ TEST(ParamFilesTest, EveryShippedFileDumpsToYamlThatLoadsBackToTheSameParameters
   EXPECT_EQ(files.at("scenario").size(), 8u);  // with estimator_drift (issue 17)
   EXPECT_EQ(files.at("camera").size(), 2u);
   EXPECT_EQ(files.at("mocap").size(), 2u);
-  EXPECT_EQ(files.at("autopilot").size(), 4u);
+  EXPECT_EQ(files.at("autopilot").size(), 8u);  // with sitl/ (issue 38)
   const fs::path dir = temp_dir("round_trip");
   for (const auto& [kind, paths] : files) {
     for (const auto& path : paths) {

@@ -34,7 +34,7 @@ const {
 } = mav;
 
 // The messages of alight/mavlink/messages.hpp.
-const IDS = [0, 1, 31, 32, 76, 77, 82, 84, 105, 111, 138, 253, 331];
+const IDS = [0, 1, 20, 22, 26, 31, 32, 48, 49, 76, 77, 82, 84, 105, 108, 111, 115, 138, 245, 253, 256, 331];
 const REGISTRY = { ...minimal.REGISTRY, ...common.REGISTRY };
 
 const args = process.argv.slice(2);
