@@ -3,13 +3,13 @@
 
 #include <algorithm>
 
-#include "vision/ingress_target.hpp"
-#include "vision/landing_target.hpp"
-#include "vision/matcher.hpp"
-#include "vision/motion_blur.hpp"
-#include "vision/star_detector.hpp"
-#include "vision/surf_descriptor.hpp"
-#include "vision/waypoint.hpp"
+#include "vision/ingress/ingress_target.hpp"
+#include "vision/landing/landing_target.hpp"
+#include "vision/frontend/matcher.hpp"
+#include "vision/frontend/motion_blur.hpp"
+#include "vision/frontend/star_detector.hpp"
+#include "vision/frontend/surf_descriptor.hpp"
+#include "vision/geometry/waypoint.hpp"
 
 namespace alight::vision {
 

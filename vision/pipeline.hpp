@@ -39,7 +39,7 @@
 #include "common/camera_mount.hpp"
 #include "common/pose_buffer.hpp"
 #include "vision/params.hpp"
-#include "vision/reference_tracker.hpp"
+#include "vision/frontend/reference_tracker.hpp"
 #include "vision/target.hpp"
 
 namespace alight::vision {
