@@ -3,13 +3,13 @@
 
 #include <algorithm>
 
-#include "vision/ingress/ingress_target.hpp"
-#include "vision/landing/landing_target.hpp"
 #include "vision/frontend/matcher.hpp"
 #include "vision/frontend/motion_blur.hpp"
 #include "vision/frontend/star_detector.hpp"
 #include "vision/frontend/surf_descriptor.hpp"
 #include "vision/geometry/waypoint.hpp"
+#include "vision/ingress/ingress_target.hpp"
+#include "vision/landing/landing_target.hpp"
 
 namespace alight::vision {
 

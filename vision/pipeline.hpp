@@ -38,8 +38,8 @@
 #include "common/camera_model.hpp"
 #include "common/camera_mount.hpp"
 #include "common/pose_buffer.hpp"
-#include "vision/params.hpp"
 #include "vision/frontend/reference_tracker.hpp"
+#include "vision/params.hpp"
 #include "vision/target.hpp"
 
 namespace alight::vision {

@@ -17,11 +17,11 @@
 
 #include "common/heap.hpp"
 #include "test/vision/test_images.hpp"
-#include "vision/geometry/alignment.hpp"
-#include "vision/geometry/homography.hpp"
 #include "vision/frontend/matcher.hpp"
 #include "vision/frontend/star_detector.hpp"
 #include "vision/frontend/surf_descriptor.hpp"
+#include "vision/geometry/alignment.hpp"
+#include "vision/geometry/homography.hpp"
 #include "vision/geometry/waypoint.hpp"
 
 using namespace alight;

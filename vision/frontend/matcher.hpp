@@ -9,8 +9,8 @@
 #include <opencv2/core.hpp>
 #include <vector>
 
-#include "vision/params.hpp"
 #include "vision/frontend/star_detector.hpp"
+#include "vision/params.hpp"
 
 namespace alight::vision {
 

@@ -26,8 +26,8 @@
 #include <vector>
 
 #include "vision/frontend/matcher.hpp"
-#include "vision/params.hpp"
 #include "vision/frontend/star_detector.hpp"
+#include "vision/params.hpp"
 #include "vision/status.hpp"
 
 namespace alight::vision {

@@ -10,9 +10,9 @@
 
 #include "vision/geometry/decomposition.hpp"
 #include "vision/geometry/homography.hpp"
-#include "vision/ingress/mask_border.hpp"
 #include "vision/geometry/warp_diff.hpp"
 #include "vision/geometry/waypoint.hpp"
+#include "vision/ingress/mask_border.hpp"
 
 namespace alight::vision {
 namespace {

@@ -9,10 +9,10 @@
 #include <opencv2/imgproc.hpp>
 
 #include "test/vision/test_images.hpp"
-#include "vision/geometry/homography.hpp"
 #include "vision/frontend/matcher.hpp"
 #include "vision/frontend/star_detector.hpp"
 #include "vision/frontend/surf_descriptor.hpp"
+#include "vision/geometry/homography.hpp"
 
 namespace alight::vision {
 namespace {

@@ -5,8 +5,8 @@
 #include <gtest/gtest.h>
 
 #include "test/vision/test_images.hpp"
-#include "vision/geometry/homography.hpp"
 #include "vision/frontend/surf_descriptor.hpp"
+#include "vision/geometry/homography.hpp"
 
 namespace alight::vision {
 namespace {

@@ -1,4 +1,5 @@
-// The dense plane check between a floor and a top (vision/geometry/plane_photometric.hpp, issue 15).
+// The dense plane check between a floor and a top (vision/geometry/plane_photometric.hpp, issue
+// 15).
 
 #include "vision/geometry/plane_photometric.hpp"
 

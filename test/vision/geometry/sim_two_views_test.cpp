@@ -24,11 +24,11 @@
 #include "sim/params.hpp"
 #include "sim/renderer.hpp"
 #include "sim/scene.hpp"
-#include "vision/geometry/alignment.hpp"
-#include "vision/geometry/homography.hpp"
 #include "vision/frontend/matcher.hpp"
 #include "vision/frontend/star_detector.hpp"
 #include "vision/frontend/surf_descriptor.hpp"
+#include "vision/geometry/alignment.hpp"
+#include "vision/geometry/homography.hpp"
 #include "vision/geometry/waypoint.hpp"
 
 namespace alight::vision {

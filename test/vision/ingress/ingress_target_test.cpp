@@ -13,9 +13,9 @@
 #include <tuple>
 
 #include "common/params.hpp"
+#include "vision/geometry/waypoint.hpp"
 #include "vision/params.hpp"
 #include "vision/status.hpp"
-#include "vision/geometry/waypoint.hpp"
 
 namespace alight::vision {
 namespace {

@@ -1,5 +1,5 @@
-// The mask's border as a pixel list (vision/ingress/mask_border.hpp): a known square's ring, and the
-// nonzero pixels of OpenCV's morphological gradient in findNonZero's order on random masks of
+// The mask's border as a pixel list (vision/ingress/mask_border.hpp): a known square's ring, and
+// the nonzero pixels of OpenCV's morphological gradient in findNonZero's order on random masks of
 // every shape, image edges and one-pixel-wide images included.
 #include "vision/ingress/mask_border.hpp"
 

@@ -1,4 +1,5 @@
-// The platform's size from its features' extent (vision/landing/landing_target.hpp side_from_extent).
+// The platform's size from its features' extent (vision/landing/landing_target.hpp
+// side_from_extent).
 
 #include <gtest/gtest.h>
 

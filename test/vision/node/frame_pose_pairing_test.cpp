@@ -1,6 +1,6 @@
-// The vision node's frame-to-pose policy (vision/node/frame_pose_pairing.hpp): known answers for each
-// way a pose can come (after the frame, before it, never, in a gap, before the history), frames
-// queueing behind one that waits, and properties over random input sequences: every frame
+// The vision node's frame-to-pose policy (vision/node/frame_pose_pairing.hpp): known answers for
+// each way a pose can come (after the frame, before it, never, in a gap, before the history),
+// frames queueing behind one that waits, and properties over random input sequences: every frame
 // decided once, in order, with its own pose, and the output a function of the input sequence.
 
 #include "vision/node/frame_pose_pairing.hpp"

@@ -1,5 +1,5 @@
-// The alight-vision node's input boundary (vision/node/inputs.hpp), driven with a real StampGuard and
-// an injected clock, as the node drives it with Node::accept_stamp.
+// The alight-vision node's input boundary (vision/node/inputs.hpp), driven with a real StampGuard
+// and an injected clock, as the node drives it with Node::accept_stamp.
 
 #include "vision/node/inputs.hpp"
 
