@@ -26,6 +26,7 @@
 #include "common/decode.hpp"
 #include "common/msg_convert.hpp"
 #include "common/params.hpp"
+#include "vision/frame_line.hpp"
 #include "vision/pipeline.hpp"
 
 namespace {
@@ -36,36 +37,6 @@ using namespace alight::vision;
 template <class T>
 bool decode(const lcm::LogEvent& ev, T& msg) {
   return ev.datalen >= 0 && alight::decode_message(msg, ev.data, static_cast<size_t>(ev.datalen));
-}
-
-// FNV-1a over bytes: a digest of the per-match and per-pixel parts of a result.
-struct Digest {
-  uint64_t h = 1469598103934665603ull;
-  void add(const void* data, size_t n) {
-    const auto* b = static_cast<const unsigned char*>(data);
-    for (size_t i = 0; i < n; ++i) h = (h ^ b[i]) * 1099511628211ull;
-  }
-  void add(const Vector2d& v) { add(v.data(), 2 * sizeof(double)); }
-};
-
-// The frame's whole result on one line, doubles as %a (exact), no timing.
-void print_frame(const FrameResult& r) {
-  const TargetEstimate& t = r.target;
-  Digest d;
-  for (const auto& p : r.features_px) d.add(p);
-  for (const auto& p : r.matched_px) d.add(p);
-  for (const Label l : r.labels) d.add(&l, sizeof l);
-  for (const auto& l : r.lines) d.add(&l, sizeof l);
-  for (const auto& p : t.outline) d.add(p);
-  std::printf(
-      "frame %lld seq %lld ref %lld reason %d found %d held %d p_W %a %a %a n_W %a %a %a "
-      "pixel %a %a height %a size %a %a yaw %a baseline %a blur %a feat %d match %d tracked %d "
-      "in %d/%d digest %016llx\n",
-      (long long)r.utime, (long long)r.seq, (long long)r.ref_utime, static_cast<int>(r.reason),
-      r.found(), r.ref_held, t.p_W.x(), t.p_W.y(), t.p_W.z(), t.n_W.x(), t.n_W.y(), t.n_W.z(),
-      t.pixel.x(), t.pixel.y(), t.height_m, t.size_m[0], t.size_m[1], t.yaw_rad, r.baseline_m,
-      r.blur_px, r.n_features, r.n_matches, r.n_tracked, t.n_inliers_dominant, t.n_inliers_target,
-      static_cast<unsigned long long>(d.h));
 }
 
 double percentile(std::vector<double> v, double q) {
@@ -143,7 +114,7 @@ int main(int argc, char** argv) {
       ms.push_back(
           std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
       ++reasons[r.reason];
-      if (frames_out) print_frame(r);
+      if (frames_out) std::fputs(frame_line(r).c_str(), stdout);
       double lat = -1, dh = 0;
       if (truth && (r.found() || located_only(r.reason))) {
         const double* c =
