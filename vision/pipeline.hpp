@@ -80,6 +80,21 @@ class Pipeline {
   const CameraModel& camera() const { return camera_; }
 
  private:
+  // The reference a frame is matched against, its pose and baseline (pipeline.cpp).
+  struct Reference;
+
+  // Stages of process(), in order (pipeline.cpp).
+  Result<TrackedFrame> front_end(const cv::Mat& gray, int64_t utime, const PoseSample& pose,
+                                 std::optional<double> exposure_s, FrameResult* r) const;
+  ReferenceTracker::Update track(TrackedFrame frame, int64_t utime, const PoseSample& pose);
+  Reference tracked_reference(const ReferenceTracker::Update& up, const PoseSample& pose) const;
+  void hold_reference(Reference* ref, const TrackedFrame& current, int64_t utime,
+                      const PoseSample& pose) const;
+  Correspondences correspondences(const TrackedFrame& a, const TrackedFrame& b,
+                                  const std::vector<Match>& matches) const;
+  bool smeared(const TrackedFrame& f) const;
+  bool holds() const;
+
   Mission mission_;
   PipelineParams params_;
   CameraModel camera_;

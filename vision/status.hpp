@@ -26,6 +26,24 @@ enum class Reason : int8_t {
   kPartialView = 11,         ///< target found but cut by the image border: its centre is unknown
   kLowParallax = 12,  ///< ingress: the opening in view, but too little parallax to measure it
   kMotionBlur = 13,   ///< landing: the frame or its reference smeared by the camera's motion
+  // Every refusal of the landing and ingress targets named; they still share the codes above.
+  kTopNotParallel = kNoTargetPlane,
+  kNoFloorAroundTop = kNoTargetPlane,
+  kTopFitsFloor = kNoTargetPlane,
+  kTopTilted = kNoTargetPlane,
+  kHeightOutOfRange = kNoTargetPlane,
+  kTopPhotometry = kNoTargetPlane,
+  kFloorPhotometry = kNoTargetPlane,
+  kTopFitDiverged = kNoTargetPlane,
+  kTopAloneTooFew = kNoTargetPlane,
+  kTopAloneFloorSeen = kNoTargetPlane,
+  kTopAloneLowRise = kNoTargetPlane,
+  kTopAloneLowParallax = kNoTargetPlane,
+  kMotionDisagrees = kDecompositionFailed,
+  kOpeningTooSmall = kNoOpening,
+  kNotBehindWall = kNoOpening,
+  kPartialNotFramed = kNoOpening,
+  kPartialNotBehind = kNoOpening,
 };
 
 const char* to_string(Reason r);

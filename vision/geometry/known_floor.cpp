@@ -204,6 +204,285 @@ bool level(const Vector3d& n_free, const Vector3d& n, const LandingParams& param
          params.max_normal_angle_deg * M_PI / 180.0;
 }
 
+// What every step of the pair's fit shares: the matches' rays, the known floor (normal n, the
+// top's range of inverse distances) and motion, the focal length and threshold.
+struct PairFit {
+  const std::vector<Vector3d>& x1;
+  const std::vector<Vector3d>& x2;
+  const KnownMotion& motion;
+  const Vector3d& n;
+  TopRange range;
+  double f, thr;
+  double max_w;  // the largest rotation correction [rad]
+  const LandingParams& params;
+  size_t size() const { return x1.size(); }
+  const Vector3d& t() const { return motion.t_12_m; }
+};
+
+// How many matches that is_floor(i) calls floor lie inside the hull of the top's matches (their
+// pixels in image 2, top_px) by more than the threshold: floor a top cannot hide.
+template <class IsFloor>
+int hidden_floor(const PairFit& p, const std::vector<Vector2d>& top_px, const IsFloor& is_floor) {
+  const double margin = p.thr / p.f;
+  const ConvexHullDepth hull(top_hull(top_px));
+  int n = 0;
+  if (hull.empty()) return n;
+  for (size_t i = 0; i < p.size(); ++i) n += is_floor(i) && hides(hull, p.x2[i].head<2>(), margin);
+  return n;
+}
+
+// One rotation correction's verdict (step 2 of known_floor.hpp).
+struct Hypothesis {
+  int score = -1;   // matches explained: the floor's seen around the top plus the top's
+  int n_floor = 0;  // floor inliers
+  TopMode top;      // the top's inverse distance and its share (count 0: no pair)
+  Vector3d w = Vector3d::Zero();
+};
+
+// The floor's inliers under rotation R, and the top's inverse distance that most other matches
+// share. The top's rho is chosen among matches off the floor by twice the threshold (a top in
+// the floor's noise band is the floor split by what is left of the rotation error), but every
+// other match within the threshold of that top is explained by it: counting only the first lost
+// a top of little parallax (a low platform, a short baseline: much of it inside the band) to the
+// hypothesis that takes the top for the floor, whose correction absorbs the parallax and whose
+// floor then explains all of the top. A top is opaque: the floor is seen around it, never
+// through it, so floor matches inside the top's hull that its plane does not explain count for
+// neither; where the floor is then seen in fewer than min_floor_inliers places outside the top,
+// the pair is no pair and only its floor counts (a few chance matches taken for the floor amid a
+// bare floor otherwise make the whole floor a level "top" a few centimetres up).
+Hypothesis score_rotation(const PairFit& p, const Matrix3d& R, std::vector<PerMatch>* pm_out) {
+  std::vector<PerMatch>& pm = *pm_out;
+  classify(p.x1, p.x2, R, p.t(), p.n, p.range.rho_f, p.f, p.thr, &pm);
+  Hypothesis h;
+  for (size_t i = 0; i < p.size(); ++i) h.n_floor += pm[i].err_floor <= p.thr;
+  h.top = top_mode(pm, p.range.rho_lo, p.range.rho_hi, p.range.max_half_width, p.thr);
+  int nt = 0;
+  std::vector<Vector2d> top_px;
+  const auto on_top = [&](size_t i) {
+    return pm[i].err_rho <= p.thr && std::abs(pm[i].rho - h.top.rho) <= pm[i].half_width;
+  };
+  if (h.top.count > 0)
+    for (size_t i = 0; i < p.size(); ++i)
+      if (pm[i].err_floor > p.thr && on_top(i)) {
+        ++nt;
+        top_px.push_back(p.x2[i].head<2>());
+      }
+  const int hidden =
+      hidden_floor(p, top_px, [&](size_t i) { return pm[i].err_floor <= p.thr && !on_top(i); });
+  if (h.top.count > 0 && h.n_floor - hidden < p.params.min_floor_inliers) {
+    h.top = TopMode{};
+    h.score = h.n_floor;
+  } else {
+    h.score = h.n_floor - hidden + std::max(nt, h.top.count);
+  }
+  return h;
+}
+
+// Step 1's candidates: only a match within the largest correction (plus the threshold) of the
+// uncorrected floor can be floor; of those at most kMaxHypotheses, evenly spread in match order
+// (every floor match gives nearly the same correction, so a few of them are as good as all).
+std::vector<size_t> floor_candidates(const PairFit& p) {
+  std::vector<size_t> hyp;
+  std::vector<PerMatch> pm0;
+  classify(p.x1, p.x2, p.motion.R_21, p.t(), p.n, p.range.rho_f, p.f, p.thr, &pm0);
+  for (size_t i = 0; i < p.size(); ++i)
+    if (pm0[i].err_floor <= p.thr + p.f * p.max_w) hyp.push_back(i);
+  constexpr size_t kMaxHypotheses = 96;
+  if (hyp.size() > kMaxHypotheses) {
+    std::vector<size_t> spread;
+    for (size_t k = 0; k < kMaxHypotheses; ++k)
+      spread.push_back(hyp[k * hyp.size() / kMaxHypotheses]);
+    hyp = std::move(spread);
+  }
+  return hyp;
+}
+
+// The rotation correction that puts match h on the floor (two Gauss-Newton steps on its two
+// equations, minimum norm: the roll about the optical axis stays at motion capture's); nullopt
+// where it is degenerate or beyond max_w.
+std::optional<Vector3d> correction_for(const PairFit& p, size_t h) {
+  Vector3d w = Vector3d::Zero();
+  for (int it = 0; it < 2; ++it) {
+    const Matrix3d R = exp_so3(w) * p.motion.R_21;
+    const Vector3d q = carry(R, p.t(), p.n, p.range.rho_f, p.x1[h]);
+    Vector2d r;
+    Eigen::Matrix<double, 2, 3> Jp;
+    if (!residual(q, p.x2[h], p.f, &r, &Jp)) return std::nullopt;
+    const Eigen::Matrix<double, 2, 3> J = Jp * -skew(q);  // left perturbation of R
+    const Eigen::Matrix2d JJt = J * J.transpose();
+    if (!(std::abs(JJt.determinant()) > 1e-12)) return std::nullopt;
+    w += -J.transpose() * JJt.inverse() * r;
+  }
+  if (!(w.norm() <= p.max_w)) return std::nullopt;
+  return w;
+}
+
+// Steps 1-2: the best scoring correction over the candidates (ties: the smaller correction;
+// exhaustive and in match order, so deterministic). score -1: no candidate.
+Hypothesis best_hypothesis(const PairFit& p) {
+  Hypothesis best;
+  std::vector<PerMatch> pm;
+  for (const size_t h : floor_candidates(p)) {
+    const auto w = correction_for(p, h);
+    if (!w) continue;
+    Hypothesis s = score_rotation(p, exp_so3(*w) * p.motion.R_21, &pm);
+    if (s.score > best.score || (s.score == best.score && w->norm() < best.w.norm())) {
+      s.w = *w;
+      best = s;
+    }
+  }
+  return best;
+}
+
+// The pair after step 3: the correction, the top's inverse distance and the matches of both.
+struct RefinedPair {
+  Vector3d w;
+  double rho_t;
+  std::vector<uint8_t> fl, tp, tp_fit;  // floor; top reported (off the floor's band); top fitted
+  int n_floor = 0, n_top = 0;
+};
+
+// Each match to the floor or the top under the pair's current correction and rho_t. The fit
+// takes every match of the top; the reported top only those off the floor's band: fitting to
+// the band-cut set biased rho and the correction towards the cut's side each step, until the
+// top ended in the floor (a low top over a short baseline).
+void reclassify(const PairFit& p, RefinedPair* q) {
+  const Matrix3d R = exp_so3(q->w) * p.motion.R_21;
+  q->n_floor = q->n_top = 0;
+  for (size_t i = 0; i < p.size(); ++i) {
+    Vector2d rf, rt;
+    const double ef =
+        residual(carry(R, p.t(), p.n, p.range.rho_f, p.x1[i]), p.x2[i], p.f, &rf) ? rf.norm() : 1e9;
+    const double et =
+        residual(carry(R, p.t(), p.n, q->rho_t, p.x1[i]), p.x2[i], p.f, &rt) ? rt.norm() : 1e9;
+    q->fl[i] = ef <= p.thr && ef <= et;
+    q->tp_fit[i] = !q->fl[i] && et <= p.thr;
+    q->tp[i] = q->tp_fit[i] && ef >= 2 * p.thr;
+    q->n_floor += q->fl[i];
+    q->n_top += q->tp[i];
+  }
+}
+
+// Step 3: Gauss-Newton on (omega, rho_top) over both inlier sets from the best hypothesis, the
+// matches reclassified after each step.
+RefinedPair refine(const PairFit& p, const Hypothesis& best) {
+  RefinedPair q{best.w, best.top.rho, std::vector<uint8_t>(p.size()),
+                std::vector<uint8_t>(p.size()), std::vector<uint8_t>(p.size())};
+  reclassify(p, &q);
+  for (int it = 0; it < 4; ++it) {
+    const Matrix3d R = exp_so3(q.w) * p.motion.R_21;
+    Eigen::Matrix4d A = Eigen::Matrix4d::Zero();
+    Eigen::Vector4d g = Eigen::Vector4d::Zero();
+    for (size_t i = 0; i < p.size(); ++i) {
+      if (!q.fl[i] && !q.tp_fit[i]) continue;
+      const double rho = q.fl[i] ? p.range.rho_f : q.rho_t;
+      const Vector3d x = carry(R, p.t(), p.n, rho, p.x1[i]);
+      Vector2d r;
+      Eigen::Matrix<double, 2, 3> Jp;
+      if (!residual(x, p.x2[i], p.f, &r, &Jp)) continue;
+      Eigen::Matrix<double, 2, 4> J = Eigen::Matrix<double, 2, 4>::Zero();
+      J.leftCols<3>() = Jp * -skew(x);
+      if (q.tp_fit[i]) J.col(3) = Jp * (R * p.t() * -p.n.dot(p.x1[i]));
+      A += J.transpose() * J;
+      g += J.transpose() * r;
+    }
+    A.diagonal() += Eigen::Vector4d::Constant(1e-9);
+    const Eigen::Vector4d d = A.ldlt().solve(-g);
+    if (!d.allFinite()) break;
+    q.w += d.head<3>();
+    q.rho_t += d(3);
+    reclassify(p, &q);
+    if (d.head<3>().norm() < 1e-7 && std::abs(d(3)) < 1e-7 * q.rho_t) break;
+  }
+  return q;
+}
+
+// The refined pair's refusals, in order: the fit left its bounds (a correction beyond max_w, a
+// top not above the floor), too few floor or top inliers, or its floor not seen around its top
+// (the hypotheses' rule, after the fit).
+Reason refined_pair_refusal(const PairFit& p, const RefinedPair& q) {
+  if (!(q.w.norm() <= p.max_w) || !(q.rho_t > p.range.rho_f) || !std::isfinite(q.rho_t))
+    return Reason::kTopFitDiverged;
+  if (q.n_floor < p.params.min_floor_inliers) return Reason::kNoDominantPlane;
+  if (q.n_top < p.params.min_platform_inliers) return Reason::kNoTargetPlane;
+  const Matrix3d R = exp_so3(q.w) * p.motion.R_21;
+  std::vector<Vector2d> top_px;
+  for (size_t i = 0; i < p.size(); ++i)
+    if (q.tp_fit[i]) top_px.push_back(p.x2[i].head<2>());
+  const int hidden = hidden_floor(p, top_px, [&](size_t i) {
+    if (!q.fl[i]) return false;
+    Vector2d rt;
+    return !residual(carry(R, p.t(), p.n, q.rho_t, p.x1[i]), p.x2[i], p.f, &rt) ||
+           rt.norm() > p.thr;
+  });
+  if (q.n_floor - hidden < p.params.min_floor_inliers) return Reason::kNoFloorAroundTop;
+  return Reason::kOk;
+}
+
+// The top's free normal (a 3-DOF fit of n1 / d1 given the motion) against the floor's: a chance
+// set of matches at one rho is no plane. A normal the matches do not determine (a degenerate
+// fit) is not shown parallel either.
+Reason top_normal_refusal(const std::vector<Vector3d>& x1, const std::vector<Vector3d>& x2,
+                          const Matrix3d& R_21, const Vector3d& t, const std::vector<uint8_t>& top,
+                          const Vector3d& n, const LandingParams& params, Vector3d* n_free) {
+  const auto free = free_normal(x1, x2, R_21, t, top);
+  if (!free) return Reason::kTopNotParallel;
+  *n_free = *free;
+  return level(*free, n, params) ? Reason::kOk : Reason::kTopNotParallel;
+}
+
+// The top alone at the inverse distance `mode`: the known floor's matches, the top's (those on
+// the mode and off the floor's band, as the pair reports its top), and how many of the matches
+// whose rho says where they are (near the epipole, the descent's focus of expansion amid the
+// top, a match fits any plane) share the mode.
+struct TopAlone {
+  KnownFloorPlanes planes;
+  int informative = 0, on_mode = 0;
+};
+TopAlone top_alone_of(const std::vector<PerMatch>& pm, const KnownMotion& motion,
+                      const KnownPlane& floor, const TopRange& range, const TopMode& mode,
+                      double thr) {
+  const size_t N = pm.size();
+  TopAlone a;
+  KnownFloorPlanes& out = a.planes;
+  out.motion = motion;
+  out.n_1 = floor.n_1;
+  out.rho_floor = range.rho_f;
+  out.rho_top = mode.rho;
+  out.floor.assign(N, 0);
+  out.top.assign(N, 0);
+  for (size_t i = 0; i < N; ++i) {
+    out.floor[i] = pm[i].err_floor <= thr;
+    out.n_floor += out.floor[i];
+    if (pm[i].err_rho > thr || pm[i].half_width > range.max_half_width) continue;
+    ++a.informative;
+    if (std::abs(pm[i].rho - mode.rho) > pm[i].half_width) continue;
+    ++a.on_mode;
+    out.top[i] = !out.floor[i] && pm[i].err_floor >= 2 * thr;
+    out.n_top += out.top[i];
+  }
+  return a;
+}
+
+// Where the floor is seen beside a top alone: its matches off the top's transfer by twice the
+// threshold (the top's own rule against the floor's band: near the epipole a match fits both),
+// anywhere. A top is opaque, so a floor inside its hull contradicts it: over a bare floor whose
+// matches are mostly tracked a few px long of their parallax, the long ones make a "top" a few
+// centimetres up over the whole view and the exact ones, amid them, its "floor".
+int floor_seen_beside(const std::vector<Vector3d>& x1, const std::vector<Vector3d>& x2,
+                      const KnownFloorPlanes& alone, double f, double thr) {
+  int seen = 0;
+  for (size_t i = 0; i < x1.size(); ++i) {
+    Vector2d r;
+    seen +=
+        alone.floor[i] &&
+        (!residual(carry(alone.motion.R_21, alone.motion.t_12_m, alone.n_1, alone.rho_top, x1[i]),
+                   x2[i], f, &r) ||
+         r.norm() > 2 * thr);
+  }
+  return seen;
+}
+
 }  // namespace
 
 std::optional<KnownPlane> known_floor(const PoseSample& pose_1, const CameraMount& mount,
@@ -230,200 +509,36 @@ Result<KnownFloorPlanes> fit_known_floor_planes(const std::vector<Vector3d>& x1,
   if (const Reason r = refused(N, x2.size(), motion, f, thr); r != Reason::kOk) return R_::fail(r);
   if (static_cast<int>(N) < params.min_floor_inliers + params.min_platform_inliers)
     return R_::fail(Reason::kTooFewMatches);
-  const Vector3d& n = floor.n_1;
-  const Vector3d& t = motion.t_12_m;
-  const auto [rho_f, rho_lo, rho_hi, max_half_width] = top_range(floor, params);
-  const double max_w = params.max_rotation_correction_deg * M_PI / 180.0;
-
-  // Floor matches (is_floor) hidden by the top whose matches in image 2 are top_px.
-  const double margin = thr / f;
-  const auto hidden_floor = [&](const std::vector<Vector2d>& top_px, const auto& is_floor) {
-    const ConvexHullDepth hull(top_hull(top_px));
-    int n = 0;
-    if (hull.empty()) return n;
-    for (size_t i = 0; i < N; ++i) n += is_floor(i) && hides(hull, x2[i].head<2>(), margin);
-    return n;
-  };
-
-  std::vector<PerMatch> pm;
-  const auto score = [&](const Matrix3d& R, TopMode* top, int* explained) {
-    classify(x1, x2, R, t, n, rho_f, f, thr, &pm);
-    int nf = 0;
-    for (size_t i = 0; i < N; ++i) nf += pm[i].err_floor <= thr;
-    *top = top_mode(pm, rho_lo, rho_hi, max_half_width, thr);
-    // The top's rho is chosen among matches off the floor by twice the threshold (a top in the
-    // floor's noise band is the floor split by what is left of the rotation error), but every
-    // other match within the threshold of that top is explained by it. Counting only the first
-    // lost a top of little parallax (a low platform, a short baseline: much of it inside the
-    // band) to the hypothesis that takes the top for the floor, whose correction absorbs the
-    // parallax and whose floor then explains all of the top: over flat tiles the top holds 20
-    // times the floor's matches (landing_tiles seed 8001, target lost in approach).
-    int nt = 0;
-    std::vector<Vector2d> top_px;
-    const auto on_top = [&](size_t i) {
-      return pm[i].err_rho <= thr && std::abs(pm[i].rho - top->rho) <= pm[i].half_width;
-    };
-    if (top->count > 0)
-      for (size_t i = 0; i < N; ++i)
-        if (pm[i].err_floor > thr && on_top(i)) {
-          ++nt;
-          top_px.push_back(x2[i].head<2>());
-        }
-    // A top is opaque: the floor is seen around it, never through it. Floor matches inside the
-    // top's region that its plane does not explain contradict the pair and count for neither;
-    // a pair whose floor is seen in fewer than min_floor_inliers places outside its top is no
-    // pair, only its floor counts. Over a bare floor (landing_none_photo) the hypothesis that
-    // took a few chance matches for the floor, all amid the real floor, made the whole floor a
-    // level "top" a few centimetres up under a small rotation correction, and outscored the
-    // truth by those few matches.
-    const int hidden =
-        hidden_floor(top_px, [&](size_t i) { return pm[i].err_floor <= thr && !on_top(i); });
-    if (top->count > 0 && nf - hidden < params.min_floor_inliers) {
-      *top = TopMode{};
-      *explained = nf;
-    } else {
-      *explained = nf - hidden + std::max(nt, top->count);
-    }
-    return nf;
-  };
-
-  // 1-2. One hypothesis per match taken for floor. Only a match within the largest correction
-  // (plus the threshold) of the uncorrected floor can be floor; of those at most
-  // kMaxHypotheses, evenly spread in match order (every floor match gives nearly the same
-  // correction, so a few of them are as good as all).
-  std::vector<size_t> hyp;
-  {
-    std::vector<PerMatch> pm0;
-    classify(x1, x2, motion.R_21, t, n, rho_f, f, thr, &pm0);
-    for (size_t i = 0; i < N; ++i)
-      if (pm0[i].err_floor <= thr + f * max_w) hyp.push_back(i);
-    constexpr size_t kMaxHypotheses = 96;
-    if (hyp.size() > kMaxHypotheses) {
-      std::vector<size_t> spread;
-      for (size_t k = 0; k < kMaxHypotheses; ++k)
-        spread.push_back(hyp[k * hyp.size() / kMaxHypotheses]);
-      hyp = std::move(spread);
-    }
-  }
-  int best_score = -1, best_floor = 0;
-  Vector3d best_w = Vector3d::Zero();
-  TopMode best_top;
-  for (const size_t h : hyp) {
-    Vector3d w = Vector3d::Zero();
-    bool ok = true;
-    for (int it = 0; it < 2 && ok; ++it) {
-      const Matrix3d R = exp_so3(w) * motion.R_21;
-      const Vector3d p = carry(R, t, n, rho_f, x1[h]);
-      Vector2d r;
-      Eigen::Matrix<double, 2, 3> Jp;
-      if (!residual(p, x2[h], f, &r, &Jp)) {
-        ok = false;
-        break;
-      }
-      const Eigen::Matrix<double, 2, 3> J = Jp * -skew(p);  // left perturbation of R
-      const Eigen::Matrix2d JJt = J * J.transpose();
-      if (!(std::abs(JJt.determinant()) > 1e-12)) {
-        ok = false;
-        break;
-      }
-      w += -J.transpose() * JJt.inverse() * r;
-    }
-    if (!ok || !(w.norm() <= max_w)) continue;
-    TopMode top;
-    int s = 0;
-    const int nf = score(exp_so3(w) * motion.R_21, &top, &s);
-    if (s > best_score || (s == best_score && w.norm() < best_w.norm())) {
-      best_score = s;
-      best_floor = nf;
-      best_w = w;
-      best_top = top;
-    }
-  }
-  if (best_score < 0 || best_floor < params.min_floor_inliers)
+  const PairFit p{x1,
+                  x2,
+                  motion,
+                  floor.n_1,
+                  top_range(floor, params),
+                  f,
+                  thr,
+                  params.max_rotation_correction_deg * M_PI / 180.0,
+                  params};
+  const Hypothesis best = best_hypothesis(p);
+  if (best.score < 0 || best.n_floor < params.min_floor_inliers)
     return R_::fail(Reason::kNoDominantPlane);
-  if (best_top.count < params.min_platform_inliers) return R_::fail(Reason::kNoTargetPlane);
-
-  // 3. Gauss-Newton on (omega, rho_top) over both inlier sets, reclassifying after each step.
-  Vector3d w = best_w;
-  double rho_t = best_top.rho;
-  std::vector<uint8_t> fl(N), tp(N), tp_fit(N);
-  const auto reclassify = [&] {
-    const Matrix3d R = exp_so3(w) * motion.R_21;
-    int nf = 0, nt = 0;
-    for (size_t i = 0; i < N; ++i) {
-      Vector2d rf, rt;
-      const double ef = residual(carry(R, t, n, rho_f, x1[i]), x2[i], f, &rf) ? rf.norm() : 1e9;
-      const double et = residual(carry(R, t, n, rho_t, x1[i]), x2[i], f, &rt) ? rt.norm() : 1e9;
-      fl[i] = ef <= thr && ef <= et;
-      // The fit takes every match of the top; the reported top only those off the floor's band.
-      // Fitting to the band-cut set biased rho and the correction towards the cut's side each
-      // step, until the top ended in the floor (a low top over a short baseline).
-      tp_fit[i] = !fl[i] && et <= thr;
-      tp[i] = tp_fit[i] && ef >= 2 * thr;
-      nf += fl[i];
-      nt += tp[i];
-    }
-    return std::make_pair(nf, nt);
-  };
-  auto counts = reclassify();
-  for (int it = 0; it < 4; ++it) {
-    const Matrix3d R = exp_so3(w) * motion.R_21;
-    Eigen::Matrix4d A = Eigen::Matrix4d::Zero();
-    Eigen::Vector4d g = Eigen::Vector4d::Zero();
-    for (size_t i = 0; i < N; ++i) {
-      if (!fl[i] && !tp_fit[i]) continue;
-      const double rho = fl[i] ? rho_f : rho_t;
-      const Vector3d p = carry(R, t, n, rho, x1[i]);
-      Vector2d r;
-      Eigen::Matrix<double, 2, 3> Jp;
-      if (!residual(p, x2[i], f, &r, &Jp)) continue;
-      Eigen::Matrix<double, 2, 4> J = Eigen::Matrix<double, 2, 4>::Zero();
-      J.leftCols<3>() = Jp * -skew(p);
-      if (tp_fit[i]) J.col(3) = Jp * (R * t * -n.dot(x1[i]));
-      A += J.transpose() * J;
-      g += J.transpose() * r;
-    }
-    A.diagonal() += Eigen::Vector4d::Constant(1e-9);
-    const Eigen::Vector4d d = A.ldlt().solve(-g);
-    if (!d.allFinite()) break;
-    w += d.head<3>();
-    rho_t += d(3);
-    counts = reclassify();
-    if (d.head<3>().norm() < 1e-7 && std::abs(d(3)) < 1e-7 * rho_t) break;
-  }
-  if (!(w.norm() <= max_w) || !(rho_t > rho_f) || !std::isfinite(rho_t))
-    return R_::fail(Reason::kNoTargetPlane);
-  if (counts.first < params.min_floor_inliers) return R_::fail(Reason::kNoDominantPlane);
-  if (counts.second < params.min_platform_inliers) return R_::fail(Reason::kNoTargetPlane);
-  {
-    // The refined pair's floor is seen around its top too (the hypotheses' rule, after the fit).
-    const Matrix3d R = exp_so3(w) * motion.R_21;
-    std::vector<Vector2d> top_px;
-    for (size_t i = 0; i < N; ++i)
-      if (tp_fit[i]) top_px.push_back(x2[i].head<2>());
-    const int hidden = hidden_floor(top_px, [&](size_t i) {
-      if (!fl[i]) return false;
-      Vector2d rt;
-      return !residual(carry(R, t, n, rho_t, x1[i]), x2[i], f, &rt) || rt.norm() > thr;
-    });
-    if (counts.first - hidden < params.min_floor_inliers) return R_::fail(Reason::kNoTargetPlane);
-  }
+  if (best.top.count < params.min_platform_inliers) return R_::fail(Reason::kNoTargetPlane);
+  const RefinedPair q = refine(p, best);
+  if (const Reason r = refined_pair_refusal(p, q); r != Reason::kOk) return R_::fail(r);
 
   KnownFloorPlanes out;
-  out.motion = {exp_so3(w) * motion.R_21, t};
-  out.rotation_correction_rad = w.norm();
-  out.n_1 = n;
-  out.rho_floor = rho_f;
-  out.rho_top = rho_t;
-  out.floor = fl;
-  out.top = tp;
-  out.n_floor = counts.first;
-  out.n_top = counts.second;
-
-  const auto n_free = free_normal(x1, x2, out.motion.R_21, t, tp);
-  if (!n_free) return R_::fail(Reason::kNoTargetPlane);
-  out.n_top_free_1 = *n_free;
-  if (!level(out.n_top_free_1, n, params)) return R_::fail(Reason::kNoTargetPlane);
+  out.motion = {exp_so3(q.w) * motion.R_21, motion.t_12_m};
+  out.rotation_correction_rad = q.w.norm();
+  out.n_1 = floor.n_1;
+  out.rho_floor = p.range.rho_f;
+  out.rho_top = q.rho_t;
+  out.floor = q.fl;
+  out.top = q.tp;
+  out.n_floor = q.n_floor;
+  out.n_top = q.n_top;
+  if (const Reason r = top_normal_refusal(x1, x2, out.motion.R_21, motion.t_12_m, q.tp, floor.n_1,
+                                          params, &out.n_top_free_1);
+      r != Reason::kOk)
+    return R_::fail(r);
   return R_::ok(std::move(out));
 }
 
@@ -436,75 +551,44 @@ Result<KnownFloorPlanes> fit_known_top_alone(const std::vector<Vector3d>& x1,
   if (const Reason r = refused(N, x2.size(), motion, f, thr); r != Reason::kOk) return R_::fail(r);
   if (!(params.top_alone_min_share > 0) || static_cast<int>(N) < params.min_platform_inliers)
     return R_::fail(Reason::kNoTargetPlane);
-  const Vector3d& n = floor.n_1;
-  const Vector3d& t = motion.t_12_m;
-  const auto [rho_f, rho_lo, rho_hi, max_half_width] = top_range(floor, params);
+  const TopRange range = top_range(floor, params);
   std::vector<PerMatch> pm;
-  classify(x1, x2, motion.R_21, t, n, rho_f, f, thr, &pm);
-  const TopMode mode = top_mode(pm, rho_lo, rho_hi, max_half_width, thr);
+  classify(x1, x2, motion.R_21, motion.t_12_m, floor.n_1, range.rho_f, f, thr, &pm);
+  const TopMode mode = top_mode(pm, range.rho_lo, range.rho_hi, range.max_half_width, thr);
   if (mode.count == 0) return R_::fail(Reason::kNoTargetPlane);
-
-  KnownFloorPlanes out;
-  out.motion = motion;
-  out.n_1 = n;
-  out.rho_floor = rho_f;
-  out.rho_top = mode.rho;
-  out.floor.assign(N, 0);
-  out.top.assign(N, 0);
-  // The share is of the matches whose rho says where they are: near the epipole (the
-  // descent's focus of expansion, amid the top) a match fits any plane.
-  int informative = 0, on_mode = 0;
-  for (size_t i = 0; i < N; ++i) {
-    out.floor[i] = pm[i].err_floor <= thr;
-    out.n_floor += out.floor[i];
-    if (pm[i].err_rho > thr || pm[i].half_width > max_half_width) continue;
-    ++informative;
-    if (std::abs(pm[i].rho - mode.rho) > pm[i].half_width) continue;
-    ++on_mode;
-    // As the pair's reported top: off the floor's band.
-    out.top[i] = !out.floor[i] && pm[i].err_floor >= 2 * thr;
-    out.n_top += out.top[i];
-  }
-  if (out.n_top < params.min_platform_inliers ||
-      on_mode < params.top_alone_min_share * static_cast<double>(informative))
-    return R_::fail(Reason::kNoTargetPlane);
-  // The floor seen: a floor match off the top's transfer by twice the threshold (the top's own
-  // rule against the floor's band: near the epipole a match fits both), anywhere. A top is
-  // opaque, so a floor inside its hull contradicts it: over a bare floor whose matches are
-  // mostly tracked a few px long of their parallax, the long ones made a "top" 4-5 cm up over
-  // the whole view and the exact ones, amid them, its "floor" (landing_none_photo 9505).
-  int floor_seen = 0;
-  for (size_t i = 0; i < N; ++i) {
-    Vector2d r;
-    floor_seen +=
-        out.floor[i] &&
-        (!residual(carry(motion.R_21, t, n, mode.rho, x1[i]), x2[i], f, &r) || r.norm() > 2 * thr);
-  }
+  const TopAlone alone = top_alone_of(pm, motion, floor, range, mode, thr);
+  const KnownFloorPlanes& out = alone.planes;
+  if (out.n_top < params.min_platform_inliers) return R_::fail(Reason::kNoTargetPlane);
+  if (alone.on_mode < params.top_alone_min_share * static_cast<double>(alone.informative))
+    return R_::fail(Reason::kTopAloneTooFew);
   // Seen in a few places (a tile's corners beside a top that fills the view), the floor does not
   // contradict a top that holds ten times its matches; the pair then fails for want of them
   // (its rotation correction rests on the floor).
   constexpr int kTopPerFloor = 10;
-  if (floor_seen >= params.min_floor_inliers && kTopPerFloor * floor_seen > on_mode)
-    return R_::fail(Reason::kNoTargetPlane);
+  const int seen = floor_seen_beside(x1, x2, out, f, thr);
+  if (seen >= params.min_floor_inliers && kTopPerFloor * seen > alone.on_mode)
+    return R_::fail(Reason::kTopAloneFloorSeen);
   // With little floor in sight to compare, a bias of the whole view's parallax (a pose a few
   // milliseconds off its image, features dragged by blur) is the rival of a plane: it scales
   // every match's inverse distance alike. The top must stand off the floor by more than such a
   // bias: its inverse distance top_alone_min_rise above the floor's.
-  if (mode.rho < (1.0 + params.top_alone_min_rise) * rho_f) return R_::fail(Reason::kNoTargetPlane);
+  if (mode.rho < (1.0 + params.top_alone_min_rise) * range.rho_f)
+    return R_::fail(Reason::kTopAloneLowRise);
   // And with no floor to correct motion capture's rotation by, its error is the other rival: the
   // top's parallax against the floor where its matches are, as an angle, must exceed the
   // largest correction the pair would make: over a short baseline a fraction of a degree makes a
   // bland floor a tall "top". Where its matches are: along the optical axis (the climb after
   // take-off, the descent) a plane's parallax grows from nothing at the epipole, so baseline
-  // times the inverse distances' difference, the parallax across the axis, overstates it and
-  // passed a photographed floor seen climbing for a top (landing_none_photo 9776).
-  if (median_parallax_angle(x1, x2, motion.R_21, t, n, mode.rho, rho_f, out.top) <
-      params.max_rotation_correction_deg * M_PI / 180.0)
-    return R_::fail(Reason::kNoTargetPlane);
-  const auto n_free = free_normal(x1, x2, motion.R_21, t, out.top);
-  if (!n_free || !level(*n_free, n, params)) return R_::fail(Reason::kNoTargetPlane);
-  out.n_top_free_1 = *n_free;
-  return R_::ok(std::move(out));
+  // times the inverse distances' difference, the parallax across the axis, overstates it.
+  if (median_parallax_angle(x1, x2, motion.R_21, motion.t_12_m, floor.n_1, mode.rho, range.rho_f,
+                            out.top) < params.max_rotation_correction_deg * M_PI / 180.0)
+    return R_::fail(Reason::kTopAloneLowParallax);
+  KnownFloorPlanes found = out;
+  if (const Reason r = top_normal_refusal(x1, x2, motion.R_21, motion.t_12_m, out.top, floor.n_1,
+                                          params, &found.n_top_free_1);
+      r != Reason::kOk)
+    return R_::fail(r);
+  return R_::ok(std::move(found));
 }
 
 }  // namespace alight::vision

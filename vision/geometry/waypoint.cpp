@@ -32,7 +32,7 @@ Result<Waypoint> compute_waypoint(const PlaneMotion& motion, const Vector3d& ray
   constexpr double kDeg = M_PI / 180.0;
   if (w.translation_angle_rad > params.max_translation_angle_deg * kDeg ||
       w.rotation_error_rad > params.max_rotation_error_deg * kDeg)
-    return Result<Waypoint>::fail(Reason::kDecompositionFailed);
+    return Result<Waypoint>::fail(Reason::kMotionDisagrees);
 
   const Vector3d n_2 = motion.n_2();  // eq. 4 [1/baseline]
   const double denom = n_2.dot(ray_2);
