@@ -1,4 +1,5 @@
-// Landing planes from the known motion and the known floor (see known_floor.hpp).
+// Landing planes from the known motion and the known floor (beyond paper 3.2; eq. 2 with the
+// metric t12 of eq. 3; see known_floor.hpp).
 #include "vision/geometry/known_floor.hpp"
 
 #include <Eigen/Cholesky>

@@ -1,5 +1,5 @@
 #pragma once
-// Landing planes from the known motion and the known floor (beyond the paper, issue 15).
+// Landing planes from the known motion and the known floor (beyond the paper; paper 3.2, eq. 2).
 //
 // The paper (3.2) takes the dominant homography of all matches as the floor and a second one,
 // over its outliers, as the platform top: a free 8-DOF fit per plane. Over a floor that gives
@@ -86,7 +86,7 @@ Result<KnownFloorPlanes> fit_known_floor_planes(const std::vector<Vector3d>& ray
                                                 double focal_px, const LandingParams& params,
                                                 double threshold_px);
 
-/// Beyond the pair (issue 15): close over a top on a floor too bland for features (the
+/// Beyond the pair: close over a top on a floor too bland for features (the
 /// approach's last metre over a paper top on a pale floor) the view holds the top alone, and the
 /// pair has no floor to stand on. A level top is still one rho under the known motion: the
 /// largest set of matches sharing one rho of a platform height (step 2 without the rotation

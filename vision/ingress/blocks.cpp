@@ -171,8 +171,8 @@ Cells cut_into_cells(const Correspondences& c, const HomographyFit& fit, const c
     std::vector<Vector2d> wall_px;
     for (size_t k = 0; k < c.size(); ++k)
       if (fit.inlier[k]) wall_px.push_back(c.u2[k]);
-    cells.mask = off_wall_mask_of_parallax_images(image_parallax, reference_parallax,
-                                                  image.size(), fit.H, *c.camera, wall_px, p);
+    cells.mask = off_wall_mask_of_parallax_images(image_parallax, reference_parallax, image.size(),
+                                                  fit.H, *c.camera, wall_px, p);
     mask_cuts(cells.mask, p, &cells.xc, &cells.yc, lines, image);
   } else {
     line_cuts(image, p, &cells.xc, &cells.yc, lines);

@@ -229,8 +229,7 @@ struct BorderFit {
 // two-pixel-wide, ragged border); one that stays within kSamePx of a refined line where that
 // line has border pixels would select the same pixels and give the same cut, so it is not
 // refined again.
-bool refined_before(const std::vector<BorderFit>& fitted, double rho, double theta,
-                    bool vertical) {
+bool refined_before(const std::vector<BorderFit>& fitted, double rho, double theta, bool vertical) {
   constexpr double kSamePx = 2.0;
   // The Hough line's across-coordinate at `along`: x at row y for a vertical line.
   const double c = std::cos(theta), s = std::sin(theta);
@@ -284,8 +283,8 @@ std::optional<BorderFit> fit_border_line(const BorderPixels& border_px, double r
     covered[along(*q)] = 1;
     lo = std::min(lo, along(*q)), hi = std::max(hi, along(*q));
   }
-  return BorderFit{vertical, a, b, mean_along, lo, hi,
-                   std::count(covered.begin(), covered.end(), 1)};
+  return BorderFit{
+      vertical, a, b, mean_along, lo, hi, std::count(covered.begin(), covered.end(), 1)};
 }
 
 }  // namespace
@@ -352,12 +351,11 @@ void mask_cuts(const cv::Mat& mask, const IngressParams& p, std::vector<double>*
     fitted.push_back(*f);
     if (f->covered < min_length) continue;
     double a = f->a;
-    if (!smooth.empty()) a = snap_to_edge(smooth, mask, vertical, a, f->b, f->mean_along, f->lo,
-                                          f->hi, p);
+    if (!smooth.empty())
+      a = snap_to_edge(smooth, mask, vertical, a, f->b, f->mean_along, f->lo, f->hi, p);
     (vertical ? xs : ys).push_back(a);
     if (kept) {
-      const double e0 = a + f->b * (f->lo - f->mean_along),
-                   e1 = a + f->b * (f->hi - f->mean_along);
+      const double e0 = a + f->b * (f->lo - f->mean_along), e1 = a + f->b * (f->hi - f->mean_along);
       kept->push_back(vertical ? cv::Vec4i(cvRound(e0), f->lo, cvRound(e1), f->hi)
                                : cv::Vec4i(f->lo, cvRound(e0), f->hi, cvRound(e1)));
     }

@@ -1,4 +1,4 @@
-// Ingress stage 3, the faces (beyond the paper; see faces.hpp).
+// Ingress stage 3, the faces (beyond paper 3.3: eq. 2 for each face's plane; see faces.hpp).
 #include "vision/ingress/faces.hpp"
 
 #include <algorithm>
@@ -202,10 +202,20 @@ double face_front_edge(int side, bool vertical, double a, double b, double mean_
   if (e_max <= k0) return a;
   const Vector3d n2 = g.wall.n_2();
   if (!n2.allFinite()) return a;
-  const FaceSearch s{g,        side,      vertical,  std::round(a),
-                     b,        mean_along, n_across, k0,
-                     k_end,    e_max,     g.wall.R_21.transpose(), g.wall.t_12,
-                     n2,       -(g.wall.R_21 * g.wall.t_12)};
+  const FaceSearch s{g,
+                     side,
+                     vertical,
+                     std::round(a),
+                     b,
+                     mean_along,
+                     n_across,
+                     k0,
+                     k_end,
+                     e_max,
+                     g.wall.R_21.transpose(),
+                     g.wall.t_12,
+                     n2,
+                     -(g.wall.R_21 * g.wall.t_12)};
   const FaceStrip strip = read_strip(s, lo, hi);
   if (strip.n_rows < 4) return a;
   return least_cost_edge(s, face_costs(s, strip, lo, hi, p), strip.n_rows, a, p);

@@ -1,4 +1,5 @@
-// Ingress stage 2, the off-wall mask (beyond the paper; see mask.hpp).
+// Ingress stage 2, the off-wall mask (beyond paper 3.3: plane-induced parallax, eq. 2; see
+// mask.hpp).
 #include "vision/ingress/mask.hpp"
 
 #include <algorithm>

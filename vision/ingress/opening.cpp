@@ -46,8 +46,7 @@ Reason measure_opening(const Correspondences& c, const PlaneMotion& wall, const 
   const double left = box.left, right = box.right, top = box.top, bottom = box.bottom;
   const Vector2d centre(0.5 * (left + right), 0.5 * (top + bottom));
   auto on_wall = [&](const Vector2d& px) {
-    return compute_waypoint(wall, c.camera->ray(px), c.pose_1, c.pose_2, *c.mount,
-                            params.waypoint);
+    return compute_waypoint(wall, c.camera->ray(px), c.pose_1, c.pose_2, *c.mount, params.waypoint);
   };
   const auto w_c = on_wall(centre);
   const auto w_l = on_wall({left, centre.y()}), w_r = on_wall({right, centre.y()});
@@ -87,8 +86,8 @@ Reason opening_checks(const Correspondences& c, const HomographyFit& wall, const
                       const std::vector<std::optional<Vector3d>>& X_W_match,
                       const TargetEstimate& e, const IngressParams& p) {
   Behind behind = behind_the_wall(c, wall, labels, X_W_match, e, p);
-  if (p.min_behind_share > 0 && (behind.behind < p.min_outliers ||
-                                 behind.behind < p.min_behind_share * behind.in_block))
+  if (p.min_behind_share > 0 &&
+      (behind.behind < p.min_outliers || behind.behind < p.min_behind_share * behind.in_block))
     return Reason::kNotBehindWall;
   // A block reaching the image border has no cut there: the opening may go on out of view, so
   // its centre and size are not known. It must show what a whole opening shows at one of its

@@ -138,7 +138,6 @@ TopRect widened_by_shortfall(TopRect r, size_t n) {
 
 Reason measure_top(const Correspondences& c, const LandingPlanes& planes, const TopRect& r,
                    const Isometry3d& X_WC2, const PipelineParams& params, TargetEstimate* e) {
-
   const Vector3d centre_W =
       r.origin_W + 0.5 * (r.lo[0] + r.hi[0]) * r.axis[0] + 0.5 * (r.lo[1] + r.hi[1]) * r.axis[1];
   const Vector3d centre_C2 = X_WC2.inverse() * centre_W;

@@ -1,4 +1,5 @@
-// Landing stage 2, the gates (see gates.hpp).
+// Landing stage 2, the gates (paper 3.2; beyond it, the plane-plus-parallax check of Irani &
+// Anandan, ECCV 1996; see gates.hpp).
 #include "vision/landing/gates.hpp"
 
 #include <algorithm>
@@ -37,9 +38,8 @@ bool off_the_top(const std::optional<PlanePhotometry>& f, const LandingParams& p
 // The fit of the pixels inside the top's hull (current image), kClear deep at least.
 std::optional<PlanePhotometry> hull_photometry(const Correspondences& c,
                                                const std::vector<cv::Point2f>& hull,
-                                               const Matrix3d& H_floor_px,
-                                               const Matrix3d& H_top_px, const cv::Mat& gray_1,
-                                               const cv::Mat& gray_2) {
+                                               const Matrix3d& H_floor_px, const Matrix3d& H_top_px,
+                                               const cv::Mat& gray_1, const cv::Mat& gray_2) {
   const cv::Rect inside(0, 0, gray_2.cols, gray_2.rows);
   std::vector<cv::Point> px;
   const cv::Rect box = cv::boundingRect(hull) & inside;
@@ -85,9 +85,8 @@ std::vector<double> floor_patch_gammas(const Correspondences& c, const LandingPl
 
 }  // namespace
 
-Reason plane_gates(const Correspondences& c, const LandingPlanes& planes,
-                   const Matrix3d& H_top_px, const Matrix3d& H_floor_px, double baseline_m,
-                   const PipelineParams& params) {
+Reason plane_gates(const Correspondences& c, const LandingPlanes& planes, const Matrix3d& H_top_px,
+                   const Matrix3d& H_floor_px, double baseline_m, const PipelineParams& params) {
   if (direction_angle(planes.top.unit_normal_1(), planes.floor.unit_normal_1()) >
       params.landing.max_normal_angle_deg * M_PI / 180.0)
     return Reason::kTopNotParallel;
@@ -157,8 +156,8 @@ bool cut_by_border(const Correspondences& c, const LandingPlanes& planes,
 }
 
 Reason photometric_gate(const Correspondences& c, const LandingPlanes& planes,
-                        const Matrix3d& H_floor_px, const Matrix3d& H_top_px,
-                        const cv::Mat& gray_1, const cv::Mat& gray_2, const LandingParams& p) {
+                        const Matrix3d& H_floor_px, const Matrix3d& H_top_px, const cv::Mat& gray_1,
+                        const cv::Mat& gray_2, const LandingParams& p) {
   std::vector<cv::Point2f> top_u2, hull;
   for (size_t i = 0; i < c.size(); ++i)
     if (planes.top_in[i]) top_u2.emplace_back(c.u2[i].x(), c.u2[i].y());

@@ -24,9 +24,8 @@ namespace alight::vision {
 /// (kTopFitsFloor, top_told_from_floor); motion capture's baseline_m at least min_baseline_m
 /// for the scale of eq. 3 (kSmallBaseline). kOk when all pass. H_top_px / H_floor_px: the
 /// planes' pixel homographies, image 1 to 2.
-Reason plane_gates(const Correspondences& c, const LandingPlanes& planes,
-                   const Matrix3d& H_top_px, const Matrix3d& H_floor_px, double baseline_m,
-                   const PipelineParams& params);
+Reason plane_gates(const Correspondences& c, const LandingPlanes& planes, const Matrix3d& H_top_px,
+                   const Matrix3d& H_floor_px, double baseline_m, const PipelineParams& params);
 
 /// A platform top is opaque: the floor is seen around it, never through it. The floor's
 /// matches seen outside the convex hull of the top's in image 2 (by more than threshold_px, or
@@ -66,8 +65,8 @@ bool cut_by_border(const Correspondences& c, const LandingPlanes& planes,
 /// pixel set too bland or too uncertain to tell gives no verdict (blank paper, a grey tile): the
 /// features decide. gray_1 / gray_2: the reference and current raw images of the camera's size.
 Reason photometric_gate(const Correspondences& c, const LandingPlanes& planes,
-                        const Matrix3d& H_floor_px, const Matrix3d& H_top_px,
-                        const cv::Mat& gray_1, const cv::Mat& gray_2, const LandingParams& params);
+                        const Matrix3d& H_floor_px, const Matrix3d& H_top_px, const cv::Mat& gray_1,
+                        const cv::Mat& gray_2, const LandingParams& params);
 
 /// The plane check's verdict on the floor from the gammas of the patches around the floor's
 /// features (0 the floor's plane, 1 the top's): false when their median is farther than

@@ -45,8 +45,7 @@ Result<LandingPlanes> known_floor_planes(const Correspondences& c, const Pipelin
 
 /// The paper's floor is the known one: its distance from camera 1 within floor_tol_frac of the
 /// known floor's, its normal within max_normal_angle_deg.
-bool floor_agrees(const PlaneMotion& floor, const Correspondences& c,
-                  const PipelineParams& params);
+bool floor_agrees(const PlaneMotion& floor, const Correspondences& c, const PipelineParams& params);
 
 /// Whether the plane of pixel homography H_px (image 1 to 2) carries match i's x1 to its x2
 /// within threshold_px.

@@ -1,4 +1,5 @@
-// Landing stage 3, the extent out to the top's rims and ends (beyond the paper; see rim.hpp).
+// Landing stage 3, the extent out to the top's rims and ends (beyond paper 3.2 and its Fig. 6b;
+// see rim.hpp).
 #include "vision/landing/rim.hpp"
 
 #include <algorithm>
@@ -161,8 +162,7 @@ double rim_turn(const SideGrid& grid, const Side& side, double step_m, int n_d, 
     const auto strongest =
         std::max_element(steps.begin(), steps.end(),
                          [](const auto& a, const auto& b) { return a.second < b.second; });
-    at.emplace_back(side.t_lo + 0.5 * (i0 + i1 - 1) * grid.t_step_m - grid.t_mid,
-                    strongest->first);
+    at.emplace_back(side.t_lo + 0.5 * (i0 + i1 - 1) * grid.t_step_m - grid.t_mid, strongest->first);
   }
   double tan_turn = 0, a = 0, b = 0;
   if (fit_line(at, &a, &b)) {
@@ -240,8 +240,7 @@ struct EndSearch {
   double e_top(std::ptrdiff_t at) const { return std::abs(grid.g2[at] - gain * grid.g1[at]); }
   // The shift of line i along a turn of slope_px pixels per metre along the side.
   int shift(const Side& side, int i, double slope_px) const {
-    return static_cast<int>(
-        std::lround((side.t_lo + i * grid.t_step_m - grid.t_mid) * slope_px));
+    return static_cast<int>(std::lround((side.t_lo + i * grid.t_step_m - grid.t_mid) * slope_px));
   }
 };
 
@@ -421,8 +420,7 @@ std::optional<Rim> top_end_offset(const Correspondences& c, const cv::Mat& gray_
   const auto e = step_up(*s, f);
   if (!e || e->y() < p.top_end_min_rise) return std::nullopt;
   if (!off_top_beyond(*s, f, *e, p) ||
-      !floor_beyond(c, gray_1, *s, side, H_12_floor, static_cast<int>(std::lround(e->x())),
-                    *slope))
+      !floor_beyond(c, gray_1, *s, side, H_12_floor, static_cast<int>(std::lround(e->x())), *slope))
     return std::nullopt;
   return Rim{std::max(0.0, e->x()) * px_m, std::atan(*slope * px_m)};
 }
