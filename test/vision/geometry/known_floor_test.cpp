@@ -193,7 +193,10 @@ TEST(KnownFloorTest, BareFloorWithMismatchesHasNoTop) {
     const Scene s = make_scene(100 + seed, 0.2, 80, 0, 30, 0.15 * kDeg);
     const auto fit = fit_known_floor_planes(s.r1, s.r2, s.mocap, s.floor, f, params, 2.0);
     ASSERT_FALSE(fit) << "seed " << seed << ": a top of " << fit->n_top;
-    EXPECT_EQ(fit.reason(), Reason::kNoTargetPlane);
+    EXPECT_TRUE(
+        fit.reason() == Reason::kNoTargetPlane ||
+        (fit.reason() >= Reason::kTopNotParallel && fit.reason() <= Reason::kTopAloneLowParallax))
+        << to_string(fit.reason());
   }
 }
 

@@ -131,7 +131,7 @@ TEST(WaypointTest, MotionContradictingMotionCaptureIsRefused) {
   wrong.t_12 = -wrong.t_12;
   const auto w = compute_waypoint(wrong, Vector3d(0, 0, 1), s.pose_1, s.pose_2, s.mount);
   EXPECT_FALSE(w);
-  EXPECT_EQ(w.reason(), Reason::kDecompositionFailed);
+  EXPECT_EQ(w.reason(), Reason::kMotionDisagrees);
 }
 
 TEST(WaypointTest, RayParallelToThePlaneIsRefused) {

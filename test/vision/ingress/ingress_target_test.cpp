@@ -273,6 +273,26 @@ TEST(IngressTargetTest, OpeningInFrontOfTheRoomIsFound) {
   EXPECT_NEAR(t.estimate.size_m[1], 0.6, 0.01);
 }
 
+// The stages' own refusals on the frame above: the wall whose motion disagrees with motion
+// capture's (wall.hpp, kMotionDisagrees), no block of min_outliers features seen through the
+// wall (blocks.hpp, kNoOpening), an opening smaller than min_size_m (opening.hpp,
+// kOpeningTooSmall). The checks that what is seen lies behind the wall have their own tests
+// below (kNotBehindWall, kPartialNotFramed, kPartialNotBehind, kLowParallax).
+TEST(IngressTargetTest, EachStageRefusesWithItsOwnReason) {
+  const WallScene s(150, 60);
+  PipelineParams base;
+  base.ingress.parallax_mask = false;
+  PipelineParams p = base;
+  p.waypoint.max_translation_angle_deg = -1;  // no motion agrees
+  EXPECT_EQ(find_ingress_target(s.c, s.image, cv::Mat(), p).reason, Reason::kMotionDisagrees);
+  p = base;
+  p.ingress.min_outliers = 100000;
+  EXPECT_EQ(find_ingress_target(s.c, s.image, cv::Mat(), p).reason, Reason::kNoOpening);
+  p = base;
+  p.ingress.min_size_m = 0.7;  // the opening is 0.6 m square
+  EXPECT_EQ(find_ingress_target(s.c, s.image, cv::Mat(), p).reason, Reason::kOpeningTooSmall);
+}
+
 // Regression (closed-loop ingress_wide, seed 1): through a wide opening the room's back wall
 // held more matches than the wall around it and became the dominant plane; the wall's own
 // features then formed an inlier-free block and "openings" were reported at x = 6 m.
@@ -282,7 +302,7 @@ TEST(IngressTargetTest, BackWallAsDominantPlaneIsNoOpening) {
   params.ingress.parallax_mask = false;
   params.ingress.nearer_plane = false;  // the dominant plane is taken for the wall
   const TargetOutcome t = find_ingress_target(s.c, s.image, cv::Mat(), params);
-  EXPECT_EQ(t.reason, Reason::kNoOpening) << "at " << t.estimate.p_W.transpose();
+  EXPECT_EQ(t.reason, Reason::kNotBehindWall) << "at " << t.estimate.p_W.transpose();
   // Without the check the same frame gives an opening on the back wall's plane.
   params.ingress.min_behind_share = 0.0;
   params.ingress.border_is_partial = false;
@@ -348,7 +368,7 @@ TEST(IngressTargetTest, MismatchesInTheRoomDoNotHideThatItIsBehind) {
   // Where any crossing of two rays counts, the mismatches outvote the room.
   params.ingress.max_ray_gap_px = 0;
   const TargetOutcome unchecked = find_ingress_target(s.c, s.image, cv::Mat(), params);
-  EXPECT_EQ(unchecked.reason, Reason::kNoOpening) << to_string(unchecked.reason);
+  EXPECT_EQ(unchecked.reason, Reason::kNotBehindWall) << to_string(unchecked.reason);
 }
 
 // Regression (issue 15, ingress_photo seed 9401: refused, its measured width 17 cm short): at
@@ -836,7 +856,7 @@ TEST(IngressTargetTest, SpaceBeyondTheWallsEndIsNoPartialView) {
   params.ingress.parallax_mask = false;
   ASSERT_GT(params.ingress.partial_frame_inliers, 0);
   const TargetOutcome t = find_ingress_target(s.c, s.image, cv::Mat(), params);
-  EXPECT_EQ(t.reason, Reason::kNoOpening) << to_string(t.reason);
+  EXPECT_EQ(t.reason, Reason::kPartialNotFramed) << to_string(t.reason);
   // Without the check the same frame is a partial view past the wall's end.
   params.ingress.partial_frame_inliers = 0;
   const TargetOutcome unchecked = find_ingress_target(s.c, s.image, cv::Mat(), params);
@@ -870,7 +890,7 @@ TEST(IngressTargetTest, FeaturesBarelyBehindTheWallAreNoPartialView) {
   params.ingress.parallax_mask = false;
   ASSERT_GT(params.ingress.partial_behind_margin_m, 0.05);
   const TargetOutcome t = find_ingress_target(s.c, s.image, cv::Mat(), params);
-  EXPECT_EQ(t.reason, Reason::kNoOpening) << to_string(t.reason);
+  EXPECT_EQ(t.reason, Reason::kPartialNotBehind) << to_string(t.reason);
   params.ingress.partial_behind_margin_m = 0;
   const TargetOutcome unchecked = find_ingress_target(s.c, s.image, cv::Mat(), params);
   EXPECT_EQ(unchecked.reason, Reason::kPartialView) << to_string(unchecked.reason);

@@ -76,7 +76,10 @@ TEST(LandingMissionTest, NoPlatformAboveTheBareFloor) {
     EXPECT_FALSE(r.found()) << "frame " << r.seq;
     if (r.ref_utime > 0) {
       ++with_reference;
-      EXPECT_EQ(r.reason, Reason::kNoTargetPlane) << to_string(r.reason);
+      // No second plane, or one that a gate of the top refuses (each with its own reason).
+      EXPECT_TRUE(r.reason == Reason::kNoTargetPlane ||
+                  (r.reason >= Reason::kTopNotParallel && r.reason <= Reason::kTopAloneLowParallax))
+          << to_string(r.reason);
       EXPECT_GT(r.target.n_inliers_dominant, 40);
     }
   }

@@ -712,5 +712,61 @@ TEST(TopAlone, ATopAloneInsideBothViewsIsSeenWhole) {
   }
 }
 
+// Each gate refuses with its own reason (gates.hpp): the 8 cm top of
+// LowestDrawnTopOverTheSameFloorIsFound, found on the paper's planes with the shipped
+// parameters, is refused by exactly the gate whose parameter is set past it, with that gate's
+// reason.
+struct GateCase {
+  const char* name;
+  void (*set)(PipelineParams*);
+  Reason reason;
+};
+
+TEST(LandingGates, EachGateRefusesWithItsOwnReason) {
+  const GateCase cases[] = {
+      {"top parallel to the floor", [](PipelineParams* p) { p->landing.max_normal_angle_deg = 0; },
+       Reason::kTopNotParallel},
+      {"floor around the top", [](PipelineParams* p) { p->landing.min_floor_inliers = 100000; },
+       Reason::kNoFloorAroundTop},
+      {"top told from the floor", [](PipelineParams* p) { p->landing.max_top_on_floor_share = -1; },
+       Reason::kTopFitsFloor},
+      {"top level", [](PipelineParams* p) { p->landing.max_tilt_deg = 0; }, Reason::kTopTilted},
+      {"height in range", [](PipelineParams* p) { p->landing.min_height_m = 0.5; },
+       Reason::kHeightOutOfRange},
+  };
+  // The paper's planes (floor_prior off): the known floor's own fit uses min_floor_inliers and
+  // the height range before the gates (known_floor.hpp), and refuses there.
+  int tested = 0;
+  for (uint64_t seed = 1; seed <= 8; ++seed) {
+    std::mt19937_64 rng(500 + seed);
+    const LowTop t = low_top(rng, 0.08);
+    PipelineParams params;
+    params.landing.floor_prior = "off";
+    if (find_landing_target(t.v.c, params).reason != Reason::kOk) continue;  // a partial view
+    ++tested;
+    for (const GateCase& g : cases) {
+      PipelineParams refused = params;
+      g.set(&refused);
+      const Reason r = find_landing_target(t.v.c, refused).reason;
+      EXPECT_EQ(r, g.reason) << g.name << ", seed " << seed << ": " << to_string(r);
+    }
+  }
+  EXPECT_GE(tested, 4);
+}
+
+// The photometric gate's two reasons: a top the images show to be floor (rendered_top's bare
+// current image: every pixel of the "top" follows the floor's plane) is refused for its pixels
+// (kTopPhotometry); a floor whose patches spread on both sides of its plane refuses for the
+// floor's (kFloorPhotometry, floor_patches_agree: FloorPatchesSpreadOnBothSidesOfZeroAreRefused).
+TEST(LandingGates, ThePhotometricGateNamesTheTopOrTheFloor) {
+  for (uint64_t seed = 1; seed <= 3; ++seed) {
+    const RenderedTop r = rendered_top(seed);
+    PipelineParams params;
+    const Reason top = find_landing_target(r.t.v.c, params, r.ref, r.bare).reason;
+    EXPECT_EQ(top, Reason::kTopPhotometry) << "seed " << seed << ": " << to_string(top);
+    EXPECT_EQ(find_landing_target(r.t.v.c, params, r.ref, r.with_top).reason, Reason::kOk);
+  }
+}
+
 }  // namespace
 }  // namespace alight::vision
