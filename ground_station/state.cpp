@@ -119,6 +119,40 @@ const char* target_reason_name(int8_t reason) {
       return "too little parallax to measure the opening";
     case target_t::REASON_MOTION_BLUR:
       return "motion blur";
+    case target_t::REASON_TOP_NOT_PARALLEL:
+      return "top not parallel to the floor";
+    case target_t::REASON_NO_FLOOR_AROUND_TOP:
+      return "no floor around the top";
+    case target_t::REASON_TOP_FITS_FLOOR:
+      return "top fits the floor";
+    case target_t::REASON_TOP_TILTED:
+      return "top tilted";
+    case target_t::REASON_HEIGHT_OUT_OF_RANGE:
+      return "height out of range";
+    case target_t::REASON_TOP_PHOTOMETRY:
+      return "photometric check failed on the top";
+    case target_t::REASON_FLOOR_PHOTOMETRY:
+      return "photometric check failed on the floor";
+    case target_t::REASON_TOP_FIT_DIVERGED:
+      return "top's fit diverged";
+    case target_t::REASON_TOP_ALONE_TOO_FEW:
+      return "top alone: too few matches on it";
+    case target_t::REASON_TOP_ALONE_FLOOR_SEEN:
+      return "top alone: floor in sight";
+    case target_t::REASON_TOP_ALONE_LOW_RISE:
+      return "top alone: too little above the floor";
+    case target_t::REASON_TOP_ALONE_LOW_PARALLAX:
+      return "top alone: too little parallax";
+    case target_t::REASON_MOTION_DISAGREES:
+      return "motion disagrees with motion capture";
+    case target_t::REASON_OPENING_TOO_SMALL:
+      return "opening too small";
+    case target_t::REASON_NOT_BEHIND_WALL:
+      return "view not behind the wall";
+    case target_t::REASON_PARTIAL_NOT_FRAMED:
+      return "partial view without the wall around it";
+    case target_t::REASON_PARTIAL_NOT_BEHIND:
+      return "partial view not behind the wall";
   }
   return "unknown";
 }
@@ -160,6 +194,7 @@ void StationState::on_pose(const pose_t& msg, int64_t now_utime) {
     track_.clear();
     heights_.clear();
     measurements_.clear();
+    target_reasons_.clear();
     t0_utime_.reset();
     last_height_utime_ = INT64_MIN;
     last_track_utime_ = INT64_MIN;
@@ -190,6 +225,7 @@ void StationState::sample_height(int64_t utime) {
 void StationState::on_target(const target_t& msg, int64_t now_utime) {
   arrived(params_.target_channel, now_utime);
   target_ = msg;
+  ++target_reasons_[msg.reason];
   if (msg.found) {
     Measurement m{t_s(msg.utime), {msg.p_W_target[0], msg.p_W_target[1], msg.p_W_target[2]}};
     push_bounded(measurements_, m, params_.measurements_max);
@@ -329,6 +365,11 @@ std::string StationState::to_json(int64_t now_utime, const std::string& extra) c
     w.field("n_inliers_target", static_cast<int>(t.n_inliers_target));
     w.end_object();
   }
+  // Every target's reason counted since the start (or the last jump back in time): which gate
+  // refuses the frames, as alight-vision-eval prints it for a log.
+  w.key("target_reasons").begin_object();
+  for (const auto& [reason, n] : target_reasons_) w.field(target_reason_name(reason), n);
+  w.end_object();
 
   w.key("channels").begin_object();
   for (const auto& [name, meter] : channels_) {

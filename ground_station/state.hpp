@@ -101,6 +101,8 @@ class StationState {
   const std::deque<TrackPoint>& track() const { return track_; }
   const std::deque<HeightPoint>& heights() const { return heights_; }
   const std::deque<Measurement>& measurements() const { return measurements_; }
+  /// VISION_TARGET messages by reason (REASON_*) since the start or the last jump back in time.
+  const std::map<int8_t, uint64_t>& target_reasons() const { return target_reasons_; }
   double channel_rate_hz(const std::string& channel, int64_t now_utime) const;
   std::optional<double> channel_age_s(const std::string& channel, int64_t now_utime) const;
 
@@ -113,6 +115,7 @@ class StationState {
   std::optional<int64_t> t0_utime_;
   std::optional<autonomy_status_t> status_;
   std::optional<target_t> target_;
+  std::map<int8_t, uint64_t> target_reasons_;  // VISION_TARGET messages by reason
   std::optional<process_status_t> processes_;
   std::optional<autopilot_status_t> autopilot_;
   struct NodeReport {

@@ -2,8 +2,11 @@
 // (paper 3.1-3.3) offline over the CAMERA frames of a session log, each with the motion-capture
 // pose interpolated at its exposure time, and scores every waypoint against the simulator's truth
 // (SIM_TRUTH). Unlike the live node it never drops a frame, so it measures the pipeline alone:
-// per-frame reasons, waypoint and height errors (median, p90), and the processing time per frame
-// on this machine (which bounds the waypoint rate the node can reach).
+// per-frame reasons (a histogram: the frames each stage or gate refused, by its reason), waypoint
+// and height errors (median, p90), and the processing time per frame on this machine (which
+// bounds the waypoint rate the node can reach). --frames prints every frame's whole result at
+// full precision and no timing, so two builds' outputs compare with diff (a refactor of the
+// vision must leave them identical).
 //
 // Exit status: 0 when the log was read, 2 when it cannot be read or holds no CAMERA frames.
 #include <CLI/CLI.hpp>
@@ -12,6 +15,7 @@
 #include <alight/pose_t.hpp>
 #include <alight/sim_truth_t.hpp>
 #include <chrono>
+#include <cstdint>
 #include <cstdio>
 #include <lcm/lcm-cpp.hpp>
 #include <map>
@@ -23,6 +27,7 @@
 #include "common/decode.hpp"
 #include "common/msg_convert.hpp"
 #include "common/params.hpp"
+#include "vision/frame_line.hpp"
 #include "vision/pipeline.hpp"
 
 namespace {
@@ -47,7 +52,7 @@ double percentile(std::vector<double> v, double q) {
 int main(int argc, char** argv) {
   CLI::App app{"alight-vision-eval: the vision pipeline over a session log, scored against truth"};
   std::string log_path, config, mission_name = "landing";
-  bool verbose = false;
+  bool verbose = false, frames_out = false;
   app.add_option("log", log_path, "Session log (.lcmlog) with CAMERA, MOCAP_POSE, SIM_TRUTH")
       ->required()
       ->check(CLI::ExistingFile);
@@ -57,6 +62,8 @@ int main(int argc, char** argv) {
   app.add_option("--mission", mission_name, "landing | ingress")
       ->check(CLI::IsMember({"landing", "ingress"}));
   app.add_flag("-v,--verbose", verbose, "One line per frame");
+  app.add_flag("--frames", frames_out,
+               "One line per frame with its whole result, exact and without timing (to compare)");
   CLI11_PARSE(app, argc, argv);
 
   try {
@@ -108,6 +115,7 @@ int main(int argc, char** argv) {
       ms.push_back(
           std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
       ++reasons[r.reason];
+      if (frames_out) std::fputs(frame_line(r).c_str(), stdout);
       double lat = -1, dh = 0;
       if (truth && (r.found() || located_only(r.reason))) {
         const double* c =
@@ -140,7 +148,14 @@ int main(int argc, char** argv) {
       return 2;
     }
     std::printf("frames: %d\n", frames);
-    for (const auto& [reason, n] : reasons) std::printf("reason %s: %d\n", to_string(reason), n);
+    // The per-reason histogram, most frequent first: which stage or gate refused the frames.
+    std::vector<std::pair<int, Reason>> by_count;
+    for (const auto& [reason, n] : reasons) by_count.emplace_back(-n, reason);
+    std::sort(by_count.begin(), by_count.end());
+    std::printf("reasons:\n");
+    for (const auto& [minus_n, reason] : by_count)
+      std::printf("  %3d %-44s %6d  %5.1f%%\n", static_cast<int>(reason), to_string(reason),
+                  -minus_n, 100.0 * -minus_n / frames);
     std::printf("frame_time_ms: median %.2f p99 %.2f\n", percentile(ms, 0.5), percentile(ms, 0.99));
     if (!lateral_m.empty()) {
       std::printf("waypoint_error_m: median %.4f p90 %.4f max %.4f (n %zu)\n",

@@ -488,7 +488,7 @@ const ParamSchema<NodeParams>& NodeParams::schema() {
     // wait converted to microseconds is undefined behaviour.
     s.add("max_pose_wait_s", &P::max_pose_wait_s, Range::closed(0, 5), "s",
           "a frame waits for its pose until a frame exposed this much later has arrived "
-          "(sensor time, vision/frame_pose_pairing.hpp)");
+          "(sensor time, vision/node/frame_pose_pairing.hpp)");
     s.add("diag_rate_hz", &P::diag_rate_hz, Range::closed(0, 100), "Hz",
           "VISION_DIAG images per second (0: none)");
     s.add("diag_jpeg_quality", &P::diag_jpeg_quality, Range::closed(1, 100), "",

@@ -3,13 +3,13 @@
 
 #include <algorithm>
 
-#include "vision/ingress_target.hpp"
-#include "vision/landing_target.hpp"
-#include "vision/matcher.hpp"
-#include "vision/motion_blur.hpp"
-#include "vision/star_detector.hpp"
-#include "vision/surf_descriptor.hpp"
-#include "vision/waypoint.hpp"
+#include "vision/frontend/matcher.hpp"
+#include "vision/frontend/motion_blur.hpp"
+#include "vision/frontend/star_detector.hpp"
+#include "vision/frontend/surf_descriptor.hpp"
+#include "vision/geometry/waypoint.hpp"
+#include "vision/ingress/ingress_target.hpp"
+#include "vision/landing/landing_target.hpp"
 
 namespace alight::vision {
 
@@ -25,6 +25,168 @@ void Pipeline::reset() {
   poses_.clear();
   held_.reset();
   last_utime_ = 0;
+}
+
+// The reference a frame is matched against: a tracked one or the held one, its pose and its
+// baseline to the current camera. `matches` are the held reference's, made while choosing it.
+struct Pipeline::Reference {
+  std::shared_ptr<const TrackedFrame> frame;  // null: none serves
+  PoseSample pose;
+  double baseline_m = 0.0;  // none tracked: any held baseline is longer
+  bool skipped_smeared = false;
+  bool held = false;
+  std::vector<Match> matches;
+};
+
+namespace {
+
+// Matches of frame a's features to frame b's (paper 3.1.1): ratio test, mutual check,
+// same-sign blobs.
+std::vector<Match> match_frames(const TrackedFrame& a, const TrackedFrame& b,
+                                const MatchParams& params) {
+  const auto sa = response_signs(a.keypoints);
+  const auto sb = response_signs(b.keypoints);
+  return match_descriptors(a.descriptors, b.descriptors, params, &sa, &sb);
+}
+
+}  // namespace
+
+bool Pipeline::smeared(const TrackedFrame& f) const {
+  const double max_blur_px = mission_ == Mission::kLanding ? params_.landing.max_motion_blur_px : 0;
+  return max_blur_px > 0 && f.blur_px > max_blur_px;
+}
+
+bool Pipeline::holds() const {
+  return mission_ == Mission::kLanding && params_.landing.hold_reference;
+}
+
+// Features, descriptors and the frame's smear (paper 3.1.1). Descriptors of every frame share
+// one world-fixed pattern orientation, so yaw between the reference and now does not break
+// matching: world x for the downward camera, world up for the forward one (world x is near its
+// optical axis). Ingress keeps each frame's image smoothed as the off-wall mask compares it,
+// made once; landing keeps the image itself for the photometric gate and the rim search (the
+// caller's pixels are not ours to keep; with both off no copy is made). Fails with the
+// detector's reason.
+Result<TrackedFrame> Pipeline::front_end(const cv::Mat& gray, int64_t utime, const PoseSample& pose,
+                                         std::optional<double> exposure_s, FrameResult* r) const {
+  const cv::Mat integral = integral_image(gray);
+  auto kps = detect_star(gray, integral,
+                         mission_ == Mission::kIngress ? params_.ingress_star : params_.star);
+  if (!kps) return Result<TrackedFrame>::fail(kps.reason());
+  r->n_features = static_cast<int>(kps->size());
+  for (const auto& k : *kps) r->features_px.emplace_back(k.x, k.y);
+  const Isometry3d X_WC = camera_in_world(pose.X_WB(), mount_.X_BC());
+  const Vector3d d_W = mission_ == Mission::kIngress ? Vector3d::UnitZ() : Vector3d::UnitX();
+  TrackedFrame frame;
+  frame.utime = utime;
+  frame.pattern_angle_rad = pattern_angle(X_WC.linear(), d_W);
+  frame.descriptors = describe_surf(integral, *kps, params_.surf, frame.pattern_angle_rad);
+  frame.keypoints = std::move(*kps);
+  const double max_blur_px = mission_ == Mission::kLanding ? params_.landing.max_motion_blur_px : 0;
+  if (max_blur_px > 0)
+    frame.blur_px = floor_motion_blur_px(camera_, mount_, pose, params_.landing.floor_z_m,
+                                         exposure_s.value_or(params_.landing.assumed_exposure_s));
+  r->blur_px = frame.blur_px;
+  if (mission_ == Mission::kIngress && params_.ingress.parallax_mask)
+    frame.image = parallax_image(gray, params_.ingress);
+  if (mission_ == Mission::kLanding &&
+      (params_.landing.photometric_tol > 0 || params_.landing.rim_search_m > 0))
+    frame.image = gray.clone();
+  return Result<TrackedFrame>::ok(std::move(frame));
+}
+
+// The frame into the tracker (paper 3.1.1), and the poses of the frames it can still pick.
+ReferenceTracker::Update Pipeline::track(TrackedFrame frame, int64_t utime,
+                                         const PoseSample& pose) {
+  const auto up = tracker_.add(std::move(frame));
+  if (up.reset) {
+    poses_.clear();
+    // Tracks broken by a changed view or a frame of few features (a pale floor loses its weak
+    // features from frame to frame) say nothing about the held reference: it is used only where
+    // it still matches min_tracked features directly (a gap in time drops it). Dropping it with
+    // every reset would restart the baseline from zero every 1-2 s over a pale floor, short of
+    // the top's parallax.
+    if (!holds()) held_.reset();
+  }
+  if (up.current) poses_.emplace_back(utime, pose);
+  const int64_t oldest = up.reference ? up.reference->utime : utime;
+  while (!poses_.empty() && poses_.front().first < oldest) poses_.pop_front();
+  return up;
+}
+
+// The tracked reference: the oldest qualifying frame within max_reference_baseline_m of the
+// current camera (the newest previous frame when even that one is farther); never a smeared
+// one.
+Pipeline::Reference Pipeline::tracked_reference(const ReferenceTracker::Update& up,
+                                                const PoseSample& pose) const {
+  Reference ref;
+  ref.frame = up.reference && !smeared(*up.reference) ? up.reference : nullptr;
+  if (up.reference) {
+    const auto& h = tracker_.history();
+    const Vector3d c_now = camera_in_world(pose.X_WB(), mount_.X_BC()).translation();
+    for (size_t k = 0; k + 1 < h.size(); ++k) {
+      const auto pose_k = std::find_if(poses_.begin(), poses_.end(),
+                                       [&](const auto& e) { return e.first == h[k]->utime; });
+      if (pose_k == poses_.end()) continue;
+      if (smeared(*h[k])) {
+        ref.skipped_smeared = true;
+        continue;
+      }
+      ref.frame = h[k];
+      if ((camera_in_world(pose_k->second.X_WB(), mount_.X_BC()).translation() - c_now).norm() <=
+          params_.max_reference_baseline_m)
+        break;
+    }
+  }
+  if (ref.frame) {
+    const auto ref_pose = std::find_if(poses_.begin(), poses_.end(),
+                                       [&](const auto& e) { return e.first == ref.frame->utime; });
+    assert(ref_pose != poses_.end());
+    ref.pose = ref_pose->second;
+    ref.baseline_m = mocap_motion(ref.pose, pose, mount_).baseline_m;
+  }
+  return ref;
+}
+
+// Hovering (pipeline.hpp): the held reference while the tracked one is nearer than
+// hold_baseline_m, where the held one is farther, within max_reference_baseline_m and
+// hold_max_age_s, and still matches min_tracked of the current frame's features. A frame that
+// matches it with fewer hands the hold to the tracked one: keeping it held through such frames
+// multiplies the false targets over floors without a platform.
+void Pipeline::hold_reference(Reference* ref, const TrackedFrame& current, int64_t utime,
+                              const PoseSample& pose) const {
+  if (!(holds() && ref->baseline_m < params_.landing.hold_baseline_m && held_ &&
+        held_->utime < utime &&
+        double(utime - held_->utime) * 1e-6 <= params_.landing.hold_max_age_s))
+    return;
+  const double held_baseline_m = mocap_motion(held_pose_, pose, mount_).baseline_m;
+  if (!(held_baseline_m > ref->baseline_m && held_baseline_m <= params_.max_reference_baseline_m))
+    return;
+  auto m = match_frames(*held_, current, params_.match);
+  if (static_cast<int>(m.size()) < params_.tracker.min_tracked) return;
+  ref->frame = held_;
+  ref->pose = held_pose_;
+  ref->baseline_m = held_baseline_m;
+  ref->matches = std::move(m);
+  ref->held = true;
+}
+
+// The matches as undistorted (K * ray) and raw pixels of both frames.
+Correspondences Pipeline::correspondences(const TrackedFrame& a, const TrackedFrame& b,
+                                          const std::vector<Match>& matches) const {
+  Correspondences c;
+  c.camera = &camera_;
+  c.mount = &mount_;
+  const Matrix3d K = camera_.K();
+  for (const auto& m : matches) {
+    const auto& k1 = a.keypoints[m.i1];
+    const auto& k2 = b.keypoints[m.i2];
+    c.x1.push_back((K * camera_.ray({k1.x, k1.y})).hnormalized());
+    c.x2.push_back((K * camera_.ray({k2.x, k2.y})).hnormalized());
+    c.u1.emplace_back(k1.x, k1.y);
+    c.u2.emplace_back(k2.x, k2.y);
+  }
+  return c;
 }
 
 FrameResult Pipeline::process(const cv::Mat& gray, int64_t utime,
@@ -49,154 +211,39 @@ FrameResult Pipeline::process(const cv::Mat& gray, int64_t utime,
     held_.reset();
   last_utime_ = utime;
 
-  const cv::Mat integral = integral_image(gray);
-  auto kps = detect_star(gray, integral,
-                         mission_ == Mission::kIngress ? params_.ingress_star : params_.star);
-  if (!kps) return fail(kps.reason());
-  r.n_features = static_cast<int>(kps->size());
-  for (const auto& k : *kps) r.features_px.emplace_back(k.x, k.y);
-
-  // Descriptors of every frame share one world-fixed pattern orientation, so yaw between the
-  // reference and now does not break matching: world x for the downward camera, world up for
-  // the forward one (world x is near its optical axis).
-  const Isometry3d X_WC = camera_in_world(pose->X_WB(), mount_.X_BC());
-  const Vector3d d_W = mission_ == Mission::kIngress ? Vector3d::UnitZ() : Vector3d::UnitX();
-  TrackedFrame frame;
-  frame.utime = utime;
-  frame.pattern_angle_rad = pattern_angle(X_WC.linear(), d_W);
-  frame.descriptors = describe_surf(integral, *kps, params_.surf, frame.pattern_angle_rad);
-  frame.keypoints = std::move(*kps);
-  const double max_blur_px = mission_ == Mission::kLanding ? params_.landing.max_motion_blur_px : 0;
-  if (max_blur_px > 0)
-    frame.blur_px = floor_motion_blur_px(camera_, mount_, *pose, params_.landing.floor_z_m,
-                                         exposure_s.value_or(params_.landing.assumed_exposure_s));
-  r.blur_px = frame.blur_px;
-  const auto smeared = [&](const TrackedFrame& f) {
-    return max_blur_px > 0 && f.blur_px > max_blur_px;
-  };
-  // Ingress compares the current image with the reference's warped by the wall homography: each
-  // frame keeps its image smoothed as that comparison wants it, made once (issue 15).
-  const bool parallax = mission_ == Mission::kIngress && params_.ingress.parallax_mask;
-  if (parallax) frame.image = parallax_image(gray, params_.ingress);
-  // Landing checks its planes against both images and looks for the top's rim in them
-  // (landing_target.hpp): the caller's pixels are not ours to keep, and with both off no copy
-  // is made.
-  const bool landing_images =
-      mission_ == Mission::kLanding &&
-      (params_.landing.photometric_tol > 0 || params_.landing.rim_search_m > 0);
-  if (landing_images) frame.image = gray.clone();
-
-  const auto up = tracker_.add(std::move(frame));
-  const bool hold = mission_ == Mission::kLanding && params_.landing.hold_reference;
-  if (up.reset) {
-    poses_.clear();
-    // Tracks broken by a changed view or a frame of few features (a pale floor loses its weak
-    // features from frame to frame) say nothing about the held reference: it is used only where
-    // it still matches min_tracked features directly (a gap in time dropped it above). Dropping
-    // it with every reset restarted the baseline from zero every 1-2 s over landing_lowtex's
-    // floor, short of the top's parallax in refinement (seeds 9306, 9309, 9314: target lost with
-    // every retry).
-    if (!hold) held_.reset();
-  }
-  if (up.current) poses_.emplace_back(utime, *pose);
-  // Keep only the poses of frames the tracker can still pick.
-  const int64_t oldest = up.reference ? up.reference->utime : utime;
-  while (!poses_.empty() && poses_.front().first < oldest) poses_.pop_front();
+  auto frame = front_end(gray, utime, *pose, exposure_s, &r);
+  if (!frame) return fail(frame.reason());
+  const auto up = track(std::move(frame.value()), utime, *pose);
   r.n_tracked = up.n_tracked;
   if (up.current && smeared(*up.current)) return fail(Reason::kMotionBlur);
   // No tracked reference (the tracks just broke): only the held one can serve.
-  const bool held_only = up.status == Reason::kNoReference && up.current && hold && held_;
+  const bool held_only = up.status == Reason::kNoReference && up.current && holds() && held_;
   if (up.status != Reason::kOk && !held_only) return fail(up.status);
-  // The oldest qualifying frame within max_reference_baseline_m of the current camera (the
-  // newest previous frame when even that one is farther); never a smeared one.
-  std::shared_ptr<const TrackedFrame> ref =
-      up.reference && !smeared(*up.reference) ? up.reference : nullptr;
-  PoseSample pose_1;
-  double baseline_m = 0.0;  // none tracked: any held baseline is longer
-  bool skipped_smeared = false;
-  if (up.reference) {
-    const auto& h = tracker_.history();
-    const Vector3d c_now = X_WC.translation();
-    for (size_t k = 0; k + 1 < h.size(); ++k) {
-      const auto pose_k = std::find_if(poses_.begin(), poses_.end(),
-                                       [&](const auto& e) { return e.first == h[k]->utime; });
-      if (pose_k == poses_.end()) continue;
-      if (smeared(*h[k])) {
-        skipped_smeared = true;
-        continue;
-      }
-      ref = h[k];
-      if ((camera_in_world(pose_k->second.X_WB(), mount_.X_BC()).translation() - c_now).norm() <=
-          params_.max_reference_baseline_m)
-        break;
-    }
-  }
-  if (ref) {
-    const auto ref_pose = std::find_if(poses_.begin(), poses_.end(),
-                                       [&](const auto& e) { return e.first == ref->utime; });
-    assert(ref_pose != poses_.end());
-    pose_1 = ref_pose->second;
-    baseline_m = mocap_motion(pose_1, *pose, mount_).baseline_m;
-  }
-
+  Reference ref = tracked_reference(up, *pose);
   const TrackedFrame& b = *up.current;
-  const auto sb = response_signs(b.keypoints);
-  auto match_to_current = [&](const TrackedFrame& a) {
-    const auto sa = response_signs(a.keypoints);
-    return match_descriptors(a.descriptors, b.descriptors, params_.match, &sa, &sb);
-  };
-  // Hovering: the held reference while the tracked one is too close, the held one farther
-  // and still overlapping (pipeline.hpp).
-  std::vector<Match> matches;
-  if (hold && baseline_m < params_.landing.hold_baseline_m && held_ && held_->utime < utime &&
-      double(utime - held_->utime) * 1e-6 <= params_.landing.hold_max_age_s) {
-    const double held_baseline_m = mocap_motion(held_pose_, *pose, mount_).baseline_m;
-    if (held_baseline_m > baseline_m && held_baseline_m <= params_.max_reference_baseline_m) {
-      auto m = match_to_current(*held_);
-      if (static_cast<int>(m.size()) >= params_.tracker.min_tracked) {
-        ref = held_;
-        pose_1 = held_pose_;
-        baseline_m = held_baseline_m;
-        matches = std::move(m);
-        r.ref_held = true;
-      }
-      // A frame that matches the held reference with fewer than min_tracked features hands the
-      // hold to the tracked one: keeping it held through such frames saved no pale-floor draw
-      // and multiplied the false targets over floors without a platform.
-    }
-  }
-  // Neither a tracked nor the held reference serves.
-  if (!ref)
-    return fail(skipped_smeared            ? Reason::kMotionBlur
+  hold_reference(&ref, b, utime, *pose);
+  if (!ref.frame)
+    return fail(ref.skipped_smeared        ? Reason::kMotionBlur
                 : up.status != Reason::kOk ? up.status
                                            : Reason::kNoReference);
-  if (hold) {
-    held_ = ref;
-    held_pose_ = pose_1;
+  if (holds()) {
+    held_ = ref.frame;
+    held_pose_ = ref.pose;
   }
-  r.ref_utime = ref->utime;
-
-  Correspondences c;
-  c.camera = &camera_;
-  c.mount = &mount_;
-  c.pose_1 = pose_1;
-  c.pose_2 = *pose;
-  r.baseline_m = baseline_m;
+  r.ref_utime = ref.frame->utime;
+  r.ref_held = ref.held;
+  r.baseline_m = ref.baseline_m;
   if (r.baseline_m < params_.waypoint.min_baseline_m) return fail(Reason::kSmallBaseline);
 
-  const TrackedFrame& a = *ref;
-  if (!r.ref_held) matches = match_to_current(a);
+  const TrackedFrame& a = *ref.frame;
+  const std::vector<Match> matches =
+      ref.held ? std::move(ref.matches) : match_frames(a, b, params_.match);
   r.n_matches = static_cast<int>(matches.size());
-  const Matrix3d K = camera_.K();
-  for (const auto& m : matches) {
-    const auto& k1 = a.keypoints[m.i1];
-    const auto& k2 = b.keypoints[m.i2];
-    c.x1.push_back((K * camera_.ray({k1.x, k1.y})).hnormalized());
-    c.x2.push_back((K * camera_.ray({k2.x, k2.y})).hnormalized());
-    c.u1.emplace_back(k1.x, k1.y);
-    c.u2.emplace_back(k2.x, k2.y);
-  }
+  Correspondences c = correspondences(a, b, matches);
+  c.pose_1 = ref.pose;
+  c.pose_2 = *pose;
   r.matched_px = c.u2;
+  const bool parallax = mission_ == Mission::kIngress && params_.ingress.parallax_mask;
   const TargetOutcome t = mission_ == Mission::kLanding
                               ? find_landing_target(c, params_, a.image, gray)
                               : find_ingress_target(c, gray, parallax ? b.image : cv::Mat(),

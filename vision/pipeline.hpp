@@ -6,7 +6,7 @@
 // caller passes the image, its exposure time and the pose interpolated at that time; same
 // inputs in the same order give the same results (all RANSAC seeded, no clock).
 //
-// Beyond the paper (landing.hold_reference, issue 15): the paper's reference is the oldest frame
+// Beyond the paper (landing.hold_reference): the paper's reference is the oldest frame
 // with N features tracked continuously to now. While the vehicle hovers (a refinement vantage's
 // dwell, an approach waiting for e_r), that frame moves forward in time: tracks break (a feature
 // missed in one frame ends its track for good) and max_history frames pass in 2 s, so within 1-2 s
@@ -23,9 +23,9 @@
 // gap or jump in the frames' times drops it. A reset of the tracker for broken tracks (a changed
 // view, a frame of few features) does not: over a pale floor the tracks break every 1-2 s while
 // the held frame still matches, and where the tracker has no reference at all the held one
-// serves alone (landing_lowtex 9306, 9309, 9314 lost the top in refinement with every retry).
+// serves alone (without it, a refinement over a pale floor loses the top at every retry).
 //
-// Beyond the paper (landing.max_motion_blur_px, issue 15): a frame exposed while the floor's image
+// Beyond the paper (landing.max_motion_blur_px): a frame exposed while the floor's image
 // moved farther than that (motion_blur.hpp) is tracked through, so the tracks and the held
 // reference live on, but it is never measured and never the reference: its features are smears,
 // placed where no plane puts them, and such frames at the search path's turns made tops of a
@@ -38,8 +38,8 @@
 #include "common/camera_model.hpp"
 #include "common/camera_mount.hpp"
 #include "common/pose_buffer.hpp"
+#include "vision/frontend/reference_tracker.hpp"
 #include "vision/params.hpp"
-#include "vision/reference_tracker.hpp"
 #include "vision/target.hpp"
 
 namespace alight::vision {
@@ -80,6 +80,21 @@ class Pipeline {
   const CameraModel& camera() const { return camera_; }
 
  private:
+  // The reference a frame is matched against, its pose and baseline (pipeline.cpp).
+  struct Reference;
+
+  // Stages of process(), in order (pipeline.cpp).
+  Result<TrackedFrame> front_end(const cv::Mat& gray, int64_t utime, const PoseSample& pose,
+                                 std::optional<double> exposure_s, FrameResult* r) const;
+  ReferenceTracker::Update track(TrackedFrame frame, int64_t utime, const PoseSample& pose);
+  Reference tracked_reference(const ReferenceTracker::Update& up, const PoseSample& pose) const;
+  void hold_reference(Reference* ref, const TrackedFrame& current, int64_t utime,
+                      const PoseSample& pose) const;
+  Correspondences correspondences(const TrackedFrame& a, const TrackedFrame& b,
+                                  const std::vector<Match>& matches) const;
+  bool smeared(const TrackedFrame& f) const;
+  bool holds() const;
+
   Mission mission_;
   PipelineParams params_;
   CameraModel camera_;

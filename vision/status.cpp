@@ -32,6 +32,40 @@ const char* to_string(Reason r) {
       return "too little parallax to measure the opening";
     case Reason::kMotionBlur:
       return "motion blur";
+    case Reason::kTopNotParallel:
+      return "top not parallel to the floor";
+    case Reason::kNoFloorAroundTop:
+      return "no floor around the top";
+    case Reason::kTopFitsFloor:
+      return "top fits the floor";
+    case Reason::kTopTilted:
+      return "top tilted";
+    case Reason::kHeightOutOfRange:
+      return "height out of range";
+    case Reason::kTopPhotometry:
+      return "photometric check failed on the top";
+    case Reason::kFloorPhotometry:
+      return "photometric check failed on the floor";
+    case Reason::kTopFitDiverged:
+      return "top's fit diverged";
+    case Reason::kTopAloneTooFew:
+      return "top alone: too few matches on it";
+    case Reason::kTopAloneFloorSeen:
+      return "top alone: floor in sight";
+    case Reason::kTopAloneLowRise:
+      return "top alone: too little above the floor";
+    case Reason::kTopAloneLowParallax:
+      return "top alone: too little parallax";
+    case Reason::kMotionDisagrees:
+      return "motion disagrees with motion capture";
+    case Reason::kOpeningTooSmall:
+      return "opening too small";
+    case Reason::kNotBehindWall:
+      return "view not behind the wall";
+    case Reason::kPartialNotFramed:
+      return "partial view without the wall around it";
+    case Reason::kPartialNotBehind:
+      return "partial view not behind the wall";
   }
   return "unknown";
 }

@@ -20,12 +20,31 @@ enum class Reason : int8_t {
   kSmallBaseline = 5,        ///< camera moved too little for a usable scale / decomposition
   kNoDominantPlane = 6,      ///< no homography with enough inliers (all outliers)
   kNoTargetPlane = 7,        ///< only one plane in view
-  kNoOpening = 8,            ///< ingress (issue 6)
+  kNoOpening = 8,            ///< ingress: no block of cells seen through the wall
   kDecompositionFailed = 9,  ///< no physically valid decomposition, or planes disagree
   kBadImage = 10,            ///< empty, wrong type or too small
   kPartialView = 11,         ///< target found but cut by the image border: its centre is unknown
   kLowParallax = 12,  ///< ingress: the opening in view, but too little parallax to measure it
   kMotionBlur = 13,   ///< landing: the frame or its reference smeared by the camera's motion
+  // Each gate of the landing and ingress targets refuses with its own reason (gates.hpp,
+  // known_floor.hpp, wall.hpp, opening.hpp; docs/vision-landing.md, docs/vision-ingress.md).
+  kTopNotParallel = 14,       ///< landing: the top's plane not parallel to the floor's
+  kNoFloorAroundTop = 15,     ///< landing: the floor not seen around the top (a top is opaque)
+  kTopFitsFloor = 16,         ///< landing: the top's matches fit the floor's homography too
+  kTopTilted = 17,            ///< landing: the measured top not level
+  kHeightOutOfRange = 18,     ///< landing: the top's height above the floor out of range
+  kTopPhotometry = 19,        ///< landing: the top's pixels do not follow the top's plane
+  kFloorPhotometry = 20,      ///< landing: the floor's patches do not follow the floor's plane
+  kTopFitDiverged = 21,       ///< landing, known floor: the pair's refinement left its bounds
+  kTopAloneTooFew = 22,       ///< landing, top alone: too few matches share its distance
+  kTopAloneFloorSeen = 23,    ///< landing, top alone: the floor is in sight beside it
+  kTopAloneLowRise = 24,      ///< landing, top alone: too little above the floor
+  kTopAloneLowParallax = 25,  ///< landing, top alone: parallax under the rotation's error
+  kMotionDisagrees = 26,      ///< a plane's motion disagrees with motion capture's
+  kOpeningTooSmall = 27,      ///< ingress: the opening narrower or lower than min_size_m
+  kNotBehindWall = 28,        ///< ingress: the block's view not behind the wall
+  kPartialNotFramed = 29,     ///< ingress: a block at the border without the wall around it
+  kPartialNotBehind = 30,     ///< ingress: a block at the border whose view is not behind
 };
 
 const char* to_string(Reason r);

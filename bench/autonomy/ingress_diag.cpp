@@ -16,7 +16,7 @@
 #include "closed_loop.hpp"
 #include "common/params.hpp"
 #include "sim/params.hpp"
-#include "vision/convert.hpp"
+#include "vision/node/convert.hpp"
 #include "vision/params.hpp"
 #include "vision/pipeline.hpp"
 

@@ -19,7 +19,7 @@
 #include "common/params.hpp"
 #include "sim/params.hpp"
 #include "sim/scene.hpp"
-#include "vision/convert.hpp"
+#include "vision/node/convert.hpp"
 #include "vision/params.hpp"
 #include "vision/pipeline.hpp"
 

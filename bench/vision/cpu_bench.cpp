@@ -14,9 +14,11 @@
 //
 //   build/bin/alight_vision_cpu_bench [--families ingress_photo,ingress_solid_photo]
 //       [--seeds 1,2,3] [--scenario FILE ...] [--passes 2] [--standoff-m 2.0] [--loop-s 8]
-//       [--vehicle config/vehicles/pelican.yaml] [--csv FILE]
+//       [--vehicle config/vehicles/pelican.yaml] [--csv FILE] [--frames FILE]
 //
 // --csv writes one row per processed frame (scene, pass, frame, CPU ms, reason, errors).
+// --frames writes every frame's whole result, exact and without timing (vision/frame_line.hpp),
+// each line after its scene's name, so that two builds' outputs compare with diff.
 
 #include <time.h>
 
@@ -34,6 +36,7 @@
 #include "common/pose_buffer.hpp"
 #include "soak_flight.hpp"
 #include "support/stats.hpp"
+#include "vision/frame_line.hpp"
 #include "vision/params.hpp"
 #include "vision/pipeline.hpp"
 
@@ -112,7 +115,7 @@ int main(int argc, char** argv) try {
   std::string families = "ingress_photo,ingress_solid_photo", seeds = "1";
   std::vector<std::string> scenario_files;
   std::string vehicle = std::string(ALIGHT_SOURCE_DIR) + "/config/vehicles/pelican.yaml";
-  std::string csv_path;
+  std::string csv_path, frames_path;
   int passes = 2;
   double standoff_m = 2.0, loop_s = 8.0, rate_hz = 60.0;
   app.add_option("--families", families, "scene families (comma separated; '' for none)");
@@ -126,6 +129,7 @@ int main(int argc, char** argv) try {
   app.add_option("--rate-hz", rate_hz, "camera rate")->check(CLI::Range(1.0, 240.0));
   app.add_option("--vehicle", vehicle, "vehicle file");
   app.add_option("--csv", csv_path, "one row per processed frame");
+  app.add_option("--frames", frames_path, "every frame's whole result, exact, no timing");
   CLI11_PARSE(app, argc, argv);
   cv::setNumThreads(1);  // as alight-vision
   if (!retain_freed_memory()) std::fprintf(stderr, "glibc refused the heap settings\n");
@@ -156,6 +160,8 @@ int main(int argc, char** argv) try {
     csv.open(csv_path);
     csv << "scene,pass,frame,cpu_ms,reason,width_err_m,height_err_m,centre_err_m\n";
   }
+  std::ofstream frames_out;
+  if (!frames_path.empty()) frames_out.open(frames_path);
   Stats all;
   Digest all_digest;
   const auto params = vision::load_node_params(vehicle);
@@ -198,6 +204,7 @@ int main(int argc, char** argv) try {
         else
           st.cpu_min_ms[i] = std::min(st.cpu_min_ms[i], cpu);
         ++st.frames;
+        if (frames_out.is_open()) frames_out << sc.name << ' ' << vision::frame_line(r);
         digest.add(static_cast<int>(r.reason));
         digest.add(r.n_features), digest.add(r.n_matches);
         double dw = NAN, dh = NAN, dc = NAN;

@@ -17,12 +17,12 @@
 
 #include "common/heap.hpp"
 #include "test/vision/test_images.hpp"
-#include "vision/alignment.hpp"
-#include "vision/homography.hpp"
-#include "vision/matcher.hpp"
-#include "vision/star_detector.hpp"
-#include "vision/surf_descriptor.hpp"
-#include "vision/waypoint.hpp"
+#include "vision/frontend/matcher.hpp"
+#include "vision/frontend/star_detector.hpp"
+#include "vision/frontend/surf_descriptor.hpp"
+#include "vision/geometry/alignment.hpp"
+#include "vision/geometry/homography.hpp"
+#include "vision/geometry/waypoint.hpp"
 
 using namespace alight;
 using namespace alight::vision;

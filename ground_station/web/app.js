@@ -373,6 +373,10 @@ function render(s) {
     { cells: ['features / matches', `${t.n_features} / ${t.n_matches}`] },
     { cells: ['inliers dom / target', `${t.n_inliers_dominant} / ${t.n_inliers_target}`] },
   ] : [{ cells: ['no VISION_TARGET yet'] }]);
+  // Every target's reason counted since the start: which gate refuses the frames, most first.
+  const reasons = s.target_reasons && typeof s.target_reasons === 'object'
+    ? Object.entries(s.target_reasons).sort((a, b) => b[1] - a[1]) : [];
+  rows($('target-reasons').tBodies[0], reasons.map(([name, n]) => ({ cells: [name, n] })));
 
   // The autopilot over MAVLink (alight-mavlink), on a real vehicle.
   const ap = typeof s.autopilot === 'object' ? s.autopilot : null;

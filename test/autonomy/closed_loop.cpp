@@ -13,7 +13,7 @@
 #include "sim/params.hpp"
 #include "sim/simulator.hpp"
 #include "sim_onboard.hpp"
-#include "vision/frame_pose_pairing.hpp"
+#include "vision/node/frame_pose_pairing.hpp"
 
 namespace alight::autonomy::test {
 
@@ -70,7 +70,7 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
     rig = sim::load_camera_rig(config.vehicle_file,
                                config.mission == Mission::kLanding ? "downward" : "forward");
   sim::Simulator simulator(scenario, vehicle, config.seed, rig, flow_rig);
-  // The vision node's frame-to-pose policy (vision/frame_pose_pairing.hpp).
+  // The vision node's frame-to-pose policy (vision/node/frame_pose_pairing.hpp).
   vision::FramePosePairing<sim::CameraFrame> frames(PoseBufferParams{}, kMaxPoseWaitUs);
   outer_loop::PositionController controller(ol_params);
   Autonomy autonomy(au_params);

@@ -37,7 +37,7 @@ struct ClosedLoopConfig {
   std::optional<double> rotor_span_m;
   /// Real vision instead of the oracle: the simulator renders the mission's camera and this is
   /// called with each frame and the motion-capture pose interpolated at its exposure, paired by
-  /// the vision node's policy (vision/frame_pose_pairing.hpp; nullopt when motion capture has
+  /// the vision node's policy (vision/node/frame_pose_pairing.hpp; nullopt when motion capture has
   /// none before a frame exposed 100 ms later); what it returns reaches autonomy at once
   /// (processing time is not simulated).
   std::function<std::optional<TargetMeasurement>(const sim::CameraFrame&,

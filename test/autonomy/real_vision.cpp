@@ -2,7 +2,7 @@
 
 #include "autonomy/convert.hpp"
 #include "sim/params.hpp"
-#include "vision/convert.hpp"
+#include "vision/node/convert.hpp"
 #include "vision/params.hpp"
 #include "vision/pipeline.hpp"
 

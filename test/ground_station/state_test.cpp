@@ -106,6 +106,27 @@ TEST(StationStateTest, KeepsOnlyFoundWaypoints) {
   EXPECT_EQ(state.measurements()[0].p_W[0], 3);
 }
 
+TEST(StationStateTest, CountsTargetsByReasonWithEachGatesName) {
+  StationState state{GroundStationParams{}};
+  target_t t{};
+  t.utime = kT0;
+  for (const int8_t r : {target_t::REASON_TOP_TILTED, target_t::REASON_TOP_TILTED,
+                         target_t::REASON_NO_FLOOR_AROUND_TOP, target_t::REASON_OK}) {
+    t.reason = r;
+    t.found = r == target_t::REASON_OK;
+    state.on_target(t, kT0);
+  }
+  EXPECT_EQ(state.target_reasons().at(target_t::REASON_TOP_TILTED), 2u);
+  EXPECT_EQ(state.target_reasons().at(target_t::REASON_NO_FLOOR_AROUND_TOP), 1u);
+  const std::string json = state.to_json(kT0);
+  EXPECT_TRUE(contains(json, "\"target_reasons\":{\"ok\":1,"));
+  EXPECT_TRUE(contains(json, "\"top tilted\":2"));
+  EXPECT_TRUE(contains(json, "\"no floor around the top\":1"));
+  // Every reason the vision sends has a name.
+  for (int r = target_t::REASON_OK; r <= target_t::REASON_PARTIAL_NOT_BEHIND; ++r)
+    EXPECT_STRNE(target_reason_name(static_cast<int8_t>(r)), "unknown") << r;
+}
+
 TEST(StationStateTest, ChannelHealthShowsRateAgeAndStaleness) {
   StationState state{GroundStationParams{}};
   for (int i = 0; i <= 30; ++i)

@@ -56,7 +56,7 @@ INSTANTIATE_TEST_SUITE_P(PapersPlatforms, RealVisionLandingTest,
 // the family does not change the test). With the paper's planes alone
 // (vision.landing.floor_prior: off) both failed: the platform was found in 839 of 3022 and 1 of
 // 1190 frames, the target lost three times, no landing. The known floor and motion
-// (vision/known_floor.hpp) find the platform where the dominant fit fails.
+// (vision/geometry/known_floor.hpp) find the platform where the dominant fit fails.
 class RealVisionWeakFloorTest : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(RealVisionWeakFloorTest, LandsOnThePlatformOverTiles) {

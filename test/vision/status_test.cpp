@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <alight/target_t.hpp>
+#include <set>
 #include <string>
 
 namespace alight::vision {
@@ -24,6 +25,32 @@ TEST(StatusTest, ReasonValuesAreTheTargetMessageConstants) {
   EXPECT_EQ(int(Reason::kPartialView), T::REASON_PARTIAL_VIEW);
   EXPECT_EQ(int(Reason::kLowParallax), T::REASON_LOW_PARALLAX);
   EXPECT_EQ(int(Reason::kMotionBlur), T::REASON_MOTION_BLUR);
+  EXPECT_EQ(int(Reason::kTopNotParallel), T::REASON_TOP_NOT_PARALLEL);
+  EXPECT_EQ(int(Reason::kNoFloorAroundTop), T::REASON_NO_FLOOR_AROUND_TOP);
+  EXPECT_EQ(int(Reason::kTopFitsFloor), T::REASON_TOP_FITS_FLOOR);
+  EXPECT_EQ(int(Reason::kTopTilted), T::REASON_TOP_TILTED);
+  EXPECT_EQ(int(Reason::kHeightOutOfRange), T::REASON_HEIGHT_OUT_OF_RANGE);
+  EXPECT_EQ(int(Reason::kTopPhotometry), T::REASON_TOP_PHOTOMETRY);
+  EXPECT_EQ(int(Reason::kFloorPhotometry), T::REASON_FLOOR_PHOTOMETRY);
+  EXPECT_EQ(int(Reason::kTopFitDiverged), T::REASON_TOP_FIT_DIVERGED);
+  EXPECT_EQ(int(Reason::kTopAloneTooFew), T::REASON_TOP_ALONE_TOO_FEW);
+  EXPECT_EQ(int(Reason::kTopAloneFloorSeen), T::REASON_TOP_ALONE_FLOOR_SEEN);
+  EXPECT_EQ(int(Reason::kTopAloneLowRise), T::REASON_TOP_ALONE_LOW_RISE);
+  EXPECT_EQ(int(Reason::kTopAloneLowParallax), T::REASON_TOP_ALONE_LOW_PARALLAX);
+  EXPECT_EQ(int(Reason::kMotionDisagrees), T::REASON_MOTION_DISAGREES);
+  EXPECT_EQ(int(Reason::kOpeningTooSmall), T::REASON_OPENING_TOO_SMALL);
+  EXPECT_EQ(int(Reason::kNotBehindWall), T::REASON_NOT_BEHIND_WALL);
+  EXPECT_EQ(int(Reason::kPartialNotFramed), T::REASON_PARTIAL_NOT_FRAMED);
+  EXPECT_EQ(int(Reason::kPartialNotBehind), T::REASON_PARTIAL_NOT_BEHIND);
+}
+
+TEST(StatusTest, EveryReasonHasItsOwnName) {
+  std::set<std::string> names;
+  for (int r = 0; r <= alight::target_t::REASON_PARTIAL_NOT_BEHIND; ++r) {
+    const std::string name = to_string(static_cast<Reason>(r));
+    EXPECT_NE(name, "unknown") << r;
+    EXPECT_TRUE(names.insert(name).second) << r << ": " << name;
+  }
 }
 
 TEST(StatusTest, ResultCarriesEitherAValueOrAReason) {

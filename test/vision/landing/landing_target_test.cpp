@@ -1,0 +1,772 @@
+// The landing target over a floor without a platform, and the top's rim search on rendered
+// images (vision/landing/landing_target.hpp, issue 15).
+
+#include "vision/landing/landing_target.hpp"
+
+#include <gtest/gtest.h>
+
+#include <limits>
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+#include <optional>
+#include <random>
+
+#include "common/camera_model.hpp"
+#include "test/vision/test_images.hpp"
+#include "vision/geometry/known_floor.hpp"
+#include "vision/geometry/waypoint.hpp"
+
+namespace alight::vision {
+namespace {
+
+PoseSample level_pose(const Vector3d& p_W_B, double yaw) {
+  PoseSample s;
+  s.p_W_B = p_W_B;
+  s.q_WB = Eigen::AngleAxisd(yaw, Vector3d::UnitZ());
+  return s;
+}
+
+struct View {
+  CameraModel camera = CameraModel::firefly_mv_4mm();
+  CameraMount mount;
+  Correspondences c;
+  View(const PoseSample& p1, const PoseSample& p2) {
+    mount.t_B_C = Vector3d(0.05, 0.0, -0.06);
+    c.camera = &camera;
+    c.mount = &mount;
+    c.pose_1 = p1;
+    c.pose_2 = p2;
+  }
+  View(const View& o) : camera(o.camera), mount(o.mount), c(o.c) {  // c points at its own
+    c.camera = &camera;
+    c.mount = &mount;
+  }
+  View& operator=(const View&) = delete;
+  std::optional<Vector2d> pixel(const PoseSample& p, const Vector3d& X_W) const {
+    const Vector3d X_C = camera_in_world(p.X_WB(), mount.X_BC()).inverse() * X_W;
+    if (X_C.z() <= 0) return std::nullopt;
+    const Vector2d u = (camera.K() * X_C).hnormalized();
+    if (u.x() < 0 || u.y() < 0 || u.x() > camera.width - 1 || u.y() > camera.height - 1)
+      return std::nullopt;
+    return u;
+  }
+  // A world point seen in both images, x2 moved by shift_2; false when out of either view.
+  bool add(const Vector3d& X_W, std::mt19937_64& rng, const Vector2d& shift_2 = Vector2d::Zero()) {
+    std::normal_distribution<double> G(0, 0.4);
+    const auto a = pixel(c.pose_1, X_W), b = pixel(c.pose_2, X_W);
+    if (!a || !b) return false;
+    const Vector2d x1 = *a + Vector2d(G(rng), G(rng));
+    Vector2d x2 = *b + Vector2d(G(rng), G(rng));
+    // Along the parallax: shift_2.x() > 0 shortens it (a farther point), < 0 lengthens it.
+    if (shift_2.x() != 0) x2 += shift_2.x() * -(x2 - x1).normalized();
+    c.x1.push_back(x1);
+    c.x2.push_back(x2);
+    c.u1.push_back(x1);
+    c.u2.push_back(x2);
+    return true;
+  }
+};
+
+bool found(const TargetOutcome& o) {
+  return o.reason == Reason::kOk || o.reason == Reason::kPartialView;
+}
+
+// A floor seen from camera 1 at 1.54 m (the search height) and camera 2 baseline_m along the
+// search path: n_floor matches under camera 2, and n_chance matches that fit the floor 4 px short
+// of their parallax (chance matches of a photographed floor).
+View bare_floor(std::mt19937_64& rng, int n_floor, int n_chance, double baseline_m = 0.29) {
+  std::uniform_real_distribution<double> U(-1, 1);
+  const double yaw = 0.3 * U(rng);
+  const PoseSample p1 = level_pose({0.1 * U(rng), 0.1 * U(rng), 1.54}, yaw);
+  const PoseSample p2 = level_pose(p1.p_W_B + Vector3d(0.0, -baseline_m, 0.0), yaw + 0.01);
+  View v(p1, p2);
+  for (int k = 0; k < n_floor;)
+    k += v.add(Vector3d(p2.p_W_B.x() + 0.7 * U(rng), p2.p_W_B.y() + 0.55 * U(rng), 0.0), rng);
+  for (int k = 0; k < n_chance;)
+    k += v.add(Vector3d(p2.p_W_B.x() + 0.6 * U(rng), p2.p_W_B.y() + 0.45 * U(rng), 0.0), rng,
+               Vector2d(4.0, 0.0));
+  return v;
+}
+
+// Regression (issue 15, landing_none_photo 9500-9509: a false target in 6 of 10 runs on main,
+// autonomy sent into refinement each time). The known floor's hypotheses scored the floor's
+// inliers plus the top's: 5 chance matches that fit the floor under a rotation correction of
+// 0.4 deg (it shifts the floor 4-5 px along the baseline) made the whole floor a level "top"
+// 4-6 cm above it and scored 5 matches more than the bare floor. A top is opaque: that "top"
+// has all of its floor inside it. Zero false targets, with either floor prior.
+TEST(FalseTargetOverABareFloor, FloorTakenWholeForATopIsNoTarget) {
+  for (uint64_t seed = 1; seed <= 20; ++seed) {
+    std::mt19937_64 rng(seed);
+    const View v = bare_floor(rng, 180, 5);
+    PipelineParams params;
+    for (const std::string mode : {"always", "fallback"}) {
+      params.landing.floor_prior = mode;
+      const TargetOutcome o = find_landing_target(v.c, params);
+      EXPECT_FALSE(found(o)) << "seed " << seed << " " << mode << ": a top " << o.estimate.height_m
+                             << " m up, " << o.estimate.n_inliers_target << " matches";
+    }
+  }
+}
+
+// The known floor alone: no pair, whatever the chance matches.
+TEST(FalseTargetOverABareFloor, KnownFloorFindsNoPairOverTheBareFloor) {
+  const double f = CameraModel::firefly_mv_4mm().K()(0, 0);
+  for (uint64_t seed = 1; seed <= 20; ++seed)
+    for (const int n_chance : {4, 5, 8, 12}) {
+      std::mt19937_64 rng(1000 * n_chance + seed);
+      const View v = bare_floor(rng, 180, n_chance);
+      const auto floor = known_floor(v.c.pose_1, *v.c.mount, 0.0);
+      ASSERT_TRUE(floor);
+      const MocapMotion m = mocap_motion(v.c.pose_1, v.c.pose_2, *v.c.mount);
+      const Matrix3d K_inv = v.camera.K().inverse();
+      std::vector<Vector3d> r1, r2;
+      for (size_t i = 0; i < v.c.size(); ++i) {
+        r1.push_back(K_inv * v.c.x1[i].homogeneous());
+        r2.push_back(K_inv * v.c.x2[i].homogeneous());
+      }
+      const auto fit =
+          fit_known_floor_planes(r1, r2, {m.R_21, m.t_12}, *floor, f, LandingParams{}, 2.0);
+      EXPECT_FALSE(fit) << "seed " << seed << ", " << n_chance << " chance matches: a top "
+                        << fit->height_m() << " m up, " << fit->n_top << " matches";
+    }
+}
+
+// Regression (issue 15, landing_none_photo 9505: a partial view in 2 frames, autonomy sent into
+// refinement). The paper's planes split a bare floor into a "top" 4 cm up that holds most of
+// the matches (130, over the whole view, 1.2 x 1.0 m) and a "floor" of the rest (22), all of it
+// inside that "top"; the "floor" is the known floor, so the fallback kept the paper's planes.
+// Here most matches of the floor, over the whole view, are 4 px long of their parallax, the
+// rest, amid them, exact: no target, with either planes.
+TEST(FalseTargetOverABareFloor, FloorSplitByThePaperPlanesIsNoTarget) {
+  for (uint64_t seed = 1; seed <= 20; ++seed) {
+    std::mt19937_64 rng(3000 + seed);
+    std::uniform_real_distribution<double> U(-1, 1);
+    View v = bare_floor(rng, 0, 0);
+    for (int k = 0; k < 22;)  // the "floor" all inside the "top", as in 9505
+      k += v.add(
+          Vector3d(v.c.pose_2.p_W_B.x() + 0.45 * U(rng), v.c.pose_2.p_W_B.y() + 0.35 * U(rng), 0.0),
+          rng);
+    for (int k = 0; k < 130;)
+      k += v.add(
+          Vector3d(v.c.pose_2.p_W_B.x() + 0.7 * U(rng), v.c.pose_2.p_W_B.y() + 0.55 * U(rng), 0.0),
+          rng, Vector2d(-4.0, 0.0));
+    PipelineParams params;
+    for (const std::string mode : {"off", "fallback", "always"}) {
+      params.landing.floor_prior = mode;
+      const TargetOutcome o = find_landing_target(v.c, params);
+      EXPECT_FALSE(found(o)) << "seed " << seed << " " << mode << ": a top " << o.estimate.height_m
+                             << " m up, " << o.estimate.n_inliers_target << " matches";
+    }
+  }
+}
+
+// A real top as low as the landing families draw (8 cm), 30 x 24 cm, over the same floor from
+// the same search height and baseline, the same chance matches among the floor's: found in
+// every draw, its height within 2 cm.
+// The floor's homography of view v in pixels (image 1 to 2), from the poses.
+Matrix3d floor_homography_px(const View& v) {
+  const auto floor = known_floor(v.c.pose_1, *v.c.mount, 0.0);
+  const MocapMotion m = mocap_motion(v.c.pose_1, v.c.pose_2, *v.c.mount);
+  const Matrix3d K = v.camera.K();
+  return K * plane_homography({m.R_21, m.t_12}, floor->n_1, 1.0 / floor->d_1_m) * K.inverse();
+}
+
+// Regression (issue 15, landing_none_photo 9732: a partial view on a photographed floor, the
+// paper's planes on the known floor). The "top", 40 matches 3 cm up over a "floor" of 14, had
+// 45 % of its inliers within the threshold of the floor's homography too; in the traced true
+// tops (photo 9902, lowtex 9913, tiles 9905: 664 found frames) the share was at most 0.23, and
+// the two frames of tiles 9905 at 0.30 and 0.35 measured its 12 cm top 4 and 7 cm up.
+TEST(FalseTargetOverABareFloor, TopWhoseMatchesTheFloorCarriesIsNoTarget) {
+  for (uint64_t seed = 1; seed <= 20; ++seed) {
+    std::mt19937_64 rng(7000 + seed);
+    std::uniform_real_distribution<double> U(-1, 1);
+    View v = bare_floor(rng, 14, 0, 0.25);
+    std::vector<uint8_t> top_in(v.c.size(), 0);
+    for (int k = 0; k < 40;) {  // 18 exact, 22 a few px long of their parallax
+      const Vector3d X(v.c.pose_2.p_W_B.x() + 0.5 * U(rng), v.c.pose_2.p_W_B.y() + 0.4 * U(rng),
+                       0.0);
+      if (v.add(X, rng, k < 18 ? Vector2d::Zero() : Vector2d(-3.0, 0.0))) {
+        top_in.push_back(1);
+        ++k;
+      }
+    }
+    const Matrix3d H = floor_homography_px(v);
+    EXPECT_FALSE(top_told_from_floor(v.c, top_in, H, 2.0, 0.25)) << "seed " << seed;
+    EXPECT_TRUE(top_told_from_floor(v.c, top_in, H, 2.0, 1.0)) << "seed " << seed << ": off";
+  }
+}
+
+// A 30 x 24 cm top h up under camera 2, seen from the search height (1.54 m) over a 24-30 cm
+// baseline: 140 matches on the floor around it, 40 on it.
+struct LowTop {
+  View v;
+  Vector3d p_W_B2;
+  bool on_top(const Vector3d& X) const {
+    return std::abs(X.x() - p_W_B2.x()) < 0.15 && std::abs(X.y() - p_W_B2.y()) < 0.12;
+  }
+};
+
+LowTop low_top(std::mt19937_64& rng, double h) {
+  std::uniform_real_distribution<double> U(-1, 1);
+  const double yaw = 0.3 * U(rng);
+  const PoseSample p1 = level_pose({0.1 * U(rng), 0.1 * U(rng), 1.54}, yaw);
+  const double dir = M_PI * U(rng), len = 0.27 + 0.03 * U(rng);
+  const PoseSample p2 =
+      level_pose(p1.p_W_B + Vector3d(len * std::cos(dir), len * std::sin(dir), 0.0), yaw + 0.01);
+  LowTop t{View(p1, p2), p2.p_W_B};
+  for (int k = 0; k < 140;) {  // the floor around the top (hidden under it)
+    const Vector3d X(p2.p_W_B.x() + 0.7 * U(rng), p2.p_W_B.y() + 0.55 * U(rng), 0.0);
+    if (!t.on_top(X)) k += t.v.add(X, rng);
+  }
+  for (int k = 0; k < 40;)
+    k += t.v.add(Vector3d(p2.p_W_B.x() + 0.15 * U(rng), p2.p_W_B.y() + 0.12 * U(rng), h), rng);
+  return t;
+}
+
+TEST(FalseTargetOverABareFloor, LowestDrawnTopIsToldFromTheFloor) {
+  for (uint64_t seed = 1; seed <= 20; ++seed) {
+    std::mt19937_64 rng(600 + seed);
+    LowTop t = low_top(rng, 0.08);
+    std::vector<uint8_t> top_in(t.v.c.size(), 0);
+    for (size_t i = 140; i < top_in.size(); ++i) top_in[i] = 1;  // the 40 on the top
+    EXPECT_TRUE(top_told_from_floor(t.v.c, top_in, floor_homography_px(t.v), 2.0, 0.25))
+        << "seed " << seed;
+  }
+}
+
+TEST(FalseTargetOverABareFloor, LowestDrawnTopOverTheSameFloorIsFound) {
+  for (uint64_t seed = 1; seed <= 20; ++seed) {
+    std::mt19937_64 rng(500 + seed);
+    std::uniform_real_distribution<double> U(-1, 1);
+    const double h = 0.08;
+    LowTop t = low_top(rng, h);
+    View& v = t.v;
+    const Vector3d p2 = t.p_W_B2;
+    const auto on_top = [&](const Vector3d& X) { return t.on_top(X); };
+    for (int k = 0; k < 5;) {
+      const Vector3d X(p2.x() + 0.6 * U(rng), p2.y() + 0.45 * U(rng), 0.0);
+      if (!on_top(X)) k += v.add(X, rng, Vector2d(4.0, 0.0));
+    }
+    PipelineParams params;
+    for (const std::string mode : {"always", "fallback"}) {
+      params.landing.floor_prior = mode;
+      const TargetOutcome o = find_landing_target(v.c, params);
+      EXPECT_TRUE(found(o)) << "seed " << seed << " " << mode << ": " << to_string(o.reason);
+      if (found(o)) {
+        EXPECT_NEAR(o.estimate.height_m, h, 0.02) << "seed " << seed << " " << mode;
+      }
+    }
+  }
+}
+
+// Regression (issue 15, landing_photo seed 10405: one floor match that fitted the top's
+// homography stretched the features' rectangle 21 cm over the floor for a whole vantage, the
+// centre 9 cm off, the touch-down 2.7 cm off). The top is opaque: a top feature whose hull takes
+// in floor matches off the top's plane is a stray and is left out of the extent.
+TEST(LandingTopExtent, AStrayTopMatchOnTheFloorDoesNotStretchTheTop) {
+  for (uint64_t seed = 1; seed <= 10; ++seed) {
+    std::mt19937_64 rng(700 + seed);
+    const double h = 0.15;
+    LowTop t = low_top(rng, h);
+    const Vector3d p2 = t.p_W_B2;
+    // On the top's plane, 18-20 cm beyond one of its sides (one in view), with the floor seen
+    // between (three matches on the way out: the evidence that it is floor there).
+    bool added = false;
+    for (const Vector2d& d : {Vector2d(0.35, 0.02), Vector2d(-0.35, 0.02), Vector2d(0.02, 0.30),
+                              Vector2d(0.02, -0.30)}) {
+      if (added || !t.v.add(Vector3d(p2.x() + d.x(), p2.y() + d.y(), h), rng)) continue;
+      added = true;
+      for (const double f : {0.6, 0.75, 0.9})
+        t.v.add(Vector3d(p2.x() + f * d.x(), p2.y() + f * d.y() + 0.03, 0.0), rng);
+    }
+    ASSERT_TRUE(added) << seed;
+    PipelineParams params;
+    ASSERT_GT(params.landing.max_stray_top_share, 0);
+    const TargetOutcome o = find_landing_target(t.v.c, params);
+    ASSERT_TRUE(found(o)) << "seed " << seed << ": " << to_string(o.reason);
+    // 40 features widened over a 30 x 24 cm top (the shortfall's spread: a few cm).
+    EXPECT_LT(o.estimate.size_m[0], 0.34) << "seed " << seed;
+    EXPECT_LT(o.estimate.size_m[1], 0.28) << "seed " << seed;
+    const Vector2d centre_error = (o.estimate.p_W - Vector3d(p2.x(), p2.y(), h)).head<2>();
+    EXPECT_LT(centre_error.norm(), 0.02) << "seed " << seed;
+    params.landing.max_stray_top_share = 0;
+    const TargetOutcome stretched = find_landing_target(t.v.c, params);
+    ASSERT_TRUE(found(stretched)) << "seed " << seed << ": " << to_string(stretched.reason);
+    EXPECT_GT(stretched.estimate.size_m[0] + stretched.estimate.size_m[1], 0.30 + 0.24 + 0.15)
+        << "seed " << seed;
+  }
+}
+
+// Over the tile floor (few floor matches around the top, many on it, a fifth mismatches, some of
+// random pixel pairs) 8-22 cm tops are found, at their height.
+TEST(FalseTargetOverABareFloor, TopsOverFewFloorMatchesAreFound) {
+  int n_found = 0;
+  for (uint64_t seed = 1; seed <= 40; ++seed) {
+    std::mt19937_64 rng(100 + seed);
+    std::uniform_real_distribution<double> U(-1, 1);
+    const double h = 0.08 + 0.14 * static_cast<double>(seed % 7) / 6.0;
+    const double yaw = U(rng);
+    const PoseSample p1 = level_pose({0.1 * U(rng), 0.1 * U(rng), 1.5}, yaw);
+    const double dir = M_PI * U(rng), len = 0.2 + 0.08 * U(rng);
+    const PoseSample p2 =
+        level_pose(p1.p_W_B + Vector3d(len * std::cos(dir), len * std::sin(dir), 0.0), yaw);
+    View v(p1, p2);
+    const auto on_top = [&](const Vector3d& X) {
+      return std::abs(X.x() - p2.p_W_B.x()) < 0.15 && std::abs(X.y() - p2.p_W_B.y()) < 0.12;
+    };
+    for (int k = 0; k < 12;) {
+      const Vector3d X(p2.p_W_B.x() + 0.7 * U(rng), p2.p_W_B.y() + 0.55 * U(rng), 0.0);
+      if (!on_top(X)) k += v.add(X, rng);
+    }
+    for (int k = 0; k < 40;)
+      k += v.add(Vector3d(p2.p_W_B.x() + 0.15 * U(rng), p2.p_W_B.y() + 0.12 * U(rng), h), rng);
+    for (int k = 0; k < 12; ++k) {  // mismatches: random pixel pairs
+      const Vector2d a(320 + 300 * U(rng), 240 + 220 * U(rng)),
+          b(320 + 300 * U(rng), 240 + 220 * U(rng));
+      v.c.x1.push_back(a);
+      v.c.x2.push_back(b);
+      v.c.u1.push_back(a);
+      v.c.u2.push_back(b);
+    }
+    const TargetOutcome o = find_landing_target(v.c, PipelineParams{});
+    n_found += found(o);
+    if (found(o)) {
+      EXPECT_NEAR(o.estimate.height_m, h, 0.02) << "seed " << seed;
+    }
+  }
+  EXPECT_GE(n_found, 39);  // as on main (seed 28: no target plane there too)
+}
+
+// The current image of a world textured by what camera 1 saw: each current pixel's ray meets
+// the top (z = h where on_top) or the floor (z = 0), and takes the reference's pixel of that
+// point. h = 0: a bare floor.
+template <class OnTop>
+cv::Mat render_current(const cv::Mat& ref, const View& v, double h, OnTop on_top) {
+  const Isometry3d X_WC2 = camera_in_world(v.c.pose_2.X_WB(), v.mount.X_BC());
+  const Isometry3d X_C1W = camera_in_world(v.c.pose_1.X_WB(), v.mount.X_BC()).inverse();
+  const Matrix3d K = v.camera.K(), K_inv = K.inverse();
+  cv::Mat map_x(ref.size(), CV_32F, cv::Scalar(-100)), map_y(ref.size(), CV_32F, cv::Scalar(-100));
+  for (int row = 0; row < ref.rows; ++row)
+    for (int col = 0; col < ref.cols; ++col) {
+      const Vector3d d_W = X_WC2.linear() * (K_inv * Vector3d(col, row, 1));
+      const Vector3d o_W = X_WC2.translation();
+      Vector3d X_W = o_W + ((h - o_W.z()) / d_W.z()) * d_W;
+      if (h == 0 || !on_top(X_W)) X_W = o_W + (-o_W.z() / d_W.z()) * d_W;
+      const Vector3d X_C1 = X_C1W * X_W;
+      const Vector2d u1 = (K * X_C1).hnormalized();
+      map_x.at<float>(row, col) = static_cast<float>(u1.x());
+      map_y.at<float>(row, col) = static_cast<float>(u1.y());
+    }
+  cv::Mat out;
+  cv::remap(ref, out, map_x, map_y, cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(128));
+  return out;
+}
+
+// An 8 cm top's matches (low_top, drawn from seed) with a procedural photograph as the reference
+// image and the current image rendered twice: showing the top, and showing a bare floor.
+struct RenderedTop {
+  static constexpr double kHeight_m = 0.08;
+  LowTop t;
+  cv::Mat ref, with_top, bare;
+};
+
+RenderedTop rendered_top(uint64_t seed) {
+  std::mt19937_64 rng(700 + seed);
+  RenderedTop r{low_top(rng, RenderedTop::kHeight_m), {}, {}, {}};
+  const auto on_top = [&](const Vector3d& X) { return r.t.on_top(X); };
+  r.ref = testing::procedural_photo(640, 480, seed);
+  r.with_top = render_current(r.ref, r.t.v, RenderedTop::kHeight_m, on_top);
+  r.bare = render_current(r.ref, r.t.v, 0.0, on_top);
+  return r;
+}
+
+// Regression (issue 15, landing_none_photo 9501, 9505: "tops" 4-9 cm up from matches tracked
+// a few pixels wrong, found by the features' rules alone). The same matches as a true 8 cm top
+// over the floor; the images decide (vision.landing.photometric_tol): where they show the top,
+// it is found; where they show a bare floor, every pixel of the "top" follows the floor's plane
+// and it is refused; where they are blank or not of the camera's size, they say nothing and the
+// features decide.
+TEST(FalseTargetOverABareFloor, TopTheImagesShowToBeFloorIsNoTarget) {
+  const cv::Mat blank(480, 640, CV_8U, cv::Scalar(200));
+  for (uint64_t seed = 1; seed <= 6; ++seed) {
+    const RenderedTop r = rendered_top(seed);
+    const View& v = r.t.v;
+    const cv::Mat &ref = r.ref, &with_top = r.with_top, &bare = r.bare;
+    PipelineParams params;
+    for (const std::string mode : {"fallback", "always"}) {
+      params.landing.floor_prior = mode;
+      const TargetOutcome features = find_landing_target(v.c, params);
+      ASSERT_TRUE(found(features)) << "seed " << seed << " " << mode;
+      EXPECT_TRUE(found(find_landing_target(v.c, params, ref, with_top)))
+          << "seed " << seed << " " << mode;
+      EXPECT_FALSE(found(find_landing_target(v.c, params, ref, bare)))
+          << "seed " << seed << " " << mode;
+      EXPECT_TRUE(found(find_landing_target(v.c, params, blank, blank)))
+          << "seed " << seed << " " << mode;
+      cv::Mat half;  // images not of the camera's size say nothing
+      cv::resize(bare, half, cv::Size(320, 240));
+      EXPECT_TRUE(found(find_landing_target(v.c, params, ref, half)))
+          << "seed " << seed << " " << mode;
+      params.landing.photometric_tol = 0;  // off: the features alone
+      EXPECT_TRUE(found(find_landing_target(v.c, params, ref, bare)))
+          << "seed " << seed << " " << mode;
+      params.landing.photometric_tol = LandingParams{}.photometric_tol;
+    }
+  }
+}
+
+// Regression (landing_none_photo 9506): a false top's pixels fitted gamma 0.21 with a standard
+// deviation of 0.12, just over photometric_max_sigma, so they gave no verdict and the top was
+// taken. An uncertain gamma still refuses when it sits photometric_far_sigmas standard
+// deviations beyond the tolerance. With every estimate counted uncertain (max_sigma tiny, which
+// also silences the floor's patches), the bare floor is refused by that rule alone, the true top
+// is still found, and without the rule (far_sigmas huge) the bare floor passes.
+TEST(FalseTargetOverABareFloor, UncertainTopFarFromItsPlaneIsStillRefused) {
+  for (uint64_t seed = 1; seed <= 6; ++seed) {
+    const RenderedTop r = rendered_top(seed);
+    const View& v = r.t.v;
+    const cv::Mat &ref = r.ref, &with_top = r.with_top, &bare = r.bare;
+    PipelineParams params;
+    params.landing.photometric_max_sigma = 1e-9;
+    EXPECT_TRUE(found(find_landing_target(v.c, params, ref, with_top))) << "seed " << seed;
+    EXPECT_FALSE(found(find_landing_target(v.c, params, ref, bare))) << "seed " << seed;
+    params.landing.photometric_far_sigmas = 1e9;
+    EXPECT_TRUE(found(find_landing_target(v.c, params, ref, bare))) << "seed " << seed;
+  }
+}
+
+// Regression (landing_none_photo 9725, 9730: "tops" of 12-14 matches over a photographed floor
+// whose hull sat at gamma 0.43-0.54, uncertain, so no verdict; the floor's patches ran from -0.7
+// to 1.6 around a median near 0: the floor's homography did not register the floor). Known
+// answers: the traced frames' patches are refused by their spread alone, a true top's floor
+// (landing_photo 9910-9919, 6698 frames with 5 or more patches: spread p99 0.10) agrees, a
+// floor off 0 is refused by its median, and too few patches give no verdict.
+TEST(FalseTargetOverABareFloor, FloorPatchesSpreadOnBothSidesOfZeroAreRefused) {
+  const LandingParams p;
+  const std::vector<double> none_9725 = {-0.31, -0.66, -0.69, -0.32, -0.34, -0.39,
+                                         -0.21, -0.26, -0.29, -0.02, -0.00, 1.60,
+                                         0.41,  0.43,  1.15,  0.77,  0.45,  0.67};
+  const std::vector<double> none_9730 = {-0.54, -0.62, -0.64, -0.28, -0.51, -0.28, -0.07,
+                                         -0.02, 0.30,  0.35,  0.60,  0.92,  0.09};
+  const std::vector<double> photo_9910 = {-0.05, -0.05, -0.07, -0.07, -0.10, -0.06, -0.06,
+                                          -0.05, -0.05, -0.04, -0.01, 0.00,  0.02,  0.01,
+                                          0.02,  0.03,  0.06,  0.04,  0.04,  0.07,  0.04};
+  EXPECT_FALSE(floor_patches_agree(none_9725, p));
+  EXPECT_FALSE(floor_patches_agree(none_9730, p));
+  EXPECT_TRUE(floor_patches_agree(photo_9910, p));
+  LandingParams no_spread = p;  // their medians alone pass
+  no_spread.photometric_max_floor_spread = 1e9;
+  EXPECT_TRUE(floor_patches_agree(none_9725, no_spread));
+  EXPECT_TRUE(floor_patches_agree(none_9730, no_spread));
+  std::vector<double> raised = photo_9910;  // the whole floor a third of the way up
+  for (double& g : raised) g += 0.33;
+  EXPECT_FALSE(floor_patches_agree(raised, p));
+  EXPECT_TRUE(floor_patches_agree({-0.9, 0.0, 0.9, 0.1}, p));  // 4: no spread to speak of
+  EXPECT_FALSE(floor_patches_agree({-0.9, 0.0, 0.9, 0.1, 0.8}, p));
+  EXPECT_TRUE(floor_patches_agree({}, p));  // no patch: no verdict
+}
+
+// Faint paper grain: value noise (a hash of each 6 mm cell, bilinear between cells) of +-1
+// grey level. Not a grating: a single sinusoid's correlation repeats along the parallax, every
+// 0.75 of the top's parallax at 1.3 cm, and left the plane check (plane_photometric.hpp) peaks
+// at gamma 0.25, 1.0 and 1.75 within 0.001 of each other (it took 1.75 on one view and refused
+// the true top; issue 15).
+double grain(const Vector3d& X_W) {
+  const auto cell = [](int64_t i, int64_t j) {
+    uint64_t v = static_cast<uint64_t>(i) * 0x9E3779B97F4A7C15ull ^
+                 static_cast<uint64_t>(j) * 0xC2B2AE3D27D4EB4Full;  // splitmix64's finaliser
+    v ^= v >> 30, v *= 0xBF58476D1CE4E5B9ull, v ^= v >> 27, v *= 0x94D049BB133111EBull,
+        v ^= v >> 31;
+    return static_cast<double>(v >> 11) * 0x1.0p-52 - 1.0;  // [-1, 1)
+  };
+  const double gx = X_W.x() / 0.006, gy = X_W.y() / 0.006;
+  const double fx = std::floor(gx), fy = std::floor(gy);
+  const int64_t i = static_cast<int64_t>(fx), j = static_cast<int64_t>(fy);
+  const double a = gx - fx, b = gy - fy;
+  return (1 - b) * ((1 - a) * cell(i, j) + a * cell(i + 1, j)) +
+         b * ((1 - a) * cell(i, j + 1) + a * cell(i + 1, j + 1));
+}
+
+// A box on the floor (a platform) and the floor around it, rendered by casting rays: the top
+// top_grey with a faint grain, the side faces side_grey, the floor floor_grey with a texture
+// and 60 grey levels darker beyond world y = floor_edge_y_m (the edge of a rug), and a busy grain
+// of floor_grain grey levels.
+struct BoxScene {
+  Vector2d centre_xy = {1.0, 0.2};
+  double yaw = 0.35, length = 0.30, width = 0.204, height = 0.15;
+  double top_grey = 225, side_grey = 165, floor_grey = 190;
+  double floor_edge_y_m = std::numeric_limits<double>::infinity();
+  double floor_grain = 0;  // a busy floor: grain() of this amplitude [grey levels]
+
+  Isometry3d X_WO() const {  // box frame: axes along the sides, origin at the box's centre
+    Isometry3d X = Isometry3d::Identity();
+    X.linear() = Eigen::AngleAxisd(yaw, Vector3d::UnitZ()).toRotationMatrix();
+    X.translation() = Vector3d(centre_xy.x(), centre_xy.y(), 0.5 * height);
+    return X;
+  }
+  bool on_top(const Vector3d& X_W, double inset_long, double inset_short) const {
+    const Vector3d q = X_WO().inverse() * X_W;
+    return std::abs(q.x()) <= 0.5 * length - inset_long &&
+           std::abs(q.y()) <= 0.5 * width - inset_short;
+  }
+  double grey(const Vector3d& o_W, const Vector3d& d_W) const {
+    // Slab test in the box frame (Kay & Kajiya, SIGGRAPH 1986).
+    const Isometry3d X_OW = X_WO().inverse();
+    const Vector3d o = X_OW * o_W, d = X_OW.linear() * d_W;
+    const double h[3] = {0.5 * length, 0.5 * width, 0.5 * height};
+    double t_in = -1e9, t_out = 1e9;
+    int axis = -1;
+    for (int k = 0; k < 3; ++k) {
+      if (std::abs(d[k]) < 1e-12) {
+        if (std::abs(o[k]) > h[k]) t_in = 1e9;
+        continue;
+      }
+      double a = (-h[k] - o[k]) / d[k], b = (h[k] - o[k]) / d[k];
+      if (a > b) std::swap(a, b);
+      if (a > t_in) t_in = a, axis = k;
+      t_out = std::min(t_out, b);
+    }
+    if (t_in <= t_out && t_in > 0) {
+      if (axis != 2) return side_grey;
+      const Vector3d X = o_W + t_in * d_W;
+      return top_grey + grain(X);
+    }
+    const Vector3d X = o_W + (-o_W.z() / d_W.z()) * d_W;
+    double g =
+        floor_grey + 6 * std::sin(2 * M_PI * X.x() / 0.037) * std::sin(2 * M_PI * X.y() / 0.051);
+    if (X.y() > floor_edge_y_m) g -= 60;
+    return g + floor_grain * grain(X);
+  }
+  // The camera's image, 3 x 3 rays a pixel.
+  cv::Mat render(const CameraModel& camera, const Isometry3d& X_WC) const {
+    cv::Mat image(camera.height, camera.width, CV_8UC1);
+    for (int v = 0; v < camera.height; ++v)
+      for (int u = 0; u < camera.width; ++u) {
+        double sum = 0;
+        for (int i = -1; i <= 1; ++i)
+          for (int j = -1; j <= 1; ++j) {
+            const Vector3d r = camera.ray(Vector2d(u + i / 3.0, v + j / 3.0));
+            sum += grey(X_WC.translation(), X_WC.linear() * r);
+          }
+        image.at<uint8_t>(v, u) = cv::saturate_cast<uint8_t>(sum / 9);
+      }
+    return image;
+  }
+};
+
+// The box seen from the search height, camera 1 17 cm from camera 2; the top's 80 features only
+// on its middle (inset_long, inset_short from its edges, as on a nearly blank top), 140 on the
+// floor around it.
+struct BoxViews {
+  View view;
+  cv::Mat image_1, image_2;
+};
+BoxViews box_views(const BoxScene& scene, uint64_t seed, double inset_long, double inset_short,
+                   std::optional<double> baseline_dir = std::nullopt,
+                   double features_turn_rad = 0.0, int n_floor = 140) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> U(-1, 1);
+  const PoseSample p2 = level_pose(
+      {scene.centre_xy.x() - 0.12 + 0.03 * U(rng), scene.centre_xy.y() + 0.03 * U(rng), 1.54},
+      0.1 * U(rng));
+  const double dir = baseline_dir ? *baseline_dir : M_PI * U(rng);
+  const PoseSample p1 =
+      level_pose(p2.p_W_B + Vector3d(0.17 * std::cos(dir), 0.17 * std::sin(dir), 0.0), 0.05);
+  BoxViews b{View(p1, p2), {}, {}};
+  View& v = b.view;
+  const Isometry3d X_WO = scene.X_WO();
+  for (int k = 0; k < 80;) {
+    const Eigen::Vector2d q = Eigen::Rotation2Dd(features_turn_rad) *
+                              Eigen::Vector2d((0.5 * scene.length - inset_long) * U(rng),
+                                              (0.5 * scene.width - inset_short) * U(rng));
+    k += v.add(X_WO * Vector3d(q.x(), q.y(), 0.5 * scene.height), rng);
+  }
+  for (int k = 0; k < n_floor;) {
+    const Vector3d X(p2.p_W_B.x() + 0.7 * U(rng), p2.p_W_B.y() + 0.55 * U(rng), 0.0);
+    if (!scene.on_top(X, -0.05, -0.05)) k += v.add(X, rng);
+  }
+  b.image_1 = scene.render(v.camera, camera_in_world(p1.X_WB(), v.mount.X_BC()));
+  b.image_2 = scene.render(v.camera, camera_in_world(p2.X_WB(), v.mount.X_BC()));
+  return b;
+}
+
+// The top measured as the scene has it: its sides within long_tol_m and short_tol_m, its
+// centre within 5 mm.
+void expect_measured(const TargetOutcome& o, const BoxScene& scene, double long_tol_m,
+                     double short_tol_m, uint64_t seed) {
+  EXPECT_NEAR(o.estimate.size_m[0], scene.length, long_tol_m) << "seed " << seed;
+  EXPECT_NEAR(o.estimate.size_m[1], scene.width, short_tol_m) << "seed " << seed;
+  const Vector3d top_W(scene.centre_xy.x(), scene.centre_xy.y(), scene.height);
+  EXPECT_LT((o.estimate.p_W - top_W).head<2>().norm(), 0.005) << "seed " << seed;
+}
+
+// Issue 15 (landing_lowtex 9913, 9919: a 20.4 cm top measured 18.8 cm and refused as too
+// narrow): the features of a nearly blank top stop 2-3 cm short of its edges. The rim, where
+// both images step at the same place of the top's plane, gives the short side within 5 mm, the
+// long one within 1 cm and the centre within 5 mm; the features' extent alone falls centimetres
+// short.
+TEST(TopRim, FeaturesShortOfTheEdgesMeasureTheTopToItsRim) {
+  const BoxScene scene;
+  for (uint64_t seed = 1; seed <= 6; ++seed) {
+    const BoxViews b = box_views(scene, seed, 0.02, 0.02 + 0.005 * static_cast<double>(seed % 3));
+    PipelineParams params;
+    const TargetOutcome o = find_landing_target(b.view.c, params, b.image_1, b.image_2);
+    ASSERT_TRUE(found(o)) << "seed " << seed << ": " << to_string(o.reason);
+    // The top's plane, and so every length on it, is known from the features' parallax to
+    // about 2 % (0.4 px of noise): a 30 cm side to 6 mm.
+    expect_measured(o, scene, 0.01, 0.005, seed);
+    const TargetOutcome features = find_landing_target(b.view.c, params);
+    EXPECT_LT(features.estimate.size_m[1], scene.width - 0.02) << "seed " << seed;
+  }
+}
+
+// A nearly blank top whose features' rectangle is turned 6 deg from its edges (as a minimum-area
+// rectangle of a few dozen features can be): each side's rim is read along its own turn, fitted
+// to where stretches of the side step, and the rims' agreement turns the rectangle onto the
+// top's edges: its yaw within 1.5 deg, its sides as square to the edges.
+TEST(TopRim, RimsTurnedFromTheFeaturesTurnTheRectangleOntoTheEdges) {
+  const BoxScene scene;
+  const double turn = 6.0 * M_PI / 180.0;
+  const auto yaw_error_deg = [&](double yaw) {  // the long axis' direction, modulo a half turn
+    double d = std::remainder(yaw - scene.yaw, M_PI);
+    return std::abs(d) * 180.0 / M_PI;
+  };
+  for (uint64_t seed = 1; seed <= 4; ++seed) {
+    // Half-extents 12 x 6.5 cm turned 6 deg: 2.3 cm inside the long sides, 2.5 cm inside the
+    // short ones at the nearest corner.
+    const BoxViews b = box_views(scene, seed, 0.03, 0.037, std::nullopt, turn);
+    PipelineParams params;
+    const TargetOutcome features = find_landing_target(b.view.c, params);
+    ASSERT_TRUE(found(features)) << "seed " << seed << ": " << to_string(features.reason);
+    EXPECT_GT(yaw_error_deg(features.estimate.yaw_rad), 3.0) << "seed " << seed;
+    const TargetOutcome o = find_landing_target(b.view.c, params, b.image_1, b.image_2);
+    ASSERT_TRUE(found(o)) << "seed " << seed << ": " << to_string(o.reason);
+    EXPECT_LT(yaw_error_deg(o.estimate.yaw_rad), 1.5) << "seed " << seed;
+    expect_measured(o, scene, 0.01, 0.005, seed);
+  }
+}
+
+// No rim evidence, no change: a top, side faces and floor of one grey show no rim, and the edge
+// of a darker rug on the floor 2-4 cm beyond the top, within the search, steps in both images,
+// but at places of the top's plane 1.5 cm apart (it lies on the floor, the baseline across it).
+// The sizes and the centre stay the features' extent widened by side_from_extent, as without
+// the images.
+TEST(TopRim, NoStepOnTheTopsPlaneKeepsTheFeaturesExtent) {
+  for (uint64_t seed = 1; seed <= 4; ++seed) {
+    BoxScene scene;
+    scene.yaw = 0;
+    scene.top_grey = scene.side_grey = scene.floor_grey = 200;
+    scene.floor_edge_y_m =
+        scene.centre_xy.y() + 0.5 * scene.width + 0.01 + 0.01 * static_cast<double>(seed % 3);
+    const BoxViews b = box_views(scene, seed, 0.03, 0.06, M_PI / 2);
+    PipelineParams params;
+    params.landing.rim_search_m = 0.12;  // from 6 cm inside the top to 6 cm beyond it
+    const TargetOutcome with = find_landing_target(b.view.c, params, b.image_1, b.image_2);
+    const TargetOutcome without = find_landing_target(b.view.c, params);
+    ASSERT_TRUE(found(with)) << "seed " << seed << ": " << to_string(with.reason);
+    ASSERT_TRUE(found(without)) << "seed " << seed;
+    for (int k = 0; k < 2; ++k)
+      EXPECT_NEAR(with.estimate.size_m[k], without.estimate.size_m[k], 1e-9) << "seed " << seed;
+    EXPECT_NEAR((with.estimate.p_W - without.estimate.p_W).norm(), 0.0, 1e-9) << "seed " << seed;
+  }
+}
+
+// Issue 15 (landing_photo 10400: a top whose features cover a band of it, over a busy floor,
+// measured 14.7 cm for 26.7 and refused): a top, side faces and floor of one mean grey show no
+// rim step, but the floor's grain is not on the top's plane. Each side ends where the top's
+// homography stops explaining the images (top_end_offset), 4-7 cm beyond the features: the
+// sizes within 1 cm, the centre within 5 mm, where the features alone fall 8 cm short.
+TEST(TopEnd, ABusyFloorEndsTheTopWhereNoRimSteps) {
+  for (uint64_t seed = 1; seed <= 4; ++seed) {
+    BoxScene scene;
+    scene.top_grey = scene.side_grey = scene.floor_grey = 170;
+    scene.floor_grain = 60;
+    const double inset = 0.04 + 0.01 * static_cast<double>(seed % 3);
+    const BoxViews b = box_views(scene, seed, inset, inset);
+    PipelineParams params;
+    const TargetOutcome o = find_landing_target(b.view.c, params, b.image_1, b.image_2);
+    ASSERT_TRUE(found(o)) << "seed " << seed << ": " << to_string(o.reason);
+    expect_measured(o, scene, 0.01, 0.01, seed);
+    params.landing.top_end_search_m = 0;
+    const TargetOutcome features = find_landing_target(b.view.c, params, b.image_1, b.image_2);
+    ASSERT_TRUE(found(features)) << "seed " << seed;
+    EXPECT_LT(features.estimate.size_m[1], scene.width - 0.04) << "seed " << seed;
+  }
+}
+
+// Issue 15 (landing_photo 10617: a paper top over a photographed floor too bland for features;
+// 928 of the refinement's 1780 frames held the whole top and no floor match, were reported as
+// partial views, and the refinement ran out of time with the centre within 5 mm in each). A top
+// alone (fit_known_top_alone) whose features stop short of the images' borders is seen whole:
+// found, its sizes and centre measured as over a floor with features.
+TEST(TopAlone, ATopAloneInsideBothViewsIsSeenWhole) {
+  const BoxScene scene;
+  for (uint64_t seed = 1; seed <= 4; ++seed) {
+    const BoxViews b = box_views(scene, seed, 0.02, 0.02, std::nullopt, 0.0, /*n_floor=*/0);
+    PipelineParams params;
+    const TargetOutcome o = find_landing_target(b.view.c, params, b.image_1, b.image_2);
+    ASSERT_EQ(o.reason, Reason::kOk) << "seed " << seed << ": " << to_string(o.reason);
+    EXPECT_EQ(o.estimate.n_inliers_dominant, 0) << "seed " << seed;
+    expect_measured(o, scene, 0.01, 0.01, seed);
+    EXPECT_NEAR(o.estimate.height_m, scene.height, 0.01) << "seed " << seed;
+  }
+}
+
+// Each gate refuses with its own reason (gates.hpp): the 8 cm top of
+// LowestDrawnTopOverTheSameFloorIsFound, found on the paper's planes with the shipped
+// parameters, is refused by exactly the gate whose parameter is set past it, with that gate's
+// reason.
+struct GateCase {
+  const char* name;
+  void (*set)(PipelineParams*);
+  Reason reason;
+};
+
+TEST(LandingGates, EachGateRefusesWithItsOwnReason) {
+  const GateCase cases[] = {
+      {"top parallel to the floor", [](PipelineParams* p) { p->landing.max_normal_angle_deg = 0; },
+       Reason::kTopNotParallel},
+      {"floor around the top", [](PipelineParams* p) { p->landing.min_floor_inliers = 100000; },
+       Reason::kNoFloorAroundTop},
+      {"top told from the floor", [](PipelineParams* p) { p->landing.max_top_on_floor_share = -1; },
+       Reason::kTopFitsFloor},
+      {"top level", [](PipelineParams* p) { p->landing.max_tilt_deg = 0; }, Reason::kTopTilted},
+      {"height in range", [](PipelineParams* p) { p->landing.min_height_m = 0.5; },
+       Reason::kHeightOutOfRange},
+  };
+  // The paper's planes (floor_prior off): the known floor's own fit uses min_floor_inliers and
+  // the height range before the gates (known_floor.hpp), and refuses there.
+  int tested = 0;
+  for (uint64_t seed = 1; seed <= 8; ++seed) {
+    std::mt19937_64 rng(500 + seed);
+    const LowTop t = low_top(rng, 0.08);
+    PipelineParams params;
+    params.landing.floor_prior = "off";
+    if (find_landing_target(t.v.c, params).reason != Reason::kOk) continue;  // a partial view
+    ++tested;
+    for (const GateCase& g : cases) {
+      PipelineParams refused = params;
+      g.set(&refused);
+      const Reason r = find_landing_target(t.v.c, refused).reason;
+      EXPECT_EQ(r, g.reason) << g.name << ", seed " << seed << ": " << to_string(r);
+    }
+  }
+  EXPECT_GE(tested, 4);
+}
+
+// The photometric gate's two reasons: a top the images show to be floor (rendered_top's bare
+// current image: every pixel of the "top" follows the floor's plane) is refused for its pixels
+// (kTopPhotometry); a floor whose patches spread on both sides of its plane refuses for the
+// floor's (kFloorPhotometry, floor_patches_agree: FloorPatchesSpreadOnBothSidesOfZeroAreRefused).
+TEST(LandingGates, ThePhotometricGateNamesTheTopOrTheFloor) {
+  for (uint64_t seed = 1; seed <= 3; ++seed) {
+    const RenderedTop r = rendered_top(seed);
+    PipelineParams params;
+    const Reason top = find_landing_target(r.t.v.c, params, r.ref, r.bare).reason;
+    EXPECT_EQ(top, Reason::kTopPhotometry) << "seed " << seed << ": " << to_string(top);
+    EXPECT_EQ(find_landing_target(r.t.v.c, params, r.ref, r.with_top).reason, Reason::kOk);
+  }
+}
+
+}  // namespace
+}  // namespace alight::vision

@@ -1,0 +1,76 @@
+// FrameResult -> VISION_TARGET (target_t), as the alight-vision node publishes it.
+#include "vision/node/convert.hpp"
+
+#include <gtest/gtest.h>
+
+#include <utility>
+
+namespace alight::vision {
+namespace {
+
+FrameResult result(Reason reason) {
+  FrameResult r;
+  r.utime = 1'700'000'000'123'456;
+  r.ref_utime = 1'700'000'000'023'456;
+  r.seq = 42;
+  r.mission = Mission::kLanding;
+  r.reason = reason;
+  r.target.p_W = Vector3d(1.0, 2.0, 0.219);
+  r.target.n_W = Vector3d(0, 0, 1);
+  r.target.pixel = Vector2d(300.5, 200.25);
+  r.target.height_m = 0.218;
+  r.target.size_m[0] = 0.43, r.target.size_m[1] = 0.27;
+  r.target.n_inliers_dominant = 300;
+  r.target.n_inliers_target = 60;
+  r.baseline_m = 0.21;
+  r.n_features = 600, r.n_matches = 400;
+  return r;
+}
+
+TEST(VisionConvertTest, FoundTargetCarriesEveryField) {
+  const target_t m = to_msg(result(Reason::kOk));
+  EXPECT_EQ(m.utime, 1'700'000'000'123'456);
+  EXPECT_EQ(m.ref_utime, 1'700'000'000'023'456);
+  EXPECT_EQ(m.seq, 42);
+  EXPECT_EQ(m.mission, target_t::MISSION_LANDING);
+  EXPECT_TRUE(m.found);
+  EXPECT_EQ(m.reason, target_t::REASON_OK);
+  EXPECT_DOUBLE_EQ(m.p_W_target[2], 0.219);
+  EXPECT_DOUBLE_EQ(m.n_W[2], 1.0);
+  EXPECT_DOUBLE_EQ(m.pixel[1], 200.25);
+  EXPECT_DOUBLE_EQ(m.target_height_m, 0.218);
+  EXPECT_DOUBLE_EQ(m.size_m[0], 0.43);
+  EXPECT_DOUBLE_EQ(m.baseline_m, 0.21);
+  EXPECT_EQ(m.n_features, 600);
+  EXPECT_EQ(m.n_matches, 400);
+  EXPECT_EQ(m.n_inliers_dominant, 300);
+  EXPECT_EQ(m.n_inliers_target, 60);
+}
+
+// A partial view, and an opening seen with too little parallax to measure it.
+TEST(VisionConvertTest, LocatedOnlyTargetsSayWhereToLookButAreNotFound) {
+  for (const auto& [reason, constant] :
+       {std::pair{Reason::kPartialView, target_t::REASON_PARTIAL_VIEW},
+        std::pair{Reason::kLowParallax, target_t::REASON_LOW_PARALLAX}}) {
+    const target_t m = to_msg(result(reason));
+    EXPECT_FALSE(m.found);
+    EXPECT_EQ(m.reason, constant);
+    EXPECT_DOUBLE_EQ(m.p_W_target[0], 1.0);
+    EXPECT_DOUBLE_EQ(m.size_m[1], 0.27);
+  }
+}
+
+TEST(VisionConvertTest, OtherFailuresCarryReasonAndCountsOnly) {
+  const target_t m = to_msg(result(Reason::kNoTargetPlane));
+  EXPECT_FALSE(m.found);
+  EXPECT_EQ(m.reason, target_t::REASON_NO_TARGET_PLANE);
+  EXPECT_EQ(m.p_W_target[0], 0.0);
+  EXPECT_EQ(m.n_W[2], 0.0);
+  EXPECT_EQ(m.target_height_m, 0.0);
+  EXPECT_EQ(m.size_m[0], 0.0);
+  EXPECT_EQ(m.n_matches, 400);
+  EXPECT_EQ(m.n_inliers_dominant, 300);
+}
+
+}  // namespace
+}  // namespace alight::vision

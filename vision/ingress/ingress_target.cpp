@@ -1,0 +1,76 @@
+// Ingress target, paper 3.3: wall -> blocks -> faces -> opening (see ingress_target.hpp).
+#include "vision/ingress/ingress_target.hpp"
+
+#include <cassert>
+#include <utility>
+
+#include "vision/geometry/homography.hpp"
+#include "vision/geometry/waypoint.hpp"
+#include "vision/ingress/blocks.hpp"
+#include "vision/ingress/opening.hpp"
+#include "vision/ingress/wall.hpp"
+
+namespace alight::vision {
+
+TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image,
+                                  const cv::Mat& reference, const PipelineParams& params) {
+  const bool mask = params.ingress.parallax_mask && !reference.empty();
+  return find_ingress_target(c, image, mask ? parallax_image(image, params.ingress) : cv::Mat(),
+                             mask ? parallax_image(reference, params.ingress) : cv::Mat(), params);
+}
+
+TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image,
+                                  const cv::Mat& image_parallax, const cv::Mat& reference_parallax,
+                                  const PipelineParams& params) {
+  assert(c.camera && c.mount);
+  const IngressParams& p = params.ingress;
+  TargetOutcome out;
+  out.labels.assign(c.size(), Label::kOutlier);
+  const auto refuse = [&](Reason reason) {
+    out.reason = reason;
+    return std::move(out);
+  };
+  // 1. The wall.
+  const auto planes = fit_two_homographies(c.x1, c.x2, params.homography);
+  if (!planes) return refuse(planes.reason());
+  if (mocap_motion(c.pose_1, c.pose_2, *c.mount).baseline_m < params.waypoint.min_baseline_m)
+    return refuse(Reason::kSmallBaseline);
+  const auto X_W_match = triangulate_matches(c, p);
+  const Wall wall = choose_wall(c, *planes, X_W_match, params);
+  const HomographyFit& fit = *wall.fit;
+  for (size_t i = 0; i < c.size(); ++i)
+    if (fit.inlier[i]) out.labels[i] = Label::kDominant;
+  out.estimate.n_inliers_dominant = fit.n_inliers;
+  if (!wall.plane) return refuse(wall.plane.reason());
+
+  // 2. The blocks.
+  const Cells cells =
+      cut_into_cells(c, fit, image, image_parallax, reference_parallax, p, &out.lines);
+  const Block b = best_block(c, fit, cells, p);
+  out.estimate.n_inliers_target = b.n_off;
+  if (b.n_off < p.min_outliers) return refuse(Reason::kNoOpening);
+  for (size_t k = 0; k < c.size(); ++k)
+    if (seen_through_wall(c, fit, cells, p, k)) {
+      const int i = cell_of(cells.xc, c.u2[k].x()), j = cell_of(cells.yc, c.u2[k].y());
+      if (i >= b.i0 && i < b.i1 && j >= b.j0 && j < b.j1) out.labels[k] = Label::kTarget;
+    }
+
+  // 3. The faces: the mask's geometry at full size only.
+  OpeningBox box{cells.xc[b.i0], cells.xc[b.i1], cells.yc[b.j0], cells.yc[b.j1]};
+  if (!cells.mask.empty() && p.max_wall_thickness_m > 0 && image_parallax.size() == image.size()) {
+    const Matrix3d K = c.camera->K();
+    const CutGeometry geometry{
+        Vector2d(K(0, 2), K(1, 2)), wall.depth_m, *wall.plane, c.camera, image_parallax,
+        reference_parallax};
+    box = to_front_edges(box, cells.mask.size(), geometry, p);
+  }
+
+  // 4. The opening.
+  if (const Reason r = measure_opening(c, *wall.plane, box, params, &out.estimate);
+      r != Reason::kOk)
+    return refuse(r);
+  out.reason = opening_checks(c, fit, b, out.labels, X_W_match, out.estimate, p);
+  return out;
+}
+
+}  // namespace alight::vision

@@ -1,0 +1,45 @@
+#pragma once
+// Ingress, stage 1 of 4 (wall -> blocks -> faces -> opening): which plane is the wall (paper
+// 3.3: the dominant homography; 3.1.2 for its decomposition). The dominant homography of the
+// matches and a second one among its outliers are the candidates; each is decomposed with motion
+// capture's rotation choosing the physical solution, and counts only when its motion agrees
+// with motion capture's (the second search also finds a dozen stray matches that fit some
+// homography). Beyond the paper, the wall is the nearer of the two by a margin: where the wall's
+// photograph is dark and flat and the room's bright, the room's back wall seen through the
+// opening holds more matches than the wall around it, and its homography would make the opening
+// the only part of the view that agrees with the reference.
+
+#include <optional>
+#include <vector>
+
+#include "vision/geometry/decomposition.hpp"
+#include "vision/geometry/homography.hpp"
+#include "vision/params.hpp"
+#include "vision/target.hpp"
+
+namespace alight::vision {
+
+/// Every match triangulated with motion capture's poses (the midpoint of the two rays, world):
+/// nullopt where the rays are near parallel, the point lies behind either camera, or the rays
+/// pass farther apart than max_ray_gap_px seen from camera 2 (a mismatch: a repeated texture
+/// matched across its epipolar line has no 3-D point and no say in the planes' depths or the
+/// opening's checks).
+std::vector<std::optional<Vector3d>> triangulate_matches(const Correspondences& c,
+                                                         const IngressParams& params);
+
+/// The wall's plane.
+struct Wall {
+  const HomographyFit* fit;   ///< its homography (into the PlanePair it was chosen from)
+  Result<PlaneMotion> plane;  ///< decomposed; kMotionDisagrees where its motion is not motion
+                              ///< capture's, else the decomposition's reason
+  double depth_m;  ///< median depth of its triangulated inliers in camera 2 (infinity: none)
+};
+
+/// The wall: the first homography, or with nearer_plane the second where it decomposes and is
+/// nearer by nearer_plane_margin_m (on a solid wall the second search can find the wall again,
+/// a worse fit of the same plane at the same depth). X_W_match: triangulate_matches().
+Wall choose_wall(const Correspondences& c, const PlanePair& planes,
+                 const std::vector<std::optional<Vector3d>>& X_W_match,
+                 const PipelineParams& params);
+
+}  // namespace alight::vision

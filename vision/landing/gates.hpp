@@ -1,0 +1,80 @@
+#pragma once
+// Landing, stage 2 of 3 (planes -> gates -> extent): the checks that the second plane is a
+// platform's top and not the floor, a chance set of matches or a plane through the top's edge
+// and the floor beyond. Each refuses the frame with its own reason (vision/status.hpp), so a
+// frame's target_t.reason says which gate refused it. In the order find_landing_target applies
+// them: the top parallel to the floor (kTopNotParallel), the floor seen around it
+// (kNoFloorAroundTop), its matches not the floor's (kTopFitsFloor), a baseline for a scale
+// (kSmallBaseline); once the top's features are placed on its plane, the top level
+// (kTopTilted); once it is measured (extent.hpp), its height in range (kHeightOutOfRange) and
+// the images' check of both planes (kTopPhotometry, kFloorPhotometry).
+
+#include <cstdint>
+#include <opencv2/core.hpp>
+#include <vector>
+
+#include "vision/landing/planes.hpp"
+
+namespace alight::vision {
+
+/// The gates on the planes alone, in order: the top's normal within max_normal_angle_deg of the
+/// floor's (kTopNotParallel); unless the top is alone, the floor seen around it in at least
+/// min_floor_inliers places (kNoFloorAroundTop, floor_seen_around_top); at most
+/// max_top_on_floor_share of the top's matches carried by the floor's homography too
+/// (kTopFitsFloor, top_told_from_floor); motion capture's baseline_m at least min_baseline_m
+/// for the scale of eq. 3 (kSmallBaseline). kOk when all pass. H_top_px / H_floor_px: the
+/// planes' pixel homographies, image 1 to 2.
+Reason plane_gates(const Correspondences& c, const LandingPlanes& planes, const Matrix3d& H_top_px,
+                   const Matrix3d& H_floor_px, double baseline_m, const PipelineParams& params);
+
+/// A platform top is opaque: the floor is seen around it, never through it. The floor's
+/// matches seen outside the convex hull of the top's in image 2 (by more than threshold_px, or
+/// inside it but off the top's plane: a match near the epipole fits both planes). The paper's
+/// planes can split a bare floor into a "top" a few centimetres up that holds most of the view
+/// and a "floor" of the rest, all of it inside that "top".
+int floor_seen_around_top(const Correspondences& c, const LandingPlanes& planes,
+                          const Matrix3d& H_top_px, double threshold_px);
+
+/// Beyond the paper: a second plane is told from the floor by its inliers that the floor's
+/// homography (pixels, image 1 to 2) does not carry within threshold_px. False when more than
+/// max_share of the top's inliers (top_in) fit the floor too: the "top" is the floor split by
+/// tracking noise into two planes a few centimetres apart, or a plane fitted through the top and
+/// the floor beside it. A true top's matches lie off the floor's transfer.
+bool top_told_from_floor(const Correspondences& c, const std::vector<uint8_t>& top_in,
+                         const Matrix3d& H_floor_px, double threshold_px, double max_share);
+
+/// The top level: its unit normal n_W (world, towards the camera) within max_tilt_deg of world
+/// up. A "plane" through the platform's edge and the floor beyond is tilted by atan(h / d).
+bool top_level(const Vector3d& n_W, const LandingParams& params);
+
+/// The measured height between the planes within [min_height_m, max_height_m].
+bool height_in_range(double height_m, const LandingParams& params);
+
+/// A top cut by the border of either image (two or more of its inliers within edge_margin_px
+/// of it): only features seen in both images are matched, so its extent is that of its visible
+/// part, and one stray inlier there is no cut.
+bool cut_by_border(const Correspondences& c, const LandingPlanes& planes,
+                   const LandingParams& params);
+
+/// Beyond the paper, the images' verdict on the planes the features found (plane plus parallax,
+/// geometry/plane_photometric.hpp): the pixels inside the top's features (their convex hull in
+/// the current image) must follow the top's plane (else kTopPhotometry), and the patches around
+/// the floor's features outside it the floor's (floor_patches_agree, else kFloorPhotometry).
+/// False tops over a bare floor are features tracked a few pixels wrong: every other pixel of
+/// their "top" and their "floor" lies on one surface, at one gamma, and rarely at 1 and 0. A
+/// pixel set too bland or too uncertain to tell gives no verdict (blank paper, a grey tile): the
+/// features decide. gray_1 / gray_2: the reference and current raw images of the camera's size.
+Reason photometric_gate(const Correspondences& c, const LandingPlanes& planes,
+                        const Matrix3d& H_floor_px, const Matrix3d& H_top_px, const cv::Mat& gray_1,
+                        const cv::Mat& gray_2, const LandingParams& params);
+
+/// The plane check's verdict on the floor from the gammas of the patches around the floor's
+/// features (0 the floor's plane, 1 the top's): false when their median is farther than
+/// photometric_tol from 0, or when 5 or more spread wider than photometric_max_floor_spread
+/// (1.4826 times their median absolute deviation). A floor homography that does not register
+/// the floor (a plane turned about a line through the view) puts its patches on both sides of 0
+/// while their median may still sit near it. Fewer than photometric_min_patches: no verdict
+/// (true).
+bool floor_patches_agree(std::vector<double> gammas, const LandingParams& params);
+
+}  // namespace alight::vision

@@ -1,0 +1,61 @@
+#pragma once
+// Landing, the extent out to the top's rims (beyond the paper; stage 3, after extent.hpp).
+//
+// The paper (Brockers et al., SPIE 2011, 3.2) finds the top's plane and its centre from the
+// top's features and measures no size; its Fig. 6b notes that features alone fall short of a
+// featureless region's true size, which is what a nearly blank top does: its extent falls short
+// by more than side_from_extent restores. Given both images, each side of the extent of a top
+// seen whole (a cut top's size is never used) is searched outward in the top's plane
+// (rim_search_m) for the top's rim: the mean grey level along lines parallel to the side, at
+// offsets from it, read in the current image and in the reference at the same points of the
+// top's plane (the top's homography: the plane-induced comparison of Irani & Anandan, ECCV
+// 1996, as in warp_diff.hpp, but only along the lines searched). The rim is the first step
+// outward that darkens (the top is lit as the floor is and the side faces, turned from the
+// light, less; a top darker than what lies beyond keeps its features' extent) and stays dark to
+// the search's end (a row of print on the top darkens and brightens again), and the reference
+// must show it within rim_max_disagreement_px on the top's plane: the rim lies on the plane,
+// while an edge of the floor or of a side face beyond moves differently between the views. The
+// features' rectangle can be turned from the top's edges, and a line across a turned rim
+// spreads its step: the rim's turn (at most rim_max_turn_deg) is the straight line through the
+// steps of short stretches of the side, and the lines are read along it. Rims that agree on a
+// turn turn the rectangle onto them. A side without a rim keeps the features' extent and its
+// half of side_from_extent's widening (never wider than the evidence shows); with one, the side
+// ends at the rim. The plane check (gates.hpp) reads the features' hull, not the rim's
+// rectangle: the rim is measured only on a top the check accepts.
+//
+// The top's end: over a busy floor the mean grey beyond a rim need not step at all (a pale
+// margin of print against a patterned floor, a photograph's mid-grey against a circuit board).
+// A side without a rim step is then searched outward (top_end_search_m) for where the top's
+// homography stops explaining the two images: at each offset, the share of the pixels whose
+// grey differs between the views, read at the same point of the top's plane, by more than a
+// threshold (top_end_min_diff, and twice the top's own differences just inside the side). On
+// the top that share is near zero, whatever its texture; on a textured floor, which lies off the
+// top's plane, it is large. The end is where it steps up (by top_end_min_rise) in most stretches
+// of the side along one straight line, the line's turn read as the rim's. Where the floor beyond
+// is flat, the top's homography explains it too and the step lies wherever the floor's texture
+// begins: an upper bound, not the rim. So an end counts only where the share stays up over the
+// 30 pixels beyond it (a busy floor, not the band that the edge of a rug moves by between the
+// views) and where the floor's homography explains most of what the top's does not; a flat band
+// of floor that ends along a straight line parallel to the side still passes, and would widen
+// the top by the band.
+
+#include <opencv2/core.hpp>
+#include <optional>
+#include <vector>
+
+#include "vision/landing/extent.hpp"
+
+namespace alight::vision {
+
+/// The top out to its rims: each side of the features' extent (`features`, their points pts_W)
+/// moved to its rim where both images show one (else to the top's end where top_end_search_m
+/// > 0), else widened as `widened`; nullopt where no side has either. Two or more rims that
+/// agree on a turn turn the rectangle onto them, each side with a rim then where its rim crosses
+/// the middle of the stretch read. gray_1 / gray_2: the reference and current raw images.
+std::optional<TopRect> rim_rect(const Correspondences& c, const cv::Mat& gray_1,
+                                const cv::Mat& gray_2, const LandingPlanes& planes,
+                                const Isometry3d& X_WC2, const std::vector<Vector3d>& pts_W,
+                                const TopRect& features, const TopRect& widened,
+                                const LandingParams& p);
+
+}  // namespace alight::vision

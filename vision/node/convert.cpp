@@ -1,0 +1,32 @@
+#include "vision/node/convert.hpp"
+
+namespace alight::vision {
+
+target_t to_msg(const FrameResult& r) {
+  target_t m{};
+  m.utime = r.utime;
+  m.ref_utime = r.ref_utime;
+  m.seq = r.seq;
+  m.mission = static_cast<int8_t>(r.mission);
+  m.found = r.found();
+  m.reason = static_cast<int8_t>(r.reason);
+  const bool has = r.found() || located_only(r.reason);
+  for (int i = 0; i < 3; ++i) {
+    m.p_W_target[i] = has ? r.target.p_W[i] : 0.0;
+    m.n_W[i] = has ? r.target.n_W[i] : 0.0;
+  }
+  m.pixel[0] = has ? r.target.pixel.x() : 0.0;
+  m.pixel[1] = has ? r.target.pixel.y() : 0.0;
+  m.target_height_m = has ? r.target.height_m : 0.0;
+  m.size_m[0] = has ? r.target.size_m[0] : 0.0;
+  m.size_m[1] = has ? r.target.size_m[1] : 0.0;
+  m.target_yaw_rad = has ? r.target.yaw_rad : 0.0;
+  m.baseline_m = r.baseline_m;
+  m.n_features = r.n_features;
+  m.n_matches = r.n_matches;
+  m.n_inliers_dominant = r.target.n_inliers_dominant;
+  m.n_inliers_target = r.target.n_inliers_target;
+  return m;
+}
+
+}  // namespace alight::vision
