@@ -115,7 +115,10 @@ StepResult Dynamics::step(VehicleState& s, const AttitudeCommand& cmd, const Vec
       const double pen = depth.minCoeff(&a);
       Vector3d n_O = Vector3d::Zero();
       n_O[a] = q[a] >= 0 ? 1.0 : -1.0;
-      f += contact_force(b.R_WO() * n_O, pen, v_W, p);
+      // A moving box (a platform's deck) pushes and drags with its surface's velocity: what
+      // counts at the contact is the speed relative to it.
+      const Vector3d v_rel = b.moving ? Vector3d(v_W - b.velocity_at(p_W)) : v_W;
+      f += contact_force(b.R_WO() * n_O, pen, v_rel, p);
       if (b.kind == Box::Kind::kPlatform) {
         ground = true;
         const bool top = a == 2 && q.z() > 0;

@@ -12,7 +12,9 @@
 // Contact: penalty springs and dampers with Coulomb friction at the four gear feet and at points
 // on the rotor rims, against the floor and the scene's boxes; a point inside a box is pushed out
 // through the face it is least deep behind, so gear over the platform top rests on it and gear
-// past its edge does not (and tips the vehicle off).
+// past its edge does not (and tips the vehicle off). A moving box (Box::v_W, omega_W: a
+// platform's deck) acts with the velocity of its surface, so a vehicle standing on it is
+// carried by friction and an impact is judged by the speed relative to the deck.
 
 #include <cstdint>
 
