@@ -179,6 +179,32 @@ TEST(PlatformMotionTest, TheSimulatorsPlatformFollowsTheMotion) {
   }
 }
 
+TEST(PlatformMotionTest, TheCameraSeesThePlatformWhereItIs) {
+  const Scenario sc = moving_scenario();  // a bright paper top on a darker floor
+  const CameraRig rig = load_camera_rig(test::config_path("vehicles/starmac.yaml"), "downward");
+  Simulator sim(sc, test::starmac(), 3, rig);
+  const Vector3d before = sim.truth().platform->top_center_W;
+  sim.step(AttitudeCommand{}, sim.now_utime() + 2'000'000);  // 1 m on along x
+  const Vector3d after = sim.truth().platform->top_center_W;
+  ASSERT_GT((after - before).norm(), 0.9);
+  const Isometry3d X_WB =
+      make_transform(Matrix3d::Identity(), Vector3d(0.5 * (before.x() + after.x()), 1.1, 1.6));
+  const cv::Mat img = sim.render(rig.mount, rig.model, X_WB);
+  const Isometry3d X_WC = camera_in_world(X_WB, rig.mount.X_BC());
+  const auto grey = [&](const Vector3d& p_W) {
+    const auto px = rig.model.project(X_WC.inverse() * p_W);
+    EXPECT_TRUE(px);
+    double sum = 0;  // a 41 x 41 patch (8 cm): the print and the floor's texture vary
+    for (int dv = -20; dv <= 20; ++dv)
+      for (int du = -20; du <= 20; ++du)
+        sum += img.at<uchar>(static_cast<int>(std::lround(px->y())) + dv,
+                             static_cast<int>(std::lround(px->x())) + du);
+    return sum / (41 * 41);
+  };
+  EXPECT_GT(grey(after), 170);  // the top is where the platform is now
+  EXPECT_LT(grey(Vector3d(before.x(), before.y(), 0.0)), 150);  // and the floor where it was
+}
+
 TEST(PlatformMotionTest, AVehicleRestingOnAMovingDeckIsCarriedWithIt) {
   const Scenario sc = moving_scenario();
   Simulator sim(sc, test::starmac(), 3);
