@@ -87,7 +87,7 @@ struct Outer {
   }
 };
 
-Outer load(const std::string& yaml) {
+Outer load_outer(const std::string& yaml) {
   const auto root = ParamNode::from_string(yaml, "v.yaml");
   Outer o;
   Outer::schema().read(root.child("top"), o);
@@ -95,7 +95,7 @@ Outer load(const std::string& yaml) {
 }
 
 TEST(ParamSchemaTest, AbsentKeysKeepTheInitialisersAndPresentOnesAreRead) {
-  const Outer o = load(
+  const Outer o = load_outer(
       "top:\n  timeout_s: 0.25\n  format: MJPEG\n  offset_m: [1, 2, 3]\n  baseline_m: 0.3\n"
       "  inner: {seed: 42}\n");
   EXPECT_EQ(o.timeout_s, 0.25);
@@ -109,38 +109,38 @@ TEST(ParamSchemaTest, AbsentKeysKeepTheInitialisersAndPresentOnesAreRead) {
 }
 
 TEST(ParamSchemaTest, ErrorsNameTheFullKeyTheValueAsWrittenAndTheConstraint) {
-  auto e = expect_param_error([] { load("top:\n  timeout_s: 3\n"); });
+  auto e = expect_param_error([] { load_outer("top:\n  timeout_s: 3\n"); });
   EXPECT_EQ(std::string(e.what()), "v.yaml: top.timeout_s = 3: must be in (0, 2] s");
-  e = expect_param_error([] { load("top:\n  inner:\n    max_size: 80\n"); });
+  e = expect_param_error([] { load_outer("top:\n  inner:\n    max_size: 80\n"); });
   EXPECT_EQ(std::string(e.what()), "v.yaml: top.inner.max_size = 80: must be in [4, 64] px");
-  e = expect_param_error([] { load("top:\n  count: 0\n"); });
+  e = expect_param_error([] { load_outer("top:\n  count: 0\n"); });
   EXPECT_EQ(std::string(e.what()), "v.yaml: top.count = 0: must be >= 1");
-  e = expect_param_error([] { load("top:\n  format: RGB3\n"); });
+  e = expect_param_error([] { load_outer("top:\n  format: RGB3\n"); });
   EXPECT_EQ(std::string(e.what()), "v.yaml: top.format = RGB3: must be GREY, YUYV or MJPEG");
-  e = expect_param_error([] { load("top:\n  window: [1, -2]\n"); });
+  e = expect_param_error([] { load_outer("top:\n  window: [1, -2]\n"); });
   EXPECT_EQ(std::string(e.what()), "v.yaml: top.window = [1, -2]: must be > 0 s");
-  e = expect_param_error([] { load("top:\n  baseline_m: 0\n"); });
+  e = expect_param_error([] { load_outer("top:\n  baseline_m: 0\n"); });
   EXPECT_EQ(e.key(), "top.baseline_m");  // merged: at the level of the file where it is written
 }
 
 TEST(ParamSchemaTest, CrossFieldChecksNameTheirKey) {
-  auto e = expect_param_error([] { load("top:\n  timeout_s: 2\n  lost_s: 1.5\n"); });
+  auto e = expect_param_error([] { load_outer("top:\n  timeout_s: 2\n  lost_s: 1.5\n"); });
   EXPECT_EQ(std::string(e.what()), "v.yaml: top.lost_s = 1.5: must exceed timeout_s");
-  e = expect_param_error([] { load("top:\n  count: 50\n"); });
+  e = expect_param_error([] { load_outer("top:\n  count: 50\n"); });
   EXPECT_EQ(std::string(e.what()), "v.yaml: top.count = 50: must not exceed inner.max_size");
 }
 
 TEST(ParamSchemaTest, NonFiniteWrongTypeUnknownAndMissingRequiredKeysAreRefused) {
-  auto e = expect_param_error([] { load("top:\n  timeout_s: .inf\n"); });
+  auto e = expect_param_error([] { load_outer("top:\n  timeout_s: .inf\n"); });
   EXPECT_EQ(std::string(e.what()), "v.yaml: top.timeout_s = .inf: expected a finite number");
-  e = expect_param_error([] { load("top:\n  inner:\n    seed: -1\n"); });
+  e = expect_param_error([] { load_outer("top:\n  inner:\n    seed: -1\n"); });
   EXPECT_EQ(std::string(e.what()), "v.yaml: top.inner.seed = -1: expected a non-negative integer");
-  e = expect_param_error([] { load("top:\n  inner:\n    max_sise: 10\n"); });
+  e = expect_param_error([] { load_outer("top:\n  inner:\n    max_sise: 10\n"); });
   EXPECT_EQ(e.key(), "top.inner.max_sise");
   EXPECT_NE(e.problem().find("unknown key"), std::string::npos);
-  e = expect_param_error([] { load("top:\n  box: {}\n"); });
+  e = expect_param_error([] { load_outer("top:\n  box: {}\n"); });
   EXPECT_EQ(e.key(), "top.box.size_m");
-  e = expect_param_error([] { load("top:\n  box:\n    other: 1\n"); });
+  e = expect_param_error([] { load_outer("top:\n  box:\n    other: 1\n"); });
   EXPECT_EQ(std::string(e.what()), "v.yaml: top.box.size_m = <missing>: required key is missing");
 }
 
@@ -189,7 +189,7 @@ TEST(ParamSchemaTest, TheDumpReadsBackToTheSameValues) {
     std::ostringstream text;
     text << "top:\n";
     Outer::schema().dump(text, o, 2);
-    const Outer r = load(text.str());
+    const Outer r = load_outer(text.str());
     EXPECT_EQ(r.timeout_s, o.timeout_s) << text.str();
     EXPECT_EQ(r.format, o.format);
     EXPECT_EQ(r.offset_m, o.offset_m);
@@ -316,9 +316,9 @@ TEST(ParamSchemaTest, AValueOutOfRangeIsReportedAtItsOwnKeyBeforeAnyCheckThatInv
 
 // Error values show the value as it was understood (1e9 as 1e+09), as the dump would write it.
 TEST(ParamSchemaTest, ErrorsShowTheValueAsTheDumpWritesIt) {
-  auto e = expect_param_error([] { load("top:\n  timeout_s: 1e9\n"); });
+  auto e = expect_param_error([] { load_outer("top:\n  timeout_s: 1e9\n"); });
   EXPECT_EQ(e.value(), "1e+09");
-  e = expect_param_error([] { load("top:\n  format: \"RGB 3\"\n"); });
+  e = expect_param_error([] { load_outer("top:\n  format: \"RGB 3\"\n"); });
   EXPECT_EQ(e.value(), "RGB 3");
 }
 

@@ -17,23 +17,23 @@ PoseSample truth(int64_t utime) {
   return s;
 }
 
-constexpr int64_t kT0 = 1'000'000'000'000;
+constexpr int64_t kBufferT0 = 1'000'000'000'000;
 
 PoseBuffer filled(const PoseBufferParams& p, int n = 100, int64_t step_us = 10'000) {
   PoseBuffer buf(p);
-  for (int i = 0; i < n; ++i) buf.add(truth(kT0 + i * step_us));
+  for (int i = 0; i < n; ++i) buf.add(truth(kBufferT0 + i * step_us));
   return buf;
 }
 
 TEST(PoseBufferTest, InterpolatesAnAnalyticTrajectoryExactly) {
   const PoseBuffer buf = filled({});
   for (int64_t dt = 0; dt <= 990'000; dt += 3'337) {
-    const auto s = buf.at(kT0 + dt);
+    const auto s = buf.at(kBufferT0 + dt);
     ASSERT_TRUE(s.has_value()) << dt;
-    const PoseSample t = truth(kT0 + dt);
+    const PoseSample t = truth(kBufferT0 + dt);
     EXPECT_LT((s->p_W_B - t.p_W_B).norm(), 1e-9);
     EXPECT_LT(s->q_WB.angularDistance(t.q_WB), 1e-9);  // slerp is exact for a constant rate
-    EXPECT_EQ(s->utime, kT0 + dt);
+    EXPECT_EQ(s->utime, kBufferT0 + dt);
   }
 }
 
@@ -47,7 +47,7 @@ TEST(PoseBufferTest, RefusesExtrapolationBeyondTheConfiguredGap) {
   EXPECT_LT((s.p_W_B - truth(newest + 19'000).p_W_B).norm(), 1e-9);
   EXPECT_LT(s.q_WB.angularDistance(truth(newest + 19'000).q_WB), 1e-9);
   EXPECT_EQ(buf.lookup(newest + 21'000, &s), PoseBuffer::Status::kAfterNewest);
-  EXPECT_EQ(buf.lookup(kT0 - 1, &s), PoseBuffer::Status::kBeforeHistory);
+  EXPECT_EQ(buf.lookup(kBufferT0 - 1, &s), PoseBuffer::Status::kBeforeHistory);
 }
 
 TEST(PoseBufferTest, DefaultNeverExtrapolates) {
@@ -60,30 +60,30 @@ TEST(PoseBufferTest, RefusesToInterpolateAcrossADropout) {
   PoseBufferParams p;
   p.max_gap_s = 0.05;
   PoseBuffer buf(p);
-  buf.add(truth(kT0));
-  buf.add(truth(kT0 + 10'000));
-  buf.add(truth(kT0 + 200'000));  // 190 ms of missing mocap
+  buf.add(truth(kBufferT0));
+  buf.add(truth(kBufferT0 + 10'000));
+  buf.add(truth(kBufferT0 + 200'000));  // 190 ms of missing mocap
   PoseSample s;
-  EXPECT_EQ(buf.lookup(kT0 + 100'000, &s), PoseBuffer::Status::kGap);
-  EXPECT_EQ(buf.lookup(kT0 + 5'000, &s), PoseBuffer::Status::kOk);
+  EXPECT_EQ(buf.lookup(kBufferT0 + 100'000, &s), PoseBuffer::Status::kGap);
+  EXPECT_EQ(buf.lookup(kBufferT0 + 5'000, &s), PoseBuffer::Status::kOk);
 }
 
 TEST(PoseBufferTest, EmptyBufferSaysSo) {
   PoseBuffer buf;
   PoseSample s;
-  EXPECT_EQ(buf.lookup(kT0, &s), PoseBuffer::Status::kEmpty);
+  EXPECT_EQ(buf.lookup(kBufferT0, &s), PoseBuffer::Status::kEmpty);
 }
 
 TEST(PoseBufferTest, OutOfOrderSamplesAreInsertedInOrder) {
   PoseBuffer buf;
-  buf.add(truth(kT0 + 20'000));
-  buf.add(truth(kT0));
-  buf.add(truth(kT0 + 10'000));
+  buf.add(truth(kBufferT0 + 20'000));
+  buf.add(truth(kBufferT0));
+  buf.add(truth(kBufferT0 + 10'000));
   EXPECT_EQ(buf.size(), 3u);
-  EXPECT_EQ(buf.oldest_utime(), kT0);
-  const auto s = buf.at(kT0 + 15'000);
+  EXPECT_EQ(buf.oldest_utime(), kBufferT0);
+  const auto s = buf.at(kBufferT0 + 15'000);
   ASSERT_TRUE(s);
-  EXPECT_LT((s->p_W_B - truth(kT0 + 15'000).p_W_B).norm(), 1e-9);
+  EXPECT_LT((s->p_W_B - truth(kBufferT0 + 15'000).p_W_B).norm(), 1e-9);
 }
 
 TEST(PoseBufferTest, HistoryIsTrimmed) {
@@ -98,14 +98,14 @@ TEST(PoseBufferTest, SampleOlderThanHistoryIsIgnored) {
   PoseBufferParams p;
   p.history_s = 0.1;
   PoseBuffer buf = filled(p, 100, 10'000);
-  EXPECT_FALSE(buf.add(truth(kT0)));
+  EXPECT_FALSE(buf.add(truth(kBufferT0)));
 }
 
 // Regression (issue 14, found by fuzzing): a pose stamped near INT64_MIN made the history
 // window's start overflow; the buffer emptied itself and read front() of an empty deque.
 TEST(PoseBufferRegression, ExtremeStampsNeverEmptyTheBuffer) {
   PoseBuffer buf = filled(PoseBufferParams{});
-  PoseSample s = truth(kT0);
+  PoseSample s = truth(kBufferT0);
   s.utime = INT64_MIN + 5;
   EXPECT_FALSE(buf.add(s));
   PoseBuffer fresh;

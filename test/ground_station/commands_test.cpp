@@ -50,22 +50,22 @@ TEST(ParseCommandTest, RefusesMalformedRequests) {
   EXPECT_FALSE(parse_command_request({{"command", "nudge"}, {"dz", ""}}, 1.0).request);
 }
 
-constexpr int64_t kSession = 77;
+constexpr int64_t kCommandSession = 77;
 
 TEST(CommandBuilderTest, SignsCommandsThatTheVerifierAccepts) {
   CommandBuilder builder("gs-test", key(), "uav-1");
-  CommandVerifier verifier(key(), "uav-1", kSession);
+  CommandVerifier verifier(key(), "uav-1", kCommandSession);
   const int64_t now = 1'700'000'000'000'000;
   CommandRequest go{operator_cmd_t::CMD_GO, 1, {9, 9, 9}};
-  const operator_cmd_t a = builder.build(go, kSession, now);
+  const operator_cmd_t a = builder.build(go, kCommandSession, now);
   EXPECT_EQ(a.sender, "gs-test");
   EXPECT_EQ(a.vehicle_id, "uav-1");
-  EXPECT_EQ(a.session, kSession);
+  EXPECT_EQ(a.session, kCommandSession);
   EXPECT_EQ(a.utime, now);
   EXPECT_EQ(a.nudge_W[0], 0.0);  // only nudges carry an offset
   EXPECT_EQ(verifier.check(a, now).reason, CommandVerdict::Reason::kNone);
   // Two commands in the same microsecond still get increasing seq.
-  const operator_cmd_t b = builder.build({operator_cmd_t::CMD_ABORT, 0, {}}, kSession, now);
+  const operator_cmd_t b = builder.build({operator_cmd_t::CMD_ABORT, 0, {}}, kCommandSession, now);
   EXPECT_GT(b.seq, a.seq);
   EXPECT_EQ(b.mission, 0);
   EXPECT_EQ(verifier.check(b, now).reason, CommandVerdict::Reason::kNone);
@@ -73,24 +73,26 @@ TEST(CommandBuilderTest, SignsCommandsThatTheVerifierAccepts) {
 
 TEST(CommandBuilderTest, SeqIncreasesAcrossGroundStationRestarts) {
   const int64_t t0 = 1'700'000'000'000'000;
-  CommandVerifier verifier(key(), "uav-1", kSession);
+  CommandVerifier verifier(key(), "uav-1", kCommandSession);
   CommandBuilder first("gs", key(), "uav-1");
   for (int i = 0; i < 5; ++i)
     ASSERT_TRUE(
-        verifier.check(first.build({operator_cmd_t::CMD_ABORT, 0, {}}, kSession, t0), t0 + 10)
+        verifier
+            .check(first.build({operator_cmd_t::CMD_ABORT, 0, {}}, kCommandSession, t0), t0 + 10)
             .accepted());
   // A restarted station (fresh builder) one second later is not taken for a replay.
   CommandBuilder second("gs", key(), "uav-1");
-  EXPECT_TRUE(verifier
-                  .check(second.build({operator_cmd_t::CMD_ABORT, 0, {}}, kSession, t0 + 1'000'000),
-                         t0 + 1'000'000)
-                  .accepted());
+  EXPECT_TRUE(
+      verifier
+          .check(second.build({operator_cmd_t::CMD_ABORT, 0, {}}, kCommandSession, t0 + 1'000'000),
+                 t0 + 1'000'000)
+          .accepted());
 }
 
 // --- acknowledgement -------------------------------------------------------------------------
 
-autonomy_status_t status(int64_t session, int64_t last_cmd_seq, int32_t rejected = 0,
-                         int64_t last_rejected_seq = -1, int8_t reason = 0) {
+autonomy_status_t command_status(int64_t session, int64_t last_cmd_seq, int32_t rejected = 0,
+                                 int64_t last_rejected_seq = -1, int8_t reason = 0) {
   autonomy_status_t st{};
   st.vehicle_id = "uav-1";
   st.cmd_session = session;
@@ -106,7 +108,7 @@ autonomy_status_t status(int64_t session, int64_t last_cmd_seq, int32_t rejected
 TEST(CommandTrackerRegression, KillWithNoVehicleListeningRaisesTheAlarm) {
   CommandTracker tracker(1.0);
   const int64_t t0 = 5'000'000;
-  tracker.sent("kill", 1001, kSession, t0);
+  tracker.sent("kill", 1001, kCommandSession, t0);
   const TrackedCommand& kill = tracker.commands().back();
   EXPECT_EQ(tracker.state_at(kill, t0 + 999'999), AckState::kSent);
   EXPECT_EQ(tracker.alarm(t0 + 999'999), nullptr);
@@ -118,26 +120,27 @@ TEST(CommandTrackerRegression, KillWithNoVehicleListeningRaisesTheAlarm) {
 
 TEST(CommandTrackerTest, EchoedSeqAcknowledgesAndALateEchoStillCounts) {
   CommandTracker tracker(1.0);
-  tracker.on_status(status(kSession, -1), 0);
-  tracker.sent("go", 2000, kSession, 100);
-  tracker.on_status(status(kSession, -1), 50'000);  // not yet
+  tracker.on_status(command_status(kCommandSession, -1), 0);
+  tracker.sent("go", 2000, kCommandSession, 100);
+  tracker.on_status(command_status(kCommandSession, -1), 50'000);  // not yet
   EXPECT_EQ(tracker.state_at(tracker.commands().back(), 60'000), AckState::kSent);
-  tracker.on_status(status(kSession, 2000), 120'000);
+  tracker.on_status(command_status(kCommandSession, 2000), 120'000);
   const TrackedCommand& go = tracker.commands().back();
   EXPECT_EQ(tracker.state_at(go, 5'000'000), AckState::kAcknowledged);
   EXPECT_EQ(go.answered_utime, 120'000);
   EXPECT_EQ(tracker.alarm(5'000'000), nullptr);
 
-  tracker.sent("abort", 2001, kSession, 6'000'000);
+  tracker.sent("abort", 2001, kCommandSession, 6'000'000);
   EXPECT_NE(tracker.alarm(7'500'000), nullptr);  // overdue
-  tracker.on_status(status(kSession, 2001), 7'600'000);
+  tracker.on_status(command_status(kCommandSession, 2001), 7'600'000);
   EXPECT_EQ(tracker.alarm(7'600'000), nullptr);  // answered late: the alarm clears
 }
 
 TEST(CommandTrackerTest, RejectionIsShownWithItsReason) {
   CommandTracker tracker(1.0);
-  tracker.sent("go", 3000, kSession, 0);
-  tracker.on_status(status(kSession, -1, 1, 3000, autonomy_status_t::REJECT_STALE), 10'000);
+  tracker.sent("go", 3000, kCommandSession, 0);
+  tracker.on_status(command_status(kCommandSession, -1, 1, 3000, autonomy_status_t::REJECT_STALE),
+                    10'000);
   const TrackedCommand& go = tracker.commands().back();
   EXPECT_EQ(tracker.state_at(go, 10'000), AckState::kRejected);
   EXPECT_NE(go.reject_reason.find("stale"), std::string::npos);
@@ -145,20 +148,20 @@ TEST(CommandTrackerTest, RejectionIsShownWithItsReason) {
 
 TEST(CommandTrackerTest, ALaterEchoAcknowledgesAnEarlierCommandOnlyWhenNothingWasRejected) {
   CommandTracker tracker(1.0);
-  tracker.on_status(status(kSession, -1, 4), 0);
-  tracker.sent("nudge", 10, kSession, 100);
-  tracker.sent("nudge", 11, kSession, 200);
+  tracker.on_status(command_status(kCommandSession, -1, 4), 0);
+  tracker.sent("nudge", 10, kCommandSession, 100);
+  tracker.sent("nudge", 11, kCommandSession, 200);
   // Only seq 11 was echoed, and the rejection count is unchanged: 10 was accepted before it.
-  tracker.on_status(status(kSession, 11, 4), 50'000);
+  tracker.on_status(command_status(kCommandSession, 11, 4), 50'000);
   EXPECT_EQ(tracker.state_at(tracker.commands()[0], 60'000), AckState::kAcknowledged);
   EXPECT_EQ(tracker.state_at(tracker.commands()[1], 60'000), AckState::kAcknowledged);
 
   // The same with one rejection in between: it may have been ours; never guessed.
   CommandTracker other(1.0);
-  other.on_status(status(kSession, -1, 4), 0);
-  other.sent("nudge", 10, kSession, 100);
-  other.sent("nudge", 11, kSession, 200);
-  other.on_status(status(kSession, 11, 5, 999), 50'000);
+  other.on_status(command_status(kCommandSession, -1, 4), 0);
+  other.sent("nudge", 10, kCommandSession, 100);
+  other.sent("nudge", 11, kCommandSession, 200);
+  other.on_status(command_status(kCommandSession, 11, 5, 999), 50'000);
   EXPECT_EQ(other.state_at(other.commands()[0], 2'000'000), AckState::kNotAcknowledged);
   EXPECT_EQ(other.state_at(other.commands()[1], 2'000'000), AckState::kAcknowledged);
 }
@@ -166,14 +169,14 @@ TEST(CommandTrackerTest, ALaterEchoAcknowledgesAnEarlierCommandOnlyWhenNothingWa
 TEST(CommandTrackerTest, AnswersOfAnotherSessionAcknowledgeNothing) {
   // autonomy restarted (new session) and happens to echo an equal seq: not ours.
   CommandTracker tracker(1.0);
-  tracker.sent("go", 42, kSession, 0);
-  tracker.on_status(status(kSession + 1, 42), 10'000);
+  tracker.sent("go", 42, kCommandSession, 0);
+  tracker.on_status(command_status(kCommandSession + 1, 42), 10'000);
   EXPECT_EQ(tracker.state_at(tracker.commands().back(), 2'000'000), AckState::kNotAcknowledged);
 }
 
 TEST(CommandTrackerTest, KeepsABoundedHistory) {
   CommandTracker tracker(1.0, 5);
-  for (int i = 0; i < 50; ++i) tracker.sent("abort", i, kSession, i);
+  for (int i = 0; i < 50; ++i) tracker.sent("abort", i, kCommandSession, i);
   EXPECT_EQ(tracker.commands().size(), 5u);
   EXPECT_EQ(tracker.commands().front().seq, 45);
 }

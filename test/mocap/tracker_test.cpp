@@ -27,17 +27,17 @@ std::vector<uint8_t> name(const std::string& n) {
   return p;
 }
 
-void append(std::vector<uint8_t>& a, const std::vector<uint8_t>& b) {
+void append_bytes(std::vector<uint8_t>& a, const std::vector<uint8_t>& b) {
   a.insert(a.end(), b.begin(), b.end());
 }
 
-std::vector<uint8_t> opening() {
+std::vector<uint8_t> tracker_opening() {
   std::vector<uint8_t> s(24, 0);
   std::memcpy(s.data(), "vrpn: ver. 07.38  0", 19);
-  append(s, VrpnTestServer::frame(-1, kPelican, 1, name("Pelican")));
-  append(s, VrpnTestServer::frame(-1, kOther, 1, name("Other")));
-  append(s, VrpnTestServer::frame(-2, kPosQuat, 1, name("vrpn_Tracker Pos_Quat")));
-  append(s, VrpnTestServer::frame(-2, kVelocity, 1, name("vrpn_Tracker Velocity")));
+  append_bytes(s, VrpnTestServer::frame(-1, kPelican, 1, name("Pelican")));
+  append_bytes(s, VrpnTestServer::frame(-1, kOther, 1, name("Other")));
+  append_bytes(s, VrpnTestServer::frame(-2, kPosQuat, 1, name("vrpn_Tracker Pos_Quat")));
+  append_bytes(s, VrpnTestServer::frame(-2, kVelocity, 1, name("vrpn_Tracker Velocity")));
   return s;
 }
 
@@ -53,7 +53,7 @@ ServedPose served(int64_t stamp_us, const Vector3d& p,
   return s;
 }
 
-std::vector<uint8_t> pose_frame(const ServedPose& p) {
+std::vector<uint8_t> tracker_pose_frame(const ServedPose& p) {
   const int32_t sender = p.object == "Pelican" ? kPelican : kOther;
   return VrpnTestServer::frame(kPosQuat, sender, p.stamp_us, VrpnTestServer::pose_payload(p));
 }
@@ -77,7 +77,7 @@ MocapParams params(const std::string& stamp_source = "server") {
 struct Feeder {
   TrackerClient client;
   explicit Feeder(const MocapParams& p) : client(p) {
-    const auto o = opening();
+    const auto o = tracker_opening();
     EXPECT_TRUE(client.on_bytes(o.data(), o.size(), kT0).empty());
   }
   std::vector<TrackerPose> feed(const std::vector<uint8_t>& bytes, int64_t recv_utime) {
@@ -108,7 +108,8 @@ TEST(TrackerClientTest, FirstPoseIsHeldBackThenVelocitiesByDifference) {
     const int64_t t = kT0 + i * 10'000;  // 100 Hz
     const double s = i * 0.01;
     const auto q = Quaterniond(Eigen::AngleAxisd(yaw_rate * s, Vector3d::UnitZ()));
-    for (const auto& p : f.feed(pose_frame(served(t, Vector3d(1, 2, 3) + v * s, q)), t + 3000))
+    for (const auto& p :
+         f.feed(tracker_pose_frame(served(t, Vector3d(1, 2, 3) + v * s, q)), t + 3000))
       got.push_back(p);
   }
   ASSERT_EQ(got.size(), 9u);
@@ -134,7 +135,8 @@ TEST(TrackerClientTest, DifferenceSpansAtLeastSpanAtHighRates) {
   for (int i = 0; i < 40; ++i) {
     const int64_t t = kT0 + i * 2500;
     const double noise = (i % 2 ? 1 : -1) * 1e-4;
-    for (const auto& x : f.feed(pose_frame(served(t, Vector3d(noise + 0.3 * i * 0.0025, 0, 1))), t))
+    for (const auto& x :
+         f.feed(tracker_pose_frame(served(t, Vector3d(noise + 0.3 * i * 0.0025, 0, 1))), t))
       got.push_back(x);
   }
   ASSERT_EQ(got.size(), 39u);
@@ -144,10 +146,12 @@ TEST(TrackerClientTest, DifferenceSpansAtLeastSpanAtHighRates) {
 TEST(TrackerClientTest, OnlyTheConfiguredObjectAndSensorAndOthersAreListed) {
   Feeder f(params());
   std::vector<uint8_t> s;
-  append(s, pose_frame(served(kT0, Vector3d::Zero(), Quaterniond::Identity(), "Other")));
-  append(s, pose_frame(served(kT0, Vector3d::Zero(), Quaterniond::Identity(), "Pelican", 1)));
-  append(s, pose_frame(served(kT0, Vector3d::Zero())));
-  append(s, pose_frame(served(kT0 + 10'000, Vector3d::Zero())));
+  append_bytes(s,
+               tracker_pose_frame(served(kT0, Vector3d::Zero(), Quaterniond::Identity(), "Other")));
+  append_bytes(
+      s, tracker_pose_frame(served(kT0, Vector3d::Zero(), Quaterniond::Identity(), "Pelican", 1)));
+  append_bytes(s, tracker_pose_frame(served(kT0, Vector3d::Zero())));
+  append_bytes(s, tracker_pose_frame(served(kT0 + 10'000, Vector3d::Zero())));
   const auto got = f.feed(s, kT0 + 20'000);
   ASSERT_EQ(got.size(), 1u);
   const auto st = f.client.stats();
@@ -159,13 +163,13 @@ TEST(TrackerClientTest, UnusableValuesAreRefusedAndCounted) {
   Feeder f(params());
   const double nan = std::nan("");
   auto bad = served(kT0, Vector3d(nan, 0, 0));
-  EXPECT_TRUE(f.feed(pose_frame(bad), kT0).empty());
+  EXPECT_TRUE(f.feed(tracker_pose_frame(bad), kT0).empty());
   bad = served(kT0, Vector3d::Zero(), Quaterniond(0, 0, 0, 0));  // a lost object's zeros
-  EXPECT_TRUE(f.feed(pose_frame(bad), kT0).empty());
+  EXPECT_TRUE(f.feed(tracker_pose_frame(bad), kT0).empty());
   bad = served(kT0, Vector3d::Zero(), Quaterniond(1.1, 0, 0, 0));
-  EXPECT_TRUE(f.feed(pose_frame(bad), kT0).empty());
+  EXPECT_TRUE(f.feed(tracker_pose_frame(bad), kT0).empty());
   bad = served(kT0, Vector3d(5e3, 0, 0));  // 5 km
-  EXPECT_TRUE(f.feed(pose_frame(bad), kT0).empty());
+  EXPECT_TRUE(f.feed(tracker_pose_frame(bad), kT0).empty());
   const auto st = f.client.stats();
   EXPECT_EQ(st.rejected_values, 4u);
   EXPECT_EQ(st.held_back + st.poses, 0u);
@@ -174,12 +178,16 @@ TEST(TrackerClientTest, UnusableValuesAreRefusedAndCounted) {
 
 TEST(TrackerClientTest, StampsMustIncreaseAndStayNearOurClockWithServerStamps) {
   Feeder f(params("server"));
-  f.feed(pose_frame(served(kT0, Vector3d::Zero())), kT0);
-  EXPECT_EQ(f.feed(pose_frame(served(kT0 + 10'000, Vector3d::Zero())), kT0 + 10'000).size(), 1u);
-  EXPECT_TRUE(f.feed(pose_frame(served(kT0 + 10'000, Vector3d::Zero())), kT0 + 20'000).empty());
-  EXPECT_TRUE(f.feed(pose_frame(served(kT0 + 5'000, Vector3d::Zero())), kT0 + 20'000).empty());
+  f.feed(tracker_pose_frame(served(kT0, Vector3d::Zero())), kT0);
+  EXPECT_EQ(f.feed(tracker_pose_frame(served(kT0 + 10'000, Vector3d::Zero())), kT0 + 10'000).size(),
+            1u);
+  EXPECT_TRUE(
+      f.feed(tracker_pose_frame(served(kT0 + 10'000, Vector3d::Zero())), kT0 + 20'000).empty());
+  EXPECT_TRUE(
+      f.feed(tracker_pose_frame(served(kT0 + 5'000, Vector3d::Zero())), kT0 + 20'000).empty());
   // A server clock 2 s off is refused (0.5 s allowed), with a hint.
-  EXPECT_TRUE(f.feed(pose_frame(served(kT0 + 20'000, Vector3d::Zero())), kT0 + 2'020'000).empty());
+  EXPECT_TRUE(
+      f.feed(tracker_pose_frame(served(kT0 + 20'000, Vector3d::Zero())), kT0 + 2'020'000).empty());
   const auto st = f.client.stats();
   EXPECT_EQ(st.rejected_stamps, 3u);
   EXPECT_NE(st.last_refusal.find("stamp.source mapped"), std::string::npos);
@@ -194,7 +202,8 @@ TEST(TrackerClientTest, MappedStampsTakeTheSmallestDelayAndKeepTheServersSpacing
   std::vector<TrackerPose> got;
   for (int i = 0; i < 6; ++i) {
     const int64_t t = kT0 + i * 10'000;
-    for (const auto& x : f.feed(pose_frame(served(t, Vector3d::Zero())), t + offset + delays[i]))
+    for (const auto& x :
+         f.feed(tracker_pose_frame(served(t, Vector3d::Zero())), t + offset + delays[i]))
       got.push_back(x);
   }
   ASSERT_EQ(got.size(), 5u);
@@ -219,7 +228,8 @@ TEST(TrackerClientTest, ReceiveStampsABurstWithTheServersSpacingBeforeTheReceipt
   p.stamp.latency_s = 0.004;
   Feeder f(p);
   std::vector<uint8_t> burst;
-  for (int i = 0; i < 4; ++i) append(burst, pose_frame(served(1 + i * 10'000, Vector3d::Zero())));
+  for (int i = 0; i < 4; ++i)
+    append_bytes(burst, tracker_pose_frame(served(1 + i * 10'000, Vector3d::Zero())));
   const int64_t recv = kT0 + 123;
   const auto got = f.feed(burst, recv);
   ASSERT_EQ(got.size(), 3u);  // the first is held back
@@ -230,7 +240,8 @@ TEST(TrackerClientTest, AGapLongerThanMaxGapHoldsThePoseAfterItBack) {
   Feeder f(params());
   int published = 0;
   for (int64_t t : {0, 10'000, 20'000, 220'000, 230'000})
-    published += f.feed(pose_frame(served(kT0 + t, Vector3d(t * 1e-6, 0, 0))), kT0 + t).size();
+    published +=
+        f.feed(tracker_pose_frame(served(kT0 + t, Vector3d(t * 1e-6, 0, 0))), kT0 + t).size();
   EXPECT_EQ(published, 3);
   EXPECT_EQ(f.client.stats().held_back, 2u);
 }
@@ -241,21 +252,23 @@ TEST(TrackerClientTest, ServerVelocityGoesWithItsPoseAndAMissingOneFallsBackToTh
   p.room.units = "mm";
   p.body.t_M_B_m = Vector3d(0.1, 0, 0);
   Feeder f(p);
-  f.feed(pose_frame(served(kT0, Vector3d::Zero())), kT0);
+  f.feed(tracker_pose_frame(served(kT0, Vector3d::Zero())), kT0);
   // Pose, then its Velocity (as VRPN servers send them): published on the Velocity.
-  EXPECT_TRUE(f.feed(pose_frame(served(kT0 + 10'000, Vector3d(10, 0, 0))), kT0 + 10'000).empty());
+  EXPECT_TRUE(
+      f.feed(tracker_pose_frame(served(kT0 + 10'000, Vector3d(10, 0, 0))), kT0 + 10'000).empty());
   auto got = f.feed(velocity_frame(kT0 + 10'000, Vector3d(2000, 0, 0)), kT0 + 10'000);
   ASSERT_EQ(got.size(), 1u);
   EXPECT_TRUE(got[0].server_velocity);
   EXPECT_LT((got[0].pose.v_W_B - Vector3d(2, 0, 0)).norm(), 1e-12);  // mm/s -> m/s
   // Velocity first, then its pose: published at once.
   EXPECT_TRUE(f.feed(velocity_frame(kT0 + 20'000, Vector3d(0, 1000, 0)), kT0 + 20'000).empty());
-  got = f.feed(pose_frame(served(kT0 + 20'000, Vector3d(20, 0, 0))), kT0 + 20'000);
+  got = f.feed(tracker_pose_frame(served(kT0 + 20'000, Vector3d(20, 0, 0))), kT0 + 20'000);
   ASSERT_EQ(got.size(), 1u);
   EXPECT_LT((got[0].pose.v_W_B - Vector3d(0, 1, 0)).norm(), 1e-12);
   // A pose whose Velocity never comes goes out with its difference when the next pose arrives.
-  EXPECT_TRUE(f.feed(pose_frame(served(kT0 + 30'000, Vector3d(30, 0, 0))), kT0 + 30'000).empty());
-  got = f.feed(pose_frame(served(kT0 + 40'000, Vector3d(40, 0, 0))), kT0 + 40'000);
+  EXPECT_TRUE(
+      f.feed(tracker_pose_frame(served(kT0 + 30'000, Vector3d(30, 0, 0))), kT0 + 30'000).empty());
+  got = f.feed(tracker_pose_frame(served(kT0 + 40'000, Vector3d(40, 0, 0))), kT0 + 40'000);
   ASSERT_EQ(got.size(), 1u);
   EXPECT_EQ(got[0].pose.utime, kT0 + 30'000);
   EXPECT_FALSE(got[0].server_velocity);
@@ -273,7 +286,7 @@ TEST(TrackerClientTest, ServerVelocityAddsTheLeverArmOfTheBodyOffset) {
   for (int i = 0; i < 3; ++i) {
     const int64_t t = kT0 + i * 10'000;
     const Quaterniond q(Eigen::AngleAxisd(i * 0.01, Vector3d::UnitZ()));
-    f.feed(pose_frame(served(t, Vector3d::Zero(), q)), t);
+    f.feed(tracker_pose_frame(served(t, Vector3d::Zero(), q)), t);
     const auto got = f.feed(velocity_frame(t, Vector3d::Zero()), t);
     if (i == 0) continue;
     ASSERT_EQ(got.size(), 1u);
@@ -284,18 +297,20 @@ TEST(TrackerClientTest, ServerVelocityAddsTheLeverArmOfTheBodyOffset) {
 
 TEST(TrackerClientTest, ConnectionsAreCountedTogetherAndATruncationIsCounted) {
   Feeder f(params());
-  f.feed(pose_frame(served(kT0, Vector3d::Zero())), kT0);
-  f.feed(pose_frame(served(kT0 + 10'000, Vector3d::Zero())), kT0 + 10'000);
-  auto cut = pose_frame(served(kT0 + 20'000, Vector3d::Zero()));
+  f.feed(tracker_pose_frame(served(kT0, Vector3d::Zero())), kT0);
+  f.feed(tracker_pose_frame(served(kT0 + 10'000, Vector3d::Zero())), kT0 + 10'000);
+  auto cut = tracker_pose_frame(served(kT0 + 20'000, Vector3d::Zero()));
   cut.resize(30);
   f.feed(cut, kT0 + 20'000);
   f.client.end_of_stream();
   f.client.reset();
   // The restarted server numbers its ids afresh; history is gone (first pose held back again).
-  const auto o = opening();
+  const auto o = tracker_opening();
   f.feed(o, kT0 + 500'000);
-  f.feed(pose_frame(served(kT0 + 500'000, Vector3d::Zero())), kT0 + 500'000);
-  EXPECT_EQ(f.feed(pose_frame(served(kT0 + 510'000, Vector3d::Zero())), kT0 + 510'000).size(), 1u);
+  f.feed(tracker_pose_frame(served(kT0 + 500'000, Vector3d::Zero())), kT0 + 500'000);
+  EXPECT_EQ(
+      f.feed(tracker_pose_frame(served(kT0 + 510'000, Vector3d::Zero())), kT0 + 510'000).size(),
+      1u);
   const auto st = f.client.stats();
   EXPECT_EQ(st.truncated, 1u);
   EXPECT_EQ(st.poses, 2u);
@@ -310,9 +325,10 @@ TEST(TrackerClientTest, YUpMillimetreRoomEndToEnd) {
   p.room.up_axis = "y";
   p.body.rpy_M_B_deg = Vector3d(-90, 0, 0);
   Feeder f(p);
-  f.feed(pose_frame(served(kT0, Vector3d(0, 1000, 0))), kT0);
+  f.feed(tracker_pose_frame(served(kT0, Vector3d(0, 1000, 0))), kT0);
   // Up 1 m -> 1.01 m in 10 ms along room y: 1 m/s up in world; 0.5 m along room z: world -y.
-  const auto got = f.feed(pose_frame(served(kT0 + 10'000, Vector3d(0, 1010, 500))), kT0 + 10'000);
+  const auto got =
+      f.feed(tracker_pose_frame(served(kT0 + 10'000, Vector3d(0, 1010, 500))), kT0 + 10'000);
   ASSERT_EQ(got.size(), 1u);
   EXPECT_LT((got[0].pose.p_W_B - Vector3d(0, -0.5, 1.01)).norm(), 1e-12);
   EXPECT_LT((got[0].pose.v_W_B - Vector3d(0, -50, 1)).norm(), 1e-9);

@@ -19,17 +19,17 @@
 namespace alight::outer_loop {
 namespace {
 
-constexpr int64_t kT0 = 1'700'000'000'000'000;
-constexpr int64_t kMs = 1000;
+constexpr int64_t kRunnerT0 = 1'700'000'000'000'000;
+constexpr int64_t kRunnerMs = 1000;
 
-OuterLoopParams params() {
+OuterLoopParams runner_params() {
   OuterLoopParams p;
   p.mass_kg = 1.2;
   return p;
 }
 
-// A node's boundary with clocks the test moves: steady from 0, wall = kT0 + steady (the stamps
-// of the test's inputs run on the same clock, as the simulator's do at real time).
+// A node's boundary with clocks the test moves: steady from 0, wall = kRunnerT0 + steady (the
+// stamps of the test's inputs run on the same clock, as the simulator's do at real time).
 struct Harness {
   int64_t steady_us = 0;
   StampGuard guard;
@@ -43,7 +43,7 @@ struct Harness {
   OperatorKey key{std::vector<uint8_t>(32, 0x42)};
   KillVerifier kills{key, "alight", 2'000'000};
 
-  explicit Harness(PersistentState restored = {}, OuterLoopParams p = params())
+  explicit Harness(PersistentState restored = {}, OuterLoopParams p = runner_params())
       : runner(p, restored, gate()) {}
 
   InputGate gate() {
@@ -53,7 +53,7 @@ struct Harness {
       return false;
     };
     g.accept_stamp = [this](const std::string& ch, int64_t utime) {
-      const bool ok = stamp_ok(guard.check(ch, utime, steady_us, kT0 + steady_us));
+      const bool ok = stamp_ok(guard.check(ch, utime, steady_us, kRunnerT0 + steady_us));
       if (!ok) ++rejected_stamps[ch];
       return ok;
     };
@@ -77,7 +77,7 @@ struct Harness {
   }
   void kill_setpoint(const Vector3d& p, const std::optional<operator_cmd_t>& authority) {
     for (int k = 0; k < 10; ++k) model.step(last.value_or(AttitudeCommand{}), 0.001);
-    steady_us += 10 * kMs;
+    steady_us += 10 * kRunnerMs;
     pose();
     PositionSetpoint sp;
     sp.utime = now();
@@ -88,7 +88,7 @@ struct Harness {
     take(runner.on_setpoint(m, steady_us));
     tick();
   }
-  int64_t now() const { return kT0 + steady_us; }
+  int64_t now() const { return kRunnerT0 + steady_us; }
   void take(const std::optional<AttitudeCommand>& c) {
     if (!c) return;
     last = c;
@@ -101,7 +101,7 @@ struct Harness {
   // 10 ms of flight: model, then pose, setpoint (if any) and the 100 Hz timer tick.
   void step(const std::optional<PositionSetpoint>& sp, bool with_pose = true) {
     for (int k = 0; k < 10; ++k) model.step(last.value_or(AttitudeCommand{}), 0.001);
-    steady_us += 10 * kMs;
+    steady_us += 10 * kRunnerMs;
     if (with_pose) pose();
     if (sp) {
       auto s = *sp;
@@ -172,7 +172,7 @@ TEST(OuterLoopRegression, RestartedOuterLoopPublishesNothingUntilPoseAndSetpoint
   h.model.floor = false;
   for (int i = 0; i < 20; ++i) {
     for (int k = 0; k < 10; ++k) h.model.step(AttitudeCommand{1, 0, 0, 0, 1.2 * 9.81, true}, 0.001);
-    h.steady_us += 10 * kMs;
+    h.steady_us += 10 * kRunnerMs;
     h.pose();
     h.tick();
   }
@@ -270,7 +270,7 @@ TEST(OuterLoopRegression, APoseOffItsPredictionIsRefusedAndASustainedOneIsAFails
   double max_dx = 0;
   for (int i = 0; i < 300; ++i) {
     for (int k = 0; k < 10; ++k) h.model.step(h.last.value_or(AttitudeCommand{}), 0.001);
-    h.steady_us += 10 * kMs;
+    h.steady_us += 10 * kRunnerMs;
     pose_t forged = alight::to_msg(h.model.pose(h.now()), 0);
     forged.pos[0] += 0.3;
     h.pose(forged);
@@ -294,7 +294,7 @@ TEST(OuterLoopRegression, APoseOffItsPredictionIsRefusedAndASustainedOneIsAFails
 // The outer loop keeps its own geofence and speed limit: a far setpoint is approached at no more
 // than max_speed_xy_mps and stops 0.2 m inside the fence.
 TEST(OuterLoopRegression, AFarSetpointIsFlownSlowlyAndStopsInsideTheGeofence) {
-  OuterLoopParams p = params();
+  OuterLoopParams p = runner_params();
   p.geofence_min_W_m = Vector3d(-3, -3, -0.5);
   p.geofence_max_W_m = Vector3d(4.7, 3, 2.6);
   Harness h({}, p);
@@ -313,7 +313,7 @@ TEST(OuterLoopRegression, AFarSetpointIsFlownSlowlyAndStopsInsideTheGeofence) {
 
 // Pushed out of the flying area (a gust, a wrong pose): hold, then land and disarm there.
 TEST(OuterLoopRegression, LeavingTheGeofenceHoldsThenLands) {
-  OuterLoopParams p = params();
+  OuterLoopParams p = runner_params();
   p.geofence_min_W_m = Vector3d(-3, -3, -0.5);
   p.geofence_max_W_m = Vector3d(4.7, 3, 2.6);
   Harness h({}, p);

@@ -16,7 +16,7 @@
 namespace alight::outer_loop {
 namespace {
 
-constexpr int64_t kT0 = 1'700'000'000'000'000;
+constexpr int64_t kStepT0 = 1'700'000'000'000'000;
 constexpr double kPhysicsDt = 0.001;
 constexpr int kControlEvery = 10;  // 100 Hz pose / control rate
 
@@ -48,7 +48,7 @@ StepResult fly_step(const OuterLoopParams& params, test::LagModel& model, const 
   AttitudeCommand cmd;
   const int n = static_cast<int>(duration_s / kPhysicsDt);
   for (int i = 0; i < n; ++i) {
-    const int64_t t = kT0 + static_cast<int64_t>(i * kPhysicsDt * 1e6);
+    const int64_t t = kStepT0 + static_cast<int64_t>(i * kPhysicsDt * 1e6);
     if (i % kControlEvery == 0) {
       sp.utime = t;
       cmd = ctrl.update(sp, model.pose(t), t);
@@ -138,7 +138,7 @@ TEST(StepResponseTest, AntiWindupBoundsTheOvershootAfterBeingHeld) {
   AttitudeCommand cmd;
   double max_z = 0;
   for (int i = 0; i < 25000; ++i) {
-    const int64_t t = kT0 + i * 1000;
+    const int64_t t = kStepT0 + i * 1000;
     const bool held = i < 10000;
     if (i % kControlEvery == 0) {
       sp.utime = t;

@@ -15,7 +15,7 @@ namespace alight::sim {
 namespace {
 
 namespace mav = alight::mavlink;
-constexpr int64_t kT0 = 1'700'000'000'000'000;
+constexpr int64_t kEndpointT0 = 1'700'000'000'000'000;
 
 /// The companion's side, scripted.
 struct Companion {
@@ -51,9 +51,9 @@ struct Companion {
 };
 
 struct EndpointHarness {
-  OffboardEndpoint ep{OffboardEndpointParams{}, 10.0, kT0};
+  OffboardEndpoint ep{OffboardEndpointParams{}, 10.0, kEndpointT0};
   Companion c;
-  int64_t now = kT0;
+  int64_t now = kEndpointT0;
   VehicleState state;
   bool on_ground = true;
   EndpointOutput step() {

@@ -16,10 +16,10 @@
 namespace alight::sim {
 namespace {
 
-constexpr double kDeg = M_PI / 180.0;
+constexpr double kMotionDeg = M_PI / 180.0;
 
-PlatformMotionParams path(const std::string& kind, double speed, double radius,
-                          double length = 2.0) {
+PlatformMotionParams motion_path(const std::string& kind, double speed, double radius,
+                                 double length = 2.0) {
   PlatformMotionParams p;
   p.path = kind;
   p.speed_mps = speed;
@@ -33,7 +33,7 @@ TEST(PlatformMotionTest, PathsAgainstTheirClosedForms) {
   const double r = 0.6, v = 1.0;
   // Circle, turning left from +x: a quarter turn later it is r ahead and r to the left.
   {
-    PlatformMotion m(path("circle", v, r), top0, 0.3, 1);
+    PlatformMotion m(motion_path("circle", v, r), top0, 0.3, 1);
     const double t = 0.5 * M_PI * r / v;
     const PlatformPose P = m.at(t);
     EXPECT_TRUE(P.top_center_W.isApprox(top0 + Vector3d(r, r, 0), 1e-12)) << P.top_center_W;
@@ -43,7 +43,7 @@ TEST(PlatformMotionTest, PathsAgainstTheirClosedForms) {
   }
   // Line (a stadium) turned by 90 deg: out along +y, over to -x, back along -y.
   {
-    PlatformMotionParams p = path("line", v, r, 2.0);
+    PlatformMotionParams p = motion_path("line", v, r, 2.0);
     p.path_heading_deg = 90;
     PlatformMotion m(p, top0, 0.0, 1);
     EXPECT_TRUE(m.at(1.0).top_center_W.isApprox(top0 + Vector3d(0, 1.0, 0), 1e-12));
@@ -55,7 +55,7 @@ TEST(PlatformMotionTest, PathsAgainstTheirClosedForms) {
   // Figure eight: at half its period it is back at the start heading the same way, then turns
   // right: a quarter turn on, r ahead and r to the right.
   {
-    PlatformMotion m(path("figure_eight", v, r), top0, 0.0, 1);
+    PlatformMotion m(motion_path("figure_eight", v, r), top0, 0.0, 1);
     const double lobe = 2 * M_PI * r / v;
     EXPECT_TRUE(m.at(lobe).top_center_W.isApprox(top0, 1e-9));
     EXPECT_TRUE(m.at(lobe).v_W.isApprox(Vector3d(v, 0, 0), 1e-9));
@@ -63,7 +63,7 @@ TEST(PlatformMotionTest, PathsAgainstTheirClosedForms) {
   }
   // Drift and a constant turn; a heading that follows a circle turns at v / r.
   {
-    PlatformMotionParams p = path("circle", 0.5, 2.5);
+    PlatformMotionParams p = motion_path("circle", 0.5, 2.5);
     p.velocity_mps = Vector2d(0.1, -0.2);
     p.heading_follows_path = true;
     p.yaw_rate_dps = 3.0;
@@ -73,8 +73,8 @@ TEST(PlatformMotionTest, PathsAgainstTheirClosedForms) {
     const Vector3d expected =
         top0 + Vector3d(2.5 * std::sin(phi) + 0.2, 2.5 * (1 - std::cos(phi)) - 0.4, 0);
     EXPECT_TRUE(P.top_center_W.isApprox(expected, 1e-12)) << P.top_center_W;
-    EXPECT_NEAR(P.yaw_rad, phi + 6.0 * kDeg, 1e-12);
-    EXPECT_NEAR(P.omega_W.z(), 0.5 / 2.5 + 3.0 * kDeg, 1e-12);
+    EXPECT_NEAR(P.yaw_rad, phi + 6.0 * kMotionDeg, 1e-12);
+    EXPECT_NEAR(P.omega_W.z(), 0.5 / 2.5 + 3.0 * kMotionDeg, 1e-12);
   }
 }
 
@@ -92,9 +92,11 @@ TEST(PlatformMotionTest, DeckSinesAndTheirRates) {
   PlatformMotion m(p, top0, 0.5, 1);
   for (double t : {0.0, 0.7, 1.9, 4.2}) {
     const PlatformPose P = m.at(t);
-    EXPECT_NEAR(P.top_center_W.z(), 0.2 + 0.05 * std::sin(2 * M_PI * 0.3 * t + 30 * kDeg), 1e-12);
-    EXPECT_NEAR(P.roll_rad, 3 * kDeg * std::sin(2 * M_PI * 0.4 * t), 1e-12);
-    EXPECT_NEAR(P.pitch_rad, 2 * kDeg * std::sin(2 * M_PI * 0.25 * t + 90 * kDeg), 1e-12);
+    EXPECT_NEAR(P.top_center_W.z(), 0.2 + 0.05 * std::sin(2 * M_PI * 0.3 * t + 30 * kMotionDeg),
+                1e-12);
+    EXPECT_NEAR(P.roll_rad, 3 * kMotionDeg * std::sin(2 * M_PI * 0.4 * t), 1e-12);
+    EXPECT_NEAR(P.pitch_rad, 2 * kMotionDeg * std::sin(2 * M_PI * 0.25 * t + 90 * kMotionDeg),
+                1e-12);
     EXPECT_TRUE(P.R_WO.isApprox(rotation_from_rpy(P.roll_rad, P.pitch_rad, 0.5), 1e-12));
     // Velocities against finite differences of the pose.
     const double h = 1e-6;
@@ -118,7 +120,7 @@ TEST(PlatformMotionTest, SeaStateStaysWithinItsBoundsAndFollowsTheSeed) {
   for (const auto& s : a.sea_roll()) {
     EXPECT_GE(s.frequency_hz, 0.2);
     EXPECT_LE(s.frequency_hz, 0.5);
-    EXPECT_NEAR(s.amplitude, 0.75 * kDeg, 1e-15);
+    EXPECT_NEAR(s.amplitude, 0.75 * kMotionDeg, 1e-15);
   }
   double max_heave = 0, max_roll = 0;
   for (double t = 0; t < 120; t += 0.05) {
@@ -129,15 +131,15 @@ TEST(PlatformMotionTest, SeaStateStaysWithinItsBoundsAndFollowsTheSeed) {
   }
   EXPECT_LE(max_heave, 0.05);
   EXPECT_GT(max_heave, 0.02);  // it does move
-  EXPECT_LE(max_roll, 3 * kDeg);
+  EXPECT_LE(max_roll, 3 * kMotionDeg);
   EXPECT_NE(a.at(3.0).top_center_W.z(), c.at(3.0).top_center_W.z());
 }
 
-Scenario moving_scenario() {
+Scenario moving_platform_scenario() {
   Scenario s = test::quiet(test::scenario("landing_a"));
   s.platform->moving = true;
   s.platform->center_xy_m = Vector2d(-0.5, 1.1);
-  s.platform->motion = path("line", 0.5, 0.6, 2.0);
+  s.platform->motion = motion_path("line", 0.5, 0.6, 2.0);
   s.platform->motion.heave_amplitude_m = 0.03;
   s.platform->motion.roll_amplitude_deg = 2.0;
   s.platform->motion.pitch_amplitude_deg = 2.0;
@@ -147,7 +149,7 @@ Scenario moving_scenario() {
 }
 
 TEST(PlatformMotionTest, TheSimulatorsPlatformFollowsTheMotion) {
-  const Scenario sc = moving_scenario();
+  const Scenario sc = moving_platform_scenario();
   Simulator sim(sc, test::starmac(), 3);
   ASSERT_NE(sim.platform_motion(), nullptr);
   const Vector3d top0(-0.5, 1.1, sc.platform->size_m.z());
@@ -180,7 +182,7 @@ TEST(PlatformMotionTest, TheSimulatorsPlatformFollowsTheMotion) {
 }
 
 TEST(PlatformMotionTest, TheCameraSeesThePlatformWhereItIs) {
-  const Scenario sc = moving_scenario();  // a bright paper top on a darker floor
+  const Scenario sc = moving_platform_scenario();  // a bright paper top on a darker floor
   const CameraRig rig = load_camera_rig(test::config_path("vehicles/starmac.yaml"), "downward");
   Simulator sim(sc, test::starmac(), 3, rig);
   const Vector3d before = sim.truth().platform->top_center_W;
@@ -206,7 +208,7 @@ TEST(PlatformMotionTest, TheCameraSeesThePlatformWhereItIs) {
 }
 
 TEST(PlatformMotionTest, AVehicleRestingOnAMovingDeckIsCarriedWithIt) {
-  const Scenario sc = moving_scenario();
+  const Scenario sc = moving_platform_scenario();
   Simulator sim(sc, test::starmac(), 3);
   // Disarmed on the deck, at its place and speed at the start.
   const PlatformPose P0 = sim.platform_motion()->at(0.0);
@@ -255,8 +257,8 @@ TEST(PlatformMotionTest, AStillPlatformIsLeftAsItWas) {
   EXPECT_FALSE(sim.scene().boxes[static_cast<size_t>(sim.scene().platform_box)].moving);
 }
 
-std::string write_temp(const std::string& name, const std::string& text) {
-  const auto dir = std::filesystem::path(ALIGHT_BINARY_DIR) / "test_tmp" / "sim";
+std::string write_motion_scenario(const std::string& name, const std::string& text) {
+  const auto dir = std::filesystem::motion_path(ALIGHT_BINARY_DIR) / "test_tmp" / "sim";
   std::filesystem::create_directories(dir);
   const auto path = dir / name;
   std::ofstream(path) << text;
@@ -286,7 +288,7 @@ TEST(PlatformMotionTest, TheLimitsAreRefusedWithTheKeyNamed) {
   int i = 0;
   for (const Case& c : cases) {
     SCOPED_TRACE(c.motion);
-    const std::string file = write_temp(
+    const std::string file = write_motion_scenario(
         "motion_limit_" + std::to_string(i++) + ".yaml",
         std::string("name: t\nplatform:\n  center_xy_m: [1.5, 1.0]\n  size_m: [0.4, 0.3, 0.1]\n"
                     "  motion: ") +
@@ -300,10 +302,10 @@ TEST(PlatformMotionTest, TheLimitsAreRefusedWithTheKeyNamed) {
     }
   }
   // At the limits exactly: accepted.
-  EXPECT_NO_THROW(load_scenario(
-      write_temp("motion_at_limit.yaml",
-                 "name: t\nplatform:\n  center_xy_m: [1.5, 1.0]\n  size_m: [0.4, 0.3, 0.1]\n"
-                 "  motion: {path: figure_eight, speed_mps: 1.0, yaw_rate_dps: -15}\n")));
+  EXPECT_NO_THROW(load_scenario(write_motion_scenario(
+      "motion_at_limit.yaml",
+      "name: t\nplatform:\n  center_xy_m: [1.5, 1.0]\n  size_m: [0.4, 0.3, 0.1]\n"
+      "  motion: {path: figure_eight, speed_mps: 1.0, yaw_rate_dps: -15}\n")));
 }
 
 TEST(PlatformMotionTest, TheShippedMovingScenariosLoad) {

@@ -5,11 +5,11 @@
 namespace alight::tools {
 namespace {
 
-constexpr int64_t kT0 = 1'790'000'000'000'000;
+constexpr int64_t kFaultT0 = 1'790'000'000'000'000;
 constexpr int64_t kS = 1'000'000;  // one second [us]
 constexpr double kRestZ = 0.05;    // body origin above the floor at rest
 
-sim_truth_t truth(int64_t t, double x, double z, bool armed, double vz = 0) {
+sim_truth_t fault_truth(int64_t t, double x, double z, bool armed, double vz = 0) {
   sim_truth_t m{};
   m.utime = t;
   m.scenario = "synthetic";
@@ -27,7 +27,7 @@ sim_truth_t truth(int64_t t, double x, double z, bool armed, double vz = 0) {
   return m;
 }
 
-autonomy_status_t status(int64_t t, int8_t phase, const std::string& name) {
+autonomy_status_t fault_status(int64_t t, int8_t phase, const std::string& name) {
   autonomy_status_t s{};
   s.utime = t;
   s.mission = target_t::MISSION_LANDING;
@@ -54,7 +54,7 @@ process_info_t proc(const std::string& name, int8_t state, int32_t restarts, int
   p.restarts = restarts;
   p.signal = sig;
   p.exit_code = code;
-  p.started_utime = kT0;
+  p.started_utime = kFaultT0;
   return p;
 }
 
@@ -73,13 +73,13 @@ constexpr int8_t kRun = process_info_t::STATE_RUNNING;
 FaultScorer airborne_run(int8_t final_mode, int8_t final_phase, const std::string& phase_name,
                          double final_vz = 0, FaultScoreParams p = {}) {
   FaultScorer sc(p);
-  sc.add(truth(kT0, 0, kRestZ, false), kT0);
+  sc.add(fault_truth(kFaultT0, 0, kRestZ, false), kFaultT0);
   for (int i = 1; i <= 10; ++i) {
-    const int64_t t = kT0 + i * kS;
-    sc.add(truth(t, 0, 1.0, true, i == 10 ? final_vz : 0), t);
+    const int64_t t = kFaultT0 + i * kS;
+    sc.add(fault_truth(t, 0, 1.0, true, i == 10 ? final_vz : 0), t);
     sc.add(cmd(t, i == 10 ? final_mode : attitude_cmd_t::MODE_NORMAL), t);
-    sc.add(status(t, i == 10 ? final_phase : autonomy_status_t::PHASE_REFINEMENT,
-                  i == 10 ? phase_name : "REFINEMENT"),
+    sc.add(fault_status(t, i == 10 ? final_phase : autonomy_status_t::PHASE_REFINEMENT,
+                        i == 10 ? phase_name : "REFINEMENT"),
            t);
   }
   return sc;
@@ -114,7 +114,7 @@ TEST(FaultScoreTest, StillFlyingTheMissionAtTheEndIsNotAPass) {
 TEST(FaultScoreTest, SinkingWithoutAttitudeCommandsIsTheAutopilotsFailsafe) {
   FaultScorer sc = airborne_run(attitude_cmd_t::MODE_NORMAL, autonomy_status_t::PHASE_HOLD, "HOLD");
   for (int i = 11; i <= 13; ++i)  // the outer loop is gone: truth only
-    sc.add(truth(kT0 + i * kS, 0, 0.8, true, -0.4), kT0 + i * kS);
+    sc.add(fault_truth(kFaultT0 + i * kS, 0, 0.8, true, -0.4), kFaultT0 + i * kS);
   const auto r = sc.result();
   EXPECT_EQ(r.outcome, "failsafe_descent");
   EXPECT_TRUE(r.ok);
@@ -122,8 +122,8 @@ TEST(FaultScoreTest, SinkingWithoutAttitudeCommandsIsTheAutopilotsFailsafe) {
 
 TEST(FaultScoreTest, ADisarmAboveThirtyCentimetresFailsTheRun) {
   FaultScorer sc = airborne_run(attitude_cmd_t::MODE_NORMAL, autonomy_status_t::PHASE_HOLD, "HOLD");
-  sc.add(truth(kT0 + 11 * kS, 0, 1.0, false), kT0 + 11 * kS);
-  sc.add(truth(kT0 + 12 * kS, 0, kRestZ, false), kT0 + 12 * kS);  // fell
+  sc.add(fault_truth(kFaultT0 + 11 * kS, 0, 1.0, false), kFaultT0 + 11 * kS);
+  sc.add(fault_truth(kFaultT0 + 12 * kS, 0, kRestZ, false), kFaultT0 + 12 * kS);  // fell
   const auto r = sc.result();
   EXPECT_EQ(r.outcome, "disarmed_in_air");
   EXPECT_FALSE(r.ok);
@@ -133,10 +133,11 @@ TEST(FaultScoreTest, ADisarmAboveThirtyCentimetresFailsTheRun) {
 
 TEST(FaultScoreTest, HeightIsMeasuredAboveThePlatformTopWhenOverIt) {
   FaultScorer sc;
-  sc.add(truth(kT0, 0, kRestZ, false), kT0);
-  sc.add(truth(kT0 + kS, 2.0, 0.2 + kRestZ + 0.1, true), kT0 + kS);
-  sc.add(truth(kT0 + 2 * kS, 2.0, 0.2 + kRestZ + 0.1, false), kT0 + 2 * kS);  // 10 cm up
-  sc.add(truth(kT0 + 3 * kS, 2.0, 0.2 + kRestZ, false), kT0 + 3 * kS);
+  sc.add(fault_truth(kFaultT0, 0, kRestZ, false), kFaultT0);
+  sc.add(fault_truth(kFaultT0 + kS, 2.0, 0.2 + kRestZ + 0.1, true), kFaultT0 + kS);
+  sc.add(fault_truth(kFaultT0 + 2 * kS, 2.0, 0.2 + kRestZ + 0.1, false),
+         kFaultT0 + 2 * kS);  // 10 cm up
+  sc.add(fault_truth(kFaultT0 + 3 * kS, 2.0, 0.2 + kRestZ, false), kFaultT0 + 3 * kS);
   const auto r = sc.result();
   ASSERT_TRUE(r.max_disarm_height_m);
   EXPECT_NEAR(*r.max_disarm_height_m, 0.1, 1e-9);
@@ -149,8 +150,8 @@ TEST(FaultScoreTest, ComingDownWithoutALandingOrFailsafeIsNotAPass) {
   // and disarms on the impact, 0 m up.
   FaultScorer sc = airborne_run(attitude_cmd_t::MODE_NORMAL, autonomy_status_t::PHASE_DETECTION,
                                 "DETECTION", -1.2);
-  sc.add(truth(kT0 + 11 * kS, 0, 0.3, true, -1.2), kT0 + 11 * kS);
-  sc.add(truth(kT0 + 12 * kS, 0, kRestZ, false), kT0 + 12 * kS);
+  sc.add(fault_truth(kFaultT0 + 11 * kS, 0, 0.3, true, -1.2), kFaultT0 + 11 * kS);
+  sc.add(fault_truth(kFaultT0 + 12 * kS, 0, kRestZ, false), kFaultT0 + 12 * kS);
   const auto r = sc.result();
   EXPECT_EQ(r.outcome, "came_down");
   EXPECT_FALSE(r.ok);
@@ -162,7 +163,8 @@ TEST(FaultScoreTest, ComingDownWithoutALandingOrFailsafeIsNotAPass) {
 
 TEST(FaultScoreTest, NeverLeavingTheGroundIsGrounded) {
   FaultScorer sc;
-  for (int i = 0; i < 5; ++i) sc.add(truth(kT0 + i * kS, 0, kRestZ, false), kT0 + i * kS);
+  for (int i = 0; i < 5; ++i)
+    sc.add(fault_truth(kFaultT0 + i * kS, 0, kRestZ, false), kFaultT0 + i * kS);
   const auto r = sc.result();
   EXPECT_EQ(r.outcome, "grounded");
   EXPECT_TRUE(r.ok);
@@ -173,7 +175,7 @@ TEST(FaultScoreTest, TheKilledProcessIsExpectedAndAnyOtherExitIsNot) {
   p.expected_exit = "vision";
   FaultScorer sc =
       airborne_run(attitude_cmd_t::MODE_NORMAL, autonomy_status_t::PHASE_HOLD, "HOLD", 0, p);
-  const int64_t t = kT0 + 10 * kS;
+  const int64_t t = kFaultT0 + 10 * kS;
   sc.add(processes(t + 1, {proc("vision", kRun, 0), proc("autonomy", kRun, 0)}), t + 1);
   sc.add(processes(t + 2, {proc("vision", process_info_t::STATE_BACKOFF, 0, 9),
                            proc("autonomy", kRun, 0)}),
@@ -204,7 +206,7 @@ TEST(FaultScoreTest, AKillThatNeverHappenedIsReported) {
 
 TEST(FaultScoreTest, TheShutdownIsNotAnExit) {
   FaultScorer sc = airborne_run(attitude_cmd_t::MODE_NORMAL, autonomy_status_t::PHASE_HOLD, "HOLD");
-  const int64_t t = kT0 + 10 * kS;
+  const int64_t t = kFaultT0 + 10 * kS;
   sc.add(processes(t + 1, {proc("sim", kRun, 0)}), t + 1);
   sc.add(processes(t + 2, {proc("sim", process_info_t::STATE_STOPPED, 0, 2)}), t + 2);
   EXPECT_TRUE(sc.result().ok);
@@ -212,11 +214,11 @@ TEST(FaultScoreTest, TheShutdownIsNotAnExit) {
 
 TEST(FaultScoreTest, InjectedAndReplayedMessagesDoNotFoolTheReferee) {
   FaultScorer sc = airborne_run(attitude_cmd_t::MODE_NORMAL, autonomy_status_t::PHASE_HOLD, "HOLD");
-  const int64_t t = kT0 + 10 * kS;
+  const int64_t t = kFaultT0 + 10 * kS;
   sc.add(processes(t, {proc("vision", kRun, 0)}), t);
   // A future-stamped status, an old one replayed, and the same for the launcher's report.
-  sc.add(status(t + 3600 * kS, autonomy_status_t::PHASE_KILLED, "KILLED"), t + 1);
-  sc.add(status(t - 3600 * kS, autonomy_status_t::PHASE_APPROACH, "APPROACH"), t + 2);
+  sc.add(fault_status(t + 3600 * kS, autonomy_status_t::PHASE_KILLED, "KILLED"), t + 1);
+  sc.add(fault_status(t - 3600 * kS, autonomy_status_t::PHASE_APPROACH, "APPROACH"), t + 2);
   sc.add(processes(t - 3600 * kS, {proc("vision", process_info_t::STATE_BACKOFF, 0, 11)}), t + 3);
   sc.add(processes(0, {proc("vision", process_info_t::STATE_FAILED, 0, 6)}), t + 4);
   sc.add(cmd(t - 100 * kS, attitude_cmd_t::MODE_DISARMED, false), t + 5);
@@ -234,12 +236,13 @@ TEST(FaultScoreTest, ARunningNodeThatStopsReportingIsHung) {
   ns.node = "alight-ground-station";
   ns.pid = 100;
   for (int i = 1; i <= 4; ++i) {  // reports for 4 s, then nothing for 6 s
-    ns.utime = kT0 + i * kS;
+    ns.utime = kFaultT0 + i * kS;
     ns.uptime_s = i;
-    sc.add(ns, kT0 + i * kS);
-    sc.add(ns, kT0 + i * kS + 10);  // a copy (injected): refused, the node's uptime did not grow
+    sc.add(ns, kFaultT0 + i * kS);
+    sc.add(ns,
+           kFaultT0 + i * kS + 10);  // a copy (injected): refused, the node's uptime did not grow
   }
-  sc.add(processes(kT0 + 10 * kS, {proc("ground_station", kRun, 0)}), kT0 + 10 * kS);
+  sc.add(processes(kFaultT0 + 10 * kS, {proc("ground_station", kRun, 0)}), kFaultT0 + 10 * kS);
   const auto r = sc.result();
   ASSERT_EQ(r.silent_nodes.size(), 1u);
   EXPECT_EQ(r.silent_nodes[0], "alight-ground-station");
@@ -248,14 +251,16 @@ TEST(FaultScoreTest, ARunningNodeThatStopsReportingIsHung) {
 
 TEST(FaultScoreTest, ALandingOnTheTargetMeetsTheGoal) {
   FaultScorer sc;
-  sc.add(truth(kT0, 0, kRestZ, false), kT0);
-  sc.add(status(kT0 + kS, autonomy_status_t::PHASE_DETECTION, "DETECTION"), kT0 + kS);
-  sc.add(truth(kT0 + 2 * kS, 2.0, 0.5, true), kT0 + 2 * kS);
-  sc.add(status(kT0 + 3 * kS, autonomy_status_t::PHASE_LANDED, "LANDED"), kT0 + 3 * kS);
-  auto t = truth(kT0 + 3 * kS, 2.0, 0.2 + kRestZ, false);
+  sc.add(fault_truth(kFaultT0, 0, kRestZ, false), kFaultT0);
+  sc.add(fault_status(kFaultT0 + kS, autonomy_status_t::PHASE_DETECTION, "DETECTION"),
+         kFaultT0 + kS);
+  sc.add(fault_truth(kFaultT0 + 2 * kS, 2.0, 0.5, true), kFaultT0 + 2 * kS);
+  sc.add(fault_status(kFaultT0 + 3 * kS, autonomy_status_t::PHASE_LANDED, "LANDED"),
+         kFaultT0 + 3 * kS);
+  auto t = fault_truth(kFaultT0 + 3 * kS, 2.0, 0.2 + kRestZ, false);
   t.landed = true;
   t.contact = sim_truth_t::CONTACT_PLATFORM_TOP;
-  sc.add(t, kT0 + 3 * kS);
+  sc.add(t, kFaultT0 + 3 * kS);
   const auto r = sc.result();
   EXPECT_EQ(r.outcome, "landed");
   EXPECT_TRUE(r.ok) << r.to_json();
@@ -263,9 +268,9 @@ TEST(FaultScoreTest, ALandingOnTheTargetMeetsTheGoal) {
 
 TEST(FaultScoreTest, ACollisionFailsTheRun) {
   FaultScorer sc = airborne_run(attitude_cmd_t::MODE_NORMAL, autonomy_status_t::PHASE_HOLD, "HOLD");
-  auto t = truth(kT0 + 11 * kS, 0, 1.0, true);
+  auto t = fault_truth(kFaultT0 + 11 * kS, 0, 1.0, true);
   t.collided = true;
-  sc.add(t, kT0 + 11 * kS);
+  sc.add(t, kFaultT0 + 11 * kS);
   const auto r = sc.result();
   EXPECT_EQ(r.outcome, "collision");
   EXPECT_FALSE(r.ok);

@@ -5,11 +5,11 @@
 namespace alight::tools {
 namespace {
 
-constexpr int64_t kT0 = 1'790'000'000'000'000;
+constexpr int64_t kMonitorT0 = 1'790'000'000'000'000;
 
 autonomy_status_t st(double t_s, int8_t phase, const char* name, int n = 0) {
   autonomy_status_t s{};
-  s.utime = kT0 + static_cast<int64_t>(t_s * 1e6);
+  s.utime = kMonitorT0 + static_cast<int64_t>(t_s * 1e6);
   s.mission = 1;
   s.phase = phase;
   s.phase_name = name;
@@ -23,7 +23,7 @@ autonomy_status_t st(double t_s, int8_t phase, const char* name, int n = 0) {
 
 sim_truth_t truth(bool tipped = false) {
   sim_truth_t t{};
-  t.utime = kT0;
+  t.utime = kMonitorT0;
   t.has_platform = true;
   t.platform_center_W[0] = 1.0;
   t.platform_center_W[1] = -0.5;
@@ -50,7 +50,7 @@ TEST(MonitorTest, ReportsPhasesProgressAndTheLanding) {
   ASSERT_EQ(lines.size(), 1u);  // motors off; the simulator's verdict follows
   EXPECT_EQ(m.end(), MissionMonitor::End::kNone);
   sim_truth_t at_rest = truth();
-  at_rest.utime = kT0 + 20'400'000;
+  at_rest.utime = kMonitorT0 + 20'400'000;
   at_rest.landed = true;
   lines = m.add(at_rest);
   ASSERT_EQ(lines.size(), 1u);

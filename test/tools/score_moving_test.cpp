@@ -12,10 +12,10 @@
 namespace alight::tools {
 namespace {
 
-constexpr int64_t kT0 = 1'790'000'000'000'000;
-constexpr int64_t kPeriod = 20'000;  // SIM_TRUTH's 50 Hz
+constexpr int64_t kMovingT0 = 1'790'000'000'000'000;
+constexpr int64_t kTruthPeriod = 20'000;  // SIM_TRUTH's 50 Hz
 
-struct Flight {
+struct DeckFlight {
   double deck_vz = 0.0;       // the deck's vertical speed around the contact [m/s]
   double sink = 0.3;          // the vehicle's sink rate in world [m/s]
   double offset_x = 0.04;     // where the vehicle comes down, from the top's centre [m]
@@ -25,20 +25,20 @@ struct Flight {
 };
 
 // The platform's top centre moves at 1 m/s along x from x = 0; the vehicle moves with it, its
-// gear reaching the top at sample `kContact`, landed 0.5 s later.
-constexpr int kContact = 100, kSamples = 160;
+// gear reaching the top at sample `kDeckContact`, landed 0.5 s later.
+constexpr int kDeckContact = 100, kDeckSamples = 160;
 
-Scorer fly(const Flight& f, Scorer sc = Scorer()) {
+Scorer fly_onto_deck(const DeckFlight& f, Scorer sc = Scorer()) {
   autonomy_status_t go{};
-  go.utime = kT0;
+  go.utime = kMovingT0;
   go.mission = target_t::MISSION_LANDING;
   go.phase = autonomy_status_t::PHASE_DETECTION;
   go.phase_name = "DETECTION";
   sc.add(go);
-  for (int k = 0; k < kSamples; ++k) {
-    const int64_t utime = kT0 + k * kPeriod;
-    const double t = k * kPeriod * 1e-6;
-    const double deck_z = 0.2 + f.deck_vz * (t - kContact * kPeriod * 1e-6);
+  for (int k = 0; k < kDeckSamples; ++k) {
+    const int64_t utime = kMovingT0 + k * kTruthPeriod;
+    const double t = k * kTruthPeriod * 1e-6;
+    const double deck_z = 0.2 + f.deck_vz * (t - kDeckContact * kTruthPeriod * 1e-6);
     platform_truth_t p{};
     p.utime = utime;
     p.version = platform_truth_t::VERSION;
@@ -57,9 +57,9 @@ Scorer fly(const Flight& f, Scorer sc = Scorer()) {
     sim_truth_t s{};
     s.utime = utime;
     s.scenario = "landing_moving_cart";
-    const bool on = k >= kContact;
+    const bool on = k >= kDeckContact;
     s.pos[0] = p.top_center_W[0] + f.offset_x;
-    s.pos[2] = on ? deck_z + 0.1 : deck_z + 0.1 + f.sink * (kContact - k) * kPeriod * 1e-6;
+    s.pos[2] = on ? deck_z + 0.1 : deck_z + 0.1 + f.sink * (kDeckContact - k) * kTruthPeriod * 1e-6;
     s.vel[0] = 1.0;
     s.vel[2] = on ? f.deck_vz : -f.sink;
     s.orientation[0] = std::cos(0.5 * f.yaw_deg * M_PI / 180);
@@ -71,25 +71,25 @@ Scorer fly(const Flight& f, Scorer sc = Scorer()) {
     }
     s.platform_yaw_rad = p.yaw_rad;
     s.contact = on ? sim_truth_t::CONTACT_PLATFORM_TOP : sim_truth_t::CONTACT_NONE;
-    s.landed = k >= kContact + 25;
+    s.landed = k >= kDeckContact + 25;
     sc.add(s);
   }
   autonomy_status_t landed = go;
-  landed.utime = kT0 + (kContact + 30) * kPeriod;
+  landed.utime = kMovingT0 + (kDeckContact + 30) * kTruthPeriod;
   landed.phase = autonomy_status_t::PHASE_LANDED;
   landed.phase_name = "LANDED";
   sc.add(landed);
   return sc;
 }
 
-std::string field(const Score& s, const std::string& key) {
+std::string score_field(const Score& s, const std::string& key) {
   for (const auto& [k, v] : s.fields())
     if (k == key) return v;
   return "";
 }
 
 TEST(ScoreMovingTest, TouchdownRelativeToTheMovingPlatform) {
-  const Score s = fly(Flight{}).result();
+  const Score s = fly_onto_deck(DeckFlight{}).result();
   EXPECT_TRUE(s.success) << s.to_text();
   EXPECT_EQ(s.outcome, "landed");
   EXPECT_TRUE(s.platform_moving);
@@ -104,35 +104,35 @@ TEST(ScoreMovingTest, TouchdownRelativeToTheMovingPlatform) {
   ASSERT_TRUE(s.touchdown_platform_speed_mps);
   EXPECT_NEAR(*s.touchdown_platform_speed_mps, 1.0, 1e-9);
   ASSERT_TRUE(s.mission_time_s);  // the time to land
-  EXPECT_NEAR(*s.mission_time_s, (kContact + 30) * kPeriod * 1e-6, 1e-9);
-  EXPECT_EQ(field(s, "platform_moving"), "true");
-  EXPECT_EQ(field(s, "touchdown_heading_error_deg"), "7.0000");
+  EXPECT_NEAR(*s.mission_time_s, (kDeckContact + 30) * kTruthPeriod * 1e-6, 1e-9);
+  EXPECT_EQ(score_field(s, "platform_moving"), "true");
+  EXPECT_EQ(score_field(s, "touchdown_heading_error_deg"), "7.0000");
 }
 
 TEST(ScoreMovingTest, AnImpactIsJudgedRelativeToTheDeck) {
   Scorer gear(1.0);  // takes 1 m/s
   // Sinking at 1.2 m/s in world onto a deck going down at 0.5 m/s: 0.7 m/s relative, landed.
-  Flight falling;
+  DeckFlight falling;
   falling.sink = 1.2;
   falling.deck_vz = -0.5;
-  const Score a = fly(falling, gear).result();
+  const Score a = fly_onto_deck(falling, gear).result();
   EXPECT_FALSE(a.crashed) << a.to_text();
   EXPECT_NEAR(*a.touchdown_relative_sink_mps, 0.7, 1e-9);
   EXPECT_NEAR(*a.max_touchdown_speed_mps, 0.7, 1e-9);
   // Sinking at 0.8 m/s onto a deck heaving up at 0.5 m/s: 1.3 m/s relative, a crash.
-  Flight rising;
+  DeckFlight rising;
   rising.sink = 0.8;
   rising.deck_vz = 0.5;
-  const Score b = fly(rising, Scorer(1.0)).result();
+  const Score b = fly_onto_deck(rising, Scorer(1.0)).result();
   EXPECT_TRUE(b.crashed) << b.to_text();
   EXPECT_EQ(b.outcome, "crashed");
   EXPECT_NEAR(*b.touchdown_relative_sink_mps, 1.3, 1e-9);
 }
 
 TEST(ScoreMovingTest, WithoutSimPlatformTheScoreIsAsBefore) {
-  Flight f;
+  DeckFlight f;
   f.with_platform_messages = false;
-  const Score s = fly(f).result();
+  const Score s = fly_onto_deck(f).result();
   EXPECT_FALSE(s.platform_moving);
   EXPECT_FALSE(s.touchdown_relative_sink_mps);
   for (const auto& [k, v] : s.fields()) {
@@ -141,17 +141,17 @@ TEST(ScoreMovingTest, WithoutSimPlatformTheScoreIsAsBefore) {
   }
   // Against the last sample's platform centre, as alight-score always measured.
   ASSERT_TRUE(s.touchdown_lateral_error_m);
-  EXPECT_NEAR(*s.touchdown_lateral_error_m, 1.0 * (kSamples - 1 - kContact - 25) * 0.02 - 0.04,
-              1e-9);
+  EXPECT_NEAR(*s.touchdown_lateral_error_m,
+              1.0 * (kDeckSamples - 1 - kDeckContact - 25) * 0.02 - 0.04, 1e-9);
 }
 
 TEST(ScoreMovingTest, ANewerPlatformMessageVersionIsRefusedAndCounted) {
   Scorer sc;
   platform_truth_t p{};
-  p.utime = kT0;
+  p.utime = kMovingT0;
   p.version = platform_truth_t::VERSION + 1;
   sc.add(p);
-  const Score s = fly(Flight{}, sc).result();
+  const Score s = fly_onto_deck(DeckFlight{}, sc).result();
   EXPECT_EQ(s.platform_messages_refused, 1);
   EXPECT_TRUE(s.platform_moving);  // the current version's messages that followed
 }

@@ -10,19 +10,20 @@
 namespace alight::vision {
 namespace {
 
-constexpr double kDeg = M_PI / 180.0;
+constexpr double kWaypointDeg = M_PI / 180.0;
 
 struct Scene {
   CameraMount mount;
   PoseSample pose_1, pose_2;
   double plane_z_m = 0.2;  // platform top, world z [m]
   Scene() {
-    mount.R_BC = R_BC_downward() * rotation_from_rpy(1 * kDeg, -2 * kDeg, 0.5 * kDeg);
+    mount.R_BC = R_BC_downward() *
+                 rotation_from_rpy(1 * kWaypointDeg, -2 * kWaypointDeg, 0.5 * kWaypointDeg);
     mount.t_B_C = Vector3d(0.05, 0.02, -0.06);
     pose_1.p_W_B = Vector3d(0.1, -0.2, 1.5);
-    pose_1.q_WB = Quaterniond(rotation_from_rpy(2 * kDeg, -1 * kDeg, 0.3));
+    pose_1.q_WB = Quaterniond(rotation_from_rpy(2 * kWaypointDeg, -1 * kWaypointDeg, 0.3));
     pose_2.p_W_B = Vector3d(0.25, -0.1, 1.45);
-    pose_2.q_WB = Quaterniond(rotation_from_rpy(-1 * kDeg, 3 * kDeg, 0.4));
+    pose_2.q_WB = Quaterniond(rotation_from_rpy(-1 * kWaypointDeg, 3 * kWaypointDeg, 0.4));
   }
   Isometry3d X_WC(const PoseSample& p) const { return camera_in_world(p.X_WB(), mount.X_BC()); }
   /// The true decomposition of the plane z = plane_z_m (eq. 1), in baseline units.
