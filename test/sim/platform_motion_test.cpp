@@ -258,7 +258,7 @@ TEST(PlatformMotionTest, AStillPlatformIsLeftAsItWas) {
 }
 
 std::string write_motion_scenario(const std::string& name, const std::string& text) {
-  const auto dir = std::filesystem::motion_path(ALIGHT_BINARY_DIR) / "test_tmp" / "sim";
+  const auto dir = std::filesystem::path(ALIGHT_BINARY_DIR) / "test_tmp" / "sim";
   std::filesystem::create_directories(dir);
   const auto path = dir / name;
   std::ofstream(path) << text;
