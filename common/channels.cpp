@@ -33,6 +33,7 @@ std::string message_type(const std::string& name) {
       {kPositionSetpoint, "position_setpoint_t"},
       {kAttitudeCmd, "attitude_cmd_t"},
       {kSimTruth, "sim_truth_t"},
+      {kSimPlatform, "platform_truth_t"},
       {kSimControl, "sim_control_t"},
       {kProcessStatus, "process_status_t"},
       {kNodeStatus, "node_status_t"},

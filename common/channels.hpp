@@ -62,6 +62,9 @@ inline constexpr const char kPositionSetpoint[] = "POSITION_SETPOINT";
 inline constexpr const char kAttitudeCmd[] = "ATTITUDE_CMD";
 /// sim_truth_t: true geometry and contact state. alight-sim → tests, scoring (never flight code).
 inline constexpr const char kSimTruth[] = "SIM_TRUTH";
+/// platform_truth_t: a moving platform's true pose and velocities, with each SIM_TRUTH.
+/// alight-sim → tests, scoring (never flight code).
+inline constexpr const char kSimPlatform[] = "SIM_PLATFORM";
 /// sim_control_t: sensor dropouts for the fault campaign. alight-inject → alight-sim.
 inline constexpr const char kSimControl[] = "SIM_CONTROL";
 /// process_status_t: each onboard process's state. alight-launch → ground station.
@@ -75,11 +78,17 @@ inline constexpr const char kAutopilotPose[] = "AUTOPILOT_POSE";
 inline constexpr const char kAutopilotStatus[] = "AUTOPILOT_STATUS";
 
 /// Every channel above.
-inline constexpr std::array<const char*, 21> kAll = {
-    kCamera,         kFlowCamera,       kMocapPose,      kImu,          kRange,      kBaro,
-    kStateEstimate,  kEstimatePose,     kVisionTarget,   kVisionTiming, kVisionDiag, kOperatorCmd,
-    kAutonomyStatus, kPositionSetpoint, kAttitudeCmd,    kSimTruth,     kSimControl, kProcessStatus,
-    kNodeStatus,     kAutopilotPose,    kAutopilotStatus};
+inline constexpr std::array<const char*, 22> kAll = {kCamera,          kFlowCamera,
+                                                     kMocapPose,       kImu,
+                                                     kRange,           kBaro,
+                                                     kStateEstimate,   kEstimatePose,
+                                                     kVisionTarget,    kVisionTiming,
+                                                     kVisionDiag,      kOperatorCmd,
+                                                     kAutonomyStatus,  kPositionSetpoint,
+                                                     kAttitudeCmd,     kSimTruth,
+                                                     kSimControl,      kProcessStatus,
+                                                     kNodeStatus,      kAutopilotPose,
+                                                     kAutopilotStatus, kSimPlatform};
 
 /// True when `name` is one of kAll.
 /// True for channels one process publishes on (all but NODE_STATUS, which every node publishes,

@@ -33,7 +33,15 @@ FAMILIES = {
     "landing_none_photo": "a photographed floor and no platform: nothing may be found",
     "ingress_photo": "photographed wall and room, openings of many sizes, shapes and offsets",
     "ingress_solid_photo": "a photographed wall without an opening: nothing may be found",
+    "landing_moving_cart": "a platform on a flat cart going round a path (line, circle, figure "
+                           "eight) at 0.5-1 m/s, photographed floor, wind",
+    "landing_deck": "a platform on a boat's deck going round a path at 0.2-0.5 m/s, heaving up to "
+                    "5 cm and rolling and pitching up to 3 deg (random sea, 0.2-0.5 Hz), wind",
 }
+
+# The simulator's limits for a moving platform (sim/params.hpp, PlatformMotionParams).
+MAX_PLATFORM_SPEED_MPS = 1.0
+MAX_PLATFORM_RATE_DPS = 15.0
 
 # Flying area, sensors and sim step as in the shipped scenarios (config/scenarios/landing_a.yaml).
 _MOCAP = {"rate_hz": 100, "latency_s": 0.010, "pos_sigma_m": 0.0003, "rot_sigma_rad": 0.0015,
@@ -167,6 +175,88 @@ def _opening(rng):
             "size_m": [round(w, 3), round(h, 3)]}
 
 
+def path_point(motion, s):
+    """The path's offset (x, y) from its start after arc length s, in world axes: the same closed
+    form as sim/platform_motion.cpp (left turns first, from path_heading_deg)."""
+    kind, r = motion.get("path", "none"), motion.get("path_radius_m", 1.0)
+    if kind == "none":
+        return 0.0, 0.0
+
+    def arc(u, sign):
+        phi = u / r
+        return r * math.sin(phi), sign * r * (1.0 - math.cos(phi))
+    if kind == "circle":
+        x, y = arc(math.fmod(s, 2 * math.pi * r), 1.0)
+    elif kind == "figure_eight":
+        lobe = 2 * math.pi * r
+        u = math.fmod(s, 2 * lobe)
+        x, y = arc(u, 1.0) if u < lobe else arc(u - lobe, -1.0)
+    else:  # line: a stadium
+        length, half = motion.get("path_length_m", 2.0), math.pi * r
+        u = math.fmod(s, 2 * length + 2 * half)
+        if u < length:
+            x, y = u, 0.0
+        elif u < length + half:
+            x, y = arc(u - length, 1.0)
+            x += length
+        elif u < 2 * length + half:
+            x, y = length - (u - length - half), 2 * r
+        else:
+            ax, ay = arc(u - 2 * length - half, 1.0)
+            x, y = -ax, 2 * r - ay
+    h = math.radians(motion.get("path_heading_deg", 0.0))
+    return x * math.cos(h) - y * math.sin(h), x * math.sin(h) + y * math.cos(h)
+
+
+def path_extent(motion):
+    """Points along one period of the path (offsets from its start), every 5 cm."""
+    r, kind = motion.get("path_radius_m", 1.0), motion.get("path", "none")
+    period = {"none": 0.0, "circle": 2 * math.pi * r, "figure_eight": 4 * math.pi * r,
+              "line": 2 * motion.get("path_length_m", 2.0) + 2 * math.pi * r}[kind]
+    n = max(1, int(period / 0.05))
+    return [path_point(motion, period * k / n) for k in range(n + 1)]
+
+
+def _moving_platform(rng, scene, speed_range, deck):
+    """Puts the scene's platform on a moving cart or deck: a path drawn at random, placed so that
+    all of it keeps the platform inside the flying area (0.3 m margin) and its footprint 0.5 m
+    from the start (the vehicle stands there until it takes off; its rotors reach 0.34 m)."""
+    p = scene["platform"]
+    reach = 0.5 * math.hypot(p["size_m"][0], p["size_m"][1])  # its corners from its centre
+    motion = {"path": rng.choice(["line", "circle", "figure_eight"]),
+              "speed_mps": round(rng.uniform(*speed_range), 3),
+              "path_heading_deg": round(rng.uniform(-180, 180), 1),
+              "path_length_m": round(rng.uniform(1.0, 2.0), 3),
+              "path_radius_m": round(rng.uniform(0.4, 0.8), 3),
+              # A cart that turned with its path would turn faster than the limit on these
+              # radii; a slow turn of its own instead.
+              "heading_follows_path": False,
+              "yaw_rate_dps": round(rng.uniform(-5.0, 5.0), 2)}
+    if deck:
+        motion["sea_state"] = {"heave_m": round(rng.uniform(0.02, 0.05), 3),
+                               "roll_deg": round(rng.uniform(1.0, 3.0), 2),
+                               "pitch_deg": round(rng.uniform(1.0, 3.0), 2),
+                               "band_hz": [0.2, 0.5], "components": 4}
+    points = path_extent(motion)
+    half = [0.5 * v for v in scene["area"]["size_m"]]
+    margin = reach + 0.3
+    for attempt in range(2000):
+        if attempt % 50 == 49:  # no place for it this way round: turn the path
+            motion["path_heading_deg"] = round(rng.uniform(-180, 180), 1)
+            points = path_extent(motion)
+        # It starts where a static platform of the other families stands: in the vehicles'
+        # search rectangle (autonomy.detection.landing_area_*), so the first views may see it.
+        cx, cy = rng.uniform(-0.2, 2.0), rng.uniform(-0.5, 1.5)
+        inside = all(abs(cx + x) <= half[0] - margin and abs(cy + y) <= half[1] - margin
+                     for x, y in points)
+        clear = all(math.hypot(cx + x, cy + y) >= 0.5 + reach for x, y in points)
+        if inside and clear:
+            p["center_xy_m"] = [round(cx, 3), round(cy, 3)]
+            p["motion"] = motion
+            return scene
+    raise RuntimeError("no place for the path %r" % motion)
+
+
 def draw(family, seed):
     """The scenario (a dict, as a config/scenarios file holds) that `seed` draws from `family`."""
     if family not in FAMILIES:
@@ -187,6 +277,11 @@ def draw(family, seed):
         return _landing(rng, family, floor, _platform(rng, lambda length: top))
     if family == "landing_none_photo":
         return _landing(rng, family, _photo(rng, SURFACE_PHOTOS, rng.uniform(1.5, 3.0)), None)
+    if family in ("landing_moving_cart", "landing_deck"):
+        deck = family == "landing_deck"
+        scene = _landing(rng, family, _photo(rng, SURFACE_PHOTOS, rng.uniform(1.5, 3.0)),
+                         _platform(rng, lambda length: _top(rng, length)))
+        return _moving_platform(rng, scene, (0.2, 0.5) if deck else (0.5, 1.0), deck)
     if family == "ingress_photo":
         return _ingress(rng, family, _opening(rng))
     assert family == "ingress_solid_photo"

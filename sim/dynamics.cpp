@@ -39,7 +39,8 @@ Dynamics::Dynamics(const VehicleParams& vehicle, const Scene& scene)
 
 template <class F>
 void Dynamics::penetrations(const Vector3d& p_W, double margin_m, F&& visit) const {
-  if (p_W.z() < margin_m) visit(Vector3d::UnitZ(), margin_m - p_W.z(), Contact::kFloor);
+  if (p_W.z() < margin_m)
+    visit(Vector3d::UnitZ(), margin_m - p_W.z(), Contact::kFloor, Vector3d::Zero());
   for (const Box& b : scene_.boxes) {
     if ((p_W - b.center_W).cwiseAbs().maxCoeff() > b.half_size_m.maxCoeff() * 1.7321 + margin_m)
       continue;
@@ -57,7 +58,7 @@ void Dynamics::penetrations(const Vector3d& p_W, double margin_m, F&& visit) con
       c = a == 2 && q.z() > 0 ? Contact::kPlatformTop : Contact::kPlatformEdge;
     else
       c = scene_.near_opening_frame(p_W) ? Contact::kFrame : Contact::kWall;
-    visit(b.R_WO() * n_O, pen, c);
+    visit(b.R_WO() * n_O, pen, c, b.moving ? Vector3d(b.velocity_at(p_W)) : Vector3d::Zero());
   }
 }
 
@@ -67,7 +68,8 @@ StepResult Dynamics::contacts(const VehicleState& s, double margin_m) const {
   int severity = 0;
   auto check = [&](const Vector3d& r_B, bool is_foot) {
     bool ground = false;
-    penetrations(s.p_W_B + R * r_B, margin_m, [&](const Vector3d&, double, Contact c) {
+    penetrations(s.p_W_B + R * r_B, margin_m,
+                 [&](const Vector3d&, double, Contact c, const Vector3d&) {
       severity = std::max(severity, static_cast<int>(c));
       if (c == Contact::kFloor || c == Contact::kPlatformTop || c == Contact::kPlatformEdge)
         ground = true;
@@ -145,8 +147,10 @@ StepResult Dynamics::step(VehicleState& s, const AttitudeCommand& cmd, const Vec
     const Vector3d v_W = s.v_W_B + R * s.omega_B.cross(r_B);
     Vector3d f = Vector3d::Zero();
     bool ground = false;  // floor or platform, not the wall
-    penetrations(p_W, 0.0, [&](const Vector3d& n_W, double pen, Contact c) {
-      f += contact_force(n_W, pen, v_W, p);
+    penetrations(p_W, 0.0, [&](const Vector3d& n_W, double pen, Contact c, const Vector3d& v_S) {
+      // A moving surface (a platform's deck) pushes and drags with its own velocity: what
+      // counts at the contact is the speed relative to it.
+      f += contact_force(n_W, pen, v_W - v_S, p);
       touch(c);
       if (c == Contact::kFloor || c == Contact::kPlatformTop || c == Contact::kPlatformEdge)
         ground = true;

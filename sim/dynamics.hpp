@@ -12,7 +12,9 @@
 // Contact: penalty springs and dampers with Coulomb friction at the four gear feet and at points
 // on the rotor rims, against the floor and the scene's boxes; a point inside a box is pushed out
 // through the face it is least deep behind, so gear over the platform top rests on it and gear
-// past its edge does not (and tips the vehicle off).
+// past its edge does not (and tips the vehicle off). A moving box (Box::v_W, omega_W: a
+// platform's deck) acts with the velocity of its surface, so a vehicle standing on it is
+// carried by friction and an impact is judged by the speed relative to the deck.
 
 #include <cstdint>
 
@@ -79,8 +81,8 @@ class Dynamics {
   const VehicleParams& vehicle() const { return vehicle_; }
 
  private:
-  // Calls visit(outward normal, depth, contact) for the floor and each box a point is inside of
-  // (boxes widened upwards by margin_m), in a fixed order.
+  // Calls visit(outward normal, depth, contact, the surface's velocity there) for the floor and
+  // each box a point is inside of (boxes widened upwards by margin_m), in a fixed order.
   template <class F>
   void penetrations(const Vector3d& p_W, double margin_m, F&& visit) const;
 

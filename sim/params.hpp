@@ -74,12 +74,54 @@ struct TextureSpec {
   void validate() const;
 };
 
+/// How a platform moves (issue 40; `platform.motion`; sim/platform_motion.hpp evaluates it): a
+/// constant drift, a path travelled at a constant speed, a turn rate, and a deck's heave, roll
+/// and pitch as sines and as a seeded random sea state. Time counts from the simulator's start.
+/// At most kMaxSpeedMps for the top centre and kMaxRateDps about each axis: what a cart, a
+/// vehicle's roof or a boat's deck a multirotor may land on does (refused beyond, key named).
+struct PlatformMotionParams {
+  static constexpr double kMaxSpeedMps = 1.0;
+  static constexpr double kMaxRateDps = 15.0;
+  Vector2d velocity_mps = Vector2d::Zero();  ///< constant drift in world xy
+  /// none | line (back and forth along a straight of path_length_m, turning on semicircles of
+  /// path_radius_m: a stadium) | circle (radius path_radius_m) | figure_eight (two circles of
+  /// path_radius_m touching where it starts). Left turns first; starts at the platform's place.
+  std::string path = "none";
+  double speed_mps = 0.0;         ///< along the path
+  double path_heading_deg = 0.0;  ///< direction the path starts in, about world z
+  double path_length_m = 2.0;
+  double path_radius_m = 1.0;
+  bool heading_follows_path = false;  ///< a cart turns with its path; false: it keeps its yaw
+  double yaw_rate_dps = 0.0;          ///< a constant turn about world z (added)
+  // Sines: amplitude * sin(2 pi frequency t + phase).
+  double heave_amplitude_m = 0.0, heave_frequency_hz = 0.3, heave_phase_deg = 0.0;
+  double roll_amplitude_deg = 0.0, roll_frequency_hz = 0.3, roll_phase_deg = 0.0;
+  double pitch_amplitude_deg = 0.0, pitch_frequency_hz = 0.3, pitch_phase_deg = 0.0;
+  // Random sea state: per motion, sea_components sines of seeded frequencies in sea_band_hz and
+  // seeded phases, each of amplitude bound / sea_components, so the sum never passes the bound.
+  double sea_heave_m = 0.0, sea_roll_deg = 0.0, sea_pitch_deg = 0.0;
+  Vector2d sea_band_hz = Vector2d(0.2, 0.5);
+  int sea_components = 4;
+
+  /// Upper bound of the top centre's speed over all time [m/s].
+  double peak_speed_bound_mps() const;
+  /// Upper bounds of the turn rates about world z, and of the roll and pitch rates [deg/s].
+  double peak_yaw_rate_dps() const;
+  double peak_roll_rate_dps() const;
+  double peak_pitch_rate_dps() const;
+  static const ParamSchema<PlatformMotionParams>& schema();
+  void validate() const;
+};
+
 /// The elevated landing platform (paper 4.2): a box standing on the floor.
 struct PlatformParams {
   Vector2d center_xy_m = Vector2d(1.0, 0.0);
   Vector3d size_m = Vector3d(0.432, 0.279, 0.109);  ///< length x, width y, height [m]
   double yaw_deg = 0.0;
   TextureSpec texture{"paper", 2, 1024, 0.0015, 200, 1.0, 0.01, {}, {}};
+  /// `motion:` present: the platform moves (issue 40); absent: it stands still.
+  bool moving = false;
+  PlatformMotionParams motion;
   static const ParamSchema<PlatformParams>& schema();
   void validate() const;
 };

@@ -2,6 +2,9 @@
 // test or a closed-loop harness that fills the structs in code gets the same checks as a loaded
 // file. Loading files (and image textures) is in params.cpp.
 #include <cmath>
+#include <cstdio>
+#include <functional>
+#include <string>
 
 #include "sim/params.hpp"
 
@@ -106,6 +109,145 @@ const ParamSchema<TextureSpec>& TextureSpec::schema() {
   return schema;
 }
 
+namespace {
+constexpr double kTwoPi = 2.0 * M_PI;
+std::string number(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3g", v);
+  return buf;
+}
+// The message of a peak beyond its limit ("" within it): the figure, its parts and the limit.
+std::string over_limit(double peak, double limit, const std::string& unit,
+                       const std::string& what) {
+  if (peak <= limit + 1e-9) return "";
+  return what + " reaches " + number(peak) + " " + unit + ": must be at most " + number(limit) +
+         " " + unit + " (the fastest platform the simulator takes)";
+}
+}  // namespace
+
+double PlatformMotionParams::peak_speed_bound_mps() const {
+  const double along_path = path == "none" ? 0.0 : speed_mps;
+  const double heave_rate =
+      kTwoPi * (heave_frequency_hz * heave_amplitude_m + sea_band_hz.y() * sea_heave_m);
+  return velocity_mps.norm() + along_path + heave_rate;
+}
+
+double PlatformMotionParams::peak_yaw_rate_dps() const {
+  const bool turns = heading_follows_path && path != "none";
+  const double path_rate = turns ? speed_mps / path_radius_m * 180.0 / M_PI : 0.0;
+  return std::abs(yaw_rate_dps) + path_rate;
+}
+
+double PlatformMotionParams::peak_roll_rate_dps() const {
+  return kTwoPi * (roll_frequency_hz * roll_amplitude_deg + sea_band_hz.y() * sea_roll_deg);
+}
+
+double PlatformMotionParams::peak_pitch_rate_dps() const {
+  return kTwoPi * (pitch_frequency_hz * pitch_amplitude_deg + sea_band_hz.y() * sea_pitch_deg);
+}
+
+const ParamSchema<PlatformMotionParams>& PlatformMotionParams::schema() {
+  using P = PlatformMotionParams;
+  static const ParamSchema<P> schema = [] {
+    ParamSchema<P> s;
+    s.add("velocity_mps", &P::velocity_mps, Range::any(), "m/s",
+          "constant drift in world xy (added to the path)")
+        .check_with([](const P& p) {
+          return over_limit(p.velocity_mps.norm(), kMaxSpeedMps, "m/s", "its speed");
+        });
+    s.add("path", &P::path, Range::any(), "",
+          "none; line: back and forth along a straight of path_length_m turning on semicircles "
+          "of path_radius_m (a stadium); circle of path_radius_m; figure_eight: two circles of "
+          "path_radius_m touching where it starts. Left turns first, from the platform's place")
+        .one_of({"none", "line", "circle", "figure_eight"});
+    s.add("speed_mps", &P::speed_mps, Range::closed(0, kMaxSpeedMps), "m/s",
+          "constant speed along the path")
+        .check_with([](const P& p) -> std::string {
+          if (p.path == "none" || p.speed_mps == 0) return "";
+          return over_limit(p.peak_speed_bound_mps(), kMaxSpeedMps, "m/s",
+                            "the top centre's speed (|velocity_mps| + speed_mps + the heave's "
+                            "rates)");
+        });
+    s.add("path_heading_deg", &P::path_heading_deg, Range::any(), "deg",
+          "direction the path starts in, about world z");
+    s.add("path_length_m", &P::path_length_m, Range::open_closed(0, 20), "m",
+          "line: length of the straight");
+    s.add("path_radius_m", &P::path_radius_m, Range::open_closed(0.05, 20), "m",
+          "the turns' radius (line, circle, figure_eight)");
+    s.add("heading_follows_path", &P::heading_follows_path, Range::any(), "",
+          "the platform turns with its path as a cart does (yaw rate speed_mps / path_radius_m "
+          "in the turns); false: it keeps its yaw")
+        .check_with([](const P& p) {
+          return over_limit(p.peak_yaw_rate_dps(), kMaxRateDps, "deg/s",
+                            "its turn rate (|yaw_rate_dps| + speed_mps / path_radius_m)");
+        });
+    s.add("yaw_rate_dps", &P::yaw_rate_dps, Range::closed(-kMaxRateDps, kMaxRateDps), "deg/s",
+          "a constant turn about world z, added");
+    // A sine's amplitude, frequency and phase; its peak rate (with the sea state's) bounded. A
+    // peak over a limit is reported at a key that adds to it (a zero amplitude stays silent), so
+    // the message names what to change.
+    const auto sine = [](const char* amp_key, double P::*amp, double P::*freq, double P::*phase,
+                         const char* unit, Range amp_range, const char* what, bool is_heave,
+                         double (P::*peak)() const) {
+      return [=](ParamSchema<P>& g) {
+        g.add(amp_key, amp, amp_range, unit, std::string("of the ") + what + " sine")
+            .check_with([=](const P& p) -> std::string {
+              if (p.*amp == 0) return "";
+              return over_limit(
+                  (p.*peak)(), is_heave ? kMaxSpeedMps : kMaxRateDps, is_heave ? "m/s" : "deg/s",
+                  is_heave ? "the top centre's speed (with the path and the heave)"
+                           : std::string("the ") + what +
+                                 " rate (2 pi frequency amplitude, with sea_state's)");
+            });
+        g.add("frequency_hz", freq, Range::open_closed(0, 2), "Hz", std::string("of the ") + what);
+        g.add("phase_deg", phase, Range::any(), "deg", "at the simulator's start");
+      };
+    };
+    s.group("heave", "the deck's heave: amplitude sin(2 pi frequency t + phase), up",
+            sine("amplitude_m", &P::heave_amplitude_m, &P::heave_frequency_hz, &P::heave_phase_deg,
+                 "m", Range::closed(0, 0.5), "heave", true, &P::peak_speed_bound_mps));
+    s.group("roll", "the deck's roll about its length (its x), a sine",
+            sine("amplitude_deg", &P::roll_amplitude_deg, &P::roll_frequency_hz, &P::roll_phase_deg,
+                 "deg", Range::closed(0, 20), "roll", false, &P::peak_roll_rate_dps));
+    s.group(
+        "pitch", "the deck's pitch about its width (its y), a sine",
+        sine("amplitude_deg", &P::pitch_amplitude_deg, &P::pitch_frequency_hz, &P::pitch_phase_deg,
+             "deg", Range::closed(0, 20), "pitch", false, &P::peak_pitch_rate_dps));
+    s.group(
+        "sea_state",
+        "a random sea: per motion, `components` sines of frequencies and phases drawn from the "
+        "seed in band_hz, each of amplitude bound / components (the sum never passes the bound), "
+        "added to the sines above",
+        [](ParamSchema<P>& g) {
+          g.add("heave_m", &P::sea_heave_m, Range::closed(0, 0.5), "m", "bound of the heave")
+              .check_with([](const P& p) -> std::string {
+                if (p.sea_heave_m == 0) return "";
+                return over_limit(p.peak_speed_bound_mps(), kMaxSpeedMps, "m/s",
+                                  "the top centre's speed (with the heave's rates)");
+              });
+          g.add("roll_deg", &P::sea_roll_deg, Range::closed(0, 20), "deg", "bound of the roll")
+              .check_with([](const P& p) -> std::string {
+                if (p.sea_roll_deg == 0) return "";
+                return over_limit(p.peak_roll_rate_dps(), kMaxRateDps, "deg/s",
+                                  "the roll rate (with the roll sine's)");
+              });
+          g.add("pitch_deg", &P::sea_pitch_deg, Range::closed(0, 20), "deg", "bound of the pitch")
+              .check_with([](const P& p) -> std::string {
+                if (p.sea_pitch_deg == 0) return "";
+                return over_limit(p.peak_pitch_rate_dps(), kMaxRateDps, "deg/s",
+                                  "the pitch rate (with the pitch sine's)");
+              });
+          g.add("band_hz", &P::sea_band_hz, Range::open_closed(0, 2), "Hz",
+                "lowest and highest frequency of the components")
+              .check([](const P& p) { return p.sea_band_hz.x() <= p.sea_band_hz.y(); },
+                     "must be [low, high] with low <= high");
+          g.add("components", &P::sea_components, Range::closed(1, 32), "", "sines per motion");
+        });
+    return s;
+  }();
+  return schema;
+}
+
 const ParamSchema<PlatformParams>& PlatformParams::schema() {
   using P = PlatformParams;
   static const ParamSchema<P> schema = [] {
@@ -114,6 +256,10 @@ const ParamSchema<PlatformParams>& PlatformParams::schema() {
     s.add("size_m", &P::size_m, Range::open(0.01, 5), "m", "length x, width y, height").required();
     s.add("yaw_deg", &P::yaw_deg, Range::any(), "deg", "rotation about world z");
     s.section("texture", &P::texture, TextureSpec::schema(), "of its top and sides");
+    s.section("motion", &P::motion, PlatformMotionParams::schema(),
+              "how it moves (a cart, a vehicle's roof, a boat's deck; sim/README.md, \"Moving "
+              "platforms\"); absent: it stands still",
+              &P::moving);
     return s;
   }();
   return schema;
@@ -449,6 +595,7 @@ const ParamSchema<Scenario>& Scenario::schema() {
 
 void VehicleParams::validate() const { schema().validate(*this); }
 void TextureSpec::validate() const { schema().validate(*this); }
+void PlatformMotionParams::validate() const { schema().validate(*this); }
 void PlatformParams::validate() const { schema().validate(*this); }
 void WallParams::validate() const { schema().validate(*this); }
 void WindParams::validate() const { schema().validate(*this); }

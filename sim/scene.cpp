@@ -128,6 +128,7 @@ Scene build_scene(const Scenario& sc, uint64_t seed) {
     b.center_W = Vector3d(xy.x(), xy.y(), 0.5 * p.size_m.z());
     b.texture = static_cast<int>(scene.textures.size());
     scene.textures.push_back(Texture::make(p.texture, seed));
+    scene.platform_box = static_cast<int>(scene.boxes.size());
     scene.boxes.push_back(b);
     scene.platform = PlatformTruth{Vector3d(xy.x(), xy.y(), p.size_m.z()), p.size_m, b.yaw_rad()};
   }

@@ -24,6 +24,18 @@ struct Box {
     yaw_rad_ = yaw_rad;
     R_WO_ = rotation_from_rpy(0, 0, yaw_rad);
   }
+  /// Any orientation (a deck that rolls and pitches); yaw_rad() is its heading.
+  void set_rotation(const Matrix3d& R_WO) {
+    R_WO_ = R_WO;
+    yaw_rad_ = yaw_of(R_WO);
+  }
+  /// A moving box (issue 40): velocity of its centre and angular velocity in world, so a contact
+  /// counts the speed relative to its surface. Zero for everything standing still.
+  bool moving = false;
+  Vector3d v_W = Vector3d::Zero();
+  Vector3d omega_W = Vector3d::Zero();
+  /// Velocity of the box's material point at p_W [m/s].
+  Vector3d velocity_at(const Vector3d& p_W) const { return v_W + omega_W.cross(p_W - center_W); }
   double yaw_rad() const { return yaw_rad_; }
   const Matrix3d& R_WO() const { return R_WO_; }
   /// Point in the box frame (axes along its sides, origin at its centre).
@@ -43,6 +55,11 @@ struct PlatformTruth {
   Vector3d top_center_W = Vector3d::Zero();  ///< centre of the top face [m]
   Vector3d size_m = Vector3d::Zero();        ///< length (its x), width (its y), height [m]
   double yaw_rad = 0.0;
+  // A moving platform (platform.motion) at the time of the truth; zero for a still one.
+  bool moving = false;
+  double roll_rad = 0.0, pitch_rad = 0.0;  ///< Z-Y-X with yaw_rad
+  Vector3d v_W = Vector3d::Zero();         ///< velocity of the top centre [m/s]
+  Vector3d omega_W = Vector3d::Zero();     ///< angular velocity, world axes [rad/s]
 };
 struct OpeningTruth {
   Vector3d center_W = Vector3d::Zero();  ///< centre of the opening in the wall's approach face [m]
@@ -69,6 +86,7 @@ struct Scene {
     return 1.0 + lighting.falloff * (2.0 * r2 / (r2 + (p_W - lighting.lamp_W).squaredNorm()) - 1.0);
   }
   std::optional<PlatformTruth> platform;
+  int platform_box = -1;  ///< index of the platform in boxes; -1 without one
   std::optional<OpeningTruth> opening;
   bool has_wall = false;
   /// Wall pieces within this distance of the opening's edge count as its frame [m].

@@ -93,6 +93,25 @@ sim_truth_t to_msg(const Truth& t) {
   return m;
 }
 
+std::optional<platform_truth_t> platform_msg(const Truth& t) {
+  if (!t.platform || !t.platform->moving) return std::nullopt;
+  const PlatformTruth& p = *t.platform;
+  platform_truth_t m{};
+  m.utime = t.utime;
+  m.version = platform_truth_t::VERSION;
+  for (int i = 0; i < 3; ++i) {
+    m.top_center_W[i] = p.top_center_W[i];
+    m.vel_W[i] = p.v_W[i];
+    m.omega_W[i] = p.omega_W[i];
+    m.size_m[i] = p.size_m[i];
+  }
+  quat_to_wxyz(Quaterniond(rotation_from_rpy(p.roll_rad, p.pitch_rad, p.yaw_rad)), m.orientation);
+  m.roll_rad = p.roll_rad;
+  m.pitch_rad = p.pitch_rad;
+  m.yaw_rad = p.yaw_rad;
+  return m;
+}
+
 AttitudeCommand from_msg(const attitude_cmd_t& msg) {
   AttitudeCommand c;
   c.utime = msg.utime;

@@ -1,11 +1,12 @@
 #pragma once
 // Conversions between the simulator's domain structs and the LCM messages the node publishes
-// (MOCAP_POSE, IMU, RANGE, BARO, CAMERA, SIM_TRUTH) and consumes (ATTITUDE_CMD).
+// (MOCAP_POSE, IMU, RANGE, BARO, CAMERA, SIM_TRUTH, SIM_PLATFORM) and consumes (ATTITUDE_CMD).
 
 #include <alight/attitude_cmd_t.hpp>
 #include <alight/baro_t.hpp>
 #include <alight/image_t.hpp>
 #include <alight/imu_t.hpp>
+#include <alight/platform_truth_t.hpp>
 #include <alight/pose_t.hpp>
 #include <alight/range_t.hpp>
 #include <alight/sim_truth_t.hpp>
@@ -24,6 +25,9 @@ baro_t to_msg(const BaroSample& sample);
 /// mono8 frame stamped at mid-exposure, with "seq" and "exposure_us" metadata.
 image_t to_msg(const CameraFrame& frame);
 sim_truth_t to_msg(const Truth& truth);
+/// SIM_PLATFORM: the moving platform's pose and velocities at the truth's time; nullopt for a
+/// platform standing still or none (issue 40).
+std::optional<platform_truth_t> platform_msg(const Truth& truth);
 AttitudeCommand from_msg(const attitude_cmd_t& msg);
 /// Validating form for untrusted input: nullopt (and *why, when given) for a non-finite angle,
 /// rate or thrust.

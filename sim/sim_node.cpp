@@ -417,7 +417,11 @@ int main(int argc, char** argv) {
       if (auto frame = simulator.take_flow_camera())
         node.publish(channels::kFlowCamera, sim::to_msg(*frame));
       if (simulator.now_utime() >= next_truth) {
-        node.publish(channels::kSimTruth, sim::to_msg(simulator.truth()));
+        const sim::Truth truth = simulator.truth();
+        // The platform's first: a reader of SIM_TRUTH has the platform of the same time.
+        if (auto platform = sim::platform_msg(truth))
+          node.publish(channels::kSimPlatform, *platform);
+        node.publish(channels::kSimTruth, sim::to_msg(truth));
         next_truth += kTruthPeriodUs;
       }
     }

@@ -42,6 +42,7 @@ Simulator::Simulator(const Scenario& scenario, const VehicleParams& vehicle, uin
       scene_(std::make_unique<Scene>(build_scene(scenario, substream(seed, 0)))),
       dynamics_(std::make_unique<Dynamics>(vehicle, *scene_)),
       now_utime_(scenario.start_utime),
+      start_utime_(scenario.start_utime),
       dt_us_(std::max<int64_t>(1, std::llround(scenario.physics_dt_s * 1e6))),
       wind_rng_(substream(seed, 1)),
       mocap_(scenario.mocap, scenario.start_utime, substream(seed, 2)),
@@ -58,6 +59,12 @@ Simulator::Simulator(const Scenario& scenario, const VehicleParams& vehicle, uin
                          std::to_string(rotor_radius_m) +
                          " m): a seeded platform could stand "
                          "under its rotors at the start");
+  if (scenario.platform && scenario.platform->moving && scene_->platform_box >= 0) {
+    // Its own stream (the sea state's draws), so a moving platform changes no other draw.
+    platform_motion_.emplace(scenario.platform->motion, scene_->platform->top_center_W,
+                             scene_->platform->yaw_rad, substream(seed, 8));
+    place_platform(now_utime_);
+  }
   const Vector3d& p0 = scenario.start_position_m;
   state_.p_W_B = Vector3d(p0.x(), p0.y(), p0.z() > 0 ? p0.z() : dynamics_->resting_height(0.0));
   state_.q_WB = Quaterniond(rotation_from_rpy(0, 0, scenario.start_yaw_deg * M_PI / 180.0));
@@ -91,6 +98,25 @@ void Simulator::start_camera(CameraStream& c) {
   c.noise.resize(2 * n);
   std::normal_distribution<float> g(0.f, 1.f);
   for (auto& v : c.noise) v = g(c.rng);
+}
+
+void Simulator::place_platform(int64_t utime) {
+  if (!platform_motion_) return;
+  const PlatformPose P = platform_motion_->at(motion_time_s(utime));
+  Box& b = scene_->boxes[static_cast<size_t>(scene_->platform_box)];
+  b.set_rotation(P.R_WO);
+  b.center_W = P.top_center_W - P.R_WO.col(2) * b.half_size_m.z();
+  b.moving = true;
+  b.omega_W = P.omega_W;
+  b.v_W = P.velocity_at(b.center_W);
+  PlatformTruth& t = *scene_->platform;
+  t.top_center_W = P.top_center_W;
+  t.yaw_rad = P.yaw_rad;
+  t.moving = true;
+  t.roll_rad = P.roll_rad;
+  t.pitch_rad = P.pitch_rad;
+  t.v_W = P.v_W;
+  t.omega_W = P.omega_W;
 }
 
 void Simulator::set_state(const VehicleState& state) {
@@ -193,6 +219,7 @@ void Simulator::physics_step() {
 
   last_ = dynamics_->step(state_, autopilot_command(), wind, dt);
   now_utime_ += dt_us_;
+  place_platform(now_utime_);
   after_step(dt, true);
 }
 
@@ -201,6 +228,7 @@ void Simulator::follow(const std::function<VehicleState(int64_t)>& state_at, int
   const double dt = dt_us_ * 1e-6;
   while (now_utime_ + dt_us_ <= until_utime) {
     now_utime_ += dt_us_;
+    place_platform(now_utime_);
     state_ = state_at(now_utime_);
     last_ = dynamics_->contacts(state_, contact_margin_m);
     after_step(dt, false);
@@ -223,8 +251,15 @@ void Simulator::after_step(double dt, bool imu) {
   if ((off.cwiseAbs() - 0.5 * scenario_.area_size_m).maxCoeff() > 0 ||
       state_.p_W_B.z() > scenario_.area_height_m)
     out_of_area_ = true;
-  const bool at_rest = !state_.armed && last_.feet_on_platform_top == 4 &&
-                       state_.v_W_B.norm() < 0.05 && state_.omega_B.norm() < 0.2;
+  // At rest on the platform: relative to it when it moves (carried along on a deck).
+  Vector3d v_rest = state_.v_W_B, omega_rest = state_.omega_B;
+  if (platform_motion_) {
+    const Box& deck = scene_->boxes[static_cast<size_t>(scene_->platform_box)];
+    v_rest -= deck.velocity_at(state_.p_W_B);
+    omega_rest -= R.transpose() * deck.omega_W;
+  }
+  const bool at_rest = !state_.armed && last_.feet_on_platform_top == 4 && v_rest.norm() < 0.05 &&
+                       omega_rest.norm() < 0.2;
   rest_s_ = at_rest ? rest_s_ + dt : 0.0;
   landed_ = rest_s_ >= 0.3 && !tipped_;
 
@@ -287,7 +322,9 @@ std::optional<CameraFrame> Simulator::take_frame(CameraStream& cam) {
   cv::Mat acc(model.height, model.width, CV_32F, cv::Scalar(0));
   const double gain = f.gain * cam.auto_gain.gain();
   const float w = static_cast<float>(gain / f.X_WC.size());
+  place_platform(f.utime);  // a moving platform as at mid-exposure (not smeared over it)
   for (const auto& X_WC : f.X_WC) cam.renderer->accumulate(*scene_, X_WC, w, acc);
+  place_platform(now_utime_);
   cam.auto_gain.update(acc, gain);
   const float sigma = static_cast<float>(cam.params.noise_sigma);
   CameraFrame out;

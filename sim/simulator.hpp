@@ -23,6 +23,7 @@
 #include "common/pose_buffer.hpp"
 #include "sim/dynamics.hpp"
 #include "sim/params.hpp"
+#include "sim/platform_motion.hpp"
 #include "sim/renderer.hpp"
 #include "sim/scene.hpp"
 #include "sim/sensors.hpp"
@@ -128,6 +129,16 @@ class Simulator {
   void set_state(const VehicleState& state);
   Truth truth() const;
   const Scene& scene() const { return *scene_; }
+  /// The platform's motion (scenario platform.motion), null for a platform standing still or
+  /// none. The scene's platform box and Truth::platform follow it: posed at now_utime() after
+  /// every physics step, at a frame's mid-exposure while that frame renders.
+  const PlatformMotion* platform_motion() const {
+    return platform_motion_ ? &*platform_motion_ : nullptr;
+  }
+  /// Seconds since the simulator's start at `utime` (the platform motion's time).
+  double motion_time_s(int64_t utime) const {
+    return 1e-6 * static_cast<double>(utime - start_utime_);
+  }
   const Scenario& scenario() const { return scenario_; }
   const Dynamics& dynamics() const { return *dynamics_; }
   /// Specific force of the last physics step in body (noise-free IMU) [m/s^2].
@@ -182,6 +193,8 @@ class Simulator {
   // Outcome flags and sensors after the state moved to now_utime_ (the IMU only when this
   // simulator flew the step).
   void after_step(double dt, bool imu);
+  // Poses the scene's moving platform (box and truth) at `utime`.
+  void place_platform(int64_t utime);
   // What the autopilot's inner loop follows: the last command, or its command-loss failsafe.
   AttitudeCommand autopilot_command();
   void start_camera(CameraStream& c);
@@ -192,6 +205,7 @@ class Simulator {
   VehicleParams vehicle_;
   std::unique_ptr<Scene> scene_;  // stable address: Dynamics refers to it
   std::unique_ptr<Dynamics> dynamics_;
+  std::optional<PlatformMotion> platform_motion_;
   VehicleState state_;
   AttitudeCommand cmd_;
   int64_t last_command_utime_ = 0;         // sim time the last command was received
@@ -200,6 +214,7 @@ class Simulator {
   bool cmd_loss_disarmed_ = false;
   uint64_t disarms_refused_ = 0;
   int64_t now_utime_;
+  int64_t start_utime_;
   int64_t dt_us_;
   StepResult last_;
 

@@ -1,5 +1,6 @@
 #include "tools/score.hpp"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -35,6 +36,27 @@ bool on_ground(int8_t contact) {
   return contact == sim_truth_t::CONTACT_FLOOR || contact == sim_truth_t::CONTACT_PLATFORM_TOP ||
          contact == sim_truth_t::CONTACT_PLATFORM_EDGE;
 }
+Eigen::Quaterniond quat(const double q[4]) {
+  return Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized();
+}
+// The vehicle's sink rate relative to the deck: the deck's velocity at the vehicle's position
+// (its centre's plus the turn's), along the deck's normal.
+double relative_sink_mps(const sim_truth_t& t, const platform_truth_t& p) {
+  const Eigen::Vector3d pos(t.pos[0], t.pos[1], t.pos[2]);
+  const Eigen::Vector3d top(p.top_center_W[0], p.top_center_W[1], p.top_center_W[2]);
+  const Eigen::Vector3d v_deck =
+      Eigen::Vector3d(p.vel_W[0], p.vel_W[1], p.vel_W[2]) +
+      Eigen::Vector3d(p.omega_W[0], p.omega_W[1], p.omega_W[2]).cross(pos - top);
+  const Eigen::Vector3d n = quat(p.orientation).toRotationMatrix().col(2);
+  return -(Eigen::Vector3d(t.vel[0], t.vel[1], t.vel[2]) - v_deck).dot(n);
+}
+// |vehicle heading - platform heading| folded to [0, 90] deg (the top's long axis either way).
+double heading_error_deg(const sim_truth_t& t, const platform_truth_t& p) {
+  const Eigen::Vector3d x = quat(t.orientation).toRotationMatrix().col(0);
+  double d = std::atan2(x.y(), x.x()) - p.yaw_rad;
+  d = std::remainder(d, M_PI);  // in [-pi/2, pi/2]
+  return std::abs(d) * 180.0 / M_PI;
+}
 std::string fmt(double v) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.4f", v);
@@ -46,16 +68,46 @@ Scorer::Scorer() : Scorer(sim::VehicleParams{}.gear_max_impact_mps) {}
 
 Scorer::Scorer(double gear_max_impact_mps) : gear_max_impact_mps_(gear_max_impact_mps) {}
 
+void Scorer::add(const platform_truth_t& p) {
+  if (p.version > platform_truth_t::VERSION) {
+    ++platform_refused_;
+    return;
+  }
+  platform_ = p;
+}
+
 void Scorer::add(const sim_truth_t& t) {
   tipped_ = tipped_ || t.tipped;
+  // The platform of this sample: SIM_PLATFORM comes just before its SIM_TRUTH.
+  const std::optional<platform_truth_t> platform =
+      platform_ && platform_->utime == t.utime ? platform_ : std::nullopt;
+  const bool onto_platform = t.contact == sim_truth_t::CONTACT_PLATFORM_TOP ||
+                             t.contact == sim_truth_t::CONTACT_PLATFORM_EDGE;
   if (last_truth_ && on_ground(t.contact) && !on_ground(last_truth_->contact)) {
     // SIM_TRUTH comes every 20 ms: the sample before the contact may be up to 20 ms short of
     // the impact (falling faster by then), the one after up to 20 ms into the gear's springs
     // (already slowed); the faster of the two is the nearer to the impact.
-    const double sink = std::max({0.0, -last_truth_->vel[2], -t.vel[2]});
+    double sink = std::max({0.0, -last_truth_->vel[2], -t.vel[2]});
+    if (onto_platform && platform && last_truth_platform_) {
+      // Onto a moving deck: what the gear takes is the speed relative to the deck.
+      sink = std::max({0.0, relative_sink_mps(*last_truth_, *last_truth_platform_),
+                       relative_sink_mps(t, *platform)});
+      if (!platform_touched_ && t.contact == sim_truth_t::CONTACT_PLATFORM_TOP) {
+        platform_touched_ = true;
+        relative_sink_mps_ = sink;
+        heading_error_deg_ = heading_error_deg(t, *platform);
+        platform_speed_mps_ = std::sqrt(platform->vel_W[0] * platform->vel_W[0] +
+                                        platform->vel_W[1] * platform->vel_W[1] +
+                                        platform->vel_W[2] * platform->vel_W[2]);
+      }
+    }
     max_touchdown_speed_mps_ = std::max(max_touchdown_speed_mps_.value_or(0.0), sink);
   }
-  if (t.has_platform && !touchdown_truth_ && (t.landed || t.tipped)) touchdown_truth_ = t;
+  if (t.has_platform && !touchdown_truth_ && (t.landed || t.tipped)) {
+    touchdown_truth_ = t;
+    touchdown_platform_ = platform;
+  }
+  last_truth_platform_ = platform;
   if (t.has_opening && !after_crossing_) {
     if (wall_side(t) >= 0) {
       before_crossing_ = t;
@@ -206,12 +258,20 @@ Score Scorer::result() const {
   s.max_touchdown_speed_mps = max_touchdown_speed_mps_;
   s.crashed = max_touchdown_speed_mps_ && *max_touchdown_speed_mps_ > gear_max_impact_mps_;
   s.out_of_area = truth.out_of_area;
+  s.platform_moving = platform_.has_value();
+  s.touchdown_relative_sink_mps = relative_sink_mps_;
+  s.touchdown_heading_error_deg = heading_error_deg_;
+  s.touchdown_platform_speed_mps = platform_speed_mps_;
+  s.platform_messages_refused = platform_refused_;
   s.mission = mission_ ? mission_
                        : (truth.has_platform ? target_t::MISSION_LANDING
                                              : (truth.has_opening ? target_t::MISSION_INGRESS : 0));
   if (truth.has_platform) {
+    // Against the platform where it was at touch-down (a still one is where it always was).
     if (touchdown_truth_)
-      s.touchdown_lateral_error_m = dist_xy(touchdown_truth_->pos, truth.platform_center_W);
+      s.touchdown_lateral_error_m =
+          dist_xy(touchdown_truth_->pos, touchdown_platform_ ? touchdown_platform_->top_center_W
+                                                             : truth.platform_center_W);
     if (converged_status_)
       s.platform_height_error_m = converged_status_->estimate_W[2] - truth.platform_center_W[2];
     if (!heights_m_.empty())
@@ -328,6 +388,13 @@ std::vector<std::pair<std::string, std::string>> Score::fields() const {
   f.emplace_back("n_collisions", std::to_string(n_collisions));
   f.emplace_back("crashed", crashed ? "true" : "false");
   f.emplace_back("out_of_area", out_of_area ? "true" : "false");
+  if (platform_moving || platform_messages_refused > 0) {
+    f.emplace_back("platform_moving", platform_moving ? "true" : "false");
+    opt("touchdown_relative_sink_mps", touchdown_relative_sink_mps);
+    opt("touchdown_heading_error_deg", touchdown_heading_error_deg);
+    opt("touchdown_platform_speed_mps", touchdown_platform_speed_mps);
+    f.emplace_back("platform_messages_refused", std::to_string(platform_messages_refused));
+  }
   return f;
 }
 

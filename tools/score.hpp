@@ -18,8 +18,15 @@
 // vehicle.gear_max_impact_mps, is a crash whatever the attitude and wherever it happens: the
 // mission fails with outcome `crashed`. max_touchdown_speed_mps is the fastest sink rate of any
 // touch-down in the log.
+//
+// A moving platform (issue 40; the log has SIM_PLATFORM, platform_truth_t, with each SIM_TRUTH):
+// a touch-down on it is judged by the sink rate relative to its deck (the deck's velocity at the
+// vehicle, along the deck's normal), the lateral error against the platform where it is at that
+// sample, and the heading against its long axis. A log without SIM_PLATFORM (a platform standing
+// still, or a log from before it) is scored exactly as before.
 
 #include <alight/autonomy_status_t.hpp>
+#include <alight/platform_truth_t.hpp>
 #include <alight/sim_truth_t.hpp>
 #include <alight/target_t.hpp>
 #include <alight/vision_timing_t.hpp>
@@ -91,6 +98,18 @@ struct Score {
   bool crashed = false;      ///< touched down faster than gear_max_impact_mps (fails any mission)
   bool out_of_area = false;  ///< the vehicle left the flying area (fails any mission)
 
+  // A moving platform (SIM_PLATFORM in the log); listed only then.
+  bool platform_moving = false;
+  /// The first touch-down on the platform's top: sink rate relative to the deck [m/s] (the
+  /// faster of the samples either side, as max_touchdown_speed_mps).
+  std::optional<double> touchdown_relative_sink_mps;
+  /// There: the vehicle's heading against the platform's long axis, either way round (a
+  /// rectangle looks the same turned half round), |error| in [0, 90] [deg].
+  std::optional<double> touchdown_heading_error_deg;
+  /// There: the platform's speed (its top centre) [m/s].
+  std::optional<double> touchdown_platform_speed_mps;
+  int platform_messages_refused = 0;  ///< SIM_PLATFORM of a version newer than this reader's
+
   /// `key: value` lines (absent figures are left out).
   std::string to_text() const;
   std::string to_json() const;
@@ -106,6 +125,8 @@ class Scorer {
   explicit Scorer(double gear_max_impact_mps);
 
   void add(const sim_truth_t& truth);
+  /// SIM_PLATFORM: the moving platform at the time of the SIM_TRUTH that follows it.
+  void add(const platform_truth_t& platform);
   void add(const autonomy_status_t& status);
   void add(const target_t& target);
   /// A VISION_TARGET with its receipt time [us, wall clock, as the logger stamps it].
@@ -119,6 +140,12 @@ class Scorer {
  private:
   double gear_max_impact_mps_;
   std::optional<sim_truth_t> last_truth_, touchdown_truth_;
+  // The newest SIM_PLATFORM, and the one that went with last_truth_.
+  std::optional<platform_truth_t> platform_, last_truth_platform_;
+  std::optional<platform_truth_t> touchdown_platform_;  // with touchdown_truth_
+  std::optional<double> relative_sink_mps_, heading_error_deg_, platform_speed_mps_;
+  bool platform_touched_ = false;
+  int platform_refused_ = 0;
   std::optional<double> max_touchdown_speed_mps_;
   std::optional<sim_truth_t> before_crossing_, after_crossing_;
   std::optional<autonomy_status_t> last_status_, converged_status_;

@@ -35,7 +35,7 @@ int main(int argc, char** argv) {
   std::string log_path,
       truth_ch = alight::channels::kSimTruth, status_ch = alight::channels::kAutonomyStatus,
       target_ch = alight::channels::kVisionTarget, camera_ch = alight::channels::kCamera,
-      timing_ch = alight::channels::kVisionTiming;
+      timing_ch = alight::channels::kVisionTiming, platform_ch = alight::channels::kSimPlatform;
   std::string vehicle_file;
   bool json = false, vision_only = false;
   app.add_option("log", log_path, "Session log (.lcmlog)")->required()->check(CLI::ExistingFile);
@@ -52,6 +52,8 @@ int main(int argc, char** argv) {
   app.add_option("--target-channel", target_ch, "Channel of target_t");
   app.add_option("--camera-channel", camera_ch, "Channel of image_t (raw frames)");
   app.add_option("--timing-channel", timing_ch, "Channel of vision_timing_t");
+  app.add_option("--platform-channel", platform_ch,
+                 "Channel of platform_truth_t (a moving platform's truth)");
   app.add_flag("--vision-only", vision_only,
                "Only the vision's figures: no SIM_TRUTH needed; exit 0 when the log holds "
                "VISION_TIMING");
@@ -84,6 +86,9 @@ int main(int argc, char** argv) {
       } else {
         ++bad;
       }
+    } else if (ev->channel == platform_ch) {
+      alight::platform_truth_t m;
+      decode(*ev, m) ? scorer.add(m) : void(++bad);
     } else if (ev->channel == status_ch) {
       alight::autonomy_status_t m;
       decode(*ev, m) ? scorer.add(m) : void(++bad);

@@ -43,7 +43,35 @@ with tempfile.TemporaryDirectory() as tmp:
             if family.startswith("landing"):
                 assert ("platform" in s) == (family != "landing_none_photo"), family
                 assert s["camera"]["mount"] == "downward"
+            moving = family in ("landing_moving_cart", "landing_deck")
             if "platform" in s:
+                assert ("motion" in s["platform"]) == moving, family
+            if moving:
+                # A moving platform: within the simulator's limits, its whole path inside the
+                # flying area and clear of the start, a deck's sea within the bounds.
+                p = s["platform"]
+                m = p["motion"]
+                (cx, cy), (length, width, height) = p["center_xy_m"], p["size_m"]
+                reach = 0.5 * math.hypot(length, width)
+                assert m["speed_mps"] <= (0.5 if family == "landing_deck" else 1.0) + 1e-9, m
+                assert m["speed_mps"] <= scene_families.MAX_PLATFORM_SPEED_MPS, m
+                assert abs(m["yaw_rate_dps"]) <= scene_families.MAX_PLATFORM_RATE_DPS, m
+                assert not m["heading_follows_path"], m
+                half = [0.5 * v for v in s["area"]["size_m"]]
+                for x, y in scene_families.path_extent(m):
+                    assert abs(cx + x) + reach <= half[0] and abs(cy + y) + reach <= half[1], \
+                        (family, seed, "path leaves the flying area", cx + x, cy + y)
+                    assert math.hypot(cx + x, cy + y) - reach >= 0.5 - 1e-9, \
+                        (family, seed, "path over the start", cx + x, cy + y)
+                sea = m.get("sea_state")
+                assert (sea is not None) == (family == "landing_deck"), m
+                if sea:
+                    assert sea["heave_m"] <= 0.05 and sea["roll_deg"] <= 3 and sea["pitch_deg"] <= 3
+                    assert sea["band_hz"] == [0.2, 0.5], sea
+                    # heave's rate within the speed limit with the path's speed
+                    assert m["speed_mps"] + 2 * math.pi * 0.5 * sea["heave_m"] <= 1.0, m
+                    assert 2 * math.pi * 0.5 * max(sea["roll_deg"], sea["pitch_deg"]) <= 15, m
+            elif "platform" in s:
                 p = s["platform"]
                 (cx, cy), (length, width, height) = p["center_xy_m"], p["size_m"]
                 assert 0.20 <= width <= length <= 0.50 and 0.08 <= height <= 0.22, p
