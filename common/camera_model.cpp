@@ -135,8 +135,7 @@ CameraModel load_camera_info(const std::string& path) {
   std::string model = "plumb_bob";
   root.read("distortion_model", model);
   if (model != "plumb_bob" && model != "none" && model != "equidistant")
-    throw root.error("distortion_model", model,
-                     "must be plumb_bob, equidistant (fisheye) or none");
+    throw root.error("distortion_model", model, "must be plumb_bob, equidistant (fisheye) or none");
   if (model == "equidistant") {
     cam.distortion = CameraModel::Distortion::kEquidistant;
     const auto D = matrix_data(root, "distortion_coefficients", -1, -1);

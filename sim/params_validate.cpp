@@ -328,9 +328,11 @@ const ParamSchema<CameraEffects>& CameraEffects::schema() {
                   .one_of({"plumb_bob", "equidistant"});
               g.add("coefficients", &P::lens_coefficients, Range::closed(-2, 2), "",
                     "plumb_bob: k1 k2 p1 p2 k3; equidistant: k1 k2 k3 k4 0")
-                  .check([](const P& p) {
-                    return p.lens_model != "equidistant" || p.lens_coefficients[4] == 0.0;
-                  }, "must end in 0 for equidistant (four coefficients k1..k4)");
+                  .check(
+                      [](const P& p) {
+                        return p.lens_model != "equidistant" || p.lens_coefficients[4] == 0.0;
+                      },
+                      "must end in 0 for equidistant (four coefficients k1..k4)");
             });
     s.group("driver", "the camera driver's delivery, as V4L2 and UVC drivers misbehave",
             [](ParamSchema<P>& g) {

@@ -297,8 +297,8 @@ void Simulator::schedule_camera(CameraStream& cam) {
     // rendering: 8 keep a 12 ms exposure at 250 Hz, three periods, to a blur of that extent).
     int k = c.motion_blur_samples;
     if (vibration_.enabled())
-      k = std::max(k, std::min(8, static_cast<int>(std::ceil(4 * c.exposure_s *
-                                                             vibration_.max_hz()))));
+      k = std::max(
+          k, std::min(8, static_cast<int>(std::ceil(4 * c.exposure_s * vibration_.max_hz()))));
     const double line_us = fx.rolling_shutter ? fx.line_delay_s * 1e6 : 0.0;
     const int band = fx.rolling_shutter ? kRowsPerBand : rows;
     for (int r0 = 0; r0 < rows; r0 += band) {
@@ -306,7 +306,8 @@ void Simulator::schedule_camera(CameraStream& cam) {
       const double t_mid = static_cast<double>(f.utime) + line_us * 0.5 * (r0 + r1 - 1);
       std::vector<Isometry3d> poses;
       for (int i = 0; i < k; ++i) {
-        const double t = k == 1 ? t_mid : t_mid - half_exposure + (2.0 * half_exposure * i) / (k - 1);
+        const double t =
+            k == 1 ? t_mid : t_mid - half_exposure + (2.0 * half_exposure * i) / (k - 1);
         poses.push_back(camera_pose_at(t, X_BC));
       }
       f.band_rows.push_back(r0);

@@ -58,7 +58,7 @@ struct CameraFrame {
   int64_t utime = 0;
   int64_t seq = 0;  ///< frame counter (a dropped frame's number is skipped)
   double exposure_s = 0.0;
-  double gain = 1.0;  ///< gain applied to this frame (flicker times the automatic gain)
+  double gain = 1.0;          ///< gain applied to this frame (flicker times the automatic gain)
   double line_delay_s = 0.0;  ///< rolling shutter's row-to-row delay; 0: global shutter
   double exposure_ev = 0.0;   ///< the automatic exposure's step on this frame [EV]
   bool duplicate = false;     ///< the driver delivered the previous frame's pixels again
@@ -195,8 +195,8 @@ class Simulator {
     // changes nothing else of a seed.
     std::mt19937_64 fx_rng;
     ExposureSteps exposure_steps;
-    cv::Mat vignette;      // per-pixel factor; empty without vignetting
-    cv::Mat last_pixels;   // for the driver's duplicates
+    cv::Mat vignette;     // per-pixel factor; empty without vignetting
+    cv::Mat last_pixels;  // for the driver's duplicates
     int64_t last_stamp = 0;
     int64_t frames_dropped = 0;
   };

@@ -62,8 +62,7 @@ double edge_column(const cv::Mat& img, int v) {
   const uchar* r = img.ptr<uchar>(v);
   for (int u = 1; u < img.cols; ++u) {
     const double a = r[u - 1], b = r[u];
-    if ((a - 140) * (b - 140) < 0 || (b == 140 && a != 140))
-      return u - 1 + (140 - a) / (b - a);
+    if ((a - 140) * (b - 140) < 0 || (b == 140 && a != 140)) return u - 1 + (140 - a) / (b - a);
   }
   return std::nan("");
 }
@@ -231,7 +230,8 @@ TEST(CameraEffectsTest, TheGyroSeesTheVibrationAveragedOverItsSample) {
   double sum2 = 0;
   int n = 0;
   for (size_t k = 1; k < ia.size(); ++k) {
-    const double t1 = (ia[k].utime - s.start_utime) * 1e-6, t0 = (ia[k - 1].utime - s.start_utime) * 1e-6;
+    const double t1 = (ia[k].utime - s.start_utime) * 1e-6,
+                 t0 = (ia[k - 1].utime - s.start_utime) * 1e-6;
     const Vector3d diff = ia[k].gyro_B - ib[k].gyro_B;
     EXPECT_LT((diff - a.vibration().mean_rate(t0, t1)).norm(), 1e-9);
     sum2 += diff.squaredNorm();
@@ -319,9 +319,8 @@ TEST(CameraEffectsTest, AFisheyeProjectsAsTheEquidistantModel) {
   m.D = {0.05, -0.01, 0.002, -0.0005, 0.0};
   const Vector3d p(0.6, -0.45, 1.0);
   const double r = std::hypot(p.x(), p.y()), th = std::atan(r);
-  const double th_d =
-      th * (1 + 0.05 * std::pow(th, 2) - 0.01 * std::pow(th, 4) + 0.002 * std::pow(th, 6) -
-            0.0005 * std::pow(th, 8));
+  const double th_d = th * (1 + 0.05 * std::pow(th, 2) - 0.01 * std::pow(th, 4) +
+                            0.002 * std::pow(th, 6) - 0.0005 * std::pow(th, 8));
   const auto px = m.project(p);
   ASSERT_TRUE(px);
   EXPECT_NEAR(px->x(), m.fx * th_d * p.x() / r + m.cx, 1e-9);
