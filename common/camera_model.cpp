@@ -1,5 +1,6 @@
 #include "common/camera_model.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 
@@ -16,12 +17,30 @@ Matrix3d CameraModel::K() const {
 }
 
 bool CameraModel::has_distortion() const {
+  if (distortion == Distortion::kEquidistant) return true;
   for (double d : D)
     if (d != 0.0) return true;
   return false;
 }
 
+namespace {
+// Equidistant: theta_d(theta) and its derivative.
+double fisheye_theta_d(const std::array<double, 5>& k, double th) {
+  const double t2 = th * th;
+  return th * (1.0 + t2 * (k[0] + t2 * (k[1] + t2 * (k[2] + t2 * k[3]))));
+}
+double fisheye_dtheta_d(const std::array<double, 5>& k, double th) {
+  const double t2 = th * th;
+  return 1.0 + t2 * (3 * k[0] + t2 * (5 * k[1] + t2 * (7 * k[2] + t2 * 9 * k[3])));
+}
+}  // namespace
+
 Vector2d CameraModel::distort(const Vector2d& xn) const {
+  if (distortion == Distortion::kEquidistant) {
+    const double r = xn.norm();
+    if (r < 1e-12) return xn;
+    return xn * (fisheye_theta_d(D, std::atan(r)) / r);
+  }
   const double x = xn.x(), y = xn.y();
   const double r2 = x * x + y * y;
   const double radial = 1.0 + r2 * (D[0] + r2 * (D[1] + r2 * D[4]));
@@ -31,6 +50,19 @@ Vector2d CameraModel::distort(const Vector2d& xn) const {
 
 Vector2d CameraModel::undistort(const Vector2d& xd) const {
   if (!has_distortion()) return xd;
+  if (distortion == Distortion::kEquidistant) {
+    // Newton on theta_d(theta) = |xd| from theta = |xd|; the normalised point is tan(theta)
+    // along xd (as cv::fisheye::undistortPoints).
+    const double rd = xd.norm();
+    if (rd < 1e-12) return xd;
+    double th = std::min(rd, 0.5 * M_PI - 1e-6);
+    for (int i = 0; i < 20; ++i) {
+      const double step = (fisheye_theta_d(D, th) - rd) / fisheye_dtheta_d(D, th);
+      th = std::clamp(th - step, 0.0, 0.5 * M_PI - 1e-6);
+      if (std::abs(step) < 1e-14) break;
+    }
+    return xd * (std::tan(th) / rd);
+  }
   Vector2d xn = xd;
   for (int i = 0; i < 20; ++i) {
     const Vector2d err = distort(xn) - xd;
@@ -63,6 +95,8 @@ void CameraModel::validate() const {
   param_check(fy > 0 && std::isfinite(fy), "camera_matrix.data[4]", fy, "fy must be > 0");
   param_check(cx > 0 && cx < width, "camera_matrix.data[2]", cx, "cx must lie inside the image");
   param_check(cy > 0 && cy < height, "camera_matrix.data[5]", cy, "cy must lie inside the image");
+  param_check(distortion != Distortion::kEquidistant || D[4] == 0.0,
+              "distortion_coefficients.data[4]", D[4], "equidistant has four coefficients");
 }
 
 namespace {
@@ -100,8 +134,16 @@ CameraModel load_camera_info(const std::string& path) {
              "camera_matrix", "must be [fx 0 cx; 0 fy cy; 0 0 1]");
   std::string model = "plumb_bob";
   root.read("distortion_model", model);
-  if (model != "plumb_bob" && model != "none")
-    throw root.error("distortion_model", model, "only plumb_bob (or none) is supported");
+  if (model != "plumb_bob" && model != "none" && model != "equidistant")
+    throw root.error("distortion_model", model, "must be plumb_bob, equidistant (fisheye) or none");
+  if (model == "equidistant") {
+    cam.distortion = CameraModel::Distortion::kEquidistant;
+    const auto D = matrix_data(root, "distortion_coefficients", -1, -1);
+    if (D.size() != 4)
+      throw root.error("distortion_coefficients", root.value_text("distortion_coefficients"),
+                       "equidistant needs 4 coefficients (k1 k2 k3 k4)");
+    for (size_t i = 0; i < D.size(); ++i) cam.D[i] = D[i];
+  }
   if (model == "plumb_bob" && root.has("distortion_coefficients")) {
     const auto D = matrix_data(root, "distortion_coefficients", -1, -1);
     if (D.size() != 5 && D.size() != 4 && !D.empty())
@@ -130,8 +172,12 @@ std::string camera_info_yaml(const CameraModel& cam) {
   out << YAML::Key << "image_height" << YAML::Value << cam.height;
   out << YAML::Key << "camera_name" << YAML::Value << cam.name;
   matrix("camera_matrix", 3, 3, {cam.fx, 0, cam.cx, 0, cam.fy, cam.cy, 0, 0, 1});
-  out << YAML::Key << "distortion_model" << YAML::Value << "plumb_bob";
-  matrix("distortion_coefficients", 1, 5, {cam.D.begin(), cam.D.end()});
+  const bool fisheye = cam.distortion == CameraModel::Distortion::kEquidistant;
+  out << YAML::Key << "distortion_model" << YAML::Value << (fisheye ? "equidistant" : "plumb_bob");
+  if (fisheye)
+    matrix("distortion_coefficients", 1, 4, {cam.D.begin(), cam.D.begin() + 4});
+  else
+    matrix("distortion_coefficients", 1, 5, {cam.D.begin(), cam.D.end()});
   matrix("rectification_matrix", 3, 3, {1, 0, 0, 0, 1, 0, 0, 0, 1});
   matrix("projection_matrix", 3, 4, {cam.fx, 0, cam.cx, 0, 0, cam.fy, cam.cy, 0, 0, 0, 1, 0});
   out << YAML::EndMap;

@@ -144,6 +144,14 @@ std::optional<Image> decode_image(const image_t& m, bool mono, std::string* erro
     }
     img.exposure_s = double(*exposure_us) * 1e-6;
   }
+  if (const auto line_delay_ns = metadata_int(m, "line_delay_ns")) {
+    if (*line_delay_ns <= 0 || *line_delay_ns > kMaxLineDelayNs) {
+      fail(error, "line_delay_ns metadata of " + std::to_string(*line_delay_ns) +
+                      " is outside (0, " + std::to_string(kMaxLineDelayNs) + "] ns");
+      return std::nullopt;
+    }
+    img.line_delay_s = double(*line_delay_ns) * 1e-9;
+  }
   if (static_cast<int64_t>(m.data.size()) > kMaxImageBytes) {
     fail(error, "image data of " + std::to_string(m.data.size()) + " bytes exceeds " +
                     std::to_string(kMaxImageBytes));

@@ -26,6 +26,10 @@ struct Image {
   int64_t seq = -1;   ///< capture sequence number ("seq" metadata), -1 when absent
   /// exposure time ("exposure_us" metadata, (0, kMaxExposureUs]) [s]; nullopt when absent
   std::optional<double> exposure_s;
+  /// A rolling shutter's row-to-row delay ("line_delay_ns" metadata, (0, kMaxLineDelayNs]) [s]:
+  /// row v was exposed utime + v x line_delay_s; nullopt when absent (a global shutter, or a
+  /// camera that does not say).
+  std::optional<double> line_delay_s;
   cv::Mat pixels;  ///< CV_8UC1 (mono8) or CV_8UC3 (BGR)
 };
 
@@ -38,6 +42,9 @@ inline constexpr int64_t kMaxImageBytes = int64_t{kMaxImageSide} * kMaxImageSide
 /// Longest exposure an "exposure_us" metadata entry may give [us]: one second, longer than any
 /// exposure a flying camera takes; beyond it (or <= 0) the frame is malformed.
 inline constexpr int64_t kMaxExposureUs = 1'000'000;
+/// Longest row-to-row delay a "line_delay_ns" entry may give [ns]: 1 ms, a 0.5 s readout of
+/// 480 rows, far slower than any sensor; beyond it (or <= 0) the frame is malformed.
+inline constexpr int64_t kMaxLineDelayNs = 1'000'000;
 /// Most scans a JPEG may have (a progressive JPEG has about 10; each scan costs a pass over the
 /// whole image, so thousands of tiny scans would make a small message expensive to decode).
 inline constexpr int kMaxJpegScans = 100;

@@ -10,6 +10,11 @@ use), tiled and low-texture floors, platforms of many sizes and turns, openings 
 sizes, aspect ratios and offsets in walls of several thicknesses, wind with gusts, exposure blur
 and gain flicker. The same (family, seed) always gives the same scenario; scripts/scenes writes
 them to files and scripts/montecarlo --families flies them.
+
+A real camera's effects (issue 41; the scenario's camera.effects and vibration blocks) join any
+family by name: "landing_photo+rolling_shutter" is landing_photo's scene for that seed (the same
+scene, drawn from the same stream) with a rolling shutter of a drawn line delay;
+"ingress_photo+vibration+driver" adds two; "+camera" adds them all. EFFECTS lists them.
 """
 import math
 import os
@@ -42,6 +47,71 @@ FAMILIES = {
 # The simulator's limits for a moving platform (sim/params.hpp, PlatformMotionParams).
 MAX_PLATFORM_SPEED_MPS = 1.0
 MAX_PLATFORM_RATE_DPS = 15.0
+
+# Camera effects (sim/camera_effects.hpp), each drawn from a stream of its own so adding one
+# leaves the scene and the other effects' draws as they were.
+EFFECTS = {
+    "rolling_shutter": "rolling shutter, line delay 10-40 us (5-20 ms readout)",
+    "exposure_steps": "automatic-exposure steps of up to 1-2 EV, 0.3-1 per second, lag 3-10 frames",
+    "vibration": "motor vibration 80-125 Hz and its 2nd harmonic, 0.5-3 mrad, 10-100 um; the IMU too",
+    "vignetting": "radial falloff to 40-80 % in the corners",
+    "lens_radtan": "radial-tangential (plumb_bob) distortion, k1 -0.3..-0.1 (barrel)",
+    "lens_fisheye": "an equidistant (fisheye) lens, k1 -0.05..0.05",
+    "driver": "1-5 % frames dropped, 1-5 % repeated, stamp jitter 0.5-2 ms",
+}
+
+
+def _effect(rng, name, s):
+    fx = s["camera"].setdefault("effects", {})
+    if name == "rolling_shutter":
+        fx["rolling_shutter"] = {"enabled": True,
+                                 "line_delay_s": round(rng.uniform(10e-6, 40e-6), 8)}
+    elif name == "exposure_steps":
+        fx["exposure_steps"] = {"enabled": True, "max_ev": round(rng.uniform(1.0, 2.0), 2),
+                                "rate_hz": round(rng.uniform(0.3, 1.0), 2),
+                                "lag_frames": rng.randint(3, 10)}
+    elif name == "vibration":
+        s["vibration"] = {"enabled": True, "base_hz": round(rng.uniform(80, 125), 1),
+                          "harmonics": 2, "angle_rad": round(rng.uniform(0.0005, 0.003), 5),
+                          "linear_m": round(rng.uniform(1e-5, 1e-4), 6), "imu_share": 1.0}
+    elif name == "vignetting":
+        fx["vignetting"] = {"enabled": True, "corner_ratio": round(rng.uniform(0.4, 0.8), 3)}
+    elif name == "lens_radtan":
+        fx["lens"] = {"enabled": True, "model": "plumb_bob",
+                      "coefficients": [round(rng.uniform(-0.3, -0.1), 4),
+                                       round(rng.uniform(0.02, 0.1), 4),
+                                       round(rng.uniform(-0.001, 0.001), 5),
+                                       round(rng.uniform(-0.001, 0.001), 5), 0.0]}
+    elif name == "lens_fisheye":
+        fx["lens"] = {"enabled": True, "model": "equidistant",
+                      "coefficients": [round(rng.uniform(-0.05, 0.05), 4),
+                                       round(rng.uniform(-0.01, 0.01), 4), 0.0, 0.0, 0.0]}
+    else:
+        assert name == "driver"
+        fx["driver"] = {"enabled": True, "drop_prob": round(rng.uniform(0.01, 0.05), 3),
+                        "dup_prob": round(rng.uniform(0.01, 0.05), 3),
+                        "stamp_jitter_s": round(rng.uniform(0.0005, 0.002), 5)}
+
+
+def split(family):
+    """(base family, [effects]) of a name such as landing_photo+rolling_shutter; "+camera" is
+    every effect but the fisheye (one lens at a time)."""
+    base, *effects = family.split("+")
+    out = []
+    for e in effects:
+        out += [k for k in EFFECTS if k != "lens_fisheye"] if e == "camera" else [e]
+    return base, out
+
+
+def known(family):
+    base, effects = split(family)
+    return base in FAMILIES and all(e in EFFECTS for e in effects)
+
+
+def describe(family):
+    base, effects = split(family)
+    return "; ".join([FAMILIES[base]] + [EFFECTS[e] for e in effects])
+
 
 # Flying area, sensors and sim step as in the shipped scenarios (config/scenarios/landing_a.yaml).
 _MOCAP = {"rate_hz": 100, "latency_s": 0.010, "pos_sigma_m": 0.0003, "rot_sigma_rad": 0.0015,
@@ -258,9 +328,21 @@ def _moving_platform(rng, scene, speed_range, deck):
 
 
 def draw(family, seed):
-    """The scenario (a dict, as a config/scenarios file holds) that `seed` draws from `family`."""
-    if family not in FAMILIES:
-        raise KeyError("unknown scene family '%s' (known: %s)" % (family, ", ".join(sorted(FAMILIES))))
+    """The scenario (a dict, as a config/scenarios file holds) that `seed` draws from `family`
+    (a base family, optionally with camera effects: landing_photo+rolling_shutter)."""
+    base, effects = split(family)
+    if not known(family):
+        raise KeyError("unknown scene family '%s' (known: %s; effects: %s)"
+                       % (family, ", ".join(sorted(FAMILIES)), ", ".join(EFFECTS)))
+    s = _draw(base, seed)
+    for e in effects:
+        _effect(random.Random("%s/%d/%s" % (base, seed, e)), e, s)
+    if effects:
+        s["name"] = family
+    return s
+
+
+def _draw(family, seed):
     rng = random.Random("%s/%d" % (family, seed))
     if family == "landing_photo":
         return _landing(rng, family, _photo(rng, SURFACE_PHOTOS, rng.uniform(1.5, 3.0)),

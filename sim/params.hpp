@@ -225,6 +225,52 @@ struct BaroParams {
   void validate() const;
 };
 
+/// A real small-drone camera's imperfections (issue 41; sim/camera_effects.hpp models them), each
+/// switched on by its own `enabled` under a camera's `effects:` and off by default, so a
+/// scenario without the block renders bit for bit as before.
+struct CameraEffects {
+  /// Rolling shutter: row v is exposed line_delay_s x v after row 0 (the frame's stamp names
+  /// row 0's mid-exposure, as alight-camera stamps a V4L2 start-of-exposure buffer).
+  bool rolling_shutter = false;
+  double line_delay_s = 2e-5;
+  /// Automatic exposure steps: a step of up to +-ae_max_ev, ae_rate_hz on average, then the
+  /// exposure control brings it back over ae_lag_frames frames.
+  bool exposure_steps = false;
+  double ae_max_ev = 2.0;
+  double ae_rate_hz = 0.5;
+  int ae_lag_frames = 6;
+  /// Vignetting: natural (cos^4-like) radial falloff, the image corner at vignetting_corner of
+  /// the centre.
+  bool vignetting = false;
+  double vignetting_corner = 0.6;
+  /// The lens the simulator renders with instead of the camera_info's: plumb_bob (radial-
+  /// tangential k1 k2 p1 p2 k3) or equidistant (fisheye k1 k2 k3 k4; the fifth must be 0).
+  bool lens = false;
+  std::string lens_model = "plumb_bob";
+  std::array<double, 5> lens_coefficients{};
+  /// The driver's delivery: frames dropped or delivered twice, stamps jittered.
+  bool driver = false;
+  double drop_prob = 0.02;
+  double dup_prob = 0.02;
+  double stamp_jitter_s = 0.001;
+  static const ParamSchema<CameraEffects>& schema();
+  void validate() const;
+};
+
+/// Motor vibration of the airframe (issue 41): harmonics base_hz x k (k = 1..harmonics,
+/// amplitude / k) as angular and linear jitter of every camera mount, and the same motion seen
+/// by the IMU (imu_share of it).
+struct VibrationParams {
+  bool enabled = false;
+  double base_hz = 120.0;
+  int harmonics = 2;
+  double angle_rad = 0.002;
+  double linear_m = 5e-5;
+  double imu_share = 1.0;
+  static const ParamSchema<VibrationParams>& schema();
+  void validate() const;
+};
+
 struct CameraParams {
   bool enabled = true;
   std::string mount = "downward";  ///< key under the vehicle file's `cameras:`
@@ -242,6 +288,7 @@ struct CameraParams {
   double auto_gain_min = 0.25;
   double auto_gain_rate = 0.1;
   double auto_gain_tolerance = 0.05;
+  CameraEffects effects;  ///< `effects:`, all off by default
   static const ParamSchema<CameraParams>& schema();
   void validate() const;
 };
@@ -302,6 +349,7 @@ struct Scenario {
     c.enabled = false;
     return c;
   }();
+  VibrationParams vibration;
   LightingParams lighting;
   RandomizeParams randomize;
   Vector3d start_position_m = Vector3d::Zero();  ///< `start.position_m`
@@ -315,6 +363,10 @@ struct CameraRig {
   CameraMount mount;
   CameraModel model;
 };
+
+/// `model` with the lens of `effects` when effects.lens is on (the simulator renders with it;
+/// the vision must undistort with the same model), else `model` unchanged.
+CameraModel with_lens(const CameraModel& model, const CameraEffects& effects);
 
 /// Reads the `vehicle:` section of a vehicle file.
 VehicleParams load_vehicle_params(const std::string& vehicle_file);

@@ -428,6 +428,94 @@ const ParamSchema<BaroParams>& BaroParams::schema() {
   return schema;
 }
 
+const ParamSchema<CameraEffects>& CameraEffects::schema() {
+  using P = CameraEffects;
+  static const ParamSchema<P> schema = [] {
+    ParamSchema<P> s;
+    s.group("rolling_shutter",
+            "a rolling-shutter CMOS sensor: rows exposed one after another, each with the "
+            "vehicle's pose at its own time; the frame's stamp stays row 0's mid-exposure (as "
+            "alight-camera stamps a V4L2 start-of-exposure buffer) and the line delay goes out "
+            "as the image's line_delay_ns metadata",
+            [](ParamSchema<P>& g) {
+              g.add("enabled", &P::rolling_shutter, Range::any(), "", "expose row by row");
+              g.add("line_delay_s", &P::line_delay_s, Range::closed(1e-6, 1e-4), "s",
+                    "from one row's exposure to the next's (10-40 us: 5-20 ms readout at 480 "
+                    "rows)");
+            });
+    s.group("exposure_steps",
+            "a camera's automatic exposure stepping: a step of up to +-max_ev, then its control "
+            "brings it back over lag_frames frames; only the brightness changes (the blur stays "
+            "exposure_s's)",
+            [](ParamSchema<P>& g) {
+              g.add("enabled", &P::exposure_steps, Range::any(), "", "step the exposure");
+              g.add("max_ev", &P::ae_max_ev, Range::open_closed(0, 3), "EV",
+                    "largest step (uniform in +-max_ev; 1 EV doubles the brightness)");
+              g.add("rate_hz", &P::ae_rate_hz, Range::open_closed(0, 10), "Hz",
+                    "steps per second on average (a step starts on a frame with probability "
+                    "rate_hz / camera rate)");
+              g.add("lag_frames", &P::ae_lag_frames, Range::closed(1, 60), "frames",
+                    "frames until the exposure has settled back (linear in EV)");
+            });
+    s.group("vignetting", "the lens's radial falloff of brightness (cos^4-like)",
+            [](ParamSchema<P>& g) {
+              g.add("enabled", &P::vignetting, Range::any(), "", "darken towards the corners");
+              g.add("corner_ratio", &P::vignetting_corner, Range::closed(0.1, 1), "",
+                    "brightness at the image's farthest corner relative to the principal point");
+            });
+    s.group("lens",
+            "the lens rendered instead of the camera_info's (the vision must undistort with the "
+            "same: in process the harness hands it this model; over LCM give alight-vision a "
+            "vehicle file whose camera_info names it)",
+            [](ParamSchema<P>& g) {
+              g.add("enabled", &P::lens, Range::any(), "", "render with this lens");
+              g.add("model", &P::lens_model, Range::any(), "",
+                    "plumb_bob (radial-tangential) or equidistant (fisheye, OpenCV's and ROS's)")
+                  .one_of({"plumb_bob", "equidistant"});
+              g.add("coefficients", &P::lens_coefficients, Range::closed(-2, 2), "",
+                    "plumb_bob: k1 k2 p1 p2 k3; equidistant: k1 k2 k3 k4 0")
+                  .check(
+                      [](const P& p) {
+                        return p.lens_model != "equidistant" || p.lens_coefficients[4] == 0.0;
+                      },
+                      "must end in 0 for equidistant (four coefficients k1..k4)");
+            });
+    s.group("driver", "the camera driver's delivery, as V4L2 and UVC drivers misbehave",
+            [](ParamSchema<P>& g) {
+              g.add("enabled", &P::driver, Range::any(), "", "drop, repeat and jitter frames");
+              g.add("drop_prob", &P::drop_prob, Range::closed(0, 0.5), "",
+                    "a frame is lost (its seq skipped, as a V4L2 sequence gap)");
+              g.add("dup_prob", &P::dup_prob, Range::closed(0, 0.5), "",
+                    "a frame repeats the previous one's pixels under a new seq and stamp");
+              g.add("stamp_jitter_s", &P::stamp_jitter_s, Range::closed(0, 0.005), "s",
+                    "standard deviation of the stamp's error (the pixels keep their true time; "
+                    "stamps stay increasing)");
+            });
+    return s;
+  }();
+  return schema;
+}
+
+const ParamSchema<VibrationParams>& VibrationParams::schema() {
+  using P = VibrationParams;
+  static const ParamSchema<P> schema = [] {
+    ParamSchema<P> s;
+    s.add("enabled", &P::enabled, Range::any(), "", "shake the cameras' mounts and the IMU");
+    s.add("base_hz", &P::base_hz, Range::closed(80, 250), "Hz",
+          "the motors' fundamental (their rotation rate)");
+    s.add("harmonics", &P::harmonics, Range::closed(1, 3), "",
+          "harmonics base_hz x k, k = 1..harmonics, each with amplitude / k");
+    s.add("angle_rad", &P::angle_rad, Range::closed(0, 0.02), "rad",
+          "angular amplitude of the fundamental about each body axis");
+    s.add("linear_m", &P::linear_m, Range::closed(0, 0.002), "m",
+          "linear amplitude of the fundamental along each body axis");
+    s.add("imu_share", &P::imu_share, Range::closed(0, 1), "",
+          "share of that motion the IMU feels (1: on the same rigid frame; less: damped mount)");
+    return s;
+  }();
+  return schema;
+}
+
 const ParamSchema<CameraParams>& CameraParams::schema() {
   using P = CameraParams;
   static const ParamSchema<P> schema = [] {
@@ -469,6 +557,8 @@ const ParamSchema<CameraParams>& CameraParams::schema() {
           "the gain changes only once the metering wants it this much higher or lower "
           "(hysteresis: a still view keeps one gain instead of hunting frame to frame; the "
           "target leaves room for it below full scale)");
+    s.section("effects", &P::effects, CameraEffects::schema(),
+              "a real camera's imperfections (issue 41), each off by default");
     return s;
   }();
   return schema;
@@ -556,6 +646,8 @@ const ParamSchema<Scenario>& Scenario::schema() {
     s.section("flow_camera", &P::flow_camera, CameraParams::schema(),
               "the downward camera rendered besides `camera` for the onboard estimator's flow "
               "(FLOW_CAMERA; ingress without motion capture); enabled: false by default");
+    s.section("vibration", &P::vibration, VibrationParams::schema(),
+              "motor vibration of the airframe: the cameras' mounts and the IMU; off by default");
     s.section("lighting", &P::lighting, LightingParams::schema(), "the renderer's light");
     s.section("randomize", &P::randomize, RandomizeParams::schema(),
               "what a seed changes: platform pose, texture seeds (always) and lighting");
@@ -604,6 +696,17 @@ void ImuParams::validate() const { schema().validate(*this); }
 void RangefinderParams::validate() const { schema().validate(*this); }
 void BaroParams::validate() const { schema().validate(*this); }
 void CameraParams::validate() const { schema().validate(*this); }
+void CameraEffects::validate() const { schema().validate(*this); }
+void VibrationParams::validate() const { schema().validate(*this); }
+
+CameraModel with_lens(const CameraModel& model, const CameraEffects& effects) {
+  if (!effects.lens) return model;
+  CameraModel m = model;
+  m.distortion = effects.lens_model == "equidistant" ? CameraModel::Distortion::kEquidistant
+                                                     : CameraModel::Distortion::kPlumbBob;
+  m.D = effects.lens_coefficients;
+  return m;
+}
 void LightingParams::validate() const { schema().validate(*this); }
 void RandomizeParams::validate() const { schema().validate(*this); }
 void Scenario::validate() const { schema().validate(*this); }

@@ -440,6 +440,13 @@ void Renderer::accumulate(const Scene& scene, const Isometry3d& X_WC, float weig
       threads_ * 4);
 }
 
+void Renderer::accumulate_rows(const Scene& scene, const Isometry3d& X_WC, float weight, int row0,
+                               int row1, cv::Mat& acc) const {
+  assert(acc.type() == CV_32F && acc.rows == model_.height && acc.cols == model_.width);
+  assert(0 <= row0 && row0 <= row1 && row1 <= model_.height);
+  if (row0 < row1) render_rows(scene, X_WC, weight, row0, row1, acc.ptr<float>(), acc.step1());
+}
+
 void Renderer::render_rows(const Scene& scene, const Isometry3d& X_WC, float weight, int row0,
                            int row1, float* out, size_t out_step) const {
   const int W = model_.width, n = ss_ * ss_;

@@ -27,6 +27,10 @@ class Renderer {
   cv::Mat render(const Scene& scene, const Isometry3d& X_WC, float gain = 1.f) const;
   /// Adds `weight` x the radiance seen from X_WC to a CV_32F image (for motion blur).
   void accumulate(const Scene& scene, const Isometry3d& X_WC, float weight, cv::Mat& acc) const;
+  /// The same for rows [row0, row1) only, on the calling thread (a rolling shutter's band of
+  /// rows, each band from its own pose).
+  void accumulate_rows(const Scene& scene, const Isometry3d& X_WC, float weight, int row0, int row1,
+                       cv::Mat& acc) const;
 
   /// Use up to this many threads (cv::parallel_for_ stripes); 1 renders on the calling thread.
   void set_threads(int n) { threads_ = n < 1 ? 1 : n; }

@@ -54,6 +54,9 @@ baro_t to_msg(const BaroSample& s) {
 image_t to_msg(const CameraFrame& frame) {
   image_t m = image_to_msg(frame.pixels, frame.utime, frame.seq);
   set_exposure_metadata(m, frame.exposure_s);
+  // A rolling shutter's line delay, where the vision can read it (Image::line_delay_s).
+  if (frame.line_delay_s > 0)
+    set_metadata_int(m, "line_delay_ns", std::llround(frame.line_delay_s * 1e9));
   return m;
 }
 

@@ -148,6 +148,16 @@ int main(int argc, char** argv) {
     std::vector<std::string> key_warnings;
     KillVerifier kill_verifier = autonomy::load_kill_verifier(vehicle_file, &key_warnings);
     for (const auto& w : key_warnings) spdlog::info("alight-sim: {}", w);
+    // The vision undistorts with the vehicle file's camera_info: a scenario's lens it does not
+    // name is a mismatch the vision cannot see (sim/README.md, "A real camera's effects").
+    if (rig && scenario.camera.effects.lens) {
+      const CameraModel rendered = sim::with_lens(rig->model, scenario.camera.effects);
+      if (rendered.distortion != rig->model.distortion || rendered.D != rig->model.D)
+        spdlog::warn(
+            "alight-sim: camera.effects.lens renders a {} lens that {} does not name; give "
+            "alight-vision a vehicle file whose camera_info has the same lens",
+            scenario.camera.effects.lens_model, vehicle_file);
+    }
     uint64_t disarms_refused = 0;
     Node node(args, "alight-sim");
     // Disarmed until the outer loop says otherwise; its silence is the autopilot's command-loss

@@ -24,6 +24,15 @@ PoseBufferParams history_params() {
   return p;
 }
 
+// Rows rendered from one pose under a rolling shutter: 0.32 ms of readout at 40 us per row, a
+// tenth of a pixel of motion at 1 m/s from 1.5 m and an eighth of a 250 Hz vibration's period.
+constexpr int kRowsPerBand = 8;
+
+// From row 0's exposure to the last row's [us]; 0 for a global shutter.
+int64_t readout_us(const CameraParams& c, int rows) {
+  return c.effects.rolling_shutter ? std::llround(c.effects.line_delay_s * 1e6 * (rows - 1)) : 0;
+}
+
 PoseSample to_pose(const VehicleState& s, int64_t utime) {
   PoseSample p;
   p.utime = utime;
@@ -84,11 +93,19 @@ Simulator::Simulator(const Scenario& scenario, const VehicleParams& vehicle, uin
   flow_camera_.rig = std::move(flow_camera);
   flow_camera_.rng.seed(substream(seed, 7));
   start_camera(flow_camera_);
+  // The camera effects' streams (issue 41): new ones, so the streams above stay as they were.
+  camera_.fx_rng.seed(substream(seed, 8));
+  flow_camera_.fx_rng.seed(substream(seed, 9));
+  vibration_ = Vibration(scenario.vibration, substream(seed, 10));
 }
 
 void Simulator::start_camera(CameraStream& c) {
   if (!c.rig || !c.params.enabled) return;
+  const CameraEffects& fx = c.params.effects;
+  c.rig->model = with_lens(c.rig->model, fx);
   c.renderer = std::make_unique<Renderer>(c.rig->model, c.params.supersample);
+  if (fx.exposure_steps) c.exposure_steps = ExposureSteps(fx, c.params.rate_hz);
+  if (fx.vignetting) c.vignette = vignetting_map(c.rig->model, fx.vignetting_corner);
   c.auto_gain = AutoGain(c.params);
   c.period_us = std::llround(1e6 / c.params.rate_hz);
   c.next_frame_utime = now_utime_ + c.period_us;
@@ -266,34 +283,99 @@ void Simulator::after_step(double dt, bool imu) {
   const PoseSample truth = to_pose(state_, now_utime_);
   history_.add(truth);
   if (scenario_.mocap.enabled) mocap_.update(now_utime_, truth);
-  if (scenario_.imu.enabled && imu)
-    imu_.update(now_utime_, dt_us_, last_.specific_force_B, state_.omega_B);
+  if (scenario_.imu.enabled && imu) {
+    if (vibration_.enabled()) {
+      // The IMU shakes with the frame (imu_share of it): the vibration's mean rate and
+      // acceleration over this step, so the IMU's average over its sample is the vibration's
+      // exactly; its specific force is seen in the shaken axes (small angles).
+      const double share = vibration_.params().imu_share;
+      const double t1 = static_cast<double>(now_utime_ - scenario_.start_utime) * 1e-6;
+      const double t0 = t1 - dt;
+      const Vector3d tilt = share * vibration_.angle(t1);
+      const Vector3d& f = last_.specific_force_B;
+      imu_.update(now_utime_, dt_us_, f - tilt.cross(f) + share * vibration_.mean_accel(t0, t1),
+                  state_.omega_B + share * vibration_.mean_rate(t0, t1));
+    } else {
+      imu_.update(now_utime_, dt_us_, last_.specific_force_B, state_.omega_B);
+    }
+  }
   if (scenario_.rangefinder.enabled) rangefinder_.update(now_utime_, truth.X_WB(), *scene_);
   if (scenario_.baro.enabled) baro_.update(now_utime_, state_.p_W_B);
   if (camera_.renderer) schedule_camera(camera_);
   if (flow_camera_.renderer) schedule_camera(flow_camera_);
 }
 
+Isometry3d Simulator::camera_pose_at(double t_us, const Isometry3d& X_BC) const {
+  const auto pose = history_.at(std::llround(t_us));
+  Isometry3d X_WB =
+      pose ? pose->X_WB() : make_transform(state_.q_WB.toRotationMatrix(), state_.p_W_B);
+  if (vibration_.enabled())
+    X_WB = X_WB * vibration_.jitter((t_us - static_cast<double>(scenario_.start_utime)) * 1e-6);
+  return camera_in_world(X_WB, X_BC);
+}
+
 void Simulator::schedule_camera(CameraStream& cam) {
   const CameraParams& c = cam.params;
+  const CameraEffects& fx = c.effects;
+  const int rows = cam.rig->model.height;
   const int64_t half_exposure = std::llround(0.5 * c.exposure_s * 1e6);
-  if (now_utime_ < cam.next_frame_utime + half_exposure) return;
+  // A frame is complete when its last row's exposure has ended.
+  if (now_utime_ < cam.next_frame_utime + half_exposure + readout_us(c, rows)) return;
   PendingFrame f;
   f.utime = cam.next_frame_utime;
+  f.stamp = f.utime;
   f.seq = ++cam.frame_seq;
   cam.next_frame_utime += cam.period_us;
   std::normal_distribution<double> g(0.0, 1.0);
   f.gain = std::clamp(1.0 + c.gain_jitter * g(cam.rng), 0.2, 3.0);
   f.noise_offset = std::uniform_int_distribution<size_t>(0, cam.noise.size() / 2)(cam.rng);
-  const int k = c.motion_blur_samples;
   const Isometry3d X_BC = cam.rig->mount.X_BC();
-  for (int i = 0; i < k; ++i) {
-    const int64_t t =
-        k == 1 ? f.utime : f.utime - half_exposure + (2 * half_exposure * i) / (k - 1);
-    const auto pose = history_.at(t);
-    const Isometry3d X_WB =
-        pose ? pose->X_WB() : make_transform(state_.q_WB.toRotationMatrix(), state_.p_W_B);
-    f.X_WC.push_back(camera_in_world(X_WB, X_BC));
+  if (!fx.rolling_shutter && !vibration_.enabled()) {
+    const int k = c.motion_blur_samples;
+    for (int i = 0; i < k; ++i) {
+      const int64_t t =
+          k == 1 ? f.utime : f.utime - half_exposure + (2 * half_exposure * i) / (k - 1);
+      const auto pose = history_.at(t);
+      const Isometry3d X_WB =
+          pose ? pose->X_WB() : make_transform(state_.q_WB.toRotationMatrix(), state_.p_W_B);
+      f.X_WC.push_back(camera_in_world(X_WB, X_BC));
+    }
+  } else {
+    // Bands of rows, each from the poses over its own exposure. A vibration blurs within the
+    // exposure: four poses per period of its highest harmonic, at most 8 (each pose is a
+    // rendering: 8 keep a 12 ms exposure at 250 Hz, three periods, to a blur of that extent).
+    int k = c.motion_blur_samples;
+    if (vibration_.enabled())
+      k = std::max(
+          k, std::min(8, static_cast<int>(std::ceil(4 * c.exposure_s * vibration_.max_hz()))));
+    const double line_us = fx.rolling_shutter ? fx.line_delay_s * 1e6 : 0.0;
+    const int band = fx.rolling_shutter ? kRowsPerBand : rows;
+    for (int r0 = 0; r0 < rows; r0 += band) {
+      const int r1 = std::min(rows, r0 + band);
+      const double t_mid = static_cast<double>(f.utime) + line_us * 0.5 * (r0 + r1 - 1);
+      std::vector<Isometry3d> poses;
+      for (int i = 0; i < k; ++i) {
+        const double t =
+            k == 1 ? t_mid : t_mid - half_exposure + (2.0 * half_exposure * i) / (k - 1);
+        poses.push_back(camera_pose_at(t, X_BC));
+      }
+      f.band_rows.push_back(r0);
+      f.band_X_WC.push_back(std::move(poses));
+    }
+    f.band_rows.push_back(rows);
+    f.X_WC = {camera_pose_at(static_cast<double>(f.utime), X_BC)};  // row 0's, at the stamp
+  }
+  if (fx.exposure_steps) f.ev = cam.exposure_steps.next_ev(cam.fx_rng);
+  if (fx.driver) {
+    const DriverDraw d = draw_driver(fx, cam.fx_rng);
+    if (d.dropped) {
+      ++cam.frames_dropped;
+      return;
+    }
+    f.duplicate = d.duplicated;
+    // Stamps stay increasing, as a driver's do.
+    f.stamp = std::max<int64_t>(f.utime + std::llround(d.stamp_error_s * 1e6), cam.last_stamp + 1);
+    cam.last_stamp = f.stamp;
   }
   if (cam.pending) ++cam.frames_skipped;
   cam.pending = std::move(f);
@@ -315,24 +397,45 @@ std::optional<CameraFrame> Simulator::take_frame(CameraStream& cam) {
   if (!cam.pending) return std::nullopt;
   const int64_t latency = std::llround(cam.params.latency_s * 1e6);
   const int64_t half_exposure = std::llround(0.5 * cam.params.exposure_s * 1e6);
-  if (now_utime_ < cam.pending->utime + half_exposure + latency) return std::nullopt;
+  const CameraModel& model = cam.rig->model;
+  const int64_t readout = readout_us(cam.params, model.height);
+  if (now_utime_ < cam.pending->utime + half_exposure + readout + latency) return std::nullopt;
   const PendingFrame f = std::move(*cam.pending);
   cam.pending.reset();
-  const CameraModel& model = cam.rig->model;
-  cv::Mat acc(model.height, model.width, CV_32F, cv::Scalar(0));
-  const double gain = f.gain * cam.auto_gain.gain();
-  const float w = static_cast<float>(gain / f.X_WC.size());
-  place_platform(f.utime);  // a moving platform as at mid-exposure (not smeared over it)
-  for (const auto& X_WC : f.X_WC) cam.renderer->accumulate(*scene_, X_WC, w, acc);
-  place_platform(now_utime_);
-  cam.auto_gain.update(acc, gain);
-  const float sigma = static_cast<float>(cam.params.noise_sigma);
+  const CameraEffects& fx = cam.params.effects;
   CameraFrame out;
-  out.utime = f.utime;
+  out.utime = f.stamp;
   out.seq = f.seq;
   out.exposure_s = cam.params.exposure_s;
-  out.gain = gain;
+  out.line_delay_s = fx.rolling_shutter ? fx.line_delay_s : 0.0;
+  out.exposure_ev = f.ev;
   out.X_WC = f.X_WC[f.X_WC.size() / 2];
+  if (f.duplicate && !cam.last_pixels.empty()) {
+    // The driver hands the previous buffer out again: its pixels, this frame's seq and stamp.
+    out.duplicate = true;
+    out.gain = cam.auto_gain.gain();
+    out.pixels = cam.last_pixels.clone();
+    return out;
+  }
+  cv::Mat acc(model.height, model.width, CV_32F, cv::Scalar(0));
+  double gain = f.gain * cam.auto_gain.gain();
+  if (f.ev != 0.0) gain *= std::exp2(f.ev);
+  place_platform(f.utime);  // a moving platform as at mid-exposure (not smeared over it)
+  if (f.band_X_WC.empty()) {
+    const float w = static_cast<float>(gain / f.X_WC.size());
+    for (const auto& X_WC : f.X_WC) cam.renderer->accumulate(*scene_, X_WC, w, acc);
+  } else {
+    for (size_t b = 0; b < f.band_X_WC.size(); ++b) {
+      const float w = static_cast<float>(gain / f.band_X_WC[b].size());
+      for (const auto& X_WC : f.band_X_WC[b])
+        cam.renderer->accumulate_rows(*scene_, X_WC, w, f.band_rows[b], f.band_rows[b + 1], acc);
+    }
+  }
+  place_platform(now_utime_);
+  if (!cam.vignette.empty()) cv::multiply(acc, cam.vignette, acc);
+  cam.auto_gain.update(acc, gain);
+  const float sigma = static_cast<float>(cam.params.noise_sigma);
+  out.gain = gain;
   out.pixels.create(model.height, model.width, CV_8U);
   const float* noise = cam.noise.data() + f.noise_offset;
   for (int v = 0; v < model.height; ++v) {
@@ -341,6 +444,7 @@ std::optional<CameraFrame> Simulator::take_frame(CameraStream& cam) {
     const float* nz = noise + static_cast<size_t>(v) * model.width;
     for (int u = 0; u < model.width; ++u) o[u] = cv::saturate_cast<uchar>(a[u] + sigma * nz[u]);
   }
+  if (fx.driver && fx.dup_prob > 0) cam.last_pixels = out.pixels.clone();
   return out;
 }
 
@@ -372,7 +476,8 @@ cv::Mat Simulator::render(const CameraMount& mount, const CameraModel& model,
   const Renderer* r = nullptr;
   auto same = [&](const CameraModel& m) {
     return m.width == model.width && m.height == model.height && m.fx == model.fx &&
-           m.fy == model.fy && m.cx == model.cx && m.cy == model.cy && m.D == model.D;
+           m.fy == model.fy && m.cx == model.cx && m.cy == model.cy && m.D == model.D &&
+           m.distortion == model.distortion;
   };
   if (camera_.renderer && same(camera_.renderer->model()) && camera_.params.supersample == 1) {
     r = camera_.renderer.get();

@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "common/pose_buffer.hpp"
+#include "sim/camera_effects.hpp"
 #include "sim/dynamics.hpp"
 #include "sim/params.hpp"
 #include "sim/platform_motion.hpp"
@@ -53,11 +54,17 @@ struct Truth {
 
 /// One camera frame.
 struct CameraFrame {
-  int64_t utime = 0;  ///< middle of the exposure [us]
-  int64_t seq = 0;    ///< frame counter
+  /// Middle of the exposure [us]; under a rolling shutter, of row 0's (row v's is utime + v x
+  /// line_delay_s), as alight-camera stamps a V4L2 start-of-exposure buffer. With the driver's
+  /// stamp jitter (CameraEffects::stamp_jitter_s) this stamp carries the error, not the pixels.
+  int64_t utime = 0;
+  int64_t seq = 0;  ///< frame counter (a dropped frame's number is skipped)
   double exposure_s = 0.0;
-  double gain = 1.0;  ///< gain applied to this frame (flicker times the automatic gain)
-  Isometry3d X_WC = Isometry3d::Identity();  ///< camera pose at mid-exposure
+  double gain = 1.0;          ///< gain applied to this frame (flicker times the automatic gain)
+  double line_delay_s = 0.0;  ///< rolling shutter's row-to-row delay; 0: global shutter
+  double exposure_ev = 0.0;   ///< the automatic exposure's step on this frame [EV]
+  bool duplicate = false;     ///< the driver delivered the previous frame's pixels again
+  Isometry3d X_WC = Isometry3d::Identity();  ///< camera pose at (row 0's) mid-exposure
   cv::Mat pixels;                            ///< mono8
 };
 
@@ -160,6 +167,15 @@ class Simulator {
   std::optional<CameraFrame> take_camera();
   /// Number of frames skipped by take_camera() so far.
   int64_t camera_frames_skipped() const { return camera_.frames_skipped; }
+  /// Frames the simulated driver lost (camera.effects.driver) so far.
+  int64_t camera_frames_dropped() const { return camera_.frames_dropped; }
+  /// The camera's model as rendered: the rig's with the scenario's lens (camera.effects.lens);
+  /// the vision must undistort with this one. The rig's when there is no camera.
+  std::optional<CameraModel> camera_model() const {
+    return camera_.rig ? std::optional<CameraModel>(camera_.rig->model) : std::nullopt;
+  }
+  /// The airframe's vibration (scenario vibration:).
+  const Vibration& vibration() const { return vibration_; }
   /// The same for the flow camera (scenario flow_camera, FLOW_CAMERA).
   std::optional<CameraFrame> take_flow_camera();
   int64_t flow_camera_frames_skipped() const { return flow_camera_.frames_skipped; }
@@ -177,6 +193,13 @@ class Simulator {
     double gain = 1.0;
     size_t noise_offset = 0;
     std::vector<Isometry3d> X_WC;  // over the exposure
+    // Camera effects: per band of rows [band_rows[b], band_rows[b + 1]) its poses over the
+    // exposure (rolling shutter, vibration); empty: the whole frame from X_WC.
+    std::vector<int> band_rows;
+    std::vector<std::vector<Isometry3d>> band_X_WC;
+    double ev = 0.0;
+    bool duplicate = false;
+    int64_t stamp = 0;  // the published stamp (utime plus the driver's jitter)
   };
   // One rendered camera: its parameters, rig, renderer, noise and frame schedule.
   struct CameraStream {
@@ -188,6 +211,14 @@ class Simulator {
     int64_t period_us = 0, next_frame_utime = 0, frame_seq = 0, frames_skipped = 0;
     AutoGain auto_gain;
     std::optional<PendingFrame> pending;
+    // Camera effects (camera_effects.hpp): their own random stream, so switching one on
+    // changes nothing else of a seed.
+    std::mt19937_64 fx_rng;
+    ExposureSteps exposure_steps;
+    cv::Mat vignette;     // per-pixel factor; empty without vignetting
+    cv::Mat last_pixels;  // for the driver's duplicates
+    int64_t last_stamp = 0;
+    int64_t frames_dropped = 0;
   };
   void physics_step();
   // Outcome flags and sensors after the state moved to now_utime_ (the IMU only when this
@@ -199,6 +230,9 @@ class Simulator {
   AttitudeCommand autopilot_command();
   void start_camera(CameraStream& c);
   void schedule_camera(CameraStream& c);
+  // The camera's pose at t_us along the simulated trajectory (pose history), shaken by the
+  // vibration.
+  Isometry3d camera_pose_at(double t_us, const Isometry3d& X_BC) const;
   std::optional<CameraFrame> take_frame(CameraStream& c);
 
   Scenario scenario_;
@@ -230,6 +264,7 @@ class Simulator {
   int n_collisions_ = 0;
   double rest_s_ = 0.0;
 
+  Vibration vibration_;
   CameraStream camera_, flow_camera_;
   mutable std::unique_ptr<Renderer> adhoc_renderer_;  // for render() with another model
   PoseBuffer history_;

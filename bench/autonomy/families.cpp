@@ -86,6 +86,7 @@ struct Run {
   std::vector<double> widths_m;  ///< full views' opening widths (ingress)
   std::vector<double> cpu_ms;    ///< the vision's thread CPU time per frame
   double true_width_m = std::nan("");
+  sim::CameraEffects effects;  ///< the scenario's camera effects (its lens: the vision's model)
 };
 
 bool success(const Run& x) {
@@ -251,6 +252,7 @@ int main(int argc, char** argv) try {
       const auto scenario = sim::load_scenario(x.scenario_file);
       if (scenario.wall && scenario.wall->has_opening)
         x.true_width_m = scenario.wall->opening_size_m.x();
+      x.effects = scenario.camera.effects;
       all.push_back(std::move(x));
     }
   }
@@ -262,7 +264,11 @@ int main(int argc, char** argv) try {
     for (size_t i = next++; i < all.size(); i = next++) {
       Run& x = all[i];
       const Mission mission = mission_of(x.family);
-      RealVision vision(vehicle, mission);
+      // The vision undistorts with the lens the simulator renders (camera.effects.lens).
+      const auto rig =
+          sim::load_camera_rig(vehicle, mission == Mission::kLanding ? "downward" : "forward");
+      RealVision vision(
+          vehicle, mission, [](vision::PipelineParams&) {}, sim::with_lens(rig.model, x.effects));
       ClosedLoopConfig c;
       c.vehicle_file = vehicle;
       c.scenario_file = x.scenario_file;

@@ -12,11 +12,17 @@ RealVision::RealVision(const std::string& vehicle_file, Mission mission)
     : RealVision(vehicle_file, mission, [](vision::PipelineParams&) {}) {}
 
 RealVision::RealVision(const std::string& vehicle_file, Mission mission,
-                       const std::function<void(vision::PipelineParams&)>& adjust) {
+                       const std::function<void(vision::PipelineParams&)>& adjust)
+    : RealVision(vehicle_file, mission, adjust, std::nullopt) {}
+
+RealVision::RealVision(const std::string& vehicle_file, Mission mission,
+                       const std::function<void(vision::PipelineParams&)>& adjust,
+                       const std::optional<CameraModel>& model) {
   auto params = vision::load_node_params(vehicle_file);
   adjust(params.pipeline);
-  const auto rig =
+  auto rig =
       sim::load_camera_rig(vehicle_file, mission == Mission::kLanding ? "downward" : "forward");
+  if (model) rig.model = *model;
   pipeline_ = std::make_unique<vision::Pipeline>(
       mission == Mission::kLanding ? vision::Mission::kLanding : vision::Mission::kIngress,
       params.pipeline, rig.model, rig.mount);

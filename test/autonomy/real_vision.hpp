@@ -10,6 +10,7 @@
 #include <string>
 
 #include "autonomy/types.hpp"
+#include "common/camera_model.hpp"
 #include "common/pose_buffer.hpp"
 #include "sim/simulator.hpp"
 
@@ -27,6 +28,11 @@ class RealVision {
   /// ... with `adjust` applied to the vehicle file's pipeline parameters (a rule switched off).
   RealVision(const std::string& vehicle_file, Mission mission,
              const std::function<void(vision::PipelineParams&)>& adjust);
+  /// ... undistorting with `model` instead of the vehicle file's (the scenario's lens,
+  /// sim::with_lens: the camera the simulator rendered).
+  RealVision(const std::string& vehicle_file, Mission mission,
+             const std::function<void(vision::PipelineParams&)>& adjust,
+             const std::optional<CameraModel>& model);
   ~RealVision();
   std::optional<TargetMeasurement> operator()(const sim::CameraFrame& f,
                                               const std::optional<PoseSample>& pose);
