@@ -62,10 +62,10 @@ std::map<std::string, std::vector<fs::path>> shipped_files() {
 TEST(ParamFilesTest, EveryShippedFileDumpsToYamlThatLoadsBackToTheSameParameters) {
   const auto files = shipped_files();
   EXPECT_EQ(files.at("vehicle").size(), 2u);
-  EXPECT_EQ(files.at("scenario").size(), 8u);  // with estimator_drift (issue 17)
+  EXPECT_EQ(files.at("scenario").size(), 10u);  // with estimator_drift and the moving platforms
   EXPECT_EQ(files.at("camera").size(), 2u);
   EXPECT_EQ(files.at("mocap").size(), 2u);
-  EXPECT_EQ(files.at("autopilot").size(), 8u);  // with sitl/ (issue 38)
+  EXPECT_EQ(files.at("autopilot").size(), 8u);  // with sitl/
   const fs::path dir = temp_dir("round_trip");
   for (const auto& [kind, paths] : files) {
     for (const auto& path : paths) {
