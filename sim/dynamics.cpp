@@ -68,13 +68,13 @@ StepResult Dynamics::contacts(const VehicleState& s, double margin_m) const {
   int severity = 0;
   auto check = [&](const Vector3d& r_B, bool is_foot) {
     bool ground = false;
-    penetrations(s.p_W_B + R * r_B, margin_m,
-                 [&](const Vector3d&, double, Contact c, const Vector3d&) {
-      severity = std::max(severity, static_cast<int>(c));
-      if (c == Contact::kFloor || c == Contact::kPlatformTop || c == Contact::kPlatformEdge)
-        ground = true;
-      if (c == Contact::kPlatformTop && is_foot) ++res.feet_on_platform_top;
-    });
+    penetrations(
+        s.p_W_B + R * r_B, margin_m, [&](const Vector3d&, double, Contact c, const Vector3d&) {
+          severity = std::max(severity, static_cast<int>(c));
+          if (c == Contact::kFloor || c == Contact::kPlatformTop || c == Contact::kPlatformEdge)
+            ground = true;
+          if (c == Contact::kPlatformTop && is_foot) ++res.feet_on_platform_top;
+        });
     if (ground && !is_foot) res.rim_touch = true;
   };
   for (const auto& r : feet_B_) check(r, true);
