@@ -16,6 +16,7 @@
 #include <string>
 #include <type_traits>
 
+#include "common/build_paths.hpp"
 #include "common/decode.hpp"
 #include "common/params.hpp"
 
@@ -78,7 +79,8 @@ class InputFile {
     dir_ = base + "/alight-fuzz-" + std::to_string(getpid());
     std::filesystem::create_directories(dir_ + "/" + subdir);
     std::error_code ec;
-    const std::filesystem::path cameras = ALIGHT_SOURCE_DIR "/config/cameras";
+    const std::filesystem::path cameras =
+        std::string(alight::build::source_dir()) + "/config/cameras";
     std::filesystem::create_directory_symlink(cameras, dir_ + "/cameras", ec);
     for (const auto& f : std::filesystem::directory_iterator(cameras, ec))
       std::filesystem::create_symlink(f.path(),

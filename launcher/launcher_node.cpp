@@ -26,6 +26,7 @@
 #include <sstream>
 #include <thread>
 
+#include "common/build_paths.hpp"
 #include "common/node.hpp"
 #include "common/operator_auth.hpp"
 #include "common/params.hpp"
@@ -457,7 +458,7 @@ int main(int argc, char** argv) {
     if (!lcm_url.empty()) lf.lcm_url = lcm_url;
     if (no_record) lf.record = false;
     const char* env_root = std::getenv("ALIGHT_ROOT");
-    const std::string root = env_root && *env_root ? env_root : ALIGHT_SOURCE_DIR;
+    const std::string root = env_root && *env_root ? env_root : alight::build::source_dir();
     if (log_root.empty()) {
       const char* env_logs = std::getenv("ALIGHT_LOG_ROOT");
       log_root = env_logs && *env_logs ? env_logs : root + "/logs";

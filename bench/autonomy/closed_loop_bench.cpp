@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "closed_loop.hpp"
+#include "common/build_paths.hpp"
 #include "support/stats.hpp"
 
 using namespace alight;
@@ -73,7 +74,7 @@ int main(int argc, char** argv) {
   app.add_flag("--ingress-only", ingress_only, "skip the landings");
   CLI11_PARSE(app, argc, argv);
 
-  const std::string root = ALIGHT_SOURCE_DIR;
+  const std::string root = alight::build::source_dir();
   std::printf(
       "oracle vision: %.1f Hz, sigma_xy %.3f m, sigma_z %.3f m, outliers %.0f %%; %d seeds\n",
       rate_hz, sigma_xy, sigma_z, 100 * outliers, seeds);

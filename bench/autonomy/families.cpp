@@ -47,6 +47,7 @@
 #include <vector>
 
 #include "closed_loop.hpp"
+#include "common/build_paths.hpp"
 #include "common/params.hpp"
 #include "real_vision.hpp"
 #include "sim/params.hpp"
@@ -188,7 +189,7 @@ int main(int argc, char** argv) try {
   std::string families =
       "landing_photo,landing_tiles,landing_lowtex,landing_none_photo,ingress_photo,"
       "ingress_solid_photo";
-  std::string vehicle = std::string(ALIGHT_SOURCE_DIR) + "/config/vehicles/pelican.yaml";
+  std::string vehicle = std::string(alight::build::source_dir()) + "/config/vehicles/pelican.yaml";
   double time_limit_s = 240;
   app.add_option("--families", families, "comma-separated families (scripts/scenes --list)");
   app.add_option("--runs", runs, "scenes drawn and flown per family")->check(CLI::Range(1, 10000));
@@ -206,7 +207,7 @@ int main(int argc, char** argv) try {
   app.add_option("--purpose", purpose_text,
                  "tune (refuse report seeds), report (refuse all but report seeds) or any")
       ->check(CLI::IsMember({"any", "tune", "report"}));
-  std::string seeds_file = std::string(ALIGHT_SOURCE_DIR) + "/config/seeds.yaml";
+  std::string seeds_file = std::string(alight::build::source_dir()) + "/config/seeds.yaml";
   app.add_option("--seeds-file", seeds_file, "the tune/report split of scene seeds");
   CLI11_PARSE(app, argc, argv);
   cv::setNumThreads(1);  // the jobs are the parallelism
@@ -237,9 +238,9 @@ int main(int argc, char** argv) try {
   for (const auto& fam : names) {
     for (int i = 0; i < runs; ++i) {
       const uint64_t seed = static_cast<uint64_t>(seed0 + i);
-      const std::string cmd = "'" + std::string(ALIGHT_SOURCE_DIR) + "/scripts/scenes' '" + fam +
-                              "' --seed " + std::to_string(seed) + " --out '" + dir.string() +
-                              "' > /dev/null";
+      const std::string cmd = "'" + std::string(alight::build::source_dir()) +
+                              "/scripts/scenes' '" + fam + "' --seed " + std::to_string(seed) +
+                              " --out '" + dir.string() + "' > /dev/null";
       if (std::system(cmd.c_str()) != 0) {
         std::fprintf(stderr, "alight_families_bench: scripts/scenes failed for family '%s'\n",
                      fam.c_str());

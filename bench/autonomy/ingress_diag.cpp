@@ -14,6 +14,7 @@
 
 #include "autonomy/convert.hpp"
 #include "closed_loop.hpp"
+#include "common/build_paths.hpp"
 #include "common/params.hpp"
 #include "sim/params.hpp"
 #include "vision/node/convert.hpp"
@@ -27,7 +28,7 @@ using namespace alight::autonomy::test;
 int main(int argc, char** argv) try {
   CLI::App app{"ingress diagnostics: per-frame vision against the truth"};
   std::string scenario_file, dump;
-  std::string vehicle = std::string(ALIGHT_SOURCE_DIR) + "/config/vehicles/pelican.yaml";
+  std::string vehicle = std::string(alight::build::source_dir()) + "/config/vehicles/pelican.yaml";
   uint64_t seed = 1;
   int every = 1;
   app.add_option("--scenario", scenario_file)->required();

@@ -16,6 +16,7 @@
 
 #include "autonomy/convert.hpp"
 #include "closed_loop.hpp"
+#include "common/build_paths.hpp"
 #include "common/params.hpp"
 #include "sim/params.hpp"
 #include "sim/scene.hpp"
@@ -30,7 +31,7 @@ using namespace alight::autonomy::test;
 int main(int argc, char** argv) try {
   CLI::App app{"landing diagnostics: per-frame vision against the truth"};
   std::string scenario_file, dump;
-  std::string vehicle = std::string(ALIGHT_SOURCE_DIR) + "/config/vehicles/pelican.yaml";
+  std::string vehicle = std::string(alight::build::source_dir()) + "/config/vehicles/pelican.yaml";
   uint64_t seed = 1;
   std::string shadow_prior;
   int every = 1;

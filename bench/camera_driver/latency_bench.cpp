@@ -22,6 +22,7 @@
 #include <string>
 #include <vector>
 
+#include "common/build_paths.hpp"
 #include "common/msg_convert.hpp"
 #include "common/node.hpp"
 
@@ -75,7 +76,7 @@ int main(int argc, char** argv) {
   }
   const std::string cfg = (dir / "cam.yaml").string();
   std::ofstream(cfg) << "channel: CAMERA_LATENCY\noutput_encoding: " << (rgb ? "rgb8" : "mono8")
-                     << "\ncamera_info: " << ALIGHT_SOURCE_DIR
+                     << "\ncamera_info: " << alight::build::source_dir()
                      << "/config/cameras/firefly_mv_4mm.yaml\n";
 
   alight::Node rx(kUrl, "camera_latency_bench");
@@ -91,8 +92,9 @@ int main(int argc, char** argv) {
     if (last_seq >= 0 && seq != last_seq + 1) ++gaps;
     last_seq = seq;
   });
-  const std::string cmd = std::string(ALIGHT_BINARY_DIR) + "/bin/alight-camera --config " + cfg +
-                          " --lcm-url '" + kUrl + "' --source file:" + video + " --log-level warn";
+  const std::string cmd = std::string(alight::build::binary_dir()) +
+                          "/bin/alight-camera --config " + cfg + " --lcm-url '" + kUrl +
+                          "' --source file:" + video + " --log-level warn";
   const pid_t pid = fork();
   if (pid == 0) {
     execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));

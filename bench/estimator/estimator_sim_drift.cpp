@@ -29,6 +29,7 @@
 #include <thread>
 #include <vector>
 
+#include "common/build_paths.hpp"
 #include "common/params.hpp"
 #include "outer_loop/params.hpp"
 #include "outer_loop/position_controller.hpp"
@@ -301,8 +302,9 @@ int main(int argc, char** argv) {
   CLI::App app{"onboard estimator drift, flying the simulator on the estimate"};
   int seeds = 10, first = 1, jobs = 1;
   std::string only;
-  std::string vehicle = std::string(ALIGHT_SOURCE_DIR) + "/config/vehicles/pelican.yaml";
-  std::string scenario = std::string(ALIGHT_SOURCE_DIR) + "/config/scenarios/estimator_drift.yaml";
+  std::string vehicle = std::string(alight::build::source_dir()) + "/config/vehicles/pelican.yaml";
+  std::string scenario =
+      std::string(alight::build::source_dir()) + "/config/scenarios/estimator_drift.yaml";
   app.add_option("--seeds", seeds, "flights per case")->check(CLI::Range(1, 1000));
   app.add_option("--first-seed", first, "seed of the first flight");
   app.add_option("--jobs", jobs, "flights at once (threads)")->check(CLI::Range(1, 64));

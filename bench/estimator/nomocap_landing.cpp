@@ -34,6 +34,7 @@
 #include <vector>
 
 #include "closed_loop.hpp"
+#include "common/build_paths.hpp"
 #include "real_vision.hpp"
 #include "support/stats.hpp"
 
@@ -60,7 +61,7 @@ bool is_file(const std::string& scenario) {
 std::string scenario_file(const std::string& scenario) {
   return is_file(scenario)
              ? scenario
-             : std::string(ALIGHT_SOURCE_DIR) + "/config/scenarios/" + scenario + ".yaml";
+             : std::string(alight::build::source_dir()) + "/config/scenarios/" + scenario + ".yaml";
 }
 
 // Ingress scenarios are named ingress*; a file by its name.
@@ -120,7 +121,7 @@ int main(int argc, char** argv) {
       "Carlo"};
   int seeds = 20, first = 1, jobs = 1;
   std::string scenarios = ALIGHT_NOMOCAP_SCENARIOS;
-  std::string vehicle = std::string(ALIGHT_SOURCE_DIR) + "/config/vehicles/pelican.yaml";
+  std::string vehicle = std::string(alight::build::source_dir()) + "/config/vehicles/pelican.yaml";
   double time_limit_s = 150;
   app.add_option("--seeds", seeds, "missions per scenario")->check(CLI::Range(1, 1000));
   app.add_option("--first-seed", first, "seed of the first mission");

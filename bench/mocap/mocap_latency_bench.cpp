@@ -36,6 +36,7 @@
 #include <thread>
 #include <vector>
 
+#include "common/build_paths.hpp"
 #include "common/channels.hpp"
 #include "mocap/vrpn.hpp"
 #include "tools/vrpn_test_server.hpp"
@@ -223,7 +224,7 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
-  const std::string bin = std::string(ALIGHT_BINARY_DIR) + "/bin/alight-mocap";
+  const std::string bin = std::string(alight::build::binary_dir()) + "/bin/alight-mocap";
   std::printf("server send -> received, %.0f s per rate, 127.0.0.1 (latency in us)\n", seconds);
   std::printf(
       "| path | rate asked [Hz] | sent | published (held back) | received | rate achieved [Hz] | "

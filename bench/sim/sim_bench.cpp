@@ -6,6 +6,7 @@
 
 #include <opencv2/core/utility.hpp>
 
+#include "common/build_paths.hpp"
 #include "sim/params.hpp"
 #include "sim/renderer.hpp"
 #include "sim/simulator.hpp"
@@ -16,7 +17,7 @@ using namespace alight;
 using namespace alight::sim;
 
 std::string config(const std::string& rel) {
-  return std::string(ALIGHT_SOURCE_DIR) + "/config/" + rel;
+  return std::string(alight::build::source_dir()) + "/config/" + rel;
 }
 
 // A view typical of each mission: 1.5 m above the platform area, 1.5 m in front of the wall.

@@ -31,6 +31,7 @@
 #include <string>
 #include <vector>
 
+#include "common/build_paths.hpp"
 #include "common/heap.hpp"
 #include "common/params.hpp"
 #include "common/pose_buffer.hpp"
@@ -114,7 +115,7 @@ int main(int argc, char** argv) try {
   CLI::App app{"alight_vision_cpu_bench: the vision's CPU time per frame and its accuracy"};
   std::string families = "ingress_photo,ingress_solid_photo", seeds = "1";
   std::vector<std::string> scenario_files;
-  std::string vehicle = std::string(ALIGHT_SOURCE_DIR) + "/config/vehicles/pelican.yaml";
+  std::string vehicle = std::string(alight::build::source_dir()) + "/config/vehicles/pelican.yaml";
   std::string csv_path, frames_path;
   int passes = 2;
   double standoff_m = 2.0, loop_s = 8.0, rate_hz = 60.0;
@@ -144,8 +145,9 @@ int main(int argc, char** argv) try {
   const fs::path dir = dir_template;
   for (const auto& fam : split(families))
     for (const auto& s : split(seeds)) {
-      const std::string cmd = "'" + std::string(ALIGHT_SOURCE_DIR) + "/scripts/scenes' '" + fam +
-                              "' --seed " + s + " --out '" + dir.string() + "' > /dev/null";
+      const std::string cmd = "'" + std::string(alight::build::source_dir()) +
+                              "/scripts/scenes' '" + fam + "' --seed " + s + " --out '" +
+                              dir.string() + "' > /dev/null";
       if (std::system(cmd.c_str()) != 0) {
         std::fprintf(stderr, "alight_vision_cpu_bench: scripts/scenes failed for '%s'\n",
                      fam.c_str());

@@ -15,10 +15,14 @@
 #include <string>
 #include <vector>
 
+#include "common/build_paths.hpp"
+
 namespace alight::autonomy::test {
 namespace {
 
-std::string path(const std::string& rel) { return std::string(ALIGHT_SOURCE_DIR) + "/" + rel; }
+std::string path(const std::string& rel) {
+  return std::string(alight::build::source_dir()) + "/" + rel;
+}
 
 ClosedLoopConfig landing(const std::string& vehicle, const std::string& platform, uint64_t seed) {
   ClosedLoopConfig c;

@@ -30,6 +30,7 @@
 #include <thread>
 #include <vector>
 
+#include "common/build_paths.hpp"
 #include "common/operator_auth.hpp"
 
 extern char** environ;
@@ -92,8 +93,9 @@ struct Recorder {
 };
 
 TEST(AutonomyNodeTest, AutoGoTakesOffStatusAtTenHertzAndKillStopsEverything) {
-  const std::string bin = std::string(ALIGHT_BINARY_DIR) + "/bin/";
-  const std::string config = std::string(ALIGHT_SOURCE_DIR) + "/config/vehicles/starmac.yaml";
+  const std::string bin = std::string(alight::build::binary_dir()) + "/bin/";
+  const std::string config =
+      std::string(alight::build::source_dir()) + "/config/vehicles/starmac.yaml";
   lcm::LCM lcm(kUrl);
   ASSERT_TRUE(lcm.good());
   Recorder rec;
@@ -330,8 +332,9 @@ std::string temp_file(const std::string& name) {
 // pose after it was an hour old: FAILSAFE for good. Now the stamp guard refuses that message
 // and the clock never moves.
 TEST(AutonomyNodeRegression, ImuStampedAnHourAheadDoesNotHoldFailsafe) {
-  const std::string bin = std::string(ALIGHT_BINARY_DIR) + "/bin/";
-  const std::string config = std::string(ALIGHT_SOURCE_DIR) + "/config/vehicles/starmac.yaml";
+  const std::string bin = std::string(alight::build::binary_dir()) + "/bin/";
+  const std::string config =
+      std::string(alight::build::source_dir()) + "/config/vehicles/starmac.yaml";
   const std::string state = temp_file("future.state");
   Bench b;
   ASSERT_TRUE(b.lcm.good());
@@ -361,8 +364,9 @@ TEST(AutonomyNodeRegression, ImuStampedAnHourAheadDoesNotHoldFailsafe) {
 // killed (SIGKILL) in flight and started again with the same arguments, it holds where the
 // vehicle is with the motors on; after a KILL it keeps the motors off, even on the ground.
 TEST(AutonomyNodeRegression, RestartedInFlightHoldsAndKillSurvivesRestarts) {
-  const std::string bin = std::string(ALIGHT_BINARY_DIR) + "/bin/";
-  const std::string config = std::string(ALIGHT_SOURCE_DIR) + "/config/vehicles/starmac.yaml";
+  const std::string bin = std::string(alight::build::binary_dir()) + "/bin/";
+  const std::string config =
+      std::string(alight::build::source_dir()) + "/config/vehicles/starmac.yaml";
   const std::string state = temp_file("restart.state");
   const std::string key_path = temp_file("restart.key");
   const std::string key_hex(64, 'c');
@@ -459,8 +463,9 @@ TEST(AutonomyNodeRegression, RestartedInFlightHoldsAndKillSurvivesRestarts) {
 TEST(AutonomyNodeTest, StateEstimateHealthGatesTakeoffAndLostIsTheFailsafe) {
   using S = alight::autonomy_status_t;
   using E = alight::state_estimate_t;
-  const std::string bin = std::string(ALIGHT_BINARY_DIR) + "/bin/";
-  const std::string config = std::string(ALIGHT_SOURCE_DIR) + "/config/vehicles/starmac.yaml";
+  const std::string bin = std::string(alight::build::binary_dir()) + "/bin/";
+  const std::string config =
+      std::string(alight::build::source_dir()) + "/config/vehicles/starmac.yaml";
   const std::string state = temp_file("estimate.state");
   Bench b;
   ASSERT_TRUE(b.lcm.good());
@@ -520,8 +525,8 @@ TEST(AutonomyNodeTest, StateEstimateHealthGatesTakeoffAndLostIsTheFailsafe) {
 // Bug: command_max_age_s: 1e-7 reached an assert (SIGABRT, exit 134) that the launcher
 // restarted forever. Now exit 2 with file, key and value.
 TEST(AutonomyNodeRegression, BadTimeoutIsExitTwoNotAnAbort) {
-  const std::string bin = std::string(ALIGHT_BINARY_DIR) + "/bin/";
-  std::ifstream in(std::string(ALIGHT_SOURCE_DIR) + "/config/vehicles/starmac.yaml");
+  const std::string bin = std::string(alight::build::binary_dir()) + "/bin/";
+  std::ifstream in(std::string(alight::build::source_dir()) + "/config/vehicles/starmac.yaml");
   std::stringstream text;
   text << in.rdbuf();
   std::string yaml = text.str();

@@ -9,6 +9,8 @@
 #include <utility>
 #include <vector>
 
+#include "common/build_paths.hpp"
+
 namespace alight::autonomy {
 namespace {
 
@@ -25,7 +27,8 @@ void expect_value(const ParamError& e, const std::string& written) {
 
 TEST(AutonomyParamsTest, VehicleFilesLoadWithThePapersThresholds) {
   for (const char* v : {"starmac", "pelican"}) {
-    const std::string path = std::string(ALIGHT_SOURCE_DIR) + "/config/vehicles/" + v + ".yaml";
+    const std::string path =
+        std::string(alight::build::source_dir()) + "/config/vehicles/" + v + ".yaml";
     const auto p = load_params(path);
     EXPECT_FALSE(p.accept_unsigned_commands) << v << ": anyone on the LAN could command it";
     EXPECT_TRUE(p.operator_key_file.empty()) << v << ": keys are made per vehicle, not shipped";
@@ -177,7 +180,8 @@ TEST(AutonomyParamsTest, EstimateHealthParametersLoadAndAreCheckedAtTheirFullKey
   }
   // The shipped vehicles fly on motion capture: no estimate required.
   for (const char* v : {"starmac", "pelican"}) {
-    const auto p = load_params(std::string(ALIGHT_SOURCE_DIR) + "/config/vehicles/" + v + ".yaml");
+    const auto p =
+        load_params(std::string(alight::build::source_dir()) + "/config/vehicles/" + v + ".yaml");
     EXPECT_FALSE(p.failsafe.require_estimate) << v;
     EXPECT_DOUBLE_EQ(p.failsafe.estimate_silent_s, 0.5) << v;
   }

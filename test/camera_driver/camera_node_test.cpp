@@ -12,6 +12,7 @@
 #include <future>
 #include <opencv2/imgcodecs.hpp>
 
+#include "common/build_paths.hpp"
 #include "common/camera_model.hpp"
 #include "common/msg_convert.hpp"
 #include "common/node.hpp"
@@ -21,7 +22,7 @@ namespace alight::camera {
 namespace {
 
 namespace fs = std::filesystem;
-const std::string kBin = std::string(ALIGHT_BINARY_DIR) + "/bin/";
+const std::string kBin = std::string(alight::build::binary_dir()) + "/bin/";
 const std::string kUrl = "udpm://239.255.76.67:7791?ttl=0";
 
 struct ProcessResult {
@@ -40,7 +41,7 @@ ProcessResult run(const std::string& args) {
 }
 
 std::string tmp_dir(const std::string& name) {
-  const std::string d = std::string(ALIGHT_BINARY_DIR) + "/test_tmp/camera_node/" + name;
+  const std::string d = std::string(alight::build::binary_dir()) + "/test_tmp/camera_node/" + name;
   fs::remove_all(d);
   fs::create_directories(d);
   return d;
@@ -120,7 +121,7 @@ TEST(CameraNodeTest, ImageFolderIsPublishedInOrderWithStampsAndMetadata) {
   std::vector<image_t> got;
   rx.on<image_t>("CAMERA_TEST", [&](const image_t& m) { got.push_back(m); });
   const std::string cfg = dir + "/cam.yaml";
-  std::ofstream(cfg) << "channel: CAMERA_TEST\ncamera_info: " << ALIGHT_SOURCE_DIR
+  std::ofstream(cfg) << "channel: CAMERA_TEST\ncamera_info: " << alight::build::source_dir()
                      << "/config/cameras/firefly_mv_4mm.yaml\n";
   const int64_t start = wall_utime();
   auto proc = std::async(std::launch::async, [&] {

@@ -12,6 +12,7 @@
 #include "camera_driver/params.hpp"
 #include "camera_driver/stored_source.hpp"
 #include "camera_driver/timestamp.hpp"
+#include "common/build_paths.hpp"
 #include "common/params.hpp"
 #include "fake_v4l2.hpp"
 
@@ -79,7 +80,7 @@ TEST(DeviceSpecTest, UnknownUsbCameraIsNotFound) {
 // One folder per test: CTest runs the cases of this file in parallel, and a shared cam.yaml let
 // one case read the file another was writing (a CI failure of ErrorsNameFileKeyAndValue).
 struct ParamsTest : ::testing::Test {
-  std::string dir = std::string(ALIGHT_BINARY_DIR) + "/test_tmp/camera_params/" +
+  std::string dir = std::string(alight::build::binary_dir()) + "/test_tmp/camera_params/" +
                     ::testing::UnitTest::GetInstance()->current_test_info()->name();
   std::string write(const std::string& text) {
     std::filesystem::create_directories(dir);
@@ -91,7 +92,7 @@ struct ParamsTest : ::testing::Test {
 
 TEST_F(ParamsTest, ShippedExampleConfigsLoad) {
   for (const char* f : {"usb_mono_640x480.yaml", "uvc_webcam_yuyv.yaml"}) {
-    const std::string path = std::string(ALIGHT_SOURCE_DIR) + "/config/cameras/" + f;
+    const std::string path = std::string(alight::build::source_dir()) + "/config/cameras/" + f;
     const CameraParams p = load_params(path);
     EXPECT_TRUE(std::filesystem::exists(p.camera_info)) << p.camera_info;
     const CaptureConfig c = capture_config(p);
@@ -187,7 +188,7 @@ TEST(FramePacerTest, PlaysAtItsRateAndSkipsToTheNewestWhenBehind) {
 }
 
 TEST(StoredSourceTest, VideoFileFramesComeBackInOrderAtTheFilesRate) {
-  const std::string dir = std::string(ALIGHT_BINARY_DIR) + "/test_tmp/camera_stored";
+  const std::string dir = std::string(alight::build::binary_dir()) + "/test_tmp/camera_stored";
   std::filesystem::create_directories(dir);
   const std::string path = dir + "/clip.avi";
   {

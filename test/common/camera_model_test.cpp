@@ -7,6 +7,7 @@
 #include <opencv2/calib3d.hpp>
 #include <random>
 
+#include "common/build_paths.hpp"
 #include "common/params.hpp"
 
 namespace alight {
@@ -79,8 +80,8 @@ TEST(CameraModelTest, CameraInfoRoundTripsThroughYaml) {
 }
 
 TEST(CameraModelTest, ShippedFireflyFileLoads) {
-  const auto c =
-      load_camera_info(std::string(ALIGHT_SOURCE_DIR) + "/config/cameras/firefly_mv_4mm.yaml");
+  const auto c = load_camera_info(std::string(alight::build::source_dir()) +
+                                  "/config/cameras/firefly_mv_4mm.yaml");
   EXPECT_EQ(c.width, 640);
   EXPECT_NEAR(c.fx, 666.667, 1e-9);
 }

@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "common/build_paths.hpp"
 #include "common/camera_mount.hpp"
 #include "common/pose_buffer.hpp"
 #include "test/common/expect_param_error.hpp"
@@ -127,7 +128,8 @@ TEST(ParamsTest, PoseBufferParamsValidate) {
 }
 
 TEST(ParamsTest, CameraMountResolvesRelativeToTheVehicleFile) {
-  const std::string vehicle = std::string(ALIGHT_SOURCE_DIR) + "/config/vehicles/pelican.yaml";
+  const std::string vehicle =
+      std::string(alight::build::source_dir()) + "/config/vehicles/pelican.yaml";
   const auto root = ParamNode::load_file(vehicle);
   const auto down = load_camera_mount(root, "downward");
   EXPECT_TRUE(std::filesystem::exists(down.camera_info_path)) << down.camera_info_path;
@@ -353,7 +355,7 @@ TEST_F(ParamFileTest, NodeCountIsBounded) {
   EXPECT_EQ(e.problem(), "line 1: more than 100000 values");
 }
 
-#ifdef ALIGHT_OUTER_LOOP_BIN
+#ifdef ALIGHT_HAVE_OUTER_LOOP
 struct Exit {
   int code = -1;  ///< exit status, or -1 when it had to be killed
   std::string output;
@@ -405,7 +407,7 @@ Exit run_node(const std::vector<std::string>& args) {
 TEST_F(ParamFileTest, ANodeGivenAFifoADeviceOrAHugeFileExitsTwoNamingIt) {
   for (const std::string& config :
        {fifo("fifo.yaml"), std::string("/dev/zero"), sparse("huge.yaml", off_t{300} << 20)}) {
-    const Exit r = run_node({ALIGHT_OUTER_LOOP_BIN, "--config", config});
+    const Exit r = run_node({alight::build::program("alight-outer-loop"), "--config", config});
     EXPECT_EQ(r.code, 2) << config << ": " << r.output;
     EXPECT_NE(r.output.find("configuration error: " + config + ": "), std::string::npos)
         << r.output;

@@ -9,13 +9,16 @@
 #include <tuple>
 
 #include "closed_loop.hpp"
+#include "common/build_paths.hpp"
 #include "real_vision.hpp"
 #include "vision/params.hpp"
 
 namespace alight::autonomy::test {
 namespace {
 
-std::string path(const std::string& rel) { return std::string(ALIGHT_SOURCE_DIR) + "/" + rel; }
+std::string path(const std::string& rel) {
+  return std::string(alight::build::source_dir()) + "/" + rel;
+}
 
 ClosedLoopConfig config(const std::string& scenario, Mission mission, uint64_t seed,
                         RealVision* vision) {

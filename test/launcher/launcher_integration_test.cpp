@@ -15,6 +15,7 @@
 #include <sstream>
 #include <thread>
 
+#include "common/build_paths.hpp"
 #include "common/node.hpp"
 
 namespace fs = std::filesystem;
@@ -87,7 +88,7 @@ class LauncherIntegrationTest : public ::testing::Test {
       freopen(out.c_str(), "w", stdout);
       dup2(fileno(stdout), 2);
       for (const auto& [k, v] : env_) setenv(k.c_str(), v.c_str(), 1);
-      const std::string bin = std::string(ALIGHT_BINARY_DIR) + "/bin/alight-launch";
+      const std::string bin = std::string(alight::build::binary_dir()) + "/bin/alight-launch";
       execl(bin.c_str(), bin.c_str(), (dir_ / "test.yaml").c_str(), "--log-root",
             (dir_ / "logs").c_str(), static_cast<char*>(nullptr));
       _exit(127);

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <set>
 
+#include "common/build_paths.hpp"
 #include "ground_station/params.hpp"
 #include "launcher/launch_file.hpp"
 #include "link/cli.hpp"
@@ -16,7 +17,7 @@
 namespace alight::link {
 namespace {
 
-const std::string kLaunchDir = std::string(ALIGHT_SOURCE_DIR) + "/config/launch/";
+const std::string kLaunchDir = std::string(alight::build::source_dir()) + "/config/launch/";
 
 // The alight-link process of a launch file, its command parsed as the node parses it.
 Options link_options(const std::string& file) {

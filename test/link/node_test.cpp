@@ -41,6 +41,7 @@
 #include <sstream>
 #include <thread>
 
+#include "common/build_paths.hpp"
 #include "common/bus_auth.hpp"
 #include "common/channels.hpp"
 
@@ -52,7 +53,7 @@ using namespace alight;
 
 constexpr const char* kVehicleUrl = "udpm://239.255.76.67:7971?ttl=0";
 constexpr const char* kGroundUrl = "udpm://239.255.76.67:7972?ttl=0";
-const std::string kBin = std::string(ALIGHT_BINARY_DIR) + "/bin/alight-link";
+const std::string kBin = std::string(alight::build::binary_dir()) + "/bin/alight-link";
 constexpr double kDeadlineS = 30.0;
 
 std::string temp_path(const std::string& name) {

@@ -24,6 +24,7 @@
 #include <string>
 #include <vector>
 
+#include "common/build_paths.hpp"
 #include "mavlink/frame.hpp"
 #include "mavlink/parser.hpp"
 #include "test/mavlink/field_compare.hpp"
@@ -38,7 +39,7 @@ using testing::distinct_message;
 using testing::without_extensions;
 using testing::zero_message;
 
-const std::string kPeerDir = ALIGHT_SOURCE_DIR "/test/mavlink/conformance";
+const std::string kPeerDir = std::string(alight::build::source_dir()) + "/test/mavlink/conformance";
 const std::string kNode = ALIGHT_NODE_EXECUTABLE;
 constexpr int kPeerMissing = 77;
 

@@ -25,6 +25,7 @@
 #include <string>
 #include <vector>
 
+#include "common/build_paths.hpp"
 #include "common/channels.hpp"
 #include "mavlink/autopilot_modes.hpp"
 #include "mavlink/frame.hpp"
@@ -38,10 +39,12 @@ namespace {
 constexpr const char* kUrl = "udpm://239.255.76.67:7917?ttl=0";
 constexpr auto kGenerous = std::chrono::seconds(30);
 
-std::string bin() { return std::string(ALIGHT_BINARY_DIR) + "/bin/alight-mavlink"; }
-std::string source(const std::string& rel) { return std::string(ALIGHT_SOURCE_DIR) + "/" + rel; }
+std::string bin() { return std::string(alight::build::binary_dir()) + "/bin/alight-mavlink"; }
+std::string source(const std::string& rel) {
+  return std::string(alight::build::source_dir()) + "/" + rel;
+}
 std::filesystem::path tmp(const std::string& name) {
-  const auto dir = std::filesystem::path(ALIGHT_BINARY_DIR) / "test_tmp";
+  const auto dir = std::filesystem::path(alight::build::binary_dir()) / "test_tmp";
   std::filesystem::create_directories(dir);
   return dir / name;
 }

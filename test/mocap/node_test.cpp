@@ -29,6 +29,7 @@
 #include <sstream>
 #include <thread>
 
+#include "common/build_paths.hpp"
 #include "common/channels.hpp"
 #include "tools/vrpn_test_server.hpp"
 
@@ -212,7 +213,7 @@ void stream(Listener& rx, VrpnTestServer& server, int n, double rate_hz, int64_t
   rx.until([&] { return s.done(); }, 120.0);
 }
 
-const std::string kBin = std::string(ALIGHT_BINARY_DIR) + "/bin/alight-mocap";
+const std::string kBin = std::string(alight::build::binary_dir()) + "/bin/alight-mocap";
 
 TEST(MocapNodeTest, PosesAt100And360HzArriveTransformedFieldByField) {
   VrpnTestServer server;

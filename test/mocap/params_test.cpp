@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include "common/build_paths.hpp"
+
 namespace alight::mocap {
 namespace {
 
@@ -18,7 +20,7 @@ ParamError load_error(const std::string& yaml) {
 }
 
 TEST(MocapParamsTest, ShippedFilesLoad) {
-  const std::string dir = std::string(ALIGHT_SOURCE_DIR) + "/config/mocap/";
+  const std::string dir = std::string(alight::build::source_dir()) + "/config/mocap/";
   const auto vicon = load_params(dir + "vicon_tracker.yaml");
   EXPECT_EQ(vicon.room.up_axis, "z");
   EXPECT_EQ(vicon.room.units, "m");

@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include "common/build_paths.hpp"
+
 namespace alight::outer_loop {
 namespace {
 
@@ -12,7 +14,8 @@ namespace {
 
 TEST(OuterLoopParamsTest, VehicleFilesLoad) {
   for (const char* v : {"starmac", "pelican"}) {
-    const std::string path = std::string(ALIGHT_SOURCE_DIR) + "/config/vehicles/" + v + ".yaml";
+    const std::string path =
+        std::string(alight::build::source_dir()) + "/config/vehicles/" + v + ".yaml";
     const auto p = load_params(path);
     EXPECT_GT(p.mass_kg, 0.0) << v;
     EXPECT_DOUBLE_EQ(p.pose_stale_s, 0.3) << v;

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cstdio>
 
+#include "common/build_paths.hpp"
 #include "outer_loop/params.hpp"
 #include "outer_loop/position_controller.hpp"
 #include "sim/params.hpp"
@@ -24,7 +25,7 @@ struct SimStep {
 };
 
 SimStep fly_step(const std::string& vehicle, const Vector3d& p0, const Vector3d& p1) {
-  const std::string root = ALIGHT_SOURCE_DIR;
+  const std::string root = alight::build::source_dir();
   const std::string vehicle_file = root + "/config/vehicles/" + vehicle + ".yaml";
   const auto scenario = sim::load_scenario(root + "/config/scenarios/landing_none.yaml");
   const auto vehicle_params = sim::load_vehicle_params(vehicle_file);

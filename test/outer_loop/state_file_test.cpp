@@ -7,11 +7,13 @@
 #include <filesystem>
 #include <fstream>
 
+#include "common/build_paths.hpp"
+
 namespace alight::outer_loop {
 namespace {
 
 std::filesystem::path temp_dir() {
-  const auto d = std::filesystem::path(ALIGHT_BINARY_DIR) / "test_tmp" /
+  const auto d = std::filesystem::path(alight::build::binary_dir()) / "test_tmp" /
                  (std::string("outer_loop_state_") +
                   ::testing::UnitTest::GetInstance()->current_test_info()->name());
   std::filesystem::remove_all(d);

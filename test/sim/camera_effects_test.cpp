@@ -10,6 +10,7 @@
 #include <map>
 #include <vector>
 
+#include "common/build_paths.hpp"
 #include "common/msg_convert.hpp"
 #include "common/params.hpp"
 #include "sim/params.hpp"
@@ -329,7 +330,7 @@ TEST(CameraEffectsTest, AFisheyeProjectsAsTheEquidistantModel) {
   EXPECT_LT((m.ray(*px) - p / p.z()).norm(), 1e-9);
   EXPECT_TRUE(m.has_distortion());
   // camera_info round trip.
-  const auto dir = std::filesystem::path(ALIGHT_BINARY_DIR) / "test_tmp" / "sim";
+  const auto dir = std::filesystem::path(alight::build::binary_dir()) / "test_tmp" / "sim";
   std::filesystem::create_directories(dir);
   const std::string path = (dir / "fisheye.yaml").string();
   save_camera_info(path, m);
@@ -416,7 +417,7 @@ TEST(CameraEffectsTest, EachEffectIsOffByDefaultAndItsKeysAreChecked) {
   const CameraEffects e;
   EXPECT_FALSE(e.rolling_shutter || e.exposure_steps || e.vignetting || e.lens || e.driver);
   EXPECT_FALSE(VibrationParams{}.enabled);
-  const auto dir = std::filesystem::path(ALIGHT_BINARY_DIR) / "test_tmp" / "sim";
+  const auto dir = std::filesystem::path(alight::build::binary_dir()) / "test_tmp" / "sim";
   std::filesystem::create_directories(dir);
   const std::string path = (dir / "bad_effects.yaml").string();
   std::ofstream(path) << "name: bad\ncamera:\n  effects:\n    rolling_shutter:\n"

@@ -9,6 +9,7 @@
 #include <fstream>
 #include <limits>
 
+#include "common/build_paths.hpp"
 #include "common/params.hpp"
 #include "sim/sim_msgs.hpp"
 #include "sim/simulator.hpp"
@@ -204,7 +205,8 @@ TEST(SimRegression, CommandsStampedFarFromTheAutopilotClockAreRefused) {
 }
 
 TEST(SimRegression, CommandLossParametersAreBoundedAndFinite) {
-  const auto dir = std::filesystem::path(ALIGHT_BINARY_DIR) / "test_tmp" / "sim_command_loss";
+  const auto dir =
+      std::filesystem::path(alight::build::binary_dir()) / "test_tmp" / "sim_command_loss";
   std::filesystem::create_directories(dir);
   for (const char* kv :
        {"cmd_loss_timeout_s: .inf", "cmd_loss_timeout_s: 0", "cmd_loss_timeout_s: 11",

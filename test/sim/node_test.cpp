@@ -15,6 +15,7 @@
 #include <sstream>
 #include <thread>
 
+#include "common/build_paths.hpp"
 #include "common/channels.hpp"
 #include "common/msg_convert.hpp"
 
@@ -23,14 +24,14 @@ namespace {
 
 const std::string kUrl = "udpm://239.255.76.67:7893?ttl=0";
 
-std::string bin() { return std::string(ALIGHT_BINARY_DIR) + "/bin/alight-sim"; }
+std::string bin() { return std::string(alight::build::binary_dir()) + "/bin/alight-sim"; }
 std::string scenario(const std::string& name) {
-  return std::string(ALIGHT_SOURCE_DIR) + "/config/scenarios/" + name + ".yaml";
+  return std::string(alight::build::source_dir()) + "/config/scenarios/" + name + ".yaml";
 }
 
 int run(const std::string& args, std::string* stderr_text = nullptr) {
   // One file per test: CTest runs this file's cases in parallel.
-  const auto err = std::filesystem::path(ALIGHT_BINARY_DIR) / "test_tmp" /
+  const auto err = std::filesystem::path(alight::build::binary_dir()) / "test_tmp" /
                    (std::string("sim_node_output_") +
                     ::testing::UnitTest::GetInstance()->current_test_info()->name() + ".txt");
   std::filesystem::create_directories(err.parent_path());
@@ -167,7 +168,8 @@ TEST(SimNodeTest, RemappedChannelsAreUsedUnderTheirNewNames) {
 }
 
 TEST(SimNodeTest, SensorsSwitchedOffPublishNothingWhileTheTruthGoesOn) {
-  const auto path = std::filesystem::path(ALIGHT_BINARY_DIR) / "test_tmp" / "sim_sensors_off.yaml";
+  const auto path =
+      std::filesystem::path(alight::build::binary_dir()) / "test_tmp" / "sim_sensors_off.yaml";
   std::filesystem::create_directories(path.parent_path());
   std::ofstream(path) << "name: sensors_off\nmocap: {enabled: false}\nimu: {enabled: false}\n"
                          "rangefinder: {enabled: false}\nbaro: {enabled: false}\n"
@@ -183,7 +185,8 @@ TEST(SimNodeTest, SensorsSwitchedOffPublishNothingWhileTheTruthGoesOn) {
   lcm.subscribe(channels::kBaro, &Counter::on_baro, &c);
   std::atomic<int> code{-1};
   std::thread node([&] {
-    code = run("--scenario " + path.string() + " --vehicle " + std::string(ALIGHT_SOURCE_DIR) +
+    code = run("--scenario " + path.string() + " --vehicle " +
+               std::string(alight::build::source_dir()) +
                "/config/vehicles/starmac.yaml --duration 1.0 --lcm-url '" + kUrl + "'");
   });
   while (code == -1) lcm.handleTimeout(5);
@@ -212,7 +215,7 @@ TEST(SimNodeTest, FlowCameraPublishesTheDownwardCameraBesidesTheForwardOne) {
   std::atomic<int> code{-1};
   std::thread node([&] {
     code = run("--scenario " + scenario("ingress_wide") + " --vehicle " +
-               std::string(ALIGHT_SOURCE_DIR) +
+               std::string(alight::build::source_dir()) +
                "/config/vehicles/pelican.yaml --no-mocap --flow-camera --duration 1.0 --lcm-url '" +
                kUrl + "'");
   });
@@ -243,7 +246,8 @@ TEST(SimNodeTest, ABadRemapExitsWithCode2NamingTheKnownChannels) {
 }
 
 TEST(SimNodeTest, ABadScenarioExitsWithCode2NamingFileKeyAndValue) {
-  const auto path = std::filesystem::path(ALIGHT_BINARY_DIR) / "test_tmp" / "sim_bad_scenario.yaml";
+  const auto path =
+      std::filesystem::path(alight::build::binary_dir()) / "test_tmp" / "sim_bad_scenario.yaml";
   std::filesystem::create_directories(path.parent_path());
   std::ofstream(path) << "name: bad\ncamera:\n  rate_hz: 500\n";
   std::string err;

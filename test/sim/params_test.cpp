@@ -8,6 +8,7 @@
 #include <utility>
 #include <vector>
 
+#include "common/build_paths.hpp"
 #include "sim/params.hpp"
 #include "sim_test_util.hpp"
 
@@ -17,7 +18,7 @@ namespace {
 using test::config_path;
 
 std::string write_temp(const std::string& name, const std::string& text) {
-  const auto dir = std::filesystem::path(ALIGHT_BINARY_DIR) / "test_tmp" / "sim";
+  const auto dir = std::filesystem::path(alight::build::binary_dir()) / "test_tmp" / "sim";
   std::filesystem::create_directories(dir);
   const auto path = dir / name;
   std::ofstream(path) << text;
@@ -90,7 +91,7 @@ TEST(SimParamsTest, AWrongTypeAndAnOpeningOutsideTheWallAreRejected) {
 TEST(SimParamsTest, AnImageTextureIsLoadedRelativeToTheScenario) {
   cv::Mat img(100, 150, CV_8U);
   cv::randu(img, 0, 255);
-  const auto dir = std::filesystem::path(ALIGHT_BINARY_DIR) / "test_tmp" / "sim";
+  const auto dir = std::filesystem::path(alight::build::binary_dir()) / "test_tmp" / "sim";
   std::filesystem::create_directories(dir);
   cv::imwrite((dir / "photo.png").string(), img);
   const std::string path = write_temp(

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "common/build_paths.hpp"
 #include "common/params.hpp"
 #include "sim/sim_msgs.hpp"
 #include "sim_test_util.hpp"
@@ -258,7 +259,7 @@ TEST(PlatformMotionTest, AStillPlatformIsLeftAsItWas) {
 }
 
 std::string write_motion_scenario(const std::string& name, const std::string& text) {
-  const auto dir = std::filesystem::path(ALIGHT_BINARY_DIR) / "test_tmp" / "sim";
+  const auto dir = std::filesystem::path(alight::build::binary_dir()) / "test_tmp" / "sim";
   std::filesystem::create_directories(dir);
   const auto path = dir / name;
   std::ofstream(path) << text;

@@ -3,13 +3,14 @@
 
 #include <string>
 
+#include "common/build_paths.hpp"
 #include "sim/params.hpp"
 #include "sim/simulator.hpp"
 
 namespace alight::sim::test {
 
 inline std::string config_path(const std::string& rel) {
-  return std::string(ALIGHT_SOURCE_DIR) + "/config/" + rel;
+  return std::string(alight::build::source_dir()) + "/config/" + rel;
 }
 inline Scenario scenario(const std::string& name) {
   return load_scenario(config_path("scenarios/" + name + ".yaml"));

@@ -15,6 +15,7 @@
 #include <set>
 #include <sstream>
 
+#include "common/build_paths.hpp"
 #include "common/params.hpp"
 #include "tools/param_dump.hpp"
 
@@ -23,10 +24,10 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const fs::path kConfig = fs::path(ALIGHT_SOURCE_DIR) / "config";
+const fs::path kConfig = fs::path(alight::build::source_dir()) / "config";
 
 fs::path temp_dir(const std::string& name) {
-  const fs::path dir = fs::path(ALIGHT_BINARY_DIR) / "test_tmp" / "param_files" / name;
+  const fs::path dir = fs::path(alight::build::binary_dir()) / "test_tmp" / "param_files" / name;
   fs::create_directories(dir);
   return dir;
 }
@@ -242,7 +243,8 @@ struct ToolRun {
 
 ToolRun run(const std::string& args) {
   ToolRun r;
-  FILE* pipe = ::popen((std::string(ALIGHT_PARAMS_BIN) + " " + args + " 2>&1").c_str(), "r");
+  FILE* pipe =
+      ::popen((alight::build::program("alight-params") + " " + args + " 2>&1").c_str(), "r");
   if (!pipe) return r;
   std::array<char, 4096> buf{};
   for (size_t n; (n = std::fread(buf.data(), 1, buf.size(), pipe)) > 0;)

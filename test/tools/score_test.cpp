@@ -14,6 +14,7 @@
 #include <numeric>
 #include <random>
 
+#include "common/build_paths.hpp"
 #include "common/channels.hpp"
 
 namespace alight::tools {
@@ -510,7 +511,7 @@ TEST(ScoreTest, CommandLineReadsASessionLog) {
     }
     write(channels::kSimTruth, landing_truth(kT0 + 2, 1.0, -0.5, 0.24, true));
   }
-  const std::string bin = std::string(ALIGHT_BINARY_DIR) + "/bin/alight-score ";
+  const std::string bin = std::string(alight::build::binary_dir()) + "/bin/alight-score ";
   auto run = [&](const std::string& args, std::string* out) {
     FILE* p = popen((bin + args + " 2>&1").c_str(), "r");
     char buf[512];
@@ -578,7 +579,8 @@ TEST(ScoreTest, CommandLineJudgesTouchdownsAgainstTheVehiclesGear) {
   std::ofstream(dir / "sturdy.yaml") << "vehicle:\n  gear_max_impact_mps: 3.0\n";
   const std::string fifo = (dir / "fifo.yaml").string();
   ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
-  const std::string bin = std::string(ALIGHT_BINARY_DIR) + "/bin/alight-score " + log_path;
+  const std::string bin =
+      std::string(alight::build::binary_dir()) + "/bin/alight-score " + log_path;
   auto run = [&](const std::string& args, std::string* out) {
     FILE* p = popen((bin + args + " 2>&1").c_str(), "r");
     char buf[512];
@@ -589,7 +591,8 @@ TEST(ScoreTest, CommandLineJudgesTouchdownsAgainstTheVehiclesGear) {
   EXPECT_EQ(run("", &plain), 1) << plain;
   EXPECT_NE(plain.find("outcome: crashed\n"), std::string::npos) << plain;
   EXPECT_NE(plain.find("max_touchdown_speed_mps: 2.0000\n"), std::string::npos) << plain;
-  EXPECT_EQ(run(" --vehicle " + std::string(ALIGHT_SOURCE_DIR) + "/config/vehicles/pelican.yaml",
+  EXPECT_EQ(run(" --vehicle " + std::string(alight::build::source_dir()) +
+                    "/config/vehicles/pelican.yaml",
                 &pelican),
             1)
       << pelican;

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include "common/build_paths.hpp"
+
 namespace alight::tools {
 namespace {
 
@@ -12,7 +14,8 @@ SeedSplit split_of(const std::string& yaml) {
 const char* kSplit = "tune: {first: 0, last: 999}\nreport: {first: 1000, last: 9999}\n";
 
 TEST(SeedSplitTest, TheShippedSplitLoads) {
-  const auto s = SeedSplit::from(ParamNode::load_file(ALIGHT_SOURCE_DIR "/config/seeds.yaml"));
+  const auto s = SeedSplit::from(
+      ParamNode::load_file(std::string(alight::build::source_dir()) + "/config/seeds.yaml"));
   EXPECT_LT(s.tune.last, s.report.first);
 }
 

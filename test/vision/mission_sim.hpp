@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "common/build_paths.hpp"
 #include "sim/params.hpp"
 #include "sim/renderer.hpp"
 #include "sim/scene.hpp"
@@ -30,7 +31,7 @@ struct Sequence {
 inline Sequence render_sequence(const std::string& scenario_file, uint64_t seed,
                                 const std::string& mount, const Vector3d& p_start,
                                 const Vector3d& step, const Vector3d& rpy, int n) {
-  const std::string root = ALIGHT_SOURCE_DIR;
+  const std::string root = alight::build::source_dir();
   const auto scenario = sim::load_scenario(root + "/config/scenarios/" + scenario_file);
   Sequence s{sim::build_scene(scenario, seed),
              sim::load_camera_rig(root + "/config/vehicles/starmac.yaml", mount),

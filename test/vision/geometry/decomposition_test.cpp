@@ -10,6 +10,7 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
 
+#include "common/build_paths.hpp"
 #include "test/vision/synthetic.hpp"
 #include "vision/geometry/homography.hpp"
 
@@ -191,7 +192,7 @@ TEST(DecompositionTest, NoiseFreeCorrespondencesRecoverRWithinOneHundredthDegree
 }
 
 TEST(DecompositionTest, WritesErrorCurvesAgainstNoiseAndBaseline) {
-  const auto dir = std::filesystem::path(ALIGHT_BINARY_DIR) / "test-output";
+  const auto dir = std::filesystem::path(alight::build::binary_dir()) / "test-output";
   std::filesystem::create_directories(dir);
   std::ofstream out(dir / "vision_decomposition_error_curves.csv");
   out << "sigma_px,baseline_m,median_R_deg,median_t_deg,median_n_deg\n";

@@ -21,6 +21,7 @@
 #include <random>
 #include <tuple>
 
+#include "common/build_paths.hpp"
 #include "sim/params.hpp"
 #include "sim/renderer.hpp"
 #include "sim/scene.hpp"
@@ -81,7 +82,7 @@ class SimTwoViewsTest : public ::testing::TestWithParam<std::tuple<uint64_t, Moc
 TEST_P(SimTwoViewsTest, PlatformWaypointWithinOneCentimetreAtOnePointFiveMetres) {
   const auto [seed, mode] = GetParam();
   const bool with_prior = mode != Mocap::kVisionAlone;
-  const std::string root = ALIGHT_SOURCE_DIR;
+  const std::string root = alight::build::source_dir();
   const auto scenario = sim::load_scenario(root + "/config/scenarios/landing_a.yaml");
   const auto scene = sim::build_scene(scenario, seed);
   const auto rig = sim::load_camera_rig(root + "/config/vehicles/starmac.yaml", "downward");

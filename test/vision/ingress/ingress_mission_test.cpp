@@ -5,6 +5,7 @@
 #include <cstdlib>
 #include <opencv2/imgcodecs.hpp>
 
+#include "common/build_paths.hpp"
 #include "test/vision/mission_sim.hpp"
 #include "vision/node/diag_image.hpp"
 
@@ -22,7 +23,7 @@ class IngressMissionTest : public ::testing::TestWithParam<uint64_t> {};
 // grey image) seed 1 missed the opening's top and left edges and seed 2 cut the height at the
 // far edges of the inner faces (56 cm).
 TEST_P(IngressMissionTest, OpeningWidthAndCentre) {
-  const std::string root = ALIGHT_SOURCE_DIR;
+  const std::string root = alight::build::source_dir();
   const auto scene =
       sim::build_scene(sim::load_scenario(root + "/config/scenarios/ingress.yaml"), GetParam());
   ASSERT_TRUE(scene.opening);

@@ -3,6 +3,7 @@
 // scene's truth, and no platform where there is none.
 #include <cstdio>
 
+#include "common/build_paths.hpp"
 #include "test/vision/mission_sim.hpp"
 
 namespace alight::vision {
@@ -20,7 +21,7 @@ class LandingMissionTest : public ::testing::TestWithParam<Case> {};
 
 TEST_P(LandingMissionTest, PlatformCentreAndHeightWithinTwoCentimetres) {
   const Case k = GetParam();
-  const std::string root = ALIGHT_SOURCE_DIR;
+  const std::string root = alight::build::source_dir();
   const auto scene =
       sim::build_scene(sim::load_scenario(root + "/config/scenarios/" + k.scenario), k.seed);
   ASSERT_TRUE(scene.platform);
@@ -108,7 +109,7 @@ TEST(LandingMissionTest, DegenerateFramesGiveAReason) {
 // floor's image moved farther than landing.max_motion_blur_px during its exposure is neither
 // measured nor ever the reference; the frames around it still are.
 TEST(LandingMissionTest, ASmearedFrameIsNeitherMeasuredNorTheReference) {
-  const std::string root = ALIGHT_SOURCE_DIR;
+  const std::string root = alight::build::source_dir();
   const Vector3d top =
       sim::build_scene(sim::load_scenario(root + "/config/scenarios/landing_a.yaml"), 3)
           .platform->top_center_W;
@@ -144,7 +145,7 @@ TEST(LandingMissionTest, ASmearedFrameIsNeitherMeasuredNorTheReference) {
 }
 
 TEST(LandingMissionTest, ReplayGivesIdenticalResults) {
-  const std::string root = ALIGHT_SOURCE_DIR;
+  const std::string root = alight::build::source_dir();
   const Vector3d top =
       sim::build_scene(sim::load_scenario(root + "/config/scenarios/landing_b.yaml"), 4)
           .platform->top_center_W;
@@ -170,7 +171,7 @@ TEST(LandingMissionTest, ReplayGivesIdenticalResults) {
 // platform with it. A short history (8 frames) stands for the 1-2 s after which that happened in
 // flight; the hover's frames are the last moving frame's image at later times.
 testing::Sequence move_then_hover(int n_move, int n_hover) {
-  const std::string root = ALIGHT_SOURCE_DIR;
+  const std::string root = alight::build::source_dir();
   const Vector3d top =
       sim::build_scene(sim::load_scenario(root + "/config/scenarios/landing_b.yaml"), 4)
           .platform->top_center_W;
