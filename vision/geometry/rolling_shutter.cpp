@@ -7,18 +7,18 @@ namespace alight::vision {
 
 namespace {
 
-// Exp of a rotation vector. A readout turns the camera by a few mrad (0.5 rad/s over 20 ms is
-// 0.01 rad), where the series to second order is off by angle^3 / 6 < 2e-7 rad, a ten-thousandth
-// of a pixel, at a fraction of Rodrigues' cost (it runs per pixel in the photometric gate and
-// the rim search); larger turns take the exact form.
-Matrix3d rotation_exp(const Vector3d& phi) {
+// Exp(phi) x: a readout turns the camera by a few mrad (0.5 rad/s over 20 ms is 0.01 rad),
+// where the series to second order is off by angle^3 / 6 < 2e-7 rad, a ten-thousandth of a pixel,
+// at a fraction of Rodrigues' cost (it runs per pixel in the photometric gate and the rim
+// search); larger turns take the exact form.
+Vector3d rotate(const Vector3d& phi, const Vector3d& x) {
   const double angle2 = phi.squaredNorm();
   if (angle2 > 0.05 * 0.05) {
     const double angle = std::sqrt(angle2);
-    return Eigen::AngleAxisd(angle, phi / angle).toRotationMatrix();
+    return Eigen::AngleAxisd(angle, phi / angle) * x;
   }
-  const Matrix3d S = skew(phi);
-  return Matrix3d::Identity() + S + 0.5 * S * S;
+  const Vector3d px = phi.cross(x);
+  return x + px + 0.5 * phi.cross(px);
 }
 
 // Depth along direction d (row 0's axes) of the plane point seen from a camera displaced by t;
@@ -57,7 +57,7 @@ Vector3d ray_at_epoch(const CameraModel& camera, const Vector2d& pixel, const Re
   const Vector3d r = camera.ray(pixel);
   if (!m.rolling()) return r;
   const double dt = pixel.y() * m.line_delay_s;
-  const Vector3d d = rotation_exp(m.w_C * dt) * r;
+  const Vector3d d = rotate(m.w_C * dt, r);
   const Vector3d t = m.v_C * dt;
   Vector3d X = d;
   if (const auto depth = plane_depth(m, d, t)) X = *depth * d + t;
@@ -74,12 +74,11 @@ std::optional<Vector2d> pixel_of_epoch_ray(const CameraModel& camera, const Vect
   std::optional<double> depth = plane_depth(m, r0, Vector3d::Zero());
   const Vector3d X0 = depth ? Vector3d(*depth * r0) : r0;
   // The first step moves the row by the readout's shift there (a few pixels), which changes
-  // its time by a few line delays: the second moves it by a hundredth of a pixel, the third by
-  // far less.
-  for (int i = 0; i < 3; ++i) {
+  // its time by a few line delays: the second moves it by about a hundredth of a pixel.
+  for (int i = 0; i < 2; ++i) {
     const double dt = u->y() * m.line_delay_s;
-    const Matrix3d R = rotation_exp(m.w_C * dt);
-    const Vector3d X_t = R.transpose() * (depth ? Vector3d(X0 - m.v_C * dt) : X0);
+    // R^T x = Exp(-phi) x.
+    const Vector3d X_t = rotate(-m.w_C * dt, depth ? Vector3d(X0 - m.v_C * dt) : X0);
     u = camera.project(X_t);
     if (!u) return u;
   }
