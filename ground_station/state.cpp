@@ -153,6 +153,12 @@ const char* target_reason_name(int8_t reason) {
       return "partial view without the wall around it";
     case target_t::REASON_PARTIAL_NOT_BEHIND:
       return "partial view not behind the wall";
+    case target_t::REASON_EXPOSURE_CHANGE:
+      return "exposure change";
+    case target_t::REASON_DUPLICATE_FRAME:
+      return "duplicated frame";
+    case target_t::REASON_FRAME_GAP:
+      return "frames missing (gap)";
   }
   return "unknown";
 }

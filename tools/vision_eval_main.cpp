@@ -110,8 +110,8 @@ int main(int argc, char** argv) {
       if (!img) continue;
       ++frames;
       const auto t0 = std::chrono::steady_clock::now();
-      const FrameResult r =
-          pipeline.process(img->pixels, img->utime, poses.at(img->utime), img->exposure_s);
+      const FrameResult r = pipeline.process(img->pixels, img->utime, poses.at(img->utime),
+                                             img->exposure_s, img->line_delay_s);
       ms.push_back(
           std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
       ++reasons[r.reason];

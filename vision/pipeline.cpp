@@ -3,6 +3,7 @@
 
 #include <algorithm>
 
+#include "vision/frontend/frame_checks.hpp"
 #include "vision/frontend/matcher.hpp"
 #include "vision/frontend/motion_blur.hpp"
 #include "vision/frontend/star_detector.hpp"
@@ -25,6 +26,9 @@ void Pipeline::reset() {
   poses_.clear();
   held_.reset();
   last_utime_ = 0;
+  exposure_.reset();
+  last_hash_.reset();
+  wall_plane_.reset();
 }
 
 // The reference a frame is matched against: a tracked one or the held one, its pose and its
@@ -65,13 +69,16 @@ bool Pipeline::holds() const {
 // matching: world x for the downward camera, world up for the forward one (world x is near its
 // optical axis). Ingress keeps each frame's image smoothed as the off-wall mask compares it,
 // made once; landing keeps the image itself for the photometric gate and the rim search (the
-// caller's pixels are not ours to keep; with both off no copy is made). Fails with the
-// detector's reason.
+// caller's pixels are not ours to keep; with both off no copy is made). threshold_scale: the
+// exposure's (frame_checks.hpp); line_delay_s: the rolling shutter's, for the frame's readout.
+// Fails with the detector's reason.
 Result<TrackedFrame> Pipeline::front_end(const cv::Mat& gray, int64_t utime, const PoseSample& pose,
-                                         std::optional<double> exposure_s, FrameResult* r) const {
+                                         std::optional<double> exposure_s, double threshold_scale,
+                                         std::optional<double> line_delay_s, FrameResult* r) const {
   const cv::Mat integral = integral_image(gray);
-  auto kps = detect_star(gray, integral,
-                         mission_ == Mission::kIngress ? params_.ingress_star : params_.star);
+  StarParams star = mission_ == Mission::kIngress ? params_.ingress_star : params_.star;
+  if (threshold_scale != 1.0) star.response_threshold *= threshold_scale;
+  auto kps = detect_star(gray, integral, star);
   if (!kps) return Result<TrackedFrame>::fail(kps.reason());
   r->n_features = static_cast<int>(kps->size());
   for (const auto& k : *kps) r->features_px.emplace_back(k.x, k.y);
@@ -87,12 +94,33 @@ Result<TrackedFrame> Pipeline::front_end(const cv::Mat& gray, int64_t utime, con
     frame.blur_px = floor_motion_blur_px(camera_, mount_, pose, params_.landing.floor_z_m,
                                          exposure_s.value_or(params_.landing.assumed_exposure_s));
   r->blur_px = frame.blur_px;
+  if (line_delay_s && *line_delay_s > 0)
+    frame.readout = readout_motion(pose, mount_, *line_delay_s, depth_plane());
   if (mission_ == Mission::kIngress && params_.ingress.parallax_mask)
     frame.image = parallax_image(gray, params_.ingress);
   if (mission_ == Mission::kLanding &&
       (params_.landing.photometric_tol > 0 || params_.landing.rim_search_m > 0))
     frame.image = gray.clone();
   return Result<TrackedFrame>::ok(std::move(frame));
+}
+
+// Whether the camera moved between two poses by more than leaves a still view's pixels equal (a
+// still camera's frames may be equal to the bit where nothing adds noise, as rendered ones):
+// 1 mm or 1 mrad, under a pixel at 1 m for a 667 px focal length.
+bool Pipeline::camera_moved(const PoseSample& a, const PoseSample& b) const {
+  constexpr double kStillM = 1e-3, kStillRad = 1e-3;
+  const Isometry3d X_WC_a = camera_in_world(a.X_WB(), mount_.X_BC());
+  const Isometry3d X_WC_b = camera_in_world(b.X_WB(), mount_.X_BC());
+  return (X_WC_a.translation() - X_WC_b.translation()).norm() > kStillM ||
+         Eigen::AngleAxisd(X_WC_a.linear().transpose() * X_WC_b.linear()).angle() > kStillRad;
+}
+
+// The plane a rolling shutter's translation takes its depths from (rolling_shutter.hpp): the
+// landing's floor, the wall the ingress last measured (none yet: rotation only).
+std::optional<ScenePlane> Pipeline::depth_plane() const {
+  if (mission_ == Mission::kLanding)
+    return ScenePlane{Vector3d::UnitZ(), params_.landing.floor_z_m};
+  return wall_plane_;
 }
 
 // The frame into the tracker (paper 3.1.1), and the poses of the frames it can still pick.
@@ -171,18 +199,29 @@ void Pipeline::hold_reference(Reference* ref, const TrackedFrame& current, int64
   ref->held = true;
 }
 
-// The matches as undistorted (K * ray) and raw pixels of both frames.
+// The matches as undistorted (K * ray) and raw pixels of both frames; under a rolling shutter
+// the rays are each frame's row 0's (rolling_shutter.hpp), and kept.
 Correspondences Pipeline::correspondences(const TrackedFrame& a, const TrackedFrame& b,
                                           const std::vector<Match>& matches) const {
   Correspondences c;
   c.camera = &camera_;
   c.mount = &mount_;
+  c.readout_1 = &a.readout;
+  c.readout_2 = &b.readout;
+  const bool rolling = a.readout.rolling() || b.readout.rolling();
   const Matrix3d K = camera_.K();
   for (const auto& m : matches) {
     const auto& k1 = a.keypoints[m.i1];
     const auto& k2 = b.keypoints[m.i2];
-    c.x1.push_back((K * camera_.ray({k1.x, k1.y})).hnormalized());
-    c.x2.push_back((K * camera_.ray({k2.x, k2.y})).hnormalized());
+    if (rolling) {
+      c.r1.push_back(ray_at_epoch(camera_, {k1.x, k1.y}, a.readout));
+      c.r2.push_back(ray_at_epoch(camera_, {k2.x, k2.y}, b.readout));
+      c.x1.push_back((K * c.r1.back()).hnormalized());
+      c.x2.push_back((K * c.r2.back()).hnormalized());
+    } else {
+      c.x1.push_back((K * camera_.ray({k1.x, k1.y})).hnormalized());
+      c.x2.push_back((K * camera_.ray({k2.x, k2.y})).hnormalized());
+    }
     c.u1.emplace_back(k1.x, k1.y);
     c.u2.emplace_back(k2.x, k2.y);
   }
@@ -191,7 +230,8 @@ Correspondences Pipeline::correspondences(const TrackedFrame& a, const TrackedFr
 
 FrameResult Pipeline::process(const cv::Mat& gray, int64_t utime,
                               const std::optional<PoseSample>& pose,
-                              std::optional<double> exposure_s) {
+                              std::optional<double> exposure_s,
+                              std::optional<double> line_delay_s) {
   FrameResult r;
   r.utime = utime;
   r.seq = ++seq_;
@@ -204,21 +244,34 @@ FrameResult Pipeline::process(const cv::Mat& gray, int64_t utime,
   if (gray.empty() || gray.type() != CV_8UC1 || gray.cols != camera_.width ||
       gray.rows != camera_.height)
     return fail(Reason::kBadImage);
+  // The driver's repeat and the exposure's steps (frame_checks.hpp): refused before their
+  // features, not tracked, not counted as the previous frame.
+  const uint64_t hash = pixel_hash(gray);
+  const bool repeated = last_hash_ && *last_hash_ == hash && camera_moved(last_pose_, *pose);
+  last_hash_ = hash;
+  last_pose_ = *pose;
+  if (repeated) return fail(Reason::kDuplicateFrame);
+  const double level = frame_level(gray);
+  const ExposureCheck exposure = exposure_.check(level, utime, clipped_share(gray));
+  if (exposure.step) return fail(Reason::kExposureChange);
   // A gap or a jump in the frames' times: nothing from before it is trusted, the held reference
   // included (the tracker sees such a gap only while its history holds frames).
-  if (last_utime_ != 0 && (utime <= last_utime_ ||
-                           double(utime - last_utime_) * 1e-6 > params_.tracker.max_frame_gap_s))
-    held_.reset();
+  const bool gap =
+      last_utime_ != 0 && double(utime - last_utime_) * 1e-6 > params_.tracker.max_frame_gap_s;
+  if (last_utime_ != 0 && (utime <= last_utime_ || gap)) held_.reset();
   last_utime_ = utime;
 
-  auto frame = front_end(gray, utime, *pose, exposure_s, &r);
+  auto frame =
+      front_end(gray, utime, *pose, exposure_s, exposure.threshold_scale, line_delay_s, &r);
   if (!frame) return fail(frame.reason());
+  frame.value().level = level;
   const auto up = track(std::move(frame.value()), utime, *pose);
   r.n_tracked = up.n_tracked;
   if (up.current && smeared(*up.current)) return fail(Reason::kMotionBlur);
   // No tracked reference (the tracks just broke): only the held one can serve.
   const bool held_only = up.status == Reason::kNoReference && up.current && holds() && held_;
-  if (up.status != Reason::kOk && !held_only) return fail(up.status);
+  if (up.status != Reason::kOk && !held_only)
+    return fail(gap && up.status == Reason::kNoReference ? Reason::kFrameGap : up.status);
   Reference ref = tracked_reference(up, *pose);
   const TrackedFrame& b = *up.current;
   hold_reference(&ref, b, utime, *pose);
@@ -244,10 +297,19 @@ FrameResult Pipeline::process(const cv::Mat& gray, int64_t utime,
   c.pose_2 = *pose;
   r.matched_px = c.u2;
   const bool parallax = mission_ == Mission::kIngress && params_.ingress.parallax_mask;
+  // The reference's pixels at the current frame's exposure, for the stages that difference them.
+  cv::Mat image_1 = a.image;
+  if (const double g = gain_between(a.level, b.level); g != 1.0 && !a.image.empty()) {
+    cv::Mat scaled;  // a new buffer: the tracked frame's image stays as captured
+    a.image.convertTo(scaled, CV_8U, g);
+    image_1 = scaled;
+  }
   const TargetOutcome t = mission_ == Mission::kLanding
-                              ? find_landing_target(c, params_, a.image, gray)
+                              ? find_landing_target(c, params_, image_1, gray)
                               : find_ingress_target(c, gray, parallax ? b.image : cv::Mat(),
-                                                    parallax ? a.image : cv::Mat(), params_);
+                                                    parallax ? image_1 : cv::Mat(), params_);
+  if (mission_ == Mission::kIngress && (t.reason == Reason::kOk || located_only(t.reason)))
+    wall_plane_ = ScenePlane{t.estimate.n_W, t.estimate.n_W.dot(t.estimate.p_W)};
   r.target = t.estimate;
   r.labels = t.labels;
   r.lines = t.lines;

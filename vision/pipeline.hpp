@@ -30,6 +30,13 @@
 // reference live on, but it is never measured and never the reference: its features are smears,
 // placed where no plane puts them, and such frames at the search path's turns made tops of a
 // bare floor.
+//
+// Beyond the paper, a real camera (frontend/frame_checks.hpp, geometry/rolling_shutter.hpp): a
+// frame equal to the previous one (the driver's repeat) and a frame whose brightness stepped
+// (automatic exposure) are refused before their features and never tracked; the detector's
+// threshold and the reference's pixels follow smaller exposure changes; under a rolling shutter
+// every feature's ray is brought to its frame's row 0, the time of the frame's stamp and pose,
+// before any geometry (with a global shutter nothing changes).
 
 #include <deque>
 #include <optional>
@@ -38,6 +45,7 @@
 #include "common/camera_model.hpp"
 #include "common/camera_mount.hpp"
 #include "common/pose_buffer.hpp"
+#include "vision/frontend/frame_checks.hpp"
 #include "vision/frontend/reference_tracker.hpp"
 #include "vision/params.hpp"
 #include "vision/target.hpp"
@@ -71,9 +79,12 @@ class Pipeline {
 
   /// Processes one frame (CV_8UC1). `pose` is the body pose at the exposure time; nullopt gives
   /// kNoPose and leaves the history untouched. `exposure_s`: the frame's exposure time [s]
-  /// (nullopt: landing.assumed_exposure_s), for the motion blur guard.
+  /// (nullopt: landing.assumed_exposure_s), for the motion blur guard. `line_delay_s`: a
+  /// rolling shutter's row-to-row delay (row v exposed at utime + v x line_delay_s) [s];
+  /// nullopt or 0: a global shutter.
   FrameResult process(const cv::Mat& gray, int64_t utime, const std::optional<PoseSample>& pose,
-                      std::optional<double> exposure_s = std::nullopt);
+                      std::optional<double> exposure_s = std::nullopt,
+                      std::optional<double> line_delay_s = std::nullopt);
   void reset();
 
   Mission mission() const { return mission_; }
@@ -85,7 +96,10 @@ class Pipeline {
 
   // Stages of process(), in order (pipeline.cpp).
   Result<TrackedFrame> front_end(const cv::Mat& gray, int64_t utime, const PoseSample& pose,
-                                 std::optional<double> exposure_s, FrameResult* r) const;
+                                 std::optional<double> exposure_s, double threshold_scale,
+                                 std::optional<double> line_delay_s, FrameResult* r) const;
+  std::optional<ScenePlane> depth_plane() const;
+  bool camera_moved(const PoseSample& a, const PoseSample& b) const;
   ReferenceTracker::Update track(TrackedFrame frame, int64_t utime, const PoseSample& pose);
   Reference tracked_reference(const ReferenceTracker::Update& up, const PoseSample& pose) const;
   void hold_reference(Reference* ref, const TrackedFrame& current, int64_t utime,
@@ -106,6 +120,12 @@ class Pipeline {
   std::shared_ptr<const TrackedFrame> held_;
   PoseSample held_pose_;
   int64_t last_utime_ = 0;  // the previous frame's time: a gap drops the held reference
+  // The real camera's checks (frame_checks.hpp) and the wall the previous frame measured (the
+  // rolling-shutter correction's depths for ingress).
+  ExposureGuard exposure_;
+  std::optional<uint64_t> last_hash_;
+  PoseSample last_pose_;  // the pose of last_hash_'s frame
+  std::optional<ScenePlane> wall_plane_;
   int64_t seq_ = 0;
 };
 

@@ -66,6 +66,12 @@ const char* to_string(Reason r) {
       return "partial view without the wall around it";
     case Reason::kPartialNotBehind:
       return "partial view not behind the wall";
+    case Reason::kExposureChange:
+      return "exposure change";
+    case Reason::kDuplicateFrame:
+      return "duplicated frame";
+    case Reason::kFrameGap:
+      return "frames missing (gap)";
   }
   return "unknown";
 }

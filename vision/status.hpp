@@ -45,6 +45,10 @@ enum class Reason : int8_t {
   kNotBehindWall = 28,        ///< ingress: the block's view not behind the wall
   kPartialNotFramed = 29,     ///< ingress: a block at the border without the wall around it
   kPartialNotBehind = 30,     ///< ingress: a block at the border whose view is not behind
+  // A frame refused for what the camera or its driver did to it (frontend/frame_checks.hpp).
+  kExposureChange = 31,  ///< the brightness stepped beyond ExposureGuard::kStepEv: not tracked
+  kDuplicateFrame = 32,  ///< the previous frame's pixels again (the driver's repeat): not tracked
+  kFrameGap = 33,        ///< no reference: a gap in the frames' times broke the tracks
 };
 
 const char* to_string(Reason r);

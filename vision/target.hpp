@@ -10,6 +10,7 @@
 #include "common/camera_model.hpp"
 #include "common/camera_mount.hpp"
 #include "common/pose_buffer.hpp"
+#include "vision/geometry/rolling_shutter.hpp"
 #include "vision/status.hpp"
 
 namespace alight::vision {
@@ -18,10 +19,32 @@ namespace alight::vision {
 struct Correspondences {
   std::vector<Vector2d> x1, x2;  ///< undistorted pixels (K * ray) in the reference / current image
   std::vector<Vector2d> u1, u2;  ///< raw (distorted) pixels in the reference / current image
-  PoseSample pose_1, pose_2;     ///< motion-capture poses at the two exposures
+  /// The rays (x, y, 1) of x1 / x2 (K^-1 x): the lens undone and, under a rolling shutter, at
+  /// each frame's row 0 (rolling_shutter.hpp). Empty: camera->ray(u1 / u2).
+  std::vector<Vector3d> r1, r2;
+  /// Each frame's readout (null or not rolling: a global shutter), for the stages that sample
+  /// the raw images at points of the geometry.
+  const Readout* readout_1 = nullptr;
+  const Readout* readout_2 = nullptr;
+  PoseSample pose_1, pose_2;  ///< motion-capture poses at the two exposures
   const CameraModel* camera = nullptr;
   const CameraMount* mount = nullptr;
   size_t size() const { return x1.size(); }
+  Vector3d ray1(size_t k) const { return r1.empty() ? camera->ray(u1[k]) : r1[k]; }
+  Vector3d ray2(size_t k) const { return r2.empty() ? camera->ray(u2[k]) : r2[k]; }
+  /// The ray of the current frame's row 0 through its raw pixel u.
+  Vector3d ray_of_pixel2(const Vector2d& u) const {
+    return readout_2 ? ray_at_epoch(*camera, u, *readout_2) : camera->ray(u);
+  }
+  /// The raw pixel of a ray (any positive scale) of the reference's / current frame's row 0.
+  std::optional<Vector2d> pixel1(const Vector3d& r) const {
+    return readout_1 && readout_1->rolling() ? pixel_of_epoch_ray(*camera, r, *readout_1)
+                                             : camera->project(r);
+  }
+  std::optional<Vector2d> pixel2(const Vector3d& r) const {
+    return readout_2 && readout_2->rolling() ? pixel_of_epoch_ray(*camera, r, *readout_2)
+                                             : camera->project(r);
+  }
 };
 
 /// Role of each correspondence, for the diagnostic image.

@@ -58,7 +58,7 @@ int main(int argc, char** argv) try {
   c.script = [&](const Autonomy& a, double, ScriptActions&) { phase = a.phase(); };
   int n = 0;
   c.camera_vision = [&](const sim::CameraFrame& f, const std::optional<PoseSample>& pose) {
-    const auto r = pipeline.process(f.pixels, f.utime, pose, f.exposure_s);
+    const auto r = pipeline.process(f.pixels, f.utime, pose, f.exposure_s, f.line_delay_s);
     // True box: the front face's corners in the image.
     const Isometry3d X_CW = f.X_WC.inverse();
     double tl = 1e9, tr = -1e9, tt = 1e9, tb = -1e9;

@@ -97,7 +97,7 @@ int main(int argc, char** argv) try {
   // how far the motion the vision assumes between reference and current is off.
   std::map<int64_t, std::pair<Isometry3d, Isometry3d>> cams;
   cfg.camera_vision = [&](const sim::CameraFrame& f, const std::optional<PoseSample>& pose) {
-    const auto r = pipeline.process(f.pixels, f.utime, pose, f.exposure_s);
+    const auto r = pipeline.process(f.pixels, f.utime, pose, f.exposure_s, f.line_delay_s);
     if (pose) cams[f.utime] = {camera_in_world(pose->X_WB(), rig.mount.X_BC()), f.X_WC};
     while (!cams.empty() && cams.begin()->first < f.utime - 5000000) cams.erase(cams.begin());
     const Isometry3d X_CW = f.X_WC.inverse();
@@ -168,7 +168,7 @@ int main(int argc, char** argv) try {
       }
     }
     if (!shadow_prior.empty()) {
-      const auto q = shadow.process(f.pixels, f.utime, pose, f.exposure_s);
+      const auto q = shadow.process(f.pixels, f.utime, pose, f.exposure_s, f.line_delay_s);
       std::printf(" | shadow %s in %d/%d", vision::to_string(q.reason), q.target.n_inliers_target,
                   q.target.n_inliers_dominant);
       if (q.found()) {

@@ -32,7 +32,7 @@ RealVision::~RealVision() = default;
 
 std::optional<TargetMeasurement> RealVision::operator()(const sim::CameraFrame& f,
                                                         const std::optional<PoseSample>& pose) {
-  const auto r = pipeline_->process(f.pixels, f.utime, pose, f.exposure_s);
+  const auto r = pipeline_->process(f.pixels, f.utime, pose, f.exposure_s, f.line_delay_s);
   ++frames;
   found += r.found();
   const TargetMeasurement m = from_msg(vision::to_msg(r));

@@ -27,6 +27,7 @@
 
 #include "vision/frontend/matcher.hpp"
 #include "vision/frontend/star_detector.hpp"
+#include "vision/geometry/rolling_shutter.hpp"
 #include "vision/params.hpp"
 #include "vision/status.hpp"
 
@@ -44,6 +45,9 @@ struct TrackedFrame {
   /// The floor's smear over the exposure [px] (motion_blur.hpp): a smeared frame is tracked
   /// through but never the reference (landing.max_motion_blur_px).
   double blur_px = 0.0;
+  /// The camera's motion over the readout (rolling_shutter.hpp; not rolling: a global shutter).
+  Readout readout;
+  double level = 0.0;  ///< brightness level (frame_checks.hpp) [grey levels]
 };
 
 class ReferenceTracker {

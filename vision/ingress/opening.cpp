@@ -46,7 +46,8 @@ Reason measure_opening(const Correspondences& c, const PlaneMotion& wall, const 
   const double left = box.left, right = box.right, top = box.top, bottom = box.bottom;
   const Vector2d centre(0.5 * (left + right), 0.5 * (top + bottom));
   auto on_wall = [&](const Vector2d& px) {
-    return compute_waypoint(wall, c.camera->ray(px), c.pose_1, c.pose_2, *c.mount, params.waypoint);
+    return compute_waypoint(wall, c.ray_of_pixel2(px), c.pose_1, c.pose_2, *c.mount,
+                            params.waypoint);
   };
   const auto w_c = on_wall(centre);
   const auto w_l = on_wall({left, centre.y()}), w_r = on_wall({right, centre.y()});

@@ -74,8 +74,8 @@ std::vector<std::optional<Vector3d>> triangulate_matches(const Correspondences& 
   const double max_gap_rad = params.max_ray_gap_px / c.camera->K()(0, 0);
   std::vector<std::optional<Vector3d>> X_W_match(c.size());
   for (size_t k = 0; k < c.size(); ++k)
-    X_W_match[k] = triangulate_midpoint(X_WC1, X_WC1.linear() * c.camera->ray(c.u1[k]), X_WC2,
-                                        X_WC2.linear() * c.camera->ray(c.u2[k]), max_gap_rad);
+    X_W_match[k] = triangulate_midpoint(X_WC1, X_WC1.linear() * c.ray1(k), X_WC2,
+                                        X_WC2.linear() * c.ray2(k), max_gap_rad);
   return X_W_match;
 }
 

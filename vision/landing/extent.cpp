@@ -163,13 +163,13 @@ Reason measure_top(const Correspondences& c, const LandingPlanes& planes, const 
   e->yaw_rad = std::atan2(long_W.y(), long_W.x());
   if (e->yaw_rad <= -M_PI / 2) e->yaw_rad += M_PI;
   if (e->yaw_rad > M_PI / 2) e->yaw_rad -= M_PI;
-  const auto px = c.camera->project(w_top->p_C2);
+  const auto px = c.pixel2(w_top->p_C2);
   e->pixel = px ? *px : (c.camera->K() * aim_ray).hnormalized();
   e->outline.clear();
   for (int k = 0; k < 4; ++k) {  // the measured rectangle, for the diagnostic image
     const double s0 = (k == 0 || k == 3) ? r.lo[0] : r.hi[0], s1 = k < 2 ? r.lo[1] : r.hi[1];
     const Vector3d corner_C2 = X_WC2.inverse() * (r.origin_W + s0 * r.axis[0] + s1 * r.axis[1]);
-    if (const auto q = c.camera->project(corner_C2)) e->outline.push_back(*q);
+    if (const auto q = c.pixel2(corner_C2)) e->outline.push_back(*q);
   }
   return Reason::kOk;
 }

@@ -95,7 +95,7 @@ std::optional<SideGrid> read_side(const Correspondences& c, const cv::Mat& gray_
       if (X_C2.z() <= 0) continue;
       const Vector3d r1 = H_12 * (X_C2 / X_C2.z());
       if (r1.z() <= 0) continue;
-      const auto u1 = c.camera->project(r1), u2 = c.camera->project(X_C2);
+      const auto u1 = c.pixel1(r1), u2 = c.pixel2(X_C2);
       double v1, v2;
       if (!u1 || !u2 || !bilinear_inside(gray_1, *u1, &v1) || !bilinear_inside(gray_2, *u2, &v2))
         continue;
@@ -395,7 +395,7 @@ bool floor_beyond(const Correspondences& c, const cv::Mat& gray_1, const EndSear
       ++off_top;
       const Vector3d r1 = H_12_floor * s.grid.point_C2(i, static_cast<int>(at % s.grid.n_g));
       double v1_floor;
-      const auto u1 = r1.z() > 0 ? c.camera->project(r1) : std::nullopt;
+      const auto u1 = r1.z() > 0 ? c.pixel1(r1) : std::nullopt;
       on_floor += u1 && bilinear_inside(gray_1, *u1, &v1_floor) &&
                   std::abs(s.grid.g2[at] - s.gain * v1_floor) <= s.tau;
     }

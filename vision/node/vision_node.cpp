@@ -174,9 +174,9 @@ int main(int argc, char** argv) {
       // half-way is dropped whole.
       const auto error = run_guarded([&] {
         const int64_t start = steady_utime(), start_cpu = thread_cpu_us();
-        const FrameResult r =
-            f.bad ? pipeline.process(cv::Mat(), f.image.utime, pose)
-                  : pipeline.process(f.image.pixels, f.image.utime, pose, f.image.exposure_s);
+        const FrameResult r = f.bad ? pipeline.process(cv::Mat(), f.image.utime, pose)
+                                    : pipeline.process(f.image.pixels, f.image.utime, pose,
+                                                       f.image.exposure_s, f.image.line_delay_s);
         const int64_t process_us = steady_utime() - start;
         const int64_t process_cpu_us = thread_cpu_us() - start_cpu;
         const target_t target = to_msg(r);
