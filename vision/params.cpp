@@ -224,17 +224,6 @@ const ParamSchema<LandingParams>& LandingParams::schema() {
           "the top is opaque: top features whose removal leaves fewer floor matches (off the "
           "top's plane) inside the hull of the top's are dropped before its extent is measured, "
           "up to this share of them (0: none)");
-    s.add("top_alone_min_share", &P::top_alone_min_share, Range::closed(0, 1), "",
-          "known floor: where the floor shows too few features for the pair, the view may hold "
-          "the top alone (close over it in the approach): one level plane at a platform height "
-          "explaining at least this share of the matches, the floor seen outside it in fewer "
-          "than min_floor_inliers places, is the top in sight (REASON_PARTIAL_VIEW: its extent "
-          "is unknown). 0: off");
-    s.add("top_alone_min_rise", &P::top_alone_min_rise, Range::open_closed(0, 1), "",
-          "top_alone_min_share: the top alone's inverse distance at least this fraction above "
-          "the floor's (its height at least this share of its distance from the camera), so that "
-          "a bias of every match's parallax alike (a pose a few milliseconds off its image) is "
-          "no top");
     s.add("photometric_tol", &P::photometric_tol, Range::closed(0, 0.5), "",
           "beyond the paper (plane_photometric.hpp): the pixels inside the top's features and "
           "around the floor's must each follow their own plane's homography within this share "
@@ -280,23 +269,6 @@ const ParamSchema<LandingParams>& LandingParams::schema() {
           "that it shows the same scene, and an approach held by gusts hovered 10 s with the "
           "target in view (landing_lowtex seed 8002), then lost it when a 10 s bound dropped "
           "the reference");
-    s.add("rim_search_m", &P::rim_search_m, Range::closed(0, 0.2), "m",
-          "each side of the top's features' extent is searched outward this far in the top's "
-          "plane for the top's rim, an intensity step that both images show at the same place "
-          "on that plane (0: off, the extent widened by side_from_extent). A nearly blank top "
-          "has no features near its edges: its extent fell 1.5-4 cm short (landing_lowtex "
-          "9913, 9919, 9612: refused as too narrow)");
-    s.add("rim_min_step", &P::rim_min_step, Range::gt(0), "grey levels",
-          "rim_search_m: the mean step across the rim, along the side, in both images at least");
-    s.add("rim_max_disagreement_px", &P::rim_max_disagreement_px, Range::gt(0), "px",
-          "rim_search_m: the two images' steps at most this far apart on the top's plane (in "
-          "pixels of the current image): farther, the step is not on the top (the floor or a "
-          "side face beyond it moves differently) and the side keeps the features' extent");
-    s.add("rim_max_turn_deg", &P::rim_max_turn_deg, Range::closed(0, 45), "deg",
-          "rim_search_m: the rim may be turned this far from the features' rectangle's side (a "
-          "minimum-area rectangle of a few dozen features on a blank top can be 10 deg or more "
-          "off its edges); the turn is fitted to where short stretches of the side step, and "
-          "two or more rims that agree on a turn turn the rectangle onto them");
     s.add("top_end_search_m", &P::top_end_search_m, Range::closed(0, 0.2), "m",
           "a side without a rim step is searched outward this far in the top's plane for the "
           "top's end: a straight line where the top's homography stops explaining the two "
@@ -333,26 +305,6 @@ const ParamSchema<IngressParams>& IngressParams::schema() {
   using P = IngressParams;
   static const ParamSchema<P> schema = [] {
     ParamSchema<P> s;
-    s.add("nearer_plane", &P::nearer_plane, Range::any(), "",
-          "the wall is the nearer (median depth of its triangulated inliers) of the dominant "
-          "plane and a second one among its outliers: a dark, flat wall photograph has fewer "
-          "matches than the room seen through a large opening (issue 15). false: the dominant "
-          "plane");
-    s.add("nearer_plane_margin_m", &P::nearer_plane_margin_m, Range::ge(0), "m",
-          "the second plane is the wall only when nearer than the dominant by this (a room's "
-          "back wall lies metres behind; a second fit of the wall itself at the same depth)");
-    s.add("border_is_partial", &P::border_is_partial, Range::any(), "",
-          "an opening block reaching the image border is a partial view (REASON_PARTIAL_VIEW: "
-          "located, never averaged into the estimate), its true extent unknown");
-    s.add("partial_frame_inliers", &P::partial_frame_inliers, Range::ge(0), "",
-          "a block at the image border is a partial view only with at least this many wall "
-          "inliers beyond each of two of its sides (a hole's corner, or its two edges in one "
-          "direction); else no opening: the space past the wall's end or above its top, or a "
-          "poor homography's stray wall features (issue 15, ingress_solid_photo). 0: no check");
-    s.add("partial_behind_margin_m", &P::partial_behind_margin_m, Range::ge(0), "m",
-          "and the median of its block's features lies this far behind the median of the "
-          "wall's inliers, both triangulated with motion capture's poses (a poor homography's "
-          "plane in front of the wall leaves wall features behind it). 0: no check");
     s.add("max_ray_gap_px", &P::max_ray_gap_px, Range::ge(0), "px",
           "a match whose two rays (motion capture's poses) pass farther apart than this, seen "
           "from the current camera, is a mismatch: it has no 3-D point, so it counts in neither "
@@ -385,17 +337,6 @@ const ParamSchema<IngressParams>& IngressParams::schema() {
           "a cut snaps to the wall's edge within this (0: off)");
     s.add("snap_min_gradient", &P::snap_min_gradient, Range::ge(0), "Sobel units",
           "a weaker mean step along the cut is no edge");
-    s.add("max_wall_thickness_m", &P::max_wall_thickness_m, Range::closed(0, 2), "m",
-          "a cut moves out across an inner face (jamb, sill, lintel) of a wall up to this thick "
-          "to the wall's front edge, where a face plane and the wall explain both views best (the "
-          "mask's border sits "
-          "inside the face; 0: no face search)");
-    s.add("face_min_rise", &P::face_min_rise, Range::ge(0), "grey levels",
-          "the two views' difference (summed along a line across the side) must rise by this over "
-          "the search, else no face shows; the front edge is at its least");
-    s.add("face_stop_rise", &P::face_stop_rise, Range::ge(0), "grey levels",
-          "the face search stops once the difference a line has risen this far above its least "
-          "(it only rises further out; 0: the whole reach)");
     s.add("blur_sigma_px", &P::blur_sigma_px, Range::closed(0, 10), "px",
           "Gaussian smoothing before Canny (0: none)");
     s.add("canny_low", &P::canny_low, Range::gt(0), "grey levels", "Canny hysteresis: low");
@@ -412,21 +353,6 @@ const ParamSchema<IngressParams>& IngressParams::schema() {
     s.add("merge_px", &P::merge_px, Range::ge(0), "px", "cuts closer than this are one cut");
     s.add("cut_margin_px", &P::cut_margin_px, Range::closed(0, 50), "px",
           "wall inliers this close to a cut do not count");
-    s.add("off_features_on_mask", &P::off_features_on_mask, Range::any(), "",
-          "an outlier of the wall's homography counts as an off-wall feature only where the "
-          "off-wall mask marks its pixel (elsewhere the dense comparison finds the wall there)");
-    s.add("min_cell_mask_share", &P::min_cell_mask_share, Range::closed(0, 1), "",
-          "a cell without off-wall features whose share of off-wall mask pixels is below this "
-          "is clear; a block with a row or column of clear cells on its border is not the "
-          "opening (the block without it holds the same features; 0: no check)");
-    s.add("edge_band_min_share", &P::edge_band_min_share, Range::closed(0, 1), "",
-          "a clear row or column on a block's border stays when the cut beyond it is the "
-          "opening's edge: wall inliers in the cell beyond, and along this share of the cut "
-          "the mask clear 4 px out and set within snap_px + 4 px in (0: never)");
-    s.add("block_inlier_share", &P::block_inlier_share, Range::closed(0, 1), "",
-          "a block may hold wall inliers up to this share of its off-wall features (inner-face "
-          "features within the wall's thickness fit the wall's homography; 0: none, the paper's "
-          "rule)");
     s.add("min_outliers", &P::min_outliers, Range::ge(1), "",
           "fewer off-wall features in the block: no opening");
     s.add("behind_margin_m", &P::behind_margin_m, Range::ge(0), "m",

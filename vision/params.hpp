@@ -120,8 +120,6 @@ struct LandingParams {
   double floor_tol_frac = 0.08;
   int min_floor_inliers = 4;
   double max_rotation_correction_deg = 0.5;
-  double top_alone_min_share = 0.6;
-  double top_alone_min_rise = 0.06;
   double max_top_on_floor_share = 0.25;
   double max_stray_top_share = 0.1;
   // Beyond the paper: the images check the planes the features found (plane_photometric.hpp).
@@ -134,11 +132,7 @@ struct LandingParams {
   bool hold_reference = true;  ///< keep a longer-baseline reference while hovering (pipeline.hpp)
   double hold_baseline_m = 0.3;
   double hold_max_age_s = 30.0;
-  // Beyond the paper: each side of the features' extent out to the top's rim (landing_target.hpp).
-  double rim_search_m = 0.05;
-  double rim_min_step = 6.0;
-  double rim_max_disagreement_px = 1.5;
-  double rim_max_turn_deg = 15.0;
+  // Beyond the paper: a side without a rim out to the top's end (rim.hpp).
   double top_end_search_m = 0.1;
   double top_end_min_diff = 12.0;
   double top_end_min_rise = 0.4;
@@ -152,11 +146,6 @@ struct LandingParams {
 /// Ingress target (paper 3.3): Hough lines split the image into cells; the block of cells
 /// with no wall inliers and the most off-wall features is the opening.
 struct IngressParams {
-  bool nearer_plane = true;
-  double nearer_plane_margin_m = 0.5;
-  bool border_is_partial = true;
-  int partial_frame_inliers = 3;
-  double partial_behind_margin_m = 0.25;
   double max_ray_gap_px = 8;
   bool parallax_mask = true;
   int parallax_decimation = 1;
@@ -168,9 +157,6 @@ struct IngressParams {
   int max_border_lines = 32;
   double snap_px = 6;
   double snap_min_gradient = 8;
-  double max_wall_thickness_m = 0.4;
-  double face_min_rise = 2.0;
-  double face_stop_rise = 20.0;
   double blur_sigma_px = 2.0;
   double canny_low = 50, canny_high = 150;
   int hough_threshold = 60;
@@ -179,10 +165,6 @@ struct IngressParams {
   double max_line_tilt_deg = 8;
   double merge_px = 6;
   double cut_margin_px = 6;
-  bool off_features_on_mask = true;
-  double min_cell_mask_share = 0.5;
-  double edge_band_min_share = 0.5;
-  double block_inlier_share = 0.02;
   int min_outliers = 8;
   double behind_margin_m = 0.02;
   double min_behind_share = 0.7;

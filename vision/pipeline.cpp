@@ -98,9 +98,7 @@ Result<TrackedFrame> Pipeline::front_end(const cv::Mat& gray, int64_t utime, con
     frame.readout = readout_motion(pose, mount_, *line_delay_s, depth_plane());
   if (mission_ == Mission::kIngress && params_.ingress.parallax_mask)
     frame.image = parallax_image(gray, params_.ingress);
-  if (mission_ == Mission::kLanding &&
-      (params_.landing.photometric_tol > 0 || params_.landing.rim_search_m > 0))
-    frame.image = gray.clone();
+  if (mission_ == Mission::kLanding) frame.image = gray.clone();  // the plane check, the rims
   return Result<TrackedFrame>::ok(std::move(frame));
 }
 

@@ -550,8 +550,7 @@ Result<KnownFloorPlanes> fit_known_top_alone(const std::vector<Vector3d>& x1,
   using R_ = Result<KnownFloorPlanes>;
   const size_t N = x1.size();
   if (const Reason r = refused(N, x2.size(), motion, f, thr); r != Reason::kOk) return R_::fail(r);
-  if (!(params.top_alone_min_share > 0) || static_cast<int>(N) < params.min_platform_inliers)
-    return R_::fail(Reason::kNoTargetPlane);
+  if (static_cast<int>(N) < params.min_platform_inliers) return R_::fail(Reason::kNoTargetPlane);
   const TopRange range = top_range(floor, params);
   std::vector<PerMatch> pm;
   classify(x1, x2, motion.R_21, motion.t_12_m, floor.n_1, range.rho_f, f, thr, &pm);
@@ -560,7 +559,10 @@ Result<KnownFloorPlanes> fit_known_top_alone(const std::vector<Vector3d>& x1,
   const TopAlone alone = top_alone_of(pm, motion, floor, range, mode, thr);
   const KnownFloorPlanes& out = alone.planes;
   if (out.n_top < params.min_platform_inliers) return R_::fail(Reason::kNoTargetPlane);
-  if (alone.on_mode < params.top_alone_min_share * static_cast<double>(alone.informative))
+  // The top alone must hold a clear majority of the matches: the rest (the floor's few, blur's
+  // strays) never outvote it, and a mode that holds half of them is one of two rival planes.
+  constexpr double kTopAloneMinShare = 0.6;
+  if (alone.on_mode < kTopAloneMinShare * static_cast<double>(alone.informative))
     return R_::fail(Reason::kTopAloneTooFew);
   // Seen in a few places (a tile's corners beside a top that fills the view), the floor does not
   // contradict a top that holds ten times its matches; the pair then fails for want of them
@@ -572,9 +574,10 @@ Result<KnownFloorPlanes> fit_known_top_alone(const std::vector<Vector3d>& x1,
   // With little floor in sight to compare, a bias of the whole view's parallax (a pose a few
   // milliseconds off its image, features dragged by blur) is the rival of a plane: it scales
   // every match's inverse distance alike. The top must stand off the floor by more than such a
-  // bias: its inverse distance top_alone_min_rise above the floor's.
-  if (mode.rho < (1.0 + params.top_alone_min_rise) * range.rho_f)
-    return R_::fail(Reason::kTopAloneLowRise);
+  // bias: its inverse distance 6 % above the floor's (a 3 cm top seen from 0.5 m; a pose 5 ms off
+  // its image in a 0.3 m/s descent over a 0.1 m baseline scales the parallax by 1.5 %).
+  constexpr double kTopAloneMinRise = 0.06;
+  if (mode.rho < (1.0 + kTopAloneMinRise) * range.rho_f) return R_::fail(Reason::kTopAloneLowRise);
   // And with no floor to correct motion capture's rotation by, its error is the other rival: the
   // top's parallax against the floor where its matches are, as an angle, must exceed the
   // largest correction the pair would make: over a short baseline a fraction of a degree makes a

@@ -92,7 +92,7 @@ Result<KnownFloorPlanes> fit_known_floor_planes(const std::vector<Vector3d>& ray
 /// largest set of matches sharing one rho of a platform height (step 2 without the rotation
 /// correction: with no floor it would trade against rho, and over the approach's baselines
 /// motion capture's 0.1 deg moves rho by well under a percent). That set is the top alone when
-/// it holds at least top_alone_min_share of the matches and min_platform_inliers, its free
+/// it holds a clear majority (0.6) of the matches and min_platform_inliers, its free
 /// normal is level with the floor's, and the floor is seen outside it in fewer than
 /// min_floor_inliers places (where it is seen, the pair decides). The floor's fields hold the
 /// known floor and its matches; n_floor counts them all.

@@ -50,7 +50,7 @@ CellCounts count_cells(const Correspondences& c, const HomographyFit& fit, const
   };
   for (size_t k = 0; k < c.size(); ++k) {
     const int i = cell_of(xc, c.u2[k].x()), j = cell_of(yc, c.u2[k].y());
-    if (seen_through_wall(c, fit, cells, p, k))
+    if (seen_through_wall(c, fit, cells, k))
       ++n.at(n.off, i + 1, j + 1);
     else if (fit.inlier[k] && !near_cut(xc, c.u2[k].x()) && !near_cut(yc, c.u2[k].y()))
       ++n.at(n.in, i + 1, j + 1);
@@ -58,7 +58,7 @@ CellCounts count_cells(const Correspondences& c, const HomographyFit& fit, const
   n.integrate(&n.in);
   n.integrate(&n.off);
   const cv::Mat& mask = cells.mask;
-  if (!mask.empty() && p.min_cell_mask_share > 0) {
+  if (!mask.empty()) {
     for (int j = 0; j < n.ny; ++j)
       for (int i = 0; i < n.nx; ++i) {
         const cv::Rect cell = cv::Rect(cv::Point(cvRound(xc[i]), cvRound(yc[j])),
@@ -66,7 +66,7 @@ CellCounts count_cells(const Correspondences& c, const HomographyFit& fit, const
                               cv::Rect(0, 0, mask.cols, mask.rows);
         if (cell.area() > 0 && n.block(n.off, i, j, i + 1, j + 1) == 0)
           n.at(n.clear, i + 1, j + 1) =
-              cv::countNonZero(mask(cell)) < p.min_cell_mask_share * cell.area();
+              2 * cv::countNonZero(mask(cell)) < cell.area();  // mostly clear
       }
     n.integrate(&n.clear);
   }
@@ -81,9 +81,8 @@ CellCounts count_cells(const Correspondences& c, const HomographyFit& fit, const
 // once, when a clear strip first asks.
 class EdgeTest {
  public:
-  EdgeTest(const Cells& cells, const CellCounts& n, const IngressParams& p)
-      : cells_(cells), n_(n), p_(p) {
-    enabled_ = !cells.mask.empty() && p.min_cell_mask_share > 0 && p.edge_band_min_share > 0;
+  EdgeTest(const Cells& cells, const CellCounts& n, const IngressParams& p) : cells_(cells), n_(n) {
+    enabled_ = !cells.mask.empty();
     reach_ = static_cast<int>(std::ceil(p.snap_px)) + 4;  // the snap moved it out
     for (auto& v : run_)
       for (auto& s : v) s.resize(std::max(n.nx, n.ny) + 1);
@@ -97,7 +96,7 @@ class EdgeTest {
     const int beyond = s == 0 ? i - 1 : i;
     const int n_beyond = vertical ? n_.block(n_.in, beyond, c0, beyond + 1, c1)
                                   : n_.block(n_.in, c0, beyond, c1, beyond + 1);
-    if (n_beyond < std::max(1, p_.partial_frame_inliers)) return false;
+    if (n_beyond < kWallShownInliers) return false;
     // The middle of the span: its ends hold the neighbouring sides.
     const std::vector<double>& along = vertical ? cells_.yc : cells_.xc;
     const double len = along[c1] - along[c0];
@@ -105,7 +104,7 @@ class EdgeTest {
     const int lo = std::max(0, static_cast<int>(std::ceil(along[c0] + 0.1 * len)));
     const int hi = std::min(static_cast<int>(run.size()) - 1,
                             static_cast<int>(std::floor(along[c1] - 0.1 * len)));
-    return hi > lo && run[hi] - run[lo] >= p_.edge_band_min_share * (hi - lo);
+    return hi > lo && 2 * (run[hi] - run[lo]) >= hi - lo;  // along half the span at least
   }
 
  private:
@@ -138,7 +137,6 @@ class EdgeTest {
 
   const Cells& cells_;
   const CellCounts& n_;
-  const IngressParams& p_;
   bool enabled_ = false;
   int reach_ = 0;
   std::vector<std::vector<int>> run_[2][2];  // [x or y cuts][side][cut]
@@ -181,13 +179,17 @@ Cells cut_into_cells(const Correspondences& c, const HomographyFit& fit, const c
 }
 
 bool seen_through_wall(const Correspondences& c, const HomographyFit& fit, const Cells& cells,
-                       const IngressParams& p, size_t k) {
+                       size_t k) {
   if (fit.inlier[k]) return false;
   const cv::Mat& mask = cells.mask;
-  if (mask.empty() || !p.off_features_on_mask) return true;
+  if (mask.empty()) return true;
   const int u = cvRound(c.u2[k].x()), v = cvRound(c.u2[k].y());
   return u < 0 || v < 0 || u >= mask.cols || v >= mask.rows || mask.at<uint8_t>(v, u) != 0;
 }
+
+// Features on the inner faces within the wall's thickness of its front edge fit the wall's
+// homography: a block may hold one such inlier per 50 features seen through the wall.
+constexpr double kBlockInlierShare = 0.02;
 
 Block best_block(const Correspondences& c, const HomographyFit& fit, const Cells& cells,
                  const IngressParams& p) {
@@ -203,10 +205,7 @@ Block best_block(const Correspondences& c, const HomographyFit& fit, const Cells
           if (wall_strip(n, edge, i0, j0, i1, j1)) continue;
           const int n_in = n.block(n.in, i0, j0, i1, j1);
           const int n_off = n.block(n.off, i0, j0, i1, j1);
-          if (n_in > p.block_inlier_share * n_off) {
-            if (p.block_inlier_share > 0) continue;
-            break;  // growing j1 only adds inliers
-          }
+          if (n_in > kBlockInlierShare * n_off) continue;
           const double area = (xc[i1] - xc[i0]) * (yc[j1] - yc[j0]);
           if (n_off > best.n_off || (n_off == best.n_off && n_off > 0 && area > best_area)) {
             best = Block{i0, j0, i1, j1, n_off};

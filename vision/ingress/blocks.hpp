@@ -31,11 +31,15 @@ Cells cut_into_cells(const Correspondences& c, const HomographyFit& fit, const c
                      const cv::Mat& image_parallax, const cv::Mat& reference_parallax,
                      const IngressParams& params, std::vector<cv::Vec4i>* lines);
 
+/// The wall's inliers in a cell that show the wall there: one or two can be a poor homography's
+/// strays.
+inline constexpr int kWallShownInliers = 3;
+
 /// Whether match k is seen through the wall: an outlier of the wall's homography, and beyond
-/// the paper (off_features_on_mask) only where the mask marks its pixel: an outlier where the
+/// the paper, with the mask, only where the mask marks its pixel: an outlier where the
 /// dense comparison finds the wall is a wall feature the homography's fit missed, or a mismatch.
 bool seen_through_wall(const Correspondences& c, const HomographyFit& fit, const Cells& cells,
-                       const IngressParams& params, size_t k);
+                       size_t k);
 
 /// A block of cells [i0, i1) x [j0, j1), the features seen through the wall it holds, and what
 /// lies beyond its sides: whether it reaches the image border (no cut there), and the wall's
@@ -50,13 +54,13 @@ struct Block {
 
 /// The block holding the most features seen through the wall (the larger on a tie: the inner
 /// faces hold no wall inliers, so the faces' far edges bound a smaller block with the same
-/// features), with at most block_inlier_share of them in wall inliers (features on the inner
-/// faces near the front edge fit the wall's homography), and beyond the paper not bounded by a
-/// strip of bare wall: an outermost row or column of cells with no such features and mostly
-/// clear in the mask (min_cell_mask_share), unless the cut beyond it is the opening's edge (the
-/// wall's inliers in the cell beyond, and along the middle of the cut the mask clear 4 px out on
-/// the wall's side and set within snap_px + 4 px on the block's side: edge_band_min_share of
-/// the lines). n_off 0: no block holds any.
+/// features), with at most 2 % of them in wall inliers (features on the inner faces near the
+/// front edge fit the wall's homography), and beyond the paper not bounded by a strip of bare
+/// wall: an outermost row or column of cells with no such features and mostly (half or more)
+/// clear in the mask, unless the cut beyond it is the opening's edge (kWallShownInliers of the
+/// wall's inliers in the cell beyond, and along the middle of the cut, on half of the lines at
+/// least, the mask clear 4 px out on the wall's side and set within snap_px + 4 px on the
+/// block's side). n_off 0: no block holds any.
 Block best_block(const Correspondences& c, const HomographyFit& fit, const Cells& cells,
                  const IngressParams& params);
 

@@ -11,6 +11,13 @@
 namespace alight::vision {
 namespace {
 
+// The search reaches as far as a face this thick can show in perspective: a thick outer wall
+// with its lining (the scene families' walls are 5-30 cm).
+constexpr double kMaxWallThicknessM = 0.4;
+// A face shows where the two views' difference, a line's mean, rises by more than the noise of
+// the smoothed images' difference (grey levels).
+constexpr double kFaceMinRise = 2.0;
+
 // One side's search: the cut line, the offsets k0 .. k_end searched towards the wall, the front
 // edge's candidates up to e_max, and the wall's motion to compare the views by.
 struct FaceSearch {
@@ -107,14 +114,14 @@ std::optional<Vector3d> face_plane(const FaceSearch& s, int e, double along_lo, 
 // cost[e - k0]: the face's model over k0 <= k < e, the wall's beyond (e = k0: no face); infinity
 // where a candidate could not be read. Past the least the cost only rises (the face's model
 // takes in more of the wall): the search stops once a candidate two or more beyond the least
-// has risen face_stop_rise a line above it (`risen`), and a candidate's sum stops there too:
+// has risen kFaceStopRise a line above it (`risen`), and a candidate's sum stops there too:
 // the candidates' pixels grow with the square of the reach.
+constexpr double kFaceStopRise = 20.0;  // grey levels a line: ten times kFaceMinRise
 struct FaceCosts {
   std::vector<double> cost;
   bool risen = false;
 };
-FaceCosts face_costs(const FaceSearch& s, const FaceStrip& f, int lo, int hi,
-                     const IngressParams& p) {
+FaceCosts face_costs(const FaceSearch& s, const FaceStrip& f, int lo, int hi) {
   const int n_k = f.n_k, n_rows = f.n_rows, k0 = s.k0;
   // wall_from[j]: the wall model's difference summed over k >= k0 + j.
   std::vector<double> wall_from(n_k + 1, 0.0);
@@ -127,13 +134,13 @@ FaceCosts face_costs(const FaceSearch& s, const FaceStrip& f, int lo, int hi,
   c.cost[0] = wall_from[0];
   double least_so_far = c.cost[0];
   int best_so_far = 0;
-  const double stop = p.face_stop_rise * n_rows;
+  const double stop = kFaceStopRise * n_rows;
   for (int e = k0 + 1; e <= s.e_max; ++e) {
     const auto face = face_plane(s, e, lo, hi);
     if (!face) continue;
     double sum = wall_from[e - k0];
     bool ok = true;
-    const bool may_stop = p.face_stop_rise > 0 && e - k0 >= best_so_far + 2;
+    const bool may_stop = e - k0 >= best_so_far + 2;
     bool stopped = false;
     for (int r = 0; r < n_rows && ok && !stopped; ++r) {
       for (int j = 0; j < e - k0; ++j) {
@@ -162,9 +169,9 @@ FaceCosts face_costs(const FaceSearch& s, const FaceStrip& f, int lo, int hi,
 // and rises once it takes in the wall beyond its front edge). Not the farthest candidate near
 // the least: where the face's texture is faint the cost is flat over pixels either side of the
 // front edge, and the farthest of them widens the opening. A strip whose cost never rises by
-// face_min_rise tells the face from the wall nowhere (a smooth wall): a unchanged.
-double least_cost_edge(const FaceSearch& s, const FaceCosts& c, int n_rows, double a,
-                       const IngressParams& p) {
+// kFaceMinRise grey levels a line tells the face from the wall nowhere (a smooth wall): a
+// unchanged.
+double least_cost_edge(const FaceSearch& s, const FaceCosts& c, int n_rows, double a) {
   const std::vector<double>& cost = c.cost;
   double least = std::numeric_limits<double>::infinity(), most = 0;
   int best = -1;
@@ -173,7 +180,7 @@ double least_cost_edge(const FaceSearch& s, const FaceCosts& c, int n_rows, doub
       if (cost[i] < least) least = cost[i], best = i;
       most = std::max(most, cost[i]);
     }
-  if (best <= 0 || (!c.risen && (most - least) / n_rows < p.face_min_rise)) return a;
+  if (best <= 0 || (!c.risen && (most - least) / n_rows < kFaceMinRise)) return a;
   double frac = 0;
   if (best + 1 < static_cast<int>(cost.size()) && std::isfinite(cost[best + 1]) &&
       std::isfinite(cost[best - 1])) {
@@ -195,7 +202,7 @@ double face_front_edge(int side, bool vertical, double a, double b, double mean_
   if (side == 0 || (a - centre) * side <= 0) return a;
   const int n_across = vertical ? g.image.cols : g.image.rows;
   const double reach =
-      std::min(std::abs(a - centre) * p.max_wall_thickness_m / g.wall_depth_m, 0.25 * n_across);
+      std::min(std::abs(a - centre) * kMaxWallThicknessM / g.wall_depth_m, 0.25 * n_across);
   const int k0 = static_cast<int>(std::ceil(2 * p.parallax_blur_sigma_px)) + 1;
   const int e_max = static_cast<int>(std::floor(reach));
   const int k_end = e_max + k0 + 8;  // beyond the farthest front edge: the wall's own level
@@ -218,7 +225,7 @@ double face_front_edge(int side, bool vertical, double a, double b, double mean_
                      -(g.wall.R_21 * g.wall.t_12)};
   const FaceStrip strip = read_strip(s, lo, hi);
   if (strip.n_rows < 4) return a;
-  return least_cost_edge(s, face_costs(s, strip, lo, hi, p), strip.n_rows, a, p);
+  return least_cost_edge(s, face_costs(s, strip, lo, hi), strip.n_rows, a);
 }
 
 OpeningBox to_front_edges(const OpeningBox& box, cv::Size image_size, const CutGeometry& geometry,

@@ -50,14 +50,14 @@ TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image
   out.estimate.n_inliers_target = b.n_off;
   if (b.n_off < p.min_outliers) return refuse(Reason::kNoOpening);
   for (size_t k = 0; k < c.size(); ++k)
-    if (seen_through_wall(c, fit, cells, p, k)) {
+    if (seen_through_wall(c, fit, cells, k)) {
       const int i = cell_of(cells.xc, c.u2[k].x()), j = cell_of(cells.yc, c.u2[k].y());
       if (i >= b.i0 && i < b.i1 && j >= b.j0 && j < b.j1) out.labels[k] = Label::kTarget;
     }
 
   // 3. The faces: the mask's geometry at full size only.
   OpeningBox box{cells.xc[b.i0], cells.xc[b.i1], cells.yc[b.j0], cells.yc[b.j1]};
-  if (!cells.mask.empty() && p.max_wall_thickness_m > 0 && image_parallax.size() == image.size()) {
+  if (!cells.mask.empty() && image_parallax.size() == image.size()) {
     const Matrix3d K = c.camera->K();
     const CutGeometry geometry{
         Vector2d(K(0, 2), K(1, 2)), wall.depth_m, *wall.plane, c.camera, image_parallax,

@@ -17,7 +17,9 @@ double median(std::vector<double>& v) {
 // motion capture's poses: a poor homography (few inliers, its plane in front of the wall) leaves
 // the wall's own features off it, all "behind" its plane. The median, not a share: an opening's
 // inner faces (jambs, sill) lie within the wall's thickness behind it, and at the vantages they
-// can hold a third of the block's features.
+// can hold a third of the block's features. A room seen through lies metres behind, the
+// thickest inner faces within 0.3 m: the median lies 0.25 m behind at least.
+constexpr double kPartialBehindM = 0.25;
 bool partial_behind_wall(const Correspondences& c, const HomographyFit& wall,
                          const std::vector<Label>& labels,
                          const std::vector<std::optional<Vector3d>>& X_W_match,
@@ -36,7 +38,7 @@ bool partial_behind_wall(const Correspondences& c, const HomographyFit& wall,
     if (labels[k] == Label::kTarget)
       if (const auto d = offset(k)) block_offset.push_back(*d);
   return !(wall_offset.empty() || static_cast<int>(block_offset.size()) < p.min_outliers ||
-           median(block_offset) > median(wall_offset) - p.partial_behind_margin_m);
+           median(block_offset) > median(wall_offset) - kPartialBehindM);
 }
 
 }  // namespace
@@ -96,12 +98,10 @@ Reason opening_checks(const Correspondences& c, const HomographyFit& wall, const
   // sides) or its two edges in one direction (opposite sides). The space past the wall's end and
   // above its top has the wall beyond neither of its two sides in view.
   const bool cut = block.at_border;
-  const int k_frame = p.partial_frame_inliers;
   int framed = 0;
-  for (const int n : block.wall_beyond) framed += n >= 0 && n >= k_frame;
-  if (cut && p.border_is_partial && k_frame > 0 && framed < 2) return Reason::kPartialNotFramed;
-  if (cut && p.border_is_partial && p.partial_behind_margin_m > 0 &&
-      !partial_behind_wall(c, wall, labels, X_W_match, e, p))
+  for (const int n : block.wall_beyond) framed += n >= kWallShownInliers;
+  if (cut && framed < 2) return Reason::kPartialNotFramed;
+  if (cut && !partial_behind_wall(c, wall, labels, X_W_match, e, p))
     return Reason::kPartialNotBehind;
   if (!cut && p.min_opening_parallax_px > 0) {
     auto& v = behind.parallax_px;
@@ -109,7 +109,7 @@ Reason opening_checks(const Correspondences& c, const HomographyFit& wall, const
     if (!v.empty()) std::nth_element(v.begin(), mid, v.end());
     if (v.empty() || *mid < p.min_opening_parallax_px) return Reason::kLowParallax;
   }
-  return cut && p.border_is_partial ? Reason::kPartialView : Reason::kOk;
+  return cut ? Reason::kPartialView : Reason::kOk;
 }
 
 }  // namespace alight::vision

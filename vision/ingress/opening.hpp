@@ -43,9 +43,9 @@ Behind behind_the_wall(const Correspondences& c, const HomographyFit& wall,
 /// opening lies behind the wall: at least min_outliers of the block's features, and
 /// min_behind_share of those with a 3-D point, lie behind it; else the "wall" is something seen
 /// through the opening and the block is the wall itself (kNotBehindWall). A block reaching the
-/// image border (border_is_partial) is a partial view whose centre and size are unknown; it must
-/// show the wall (partial_frame_inliers of its inliers) beyond two of its sides
-/// (kPartialNotFramed) and its features' median partial_behind_margin_m behind the median of
+/// image border is a partial view whose centre and size are unknown; it must show the wall
+/// (kWallShownInliers of its inliers) beyond two of its sides (kPartialNotFramed) and its
+/// features' median 0.25 m behind the median of
 /// the wall's own inliers, not only behind the plane a poor homography's decomposition gives
 /// (kPartialNotBehind); then kPartialView. A whole opening whose features behind the wall moved
 /// less than min_opening_parallax_px against the wall's homography (median) is located, not

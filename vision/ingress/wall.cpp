@@ -83,10 +83,12 @@ Wall choose_wall(const Correspondences& c, const PlanePair& planes,
                  const std::vector<std::optional<Vector3d>>& X_W_match,
                  const PipelineParams& params) {
   Wall wall = candidate(c, planes.first, X_W_match, params);
-  if (params.ingress.nearer_plane && planes.second) {
+  // A room's back wall lies metres behind the wall; a second fit of the wall itself lies at its
+  // depth, within the triangulation's centimetres.
+  constexpr double kNearerMarginM = 0.5;
+  if (planes.second) {
     Wall other = candidate(c, *planes.second, X_W_match, params);
-    if (other.plane &&
-        (!wall.plane || other.depth_m < wall.depth_m - params.ingress.nearer_plane_margin_m))
+    if (other.plane && (!wall.plane || other.depth_m < wall.depth_m - kNearerMarginM))
       wall = std::move(other);
   }
   return wall;

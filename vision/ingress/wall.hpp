@@ -35,8 +35,9 @@ struct Wall {
   double depth_m;  ///< median depth of its triangulated inliers in camera 2 (infinity: none)
 };
 
-/// The wall: the first homography, or with nearer_plane the second where it decomposes and is
-/// nearer by nearer_plane_margin_m (on a solid wall the second search can find the wall again,
+/// The wall: the first homography, or the second where it decomposes and is nearer by 0.5 m
+/// (a dark, flat wall photograph can hold fewer matches than the room seen through a large
+/// opening; on a solid wall the second search can find the wall again,
 /// a worse fit of the same plane at the same depth). X_W_match: triangulate_matches().
 Wall choose_wall(const Correspondences& c, const PlanePair& planes,
                  const std::vector<std::optional<Vector3d>>& X_W_match,

@@ -63,7 +63,7 @@ TargetOutcome platform_of(const Correspondences& c, const PipelineParams& params
   out.reason = cut ? Reason::kPartialView : Reason::kOk;
   // The top's rim, on a top seen whole (a cut top's size is never used): where the rims give no
   // estimate (a waypoint fails, the height leaves its range), the features' stands.
-  if (out.reason == Reason::kOk && images && params.landing.rim_search_m > 0) {
+  if (out.reason == Reason::kOk && images) {
     if (const auto rim =
             rim_rect(c, gray_1, gray_2, planes, X_WC2, pts_W, *features, widened, params.landing)) {
       TargetEstimate at_rim = out.estimate;

@@ -32,7 +32,7 @@ namespace alight::vision {
 /// the planes' reasons (planes.hpp), a gate's (gates.hpp), or the extent's (kDecompositionFailed,
 /// kMotionDisagrees: extent.hpp); kPartialView for a top cut by either image's border
 /// (cut_by_border). gray_1 / gray_2: the reference and current raw images, CV_8UC1 of the
-/// camera's size (the photometric gate, and the extent out to the top's rim: rim_search_m);
+/// camera's size (the photometric gate, and the extent out to the top's rim);
 /// either empty or of another kind: the features alone decide.
 TargetOutcome find_landing_target(const Correspondences& c, const PipelineParams& params,
                                   const cv::Mat& gray_1 = cv::Mat(),

@@ -120,6 +120,15 @@ struct Rim {
 // stretches of the side: each a sixth of a 14 cm side, across which a rim turned 15 deg spreads
 // its step over 6 mm, a pixel and a half at the search height.
 constexpr int kRimK = 2, kRimJ0 = 8, kRimMaxLines = 48, kRimStretches = 6;
+// The search's reach in the top's plane: a blank top's features stop short of its edges by the
+// detector's border and the gaps between sparse features, a few centimetres at the search
+// height. A rim steps by kRimMinStep grey levels at least in the mean of the lines (several
+// times that mean's noise), and the two images' steps agree within kRimMaxDisagreementPx (each
+// read to half a pixel, blur spreading it by up to one more; a step off the top's plane moves by
+// its parallax). A minimum-area rectangle of a few dozen features on a blank top can be 10 deg
+// or more off its edges: the rim's (and the end's) turn is fitted up to kRimMaxTurnDeg.
+constexpr double kRimSearchM = 0.05, kRimMinStep = 6.0, kRimMaxDisagreementPx = 1.5;
+constexpr double kRimMaxTurnDeg = 15.0;
 
 // The mean of grid values g over lines [i0, i1) turned by tan_turn at each of n_d offsets (step_m
 // apart); it ends where most of the lines are out of either view (a side cut by the border).
@@ -150,14 +159,13 @@ std::vector<double> rim_profile(const SideGrid& grid, const std::vector<float>& 
 // of each stretch in the current image, unturned, and a straight line through them (least
 // squares; the stretches more than a pixel off it dropped once). Fewer than three stretches that
 // step, or a turn beyond max_tan: 0.
-double rim_turn(const SideGrid& grid, const Side& side, double step_m, int n_d, double max_tan,
-                const LandingParams& p) {
+double rim_turn(const SideGrid& grid, const Side& side, double step_m, int n_d, double max_tan) {
   const int n_t = grid.n_t;
   std::vector<Eigen::Vector2d> at;  // (t - t_mid [m], offset [steps])
   for (int s = 0; s < kRimStretches; ++s) {
     const int i0 = s * n_t / kRimStretches, i1 = (s + 1) * n_t / kRimStretches;
     const auto steps = darkening_steps(rim_profile(grid, grid.g2, side, step_m, n_d, 0.0, i0, i1),
-                                       kRimJ0, kRimK, p.rim_min_step);
+                                       kRimJ0, kRimK, kRimMinStep);
     if (steps.empty()) continue;
     const auto strongest =
         std::max_element(steps.begin(), steps.end(),
@@ -181,11 +189,11 @@ double rim_turn(const SideGrid& grid, const Side& side, double step_m, int n_d, 
 // beyond the rim the profile stays below the top's level (its median inside the step) to the
 // search's end.
 std::optional<Rim> rim_of_profiles(const std::vector<double>& P1, const std::vector<double>& P2,
-                                   double step_m, double tan_turn, const LandingParams& p) {
+                                   double step_m, double tan_turn) {
   const int k = kRimK, j0 = kRimJ0;
-  const auto steps_1 = darkening_steps(P1, j0, k, p.rim_min_step);
+  const auto steps_1 = darkening_steps(P1, j0, k, kRimMinStep);
   const int n = static_cast<int>(P2.size());
-  for (const auto& [j2, g2_step] : darkening_steps(P2, j0, k, p.rim_min_step)) {
+  for (const auto& [j2, g2_step] : darkening_steps(P2, j0, k, kRimMinStep)) {
     const int inner = static_cast<int>(std::floor(j2)) - k;
     const int outer = static_cast<int>(std::ceil(j2)) + k;
     if (inner < 1 || outer + 4 * k > n) break;  // too near the search's end to tell
@@ -193,9 +201,9 @@ std::optional<Rim> rim_of_profiles(const std::vector<double>& P1, const std::vec
     std::nth_element(in.begin(), in.begin() + in.size() / 2, in.end());
     const double level = in[in.size() / 2];
     const double beyond = *std::max_element(P2.begin() + outer, P2.end());
-    if (beyond > level - 0.5 * p.rim_min_step) continue;
+    if (beyond > level - 0.5 * kRimMinStep) continue;
     for (const auto& step_1 : steps_1)
-      if (std::abs(step_1.first - j2) <= 2 * p.rim_max_disagreement_px)
+      if (std::abs(step_1.first - j2) <= 2 * kRimMaxDisagreementPx)
         return Rim{std::max(0.0, (j2 - j0) * step_m), std::atan(tan_turn)};
     return std::nullopt;
   }
@@ -204,16 +212,16 @@ std::optional<Rim> rim_of_profiles(const std::vector<double>& P1, const std::vec
 
 std::optional<Rim> rim_offset(const Correspondences& c, const cv::Mat& gray_1,
                               const cv::Mat& gray_2, const Matrix3d& H_12, const Isometry3d& X_WC2,
-                              const Side& side, double step_m, const LandingParams& p) {
-  const double max_tan = std::tan(p.rim_max_turn_deg * M_PI / 180.0);
-  const int n_d = kRimJ0 + static_cast<int>(std::ceil(p.rim_search_m / step_m)) + kRimK + 1;
+                              const Side& side, double step_m) {
+  const double max_tan = std::tan(kRimMaxTurnDeg * M_PI / 180.0);
+  const int n_d = kRimJ0 + static_cast<int>(std::ceil(kRimSearchM / step_m)) + kRimK + 1;
   const auto grid = read_side(c, gray_1, gray_2, H_12, X_WC2, side, 2 * step_m, kRimMaxLines,
                               2 * kRimStretches, step_m, -kRimJ0, n_d - kRimJ0, max_tan);
   if (!grid) return std::nullopt;
-  const double tan_turn = rim_turn(*grid, side, step_m, n_d, max_tan, p);
+  const double tan_turn = rim_turn(*grid, side, step_m, n_d, max_tan);
   return rim_of_profiles(rim_profile(*grid, grid->g1, side, step_m, n_d, tan_turn, 0, grid->n_t),
                          rim_profile(*grid, grid->g2, side, step_m, n_d, tan_turn, 0, grid->n_t),
-                         step_m, tan_turn, p);
+                         step_m, tan_turn);
 }
 
 // The top's end search (top_end_offset) in pixels of the current image on the top: kEndInside
@@ -252,7 +260,7 @@ std::optional<EndSearch> end_search(const Correspondences& c, const cv::Mat& gra
                                     const cv::Mat& gray_2, const Matrix3d& H_12_top,
                                     const Isometry3d& X_WC2, const Side& side, double px_m,
                                     const LandingParams& p) {
-  const double max_tan = std::tan(p.rim_max_turn_deg * M_PI / 180.0);
+  const double max_tan = std::tan(kRimMaxTurnDeg * M_PI / 180.0);
   EndSearch s;
   s.n_search = static_cast<int>(std::ceil(p.top_end_search_m / px_m));
   s.j_lo = -kEndInside, s.j_hi = s.n_search + kEndBeyond;
@@ -331,7 +339,7 @@ std::optional<Eigen::Vector2d> step_up(const EndSearch& s, const std::vector<dou
 // The end's turn [px / m], as the rim's: the stretches' ends unturned and a least-squares line
 // through them. A straight end steps in most stretches: the one farthest off is dropped while
 // it lies more than two pixels off, down to kEndStretches - 2 of them. nullopt without such a
-// line or with a turn beyond rim_max_turn_deg.
+// line or with a turn beyond kRimMaxTurnDeg.
 std::optional<double> end_slope(const EndSearch& s, const Side& side, double px_m,
                                 const LandingParams& p) {
   const int n_t = s.grid.n_t;
@@ -357,7 +365,7 @@ std::optional<double> end_slope(const EndSearch& s, const Side& side, double px_
     if (off(*worst) <= 2.0) break;
     at_stretch.erase(worst);
   }
-  if (std::abs(slope * px_m) > std::tan(p.rim_max_turn_deg * M_PI / 180.0)) return std::nullopt;
+  if (std::abs(slope * px_m) > std::tan(kRimMaxTurnDeg * M_PI / 180.0)) return std::nullopt;
   return slope;
 }
 
@@ -455,7 +463,7 @@ std::optional<TopRect> rim_rect(const Correspondences& c, const cv::Mat& gray_1,
       const double at = sign < 0 ? features.lo[k] : features.hi[k];
       const Side side{features.origin_W + at * features.axis[k], sign * features.axis[k],
                       features.axis[o], t_lo, t_hi};
-      auto rim = rim_offset(c, gray_1, gray_2, H_12, X_WC2, side, step_m, p);
+      auto rim = rim_offset(c, gray_1, gray_2, H_12, X_WC2, side, step_m);
       if (!rim && p.top_end_search_m > 0)
         rim = top_end_offset(c, gray_1, gray_2, H_12, H_12_floor, X_WC2, side, 2 * step_m, p);
       if (!rim) continue;

@@ -6,17 +6,17 @@
 // featureless region's true size, which is what a nearly blank top does: its extent falls short
 // by more than side_from_extent restores. Given both images, each side of the extent of a top
 // seen whole (a cut top's size is never used) is searched outward in the top's plane
-// (rim_search_m) for the top's rim: the mean grey level along lines parallel to the side, at
+// (5 cm) for the top's rim: the mean grey level along lines parallel to the side, at
 // offsets from it, read in the current image and in the reference at the same points of the
 // top's plane (the top's homography: the plane-induced comparison of Irani & Anandan, ECCV
 // 1996, as in warp_diff.hpp, but only along the lines searched). The rim is the first step
 // outward that darkens (the top is lit as the floor is and the side faces, turned from the
 // light, less; a top darker than what lies beyond keeps its features' extent) and stays dark to
 // the search's end (a row of print on the top darkens and brightens again), and the reference
-// must show it within rim_max_disagreement_px on the top's plane: the rim lies on the plane,
+// must show it within a pixel and a half on the top's plane: the rim lies on the plane,
 // while an edge of the floor or of a side face beyond moves differently between the views. The
 // features' rectangle can be turned from the top's edges, and a line across a turned rim
-// spreads its step: the rim's turn (at most rim_max_turn_deg) is the straight line through the
+// spreads its step: the rim's turn (at most 15 deg) is the straight line through the
 // steps of short stretches of the side, and the lines are read along it. Rims that agree on a
 // turn turn the rectangle onto them. A side without a rim keeps the features' extent and its
 // half of side_from_extent's widening (never wider than the evidence shows); with one, the side

@@ -658,9 +658,9 @@ TEST(TopRim, NoStepOnTheTopsPlaneKeepsTheFeaturesExtent) {
     scene.top_grey = scene.side_grey = scene.floor_grey = 200;
     scene.floor_edge_y_m =
         scene.centre_xy.y() + 0.5 * scene.width + 0.01 + 0.01 * static_cast<double>(seed % 3);
-    const BoxViews b = box_views(scene, seed, 0.03, 0.06, M_PI / 2);
+    // The features stop 1 cm inside the top's long sides: the 5 cm search reaches 4 cm beyond.
+    const BoxViews b = box_views(scene, seed, 0.03, 0.01, M_PI / 2);
     PipelineParams params;
-    params.landing.rim_search_m = 0.12;  // from 6 cm inside the top to 6 cm beyond it
     const TargetOutcome with = find_landing_target(b.view.c, params, b.image_1, b.image_2);
     const TargetOutcome without = find_landing_target(b.view.c, params);
     ASSERT_TRUE(found(with)) << "seed " << seed << ": " << to_string(with.reason);
