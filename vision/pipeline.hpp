@@ -30,6 +30,12 @@
 // reference live on, but it is never measured and never the reference: its features are smears,
 // placed where no plane puts them, and such frames at the search path's turns made tops of a
 // bare floor.
+//
+// Beyond the paper (moving_top): a platform that moves breaks the still scene the paper's planes
+// assume. Each landing frame is also matched against a recent earlier frame (moving_top.interval_s
+// back) and the moving top measured between them (vision/landing/moving_top.hpp), in
+// FrameResult::moving; the paper's target (FrameResult::target, VISION_TARGET) does not depend on
+// it.
 
 #include <deque>
 #include <optional>
@@ -39,6 +45,7 @@
 #include "common/camera_mount.hpp"
 #include "common/pose_buffer.hpp"
 #include "vision/frontend/reference_tracker.hpp"
+#include "vision/landing/moving_top.hpp"
 #include "vision/params.hpp"
 #include "vision/target.hpp"
 
@@ -62,6 +69,11 @@ struct FrameResult {
   std::vector<Vector2d> matched_px;   ///< matched current features (raw pixels)
   std::vector<Label> labels;          ///< one per matched feature
   std::vector<cv::Vec4i> lines;       ///< ingress Hough segments
+  /// Landing with moving_top.enabled: the moving top's measurement (not found: its reason),
+  /// against the frame of exposure moving_ref_utime; nullopt where the frame never got that far
+  /// (no pose, a bad image, no features, a smeared frame).
+  std::optional<MovingTop> moving;
+  int64_t moving_ref_utime = 0;
 };
 
 class Pipeline {
@@ -93,6 +105,8 @@ class Pipeline {
   Correspondences correspondences(const TrackedFrame& a, const TrackedFrame& b,
                                   const std::vector<Match>& matches) const;
   bool smeared(const TrackedFrame& f) const;
+  void measure_moving(const std::shared_ptr<const TrackedFrame>& current, int64_t utime,
+                      const PoseSample& pose, FrameResult* r);
   bool holds() const;
 
   Mission mission_;
@@ -106,6 +120,8 @@ class Pipeline {
   std::shared_ptr<const TrackedFrame> held_;
   PoseSample held_pose_;
   int64_t last_utime_ = 0;  // the previous frame's time: a gap drops the held reference
+  // The last max_interval_s of frames and their poses, for the moving top (moving_top).
+  std::deque<std::pair<std::shared_ptr<const TrackedFrame>, PoseSample>> recent_;
   int64_t seq_ = 0;
 };
 
