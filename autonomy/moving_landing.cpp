@@ -26,6 +26,8 @@ const ParamSchema<MovingLandingParams>& MovingLandingParams::schema() {
           "platform filter updates before it is trusted");
     s.add("follow_height_m", &P::follow_height_m, Range::gt(0), "m",
           "matching the platform's velocity this high above its top");
+    s.add("final_height_m", &P::final_height_m, Range::gt(0), "m",
+          "the last drop starts this high above the top (the top still seen whole)");
     s.add("match_speed_mps", &P::match_speed_mps, Range::gt(0), "m/s",
           "matched: the velocity relative to the platform within this");
     s.add("match_radial_m", &P::match_radial_m, Range::gt(0), "m",
@@ -100,9 +102,8 @@ std::optional<std::string> too_fast(const PlatformFilter::Prediction& p,
 
 MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
                                 const PoseSample& pose, int64_t now_utime, double dt_s,
-                                double yaw_sp_rad, double gear_height_m, double final_height_m,
-                                double descent_rate_mps, double final_descent_rate_mps,
-                                const MovingLandingParams& params) {
+                                double yaw_sp_rad, double gear_height_m, double descent_rate_mps,
+                                double final_descent_rate_mps, const MovingLandingParams& params) {
   MovingStep out;
   out.yaw_sp_rad = yaw_sp_rad;
   const double since_s = double(now_utime - filter.utime()) * 1e-6;
@@ -124,7 +125,7 @@ MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
   }
   const double z_top = pr.top_z_m;
   const double z_follow = z_top + gear_height_m + params.follow_height_m;
-  const double z_final = z_top + gear_height_m + final_height_m;
+  const double z_final = z_top + gear_height_m + params.final_height_m;
   if (s.z_sp_m <= 0) s.z_sp_m = std::max(z_final, std::min(pose.p_W_B.z(), z_follow));
   out.yaw_sp_rad = aligned_yaw(pr.yaw_rad, yaw_sp_rad);
   const Vector2d offset = pose.p_W_B.head<2>() - pr.p_W;
@@ -153,7 +154,7 @@ MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
   // At the final height: the last drop when matched and the heave allows it.
   if (!s.at_final_since_utime) s.at_final_since_utime = now_utime;
   const double waited_s = double(now_utime - *s.at_final_since_utime) * 1e-6;
-  const double fall_s = final_height_m / final_descent_rate_mps + params.fall_lag_s;
+  const double fall_s = params.final_height_m / final_descent_rate_mps + params.fall_lag_s;
   const Release r = heave_release(filter.heave(), now_utime, fall_s, waited_s, params);
   if (settled && r != Release::kWait) {
     out.next = MovingStep::Next::kFinalDescent;

@@ -9,7 +9,7 @@
 //     relative to the platform is within match_speed_mps and its offset within
 //     match_radial_m for match_settle_s.
 //  2. Descend at landing.descent_rate_mps while matched (the paper's e_r rule on the relative
-//     state), holding the altitude whenever not, down to landing.final_height_m over the top.
+//     state), holding the altitude whenever not, down to final_height_m over the top.
 //  3. The deck's heave: the last drop (landing.final_descent_rate_mps) starts when its contact,
 //     a fall time later, falls in the quarter period after a crest of the fitted heave (the deck
 //     high and going down: the relative vertical speed at contact is the descent's minus the
@@ -33,7 +33,12 @@ struct MovingLandingParams {
   bool enabled = true;
   double min_speed_mps = 0.15;   ///< a platform this fast is landed on as a moving one
   int min_updates = 6;           ///< filter updates before it is trusted
-  double follow_height_m = 0.7;  ///< matching the platform this high above its top [m]
+  /// Matching the platform this high above its top [m]: the camera's view there is wide enough
+  /// that a cart's turn stays in it while the vehicle follows.
+  double follow_height_m = 1.0;
+  /// The last drop starts this high above the top [m]: the top still seen whole (closer, it
+  /// fills the view and its centre is no longer measured, only its motion).
+  double final_height_m = 0.45;
   double match_speed_mps = 0.1;
   double match_radial_m = 0.05;
   double match_settle_s = 0.5;
@@ -75,13 +80,12 @@ struct MovingStep {
 /// `current` [rad].
 double aligned_yaw(double platform_yaw_rad, double current_rad);
 
-/// One step of steps 1-4. `final_height_m`, `descent_rate_mps`, `final_descent_rate_mps`,
-/// `gear_height_m`: the still landing's (autonomy.landing).
+/// One step of steps 1-4. `descent_rate_mps`, `final_descent_rate_mps`, `gear_height_m`: the
+/// still landing's (autonomy.landing).
 MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
                                 const PoseSample& pose, int64_t now_utime, double dt_s,
-                                double yaw_sp_rad, double gear_height_m, double final_height_m,
-                                double descent_rate_mps, double final_descent_rate_mps,
-                                const MovingLandingParams& params);
+                                double yaw_sp_rad, double gear_height_m, double descent_rate_mps,
+                                double final_descent_rate_mps, const MovingLandingParams& params);
 
 /// The platform's motion beyond what the vehicle follows (step 4), or nullopt.
 std::optional<std::string> too_fast(const PlatformFilter::Prediction& p,

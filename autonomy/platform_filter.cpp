@@ -48,6 +48,9 @@ const ParamSchema<PlatformFilterParams>& PlatformFilterParams::schema() {
           "floor on a measurement's position sigma");
     s.add("min_sigma_mps", &P::min_sigma_mps, Range::gt(0), "m/s",
           "floor on a measurement's velocity sigma");
+    s.add("course_tau_s", &P::course_tau_s, Range::gt(0), "s",
+          "the course's turn rate (a cart round a bend) smoothed over this; the prediction "
+          "turns the velocity at it");
     s.add("heave_window_s", &P::heave_window_s, Range::gt(0), "s",
           "the vertical velocities the heave is fitted to");
     s.add("heave_min_hz", &P::heave_min_hz, Range::gt(0), "Hz", "lowest heave frequency fitted");
@@ -120,6 +123,7 @@ PlatformFilter::PlatformFilter(const PlatformFilterParams& params) : params_(par
 
 void PlatformFilter::reset() {
   t_utime_ = 0;
+  course_rate_ = 0;
   consecutive_rejections_ = 0;
   top_z_sum_ = 0;
   n_z_ = 0;
@@ -130,8 +134,16 @@ void PlatformFilter::reset() {
 PlatformFilter::Prediction PlatformFilter::predict(int64_t utime) const {
   Prediction p;
   const double dt = std::max(0.0, double(utime - t_utime_) * 1e-6);
-  p.p_W = x_.head<2>() + dt * x_.tail<2>();
-  p.v_W = x_.tail<2>();
+  // The path's turn (a cart round a bend): the velocity turned at course_rate_ over dt.
+  const double w = course_rate_, a = w * dt;
+  const Vector2d v = x_.tail<2>(), v_perp(-v.y(), v.x());
+  if (std::abs(a) > 1e-6) {
+    p.p_W = x_.head<2>() + (std::sin(a) * v + (1 - std::cos(a)) * v_perp) / w;
+    p.v_W = std::cos(a) * v + std::sin(a) * v_perp;
+  } else {
+    p.p_W = x_.head<2>() + dt * v;
+    p.v_W = v;
+  }
   Eigen::Matrix4d F = Eigen::Matrix4d::Identity();
   F.topRightCorner<2, 2>() = dt * Matrix2d::Identity();
   Eigen::Matrix4d Pp = F * P_ * F.transpose();
@@ -177,7 +189,9 @@ bool PlatformFilter::update(const PlatformMeasurement& m) {
       Pp(i, i) += q(0, 0), Pp(i, i + 2) += q(0, 1), Pp(i + 2, i) += q(1, 0),
           Pp(i + 2, i + 2) += q(1, 1);
     }
-    const Eigen::Vector4d xp = F * x_;
+    const Prediction ahead = predict(m.utime);
+    Eigen::Vector4d xp;
+    xp << ahead.p_W, ahead.v_W;
     const Eigen::Vector4d innov = z - xp;
     const Eigen::Matrix4d S = Pp + R;
     const Eigen::LDLT<Eigen::Matrix4d> ldlt(S);
@@ -191,6 +205,14 @@ bool PlatformFilter::update(const PlatformMeasurement& m) {
     }
     const Eigen::Matrix4d K = Pp * ldlt.solve(Eigen::Matrix4d::Identity());
     x_ = xp + K * innov;
+    // The course's turn rate, smoothed over about course_tau_s (from the filtered velocity's
+    // direction, only while it is fast enough to have one).
+    const Vector2d v0 = xp.tail<2>(), v1 = x_.tail<2>();
+    if (v0.norm() > 0.2 && v1.norm() > 0.2 && dt > 0) {
+      const double rate = std::atan2(v0.x() * v1.y() - v0.y() * v1.x(), v0.dot(v1)) / dt;
+      const double k = std::min(1.0, dt / params_.course_tau_s);
+      course_rate_ += k * (rate - course_rate_);
+    }
     P_ = (Eigen::Matrix4d::Identity() - K) * Pp;
     P_ = 0.5 * (P_ + P_.transpose()).eval();
     // Yaw and its rate: the same filter in one dimension pair.

@@ -13,6 +13,9 @@
 // platform is not where it was believed). Measurements come in exposure order; one
 // older than the filter's time is refused. Pure: time passed in.
 //
+// The prediction turns the velocity at the course's turn rate (the filtered velocity's direction
+// over course_tau_s): a cart round a bend is led into it, not extrapolated off its path.
+//
 // The deck's heave: the vertical velocities vision measures (each the mean over its interval,
 // at the interval's middle) in a window of heave_window_s, fitted by one sine of the
 // frequency in heave_band_hz that explains them best (least squares per frequency on a grid),
@@ -55,6 +58,7 @@ struct PlatformFilterParams {
   /// Floor on its velocity sigma [m/s]: the mean over vision's interval lags the velocity now by
   /// half the interval's acceleration (0.2 m/s in a cart's turn).
   double min_sigma_mps = 0.1;
+  double course_tau_s = 0.3;
   double heave_window_s = 6.0;
   double heave_min_hz = 0.1, heave_max_hz = 1.0;
   static const ParamSchema<PlatformFilterParams>& schema();
@@ -107,6 +111,7 @@ class PlatformFilter {
   Eigen::Matrix4d P_ = Eigen::Matrix4d::Zero();
   Vector2d yaw_ = Vector2d::Zero();  // psi, omega
   Matrix2d P_yaw_ = Matrix2d::Zero();
+  double course_rate_ = 0;  // the velocity's turn rate [rad/s]
   double top_z_sum_ = 0;
   int n_z_ = 0;
   std::deque<std::pair<int64_t, double>> vz_;

@@ -175,7 +175,7 @@ TEST(MovingApproachTest, MatchesThePlatformThenDescendsAndFailsSafeWhenTooFast) 
   PoseSample pose;
   pose.p_W_B << m.p(t).x() + 0.3, m.p(t).y(), 1.2;
   const int64_t now = kPfT0 + int64_t(t * 1e6);
-  auto st = step_moving_approach(s, f, pose, now, 0.01, 0.0, 0.1, 0.25, 0.25, 1.0, params);
+  auto st = step_moving_approach(s, f, pose, now, 0.01, 0.0, 0.1, 0.25, 1.0, params);
   EXPECT_EQ(st.next, MovingStep::Next::kContinue);
   // Over the predicted centre, the platform's velocity fed forward, no descent while unmatched.
   EXPECT_NEAR(st.sp_p_W.x(), m.p(t).x(), 0.03);
@@ -187,22 +187,22 @@ TEST(MovingApproachTest, MatchesThePlatformThenDescendsAndFailsSafeWhenTooFast) 
   pose.v_W_B << st.sp_v_W.head<2>(), 0;
   for (int k = 0; k <= 60; ++k) {
     pose.p_W_B.head<2>() = f.predict(now + k * 10000).p_W;
-    st = step_moving_approach(s, f, pose, now + k * 10000, 0.01, 0.0, 0.1, 0.25, 0.25, 1.0, params);
+    st = step_moving_approach(s, f, pose, now + k * 10000, 0.01, 0.0, 0.1, 0.25, 1.0, params);
   }
   EXPECT_LT(st.sp_p_W.z(), z0);
   EXPECT_LT(st.sp_v_W.z(), 0.0);
   // The same platform beyond max_speed_mps for too_fast_s: the failsafe.
   params.max_speed_mps = 0.4;
   MovingApproach s2;
-  st = step_moving_approach(s2, f, pose, now, 0.01, 0.0, 0.1, 0.25, 0.25, 1.0, params);
+  st = step_moving_approach(s2, f, pose, now, 0.01, 0.0, 0.1, 0.25, 1.0, params);
   EXPECT_EQ(st.next, MovingStep::Next::kContinue);
   st = step_moving_approach(s2, f, pose, now + int64_t(params.too_fast_s * 1e6), 0.01, 0.0, 0.1,
-                            0.25, 0.25, 1.0, params);
+                            0.25, 1.0, params);
   EXPECT_EQ(st.next, MovingStep::Next::kTooFast);
   // Not measured for lost_timeout_s: lost.
   MovingApproach s3;
   st = step_moving_approach(s3, f, pose, now + int64_t((params.lost_timeout_s + 0.1) * 1e6), 0.01,
-                            0.0, 0.1, 0.25, 0.25, 1.0, MovingLandingParams{});
+                            0.0, 0.1, 0.25, 1.0, MovingLandingParams{});
   EXPECT_EQ(st.next, MovingStep::Next::kTargetLost);
 }
 

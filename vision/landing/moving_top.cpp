@@ -163,6 +163,9 @@ std::vector<size_t> common_motion(const std::vector<Placed>& cand, const MovingT
   return best;
 }
 
+// A cut top's horizontal position variance: no information [m^2].
+constexpr double kCutPositionVar = 100.0;
+
 double wrap_half_pi(double a) {
   while (a > M_PI / 2) a -= M_PI;
   while (a <= -M_PI / 2) a += M_PI;
@@ -219,6 +222,7 @@ void measure(const std::vector<Placed>& cand, const std::vector<size_t>& in, con
   out->cov_p_W.setZero();
   out->cov_p_W.topLeftCorner<2, 2>() = var_r / n * Eigen::Matrix2d::Identity() + u * u.transpose();
   out->cov_p_W(2, 2) = params.top_height_sigma_m * params.top_height_sigma_m + d2 * d2 * var_s;
+  if (out->cut) out->cov_p_W.topLeftCorner<2, 2>() = kCutPositionVar * Eigen::Matrix2d::Identity();
   out->cov_v_W.setZero();
   out->cov_v_W.topLeftCorner<2, 2>() =
       2 * var_r / (n * dt_s * dt_s) * Eigen::Matrix2d::Identity() + w * w.transpose();
@@ -273,7 +277,14 @@ MovingTop find_moving_top(const Correspondences& c, double dt_s, double floor_z_
   std::vector<Vector3d> pts_W;
   for (size_t k : in) pts_W.emplace_back(cand[k].p2.x(), cand[k].p2.y(), z_top);
   const auto rect = features_extent(pts_W, Vector3d::UnitZ());
-  if (!rect || rect->hi[1] - rect->lo[1] < params.min_size_m ||
+  if (rect) out.size_m[0] = rect->hi[0] - rect->lo[0], out.size_m[1] = rect->hi[1] - rect->lo[1];
+  // A top cut by the current image's border (close over it, it fills the view) still moves as
+  // a whole, but its visible part's centre is not its centre: its motion is measured, its
+  // position is not (and a cut top may be narrow).
+  out.cut = std::any_of(in.begin(), in.end(), [&](size_t k) {
+    return !c.camera->in_image(c.u2[cand[k].index], params.border_margin_px);
+  });
+  if (!rect || (!out.cut && rect->hi[1] - rect->lo[1] < params.min_size_m) ||
       rect->hi[0] - rect->lo[0] > params.max_size_m)
     return refuse(MovingReason::kSizeOutOfRange);
   measure(cand, in, S, v, dt_s, floor_z_m, params, &out);

@@ -49,7 +49,8 @@ enum class MovingReason : int8_t {
   kOnFloor = 5,           ///< the set's matches are the floor's (max_floor_share)
   kTooFast = 6,           ///< faster than max_speed_mps / max_yaw_rate_dps, or a scale change
                           ///< beyond max_scale_change
-  kSizeOutOfRange = 7,    ///< the inliers' extent outside [min_size_m, max_size_m]
+  kSizeOutOfRange = 7,    ///< the inliers' extent outside [min_size_m, max_size_m] (a cut
+                          ///< top: longer than max_size_m)
 };
 
 const char* to_string(MovingReason r);
@@ -64,6 +65,9 @@ struct MovingTop {
   double yaw_rad = 0.0;             ///< long axis of the inliers' rectangle, (-pi/2, pi/2]
   double yaw_rate_rps = 0.0;        ///< its turn over the interval / dt_s [rad/s]
   double scale = 1.0;               ///< s of the similarity (heave, height error)
+  /// The top cut by the current image's border (border_margin_px): its motion is measured, its
+  /// centre is not (cov_p_W's horizontal block 100 m^2; p_W the visible part's centre).
+  bool cut = false;
   Matrix3d cov_p_W = Matrix3d::Zero();  ///< [m^2]
   Matrix3d cov_v_W = Matrix3d::Zero();  ///< [m^2/s^2]
   double var_yaw = 0.0, var_yaw_rate = 0.0;

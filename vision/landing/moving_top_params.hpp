@@ -36,7 +36,8 @@ struct MovingTopParams {
   double max_speed_mps = 2.0;
   double max_yaw_rate_dps = 45.0;
   double max_scale_change = 0.15;  ///< |s - 1| of the plane's similarity: heave / camera height
-  double min_size_m = 0.08;        ///< the features' extent, short side
+  double min_size_m = 0.08;        ///< the features' extent, short side (a top seen whole)
+  double border_margin_px = 20.0;  ///< an inlier this close to the image's border: a cut top
   double max_size_m = 1.0;         ///< long side
   /// The top's matches that the known floor also carries (within threshold_px): at most this
   /// share (a cluster of floor matches is no top).
