@@ -541,8 +541,9 @@ void Autonomy::step_moving(phases::Approach& a, const Vector3d& /*p*/, double dt
   const auto& L = params_.landing;
   const auto& M = params_.moving_platform;
   if (!pose_) return;
-  const MovingStep st = step_moving_approach(*a.moving, platform_, *pose_, now_utime_, dt_s,
-                                             yaw_sp_rad_, L.gear_height_m, L.descent_rate_mps, L.final_descent_rate_mps, M);
+  const MovingStep st =
+      step_moving_approach(*a.moving, platform_, *pose_, now_utime_, dt_s, yaw_sp_rad_,
+                           L.gear_height_m, L.descent_rate_mps, L.final_descent_rate_mps, M);
   const auto pr = platform_.predict(now_utime_);
   switch (st.next) {
     case MovingStep::Next::kTargetLost:

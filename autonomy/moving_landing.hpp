@@ -31,8 +31,8 @@ namespace alight::autonomy {
 
 struct MovingLandingParams {
   bool enabled = true;
-  double min_speed_mps = 0.15;   ///< a platform this fast is landed on as a moving one
-  int min_updates = 6;           ///< filter updates before it is trusted
+  double min_speed_mps = 0.15;  ///< a platform this fast is landed on as a moving one
+  int min_updates = 6;          ///< filter updates before it is trusted
   /// Matching the platform this high above its top [m]: the camera's view there is wide enough
   /// that a cart's turn stays in it while the vehicle follows.
   double follow_height_m = 1.0;
@@ -43,7 +43,9 @@ struct MovingLandingParams {
   double match_radial_m = 0.05;
   double match_settle_s = 0.5;
   double lost_timeout_s = 1.0;  ///< no platform measurement for this long: target lost
-  double max_speed_mps = 1.2;
+  /// What the vehicle follows [m/s]: the shipped vehicles' outer loop flies at most 1 m/s
+  /// (outer_loop.max_speed_xy_mps), and a follower needs a margin to close a gap.
+  double max_speed_mps = 0.9;
   double max_yaw_rate_dps = 20.0;
   double too_fast_s = 0.5;
   double heave_min_amplitude_m = 0.01;
