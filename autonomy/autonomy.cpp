@@ -86,7 +86,8 @@ Autonomy::Autonomy(const AutonomyParams& params, const RestartState& restored)
       estimator_(params.refinement),
       sampler_(params.refinement, params.seed),
       gate_(params.accept_unsigned_commands),
-      restored_(restored) {
+      restored_(restored),
+      platform_(params.moving_platform.filter) {
   params_.validate();
   if (restored_.killed) {
     // An explicit KILL outlives the process that received it: motors off at once, whatever
@@ -496,6 +497,7 @@ void Autonomy::handle_target(const TargetMeasurement& m) {
     start_refinement(m);
   } else if (auto* a = std::get_if<phases::Approach>(&state_)) {
     seen(a->last_found_utime);
+    if (a->moving) return;  // flown on the platform filter, not on the still estimate
     if (m.found && vision_disagrees(*a, m)) return;
   } else if (auto* r = std::get_if<phases::Refinement>(&state_)) {
     seen(r->last_found_utime);
@@ -516,6 +518,58 @@ void Autonomy::handle_target(const TargetMeasurement& m) {
     }
     add_waypoint(*r, m.p_W_target);
   }
+}
+
+void Autonomy::handle_platform(const PlatformMeasurement& m) {
+  const auto& M = params_.moving_platform;
+  if (!M.enabled || mission() != Mission::kLanding) return;
+  platform_.update(m);
+  if (!(std::holds_alternative<phases::Detection>(state_) ||
+        std::holds_alternative<phases::Refinement>(state_)))
+    return;
+  if (platform_.n_updates() < M.min_updates || !pose_) return;
+  const auto pr = platform_.predict(now_utime_);
+  if (pr.v_W.norm() < M.min_speed_mps) return;
+  estimator_.reset();
+  estimate_W_ << pr.p_W, pr.top_z_m;
+  enter(phases::Approach{LandingApproach{}, m.utime, {}, MovingApproach{}},
+        "moving platform at (" + fmt(pr.p_W.x()) + ", " + fmt(pr.p_W.y()) + "), " +
+            fmt(pr.v_W.norm()) + " m/s: matching its motion");
+}
+
+void Autonomy::step_moving(phases::Approach& a, const Vector3d& /*p*/, double dt_s) {
+  const auto& L = params_.landing;
+  const auto& M = params_.moving_platform;
+  if (!pose_) return;
+  const MovingStep st =
+      step_moving_approach(*a.moving, platform_, *pose_, now_utime_, dt_s, yaw_sp_rad_,
+                           L.gear_height_m, L.descent_rate_mps, L.final_descent_rate_mps, M);
+  const auto pr = platform_.predict(now_utime_);
+  switch (st.next) {
+    case MovingStep::Next::kTargetLost:
+      target_lost(st.reason);
+      return;
+    case MovingStep::Next::kTooFast:
+      hold(st.reason + ": beyond what the vehicle follows, climbing and holding",
+           Failsafe::kPlatformTooFast, pr.top_z_m + L.gear_height_m + M.follow_height_m + 0.3);
+      return;
+    case MovingStep::Next::kFinalDescent: {
+      phases::FinalDescent f{a.moving->z_sp_m, TouchdownDetector(L), false, {}, {}, true};
+      f.touchdown.arm(now_utime_);
+      sp_p_W_ = st.sp_p_W;
+      sp_v_W_ = st.sp_v_W;
+      yaw_sp_rad_ = st.yaw_sp_rad;
+      enter(std::move(f), st.reason);
+      return;
+    }
+    case MovingStep::Next::kContinue:
+      break;
+  }
+  estimate_W_ << pr.p_W, pr.top_z_m;
+  sp_p_W_ = st.sp_p_W;
+  sp_v_W_ = st.sp_v_W;
+  yaw_sp_rad_ = st.yaw_sp_rad;
+  reason_ = st.reason;
 }
 
 bool Autonomy::vision_disagrees(phases::Approach& a, const TargetMeasurement& m) {
@@ -646,6 +700,10 @@ void Autonomy::step(phases::Refinement& r, const Vector3d& p, double /*dt_s*/) {
 }
 
 void Autonomy::step(phases::Approach& a, const Vector3d& p, double dt_s) {
+  if (a.moving) {
+    step_moving(a, p, dt_s);
+    return;
+  }
   const ApproachInputs in{
       pose_, p, estimate_W_, yaw_sp_rad_, since_found_s(a.last_found_utime), dt_s, now_utime_};
   ApproachStep next = profile_->step_approach(a.how, in);
@@ -677,6 +735,30 @@ void Autonomy::step(phases::Approach& a, const Vector3d& p, double dt_s) {
 
 void Autonomy::step(phases::FinalDescent& s, const Vector3d& /*p*/, double dt_s) {
   const auto& L = params_.landing;
+  if (s.moving) {
+    // Onto the moving platform: over its predicted centre, its velocity fed forward; a lost
+    // platform does not stop the drop (finishing it is the safe end, as in the still landing).
+    // Resting is judged relative to the deck's predicted heave.
+    const auto pr = platform_.predict(now_utime_);
+    const double z_floor = pr.top_z_m + L.gear_height_m - L.final_depth_m;
+    if (s.z_sp_m > z_floor)
+      s.z_sp_m = std::max(z_floor, s.z_sp_m - L.final_descent_rate_mps * dt_s);
+    sp_p_W_ << pr.p_W, s.z_sp_m;
+    sp_v_W_ << pr.v_W, s.z_sp_m > z_floor ? -L.final_descent_rate_mps : 0.0;
+    estimate_W_ << pr.p_W, pr.top_z_m;
+    if (pose_fresh()) {
+      PoseSample rel = *pose_;
+      rel.v_W_B.z() -= platform_.heave().vz(now_utime_) - platform_.heave().c;
+      s.touchdown.add_pose(rel, s.z_sp_m, now_utime_);
+    }
+    if (s.touchdown.detected()) {
+      motors_on_ = false;
+      end_utime_ = now_utime_;
+      enter(phases::Landed{}, std::string("touch-down on the moving platform (") +
+                                  s.touchdown.cue() + "): motors off");
+    }
+    return;
+  }
   const double z_touch = estimate_W_.z() + L.gear_height_m;
   const double z_floor = z_touch - L.final_depth_m;
   const FinalPause pause = pause_final_descent(s, z_touch);
@@ -863,6 +945,7 @@ Output Autonomy::update(const Inputs& in, int64_t now_utime) {
     last_vision_utime_ = now_utime_;
     handle_target(*in.target);
   }
+  if (in.platform) handle_platform(*in.platform);
   step_phase(dt_s);
   return make_output();
 }

@@ -54,6 +54,7 @@
 
 #include "autonomy/command_gate.hpp"
 #include "autonomy/mission_profile.hpp"
+#include "autonomy/moving_landing.hpp"
 #include "autonomy/params.hpp"
 #include "autonomy/refinement.hpp"
 #include "autonomy/search_path.hpp"
@@ -90,6 +91,8 @@ struct Approach {
   ApproachState how;                            ///< the mission profile's own approach state
   std::optional<int64_t> last_found_utime;      ///< carried over from refinement
   std::optional<int64_t> disagree_since_utime;  ///< every found target far from the estimate
+  /// A moving platform's approach (moving_landing.hpp): flown on the platform filter.
+  std::optional<MovingApproach> moving;
 };
 struct FinalDescent {
   double z_sp_m = 0.0;
@@ -97,6 +100,7 @@ struct FinalDescent {
   bool may_pause = false;                     ///< onto a target (not the operator's LAND_HERE)
   std::optional<int64_t> paused_since_utime;  ///< a gust carried the vehicle off: stopped since
   std::optional<int64_t> calm_since_utime;    ///< ... and calm again since
+  bool moving = false;                        ///< onto a moving platform: follows its filter
 };
 struct Landed {};
 struct Done {
@@ -139,6 +143,8 @@ class Autonomy {
   Mission mission() const { return profile_ ? profile_->mission() : Mission::kNone; }
   Failsafe failsafe() const { return failsafe_; }
   const RefinementEstimator& estimator() const { return estimator_; }
+  /// The moving platform's filter (VISION_PLATFORM), landing only.
+  const PlatformFilter& platform_filter() const { return platform_; }
   const AutonomyParams& params() const { return params_; }
   /// The final estimate the approach flies to (valid from APPROACH on, kept after the mission).
   const Vector3d& final_estimate() const { return estimate_W_; }
@@ -184,6 +190,10 @@ class Autonomy {
   TouchdownDetector* touchdown();
   void handle_command(const OperatorCommand& cmd);
   void handle_target(const TargetMeasurement& m);
+  /// A moving platform's measurement: into the filter; in detection or refinement, a platform
+  /// the filter trusts moving starts the moving approach.
+  void handle_platform(const PlatformMeasurement& m);
+  void step_moving(phases::Approach& a, const Vector3d& p, double dt_s);
   // APPROACH: true (and counted) when `m` lies outside the gate around the final estimate; a
   // sustained disagreement enters the VISION_DISAGREES failsafe.
   bool vision_disagrees(phases::Approach& a, const TargetMeasurement& m);
@@ -251,7 +261,8 @@ class Autonomy {
   std::optional<int64_t> go_utime_;
   std::optional<int64_t> end_utime_;
   Vector3d estimate_W_ = Vector3d::Zero();  // the final estimate, from APPROACH on
-  uint64_t vision_refused_ = 0;             // found targets outside the gate in APPROACH
+  PlatformFilter platform_;
+  uint64_t vision_refused_ = 0;  // found targets outside the gate in APPROACH
 };
 
 }  // namespace alight::autonomy

@@ -238,6 +238,22 @@ int main(int argc, char** argv) {
       if (!node.accept_stamp(ch::kVisionTarget, m.utime)) return;
       step(in);
     });
+    // A moving platform's measurements (landing): one per landing frame; those not found carry
+    // nothing to fuse and make no step.
+    node.on<alight::platform_motion_t>(ch::kVisionPlatform,
+                                       [&](const alight::platform_motion_t& m) {
+                                         std::string why;
+                                         au::Inputs in;
+                                         in.platform = au::platform_from_msg(m, &why);
+                                         if (!in.platform) {
+                                           if (!why.empty())
+                                             node.reject_value(ch::kVisionPlatform, why);
+                                           return;
+                                         }
+                                         if (!node.accept_stamp(ch::kVisionPlatform, m.utime))
+                                           return;
+                                         step(in);
+                                       });
     // The onboard estimate's health (issue 17; its pose arrives as the pose, remapped). It comes
     // at the IMU rate and goes with the next step rather than making one: a step per estimate
     // would add 200 setpoints a second, and as many attitude commands from the outer loop,

@@ -71,6 +71,8 @@ int8_t failsafe_to_msg(Failsafe f) {
       return S::FAILSAFE_ESTIMATE_LOST;
     case Failsafe::kVisionDisagrees:
       return S::FAILSAFE_VISION_DISAGREES;
+    case Failsafe::kPlatformTooFast:
+      return S::FAILSAFE_PLATFORM_TOO_FAST;
   }
   return S::FAILSAFE_NONE;
 }
@@ -205,6 +207,65 @@ std::optional<TargetMeasurement> target_from_msg(const target_t& m, std::string*
     t.n_W.normalize();
   }
   return t;
+}
+
+std::optional<PlatformMeasurement> platform_from_msg(const platform_motion_t& m, std::string* why) {
+  using P = PlatformMeasurement;
+  if (m.version > platform_motion_t::VERSION)
+    return refuse<P>(why, "platform: version " + std::to_string(m.version) + " is newer than " +
+                              std::to_string(platform_motion_t::VERSION));
+  if (!m.found) return std::nullopt;
+  if (!finite(m.p_W, 3) || !finite(m.v_W, 3) || !finite(m.cov_p_W, 9) || !finite(m.cov_v_W, 9) ||
+      !std::isfinite(m.yaw_rad) || !std::isfinite(m.yaw_rate_rps) || !std::isfinite(m.var_yaw) ||
+      !std::isfinite(m.var_yaw_rate) || !finite(m.size_m, 2))
+    return refuse<P>(why, "platform: non-finite field");
+  if (m.var_yaw < 0 || m.var_yaw_rate < 0 || m.cov_p_W[0] < 0 || m.cov_p_W[4] < 0 ||
+      m.cov_v_W[0] < 0 || m.cov_v_W[4] < 0)
+    return refuse<P>(why, "platform: negative variance");
+  if (m.ref_utime >= m.utime) return refuse<P>(why, "platform: earlier frame not before");
+  P p;
+  p.utime = m.utime;
+  p.ref_utime = m.ref_utime;
+  for (int i = 0; i < 3; ++i) {
+    p.p_W[i] = m.p_W[i];
+    p.v_W[i] = m.v_W[i];
+    for (int j = 0; j < 3; ++j) {
+      p.cov_p_W(i, j) = m.cov_p_W[3 * i + j];
+      p.cov_v_W(i, j) = m.cov_v_W[3 * i + j];
+    }
+  }
+  p.yaw_rad = m.yaw_rad;
+  p.yaw_rate_rps = m.yaw_rate_rps;
+  p.var_yaw = m.var_yaw;
+  p.var_yaw_rate = m.var_yaw_rate;
+  p.size_m = Vector2d(m.size_m[0], m.size_m[1]);
+  return p;
+}
+
+platform_motion_t to_msg(const PlatformMeasurement& p, int64_t seq) {
+  platform_motion_t m{};
+  m.utime = p.utime;
+  m.ref_utime = p.ref_utime;
+  m.seq = seq;
+  m.version = platform_motion_t::VERSION;
+  m.found = true;
+  m.reason = platform_motion_t::REASON_OK;
+  for (int i = 0; i < 3; ++i) {
+    m.p_W[i] = p.p_W[i];
+    m.v_W[i] = p.v_W[i];
+    for (int j = 0; j < 3; ++j) {
+      m.cov_p_W[3 * i + j] = p.cov_p_W(i, j);
+      m.cov_v_W[3 * i + j] = p.cov_v_W(i, j);
+    }
+  }
+  m.yaw_rad = p.yaw_rad;
+  m.yaw_rate_rps = p.yaw_rate_rps;
+  m.var_yaw = p.var_yaw;
+  m.var_yaw_rate = p.var_yaw_rate;
+  m.size_m[0] = p.size_m.x();
+  m.size_m[1] = p.size_m.y();
+  m.scale = 1.0;
+  return m;
 }
 
 std::optional<OperatorCommand> command_from_msg(const operator_cmd_t& m, std::string* why) {

@@ -5,6 +5,7 @@
 #include <alight/autonomy_status_t.hpp>
 #include <alight/imu_t.hpp>
 #include <alight/operator_cmd_t.hpp>
+#include <alight/platform_motion_t.hpp>
 #include <alight/state_estimate_t.hpp>
 #include <alight/target_t.hpp>
 #include <optional>
@@ -42,6 +43,13 @@ inline constexpr double kMaxQuaternionNormError = 0.01;   // as pose_from_msg
 inline constexpr double kMaxEstimatePositionM = 10000.0;  // 10 km from the origin: diverged
 std::optional<ImuSample> imu_from_msg(const imu_t& msg, std::string* why);
 std::optional<TargetMeasurement> target_from_msg(const target_t& msg, std::string* why);
+/// A found VISION_PLATFORM measurement; nullopt (why empty) for one not found, refused (why
+/// says) for a newer version, non-finite fields, negative variances or an earlier frame not
+/// before the current one.
+std::optional<PlatformMeasurement> platform_from_msg(const platform_motion_t& msg,
+                                                     std::string* why);
+/// The message form of a measurement, for tests.
+platform_motion_t to_msg(const PlatformMeasurement& m, int64_t seq);
 std::optional<OperatorCommand> command_from_msg(const operator_cmd_t& msg, std::string* why);
 std::optional<EstimateHealth> estimate_from_msg(const state_estimate_t& msg, std::string* why);
 autonomy_status_t to_msg(const Status& status);

@@ -335,6 +335,8 @@ const ParamSchema<AutonomyParams>& AutonomyParams::schema() {
               "lost motion capture, silent vision, the onboard estimate's health (issue 17)");
     s.section("restart", &P::restart, RestartParams::schema(),
               "a restart in flight holds and waits for the operator (issue 14)");
+    s.section("moving_platform", &P::moving_platform, MovingLandingParams::schema(),
+              "landing on a platform vision measures moving (autonomy/moving_landing.hpp)");
     s.check(
         "takeoff.height_m", [](const P& p) { return p.takeoff.height_m < p.geofence.max_W_m.z(); },
         "must be inside the geofence");

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <string>
 
+#include "autonomy/moving_landing.hpp"
 #include "common/geometry.hpp"
 #include "common/param_schema.hpp"
 
@@ -153,6 +154,7 @@ struct AutonomyParams {
   IngressParams ingress;
   FailsafeParams failsafe;
   RestartParams restart;
+  MovingLandingParams moving_platform;
   static const ParamSchema<AutonomyParams>& schema();
   void validate() const;  ///< throws ParamError naming the full key and its value
 };

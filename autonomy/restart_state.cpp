@@ -32,14 +32,16 @@ const char* failsafe_key(Failsafe f) {
       return "ESTIMATE_LOST";
     case Failsafe::kVisionDisagrees:
       return "VISION_DISAGREES";
+    case Failsafe::kPlatformTooFast:
+      return "PLATFORM_TOO_FAST";
   }
   return "NONE";
 }
 
 std::optional<Failsafe> failsafe_from_key(const std::string& s) {
-  for (Failsafe f :
-       {Failsafe::kNone, Failsafe::kPoseStale, Failsafe::kPoseLost, Failsafe::kOperatorAbort,
-        Failsafe::kKill, Failsafe::kEstimateLost, Failsafe::kVisionDisagrees}) {
+  for (Failsafe f : {Failsafe::kNone, Failsafe::kPoseStale, Failsafe::kPoseLost,
+                     Failsafe::kOperatorAbort, Failsafe::kKill, Failsafe::kEstimateLost,
+                     Failsafe::kVisionDisagrees, Failsafe::kPlatformTooFast}) {
     if (s == failsafe_key(f)) return f;
   }
   return std::nullopt;

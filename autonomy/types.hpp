@@ -8,6 +8,7 @@
 #include <optional>
 #include <string>
 
+#include "autonomy/platform_filter.hpp"
 #include "common/command_reject.hpp"
 #include "common/geometry.hpp"
 #include "common/pose_buffer.hpp"
@@ -42,6 +43,8 @@ enum class Failsafe {
   kKill,
   kEstimateLost,
   kVisionDisagrees,  ///< found targets far from the converged estimate: hold, then descend
+  /// A moving platform faster (or turning faster) than the vehicle follows: climb, hold.
+  kPlatformTooFast,
 };
 
 const char* mission_name(Mission m);
@@ -108,7 +111,8 @@ struct Inputs {
   std::optional<ImuSample> imu;
   std::optional<TargetMeasurement> target;
   std::optional<OperatorCommand> command;
-  std::optional<EstimateHealth> estimate;  ///< STATE_ESTIMATE (none ever: flying on mocap)
+  std::optional<EstimateHealth> estimate;       ///< STATE_ESTIMATE (none ever: flying on mocap)
+  std::optional<PlatformMeasurement> platform;  ///< VISION_PLATFORM, found
 };
 
 struct Status {

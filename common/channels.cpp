@@ -27,6 +27,7 @@ std::string message_type(const std::string& name) {
       {kEstimatePose, "pose_t"},
       {kVisionTarget, "target_t"},
       {kVisionTiming, "vision_timing_t"},
+      {kVisionPlatform, "platform_motion_t"},
       {kVisionDiag, "image_t"},
       {kOperatorCmd, "operator_cmd_t"},
       {kAutonomyStatus, "autonomy_status_t"},

@@ -48,6 +48,9 @@ inline constexpr const char kVisionTarget[] = "VISION_TARGET";
 /// vision_timing_t: per processed frame, the vision's wait, processing time and frame counters
 /// (wall and steady clocks, so apart from VISION_TARGET). alight-vision → logs, alight-score.
 inline constexpr const char kVisionTiming[] = "VISION_TIMING";
+/// platform_motion_t: per landing frame, the moving platform's measured position, velocity,
+/// yaw and covariances. alight-vision → autonomy, logs.
+inline constexpr const char kVisionPlatform[] = "VISION_PLATFORM";
 /// image_t (JPEG): diagnostic image. alight-vision → ground station.
 inline constexpr const char kVisionDiag[] = "VISION_DIAG";
 /// operator_cmd_t: signed operator commands. alight-ground-station → autonomy.
@@ -78,7 +81,7 @@ inline constexpr const char kAutopilotPose[] = "AUTOPILOT_POSE";
 inline constexpr const char kAutopilotStatus[] = "AUTOPILOT_STATUS";
 
 /// Every channel above.
-inline constexpr std::array<const char*, 22> kAll = {kCamera,          kFlowCamera,
+inline constexpr std::array<const char*, 23> kAll = {kCamera,          kFlowCamera,
                                                      kMocapPose,       kImu,
                                                      kRange,           kBaro,
                                                      kStateEstimate,   kEstimatePose,
@@ -88,7 +91,8 @@ inline constexpr std::array<const char*, 22> kAll = {kCamera,          kFlowCame
                                                      kAttitudeCmd,     kSimTruth,
                                                      kSimControl,      kProcessStatus,
                                                      kNodeStatus,      kAutopilotPose,
-                                                     kAutopilotStatus, kSimPlatform};
+                                                     kAutopilotStatus, kSimPlatform,
+                                                     kVisionPlatform};
 
 /// True when `name` is one of kAll.
 /// True for channels one process publishes on (all but NODE_STATUS, which every node publishes,

@@ -8,6 +8,7 @@
 #include <alight/imu_t.hpp>
 #include <alight/node_status_t.hpp>
 #include <alight/operator_cmd_t.hpp>
+#include <alight/platform_motion_t.hpp>
 #include <alight/platform_truth_t.hpp>
 #include <alight/pose_t.hpp>
 #include <alight/position_setpoint_t.hpp>
@@ -47,6 +48,7 @@ const std::map<std::string, Check>& checks() {
       {"node_status_t", decodes<node_status_t>},
       {"operator_cmd_t", decodes<operator_cmd_t>},
       {"platform_truth_t", decodes<platform_truth_t>},
+      {"platform_motion_t", decodes<platform_motion_t>},
       {"pose_t", decodes<pose_t>},
       {"position_setpoint_t", decodes<position_setpoint_t>},
       {"process_status_t", decodes<process_status_t>},

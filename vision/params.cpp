@@ -158,6 +158,54 @@ const ParamSchema<AlignParams>& AlignParams::schema() {
   return schema;
 }
 
+const ParamSchema<MovingTopParams>& MovingTopParams::schema() {
+  using P = MovingTopParams;
+  static const ParamSchema<P> schema = [] {
+    ParamSchema<P> s;
+    s.add("enabled", &P::enabled, Range::any(), "",
+          "measure a moving platform's top on every landing frame (VISION_PLATFORM); "
+          "VISION_TARGET does not depend on it");
+    s.add("top_height_m", &P::top_height_m, Range::closed(0, 2), "m",
+          "the top's expected height above the floor: an independently moving plane's depth is "
+          "not observable from two level views; its error scales with the view angle (position) "
+          "and the relative speed (velocity), both driven to zero by the approach");
+    s.add("top_height_sigma_m", &P::top_height_sigma_m, Range::ge(0), "m",
+          "its uncertainty, carried into the published covariances");
+    s.add("interval_s", &P::interval_s, Range::gt(0), "s",
+          "the earlier frame: the newest at least this much older than the current one");
+    s.add("max_interval_s", &P::max_interval_s, Range::gt(0), "s",
+          "no earlier frame within this: nothing measured")
+        .check([](const P& p) { return p.max_interval_s >= p.interval_s; },
+               "must not be below interval_s");
+    s.add("floor_tol_px", &P::floor_tol_px, Range::gt(0), "px",
+          "a match the known floor carries within this lies on the floor");
+    s.add("threshold_px", &P::threshold_px, Range::gt(0), "px",
+          "a match follows the top's motion within this (converted at its depth)");
+    s.add("min_inliers", &P::min_inliers, Range::ge(3), "", "matches on the moving top");
+    s.add("iterations", &P::iterations, Range::closed(1, 100000), "",
+          "RANSAC draws of two matches");
+    s.add("seed", &P::seed, Range::any(), "", "RANSAC random seed");
+    s.add("max_speed_mps", &P::max_speed_mps, Range::gt(0), "m/s",
+          "a faster top is refused (TOO_FAST)");
+    s.add("max_yaw_rate_dps", &P::max_yaw_rate_dps, Range::gt(0), "deg/s",
+          "a faster turn is refused (TOO_FAST)");
+    s.add("max_scale_change", &P::max_scale_change, Range::open(0, 1), "",
+          "|s - 1| of the plane's similarity between the views (heave over the camera's height)");
+    s.add("min_size_m", &P::min_size_m, Range::ge(0), "m",
+          "the inliers' extent, short side, at least this (SIZE)");
+    s.add("border_margin_px", &P::border_margin_px, Range::ge(0), "px",
+          "an inlier this close to the current image's border makes the top cut: its motion is "
+          "measured, its position not (horizontal covariance 100 m^2)");
+    s.add("max_size_m", &P::max_size_m, Range::gt(0), "m",
+          "the inliers' extent, long side, at most this (SIZE)")
+        .check([](const P& p) { return p.max_size_m > p.min_size_m; }, "must exceed min_size_m");
+    s.add("max_floor_share", &P::max_floor_share, Range::closed(0, 1), "",
+          "the top's matches the known floor also carries, at most this share (ON_FLOOR)");
+    return s;
+  }();
+  return schema;
+}
+
 const ParamSchema<WaypointParams>& WaypointParams::schema() {
   using P = WaypointParams;
   static const ParamSchema<P> schema = [] {
@@ -401,6 +449,8 @@ const ParamSchema<PipelineParams>& PipelineParams::schema() {
               "waypoint geometry (paper 3.1.3, eqs. 3-6)");
     s.section("landing", &P::landing, LandingParams::schema(), "landing target (paper 3.2)");
     s.section("ingress", &P::ingress, IngressParams::schema(), "ingress target (paper 3.3)");
+    s.section("moving_top", &P::moving_top, MovingTopParams::schema(),
+              "a moving platform's top, its motion between the reference and the current frame");
     return s;
   }();
   return schema;
@@ -439,6 +489,7 @@ void DecompositionParams::validate() const { schema().validate(*this); }
 void AlignParams::validate() const { schema().validate(*this); }
 void WaypointParams::validate() const { schema().validate(*this); }
 void LandingParams::validate() const { schema().validate(*this); }
+void MovingTopParams::validate() const { schema().validate(*this); }
 void IngressParams::validate() const { schema().validate(*this); }
 void PipelineParams::validate() const { schema().validate(*this); }
 void NodeParams::validate() const { schema().validate(*this); }

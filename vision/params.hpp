@@ -10,6 +10,7 @@
 
 #include "common/param_schema.hpp"
 #include "common/pose_buffer.hpp"
+#include "vision/landing/moving_top_params.hpp"
 
 namespace alight::vision {
 
@@ -206,6 +207,7 @@ struct PipelineParams {
   WaypointParams waypoint{};
   LandingParams landing{};
   IngressParams ingress{};
+  MovingTopParams moving_top{};  ///< a moving platform (VISION_PLATFORM)
   double max_reference_baseline_m = 0.3;
   static const ParamSchema<PipelineParams>& schema();
   void validate() const;

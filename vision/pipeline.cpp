@@ -25,6 +25,7 @@ void Pipeline::reset() {
   tracker_.reset();
   poses_.clear();
   held_.reset();
+  recent_.clear();
   last_utime_ = 0;
   exposure_.reset();
   last_hash_.reset();
@@ -197,6 +198,33 @@ void Pipeline::hold_reference(Reference* ref, const TrackedFrame& current, int64
   ref->held = true;
 }
 
+// The moving top (pipeline.hpp) against the newest earlier frame at least interval_s older,
+// within max_interval_s; the current frame then joins the recent ones.
+void Pipeline::measure_moving(const std::shared_ptr<const TrackedFrame>& current, int64_t utime,
+                              const PoseSample& pose, FrameResult* r) {
+  const MovingTopParams& mp = params_.moving_top;
+  if (mission_ != Mission::kLanding || !mp.enabled) return;
+  const auto age_s = [&](int64_t t) { return double(utime - t) * 1e-6; };
+  while (!recent_.empty() && age_s(recent_.front().first->utime) > mp.max_interval_s)
+    recent_.pop_front();
+  const std::pair<std::shared_ptr<const TrackedFrame>, PoseSample>* earlier = nullptr;
+  for (const auto& e : recent_)
+    if (age_s(e.first->utime) >= mp.interval_s) earlier = &e;
+  MovingTop m;
+  if (!earlier) {
+    m.reason = MovingReason::kNoEarlierFrame;
+  } else {
+    const TrackedFrame& a = *earlier->first;
+    Correspondences c = correspondences(a, *current, match_frames(a, *current, params_.match));
+    c.pose_1 = earlier->second;
+    c.pose_2 = pose;
+    m = find_moving_top(c, age_s(a.utime), params_.landing.floor_z_m, mp);
+    r->moving_ref_utime = a.utime;
+  }
+  r->moving = std::move(m);
+  recent_.emplace_back(current, pose);
+}
+
 // The matches as undistorted (K * ray) and raw pixels of both frames; under a rolling shutter
 // the rays are each frame's row 0's (rolling_shutter.hpp), and kept.
 Correspondences Pipeline::correspondences(const TrackedFrame& a, const TrackedFrame& b,
@@ -256,7 +284,10 @@ FrameResult Pipeline::process(const cv::Mat& gray, int64_t utime,
   // included (the tracker sees such a gap only while its history holds frames).
   const bool gap =
       last_utime_ != 0 && double(utime - last_utime_) * 1e-6 > params_.tracker.max_frame_gap_s;
-  if (last_utime_ != 0 && (utime <= last_utime_ || gap)) held_.reset();
+  if (last_utime_ != 0 && (utime <= last_utime_ || gap)) {
+    held_.reset();
+    recent_.clear();
+  }
   last_utime_ = utime;
 
   auto frame =
@@ -266,6 +297,7 @@ FrameResult Pipeline::process(const cv::Mat& gray, int64_t utime,
   const auto up = track(std::move(frame.value()), utime, *pose);
   r.n_tracked = up.n_tracked;
   if (up.current && smeared(*up.current)) return fail(Reason::kMotionBlur);
+  if (up.current) measure_moving(up.current, utime, *pose, &r);
   // No tracked reference (the tracks just broke): only the held one can serve.
   const bool held_only = up.status == Reason::kNoReference && up.current && holds() && held_;
   if (up.status != Reason::kOk && !held_only)

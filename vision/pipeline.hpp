@@ -37,6 +37,12 @@
 // threshold and the reference's pixels follow smaller exposure changes; under a rolling shutter
 // every feature's ray is brought to its frame's row 0, the time of the frame's stamp and pose,
 // before any geometry (with a global shutter nothing changes).
+//
+// Beyond the paper (moving_top): a platform that moves breaks the still scene the paper's planes
+// assume. Each landing frame is also matched against a recent earlier frame (moving_top.interval_s
+// back) and the moving top measured between them (vision/landing/moving_top.hpp), in
+// FrameResult::moving; the paper's target (FrameResult::target, VISION_TARGET) does not depend on
+// it.
 
 #include <deque>
 #include <optional>
@@ -47,6 +53,7 @@
 #include "common/pose_buffer.hpp"
 #include "vision/frontend/frame_checks.hpp"
 #include "vision/frontend/reference_tracker.hpp"
+#include "vision/landing/moving_top.hpp"
 #include "vision/params.hpp"
 #include "vision/target.hpp"
 
@@ -70,6 +77,11 @@ struct FrameResult {
   std::vector<Vector2d> matched_px;   ///< matched current features (raw pixels)
   std::vector<Label> labels;          ///< one per matched feature
   std::vector<cv::Vec4i> lines;       ///< ingress Hough segments
+  /// Landing with moving_top.enabled: the moving top's measurement (not found: its reason),
+  /// against the frame of exposure moving_ref_utime; nullopt where the frame never got that far
+  /// (no pose, a bad image, no features, a smeared frame).
+  std::optional<MovingTop> moving;
+  int64_t moving_ref_utime = 0;
 };
 
 class Pipeline {
@@ -107,6 +119,8 @@ class Pipeline {
   Correspondences correspondences(const TrackedFrame& a, const TrackedFrame& b,
                                   const std::vector<Match>& matches) const;
   bool smeared(const TrackedFrame& f) const;
+  void measure_moving(const std::shared_ptr<const TrackedFrame>& current, int64_t utime,
+                      const PoseSample& pose, FrameResult* r);
   bool holds() const;
 
   Mission mission_;
@@ -126,6 +140,8 @@ class Pipeline {
   std::optional<uint64_t> last_hash_;
   PoseSample last_pose_;  // the pose of last_hash_'s frame
   std::optional<ScenePlane> wall_plane_;
+  // The last max_interval_s of frames and their poses, for the moving top (moving_top).
+  std::deque<std::pair<std::shared_ptr<const TrackedFrame>, PoseSample>> recent_;
   int64_t seq_ = 0;
 };
 

@@ -34,6 +34,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -84,11 +85,17 @@ struct Run {
   ClosedLoopResult r;
   bool ok = false;
   int frames = 0, found = 0, partial = 0;
+  int platform_found = 0;        ///< frames with a moving top measured (VISION_PLATFORM found)
   std::vector<double> widths_m;  ///< full views' opening widths (ingress)
   std::vector<double> cpu_ms;    ///< the vision's thread CPU time per frame
   double true_width_m = std::nan("");
   sim::CameraEffects effects;  ///< the scenario's camera effects (its lens: the vision's model)
 };
+
+/// The families whose platform moves (platform.motion): their extra figures (relative to it).
+bool moving(const std::string& family) {
+  return family.rfind("landing_moving_cart", 0) == 0 || family.rfind("landing_deck", 0) == 0;
+}
 
 bool success(const Run& x) {
   const auto& r = x.r;
@@ -107,7 +114,7 @@ double width_error_m(const Run& x) {
 
 std::string one_line(const Run& x) {
   const auto& r = x.r;
-  char what[256];
+  char what[384];
   if (targetless(x.family))
     std::snprintf(what, sizeof what, "found in %d and a partial view in %d of %d frames", x.found,
                   x.partial, x.frames);
@@ -123,6 +130,14 @@ std::string one_line(const Run& x) {
                   "wall %.2f cm",
                   100 * width_error_m(x), x.true_width_m, 100 * r.estimate_error_W.norm(),
                   100 * r.max_lateral_in_wall_m);
+  if (moving(x.family)) {
+    const size_t n = std::strlen(what);
+    std::snprintf(what + n, sizeof what - n,
+                  ", heading error %.1f deg, contact relative vz %+.2f m/s, platform measured in "
+                  "%d of %d frames",
+                  r.heading_error_at_touchdown_deg, r.contact_rel_vz_mps, x.platform_found,
+                  x.frames);
+  }
   char buf[768];
   std::snprintf(buf, sizeof buf, "%s seed %llu: %s, %s; %s; retries %d, mission %.1f s",
                 x.family.c_str(), static_cast<unsigned long long>(x.seed), x.ok ? "ok" : "FAILED",
@@ -285,10 +300,12 @@ int main(int argc, char** argv) try {
           x.widths_m.push_back(m->size_m.x());
         return m;
       };
+      c.camera_platform = [&] { return vision.take_platform(); };
       x.r = fly_closed_loop(c);
       x.frames = vision.frames;
       x.found = vision.found;
       x.partial = vision.partial;
+      x.platform_found = vision.platform_found;
       x.ok = success(x);
       std::lock_guard<std::mutex> lock(out);
       std::printf("%s\n", one_line(x).c_str());
@@ -315,6 +332,7 @@ int main(int argc, char** argv) try {
               static_cast<long long>(seed0 + runs - 1), seed_kind.c_str(),
               no_mocap ? "on the onboard estimate" : "on motion capture");
   for (const auto& fam : names) {
+    std::vector<double> heading_deg, rel_vz_mps;
     std::vector<double> touch_cm, werr_cm, wabs_cm, centre_cm, offset_cm, cpu, time_s;
     int ok = 0, n = 0, retries = 0, false_runs = 0, false_frames = 0, partial_frames = 0;
     std::map<std::string, int> failures;
@@ -335,6 +353,10 @@ int main(int argc, char** argv) try {
       if (targetless(fam)) continue;
       if (mission_of(fam) == Mission::kLanding) {
         if (x.ok) touch_cm.push_back(100 * x.r.touchdown_error_m);
+        if (x.ok && moving(fam)) {
+          heading_deg.push_back(x.r.heading_error_at_touchdown_deg);
+          rel_vz_mps.push_back(std::abs(x.r.contact_rel_vz_mps));
+        }
       } else {
         const double w = width_error_m(x);
         if (std::isfinite(w)) {
@@ -362,6 +384,12 @@ int main(int argc, char** argv) try {
           quantile(wabs_cm, 0.5), quantile(wabs_cm, 0.95), quantile(wabs_cm, 1.0),
           quantile(werr_cm, 0.5), werr_cm.size(), quantile(centre_cm, 0.5),
           quantile(centre_cm, 0.95), quantile(offset_cm, 0.5), quantile(offset_cm, 1.0));
+    if (moving(fam))
+      std::printf(
+          "; relative to the platform: heading error p50 %.1f p95 %.1f deg, contact "
+          "|relative vz| p50 %.2f p95 %.2f m/s",
+          quantile(heading_deg, 0.5), quantile(heading_deg, 0.95), quantile(rel_vz_mps, 0.5),
+          quantile(rel_vz_mps, 0.95));
     std::printf(
         "; mission p50 %.1f s; retries %d; vision CPU per frame p50 %.2f p99 %.2f max %.2f ms"
         " over %zu frames\n",

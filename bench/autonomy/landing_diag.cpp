@@ -93,6 +93,7 @@ int main(int argc, char** argv) try {
     n_waypoints = a.estimator().n();
   };
   int n = 0;
+  std::optional<platform_motion_t> platform;  // the last frame's VISION_PLATFORM
   // Each frame's camera pose from motion capture (as the vision gets it) and the truth, to tell
   // how far the motion the vision assumes between reference and current is off.
   std::map<int64_t, std::pair<Isometry3d, Isometry3d>> cams;
@@ -177,6 +178,16 @@ int main(int argc, char** argv) try {
                     q.target.size_m[0], q.target.size_m[1]);
       }
     }
+    if (r.moving) {  // the moving top (VISION_PLATFORM)
+      const auto& m = *r.moving;
+      std::printf(" | moving %s cand %d in %d size %.2f x %.2f", vision::to_string(m.reason),
+                  m.n_candidates, m.n_inliers, m.size_m[0], m.size_m[1]);
+      if (m.found())
+        std::printf(" p(%+.3f %+.3f %.3f) v(%+.3f %+.3f %+.3f) yaw %+.1f rate %+.1f deg/s",
+                    m.p_W.x(), m.p_W.y(), m.p_W.z(), m.v_W.x(), m.v_W.y(), m.v_W.z(),
+                    m.yaw_rad * 180 / M_PI, m.yaw_rate_rps * 180 / M_PI);
+    }
+    platform = vision::to_platform_msg(r);
     std::printf("\n");
     if (!dump.empty() && n % every == 0) {
       cv::Mat bgr;
@@ -199,6 +210,13 @@ int main(int argc, char** argv) try {
     }
     ++n;
     return from_msg(vision::to_msg(r));
+  };
+  cfg.camera_platform = [&]() -> std::optional<PlatformMeasurement> {
+    if (!platform) return std::nullopt;
+    std::string why;
+    auto m = platform_from_msg(*platform, &why);
+    platform.reset();
+    return m;
   };
   const auto r = fly_closed_loop(cfg);
   std::printf("# result %s: %s landed %d touchdown %.3f est err %.3f retries %d\n",

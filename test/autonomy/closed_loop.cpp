@@ -97,6 +97,8 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
   std::optional<EstimateHealth> estimate;  // scripted STATE_ESTIMATE health
   uint32_t estimate_reasons = 0;           // onboard: every reason seen in flight
   bool approach_seen = false;
+  bool top_contact_seen = false;     // the first contact with the platform top
+  double prev_rel_vz = 0;            // body - top vertical speed at the previous sample
   std::optional<double> prev_along;  // ingress: body from the opening's plane along its normal
   ClosedLoopResult r;
 
@@ -235,6 +237,12 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
           in.target = *m;
           step_autonomy(in);
         }
+        if (config.camera_platform && !vision.silent)
+          if (auto pm = config.camera_platform()) {
+            Inputs in;
+            in.platform = *pm;
+            step_autonomy(in);
+          }
       }
     } else if (auto m = vision.update(ot, until)) {
       Inputs in;
@@ -329,7 +337,16 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
           (truth.state.p_W_B.head<2>() - truth.platform->top_center_W.head<2>()).norm();
       if (ph == Phase::kFinalDescent && r.error_at_final_descent_m < 0)
         r.error_at_final_descent_m = e;
+      if (truth.contact == sim::Contact::kPlatformTop && !top_contact_seen) {
+        top_contact_seen = true;
+        r.contact_rel_vz_mps = prev_rel_vz;
+      }
+      prev_rel_vz = truth.state.v_W_B.z() - truth.platform->v_W.z();
       if (ph == Phase::kLanded && r.error_at_touchdown_m < 0) {
+        const Matrix3d R = truth.state.q_WB.toRotationMatrix();
+        const double yaw = std::atan2(R(1, 0), R(0, 0));
+        const double d = std::remainder(yaw - truth.platform->yaw_rad, M_PI / 2);
+        r.heading_error_at_touchdown_deg = std::abs(d) * 180 / M_PI;
         r.error_at_touchdown_m = e;
         r.p_W_at_touchdown = truth.state.p_W_B;
         if (onboard)

@@ -43,6 +43,9 @@ struct ClosedLoopConfig {
   std::function<std::optional<TargetMeasurement>(const sim::CameraFrame&,
                                                  const std::optional<PoseSample>&)>
       camera_vision;
+  /// With camera_vision: the moving platform's measurement of the frame camera_vision just
+  /// processed (VISION_PLATFORM, found), given to autonomy as the node would.
+  std::function<std::optional<PlatformMeasurement>()> camera_platform;
   /// Flies without motion capture (issue 17), as config/launch/sim_landing_nomocap.yaml and
   /// sim_ingress_nomocap.yaml: the scenario's motion capture is off; the simulator's IMU,
   /// rangefinder, barometer and downward frames feed the onboard estimator as alight-estimator
@@ -89,6 +92,11 @@ struct ClosedLoopResult {
   double error_at_final_descent_m = -1;  ///< lateral body - platform centre entering FINAL_DESCENT
   double error_at_touchdown_m = -1;      ///< ... when autonomy detected the touch-down
   Vector3d p_W_at_touchdown = Vector3d::Zero();  ///< the body then (the slide: final_p_W - this)
+  /// At the detected touch-down: the body's heading against the platform's axes (mod 90 deg)
+  /// [deg]; at the first contact with the top: the body's vertical speed relative to the top's
+  /// just before it (negative: closing) [m/s]; 0 when none.
+  double heading_error_at_touchdown_deg = 0;
+  double contact_rel_vz_mps = 0;
   double platform_yaw_rad = 0;
   /// Final body position relative to the platform top's centre, in the platform's frame (x along
   /// its length), and the platform's length and width: touchdown plots over the outline [m].

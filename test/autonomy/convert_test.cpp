@@ -399,5 +399,48 @@ TEST(AutonomyConvertRegression, EstimateWithNonFiniteOrAbsurdValuesIsRefused) {
   expect_refused(m, "pos beyond");
 }
 
+TEST(ConvertTest, PlatformMeasurementRoundTripsAndBadOnesAreRefusedWithAReason) {
+  PlatformMeasurement p;
+  p.utime = 2'000'000;
+  p.ref_utime = 1'750'000;
+  p.p_W = Vector3d(0.5, -0.2, 0.15);
+  p.v_W = Vector3d(0.8, 0.1, -0.02);
+  p.yaw_rad = 0.3;
+  p.yaw_rate_rps = 0.05;
+  p.size_m = Vector2d(0.43, 0.28);
+  std::string why;
+  const auto back = platform_from_msg(to_msg(p, 4), &why);
+  ASSERT_TRUE(back) << why;
+  EXPECT_EQ(back->utime, p.utime);
+  EXPECT_EQ(back->ref_utime, p.ref_utime);
+  EXPECT_EQ(back->p_W, p.p_W);
+  EXPECT_EQ(back->v_W, p.v_W);
+  EXPECT_EQ(back->cov_p_W, p.cov_p_W);
+  EXPECT_EQ(back->size_m, p.size_m);
+  // Not found: nothing to fuse, nothing refused.
+  auto m = to_msg(p, 4);
+  m.found = false;
+  why.clear();
+  EXPECT_FALSE(platform_from_msg(m, &why));
+  EXPECT_TRUE(why.empty());
+  // A newer version, a non-finite field, a negative variance, an earlier frame not before.
+  m = to_msg(p, 4);
+  m.version = platform_motion_t::VERSION + 1;
+  EXPECT_FALSE(platform_from_msg(m, &why));
+  EXPECT_NE(why.find("newer"), std::string::npos) << why;
+  m = to_msg(p, 4);
+  m.v_W[1] = NAN;
+  EXPECT_FALSE(platform_from_msg(m, &why));
+  EXPECT_NE(why.find("non-finite"), std::string::npos) << why;
+  m = to_msg(p, 4);
+  m.cov_p_W[4] = -1;
+  EXPECT_FALSE(platform_from_msg(m, &why));
+  EXPECT_NE(why.find("negative"), std::string::npos) << why;
+  m = to_msg(p, 4);
+  m.ref_utime = m.utime;
+  EXPECT_FALSE(platform_from_msg(m, &why));
+  EXPECT_NE(why.find("earlier frame"), std::string::npos) << why;
+}
+
 }  // namespace
 }  // namespace alight::autonomy

@@ -37,6 +37,12 @@ std::optional<TargetMeasurement> RealVision::operator()(const sim::CameraFrame& 
   found += r.found();
   const TargetMeasurement m = from_msg(vision::to_msg(r));
   partial += m.partial;
+  platform_.reset();
+  if (const auto pm = vision::to_platform_msg(r)) {
+    std::string why;
+    platform_ = platform_from_msg(*pm, &why);
+    platform_found += platform_.has_value();
+  }
   return m;
 }
 

@@ -8,6 +8,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 
 #include "autonomy/types.hpp"
 #include "common/camera_model.hpp"
@@ -37,12 +38,17 @@ class RealVision {
   std::optional<TargetMeasurement> operator()(const sim::CameraFrame& f,
                                               const std::optional<PoseSample>& pose);
 
-  int frames = 0;   ///< frames processed
-  int found = 0;    ///< ... in which the target was found
-  int partial = 0;  ///< ... reported as a partial view (autonomy refines on these too)
+  int frames = 0;          ///< frames processed
+  int found = 0;           ///< ... in which the target was found
+  int partial = 0;         ///< ... reported as a partial view (autonomy refines on these too)
+  int platform_found = 0;  ///< ... in which a moving top was measured (VISION_PLATFORM found)
+  /// The last frame's moving-top measurement (VISION_PLATFORM, found, through the node's and
+  /// autonomy's conversions), once.
+  std::optional<PlatformMeasurement> take_platform() { return std::exchange(platform_, {}); }
 
  private:
   std::unique_ptr<vision::Pipeline> pipeline_;
+  std::optional<PlatformMeasurement> platform_;
 };
 
 }  // namespace alight::autonomy::test

@@ -14,6 +14,7 @@
 #include <alight/imu_t.hpp>
 #include <alight/node_status_t.hpp>
 #include <alight/operator_cmd_t.hpp>
+#include <alight/platform_motion_t.hpp>
 #include <alight/platform_truth_t.hpp>
 #include <alight/pose_t.hpp>
 #include <alight/position_setpoint_t.hpp>
@@ -70,6 +71,7 @@ std::vector<uint8_t> sample(const std::string& type) {
        }},
       {"operator_cmd_t", [] { return encode(operator_cmd_t{}); }},
       {"platform_truth_t", [] { return encode(platform_truth_t{}); }},
+      {"platform_motion_t", [] { return encode(platform_motion_t{}); }},
       {"pose_t", [] { return encode(pose_t{}); }},
       {"position_setpoint_t", [] { return encode(position_setpoint_t{}); }},
       {"process_status_t",

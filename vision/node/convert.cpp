@@ -29,4 +29,35 @@ target_t to_msg(const FrameResult& r) {
   return m;
 }
 
+std::optional<platform_motion_t> to_platform_msg(const FrameResult& r) {
+  if (!r.moving) return std::nullopt;
+  const MovingTop& t = *r.moving;
+  platform_motion_t m{};
+  m.utime = r.utime;
+  m.ref_utime = r.moving_ref_utime;
+  m.seq = r.seq;
+  m.version = platform_motion_t::VERSION;
+  m.found = t.found();
+  m.reason = static_cast<int8_t>(t.reason);
+  m.n_candidates = t.n_candidates;
+  m.n_inliers = t.n_inliers;
+  if (!t.found()) return m;
+  for (int i = 0; i < 3; ++i) {
+    m.p_W[i] = t.p_W[i];
+    m.v_W[i] = t.v_W[i];
+    for (int j = 0; j < 3; ++j) {
+      m.cov_p_W[3 * i + j] = t.cov_p_W(i, j);
+      m.cov_v_W[3 * i + j] = t.cov_v_W(i, j);
+    }
+  }
+  m.yaw_rad = t.yaw_rad;
+  m.yaw_rate_rps = t.yaw_rate_rps;
+  m.var_yaw = t.var_yaw;
+  m.var_yaw_rate = t.var_yaw_rate;
+  m.size_m[0] = t.size_m[0];
+  m.size_m[1] = t.size_m[1];
+  m.scale = t.scale;
+  return m;
+}
+
 }  // namespace alight::vision

@@ -188,6 +188,8 @@ int main(int argc, char** argv) {
           last_diag_utime = r.utime;
         }
         node.publish(channels::kVisionTarget, target);
+        if (const auto platform = to_platform_msg(r))
+          node.publish(channels::kVisionPlatform, *platform);
         if (diag) node.publish(channels::kVisionDiag, *diag);
         ++n_frames;
         if (r.found()) ++n_found;

@@ -72,5 +72,48 @@ TEST(VisionConvertTest, OtherFailuresCarryReasonAndCountsOnly) {
   EXPECT_EQ(m.n_inliers_dominant, 300);
 }
 
+TEST(VisionConvertTest, MovingTopBecomesVisionPlatformOnlyWhereMeasured) {
+  FrameResult r;
+  r.utime = 5'000'000;
+  r.seq = 9;
+  EXPECT_FALSE(to_platform_msg(r));  // no moving-top stage ran
+  MovingTop m;
+  m.p_W = Vector3d(1, 2, 0.15);
+  m.v_W = Vector3d(0.5, -0.1, 0.02);
+  m.cov_p_W = Matrix3d::Identity() * 1e-4;
+  m.cov_v_W(0, 1) = 3e-3;
+  m.yaw_rad = 0.4;
+  m.yaw_rate_rps = 0.1;
+  m.size_m[0] = 0.4, m.size_m[1] = 0.3;
+  m.n_candidates = 50, m.n_inliers = 40;
+  r.moving = m;
+  r.moving_ref_utime = 4'750'000;
+  const auto msg = to_platform_msg(r);
+  ASSERT_TRUE(msg);
+  EXPECT_EQ(msg->version, platform_motion_t::VERSION);
+  EXPECT_TRUE(msg->found);
+  EXPECT_EQ(msg->reason, platform_motion_t::REASON_OK);
+  EXPECT_EQ(msg->utime, r.utime);
+  EXPECT_EQ(msg->ref_utime, r.moving_ref_utime);
+  EXPECT_EQ(msg->seq, r.seq);
+  EXPECT_EQ(msg->p_W[1], 2.0);
+  EXPECT_EQ(msg->v_W[0], 0.5);
+  EXPECT_EQ(msg->cov_v_W[1], 3e-3);  // row-major
+  EXPECT_EQ(msg->cov_p_W[8], 1e-4);
+  EXPECT_EQ(msg->size_m[1], 0.3);
+  EXPECT_EQ(msg->n_inliers, 40);
+  // Not found: the reason (platform_motion_t's value) and the counts only.
+  m.reason = MovingReason::kOnFloor;
+  r.moving = m;
+  const auto refused = to_platform_msg(r);
+  ASSERT_TRUE(refused);
+  EXPECT_FALSE(refused->found);
+  EXPECT_EQ(refused->reason, platform_motion_t::REASON_ON_FLOOR);
+  EXPECT_EQ(refused->p_W[0], 0.0);
+  EXPECT_EQ(refused->n_candidates, 50);
+  static_assert(int(MovingReason::kSizeOutOfRange) == platform_motion_t::REASON_SIZE_OUT_OF_RANGE);
+  static_assert(int(MovingReason::kNoEarlierFrame) == platform_motion_t::REASON_NO_EARLIER_FRAME);
+}
+
 }  // namespace
 }  // namespace alight::vision

@@ -1,0 +1,169 @@
+// Landing on a moving platform (beyond paper 3.4.1; see moving_landing.hpp).
+#include "autonomy/moving_landing.hpp"
+
+#include <cmath>
+
+namespace alight::autonomy {
+namespace {
+
+std::string fmt2(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.2f", v);
+  return b;
+}
+
+}  // namespace
+
+const ParamSchema<MovingLandingParams>& MovingLandingParams::schema() {
+  using P = MovingLandingParams;
+  static const ParamSchema<P> schema = [] {
+    ParamSchema<P> s;
+    s.add("enabled", &P::enabled, Range::any(), "",
+          "land on a platform that vision measures moving (VISION_PLATFORM)");
+    s.add("min_speed_mps", &P::min_speed_mps, Range::gt(0), "m/s",
+          "a platform this fast is landed on as a moving one");
+    s.add("min_updates", &P::min_updates, Range::ge(1), "",
+          "platform filter updates before it is trusted");
+    s.add("follow_height_m", &P::follow_height_m, Range::gt(0), "m",
+          "matching the platform's velocity this high above its top");
+    s.add("final_height_m", &P::final_height_m, Range::gt(0), "m",
+          "the last drop starts this high above the top (the top still seen whole)");
+    s.add("match_speed_mps", &P::match_speed_mps, Range::gt(0), "m/s",
+          "matched: the velocity relative to the platform within this");
+    s.add("match_radial_m", &P::match_radial_m, Range::gt(0), "m",
+          "matched: the offset from the platform's centre within this");
+    s.add("match_settle_s", &P::match_settle_s, Range::ge(0), "s",
+          "matched this long before the descent starts");
+    s.add("lost_timeout_s", &P::lost_timeout_s, Range::gt(0), "s",
+          "no platform measurement for this long: target lost");
+    s.add("max_speed_mps", &P::max_speed_mps, Range::gt(0), "m/s",
+          "a platform predicted faster is beyond what the vehicle follows (PLATFORM_TOO_FAST)");
+    s.add("max_yaw_rate_dps", &P::max_yaw_rate_dps, Range::gt(0), "deg/s",
+          "a platform predicted turning faster is beyond what the vehicle follows");
+    s.add("too_fast_s", &P::too_fast_s, Range::ge(0), "s",
+          "beyond those bounds this long: the failsafe");
+    s.add("heave_min_amplitude_m", &P::heave_min_amplitude_m, Range::ge(0), "m",
+          "a fitted heave smaller than this is no heave: the last drop at once");
+    s.add("heave_max_wait_s", &P::heave_max_wait_s, Range::ge(0), "s",
+          "waited this long for a crest: the last drop at once");
+    s.add("fall_lag_s", &P::fall_lag_s, Range::ge(0), "s",
+          "the altitude loop's lag added to the last drop's fall time");
+    s.section("filter", &P::filter, PlatformFilterParams::schema(),
+              "the platform's constant-velocity filter and heave fit");
+    return s;
+  }();
+  return schema;
+}
+
+void MovingLandingParams::validate() const { schema().validate(*this); }
+
+const char* to_string(Release r) {
+  switch (r) {
+    case Release::kWait:
+      return "waiting for a crest";
+    case Release::kNoHeave:
+      return "no heave";
+    case Release::kAfterCrest:
+      return "contact just after a crest";
+    case Release::kWaitedEnough:
+      return "waited long enough for a crest";
+  }
+  return "?";
+}
+
+Release heave_release(const HeaveModel& heave, int64_t now_utime, double fall_s, double waited_s,
+                      const MovingLandingParams& params) {
+  if (!(heave.w_rps > 0) || heave.amplitude_m() < params.heave_min_amplitude_m)
+    return Release::kNoHeave;
+  const int64_t contact = now_utime + static_cast<int64_t>(fall_s * 1e6);
+  // The quarter period after a crest: high (above the mean) and going down.
+  if (heave.z(contact) >= 0 && heave.vz(contact) - heave.c <= 0) return Release::kAfterCrest;
+  if (waited_s >= params.heave_max_wait_s) return Release::kWaitedEnough;
+  return Release::kWait;
+}
+
+double aligned_yaw(double platform_yaw_rad, double current_rad) {
+  const double q = M_PI / 2;
+  const double k = std::round((current_rad - platform_yaw_rad) / q);
+  return platform_yaw_rad + k * q;
+}
+
+std::optional<std::string> too_fast(const PlatformFilter::Prediction& p,
+                                    const MovingLandingParams& params) {
+  const double speed = p.v_W.norm();
+  const double rate_dps = std::abs(p.yaw_rate_rps) * 180 / M_PI;
+  if (speed > params.max_speed_mps)
+    return "platform at " + fmt2(speed) + " m/s, beyond " + fmt2(params.max_speed_mps);
+  if (rate_dps > params.max_yaw_rate_dps)
+    return "platform turning at " + fmt2(rate_dps) + " deg/s, beyond " +
+           fmt2(params.max_yaw_rate_dps);
+  return std::nullopt;
+}
+
+MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
+                                const PoseSample& pose, int64_t now_utime, double dt_s,
+                                double yaw_sp_rad, double gear_height_m, double descent_rate_mps,
+                                double final_descent_rate_mps, const MovingLandingParams& params) {
+  MovingStep out;
+  out.yaw_sp_rad = yaw_sp_rad;
+  const double since_s = double(now_utime - filter.utime()) * 1e-6;
+  if (!filter.initialised() || since_s > params.lost_timeout_s) {
+    out.next = MovingStep::Next::kTargetLost;
+    out.reason = "moving platform not measured for " + fmt2(since_s) + " s";
+    return out;
+  }
+  const auto pr = filter.predict(now_utime);
+  if (const auto why = too_fast(pr, params)) {
+    if (!s.too_fast_since_utime) s.too_fast_since_utime = now_utime;
+    if (double(now_utime - *s.too_fast_since_utime) * 1e-6 >= params.too_fast_s) {
+      out.next = MovingStep::Next::kTooFast;
+      out.reason = *why;
+      return out;
+    }
+  } else {
+    s.too_fast_since_utime.reset();
+  }
+  const double z_top = pr.top_z_m;
+  const double z_follow = z_top + gear_height_m + params.follow_height_m;
+  const double z_final = z_top + gear_height_m + params.final_height_m;
+  if (s.z_sp_m <= 0) s.z_sp_m = std::max(z_final, std::min(pose.p_W_B.z(), z_follow));
+  out.yaw_sp_rad = aligned_yaw(pr.yaw_rad, yaw_sp_rad);
+  const Vector2d offset = pose.p_W_B.head<2>() - pr.p_W;
+  const Vector2d rel_v = pose.v_W_B.head<2>() - pr.v_W;
+  const bool matched =
+      offset.norm() <= params.match_radial_m && rel_v.norm() <= params.match_speed_mps;
+  if (!matched) {
+    s.matched_since_utime.reset();
+  } else if (!s.matched_since_utime) {
+    s.matched_since_utime = now_utime;
+  }
+  const bool settled = s.matched_since_utime &&
+                       double(now_utime - *s.matched_since_utime) * 1e-6 >= params.match_settle_s;
+  out.sp_v_W << pr.v_W, 0.0;
+  if (settled && s.z_sp_m > z_final) {
+    s.z_sp_m = std::max(z_final, s.z_sp_m - descent_rate_mps * dt_s);
+    out.sp_v_W.z() = -descent_rate_mps;
+  }
+  out.sp_p_W << pr.p_W, s.z_sp_m;
+  if (s.z_sp_m > z_final) {
+    out.reason = settled ? "descending with the moving platform"
+                         : "matching the moving platform (" + fmt2(offset.norm()) + " m, " +
+                               fmt2(rel_v.norm()) + " m/s off)";
+    return out;
+  }
+  // At the final height: the last drop when matched and the heave allows it.
+  if (!s.at_final_since_utime) s.at_final_since_utime = now_utime;
+  const double waited_s = double(now_utime - *s.at_final_since_utime) * 1e-6;
+  const double fall_s = params.final_height_m / final_descent_rate_mps + params.fall_lag_s;
+  const Release r = heave_release(filter.heave(), now_utime, fall_s, waited_s, params);
+  if (settled && r != Release::kWait) {
+    out.next = MovingStep::Next::kFinalDescent;
+    out.reason = std::string("moving platform matched, final descent (") + to_string(r) + ")";
+    return out;
+  }
+  out.reason = settled ? std::string("over the moving platform: ") + to_string(r)
+                       : "over the moving platform: matching";
+  return out;
+}
+
+}  // namespace alight::autonomy

@@ -1,0 +1,96 @@
+#pragma once
+// Landing on a moving platform (beyond the paper, whose 3.4.1 lands on a still one): the
+// approach and the final descent flown on the platform filter's prediction
+// (autonomy/platform_filter.hpp) instead of the refinement's fixed estimate.
+//
+//  1. Match: over the platform's predicted centre at follow_height_m above its top, the
+//     platform's velocity fed forward and its long axis as the heading (the nearest of the four
+//     ways a rectangle's axes align, as the still landing does), until the vehicle's velocity
+//     relative to the platform is within match_speed_mps and its offset within
+//     match_radial_m for match_settle_s.
+//  2. Descend at landing.descent_rate_mps while matched (the paper's e_r rule on the relative
+//     state), holding the altitude whenever not, down to final_height_m over the top.
+//  3. The deck's heave: the last drop (landing.final_descent_rate_mps) starts when its contact,
+//     a fall time later, falls in the quarter period after a crest of the fitted heave (the deck
+//     high and going down: the relative vertical speed at contact is the descent's minus the
+//     deck's, the lowest of the high half); no heave above heave_min_amplitude_m: at once;
+//     waited heave_max_wait_s: at once.
+//  4. The failsafe: a platform predicted faster than max_speed_mps or turning faster than
+//     max_yaw_rate_dps for too_fast_s is beyond what the vehicle follows
+//     (Failsafe::kPlatformTooFast: climb and hold).
+// Pure: the time is passed in.
+
+#include <optional>
+#include <string>
+
+#include "autonomy/platform_filter.hpp"
+#include "common/param_schema.hpp"
+#include "common/pose_buffer.hpp"
+
+namespace alight::autonomy {
+
+struct MovingLandingParams {
+  bool enabled = true;
+  double min_speed_mps = 0.15;  ///< a platform this fast is landed on as a moving one
+  int min_updates = 6;          ///< filter updates before it is trusted
+  /// Matching the platform this high above its top [m]: the camera's view there is wide enough
+  /// that a cart's turn stays in it while the vehicle follows.
+  double follow_height_m = 1.0;
+  /// The last drop starts this high above the top [m]: the top still seen whole (closer, it
+  /// fills the view and its centre is no longer measured, only its motion).
+  double final_height_m = 0.45;
+  double match_speed_mps = 0.1;
+  double match_radial_m = 0.05;
+  double match_settle_s = 0.5;
+  double lost_timeout_s = 1.0;  ///< no platform measurement for this long: target lost
+  /// What the vehicle follows [m/s]: the shipped vehicles' outer loop flies at most 1 m/s
+  /// (outer_loop.max_speed_xy_mps), and a follower needs a margin to close a gap.
+  double max_speed_mps = 0.9;
+  double max_yaw_rate_dps = 20.0;
+  double too_fast_s = 0.5;
+  double heave_min_amplitude_m = 0.01;
+  double heave_max_wait_s = 6.0;
+  double fall_lag_s = 0.15;  ///< the altitude loop's lag added to the last drop's fall time [s]
+  PlatformFilterParams filter;
+  static const ParamSchema<MovingLandingParams>& schema();
+  void validate() const;
+};
+
+/// Whether the last drop starts now (step 3 of moving_landing.hpp).
+enum class Release { kWait, kNoHeave, kAfterCrest, kWaitedEnough };
+Release heave_release(const HeaveModel& heave, int64_t now_utime, double fall_s, double waited_s,
+                      const MovingLandingParams& params);
+const char* to_string(Release r);
+
+/// The moving approach's own state.
+struct MovingApproach {
+  double z_sp_m = 0.0;
+  std::optional<int64_t> matched_since_utime;
+  std::optional<int64_t> at_final_since_utime;  ///< waiting for the heave since
+  std::optional<int64_t> too_fast_since_utime;
+};
+
+struct MovingStep {
+  enum class Next { kContinue, kFinalDescent, kTargetLost, kTooFast };
+  Next next = Next::kContinue;
+  Vector3d sp_p_W = Vector3d::Zero(), sp_v_W = Vector3d::Zero();
+  double yaw_sp_rad = 0.0;
+  std::string reason;
+};
+
+/// The heading that puts the body's axes along the platform's (yaw mod 90 deg) nearest to
+/// `current` [rad].
+double aligned_yaw(double platform_yaw_rad, double current_rad);
+
+/// One step of steps 1-4. `descent_rate_mps`, `final_descent_rate_mps`, `gear_height_m`: the
+/// still landing's (autonomy.landing).
+MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
+                                const PoseSample& pose, int64_t now_utime, double dt_s,
+                                double yaw_sp_rad, double gear_height_m, double descent_rate_mps,
+                                double final_descent_rate_mps, const MovingLandingParams& params);
+
+/// The platform's motion beyond what the vehicle follows (step 4), or nullopt.
+std::optional<std::string> too_fast(const PlatformFilter::Prediction& p,
+                                    const MovingLandingParams& params);
+
+}  // namespace alight::autonomy

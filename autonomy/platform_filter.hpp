@@ -1,0 +1,122 @@
+#pragma once
+// The moving platform's motion from the vision's measurements (VISION_PLATFORM; beyond the
+// paper, whose 3.4.1 averages a still platform's waypoints, eqs. 7-9).
+//
+// A constant-velocity Kalman filter: horizontally the state [x, y, vx, vy] driven by white
+// acceleration of spectral density accel_psd (a cart's turns, a deck's drift), and the long
+// axis' yaw with its rate [psi, omega] driven by white angular acceleration; each measurement's
+// position, velocity, yaw and yaw rate with the covariances vision publishes. The yaw is a
+// direction of a rectangle's axes (mod pi/2: a top seen in part can swap its long and short
+// sides): it is kept in (-pi/4, pi/4], its innovation wrapped there. A measurement whose
+// position and velocity innovation lies beyond gate_chi2 (Mahalanobis, 4 dof) is refused and
+// counted; the max_consecutive_rejections-th in a row starts the filter over from itself (the
+// platform is not where it was believed). Measurements come in exposure order; one
+// older than the filter's time is refused. Pure: time passed in.
+//
+// The prediction turns the velocity at the course's turn rate (the filtered velocity's direction
+// over course_tau_s): a cart round a bend is led into it, not extrapolated off its path.
+//
+// The deck's heave: the vertical velocities vision measures (each the mean over its interval,
+// at the interval's middle) in a window of heave_window_s, fitted by one sine of the
+// frequency in heave_band_hz that explains them best (least squares per frequency on a grid),
+// so the deck's vertical position and velocity can be predicted a fall time ahead
+// (HeaveModel).
+
+#include <cmath>
+#include <cstdint>
+#include <deque>
+#include <optional>
+
+#include "common/geometry.hpp"
+#include "common/param_schema.hpp"
+
+namespace alight::autonomy {
+
+using Eigen::Matrix2d;
+
+/// One measurement of the moving top (platform_motion_t, found).
+struct PlatformMeasurement {
+  int64_t utime = 0;      ///< exposure of the current image [us]
+  int64_t ref_utime = 0;  ///< exposure of the earlier image [us]
+  Vector3d p_W = Vector3d::Zero();
+  Vector3d v_W = Vector3d::Zero();
+  double yaw_rad = 0.0, yaw_rate_rps = 0.0;
+  Matrix3d cov_p_W = Matrix3d::Identity(), cov_v_W = Matrix3d::Identity();
+  double var_yaw = 1.0, var_yaw_rate = 1.0;
+  Vector2d size_m = Vector2d::Zero();
+};
+
+struct PlatformFilterParams {
+  /// Horizontal acceleration spectral density [m^2/s^3]: a cart at 1 m/s round a 0.6 m turn
+  /// accelerates at 1.7 m/s^2 for the 2 s of a half turn.
+  double accel_psd = 1.5;
+  double yaw_accel_psd = 0.05;  ///< angular acceleration spectral density [rad^2/s^3]
+  double gate_chi2 = 18.47;     ///< 4 dof, p = 0.001
+  int max_consecutive_rejections = 5;
+  double stale_s = 1.0;        ///< no measurement for this long: the filter starts over
+  double min_sigma_m = 0.005;  ///< floor on a measurement's position sigma [m]
+  /// Floor on its velocity sigma [m/s]: the mean over vision's interval lags the velocity now by
+  /// half the interval's acceleration (0.2 m/s in a cart's turn).
+  double min_sigma_mps = 0.1;
+  double course_tau_s = 0.3;
+  double heave_window_s = 6.0;
+  double heave_min_hz = 0.1, heave_max_hz = 1.0;
+  static const ParamSchema<PlatformFilterParams>& schema();
+  void validate() const;
+};
+
+/// The deck's vertical motion as one sine: vz(t) = a sin(w t) + b cos(w t) + c (t from t0).
+struct HeaveModel {
+  double w_rps = 0.0;  ///< 0: no heave model (too few samples)
+  double a = 0, b = 0, c = 0;
+  int64_t t0_utime = 0;
+  double rms_mps = 0;  ///< residual
+  double amplitude_m() const { return w_rps > 0 ? std::hypot(a, b) / w_rps : 0.0; }
+  double vz(int64_t utime) const;
+  /// The deck's height about its mean (the sine's integral; the drift c left out).
+  double z(int64_t utime) const;
+};
+
+/// Fits the heave to (time, vz) samples: the best frequency on a grid of min_hz..max_hz.
+HeaveModel fit_heave(const std::deque<std::pair<int64_t, double>>& vz, double min_hz,
+                     double max_hz);
+
+class PlatformFilter {
+ public:
+  explicit PlatformFilter(const PlatformFilterParams& params);
+
+  /// Fuses a measurement; false when it was refused (gate, out of order, not finite).
+  bool update(const PlatformMeasurement& m);
+  void reset();
+
+  bool initialised() const { return t_utime_ != 0; }
+  int64_t utime() const { return t_utime_; }
+  /// The state predicted to `utime` (not before the filter's time).
+  struct Prediction {
+    Vector2d p_W = Vector2d::Zero(), v_W = Vector2d::Zero();
+    Matrix2d cov_p = Matrix2d::Zero(), cov_v = Matrix2d::Zero();
+    double yaw_rad = 0;  ///< the axes' direction, in (-pi/4, pi/4] [rad]
+    double yaw_rate_rps = 0, var_yaw = 0;
+    double top_z_m = 0;  ///< the top's height, the measurements' z averaged [m]
+  };
+  Prediction predict(int64_t utime) const;
+  const HeaveModel& heave() const { return heave_; }
+  int n_updates() const { return n_updates_; }
+  int n_rejected() const { return n_rejected_; }
+
+ private:
+  PlatformFilterParams params_;
+  int64_t t_utime_ = 0;
+  Eigen::Vector4d x_ = Eigen::Vector4d::Zero();  // x, y, vx, vy
+  Eigen::Matrix4d P_ = Eigen::Matrix4d::Zero();
+  Vector2d yaw_ = Vector2d::Zero();  // psi, omega
+  Matrix2d P_yaw_ = Matrix2d::Zero();
+  double course_rate_ = 0;  // the velocity's turn rate [rad/s]
+  double top_z_sum_ = 0;
+  int n_z_ = 0;
+  std::deque<std::pair<int64_t, double>> vz_;
+  HeaveModel heave_;
+  int consecutive_rejections_ = 0, n_updates_ = 0, n_rejected_ = 0;
+};
+
+}  // namespace alight::autonomy

@@ -1,0 +1,83 @@
+// Closed loop in-process with real vision onto a MOVING platform: the shipped deck
+// (config/scenarios/landing_deck.yaml: 0.5 m/s, heave, roll and pitch) is landed on, the shipped
+// cart (landing_moving_cart.yaml, 1 m/s) is beyond what the Pelican follows and ends in the named
+// failsafe. The vision measures the moving top (VISION_PLATFORM, through the node's and
+// autonomy's conversions), autonomy's platform filter and moving approach follow it and time the
+// last drop to the deck's heave. Lockstep and deterministic, as closed_loop_vision_test.
+#include <gtest/gtest.h>
+
+#include "closed_loop.hpp"
+#include "real_vision.hpp"
+
+namespace alight::autonomy::test {
+namespace {
+
+std::string path(const std::string& rel) { return std::string(ALIGHT_SOURCE_DIR) + "/" + rel; }
+
+struct Case {
+  std::string scenario;  ///< config/scenarios/NAME.yaml, or test/integration/scenarios/NAME.yaml
+  uint64_t seed;
+  bool shipped = true;
+};
+
+ClosedLoopConfig moving_config(const Case& k, RealVision* vision) {
+  ClosedLoopConfig c;
+  c.vehicle_file = path("config/vehicles/pelican.yaml");
+  c.scenario_file = path((k.shipped ? "config/scenarios/" : "test/integration/scenarios/") +
+                         k.scenario + ".yaml");
+  c.mission = Mission::kLanding;
+  c.seed = k.seed;
+  c.time_limit_s = 150;
+  c.camera_vision = [vision](const sim::CameraFrame& f, const std::optional<PoseSample>& p) {
+    return (*vision)(f, p);
+  };
+  c.camera_platform = [vision] { return vision->take_platform(); };
+  return c;
+}
+
+class MovingPlatformLandingTest : public ::testing::TestWithParam<Case> {};
+
+TEST_P(MovingPlatformLandingTest, LandsOnThePlatformWhileItMoves) {
+  RealVision vision(path("config/vehicles/pelican.yaml"), Mission::kLanding);
+  const auto r = fly_closed_loop(moving_config(GetParam(), &vision));
+  std::printf(
+      "%s seed %llu: %s, touchdown error %.4f m relative to the platform (at the detected "
+      "touch-down %.4f), heading error %.1f deg, contact relative vz %+.2f m/s, mission %.1f s, "
+      "platform measured in %d of %d frames\n",
+      GetParam().scenario.c_str(), static_cast<unsigned long long>(GetParam().seed),
+      r.reason.c_str(), r.touchdown_error_m, r.error_at_touchdown_m,
+      r.heading_error_at_touchdown_deg, r.contact_rel_vz_mps, r.mission_time_s,
+      vision.platform_found, vision.frames);
+  EXPECT_EQ(r.phase, Phase::kLanded) << r.reason;
+  EXPECT_TRUE(r.landed) << r.reason;
+  EXPECT_FALSE(r.tipped);
+  EXPECT_TRUE(r.on_platform_top);
+  EXPECT_GT(vision.platform_found, 0);
+  // On the top (0.43 x 0.28 m), within its half width of the centre.
+  EXPECT_LT(r.touchdown_error_m, 0.14);
+  EXPECT_LT(r.heading_error_at_touchdown_deg, 10.0);
+}
+
+// The deck (0.5 m/s, heave, roll and pitch). The cart at 0.6 m/s
+// (test/integration/scenarios/landing_moving_cart_slow.yaml) is followed and landed on by
+// autonomy but, on seed 7, 19 cm off the top's centre, over its edge: not yet a case that passes
+// (docs/results.md, "Moving platforms").
+INSTANTIATE_TEST_SUITE_P(Deck, MovingPlatformLandingTest,
+                         ::testing::Values(Case{"landing_deck", 7}),
+                         [](const auto& info) { return info.param.scenario; });
+
+// The shipped cart at 1 m/s is faster than the Pelican follows (its outer loop's 1 m/s, less a
+// margin: autonomy.moving_platform.max_speed_mps 0.9): the named failsafe, climb and hold, no
+// landing attempt on it and no collision.
+TEST(MovingPlatformFailsafeTest, ACartFasterThanTheVehicleFollowsIsTheNamedFailsafe) {
+  RealVision vision(path("config/vehicles/pelican.yaml"), Mission::kLanding);
+  const auto r = fly_closed_loop(moving_config(Case{"landing_moving_cart", 7}, &vision));
+  std::printf("landing_moving_cart seed 7: %s, phase %s\n", r.reason.c_str(), phase_name(r.phase));
+  EXPECT_EQ(r.phase, Phase::kHold) << r.reason;
+  EXPECT_NE(r.reason.find("beyond what the vehicle follows"), std::string::npos) << r.reason;
+  EXPECT_FALSE(r.collided);
+  EXPECT_FALSE(r.tipped);
+}
+
+}  // namespace
+}  // namespace alight::autonomy::test

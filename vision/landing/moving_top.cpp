@@ -1,0 +1,294 @@
+// A moving platform's top between two frames (beyond paper 3.2; see moving_top.hpp): the
+// floor's matches by the known floor (eq. 2 with the metric motion of eq. 3), the others on a
+// level plane from each view (eqs. 4-6), their similarity by RANSAC, the gates, the measurement.
+#include "vision/landing/moving_top.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include "vision/landing/extent.hpp"
+
+namespace alight::vision {
+
+const char* to_string(MovingReason r) {
+  switch (r) {
+    case MovingReason::kOk:
+      return "ok";
+    case MovingReason::kNoEarlierFrame:
+      return "no_earlier_frame";
+    case MovingReason::kNotAboveFloor:
+      return "not_above_floor";
+    case MovingReason::kTooFewCandidates:
+      return "too_few_candidates";
+    case MovingReason::kNoCommonMotion:
+      return "no_common_motion";
+    case MovingReason::kOnFloor:
+      return "on_floor";
+    case MovingReason::kTooFast:
+      return "too_fast";
+    case MovingReason::kSizeOutOfRange:
+      return "size_out_of_range";
+  }
+  return "unknown";
+}
+
+Vector2d Similarity2::apply(const Vector2d& p) const {
+  const double c = std::cos(theta), sn = std::sin(theta);
+  return s * Vector2d(c * p.x() - sn * p.y(), sn * p.x() + c * p.y()) + t;
+}
+
+std::optional<Similarity2> fit_similarity(const std::vector<Vector2d>& p,
+                                          const std::vector<Vector2d>& q) {
+  assert(p.size() == q.size());
+  if (p.size() < 2) return std::nullopt;
+  Vector2d mp = Vector2d::Zero(), mq = Vector2d::Zero();
+  for (size_t i = 0; i < p.size(); ++i) mp += p[i], mq += q[i];
+  mp /= double(p.size()), mq /= double(q.size());
+  // As complex numbers: q - mq = a (p - mp), a = s e^{i theta} = sum conj(p') q' / sum |p'|^2.
+  double re = 0, im = 0, pp = 0;
+  for (size_t i = 0; i < p.size(); ++i) {
+    const Vector2d a = p[i] - mp, b = q[i] - mq;
+    re += a.x() * b.x() + a.y() * b.y();
+    im += a.x() * b.y() - a.y() * b.x();
+    pp += a.squaredNorm();
+  }
+  if (!(pp > 1e-12)) return std::nullopt;
+  Similarity2 S;
+  S.s = std::hypot(re, im) / pp;
+  S.theta = std::atan2(im, re);
+  S.t = mq - S.apply(mp);  // apply adds S.t, still zero: t = mq - s R mp
+  return S;
+}
+
+namespace {
+
+// One match placed in the world: its rays from both cameras and, off the floor, its points on
+// the assumed top plane seen from each view.
+struct Placed {
+  size_t index = 0;
+  Vector2d p1 = Vector2d::Zero(), p2 = Vector2d::Zero();  // on the top plane, world xy [m]
+  double tol_m = 0;         // threshold_px at its distance from camera 2 [m]
+  double floor_err_px = 0;  // transfer error under the known floor [px]
+};
+
+struct Views {
+  Isometry3d X_WC1, X_WC2;
+  double focal_px = 1;
+};
+
+// Where the ray from camera centre c along d_W meets z = z_plane, in front of the camera.
+std::optional<Vector3d> on_plane(const Vector3d& c, const Vector3d& d_W, double z_plane) {
+  if (!(std::abs(d_W.z()) > 1e-9)) return std::nullopt;
+  const double lambda = (z_plane - c.z()) / d_W.z();
+  if (!(lambda > 0)) return std::nullopt;
+  return c + lambda * d_W;
+}
+
+// Transfer error of match i under the known floor: its reference ray onto the floor, into the
+// current camera, against its current ray [px]; infinite where either misses the floor.
+double floor_error_px(const Views& v, const Vector3d& r1, const Vector3d& r2, double floor_z_m) {
+  const auto F = on_plane(v.X_WC1.translation(), v.X_WC1.linear() * r1, floor_z_m);
+  if (!F) return INFINITY;
+  const Vector3d x = v.X_WC2.inverse() * *F;
+  if (!(x.z() > 1e-6)) return INFINITY;
+  return v.focal_px * (x.hnormalized() - r2.hnormalized()).norm();
+}
+
+// Stage 1: every match placed; those the known floor does not carry within floor_tol_px and
+// whose rays meet the top's plane from both views are the candidates.
+std::vector<Placed> place_candidates(const Correspondences& c, const Views& v, double floor_z_m,
+                                     const MovingTopParams& params) {
+  std::vector<Placed> out;
+  const double z_top = floor_z_m + params.top_height_m;
+  for (size_t i = 0; i < c.size(); ++i) {
+    const Vector3d r1 = c.camera->ray(c.u1[i]), r2 = c.camera->ray(c.u2[i]);
+    Placed m;
+    m.index = i;
+    m.floor_err_px = floor_error_px(v, r1, r2, floor_z_m);
+    if (m.floor_err_px <= params.floor_tol_px) continue;
+    const Vector3d d1 = v.X_WC1.linear() * r1, d2 = v.X_WC2.linear() * r2;
+    const auto P1 = on_plane(v.X_WC1.translation(), d1, z_top);
+    const auto P2 = on_plane(v.X_WC2.translation(), d2, z_top);
+    if (!P1 || !P2) continue;
+    m.p1 = P1->head<2>();
+    m.p2 = P2->head<2>();
+    m.tol_m = params.threshold_px * (*P2 - v.X_WC2.translation()).norm() / r2.norm() / v.focal_px;
+    out.push_back(m);
+  }
+  return out;
+}
+
+bool fits(const Similarity2& S, const Placed& m) {
+  return (S.apply(m.p1) - m.p2).norm() <= m.tol_m;
+}
+
+std::vector<size_t> inliers_of(const Similarity2& S, const std::vector<Placed>& cand) {
+  std::vector<size_t> in;
+  for (size_t k = 0; k < cand.size(); ++k)
+    if (fits(S, cand[k])) in.push_back(k);
+  return in;
+}
+
+std::optional<Similarity2> fit_on(const std::vector<Placed>& cand, const std::vector<size_t>& in) {
+  std::vector<Vector2d> p, q;
+  for (size_t k : in) p.push_back(cand[k].p1), q.push_back(cand[k].p2);
+  return fit_similarity(p, q);
+}
+
+// Stage 2: the largest set of candidates sharing one similarity. Draws of two candidates at
+// least 2 cm apart on the plane (seeded; the same inputs give the same set), the best refined by
+// least squares over its inliers twice. Ties keep the first drawn.
+std::vector<size_t> common_motion(const std::vector<Placed>& cand, const MovingTopParams& params,
+                                  Similarity2* S_out) {
+  std::vector<size_t> best;
+  if (cand.size() < 2) return best;
+  std::mt19937_64 rng(params.seed);
+  std::uniform_int_distribution<size_t> pick(0, cand.size() - 1);
+  for (int it = 0; it < params.iterations; ++it) {
+    const size_t a = pick(rng), b = pick(rng);
+    if (a == b || (cand[a].p1 - cand[b].p1).norm() < 0.02) continue;
+    const auto S = fit_similarity({cand[a].p1, cand[b].p1}, {cand[a].p2, cand[b].p2});
+    if (!S || std::abs(S->s - 1) > params.max_scale_change) continue;
+    auto in = inliers_of(*S, cand);
+    if (in.size() > best.size()) best = std::move(in), *S_out = *S;
+  }
+  for (int refine = 0; refine < 2 && best.size() >= 3; ++refine) {
+    const auto S = fit_on(cand, best);
+    if (!S) break;
+    auto in = inliers_of(*S, cand);
+    if (in.size() < best.size()) break;
+    best = std::move(in), *S_out = *S;
+  }
+  return best;
+}
+
+// A cut top's horizontal position variance: no information [m^2].
+constexpr double kCutPositionVar = 100.0;
+
+double wrap_half_pi(double a) {
+  while (a > M_PI / 2) a -= M_PI;
+  while (a <= -M_PI / 2) a += M_PI;
+  return a;
+}
+
+// Stage 4: the measurement of the accepted set: its rectangle (centre, size, yaw) at the
+// current exposure, its velocity, turn and heave over the interval, and their covariances from
+// the fit's residuals and the height's uncertainty (moving_top.hpp).
+void measure(const std::vector<Placed>& cand, const std::vector<size_t>& in, const Similarity2& S,
+             const Views& v, double dt_s, double floor_z_m, const MovingTopParams& params,
+             MovingTop* out) {
+  const double n = double(in.size());
+  std::vector<Vector3d> pts_W;
+  Vector2d m1 = Vector2d::Zero(), m2 = Vector2d::Zero();
+  double r2_sum = 0, spread = 0;
+  for (size_t k : in) {
+    m1 += cand[k].p1, m2 += cand[k].p2;
+    r2_sum += (S.apply(cand[k].p1) - cand[k].p2).squaredNorm();
+  }
+  m1 /= n, m2 /= n;
+  const double z_top = floor_z_m + params.top_height_m;
+  for (size_t k : in) {
+    pts_W.emplace_back(cand[k].p2.x(), cand[k].p2.y(), z_top);
+    spread += (cand[k].p2 - m2).squaredNorm();
+  }
+  const auto rect = features_extent(pts_W, Vector3d::UnitZ());
+  assert(rect);  // the size gate ran on the same points
+  Vector3d centre = rect->origin_W;
+  for (int a = 0; a < 2; ++a) centre += 0.5 * (rect->lo[a] + rect->hi[a]) * rect->axis[a];
+  const TopRect wide = widened_by_shortfall(*rect, in.size());
+  out->size_m[0] = wide.hi[0] - wide.lo[0];
+  out->size_m[1] = wide.hi[1] - wide.lo[1];
+  out->yaw_rad = wrap_half_pi(std::atan2(rect->axis[0].y(), rect->axis[0].x()));
+  out->yaw_rate_rps = S.theta / dt_s;
+  out->scale = S.s;
+  // Heave: the reference's points at the assumed height (k_1 = 1), so s = k_2.
+  const double zc2 = v.X_WC2.translation().z();
+  const double d2 = zc2 - z_top;
+  const double dz = d2 - d2 / S.s;
+  out->p_W = Vector3d(centre.x(), centre.y(), z_top + dz);
+  const Vector2d vel = (m2 - m1) / dt_s;
+  out->v_W = Vector3d(vel.x(), vel.y(), dz / dt_s);
+
+  // Residuals: per axis, 4 parameters fitted over 2n coordinates.
+  const double var_r = r2_sum / std::max(1.0, 2 * n - 4);
+  const double sh = params.top_height_sigma_m / std::max(0.1, d2);
+  // A height error scales the points about each camera's nadir: the centre moves along its
+  // offset from camera 2's nadir, the velocity along the speed relative to the camera.
+  const Vector2d u = (centre.head<2>() - v.X_WC2.translation().head<2>()) * sh;
+  const Vector2d v_cam = (v.X_WC2.translation() - v.X_WC1.translation()).head<2>() / dt_s;
+  const Vector2d w = (vel - v_cam) * sh;
+  const double var_s = var_r / std::max(1e-6, spread);
+  out->cov_p_W.setZero();
+  out->cov_p_W.topLeftCorner<2, 2>() = var_r / n * Eigen::Matrix2d::Identity() + u * u.transpose();
+  out->cov_p_W(2, 2) = params.top_height_sigma_m * params.top_height_sigma_m + d2 * d2 * var_s;
+  if (out->cut) out->cov_p_W.topLeftCorner<2, 2>() = kCutPositionVar * Eigen::Matrix2d::Identity();
+  out->cov_v_W.setZero();
+  out->cov_v_W.topLeftCorner<2, 2>() =
+      2 * var_r / (n * dt_s * dt_s) * Eigen::Matrix2d::Identity() + w * w.transpose();
+  out->cov_v_W(2, 2) = d2 * d2 * var_s / (dt_s * dt_s);
+  out->var_yaw = var_s;  // the turn's variance equals the scale's (same residuals, same spread)
+  out->var_yaw_rate = 2 * var_s / (dt_s * dt_s);
+}
+
+}  // namespace
+
+MovingTop find_moving_top(const Correspondences& c, double dt_s, double floor_z_m,
+                          const MovingTopParams& params) {
+  assert(c.camera && c.mount && dt_s > 0);
+  MovingTop out;
+  out.dt_s = dt_s;
+  out.inliers.assign(c.size(), 0);
+  const auto refuse = [&](MovingReason r) {
+    out.reason = r;
+    return out;
+  };
+  Views v;
+  v.X_WC1 = camera_in_world(c.pose_1.X_WB(), c.mount->X_BC());
+  v.X_WC2 = camera_in_world(c.pose_2.X_WB(), c.mount->X_BC());
+  v.focal_px = c.camera->K()(0, 0);
+  const double z_top = floor_z_m + params.top_height_m;
+  if (!(v.X_WC1.translation().z() > z_top + 0.05 && v.X_WC2.translation().z() > z_top + 0.05))
+    return refuse(MovingReason::kNotAboveFloor);
+
+  const std::vector<Placed> cand = place_candidates(c, v, floor_z_m, params);
+  out.n_candidates = static_cast<int>(cand.size());
+  if (out.n_candidates < params.min_inliers) return refuse(MovingReason::kTooFewCandidates);
+  Similarity2 S;
+  const std::vector<size_t> in = common_motion(cand, params, &S);
+  out.n_inliers = static_cast<int>(in.size());
+  if (out.n_inliers < params.min_inliers) return refuse(MovingReason::kNoCommonMotion);
+  for (size_t k : in) out.inliers[cand[k].index] = 1;
+
+  // Stage 3: the gates. A cluster of floor matches just outside floor_tol_px (motion capture's
+  // noise) shares the floor's apparent motion on the top's plane: most of its matches are
+  // carried by the floor within a few tolerances.
+  const int on_floor = static_cast<int>(std::count_if(in.begin(), in.end(), [&](size_t k) {
+    return cand[k].floor_err_px <= 3 * params.floor_tol_px;
+  }));
+  if (on_floor > params.max_floor_share * out.n_inliers) return refuse(MovingReason::kOnFloor);
+  Vector2d m1 = Vector2d::Zero(), m2 = Vector2d::Zero();
+  for (size_t k : in) m1 += cand[k].p1, m2 += cand[k].p2;
+  const double speed = (m2 - m1).norm() / out.n_inliers / dt_s;
+  if (speed > params.max_speed_mps ||
+      std::abs(S.theta) / dt_s > params.max_yaw_rate_dps * M_PI / 180 ||
+      std::abs(S.s - 1) > params.max_scale_change)
+    return refuse(MovingReason::kTooFast);
+  std::vector<Vector3d> pts_W;
+  for (size_t k : in) pts_W.emplace_back(cand[k].p2.x(), cand[k].p2.y(), z_top);
+  const auto rect = features_extent(pts_W, Vector3d::UnitZ());
+  if (rect) out.size_m[0] = rect->hi[0] - rect->lo[0], out.size_m[1] = rect->hi[1] - rect->lo[1];
+  // A top cut by the current image's border (close over it, it fills the view) still moves as
+  // a whole, but its visible part's centre is not its centre: its motion is measured, its
+  // position is not (and a cut top may be narrow).
+  out.cut = std::any_of(in.begin(), in.end(), [&](size_t k) {
+    return !c.camera->in_image(c.u2[cand[k].index], params.border_margin_px);
+  });
+  if (!rect || (!out.cut && rect->hi[1] - rect->lo[1] < params.min_size_m) ||
+      rect->hi[0] - rect->lo[0] > params.max_size_m)
+    return refuse(MovingReason::kSizeOutOfRange);
+  measure(cand, in, S, v, dt_s, floor_z_m, params, &out);
+  return out;
+}
+
+}  // namespace alight::vision

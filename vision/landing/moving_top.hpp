@@ -1,0 +1,95 @@
+#pragma once
+// A moving platform's top between two frames (beyond the paper; its 3.2 and eqs. 2-6 assume a
+// still scene).
+//
+// Why the paper's planes miss a moving platform: both homographies, and the known floor's
+// fit, explain the matches by the camera's motion alone. The top's matches still lie on one
+// plane, but that plane moved between the exposures: its homography is that of the camera's
+// motion composed with the platform's, so decomposed with the camera's motion it gives a height
+// and a position that are the platform's motion in disguise (a cart at 1 m/s moves 25 cm in a
+// quarter second, ten times the parallax of a 15 cm top), and the gates refuse it.
+//
+// What is measured instead. Motion capture (or the estimate) gives both camera poses, so the
+// camera's own motion is removed exactly: every ray is placed in the world. The floor's matches
+// are the ones the known floor (z = floor_z_m) carries from one view to the other (eq. 2 with
+// motion capture's metric motion). The others are intersected with a level plane at the top's
+// height, once from each view; for a level top these two point sets are the top's points at the
+// two exposures, related by the platform's rigid motion (a turn about z and a displacement).
+// Where the assumed height is off by dh, each view's points are scaled about its camera's nadir
+// by (z_c - h_assumed) / (z_c - h), so the two sets are related by a similarity whose scale
+// s = k_2 / k_1 also carries the top's heave (a deck) over the interval. A similarity fitted by
+// RANSAC (two matches a draw, seeded) gives the top's inliers, its displacement, its turn and
+// its heave; the inliers' rectangle its centre, size and yaw. Gates refuse a floor cluster,
+// an implausible motion or size, each with its own reason.
+//
+// The height: a plane that moves on its own has no observable depth from two views with a level
+// camera (its motion absorbs the baseline). It is taken as moving_top.top_height_m; the error
+// this leaves (position: dh times the tangent of the view angle; velocity: dh over the camera's
+// height times the speed relative to the camera) vanishes as the vehicle comes over the
+// platform and matches its speed, which is what the approach does.
+
+#include <cassert>
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "common/geometry.hpp"
+#include "vision/landing/moving_top_params.hpp"
+#include "vision/target.hpp"
+
+namespace alight::vision {
+
+/// Why no moving top was measured; values equal platform_motion_t's REASON_*.
+enum class MovingReason : int8_t {
+  kOk = 0,
+  kNoEarlierFrame = 1,    ///< no frame within max_interval_s to measure the motion against
+  kNotAboveFloor = 2,     ///< a camera not above the floor (no known floor)
+  kTooFewCandidates = 3,  ///< fewer than min_inliers matches off the floor
+  kNoCommonMotion = 4,    ///< no min_inliers of them share one rigid motion
+  kOnFloor = 5,           ///< the set's matches are the floor's (max_floor_share)
+  kTooFast = 6,           ///< faster than max_speed_mps / max_yaw_rate_dps, or a scale change
+                          ///< beyond max_scale_change
+  kSizeOutOfRange = 7,    ///< the inliers' extent outside [min_size_m, max_size_m] (a cut
+                          ///< top: longer than max_size_m)
+};
+
+const char* to_string(MovingReason r);
+
+/// The top's state at the current exposure, from its motion since the earlier one.
+struct MovingTop {
+  MovingReason reason = MovingReason::kOk;
+  bool found() const { return reason == MovingReason::kOk; }
+  double dt_s = 0.0;                ///< between the two exposures [s]
+  Vector3d p_W = Vector3d::Zero();  ///< centre of the inliers' rectangle (z: top_height_m + heave)
+  Vector3d v_W = Vector3d::Zero();  ///< mean velocity over the interval (z: from the heave) [m/s]
+  double yaw_rad = 0.0;             ///< long axis of the inliers' rectangle, (-pi/2, pi/2]
+  double yaw_rate_rps = 0.0;        ///< its turn over the interval / dt_s [rad/s]
+  double scale = 1.0;               ///< s of the similarity (heave, height error)
+  /// The top cut by the current image's border (border_margin_px): its motion is measured, its
+  /// centre is not (cov_p_W's horizontal block 100 m^2; p_W the visible part's centre).
+  bool cut = false;
+  Matrix3d cov_p_W = Matrix3d::Zero();  ///< [m^2]
+  Matrix3d cov_v_W = Matrix3d::Zero();  ///< [m^2/s^2]
+  double var_yaw = 0.0, var_yaw_rate = 0.0;
+  double size_m[2] = {0, 0};  ///< the inliers' extent (long, short) [m]
+  int n_candidates = 0;       ///< matches off the floor
+  int n_inliers = 0;
+  std::vector<uint8_t> inliers;  ///< per correspondence
+};
+
+/// The top's motion between c's reference (pose_1) and current (pose_2) views, dt_s apart.
+MovingTop find_moving_top(const Correspondences& c, double dt_s, double floor_z_m,
+                          const MovingTopParams& params);
+
+/// A 2-D similarity q = s R(theta) p + t.
+struct Similarity2 {
+  double s = 1.0, theta = 0.0;
+  Vector2d t = Vector2d::Zero();
+  Vector2d apply(const Vector2d& p) const;
+};
+
+/// Least-squares similarity from p to q (Umeyama 1991, in 2-D); nullopt when p has no extent.
+std::optional<Similarity2> fit_similarity(const std::vector<Vector2d>& p,
+                                          const std::vector<Vector2d>& q);
+
+}  // namespace alight::vision
