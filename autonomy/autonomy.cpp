@@ -240,7 +240,7 @@ void Autonomy::react_to_estimate() {
   // second or less from touch-down: finishing it lands on the platform. A hold instead hovers
   // there on a degraded or dead-reckoned pose that drifts, and the descent that follows (the
   // failsafe's, or the operator's LAND_HERE) lands where it drifted to; over a platform's edge
-  // that tips the vehicle, as the mocap_drop_2s fault did (issue 14). PX4's Land mode, too,
+  // that tips the vehicle, as the mocap_drop_2s fault did. PX4's Land mode, too,
   // goes on landing without a position estimate. A failsafe descent is not restarted.
   if (current == Phase::kFailsafe || current == Phase::kFinalDescent) return;
   if (e->level == L::kLost) {

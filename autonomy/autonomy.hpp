@@ -21,7 +21,7 @@
 //  - Failsafes: pose older than pose_stale_s freezes the mission (the outer loop levels and
 //    holds hover thrust); older than pose_lost_s: FAILSAFE, controlled descent, motors off at
 //    touch-down. ABORT: climb to abort_height and HOLD. KILL: motors off at once, for good.
-//  - The onboard estimate's health (STATE_ESTIMATE, issue 17; flying without motion capture the
+//  - The onboard estimate's health (STATE_ESTIMATE; flying without motion capture the
 //    pose is that estimate's): in flight, DEGRADED holds and waits for the operator (not in the
 //    final descent, which finishes the landing; not a hold, a descent or a LAND_HERE already
 //    under way); LOST, or no STATE_ESTIMATE for estimate_silent_s once one was heard, is the
@@ -32,7 +32,7 @@
 //    the altitude and goes on landing without a position estimate, and a vehicle that loses its
 //    position descends where it is (docs.px4.io v1.14, flight_modes_mc/land; the Descend flight
 //    task, PX4 pull request 13143).
-//  - Restart (issue 14, as PX4 does after an in-flight reboot of a module): nothing is
+//  - Restart (as PX4 does after an in-flight reboot of a module): nothing is
 //    commanded before the first pose. If it (or the restored state) shows the vehicle flying,
 //    the autonomy holds there with the motors on and waits for the operator (GO, NUDGE, ABORT,
 //    LAND_HERE, KILL); it never takes off again. A restored KILL keeps the motors off; a

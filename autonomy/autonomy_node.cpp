@@ -5,14 +5,14 @@
 // sample) and operator commands (stamped by the ground station's clock) are handled at the
 // current sensor time and never move it, so a replayed log gives the same setpoints.
 //
-// Input boundary (issue 14): every message goes through a validating conversion (non-finite or
+// Input boundary: every message goes through a validating conversion (non-finite or
 // absurd values are counted with reject_value and dropped; the autonomy keeps the last good
 // one), and pose, IMU and vision stamps through the node's StampGuard: only an accepted stamp
 // advances the clock, so one IMU sample stamped an hour ahead no longer ages every pose past
 // pose_lost_s (FAILSAFE for good). Operator commands are stamped by the ground station's clock
 // and judged by the verifier on the wall clock, not here.
 //
-// Restart (issue 14): the latches (KILL, failsafe) and whether the motors were on are kept in a
+// Restart: the latches (KILL, failsafe) and whether the motors were on are kept in a
 // state file (autonomy/restart_state.hpp says why a file), rewritten on every change and once a
 // second. A restarted autonomy gets them as RestartState; it publishes no setpoint before the
 // first pose, and one that finds the vehicle flying holds there and never runs --auto-go.
@@ -95,7 +95,7 @@ int main(int argc, char** argv) {
       state_file_ok = ok;
     };
     save_state();
-    // Signed operator commands (issue 8) are verified here, at the link: the pure autonomy only
+    // Signed operator commands are verified here, at the link: the pure autonomy only
     // sees commands the verifier accepted. Freshness is judged on the wall clock because the
     // command's utime comes from the ground station's clock, not from the sensors.
     if (key_file.empty()) key_file = params.operator_key_file;
@@ -103,11 +103,11 @@ int main(int argc, char** argv) {
     if (!key_file.empty()) {
       auto loaded = alight::load_key_file(key_file);
       for (const auto& w : loaded.warnings) spdlog::warn("{}", w);
-      // A new session per start: commands signed for an earlier run are refused (issue 14).
+      // A new session per start: commands signed for an earlier run are refused.
       verifier.emplace(std::move(loaded.key), params.vehicle_id, alight::draw_session_nonce(),
                        static_cast<int64_t>(std::llround(params.command_max_age_s * 1e6)));
     }
-    // What the station needs to sign for this run (issue 14); the acknowledgements and the
+    // What the station needs to sign for this run; the acknowledgements and the
     // counters of refused commands are the autonomy's CommandGate's (in the converted status).
     const auto fill_link_status = [&](alight::autonomy_status_t& st) {
       st.vehicle_id = params.vehicle_id;
@@ -254,7 +254,7 @@ int main(int argc, char** argv) {
                                            return;
                                          step(in);
                                        });
-    // The onboard estimate's health (issue 17; its pose arrives as the pose, remapped). It comes
+    // The onboard estimate's health (its pose arrives as the pose, remapped). It comes
     // at the IMU rate and goes with the next step rather than making one: a step per estimate
     // would add 200 setpoints a second, and as many attitude commands from the outer loop,
     // without new information for either (the IMU steps the autonomy as often).

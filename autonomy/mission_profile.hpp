@@ -55,7 +55,7 @@ struct LandingApproach {
   }
 };
 
-/// The final hold's calm moment (beyond the paper, issue 15): e_r within radial_tol_m and
+/// The final hold's calm moment (beyond the paper): e_r within radial_tol_m and
 /// final_hold_radial_m, and the horizontal speed within its bound, for final_hold_settle_s. The
 /// bound is final_hold_speed_mps at first and grows to final_hold_speed_max_mps over half of
 /// final_hold_timeout_s of waiting (held_s): a still moment is worth waiting for, but in steady
@@ -65,7 +65,7 @@ bool calm_for_final_descent(const LandingParams& L, double e_r,
                             const std::optional<PoseSample>& pose, double held_s, int64_t now_utime,
                             std::optional<int64_t>& calm_since_utime);
 
-/// Beyond the paper (issue 15): the horizontal offset of the body origin from the gear's centre
+/// Beyond the paper: the horizontal offset of the body origin from the gear's centre
 /// (gear_height_m below it along the body's z axis) [m]. A body tilted against the wind holds
 /// its gear downwind of the origin by gear_height_m sin(tilt); the gear lands where its feet
 /// touch, and the body levels above them. With aim_gear the landing approach and the final

@@ -332,9 +332,9 @@ const ParamSchema<AutonomyParams>& AutonomyParams::schema() {
     s.section("ingress", &P::ingress, IngressParams::schema(),
               "approach, ingress: paper 3.4.2 (not flown in the paper)");
     s.section("failsafe", &P::failsafe, FailsafeParams::schema(),
-              "lost motion capture, silent vision, the onboard estimate's health (issue 17)");
+              "lost motion capture, silent vision, the onboard estimate's health");
     s.section("restart", &P::restart, RestartParams::schema(),
-              "a restart in flight holds and waits for the operator (issue 14)");
+              "a restart in flight holds and waits for the operator");
     s.section("moving_platform", &P::moving_platform, MovingLandingParams::schema(),
               "landing on a platform vision measures moving (autonomy/moving_landing.hpp)");
     s.check(

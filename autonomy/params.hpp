@@ -113,7 +113,7 @@ struct IngressParams {
   void validate() const;
 };
 
-/// Lost motion capture, silent vision, and the onboard estimate's health (issue 17).
+/// Lost motion capture, silent vision, and the onboard estimate's health.
 struct FailsafeParams {
   double pose_stale_s = 0.3;
   double pose_lost_s = 1.0;
@@ -128,7 +128,7 @@ struct FailsafeParams {
   void validate() const;
 };
 
-/// Restart semantics (issue 14), the PX4 way: an autonomy that starts while the vehicle flies
+/// Restart semantics, the PX4 way: an autonomy that starts while the vehicle flies
 /// holds where it is, motors on, and waits for the operator; it never takes off again.
 struct RestartParams {
   double airborne_height_m = 0.15;

@@ -1,5 +1,5 @@
 #pragma once
-// The autonomy's memory across a restart of its process (issue 14): the latches a restart must
+// The autonomy's memory across a restart of its process: the latches a restart must
 // not forget (KILL, a failsafe) and whether it was flying, kept by the node in a small state file.
 //
 // Why a file owned by the node rather than state derived from LCM: a KILL is a decision, not a

@@ -34,7 +34,7 @@ enum class Phase {
   kKilled,
 };
 
-/// kEstimateLost: the onboard estimate (STATE_ESTIMATE, issue 17) LOST or silent.
+/// kEstimateLost: the onboard estimate (STATE_ESTIMATE) LOST or silent.
 enum class Failsafe {
   kNone,
   kPoseStale,
@@ -94,7 +94,7 @@ struct OperatorCommand {
   CommandReject link_reject = CommandReject::kNone;
 };
 
-/// The onboard state estimate's health (state_estimate_t, alight-estimator, issue 17): all the
+/// The onboard state estimate's health (state_estimate_t, alight-estimator): all the
 /// autonomy takes from STATE_ESTIMATE. Its pose reaches the autonomy as the pose (ESTIMATE_POSE
 /// remapped onto MOCAP_POSE when flying without motion capture).
 struct EstimateHealth {

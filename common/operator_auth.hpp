@@ -24,7 +24,7 @@
 // accepted at all). Because it equals LCM's own encoding, a verifier in any language can take
 // the bytes straight from the received message.
 //
-// Binding (issue 14): the tag covers the vehicle's id, so vehicles sharing a key no longer obey
+// Binding: the tag covers the vehicle's id, so vehicles sharing a key no longer obey
 // each other's commands, and the session nonce that the verifier draws from the operating
 // system's random source at every start of autonomy and announces in AUTONOMY_STATUS, so a
 // command recorded before a restart of autonomy is refused after it (the new verifier has no

@@ -1,5 +1,5 @@
 #pragma once
-// Parameters declared once (issue 18). Each parameter struct lists its parameters in one
+// Parameters declared once. Each parameter struct lists its parameters in one
 // ParamSchema — key, field, constraint, unit, description — and everything else is derived from
 // that list: reading a file section (absent keys keep the struct's default, unknown keys are
 // errors), validation with messages built from the constraint and the full dotted key, and the

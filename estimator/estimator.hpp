@@ -1,5 +1,5 @@
 #pragma once
-// Onboard visual-inertial estimation with metric scale (issue 17; the paper's future work, 5: fly
+// Onboard visual-inertial estimation with metric scale (the paper's future work, 5: fly
 // without motion capture). An error-state EKF (Sola 2017; see eskf.hpp) propagated with the IMU
 // at its rate and updated by a downward rangefinder, a barometer and the flow front end's
 // translation-over-height between consecutive frames (stochastic cloning of the pose at the first

@@ -1,5 +1,5 @@
 #pragma once
-// Flow odometry over the floor (issue 17: flight without motion capture): the downward camera's
+// Flow odometry over the floor (flight without motion capture): the downward camera's
 // translation between consecutive frames divided by its distance to the floor, t/d, for the
 // error-state EKF, which multiplies it by the rangefinder's height.
 //

@@ -1,5 +1,5 @@
 #pragma once
-// The onboard estimator as one pure object (issue 17): the error-state EKF (estimator.hpp) fed by
+// The onboard estimator as one pure object: the error-state EKF (estimator.hpp) fed by
 // the IMU, the rangefinder, the barometer and the flow front end (flow_odometry.hpp) run on the
 // downward camera's frames. What the front end needs from the filter is assembled here: the
 // rotation between two frames from the bias-corrected gyro, and the floor's normal in the first

@@ -1,5 +1,5 @@
 #pragma once
-// Parameters of the onboard estimator (issue 17): the `estimator:` section of a vehicle file.
+// Parameters of the onboard estimator: the `estimator:` section of a vehicle file.
 // Defaults: a BMI088-class MEMS IMU (datasheet noise densities), a TFmini-class rangefinder
 // (1 cm + 1 % of the range, 0.1 to 12 m), a BMP388-class barometer (its noise with prop wash, and a
 // slowly drifting offset). Each parameter is declared once, in params.cpp.

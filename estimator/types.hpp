@@ -1,5 +1,5 @@
 #pragma once
-// The estimator's inputs and output (issue 17: flying without motion capture). Plain structs, no
+// The estimator's inputs and output (flying without motion capture). Plain structs, no
 // middleware: the node converts LCM messages into these. Frames as in docs/ARCHITECTURE.md: world
 // W z up, body B x forward / y left / z up, camera C optical; utime in microseconds.
 

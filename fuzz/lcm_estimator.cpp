@@ -1,4 +1,4 @@
-// The onboard estimator's network input (issue 17): a first byte picks the message, the rest is
+// The onboard estimator's network input: a first byte picks the message, the rest is
 // its LCM encoding: range_t, baro_t or imu_t, decoded and converted as alight-estimator does and
 // fed to a filter that has finished its alignment (then a few more IMU samples, so a stored
 // value reaches the propagation); or state_estimate_t as alight-autonomy reads it. Whatever the

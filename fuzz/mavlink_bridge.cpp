@@ -1,4 +1,4 @@
-// The autopilot bridge's input side (issue 16): alight-mavlink's Bridge fed arbitrary bytes from
+// The autopilot bridge's input side: alight-mavlink's Bridge fed arbitrary bytes from
 // "the autopilot" in arbitrary chunks, with the stack's setpoints (armed) and motion capture
 // interleaved and the clocks advancing by amounts the input chooses. Input: a flags byte (bit 0:
 // ArduPilot, bit 1: position control, bit 2: engage operator, bit 3: ODOMETRY), a chunking seed

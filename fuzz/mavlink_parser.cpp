@@ -1,4 +1,4 @@
-// MAVLink bytes from an autopilot link (issue 16): alight's streaming parser over arbitrary bytes
+// MAVLink bytes from an autopilot link: alight's streaming parser over arbitrary bytes
 // in arbitrary chunks, with and without a signing key, then every delivered frame decoded into its
 // typed message. Input: a flags byte (bit 0: signing key, the fuzz targets' 32 bytes 0x5a; bit 1:
 // accept unsigned frames too; bit 2: refuse MAVLink 1; bit 3: refuse payloads longer than known),

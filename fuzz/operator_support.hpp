@@ -2,7 +2,7 @@
 // The operator link's test setup for the fuzz targets: the key (32 bytes 0x5a, as
 // fuzz/make-corpus signs its seed commands with), and a verifier / command bound to one vehicle
 // and session. Written against both forms of common/operator_auth.hpp (before and after
-// commands were bound to a vehicle id and the verifier's session, issue 14) so the targets build
+// commands were bound to a vehicle id and the verifier's session) so the targets build
 // with either.
 
 #include <cstdint>

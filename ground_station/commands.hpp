@@ -56,7 +56,7 @@ class CommandBuilder {
   int64_t last_seq_ = 0;
 };
 
-/// What became of a command the station sent (issue 14: "sent" alone said nothing about whether
+/// What became of a command the station sent ("sent" alone said nothing about whether
 /// the vehicle heard it).
 enum class AckState {
   kSent,             ///< on LCM, no answer yet, deadline not passed
@@ -113,7 +113,7 @@ struct AccessPolicy {
   std::string token;          ///< session token printed at start
   bool loopback_only = true;  ///< bound to a loopback address: Host must name it
 };
-/// Policy for a bind address: the token is always required (issue 14: on loopback it was not,
+/// Policy for a bind address: the token is always required (on loopback it was not,
 /// and any web page could post commands); on a loopback address the Host must name it too.
 AccessPolicy policy_for_bind(const std::string& bind_address, std::string token);
 bool is_loopback_address(const std::string& address);

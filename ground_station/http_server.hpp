@@ -1,5 +1,5 @@
 #pragma once
-// cpp-httplib's server behind a gate that no slow client can hold (issue 14: 24 clients sending
+// cpp-httplib's server behind a gate that no slow client can hold (24 clients sending
 // one header line every 0.8 s kept POST /api/command unanswered for 15 s, because httplib gives
 // every accepted connection a worker thread at once, and a worker waits as long as bytes keep
 // trickling in).

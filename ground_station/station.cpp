@@ -52,7 +52,7 @@ Station::Station(const GroundStationParams& params, StationOptions options)
       state_(params),
       camera_(params.jpeg_quality),
       diag_(params.jpeg_quality) {
-  // Every command needs the token, on loopback too (issue 14: no token was asked there, so any
+  // Every command needs the token, on loopback too (no token was asked there, so any
   // page the operator's browser opened could post commands). On loopback the page may fetch it
   // from GET /api/session; elsewhere the operator types it or opens the printed URL.
   if (policy_.loopback_only && policy_.token.empty()) policy_.token = make_session_token();

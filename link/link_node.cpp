@@ -1,6 +1,6 @@
 // alight-link: chosen LCM channels between the vehicle's bus and a peer's bus (the operator's
 // ground station on another computer) over one TCP connection, every frame authenticated
-// (docs/link.md; issue 37: the onboard bus never leaves the vehicle computer). Glue only: the
+// (docs/link.md: the onboard bus never leaves the vehicle computer). Glue only: the
 // protocol, what is sent when and which connections are kept are link/'s; this file owns the
 // sockets, the clocks, LCM and the command line.
 //

@@ -1,5 +1,5 @@
 #pragma once
-// The MAVLink side of alight-mavlink (issue 16; issue 38: what a real ArduCopter and PX4 need):
+// The MAVLink side of alight-mavlink (what a real ArduCopter and PX4 need):
 // alight's setpoints to a PX4 or ArduPilot autopilot, its motion capture to the autopilot's
 // estimator, and the autopilot's IMU, attitude, mode, arming and link state back. Pure: bytes,
 // messages and both clocks go in through update(), bytes to write and samples to publish come

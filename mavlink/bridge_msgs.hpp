@@ -26,7 +26,7 @@ std::optional<PositionTarget> position_from_msg(const position_setpoint_t& msg, 
 std::optional<std::string> setpoint_stamp_problem(int64_t utime, int64_t reference_utime,
                                                   double max_age_s, double max_ahead_s);
 /// Whether a KILL (POSITION_SETPOINT motors KILL, ATTITUDE_CMD armed = false) carries the
-/// operator's authority for a forced disarm (issue 37): its kill_authority, the operator's signed
+/// operator's authority for a forced disarm: its kill_authority, the operator's signed
 /// CMD_KILL, verified with the vehicle's operator key at `now_wall_us` (the command was stamped
 /// by the ground station's clock). False, and *why, for an empty authority, no verifier (no
 /// operator key configured) or one the verifier refuses: a plain motors-off then.

@@ -1,4 +1,4 @@
-// alight-mavlink: alight on a PX4 or ArduPilot autopilot over MAVLink (issue 16). Glue only: the
+// alight-mavlink: alight on a PX4 or ArduPilot autopilot over MAVLink. Glue only: the
 // protocol, the setpoint stream, the mode and arming state machine and the conversions are the
 // Bridge's (mavlink/bridge.hpp); this file owns the serial port or UDP socket, LCM, the clocks
 // and the parameters.

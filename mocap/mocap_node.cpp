@@ -1,5 +1,5 @@
 // alight-mocap: a VRPN tracker (VICON Tracker, OptiTrack Motive, Qualisys QTM) -> MOCAP_POSE
-// (issue 16, item 4). Glue only: the protocol, the room's frame, the stamps and the velocities
+// Glue only: the protocol, the room's frame, the stamps and the velocities
 // are the TrackerClient's (mocap/tracker.hpp); this file owns the TCP socket, the clocks, LCM and
 // the parameters.
 //

@@ -1,6 +1,6 @@
 #pragma once
 // The VRPN wire protocol as a tracker client needs it: the protocol VICON Tracker, OptiTrack
-// Motive and Qualisys QTM serve poses with (issue 16, item 4). Written from VRPN's protocol
+// Motive and Qualisys QTM serve poses with. Written from VRPN's protocol
 // description (Format_Of_Protocol.txt) and the facts of its reference implementation
 // (vrpn_Connection.C, vrpn_Tracker.C in github.com/vrpn/vrpn), where the two differ:
 //

@@ -1,4 +1,4 @@
-"""Scene families (issue 15): scenario files drawn at random from a family's distribution, so a
+"""Scene families: scenario files drawn at random from a family's distribution, so a
 Monte Carlo over fresh seeds measures the vision on scenes nobody tuned it to.
 
     import scene_families
@@ -11,7 +11,7 @@ sizes, aspect ratios and offsets in walls of several thicknesses, wind with gust
 and gain flicker. The same (family, seed) always gives the same scenario; scripts/scenes writes
 them to files and scripts/montecarlo --families flies them.
 
-A real camera's effects (issue 41; the scenario's camera.effects and vibration blocks) join any
+A real camera's effects (the scenario's camera.effects and vibration blocks) join any
 family by name: "landing_photo+rolling_shutter" is landing_photo's scene for that seed (the same
 scene, drawn from the same stream) with a rolling shutter of a drawn line delay;
 "ingress_photo+vibration+driver" adds two; "+camera" adds them all. EFFECTS lists them.

@@ -1,5 +1,5 @@
 #pragma once
-// The vehicle's true state from an autopilot's own simulator (issue 38), for alight-sim as a
+// The vehicle's true state from an autopilot's own simulator, for alight-sim as a
 // sensor renderer (alight-sim --truth-from): ArduPilot SITL's SIM_STATE (libraries/SITL/SITL.cpp,
 // sim_state_send) or PX4 SIH's HIL_STATE_QUATERNION (src/modules/mavlink/streams/
 // HIL_STATE_QUATERNION.hpp, read from SIH's ground-truth topics), over MAVLink, in alight's world.

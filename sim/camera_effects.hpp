@@ -1,5 +1,5 @@
 #pragma once
-// A real small-drone camera's imperfections for the simulated camera (issue 41), each switched
+// A real small-drone camera's imperfections for the simulated camera, each switched
 // on by the scenario (CameraEffects, VibrationParams in params.hpp) and seeded from the
 // simulator's seed. The simulator (simulator.cpp) applies them:
 // - Rolling shutter: row v is exposed line_delay x v after row 0, each band of rows rendered

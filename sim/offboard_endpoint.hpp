@@ -1,6 +1,6 @@
 #pragma once
-// The simulated vehicle's autopilot as a MAVLink peer, the way PX4's offboard interface behaves
-// (issue 16): alight-sim --mavlink ADDRESS puts it between alight-mavlink and the dynamics, so
+// The simulated vehicle's autopilot as a MAVLink peer, the way PX4's offboard interface behaves:
+// alight-sim --mavlink ADDRESS puts it between alight-mavlink and the dynamics, so
 // setpoints, mode changes, arming and telemetry cross the link as MAVLink bytes. Pure: bytes,
 // the simulated state and the sim time go in; bytes and the command for the dynamics come out.
 //

@@ -74,7 +74,7 @@ struct TextureSpec {
   void validate() const;
 };
 
-/// How a platform moves (issue 40; `platform.motion`; sim/platform_motion.hpp evaluates it): a
+/// How a platform moves (`platform.motion`; sim/platform_motion.hpp evaluates it): a
 /// constant drift, a path travelled at a constant speed, a turn rate, and a deck's heave, roll
 /// and pitch as sines and as a seeded random sea state. Time counts from the simulator's start.
 /// At most kMaxSpeedMps for the top centre and kMaxRateDps about each axis: what a cart, a
@@ -119,7 +119,7 @@ struct PlatformParams {
   Vector3d size_m = Vector3d(0.432, 0.279, 0.109);  ///< length x, width y, height [m]
   double yaw_deg = 0.0;
   TextureSpec texture{"paper", 2, 1024, 0.0015, 200, 1.0, 0.01, {}, {}};
-  /// `motion:` present: the platform moves (issue 40); absent: it stands still.
+  /// `motion:` present: the platform moves; absent: it stands still.
   bool moving = false;
   PlatformMotionParams motion;
   static const ParamSchema<PlatformParams>& schema();
@@ -225,7 +225,7 @@ struct BaroParams {
   void validate() const;
 };
 
-/// A real small-drone camera's imperfections (issue 41; sim/camera_effects.hpp models them), each
+/// A real small-drone camera's imperfections (sim/camera_effects.hpp models them), each
 /// switched on by its own `enabled` under a camera's `effects:` and off by default, so a
 /// scenario without the block renders bit for bit as before.
 struct CameraEffects {
@@ -257,7 +257,7 @@ struct CameraEffects {
   void validate() const;
 };
 
-/// Motor vibration of the airframe (issue 41): harmonics base_hz x k (k = 1..harmonics,
+/// Motor vibration of the airframe: harmonics base_hz x k (k = 1..harmonics,
 /// amplitude / k) as angular and linear jitter of every camera mount, and the same motion seen
 /// by the IMU (imu_share of it).
 struct VibrationParams {
@@ -342,7 +342,7 @@ struct Scenario {
   CameraParams camera;
   /// The downward camera once more, for the onboard estimator's flow (FLOW_CAMERA), when
   /// `camera` is another one: ingress without motion capture renders the forward camera for the
-  /// vision and this one for the estimator (issue 17). Off unless enabled here or by
+  /// vision and this one for the estimator. Off unless enabled here or by
   /// alight-sim --flow-camera.
   CameraParams flow_camera = [] {
     CameraParams c;

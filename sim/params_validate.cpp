@@ -558,7 +558,7 @@ const ParamSchema<CameraParams>& CameraParams::schema() {
           "(hysteresis: a still view keeps one gain instead of hunting frame to frame; the "
           "target leaves room for it below full scale)");
     s.section("effects", &P::effects, CameraEffects::schema(),
-              "a real camera's imperfections (issue 41), each off by default");
+              "a real camera's imperfections, each off by default");
     return s;
   }();
   return schema;

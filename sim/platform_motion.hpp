@@ -1,5 +1,5 @@
 #pragma once
-// A moving platform's pose and velocity as a function of time (issue 40): a cart, a vehicle's
+// A moving platform's pose and velocity as a function of time: a cart, a vehicle's
 // roof, a boat's deck. Closed form, so the simulator's step, its renderer and the tests all see
 // the same platform at the same time: the path is travelled at a constant speed along straights
 // and circular arcs (line: a stadium; circle; figure_eight: two circles touching where it

@@ -29,7 +29,7 @@ struct Box {
     R_WO_ = R_WO;
     yaw_rad_ = yaw_of(R_WO);
   }
-  /// A moving box (issue 40): velocity of its centre and angular velocity in world, so a contact
+  /// A moving box: velocity of its centre and angular velocity in world, so a contact
   /// counts the speed relative to its surface. Zero for everything standing still.
   bool moving = false;
   Vector3d v_W = Vector3d::Zero();

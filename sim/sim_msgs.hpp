@@ -26,7 +26,7 @@ baro_t to_msg(const BaroSample& sample);
 image_t to_msg(const CameraFrame& frame);
 sim_truth_t to_msg(const Truth& truth);
 /// SIM_PLATFORM: the moving platform's pose and velocities at the truth's time; nullopt for a
-/// platform standing still or none (issue 40).
+/// platform standing still or none.
 std::optional<platform_truth_t> platform_msg(const Truth& truth);
 AttitudeCommand from_msg(const attitude_cmd_t& msg);
 /// Validating form for untrusted input: nullopt (and *why, when given) for a non-finite angle,

@@ -13,7 +13,7 @@
 // RANGE and BARO are published on LCM either way (alight-mavlink does not bridge them).
 //
 // --truth-from ardupilot|px4 --truth-link ADDRESS: the vehicle is a real autopilot's SITL
-// (issue 38: ArduCopter's own physics, PX4's SIH), flown by it; alight-sim only renders the
+// (ArduCopter's own physics, PX4's SIH), flown by it; alight-sim only renders the
 // sensors from its true state (SIM_STATE / HIL_STATE_QUATERNION over MAVLink on ADDRESS,
 // sim/autopilot_truth.hpp) and judges contact with the scene. The SITL's ground is flat: it is
 // the platform's top in a landing scenario (the top's height above the floor: 11 to 22 cm),
@@ -24,7 +24,7 @@
 // --flow-camera (or the scenario's flow_camera.enabled): the downward camera is rendered besides
 // the scenario's camera and published on FLOW_CAMERA for alight-estimator, at flow_camera.rate_hz
 // (ingress without motion capture: the vision flies the forward camera, the estimator's flow
-// needs the floor; issue 17). SIM_CONTROL's camera dropouts silence CAMERA only.
+// needs the floor). SIM_CONTROL's camera dropouts silence CAMERA only.
 
 #include <spdlog/spdlog.h>
 

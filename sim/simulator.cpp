@@ -93,7 +93,7 @@ Simulator::Simulator(const Scenario& scenario, const VehicleParams& vehicle, uin
   flow_camera_.rig = std::move(flow_camera);
   flow_camera_.rng.seed(substream(seed, 7));
   start_camera(flow_camera_);
-  // The camera effects' streams (issue 41): new ones, so the streams above stay as they were.
+  // The camera effects' streams: new ones, so the streams above stay as they were.
   camera_.fx_rng.seed(substream(seed, 8));
   flow_camera_.fx_rng.seed(substream(seed, 9));
   vibration_ = Vibration(scenario.vibration, substream(seed, 10));

@@ -9,7 +9,7 @@
 //   sim.step(cmd, sim.now_utime() + 10000);   // 10 ms under cmd
 //   for (const auto& m : sim.take_mocap()) ...;
 //   if (auto frame = sim.take_camera()) ...;
-//   if (auto frame = sim.take_flow_camera()) ...;   // with a flow_camera rig (issue 17)
+//   if (auto frame = sim.take_flow_camera()) ...;   // with a flow_camera rig
 
 #include <cstdint>
 #include <functional>
@@ -122,7 +122,7 @@ class Simulator {
   /// armed again only after a disarmed command.
   void advance_to(int64_t until_utime);
 
-  /// The vehicle flown by another simulator (an autopilot's SITL, issue 38): every physics step
+  /// The vehicle flown by another simulator (an autopilot's SITL): every physics step
   /// takes `state_at(t)` instead of integrating the dynamics, and contact (a point within
   /// `contact_margin_m` above a surface touches it: that simulator's ground is flat, its heights
   /// are its own), the outcome flags, motion capture, the rangefinder, the barometer and the

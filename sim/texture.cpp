@@ -139,7 +139,7 @@ cv::Mat checker_texture(const TextureSpec& s, std::mt19937_64& rng) {
 
 cv::Mat tiles_texture(const TextureSpec& s, std::mt19937_64& rng) {
   // A floor of square tiles of side feature_m, each one flat grey, with darker grout between:
-  // a surface whose only features are the tiles' edges and corners (issue 15's hard floor). The
+  // a surface whose only features are the tiles' edges and corners. The
   // tile side is rounded so a whole number of tiles fills the wrapping texture.
   const int n = s.size_px;
   const int tiles = std::max(1, static_cast<int>(std::lround(n * s.texel_m / s.feature_m)));

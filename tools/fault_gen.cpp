@@ -506,7 +506,7 @@ std::vector<Bytes> generate(Kind kind, const std::string& type_name, const Bytes
       Bytes b = good;
       put_int64(b, 8, 0);
       out.push_back(std::move(b));
-      position_setpoint_t sp;  // issue 14: a stamp-0 motors-off setpoint disarmed in the air
+      position_setpoint_t sp;  // a stamp-0 motors-off setpoint disarmed in the air
       if (type_name == "position_setpoint_t" && decode_message(sp, good.data(), good.size())) {
         sp.utime = 0;
         sp.motors = position_setpoint_t::MOTORS_OFF;

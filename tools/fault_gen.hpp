@@ -1,11 +1,11 @@
 #pragma once
-// Fault generators of the fault campaign (issue 14, scripts/faults): the bytes alight-inject
+// Fault generators of the fault campaign (scripts/faults): the bytes alight-inject
 // sends onto a live channel. Pure: no LCM handle, no clock (the base message and the present
 // time are passed in), randomness from a seeded engine, so a test can check that each hostile
 // message is what it claims to be (e.g. that a bad string length really sits where the decoder
 // reads it).
 //
-// Kinds, after what broke the stack on main (issue 14):
+// Kinds, each a way an unchecked input once broke a node:
 //  - garbage:     random bytes, with and without the channel's fingerprint in front (the last
 //                 one the message's length: a type without lengths decodes it, random values);
 //  - truncated:   a well-formed message of the channel's type cut short at several points;

@@ -1,5 +1,5 @@
 #pragma once
-// Outcome of one fault-campaign run (issue 14, scripts/faults) from its session log. Pure: fed
+// Outcome of one fault-campaign run (scripts/faults) from its session log. Pure: fed
 // decoded messages in log order with their receipt time (lcm-logger's wall-clock stamp);
 // alight-fault-score reads the file.
 //

@@ -13,7 +13,7 @@
 
 namespace {
 
-// decode_message() on main (75dfc60) dies of SIGSEGV on a string length of INT32_MIN (lcm-gen's
+// lcm-gen's decode_message() dies of SIGSEGV on a string length of INT32_MIN (lcm-gen's
 // `len - 1` wraps): the referee walks the strings of the types it reads itself first, so the log
 // of a campaign that injected exactly that can still be judged.
 bool strings_ok(const std::string& channel, const void* data, size_t size) {

@@ -1,4 +1,4 @@
-// alight-inject: the fault injector of the fault campaign (issue 14, scripts/faults). Waits for
+// alight-inject: the fault injector of the fault campaign (scripts/faults). Waits for
 // a mission phase (AUTONOMY_STATUS), then does one or more of:
 //   --fault KIND:CHANNELS  hostile messages (tools/fault_gen.hpp: garbage, truncated,
 //                          bad_lengths, nan, inf, future, zero_stamp; `all` for every kind) on

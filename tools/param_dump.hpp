@@ -1,6 +1,6 @@
 #pragma once
 // Every parameter of a configuration file, read by the components' own loaders and printed from
-// their declarations (common/param_schema.hpp): alight-params and its tests (issue 18).
+// their declarations (common/param_schema.hpp): alight-params and its tests.
 
 #include <functional>
 #include <string>

@@ -1,5 +1,5 @@
 // alight-params: every parameter of a configuration file as the nodes read it, with its meaning,
-// constraint and unit, from the one declaration of each parameter (issue 18).
+// constraint and unit, from the one declaration of each parameter.
 //
 //   alight-params --dump config/vehicles/pelican.yaml              # values in effect
 //   alight-params --dump config/scenarios/ingress.yaml --kind scenario

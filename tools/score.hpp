@@ -8,7 +8,7 @@
 // message's receipt time in the log (lcm-logger's wall-clock stamp), the scorer also measures
 // the camera -> VISION_TARGET latency and the frame and waypoint rates. All of it is wall-clock
 // time, whatever real-time factor the simulator ran at. When the log has VISION_TIMING
-// (vision_timing_t, issue 15), the vision's own account comes apart: processing time
+// (vision_timing_t), the vision's own account comes apart: processing time
 // (Pipeline::process), the wait before it (queue and pose), the end-to-end latency from exposure
 // to the logger's receipt of the VISION_TARGET, and the frames it received, dropped and
 // processed.
@@ -19,7 +19,7 @@
 // mission fails with outcome `crashed`. max_touchdown_speed_mps is the fastest sink rate of any
 // touch-down in the log.
 //
-// A moving platform (issue 40; the log has SIM_PLATFORM, platform_truth_t, with each SIM_TRUTH):
+// A moving platform (the log has SIM_PLATFORM, platform_truth_t, with each SIM_TRUTH):
 // a touch-down on it is judged by the sink rate relative to its deck (the deck's velocity at the
 // vehicle, along the deck's normal), the lateral error against the platform where it is at that
 // sample, and the heading against its long axis. A log without SIM_PLATFORM (a platform standing

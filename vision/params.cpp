@@ -307,24 +307,20 @@ const ParamSchema<LandingParams>& LandingParams::schema() {
           "hold_reference: a tracked reference at least this far from the current camera is "
           "used as the paper has it (and becomes the held one). At max_reference_baseline_m "
           "(0.3) the held reference is used whenever it is the farther one: the measured "
-          "setting. 0.15 (a 10 cm top at 1.6 m moves 4.5 px against the floor) was flown on the "
-          "five draws that lost the target on main: landing_photo 9000 (a 9 cm top) was lost "
-          "again and 8001 still, landing_tiles 8014 needed a retry");
+          "setting; at 0.15 (a 10 cm top at 1.6 m moves 4.5 px against the floor) small tops were "
+          "lost more often");
     // Finite and bounded, as tracker.max_reference_age_s.
     s.add("hold_max_age_s", &P::hold_max_age_s, Range::open_closed(0, 600), "s",
           "a held reference older than this is dropped. Longer than tracker.max_reference_age_s: "
           "the held one must still match min_tracked features directly, which is the check "
-          "that it shows the same scene, and an approach held by gusts hovered 10 s with the "
-          "target in view (landing_lowtex seed 8002), then lost it when a 10 s bound dropped "
-          "the reference");
+          "that it shows the same scene; an approach held by gusts can hover 10 s and more with "
+          "the target in view");
     s.add("top_end_search_m", &P::top_end_search_m, Range::closed(0, 0.2), "m",
           "a side without a rim step is searched outward this far in the top's plane for the "
           "top's end: a straight line where the top's homography stops explaining the two "
           "images and a textured floor, which the floor's homography explains, begins (0: off). "
-          "A text-printed top whose print stops short of its edges, on a patterned floor as "
-          "pale on average, measured 19.0 cm for 20.1 and was refused (landing_photo 10416); an "
-          "apple photograph that leaves a third of its top bare put the centre 2.2 cm off "
-          "(landing_photo 10406)");
+          "For tops whose print stops short of their edges, or leaves part of the top bare, on a "
+          "floor as pale on average: there the rim search finds no step");
     s.add("top_end_min_diff", &P::top_end_min_diff, Range::gt(0), "grey levels",
           "top_end_search_m: a pixel the top's homography does not explain differs between the "
           "images by this much at least (and by twice the 90th percentile of the top's own "
@@ -339,7 +335,7 @@ const ParamSchema<LandingParams>& LandingParams::schema() {
           "rate, the camera's exposure time and the floor's plane) is neither measured nor "
           "taken as a reference (REASON_MOTION_BLUR). The turns of the search path smear the "
           "floor several times as far as the frames a platform is found in, and the matches of "
-          "such frames made false tops over bare photographed floors (README, issue 15). 0: off");
+          "such frames can make false tops over bare photographed floors. 0: off");
     s.add("assumed_exposure_s", &P::assumed_exposure_s, Range::open_closed(0, 1), "s",
           "max_motion_blur_px: the exposure time of a frame that does not carry its own (no "
           "exposure_us metadata: a camera on automatic exposure); the longest a camera indoors "
@@ -356,9 +352,8 @@ const ParamSchema<IngressParams>& IngressParams::schema() {
     s.add("max_ray_gap_px", &P::max_ray_gap_px, Range::ge(0), "px",
           "a match whose two rays (motion capture's poses) pass farther apart than this, seen "
           "from the current camera, is a mismatch: it has no 3-D point, so it counts in neither "
-          "the planes' depths nor the behind checks (issue 15, ingress_photo seed 3000: a "
-          "repeated room texture matched 60-560 px off its epipolar line and triangulated in "
-          "front of the wall). 0: no check");
+          "the planes' depths nor the behind checks (a repeated room texture can match far off "
+          "its epipolar line and triangulate in front of the wall). 0: no check");
     s.add("parallax_mask", &P::parallax_mask, Range::any(), "",
           "beyond the paper: Canny and Hough run on the off-wall mask (the reference image "
           "warped by the wall homography disagrees with the current one wherever the view passes "
@@ -367,8 +362,8 @@ const ParamSchema<IngressParams>& IngressParams::schema() {
           "false: the paper's edges");
     s.add("parallax_decimation", &P::parallax_decimation, Range::closed(1, 4), "",
           "the mask is made on a grid this many times coarser and scaled back up (1: full "
-          "size; 2 costs a quarter of the warp, blurs and morphology, but on ingress_photo "
-          "widened the width and height errors' tails: issue 15)");
+          "size; 2 costs a quarter of the warp, blurs and morphology, but widens the "
+          "opening's width and height errors' tails)");
     s.add("parallax_blur_sigma_px", &P::parallax_blur_sigma_px, Range::closed(0, 10), "px",
           "smoothing of both images before the difference");
     s.add("parallax_min_diff", &P::parallax_min_diff, Range::open(0, 255), "grey levels",

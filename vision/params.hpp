@@ -190,13 +190,13 @@ struct PipelineParams {
   /// The landing mission's detector (the downward camera). Features spread over an 8 x 6 grid,
   /// 900 in all: the floor keeps enough for its homography when the platform top (richer texture)
   /// fills part of the view, and a top smoother than the floor keeps its share of a cell it shares
-  /// with the floor (star_detector.hpp; issue 15: with 4 x 3 and 600 a photographed top over a
+  /// with the floor (star_detector.hpp: with 4 x 3 and 600 a photographed top over a
   /// printed circuit board kept 4-11 matches). The tops it made of frames smeared at the search
   /// path's turns are refused by landing.max_motion_blur_px.
   StarParams star = star_budget(8, 6, 900);
   /// The ingress mission's detector (the forward camera): a 4 x 3 grid of 600. The wall needs
-  /// no share kept for a smoother surface in front of it, and the finer budget widened the
-  /// opening's width error on ingress_photo (README, issue 15).
+  /// no share kept for a smoother surface in front of it, and the finer budget widens the
+  /// opening's width error on photographed walls.
   StarParams ingress_star = star_budget(4, 3, 600);
   SurfParams surf{};
   TrackerParams tracker{};

@@ -1,4 +1,4 @@
-// Scene families, Monte Carlo in process (issue 15): for each family (scripts/scene_families.py)
+// Scene families, Monte Carlo in process: for each family (scripts/scene_families.py)
 // N scenes freshly drawn (scripts/scenes, seed0 .. seed0 + N - 1; seed0 random unless given, and
 // printed so a run can be redone), each flown with the real vision pipeline in the tests' closed
 // loop (test/autonomy/closed_loop.hpp: simulator, outer loop, autonomy; motion capture, or the

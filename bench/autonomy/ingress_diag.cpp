@@ -1,4 +1,4 @@
-// Ingress diagnostics (issue 15): one scene flown in process with the real vision, every frame's
+// Ingress diagnostics: one scene flown in process with the real vision, every frame's
 // outcome printed against the simulator's truth: reason, the opening's box in the image against
 // the true opening's front-face box projected with the true camera pose, width / height and the
 // centre's error, and autonomy's phase. With --dump DIR the frames (and the truth box) are

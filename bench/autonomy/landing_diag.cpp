@@ -1,4 +1,4 @@
-// Landing diagnostics (issue 15): one scene flown in process with the real vision, every frame's
+// Landing diagnostics: one scene flown in process with the real vision, every frame's
 // outcome printed against the simulator's truth: reason, the platform's inliers and the floor's,
 // how much of the true platform top is in the image, and when found the waypoint's error, the
 // measured extent (long, short) minus the true size and the height error; autonomy's phase and

@@ -1,4 +1,4 @@
-// CPU cost of the onboard estimator (issue 17), Google Benchmark:
+// CPU cost of the onboard estimator, Google Benchmark:
 //  - ImuSample: one add_imu in steady state (propagation of the 17-dim error state, checkpoint,
 //    pruning of the 0.5 s history), no measurement in the interval;
 //  - FlowFuse: the flow update alone (model, Jacobians, gate, Kalman update with one clone);

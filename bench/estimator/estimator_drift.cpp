@@ -1,4 +1,4 @@
-// Drift of the onboard estimator (issue 17) on synthetic flights with IMU + rangefinder + baro +
+// Drift of the onboard estimator on synthetic flights with IMU + rangefinder + baro +
 // flow at the default noise (estimator/params.hpp; flow sigma 0.003 + the 0.002 floor per axis of
 // t/d, delays 20 / 30 / 50 ms): a 60 s hover at 1.5 m, and a 10 m square at 1 m/s (1 s ramps, a
 // second's pause at each corner) back to its start. For each seed: the final error of the

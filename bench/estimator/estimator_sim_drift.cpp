@@ -1,4 +1,4 @@
-// Drift of the onboard estimator flying the simulator on its own estimate (issue 17): the
+// Drift of the onboard estimator flying the simulator on its own estimate: the
 // simulator (config/scenarios/estimator_drift.yaml: textured floor, no motion capture), the
 // outer loop fed the estimate's pose (ESTIMATE_POSE) and position setpoints, and the estimator as
 // alight-estimator runs it (test/estimator/sim_onboard.hpp: the vehicle file's parameters, the

@@ -1,4 +1,4 @@
-// Landing and ingress without motion capture, Monte Carlo (issue 17): for each scenario, N
+// Landing and ingress without motion capture, Monte Carlo: for each scenario, N
 // seeded missions flown in process on the onboard estimate (test/autonomy/closed_loop.hpp with
 // onboard_estimate: the simulator's IMU, rangefinder, barometer and downward frames through
 // alight-estimator's work, real vision on the mission's camera; no motion capture; the truth

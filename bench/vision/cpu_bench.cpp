@@ -1,4 +1,4 @@
-// The vision's CPU time per frame, apart from the machine's load (issue 15, "keep up with the
+// The vision's CPU time per frame, apart from the machine's load ("keep up with the
 // camera"): for each scene (a family draw of scripts/scenes, or a scenario file) the flight of
 // bench/vision/soak (soak_flight.hpp: a closed figure-eight in front of the wall's opening or
 // over the platform, 60 Hz) is rendered once, and Pipeline::process runs on its frames in this

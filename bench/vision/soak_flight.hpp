@@ -1,5 +1,5 @@
 #pragma once
-// The rendered flight of bench/vision/soak (issue 15): the vehicle flown by the outer loop's
+// The rendered flight of bench/vision/soak: the vehicle flown by the outer loop's
 // position controller along a closed figure-eight in front of the target (over the platform, or
 // facing the wall and its opening), one period of its frames and motion-capture poses kept.
 // Shared by alight-vision-soak-source (publishes them over LCM) and alight_vision_cpu_bench

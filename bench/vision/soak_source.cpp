@@ -1,4 +1,4 @@
-// alight-vision-soak-source: the camera and motion capture of bench/vision/soak (issue 15, "keep
+// alight-vision-soak-source: the camera and motion capture of bench/vision/soak ("keep
 // up with the camera"): CAMERA at a fixed rate (60 Hz by default) and MOCAP_POSE, for as long as
 // asked, paced on the steady clock and stamped on the wall clock like a real camera and room.
 //

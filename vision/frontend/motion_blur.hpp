@@ -1,5 +1,5 @@
 #pragma once
-// How far the floor's image moves during one exposure (beyond the paper, issue 15). A feature in a
+// How far the floor's image moves during one exposure (beyond the paper). A feature in a
 // frame exposed while the camera turns or moves is the image smeared along that motion: its
 // detector response and descriptor change, and its position is the smear's centre, which can
 // differ from the mid-exposure projection by a pixel or more. At the search path's turns, frames

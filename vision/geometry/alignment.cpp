@@ -73,8 +73,7 @@ struct Joint {
   /// IRLS: Cauchy weights from each set's residuals (each plane its own scale), as in the final
   /// refinement of each homography (homography.cpp): a feature on the platform's edge or a near
   /// miss inside the RANSAC threshold must not pull the shared motion. With plain least squares
-  /// the joint R21 came out worse than either plane's own (rendered seed 6: 0.19 deg against
-  /// 0.05 deg each). The prior keeps weight 1.
+  /// the joint R21 can come out worse than either plane's own. The prior keeps weight 1.
   void weights(const Eigen::VectorXd& r, Eigen::VectorXd& w) const {
     w.setOnes(r.size());
     auto set_weights = [&](size_t at, size_t n) {

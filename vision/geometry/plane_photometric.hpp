@@ -1,5 +1,5 @@
 #pragma once
-// Dense photometric check of a platform top (issue 15, false tops over a bare floor): where,
+// Dense photometric check of a platform top (false tops over a bare floor): where,
 // between the floor's plane and the top's, the current image's pixels inside the top's hull are
 // explained by the reference image. Plane plus parallax (Irani & Anandan, "Parallax geometry of
 // pairs of points for 3D scene analysis", ECCV 1996; Sawhney, "3D geometry from planar parallax",

@@ -1,7 +1,7 @@
 #pragma once
 // Plane-induced parallax as an image (Irani & Anandan, ECCV 1996): the absolute difference
 // between the current image and the reference image warped into it by a homography, in one pass
-// and without the warped image (issue 15: cv::warpPerspective of the reference, and of a second
+// and without the warped image (cv::warpPerspective of the reference, and of a second
 // image only to learn which pixels the reference saw, were a fifth of the vision's time on a
 // photographed wall).
 //

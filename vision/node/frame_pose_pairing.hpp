@@ -6,7 +6,7 @@
 // The policy alight-vision runs, as a pure class so the in-process closed loop
 // (test/autonomy/closed_loop.cpp) runs the same one and tests can drive it: no LCM, no clock.
 // Every frame is processed, in the order it arrived, and what becomes of it depends only on the
-// sequence of frames and poses offered (issue 15: a replay through lcm-logplayer gives the same
+// sequence of frames and poses offered (a replay through lcm-logplayer gives the same
 // output on a loaded machine as live; an earlier policy let a newer frame displace one still
 // waiting for its pose and timed the wait on the wall clock, so how busy the machine was decided
 // which frames were processed):

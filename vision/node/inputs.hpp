@@ -1,5 +1,5 @@
 #pragma once
-// The alight-vision node's input boundary (issue 14), as functions the node calls and tests can
+// The alight-vision node's input boundary, as functions the node calls and tests can
 // drive with their own stamp judge and clock. Every input is untrusted: a refused message is
 // counted through the node's callbacks (NODE_STATUS rejected_values / rejected_stamps) and
 // never reaches the pose buffer or the pipeline; nothing here throws.

@@ -9,7 +9,7 @@
 // published is stamped with the frame's exposure time, so the output is a function of the
 // message sequence alone: a replayed log gives the same bytes however busy the machine is.
 //
-// Keeping up with the camera (issue 15): CAMERA messages wait undecoded in the node's queue
+// Keeping up with the camera: CAMERA messages wait undecoded in the node's queue
 // (Node::on, at most vision.camera_queue_frames; more are dropped and counted), then decoded
 // frames wait in the pairing for their pose (at most 64, FramePosePairing's bound; a frame
 // beyond it is processed without a pose, never dropped). The first queue fills only when
@@ -26,7 +26,7 @@
 // the one choice that depends on the machine; scripts/replay-vision replays the frames the live
 // vision processed (those with a VISION_TARGET in the log), so a replay makes the same choice.
 //
-// Input boundary (issue 14, vision/node/inputs.hpp): a pose with a non-finite value or a non-unit
+// Input boundary (vision/node/inputs.hpp): a pose with a non-finite value or a non-unit
 // quaternion is refused, and so is any message whose stamp the node's StampGuard refuses (a
 // pose an hour ahead used to push every later pose out of the buffer); a frame that does not
 // decode safely is reported as REASON_BAD_IMAGE. An exception out of one frame's work (OpenCV,
@@ -89,7 +89,7 @@ int main(int argc, char** argv) {
 
     // One frame at a time on this thread: OpenCV's worker threads (TBB) would only add their
     // hand-offs and spinning to a 640x480 frame's work and compete with the camera and the
-    // other nodes for the cores (issue 15), and it leaves process_cpu_us the whole of a frame's
+    // other nodes for the cores, and it leaves process_cpu_us the whole of a frame's
     // CPU time. Pixel results do not depend on the thread count.
     cv::setNumThreads(1);
     const Mission mission = mission_from_string(mission_name);
