@@ -7,12 +7,15 @@
 #include <gtest/gtest.h>
 
 #include "closed_loop.hpp"
+#include "common/build_paths.hpp"
 #include "real_vision.hpp"
 
 namespace alight::autonomy::test {
 namespace {
 
-std::string path(const std::string& rel) { return std::string(ALIGHT_SOURCE_DIR) + "/" + rel; }
+std::string path(const std::string& rel) {
+  return std::string(alight::build::source_dir()) + "/" + rel;
+}
 
 struct Case {
   std::string scenario;  ///< config/scenarios/NAME.yaml, or test/integration/scenarios/NAME.yaml

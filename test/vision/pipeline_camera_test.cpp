@@ -10,6 +10,7 @@
 #include <optional>
 #include <vector>
 
+#include "common/build_paths.hpp"
 #include "sim/params.hpp"
 #include "sim/renderer.hpp"
 #include "sim/scene.hpp"
@@ -33,7 +34,7 @@ struct Views {
 };
 
 Views landing_a() {
-  const std::string root = ALIGHT_SOURCE_DIR;
+  const std::string root = alight::build::source_dir();
   Views v{sim::build_scene(sim::load_scenario(root + "/config/scenarios/landing_a.yaml"), 3),
           sim::load_camera_rig(root + "/config/vehicles/starmac.yaml", "downward"),
           {}};
@@ -134,7 +135,9 @@ TEST(PipelineCameraTest, RollingShutterFramesAreCorrectedToRowZero) {
   EXPECT_NEAR(r.target.height_m, v.scene.platform->size_m.z(), 0.015);
   // The correction is what brings it there: the same frames taken for a global shutter's put
   // the platform several times farther off.
-  if (u.found()) EXPECT_LT((r.target.p_W - v.top).norm(), 0.5 * (u.target.p_W - v.top).norm());
+  if (u.found()) {
+    EXPECT_LT((r.target.p_W - v.top).norm(), 0.5 * (u.target.p_W - v.top).norm());
+  }
 }
 
 TEST(PipelineCameraTest, TheDriversRepeatIsRefusedAndTheTracksLiveOn) {
