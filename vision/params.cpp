@@ -297,18 +297,13 @@ const ParamSchema<LandingParams>& LandingParams::schema() {
           "around its features (fewer: none). A false top that covers most of the view leaves "
           "one or two of the floor's features clear of it");
     s.add("hold_reference", &P::hold_reference, Range::any(), "",
-          "beyond the paper: while the tracked reference is closer than hold_baseline_m (the "
+          "beyond the paper: while the tracked reference is closer than max_reference_baseline_m "
+          "(the "
           "camera hovers), keep the previous frame's reference when it is farther from the "
           "camera (within max_reference_baseline_m and hold_max_age_s) and still matches "
           "tracker.min_tracked features: continuous tracks die within 1-2 s of hovering (or "
           "max_history frames pass), and the tracked reference's baseline then shrinks until the "
           "top's parallax is lost");
-    s.add("hold_baseline_m", &P::hold_baseline_m, Range::gt(0), "m",
-          "hold_reference: a tracked reference at least this far from the current camera is "
-          "used as the paper has it (and becomes the held one). At max_reference_baseline_m "
-          "(0.3) the held reference is used whenever it is the farther one: the measured "
-          "setting; at 0.15 (a 10 cm top at 1.6 m moves 4.5 px against the floor) small tops were "
-          "lost more often");
     // Finite and bounded, as tracker.max_reference_age_s.
     s.add("hold_max_age_s", &P::hold_max_age_s, Range::open_closed(0, 600), "s",
           "a held reference older than this is dropped. Longer than tracker.max_reference_age_s: "
@@ -321,14 +316,6 @@ const ParamSchema<LandingParams>& LandingParams::schema() {
           "images and a textured floor, which the floor's homography explains, begins (0: off). "
           "For tops whose print stops short of their edges, or leaves part of the top bare, on a "
           "floor as pale on average: there the rim search finds no step");
-    s.add("top_end_min_diff", &P::top_end_min_diff, Range::gt(0), "grey levels",
-          "top_end_search_m: a pixel the top's homography does not explain differs between the "
-          "images by this much at least (and by twice the 90th percentile of the top's own "
-          "differences just inside the side)");
-    s.add("top_end_min_rise", &P::top_end_min_rise, Range::open_closed(0, 1), "",
-          "top_end_search_m: at the top's end, the share of pixels its homography does not "
-          "explain rises by this much at least (from the top's few to the floor's many), in "
-          "five of six stretches of the side and along the whole side");
     s.add("max_motion_blur_px", &P::max_motion_blur_px, Range::ge(0), "px",
           "beyond the paper (motion_blur.hpp): a frame whose exposure smeared the floor's image "
           "farther than this anywhere in the view (from motion capture's velocity and angular "

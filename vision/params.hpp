@@ -131,12 +131,9 @@ struct LandingParams {
   double photometric_max_floor_spread = 0.5;
   int photometric_min_patches = 1;
   bool hold_reference = true;  ///< keep a longer-baseline reference while hovering (pipeline.hpp)
-  double hold_baseline_m = 0.3;
   double hold_max_age_s = 30.0;
   // Beyond the paper: a side without a rim out to the top's end (rim.hpp).
   double top_end_search_m = 0.1;
-  double top_end_min_diff = 12.0;
-  double top_end_min_rise = 0.4;
   // Beyond the paper: frames smeared by the camera's motion are not used (motion_blur.hpp).
   double max_motion_blur_px = 8.0;
   double assumed_exposure_s = 0.01;

@@ -14,15 +14,15 @@
 // zero. The platform top's parallax over the floor, f b (1/Z_top - 1/Z_floor), then falls under
 // the 2 x threshold that tells it from the floor (4 px: b ~ 9 cm for a 15 cm top at 1.5 m, 15 cm
 // for a 9 cm top), and the target is lost although it has not moved. So while the tracked
-// reference is closer than landing.hold_baseline_m, the previous frame's reference is held when
+// reference is closer than max_reference_baseline_m, the previous frame's reference is held when
 // it is farther from the current camera, no farther than max_reference_baseline_m, younger than
 // landing.hold_max_age_s, and still matches N features directly (the overlap the paper's tracking
 // rule asks for): the longer baseline still in view, which is what the paper's rule aims at. A
-// tracked reference at hold_baseline_m or more is used as the paper has it (and becomes the held
-// one). The held reference is a function of the frames and poses received, as the tracker is; a
-// gap or jump in the frames' times drops it. A reset of the tracker for broken tracks (a changed
-// view, a frame of few features) does not: over a pale floor the tracks break every 1-2 s while
-// the held frame still matches, and where the tracker has no reference at all the held one
+// tracked reference at max_reference_baseline_m or more is used as the paper has it (and becomes
+// the held one). The held reference is a function of the frames and poses received, as the tracker
+// is; a gap or jump in the frames' times drops it. A reset of the tracker for broken tracks (a
+// changed view, a frame of few features) does not: over a pale floor the tracks break every 1-2 s
+// while the held frame still matches, and where the tracker has no reference at all the held one
 // serves alone (without it, a refinement over a pale floor loses the top at every retry).
 //
 // Beyond the paper (landing.max_motion_blur_px): a frame exposed while the floor's image

@@ -230,6 +230,14 @@ std::optional<Rim> rim_offset(const Correspondences& c, const cv::Mat& gray_1,
 // pixels either side; kEndMaxLines lines at most, kEndStretches stretches for the turn.
 constexpr int kEndInside = 4, kEndBeyond = 30, kEndParts = 3, kEndWindow = 3;
 constexpr int kEndMaxLines = 36, kEndStretches = 6;
+// A pixel the top's homography does not explain differs by this many grey levels at least:
+// several times the sensor's noise (1-5 levels) and the resampling's error on a sharp texture,
+// under the contrast of any texture a floor's features come from.
+constexpr double kTopEndMinDiff = 12.0;
+// At the top's end the share of such pixels steps up by this much at least: from the top's few
+// (near 0 where its plane holds) to a busy floor's many (most pixels), so under half that step
+// and above the share a smooth floor band leaves.
+constexpr double kTopEndMinRise = 0.4;
 
 // The grid read beside a side at offsets j (pixels past the side) in [j_lo, j_hi), the images'
 // gain ratio and the threshold tau above which a pixel's difference between the views, read at
@@ -255,7 +263,7 @@ struct EndSearch {
 // The search's grid and its calibration: the images' gains differ (automatic gain, flicker), so
 // the inside strip's ratio evens them; the threshold lies above the top's own disagreement in
 // that strip (noise, blur, the plane's error across its texture): twice its 90th percentile,
-// and top_end_min_diff. nullopt where too little of the strip is seen.
+// and kTopEndMinDiff. nullopt where too little of the strip is seen.
 std::optional<EndSearch> end_search(const Correspondences& c, const cv::Mat& gray_1,
                                     const cv::Mat& gray_2, const Matrix3d& H_12_top,
                                     const Isometry3d& X_WC2, const Side& side, double px_m,
@@ -284,7 +292,7 @@ std::optional<EndSearch> end_search(const Correspondences& c, const cv::Mat& gra
   for (const auto at : inside) e_inside.push_back(s.e_top(at));
   const auto q90 = e_inside.begin() + static_cast<std::ptrdiff_t>(0.9 * (e_inside.size() - 1));
   std::nth_element(e_inside.begin(), q90, e_inside.end());
-  s.tau = std::max(p.top_end_min_diff, 2.0 * *q90);
+  s.tau = std::max(kTopEndMinDiff, 2.0 * *q90);
   return s;
 }
 
@@ -347,7 +355,7 @@ std::optional<double> end_slope(const EndSearch& s, const Side& side, double px_
   for (int k = 0; k < kEndStretches; ++k) {
     const int i0 = k * n_t / kEndStretches, i1 = (k + 1) * n_t / kEndStretches;
     const auto e = step_up(s, share_off_top(s, side, 0.0, i0, i1));
-    if (e && e->y() >= p.top_end_min_rise)
+    if (e && e->y() >= kTopEndMinRise)
       at_stretch.emplace_back(side.t_lo + 0.5 * (i0 + i1 - 1) * s.grid.t_step_m - s.grid.t_mid,
                               e->x());
   }
@@ -384,7 +392,7 @@ bool off_top_beyond(const EndSearch& s, const std::vector<double>& f, const Eige
     double share = 0;
     for (int j = 0; j < kEndBeyond / kEndParts; ++j)
       share += f_at(j_end + 1 + part * kEndBeyond / kEndParts + j);
-    if (share / (kEndBeyond / kEndParts) - inside_share < p.top_end_min_rise) return false;
+    if (share / (kEndBeyond / kEndParts) - inside_share < kTopEndMinRise) return false;
   }
   return true;
 }
@@ -426,7 +434,7 @@ std::optional<Rim> top_end_offset(const Correspondences& c, const cv::Mat& gray_
   if (!slope) return std::nullopt;
   const std::vector<double> f = share_off_top(*s, side, *slope, 0, s->grid.n_t);
   const auto e = step_up(*s, f);
-  if (!e || e->y() < p.top_end_min_rise) return std::nullopt;
+  if (!e || e->y() < kTopEndMinRise) return std::nullopt;
   if (!off_top_beyond(*s, f, *e, p) ||
       !floor_beyond(c, gray_1, *s, side, H_12_floor, static_cast<int>(std::lround(e->x())), *slope))
     return std::nullopt;

@@ -28,9 +28,9 @@
 // A side without a rim step is then searched outward (top_end_search_m) for where the top's
 // homography stops explaining the two images: at each offset, the share of the pixels whose
 // grey differs between the views, read at the same point of the top's plane, by more than a
-// threshold (top_end_min_diff, and twice the top's own differences just inside the side). On
+// threshold (kTopEndMinDiff, and twice the top's own differences just inside the side). On
 // the top that share is near zero, whatever its texture; on a textured floor, which lies off the
-// top's plane, it is large. The end is where it steps up (by top_end_min_rise) in most stretches
+// top's plane, it is large. The end is where it steps up (by kTopEndMinRise) in most stretches
 // of the side along one straight line, the line's turn read as the rim's. Where the floor beyond
 // is flat, the top's homography explains it too and the step lies wherever the floor's texture
 // begins: an upper bound, not the rim. So an end counts only where the share stays up over the
