@@ -159,6 +159,8 @@ const char* target_reason_name(int8_t reason) {
       return "duplicated frame";
     case target_t::REASON_FRAME_GAP:
       return "frames missing (gap)";
+    case target_t::REASON_TOP_PARALLAX_GAP:
+      return "top near the epipole (parallax gap)";
   }
   return "unknown";
 }

@@ -62,6 +62,14 @@ constexpr double kFrameOffsetMaxSpeedMps = 0.1;
 constexpr int64_t kFrameOffsetMocapAgeUs = 50'000;
 constexpr double kFrameOffsetTauS = 2.0;
 constexpr double kFrameOffsetReportM = 0.05;
+/// In the air the offset is followed more slowly (the two poses' residual timing error averages
+/// out over a few of the hover's oscillations; PX4 SIH's EKF2 heights drifted 2 to 5 cm from
+/// motion capture's over tens of seconds after take-off), and never further than this from the
+/// offset last measured on the ground (a glitch of either pose cannot move the setpoints far).
+constexpr double kFrameOffsetAirTauS = 4.0;
+constexpr double kFrameOffsetAirBoundM = 0.1;
+/// Motion capture is moved to the local position's stamp by its velocity over at most this.
+constexpr double kFrameOffsetMaxShiftS = 0.1;
 /// PX4 counts as ready this long after its local position appeared.
 constexpr int64_t kPx4ReadyUs = 2'000'000;
 /// SCALED_IMU's units.
@@ -135,6 +143,7 @@ void Bridge::reset_autopilot_state() {
   local_position_.reset();
   ext_state_.reset();
   frame_offset_NED_.reset();
+  ground_offset_NED_.reset();
   local_position_since_us_.reset();
   pending_.reset();
   await_heartbeat_ = false;
@@ -354,16 +363,35 @@ void Bridge::handle_frame(const Frame& f, const BridgeClock& now, BridgeOutput& 
 }
 
 void Bridge::update_frame_offset(const BridgeClock& now, BridgeOutput& out) {
-  // Only at rest on the ground: the two positions are not sampled at the same instant, and in
-  // the air the motion's lag reads as an offset (it wandered by 5 cm in SITL).
-  const bool on_ground = !heartbeat_ || !(heartbeat_->base_mode & mav_mode_flag::kSafetyArmed) ||
-                         landed_state(now) == mav_landed_state::kOnGround;
-  if (!params_.align_frames || !local_position_ || !mocap_ || !on_ground ||
+  if (!params_.align_frames || !local_position_ || !mocap_ ||
       now.steady_us - mocap_rx_steady_us_ > kFrameOffsetMocapAgeUs)
     return;
+  const bool on_ground = !heartbeat_ || !(heartbeat_->base_mode & mav_mode_flag::kSafetyArmed) ||
+                         landed_state(now) == mav_landed_state::kOnGround;
   const LocalPositionNed& lp = *local_position_;
-  if (Vector3d(lp.vx, lp.vy, lp.vz).norm() > kFrameOffsetMaxSpeedMps) return;
-  const Vector3d sample = Vector3d(lp.x, lp.y, lp.z) - ned_from_enu(mocap_->p_W_B);
+  const Vector3d p_lp(lp.x, lp.y, lp.z);
+  if (on_ground) {
+    // At rest the two poses agree whenever they were sampled.
+    if (Vector3d(lp.vx, lp.vy, lp.vz).norm() > kFrameOffsetMaxSpeedMps) return;
+    const Vector3d sample = p_lp - ned_from_enu(mocap_->p_W_B);
+    follow_frame_offset(sample, kFrameOffsetTauS, now, out);
+    ground_offset_NED_ = frame_offset_NED_;
+    return;
+  }
+  // In the air: both at the local position's instant, and only about an offset measured at rest.
+  if (!ground_offset_NED_) return;
+  const auto stamp = wall_stamp(uint64_t{lp.time_boot_ms} * 1000, now);
+  if (!stamp) return;
+  const double shift_s =
+      std::clamp((*stamp - mocap_->utime) * 1e-6, -kFrameOffsetMaxShiftS, kFrameOffsetMaxShiftS);
+  const Vector3d mocap_NED = ned_from_enu(mocap_->p_W_B + mocap_->v_W_B * shift_s);
+  Vector3d drift = p_lp - mocap_NED - *ground_offset_NED_;
+  if (drift.norm() > kFrameOffsetAirBoundM) drift *= kFrameOffsetAirBoundM / drift.norm();
+  follow_frame_offset(*ground_offset_NED_ + drift, kFrameOffsetAirTauS, now, out);
+}
+
+void Bridge::follow_frame_offset(const Vector3d& sample, double tau_s, const BridgeClock& now,
+                                 BridgeOutput& out) {
   if (!frame_offset_NED_) {
     frame_offset_NED_ = sample;
     reported_offset_NED_ = sample;
@@ -372,7 +400,7 @@ void Bridge::update_frame_offset(const BridgeClock& now, BridgeOutput& out) {
                     vector_text(sample) + " m: position setpoints carry it"});
   } else {
     const double dt = std::max(0.0, (now.steady_us - frame_offset_steady_us_) * 1e-6);
-    *frame_offset_NED_ += std::min(1.0, dt / kFrameOffsetTauS) * (sample - *frame_offset_NED_);
+    *frame_offset_NED_ += std::min(1.0, dt / tau_s) * (sample - *frame_offset_NED_);
     if ((*frame_offset_NED_ - reported_offset_NED_).norm() > kFrameOffsetReportM) {
       reported_offset_NED_ = *frame_offset_NED_;
       out.events.push_back({true, "the autopilot's local frame moved: now offset by " +

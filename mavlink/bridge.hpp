@@ -54,7 +54,9 @@
 //  - Frames: position setpoints go out in the autopilot's local frame, which need not be motion
 //    capture's (ArduCopter SITL's EKF3 read 0.2 m above it): with align_frames the bridge
 //    measures the offset (LOCAL_POSITION_NED minus motion capture, at rest on the ground) and
-//    adds it.
+//    adds it. In the air it keeps following it slowly (the estimate drifts from motion capture:
+//    PX4 SIH's EKF2 by 2 to 5 cm in height after take-off), both poses taken at the same instant,
+//    within kFrameOffsetAirBoundM of the offset measured at rest.
 //  - Parameters: at link-up the bridge reads the autopilot parameters its behaviour relies on
 //    (autopilot_params.hpp) and reports each one that is missing or set otherwise.
 //
@@ -254,6 +256,8 @@ class Bridge {
               BridgeOutput& out);
   void on_param(const ParamValue& m, BridgeOutput& out);
   void update_frame_offset(const BridgeClock& now, BridgeOutput& out);
+  void follow_frame_offset(const Vector3d& sample, double tau_s, const BridgeClock& now,
+                           BridgeOutput& out);
   void set_prearm(bool ok, BridgeOutput& out);
   std::optional<int64_t> wall_stamp(uint64_t autopilot_us, const BridgeClock& now);
   void reset_autopilot_state();
@@ -307,7 +311,8 @@ class Bridge {
   int64_t local_position_steady_us_ = 0;
   std::optional<int64_t> local_position_since_us_;
   std::optional<ExtendedSysState> ext_state_;
-  std::optional<Vector3d> frame_offset_NED_;  // autopilot's local position - motion capture's
+  std::optional<Vector3d> frame_offset_NED_;   // autopilot's local position - motion capture's
+  std::optional<Vector3d> ground_offset_NED_;  // ... as last measured at rest on the ground
   Vector3d reported_offset_NED_ = Vector3d::Zero();
   int64_t frame_offset_steady_us_ = 0;
   int64_t ext_state_steady_us_ = 0;

@@ -29,6 +29,13 @@ const char* mode_name(Mode mode) {
 
 namespace {
 constexpr double kDegToRad = M_PI / 180.0;
+/// Risen this far above the height it rested at since arming, the vehicle flies: well above
+/// motion capture's noise (sub-millimetre) and a landing gear's settling, well below a take-off's
+/// first second.
+constexpr double kLiftOffM = 0.05;
+/// Moving vertically faster than this, the vehicle is not held by the ground either (motion
+/// capture's velocity noise is millimetres per second).
+constexpr double kAirborneSpeedMps = 0.1;
 
 double age_s(const std::optional<int64_t>& utime, int64_t now_utime) {
   if (!utime) return std::numeric_limits<double>::infinity();
@@ -58,7 +65,10 @@ bool all_finite(const AttitudeCommand& c) {
 
 PositionController::PositionController(const OuterLoopParams& params,
                                        const PersistentState& restored)
-    : params_(params), disarm_latched_(restored.disarm_latched), armed_(restored.armed) {
+    : params_(params),
+      disarm_latched_(restored.disarm_latched),
+      armed_(restored.armed),
+      lifted_off_(restored.armed) {
   params_.validate();
 }
 
@@ -114,6 +124,7 @@ AttitudeCommand PositionController::track(const Vector3d& p_sp, const Vector3d& 
   // Conditional integration: near the setpoint, or while not moving (a steady offset, e.g. a
   // wrong mass, larger than the zone), so that flying a large step does not wind it up.
   const bool still = pose.v_W_B.norm() < P.i_still_mps;
+  integrate = integrate && lifted_off_;
   if (integrate && (still || e_p.head<2>().norm() < P.i_zone_m)) {
     integral_mps2_.head<2>() += ki_xy * e_p.head<2>() * dt_s;
     clamp_norm(integral_mps2_.head<2>(), P.i_limit_xy_mps2);
@@ -173,6 +184,7 @@ AttitudeCommand PositionController::update(const std::optional<PositionSetpoint>
     started_ = true;
   }
 
+  detect_lift_off(pose, now_utime);
   AttitudeCommand c = step(setpoint, pose, now_utime, dt_s);
   if (!integral_mps2_.allFinite()) integral_mps2_.setZero();
   if (c.armed && !all_finite(c)) {
@@ -198,6 +210,18 @@ void PositionController::detect_landing(const PoseSample& pose, int64_t now_utim
   }
   if (!land_since_) land_since_ = now_utime;
   landed_ = age_s(*land_since_, now_utime) >= P.land_detect_s;
+}
+
+void PositionController::detect_lift_off(const std::optional<PoseSample>& pose, int64_t now_utime) {
+  if (!armed_) {  // the previous command: a disarmed vehicle rests wherever it is
+    rest_z_m_.reset();
+    lifted_off_ = false;
+    return;
+  }
+  if (lifted_off_ || !pose || age_s(pose->utime, now_utime) > params_.pose_stale_s) return;
+  const double z = pose->p_W_B.z();
+  rest_z_m_ = rest_z_m_ ? std::min(*rest_z_m_, z) : z;
+  lifted_off_ = z > *rest_z_m_ + kLiftOffM || std::abs(pose->v_W_B.z()) > kAirborneSpeedMps;
 }
 
 AttitudeCommand PositionController::land(const PoseSample& pose, int64_t now_utime, double dt_s) {

@@ -11,6 +11,11 @@
 // the classic near-hover quadrotor linearisation (e.g. Hoffmann et al., "Quadrotor helicopter
 // flight dynamics and control", AIAA GNC 2007, the STARMAC controller).
 //
+// The integrators learn only once the vehicle flies: risen kLiftOffM above where it rested when
+// armed, or moving vertically (the ground holds it still): an autopilot that takes seconds from
+// arming to lift-off (ArduCopter's spool-up in GUIDED_NOGPS) otherwise winds them up against the
+// ground and the take-off overshoots.
+//
 // Stale inputs are explicit modes (never flying on old data): pose older than pose_stale_s →
 // level attitude with hover thrust; older than pose_lost_s → open-loop slow descent and disarm;
 // setpoint older than setpoint_stale_s → hold the position where it went stale; older than
@@ -94,6 +99,7 @@ class PositionController {
   Vector3d inside_fence(const Vector3d& p_W) const;
   bool outside_fence(const Vector3d& p_W) const;
   void detect_landing(const PoseSample& pose, int64_t now_utime);
+  void detect_lift_off(const std::optional<PoseSample>& pose, int64_t now_utime);
 
   OuterLoopParams params_;
   std::optional<int64_t> last_utime_;
@@ -103,6 +109,11 @@ class PositionController {
   bool armed_ = false;           // the last command's armed
   bool started_ = false;
   bool landed_ = false;
+  // Since the last arming: the lowest height seen, and whether the vehicle has risen off it. The
+  // integrators learn only in the air: on the ground the support, not a thrust error, cancels the
+  // position error.
+  std::optional<double> rest_z_m_;
+  bool lifted_off_ = false;
   std::optional<int64_t> land_since_;
   double last_demand_z_mps2_ = 0.0;  // PD part of the last vertical demand (land detector)
   std::optional<PositionSetpoint> last_good_setpoint_;

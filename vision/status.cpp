@@ -72,6 +72,8 @@ const char* to_string(Reason r) {
       return "duplicated frame";
     case Reason::kFrameGap:
       return "frames missing (gap)";
+    case Reason::kTopParallaxGap:
+      return "top near the epipole (parallax gap)";
   }
   return "unknown";
 }

@@ -49,6 +49,7 @@ enum class Reason : int8_t {
   kExposureChange = 31,  ///< the brightness stepped beyond ExposureGuard::kStepEv: not tracked
   kDuplicateFrame = 32,  ///< the previous frame's pixels again (the driver's repeat): not tracked
   kFrameGap = 33,        ///< no reference: a gap in the frames' times broke the tracks
+  kTopParallaxGap = 34,  ///< landing: the planes' parallax too small somewhere on the top
 };
 
 const char* to_string(Reason r);

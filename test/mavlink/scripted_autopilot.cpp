@@ -390,6 +390,10 @@ void ScriptedAutopilot::disarm(const std::string& why) {
   text("Disarming motors (" + why + ")");
 }
 
+double ScriptedAutopilot::estimate_up_m() const {
+  return z_ + c_.estimate_offset_up_m + (landed_ ? 0.0 : c_.estimate_offset_in_air_up_m);
+}
+
 void ScriptedAutopilot::physics(double dt) {
   if (dt <= 0) return;
   double vz_cmd = 0;
@@ -440,7 +444,7 @@ void ScriptedAutopilot::physics(double dt) {
       // its estimate to the target.
       if (auto_armed_ && !landed_) {
         hold_ground = false;
-        vz_cmd = std::clamp(target_z_ - (z_ + c_.estimate_offset_up_m), -kClimb, kClimb);
+        vz_cmd = std::clamp(target_z_ - estimate_up_m(), -kClimb, kClimb);
       }
     } else if (armed_ && mode_ == copter_mode::kGuided && sub_ == Sub::kTakeoff) {
       // Mode::do_user_takeoff: the altitude above home, home where it armed.
@@ -488,7 +492,8 @@ void ScriptedAutopilot::physics(double dt) {
           vz_cmd = vz_;
         }
       } else {
-        vz_cmd = std::clamp(target_z_ - z_, -kClimb, kClimb);
+        // mc_pos_control flies EKF2's estimate to the target.
+        vz_cmd = std::clamp(target_z_ - estimate_up_m(), -kClimb, kClimb);
         if (!landed_ || vz_cmd > 0) {
           landed_ = false;
           hold_ground = false;
@@ -588,7 +593,7 @@ void ScriptedAutopilot::telemetry() {
         if (local_position_valid()) {
           LocalPositionNed m;
           m.time_boot_ms = boot_ms;
-          m.z = static_cast<float>(-(z_ + c_.estimate_offset_up_m));
+          m.z = static_cast<float>(-estimate_up_m());
           m.vz = static_cast<float>(-vz_);
           send(m);
         }

@@ -46,6 +46,11 @@ struct ScriptedConfig {
   /// LOCAL_POSITION_NED read 0.2 m above motion capture (EKF3 keeps its own height datum,
   /// libraries/AP_NavEKF3/AP_NavEKF3_PosVelFusion.cpp).
   double estimate_offset_up_m = 0.0;
+  /// Added to it once airborne [m]: PX4 SIH's EKF2, fusing motion capture as vision with the
+  /// barometer still fused (EKF2_BARO_CTRL 1, its bias learnt only slowly:
+  /// src/modules/ekf2/EKF/aid_sources/barometer/baro_height_control.cpp), read 2 to 5 cm above
+  /// motion capture for tens of seconds after take-off.
+  double estimate_offset_in_air_up_m = 0.0;
   /// HIGHRES_IMU compiled in: boards with more than 1 MB of flash
   /// (libraries/GCS_MAVLink/GCS_config.h, AP_MAVLINK_MSG_HIGHRES_IMU_ENABLED).
   bool highres_imu = true;
@@ -107,6 +112,7 @@ class ScriptedAutopilot {
   bool local_position_valid() const;
   uint8_t landed_state() const;
   double param(const std::string& name, bool* found) const;
+  double estimate_up_m() const;  ///< the height its estimator reports
 
   ScriptedConfig c_;
   Parser parser_;

@@ -643,5 +643,42 @@ TEST(PositionControllerTest, WithThePoseLostAutonomysTouchDownMotorsOffIsHonoure
   EXPECT_FALSE(c.update(off, last_pose, t + 10 * kMs).armed);
 }
 
+TEST(OuterLoopRegression, ATakeOffThatWaitsOnTheGroundDoesNotWindUpTheIntegrators) {
+  // ArduCopter SITL in GUIDED_NOGPS lifted off about 3.5 s after the outer loop first asked for
+  // thrust (mode change, arming, spool-up): integrating the take-off's height error against the
+  // ground all that while, the outer loop overshot a 1.2 m take-off to 1.53 m.
+  PositionController c(params());
+  test::LagModel model;
+  int64_t t = kT0;
+  const auto sp = setpoint_at({0, 0, 1.2}, 0, t);
+  const int64_t spool_end = t + 3'500 * kMs;
+  double peak_m = 0.0;
+  for (; t < kT0 + 10'000'000; t += 10 * kMs) {
+    auto s = sp;
+    s.utime = t;
+    AttitudeCommand cmd = c.update(s, model.pose(t), t);
+    if (t < spool_end) {
+      EXPECT_EQ(c.integral().norm(), 0.0) << "on the ground at " << (t - kT0) * 1e-6 << " s";
+      cmd.armed = false;  // the motors not spinning yet
+    }
+    for (int k = 0; k < 10; ++k) model.step(cmd, 0.001);
+    peak_m = std::max(peak_m, model.p.z());
+  }
+  EXPECT_LT(peak_m, 1.2 + 0.08);  // autonomy's take-off tolerance (takeoff.reached_tol_m)
+  EXPECT_NEAR(model.p.z(), 1.2, 0.02);
+}
+
+TEST(PositionControllerTest, TheIntegratorsLearnOnceTheVehicleHasLiftedOff) {
+  // A nominal mass 10 % low: the altitude integral must make up for it in the air.
+  auto p = params();
+  p.mass_kg = 1.2 / 1.1;
+  PositionController c(p);
+  test::LagModel model;
+  int64_t t = kT0;
+  fly(c, model, setpoint_at({0, 0, 1.0}, 0, t), t, 15.0);
+  EXPECT_GT(c.integral().z(), 0.5);
+  EXPECT_NEAR(model.p.z(), 1.0, 0.02);
+}
+
 }  // namespace
 }  // namespace alight::outer_loop

@@ -43,23 +43,23 @@ check(gaps == [(30, 50)], "pose gaps %s" % gaps)
 # compare: identical; a difference away from a gap; a difference explained by a gap (frame or
 # reference frame inside it); a missing target.
 a = [target(10, 0, 1), target(40, 10, 2), target(70, 40, 3)]
-ok, lines = rv.compare(a, list(a), gaps)
-check(ok and "identical: 3" in lines[-1], "identical: %s" % lines)
+verdict, lines = rv.compare(a, list(a), gaps)
+check(verdict == rv.IDENTICAL and "identical: 3" in lines[-1], "identical: %s" % lines)
 b = [a[0], target(40, 10, 2, b"\x01\x01"), a[2]]
-ok, lines = rv.compare(a, b, gaps)
-check(ok and "but 1 targets" in lines[-1], "frame in a gap is explained: %s" % lines)
+verdict, lines = rv.compare(a, b, gaps)
+check(verdict == rv.IDENTICAL and "but 1 targets" in lines[-1], "frame in a gap is explained: %s" % lines)
 c = [a[0], a[1], target(70, 40, 3, b"\x01\x01")]
-ok, lines = rv.compare(a, c, gaps)
-check(ok, "reference frame in a gap is explained: %s" % lines)
+verdict, lines = rv.compare(a, c, gaps)
+check(verdict == rv.IDENTICAL, "reference frame in a gap is explained: %s" % lines)
 d = [target(10, 0, 1, b"\x01\x01"), a[1], a[2]]
-ok, lines = rv.compare(a, d, gaps)
-check(not ok and "first difference at target 0" in lines[0], "difference outside gaps: %s" % lines)
-ok, lines = rv.compare(a, b, [])
-check(not ok, "without the gap the same difference fails")
-ok, lines = rv.compare(a, [a[0], a[2]], gaps)
-check(not ok and "no target for frame 40" in lines[0], "missing target: %s" % lines)
-ok, lines = rv.compare(a, [a[0], a[2], a[1]], gaps)
-check(not ok, "out of order")
+verdict, lines = rv.compare(a, d, gaps)
+check(verdict == rv.DIFFERS and "first difference at target 0" in lines[0], "difference outside gaps: %s" % lines)
+verdict, lines = rv.compare(a, b, [])
+check(verdict == rv.DIFFERS, "without the gap the same difference fails")
+verdict, lines = rv.compare(a, [a[0], a[2]], gaps)
+check(verdict == rv.LOST and "no target for frame 40" in lines[0], "missing target: %s" % lines)
+verdict, lines = rv.compare(a, [a[0], a[2], a[1]], gaps)
+check(verdict == rv.DIFFERS, "out of order")
 
 for f in failures:
     print("FAIL: " + f)

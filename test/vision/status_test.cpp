@@ -45,11 +45,12 @@ TEST(StatusTest, ReasonValuesAreTheTargetMessageConstants) {
   EXPECT_EQ(int(Reason::kExposureChange), T::REASON_EXPOSURE_CHANGE);
   EXPECT_EQ(int(Reason::kDuplicateFrame), T::REASON_DUPLICATE_FRAME);
   EXPECT_EQ(int(Reason::kFrameGap), T::REASON_FRAME_GAP);
+  EXPECT_EQ(int(Reason::kTopParallaxGap), T::REASON_TOP_PARALLAX_GAP);
 }
 
 TEST(StatusTest, EveryReasonHasItsOwnName) {
   std::set<std::string> names;
-  for (int r = 0; r <= alight::target_t::REASON_FRAME_GAP; ++r) {
+  for (int r = 0; r <= alight::target_t::REASON_TOP_PARALLAX_GAP; ++r) {
     const std::string name = to_string(static_cast<Reason>(r));
     EXPECT_NE(name, "unknown") << r;
     EXPECT_TRUE(names.insert(name).second) << r << ": " << name;

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <opencv2/imgproc.hpp>
 #include <optional>
 
@@ -88,7 +89,8 @@ std::vector<double> floor_patch_gammas(const Correspondences& c, const LandingPl
 }  // namespace
 
 Reason plane_gates(const Correspondences& c, const LandingPlanes& planes, const Matrix3d& H_top_px,
-                   const Matrix3d& H_floor_px, double baseline_m, const PipelineParams& params) {
+                   const Matrix3d& H_floor_px, const MocapMotion& mocap,
+                   const PipelineParams& params) {
   if (direction_angle(planes.top.unit_normal_1(), planes.floor.unit_normal_1()) >
       params.landing.max_normal_angle_deg * M_PI / 180.0)
     return Reason::kTopNotParallel;
@@ -101,8 +103,46 @@ Reason plane_gates(const Correspondences& c, const LandingPlanes& planes, const 
   if (!top_told_from_floor(c, planes.top_in, H_floor_px, params.homography.threshold_px,
                            params.landing.max_top_on_floor_share))
     return Reason::kTopFitsFloor;
-  if (baseline_m < params.waypoint.min_baseline_m) return Reason::kSmallBaseline;
+  if (!top_clear_of_epipole(c, planes.top_in, H_floor_px, H_top_px, mocap,
+                            params.homography.threshold_px))
+    return Reason::kTopParallaxGap;
+  if (mocap.baseline_m < params.waypoint.min_baseline_m) return Reason::kSmallBaseline;
   return Reason::kOk;
+}
+
+bool top_clear_of_epipole(const Correspondences& c, const std::vector<uint8_t>& top_in,
+                          const Matrix3d& H_floor_px, const Matrix3d& H_top_px,
+                          const MocapMotion& mocap, double threshold_px) {
+  std::vector<cv::Point2f> top_px, hull;
+  for (size_t i = 0; i < c.size(); ++i)
+    if (top_in[i])
+      top_px.emplace_back(static_cast<float>(c.x2[i].x()), static_cast<float>(c.x2[i].y()));
+  if (top_px.size() < 3) return true;
+  cv::convexHull(top_px, hull);
+  const Matrix3d to_floor = H_floor_px * H_top_px.inverse();  // image 2 to image 2
+  const auto parallax = [&](const Vector2d& u) {
+    const Vector3d q = to_floor * u.homogeneous();
+    return q.z() > 0 ? (q.hnormalized() - u).norm() : std::numeric_limits<double>::infinity();
+  };
+  // The nearest point of the hull to the epipole; with the epipole at infinity (a sideways
+  // motion) the parallax barely changes over the view: the hull's corners.
+  const Vector3d e = c.camera->K() * (-(mocap.R_21 * mocap.t_12));
+  double least = std::numeric_limits<double>::infinity();
+  for (const auto& p : hull) least = std::min(least, parallax(Vector2d(p.x, p.y)));
+  if (std::abs(e.z()) > 1e-9 * e.norm()) {
+    const Vector2d e2 = e.hnormalized();
+    if (cv::pointPolygonTest(
+            hull, cv::Point2f(static_cast<float>(e2.x()), static_cast<float>(e2.y())), false) >= 0)
+      return false;
+    for (size_t k = 0; k < hull.size(); ++k) {
+      const Vector2d a(hull[k].x, hull[k].y);
+      const Vector2d b(hull[(k + 1) % hull.size()].x, hull[(k + 1) % hull.size()].y);
+      const double len2 = (b - a).squaredNorm();
+      const double s = len2 > 0 ? std::clamp((e2 - a).dot(b - a) / len2, 0.0, 1.0) : 0.0;
+      least = std::min(least, parallax(a + s * (b - a)));
+    }
+  }
+  return least >= kMinParallaxThresholds * threshold_px;
 }
 
 int floor_seen_around_top(const Correspondences& c, const LandingPlanes& planes,

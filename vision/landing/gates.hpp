@@ -4,15 +4,16 @@
 // and the floor beyond. Each refuses the frame with its own reason (vision/status.hpp), so a
 // frame's target_t.reason says which gate refused it. In the order find_landing_target applies
 // them: the top parallel to the floor (kTopNotParallel), the floor seen around it
-// (kNoFloorAroundTop), its matches not the floor's (kTopFitsFloor), a baseline for a scale
-// (kSmallBaseline); once the top's features are placed on its plane, the top level
-// (kTopTilted); once it is measured (extent.hpp), its height in range (kHeightOutOfRange) and
-// the images' check of both planes (kTopPhotometry, kFloorPhotometry).
+// (kNoFloorAroundTop), its matches not the floor's (kTopFitsFloor), told from it all over
+// (kTopParallaxGap), a baseline for a scale (kSmallBaseline); once the top's features are placed on
+// its plane, the top level (kTopTilted); once it is measured (extent.hpp), its height in range
+// (kHeightOutOfRange) and the images' check of both planes (kTopPhotometry, kFloorPhotometry).
 
 #include <cstdint>
 #include <opencv2/core.hpp>
 #include <vector>
 
+#include "vision/geometry/waypoint.hpp"
 #include "vision/landing/planes.hpp"
 
 namespace alight::vision {
@@ -21,11 +22,13 @@ namespace alight::vision {
 /// floor's (kTopNotParallel); unless the top is alone, the floor seen around it in at least
 /// min_floor_inliers places (kNoFloorAroundTop, floor_seen_around_top); at most
 /// max_top_on_floor_share of the top's matches carried by the floor's homography too
-/// (kTopFitsFloor, top_told_from_floor); motion capture's baseline_m at least min_baseline_m
+/// (kTopFitsFloor, top_told_from_floor); the top told from the floor all over it
+/// (kTopParallaxGap, top_clear_of_epipole); motion capture's baseline at least min_baseline_m
 /// for the scale of eq. 3 (kSmallBaseline). kOk when all pass. H_top_px / H_floor_px: the
-/// planes' pixel homographies, image 1 to 2.
+/// planes' pixel homographies, image 1 to 2; `mocap`: the cameras' motion between them.
 Reason plane_gates(const Correspondences& c, const LandingPlanes& planes, const Matrix3d& H_top_px,
-                   const Matrix3d& H_floor_px, double baseline_m, const PipelineParams& params);
+                   const Matrix3d& H_floor_px, const MocapMotion& mocap,
+                   const PipelineParams& params);
 
 /// A platform top is opaque: the floor is seen around it, never through it. The floor's
 /// matches seen outside the convex hull of the top's in image 2 (by more than threshold_px, or
@@ -42,6 +45,25 @@ int floor_seen_around_top(const Correspondences& c, const LandingPlanes& planes,
 /// the floor beside it. A true top's matches lie off the floor's transfer.
 bool top_told_from_floor(const Correspondences& c, const std::vector<uint8_t>& top_in,
                          const Matrix3d& H_floor_px, double threshold_px, double max_share);
+
+/// A match fits a plane within threshold_px, about three times the tracking noise; where the two
+/// planes' parallax is under kMinParallaxThresholds times that, a top match fits the floor's
+/// transfer too by its noise alone.
+constexpr double kMinParallaxThresholds = 2.0;
+
+/// Beyond the paper: the top told from the floor all over it. The planes' parallax at a point of
+/// the top in image 2 is how far the floor's homography puts it from where the top's does
+/// (|H_floor H_top^-1 u - u|). Two parallel planes' homographies differ by a homology about the
+/// epipole: the parallax vanishes there and grows with the distance from it. Where the camera
+/// moved towards or away from the top (a descent or a climb over it) the epipole lies on or near
+/// the top, the top's matches around it fit the floor as well and drop out of the top, and the
+/// ones left make a rectangle of a part of the top, off its centre. False when the parallax at
+/// the point of the top's inliers' convex hull nearest the epipole (none with the epipole inside
+/// the hull) is under kMinParallaxThresholds x threshold_px. `mocap` places the epipole (camera
+/// 1's centre seen from camera 2); fewer than 3 top inliers: true (the other gates decide).
+bool top_clear_of_epipole(const Correspondences& c, const std::vector<uint8_t>& top_in,
+                          const Matrix3d& H_floor_px, const Matrix3d& H_top_px,
+                          const MocapMotion& mocap, double threshold_px);
 
 /// The top level: its unit normal n_W (world, towards the camera) within max_tilt_deg of world
 /// up. A "plane" through the platform's edge and the floor beyond is tilted by atan(h / d).

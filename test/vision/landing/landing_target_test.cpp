@@ -754,6 +754,80 @@ TEST(LandingGates, EachGateRefusesWithItsOwnReason) {
   EXPECT_GE(tested, 4);
 }
 
+// The pixel homography (image 1 to 2) of the level plane at height z_m of view v, from the poses.
+Matrix3d level_plane_homography_px(const View& v, double z_m) {
+  const auto plane = known_floor(v.c.pose_1, *v.c.mount, z_m);
+  const MocapMotion m = mocap_motion(v.c.pose_1, v.c.pose_2, *v.c.mount);
+  const Matrix3d K = v.camera.K();
+  return K * plane_homography({m.R_21, m.t_12}, plane->n_1, 1.0 / plane->d_1_m) * K.inverse();
+}
+
+// Regression (landing_tiles_101 in the final descent): camera 2 0.3 m straight below camera 1
+// over a 48 x 23 cm top 13 cm high puts the epipole on the top, where the planes' parallax
+// vanishes; the top's matches near it fit the floor too, and those left made a rectangle of a
+// part of the top 11-19 cm off its centre. The same top seen over a sideways baseline is told
+// from the floor all over.
+constexpr double kTopZ = 0.134;
+
+TEST(LandingGates, ATopStraightUnderADescentIsRefusedForItsParallaxGap) {
+  const auto top_view = [](std::mt19937_64& rng, const Vector3d& step) {
+    std::uniform_real_distribution<double> U(-1, 1);
+    const double yaw = 0.3 * U(rng);
+    const PoseSample p1 = level_pose({0.1 * U(rng), 0.1 * U(rng), 1.6}, yaw);
+    const PoseSample p2 = level_pose(p1.p_W_B + step, yaw + 0.005);
+    View v(p1, p2);
+    const Vector3d centre = camera_in_world(p2.X_WB(), v.mount.X_BC()).translation();
+    const auto on_top = [&](const Vector3d& X) {
+      return std::abs(X.x() - centre.x()) < 0.24 && std::abs(X.y() - centre.y()) < 0.115;
+    };
+    std::vector<uint8_t> top_in;
+    for (int k = 0; k < 140;) {
+      const Vector3d X(centre.x() + 0.8 * U(rng), centre.y() + 0.6 * U(rng), 0.0);
+      if (!on_top(X) && v.add(X, rng)) {
+        top_in.push_back(0);
+        ++k;
+      }
+    }
+    for (int k = 0; k < 120;)
+      if (v.add(Vector3d(centre.x() + 0.24 * U(rng), centre.y() + 0.115 * U(rng), kTopZ), rng)) {
+        top_in.push_back(1);
+        ++k;
+      }
+    return std::pair{v, top_in};
+  };
+  for (uint64_t seed = 1; seed <= 10; ++seed) {
+    std::mt19937_64 rng(900 + seed);
+    std::uniform_real_distribution<double> U(-1, 1);
+    const auto [down, top_in] = top_view(rng, Vector3d(0.01 * U(rng), 0.01 * U(rng), -0.3));
+    const Matrix3d H_floor = level_plane_homography_px(down, 0.0);
+    const Matrix3d H_top = level_plane_homography_px(down, kTopZ);
+    const MocapMotion m = mocap_motion(down.c.pose_1, down.c.pose_2, down.mount);
+    EXPECT_FALSE(top_clear_of_epipole(down.c, top_in, H_floor, H_top, m, 2.0)) << "seed " << seed;
+    // The matches the planes can still tell (parallax over the 2 px threshold) on one side of
+    // the epipole: a part of the top beside it, refused too.
+    const Matrix3d to_floor = H_floor * H_top.inverse();
+    const Vector2d e2 = (down.camera.K() * -(m.R_21 * m.t_12)).hnormalized();
+    std::vector<uint8_t> told = top_in;
+    int n_told = 0;
+    for (size_t i = 0; i < told.size(); ++i) {
+      const Vector2d& x = down.c.x2[i];
+      told[i] = told[i] && x.x() > e2.x() &&
+                ((to_floor * x.homogeneous()).hnormalized() - x).norm() > 2.0;
+      n_told += told[i];
+    }
+    ASSERT_GE(n_told, 3) << "seed " << seed;
+    EXPECT_FALSE(top_clear_of_epipole(down.c, told, H_floor, H_top, m, 2.0)) << "seed " << seed;
+
+    const double dir = M_PI * U(rng);
+    const auto [side, side_top_in] =
+        top_view(rng, Vector3d(0.25 * std::cos(dir), 0.25 * std::sin(dir), 0.0));
+    EXPECT_TRUE(top_clear_of_epipole(side.c, side_top_in, level_plane_homography_px(side, 0.0),
+                                     level_plane_homography_px(side, kTopZ),
+                                     mocap_motion(side.c.pose_1, side.c.pose_2, side.mount), 2.0))
+        << "seed " << seed;
+  }
+}
+
 // The photometric gate's two reasons: a top the images show to be floor (rendered_top's bare
 // current image: every pixel of the "top" follows the floor's plane) is refused for its pixels
 // (kTopPhotometry); a floor whose patches spread on both sides of its plane refuses for the
