@@ -263,59 +263,13 @@ const ParamSchema<LandingParams>& LandingParams::schema() {
           "known floor: motion capture's R21 is corrected by at most this (its orientation noise, "
           "0.1 deg a sample, moves the image by 1-2 px; a correction the size of the "
           "platform's parallax would take the top for the floor)");
-    s.add("max_top_on_floor_share", &P::max_top_on_floor_share, Range::closed(0, 1), "",
-          "a top's inliers that the floor's homography also carries within the threshold tell "
-          "the planes by nothing; more than this share of them, and the \"top\" is the floor "
-          "split by tracking noise, or a plane fitted through the top and the floor: no target. "
-          "1: off");
-    s.add("max_stray_top_share", &P::max_stray_top_share, Range::closed(0, 0.5), "",
-          "the top is opaque: top features whose removal leaves fewer floor matches (off the "
-          "top's plane) inside the hull of the top's are dropped before its extent is measured, "
-          "up to this share of them (0: none)");
-    s.add("photometric_tol", &P::photometric_tol, Range::closed(0, 0.5), "",
-          "beyond the paper (plane_photometric.hpp): the pixels inside the top's features and "
-          "around the floor's must each follow their own plane's homography within this share "
-          "of the height between the planes (gamma: 0 the floor, 1 the top); a top whose pixels "
-          "sit elsewhere is refused. Features tracked a few pixels wrong make \"tops\" the images "
-          "show to be floor. 0: off");
-    s.add("photometric_min_ncc", &P::photometric_min_ncc, Range::open(0, 1), "",
-          "photometric_tol: a pixel set whose best normalised cross-correlation between the "
-          "images is lower shares too little texture to say where it is (no verdict)");
-    s.add("photometric_max_sigma", &P::photometric_max_sigma, Range::gt(0), "",
-          "photometric_tol: a gamma less certain than this (its standard deviation, from the "
-          "fit's curvature and residual) gives no verdict; a floor patch's may be 3 times it");
-    s.add("photometric_far_sigmas", &P::photometric_far_sigmas, Range::gt(0), "",
-          "photometric_tol: the top's pixels less certain than photometric_max_sigma still "
-          "refuse it when their gamma is farther from 1 than the tolerance by this many of "
-          "its standard deviations");
-    s.add("photometric_max_floor_spread", &P::photometric_max_floor_spread, Range::gt(0), "",
-          "photometric_tol: the floor's patches (5 or more) spread at most this far in gamma "
-          "(1.4826 times their median absolute deviation); wider, the floor's homography does "
-          "not register the floor's pixels and the planes are refused");
-    s.add("photometric_min_patches", &P::photometric_min_patches, Range::ge(1), "",
-          "photometric_tol: the floor's verdict is the median of at least this many patches "
-          "around its features (fewer: none). A false top that covers most of the view leaves "
-          "one or two of the floor's features clear of it");
     s.add("hold_reference", &P::hold_reference, Range::any(), "",
           "beyond the paper: while the tracked reference is closer than max_reference_baseline_m "
-          "(the "
-          "camera hovers), keep the previous frame's reference when it is farther from the "
-          "camera (within max_reference_baseline_m and hold_max_age_s) and still matches "
+          "(the camera hovers), keep the previous frame's reference when it is farther from the "
+          "camera (within max_reference_baseline_m, and at most 30 s old) and still matches "
           "tracker.min_tracked features: continuous tracks die within 1-2 s of hovering (or "
           "max_history frames pass), and the tracked reference's baseline then shrinks until the "
           "top's parallax is lost");
-    // Finite and bounded, as tracker.max_reference_age_s.
-    s.add("hold_max_age_s", &P::hold_max_age_s, Range::open_closed(0, 600), "s",
-          "a held reference older than this is dropped. Longer than tracker.max_reference_age_s: "
-          "the held one must still match min_tracked features directly, which is the check "
-          "that it shows the same scene; an approach held by gusts can hover 10 s and more with "
-          "the target in view");
-    s.add("top_end_search_m", &P::top_end_search_m, Range::closed(0, 0.2), "m",
-          "a side without a rim step is searched outward this far in the top's plane for the "
-          "top's end: a straight line where the top's homography stops explaining the two "
-          "images and a textured floor, which the floor's homography explains, begins (0: off). "
-          "For tops whose print stops short of their edges, or leaves part of the top bare, on a "
-          "floor as pale on average: there the rim search finds no step");
     s.add("max_motion_blur_px", &P::max_motion_blur_px, Range::ge(0), "px",
           "beyond the paper (motion_blur.hpp): a frame whose exposure smeared the floor's image "
           "farther than this anywhere in the view (from motion capture's velocity and angular "
@@ -336,11 +290,6 @@ const ParamSchema<IngressParams>& IngressParams::schema() {
   using P = IngressParams;
   static const ParamSchema<P> schema = [] {
     ParamSchema<P> s;
-    s.add("max_ray_gap_px", &P::max_ray_gap_px, Range::ge(0), "px",
-          "a match whose two rays (motion capture's poses) pass farther apart than this, seen "
-          "from the current camera, is a mismatch: it has no 3-D point, so it counts in neither "
-          "the planes' depths nor the behind checks (a repeated room texture can match far off "
-          "its epipolar line and triangulate in front of the wall). 0: no check");
     s.add("parallax_mask", &P::parallax_mask, Range::any(), "",
           "beyond the paper: Canny and Hough run on the off-wall mask (the reference image "
           "warped by the wall homography disagrees with the current one wherever the view passes "

@@ -121,19 +121,7 @@ struct LandingParams {
   double floor_tol_frac = 0.08;
   int min_floor_inliers = 4;
   double max_rotation_correction_deg = 0.5;
-  double max_top_on_floor_share = 0.25;
-  double max_stray_top_share = 0.1;
-  // Beyond the paper: the images check the planes the features found (plane_photometric.hpp).
-  double photometric_tol = 0.25;
-  double photometric_min_ncc = 0.5;
-  double photometric_max_sigma = 0.1;
-  double photometric_far_sigmas = 3.0;
-  double photometric_max_floor_spread = 0.5;
-  int photometric_min_patches = 1;
   bool hold_reference = true;  ///< keep a longer-baseline reference while hovering (pipeline.hpp)
-  double hold_max_age_s = 30.0;
-  // Beyond the paper: a side without a rim out to the top's end (rim.hpp).
-  double top_end_search_m = 0.1;
   // Beyond the paper: frames smeared by the camera's motion are not used (motion_blur.hpp).
   double max_motion_blur_px = 8.0;
   double assumed_exposure_s = 0.01;
@@ -144,7 +132,6 @@ struct LandingParams {
 /// Ingress target (paper 3.3): Hough lines split the image into cells; the block of cells
 /// with no wall inliers and the most off-wall features is the opening.
 struct IngressParams {
-  double max_ray_gap_px = 8;
   bool parallax_mask = true;
   int parallax_decimation = 1;
   double parallax_blur_sigma_px = 1.5;

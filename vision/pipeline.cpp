@@ -177,14 +177,13 @@ Pipeline::Reference Pipeline::tracked_reference(const ReferenceTracker::Update& 
 
 // Hovering (pipeline.hpp): the held reference while the tracked one is nearer than
 // max_reference_baseline_m, where the held one is farther, within max_reference_baseline_m and
-// hold_max_age_s, and still matches min_tracked of the current frame's features. A frame that
+// kHoldMaxAgeS, and still matches min_tracked of the current frame's features. A frame that
 // matches it with fewer hands the hold to the tracked one: keeping it held through such frames
 // multiplies the false targets over floors without a platform.
 void Pipeline::hold_reference(Reference* ref, const TrackedFrame& current, int64_t utime,
                               const PoseSample& pose) const {
   if (!(holds() && ref->baseline_m < params_.max_reference_baseline_m && held_ &&
-        held_->utime < utime &&
-        double(utime - held_->utime) * 1e-6 <= params_.landing.hold_max_age_s))
+        held_->utime < utime && double(utime - held_->utime) * 1e-6 <= kHoldMaxAgeS))
     return;
   const double held_baseline_m = mocap_motion(held_pose_, pose, mount_).baseline_m;
   if (!(held_baseline_m > ref->baseline_m && held_baseline_m <= params_.max_reference_baseline_m))

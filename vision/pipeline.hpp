@@ -59,6 +59,12 @@
 
 namespace alight::vision {
 
+/// A held reference older than this [s] is dropped. An approach held by gusts hovers 10 s and
+/// more with the target in view; what shows that the held frame still sees the same scene is its
+/// direct match of tracker.min_tracked features, not its age, so the bound is three times
+/// tracker.max_reference_age_s's 10 s and only retires a frame the scene may have changed under.
+constexpr double kHoldMaxAgeS = 30.0;
+
 /// The outcome of one frame; reason says why nothing was found.
 struct FrameResult {
   int64_t utime = 0;      ///< exposure time of the current image [us]

@@ -134,6 +134,29 @@ TEST(VisionParamsTest, EveryValidatedFieldIsSettableFromTheVehicleFile) {
             "vision.tracker.match.ratio");
 }
 
+// Knobs decided as constants in the code (docs/results.md, "Parameters decided"): a vehicle file
+// that still sets one is refused, the error naming its full key.
+TEST(VisionParamsTest, DecidedKnobsAreNoKeys) {
+  for (const std::string section_key :
+       {"landing.max_top_on_floor_share", "landing.max_stray_top_share", "landing.photometric_tol",
+        "landing.photometric_min_ncc", "landing.photometric_max_sigma",
+        "landing.photometric_far_sigmas", "landing.photometric_max_floor_spread",
+        "landing.photometric_min_patches", "landing.hold_max_age_s", "landing.top_end_search_m",
+        "ingress.max_ray_gap_px"}) {
+    const size_t dot = section_key.find('.');
+    const ParamError e = vision_error("vision: {" + section_key.substr(0, dot) + ": {" +
+                                      section_key.substr(dot + 1) + ": 1}}");
+    EXPECT_EQ(e.key(), "vision." + section_key);
+    EXPECT_NE(std::string(e.what()).find("unknown key"), std::string::npos) << e.what();
+  }
+  // Their sections still load without them.
+  const NodeParams p = load_node_params(ParamNode::from_string(
+      "vision: {landing: {hold_reference: false}, ingress: {parallax_mask: false}}\n",
+      "vehicle.yaml"));
+  EXPECT_FALSE(p.pipeline.landing.hold_reference);
+  EXPECT_FALSE(p.pipeline.ingress.parallax_mask);
+}
+
 TEST(VisionParamsTest, WithoutAVisionSectionTheDefaultsApply) {
   const NodeParams p = load_node_params(ParamNode::from_string("autonomy: {}\n", "vehicle.yaml"));
   EXPECT_EQ(p.pipeline.star.grid_rows, 6);

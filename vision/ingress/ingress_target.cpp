@@ -35,7 +35,7 @@ TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image
   if (!planes) return refuse(planes.reason());
   if (mocap_motion(c.pose_1, c.pose_2, *c.mount).baseline_m < params.waypoint.min_baseline_m)
     return refuse(Reason::kSmallBaseline);
-  const auto X_W_match = triangulate_matches(c, p);
+  const auto X_W_match = triangulate_matches(c, kMaxRayGapPx);
   const Wall wall = choose_wall(c, *planes, X_W_match, params);
   const HomographyFit& fit = *wall.fit;
   for (size_t i = 0; i < c.size(); ++i)

@@ -68,10 +68,10 @@ Wall candidate(const Correspondences& c, const HomographyFit& f,
 }  // namespace
 
 std::vector<std::optional<Vector3d>> triangulate_matches(const Correspondences& c,
-                                                         const IngressParams& params) {
+                                                         double max_ray_gap_px) {
   const Isometry3d X_WC1 = camera_in_world(c.pose_1.X_WB(), c.mount->X_BC());
   const Isometry3d X_WC2 = camera_in_world(c.pose_2.X_WB(), c.mount->X_BC());
-  const double max_gap_rad = params.max_ray_gap_px / c.camera->K()(0, 0);
+  const double max_gap_rad = max_ray_gap_px / c.camera->K()(0, 0);
   std::vector<std::optional<Vector3d>> X_W_match(c.size());
   for (size_t k = 0; k < c.size(); ++k)
     X_W_match[k] = triangulate_midpoint(X_WC1, X_WC1.linear() * c.ray1(k), X_WC2,

@@ -19,13 +19,19 @@
 
 namespace alight::vision {
 
+/// Two rays of a true match miss each other by its tracking noise (under a pixel) and motion
+/// capture's orientation noise (1-2 px); a repeated texture matched across its epipolar line
+/// misses by tens to hundreds of pixels. A gap of this many pixels [px] seen from camera 2 lies
+/// several times above the first and under the second.
+constexpr double kMaxRayGapPx = 8.0;
+
 /// Every match triangulated with motion capture's poses (the midpoint of the two rays, world):
 /// nullopt where the rays are near parallel, the point lies behind either camera, or the rays
 /// pass farther apart than max_ray_gap_px seen from camera 2 (a mismatch: a repeated texture
 /// matched across its epipolar line has no 3-D point and no say in the planes' depths or the
-/// opening's checks).
+/// opening's checks). find_ingress_target passes kMaxRayGapPx; 0: no gap check.
 std::vector<std::optional<Vector3d>> triangulate_matches(const Correspondences& c,
-                                                         const IngressParams& params);
+                                                         double max_ray_gap_px);
 
 /// The wall's plane.
 struct Wall {

@@ -76,10 +76,7 @@ std::vector<Vector3d> top_points_W(const Correspondences& c, const LandingPlanes
   const Matrix3d K_inv = c.camera->K().inverse();
   const Vector3d n2 = planes.top.n_2() / baseline_m;  // n2~ in [1/m]
   const std::vector<uint8_t> top_features =
-      params.landing.max_stray_top_share > 0
-          ? without_strays(c, planes, H_top_px, params.homography.threshold_px,
-                           params.landing.max_stray_top_share)
-          : planes.top_in;
+      without_strays(c, planes, H_top_px, params.homography.threshold_px, kMaxStrayTopShare);
   std::vector<Vector3d> pts_W;
   for (size_t i = 0; i < c.size(); ++i) {
     if (!top_features[i]) continue;

@@ -31,6 +31,11 @@ struct TopRect {
   double lo[2], hi[2];
 };
 
+/// A stray is one or two top matches among a few dozen that fit the top's plane by chance on the
+/// floor beside it: up to this share of the top's features are dropped as strays. Where more
+/// would have to go, the features, not a few strays, cover the floor, and the gates decide.
+constexpr double kMaxStrayTopShare = 0.1;
+
 /// The top's features without the strays that stretch them over the floor. The top is opaque,
 /// so no floor match off its plane lies inside the hull of its features (as in
 /// floor_seen_around_top). While some do and removing one hull corner leaves fewer inside, the
@@ -42,7 +47,7 @@ std::vector<uint8_t> without_strays(const Correspondences& c, const LandingPlane
                                     const Matrix3d& H_top_px, double threshold_px,
                                     double max_share);
 
-/// The top's features (without strays where max_stray_top_share > 0) intersected with the top's
+/// The top's features (without_strays, up to kMaxStrayTopShare of them) intersected with the top's
 /// plane seen from camera 2 at X_WC2 (eqs. 4-6 with motion capture's baseline_m), in world;
 /// those whose ray misses the plane are left out.
 std::vector<Vector3d> top_points_W(const Correspondences& c, const LandingPlanes& planes,

@@ -21,19 +21,17 @@ constexpr double kClear = 4.0;  // [px] a patch's pixels this far outside the hu
 
 // Whether a pixel set's fit says where it lies: correlated, and certain to max_sigma.
 bool informative(const std::optional<PlanePhotometry>& f, double max_sigma,
-                 const LandingParams& p) {
-  return f && f->ncc_best >= p.photometric_min_ncc && f->sigma_gamma <= max_sigma;
+                 const PhotometricLimits& p) {
+  return f && f->ncc_best >= p.min_ncc && f->sigma_gamma <= max_sigma;
 }
 
 // The top's pixels off its plane. A certain gamma decides alone; a less certain one only when
-// it sits photometric_far_sigmas standard deviations beyond the tolerance: a hull on a false
-// top over a busy floor can be blurred to a wide fit that still places it nowhere near the
-// top's plane.
-bool off_the_top(const std::optional<PlanePhotometry>& f, const LandingParams& p) {
-  if (!f || f->ncc_best < p.photometric_min_ncc) return false;
-  const double beyond = std::abs(f->gamma - 1.0) - p.photometric_tol;
-  return beyond > 0 && (f->sigma_gamma <= p.photometric_max_sigma ||
-                        beyond > p.photometric_far_sigmas * f->sigma_gamma);
+// it sits far_sigmas standard deviations beyond the tolerance: a hull on a false top over a busy
+// floor can be blurred to a wide fit that still places it nowhere near the top's plane.
+bool off_the_top(const std::optional<PlanePhotometry>& f, const PhotometricLimits& p) {
+  if (!f || f->ncc_best < p.min_ncc) return false;
+  const double beyond = std::abs(f->gamma - 1.0) - p.tol;
+  return beyond > 0 && (f->sigma_gamma <= p.max_sigma || beyond > p.far_sigmas * f->sigma_gamma);
 }
 
 // The fit of the pixels inside the top's hull (current image), kClear deep at least.
@@ -60,7 +58,7 @@ std::vector<double> floor_patch_gammas(const Correspondences& c, const LandingPl
                                        const std::vector<cv::Point2f>& hull,
                                        const Matrix3d& H_floor_px, const Matrix3d& H_top_px,
                                        const cv::Mat& gray_1, const cv::Mat& gray_2,
-                                       const LandingParams& p) {
+                                       const PhotometricLimits& p) {
   const cv::Rect inside(0, 0, gray_2.cols, gray_2.rows);
   std::vector<size_t> floor_i;
   for (size_t i = 0; i < c.size(); ++i)
@@ -81,7 +79,7 @@ std::vector<double> floor_patch_gammas(const Correspondences& c, const LandingPl
     const auto patch =
         plane_photometry(gray_1, gray_2, *c.camera, H_floor_px, H_top_px, px,
                          (kPatchHalf + 1) * (kPatchHalf + 1), c.readout_1, c.readout_2);
-    if (informative(patch, 3 * p.photometric_max_sigma, p)) gammas.push_back(patch->gamma);
+    if (informative(patch, 3 * p.max_sigma, p)) gammas.push_back(patch->gamma);
   }
   return gammas;
 }
@@ -101,7 +99,7 @@ Reason plane_gates(const Correspondences& c, const LandingPlanes& planes, const 
           params.landing.min_floor_inliers)
     return Reason::kNoFloorAroundTop;
   if (!top_told_from_floor(c, planes.top_in, H_floor_px, params.homography.threshold_px,
-                           params.landing.max_top_on_floor_share))
+                           kMaxTopOnFloorShare))
     return Reason::kTopFitsFloor;
   if (!top_clear_of_epipole(c, planes.top_in, H_floor_px, H_top_px, mocap,
                             params.homography.threshold_px))
@@ -199,7 +197,7 @@ bool cut_by_border(const Correspondences& c, const LandingPlanes& planes,
 
 Reason photometric_gate(const Correspondences& c, const LandingPlanes& planes,
                         const Matrix3d& H_floor_px, const Matrix3d& H_top_px, const cv::Mat& gray_1,
-                        const cv::Mat& gray_2, const LandingParams& p) {
+                        const cv::Mat& gray_2, const PhotometricLimits& p) {
   std::vector<cv::Point2f> top_u2, hull;
   for (size_t i = 0; i < c.size(); ++i)
     if (planes.top_in[i]) top_u2.emplace_back(c.u2[i].x(), c.u2[i].y());
@@ -213,17 +211,17 @@ Reason photometric_gate(const Correspondences& c, const LandingPlanes& planes,
   return Reason::kOk;
 }
 
-bool floor_patches_agree(std::vector<double> gammas, const LandingParams& params) {
-  if (static_cast<int>(gammas.size()) < params.photometric_min_patches) return true;
+bool floor_patches_agree(std::vector<double> gammas, const PhotometricLimits& limits) {
+  if (gammas.empty()) return true;
   std::nth_element(gammas.begin(), gammas.begin() + gammas.size() / 2, gammas.end());
   const double median = gammas[gammas.size() / 2];
-  if (std::abs(median) > params.photometric_tol) return false;
+  if (std::abs(median) > limits.tol) return false;
   constexpr size_t kSpreadPatches = 5;  // fewer have no spread to speak of
   if (gammas.size() < kSpreadPatches) return true;
   std::vector<double> dev;
   for (const double g : gammas) dev.push_back(std::abs(g - median));
   std::nth_element(dev.begin(), dev.begin() + dev.size() / 2, dev.end());
-  return 1.4826 * dev[dev.size() / 2] <= params.photometric_max_floor_spread;
+  return 1.4826 * dev[dev.size() / 2] <= limits.max_floor_spread;
 }
 
 }  // namespace alight::vision

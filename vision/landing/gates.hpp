@@ -18,10 +18,16 @@
 
 namespace alight::vision {
 
+/// A true top's matches fit the floor's transfer too only by their noise where the planes'
+/// parallax is small (near the epipole, on a low top): a quarter of them at most; a floor split
+/// by tracking noise into two planes a few centimetres apart has nearly half its "top" on the
+/// floor's transfer.
+constexpr double kMaxTopOnFloorShare = 0.25;
+
 /// The gates on the planes alone, in order: the top's normal within max_normal_angle_deg of the
 /// floor's (kTopNotParallel); unless the top is alone, the floor seen around it in at least
 /// min_floor_inliers places (kNoFloorAroundTop, floor_seen_around_top); at most
-/// max_top_on_floor_share of the top's matches carried by the floor's homography too
+/// kMaxTopOnFloorShare of the top's matches carried by the floor's homography too
 /// (kTopFitsFloor, top_told_from_floor); the top told from the floor all over it
 /// (kTopParallaxGap, top_clear_of_epipole); motion capture's baseline at least min_baseline_m
 /// for the scale of eq. 3 (kSmallBaseline). kOk when all pass. H_top_px / H_floor_px: the
@@ -78,6 +84,31 @@ bool height_in_range(double height_m, const LandingParams& params);
 bool cut_by_border(const Correspondences& c, const LandingPlanes& planes,
                    const LandingParams& params);
 
+/// The photometric gate's limits on gamma (0 the floor's plane, 1 the top's). find_landing_target
+/// uses the defaults; each is a constant of the camera's noise and the planes' geometry.
+struct PhotometricLimits {
+  /// A pixel set sits on its own plane within this much of the height between the planes: a
+  /// quarter, so a set placed within it is on one plane and not the other (a false top's pixels
+  /// follow one surface, which is rarely both 1 for its hull and 0 for the floor's patches).
+  double tol = 0.25;
+  /// A pixel set whose best normalised cross-correlation between the images is lower shares too
+  /// little texture to say where it is (blank paper, a grey tile): no verdict.
+  double min_ncc = 0.5;
+  /// A gamma less certain than this (its standard deviation, from the fit's curvature and
+  /// residual) gives no verdict: under half the tolerance, so a certain gamma inside it is not
+  /// a chance one. A floor patch (a hundred-odd pixels, not a hull's thousand) may be 3 times it.
+  double max_sigma = 0.1;
+  /// The top's pixels less certain than max_sigma still refuse it when their gamma lies beyond
+  /// the tolerance by this many standard deviations (a chance of about 0.1 %): a hull on a false
+  /// top over a busy floor can be blurred to a wide fit that still places it far from 1.
+  double far_sigmas = 3.0;
+  /// The floor's patches (5 or more) spread at most this far in gamma (1.4826 times their
+  /// median absolute deviation): twice the tolerance. A floor homography that registers the
+  /// floor spreads them by their noise (a tenth); one that does not (a plane turned about a line
+  /// through the view) spreads them across both planes.
+  double max_floor_spread = 0.5;
+};
+
 /// Beyond the paper, the images' verdict on the planes the features found (plane plus parallax,
 /// geometry/plane_photometric.hpp): the pixels inside the top's features (their convex hull in
 /// the current image) must follow the top's plane (else kTopPhotometry), and the patches around
@@ -88,15 +119,15 @@ bool cut_by_border(const Correspondences& c, const LandingPlanes& planes,
 /// features decide. gray_1 / gray_2: the reference and current raw images of the camera's size.
 Reason photometric_gate(const Correspondences& c, const LandingPlanes& planes,
                         const Matrix3d& H_floor_px, const Matrix3d& H_top_px, const cv::Mat& gray_1,
-                        const cv::Mat& gray_2, const LandingParams& params);
+                        const cv::Mat& gray_2, const PhotometricLimits& limits = {});
 
 /// The plane check's verdict on the floor from the gammas of the patches around the floor's
 /// features (0 the floor's plane, 1 the top's): false when their median is farther than
-/// photometric_tol from 0, or when 5 or more spread wider than photometric_max_floor_spread
-/// (1.4826 times their median absolute deviation). A floor homography that does not register
-/// the floor (a plane turned about a line through the view) puts its patches on both sides of 0
-/// while their median may still sit near it. Fewer than photometric_min_patches: no verdict
-/// (true).
-bool floor_patches_agree(std::vector<double> gammas, const LandingParams& params);
+/// limits.tol from 0, or when 5 or more spread wider than limits.max_floor_spread (1.4826 times
+/// their median absolute deviation). A floor homography that does not register the floor (a
+/// plane turned about a line through the view) puts its patches on both sides of 0 while their
+/// median may still sit near it. No patch: no verdict (true); one decides: a false top that
+/// covers most of the view leaves one or two of the floor's features clear of it.
+bool floor_patches_agree(std::vector<double> gammas, const PhotometricLimits& limits = {});
 
 }  // namespace alight::vision

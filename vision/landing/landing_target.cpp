@@ -53,9 +53,8 @@ TargetOutcome platform_of(const Correspondences& c, const PipelineParams& params
     return refuse(std::move(out), Reason::kHeightOutOfRange);
   const bool cut = cut_by_border(c, planes, params.landing);
   const bool images = !gray_1.empty() && !gray_2.empty();
-  if (images && params.landing.photometric_tol > 0)
-    if (const Reason r =
-            photometric_gate(c, planes, H_floor_px, H_top_px, gray_1, gray_2, params.landing);
+  if (images)
+    if (const Reason r = photometric_gate(c, planes, H_floor_px, H_top_px, gray_1, gray_2);
         r != Reason::kOk)
       return refuse(std::move(out), r);
   // A top alone (no floor matches in sight) is seen whole where its features stop short of both
@@ -65,7 +64,7 @@ TargetOutcome platform_of(const Correspondences& c, const PipelineParams& params
   // estimate (a waypoint fails, the height leaves its range), the features' stands.
   if (out.reason == Reason::kOk && images) {
     if (const auto rim =
-            rim_rect(c, gray_1, gray_2, planes, X_WC2, pts_W, *features, widened, params.landing)) {
+            rim_rect(c, gray_1, gray_2, planes, X_WC2, pts_W, *features, widened, kTopEndSearchM)) {
       TargetEstimate at_rim = out.estimate;
       if (measure_top(c, planes, *rim, X_WC2, params, &at_rim) == Reason::kOk &&
           at_rim.height_m >= params.landing.min_height_m &&

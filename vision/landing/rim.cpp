@@ -267,10 +267,10 @@ struct EndSearch {
 std::optional<EndSearch> end_search(const Correspondences& c, const cv::Mat& gray_1,
                                     const cv::Mat& gray_2, const Matrix3d& H_12_top,
                                     const Isometry3d& X_WC2, const Side& side, double px_m,
-                                    const LandingParams& p) {
+                                    double end_search_m) {
   const double max_tan = std::tan(kRimMaxTurnDeg * M_PI / 180.0);
   EndSearch s;
-  s.n_search = static_cast<int>(std::ceil(p.top_end_search_m / px_m));
+  s.n_search = static_cast<int>(std::ceil(end_search_m / px_m));
   s.j_lo = -kEndInside, s.j_hi = s.n_search + kEndBeyond;
   auto grid = read_side(c, gray_1, gray_2, H_12_top, X_WC2, side, px_m, kEndMaxLines,
                         2 * kEndStretches, px_m, s.j_lo, s.j_hi, max_tan);
@@ -348,8 +348,7 @@ std::optional<Eigen::Vector2d> step_up(const EndSearch& s, const std::vector<dou
 // through them. A straight end steps in most stretches: the one farthest off is dropped while
 // it lies more than two pixels off, down to kEndStretches - 2 of them. nullopt without such a
 // line or with a turn beyond kRimMaxTurnDeg.
-std::optional<double> end_slope(const EndSearch& s, const Side& side, double px_m,
-                                const LandingParams& p) {
+std::optional<double> end_slope(const EndSearch& s, const Side& side, double px_m) {
   const int n_t = s.grid.n_t;
   std::vector<Eigen::Vector2d> at_stretch;  // (t - t_mid [m], end [px])
   for (int k = 0; k < kEndStretches; ++k) {
@@ -380,8 +379,7 @@ std::optional<double> end_slope(const EndSearch& s, const Side& side, double px_
 // Beyond the end e (on the whole side's share f) the top's plane fails for kEndBeyond pixels as
 // often as it fails at the end, part by part: the floor is busy from the end on, and the band
 // that an edge of a rug moves by between the views is no end. Inside, it explains the images.
-bool off_top_beyond(const EndSearch& s, const std::vector<double>& f, const Eigen::Vector2d& e,
-                    const LandingParams& p) {
+bool off_top_beyond(const EndSearch& s, const std::vector<double>& f, const Eigen::Vector2d& e) {
   const int j_end = static_cast<int>(std::lround(e.x()));
   const auto f_at = [&](int j) { return f[static_cast<size_t>(j - s.j_lo)]; };
   if (j_end + 1 + kEndBeyond - s.j_lo > static_cast<int>(f.size())) return false;
@@ -427,15 +425,15 @@ bool floor_beyond(const Correspondences& c, const cv::Mat& gray_1, const EndSear
 std::optional<Rim> top_end_offset(const Correspondences& c, const cv::Mat& gray_1,
                                   const cv::Mat& gray_2, const Matrix3d& H_12_top,
                                   const Matrix3d& H_12_floor, const Isometry3d& X_WC2,
-                                  const Side& side, double px_m, const LandingParams& p) {
-  const auto s = end_search(c, gray_1, gray_2, H_12_top, X_WC2, side, px_m, p);
+                                  const Side& side, double px_m, double end_search_m) {
+  const auto s = end_search(c, gray_1, gray_2, H_12_top, X_WC2, side, px_m, end_search_m);
   if (!s) return std::nullopt;
-  const auto slope = end_slope(*s, side, px_m, p);
+  const auto slope = end_slope(*s, side, px_m);
   if (!slope) return std::nullopt;
   const std::vector<double> f = share_off_top(*s, side, *slope, 0, s->grid.n_t);
   const auto e = step_up(*s, f);
   if (!e || e->y() < kTopEndMinRise) return std::nullopt;
-  if (!off_top_beyond(*s, f, *e, p) ||
+  if (!off_top_beyond(*s, f, *e) ||
       !floor_beyond(c, gray_1, *s, side, H_12_floor, static_cast<int>(std::lround(e->x())), *slope))
     return std::nullopt;
   return Rim{std::max(0.0, e->x()) * px_m, std::atan(*slope * px_m)};
@@ -447,7 +445,7 @@ std::optional<TopRect> rim_rect(const Correspondences& c, const cv::Mat& gray_1,
                                 const cv::Mat& gray_2, const LandingPlanes& planes,
                                 const Isometry3d& X_WC2, const std::vector<Vector3d>& pts_W,
                                 const TopRect& features, const TopRect& widened,
-                                const LandingParams& p) {
+                                double end_search_m) {
   // The reference's point of the top's plane seen at a current ray: the top's homography
   // (calibrated, x2 ~ H x1), which explains the top's features, not the poses' motion.
   const Matrix3d H_12 = planes.top.homography().inverse();
@@ -472,8 +470,9 @@ std::optional<TopRect> rim_rect(const Correspondences& c, const cv::Mat& gray_1,
       const Side side{features.origin_W + at * features.axis[k], sign * features.axis[k],
                       features.axis[o], t_lo, t_hi};
       auto rim = rim_offset(c, gray_1, gray_2, H_12, X_WC2, side, step_m);
-      if (!rim && p.top_end_search_m > 0)
-        rim = top_end_offset(c, gray_1, gray_2, H_12, H_12_floor, X_WC2, side, 2 * step_m, p);
+      if (!rim && end_search_m > 0)
+        rim = top_end_offset(c, gray_1, gray_2, H_12, H_12_floor, X_WC2, side, 2 * step_m,
+                             end_search_m);
       if (!rim) continue;
       const double s = at + sign * rim->d_m;
       (sign < 0 ? r.lo[k] : r.hi[k]) = s;

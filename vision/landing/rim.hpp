@@ -25,7 +25,7 @@
 //
 // The top's end: over a busy floor the mean grey beyond a rim need not step at all (a pale
 // margin of print against a patterned floor, a photograph's mid-grey against a circuit board).
-// A side without a rim step is then searched outward (top_end_search_m) for where the top's
+// A side without a rim step is then searched outward (kTopEndSearchM) for where the top's
 // homography stops explaining the two images: at each offset, the share of the pixels whose
 // grey differs between the views, read at the same point of the top's plane, by more than a
 // threshold (kTopEndMinDiff, and twice the top's own differences just inside the side). On
@@ -47,15 +47,22 @@
 
 namespace alight::vision {
 
+/// How far beyond the features a side without a rim step is searched for the top's end [m]: the
+/// features fall short of a side by their shortfall (a few centimetres) and by a print's bare
+/// margin or band (several more), a third of a 28 cm top's width in all; farther out, the floor
+/// read beyond the end lies ever farther from the features the top's plane was fitted on.
+constexpr double kTopEndSearchM = 0.1;
+
 /// The top out to its rims: each side of the features' extent (`features`, their points pts_W)
-/// moved to its rim where both images show one (else to the top's end where top_end_search_m
-/// > 0), else widened as `widened`; nullopt where no side has either. Two or more rims that
-/// agree on a turn turn the rectangle onto them, each side with a rim then where its rim crosses
-/// the middle of the stretch read. gray_1 / gray_2: the reference and current raw images.
+/// moved to its rim where both images show one (else to the top's end within end_search_m of the
+/// side: find_landing_target passes kTopEndSearchM; 0, no end search), else widened as
+/// `widened`; nullopt where no side has either. Two or more rims that agree on a turn turn the
+/// rectangle onto them, each side with a rim then where its rim crosses the middle of the
+/// stretch read. gray_1 / gray_2: the reference and current raw images.
 std::optional<TopRect> rim_rect(const Correspondences& c, const cv::Mat& gray_1,
                                 const cv::Mat& gray_2, const LandingPlanes& planes,
                                 const Isometry3d& X_WC2, const std::vector<Vector3d>& pts_W,
                                 const TopRect& features, const TopRect& widened,
-                                const LandingParams& p);
+                                double end_search_m);
 
 }  // namespace alight::vision

@@ -86,7 +86,7 @@ TEST(PlanePhotometry, GainAndOffsetBetweenTheFramesChangeNothing) {
 }
 
 // A blank surface says nothing about its height: the images share no texture (the landing
-// target's check takes no verdict below vision.landing.photometric_min_ncc, 0.5).
+// target's check takes no verdict below PhotometricLimits::min_ncc, 0.5).
 TEST(PlanePhotometry, BlankSurfaceGivesNoConfidentHeight) {
   const Pair p = planes();
   cv::Mat ref(480, 640, CV_8U, cv::Scalar(200)), noise(480, 640, CV_8U);

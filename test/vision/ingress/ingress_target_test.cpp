@@ -14,6 +14,7 @@
 
 #include "common/params.hpp"
 #include "vision/geometry/waypoint.hpp"
+#include "vision/ingress/wall.hpp"
 #include "vision/params.hpp"
 #include "vision/status.hpp"
 
@@ -332,9 +333,12 @@ TEST(IngressTargetTest, RoomOutmatchingTheWallIsNotTakenForTheWall) {
 // opening, its texture repeated): the room's repeats matched 60-560 px off their epipolar lines,
 // their rays crossed in front of the wall, and a third to a half of the block's features were
 // "in front": the behind check refused 700 of 824 refinement frames of the right opening, and
-// the target was lost. A match whose rays miss each other has no 3-D point and no say.
+// the target was lost. A match whose rays miss each other has no 3-D point and no say
+// (triangulate_matches, kMaxRayGapPx); without the gap check the mismatches' midpoints lie in
+// front of the wall, and as many points there (the same points matched right) refuse the opening.
 TEST(IngressTargetTest, MismatchesInTheRoomDoNotHideThatItIsBehind) {
   WallScene s(150, 60);
+  WallScene in_front = s;  // the same points, matched where they are seen
   const Isometry3d X_CW1 = camera_in_world(s.pose_1.X_WB(), s.mount.X_BC()).inverse();
   const Isometry3d X_CW2 = camera_in_world(s.pose_2.X_WB(), s.mount.X_BC()).inverse();
   const auto a = s.camera.project(X_CW2 * Vector3d(3.0, -0.3, 1.5));
@@ -356,19 +360,33 @@ TEST(IngressTargetTest, MismatchesInTheRoomDoNotHideThatItIsBehind) {
       continue;
     s.c.x1.push_back(*u1), s.c.x2.push_back(u2_wrong);
     s.c.u1.push_back(*u1), s.c.u2.push_back(u2_wrong);
+    in_front.c.x1.push_back(*u1), in_front.c.x2.push_back(*u2);
+    in_front.c.u1.push_back(*u1), in_front.c.u2.push_back(*u2);
     ++added;
   }
   PipelineParams params;
   params.ingress.parallax_mask = false;
-  ASSERT_GT(params.ingress.max_ray_gap_px, 0);
   const TargetOutcome t = find_ingress_target(s.c, s.image, cv::Mat(), params);
   ASSERT_EQ(t.reason, Reason::kOk) << to_string(t.reason);
   EXPECT_LT((t.estimate.p_W - Vector3d(3.0, 0.0, 1.2)).norm(), 0.01);
   EXPECT_NEAR(t.estimate.size_m[0], 0.6, 0.01);
-  // Where any crossing of two rays counts, the mismatches outvote the room.
-  params.ingress.max_ray_gap_px = 0;
-  const TargetOutcome unchecked = find_ingress_target(s.c, s.image, cv::Mat(), params);
-  EXPECT_EQ(unchecked.reason, Reason::kNotBehindWall) << to_string(unchecked.reason);
+  // The gap check leaves the 40 mismatches no point and every other match its own; without it,
+  // each has one in front of the wall (x < 3 m).
+  const auto checked = triangulate_matches(s.c, kMaxRayGapPx);
+  const auto unchecked = triangulate_matches(s.c, 0.0);
+  const size_t first_mismatch = s.c.size() - 40;
+  for (size_t k = 0; k < s.c.size(); ++k) {
+    if (k < first_mismatch) {
+      EXPECT_EQ(checked[k].has_value(), unchecked[k].has_value()) << k;
+    } else {
+      EXPECT_FALSE(checked[k]) << k;
+      ASSERT_TRUE(unchecked[k]) << k;
+      EXPECT_LT(unchecked[k]->x(), 3.0 - 0.2) << k;
+    }
+  }
+  // Where such points count, they outvote the room.
+  const TargetOutcome outvoted = find_ingress_target(in_front.c, in_front.image, cv::Mat(), params);
+  EXPECT_EQ(outvoted.reason, Reason::kNotBehindWall) << to_string(outvoted.reason);
 }
 
 // Regression (issue 15, ingress_photo seed 9401: refused, its measured width 17 cm short): at

@@ -170,7 +170,7 @@ TEST(LandingMissionTest, ReplayGivesIdenticalResults) {
 // have broken) every candidate was taken from the hover point, the baseline vanishes and the
 // platform with it. A short history (8 frames) stands for the 1-2 s after which that happened in
 // flight; the hover's frames are the last moving frame's image at later times.
-testing::Sequence move_then_hover(int n_move, int n_hover) {
+testing::Sequence move_then_hover(int n_move, int n_hover, int64_t hover_step_us = 100'000) {
   const std::string root = alight::build::source_dir();
   const Vector3d top =
       sim::build_scene(sim::load_scenario(root + "/config/scenarios/landing_b.yaml"), 4)
@@ -181,7 +181,7 @@ testing::Sequence move_then_hover(int n_move, int n_hover) {
   const testing::Frame last = seq.frames.back();
   for (int i = 1; i <= n_hover; ++i) {
     testing::Frame f = last;
-    f.utime = last.utime + i * 100'000;
+    f.utime = last.utime + i * hover_step_us;
     f.pose.utime = f.utime;
     seq.frames.push_back(f);
   }
@@ -255,17 +255,23 @@ TEST(TargetLostWhileHovering, AHeldReferenceOutOfViewIsNotHeld) {
 }
 
 TEST(TargetLostWhileHovering, AHeldReferenceExpiresAfterHoldMaxAge) {
+  // Hover frames 2.5 s apart (the tracker taking gaps of up to 5 s), so that 25 of them outlast
+  // kHoldMaxAgeS: the reference from before the hover is held while it is younger, then dropped.
   const int n_move = 7, n_hover = 25;
   auto params = short_history(true);
-  params.landing.hold_max_age_s = 1.5;  // frames 0.1 s apart: held from before the hover
-  const auto seq = move_then_hover(n_move, n_hover);
+  params.tracker.max_frame_gap_s = 5.0;
+  const auto seq = move_then_hover(n_move, n_hover, 2'500'000);
+  ASSERT_GT((seq.frames.back().utime - seq.frames[n_move - 1].utime) * 1e-6, kHoldMaxAgeS + 5.0);
   const auto results = run(seq, Mission::kLanding, params);
+  int held = 0;
   for (int i = n_move; i < n_move + n_hover; ++i) {
     const double age_s = (results[i].utime - results[i].ref_utime) * 1e-6;
     if (results[i].ref_held) {
-      EXPECT_LE(age_s, 1.5 + 1e-9) << i;
+      EXPECT_LE(age_s, kHoldMaxAgeS + 1e-9) << i;
+      ++held;
     }
   }
+  EXPECT_GT(held, 0);
   EXPECT_EQ(results.back().reason, Reason::kSmallBaseline) << to_string(results.back().reason);
 }
 

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <limits>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
@@ -15,6 +16,7 @@
 #include "test/vision/test_images.hpp"
 #include "vision/geometry/known_floor.hpp"
 #include "vision/geometry/waypoint.hpp"
+#include "vision/landing/rim.hpp"
 
 namespace alight::vision {
 namespace {
@@ -69,6 +71,76 @@ struct View {
 
 bool found(const TargetOutcome& o) {
   return o.reason == Reason::kOk || o.reason == Reason::kPartialView;
+}
+
+// The paper's planes of c (find_landing_target's first source), nullopt where they fail.
+std::optional<LandingPlanes> paper_planes_of(const Correspondences& c,
+                                             const PipelineParams& params) {
+  TargetOutcome out;
+  out.labels.assign(c.size(), Label::kOutlier);
+  auto planes = paper_planes(c, params, &out);
+  if (!planes) return std::nullopt;
+  return *planes;
+}
+
+// The planes find_landing_target takes its outcome from (its floor_prior's choice,
+// landing_target.hpp): in "fallback", the paper's where they give a platform on the known floor,
+// else the known floor's where those give one, else the paper's. nullopt where the chosen source
+// has none.
+std::optional<LandingPlanes> planes_of(const Correspondences& c, const PipelineParams& params,
+                                       const cv::Mat& gray_1 = cv::Mat(),
+                                       const cv::Mat& gray_2 = cv::Mat()) {
+  const std::string& mode = params.landing.floor_prior;
+  PipelineParams one_source = params;
+  std::optional<LandingPlanes> paper;
+  if (mode != "always") {
+    paper = paper_planes_of(c, params);
+    one_source.landing.floor_prior = "off";
+    if (mode == "off" || (paper && found(find_landing_target(c, one_source, gray_1, gray_2)) &&
+                          floor_agrees(paper->floor, c, params)))
+      return paper;
+  }
+  one_source.landing.floor_prior = "always";
+  if (mode == "always" || found(find_landing_target(c, one_source, gray_1, gray_2))) {
+    auto known = known_floor_planes(c, params);
+    if (!known) return std::nullopt;
+    return *known;
+  }
+  return paper;
+}
+
+Matrix3d top_homography_px(const Correspondences& c, const LandingPlanes& planes) {
+  const Matrix3d K = c.camera->K();
+  return K * planes.top.homography() * K.inverse();
+}
+
+Matrix3d floor_homography_px(const Correspondences& c, const LandingPlanes& planes) {
+  const Matrix3d K = c.camera->K();
+  return K * planes.floor.homography() * K.inverse();
+}
+
+// The extent stage as find_landing_target runs it on `planes` (extent.hpp, rim.hpp): the top's
+// points without strays, the features' rectangle widened by their shortfall, with images out
+// to the rims (the top's end searched end_search_m beyond a side without one), measured.
+// nullopt where the measurement fails.
+std::optional<TargetEstimate> measured_top(const Correspondences& c, const PipelineParams& params,
+                                           const LandingPlanes& planes,
+                                           const cv::Mat& gray_1 = cv::Mat(),
+                                           const cv::Mat& gray_2 = cv::Mat(),
+                                           double end_search_m = kTopEndSearchM) {
+  const Isometry3d X_WC2 = camera_in_world(c.pose_2.X_WB(), c.mount->X_BC());
+  const MocapMotion m = mocap_motion(c.pose_1, c.pose_2, *c.mount);
+  const std::vector<Vector3d> pts_W =
+      top_points_W(c, planes, top_homography_px(c, planes), X_WC2, m.baseline_m, params);
+  if (pts_W.size() < 4) return std::nullopt;
+  const auto features = features_extent(pts_W, top_normal_W(planes, X_WC2));
+  if (!features) return std::nullopt;
+  TopRect r = widened_by_shortfall(*features, pts_W.size());
+  if (!gray_1.empty())
+    r = rim_rect(c, gray_1, gray_2, planes, X_WC2, pts_W, *features, r, end_search_m).value_or(r);
+  TargetEstimate e;
+  if (measure_top(c, planes, r, X_WC2, params, &e) != Reason::kOk) return std::nullopt;
+  return e;
 }
 
 // A floor seen from camera 1 at 1.54 m (the search height) and camera 2 baseline_m along the
@@ -191,7 +263,7 @@ TEST(FalseTargetOverABareFloor, TopWhoseMatchesTheFloorCarriesIsNoTarget) {
       }
     }
     const Matrix3d H = floor_homography_px(v);
-    EXPECT_FALSE(top_told_from_floor(v.c, top_in, H, 2.0, 0.25)) << "seed " << seed;
+    EXPECT_FALSE(top_told_from_floor(v.c, top_in, H, 2.0, kMaxTopOnFloorShare)) << "seed " << seed;
     EXPECT_TRUE(top_told_from_floor(v.c, top_in, H, 2.0, 1.0)) << "seed " << seed << ": off";
   }
 }
@@ -229,7 +301,8 @@ TEST(FalseTargetOverABareFloor, LowestDrawnTopIsToldFromTheFloor) {
     LowTop t = low_top(rng, 0.08);
     std::vector<uint8_t> top_in(t.v.c.size(), 0);
     for (size_t i = 140; i < top_in.size(); ++i) top_in[i] = 1;  // the 40 on the top
-    EXPECT_TRUE(top_told_from_floor(t.v.c, top_in, floor_homography_px(t.v), 2.0, 0.25))
+    EXPECT_TRUE(
+        top_told_from_floor(t.v.c, top_in, floor_homography_px(t.v), 2.0, kMaxTopOnFloorShare))
         << "seed " << seed;
   }
 }
@@ -280,8 +353,8 @@ TEST(LandingTopExtent, AStrayTopMatchOnTheFloorDoesNotStretchTheTop) {
         t.v.add(Vector3d(p2.x() + f * d.x(), p2.y() + f * d.y() + 0.03, 0.0), rng);
     }
     ASSERT_TRUE(added) << seed;
+    const size_t stray = 180;  // after low_top's 140 floor and 40 top matches
     PipelineParams params;
-    ASSERT_GT(params.landing.max_stray_top_share, 0);
     const TargetOutcome o = find_landing_target(t.v.c, params);
     ASSERT_TRUE(found(o)) << "seed " << seed << ": " << to_string(o.reason);
     // 40 features widened over a 30 x 24 cm top (the shortfall's spread: a few cm).
@@ -289,11 +362,27 @@ TEST(LandingTopExtent, AStrayTopMatchOnTheFloorDoesNotStretchTheTop) {
     EXPECT_LT(o.estimate.size_m[1], 0.28) << "seed " << seed;
     const Vector2d centre_error = (o.estimate.p_W - Vector3d(p2.x(), p2.y(), h)).head<2>();
     EXPECT_LT(centre_error.norm(), 0.02) << "seed " << seed;
-    params.landing.max_stray_top_share = 0;
-    const TargetOutcome stretched = find_landing_target(t.v.c, params);
-    ASSERT_TRUE(found(stretched)) << "seed " << seed << ": " << to_string(stretched.reason);
-    EXPECT_GT(stretched.estimate.size_m[0] + stretched.estimate.size_m[1], 0.30 + 0.24 + 0.15)
+    // The rule at the extent stage, on the planes o was measured on: the stray is a top
+    // inlier, kMaxStrayTopShare drops it, a share of 0 keeps it.
+    const auto planes = planes_of(t.v.c, params);
+    ASSERT_TRUE(planes) << "seed " << seed;
+    const auto again = measured_top(t.v.c, params, *planes);
+    ASSERT_TRUE(again) << "seed " << seed;
+    EXPECT_NEAR(again->size_m[0], o.estimate.size_m[0], 1e-9) << "seed " << seed;
+    EXPECT_NEAR(again->size_m[1], o.estimate.size_m[1], 1e-9) << "seed " << seed;
+    ASSERT_TRUE(planes->top_in[stray]) << "seed " << seed;
+    const Matrix3d H_top = top_homography_px(t.v.c, *planes);
+    const double threshold_px = params.homography.threshold_px;
+    EXPECT_FALSE(without_strays(t.v.c, *planes, H_top, threshold_px, kMaxStrayTopShare)[stray])
         << "seed " << seed;
+    EXPECT_EQ(without_strays(t.v.c, *planes, H_top, threshold_px, 0.0), planes->top_in)
+        << "seed " << seed;
+    // Kept (no floor match off the top's plane to show it a stray), it stretches the top.
+    LandingPlanes no_floor_seen = *planes;
+    std::fill(no_floor_seen.floor_in.begin(), no_floor_seen.floor_in.end(), 0);
+    const auto stretched = measured_top(t.v.c, params, no_floor_seen);
+    ASSERT_TRUE(stretched) << "seed " << seed;
+    EXPECT_GT(stretched->size_m[0] + stretched->size_m[1], 0.30 + 0.24 + 0.15) << "seed " << seed;
   }
 }
 
@@ -382,10 +471,10 @@ RenderedTop rendered_top(uint64_t seed) {
 
 // Regression (issue 15, landing_none_photo 9501, 9505: "tops" 4-9 cm up from matches tracked
 // a few pixels wrong, found by the features' rules alone). The same matches as a true 8 cm top
-// over the floor; the images decide (vision.landing.photometric_tol): where they show the top,
-// it is found; where they show a bare floor, every pixel of the "top" follows the floor's plane
-// and it is refused; where they are blank or not of the camera's size, they say nothing and the
-// features decide.
+// over the floor; the images decide (photometric_gate): where they show the top, it is found;
+// where they show a bare floor, every pixel of the "top" follows the floor's plane and it is
+// refused by the images' check, the last gate (so without it the features would take it); where
+// they are blank or not of the camera's size, they say nothing and the features decide.
 TEST(FalseTargetOverABareFloor, TopTheImagesShowToBeFloorIsNoTarget) {
   const cv::Mat blank(480, 640, CV_8U, cv::Scalar(200));
   for (uint64_t seed = 1; seed <= 6; ++seed) {
@@ -399,39 +488,54 @@ TEST(FalseTargetOverABareFloor, TopTheImagesShowToBeFloorIsNoTarget) {
       ASSERT_TRUE(found(features)) << "seed " << seed << " " << mode;
       EXPECT_TRUE(found(find_landing_target(v.c, params, ref, with_top)))
           << "seed " << seed << " " << mode;
-      EXPECT_FALSE(found(find_landing_target(v.c, params, ref, bare)))
-          << "seed " << seed << " " << mode;
+      // Refused where the features alone find it: the images' check is the one gate that the
+      // images add (the rim search only measures a top found).
+      const Reason r = find_landing_target(v.c, params, ref, bare).reason;
+      EXPECT_NE(r, Reason::kOk) << "seed " << seed << " " << mode;
+      EXPECT_NE(r, Reason::kPartialView) << "seed " << seed << " " << mode;
+      // On the planes the features are found on, the images' check refuses.
+      const auto planes = planes_of(v.c, params);
+      ASSERT_TRUE(planes) << "seed " << seed << " " << mode;
+      const Reason gate = photometric_gate(v.c, *planes, floor_homography_px(v.c, *planes),
+                                           top_homography_px(v.c, *planes), ref, bare);
+      EXPECT_TRUE(gate == Reason::kTopPhotometry || gate == Reason::kFloorPhotometry)
+          << "seed " << seed << " " << mode << ": " << to_string(gate);
       EXPECT_TRUE(found(find_landing_target(v.c, params, blank, blank)))
           << "seed " << seed << " " << mode;
       cv::Mat half;  // images not of the camera's size say nothing
       cv::resize(bare, half, cv::Size(320, 240));
       EXPECT_TRUE(found(find_landing_target(v.c, params, ref, half)))
           << "seed " << seed << " " << mode;
-      params.landing.photometric_tol = 0;  // off: the features alone
-      EXPECT_TRUE(found(find_landing_target(v.c, params, ref, bare)))
-          << "seed " << seed << " " << mode;
-      params.landing.photometric_tol = LandingParams{}.photometric_tol;
     }
   }
 }
 
 // Regression (landing_none_photo 9506): a false top's pixels fitted gamma 0.21 with a standard
-// deviation of 0.12, just over photometric_max_sigma, so they gave no verdict and the top was
-// taken. An uncertain gamma still refuses when it sits photometric_far_sigmas standard
-// deviations beyond the tolerance. With every estimate counted uncertain (max_sigma tiny, which
-// also silences the floor's patches), the bare floor is refused by that rule alone, the true top
-// is still found, and without the rule (far_sigmas huge) the bare floor passes.
+// deviation of 0.12, just over PhotometricLimits::max_sigma, so they gave no verdict and the top
+// was taken. An uncertain gamma still refuses when it sits far_sigmas standard deviations beyond
+// the tolerance. The gate on the top's planes with every estimate counted uncertain (max_sigma
+// tiny, which also silences the floor's patches): the bare floor is refused for the top's pixels
+// by that rule alone, the true top passes, and without the rule (far_sigmas huge) the bare floor
+// passes.
 TEST(FalseTargetOverABareFloor, UncertainTopFarFromItsPlaneIsStillRefused) {
   for (uint64_t seed = 1; seed <= 6; ++seed) {
     const RenderedTop r = rendered_top(seed);
     const View& v = r.t.v;
     const cv::Mat &ref = r.ref, &with_top = r.with_top, &bare = r.bare;
-    PipelineParams params;
-    params.landing.photometric_max_sigma = 1e-9;
-    EXPECT_TRUE(found(find_landing_target(v.c, params, ref, with_top))) << "seed " << seed;
-    EXPECT_FALSE(found(find_landing_target(v.c, params, ref, bare))) << "seed " << seed;
-    params.landing.photometric_far_sigmas = 1e9;
-    EXPECT_TRUE(found(find_landing_target(v.c, params, ref, bare))) << "seed " << seed;
+    const auto planes = planes_of(v.c, PipelineParams{});
+    ASSERT_TRUE(planes) << "seed " << seed;
+    const Matrix3d H_floor = floor_homography_px(v.c, *planes),
+                   H_top = top_homography_px(v.c, *planes);
+    PhotometricLimits uncertain;
+    uncertain.max_sigma = 1e-9;
+    EXPECT_EQ(photometric_gate(v.c, *planes, H_floor, H_top, ref, with_top, uncertain), Reason::kOk)
+        << "seed " << seed;
+    EXPECT_EQ(photometric_gate(v.c, *planes, H_floor, H_top, ref, bare, uncertain),
+              Reason::kTopPhotometry)
+        << "seed " << seed;
+    uncertain.far_sigmas = 1e9;
+    EXPECT_EQ(photometric_gate(v.c, *planes, H_floor, H_top, ref, bare, uncertain), Reason::kOk)
+        << "seed " << seed;
   }
 }
 
@@ -442,7 +546,7 @@ TEST(FalseTargetOverABareFloor, UncertainTopFarFromItsPlaneIsStillRefused) {
 // (landing_photo 9910-9919, 6698 frames with 5 or more patches: spread p99 0.10) agrees, a
 // floor off 0 is refused by its median, and too few patches give no verdict.
 TEST(FalseTargetOverABareFloor, FloorPatchesSpreadOnBothSidesOfZeroAreRefused) {
-  const LandingParams p;
+  const PhotometricLimits p;
   const std::vector<double> none_9725 = {-0.31, -0.66, -0.69, -0.32, -0.34, -0.39,
                                          -0.21, -0.26, -0.29, -0.02, -0.00, 1.60,
                                          0.41,  0.43,  1.15,  0.77,  0.45,  0.67};
@@ -454,8 +558,8 @@ TEST(FalseTargetOverABareFloor, FloorPatchesSpreadOnBothSidesOfZeroAreRefused) {
   EXPECT_FALSE(floor_patches_agree(none_9725, p));
   EXPECT_FALSE(floor_patches_agree(none_9730, p));
   EXPECT_TRUE(floor_patches_agree(photo_9910, p));
-  LandingParams no_spread = p;  // their medians alone pass
-  no_spread.photometric_max_floor_spread = 1e9;
+  PhotometricLimits no_spread = p;  // their medians alone pass
+  no_spread.max_floor_spread = 1e9;
   EXPECT_TRUE(floor_patches_agree(none_9725, no_spread));
   EXPECT_TRUE(floor_patches_agree(none_9730, no_spread));
   std::vector<double> raised = photo_9910;  // the whole floor a third of the way up
@@ -687,10 +791,17 @@ TEST(TopEnd, ABusyFloorEndsTheTopWhereNoRimSteps) {
     const TargetOutcome o = find_landing_target(b.view.c, params, b.image_1, b.image_2);
     ASSERT_TRUE(found(o)) << "seed " << seed << ": " << to_string(o.reason);
     expect_measured(o, scene, 0.01, 0.01, seed);
-    params.landing.top_end_search_m = 0;
-    const TargetOutcome features = find_landing_target(b.view.c, params, b.image_1, b.image_2);
-    ASSERT_TRUE(found(features)) << "seed " << seed;
-    EXPECT_LT(features.estimate.size_m[1], scene.width - 0.04) << "seed " << seed;
+    // The extent stage on the planes o was measured on, the top's end searched kTopEndSearchM
+    // beyond the features as find_landing_target does, and not at all.
+    const auto planes = planes_of(b.view.c, params, b.image_1, b.image_2);
+    ASSERT_TRUE(planes) << "seed " << seed;
+    const auto searched = measured_top(b.view.c, params, *planes, b.image_1, b.image_2);
+    ASSERT_TRUE(searched) << "seed " << seed;
+    EXPECT_NEAR(searched->size_m[0], o.estimate.size_m[0], 1e-9) << "seed " << seed;
+    EXPECT_NEAR(searched->size_m[1], o.estimate.size_m[1], 1e-9) << "seed " << seed;
+    const auto features = measured_top(b.view.c, params, *planes, b.image_1, b.image_2, 0.0);
+    ASSERT_TRUE(features) << "seed " << seed;
+    EXPECT_LT(features->size_m[1], scene.width - 0.04) << "seed " << seed;
   }
 }
 
@@ -715,7 +826,9 @@ TEST(TopAlone, ATopAloneInsideBothViewsIsSeenWhole) {
 // Each gate refuses with its own reason (gates.hpp): the 8 cm top of
 // LowestDrawnTopOverTheSameFloorIsFound, found on the paper's planes with the shipped
 // parameters, is refused by exactly the gate whose parameter is set past it, with that gate's
-// reason.
+// reason. The top told from the floor (kMaxTopOnFloorShare, a constant): its planes pass the
+// gates, and with a third of the "top" made of the floor's matches next to it, plane_gates
+// refuses them for that.
 struct GateCase {
   const char* name;
   void (*set)(PipelineParams*);
@@ -728,8 +841,6 @@ TEST(LandingGates, EachGateRefusesWithItsOwnReason) {
        Reason::kTopNotParallel},
       {"floor around the top", [](PipelineParams* p) { p->landing.min_floor_inliers = 100000; },
        Reason::kNoFloorAroundTop},
-      {"top told from the floor", [](PipelineParams* p) { p->landing.max_top_on_floor_share = -1; },
-       Reason::kTopFitsFloor},
       {"top level", [](PipelineParams* p) { p->landing.max_tilt_deg = 0; }, Reason::kTopTilted},
       {"height in range", [](PipelineParams* p) { p->landing.min_height_m = 0.5; },
        Reason::kHeightOutOfRange},
@@ -750,6 +861,32 @@ TEST(LandingGates, EachGateRefusesWithItsOwnReason) {
       const Reason r = find_landing_target(t.v.c, refused).reason;
       EXPECT_EQ(r, g.reason) << g.name << ", seed " << seed << ": " << to_string(r);
     }
+    const auto planes = paper_planes_of(t.v.c, params);
+    ASSERT_TRUE(planes) << "seed " << seed;
+    const Matrix3d H_top = top_homography_px(t.v.c, *planes),
+                   H_floor = floor_homography_px(t.v.c, *planes);
+    const MocapMotion m = mocap_motion(t.v.c.pose_1, t.v.c.pose_2, *t.v.c.mount);
+    EXPECT_EQ(plane_gates(t.v.c, *planes, H_top, H_floor, m, params), Reason::kOk)
+        << "seed " << seed;
+    // The floor's matches nearest the top's (their centroid in image 2), half as many as the
+    // top's, join the top's inliers: a third of them then fit the floor's homography.
+    Vector2d centre = Vector2d::Zero();
+    std::vector<size_t> floor_i;
+    for (size_t i = 0; i < t.v.c.size(); ++i) {
+      if (planes->top_in[i]) centre += t.v.c.x2[i] / static_cast<double>(planes->n_top);
+      if (planes->floor_in[i] && !planes->top_in[i]) floor_i.push_back(i);
+    }
+    std::sort(floor_i.begin(), floor_i.end(), [&](size_t a, size_t b) {
+      return (t.v.c.x2[a] - centre).norm() < (t.v.c.x2[b] - centre).norm();
+    });
+    ASSERT_GE(floor_i.size(), static_cast<size_t>(planes->n_top / 2 + 20)) << "seed " << seed;
+    LandingPlanes joined = *planes;
+    for (int k = 0; k < planes->n_top / 2; ++k) {
+      joined.top_in[floor_i[static_cast<size_t>(k)]] = 1;
+      joined.floor_in[floor_i[static_cast<size_t>(k)]] = 0;
+    }
+    const Reason r = plane_gates(t.v.c, joined, H_top, H_floor, m, params);
+    EXPECT_EQ(r, Reason::kTopFitsFloor) << "seed " << seed << ": " << to_string(r);
   }
   EXPECT_GE(tested, 4);
 }
