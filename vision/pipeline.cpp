@@ -233,6 +233,8 @@ Correspondences Pipeline::correspondences(const TrackedFrame& a, const TrackedFr
   c.mount = &mount_;
   c.readout_1 = &a.readout;
   c.readout_2 = &b.readout;
+  if (a.readout.rolling()) c.grid_1 = std::make_shared<const EpochPixelGrid>(camera_, a.readout);
+  if (b.readout.rolling()) c.grid_2 = std::make_shared<const EpochPixelGrid>(camera_, b.readout);
   const bool rolling = a.readout.rolling() || b.readout.rolling();
   const Matrix3d K = camera_.K();
   for (const auto& m : matches) {

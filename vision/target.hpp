@@ -4,6 +4,7 @@
 // detector reports for one frame.
 
 #include <cstdint>
+#include <memory>
 #include <opencv2/core.hpp>
 #include <vector>
 
@@ -26,6 +27,10 @@ struct Correspondences {
   /// the raw images at points of the geometry.
   const Readout* readout_1 = nullptr;
   const Readout* readout_2 = nullptr;
+  /// The readouts' inverses tabulated (rolling_shutter.hpp), set with each rolling readout: the
+  /// photometric gate reads the reference's through grid_1 alone. Null: pixel1 / pixel2 map
+  /// each ray exactly.
+  std::shared_ptr<const EpochPixelGrid> grid_1, grid_2;
   PoseSample pose_1, pose_2;  ///< motion-capture poses at the two exposures
   const CameraModel* camera = nullptr;
   const CameraMount* mount = nullptr;
@@ -37,13 +42,14 @@ struct Correspondences {
     return readout_2 ? ray_at_epoch(*camera, u, *readout_2) : camera->ray(u);
   }
   /// The raw pixel of a ray (any positive scale) of the reference's / current frame's row 0.
-  std::optional<Vector2d> pixel1(const Vector3d& r) const {
-    return readout_1 && readout_1->rolling() ? pixel_of_epoch_ray(*camera, r, *readout_1)
-                                             : camera->project(r);
-  }
-  std::optional<Vector2d> pixel2(const Vector3d& r) const {
-    return readout_2 && readout_2->rolling() ? pixel_of_epoch_ray(*camera, r, *readout_2)
-                                             : camera->project(r);
+  std::optional<Vector2d> pixel1(const Vector3d& r) const { return pixel(r, readout_1, grid_1); }
+  std::optional<Vector2d> pixel2(const Vector3d& r) const { return pixel(r, readout_2, grid_2); }
+
+ private:
+  std::optional<Vector2d> pixel(const Vector3d& r, const Readout* m,
+                                const std::shared_ptr<const EpochPixelGrid>& grid) const {
+    if (grid) return grid->pixel(r);
+    return m && m->rolling() ? pixel_of_epoch_ray(*camera, r, *m) : camera->project(r);
   }
 };
 

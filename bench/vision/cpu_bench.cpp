@@ -10,7 +10,9 @@
 // the same from run to run within a few percent); and, against the simulator's truth,
 // how often an opening was found and its width, height and centre errors (p5 / p50 / p95), so a
 // faster pipeline can be checked for accuracy on exactly the same frames. A digest of every
-// frame's outcome tells whether two builds give the same output.
+// frame's outcome tells whether two builds give the same output. A family joined to a camera
+// effect (landing_photo+rolling_shutter) is rendered with it, and a rolling shutter's line delay
+// reaches Pipeline::process with each frame, as the camera's driver stamps it.
 //
 //   build/bin/alight_vision_cpu_bench [--families ingress_photo,ingress_solid_photo]
 //       [--seeds 1,2,3] [--scenario FILE ...] [--passes 2] [--standoff-m 2.0] [--loop-s 8]
@@ -197,8 +199,8 @@ int main(int argc, char** argv) try {
         }
         const auto pose = poses.at(t);
         const double t0 = thread_cpu_ms();
-        const vision::FrameResult r =
-            pipeline.process(rec.frames[i].second, t, pose, scenario.camera.exposure_s);
+        const vision::FrameResult r = pipeline.process(
+            rec.frames[i].second, t, pose, scenario.camera.exposure_s, rec.line_delay_s);
         const double cpu = thread_cpu_ms() - t0;
         st.cpu_ms.push_back(cpu);
         if (pass == 0)

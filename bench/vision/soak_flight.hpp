@@ -86,6 +86,7 @@ struct Recorded {
   int64_t frame_release_us = 0;  // exposure -> available (half the exposure + camera latency)
   int64_t pose_release_us = 0;   // sample -> published (motion-capture latency)
   std::optional<sim::OpeningTruth> opening;  // the wall's opening, if any (truth)
+  double line_delay_s = 0.0;  // the frames' rolling-shutter row delay; 0: a global shutter [s]
 };
 
 // Flies two periods and keeps the second: frames exposed and poses sampled in it.
@@ -145,8 +146,10 @@ inline Recorded record_one_period(const sim::Scenario& scenario, const std::stri
     simulator.take_imu();
     // Frames are rendered only when taken: the first period is flown without rendering.
     if (now + 50'000 >= rec0) {
-      if (auto f = simulator.take_camera(); f && f->utime >= rec0 && f->utime < rec1)
+      if (auto f = simulator.take_camera(); f && f->utime >= rec0 && f->utime < rec1) {
         rec.frames.emplace_back(f->utime - rec0, f->pixels);
+        rec.line_delay_s = f->line_delay_s;
+      }
     }
   }
   const sim::Truth truth = simulator.truth();

@@ -11,9 +11,8 @@ namespace alight::vision {
 std::optional<PlanePhotometry> plane_photometry(
     const cv::Mat& gray_1, const cv::Mat& gray_2, const CameraModel& camera,
     const Matrix3d& H_floor_px, const Matrix3d& H_top_px, const std::vector<cv::Point>& pixels_u2,
-    int min_pixels, const Readout* readout_1, const Readout* readout_2) {
+    int min_pixels, const EpochPixelGrid* grid_1, const Readout* readout_2) {
   if (gray_1.empty() || gray_2.empty()) return std::nullopt;
-  const bool rolling_1 = readout_1 && readout_1->rolling();
   const bool rolling_2 = readout_2 && readout_2->rolling();
   const Matrix3d K = camera.K(), K_inv = K.inverse();
   const Matrix3d Hf_inv = H_floor_px.inverse(), Ht_inv = H_top_px.inverse();
@@ -32,10 +31,8 @@ std::optional<PlanePhotometry> plane_photometry(
                                        : camera.ray(Vector2d(q.x, q.y)));
     const Vector3d a = Hf_inv * x2, b = Ht_inv * x2;
     if (!(a.z() > 0 && b.z() > 0)) continue;
-    const auto u_floor =
-        rolling_1 ? pixel_of_epoch_ray(camera, K_inv * a, *readout_1) : camera.project(K_inv * a);
-    const auto u_top =
-        rolling_1 ? pixel_of_epoch_ray(camera, K_inv * b, *readout_1) : camera.project(K_inv * b);
+    const auto u_floor = grid_1 ? grid_1->pixel(K_inv * a) : camera.project(K_inv * a);
+    const auto u_top = grid_1 ? grid_1->pixel(K_inv * b) : camera.project(K_inv * b);
     if (!u_floor || !u_top) continue;
     const Vector2d step = *u_top - *u_floor;
     const Vector2d lo = *u_floor + gamma_of(0) * step, hi = *u_floor + gamma_of(kSteps - 1) * step;

@@ -30,12 +30,12 @@ struct PlanePhotometry {
 /// H_floor_px / H_top_px map undistorted reference pixels (K * ray) to the current ones;
 /// pixels_u2: the current raw image's pixels compared (at least one pixel inside its border).
 /// nullopt when fewer than min_pixels of them are seen in the reference at every gamma.
-/// readout_1 / readout_2: the frames' rolling-shutter readouts (null or not rolling: a global
-/// shutter), with which the homographies, fitted to rays at each frame's row 0
-/// (rolling_shutter.hpp), are taken back to the raw pixels.
+/// grid_1 / readout_2: the reference's rolling-shutter readout, tabulated, and the current
+/// frame's (null or not rolling: a global shutter), with which the homographies, fitted to rays
+/// at each frame's row 0 (rolling_shutter.hpp), are taken back to the raw pixels.
 std::optional<PlanePhotometry> plane_photometry(
     const cv::Mat& gray_1, const cv::Mat& gray_2, const CameraModel& camera,
     const Matrix3d& H_floor_px, const Matrix3d& H_top_px, const std::vector<cv::Point>& pixels_u2,
-    int min_pixels, const Readout* readout_1 = nullptr, const Readout* readout_2 = nullptr);
+    int min_pixels, const EpochPixelGrid* grid_1 = nullptr, const Readout* readout_2 = nullptr);
 
 }  // namespace alight::vision

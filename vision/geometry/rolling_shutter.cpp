@@ -85,4 +85,69 @@ std::optional<Vector2d> pixel_of_epoch_ray(const CameraModel& camera, const Vect
   return u;
 }
 
+EpochPixelGrid::EpochPixelGrid(const CameraModel& camera, const Readout& m)
+    : camera_(&camera),
+      m_(m),
+      pinhole_(!camera.has_distortion()),
+      nx_((camera.width - 1 + 2 * kMarginPx) / kStepPx + 2),
+      ny_((camera.height - 1 + 2 * kMarginPx) / kStepPx + 2) {}
+
+// Node (i, j) sits at raw pixel (i, j) x kStepPx - kMarginPx, a global shutter's pixel of its ray.
+EpochPixelGrid::Node EpochPixelGrid::node(int i, int j) const {
+  const size_t at = static_cast<size_t>(j) * nx_ + i;
+  if (node_[at] != Node::kUnset) return node_[at];
+  node_[at] = Node::kRefused;
+  const Vector2d g(i * kStepPx - kMarginPx, j * kStepPx - kMarginPx);
+  const Vector3d r = camera_->ray(g);
+  // A lens model's inverse can fail far out (a fisheye past its valid angle): such a node would
+  // interpolate a ray that is not its pixel's.
+  const auto back = camera_->project(r);
+  if (!back || (*back - g).norm() > 1e-6) return node_[at];
+  const auto u = pixel_of_epoch_ray(*camera_, r, m_);
+  if (!u) return node_[at];
+  shift_[at] = *u - g;
+  node_[at] = plane_depth(m_, r, Vector3d::Zero()) ? Node::kDepth : Node::kDirection;
+  return node_[at];
+}
+
+// Cell (i, j) spans nodes (i, j) to (i + 1, j + 1): interpolated where its four corners are
+// mapped with one model.
+EpochPixelGrid::Cell EpochPixelGrid::cell(int i, int j) const {
+  if (shift_.empty()) {
+    shift_.resize(static_cast<size_t>(nx_) * ny_);
+    node_.resize(shift_.size(), Node::kUnset);
+    cell_.resize(static_cast<size_t>(nx_ - 1) * (ny_ - 1), Cell::kUnset);
+  }
+  Cell& c = cell_[static_cast<size_t>(j) * (nx_ - 1) + i];
+  if (c != Cell::kUnset) return c;
+  const Node a = node(i, j);
+  const bool one_model =
+      a != Node::kRefused && node(i + 1, j) == a && node(i, j + 1) == a && node(i + 1, j + 1) == a;
+  c = one_model ? Cell::kInterpolated : Cell::kExact;
+  return c;
+}
+
+// CameraModel::project, in place for a lens without distortion (the lookup's hot path).
+std::optional<Vector2d> EpochPixelGrid::global_pixel(const Vector3d& r0) const {
+  if (!pinhole_) return camera_->project(r0);
+  if (r0.z() <= 1e-9) return std::nullopt;
+  return Vector2d(camera_->fx * (r0.x() / r0.z()) + camera_->cx,
+                  camera_->fy * (r0.y() / r0.z()) + camera_->cy);
+}
+
+std::optional<Vector2d> EpochPixelGrid::pixel(const Vector3d& r0) const {
+  const auto g = global_pixel(r0);
+  if (!g) return g;
+  const double x = (g->x() + kMarginPx) / kStepPx, y = (g->y() + kMarginPx) / kStepPx;
+  if (!(x >= 0 && y >= 0 && x < nx_ - 1 && y < ny_ - 1))
+    return pixel_of_epoch_ray(*camera_, r0, m_);
+  const int i = static_cast<int>(x), j = static_cast<int>(y);
+  if (cell(i, j) != Cell::kInterpolated) return pixel_of_epoch_ray(*camera_, r0, m_);
+  const Vector2d* top = &shift_[static_cast<size_t>(j) * nx_ + i];
+  const Vector2d* bottom = top + nx_;
+  const double fx = x - i, fy = y - j;
+  return *g + (1 - fy) * ((1 - fx) * top[0] + fx * top[1]) +
+         fy * ((1 - fx) * bottom[0] + fx * bottom[1]);
+}
+
 }  // namespace alight::vision

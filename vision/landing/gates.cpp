@@ -49,7 +49,7 @@ std::optional<PlanePhotometry> hull_photometry(const Correspondences& c,
     for (int u = box.x; u < box.x + box.width; u += stride)
       if (depth.depth(u, v) >= kClear) px.emplace_back(u, v);
   return plane_photometry(gray_1, gray_2, *c.camera, H_floor_px, H_top_px, px, kHullPixels / 10,
-                          c.readout_1, c.readout_2);
+                          c.grid_1.get(), c.readout_2);
 }
 
 // The gammas of up to kPatches patches around the floor's matches clear of the top's hull, the
@@ -78,7 +78,7 @@ std::vector<double> floor_patch_gammas(const Correspondences& c, const LandingPl
         if (inside.contains(cv::Point(u0 + du, v0 + dv))) px.emplace_back(u0 + du, v0 + dv);
     const auto patch =
         plane_photometry(gray_1, gray_2, *c.camera, H_floor_px, H_top_px, px,
-                         (kPatchHalf + 1) * (kPatchHalf + 1), c.readout_1, c.readout_2);
+                         (kPatchHalf + 1) * (kPatchHalf + 1), c.grid_1.get(), c.readout_2);
     if (informative(patch, 3 * p.max_sigma, p)) gammas.push_back(patch->gamma);
   }
   return gammas;

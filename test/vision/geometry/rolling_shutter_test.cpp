@@ -134,5 +134,52 @@ TEST(RollingShutterTest, FisheyeRaysAreUndistortedBeforeTheCorrection) {
   }
 }
 
+// The tabulated inverse against the exact one at every pixel of the frame and half a pixel off
+// it, for the three lenses, under a fast readout (40 us a row, 19 ms) while turning at 0.6 rad/s
+// and moving at 0.6 m/s 1.5 m over the floor.
+TEST(RollingShutterTest, TheGridMapsEveryPixelAsTheExactInverse) {
+  CameraModel pinhole, radtan, fisheye;
+  radtan.D = {-0.25, 0.07, 0.001, -0.001, 0.0};
+  fisheye.distortion = CameraModel::Distortion::kEquidistant;
+  fisheye.D = {-0.05, 0.01, 0.0, 0.0, 0.0};
+  const CameraMount mount = downward_mount();
+  const PoseSample p0 = moving_pose();
+  for (const auto& plane : {std::optional<ScenePlane>(ScenePlane{Vector3d::UnitZ(), 0.0}),
+                            std::optional<ScenePlane>()}) {
+    const Readout m = readout_motion(p0, mount, 40e-6, plane);
+    for (const CameraModel* cam : {&pinhole, &radtan, &fisheye}) {
+      const EpochPixelGrid grid(*cam, m);
+      double worst_px = 0, largest_shift_px = 0;
+      for (double v = -0.25; v < cam->height; v += 0.5)
+        for (double u = -0.25; u < cam->width; u += 0.5) {
+          const Vector3d r0 = cam->ray({u, v});
+          const auto exact = pixel_of_epoch_ray(*cam, r0, m);
+          const auto fast = grid.pixel(r0);
+          ASSERT_EQ(exact.has_value(), fast.has_value());
+          if (!exact) continue;
+          worst_px = std::max(worst_px, (*fast - *exact).norm());
+          largest_shift_px = std::max(largest_shift_px, (*exact - Vector2d(u, v)).norm());
+        }
+      EXPECT_GT(largest_shift_px, 3.0);  // a readout that matters
+      EXPECT_LT(worst_px, 1e-3) << cam->D[0] << (plane ? " on the floor" : " rotation only")
+                                << ", shifts up to " << largest_shift_px << " px";
+    }
+  }
+}
+
+// Off the grid (far outside the image) the exact inverse answers, to the bit; behind the camera
+// nothing.
+TEST(RollingShutterTest, TheGridLeavesRaysOffItToTheExactInverse) {
+  const CameraModel cam;
+  const Readout m =
+      readout_motion(moving_pose(), downward_mount(), 40e-6, ScenePlane{Vector3d::UnitZ(), 0.0});
+  const EpochPixelGrid grid(cam, m);
+  for (const Vector3d& r0 : {Vector3d(-0.7, 0.1, 1.0), Vector3d(0.2, 0.9, 1.0)}) {
+    ASSERT_TRUE(pixel_of_epoch_ray(cam, r0, m));
+    EXPECT_EQ(*grid.pixel(r0), *pixel_of_epoch_ray(cam, r0, m));
+  }
+  EXPECT_FALSE(grid.pixel(Vector3d(0.1, 0.1, -1.0)));
+}
+
 }  // namespace
 }  // namespace alight::vision
