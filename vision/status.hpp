@@ -49,14 +49,14 @@ enum class Reason : int8_t {
   kExposureChange = 31,  ///< the brightness stepped beyond ExposureGuard::kStepEv: not tracked
   kDuplicateFrame = 32,  ///< the previous frame's pixels again (the driver's repeat): not tracked
   kFrameGap = 33,        ///< no reference: a gap in the frames' times broke the tracks
-  kTopParallaxGap = 34,  ///< landing: the planes' parallax too small somewhere on the top
+  kTopParallaxGap = 34,  ///< landing: seen in part, the top reaching into the epipole's gap
 };
 
 const char* to_string(Reason r);
 
 /// Not found, but located: in view and worth flying to, never averaged into an estimate.
 inline bool located_only(Reason r) {
-  return r == Reason::kPartialView || r == Reason::kLowParallax;
+  return r == Reason::kPartialView || r == Reason::kLowParallax || r == Reason::kTopParallaxGap;
 }
 
 /// A value or the reason there is none.

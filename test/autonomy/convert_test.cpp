@@ -55,7 +55,8 @@ TEST(AutonomyConvertTest, LocatedOnlyTargetsArePartial) {
   m.found = false;
   m.p_W_target[0] = 3.0;
   m.n_W[0] = -1.0;
-  for (const int8_t reason : {target_t::REASON_PARTIAL_VIEW, target_t::REASON_LOW_PARALLAX}) {
+  for (const int8_t reason : {target_t::REASON_PARTIAL_VIEW, target_t::REASON_LOW_PARALLAX,
+                              target_t::REASON_TOP_PARALLAX_GAP}) {
     m.reason = reason;
     const TargetMeasurement t = from_msg(wire(m));
     EXPECT_FALSE(t.found);

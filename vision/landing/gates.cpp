@@ -101,9 +101,6 @@ Reason plane_gates(const Correspondences& c, const LandingPlanes& planes, const 
   if (!top_told_from_floor(c, planes.top_in, H_floor_px, params.homography.threshold_px,
                            kMaxTopOnFloorShare))
     return Reason::kTopFitsFloor;
-  if (!top_clear_of_epipole(c, planes.top_in, H_floor_px, H_top_px, mocap,
-                            params.homography.threshold_px))
-    return Reason::kTopParallaxGap;
   if (mocap.baseline_m < params.waypoint.min_baseline_m) return Reason::kSmallBaseline;
   return Reason::kOk;
 }

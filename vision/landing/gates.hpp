@@ -4,8 +4,8 @@
 // and the floor beyond. Each refuses the frame with its own reason (vision/status.hpp), so a
 // frame's target_t.reason says which gate refused it. In the order find_landing_target applies
 // them: the top parallel to the floor (kTopNotParallel), the floor seen around it
-// (kNoFloorAroundTop), its matches not the floor's (kTopFitsFloor), told from it all over
-// (kTopParallaxGap), a baseline for a scale (kSmallBaseline); once the top's features are placed on
+// (kNoFloorAroundTop), its matches not the floor's (kTopFitsFloor), a baseline for a scale
+// (kSmallBaseline); once the top's features are placed on
 // its plane, the top level (kTopTilted); once it is measured (extent.hpp), its height in range
 // (kHeightOutOfRange) and the images' check of both planes (kTopPhotometry, kFloorPhotometry).
 
@@ -28,8 +28,7 @@ constexpr double kMaxTopOnFloorShare = 0.25;
 /// floor's (kTopNotParallel); unless the top is alone, the floor seen around it in at least
 /// min_floor_inliers places (kNoFloorAroundTop, floor_seen_around_top); at most
 /// kMaxTopOnFloorShare of the top's matches carried by the floor's homography too
-/// (kTopFitsFloor, top_told_from_floor); the top told from the floor all over it
-/// (kTopParallaxGap, top_clear_of_epipole); motion capture's baseline at least min_baseline_m
+/// (kTopFitsFloor, top_told_from_floor); motion capture's baseline at least min_baseline_m
 /// for the scale of eq. 3 (kSmallBaseline). kOk when all pass. H_top_px / H_floor_px: the
 /// planes' pixel homographies, image 1 to 2; `mocap`: the cameras' motion between them.
 Reason plane_gates(const Correspondences& c, const LandingPlanes& planes, const Matrix3d& H_top_px,
@@ -63,7 +62,8 @@ constexpr double kMinParallaxThresholds = 2.0;
 /// epipole: the parallax vanishes there and grows with the distance from it. Where the camera
 /// moved towards or away from the top (a descent or a climb over it) the epipole lies on or near
 /// the top, the top's matches around it fit the floor as well and drop out of the top, and the
-/// ones left make a rectangle of a part of the top, off its centre. False when the parallax at
+/// ones left make a rectangle of a part of the top, off its centre: such a top is located, not
+/// measured (kTopParallaxGap, reported like a view cut by the border). False when the parallax at
 /// the point of the top's inliers' convex hull nearest the epipole (none with the epipole inside
 /// the hull) is under kMinParallaxThresholds x threshold_px. `mocap` places the epipole (camera
 /// 1's centre seen from camera 2); fewer than 3 top inliers: true (the other gates decide).

@@ -58,8 +58,11 @@ TargetOutcome platform_of(const Correspondences& c, const PipelineParams& params
         r != Reason::kOk)
       return refuse(std::move(out), r);
   // A top alone (no floor matches in sight) is seen whole where its features stop short of both
-  // images' borders, as any top; close over it, it fills the view and is cut.
-  out.reason = cut ? Reason::kPartialView : Reason::kOk;
+  // images' borders, as any top; close over it, it fills the view and is cut. A top reaching into
+  // the epipole's parallax gap is seen in part too: located, its centre not measured.
+  const bool gap = !top_clear_of_epipole(c, planes.top_in, H_floor_px, H_top_px, mocap,
+                                         params.homography.threshold_px);
+  out.reason = cut ? Reason::kPartialView : gap ? Reason::kTopParallaxGap : Reason::kOk;
   // The top's rim, on a top seen whole (a cut top's size is never used): where the rims give no
   // estimate (a waypoint fails, the height leaves its range), the features' stands.
   if (out.reason == Reason::kOk && images) {
@@ -76,7 +79,7 @@ TargetOutcome platform_of(const Correspondences& c, const PipelineParams& params
 }
 
 bool found_or_partial(const TargetOutcome& o) {
-  return o.reason == Reason::kOk || o.reason == Reason::kPartialView;
+  return o.reason == Reason::kOk || located_only(o.reason);
 }
 
 }  // namespace

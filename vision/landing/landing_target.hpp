@@ -31,9 +31,10 @@ namespace alight::vision {
 /// outcome standing where neither gives one; "always" and "off" use one source only. Fails with
 /// the planes' reasons (planes.hpp), a gate's (gates.hpp), or the extent's (kDecompositionFailed,
 /// kMotionDisagrees: extent.hpp); kPartialView for a top cut by either image's border
-/// (cut_by_border). gray_1 / gray_2: the reference and current raw images, CV_8UC1 of the
-/// camera's size (the photometric gate, and the extent out to the top's rim);
-/// either empty or of another kind: the features alone decide.
+/// (cut_by_border), kTopParallaxGap for one reaching into the epipole's parallax gap
+/// (top_clear_of_epipole): both located, their centre not measured. gray_1 / gray_2: the reference
+/// and current raw images, CV_8UC1 of the camera's size (the photometric gate, and the extent out
+/// to the top's rim); either empty or of another kind: the features alone decide.
 TargetOutcome find_landing_target(const Correspondences& c, const PipelineParams& params,
                                   const cv::Mat& gray_1 = cv::Mat(),
                                   const cv::Mat& gray_2 = cv::Mat());
