@@ -263,7 +263,13 @@ PlatformFilter::Fused PlatformFilter::fuse(Track& t, const PlatformMeasurement& 
     }
     Eigen::Matrix4d R = measurement_cov(m, params_);
     if (partial) R.topLeftCorner<2, 2>() = kUnknownPositionVar * Matrix2d::Identity();
-    const Eigen::Vector4d z(m.p_W.x(), m.p_W.y(), m.v_W.x(), m.v_W.y());
+    // The measured velocity is the mean over vision's interval, the velocity at its middle: in a
+    // turn it is turned on to the measurement's time at the course's rate, or each one pulls the
+    // track's velocity back into the turn's past and its position out of the turn.
+    const double half_interval_s = 0.5 * double(m.utime - m.ref_utime) * 1e-6;
+    const double turn = t.course_rate * half_interval_s;
+    const Vector2d v_now = Eigen::Rotation2Dd(turn) * Vector2d(m.v_W.head<2>());
+    const Eigen::Vector4d z(m.p_W.x(), m.p_W.y(), v_now.x(), v_now.y());
     const double dt = double(m.utime - t.t_utime) * 1e-6;
     const Prediction ahead = predict(t, m.utime);
     Eigen::Vector4d xp;

@@ -26,7 +26,9 @@
 // passed in.
 //
 // The prediction turns the velocity at the course's turn rate (the filtered velocity's direction
-// over course_tau_s): a cart round a bend is led into it, not extrapolated off its path.
+// over course_tau_s): a cart round a bend is led into it, not extrapolated off its path. A
+// measured velocity is the mean over vision's interval, the velocity at its middle: it is turned
+// on to the measurement's time at that rate before it is fused.
 //
 // The deck's heave: the vertical velocities vision measures (each the mean over its interval,
 // at the interval's middle) in a window of heave_window_s, fitted by one sine of the

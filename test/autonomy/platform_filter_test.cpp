@@ -278,6 +278,28 @@ TEST(PlatformFilterTest, AnExtentFarLargerThanTheTopIsAnotherObject) {
   EXPECT_TRUE(f.update(near_whole));
 }
 
+TEST(PlatformFilterTest, RoundATurnSeenInPartItsVelocitiesKeepTheTrackOnThePath) {
+  // 0.5 m/s round 0.4 m, the top cut by the image's border for 3 s (vision's cut views: position
+  // variance 100 m^2): the track goes on its measured velocities alone. Each is the mean over
+  // vision's quarter second, the velocity an eighth of a second ago: taken as the velocity now,
+  // the track drifts out of the turn (12 cm over the 3 s).
+  PlatformPath m;
+  m.r = 0.4, m.v = 0.5, m.omega = 0;
+  PlatformFilter f{PlatformFilterParams{}};
+  std::mt19937_64 rng(12);
+  double t = kPfInterval;
+  for (; t < 3; t += kPfDt) f.update(measure_path(m, t, rng, 0.005, 0.01));
+  const double cut_at = t;
+  double worst = 0;
+  for (; t < cut_at + 3; t += kPfDt) {
+    auto z = measure_path(m, t, rng, 0.005, 0.01);
+    z.cov_p_W = 100 * Matrix3d::Identity();
+    EXPECT_TRUE(f.update(z));
+    worst = std::max(worst, (f.predict(z.utime).p_W - m.p(t)).norm());
+  }
+  EXPECT_LT(worst, 0.04);
+}
+
 TEST(PlatformFilterTest, FitsAKnownHeave) {
   PlatformPath m;
   m.straight = true;
