@@ -527,7 +527,7 @@ void Autonomy::handle_platform(const PlatformMeasurement& m) {
   if (!(std::holds_alternative<phases::Detection>(state_) ||
         std::holds_alternative<phases::Refinement>(state_)))
     return;
-  if (platform_.n_updates() < M.min_updates || !pose_) return;
+  if (!platform_.believed() || !pose_) return;
   const auto pr = platform_.predict(now_utime_);
   if (pr.v_W.norm() < M.min_speed_mps) return;
   estimator_.reset();
@@ -558,6 +558,7 @@ void Autonomy::step_moving(phases::Approach& a, const Vector3d& /*p*/, double dt
       f.touchdown.arm(now_utime_);
       sp_p_W_ = st.sp_p_W;
       sp_v_W_ = st.sp_v_W;
+      sp_a_W_ = st.sp_a_W;
       yaw_sp_rad_ = st.yaw_sp_rad;
       enter(std::move(f), st.reason);
       return;
@@ -568,6 +569,7 @@ void Autonomy::step_moving(phases::Approach& a, const Vector3d& /*p*/, double dt
   estimate_W_ << pr.p_W, pr.top_z_m;
   sp_p_W_ = st.sp_p_W;
   sp_v_W_ = st.sp_v_W;
+  sp_a_W_ = st.sp_a_W;
   yaw_sp_rad_ = st.yaw_sp_rad;
   reason_ = st.reason;
 }
@@ -615,6 +617,7 @@ void Autonomy::add_waypoint(phases::Refinement& r, const Vector3d& X_W) {
 void Autonomy::step_phase(double dt_s) {
   const Vector3d p = pose_ ? pose_->p_W_B : sp_p_W_;
   sp_v_W_.setZero();
+  sp_a_W_.setZero();
   std::visit(
       [&](auto& s) {
         using S = std::decay_t<decltype(s)>;
@@ -745,6 +748,7 @@ void Autonomy::step(phases::FinalDescent& s, const Vector3d& /*p*/, double dt_s)
       s.z_sp_m = std::max(z_floor, s.z_sp_m - L.final_descent_rate_mps * dt_s);
     sp_p_W_ << pr.p_W, s.z_sp_m;
     sp_v_W_ << pr.v_W, s.z_sp_m > z_floor ? -L.final_descent_rate_mps : 0.0;
+    sp_a_W_ << pr.a_W, 0.0;
     estimate_W_ << pr.p_W, pr.top_z_m;
     if (pose_fresh()) {
       PoseSample rel = *pose_;
@@ -855,9 +859,11 @@ void Autonomy::step(phases::FailsafeDescent& s, const Vector3d& /*p*/, double /*
 Output Autonomy::make_output() {
   // The last line of defence: whatever got through, a non-finite setpoint is never sent (NaN
   // passes cwiseMax / cwiseMin, so the geofence alone does not stop it).
-  if (!sp_p_W_.allFinite() || !sp_v_W_.allFinite() || !std::isfinite(yaw_sp_rad_)) {
+  if (!sp_p_W_.allFinite() || !sp_v_W_.allFinite() || !sp_a_W_.allFinite() ||
+      !std::isfinite(yaw_sp_rad_)) {
     sp_p_W_ = last_finite_sp_p_W_;
     sp_v_W_.setZero();
+    sp_a_W_.setZero();
     yaw_sp_rad_ = last_finite_yaw_rad_;
     if (Vector3d* held = held_position(); held && !held->allFinite()) *held = last_finite_sp_p_W_;
     reason_ = "non-finite setpoint refused: holding the last finite one";
@@ -872,6 +878,7 @@ Output Autonomy::make_output() {
   sp.utime = now_utime_;
   sp.p_W = motors_on_ ? clamped : sp_p_W_;
   sp.v_W = geofence_clamped_ ? Vector3d::Zero() : sp_v_W_;
+  sp.a_W = geofence_clamped_ ? Vector3d::Zero() : sp_a_W_;
   sp.yaw_rad = yaw_sp_rad_;
   sp.motors_on = motors_on_;
   sp.kill =

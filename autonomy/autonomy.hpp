@@ -251,6 +251,7 @@ class Autonomy {
   // Setpoint being commanded.
   Vector3d sp_p_W_ = Vector3d::Zero();
   Vector3d sp_v_W_ = Vector3d::Zero();
+  Vector3d sp_a_W_ = Vector3d::Zero();  // a moving platform's acceleration fed forward
   double yaw_sp_rad_ = 0.0;
   bool motors_on_ = false;
   bool geofence_clamped_ = false;

@@ -22,8 +22,6 @@ const ParamSchema<MovingLandingParams>& MovingLandingParams::schema() {
           "land on a platform that vision measures moving (VISION_PLATFORM)");
     s.add("min_speed_mps", &P::min_speed_mps, Range::gt(0), "m/s",
           "a platform this fast is landed on as a moving one");
-    s.add("min_updates", &P::min_updates, Range::ge(1), "",
-          "platform filter updates before it is trusted");
     s.add("follow_height_m", &P::follow_height_m, Range::gt(0), "m",
           "matching the platform's velocity this high above its top");
     s.add("final_height_m", &P::final_height_m, Range::gt(0), "m",
@@ -113,7 +111,10 @@ MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
     return out;
   }
   const auto pr = filter.predict(now_utime);
-  if (const auto why = too_fast(pr, params)) {
+  // A track not believed yet (started over on measurements its predecessor refused) is followed,
+  // but neither judged too fast nor descended onto.
+  const bool believed = filter.believed();
+  if (const auto why = believed ? too_fast(pr, params) : std::nullopt) {
     if (!s.too_fast_since_utime) s.too_fast_since_utime = now_utime;
     if (double(now_utime - *s.too_fast_since_utime) * 1e-6 >= params.too_fast_s) {
       out.next = MovingStep::Next::kTooFast;
@@ -131,7 +132,7 @@ MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
   const Vector2d offset = pose.p_W_B.head<2>() - pr.p_W;
   const Vector2d rel_v = pose.v_W_B.head<2>() - pr.v_W;
   const bool matched =
-      offset.norm() <= params.match_radial_m && rel_v.norm() <= params.match_speed_mps;
+      believed && offset.norm() <= params.match_radial_m && rel_v.norm() <= params.match_speed_mps;
   if (!matched) {
     s.matched_since_utime.reset();
   } else if (!s.matched_since_utime) {
@@ -140,6 +141,7 @@ MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
   const bool settled = s.matched_since_utime &&
                        double(now_utime - *s.matched_since_utime) * 1e-6 >= params.match_settle_s;
   out.sp_v_W << pr.v_W, 0.0;
+  out.sp_a_W << pr.a_W, 0.0;
   if (settled && s.z_sp_m > z_final) {
     s.z_sp_m = std::max(z_final, s.z_sp_m - descent_rate_mps * dt_s);
     out.sp_v_W.z() = -descent_rate_mps;

@@ -4,9 +4,9 @@
 // (autonomy/platform_filter.hpp) instead of the refinement's fixed estimate.
 //
 //  1. Match: over the platform's predicted centre at follow_height_m above its top, the
-//     platform's velocity fed forward and its long axis as the heading (the nearest of the four
-//     ways a rectangle's axes align, as the still landing does), until the vehicle's velocity
-//     relative to the platform is within match_speed_mps and its offset within
+//     platform's velocity and its turn's acceleration fed forward and its long axis as the heading
+//     (the nearest of the four ways a rectangle's axes align, as the still landing does), until the
+//     vehicle's velocity relative to the platform is within match_speed_mps and its offset within
 //     match_radial_m for match_settle_s.
 //  2. Descend at landing.descent_rate_mps while matched (the paper's e_r rule on the relative
 //     state), holding the altitude whenever not, down to final_height_m over the top.
@@ -15,7 +15,8 @@
 //     high and going down: the relative vertical speed at contact is the descent's minus the
 //     deck's, the lowest of the high half); no heave above heave_min_amplitude_m: at once;
 //     waited heave_max_wait_s: at once.
-//  4. The failsafe: a platform predicted faster than max_speed_mps or turning faster than
+//  4. The failsafe: a believed platform (PlatformFilter::believed) predicted faster than
+//     max_speed_mps or turning faster than
 //     max_yaw_rate_dps for too_fast_s is beyond what the vehicle follows
 //     (Failsafe::kPlatformTooFast: climb and hold).
 // Pure: the time is passed in.
@@ -32,7 +33,6 @@ namespace alight::autonomy {
 struct MovingLandingParams {
   bool enabled = true;
   double min_speed_mps = 0.15;  ///< a platform this fast is landed on as a moving one
-  int min_updates = 6;          ///< filter updates before it is trusted
   /// Matching the platform this high above its top [m]: the camera's view there is wide enough
   /// that a cart's turn stays in it while the vehicle follows.
   double follow_height_m = 1.0;
@@ -73,7 +73,7 @@ struct MovingApproach {
 struct MovingStep {
   enum class Next { kContinue, kFinalDescent, kTargetLost, kTooFast };
   Next next = Next::kContinue;
-  Vector3d sp_p_W = Vector3d::Zero(), sp_v_W = Vector3d::Zero();
+  Vector3d sp_p_W = Vector3d::Zero(), sp_v_W = Vector3d::Zero(), sp_a_W = Vector3d::Zero();
   double yaw_sp_rad = 0.0;
   std::string reason;
 };

@@ -2,7 +2,9 @@
 #include "autonomy/platform_filter.hpp"
 
 #include <Eigen/Cholesky>
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 namespace alight::autonomy {
 namespace {
@@ -41,7 +43,10 @@ const ParamSchema<PlatformFilterParams>& PlatformFilterParams::schema() {
     s.add("gate_chi2", &P::gate_chi2, Range::gt(0), "",
           "a measurement's position and velocity innovation beyond this (4 dof) is refused");
     s.add("max_consecutive_rejections", &P::max_consecutive_rejections, Range::ge(1), "",
-          "refused in a row: the filter starts over from the next measurement");
+          "refused in a row: the refused measurements' own track replaces the filter's (once "
+          "believed, if the filter's is)");
+    s.add("min_consistent", &P::min_consistent, Range::ge(2), "",
+          "measurements in a row within the gate before a track's motion is believed");
     s.add("stale_s", &P::stale_s, Range::gt(0), "s",
           "no measurement for this long: the filter starts over");
     s.add("min_sigma_m", &P::min_sigma_m, Range::gt(0), "m",
@@ -121,32 +126,53 @@ PlatformFilter::PlatformFilter(const PlatformFilterParams& params) : params_(par
   params_.validate();
 }
 
-void PlatformFilter::reset() {
-  t_utime_ = 0;
-  course_rate_ = 0;
-  consecutive_rejections_ = 0;
-  top_z_sum_ = 0;
-  n_z_ = 0;
-  vz_.clear();
-  heave_ = HeaveModel{};
+const char* PlatformFilter::to_string(Refusal r) {
+  switch (r) {
+    case Refusal::kNotFinite:
+      return "not finite";
+    case Refusal::kOutOfOrder:
+      return "out of order";
+    case Refusal::kGate:
+      return "beyond the gate";
+    case Refusal::kLargerThanTheTop:
+      return "larger than the top";
+  }
+  return "?";
 }
 
-PlatformFilter::Prediction PlatformFilter::predict(int64_t utime) const {
+void PlatformFilter::reset() {
+  track_ = Track{};
+  candidate_ = Track{};
+  consecutive_rejections_ = 0;
+}
+
+void PlatformFilter::refuse(Refusal r) {
+  ++n_rejected_;
+  ++refused_[static_cast<int>(r)];
+}
+
+bool PlatformFilter::believed(const Track& t) const {
+  return t.t_utime != 0 && t.n_consistent >= params_.min_consistent &&
+         double(t.t_utime - t.since_utime) * 1e-6 >= kConfirmS;
+}
+
+PlatformFilter::Prediction PlatformFilter::predict(const Track& t, int64_t utime) const {
   Prediction p;
-  const double dt = std::max(0.0, double(utime - t_utime_) * 1e-6);
-  // The path's turn (a cart round a bend): the velocity turned at course_rate_ over dt.
-  const double w = course_rate_, a = w * dt;
-  const Vector2d v = x_.tail<2>(), v_perp(-v.y(), v.x());
+  const double dt = std::max(0.0, double(utime - t.t_utime) * 1e-6);
+  // The path's turn (a cart round a bend): the velocity turned at the course's rate over dt.
+  const double w = t.course_rate, a = w * dt;
+  const Vector2d v = t.x.tail<2>(), v_perp(-v.y(), v.x());
   if (std::abs(a) > 1e-6) {
-    p.p_W = x_.head<2>() + (std::sin(a) * v + (1 - std::cos(a)) * v_perp) / w;
+    p.p_W = t.x.head<2>() + (std::sin(a) * v + (1 - std::cos(a)) * v_perp) / w;
     p.v_W = std::cos(a) * v + std::sin(a) * v_perp;
   } else {
-    p.p_W = x_.head<2>() + dt * v;
+    p.p_W = t.x.head<2>() + dt * v;
     p.v_W = v;
   }
+  p.a_W = w * Vector2d(-p.v_W.y(), p.v_W.x());
   Eigen::Matrix4d F = Eigen::Matrix4d::Identity();
   F.topRightCorner<2, 2>() = dt * Matrix2d::Identity();
-  Eigen::Matrix4d Pp = F * P_ * F.transpose();
+  Eigen::Matrix4d Pp = F * t.P * F.transpose();
   const Matrix2d q = cv_noise(params_.accel_psd, dt);
   for (int i = 0; i < 2; ++i) {
     Pp(i, i) += q(0, 0), Pp(i, i + 2) += q(0, 1), Pp(i + 2, i) += q(1, 0),
@@ -154,93 +180,203 @@ PlatformFilter::Prediction PlatformFilter::predict(int64_t utime) const {
   }
   p.cov_p = Pp.topLeftCorner<2, 2>();
   p.cov_v = Pp.bottomRightCorner<2, 2>();
-  p.yaw_rad = wrap_quarter(yaw_(0) + dt * yaw_(1));
-  p.yaw_rate_rps = yaw_(1);
-  p.var_yaw = P_yaw_(0, 0) + 2 * dt * P_yaw_(0, 1) + dt * dt * P_yaw_(1, 1) +
+  p.yaw_rad = wrap_quarter(t.yaw(0) + dt * t.yaw(1));
+  p.yaw_rate_rps = t.yaw(1);
+  p.var_yaw = t.P_yaw(0, 0) + 2 * dt * t.P_yaw(0, 1) + dt * dt * t.P_yaw(1, 1) +
               cv_noise(params_.yaw_accel_psd, dt)(0, 0);
-  p.top_z_m = n_z_ > 0 ? top_z_sum_ / n_z_ : 0.0;
+  p.top_z_m = t.n_z > 0 ? t.top_z_sum / t.n_z : 0.0;
   return p;
 }
 
-bool PlatformFilter::update(const PlatformMeasurement& m) {
-  if (!finite(m) || m.utime <= 0 || m.ref_utime >= m.utime) return false;
-  if (initialised() && m.utime <= t_utime_) return false;
-  if (initialised() && double(m.utime - t_utime_) * 1e-6 > params_.stale_s) reset();
-  // The measurement's covariances, floored: vision's residuals can be optimistic.
+namespace {
+
+// The measurement's covariances, floored: vision's residuals can be optimistic.
+Eigen::Matrix4d measurement_cov(const PlatformMeasurement& m, const PlatformFilterParams& params) {
   Eigen::Matrix4d R = Eigen::Matrix4d::Zero();
   R.topLeftCorner<2, 2>() = m.cov_p_W.topLeftCorner<2, 2>() +
-                            params_.min_sigma_m * params_.min_sigma_m * Matrix2d::Identity();
-  R.bottomRightCorner<2, 2>() = m.cov_v_W.topLeftCorner<2, 2>() + params_.min_sigma_mps *
-                                                                      params_.min_sigma_mps *
-                                                                      Matrix2d::Identity();
-  const Eigen::Vector4d z(m.p_W.x(), m.p_W.y(), m.v_W.x(), m.v_W.y());
-  if (!initialised()) {
-    x_ = z;
-    P_ = R;
-    yaw_ = Vector2d(wrap_quarter(m.yaw_rad), m.yaw_rate_rps);
-    P_yaw_ = Vector2d(m.var_yaw + 1e-4, m.var_yaw_rate + 1e-4).asDiagonal();
+                            params.min_sigma_m * params.min_sigma_m * Matrix2d::Identity();
+  R.bottomRightCorner<2, 2>() = m.cov_v_W.topLeftCorner<2, 2>() +
+                                params.min_sigma_mps * params.min_sigma_mps * Matrix2d::Identity();
+  return R;
+}
+
+}  // namespace
+
+namespace {
+
+// A part of the top's position variance: no information [m^2].
+constexpr double kUnknownPositionVar = 1e2;
+// The whole top's extent is the median of this many of its latest views: a few seconds of them.
+constexpr size_t kExtentsKept = 64;
+
+Vector2d extent(const PlatformMeasurement& m) {
+  return Vector2d(m.size_m.maxCoeff(), m.size_m.minCoeff());
+}
+
+}  // namespace
+
+// The median of the track's views of its whole top (zero: none yet) [m].
+Vector2d PlatformFilter::whole_extent(const Track& t) {
+  if (t.whole_extents.empty()) return Vector2d::Zero();
+  Vector2d whole;
+  for (int i = 0; i < 2; ++i) {
+    std::vector<double> v;
+    v.reserve(t.whole_extents.size());
+    for (const auto& e : t.whole_extents) v.push_back(e(i));
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    whole(i) = v[v.size() / 2];
+  }
+  return whole;
+}
+
+bool PlatformFilter::partial_view(const Track& t, const PlatformMeasurement& m) {
+  const Vector2d whole = whole_extent(t);
+  if (!(whole.minCoeff() > 0) || !(m.size_m.minCoeff() > 0)) return false;
+  return ((extent(m) - whole).array() < -kPartialViewM).any();
+}
+
+bool PlatformFilter::larger_than_the_top(const Track& t, const PlatformMeasurement& m) {
+  const Vector2d whole = whole_extent(t);
+  if (!(whole.minCoeff() > 0)) return false;
+  return (extent(m).array() > kLargerThanTheTop * whole.array()).any();
+}
+
+void PlatformFilter::start(Track& t, const PlatformMeasurement& m) const {
+  t = Track{};
+  t.x << m.p_W.x(), m.p_W.y(), m.v_W.x(), m.v_W.y();
+  t.P = measurement_cov(m, params_);
+  t.yaw = Vector2d(wrap_quarter(m.yaw_rad), m.yaw_rate_rps);
+  t.P_yaw = Vector2d(m.var_yaw + 1e-4, m.var_yaw_rate + 1e-4).asDiagonal();
+  t.since_utime = m.utime;
+}
+
+PlatformFilter::Fused PlatformFilter::fuse(Track& t, const PlatformMeasurement& m) const {
+  const bool partial = partial_view(t, m);
+  if (t.t_utime == 0) {
+    start(t, m);
   } else {
-    const double dt = double(m.utime - t_utime_) * 1e-6;
-    Eigen::Matrix4d F = Eigen::Matrix4d::Identity();
-    F.topRightCorner<2, 2>() = dt * Matrix2d::Identity();
-    Eigen::Matrix4d Pp = F * P_ * F.transpose();
-    const Matrix2d q = cv_noise(params_.accel_psd, dt);
-    for (int i = 0; i < 2; ++i) {
-      Pp(i, i) += q(0, 0), Pp(i, i + 2) += q(0, 1), Pp(i + 2, i) += q(1, 0),
-          Pp(i + 2, i + 2) += q(1, 1);
+    // Unmeasured that long, the prediction's covariance has grown enough to let a wrong
+    // measurement through the gate: the track's motion is confirmed again from this one.
+    if (double(m.utime - t.t_utime) * 1e-6 > kConfirmS) {
+      t.n_consistent = 0;
+      t.since_utime = m.utime;
     }
-    const Prediction ahead = predict(m.utime);
+    Eigen::Matrix4d R = measurement_cov(m, params_);
+    if (partial) R.topLeftCorner<2, 2>() = kUnknownPositionVar * Matrix2d::Identity();
+    // The measured velocity is the mean over vision's interval, the velocity at its middle: in a
+    // turn it is turned on to the measurement's time at the course's rate, or each one pulls the
+    // track's velocity back into the turn's past and its position out of the turn.
+    const double half_interval_s = 0.5 * double(m.utime - m.ref_utime) * 1e-6;
+    const double turn = t.course_rate * half_interval_s;
+    const Vector2d v_now = Eigen::Rotation2Dd(turn) * Vector2d(m.v_W.head<2>());
+    const Eigen::Vector4d z(m.p_W.x(), m.p_W.y(), v_now.x(), v_now.y());
+    const double dt = double(m.utime - t.t_utime) * 1e-6;
+    const Prediction ahead = predict(t, m.utime);
     Eigen::Vector4d xp;
     xp << ahead.p_W, ahead.v_W;
+    Eigen::Matrix4d Pp = Eigen::Matrix4d::Zero();
+    {
+      Eigen::Matrix4d F = Eigen::Matrix4d::Identity();
+      F.topRightCorner<2, 2>() = dt * Matrix2d::Identity();
+      Pp = F * t.P * F.transpose();
+      const Matrix2d q = cv_noise(params_.accel_psd, dt);
+      for (int i = 0; i < 2; ++i) {
+        Pp(i, i) += q(0, 0), Pp(i, i + 2) += q(0, 1), Pp(i + 2, i) += q(1, 0),
+            Pp(i + 2, i + 2) += q(1, 1);
+      }
+    }
     const Eigen::Vector4d innov = z - xp;
     const Eigen::Matrix4d S = Pp + R;
     const Eigen::LDLT<Eigen::Matrix4d> ldlt(S);
     const double d2 = innov.dot(ldlt.solve(innov));
-    if (!(d2 <= params_.gate_chi2)) {
-      ++n_rejected_;
-      if (++consecutive_rejections_ < params_.max_consecutive_rejections) return false;
-      // The platform is not where it was believed: start over from this measurement.
-      reset();
-      return update(m);
-    }
+    if (!(d2 <= params_.gate_chi2)) return Fused::kOutsideGate;
     const Eigen::Matrix4d K = Pp * ldlt.solve(Eigen::Matrix4d::Identity());
-    x_ = xp + K * innov;
     // The course's turn rate, smoothed over about course_tau_s (from the filtered velocity's
-    // direction, only while it is fast enough to have one).
-    const Vector2d v0 = xp.tail<2>(), v1 = x_.tail<2>();
+    // direction, only while it is fast enough to have one): its whole turn since the last update,
+    // not the innovation's share of it, which the prediction's own turn leaves about half of.
+    const Vector2d v0 = t.x.tail<2>();
+    t.x = xp + K * innov;
+    const Vector2d v1 = t.x.tail<2>();
     if (v0.norm() > 0.2 && v1.norm() > 0.2 && dt > 0) {
       const double rate = std::atan2(v0.x() * v1.y() - v0.y() * v1.x(), v0.dot(v1)) / dt;
       const double k = std::min(1.0, dt / params_.course_tau_s);
-      course_rate_ += k * (rate - course_rate_);
+      t.course_rate += k * (rate - t.course_rate);
     }
-    P_ = (Eigen::Matrix4d::Identity() - K) * Pp;
-    P_ = 0.5 * (P_ + P_.transpose()).eval();
+    t.P = (Eigen::Matrix4d::Identity() - K) * Pp;
+    t.P = 0.5 * (t.P + t.P.transpose()).eval();
     // Yaw and its rate: the same filter in one dimension pair.
     Matrix2d Fy;
     Fy << 1, dt, 0, 1;
-    const Vector2d yp(yaw_(0) + dt * yaw_(1), yaw_(1));
-    const Matrix2d Py = Fy * P_yaw_ * Fy.transpose() + cv_noise(params_.yaw_accel_psd, dt);
+    const Vector2d yp(t.yaw(0) + dt * t.yaw(1), t.yaw(1));
+    const Matrix2d Py = Fy * t.P_yaw * Fy.transpose() + cv_noise(params_.yaw_accel_psd, dt);
     const Vector2d iy(wrap_quarter(m.yaw_rad - yp(0)), m.yaw_rate_rps - yp(1));
     Matrix2d Sy = Py;
     Sy(0, 0) += m.var_yaw + 1e-6;
     Sy(1, 1) += m.var_yaw_rate + 1e-6;
     const Matrix2d Ky = Py * Sy.inverse();
-    yaw_ = yp + Ky * iy;
-    yaw_(0) = wrap_quarter(yaw_(0));
-    P_yaw_ = (Matrix2d::Identity() - Ky) * Py;
+    t.yaw = yp + Ky * iy;
+    t.yaw(0) = wrap_quarter(t.yaw(0));
+    t.P_yaw = (Matrix2d::Identity() - Ky) * Py;
   }
-  t_utime_ = m.utime;
-  consecutive_rejections_ = 0;
-  ++n_updates_;
-  top_z_sum_ += m.p_W.z();
-  ++n_z_;
+  t.t_utime = m.utime;
+  ++t.n_consistent;
+  if (!partial && m.size_m.minCoeff() > 0) {
+    t.whole_extents.push_back(extent(m));
+    if (t.whole_extents.size() > kExtentsKept) t.whole_extents.pop_front();
+  }
+  t.top_z_sum += m.p_W.z();
+  ++t.n_z;
   // The heave: each vertical velocity is the mean over its interval, so at the interval's middle.
-  vz_.emplace_back((m.utime + m.ref_utime) / 2, m.v_W.z());
-  while (!vz_.empty() &&
-         double(vz_.back().first - vz_.front().first) * 1e-6 > params_.heave_window_s)
-    vz_.pop_front();
-  heave_ = fit_heave(vz_, params_.heave_min_hz, params_.heave_max_hz);
-  return true;
+  t.vz.emplace_back((m.utime + m.ref_utime) / 2, m.v_W.z());
+  while (!t.vz.empty() &&
+         double(t.vz.back().first - t.vz.front().first) * 1e-6 > params_.heave_window_s)
+    t.vz.pop_front();
+  t.heave = fit_heave(t.vz, params_.heave_min_hz, params_.heave_max_hz);
+  return partial ? Fused::kAcceptedPartial : Fused::kAccepted;
+}
+
+bool PlatformFilter::update(const PlatformMeasurement& m) {
+  if (!finite(m) || m.utime <= 0 || m.ref_utime >= m.utime) {
+    refuse(Refusal::kNotFinite);
+    return false;
+  }
+  if (initialised() && m.utime <= track_.t_utime) {
+    refuse(Refusal::kOutOfOrder);
+    return false;
+  }
+  const auto stale = [&](const Track& t) {
+    return t.t_utime != 0 && double(m.utime - t.t_utime) * 1e-6 > params_.stale_s;
+  };
+  if (stale(track_)) reset();
+  if (stale(candidate_)) candidate_ = Track{};
+  if (larger_than_the_top(track_, m)) {
+    refuse(Refusal::kLargerThanTheTop);
+    return false;
+  }
+  if (const Fused f = fuse(track_, m); f != Fused::kOutsideGate) {
+    n_partial_ += f == Fused::kAcceptedPartial;
+    consecutive_rejections_ = 0;
+    candidate_ = Track{};
+    ++n_updates_;
+    return true;
+  }
+  refuse(Refusal::kGate);
+  ++consecutive_rejections_;
+  // The refused measurements as a track of their own: a candidate that refuses one in turn
+  // starts over from it.
+  if (fuse(candidate_, m) == Fused::kOutsideGate) {
+    candidate_ = Track{};
+    fuse(candidate_, m);
+  }
+  // Many in a row: the platform is not where the track believed. A believed track gives way
+  // only to a candidate believed in turn (a burst of wrong measurements never replaces it).
+  if (consecutive_rejections_ >= params_.max_consecutive_rejections &&
+      (!believed(track_) || believed(candidate_))) {
+    track_ = std::move(candidate_);
+    candidate_ = Track{};
+    consecutive_rejections_ = 0;
+  }
+  return false;
 }
 
 }  // namespace alight::autonomy

@@ -7,14 +7,28 @@
 // axis' yaw with its rate [psi, omega] driven by white angular acceleration; each measurement's
 // position, velocity, yaw and yaw rate with the covariances vision publishes. The yaw is a
 // direction of a rectangle's axes (mod pi/2: a top seen in part can swap its long and short
-// sides): it is kept in (-pi/4, pi/4], its innovation wrapped there. A measurement whose
-// position and velocity innovation lies beyond gate_chi2 (Mahalanobis, 4 dof) is refused and
-// counted; the max_consecutive_rejections-th in a row starts the filter over from itself (the
-// platform is not where it was believed). Measurements come in exposure order; one
-// older than the filter's time is refused. Pure: time passed in.
+// sides): it is kept in (-pi/4, pi/4], its innovation wrapped there. Measurements come in
+// exposure order. Each refusal is counted by its reason (Refusal):
+//  - not finite, or older than the filter's time;
+//  - its extent kLargerThanTheTop times the track's whole top: another object;
+//  - its position and velocity innovation beyond gate_chi2 (Mahalanobis distance by the
+//    predicted covariance, 4 dof). The refused measurements start a candidate track of their
+//    own; after max_consecutive_rejections in a row, the candidate replaces the track once it is
+//    believed itself (the platform is not where it was believed), or at once while the track is
+//    not believed yet.
+// A measurement whose extent falls short of the track's whole top (the median extent of its
+// measurements that were not short) by kPartialViewM shows part of the top: its position is not
+// the top's centre and is not fused, its velocity is (the part moves with the whole).
+// A track is believed (believed()) after min_consistent measurements in a row, each within the
+// gate, over at least kConfirmS: a short burst of wrong measurements (a mismatched frame pair
+// during the search reads as a fast platform) never is. A track not measured for kConfirmS is
+// confirmed again (its grown covariance lets a wrong measurement through the gate). Pure: time
+// passed in.
 //
 // The prediction turns the velocity at the course's turn rate (the filtered velocity's direction
-// over course_tau_s): a cart round a bend is led into it, not extrapolated off its path.
+// over course_tau_s): a cart round a bend is led into it, not extrapolated off its path. A
+// measured velocity is the mean over vision's interval, the velocity at its middle: it is turned
+// on to the measurement's time at that rate before it is fused.
 //
 // The deck's heave: the vertical velocities vision measures (each the mean over its interval,
 // at the interval's middle) in a window of heave_window_s, fitted by one sine of the
@@ -22,9 +36,11 @@
 // so the deck's vertical position and velocity can be predicted a fall time ahead
 // (HeaveModel).
 
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <deque>
+#include <memory>
 #include <optional>
 
 #include "common/geometry.hpp"
@@ -53,6 +69,9 @@ struct PlatformFilterParams {
   double yaw_accel_psd = 0.05;  ///< angular acceleration spectral density [rad^2/s^3]
   double gate_chi2 = 18.47;     ///< 4 dof, p = 0.001
   int max_consecutive_rejections = 5;
+  /// Measurements in a row within the gate before a track's motion is believed: a fifth of a
+  /// second of the camera's frames at the least.
+  int min_consistent = 6;
   double stale_s = 1.0;        ///< no measurement for this long: the filter starts over
   double min_sigma_m = 0.005;  ///< floor on a measurement's position sigma [m]
   /// Floor on its velocity sigma [m/s]: the mean over vision's interval lags the velocity now by
@@ -81,42 +100,94 @@ struct HeaveModel {
 HeaveModel fit_heave(const std::deque<std::pair<int64_t, double>>& vz, double min_hz,
                      double max_hz);
 
+/// A measured extent this much shorter than the track's whole top (on either side): a view of
+/// part of it [m]. Close over the top, it fills the view and the inliers' rectangle is the
+/// visible part's, its centre pulled towards the camera by up to half the shortfall: beyond
+/// 1.5 cm, the measured extents' own scatter from one frame to the next.
+inline constexpr double kPartialViewM = 0.03;
+
+/// A measured extent this many times the track's whole top (on either side) is not that top: a
+/// mismatched cluster of the floor or the vehicle's own motion read as one. The views of one
+/// top from the search height down to the last drop's differ by under a third.
+inline constexpr double kLargerThanTheTop = 1.5;
+
+/// A track is believed only over this span at the least [s]: vision's positions alone (1-2 cm
+/// each) then confirm its velocity within a few centimetres a second, under the approach's
+/// match tolerance, whatever the velocities it measured say.
+inline constexpr double kConfirmS = 0.5;
+
 class PlatformFilter {
  public:
+  /// Why a measurement was refused.
+  enum class Refusal { kNotFinite, kOutOfOrder, kGate, kLargerThanTheTop };
+  static constexpr int kRefusals = 4;
+  static const char* to_string(Refusal r);
+
   explicit PlatformFilter(const PlatformFilterParams& params);
 
-  /// Fuses a measurement; false when it was refused (gate, out of order, not finite).
+  /// Fuses a measurement; false when it was refused (counted by its reason).
   bool update(const PlatformMeasurement& m);
   void reset();
 
-  bool initialised() const { return t_utime_ != 0; }
-  int64_t utime() const { return t_utime_; }
+  bool initialised() const { return track_.t_utime != 0; }
+  /// The track's motion is confirmed: min_consistent measurements in a row within the gate, over
+  /// kConfirmS at the least.
+  bool believed() const { return believed(track_); }
+  int64_t utime() const { return track_.t_utime; }
   /// The state predicted to `utime` (not before the filter's time).
   struct Prediction {
     Vector2d p_W = Vector2d::Zero(), v_W = Vector2d::Zero();
+    Vector2d a_W = Vector2d::Zero();  ///< the velocity's turn at the course's rate [m/s^2]
     Matrix2d cov_p = Matrix2d::Zero(), cov_v = Matrix2d::Zero();
     double yaw_rad = 0;  ///< the axes' direction, in (-pi/4, pi/4] [rad]
     double yaw_rate_rps = 0, var_yaw = 0;
     double top_z_m = 0;  ///< the top's height, the measurements' z averaged [m]
   };
-  Prediction predict(int64_t utime) const;
-  const HeaveModel& heave() const { return heave_; }
+  Prediction predict(int64_t utime) const { return predict(track_, utime); }
+  const HeaveModel& heave() const { return track_.heave; }
   int n_updates() const { return n_updates_; }
   int n_rejected() const { return n_rejected_; }
+  int n_refused(Refusal r) const { return refused_[static_cast<int>(r)]; }
+  /// Measurements in a row within the gate since the track started.
+  int n_consistent() const { return track_.n_consistent; }
+  /// Measurements fused as views of part of the top (velocity only).
+  int n_partial() const { return n_partial_; }
 
  private:
+  // One track: the filter's state since it (re)started.
+  struct Track {
+    int64_t t_utime = 0;  // 0: not started
+    int64_t since_utime = 0;
+    Eigen::Vector4d x = Eigen::Vector4d::Zero();  // x, y, vx, vy
+    Eigen::Matrix4d P = Eigen::Matrix4d::Zero();
+    Vector2d yaw = Vector2d::Zero();  // psi, omega
+    Matrix2d P_yaw = Matrix2d::Zero();
+    double course_rate = 0;  // the velocity's turn rate [rad/s]
+    double top_z_sum = 0;
+    int n_z = 0;
+    std::deque<std::pair<int64_t, double>> vz;
+    HeaveModel heave;
+    int n_consistent = 0;
+    std::deque<Vector2d> whole_extents;  // (long, short) of the views of the whole top [m]
+  };
+  enum class Fused { kAccepted, kAcceptedPartial, kOutsideGate };
+  Fused fuse(Track& t, const PlatformMeasurement& m) const;
+  void start(Track& t, const PlatformMeasurement& m) const;
+  static Vector2d whole_extent(const Track& t);
+  static bool partial_view(const Track& t, const PlatformMeasurement& m);
+  static bool larger_than_the_top(const Track& t, const PlatformMeasurement& m);
+  Prediction predict(const Track& t, int64_t utime) const;
+  bool believed(const Track& t) const;
+  void refuse(Refusal r);
+
   PlatformFilterParams params_;
-  int64_t t_utime_ = 0;
-  Eigen::Vector4d x_ = Eigen::Vector4d::Zero();  // x, y, vx, vy
-  Eigen::Matrix4d P_ = Eigen::Matrix4d::Zero();
-  Vector2d yaw_ = Vector2d::Zero();  // psi, omega
-  Matrix2d P_yaw_ = Matrix2d::Zero();
-  double course_rate_ = 0;  // the velocity's turn rate [rad/s]
-  double top_z_sum_ = 0;
-  int n_z_ = 0;
-  std::deque<std::pair<int64_t, double>> vz_;
-  HeaveModel heave_;
+  Track track_;
+  // The measurements the track refuses, tracked on their own: the platform may not be where it
+  // was believed.
+  Track candidate_;
   int consecutive_rejections_ = 0, n_updates_ = 0, n_rejected_ = 0;
+  int n_partial_ = 0;
+  std::array<int, kRefusals> refused_{};
 };
 
 }  // namespace alight::autonomy

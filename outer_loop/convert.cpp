@@ -9,6 +9,7 @@ PositionSetpoint from_msg(const position_setpoint_t& msg) {
   sp.utime = msg.utime;
   sp.p_W = Vector3d(msg.p_W[0], msg.p_W[1], msg.p_W[2]);
   sp.v_W = Vector3d(msg.v_W[0], msg.v_W[1], msg.v_W[2]);
+  sp.a_W = Vector3d(msg.a_W[0], msg.a_W[1], msg.a_W[2]);
   sp.yaw_rad = msg.yaw_rad;
   sp.motors_on = msg.motors == position_setpoint_t::MOTORS_ON;
   sp.kill = msg.motors == position_setpoint_t::MOTORS_KILL;
@@ -26,6 +27,7 @@ std::optional<PositionSetpoint> setpoint_from_msg(const position_setpoint_t& msg
   for (int i = 0; i < 3; ++i) {
     if (!std::isfinite(msg.p_W[i])) return refuse("setpoint: non-finite position");
     if (!std::isfinite(msg.v_W[i])) return refuse("setpoint: non-finite velocity");
+    if (!std::isfinite(msg.a_W[i])) return refuse("setpoint: non-finite acceleration");
   }
   if (!std::isfinite(msg.yaw_rad)) return refuse("setpoint: non-finite yaw");
   if (msg.motors != position_setpoint_t::MOTORS_OFF &&
@@ -44,6 +46,7 @@ position_setpoint_t to_msg(const PositionSetpoint& sp) {
   for (int i = 0; i < 3; ++i) {
     msg.p_W[i] = sp.p_W[i];
     msg.v_W[i] = sp.v_W[i];
+    msg.a_W[i] = sp.a_W[i];
   }
   msg.yaw_rad = sp.yaw_rad;
   msg.motors = sp.kill        ? position_setpoint_t::MOTORS_KILL

@@ -49,7 +49,8 @@ void clamp_norm(Eigen::Ref<Eigen::VectorXd> v, double limit) {
 }
 
 bool all_finite(const PositionSetpoint& sp) {
-  return sp.p_W.allFinite() && sp.v_W.allFinite() && std::isfinite(sp.yaw_rad);
+  return sp.p_W.allFinite() && sp.v_W.allFinite() && sp.a_W.allFinite() &&
+         std::isfinite(sp.yaw_rad);
 }
 
 bool all_finite(const PoseSample& pose) {
@@ -103,7 +104,8 @@ AttitudeCommand PositionController::disarmed(const char* reason) {
   return c;
 }
 
-AttitudeCommand PositionController::track(const Vector3d& p_sp, const Vector3d& v_sp, double yaw_sp,
+AttitudeCommand PositionController::track(const Vector3d& p_sp, const Vector3d& v_sp,
+                                          const Vector3d& a_sp, double yaw_sp,
                                           const PoseSample& pose, double dt_s, bool integrate,
                                           bool precise) {
   const auto& P = params_;
@@ -134,8 +136,12 @@ AttitudeCommand PositionController::track(const Vector3d& p_sp, const Vector3d& 
                                     -P.i_limit_z_mps2, P.i_limit_z_mps2);
   }
 
-  Vector2d a_xy = kp_xy * e_p.head<2>() + kd_xy * e_v.head<2>() + integral_mps2_.head<2>();
-  last_demand_z_mps2_ = P.kp_z_per_s2 * e_p.z() + P.kd_z_per_s * e_v.z();
+  // A moving setpoint's own acceleration (a platform's turn) fed forward: without it a PD loop
+  // lags a turning setpoint by a / kp, and the integrator cannot learn a disturbance that turns
+  // with it.
+  Vector2d a_xy =
+      kp_xy * e_p.head<2>() + kd_xy * e_v.head<2>() + integral_mps2_.head<2>() + a_sp.head<2>();
+  last_demand_z_mps2_ = P.kp_z_per_s2 * e_p.z() + P.kd_z_per_s * e_v.z() + a_sp.z();
   const double a_z =
       std::clamp(last_demand_z_mps2_ + integral_mps2_.z(), -P.max_accel_z_mps2, P.max_accel_z_mps2);
   const double f_z = P.gravity_mps2 + a_z;  // > 0 since max_accel_z < g
@@ -239,6 +245,11 @@ AttitudeCommand PositionController::land(const PoseSample& pose, int64_t now_uti
     landing_descent_mps_ =
         std::clamp(commanded_mps, P.setpoint_lost_descent_mps,
                    std::max(P.setpoint_lost_descent_mps, P.land_max_descent_mps));
+    // A touch-down on a moving platform: the vehicle goes on with the horizontal velocity autonomy
+    // last fed forward (the platform's), or it is held to a world point while the top moves on
+    // under it and drags it across the top until the land detector levels it.
+    landing_v_xy_ = last_motors_on_ ? Vector2d(last_motors_on_->v_W.head<2>()) : Vector2d::Zero();
+    clamp_norm(landing_v_xy_, P.max_speed_xy_mps);
     // Autonomy was leading a descent: its motors-off is an arrival (at the impact, or once it saw
     // the vehicle stopped on the ground).
     landing_arrived_ = commanded_mps > P.land_vz_mps;
@@ -254,8 +265,10 @@ AttitudeCommand PositionController::land(const PoseSample& pose, int64_t now_uti
   landing_arrived_ = landing_arrived_ || pose.v_W_B.z() < -P.land_vz_mps;
   const double t_s = std::max(0.0, age_s(*landing_since_, now_utime));
   Vector3d p_sp = landing_p_W_;
+  p_sp.head<2>() += landing_v_xy_ * t_s;
   p_sp.z() -= landing_descent_mps_ * t_s;
-  auto c = track(p_sp, Vector3d(0, 0, -landing_descent_mps_), landing_yaw_rad_, pose, dt_s, false);
+  const Vector3d v_sp(landing_v_xy_.x(), landing_v_xy_.y(), -landing_descent_mps_);
+  auto c = track(p_sp, v_sp, Vector3d::Zero(), landing_yaw_rad_, pose, dt_s, false);
   if (land_since_) {
     // Ground contact (PX4 stops horizontal control there too): the gear's friction holds the
     // vehicle where it stands, and tilting against it only drags it across the top.
@@ -307,7 +320,7 @@ AttitudeCommand PositionController::descend_to_ground(const Vector3d& from_W, do
     disarm_latched_ = true;
     return disarmed(landed_reason);
   }
-  auto c = track(p_sp, v_sp, yaw_rad, pose, dt_s, false);
+  auto c = track(p_sp, v_sp, Vector3d::Zero(), yaw_rad, pose, dt_s, false);
   c.mode = mode;
   c.reason = reason;
   return c;
@@ -323,7 +336,8 @@ AttitudeCommand PositionController::failsafe_land(const PoseSample& pose, int64_
     still_since_.reset();
   }
   if (age_s(*failsafe_since_, now_utime) <= P.failsafe_hold_s) {
-    auto c = track(failsafe_p_W_, Vector3d::Zero(), failsafe_yaw_rad_, pose, dt_s, false);
+    auto c = track(failsafe_p_W_, Vector3d::Zero(), Vector3d::Zero(), failsafe_yaw_rad_, pose, dt_s,
+                   false);
     c.mode = Mode::kFailsafeLand;
     c.reason = failsafe_reason_;
     return c;
@@ -419,8 +433,8 @@ AttitudeCommand PositionController::step(const std::optional<PositionSetpoint>& 
     holding_ = false;
     setpoint_lost_since_.reset();
     still_since_.reset();
-    auto c = track(inside_fence(setpoint->p_W), setpoint->v_W, setpoint->yaw_rad, *pose, dt_s, true,
-                   setpoint->precise);
+    auto c = track(inside_fence(setpoint->p_W), setpoint->v_W, setpoint->a_W, setpoint->yaw_rad,
+                   *pose, dt_s, true, setpoint->precise);
     c.reason = setpoint->precise ? "tracking (precise)" : "tracking";
     return c;
   }
@@ -431,7 +445,8 @@ AttitudeCommand PositionController::step(const std::optional<PositionSetpoint>& 
     hold_yaw_rad_ = yaw_of(pose->q_WB.toRotationMatrix());
   }
   if (sp_age_s <= P.setpoint_lost_s) {
-    auto c = track(hold_p_W_, Vector3d::Zero(), hold_yaw_rad_, *pose, dt_s, false);
+    auto c =
+        track(hold_p_W_, Vector3d::Zero(), Vector3d::Zero(), hold_yaw_rad_, *pose, dt_s, false);
     c.mode = Mode::kHoldPosition;
     c.reason = "setpoint stale: holding position";
     return c;

@@ -4,12 +4,13 @@
 // constant, and altitude is also regulated with a linear controller based on state measurements
 // from the motion capture system").
 //
-// Lateral PD(+I) on position and velocity gives a desired horizontal acceleration; with the
-// gravity feed-forward and the altitude PD(+I) this is a desired specific-force vector f, whose
-// direction is the commanded body z axis (roll / pitch, Z-Y-X Euler in the heading frame) and
-// whose magnitude times the mass is the collective thrust. This is the small-angle-free form of
-// the classic near-hover quadrotor linearisation (e.g. Hoffmann et al., "Quadrotor helicopter
-// flight dynamics and control", AIAA GNC 2007, the STARMAC controller).
+// Lateral PD(+I) on position and velocity, plus the setpoint's feed-forward acceleration, gives a
+// desired horizontal acceleration; with the gravity feed-forward and the altitude PD(+I) this is a
+// desired specific-force vector f, whose direction is the commanded body z axis (roll / pitch,
+// Z-Y-X Euler in the heading frame) and whose magnitude times the mass is the collective thrust.
+// This is the small-angle-free form of the classic near-hover quadrotor linearisation (e.g.
+// Hoffmann et al., "Quadrotor helicopter flight dynamics and control", AIAA GNC 2007, the STARMAC
+// controller).
 //
 // The integrators learn only once the vehicle flies: risen kLiftOffM above where it rested when
 // armed, or moving vertically (the ground holds it still): an autopilot that takes seconds from
@@ -82,8 +83,9 @@ class PositionController {
   const OuterLoopParams& params() const { return params_; }
 
  private:
-  AttitudeCommand track(const Vector3d& p_sp, const Vector3d& v_sp, double yaw_sp,
-                        const PoseSample& pose, double dt_s, bool integrate, bool precise = false);
+  AttitudeCommand track(const Vector3d& p_sp, const Vector3d& v_sp, const Vector3d& a_sp,
+                        double yaw_sp, const PoseSample& pose, double dt_s, bool integrate,
+                        bool precise = false);
   AttitudeCommand level(double thrust_N) const;
   AttitudeCommand disarmed(const char* reason);
   double hover_thrust_N() const;
@@ -123,6 +125,7 @@ class PositionController {
   Vector3d landing_p_W_ = Vector3d::Zero();
   double landing_yaw_rad_ = 0.0;
   double landing_descent_mps_ = 0.0;
+  Vector2d landing_v_xy_ = Vector2d::Zero();  // the last feed-forward: a moving top's velocity
   bool landing_arrived_ = false;  // led down or seen descending: a contact now is the ground
   std::optional<int64_t> pose_lost_since_;
   std::optional<int64_t> setpoint_lost_since_;

@@ -13,6 +13,7 @@ struct PositionSetpoint {
   int64_t utime = 0;                ///< time of the autonomy input that produced it [us]
   Vector3d p_W = Vector3d::Zero();  ///< position setpoint, world [m]
   Vector3d v_W = Vector3d::Zero();  ///< feed-forward velocity, world [m/s]
+  Vector3d a_W = Vector3d::Zero();  ///< feed-forward acceleration, world [m/s^2]
   double yaw_rad = 0.0;             ///< heading setpoint about world z [rad]
   bool motors_on = false;           ///< false: motors off (landed, not yet taken off); honoured
                                     ///< in the air only with kill

@@ -17,6 +17,7 @@ TEST(OuterLoopConvertTest, SetpointRoundTrips) {
   sp.utime = 123456789;
   sp.p_W = {1, -2, 3};
   sp.v_W = {0.1, 0.2, -0.3};
+  sp.a_W = {0.4, -0.5, 0.0};
   sp.yaw_rad = 0.7;
   sp.motors_on = true;
   sp.idle = false;
@@ -32,6 +33,7 @@ TEST(OuterLoopConvertTest, SetpointRoundTrips) {
   EXPECT_EQ(back.utime, sp.utime);
   EXPECT_EQ(back.p_W, sp.p_W);
   EXPECT_EQ(back.v_W, sp.v_W);
+  EXPECT_EQ(back.a_W, sp.a_W);
   EXPECT_EQ(back.yaw_rad, sp.yaw_rad);
   EXPECT_TRUE(back.motors_on);
   EXPECT_FALSE(back.idle);
@@ -93,13 +95,15 @@ TEST(OuterLoopRegression, NonFiniteSetpointIsRefusedAtConversion) {
   const position_setpoint_t good = to_msg(sp);
   std::string why;
   ASSERT_TRUE(setpoint_from_msg(good, &why));
-  for (int field = 0; field < 7; ++field) {
+  for (int field = 0; field < 10; ++field) {
     for (double bad : {std::nan(""), std::numeric_limits<double>::infinity()}) {
       position_setpoint_t m = good;
       if (field < 3)
         m.p_W[field] = bad;
       else if (field < 6)
         m.v_W[field - 3] = bad;
+      else if (field < 9)
+        m.a_W[field - 6] = bad;
       else
         m.yaw_rad = bad;
       why.clear();

@@ -445,6 +445,37 @@ TEST(OuterLoopRegression, MotorsOffAtTheImpactDoesNotBrakeTheDescent) {
   EXPECT_LT(highest_thrust_N, 1.2 * 9.81);
 }
 
+TEST(PositionControllerTest, AMotorsOffOnAMovingTopGoesOnWithItsVelocity) {
+  // A touch-down on a moving platform: autonomy fed the platform's 0.5 m/s forward up to its
+  // motors-off. Until the land detector levels the vehicle, the landing must go on moving with
+  // the top, not brake to where the motors-off came (which drags the gear across the top).
+  PositionController c(params());
+  test::LagModel model;
+  model.floor = false;  // still in the air: what the landing asks for, not a contact
+  int64_t t = hover_for_a_second(c, model, {0, 0, 1.0});
+  auto sp = setpoint_at({0, 0, 1.0}, 0, t);
+  const double v = 0.5;
+  for (int i = 0; i < 300; ++i, t += 10 * kMs) {  // 3 s following at 0.5 m/s, descending
+    sp.utime = t;
+    sp.p_W = Vector3d(v * 0.01 * i, 0, 1.0 - 0.2 * 0.01 * i);
+    sp.v_W = Vector3d(v, 0, -0.2);
+    const auto cmd = c.update(sp, model.pose(t), t);
+    for (int k = 0; k < 10; ++k) model.step(cmd, 0.001);
+  }
+  ASSERT_NEAR(model.v.x(), v, 0.05);
+  auto off = sp;
+  off.motors_on = false;
+  const double x0 = model.p.x();
+  for (int i = 0; i < 40; ++i, t += 10 * kMs) {  // 0.4 s
+    off.utime = t;
+    const auto cmd = c.update(off, model.pose(t), t);
+    EXPECT_EQ(cmd.mode, Mode::kSetpointLostDescent);
+    for (int k = 0; k < 10; ++k) model.step(cmd, 0.001);
+  }
+  EXPECT_NEAR(model.v.x(), v, 0.05);
+  EXPECT_NEAR(model.p.x() - x0, v * 0.4, 0.03);
+}
+
 TEST(PositionControllerTest, AMotorsOffInAHoverStillDescendsSlowly) {
   // No descent was commanded: the refused motors-off lands at setpoint_lost_descent_mps.
   auto p = params();
@@ -678,6 +709,44 @@ TEST(PositionControllerTest, TheIntegratorsLearnOnceTheVehicleHasLiftedOff) {
   fly(c, model, setpoint_at({0, 0, 1.0}, 0, t), t, 15.0);
   EXPECT_GT(c.integral().z(), 0.5);
   EXPECT_NEAR(model.p.z(), 1.0, 0.02);
+}
+
+// A setpoint going round a circle (a platform followed on its path), with its velocity and
+// acceleration fed forward, on the lag model: the largest offset over the second and third laps.
+double worst_offset_on_a_circle(bool feed_acceleration) {
+  const double r = 0.6, v = 0.5, w = v / r;  // 0.42 m/s^2 towards the centre
+  const Vector3d c0(0, 0, 1.5);
+  const auto on_circle = [&](double t, PositionSetpoint& sp) {
+    const double a = w * t;
+    sp.p_W = c0 + r * Vector3d(std::cos(a), std::sin(a), 0);
+    sp.v_W = v * Vector3d(-std::sin(a), std::cos(a), 0);
+    sp.a_W = feed_acceleration ? Vector3d(-v * w * std::cos(a), -v * w * std::sin(a), 0)
+                               : Vector3d::Zero();
+  };
+  PositionController c(params());
+  test::LagModel model;
+  PositionSetpoint sp = setpoint_at(c0, 0, kT0);
+  on_circle(0, sp);
+  model.hover_at(sp.p_W);
+  model.v = sp.v_W;
+  const double lap_s = 2 * M_PI / w;
+  double worst = 0;
+  for (int64_t t = kT0; t < kT0 + int64_t(3 * lap_s * 1e6); t += 10 * kMs) {
+    const double ts = double(t - kT0) * 1e-6;
+    on_circle(ts, sp);
+    sp.utime = t;
+    const auto cmd = c.update(sp, model.pose(t), t);
+    for (int k = 0; k < 10; ++k) model.step(cmd, 0.001);
+    if (ts > lap_s) worst = std::max(worst, (model.p - sp.p_W).head<2>().norm());
+  }
+  return worst;
+}
+
+TEST(PositionControllerTest, FollowsATurningSetpointWithItsAccelerationFedForward) {
+  // Without it the loop lags the turn by about a / kp (10 cm here), twice the moving landing's
+  // match tolerance; with it, what is left is the lag model's drag and attitude lag.
+  EXPECT_GT(worst_offset_on_a_circle(false), 0.06);
+  EXPECT_LT(worst_offset_on_a_circle(true), 0.02);
 }
 
 }  // namespace
