@@ -109,6 +109,21 @@ TEST(PlatformFilterTest, RefusalsAreCountedByTheirReason) {
   EXPECT_TRUE(f.believed());
 }
 
+// A platform going straight at v [m/s].
+PlatformPath straight_path(double v) {
+  PlatformPath m;
+  m.straight = true;
+  m.v = v;
+  return m;
+}
+
+// Measured every kPfDt from the first interval to 2 s: the time reached.
+double track_until_2s(PlatformFilter& f, const PlatformPath& m, std::mt19937_64& rng) {
+  double t = kPfInterval;
+  for (; t < 2; t += kPfDt) f.update(measure_path(m, t, rng));
+  return t;
+}
+
 // A wrong reading of vision during the search: a platform at `speed` for `frames` frames, its
 // positions moving with it (`consistent`) or standing still while its velocities say it moves.
 void feed_burst(PlatformFilter& f, double t0, int frames, double speed, bool consistent,
@@ -139,13 +154,10 @@ TEST(PlatformFilterTest, AShortBurstOfAFastPlatformIsNeverBelieved) {
 }
 
 TEST(PlatformFilterTest, ABurstDoesNotReplaceABelievedTrackAndTheTrueOneIsKept) {
-  PlatformPath m;
-  m.straight = true;
-  m.v = 0.4;
+  const PlatformPath m = straight_path(0.4);
   PlatformFilter f{PlatformFilterParams{}};
   std::mt19937_64 rng(6);
-  double t = kPfInterval;
-  for (; t < 2; t += kPfDt) f.update(measure_path(m, t, rng));
+  double t = track_until_2s(f, m, rng);
   ASSERT_TRUE(f.believed());
   feed_burst(f, t, 11, 1.87, true, rng);
   t += 11 * kPfDt;
@@ -161,13 +173,10 @@ TEST(PlatformFilterTest, ABurstDoesNotReplaceABelievedTrackAndTheTrueOneIsKept) 
 TEST(PlatformFilterTest, AMovedPlatformReplacesTheTrackOnceItIsBelievedItself) {
   // The platform 1 m from where the track had it (a wrong track, or the right one found late):
   // its measurements are refused until their own track is believed, then it takes over.
-  PlatformPath m;
-  m.straight = true;
-  m.v = 0.4;
+  const PlatformPath m = straight_path(0.4);
   PlatformFilter f{PlatformFilterParams{}};
   std::mt19937_64 rng(7);
-  double t = kPfInterval;
-  for (; t < 2; t += kPfDt) f.update(measure_path(m, t, rng));
+  double t = track_until_2s(f, m, rng);
   ASSERT_TRUE(f.believed());
   const double moved_at = t;
   for (; t < moved_at + kConfirmS - kPfDt; t += kPfDt) {
@@ -236,13 +245,10 @@ TEST(PlatformFilterTest, AfterAGapAWrongMeasurementIsNotBelievedAndTheTopIsFound
   // Unmeasured for 0.7 s the prediction's covariance lets through a wrong reading 30 cm off at
   // 1.5 m/s: the track is not believed on it (no failsafe on a platform "too fast"), and once the
   // top is measured again for half a second it is believed at its own speed.
-  PlatformPath m;
-  m.straight = true;
-  m.v = 0.3;
+  const PlatformPath m = straight_path(0.3);
   PlatformFilter f{PlatformFilterParams{}};
   std::mt19937_64 rng(10);
-  double t = kPfInterval;
-  for (; t < 2; t += kPfDt) f.update(measure_path(m, t, rng));
+  double t = track_until_2s(f, m, rng);
   ASSERT_TRUE(f.believed());
   t += 0.7;
   auto wrong = measure_path(m, t, rng);
@@ -350,13 +356,10 @@ TEST(HeaveReleaseTest, TheLastDropStartsSoThatContactFollowsACrest) {
 }
 
 TEST(MovingApproachTest, MatchesThePlatformThenDescendsAndFailsSafeWhenTooFast) {
-  PlatformPath m;
-  m.straight = true;
-  m.v = 0.5;
+  const PlatformPath m = straight_path(0.5);
   PlatformFilter f{PlatformFilterParams{}};
   std::mt19937_64 rng(5);
-  double t = kPfInterval;
-  for (; t < 2; t += kPfDt) f.update(measure_path(m, t, rng));
+  double t = track_until_2s(f, m, rng);
   MovingLandingParams params;
   MovingApproach s;
   PoseSample pose;

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <deque>
 #include <functional>
+#include <optional>
 
 #include "mavlink/bridge.hpp"
 #include "scripted_autopilot.hpp"
@@ -271,27 +272,43 @@ TEST(BridgeAutopilotTest, WithoutNavTakeoffArduCoptersGuidedDisarmsOnTheGround) 
   EXPECT_FALSE(ap.armed());  // DISARM_DELAY
 }
 
-TEST(BridgeAutopilotTest, PositionSetpointsReachTheRoomsHeightThoughTheAutopilotsFrameIsOffset) {
-  ScriptedConfig c = copter();
-  c.estimate_offset_up_m = 0.2;
-  Loop l(ardupilot_params("position"), c);
+// Position setpoints to 1.2 m from the ground, held settle_s once the autopilot's vehicle is
+// above airborne_m: the height it reached (the room's) and the bridge's frame offset (NED z).
+struct Hover {
+  bool airborne = false;
+  double height_m = 0.0;
+  std::optional<double> offset_down_m;
+};
+
+Hover hover_at_1_2m(const BridgeParams& params, const ScriptedConfig& c, double airborne_m,
+                    double settle_s) {
+  Loop l(params, c);
   Motors motors = Motors::kOn;
   int64_t next = 0;
   l.stack = position_stack(l, 1.2, &motors, &next);
-  ASSERT_TRUE(l.run_until([&] { return l.ap.height_m() > 1.0; }, 30.0));
-  l.run(10.0);
-  EXPECT_NEAR(l.ap.height_m(), 1.2, 0.03);  // the room's 1.2 m, not the autopilot's
-  const auto offset = l.bridge->status({l.t_us, 0}).frame_offset_NED;
-  ASSERT_TRUE(offset);
-  EXPECT_NEAR(offset->z(), -0.2, 0.01);
+  Hover h;
+  h.airborne = l.run_until([&] { return l.ap.height_m() > airborne_m; }, 30.0);
+  if (!h.airborne) return h;
+  l.run(settle_s);
+  h.height_m = l.ap.height_m();
+  if (const auto offset = l.bridge->status({l.t_us, 0}).frame_offset_NED)
+    h.offset_down_m = offset->z();
+  return h;
+}
+
+TEST(BridgeAutopilotTest, PositionSetpointsReachTheRoomsHeightThoughTheAutopilotsFrameIsOffset) {
+  ScriptedConfig c = copter();
+  c.estimate_offset_up_m = 0.2;
+  const Hover aligned = hover_at_1_2m(ardupilot_params("position"), c, 1.0, 10.0);
+  ASSERT_TRUE(aligned.airborne);
+  EXPECT_NEAR(aligned.height_m, 1.2, 0.03);  // the room's 1.2 m, not the autopilot's
+  ASSERT_TRUE(aligned.offset_down_m);
+  EXPECT_NEAR(*aligned.offset_down_m, -0.2, 0.01);
   BridgeParams p = ardupilot_params("position");
   p.align_frames = false;
-  Loop u(p, c);
-  int64_t next_u = 0;
-  u.stack = position_stack(u, 1.2, &motors, &next_u);
-  ASSERT_TRUE(u.run_until([&] { return u.ap.height_m() > 0.9; }, 30.0));
-  u.run(10.0);
-  EXPECT_NEAR(u.ap.height_m(), 1.0, 0.03);  // what SITL showed before the bridge aligned
+  const Hover unaligned = hover_at_1_2m(p, c, 0.9, 10.0);
+  ASSERT_TRUE(unaligned.airborne);
+  EXPECT_NEAR(unaligned.height_m, 1.0, 0.03);  // what SITL showed before the bridge aligned
 }
 
 TEST(BridgeAutopilotTest, Px4PositionHoldsTheRoomsHeightThoughEkf2DriftsAfterTakeOff) {
@@ -300,16 +317,11 @@ TEST(BridgeAutopilotTest, Px4PositionHoldsTheRoomsHeightThoughEkf2DriftsAfterTak
   // vehicle that far below autonomy's setpoints, more than its 1.5 cm refinement tolerance.
   ScriptedConfig c = px4();
   c.estimate_offset_in_air_up_m = 0.04;
-  Loop l(px4_params("position"), c);
-  Motors motors = Motors::kOn;
-  int64_t next = 0;
-  l.stack = position_stack(l, 1.2, &motors, &next);
-  ASSERT_TRUE(l.run_until([&] { return l.ap.height_m() > 1.0; }, 30.0));
-  l.run(25.0);
-  EXPECT_NEAR(l.ap.height_m(), 1.2, 0.005);  // the room's 1.2 m, not EKF2's
-  const auto offset = l.bridge->status({l.t_us, 0}).frame_offset_NED;
-  ASSERT_TRUE(offset);
-  EXPECT_NEAR(offset->z(), -0.04, 0.005);
+  const Hover h = hover_at_1_2m(px4_params("position"), c, 1.0, 25.0);
+  ASSERT_TRUE(h.airborne);
+  EXPECT_NEAR(h.height_m, 1.2, 0.005);  // the room's 1.2 m, not EKF2's
+  ASSERT_TRUE(h.offset_down_m);
+  EXPECT_NEAR(*h.offset_down_m, -0.04, 0.005);
 }
 
 TEST(BridgeAutopilotTest, InTheAirTheFrameOffsetFollowsNoFurtherThanItsBound) {
