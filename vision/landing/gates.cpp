@@ -84,11 +84,20 @@ std::vector<double> floor_patch_gammas(const Correspondences& c, const LandingPl
   return gammas;
 }
 
+// The convex hull of the top's inliers in image 2 (undistorted pixels); empty for fewer than 3.
+std::vector<cv::Point2f> top_hull_2(const Correspondences& c, const std::vector<uint8_t>& top_in) {
+  std::vector<cv::Point2f> top_px, hull;
+  for (size_t i = 0; i < c.size(); ++i)
+    if (top_in[i])
+      top_px.emplace_back(static_cast<float>(c.x2[i].x()), static_cast<float>(c.x2[i].y()));
+  if (top_px.size() >= 3) cv::convexHull(top_px, hull);
+  return hull;
+}
+
 }  // namespace
 
 Reason plane_gates(const Correspondences& c, const LandingPlanes& planes, const Matrix3d& H_top_px,
-                   const Matrix3d& H_floor_px, const MocapMotion& mocap,
-                   const PipelineParams& params) {
+                   const Matrix3d& H_floor_px, double baseline_m, const PipelineParams& params) {
   if (direction_angle(planes.top.unit_normal_1(), planes.floor.unit_normal_1()) >
       params.landing.max_normal_angle_deg * M_PI / 180.0)
     return Reason::kTopNotParallel;
@@ -101,19 +110,15 @@ Reason plane_gates(const Correspondences& c, const LandingPlanes& planes, const 
   if (!top_told_from_floor(c, planes.top_in, H_floor_px, params.homography.threshold_px,
                            kMaxTopOnFloorShare))
     return Reason::kTopFitsFloor;
-  if (mocap.baseline_m < params.waypoint.min_baseline_m) return Reason::kSmallBaseline;
+  if (baseline_m < params.waypoint.min_baseline_m) return Reason::kSmallBaseline;
   return Reason::kOk;
 }
 
 bool top_clear_of_epipole(const Correspondences& c, const std::vector<uint8_t>& top_in,
                           const Matrix3d& H_floor_px, const Matrix3d& H_top_px,
                           const MocapMotion& mocap, double threshold_px) {
-  std::vector<cv::Point2f> top_px, hull;
-  for (size_t i = 0; i < c.size(); ++i)
-    if (top_in[i])
-      top_px.emplace_back(static_cast<float>(c.x2[i].x()), static_cast<float>(c.x2[i].y()));
-  if (top_px.size() < 3) return true;
-  cv::convexHull(top_px, hull);
+  const std::vector<cv::Point2f> hull = top_hull_2(c, top_in);
+  if (hull.empty()) return true;
   const Matrix3d to_floor = H_floor_px * H_top_px.inverse();  // image 2 to image 2
   const auto parallax = [&](const Vector2d& u) {
     const Vector3d q = to_floor * u.homogeneous();
@@ -142,13 +147,8 @@ bool top_clear_of_epipole(const Correspondences& c, const std::vector<uint8_t>& 
 
 int floor_seen_around_top(const Correspondences& c, const LandingPlanes& planes,
                           const Matrix3d& H_top_px, double threshold_px) {
-  std::vector<cv::Point2f> top_px, hull;
-  for (size_t i = 0; i < c.size(); ++i)
-    if (planes.top_in[i])
-      top_px.emplace_back(static_cast<float>(c.x2[i].x()), static_cast<float>(c.x2[i].y()));
   int n = 0;
-  if (top_px.size() >= 3) cv::convexHull(top_px, hull);
-  const ConvexHullDepth depth(hull);
+  const ConvexHullDepth depth(top_hull_2(c, planes.top_in));
   for (size_t i = 0; i < c.size(); ++i) {
     if (!planes.floor_in[i] || planes.top_in[i]) continue;
     const cv::Point2f q(static_cast<float>(c.x2[i].x()), static_cast<float>(c.x2[i].y()));

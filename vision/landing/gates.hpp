@@ -28,12 +28,11 @@ constexpr double kMaxTopOnFloorShare = 0.25;
 /// floor's (kTopNotParallel); unless the top is alone, the floor seen around it in at least
 /// min_floor_inliers places (kNoFloorAroundTop, floor_seen_around_top); at most
 /// kMaxTopOnFloorShare of the top's matches carried by the floor's homography too
-/// (kTopFitsFloor, top_told_from_floor); motion capture's baseline at least min_baseline_m
+/// (kTopFitsFloor, top_told_from_floor); motion capture's baseline_m at least min_baseline_m
 /// for the scale of eq. 3 (kSmallBaseline). kOk when all pass. H_top_px / H_floor_px: the
-/// planes' pixel homographies, image 1 to 2; `mocap`: the cameras' motion between them.
+/// planes' pixel homographies, image 1 to 2.
 Reason plane_gates(const Correspondences& c, const LandingPlanes& planes, const Matrix3d& H_top_px,
-                   const Matrix3d& H_floor_px, const MocapMotion& mocap,
-                   const PipelineParams& params);
+                   const Matrix3d& H_floor_px, double baseline_m, const PipelineParams& params);
 
 /// A platform top is opaque: the floor is seen around it, never through it. The floor's
 /// matches seen outside the convex hull of the top's in image 2 (by more than threshold_px, or

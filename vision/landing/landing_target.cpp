@@ -33,7 +33,7 @@ TargetOutcome platform_of(const Correspondences& c, const PipelineParams& params
                                          : Label::kOutlier;
   out.estimate.n_inliers_dominant = planes.n_floor;
   out.estimate.n_inliers_target = planes.n_top;
-  if (const Reason r = plane_gates(c, planes, H_top_px, H_floor_px, mocap, params);
+  if (const Reason r = plane_gates(c, planes, H_top_px, H_floor_px, mocap.baseline_m, params);
       r != Reason::kOk)
     return refuse(std::move(out), r);
 

@@ -866,7 +866,7 @@ TEST(LandingGates, EachGateRefusesWithItsOwnReason) {
     const Matrix3d H_top = top_homography_px(t.v.c, *planes),
                    H_floor = floor_homography_px(t.v.c, *planes);
     const MocapMotion m = mocap_motion(t.v.c.pose_1, t.v.c.pose_2, *t.v.c.mount);
-    EXPECT_EQ(plane_gates(t.v.c, *planes, H_top, H_floor, m, params), Reason::kOk)
+    EXPECT_EQ(plane_gates(t.v.c, *planes, H_top, H_floor, m.baseline_m, params), Reason::kOk)
         << "seed " << seed;
     // The floor's matches nearest the top's (their centroid in image 2), half as many as the
     // top's, join the top's inliers: a third of them then fit the floor's homography.
@@ -885,7 +885,7 @@ TEST(LandingGates, EachGateRefusesWithItsOwnReason) {
       joined.top_in[floor_i[static_cast<size_t>(k)]] = 1;
       joined.floor_in[floor_i[static_cast<size_t>(k)]] = 0;
     }
-    const Reason r = plane_gates(t.v.c, joined, H_top, H_floor, m, params);
+    const Reason r = plane_gates(t.v.c, joined, H_top, H_floor, m.baseline_m, params);
     EXPECT_EQ(r, Reason::kTopFitsFloor) << "seed " << seed << ": " << to_string(r);
   }
   EXPECT_GE(tested, 4);
