@@ -27,6 +27,15 @@ SURFACE_PHOTOS = ["aloeL.jpg", "board.jpg", "box_in_scene.png", "ela_original.jp
                   "leuvenA.jpg", "pca_test1.jpg", "rubberwhale1.png", "squirrel_cls.jpg",
                   "starry_night.jpg", "stuff.jpg", "graf3.png", "basketball1.png", "left.jpg",
                   "licenseplate_motion.jpg", "Blender_Suzanne1.jpg"]
+# The vehicle files' search rectangle (autonomy.detection.landing_area_{min,max}_W_m) [m].
+LANDING_AREA_MIN, LANDING_AREA_MAX = (-0.2, -0.5), (2.0, 1.5)
+# Photographs with large smooth regions (half or more of their 32-pixel blocks at 512 pixels
+# wide vary by under 6 grey levels: sky, a painted wall, a backdrop) for walls, and busy ones
+# for the room behind an opening.
+SMOOTH_PHOTOS = ["ela_original.jpg", "ela_modified.jpg", "stuff.jpg", "Blender_Suzanne1.jpg",
+                 "Blender_Suzanne2.jpg", "home.jpg"]
+BUSY_PHOTOS = ["starry_night.jpg", "board.jpg", "box_in_scene.png", "leuvenA.jpg",
+               "rubberwhale1.png", "squirrel_cls.jpg", "pca_test1.jpg", "basketball1.png"]
 # Photographs printed on a platform's top (a poster, a magazine, a box lid).
 TOP_PHOTOS = ["sudoku.png", "smarties.png", "butterfly.jpg", "messi5.jpg", "fruits.jpg",
               "apple.jpg", "orange.jpg", "chicky_512.png", "text_motion.jpg", "rubberwhale2.png"]
@@ -38,6 +47,14 @@ FAMILIES = {
     "landing_none_photo": "a photographed floor and no platform: nothing may be found",
     "ingress_photo": "photographed wall and room, openings of many sizes, shapes and offsets",
     "ingress_solid_photo": "a photographed wall without an opening: nothing may be found",
+    "landing_sizes": "platforms from 20 cm to 1.4 m long, the largest wider than the downward "
+                     "camera's view from the search height, on a photographed floor",
+    "landing_samegrain": "floor and top cut from one photograph at one scale: natural textures of "
+                         "the same grain on both (gravel on gravel)",
+    "landing_dim": "a nearly featureless dark top (slate) on a speckled floor (granite) in dim "
+                   "light, a third of the usual ambient, sensor noise 4-6 grey levels",
+    "ingress_smooth_wall": "a photographed wall with large smooth regions and a busy photographed "
+                           "room behind the opening",
     "landing_moving_cart": "a platform on a flat cart going round a path (line, circle, figure "
                            "eight) at 0.5-1 m/s, photographed floor, wind",
     "landing_deck": "a platform on a boat's deck going round a path at 0.2-0.5 m/s, heaving up to "
@@ -205,6 +222,34 @@ def _top(rng, length_m):
                        rng.uniform(0.006, 0.010))
 
 
+def _platform_any_size(rng, top_of_length, area_min, area_max):
+    """A platform 0.2-1.4 m long (log-uniform: as many small ones as large), 0.2-1.0 m wide,
+    8-30 cm high, any turn, wholly inside the search rectangle and at least 0.35 m from the
+    start (drawn again until it is)."""
+    length = math.exp(rng.uniform(math.log(0.20), math.log(1.40)))
+    width = rng.uniform(0.20, min(1.0, length))
+    height = rng.uniform(0.08, 0.30)
+    while True:
+        yaw = math.radians(rng.uniform(-90, 90))
+        hx = abs(math.cos(yaw)) * length / 2 + abs(math.sin(yaw)) * width / 2
+        hy = abs(math.sin(yaw)) * length / 2 + abs(math.cos(yaw)) * width / 2
+        cx = rng.uniform(area_min[0] + hx, area_max[0] - hx)
+        cy = rng.uniform(area_min[1] + hy, area_max[1] - hy)
+        if start_clearance([cx, cy], [length, width], math.degrees(yaw)) >= 0.35:
+            break
+    return {"center_xy_m": [round(cx, 3), round(cy, 3)],
+            "size_m": [round(length, 3), round(width, 3), round(height, 3)],
+            "yaw_deg": round(math.degrees(yaw), 1), "texture": top_of_length(length)}
+
+
+def start_clearance(center_xy, size_xy, yaw_deg):
+    """Distance from the start (the origin) to a platform's footprint [m]."""
+    yaw = math.radians(yaw_deg)
+    u = -math.cos(yaw) * center_xy[0] - math.sin(yaw) * center_xy[1]
+    v = math.sin(yaw) * center_xy[0] - math.cos(yaw) * center_xy[1]
+    return math.hypot(max(abs(u) - size_xy[0] / 2, 0.0), max(abs(v) - size_xy[1] / 2, 0.0))
+
+
 def _ingress(rng, name, opening):
     wall_x = 3.0
     s = {
@@ -357,6 +402,23 @@ def _draw(family, seed):
         top = _procedural(rng, "paper", 1024, 0.001, rng.uniform(215, 235), rng.uniform(0.25, 0.5),
                           rng.uniform(0.006, 0.010))
         return _landing(rng, family, floor, _platform(rng, lambda length: top))
+    if family == "landing_sizes":
+        return _landing(rng, family, _photo(rng, SURFACE_PHOTOS, rng.uniform(1.5, 3.0)),
+                        _platform_any_size(rng, lambda length: _top(rng, length),
+                                           LANDING_AREA_MIN, LANDING_AREA_MAX))
+    if family == "landing_samegrain":
+        photo = _photo(rng, SURFACE_PHOTOS, rng.uniform(1.5, 3.0))
+        return _landing(rng, family, photo, _platform(rng, lambda length: dict(photo)))
+    if family == "landing_dim":
+        floor = _procedural(rng, "noise", 2048, 0.002, rng.uniform(100, 150), rng.uniform(0.6, 1.0),
+                            rng.uniform(0.004, 0.012))
+        top = _procedural(rng, "paper", 1024, 0.001, rng.uniform(60, 90), rng.uniform(0.1, 0.25),
+                          rng.uniform(0.006, 0.010))
+        scene = _landing(rng, family, floor, _platform(rng, lambda length: top))
+        scene["lighting"]["ambient"] = round(scene["lighting"]["ambient"] / 3, 3)
+        scene["lighting"]["diffuse"] = round(scene["lighting"]["diffuse"] / 3, 3)
+        scene["camera"]["noise_sigma"] = round(rng.uniform(4.0, 6.0), 2)
+        return scene
     if family == "landing_none_photo":
         return _landing(rng, family, _photo(rng, SURFACE_PHOTOS, rng.uniform(1.5, 3.0)), None)
     if family in ("landing_moving_cart", "landing_deck"):
@@ -366,6 +428,11 @@ def _draw(family, seed):
         return _moving_platform(rng, scene, (0.2, 0.5) if deck else (0.5, 1.0), deck)
     if family == "ingress_photo":
         return _ingress(rng, family, _opening(rng))
+    if family == "ingress_smooth_wall":
+        scene = _ingress(rng, family, _opening(rng))
+        scene["wall"]["texture"] = _photo(rng, SMOOTH_PHOTOS, rng.uniform(2.5, 4.0))
+        scene["wall"]["room_texture"] = _photo(rng, BUSY_PHOTOS, rng.uniform(1.0, 2.5))
+        return scene
     assert family == "ingress_solid_photo"
     return _ingress(rng, family, None)
 

@@ -74,7 +74,19 @@ with tempfile.TemporaryDirectory() as tmp:
             elif "platform" in s:
                 p = s["platform"]
                 (cx, cy), (length, width, height) = p["center_xy_m"], p["size_m"]
-                assert 0.20 <= width <= length <= 0.50 and 0.08 <= height <= 0.22, p
+                if family == "landing_sizes":
+                    # From a ream of paper to a rooftop wider than the view from search height.
+                    assert 0.20 <= width <= min(1.0, length) and length <= 1.40, p
+                    assert 0.08 <= height <= 0.30, p
+                    assert scene_families.start_clearance(p["center_xy_m"], p["size_m"][:2],
+                                                          p["yaw_deg"]) >= 0.35, (family, seed, p)
+                else:
+                    assert 0.20 <= width <= length <= 0.50 and 0.08 <= height <= 0.22, p
+                if family == "landing_samegrain":
+                    assert p["texture"] == s["area"]["floor_texture"], (seed, "not one grain")
+                if family == "landing_dim":
+                    assert s["lighting"]["ambient"] <= 0.85 / 3 + 1e-3, s["lighting"]
+                    assert 4.0 <= s["camera"]["noise_sigma"] <= 6.0, s["camera"]
                 yaw = math.radians(p["yaw_deg"])
                 for sx in (-1, 1):
                     for sy in (-1, 1):
@@ -85,7 +97,10 @@ with tempfile.TemporaryDirectory() as tmp:
                         assert math.hypot(x, y) > 0.35, (family, seed, "platform under the start")
             if family.startswith("ingress"):
                 w = s["wall"]
-                assert ("opening" in w) == (family == "ingress_photo"), family
+                assert ("opening" in w) == (family != "ingress_solid_photo"), family
+                if family == "ingress_smooth_wall":
+                    assert os.path.basename(w["texture"]["path"]) in scene_families.SMOOTH_PHOTOS
+                    assert os.path.basename(w["room_texture"]["path"]) in scene_families.BUSY_PHOTOS
                 assert s["camera"]["mount"] == "forward"
                 if "opening" in w:
                     (oy, oz), (ow, oh) = w["opening"]["center_yz_m"], w["opening"]["size_m"]
