@@ -32,7 +32,8 @@ Quantiles quantiles(std::vector<double> v) {
   if (v.empty()) return q;
   std::sort(v.begin(), v.end());
   const auto at = [&](double f) {
-    return v[std::min(v.size() - 1, static_cast<size_t>(f * static_cast<double>(v.size() - 1) + 0.5))];
+    return v[std::min(v.size() - 1,
+                      static_cast<size_t>(f * static_cast<double>(v.size() - 1) + 0.5))];
   };
   q.p10 = at(0.1);
   q.p50 = at(0.5);
@@ -72,8 +73,9 @@ void summarize_stream(const std::vector<EvalFrame>& frames, EvalSummary& s) {
   }
   if (!jitter.empty()) {
     std::sort(jitter.begin(), jitter.end());
-    s.jitter_p99_ms = jitter[std::min(
-        jitter.size() - 1, static_cast<size_t>(0.99 * static_cast<double>(jitter.size() - 1) + 0.5))];
+    s.jitter_p99_ms =
+        jitter[std::min(jitter.size() - 1,
+                        static_cast<size_t>(0.99 * static_cast<double>(jitter.size() - 1) + 0.5))];
   }
 }
 
@@ -130,7 +132,8 @@ EvalSummary summarize(const std::vector<EvalFrame>& frames) {
 const char* hint(Reason reason) {
   switch (reason) {
     case Reason::kNoPose:
-      return "no pose at the frame's exposure time: is the pose channel in the log (--pose-channel),"
+      return "no pose at the frame's exposure time: is the pose channel in the log "
+             "(--pose-channel),"
              " and are the camera's and the poses' stamps on the same clock (see delay)?";
     case Reason::kNoReference:
       return "no reference frame yet: frames after a start, a reset or lost tracks";
@@ -171,15 +174,18 @@ std::string format_summary(const EvalSummary& s) {
   const auto q = [](const Quantiles& v, const char* fmt) {
     return line(fmt, v.p10, v.p50, v.p90, v.max);
   };
-  out += line("stream: %.1f Hz (median interval %.2f ms), %d gaps (%d frames missing), %d repeated"
-              " or backward stamps, jitter p99 %.2f ms\n",
-              s.interval_ms > 0 ? 1e3 / s.interval_ms : 0.0, s.interval_ms, s.gaps,
-              s.missing_frames, s.repeated_stamps, s.jitter_p99_ms);
+  out += line(
+      "stream: %.1f Hz (median interval %.2f ms), %d gaps (%d frames missing), %d repeated"
+      " or backward stamps, jitter p99 %.2f ms\n",
+      s.interval_ms > 0 ? 1e3 / s.interval_ms : 0.0, s.interval_ms, s.gaps, s.missing_frames,
+      s.repeated_stamps, s.jitter_p99_ms);
   if (s.delay_ms.n > 0)
-    out += "delay_ms (exposure to recorder): " + q(s.delay_ms, "p10 %.1f p50 %.1f p90 %.1f max %.1f\n");
+    out += "delay_ms (exposure to recorder): " +
+           q(s.delay_ms, "p10 %.1f p50 %.1f p90 %.1f max %.1f\n");
   out += "level (mean grey): " + q(s.level, "p10 %.0f p50 %.0f p90 %.0f max %.0f");
-  out += line(", %d over-exposed (>%.0f%% clipped), %d under-exposed (>%.0f%% at the noise floor)\n",
-              s.over_exposed, 100 * kOverExposedShare, s.under_exposed, 100 * kUnderExposedShare);
+  out +=
+      line(", %d over-exposed (>%.0f%% clipped), %d under-exposed (>%.0f%% at the noise floor)\n",
+           s.over_exposed, 100 * kOverExposedShare, s.under_exposed, 100 * kUnderExposedShare);
   if (s.exposure_ms.n > 0)
     out += "exposure_ms (driver): " + q(s.exposure_ms, "p10 %.2f p50 %.2f p90 %.2f max %.2f\n");
   else
@@ -187,7 +193,8 @@ std::string format_summary(const EvalSummary& s) {
   out += "features: " + q(s.features, "p10 %.0f p50 %.0f p90 %.0f max %.0f\n");
   out += "matches: " + q(s.matches, "p10 %.0f p50 %.0f p90 %.0f max %.0f\n");
   if (s.inliers.n > 0)
-    out += "target inliers (found frames): " + q(s.inliers, "p10 %.0f p50 %.0f p90 %.0f max %.0f\n");
+    out +=
+        "target inliers (found frames): " + q(s.inliers, "p10 %.0f p50 %.0f p90 %.0f max %.0f\n");
   out += line("frames without a pose: %d\n", s.without_pose);
   out += "reasons:\n";
   for (const auto& [reason, n] : s.reasons) {

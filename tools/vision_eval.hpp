@@ -10,8 +10,8 @@
 // Pure: the frames' records in, a summary and its text out; alight-vision-eval reads the log.
 
 #include <cstdint>
-#include <optional>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -62,12 +62,12 @@ Quantiles quantiles(std::vector<double> v);
 struct EvalSummary {
   size_t frames = 0;
   // The stream: intervals between consecutive frames' exposure times, in log order.
-  double interval_ms = 0.0;     ///< the median interval (the nominal rate's period) [ms]
-  int gaps = 0;                 ///< intervals longer than kGapIntervals nominal ones
-  int missing_frames = 0;       ///< frames those gaps lost, by the nominal interval
-  int repeated_stamps = 0;      ///< intervals <= 0: a stamp equal to or before the previous one
-  double jitter_p99_ms = 0.0;   ///< |interval - nominal| over the intervals that are not gaps
-  Quantiles delay_ms;           ///< exposure to the recorder's reception (log_utime known)
+  double interval_ms = 0.0;    ///< the median interval (the nominal rate's period) [ms]
+  int gaps = 0;                ///< intervals longer than kGapIntervals nominal ones
+  int missing_frames = 0;      ///< frames those gaps lost, by the nominal interval
+  int repeated_stamps = 0;     ///< intervals <= 0: a stamp equal to or before the previous one
+  double jitter_p99_ms = 0.0;  ///< |interval - nominal| over the intervals that are not gaps
+  Quantiles delay_ms;          ///< exposure to the recorder's reception (log_utime known)
   // Exposure.
   Quantiles level, exposure_ms;  ///< exposure_ms.n = 0: the driver never said
   int over_exposed = 0, under_exposed = 0;

@@ -41,7 +41,7 @@ TEST(VisionEvalSummaryTest, StreamGapsRepeatsAndJitter) {
   for (int i = 0; i < 60; ++i) {
     EvalFrame f;
     t += 33'333 + (i % 2 ? 400 : -400);
-    if (i == 30) t += 2 * 33'333;   // two frames lost
+    if (i == 30) t += 2 * 33'333;          // two frames lost
     if (i == 40) t = frames.back().utime;  // the driver's stamp again
     f.utime = t;
     f.log_utime = t + 12'000;  // 12 ms from exposure to the recorder
@@ -106,10 +106,9 @@ TEST(VisionEvalSummaryTest, NoFramesIsAnEmptyReport) {
 class VisionEvalToolTest : public ::testing::Test {
  protected:
   std::string write_log(bool with_poses) {
-    const std::string path =
-        (std::filesystem::temp_directory_path() /
-         ("alight_vision_eval_test_" + std::to_string(with_poses) + ".lcmlog"))
-            .string();
+    const std::string path = (std::filesystem::temp_directory_path() /
+                              ("alight_vision_eval_test_" + std::to_string(with_poses) + ".lcmlog"))
+                                 .string();
     lcm::LogFile log(path, "w");
     EXPECT_TRUE(log.good());
     cv::Mat texture(480, 640, CV_8UC1);
@@ -150,8 +149,8 @@ class VisionEvalToolTest : public ::testing::Test {
   }
 
   static std::string run(const std::string& args, int* status) {
-    const std::string cmd = std::string(alight::build::binary_dir()) +
-                            "/bin/alight-vision-eval " + args + " 2>&1";
+    const std::string cmd =
+        std::string(alight::build::binary_dir()) + "/bin/alight-vision-eval " + args + " 2>&1";
     FILE* p = popen(cmd.c_str(), "r");
     std::string out;
     char buf[512];
