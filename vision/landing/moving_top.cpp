@@ -29,6 +29,8 @@ const char* to_string(MovingReason r) {
       return "too_fast";
     case MovingReason::kSizeOutOfRange:
       return "size_out_of_range";
+    case MovingReason::kStillTop:
+      return "still_top";
   }
   return "unknown";
 }
@@ -163,6 +165,46 @@ std::vector<size_t> common_motion(const std::vector<Placed>& cand, const MovingT
   return best;
 }
 
+// Stage 2b: the matches that stay put inside the moving set's footprint (its rectangle on the
+// top's plane in the current view, the inner kStillInner of it: at the assumed height the edges
+// may be a few centimetres off). A cart hides the floor under it; a still top's own matches
+// stay where they were. Still: carried by the known floor (a still top's parallax over a short
+// baseline may be under floor_tol_px), or a candidate that moves only by the height error's
+// scale about the cameras' nadirs (at most max_scale_change times their horizontal shift).
+constexpr double kStillInner = 0.8;
+
+int still_inside(const Correspondences& c, const std::vector<Placed>& cand,
+                 const std::vector<size_t>& in, const TopRect& rect, const Views& v,
+                 double floor_z_m, const MovingTopParams& params) {
+  const double z_top = floor_z_m + params.top_height_m;
+  std::vector<uint8_t> moving(c.size(), 0), placed(c.size(), 0);
+  for (size_t k : in) moving[cand[k].index] = 1;
+  const auto inside = [&](const Vector3d& P) {
+    for (int i = 0; i < 2; ++i) {
+      const double x = rect.axis[i].dot(P - rect.origin_W);
+      const double mid = 0.5 * (rect.lo[i] + rect.hi[i]), half = 0.5 * (rect.hi[i] - rect.lo[i]);
+      if (std::abs(x - mid) > kStillInner * half) return false;
+    }
+    return true;
+  };
+  const double shift = (v.X_WC2.translation() - v.X_WC1.translation()).head<2>().norm();
+  int n = 0;
+  for (const Placed& m : cand) {
+    placed[m.index] = 1;
+    if (!moving[m.index] && (m.p2 - m.p1).norm() <= m.tol_m + params.max_scale_change * shift &&
+        inside(Vector3d(m.p2.x(), m.p2.y(), z_top)))
+      ++n;
+  }
+  for (size_t i = 0; i < c.size(); ++i) {
+    if (placed[i]) continue;
+    const Vector3d r2 = c.camera->ray(c.u2[i]);
+    if (floor_error_px(v, c.camera->ray(c.u1[i]), r2, floor_z_m) > params.floor_tol_px) continue;
+    const auto P = on_plane(v.X_WC2.translation(), v.X_WC2.linear() * r2, z_top);
+    if (P && inside(*P)) ++n;
+  }
+  return n;
+}
+
 // A cut top's horizontal position variance: no information [m^2].
 constexpr double kCutPositionVar = 100.0;
 
@@ -287,6 +329,8 @@ MovingTop find_moving_top(const Correspondences& c, double dt_s, double floor_z_
   if (!rect || (!out.cut && rect->hi[1] - rect->lo[1] < params.min_size_m) ||
       rect->hi[0] - rect->lo[0] > params.max_size_m)
     return refuse(MovingReason::kSizeOutOfRange);
+  if (still_inside(c, cand, in, *rect, v, floor_z_m, params) >= kStillShare * out.n_inliers)
+    return refuse(MovingReason::kStillTop);
   measure(cand, in, S, v, dt_s, floor_z_m, params, &out);
   return out;
 }

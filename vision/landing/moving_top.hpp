@@ -20,7 +20,9 @@
 // s = k_2 / k_1 also carries the top's heave (a deck) over the interval. A similarity fitted by
 // RANSAC (two matches a draw, seeded) gives the top's inliers, its displacement, its turn and
 // its heave; the inliers' rectangle its centre, size and yaw. Gates refuse a floor cluster,
-// an implausible motion or size, each with its own reason.
+// an implausible motion or size, and a motion that a still top explains as well (a pattern
+// repeated along the top: its descriptors match the next copy, one period away, and those
+// matches share one rigid motion), each with its own reason.
 //
 // The height: a plane that moves on its own has no observable depth from two views with a level
 // camera (its motion absorbs the baseline). It is taken as moving_top.top_height_m; the error
@@ -51,6 +53,8 @@ enum class MovingReason : int8_t {
                           ///< beyond max_scale_change
   kSizeOutOfRange = 7,    ///< the inliers' extent outside [min_size_m, max_size_m] (a cut
                           ///< top: longer than max_size_m)
+  kStillTop = 8,          ///< a still top explains as many matches (a pattern repeated along
+                          ///< the top matched to its next copy)
 };
 
 const char* to_string(MovingReason r);
@@ -87,6 +91,13 @@ struct Similarity2 {
   Vector2d t = Vector2d::Zero();
   Vector2d apply(const Vector2d& p) const;
 };
+
+/// Matches that stay put inside the moving set's footprint, against the moving set's inliers: at
+/// least this share and a still top explains the view as well (kStillTop). A cart hides the
+/// floor under it and has no still matches of its own (a stopped one's are its moving set); a
+/// still top whose pattern repeats keeps its true matches beside the ones to the next copy,
+/// though the ratio test drops most of both (each feature has a twin), so a quarter is asked.
+inline constexpr double kStillShare = 0.25;
 
 /// Least-squares similarity from p to q (Umeyama 1991, in 2-D); nullopt when p has no extent.
 std::optional<Similarity2> fit_similarity(const std::vector<Vector2d>& p,

@@ -180,6 +180,48 @@ TEST(MovingTopTest, AStillFloorIsNoMovingTop) {
       << to_string(m.reason);
 }
 
+// A still top 0.8 x 0.7 m whose print repeats every 0.42 m across it (a photograph tiled over a
+// large top, roof tiles, a grating), seen while hovering: 24 of its features match the next copy
+// in the later view, one period on, and share that displacement (1.7 m/s over 0.25 s) as one
+// rigid motion; 60 match themselves and stay put (over 5 mm of baseline the known floor carries
+// them too, so they are no candidates). The still top explains the view as well: no moving top.
+TEST(MovingTopTest, ATopWhosePatternRepeatsIsNotMovingByOnePeriod) {
+  MovingScene s = moving_cart_scene();
+  s.with_top = false;
+  s.pose_2 = MovingScene::at({0.005, 0.0, 1.5}, 0.3);  // hovering
+  s.pose_2.utime = 1'250'000;
+  Correspondences c = s.correspondences();
+  MovingTopTruth top;
+  top.c = {0.1, 0.05};
+  top.psi = 0.56;
+  const Vector2d period(0.0, 0.42);
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> ux(-0.4, 0.4), uy(-0.35, 0.35);
+  const auto add = [&](const Vector2d& l1, const Vector2d& l2) {
+    const auto p1 = s.project(s.pose_1, top.point(l1)), p2 = s.project(s.pose_2, top.point(l2));
+    if (!p1 || !p2) return false;
+    c.u1.push_back(*p1);
+    c.u2.push_back(*p2);
+    c.x1.push_back((s.camera.K() * s.camera.ray(*p1)).hnormalized());
+    c.x2.push_back((s.camera.K() * s.camera.ray(*p2)).hnormalized());
+    return true;
+  };
+  int twins = 0, selves = 0;
+  while (twins < 24) {
+    const Vector2d l(ux(rng), uy(rng) - 0.21);  // its next copy is on the top too
+    twins += add(l, l + period);
+  }
+  while (selves < 60) {
+    const Vector2d l(ux(rng), uy(rng));
+    selves += add(l, l);
+  }
+  const MovingTop m = find_moving_top(c, 0.25, 0.0, MovingTopParams{});
+  EXPECT_EQ(m.reason, MovingReason::kStillTop)
+      << to_string(m.reason) << " at " << m.v_W.head<2>().norm() << " m/s";
+  // The cart's measurement keeps its motion: no still matches of its own.
+  EXPECT_TRUE(find_moving_top(moving_cart_scene().correspondences(), 0.25, 0.0, {}).found());
+}
+
 TEST(MovingTopTest, RefusesAPlatformFasterThanTheBound) {
   MovingScene s = moving_cart_scene();
   MovingTopParams params;
