@@ -444,7 +444,6 @@ void Autonomy::next_vantage(phases::Refinement& r) {
   const auto v = profile_->vantage(mu, estimator_.covariance(), estimator_.n(), here,
                                    r.normal_sum_W, sampler_);
   r.vantage_W = v.p_W;
-  r.vantage_W.z() += r.climb_m;
   if (v.yaw_rad) yaw_sp_rad_ = *v.yaw_rad;
   r.vantage_since_utime = now_utime_;
   r.at_vantage_since_utime.reset();
@@ -507,10 +506,8 @@ void Autonomy::handle_target(const TargetMeasurement& m) {
       // between the vehicle and the true centre, so each vantage sees more of the target (in
       // Monte Carlo runs the draws around the first sighting alone kept it cut for 60 s).
       if (estimator_.n() == 0) r->first_sighting_W = m.p_W_target;
-      if (!r->partial_only_since_utime) r->partial_only_since_utime = m.utime;
       return;
     }
-    r->partial_only_since_utime.reset();
     r->sizes_m.push_back(m.size_m);
     r->normal_sum_W += m.n_W;
     r->yaw4_sum += Vector2d(std::cos(4 * m.yaw_rad), std::sin(4 * m.yaw_rad));
@@ -665,23 +662,6 @@ void Autonomy::step(phases::Detection& s, const Vector3d& p, double dt_s) {
   }
 }
 
-bool Autonomy::widen_view(phases::Refinement& r) {
-  // A top larger than the camera's view from the vantages' height is only ever seen cut by the
-  // image border: located, never found, the vantages circle it for good. After a vantage's
-  // timeout of nothing but partial views the vantages rise by kWiderViewStepM, up to the
-  // geofence (kWiderViewCeilingM below its top); each step widens the view by the range gained.
-  if (mission() != Mission::kLanding || !r.partial_only_since_utime ||
-      seconds(now_utime_ - *r.partial_only_since_utime) < params_.refinement.vantage_timeout_s)
-    return false;
-  const double ceiling = params_.geofence.max_W_m.z() - kWiderViewCeilingM;
-  const double climb =
-      std::min(r.climb_m + kWiderViewStepM, ceiling - params_.detection.landing_height_m);
-  r.partial_only_since_utime = now_utime_;
-  if (climb <= r.climb_m) return false;
-  r.climb_m = climb;
-  return true;
-}
-
 void Autonomy::step(phases::Refinement& r, const Vector3d& p, double /*dt_s*/) {
   if (hold_if_vision_silent()) return;
   const auto& R = params_.refinement;
@@ -694,9 +674,7 @@ void Autonomy::step(phases::Refinement& r, const Vector3d& p, double /*dt_s*/) {
     hold("refinement did not converge in " + fmt(R.max_time_s, 0) + " s", Failsafe::kNone, 0.0);
     return;
   }
-  if (widen_view(r)) {
-    next_vantage(r);
-  } else if ((p - r.vantage_W).norm() < R.vantage_reach_tol_m) {
+  if ((p - r.vantage_W).norm() < R.vantage_reach_tol_m) {
     if (!r.at_vantage_since_utime) r.at_vantage_since_utime = now_utime_;
     if (seconds(now_utime_ - *r.at_vantage_since_utime) >= R.vantage_dwell_s) {
       if (!R.one_waypoint_per_vantage) {

@@ -7,9 +7,6 @@
 //  - Detection (3.4.1, 4.3): a lawnmower over the landing area / a pass along the wall until the
 //    first VISION_TARGET of the mission's kind.
 //  - Refinement (3.4.1, eqs. 7-9): autonomy/refinement.hpp (estimate, outlier gate, vantages).
-//    Beyond the paper, landing: a top only ever seen cut by the image border (larger than the
-//    view from the vantages) raises the vantages by kWiderViewStepM after each vantage timeout
-//    of partial views, up to the geofence.
 //  - Approach, landing (3.4.1): above the estimate at the current altitude; descend at v_des
 //    (x3(t+1) = x3(t) - v_des dt) only while the radial error e_r(t) is within radial_tol; below
 //    final_height the setpoint drops rapidly; touch-down from the accelerometer (touchdown.hpp)
@@ -89,9 +86,6 @@ struct Refinement {
   int64_t vantage_since_utime = 0;
   std::optional<int64_t> at_vantage_since_utime;  ///< dwelling at the vantage since
   std::vector<Vector3d> at_vantage_W;             ///< waypoints seen while dwelling there
-  /// Landing: partial views only since (none: a full view since the last partial one, or none).
-  std::optional<int64_t> partial_only_since_utime;
-  double climb_m = 0.0;  ///< landing: the vantages raised this much for a whole view [m]
 };
 struct Approach {
   ApproachState how;                            ///< the mission profile's own approach state
@@ -130,15 +124,6 @@ using PhaseState =
     std::variant<phases::Idle, phases::Takeoff, phases::Hover, phases::Detection,
                  phases::Refinement, phases::Approach, phases::FinalDescent, phases::Landed,
                  phases::Done, phases::Hold, phases::FailsafeDescent, phases::Killed>;
-
-/// Landing refinement: each rise of the vantages for a whole view of a top larger than the
-/// camera's view [m]. From the search height (1.2-1.6 m, the top 10-30 cm high) 0.3 m widens the
-/// view by a fifth to a quarter of its width: two or three rises take in a top half again as
-/// wide as the view, and each costs only the climb.
-inline constexpr double kWiderViewStepM = 0.3;
-/// The raised vantages stay this far below the geofence's top [m]: the room to stop a climb
-/// and the outer loop's own inset.
-inline constexpr double kWiderViewCeilingM = 0.2;
 
 class Autonomy {
  public:
@@ -229,9 +214,6 @@ class Autonomy {
   void start_refinement(const TargetMeasurement& m);
   void finish_refinement(phases::Refinement& r);
   void next_vantage(phases::Refinement& r);
-  /// Landing refinement: raises the vantages when the top has been seen only cut by the border
-  /// for a vantage's timeout; true when they rose.
-  bool widen_view(phases::Refinement& r);
   void add_waypoint(phases::Refinement& r, const Vector3d& X_W);
   void target_lost(const std::string& what);
   void hold(const std::string& reason, Failsafe failsafe, double min_z_m);

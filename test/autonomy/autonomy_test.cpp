@@ -15,8 +15,6 @@ namespace {
 
 using test::command;
 using test::KinematicWorld;
-using test::OracleVisionParams;
-using test::test_params;
 
 TEST(AutonomyTest, StartsIdleWithMotorsOff) {
   KinematicWorld w;
@@ -172,53 +170,6 @@ TEST(AutonomyTest, RefusesAPlatformSmallerThanTheGearFootprint) {
   for (int i = 0; i < 300; ++i) w.step();
   EXPECT_EQ(w.autonomy.phase(), Phase::kHold);
   EXPECT_GT(w.p.z(), 1.0) << "still hovering at a safe height";
-}
-
-// A top larger than the camera's view from the search height (1.2 x 1.0 m; from 1.2 m the view
-// spans about 1.0 x 0.75 m of it): seen only cut by the border, it is located, never found, and
-// the vantages circled it until the refinement's time ran out. They rise until it is seen whole,
-// then the refinement converges and the vehicle lands on it.
-TEST(AutonomyTest, ATopLargerThanTheViewRaisesTheVantagesUntilItIsSeenWhole) {
-  OracleVisionParams vp;
-  vp.whole_view_needed = true;
-  KinematicWorld w(test_params(), vp);
-  w.truth.platform_size_m = Vector3d(1.2, 1.0, 0.2);
-  w.takeoff_and_hover();
-  w.send(Command::kGo, Mission::kLanding);
-  ASSERT_TRUE(w.run_until_phase(Phase::kRefinement, 60));
-  EXPECT_EQ(w.autonomy.estimator().n(), 0) << "never seen whole from the search height";
-  double highest = 0;
-  ASSERT_TRUE(w.run_until(
-      [&] {
-        highest = std::max(highest, w.out.setpoint.p_W.z());
-        return w.autonomy.phase() == Phase::kApproach;
-      },
-      60))
-      << w.out.status.reason;
-  const double search_z = w.autonomy.params().detection.landing_height_m;
-  EXPECT_GE(highest, search_z + 2 * kWiderViewStepM - 1e-9);
-  EXPECT_LE(highest, w.autonomy.params().geofence.max_W_m.z() - kWiderViewCeilingM + 1e-9);
-  EXPECT_LT((w.autonomy.final_estimate() - w.truth.platform_center_W).head<2>().norm(), 0.02);
-  ASSERT_TRUE(w.run_until_phase(Phase::kLanded, 60)) << w.out.status.reason;
-  EXPECT_LT((w.p - w.truth.platform_center_W).head<2>().norm(), 0.05);
-}
-
-// The same top when the view takes it in whole: the vantages stay at the search height.
-TEST(AutonomyTest, ATopSeenWholeKeepsTheVantagesAtTheSearchHeight) {
-  OracleVisionParams vp;
-  vp.whole_view_needed = true;
-  KinematicWorld w(test_params(), vp);
-  w.takeoff_and_hover();
-  w.send(Command::kGo, Mission::kLanding);
-  ASSERT_TRUE(w.run_until_phase(Phase::kRefinement, 60));
-  double highest = 0;
-  ASSERT_TRUE(w.run_until(
-      [&] {
-        highest = std::max(highest, w.out.setpoint.p_W.z());
-        return w.autonomy.phase() == Phase::kApproach;
-      },
-      60));
-  EXPECT_NEAR(highest, w.autonomy.params().detection.landing_height_m, 1e-9);
 }
 
 TEST(AutonomyTest, VisionSilenceInRefinementRetriesDetectionThenHolds) {

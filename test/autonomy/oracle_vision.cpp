@@ -6,36 +6,16 @@ namespace alight::autonomy::test {
 
 OracleVision::OracleVision(const OracleVisionParams& params) : params_(params), rng_(params.seed) {}
 
-namespace {
-
-bool point_in_view(const OracleVisionParams& params, const OracleTruth& truth,
-                   const Vector3d& p_W) {
-  const Isometry3d X_WC =
-      camera_in_world(truth.vehicle.X_WB(), make_transform(params.R_BC, params.t_B_C));
-  const Vector3d p_C = X_WC.inverse() * p_W;
-  if (p_C.z() < params.min_range_m || p_C.norm() > params.max_range_m) return false;
-  return std::abs(p_C.x() / p_C.z()) < std::tan(params.half_fov_x_rad) &&
-         std::abs(p_C.y() / p_C.z()) < std::tan(params.half_fov_y_rad);
-}
-
-}  // namespace
-
 bool OracleVision::in_view(const OracleTruth& truth) const {
   const bool landing = params_.mission == Mission::kLanding;
   if (landing ? !truth.has_platform : !truth.has_opening) return false;
-  return point_in_view(params_, truth, landing ? truth.platform_center_W : truth.opening_center_W);
-}
-
-bool OracleVision::whole_in_view(const OracleTruth& truth) const {
-  const double c = std::cos(truth.platform_yaw_rad), s = std::sin(truth.platform_yaw_rad);
-  for (const double sx : {-0.5, 0.5})
-    for (const double sy : {-0.5, 0.5}) {
-      const double x = sx * truth.platform_size_m.x(), y = sy * truth.platform_size_m.y();
-      if (!point_in_view(params_, truth,
-                         truth.platform_center_W + Vector3d(c * x - s * y, s * x + c * y, 0)))
-        return false;
-    }
-  return true;
+  const Vector3d target = landing ? truth.platform_center_W : truth.opening_center_W;
+  const Isometry3d X_WC =
+      camera_in_world(truth.vehicle.X_WB(), make_transform(params_.R_BC, params_.t_B_C));
+  const Vector3d p_C = X_WC.inverse() * target;
+  if (p_C.z() < params_.min_range_m || p_C.norm() > params_.max_range_m) return false;
+  return std::abs(p_C.x() / p_C.z()) < std::tan(params_.half_fov_x_rad) &&
+         std::abs(p_C.y() / p_C.z()) < std::tan(params_.half_fov_y_rad);
 }
 
 std::optional<TargetMeasurement> OracleVision::update(const OracleTruth& truth, int64_t utime) {
@@ -50,10 +30,8 @@ std::optional<TargetMeasurement> OracleVision::update(const OracleTruth& truth, 
   m.utime = utime;
   m.mission = params_.mission;
   if (blind || !in_view(truth)) return m;
-  const bool landing_ = params_.mission == Mission::kLanding;
-  m.found = !(landing_ && params_.whole_view_needed && !whole_in_view(truth));
-  m.partial = !m.found;
-  n_found_ += m.found;
+  m.found = true;
+  ++n_found_;
   std::normal_distribution<double> n01(0.0, 1.0);
   std::uniform_real_distribution<double> u01(0.0, 1.0);
   const bool landing = params_.mission == Mission::kLanding;

@@ -50,9 +50,6 @@ struct OracleVisionParams {
   double half_fov_y_rad = 0.346;  ///< 480 px
   double min_range_m = 0.35;      ///< closer than this the target fills the image
   double max_range_m = 4.0;
-  /// Landing: a top with a corner out of the field of view is located, not found (vision's
-  /// REASON_PARTIAL_VIEW), its centre with the same noise.
-  bool whole_view_needed = false;
   uint64_t seed = 1;
 };
 
@@ -64,8 +61,6 @@ class OracleVision {
   std::optional<TargetMeasurement> update(const OracleTruth& truth, int64_t utime);
   /// Whether the target centre is in view from this pose.
   bool in_view(const OracleTruth& truth) const;
-  /// Landing: whether the top's four corners are in view.
-  bool whole_in_view(const OracleTruth& truth) const;
 
   bool silent = false;  ///< no measurements at all
   bool blind = false;   ///< measurements, all not-found
