@@ -159,15 +159,21 @@ class VisionEvalToolTest : public ::testing::Test {
     return out;
   }
 
-  const std::string config_ =
-      std::string(alight::build::source_dir()) + "/config/vehicles/pelican.yaml";
+  /// The tool's output over a written log (it must exit 0).
+  std::string evaluate(bool with_poses) {
+    const std::string log = write_log(with_poses);
+    const std::string config =
+        std::string(alight::build::source_dir()) + "/config/vehicles/pelican.yaml";
+    int status = 0;
+    const std::string out = run(log + " --config " + config + " --mission landing", &status);
+    EXPECT_EQ(status, 0) << out;
+    std::filesystem::remove(log);
+    return out;
+  }
 };
 
 TEST_F(VisionEvalToolTest, AFlightWithoutMotionCaptureOrTruth) {
-  const std::string log = write_log(true);
-  int status = 0;
-  const std::string out = run(log + " --config " + config_ + " --mission landing", &status);
-  EXPECT_EQ(status, 0) << out;
+  const std::string out = evaluate(true);
   EXPECT_NE(out.find("poses: ESTIMATE_POSE (301); truth: none"), std::string::npos) << out;
   EXPECT_NE(out.find("frames: 99"), std::string::npos) << out;
   EXPECT_NE(out.find("stream: 33.3 Hz"), std::string::npos) << out;
@@ -177,18 +183,13 @@ TEST_F(VisionEvalToolTest, AFlightWithoutMotionCaptureOrTruth) {
   EXPECT_NE(out.find("exposure_ms (driver): p10 4.00 p50 4.00"), std::string::npos) << out;
   EXPECT_NE(out.find("frames without a pose: 0"), std::string::npos) << out;
   EXPECT_EQ(out.find("waypoint_error_m"), std::string::npos) << "no truth, no errors";
-  std::filesystem::remove(log);
 }
 
 TEST_F(VisionEvalToolTest, APoseChannelMissingIsSaidWithWhatToCheck) {
-  const std::string log = write_log(false);
-  int status = 0;
-  const std::string out = run(log + " --config " + config_ + " --mission landing", &status);
-  EXPECT_EQ(status, 0) << out;
+  const std::string out = evaluate(false);
   EXPECT_NE(out.find("poses: MOCAP_POSE (0)"), std::string::npos) << out;
   EXPECT_NE(out.find("frames without a pose: 99"), std::string::npos) << out;
   EXPECT_NE(out.find(alight::tools::hint(Reason::kNoPose)), std::string::npos) << out;
-  std::filesystem::remove(log);
 }
 
 }  // namespace
