@@ -165,12 +165,12 @@ std::vector<size_t> common_motion(const std::vector<Placed>& cand, const MovingT
   return best;
 }
 
-// Stage 2b: the matches that stay put inside the moving set's footprint (its rectangle on the
-// top's plane in the current view, the inner kStillInner of it: at the assumed height the edges
-// may be a few centimetres off). A cart hides the floor under it; a still top's own matches
-// stay where they were. Still: carried by the known floor (a still top's parallax over a short
-// baseline may be under floor_tol_px), or a candidate that moves only by the height error's
-// scale about the cameras' nadirs (at most max_scale_change times their horizontal shift).
+// A gate of stage 3, the last: the matches that stay put inside the moving set's footprint (its
+// rectangle on the top's plane in the current view, the inner kStillInner of it: at the assumed
+// height the edges may be a few centimetres off). A cart hides the floor under it; a still top's
+// own matches stay where they were. Still: carried by the known floor (a still top's parallax
+// over a short baseline may be under floor_tol_px), or a candidate that moves only by the height
+// error's scale about the cameras' nadirs (at most max_scale_change times their horizontal shift).
 constexpr double kStillInner = 0.8;
 
 int still_inside(const Correspondences& c, const std::vector<Placed>& cand,
