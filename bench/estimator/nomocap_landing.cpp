@@ -35,6 +35,7 @@
 
 #include "closed_loop.hpp"
 #include "common/build_paths.hpp"
+#include "estimator/flow_odometry.hpp"
 #include "real_vision.hpp"
 #include "support/stats.hpp"
 
@@ -80,6 +81,17 @@ bool success(const std::string& scenario, const ClosedLoopResult& r) {
          (r.tipped_before_go ? r.on_platform_top : r.landed && !r.tipped);
 }
 
+// The flow front end's frame pairs by outcome, those that happened: " ok 812, too_few_tracks 3".
+std::string flow_pairs_text(const std::vector<int64_t>& counts) {
+  std::string out;
+  for (size_t i = 0; i < counts.size(); ++i)
+    if (counts[i] > 0)
+      out += std::string(out.empty() ? " " : ", ") +
+             estimator::to_string(static_cast<estimator::FlowReason>(i)) + " " +
+             std::to_string(counts[i]);
+  return out.empty() ? " none" : out;
+}
+
 std::string one_line(const Run& x) {
   const auto& r = x.r;
   char buf[768];
@@ -102,14 +114,14 @@ std::string one_line(const Run& x) {
   std::snprintf(buf, sizeof buf,
                 "%s seed %2d: %s touchdown %.2f cm, platform rel. error %.2f cm (z %+.2f), pose "
                 "error max %.2f cm (z %.2f), retries %d, mission %.1f s, flow on floor %lld, "
-                "terrain resets %d, health not OK %d+%d steps%s%s",
+                "terrain resets %d, health not OK %d+%d steps%s, flow pairs%s%s",
                 x.scenario.c_str(), x.seed, x.ok ? "landed" : "FAILED", 100 * r.touchdown_error_m,
                 100 * r.estimate_error_rel_W.norm(), 100 * r.estimate_error_rel_W.z(),
                 100 * r.max_pose_error_h_m, 100 * r.max_pose_error_z_m, r.retries, r.mission_time_s,
                 static_cast<long long>(r.flow_on_floor), r.terrain_resets,
                 r.estimate_degraded_steps, r.estimate_lost_steps,
                 r.estimate_reasons.empty() ? "" : (" (" + r.estimate_reasons + ")").c_str(),
-                x.ok ? "" : (": " + r.reason).c_str());
+                flow_pairs_text(r.flow_reasons).c_str(), x.ok ? "" : (": " + r.reason).c_str());
   return buf;
 }
 

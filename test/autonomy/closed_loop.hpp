@@ -122,7 +122,10 @@ struct ClosedLoopResult {
   std::string estimate_reasons;  ///< every health reason seen in flight, "no_flow|no_range"
   int64_t flow_fused = 0, flow_rejected = 0;  ///< the filter's verdicts on flow samples
   int64_t flow_on_floor = 0;  ///< ... judged against the floor while over the platform
-  int terrain_resets = 0;     ///< platform steps on and off
+  /// The flow front end's frame pairs by outcome (estimator::FlowReason order): why it gave
+  /// no sample.
+  std::vector<int64_t> flow_reasons;
+  int terrain_resets = 0;  ///< platform steps on and off
   /// Ingress: the body origin's offset from the opening's centre (lateral along the wall, up)
   /// at the step it crossed the opening's plane; none when it never did [m].
   std::optional<Vector2d> crossing_offset_m;
