@@ -250,6 +250,12 @@ void Autonomy::react_to_estimate() {
   // DEGRADED: hold and wait for the operator, unless already holding (HOLD, DONE) or landing
   // where the operator said (LAND_HERE: the landing was the operator's answer).
   if (current == Phase::kHold || current == Phase::kDone) return;
+  // The take-off's climb goes on through a DEGRADED that is the flow's alone: in its first
+  // decimetres the flow camera may be too near the floor to track it (out of a flight camera's
+  // focus, the texture magnified beyond its detail), while the rangefinder and the barometer
+  // hold the height and the climb is straight up. At the take-off height (HOVER) a flow still
+  // missing holds as anywhere else.
+  if (current == Phase::kTakeoff && estimate_->reasons == kEstimateReasonNoFlow) return;
   if (const auto* a = std::get_if<phases::Approach>(&state_)) {
     const auto* landing = std::get_if<LandingApproach>(&a->how);
     if (landing && landing->land_here) return;

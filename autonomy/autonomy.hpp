@@ -24,14 +24,14 @@
 //  - The onboard estimate's health (STATE_ESTIMATE; flying without motion capture the
 //    pose is that estimate's): in flight, DEGRADED holds and waits for the operator (not in the
 //    final descent, which finishes the landing; not a hold, a descent or a LAND_HERE already
-//    under way); LOST, or no STATE_ESTIMATE for estimate_silent_s once one was heard, is the
-//    failsafe descent of a lost pose on the pose the estimator still dead-reckons, stopped into
-//    a hold when the estimate is OK again for pose_recovered_s. TAKEOFF and GO wait for an OK
-//    estimate once one was heard (with require_estimate, also before). Never heard: nothing
-//    changes (flying on motion capture). As PX4 does: its Land mode, in a failsafe, needs only
-//    the altitude and goes on landing without a position estimate, and a vehicle that loses its
-//    position descends where it is (docs.px4.io v1.14, flight_modes_mc/land; the Descend flight
-//    task, PX4 pull request 13143).
+//    under way; not the take-off's climb for the flow alone); LOST, or no STATE_ESTIMATE for
+//    estimate_silent_s once one was heard, is the failsafe descent of a lost pose on the pose the
+//    estimator still dead-reckons, stopped into a hold when the estimate is OK again for
+//    pose_recovered_s. TAKEOFF and GO wait for an OK estimate once one was heard (with
+//    require_estimate, also before). Never heard: nothing changes (flying on motion capture). As
+//    PX4 does: its Land mode, in a failsafe, needs only the altitude and goes on landing without a
+//    position estimate, and a vehicle that loses its position descends where it is (docs.px4.io
+//    v1.14, flight_modes_mc/land; the Descend flight task, PX4 pull request 13143).
 //  - Restart (as PX4 does after an in-flight reboot of a module): nothing is
 //    commanded before the first pose. If it (or the restored state) shows the vehicle flying,
 //    the autonomy holds there with the motors on and waits for the operator (GO, NUDGE, ABORT,

@@ -285,6 +285,8 @@ static_assert(static_cast<int8_t>(CommandReject::kUnsigned) == autonomy_status_t
 static_assert(kCommandRejectSlots ==
               sizeof(autonomy_status_t::cmds_rejected_by_reason) / sizeof(int32_t));
 
+static_assert(kEstimateReasonNoFlow == state_estimate_t::REASON_NO_FLOW);
+
 std::string estimate_reasons_text(uint32_t reasons) {
   using E = state_estimate_t;
   static constexpr std::pair<int32_t, const char*> kNames[] = {

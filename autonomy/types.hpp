@@ -97,6 +97,9 @@ struct OperatorCommand {
 /// The onboard state estimate's health (state_estimate_t, alight-estimator): all the
 /// autonomy takes from STATE_ESTIMATE. Its pose reaches the autonomy as the pose (ESTIMATE_POSE
 /// remapped onto MOCAP_POSE when flying without motion capture).
+/// state_estimate_t.REASON_NO_FLOW: no flow fused for a while (autonomy/convert.cpp checks it).
+inline constexpr uint32_t kEstimateReasonNoFlow = 2;
+
 struct EstimateHealth {
   enum class Level { kOk, kDegraded, kLost };
   int64_t utime = 0;  ///< the estimate's time: its newest IMU sample [us]

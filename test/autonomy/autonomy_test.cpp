@@ -976,6 +976,24 @@ TEST(AutonomyEstimateTest, DegradedWhileTakingOffHoldsWhereItIs) {
   EXPECT_TRUE(w.out.setpoint.motors_on);
 }
 
+// The flow alone gone in the take-off's climb (the floor too near the flow camera to track):
+// the climb goes on to the take-off height; still without flow there, it holds as anywhere.
+TEST(AutonomyEstimateTest, NoFlowAloneWhileTakingOffClimbsOnAndHoldsAtTheTakeoffHeight) {
+  KinematicWorld w;
+  w.estimate = health(Level::kOk);
+  w.step();
+  w.send(Command::kTakeoff);
+  ASSERT_TRUE(w.run_until([&] { return w.p.z() > 0.2; }, 5));
+  w.estimate = health(Level::kDegraded, E::REASON_NO_FLOW);
+  ASSERT_TRUE(w.run_until([&] { return w.autonomy.phase() != Phase::kTakeoff; }, 10));
+  const double takeoff_z = w.autonomy.params().takeoff.height_m;
+  EXPECT_NEAR(w.p.z(), takeoff_z, w.autonomy.params().takeoff.reached_tol_m + 0.02);
+  for (int i = 0; i < 10; ++i) w.step();
+  EXPECT_EQ(w.autonomy.phase(), Phase::kHold) << w.out.status.reason;
+  EXPECT_TRUE(has(w.out.status.reason, "state estimate degraded (no_flow): holding"))
+      << w.out.status.reason;
+}
+
 // A degraded or lost estimate in the last 25 cm: the landing goes on (autonomy.cpp,
 // react_to_estimate, says why).
 TEST(AutonomyEstimateTest, DegradedOrLostInTheFinalDescentKeepsLanding) {
