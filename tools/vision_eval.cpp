@@ -26,18 +26,29 @@ Exposure measure_exposure(const cv::Mat& gray) {
   return e;
 }
 
+namespace {
+
+double sorted_at(const std::vector<double>& sorted, double q) {
+  return sorted[std::min(sorted.size() - 1,
+                         static_cast<size_t>(q * static_cast<double>(sorted.size() - 1) + 0.5))];
+}
+
+}  // namespace
+
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  return sorted_at(v, q);
+}
+
 Quantiles quantiles(std::vector<double> v) {
   Quantiles q;
   q.n = v.size();
   if (v.empty()) return q;
   std::sort(v.begin(), v.end());
-  const auto at = [&](double f) {
-    return v[std::min(v.size() - 1,
-                      static_cast<size_t>(f * static_cast<double>(v.size() - 1) + 0.5))];
-  };
-  q.p10 = at(0.1);
-  q.p50 = at(0.5);
-  q.p90 = at(0.9);
+  q.p10 = sorted_at(v, 0.1);
+  q.p50 = sorted_at(v, 0.5);
+  q.p90 = sorted_at(v, 0.9);
   q.max = v.back();
   return q;
 }
@@ -61,7 +72,7 @@ void summarize_stream(const std::vector<EvalFrame>& frames, EvalSummary& s) {
       positive.push_back(d);
   }
   if (positive.empty()) return;
-  s.interval_ms = quantiles(positive).p50;
+  s.interval_ms = percentile(positive, 0.5);
   std::vector<double> jitter;
   for (double d : positive) {
     if (d > kGapIntervals * s.interval_ms) {
@@ -71,12 +82,7 @@ void summarize_stream(const std::vector<EvalFrame>& frames, EvalSummary& s) {
       jitter.push_back(std::abs(d - s.interval_ms));
     }
   }
-  if (!jitter.empty()) {
-    std::sort(jitter.begin(), jitter.end());
-    s.jitter_p99_ms =
-        jitter[std::min(jitter.size() - 1,
-                        static_cast<size_t>(0.99 * static_cast<double>(jitter.size() - 1) + 0.5))];
-  }
+  s.jitter_p99_ms = percentile(jitter, 0.99);
 }
 
 void summarize_exposure(const std::vector<EvalFrame>& frames, EvalSummary& s) {

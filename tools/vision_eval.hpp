@@ -57,6 +57,8 @@ struct Quantiles {
   double p10 = 0, p50 = 0, p90 = 0, max = 0;
   size_t n = 0;
 };
+/// The nearest-rank q-quantile (q in [0, 1]) of v; 0 for none.
+double percentile(std::vector<double> v, double q);
 Quantiles quantiles(std::vector<double> v);
 
 struct EvalSummary {

@@ -44,13 +44,6 @@ bool decode(const lcm::LogEvent& ev, T& msg) {
   return ev.datalen >= 0 && alight::decode_message(msg, ev.data, static_cast<size_t>(ev.datalen));
 }
 
-double percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  const size_t i = std::min(v.size() - 1, static_cast<size_t>(q * (v.size() - 1) + 0.5));
-  return v[i];
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -185,14 +178,14 @@ int main(int argc, char** argv) {
     std::fputs(tools::format_summary(tools::summarize(frames)).c_str(), stdout);
     if (!lateral_m.empty()) {
       std::printf("waypoint_error_m: median %.4f p90 %.4f max %.4f (n %zu)\n",
-                  percentile(lateral_m, 0.5), percentile(lateral_m, 0.9),
-                  percentile(lateral_m, 1.0), lateral_m.size());
+                  tools::percentile(lateral_m, 0.5), tools::percentile(lateral_m, 0.9),
+                  tools::percentile(lateral_m, 1.0), lateral_m.size());
       const auto& e = mission == Mission::kLanding ? height_m : size_err_m;
       std::vector<double> a;
       for (double x : e) a.push_back(std::abs(x));
       std::printf("%s: median %+.4f |p90| %.4f\n",
                   mission == Mission::kLanding ? "height_error_m" : "width_error_m",
-                  percentile(e, 0.5), percentile(a, 0.9));
+                  tools::percentile(e, 0.5), tools::percentile(a, 0.9));
     }
     return 0;
   } catch (const ParamError& e) {

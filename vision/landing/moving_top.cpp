@@ -98,17 +98,22 @@ double floor_error_px(const Views& v, const Vector3d& r1, const Vector3d& r2, do
 }
 
 // Stage 1: every match placed; those the known floor does not carry within floor_tol_px and
-// whose rays meet the top's plane from both views are the candidates.
+// whose rays meet the top's plane from both views are the candidates. *carried marks, per
+// correspondence, those the known floor does carry.
 std::vector<Placed> place_candidates(const Correspondences& c, const Views& v, double floor_z_m,
-                                     const MovingTopParams& params) {
+                                     const MovingTopParams& params, std::vector<uint8_t>* carried) {
   std::vector<Placed> out;
+  carried->assign(c.size(), 0);
   const double z_top = floor_z_m + params.top_height_m;
   for (size_t i = 0; i < c.size(); ++i) {
     const Vector3d r1 = c.camera->ray(c.u1[i]), r2 = c.camera->ray(c.u2[i]);
     Placed m;
     m.index = i;
     m.floor_err_px = floor_error_px(v, r1, r2, floor_z_m);
-    if (m.floor_err_px <= params.floor_tol_px) continue;
+    if (m.floor_err_px <= params.floor_tol_px) {
+      (*carried)[i] = 1;
+      continue;
+    }
     const Vector3d d1 = v.X_WC1.linear() * r1, d2 = v.X_WC2.linear() * r2;
     const auto P1 = on_plane(v.X_WC1.translation(), d1, z_top);
     const auto P2 = on_plane(v.X_WC2.translation(), d2, z_top);
@@ -174,10 +179,11 @@ std::vector<size_t> common_motion(const std::vector<Placed>& cand, const MovingT
 constexpr double kStillInner = 0.8;
 
 int still_inside(const Correspondences& c, const std::vector<Placed>& cand,
-                 const std::vector<size_t>& in, const TopRect& rect, const Views& v,
-                 double floor_z_m, const MovingTopParams& params) {
+                 const std::vector<uint8_t>& carried, const std::vector<size_t>& in,
+                 const TopRect& rect, const Views& v, double floor_z_m,
+                 const MovingTopParams& params) {
   const double z_top = floor_z_m + params.top_height_m;
-  std::vector<uint8_t> moving(c.size(), 0), placed(c.size(), 0);
+  std::vector<uint8_t> moving(c.size(), 0);
   for (size_t k : in) moving[cand[k].index] = 1;
   const auto inside = [&](const Vector3d& P) {
     for (int i = 0; i < 2; ++i) {
@@ -189,17 +195,14 @@ int still_inside(const Correspondences& c, const std::vector<Placed>& cand,
   };
   const double shift = (v.X_WC2.translation() - v.X_WC1.translation()).head<2>().norm();
   int n = 0;
-  for (const Placed& m : cand) {
-    placed[m.index] = 1;
+  for (const Placed& m : cand)
     if (!moving[m.index] && (m.p2 - m.p1).norm() <= m.tol_m + params.max_scale_change * shift &&
         inside(Vector3d(m.p2.x(), m.p2.y(), z_top)))
       ++n;
-  }
   for (size_t i = 0; i < c.size(); ++i) {
-    if (placed[i]) continue;
-    const Vector3d r2 = c.camera->ray(c.u2[i]);
-    if (floor_error_px(v, c.camera->ray(c.u1[i]), r2, floor_z_m) > params.floor_tol_px) continue;
-    const auto P = on_plane(v.X_WC2.translation(), v.X_WC2.linear() * r2, z_top);
+    if (!carried[i]) continue;
+    const auto P =
+        on_plane(v.X_WC2.translation(), v.X_WC2.linear() * c.camera->ray(c.u2[i]), z_top);
     if (P && inside(*P)) ++n;
   }
   return n;
@@ -293,7 +296,8 @@ MovingTop find_moving_top(const Correspondences& c, double dt_s, double floor_z_
   if (!(v.X_WC1.translation().z() > z_top + 0.05 && v.X_WC2.translation().z() > z_top + 0.05))
     return refuse(MovingReason::kNotAboveFloor);
 
-  const std::vector<Placed> cand = place_candidates(c, v, floor_z_m, params);
+  std::vector<uint8_t> carried;
+  const std::vector<Placed> cand = place_candidates(c, v, floor_z_m, params, &carried);
   out.n_candidates = static_cast<int>(cand.size());
   if (out.n_candidates < params.min_inliers) return refuse(MovingReason::kTooFewCandidates);
   Similarity2 S;
@@ -329,7 +333,8 @@ MovingTop find_moving_top(const Correspondences& c, double dt_s, double floor_z_
   if (!rect || (!out.cut && rect->hi[1] - rect->lo[1] < params.min_size_m) ||
       rect->hi[0] - rect->lo[0] > params.max_size_m)
     return refuse(MovingReason::kSizeOutOfRange);
-  if (still_inside(c, cand, in, *rect, v, floor_z_m, params) >= kStillShare * out.n_inliers)
+  if (still_inside(c, cand, carried, in, *rect, v, floor_z_m, params) >=
+      kStillShare * out.n_inliers)
     return refuse(MovingReason::kStillTop);
   measure(cand, in, S, v, dt_s, floor_z_m, params, &out);
   return out;
