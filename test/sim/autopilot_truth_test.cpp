@@ -35,7 +35,8 @@ struct Sitl {
     say(hb);
   }
   /// SIM_STATE of a vehicle `north_m` / `east_m` / `up_m` from home, heading `yaw_ned`.
-  void sim_state(double north_m, double east_m, double up_m, double yaw_ned, Vector3d v_NED = {}) {
+  void sim_state(double north_m, double east_m, double up_m, double yaw_ned,
+                 Vector3d v_NED = Vector3d::Zero()) {  // (Eigen leaves `{}` uninitialised)
     mav::SimState s;
     const auto q = mav::wxyz_float(Quaterniond(Eigen::AngleAxisd(yaw_ned, Vector3d::UnitZ())));
     s.q1 = q[0], s.q2 = q[1], s.q3 = q[2], s.q4 = q[3];
