@@ -468,6 +468,8 @@ std::string StationState::to_json(int64_t now_utime, const std::string& extra) c
     w.field("last_result", static_cast<int>(a.last_result));
     w.field("last_statustext", a.last_statustext);
     w.field("battery_V", a.battery_V);
+    w.field("firmware", a.firmware);
+    w.field("accel_feedforward", static_cast<bool>(a.accel_feedforward));
     w.field("crc_errors", static_cast<double>(a.crc_errors));
     w.field("link_losses", static_cast<double>(a.link_losses));
     w.end_object();

@@ -47,6 +47,8 @@ constexpr double kMinTakeoffAltM = 0.3;
 /// Setpoints held after NAV_TAKEOFF until the autopilot reports the vehicle in the air; without a
 /// landed state, until half the climb is done or this long has passed.
 constexpr int64_t kTakeoffHoldMaxUs = 15'000'000;
+/// An AUTOPILOT_VERSION request's answer: the acknowledgement's wait and retries, then the message.
+constexpr int64_t kVersionWaitUs = 3'000'000;
 /// HIGHRES_IMU asked and accepted, but none this long after: SCALED_IMU instead.
 constexpr int64_t kHighresWaitUs = 3'000'000;
 /// One parameter read: resent after this long, given up after kParamAttempts.
@@ -161,6 +163,10 @@ void Bridge::reset_autopilot_state() {
   prearm_ok_ = false;
   origin_attempts_ = 0;
   next_origin_us_ = 0;
+  firmware_.reset();
+  accel_feedforward_ = false;
+  version_asks_ = 0;
+  next_version_ask_us_ = 0;
   intervals_to_ask_.clear();
   const std::pair<uint32_t, double> asks[] = {{HighresImu::kId, params_.imu_rate_hz},
                                               {AttitudeQuaternion::kId, params_.attitude_rate_hz},
@@ -345,6 +351,8 @@ void Bridge::handle_frame(const Frame& f, const BridgeClock& now, BridgeOutput& 
       origin_known_ = true;
     } else if constexpr (std::is_same_v<M, ParamValue>) {
       on_param(m, out);
+    } else if constexpr (std::is_same_v<M, AutopilotVersion>) {
+      on_version(m, out);
     } else if constexpr (std::is_same_v<M, Statustext>) {
       last_statustext_ = statustext_string(m);
       out.events.push_back(
@@ -443,6 +451,18 @@ void Bridge::on_param(const ParamValue& m, BridgeOutput& out) {
                                     ", alight needs " + r.expect.want + ": " + r.expect.why});
   }
   params_to_read_.erase(params_to_read_.begin());
+}
+
+void Bridge::on_version(const AutopilotVersion& m, BridgeOutput& out) {
+  const auto v = FirmwareVersion::from_flight_sw_version(m.flight_sw_version);
+  if (firmware_ && firmware_->str() == v.str()) return;
+  firmware_ = v;
+  accel_feedforward_ = takes_position_target_accel(flavour_, v);
+  out.events.push_back(
+      {false, "autopilot firmware " + v.str() +
+                  (accel_feedforward_ ? ": position targets carry the feed-forward acceleration"
+                                      : ": position targets without acceleration (not known to "
+                                        "be taken by this version)")});
 }
 
 void Bridge::on_heartbeat(const Frame& f, const Heartbeat& m, const BridgeClock& now,
@@ -721,8 +741,16 @@ void Bridge::stream(const BridgeClock& now, BridgeOutput& out) {
     m.target_system = *sysid_;
     m.target_component = static_cast<uint8_t>(params_.target_compid);
     m.coordinate_frame = mav_frame::kLocalNed;
-    m.type_mask = position_target_typemask::kAxIgnore | position_target_typemask::kAyIgnore |
-                  position_target_typemask::kAzIgnore | position_target_typemask::kYawRateIgnore;
+    m.type_mask = position_target_typemask::kYawRateIgnore;
+    if (accel_feedforward_) {
+      const Vector3d a = ned_from_enu(t.a_W);
+      m.afx = static_cast<float>(a.x());
+      m.afy = static_cast<float>(a.y());
+      m.afz = static_cast<float>(a.z());
+    } else {
+      m.type_mask |= position_target_typemask::kAxIgnore | position_target_typemask::kAyIgnore |
+                     position_target_typemask::kAzIgnore;
+    }
     m.x = static_cast<float>(p.x());
     m.y = static_cast<float>(p.y());
     m.z = static_cast<float>(p.z());
@@ -820,7 +848,8 @@ void Bridge::command_finished(bool ok, int result, const BridgeClock& now, Bridg
   const auto interval_id = static_cast<uint32_t>(pending_->cmd.param1);
   last_result_ = result;
   pending_.reset();
-  const bool housekeeping = name == "interval" || name == "origin request";
+  const bool housekeeping =
+      name == "interval" || name == "origin request" || name == "version request";
   if (ok) {
     if (!housekeeping) {
       await_heartbeat_ = true;
@@ -1038,6 +1067,26 @@ bool Bridge::decide_housekeeping(const BridgeClock& now, BridgeOutput& out) {
                  static_cast<float>(1e6 / rate), 0, now, out);
     return true;
   }
+  // The firmware's version, for what its position targets may carry: MAV_CMD_REQUEST_MESSAGE,
+  // then the older MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES (firmware from before 2019). Each is
+  // given kVersionWaitUs for the message to follow its acknowledgement.
+  if (!firmware_ && now.steady_us >= next_version_ask_us_) {
+    if (version_asks_ == 0) {
+      send_command(mav_cmd::kRequestMessage, "version request",
+                   static_cast<float>(AutopilotVersion::kId), 0, 0, now, out);
+    } else if (version_asks_ == 1) {
+      send_command(mav_cmd::kRequestAutopilotCapabilities, "version request", 1, 0, 0, now, out);
+    } else {
+      out.events.push_back({true,
+                            "no AUTOPILOT_VERSION from the autopilot: position targets "
+                            "go without acceleration"});
+      next_version_ask_us_ = INT64_MAX;
+      return false;
+    }
+    ++version_asks_;
+    next_version_ask_us_ = now.steady_us + kVersionWaitUs;
+    return true;
+  }
   return false;
 }
 
@@ -1113,6 +1162,8 @@ AutopilotStatus Bridge::status(const BridgeClock& now) const {
   s.imu_source = imu_source_;
   s.origin_known = origin_known_;
   s.prearm_ok = prearm_ok_;
+  if (firmware_) s.firmware = firmware_->str();
+  s.accel_feedforward = accel_feedforward_;
   s.frame_offset_NED = frame_offset_NED_;
   s.stats = stats_;
   s.parser = parser_.stats();

@@ -18,7 +18,9 @@
 //    normalised as thrust_N / hover_thrust_N x hover_thrust. The body rates are flagged the way
 //    each autopilot reads them: PX4 takes the yaw rate alone as a feed-forward (roll and pitch
 //    rates ignored), ArduCopter takes all three body rates or none and drops anything else, so
-//    it gets none.
+//    it gets none. Position targets carry position, velocity and, only to firmware whose version
+//    (AUTOPILOT_VERSION, asked at link-up) is known to take it, the feed-forward acceleration:
+//    an ArduCopter older than 4.1 drops a target that has one (autopilot_firmware.hpp).
 //  - Engaging (engage: auto): once the stack arms and setpoints have streamed for
 //    offboard_warmup_s, DO_SET_MODE to OFFBOARD (PX4) or GUIDED_NOGPS / GUIDED (ArduPilot), then
 //    ARM. Each COMMAND_LONG waits for its COMMAND_ACK, is resent (confirmation + 1) after
@@ -71,6 +73,7 @@
 
 #include "common/geometry.hpp"
 #include "common/pose_buffer.hpp"
+#include "mavlink/autopilot_firmware.hpp"
 #include "mavlink/autopilot_modes.hpp"
 #include "mavlink/autopilot_params.hpp"
 #include "mavlink/bridge_params.hpp"
@@ -104,6 +107,9 @@ struct PositionTarget {
   int64_t utime = 0;
   Vector3d p_W = Vector3d::Zero();
   Vector3d v_W = Vector3d::Zero();
+  /// Feed-forward acceleration [m/s^2]: sent only to firmware known to take it
+  /// (takes_position_target_accel), else left out.
+  Vector3d a_W = Vector3d::Zero();
   double yaw_rad = 0;  ///< heading from east, counter-clockwise
   Motors motors = Motors::kOff;
   /// motors KILL carries the operator's signed CMD_KILL, verified by the node: a forced disarm.
@@ -216,6 +222,10 @@ struct AutopilotStatus {
   /// The autopilot could arm: ArduPilot's pre-arm checks pass (SYS_STATUS); PX4 has had a
   /// local position for 2 s (its own checks are per mode, and fail without GPS).
   bool prearm_ok = false;
+  /// The firmware's version from AUTOPILOT_VERSION ("4.5.7", "1.15.0-rc"); "" not known yet.
+  std::string firmware;
+  /// Position targets carry the stack's acceleration (the firmware takes it).
+  bool accel_feedforward = false;
   BridgeStats stats;
   ParserStats parser;
 };
@@ -255,6 +265,7 @@ class Bridge {
   void on_imu(int64_t utime, const Vector3d& accel_FRD, const Vector3d& gyro_FRD,
               BridgeOutput& out);
   void on_param(const ParamValue& m, BridgeOutput& out);
+  void on_version(const AutopilotVersion& m, BridgeOutput& out);
   void update_frame_offset(const BridgeClock& now, BridgeOutput& out);
   void follow_frame_offset(const Vector3d& sample, double tau_s, const BridgeClock& now,
                            BridgeOutput& out);
@@ -321,6 +332,8 @@ class Bridge {
   std::string imu_source_;
   bool origin_known_ = false;
   bool prearm_ok_ = false;
+  std::optional<FirmwareVersion> firmware_;
+  bool accel_feedforward_ = false;
 
   // The stack.
   std::optional<AttitudeTarget> attitude_;
@@ -345,6 +358,8 @@ class Bridge {
   std::vector<ParamRead> params_to_read_;
   int64_t next_origin_us_ = 0;
   int origin_attempts_ = 0;
+  int version_asks_ = 0;  // AUTOPILOT_VERSION requests sent (REQUEST_MESSAGE, then the older one)
+  int64_t next_version_ask_us_ = 0;
 
   // Engage state.
   bool was_armed_ = false;

@@ -8,6 +8,8 @@ namespace {
 /// Beyond these a command is corrupt, not aggressive: 180 deg of tilt, 20 rad/s of yaw, 10 kN.
 constexpr double kMaxAngleRad = M_PI, kMaxYawRateRadps = 20, kMaxThrustN = 1e4;
 constexpr double kMaxPositionM = 1e4, kMaxVelocityMps = 100;
+/// A feed-forward acceleration beyond 5 g is no multicopter's.
+constexpr double kMaxAccelMps2 = 50;
 
 bool finite_within(const double* v, int n, double limit) {
   for (int i = 0; i < n; ++i)
@@ -45,6 +47,8 @@ std::optional<PositionTarget> position_from_msg(const position_setpoint_t& msg, 
   if (!finite_within(msg.p_W, 3, kMaxPositionM)) return fail("position not finite or beyond 10 km");
   if (!finite_within(msg.v_W, 3, kMaxVelocityMps))
     return fail("velocity not finite or beyond 100 m/s");
+  if (!finite_within(msg.a_W, 3, kMaxAccelMps2))
+    return fail("acceleration not finite or beyond 50 m/s^2");
   if (!std::isfinite(msg.yaw_rad)) return fail("yaw not finite");
   PositionTarget t;
   switch (msg.motors) {
@@ -63,6 +67,7 @@ std::optional<PositionTarget> position_from_msg(const position_setpoint_t& msg, 
   t.utime = msg.utime;
   t.p_W = Vector3d(msg.p_W[0], msg.p_W[1], msg.p_W[2]);
   t.v_W = Vector3d(msg.v_W[0], msg.v_W[1], msg.v_W[2]);
+  t.a_W = Vector3d(msg.a_W[0], msg.a_W[1], msg.a_W[2]);
   t.yaw_rad = msg.yaw_rad;
   return t;
 }
@@ -129,6 +134,8 @@ autopilot_status_t to_msg(const AutopilotStatus& s, int64_t wall_utime, int64_t 
   m.last_result = static_cast<int16_t>(s.last_result);
   m.last_statustext = s.last_statustext;
   m.battery_V = s.battery_V;
+  m.firmware = s.firmware;
+  m.accel_feedforward = s.accel_feedforward;
   m.frames_received = static_cast<int64_t>(s.parser.frames_ok);
   m.crc_errors = static_cast<int64_t>(s.parser.crc_errors);
   m.bytes_dropped = static_cast<int64_t>(s.parser.bytes_dropped);

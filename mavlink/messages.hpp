@@ -46,7 +46,7 @@ inline constexpr uint8_t kLocalNed = 1, kBodyNed = 8, kBodyOffsetNed = 9, kBodyF
 namespace mav_cmd {
 inline constexpr uint16_t kNavLand = 21, kNavTakeoff = 22, kDoSetMode = 176,
                           kComponentArmDisarm = 400, kSetMessageInterval = 511,
-                          kRequestMessage = 512;
+                          kRequestMessage = 512, kRequestAutopilotCapabilities = 520;
 }
 namespace mav_result {
 inline constexpr uint8_t kAccepted = 0, kTemporarilyRejected = 1, kDenied = 2, kUnsupported = 3,
@@ -61,6 +61,9 @@ inline constexpr uint8_t kEmergency = 0, kAlert = 1, kCritical = 2, kError = 3, 
 }
 namespace mav_estimator_type {
 inline constexpr uint8_t kUnknown = 0, kVision = 2, kVio = 3, kMocap = 6;
+}
+namespace firmware_version_type {  // AUTOPILOT_VERSION.flight_sw_version's low byte
+inline constexpr uint8_t kDev = 0, kAlpha = 64, kBeta = 128, kRc = 192, kOfficial = 255;
 }
 namespace attitude_target_typemask {  // SET_ATTITUDE_TARGET.type_mask: set bit = ignore
 inline constexpr uint8_t kBodyRollRateIgnore = 1, kBodyPitchRateIgnore = 2, kBodyYawRateIgnore = 4,
@@ -735,6 +738,47 @@ struct ParamValue {
   bool operator==(const ParamValue&) const = default;
 };
 
+/// AUTOPILOT_VERSION (148, standard.xml): the firmware's version and capabilities, sent when asked
+/// (MAV_CMD_REQUEST_MESSAGE, or MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES on older firmware).
+struct AutopilotVersion {
+  static constexpr uint32_t kId = 148;
+  static constexpr std::string_view kName = "AUTOPILOT_VERSION";
+  static constexpr uint8_t kCrcExtra = 178, kBaseLength = 60, kMaxLength = 78;
+
+  uint64_t capabilities = 0;  ///< MAV_PROTOCOL_CAPABILITY bits
+  uint32_t flight_sw_version =
+      0;  ///< bytes from the top: major, minor, patch, FIRMWARE_VERSION_TYPE
+  uint32_t middleware_sw_version = 0;
+  uint32_t os_sw_version = 0;
+  uint32_t board_version = 0;
+  std::array<uint8_t, 8> flight_custom_version{};  ///< commonly the git hash's first 8 bytes
+  std::array<uint8_t, 8> middleware_custom_version{};
+  std::array<uint8_t, 8> os_custom_version{};
+  uint16_t vendor_id = 0;
+  uint16_t product_id = 0;
+  uint64_t uid = 0;
+  // extensions
+  std::array<uint8_t, 18> uid2{};
+
+  template <class S, class V>
+  static constexpr void fields(S& m, V& v) {
+    v("capabilities", m.capabilities);
+    v("uid", m.uid);
+    v("flight_sw_version", m.flight_sw_version);
+    v("middleware_sw_version", m.middleware_sw_version);
+    v("os_sw_version", m.os_sw_version);
+    v("board_version", m.board_version);
+    v("vendor_id", m.vendor_id);
+    v("product_id", m.product_id);
+    v("flight_custom_version", m.flight_custom_version);
+    v("middleware_custom_version", m.middleware_custom_version);
+    v("os_custom_version", m.os_custom_version);
+    v.extensions();
+    v("uid2", m.uid2);
+  }
+  bool operator==(const AutopilotVersion&) const = default;
+};
+
 // --- The set, and what the parser needs to know of each --------------------------------------
 
 template <class... Ms>
@@ -743,7 +787,8 @@ using KnownMessages =
     MessageList<Heartbeat, SysStatus, AttitudeQuaternion, LocalPositionNed, CommandLong, CommandAck,
                 SetAttitudeTarget, SetPositionTargetLocalNed, HighresImu, Timesync, AttPosMocap,
                 Statustext, Odometry, ScaledImu, SetGpsGlobalOrigin, GpsGlobalOrigin, SimState,
-                HilStateQuaternion, ExtendedSysState, SetupSigning, ParamRequestRead, ParamValue>;
+                HilStateQuaternion, ExtendedSysState, SetupSigning, ParamRequestRead, ParamValue,
+                AutopilotVersion>;
 
 /// Calls f(M{}) for every known message type M.
 template <class F, class... Ms>
@@ -831,5 +876,6 @@ static_assert(detail::layout_matches<ExtendedSysState>());
 static_assert(detail::layout_matches<SetupSigning>());
 static_assert(detail::layout_matches<ParamRequestRead>());
 static_assert(detail::layout_matches<ParamValue>());
+static_assert(detail::layout_matches<AutopilotVersion>());
 
 }  // namespace alight::mavlink

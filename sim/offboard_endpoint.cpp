@@ -11,6 +11,9 @@ namespace mav = alight::mavlink;
 
 namespace {
 constexpr int64_t kHeartbeatPeriodUs = 1'000'000;
+/// The PX4 release whose offboard handling this endpoint follows (v1.15.0, official), as
+/// AUTOPILOT_VERSION.flight_sw_version encodes it.
+constexpr uint32_t kFlightSwVersion = 0x010F00FFu;
 const uint32_t kOffboardMode = mav::px4_mode::custom_mode(mav::px4_mode::kOffboard);
 const uint32_t kLandMode =
     mav::px4_mode::custom_mode(mav::px4_mode::kAuto, mav::px4_mode::auto_sub::kLand);
@@ -123,6 +126,21 @@ void OffboardEndpoint::on_command(const mav::CommandLong& c, const EndpointInput
       }
       return;
     }
+    case mav::mav_cmd::kRequestMessage:
+    case mav::mav_cmd::kRequestAutopilotCapabilities: {
+      const bool version = c.command == mav::mav_cmd::kRequestMessage
+                               ? static_cast<uint32_t>(c.param1) == mav::AutopilotVersion::kId
+                               : c.param1 == 1.0f;
+      if (!version) {
+        ack(c, mav::mav_result::kUnsupported, to_sys, to_comp, out);
+        return;
+      }
+      ack(c, mav::mav_result::kAccepted, to_sys, to_comp, out);
+      mav::AutopilotVersion v;
+      v.flight_sw_version = kFlightSwVersion;
+      send(v, out);
+      return;
+    }
     case mav::mav_cmd::kSetMessageInterval: {
       // param2: interval [us]; 0 the default, -1 off.
       const double rate = c.param2 > 0 ? 1e6 / c.param2 : (c.param2 < 0 ? 0.0 : -1.0);
@@ -205,6 +223,11 @@ void OffboardEndpoint::handle(const mav::Frame& f, const EndpointInput& in, Endp
                                         mav::position_target_typemask::kVyIgnore |
                                         mav::position_target_typemask::kVzIgnore));
       if (vel) t.v_W = mav::enu_from_ned(Vector3d(m.vx, m.vy, m.vz));
+      const bool acc = !(m.type_mask & (mav::position_target_typemask::kAxIgnore |
+                                        mav::position_target_typemask::kAyIgnore |
+                                        mav::position_target_typemask::kAzIgnore));
+      if (acc && std::isfinite(m.afx) && std::isfinite(m.afy) && std::isfinite(m.afz))
+        t.a_W = mav::enu_from_ned(Vector3d(m.afx, m.afy, m.afz));
       t.yaw_rad = (m.type_mask & mav::position_target_typemask::kYawIgnore)
                       ? yaw_of(in.state.q_WB.toRotationMatrix())
                       : mav::yaw_enu_from_ned(m.yaw);

@@ -21,6 +21,9 @@
 //  - Telemetry: ATTITUDE_QUATERNION and LOCAL_POSITION_NED (the estimate: the true state), and
 //    HIGHRES_IMU from the simulated IMU samples, stamped in Unix time (sim time); rates as set by
 //    SET_MESSAGE_INTERVAL. TIMESYNC requests answered with the boot clock.
+//  - MAV_CMD_REQUEST_MESSAGE for AUTOPILOT_VERSION (and the older
+//    MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES): acknowledged, then AUTOPILOT_VERSION as a PX4 of
+//    kFlightSwVersion, whose position targets take a feed-forward acceleration.
 //  - ATT_POS_MOCAP / ODOMETRY are counted (the estimate is the truth here).
 
 #include <cstdint>
@@ -57,6 +60,7 @@ struct EndpointPositionTarget {
   int64_t utime = 0;
   Vector3d p_W = Vector3d::Zero();
   Vector3d v_W = Vector3d::Zero();
+  Vector3d a_W = Vector3d::Zero();  ///< feed-forward; zero when the target gave none
   double yaw_rad = 0;
 };
 

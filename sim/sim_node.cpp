@@ -334,6 +334,7 @@ int main(int argc, char** argv) {
         sp.utime = position_target->utime;
         sp.p_W = position_target->p_W;
         sp.v_W = position_target->v_W;
+        sp.a_W = position_target->a_W;
         sp.yaw_rad = position_target->yaw_rad;
         sp.motors_on = true;
         const auto c = position_controller->update(sp, pose, simulator.now_utime());

@@ -384,6 +384,7 @@ function render(s) {
   rows($('autopilot').tBodies[0], ap ? [
     { cells: ['link', ap.link_up ? `up, heartbeat ${fmt(ap.heartbeat_age_s, 1)} s` : 'DOWN'],
       cls: ap.link_up ? '' : 'stale' },
+    { cells: ['firmware', ap.firmware ? `${ap.firmware}${ap.accel_feedforward ? ', takes acceleration' : ''}` : 'not known yet'] },
     { cells: ['mode', `${ap.mode || '?'}${ap.offboard ? ' (alight flies)' : ''}`] },
     { cells: ['armed', ap.armed ? 'ARMED' : 'disarmed'] },
     { cells: ['bridge', `${ap.engage}${ap.streaming ? ', streaming' : ''}`],

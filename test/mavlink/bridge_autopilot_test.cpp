@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cctype>
 #include <deque>
 #include <functional>
 #include <optional>
@@ -601,6 +602,127 @@ TEST(BridgeAutopilotTest, ReportsTheAutopilotParametersSetOtherwise) {
   x.run(10.0);
   EXPECT_TRUE(x.saw("COM_OBL_RC_ACT = 0"));
   EXPECT_EQ(x.bridge->stats().param_problems, 1u);  // INT32 read bytewise: the others hold
+}
+
+// --- The feed-forward acceleration, per firmware version ---------------------------------------
+
+/// Position targets at 1.2 m with a moving platform's feed-forward acceleration (0.5 m/s^2 east,
+/// 0.2 m/s^2 up).
+std::function<void(BridgeInput&)> accelerating_stack(Loop& l, int64_t* next) {
+  return [&l, next](BridgeInput& in) {
+    if (l.t_us < *next) return;
+    *next = l.t_us + 10'000;
+    PositionTarget t;
+    t.p_W = Vector3d(0, 0, 1.2);
+    t.a_W = Vector3d(0.5, 0, 0.2);
+    t.motors = Motors::kOn;
+    in.position = t;
+  };
+}
+
+struct AccelCase {
+  Flavour flavour;
+  uint32_t flight_sw_version;
+  bool request_message;  // answers MAV_CMD_REQUEST_MESSAGE, else only the older command
+  const char* firmware;  // as the bridge reports it
+  bool takes_accel;
+};
+
+void PrintTo(const AccelCase& c, std::ostream* os) { *os << c.firmware; }
+
+class FeedForwardByVersion : public ::testing::TestWithParam<AccelCase> {};
+
+TEST_P(FeedForwardByVersion, FliesAndSendsTheAccelerationOnlyWhereTheFirmwareTakesIt) {
+  const AccelCase c = GetParam();
+  ScriptedConfig config = c.flavour == Flavour::kArdupilot ? copter() : px4();
+  config.flight_sw_version = c.flight_sw_version;
+  config.request_message = c.request_message;
+  Loop l(c.flavour == Flavour::kArdupilot ? ardupilot_params("position") : px4_params("position"),
+         config);
+  int64_t next = 0;
+  l.stack = accelerating_stack(l, &next);
+  ASSERT_TRUE(l.run_until([&] { return l.ap.height_m() > 1.1; }, 30.0))
+      << "height " << l.ap.height_m() << ", targets used " << l.ap.position_used << ", dropped "
+      << l.ap.position_dropped;
+  l.run(2.0);
+  EXPECT_EQ(l.ap.version_sent, 1);
+  const AutopilotStatus s = l.bridge->status({l.t_us, 1'700'000'000'000'000 + l.t_us});
+  EXPECT_EQ(s.firmware, c.firmware);
+  EXPECT_EQ(s.accel_feedforward, c.takes_accel);
+  EXPECT_EQ(l.ap.position_dropped, 0) << "a target the firmware drops for its acceleration";
+  EXPECT_GT(l.ap.position_used, 100);
+  if (c.takes_accel) {
+    ASSERT_TRUE(l.ap.target_accel_NED.has_value());
+    EXPECT_FLOAT_EQ((*l.ap.target_accel_NED)[0], 0.0f);   // north
+    EXPECT_FLOAT_EQ((*l.ap.target_accel_NED)[1], 0.5f);   // east
+    EXPECT_FLOAT_EQ((*l.ap.target_accel_NED)[2], -0.2f);  // down
+  } else if (l.ap.target_accel_NED) {
+    // ArduCopter reads an ignored acceleration as zero.
+    EXPECT_EQ(*l.ap.target_accel_NED, (std::array<float, 3>{0, 0, 0}));
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Versions, FeedForwardByVersion,
+    ::testing::Values(
+        // ArduCopter/GCS_Mavlink.cpp before the Guided rework: a target with an acceleration is
+        // dropped, so none may go.
+        AccelCase{Flavour::kArdupilot, 0x040007FFu, true, "4.0.7", false},
+        // Copter 3.6 knew no MAV_CMD_REQUEST_MESSAGE: the version comes from the older command.
+        AccelCase{Flavour::kArdupilot, 0x03060CFFu, false, "3.6.12", false},
+        AccelCase{Flavour::kArdupilot, 0x040100FFu, true, "4.1.0", true},
+        AccelCase{Flavour::kArdupilot, 0x040507FFu, true, "4.5.7", true},
+        AccelCase{Flavour::kArdupilot, 0x04070000u, true, "4.7.0-dev", true},
+        // PX4 before the OFFBOARD rework of 1.12: not known to take it.
+        AccelCase{Flavour::kPx4, 0x010B03FFu, true, "1.11.3", false},
+        AccelCase{Flavour::kPx4, 0x010E00C0u, true, "1.14.0-rc", true}),
+    [](const ::testing::TestParamInfo<AccelCase>& i) {
+      std::string name =
+          std::string(i.param.flavour == Flavour::kArdupilot ? "ArduCopter_" : "Px4_") +
+          i.param.firmware;
+      std::replace_if(
+          name.begin(), name.end(), [](char c) { return !std::isalnum(c); }, '_');
+      return name;
+    });
+
+TEST(ScriptedAutopilotTest, AnArduCopterBeforeTheGuidedReworkDropsATargetWithAnAcceleration) {
+  // What the bridge must never send to one (ArduCopter/GCS_Mavlink.cpp before 635d13a106).
+  ScriptedConfig config = copter();
+  config.flight_sw_version = 0x040007FFu;
+  ScriptedAutopilot ap(config);
+  ap.start_flying(copter_mode::kGuided, 1.0, 1000);
+  Sender gcs(250, 191);
+  SetPositionTargetLocalNed t;
+  t.target_system = 1;
+  t.coordinate_frame = mav_frame::kLocalNed;
+  t.z = -1.0f;
+  t.afx = 0.5f;
+  t.type_mask = position_target_typemask::kYawRateIgnore;
+  ap.step(gcs.pack(t, 0).bytes(), 2000);
+  EXPECT_EQ(ap.position_dropped, 1);
+  EXPECT_EQ(ap.position_used, 0);
+  t.type_mask |= position_target_typemask::kAxIgnore | position_target_typemask::kAyIgnore |
+                 position_target_typemask::kAzIgnore;
+  ap.step(gcs.pack(t, 0).bytes(), 3000);
+  EXPECT_EQ(ap.position_used, 1);
+}
+
+TEST(AutopilotFirmwareTest, VersionsReadAndJudgedAsTheirSourcesHandleTheAcceleration) {
+  const auto v = [](uint32_t x) { return FirmwareVersion::from_flight_sw_version(x); };
+  EXPECT_EQ(v(0x040507FFu).str(), "4.5.7");
+  EXPECT_EQ(v(0x040100C0u).str(), "4.1.0-rc");
+  EXPECT_EQ(v(0x04010080u).str(), "4.1.0-beta");
+  EXPECT_EQ(v(0x04010040u).str(), "4.1.0-alpha");
+  EXPECT_EQ(v(0x04010000u).str(), "4.1.0-dev");
+  EXPECT_FALSE(takes_position_target_accel(Flavour::kArdupilot, v(0x040007FFu)));
+  EXPECT_FALSE(takes_position_target_accel(Flavour::kArdupilot, v(0x04010080u)));
+  EXPECT_TRUE(takes_position_target_accel(Flavour::kArdupilot, v(0x040100C0u)));
+  EXPECT_TRUE(takes_position_target_accel(Flavour::kArdupilot, v(0x04010100u)));
+  EXPECT_TRUE(takes_position_target_accel(Flavour::kArdupilot, v(0x05000000u)));
+  EXPECT_FALSE(takes_position_target_accel(Flavour::kPx4, v(0x010B03FFu)));
+  EXPECT_TRUE(takes_position_target_accel(Flavour::kPx4, v(0x010C0080u)));
+  EXPECT_TRUE(takes_position_target_accel(Flavour::kPx4, v(0x02000000u)));
+  EXPECT_FALSE(takes_position_target_accel(Flavour::kPx4, v(0)));
 }
 
 TEST(AutopilotModesTest, EveryArduCopterModeHasItsName) {

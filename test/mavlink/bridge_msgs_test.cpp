@@ -47,6 +47,18 @@ TEST(BridgeMsgsTest, PositionSetpointsNeedFiniteValuesAndAKnownMotorsValue) {
   bad = m;
   bad.v_W[0] = std::numeric_limits<double>::quiet_NaN();
   EXPECT_FALSE(position_from_msg(bad, &why));
+  auto turning = m;
+  turning.a_W[1] = 0.8;  // a moving platform's turn
+  const auto a = position_from_msg(turning, &why);
+  ASSERT_TRUE(a);
+  EXPECT_EQ(a->a_W.y(), 0.8);
+  bad = m;
+  bad.a_W[2] = std::numeric_limits<double>::infinity();
+  EXPECT_FALSE(position_from_msg(bad, &why));
+  bad = m;
+  bad.a_W[0] = 60;  // beyond 5 g
+  EXPECT_FALSE(position_from_msg(bad, &why));
+  EXPECT_NE(why.find("acceleration"), std::string::npos);
 }
 
 TEST(BridgeMsgsTest, StatusCarriesModeArmingLinkAndCounters) {
@@ -59,7 +71,11 @@ TEST(BridgeMsgsTest, StatusCarriesModeArmingLinkAndCounters) {
   s.flavour = Flavour::kArdupilot;
   s.stats.commands_failed = 3;
   s.parser.crc_errors = 4;
+  s.firmware = "4.5.7";
+  s.accel_feedforward = true;
   const auto m = to_msg(s, 42, 2);
+  EXPECT_EQ(m.firmware, "4.5.7");
+  EXPECT_TRUE(m.accel_feedforward);
   EXPECT_EQ(m.utime, 42);
   EXPECT_TRUE(m.link_up);
   EXPECT_EQ(m.mode, "OFFBOARD");

@@ -87,7 +87,20 @@ struct Harness {
     BridgeOutput out = bridge.update(in, clock());
     ap.rx.push(out.link_bytes);
     Frame f;
-    while (ap.rx.next(f)) ap.heard.push_back(f);
+    while (ap.rx.next(f)) {
+      // Every autopilot here answers the version request at once (a PX4 1.15), out of the
+      // tests' way; BridgeAutopilotTest covers the request itself.
+      const auto c = decode<CommandLong>(f);
+      if (answer_version && c && c->command == mav_cmd::kRequestMessage &&
+          static_cast<uint32_t>(c->param1) == AutopilotVersion::kId) {
+        ap.ack(c->command, mav_result::kAccepted);
+        AutopilotVersion v;
+        v.flight_sw_version = 0x010F00FFu;
+        ap.say(v);
+        continue;
+      }
+      ap.heard.push_back(f);
+    }
     for (auto& s : out.imu) imu.push_back(s);
     for (auto& e : out.events) events.push_back(e.text);
     t_us += 1000;
@@ -111,6 +124,7 @@ struct Harness {
   BridgeParams params;
   Bridge bridge;
   FakeAutopilot ap;
+  bool answer_version = true;
   int64_t t_us = 1'000'000;
   std::vector<ImuOut> imu;
   std::vector<std::string> events;
@@ -479,6 +493,7 @@ TEST(BridgeTest, PositionSetpointGoesOutInNedWithYawFromNorth) {
   PositionTarget t;
   t.p_W = Vector3d(1, 2, 3);  // 1 m east, 2 m north, 3 m up
   t.v_W = Vector3d(0.1, 0, -0.2);
+  t.a_W = Vector3d(0.3, -0.4, 0.5);
   t.yaw_rad = 0;  // facing east
   t.motors = Motors::kOn;
   BridgeInput in;
@@ -493,8 +508,43 @@ TEST(BridgeTest, PositionSetpointGoesOutInNedWithYawFromNorth) {
   EXPECT_FLOAT_EQ(m[0].vz, 0.2f);
   EXPECT_NEAR(m[0].yaw, M_PI / 2, 1e-6);
   EXPECT_EQ(m[0].coordinate_frame, mav_frame::kLocalNed);
-  EXPECT_TRUE(m[0].type_mask & position_target_typemask::kAxIgnore);
   EXPECT_FALSE(m[0].type_mask & position_target_typemask::kXIgnore);
+  EXPECT_TRUE(m[0].type_mask & position_target_typemask::kYawRateIgnore);
+  // The harness's autopilot said PX4 1.15: the acceleration goes too, in NED.
+  EXPECT_FALSE(m[0].type_mask &
+               (position_target_typemask::kAxIgnore | position_target_typemask::kAyIgnore |
+                position_target_typemask::kAzIgnore));
+  EXPECT_FLOAT_EQ(m[0].afx, -0.4f);
+  EXPECT_FLOAT_EQ(m[0].afy, 0.3f);
+  EXPECT_FLOAT_EQ(m[0].afz, -0.5f);
+  EXPECT_EQ(h.bridge.status(h.clock()).firmware, "1.15.0");
+  EXPECT_TRUE(h.bridge.status(h.clock()).accel_feedforward);
+}
+
+TEST(BridgeTest, PositionTargetsGoWithoutAccelerationUntilTheVersionIsKnown) {
+  BridgeParams p = px4_params();
+  p.control = "position";
+  Harness h(p);
+  h.answer_version = false;
+  h.ap.heartbeat(kPosctl, false);
+  PositionTarget t;
+  t.p_W = Vector3d(1, 2, 3);
+  t.a_W = Vector3d(0.3, -0.4, 0.5);
+  t.motors = Motors::kOn;
+  BridgeInput in;
+  in.position = t;
+  h.step(in);
+  const auto requests = h.ap.commands(mav_cmd::kRequestMessage);
+  ASSERT_EQ(requests.size(), 1u);
+  EXPECT_EQ(requests[0].param1, AutopilotVersion::kId);
+  const auto m = h.ap.take<SetPositionTargetLocalNed>();
+  ASSERT_EQ(m.size(), 1u);
+  const uint16_t accel_bits = position_target_typemask::kAxIgnore |
+                              position_target_typemask::kAyIgnore |
+                              position_target_typemask::kAzIgnore;
+  EXPECT_EQ(m[0].type_mask & accel_bits, accel_bits);
+  EXPECT_EQ(h.bridge.status(h.clock()).firmware, "");
+  EXPECT_FALSE(h.bridge.status(h.clock()).accel_feedforward);
 }
 
 TEST(BridgeTest, MotionCaptureGoesToTheEstimatorInNedAtTheConfiguredRate) {

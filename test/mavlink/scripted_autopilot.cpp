@@ -33,6 +33,8 @@ ScriptedAutopilot::ScriptedAutopilot(ScriptedConfig config)
   mode_ = c_.flavour == Flavour::kArdupilot
               ? copter_mode::kStabilize
               : px4_mode::custom_mode(px4_mode::kAuto, px4_mode::auto_sub::kLoiter);
+  if (c_.flight_sw_version == 0)
+    c_.flight_sw_version = c_.flavour == Flavour::kArdupilot ? 0x04070000u : 0x01120000u;
   if (c_.flavour == Flavour::kPx4) {
     // The onboard link's default streams (src/modules/mavlink/mavlink_main.cpp,
     // configure_streams_to_default, MAVLINK_MODE_ONBOARD).
@@ -198,11 +200,21 @@ void ScriptedAutopilot::on_frame(const Frame& f) {
       const bool pos_given =
           !(m.type_mask & (position_target_typemask::kXIgnore | position_target_typemask::kYIgnore |
                            position_target_typemask::kZIgnore));
+      const uint16_t accel_bits = position_target_typemask::kAxIgnore |
+                                  position_target_typemask::kAyIgnore |
+                                  position_target_typemask::kAzIgnore;
+      const bool accel_given = (m.type_mask & accel_bits) != accel_bits;
       if (c_.flavour == Flavour::kArdupilot) {
         // ArduCopter/GCS_MAVLink_Copter.cpp, handle_message_set_position_target_local_ned: guided
         // modes only, no armed or landed check; a position target switches the submode
         // (ModeGuided::set_destination), also out of a take-off.
         if (!guided() || !pos_given || m.coordinate_frame != mav_frame::kLocalNed) return;
+        // Before the Guided rework (ArduCopter/GCS_Mavlink.cpp before 635d13a106, Copter 4.0):
+        // "exit immediately if acceleration provided".
+        if (accel_given && c_.flight_sw_version < 0x040100C0u) return void(++position_dropped);
+        // Since: set_destination_posvelaccel, an ignored acceleration read as zero.
+        target_accel_NED = std::array<float, 3>{0, 0, 0};
+        if (accel_given) target_accel_NED = std::array<float, 3>{m.afx, m.afy, m.afz};
         target_z_ = -m.z;
         sub_ = Sub::kPos;
         ++position_used;
@@ -210,6 +222,10 @@ void ScriptedAutopilot::on_frame(const Frame& f) {
         offboard_signal_ = now_;
         offboard_attitude_ = false;
         if (!in_offboard() || !pos_given) return;
+        // src/modules/mavlink/mavlink_receiver.cpp: an ignored axis is NaN in the trajectory
+        // setpoint, which the position controller's feed-forward skips.
+        target_accel_NED.reset();
+        if (accel_given) target_accel_NED = std::array<float, 3>{m.afx, m.afy, m.afz};
         target_z_ = -m.z;
         ++position_used;
       }
@@ -264,6 +280,14 @@ void ScriptedAutopilot::on_frame(const Frame& f) {
   });
 }
 
+void ScriptedAutopilot::send_version() {
+  AutopilotVersion v;
+  v.flight_sw_version = c_.flight_sw_version;
+  v.capabilities = 0x80;  // MAV_PROTOCOL_CAPABILITY_SET_POSITION_TARGET_LOCAL_NED, and more
+  send(v);
+  ++version_sent;
+}
+
 void ScriptedAutopilot::on_command(const CommandLong& c, const Frame& f) {
   uint8_t result = mav_result::kUnsupported;
   switch (c.command) {
@@ -293,6 +317,16 @@ void ScriptedAutopilot::on_command(const CommandLong& c, const Frame& f) {
         result = mav_result::kFailed;
       }
       break;
+    case mav_cmd::kRequestMessage:
+      if (!c_.request_message || static_cast<uint32_t>(c.param1) != AutopilotVersion::kId) break;
+      ack(c.command, mav_result::kAccepted, f.sysid, f.compid);
+      send_version();
+      return;
+    case mav_cmd::kRequestAutopilotCapabilities:
+      if (c.param1 != 1) break;
+      ack(c.command, mav_result::kAccepted, f.sysid, f.compid);
+      send_version();
+      return;
     case mav_cmd::kSetMessageInterval: {
       const auto id = static_cast<uint32_t>(c.param1);
       if (c_.flavour == Flavour::kArdupilot && id == HighresImu::kId && !c_.highres_imu) {

@@ -10,6 +10,7 @@
 // Deliberately simple where the bridge cannot tell: no lateral motion, attitude taken as
 // commanded, the land detectors as a height and speed test held for their time.
 
+#include <array>
 #include <cstdint>
 #include <map>
 #include <optional>
@@ -31,6 +32,15 @@ struct ScriptedConfig {
   /// ArduPilot: the bridge's link is MAVLink channel 0, where unsigned frames are accepted
   /// anyway (libraries/GCS_MAVLink/GCS_Signing.cpp, accept_unsigned_callback).
   bool channel0 = false;
+
+  /// AUTOPILOT_VERSION.flight_sw_version (major, minor, patch, FIRMWARE_VERSION_TYPE from the top
+  /// byte); 0: the sources' own (ArduCopter 4.7.0-dev, PX4 1.18.0-dev). An ArduCopter older
+  /// than 4.1.0-rc handles SET_POSITION_TARGET_LOCAL_NED as before the Guided rework of 2021-05
+  /// (ArduCopter/GCS_Mavlink.cpp before 635d13a106: a target with any acceleration dropped).
+  uint32_t flight_sw_version = 0;
+  /// Answers MAV_CMD_REQUEST_MESSAGE (ArduPilot from 4.0, libraries/GCS_MAVLink/GCS_Common.cpp,
+  /// handle_command_request_message); without it only MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES.
+  bool request_message = true;
 
   // ArduCopter (ArduCopter/Parameters.cpp, libraries/GCS_MAVLink/GCS.cpp).
   double guid_options = 8;  ///< GUID_OPTIONS (bit 3: SET_ATTITUDE_TARGET thrust is thrust)
@@ -82,13 +92,18 @@ class ScriptedAutopilot {
   bool on_ground() const { return landed_; }
   bool origin_set() const { return origin_set_; }
 
-  int arms = 0;                     ///< accepted ARMs
-  int forced_disarms = 0;           ///< accepted forced DISARMs
-  int refused_disarms = 0;          ///< plain DISARMs refused in the air
-  int attitude_used = 0;            ///< SET_ATTITUDE_TARGET taken as a target
-  int attitude_ignored = 0;         ///< ... outside the modes that take it
-  int attitude_dropped = 0;         ///< ... refused for its content (type_mask, quaternion)
-  int position_used = 0;            ///< SET_POSITION_TARGET_LOCAL_NED stored as a target
+  int arms = 0;              ///< accepted ARMs
+  int forced_disarms = 0;    ///< accepted forced DISARMs
+  int refused_disarms = 0;   ///< plain DISARMs refused in the air
+  int attitude_used = 0;     ///< SET_ATTITUDE_TARGET taken as a target
+  int attitude_ignored = 0;  ///< ... outside the modes that take it
+  int attitude_dropped = 0;  ///< ... refused for its content (type_mask, quaternion)
+  int position_used = 0;     ///< SET_POSITION_TARGET_LOCAL_NED stored as a target
+  int position_dropped = 0;  ///< ... refused for its content (type_mask)
+  /// The newest position target's acceleration as the controller takes it (NED) [m/s^2]: none
+  /// when the target had none.
+  std::optional<std::array<float, 3>> target_accel_NED;
+  int version_sent = 0;             ///< AUTOPILOT_VERSION sent
   int takeoffs = 0;                 ///< NAV_TAKEOFF accepted
   int fs_gcs_triggers = 0;          ///< ArduCopter's GCS failsafe fired
   int offboard_losses = 0;          ///< PX4's offboard-loss failsafe fired
@@ -102,6 +117,7 @@ class ScriptedAutopilot {
   void text(const std::string& t);
   void on_frame(const Frame& f);
   void on_command(const CommandLong& c, const Frame& f);
+  void send_version();
   uint8_t set_mode(uint32_t mode);
   uint8_t arm(bool on, bool forced);
   void disarm(const std::string& why);

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include "mavlink/autopilot_firmware.hpp"
 #include "mavlink/bridge.hpp"
 #include "mavlink/ned_frd.hpp"
 #include "sim/simulator.hpp"
@@ -125,6 +126,49 @@ TEST(OffboardEndpointTest, DisarmIsDeniedInTheAirUnlessForced) {
   h.c.command(mav::mav_cmd::kComponentArmDisarm, 0, mav::kForceDisarmMagic);
   EXPECT_TRUE(h.step().disarm);
   EXPECT_FALSE(h.ep.armed());
+}
+
+TEST(OffboardEndpointTest, AnswersTheVersionRequestAndFliesTheTargetsAcceleration) {
+  EndpointHarness h;
+  h.c.command(mav::mav_cmd::kRequestMessage, mav::AutopilotVersion::kId);
+  h.step();
+  ASSERT_EQ(h.c.acks().size(), 1u);
+  EXPECT_EQ(h.c.acks()[0].result, mav::mav_result::kAccepted);
+  std::optional<mav::AutopilotVersion> v;
+  for (const auto& f : h.c.heard)
+    if (auto m = mav::decode<mav::AutopilotVersion>(f)) v = m;
+  ASSERT_TRUE(v);
+  EXPECT_TRUE(mav::takes_position_target_accel(
+      mav::Flavour::kPx4, mav::FirmwareVersion::from_flight_sw_version(v->flight_sw_version)));
+  h.c.command(mav::mav_cmd::kRequestMessage, 999);  // a message it does not send
+  h.step();
+  EXPECT_EQ(h.c.acks().back().result, mav::mav_result::kUnsupported);
+
+  mav::SetPositionTargetLocalNed t;
+  t.target_system = 1;
+  t.coordinate_frame = mav::mav_frame::kLocalNed;
+  t.z = -1.0f;
+  t.afx = 0.4f;  // north
+  t.type_mask = mav::position_target_typemask::kYawRateIgnore;
+  for (int i = 0; i < 5; ++i) {
+    h.c.say(t);
+    h.step();
+  }
+  h.c.command(mav::mav_cmd::kDoSetMode, 1, kOffboard);
+  h.c.command(mav::mav_cmd::kComponentArmDisarm, 1);
+  h.step();
+  h.c.say(t);
+  auto out = h.step();
+  ASSERT_TRUE(out.position);
+  EXPECT_NEAR(out.position->a_W.y(), 0.4, 1e-6);  // ENU: north is y
+  EXPECT_NEAR(out.position->a_W.x(), 0.0, 1e-6);
+  t.type_mask |= mav::position_target_typemask::kAxIgnore |
+                 mav::position_target_typemask::kAyIgnore |
+                 mav::position_target_typemask::kAzIgnore;
+  h.c.say(t);
+  out = h.step();
+  ASSERT_TRUE(out.position);
+  EXPECT_EQ(out.position->a_W, Vector3d::Zero());
 }
 
 TEST(OffboardEndpointTest, LandsWhenTheOffboardSignalIsLost) {

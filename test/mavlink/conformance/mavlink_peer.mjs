@@ -30,12 +30,12 @@ try {
 }
 const {
   MavLinkPacketSplitter, MavLinkPacketParser, MavLinkProtocolV1, MavLinkProtocolV2, x25crc,
-  minimal, common,
+  minimal, common, standard,
 } = mav;
 
 // The messages of alight/mavlink/messages.hpp.
-const IDS = [0, 1, 20, 22, 26, 31, 32, 48, 49, 76, 77, 82, 84, 105, 108, 111, 115, 138, 245, 253, 256, 331];
-const REGISTRY = { ...minimal.REGISTRY, ...common.REGISTRY };
+const IDS = [0, 1, 20, 22, 26, 31, 32, 48, 49, 76, 77, 82, 84, 105, 108, 111, 115, 138, 148, 245, 253, 256, 331];
+const REGISTRY = { ...minimal.REGISTRY, ...common.REGISTRY, ...standard.REGISTRY };
 
 const args = process.argv.slice(2);
 const mode = args[0];
