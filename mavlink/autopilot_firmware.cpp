@@ -16,8 +16,7 @@ FirmwareVersion FirmwareVersion::from_flight_sw_version(uint32_t v) {
 }
 
 std::string FirmwareVersion::str() const {
-  std::string s =
-      std::to_string(major) + "." + std::to_string(minor) + "." + std::to_string(patch);
+  std::string s = std::to_string(major) + "." + std::to_string(minor) + "." + std::to_string(patch);
   using namespace firmware_version_type;
   if (type == kOfficial) return s;
   if (type >= kRc) return s + "-rc";
