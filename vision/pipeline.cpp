@@ -61,6 +61,11 @@ bool Pipeline::smeared(const TrackedFrame& f) const {
   return max_blur_px > 0 && f.blur_px > max_blur_px;
 }
 
+bool Pipeline::spun(const TrackedFrame& f) const {
+  const double max_blur_px = mission_ == Mission::kLanding ? params_.landing.max_motion_blur_px : 0;
+  return max_blur_px > 0 && f.spin_blur_px > max_blur_px;
+}
+
 bool Pipeline::holds() const {
   return mission_ == Mission::kLanding && params_.landing.hold_reference;
 }
@@ -91,9 +96,15 @@ Result<TrackedFrame> Pipeline::front_end(const cv::Mat& gray, int64_t utime, con
   frame.descriptors = describe_surf(integral, *kps, params_.surf, frame.pattern_angle_rad);
   frame.keypoints = std::move(*kps);
   const double max_blur_px = mission_ == Mission::kLanding ? params_.landing.max_motion_blur_px : 0;
-  if (max_blur_px > 0)
-    frame.blur_px = floor_motion_blur_px(camera_, mount_, pose, params_.landing.floor_z_m,
-                                         exposure_s.value_or(params_.landing.assumed_exposure_s));
+  if (max_blur_px > 0) {
+    const double exposure = exposure_s.value_or(params_.landing.assumed_exposure_s);
+    frame.blur_px =
+        floor_motion_blur_px(camera_, mount_, pose, params_.landing.floor_z_m, exposure);
+    PoseSample turning = pose;
+    turning.v_W_B.setZero();
+    frame.spin_blur_px =
+        floor_motion_blur_px(camera_, mount_, turning, params_.landing.floor_z_m, exposure);
+  }
   r->blur_px = frame.blur_px;
   if (line_delay_s && *line_delay_s > 0)
     frame.readout = readout_motion(pose, mount_, *line_delay_s, depth_plane());
@@ -297,7 +308,10 @@ FrameResult Pipeline::process(const cv::Mat& gray, int64_t utime,
   frame.value().level = level;
   const auto up = track(std::move(frame.value()), utime, *pose);
   r.n_tracked = up.n_tracked;
-  if (up.current && smeared(*up.current)) return fail(Reason::kMotionBlur);
+  if (up.current && smeared(*up.current)) {
+    if (!spun(*up.current)) measure_moving(up.current, utime, *pose, &r);
+    return fail(Reason::kMotionBlur);
+  }
   if (up.current) measure_moving(up.current, utime, *pose, &r);
   // No tracked reference (the tracks just broke): only the held one can serve.
   const bool held_only = up.status == Reason::kNoReference && up.current && holds() && held_;

@@ -42,7 +42,11 @@
 // assume. Each landing frame is also matched against a recent earlier frame (moving_top.interval_s
 // back) and the moving top measured between them (vision/landing/moving_top.hpp), in
 // FrameResult::moving; the paper's target (FrameResult::target, VISION_TARGET) does not depend on
-// it.
+// it. A frame smeared past landing.max_motion_blur_px by the camera's travel alone is still
+// measured for the moving top (never for the target): a camera following a platform at 0.7 m/s
+// smears the floor by 4-6 px and more, but not the top it keeps pace with, and refusing those
+// frames lost the platform while the vehicle caught up with it. The camera's turning smears the
+// top as much as the floor: such frames stay refused for both.
 
 #include <deque>
 #include <optional>
@@ -125,6 +129,8 @@ class Pipeline {
   Correspondences correspondences(const TrackedFrame& a, const TrackedFrame& b,
                                   const std::vector<Match>& matches) const;
   bool smeared(const TrackedFrame& f) const;
+  /// Smeared by the camera's turning (spin_blur_px past the same bound).
+  bool spun(const TrackedFrame& f) const;
   void measure_moving(const std::shared_ptr<const TrackedFrame>& current, int64_t utime,
                       const PoseSample& pose, FrameResult* r);
   bool holds() const;

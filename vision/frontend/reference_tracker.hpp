@@ -45,6 +45,10 @@ struct TrackedFrame {
   /// The floor's smear over the exposure [px] (motion_blur.hpp): a smeared frame is tracked
   /// through but never the reference (landing.max_motion_blur_px).
   double blur_px = 0.0;
+  /// The same smear from the camera's turning alone [px]: what also smears a top that moves
+  /// with the camera (the moving top is measured on frames whose floor only the camera's
+  /// travel smeared).
+  double spin_blur_px = 0.0;
   /// The camera's motion over the readout (rolling_shutter.hpp; not rolling: a global shutter).
   Readout readout;
   double level = 0.0;  ///< brightness level (frame_checks.hpp) [grey levels]

@@ -144,6 +144,33 @@ TEST(LandingMissionTest, ASmearedFrameIsNeitherMeasuredNorTheReference) {
   }
 }
 
+// A camera following a moving platform smears the floor by its travel, not the top it keeps pace
+// with: such a frame is still measured for the moving top (never for the target), while a frame
+// smeared by the camera's turning is measured for neither.
+TEST(LandingMissionTest, AFrameSmearedByTravelAloneIsStillMeasuredForTheMovingTop) {
+  const std::string root = alight::build::source_dir();
+  const Vector3d top =
+      sim::build_scene(sim::load_scenario(root + "/config/scenarios/landing_a.yaml"), 3)
+          .platform->top_center_W;
+  auto seq = render_sequence("landing_a.yaml", 3, "downward",
+                             Vector3d(top.x() - 0.12, top.y() + 0.04, 1.7),
+                             Vector3d(0.04, -0.01, 0.0), Vector3d(0.01, -0.02, 0.2), 14);
+  // 3 m/s of travel smears the floor 1.7 m below by about 12 px over the assumed 10 ms; a pitch
+  // of 2 rad/s by 13 px. The images are sharp: only the poses say so.
+  const int travelled = 11, turned = 12;
+  seq.frames[travelled].pose.v_W_B = Vector3d(3.0, 0, 0);
+  seq.frames[turned].pose.omega_B = Vector3d(0, 2.0, 0);
+  const auto r = run(seq, Mission::kLanding);
+  EXPECT_EQ(r[travelled].reason, Reason::kMotionBlur);
+  EXPECT_FALSE(r[travelled].found());
+  ASSERT_TRUE(r[travelled].moving.has_value());
+  EXPECT_NE(r[travelled].moving->reason, MovingReason::kNoEarlierFrame);
+  EXPECT_EQ(r[turned].reason, Reason::kMotionBlur);
+  EXPECT_FALSE(r[turned].moving.has_value());
+  // The frame after the travelled one measures the moving top against frames that include it.
+  ASSERT_TRUE(r[turned + 1].moving.has_value());
+}
+
 TEST(LandingMissionTest, ReplayGivesIdenticalResults) {
   const std::string root = alight::build::source_dir();
   const Vector3d top =
