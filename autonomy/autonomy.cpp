@@ -68,6 +68,14 @@ static_assert(kAt<Phase::kIdle, phases::Idle> && kAt<Phase::kTakeoff, phases::Ta
 
 double seconds(int64_t dt_utime) { return static_cast<double>(dt_utime) * 1e-6; }
 
+/// A DEGRADED estimate first pauses the mission (position held on it, nothing advanced) and
+/// holds for the operator only once it has lasted this long [s], as PX4 holds for
+/// COM_FAIL_ACT_T before a failsafe's action and goes on when the condition clears within it.
+/// The flow's dropouts where the view changes (the platform coming into the downward camera's
+/// view, a floor's texture thinning) last a few tenths of a second; lateral dead reckoning on the
+/// IMU drifts by centimetres over this.
+constexpr double kDegradedPauseS = 2.0;
+
 bool finite(const PoseSample& s) {
   return s.p_W_B.allFinite() && s.v_W_B.allFinite() && s.q_WB.coeffs().allFinite() &&
          s.omega_B.allFinite() && std::abs(s.q_WB.norm() - 1.0) < 1e-3;
@@ -230,10 +238,18 @@ std::optional<std::string> Autonomy::estimate_refusal() const {
   return e->what;
 }
 
-void Autonomy::react_to_estimate() {
+bool Autonomy::react_to_estimate() {
   using L = EstimateHealth::Level;
   const auto e = estimate_condition();
-  if (!e || e->level == L::kOk || !airborne()) return;
+  const bool was_paused = paused_on_estimate_;
+  paused_on_estimate_ = false;
+  if (e && e->level == L::kDegraded && airborne()) {
+    if (!degraded_since_utime_) degraded_since_utime_ = now_utime_;
+  } else {
+    degraded_since_utime_.reset();
+    if (was_paused && e && e->level == L::kOk) reason_ = "state estimate OK again: mission resumed";
+  }
+  if (!e || e->level == L::kOk || !airborne()) return false;
   const Phase current = phase();
   // A descent to touch-down is under way. The final descent is on the target (entered only
   // within radial_tol_m of the estimate, the gear final_height_m above the platform) and a
@@ -242,25 +258,36 @@ void Autonomy::react_to_estimate() {
   // failsafe's, or the operator's LAND_HERE) lands where it drifted to; over a platform's edge
   // that tips the vehicle, as the mocap_drop_2s fault did. PX4's Land mode, too,
   // goes on landing without a position estimate. A failsafe descent is not restarted.
-  if (current == Phase::kFailsafe || current == Phase::kFinalDescent) return;
+  if (current == Phase::kFailsafe || current == Phase::kFinalDescent) return false;
   if (e->level == L::kLost) {
     enter_estimate_lost(e->what);
-    return;
+    return false;
   }
-  // DEGRADED: hold and wait for the operator, unless already holding (HOLD, DONE) or landing
-  // where the operator said (LAND_HERE: the landing was the operator's answer).
-  if (current == Phase::kHold || current == Phase::kDone) return;
+  // DEGRADED: pause, then hold and wait for the operator, unless already holding (HOLD, DONE) or
+  // landing where the operator said (LAND_HERE: the landing was the operator's answer).
+  if (current == Phase::kHold || current == Phase::kDone) return false;
   // The take-off's climb goes on through a DEGRADED that is the flow's alone: in its first
   // decimetres the flow camera may be too near the floor to track it (out of a flight camera's
   // focus, the texture magnified beyond its detail), while the rangefinder and the barometer
   // hold the height and the climb is straight up. At the take-off height (HOVER) a flow still
   // missing holds as anywhere else.
-  if (current == Phase::kTakeoff && estimate_->reasons == kEstimateReasonNoFlow) return;
+  if (current == Phase::kTakeoff && estimate_->reasons == kEstimateReasonNoFlow) return false;
   if (const auto* a = std::get_if<phases::Approach>(&state_)) {
     const auto* landing = std::get_if<LandingApproach>(&a->how);
-    if (landing && landing->land_here) return;
+    if (landing && landing->land_here) return false;
+  }
+  const double degraded_s = seconds(now_utime_ - *degraded_since_utime_);
+  if (degraded_s < kDegradedPauseS) {
+    reason_ = e->what + ": mission paused, holding position (" + fmt(degraded_s, 1) + " of " +
+              fmt(kDegradedPauseS, 1) + " s)";
+    // Held where the vehicle is when the pause begins (the setpoint may lead it: a climb, an
+    // approach).
+    if (!was_paused) pause_p_W_ = pose_ ? pose_->p_W_B : sp_p_W_;
+    paused_on_estimate_ = true;
+    return true;
   }
   hold(e->what + ": holding; waiting for the operator", Failsafe::kNone, 0.0);
+  return false;
 }
 
 RestartState Autonomy::restart_state() const {
@@ -935,7 +962,7 @@ Output Autonomy::update(const Inputs& in, int64_t now_utime) {
   if (in.command) handle_command(*in.command);
   // Before the pose's checks: a stale pose freezes the mission for up to pose_lost_s, and a LOST
   // estimate must not wait behind it.
-  react_to_estimate();
+  const bool paused = react_to_estimate();
 
   if (airborne() && phase() != Phase::kFailsafe) {
     const double age_s = pose_ ? seconds(now_utime_ - pose_->utime) : 1e9;
@@ -954,6 +981,13 @@ Output Autonomy::update(const Inputs& in, int64_t now_utime) {
     }
   }
 
+  if (paused) {
+    // At rest where the pause began: no progress, no measurement taken on the degraded pose.
+    sp_p_W_ = pause_p_W_;
+    sp_v_W_.setZero();
+    sp_a_W_.setZero();
+    return make_output();
+  }
   if (in.target) {
     last_vision_utime_ = now_utime_;
     handle_target(*in.target);

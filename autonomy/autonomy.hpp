@@ -177,8 +177,9 @@ class Autonomy {
   std::optional<EstimateCondition> estimate_condition() const;
   /// Why TAKEOFF / GO must wait for the estimate (nullopt: they need not).
   std::optional<std::string> estimate_refusal() const;
-  /// In flight: DEGRADED holds, LOST (or silent) starts the failsafe descent.
-  void react_to_estimate();
+  /// In flight: DEGRADED pauses the mission, and holds once it has lasted kDegradedPauseS; LOST
+  /// (or silent) starts the failsafe descent. True while paused (no progress this step).
+  bool react_to_estimate();
   /// Seconds since the target was last in sight (since the phase began when it never was).
   double since_found_s(const std::optional<int64_t>& last_found_utime) const;
   /// Leaves the current phase (destroying its state) for `state`.
@@ -247,6 +248,9 @@ class Autonomy {
   std::string reason_ = "waiting for the first pose";
   Failsafe failsafe_ = Failsafe::kNone;
   Failsafe failsafe_before_stale_ = Failsafe::kNone;  // restored when the pose is back
+  std::optional<int64_t> degraded_since_utime_;       // the estimate DEGRADED in flight since
+  bool paused_on_estimate_ = false;                   // the last step paused the mission for it
+  Vector3d pause_p_W_ = Vector3d::Zero();             // ... holding there
 
   // Setpoint being commanded.
   Vector3d sp_p_W_ = Vector3d::Zero();

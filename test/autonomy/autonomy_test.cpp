@@ -932,6 +932,13 @@ bool has(const std::string& text, const std::string& part) {
   return text.find(part) != std::string::npos;
 }
 
+// A DEGRADED estimate pauses the mission for 2 s (autonomy.cpp, kDegradedPauseS) before it holds:
+// the world's steps are 10 ms.
+constexpr int kPauseSteps = 200;
+void step_through_pause(KinematicWorld& w) {
+  for (int i = 0; i <= kPauseSteps; ++i) w.step();
+}
+
 TEST(AutonomyEstimateTest, DegradedHoldsInDetectionRefinementAndApproachAndWaitsForTheOperator) {
   for (const Phase degrade_in : {Phase::kDetection, Phase::kRefinement, Phase::kApproach}) {
     SCOPED_TRACE(phase_name(degrade_in));
@@ -942,6 +949,10 @@ TEST(AutonomyEstimateTest, DegradedHoldsInDetectionRefinementAndApproachAndWaits
     ASSERT_TRUE(w.run_until_phase(degrade_in, 120)) << w.out.status.reason;
     w.estimate = health(Level::kDegraded, E::REASON_NO_FLOW);
     w.step();
+    EXPECT_EQ(w.autonomy.phase(), degrade_in);
+    EXPECT_TRUE(has(w.out.status.reason, "state estimate degraded (no_flow): mission paused"))
+        << w.out.status.reason;
+    step_through_pause(w);
     EXPECT_EQ(w.autonomy.phase(), Phase::kHold);
     EXPECT_TRUE(has(w.out.status.reason, "state estimate degraded (no_flow): holding"))
         << w.out.status.reason;
@@ -960,6 +971,39 @@ TEST(AutonomyEstimateTest, DegradedHoldsInDetectionRefinementAndApproachAndWaits
   }
 }
 
+// A DEGRADED that clears within the pause (the flow's dropout where the view changes) pauses the
+// mission where it is and resumes it; no hold, no operator needed.
+TEST(AutonomyEstimateTest, ADegradedThatClearsWithinThePauseResumesTheMission) {
+  KinematicWorld w;
+  w.estimate = health(Level::kOk);
+  w.takeoff_and_hover();
+  w.send(Command::kGo, Mission::kLanding);
+  ASSERT_TRUE(w.run_until_phase(Phase::kDetection, 10)) << w.out.status.reason;
+  for (int i = 0; i < 100; ++i) w.step();  // under way on the search path
+  w.estimate = health(Level::kDegraded, E::REASON_NO_FLOW);
+  w.step();
+  const Vector3d paused_at = w.out.setpoint.p_W;
+  EXPECT_LT((paused_at - w.p).norm(), 0.1) << "held where the vehicle was";
+  for (int i = 0; i < kPauseSteps / 2; ++i) {
+    w.step();
+    ASSERT_EQ(w.autonomy.phase(), Phase::kDetection) << w.out.status.reason;
+    ASSERT_LT((w.out.setpoint.p_W - paused_at).norm(), 1e-9) << "no progress while paused";
+    ASSERT_EQ(w.out.setpoint.v_W.norm(), 0.0);
+  }
+  EXPECT_TRUE(has(w.out.status.reason, "mission paused, holding position")) << w.out.status.reason;
+  w.estimate = health(Level::kOk);
+  w.step();
+  EXPECT_EQ(w.autonomy.phase(), Phase::kDetection);
+  for (int i = 0; i < 100; ++i) w.step();
+  EXPECT_GT((w.out.setpoint.p_W - paused_at).norm(), 0.05) << "the search goes on";
+  // The pause is timed from each DEGRADED's start: a second short one pauses again, no hold.
+  w.estimate = health(Level::kDegraded, E::REASON_NO_FLOW);
+  for (int i = 0; i < kPauseSteps - 20; ++i) w.step();
+  w.estimate = health(Level::kOk);
+  for (int i = 0; i < 10; ++i) w.step();
+  EXPECT_EQ(w.autonomy.phase(), Phase::kDetection) << w.out.status.reason;
+}
+
 TEST(AutonomyEstimateTest, DegradedWhileTakingOffHoldsWhereItIs) {
   KinematicWorld w;
   w.estimate = health(Level::kOk);
@@ -968,6 +1012,10 @@ TEST(AutonomyEstimateTest, DegradedWhileTakingOffHoldsWhereItIs) {
   ASSERT_TRUE(w.run_until([&] { return w.p.z() > 0.6; }, 5));
   w.estimate = health(Level::kDegraded, int32_t{E::REASON_NO_RANGE} | E::REASON_HEIGHT_UNCERTAIN);
   w.step();
+  EXPECT_EQ(w.autonomy.phase(), Phase::kTakeoff) << "paused first";
+  const double z_paused = w.p.z();
+  step_through_pause(w);
+  EXPECT_NEAR(w.p.z(), z_paused, 0.05) << "the climb paused";
   EXPECT_EQ(w.autonomy.phase(), Phase::kHold);
   EXPECT_TRUE(has(w.out.status.reason, "(no_range|height_uncertain)")) << w.out.status.reason;
   const double z = w.p.z();
@@ -1063,7 +1111,7 @@ TEST(AutonomyEstimateTest, HoldWhenDegradedDescentWhenLostHoldWhenOkAgain) {
   w.estimate = health(Level::kOk);
   w.takeoff_and_hover();
   w.estimate = health(Level::kDegraded, E::REASON_NO_FLOW);
-  w.step();
+  step_through_pause(w);
   ASSERT_EQ(w.autonomy.phase(), Phase::kHold) << w.out.status.reason;
   for (int i = 0; i < 50; ++i) w.step();
   w.estimate = health(Level::kLost, E::REASON_POSITION_UNCERTAIN);
@@ -1148,9 +1196,9 @@ TEST(AutonomyEstimateTest, RequireEstimateRefusesTakeoffAndGoUntilItIsOk) {
   w.send(Command::kTakeoff);
   EXPECT_EQ(w.autonomy.phase(), Phase::kTakeoff) << w.out.status.reason;
   ASSERT_TRUE(w.run_until_phase(Phase::kHover, 10));
-  // Degraded in the hover: HOLD, and GO waits for an OK estimate.
+  // Degraded in the hover: HOLD (after the pause), and GO waits for an OK estimate.
   w.estimate = health(Level::kDegraded, E::REASON_NO_FLOW);
-  w.step();
+  step_through_pause(w);
   ASSERT_EQ(w.autonomy.phase(), Phase::kHold);
   w.send(Command::kGo, Mission::kLanding);
   EXPECT_EQ(w.autonomy.phase(), Phase::kHold);
@@ -1189,7 +1237,7 @@ TEST(AutonomyEstimateTest, LandHereOnADegradedEstimateLands) {
   w.estimate = health(Level::kOk);
   w.takeoff_and_hover();
   w.estimate = health(Level::kDegraded, E::REASON_NO_FLOW);
-  w.step();
+  step_through_pause(w);
   ASSERT_EQ(w.autonomy.phase(), Phase::kHold);
   w.send(Command::kLandHere);
   ASSERT_EQ(w.autonomy.phase(), Phase::kApproach) << w.out.status.reason;
