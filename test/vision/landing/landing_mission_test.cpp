@@ -11,6 +11,7 @@ namespace {
 
 using testing::render_sequence;
 using testing::run;
+using testing::Sequence;
 
 struct Case {
   const char* scenario;
@@ -104,18 +105,23 @@ TEST(LandingMissionTest, DegenerateFramesGiveAReason) {
   EXPECT_EQ(p.process(f[2].image, f[2].utime, f[2].pose).seq, 7);
 }
 
+// `frames` frames of the camera drifting 1.7 m over landing_a's top (seed 3), a slight turn.
+Sequence drift_over_top_a(int frames) {
+  const std::string root = alight::build::source_dir();
+  const Vector3d top =
+      sim::build_scene(sim::load_scenario(root + "/config/scenarios/landing_a.yaml"), 3)
+          .platform->top_center_W;
+  return render_sequence("landing_a.yaml", 3, "downward",
+                         Vector3d(top.x() - 0.12, top.y() + 0.04, 1.7), Vector3d(0.04, -0.01, 0.0),
+                         Vector3d(0.01, -0.02, 0.2), frames);
+}
+
 // Issue 15, false tops at the search path's turns: a frame exposed while the camera turns is a
 // smear, and the matches of such frames made tops of a bare floor. A frame whose pose says the
 // floor's image moved farther than landing.max_motion_blur_px during its exposure is neither
 // measured nor ever the reference; the frames around it still are.
 TEST(LandingMissionTest, ASmearedFrameIsNeitherMeasuredNorTheReference) {
-  const std::string root = alight::build::source_dir();
-  const Vector3d top =
-      sim::build_scene(sim::load_scenario(root + "/config/scenarios/landing_a.yaml"), 3)
-          .platform->top_center_W;
-  auto seq = render_sequence("landing_a.yaml", 3, "downward",
-                             Vector3d(top.x() - 0.12, top.y() + 0.04, 1.7),
-                             Vector3d(0.04, -0.01, 0.0), Vector3d(0.01, -0.02, 0.2), 7);
+  auto seq = drift_over_top_a(7);
   // Frames 0 (the first reference) and 3 pitch at 2 rad/s: 13 px at the image's centre over the
   // assumed 10 ms exposure. The images themselves are sharp: only the poses say so.
   for (const int i : {0, 3}) seq.frames[i].pose.omega_B = Vector3d(0, 2.0, 0);
@@ -148,13 +154,7 @@ TEST(LandingMissionTest, ASmearedFrameIsNeitherMeasuredNorTheReference) {
 // with: such a frame is still measured for the moving top (never for the target), while a frame
 // smeared by the camera's turning is measured for neither.
 TEST(LandingMissionTest, AFrameSmearedByTravelAloneIsStillMeasuredForTheMovingTop) {
-  const std::string root = alight::build::source_dir();
-  const Vector3d top =
-      sim::build_scene(sim::load_scenario(root + "/config/scenarios/landing_a.yaml"), 3)
-          .platform->top_center_W;
-  auto seq = render_sequence("landing_a.yaml", 3, "downward",
-                             Vector3d(top.x() - 0.12, top.y() + 0.04, 1.7),
-                             Vector3d(0.04, -0.01, 0.0), Vector3d(0.01, -0.02, 0.2), 14);
+  auto seq = drift_over_top_a(14);
   // 3 m/s of travel smears the floor 1.7 m below by about 12 px over the assumed 10 ms; a pitch
   // of 2 rad/s by 13 px. The images are sharp: only the poses say so.
   const int travelled = 11, turned = 12;
