@@ -35,6 +35,14 @@ frames, problems = rv.frames_processed(live, {100, 200, 300, 400})
 check(frames == {100, 200, 300} and not problems, "a target the log lost: %s %s" % (frames, problems))
 frames, problems = rv.frames_processed(live, {100, 300})
 check(problems, "a processed frame the log lost must make it not reproducible")
+# Frames the node skipped (too old on a loaded machine, or never received) between targets of
+# consecutive seq numbers: not replayed, and the replay still reproducible.
+skipped = [target(100, 0, 1), target(400, 0, 2)]
+frames, problems = rv.frames_processed(skipped, {100, 200, 300, 400})
+check(frames == {100, 400} and not problems, "frames the node skipped: %s %s" % (frames, problems))
+# Some of them processed without a logged target, some skipped: which, the log cannot say.
+frames, problems = rv.frames_processed([target(100, 0, 1), target(400, 0, 3)], {100, 200, 300, 400})
+check(problems, "one of two frames processed, the other skipped, must make it not reproducible")
 
 # pose_gaps: only missing seq numbers make a gap, whatever the order of the log.
 gaps = rv.pose_gaps([(3, 30), (1, 10), (2, 20), (5, 50), (6, 60)])
