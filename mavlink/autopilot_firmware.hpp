@@ -18,6 +18,7 @@ struct FirmwareVersion {
   static FirmwareVersion from_flight_sw_version(uint32_t v);
   /// "4.5.7", "1.15.0-rc", "4.7.0-dev".
   std::string str() const;
+  bool operator==(const FirmwareVersion&) const = default;
 };
 
 /// Whether SET_POSITION_TARGET_LOCAL_NED's acceleration, given with a position and a velocity, is

@@ -164,7 +164,6 @@ void Bridge::reset_autopilot_state() {
   origin_attempts_ = 0;
   next_origin_us_ = 0;
   firmware_.reset();
-  accel_feedforward_ = false;
   version_asks_ = 0;
   next_version_ask_us_ = 0;
   intervals_to_ask_.clear();
@@ -455,14 +454,13 @@ void Bridge::on_param(const ParamValue& m, BridgeOutput& out) {
 
 void Bridge::on_version(const AutopilotVersion& m, BridgeOutput& out) {
   const auto v = FirmwareVersion::from_flight_sw_version(m.flight_sw_version);
-  if (firmware_ && firmware_->str() == v.str()) return;
+  if (firmware_ == v) return;
   firmware_ = v;
-  accel_feedforward_ = takes_position_target_accel(flavour_, v);
   out.events.push_back(
       {false, "autopilot firmware " + v.str() +
-                  (accel_feedforward_ ? ": position targets carry the feed-forward acceleration"
-                                      : ": position targets without acceleration (not known to "
-                                        "be taken by this version)")});
+                  (accel_feedforward() ? ": position targets carry the feed-forward acceleration"
+                                       : ": position targets without acceleration (not known to "
+                                         "be taken by this version)")});
 }
 
 void Bridge::on_heartbeat(const Frame& f, const Heartbeat& m, const BridgeClock& now,
@@ -677,6 +675,10 @@ std::optional<double> Bridge::height_up(const BridgeClock& now) const {
   return std::nullopt;
 }
 
+bool Bridge::accel_feedforward() const {
+  return firmware_ && takes_position_target_accel(flavour_, *firmware_);
+}
+
 bool Bridge::hold_setpoints() const {
   if (!heartbeat_) return false;
   const bool armed = heartbeat_->base_mode & mav_mode_flag::kSafetyArmed;
@@ -742,7 +744,7 @@ void Bridge::stream(const BridgeClock& now, BridgeOutput& out) {
     m.target_component = static_cast<uint8_t>(params_.target_compid);
     m.coordinate_frame = mav_frame::kLocalNed;
     m.type_mask = position_target_typemask::kYawRateIgnore;
-    if (accel_feedforward_) {
+    if (accel_feedforward()) {
       const Vector3d a = ned_from_enu(t.a_W);
       m.afx = static_cast<float>(a.x());
       m.afy = static_cast<float>(a.y());
@@ -1163,7 +1165,7 @@ AutopilotStatus Bridge::status(const BridgeClock& now) const {
   s.origin_known = origin_known_;
   s.prearm_ok = prearm_ok_;
   if (firmware_) s.firmware = firmware_->str();
-  s.accel_feedforward = accel_feedforward_;
+  s.accel_feedforward = accel_feedforward();
   s.frame_offset_NED = frame_offset_NED_;
   s.stats = stats_;
   s.parser = parser_.stats();

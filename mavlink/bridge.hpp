@@ -294,6 +294,8 @@ class Bridge {
   /// MAV_LANDED_STATE as known now (kUndefined when not).
   uint8_t landed_state(const BridgeClock& now) const;
   bool in_air(const BridgeClock& now) const;
+  /// Position targets carry the acceleration: the firmware is known to take it.
+  bool accel_feedforward() const;
   template <class M>
   void send(const M& m, const BridgeClock& now, BridgeOutput& out);
 
@@ -333,7 +335,6 @@ class Bridge {
   bool origin_known_ = false;
   bool prearm_ok_ = false;
   std::optional<FirmwareVersion> firmware_;
-  bool accel_feedforward_ = false;
 
   // The stack.
   std::optional<AttitudeTarget> attitude_;
