@@ -56,14 +56,16 @@ std::vector<Match> match_frames(const TrackedFrame& a, const TrackedFrame& b,
 
 }  // namespace
 
+double Pipeline::max_blur_px() const {
+  return mission_ == Mission::kLanding ? params_.landing.max_motion_blur_px : 0;
+}
+
 bool Pipeline::smeared(const TrackedFrame& f) const {
-  const double max_blur_px = mission_ == Mission::kLanding ? params_.landing.max_motion_blur_px : 0;
-  return max_blur_px > 0 && f.blur_px > max_blur_px;
+  return max_blur_px() > 0 && f.blur_px > max_blur_px();
 }
 
 bool Pipeline::spun(const TrackedFrame& f) const {
-  const double max_blur_px = mission_ == Mission::kLanding ? params_.landing.max_motion_blur_px : 0;
-  return max_blur_px > 0 && f.spin_blur_px > max_blur_px;
+  return max_blur_px() > 0 && f.spin_blur_px > max_blur_px();
 }
 
 bool Pipeline::holds() const {
@@ -95,15 +97,17 @@ Result<TrackedFrame> Pipeline::front_end(const cv::Mat& gray, int64_t utime, con
   frame.pattern_angle_rad = pattern_angle(X_WC.linear(), d_W);
   frame.descriptors = describe_surf(integral, *kps, params_.surf, frame.pattern_angle_rad);
   frame.keypoints = std::move(*kps);
-  const double max_blur_px = mission_ == Mission::kLanding ? params_.landing.max_motion_blur_px : 0;
-  if (max_blur_px > 0) {
+  if (max_blur_px() > 0) {
     const double exposure = exposure_s.value_or(params_.landing.assumed_exposure_s);
     frame.blur_px =
         floor_motion_blur_px(camera_, mount_, pose, params_.landing.floor_z_m, exposure);
-    PoseSample turning = pose;
-    turning.v_W_B.setZero();
-    frame.spin_blur_px =
-        floor_motion_blur_px(camera_, mount_, turning, params_.landing.floor_z_m, exposure);
+    // The turning's share matters only to a frame smeared past the bound (spun()).
+    if (smeared(frame)) {
+      PoseSample turning = pose;
+      turning.v_W_B.setZero();
+      frame.spin_blur_px =
+          floor_motion_blur_px(camera_, mount_, turning, params_.landing.floor_z_m, exposure);
+    }
   }
   r->blur_px = frame.blur_px;
   if (line_delay_s && *line_delay_s > 0)

@@ -128,6 +128,8 @@ class Pipeline {
                       const PoseSample& pose) const;
   Correspondences correspondences(const TrackedFrame& a, const TrackedFrame& b,
                                   const std::vector<Match>& matches) const;
+  /// landing.max_motion_blur_px while landing; 0 (no bound) otherwise.
+  double max_blur_px() const;
   bool smeared(const TrackedFrame& f) const;
   /// Smeared by the camera's turning (spin_blur_px past the same bound).
   bool spun(const TrackedFrame& f) const;

@@ -47,7 +47,7 @@ struct TrackedFrame {
   double blur_px = 0.0;
   /// The same smear from the camera's turning alone [px]: what also smears a top that moves
   /// with the camera (the moving top is measured on frames whose floor only the camera's
-  /// travel smeared).
+  /// travel smeared). Computed only for a frame smeared past the bound; 0 otherwise.
   double spin_blur_px = 0.0;
   /// The camera's motion over the readout (rolling_shutter.hpp; not rolling: a global shutter).
   Readout readout;
