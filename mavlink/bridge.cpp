@@ -750,8 +750,7 @@ void Bridge::stream(const BridgeClock& now, BridgeOutput& out) {
       m.afy = static_cast<float>(a.y());
       m.afz = static_cast<float>(a.z());
     } else {
-      m.type_mask |= position_target_typemask::kAxIgnore | position_target_typemask::kAyIgnore |
-                     position_target_typemask::kAzIgnore;
+      m.type_mask |= position_target_typemask::kAccelIgnore;
     }
     m.x = static_cast<float>(p.x());
     m.y = static_cast<float>(p.y());

@@ -73,7 +73,10 @@ namespace position_target_typemask {  // SET_POSITION_TARGET_LOCAL_NED.type_mask
 inline constexpr uint16_t kXIgnore = 1, kYIgnore = 2, kZIgnore = 4, kVxIgnore = 8, kVyIgnore = 16,
                           kVzIgnore = 32, kAxIgnore = 64, kAyIgnore = 128, kAzIgnore = 256,
                           kForceSet = 512, kYawIgnore = 1024, kYawRateIgnore = 2048;
-}
+/// The acceleration's three bits; ArduCopter reads any one of them set as all ignored
+/// (ArduCopter/GCS_MAVLink_Copter.cpp, acc_ignore).
+inline constexpr uint16_t kAccelIgnore = kAxIgnore | kAyIgnore | kAzIgnore;
+}  // namespace position_target_typemask
 
 // --- Messages ---------------------------------------------------------------------------------
 

@@ -223,9 +223,7 @@ void OffboardEndpoint::handle(const mav::Frame& f, const EndpointInput& in, Endp
                                         mav::position_target_typemask::kVyIgnore |
                                         mav::position_target_typemask::kVzIgnore));
       if (vel) t.v_W = mav::enu_from_ned(Vector3d(m.vx, m.vy, m.vz));
-      const bool acc = !(m.type_mask & (mav::position_target_typemask::kAxIgnore |
-                                        mav::position_target_typemask::kAyIgnore |
-                                        mav::position_target_typemask::kAzIgnore));
+      const bool acc = !(m.type_mask & mav::position_target_typemask::kAccelIgnore);
       if (acc && std::isfinite(m.afx) && std::isfinite(m.afy) && std::isfinite(m.afz))
         t.a_W = mav::enu_from_ned(Vector3d(m.afx, m.afy, m.afz));
       t.yaw_rad = (m.type_mask & mav::position_target_typemask::kYawIgnore)

@@ -262,8 +262,7 @@ TEST(BridgeAutopilotTest, WithoutNavTakeoffArduCoptersGuidedDisarmsOnTheGround) 
   ASSERT_TRUE(ap.armed());
   SetPositionTargetLocalNed p;
   p.z = -1.2f;
-  p.type_mask = position_target_typemask::kAxIgnore | position_target_typemask::kAyIgnore |
-                position_target_typemask::kAzIgnore;
+  p.type_mask = position_target_typemask::kAccelIgnore;
   for (int i = 0; i < 1200; ++i) {  // 12 s of targets at 100 Hz, with motion capture
     say(p);
     if (i % 2 == 0) say(odom);
@@ -701,8 +700,7 @@ TEST(ScriptedAutopilotTest, AnArduCopterBeforeTheGuidedReworkDropsATargetWithAnA
   ap.step(gcs.pack(t, 0).bytes(), 2000);
   EXPECT_EQ(ap.position_dropped, 1);
   EXPECT_EQ(ap.position_used, 0);
-  t.type_mask |= position_target_typemask::kAxIgnore | position_target_typemask::kAyIgnore |
-                 position_target_typemask::kAzIgnore;
+  t.type_mask |= position_target_typemask::kAccelIgnore;
   ap.step(gcs.pack(t, 0).bytes(), 3000);
   EXPECT_EQ(ap.position_used, 1);
 }

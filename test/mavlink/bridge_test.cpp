@@ -511,9 +511,7 @@ TEST(BridgeTest, PositionSetpointGoesOutInNedWithYawFromNorth) {
   EXPECT_FALSE(m[0].type_mask & position_target_typemask::kXIgnore);
   EXPECT_TRUE(m[0].type_mask & position_target_typemask::kYawRateIgnore);
   // The harness's autopilot said PX4 1.15: the acceleration goes too, in NED.
-  EXPECT_FALSE(m[0].type_mask &
-               (position_target_typemask::kAxIgnore | position_target_typemask::kAyIgnore |
-                position_target_typemask::kAzIgnore));
+  EXPECT_FALSE(m[0].type_mask & position_target_typemask::kAccelIgnore);
   EXPECT_FLOAT_EQ(m[0].afx, -0.4f);
   EXPECT_FLOAT_EQ(m[0].afy, 0.3f);
   EXPECT_FLOAT_EQ(m[0].afz, -0.5f);
@@ -539,10 +537,8 @@ TEST(BridgeTest, PositionTargetsGoWithoutAccelerationUntilTheVersionIsKnown) {
   EXPECT_EQ(requests[0].param1, AutopilotVersion::kId);
   const auto m = h.ap.take<SetPositionTargetLocalNed>();
   ASSERT_EQ(m.size(), 1u);
-  const uint16_t accel_bits = position_target_typemask::kAxIgnore |
-                              position_target_typemask::kAyIgnore |
-                              position_target_typemask::kAzIgnore;
-  EXPECT_EQ(m[0].type_mask & accel_bits, accel_bits);
+  EXPECT_EQ(m[0].type_mask & position_target_typemask::kAccelIgnore,
+            position_target_typemask::kAccelIgnore);
   EXPECT_EQ(h.bridge.status(h.clock()).firmware, "");
   EXPECT_FALSE(h.bridge.status(h.clock()).accel_feedforward);
 }

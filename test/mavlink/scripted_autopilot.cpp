@@ -200,10 +200,7 @@ void ScriptedAutopilot::on_frame(const Frame& f) {
       const bool pos_given =
           !(m.type_mask & (position_target_typemask::kXIgnore | position_target_typemask::kYIgnore |
                            position_target_typemask::kZIgnore));
-      const uint16_t accel_bits = position_target_typemask::kAxIgnore |
-                                  position_target_typemask::kAyIgnore |
-                                  position_target_typemask::kAzIgnore;
-      const bool accel_given = (m.type_mask & accel_bits) != accel_bits;
+      const uint16_t accel_bits = m.type_mask & position_target_typemask::kAccelIgnore;
       if (c_.flavour == Flavour::kArdupilot) {
         // ArduCopter/GCS_MAVLink_Copter.cpp, handle_message_set_position_target_local_ned: guided
         // modes only, no armed or landed check; a position target switches the submode
@@ -211,6 +208,8 @@ void ScriptedAutopilot::on_frame(const Frame& f) {
         if (!guided() || !pos_given || m.coordinate_frame != mav_frame::kLocalNed) return;
         // Before the Guided rework (ArduCopter/GCS_Mavlink.cpp before 635d13a106, Copter 4.0):
         // "exit immediately if acceleration provided".
+        // Any one of the acceleration's bits set ignores all three (acc_ignore).
+        const bool accel_given = accel_bits == 0;
         if (accel_given && c_.flight_sw_version < 0x040100C0u) return void(++position_dropped);
         // Since: set_destination_posvelaccel, an ignored acceleration read as zero.
         target_accel_NED = std::array<float, 3>{0, 0, 0};
@@ -225,7 +224,8 @@ void ScriptedAutopilot::on_frame(const Frame& f) {
         // src/modules/mavlink/mavlink_receiver.cpp: an ignored axis is NaN in the trajectory
         // setpoint, which the position controller's feed-forward skips.
         target_accel_NED.reset();
-        if (accel_given) target_accel_NED = std::array<float, 3>{m.afx, m.afy, m.afz};
+        if (accel_bits != position_target_typemask::kAccelIgnore)
+          target_accel_NED = std::array<float, 3>{m.afx, m.afy, m.afz};
         target_z_ = -m.z;
         ++position_used;
       }
