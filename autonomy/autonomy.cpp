@@ -490,14 +490,15 @@ void Autonomy::finish_refinement(phases::Refinement& r) {
     a.push_back(s.x());
     b.push_back(s.y());
   }
-  if (const auto refusal = profile_->refuse(median(a), median(b))) {
+  const Vector2d size_m(median(a), median(b));
+  if (const auto refusal = profile_->refuse(size_m.x(), size_m.y())) {
     hold(refusal->why, Failsafe::kNone, refusal->hold_min_z_m);
     return;
   }
   const std::string where = "estimate (" + fmt(estimate_W_.x()) + ", " + fmt(estimate_W_.y()) +
                             ", " + fmt(estimate_W_.z()) +
                             ") from n = " + std::to_string(estimator_.n());
-  auto start = profile_->begin_approach(*pose_, yaw_sp_rad_, r.normal_sum_W, r.yaw4_sum);
+  auto start = profile_->begin_approach(*pose_, yaw_sp_rad_, r.normal_sum_W, r.yaw4_sum, size_m);
   yaw_sp_rad_ = start.yaw_sp_rad;
   enter(phases::Approach{std::move(start.state), r.last_found_utime},
         "refinement converged (eqs. 7-9): " + where);
@@ -756,6 +757,8 @@ void Autonomy::step(phases::Approach& a, const Vector3d& p, double dt_s) {
     case ApproachStep::Next::kFinalDescent: {
       const auto& l = std::get<LandingApproach>(a.how);
       phases::FinalDescent f{l.z_sp_m, TouchdownDetector(params_.landing), !l.land_here, {}, {}};
+      f.fit_radius_m = l.fit_radius_m;
+      if (l.held_since_utime) f.held_s = seconds(now_utime_ - *l.held_since_utime);
       f.touchdown.arm(now_utime_);
       enter(std::move(f), std::move(next.reason));
       return;
@@ -828,10 +831,14 @@ Autonomy::FinalPause Autonomy::pause_final_descent(phases::FinalDescent& s, doub
     s.paused_since_utime.reset();
     return FinalPause::kNone;
   }
-  const double e_r =
-      (pose_->p_W_B.head<2>() - body_over_gear_xy(L, pose_) - estimate_W_.head<2>()).norm();
+  const Vector2d e_W = pose_->p_W_B.head<2>() - body_over_gear_xy(L, pose_) - estimate_W_.head<2>();
+  const double e_r = e_W.norm();
   if (!s.paused_since_utime) {
-    if (e_r <= L.final_pause_radial_m || pose_->p_W_B.z() - z_touch_m <= L.final_pause_min_height_m)
+    // A descent that began on the hold's grown bounds pauses as much further out.
+    const CalmBounds began = calm_bounds(L, s.held_s, s.fit_radius_m);
+    const double pause_radial_m =
+        L.final_pause_radial_m + std::max(0.0, began.reach_m - began.radial_m);
+    if (e_r <= pause_radial_m || pose_->p_W_B.z() - z_touch_m <= L.final_pause_min_height_m)
       return FinalPause::kNone;
     s.paused_since_utime = now_utime_;
     s.calm_since_utime.reset();
@@ -840,7 +847,8 @@ Autonomy::FinalPause Autonomy::pause_final_descent(phases::FinalDescent& s, doub
     s.z_sp_m = std::max(s.z_sp_m, pose_->p_W_B.z());
   }
   const double paused_s = seconds(now_utime_ - *s.paused_since_utime);
-  if (calm_for_final_descent(L, e_r, pose_, paused_s, now_utime_, s.calm_since_utime)) {
+  if (calm_for_final_descent(L, e_W, pose_, s.held_s + paused_s, s.fit_radius_m, now_utime_,
+                             s.calm_since_utime)) {
     s.paused_since_utime.reset();
     reason_ = "final descent resumed: calm again";
     return FinalPause::kNone;

@@ -63,8 +63,13 @@ class LandingProfile final : public MissionProfile {
   }
 
   Start begin_approach(const PoseSample& pose, double yaw_sp_rad, const Vector3d& /*normal_sum_W*/,
-                       const Vector2d& yaw4_sum) const override {
-    Start s{LandingApproach{pose.p_W_B.z(), false, {}, {}}, yaw_sp_rad};
+                       const Vector2d& yaw4_sum, const Vector2d& size_m) const override {
+    Start s{LandingApproach{pose.p_W_B.z(),
+                            false,
+                            {},
+                            {},
+                            fit_radius_m(p_.landing, std::min(size_m.x(), size_m.y()))},
+            yaw_sp_rad};
     if (p_.landing.align_yaw_tol_deg > 0 && yaw4_sum.norm() > 1e-9) {
       // The platform's edges modulo 90 deg (the gear is square): the turn of at most 45 deg.
       const double edges = std::atan2(yaw4_sum.y(), yaw4_sum.x()) / 4;
@@ -83,7 +88,8 @@ class LandingProfile final : public MissionProfile {
     ApproachStep out;
     const double z_touch = target.z() + L.gear_height_m;  // body z on the platform
     const Vector2d body_over_gear = body_over_gear_xy(L, in.pose);
-    const double e_r = (p.head<2>() - body_over_gear - target.head<2>()).norm();
+    const Vector2d e_W = p.head<2>() - body_over_gear - target.head<2>();
+    const double e_r = e_W.norm();
     if (!a.land_here && p.z() - z_touch > L.lost_check_height_m &&
         in.since_found_s > L.lost_timeout_s) {
       out.next = ApproachStep::Next::kTargetLost;
@@ -105,7 +111,7 @@ class LandingProfile final : public MissionProfile {
     }
     out.sp_p_W << target.head<2>() + body_over_gear, a.z_sp_m;
     if (a.at_final_height(target.z(), L.gear_height_m, L.final_height_m)) {
-      if (!final_descent_allowed(a, e_r, in)) {
+      if (!final_descent_allowed(a, e_W, in)) {
         if (seconds(in.now_utime - *a.held_since_utime) > L.final_hold_timeout_s) {
           out.next = ApproachStep::Next::kTargetLost;
           out.reason = no_calm_moment(L, "held");
@@ -122,15 +128,15 @@ class LandingProfile final : public MissionProfile {
 
   double lost_hold_min_z_m() const override { return p_.detection.landing_height_m; }
 
-  // At final_height_m: the rapid final descent starts only in a calm moment, e_r within
-  // final_hold_radial_m (and radial_tol_m) and the horizontal speed within final_hold_speed_mps for
-  // final_hold_settle_s.
-  bool final_descent_allowed(LandingApproach& a, double e_r, const ApproachInputs& in) const {
+  // At final_height_m: the rapid final descent starts only in a calm moment
+  // (calm_for_final_descent).
+  bool final_descent_allowed(LandingApproach& a, const Vector2d& e_W,
+                             const ApproachInputs& in) const {
     const auto& L = p_.landing;
     if (L.final_hold_speed_mps <= 0 || a.land_here) return true;
     if (!a.held_since_utime) a.held_since_utime = in.now_utime;
-    return calm_for_final_descent(L, e_r, in.pose, seconds(in.now_utime - *a.held_since_utime),
-                                  in.now_utime, a.calm_since_utime);
+    return calm_for_final_descent(L, e_W, in.pose, seconds(in.now_utime - *a.held_since_utime),
+                                  a.fit_radius_m, in.now_utime, a.calm_since_utime);
   }
 
  private:
@@ -175,7 +181,8 @@ class IngressProfile final : public MissionProfile {
   }
 
   Start begin_approach(const PoseSample& /*pose*/, double /*yaw_sp_rad*/,
-                       const Vector3d& normal_sum_W, const Vector2d& /*yaw4_sum*/) const override {
+                       const Vector3d& normal_sum_W, const Vector2d& /*yaw4_sum*/,
+                       const Vector2d& /*size_m*/) const override {
     IngressApproach a;
     a.n_W = horizontal_normal(normal_sum_W);
     return {a, yaw_facing(a.n_W)};
@@ -240,7 +247,8 @@ std::string no_calm_moment(const LandingParams& L, const std::string& what) {
          " s without a calm moment (e_r within " +
          fmt(std::min(L.radial_tol_m, L.final_hold_radial_m), 3) + " m, speed within " +
          fmt(L.final_hold_speed_mps, 2) +
-         (speed_max_mps > L.final_hold_speed_mps ? " to " + fmt(speed_max_mps, 2) : "") + " m/s)";
+         (speed_max_mps > L.final_hold_speed_mps ? " to " + fmt(speed_max_mps, 2) : "") +
+         " m/s; or heading within the top's room)";
 }
 
 Vector2d body_over_gear_xy(const LandingParams& L, const std::optional<PoseSample>& pose) {
@@ -248,15 +256,39 @@ Vector2d body_over_gear_xy(const LandingParams& L, const std::optional<PoseSampl
   return L.gear_height_m * (pose->q_WB * Vector3d::UnitZ()).head<2>();
 }
 
-bool calm_for_final_descent(const LandingParams& L, double e_r,
-                            const std::optional<PoseSample>& pose, double held_s, int64_t now_utime,
+double fit_radius_m(const LandingParams& L, double short_side_m) {
+  const double r = 0.5 * (short_side_m - L.gear_footprint_m) - L.fit_margin_m;
+  return r > 0 ? r : 0.0;  // NaN-safe: an unmeasured top leaves no room
+}
+
+CalmBounds calm_bounds(const LandingParams& L, double held_s, double fit_radius_m) {
+  const double quarter_s = 0.25 * L.final_hold_timeout_s;
+  const double relaxed = std::clamp(held_s / (2 * quarter_s), 0.0, 1.0);
+  const double reach_relaxed = std::clamp((held_s - quarter_s) / quarter_s, 0.0, 1.0);
+  CalmBounds b;
+  b.radial_m = std::min(L.radial_tol_m, L.final_hold_radial_m);
+  b.speed_mps = L.final_hold_speed_mps +
+                std::max(0.0, L.final_hold_speed_max_mps - L.final_hold_speed_mps) * relaxed;
+  if (reach_relaxed > 0 && fit_radius_m > b.radial_m)
+    b.reach_m = b.radial_m + (fit_radius_m - b.radial_m) * reach_relaxed;
+  return b;
+}
+
+bool calm_for_final_descent(const LandingParams& L, const Vector2d& e_W,
+                            const std::optional<PoseSample>& pose, double held_s,
+                            double fit_radius_m, int64_t now_utime,
                             std::optional<int64_t>& calm_since_utime) {
-  const double relaxed = std::clamp(held_s / (0.5 * L.final_hold_timeout_s), 0.0, 1.0);
-  const double speed_mps =
-      L.final_hold_speed_mps +
-      std::max(0.0, L.final_hold_speed_max_mps - L.final_hold_speed_mps) * relaxed;
-  const bool calm = pose && e_r <= std::min(L.radial_tol_m, L.final_hold_radial_m) &&
-                    pose->v_W_B.head<2>().norm() <= speed_mps;
+  const CalmBounds b = calm_bounds(L, held_s, fit_radius_m);
+  bool calm = false;
+  if (pose) {
+    const Vector2d v_W = pose->v_W_B.head<2>();
+    const double e_r = e_W.norm();
+    const double descent_s = L.final_height_m / L.final_descent_rate_mps;
+    const bool strict = e_r <= b.radial_m && v_W.norm() <= b.speed_mps;
+    const bool heading_in =
+        b.reach_m > 0 && e_r <= b.reach_m && (e_W + v_W * descent_s).norm() <= b.reach_m;
+    calm = strict || heading_in;
+  }
   if (!calm) {
     calm_since_utime.reset();
     return false;

@@ -47,6 +47,9 @@ struct LandingApproach {
   bool land_here = false;  ///< operator LAND_HERE: onto the floor below, no target to lose
   std::optional<int64_t> held_since_utime;  ///< at final_height_m, waiting for calm
   std::optional<int64_t> calm_since_utime;  ///< ... calm (speed and e_r within) since
+  /// How far off the platform's centre the gear still lands with fit_margin_m of the top around
+  /// it (fit_radius_m of the measured size; 0: unmeasured, the hold's radius never grows).
+  double fit_radius_m = 0.0;
 
   /// The altitude setpoint is down to final_height_m above the platform top at top_z_m (the
   /// final hold, then the rapid descent).
@@ -55,14 +58,36 @@ struct LandingApproach {
   }
 };
 
-/// The final hold's calm moment (beyond the paper): e_r within radial_tol_m and
-/// final_hold_radial_m, and the horizontal speed within its bound, for final_hold_settle_s. The
-/// bound is final_hold_speed_mps at first and grows to final_hold_speed_max_mps over half of
-/// final_hold_timeout_s of waiting (held_s): a still moment is worth waiting for, but in steady
-/// fast gusts the vehicle is rarely both centred and still. calm_since_utime is the window's own
+/// How far the gear's centre may be off the centre of a top whose short side measures
+/// short_side_m and still touch down with fit_margin_m of the top around the gear [m]; 0 for an
+/// unmeasured (NaN) or too small top.
+double fit_radius_m(const LandingParams& L, double short_side_m);
+
+/// The final hold's bounds after held_s of waiting at the final height. At first e_r within
+/// min(radial_tol_m, final_hold_radial_m) and the horizontal speed within final_hold_speed_mps;
+/// over half of final_hold_timeout_s the speed bound grows to final_hold_speed_max_mps. From a
+/// quarter of it on, the predicted test's radius grows from the strict one to fit_radius_m
+/// (reached at half of it). A still, centred moment is worth waiting for, and a vehicle that
+/// holds to millimetres has one within the first quarter; one that rarely has it (an autopilot's
+/// position controller that holds to a few centimetres) should not wait for ever when the top
+/// leaves room.
+struct CalmBounds {
+  double radial_m = 0.0;   ///< the strict test's e_r bound
+  double speed_mps = 0.0;  ///< ... and its speed bound
+  double reach_m = 0.0;    ///< the predicted test's bound on e_r and where it heads (0: none yet)
+};
+CalmBounds calm_bounds(const LandingParams& L, double held_s, double fit_radius_m);
+
+/// The final hold's calm moment (beyond the paper), for final_hold_settle_s on end: either the
+/// strict test (e_r and the speed within CalmBounds' radial_m and speed_mps), or the predicted
+/// one: e_r, and the offset the vehicle heads for over the rapid descent's duration
+/// (final_height_m / final_descent_rate_mps, e_W + v_W T), both within reach_m. The predicted
+/// test lets a vehicle swinging through the centre descend while it swings towards it.
+/// e_W: the gear's centre minus the target, horizontal. calm_since_utime is the window's own
 /// state; true once it has lasted.
-bool calm_for_final_descent(const LandingParams& L, double e_r,
-                            const std::optional<PoseSample>& pose, double held_s, int64_t now_utime,
+bool calm_for_final_descent(const LandingParams& L, const Vector2d& e_W,
+                            const std::optional<PoseSample>& pose, double held_s,
+                            double fit_radius_m, int64_t now_utime,
                             std::optional<int64_t>& calm_since_utime);
 
 /// Beyond the paper: the horizontal offset of the body origin from the gear's centre
@@ -145,13 +170,15 @@ class MissionProfile {
   virtual std::optional<Refusal> refuse(double size_a_m, double size_b_m) const = 0;
 
   /// The approach's start from the converged refinement: its state and the yaw to fly it with.
-  /// yaw4_sum: sum of (cos, sin)(4 yaw) of the platform's measured long axis.
+  /// yaw4_sum: sum of (cos, sin)(4 yaw) of the platform's measured long axis; size_m: the
+  /// target's measured size (the medians of the full views; NaN when unmeasured).
   struct Start {
     ApproachState state;
     double yaw_sp_rad = 0.0;
   };
   virtual Start begin_approach(const PoseSample& pose, double yaw_sp_rad,
-                               const Vector3d& normal_sum_W, const Vector2d& yaw4_sum) const = 0;
+                               const Vector3d& normal_sum_W, const Vector2d& yaw4_sum,
+                               const Vector2d& size_m) const = 0;
   virtual ApproachStep step_approach(ApproachState& state, const ApproachInputs& in) const = 0;
 
   /// Target lost and retries exhausted: hold at least this high [m].

@@ -169,7 +169,9 @@ const ParamSchema<LandingParams>& LandingParams::schema() {
             "must be 0 or at least final_hold_speed_mps");
     s.add("final_hold_radial_m", &P::final_hold_radial_m, Range::gt(0), "m",
           "... and e_r within this (and within radial_tol_m): the rapid descent starts nearer "
-          "the centre than the slow one needs");
+          "the centre than the slow one needs. Over half of final_hold_timeout_s of waiting the "
+          "radius grows to the room the measured top leaves around the gear, for e_r and where "
+          "the vehicle heads over the rapid descent (an autopilot holding to centimetres)");
     s.add("final_hold_settle_s", &P::final_hold_settle_s, Range::ge(0), "s",
           "... both within for this long");
     s.add("final_hold_timeout_s", &P::final_hold_timeout_s, Range::gt(0), "s",
