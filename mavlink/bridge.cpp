@@ -42,6 +42,12 @@ constexpr int64_t kLandedStateFreshUs = 3'000'000;
 /// touch-down (ArduCopter: 1 s, ArduCopter/land_detector.cpp; PX4 maybe-landed then landed,
 /// about 1.5 s, src/modules/land_detector/MulticopterLandDetector.cpp).
 constexpr int64_t kInAirDisarmWaitUs = 2'000'000;
+/// The stack's motors-off with the vehicle still armed in the offboard mode: the position target
+/// keeps it pressed down where the stack last flew it, commanding this descent. PX4 counts ground
+/// contact, and so a landing it will disarm on, only under a commanded descent faster than
+/// 1.1 x LNDMC_Z_VEL_MAX (0.25 m/s; src/modules/land_detector/MulticopterLandDetector.cpp,
+/// _get_ground_contact_state); ArduCopter's LAND_SPEED is 0.5 m/s as well.
+constexpr double kTouchdownPushMps = 0.5;
 /// ArduCopter's NAV_TAKEOFF: at least this far above the vehicle (it refuses a target below it).
 constexpr double kMinTakeoffAltM = 0.3;
 /// Setpoints held after NAV_TAKEOFF until the autopilot reports the vehicle in the air; without a
@@ -210,6 +216,7 @@ BridgeOutput Bridge::update(const BridgeInput& in, const BridgeClock& now) {
   if (in.position) {
     position_ = in.position;
     position_rx_steady_us_ = now.steady_us;
+    if (in.position->motors == Motors::kOn) last_on_position_ = in.position;
     if (in.position->motors != Motors::kOn) need_motors_off_ = false;
     if (in.position->motors == Motors::kKill && !in.position->kill_authorised)
       ++stats_.kills_refused;
@@ -528,6 +535,7 @@ void Bridge::on_heartbeat(const Frame& f, const Heartbeat& m, const BridgeClock&
   }
   if (!armed && was_armed_) {
     disarmed_at_us_ = now.steady_us;
+    last_on_position_.reset();  // a touch-down's target is this flight's, not the next one's
     if (flew_ || !ext_state_) need_motors_off_ = true;
     out.events.push_back(
         {false, std::string("disarmed") +
@@ -733,7 +741,7 @@ void Bridge::stream(const BridgeClock& now, BridgeOutput& out) {
     m.thrust = static_cast<float>(std::clamp(thrust, 0.0, 1.0));
     send(m, now, out);
   } else {
-    const PositionTarget& t = *position_;
+    const PositionTarget t = position_to_stream();
     // In the autopilot's local frame, which need not be motion capture's: ArduCopter SITL's EKF3
     // reported heights 0.2 m above the external navigation it fused, from before arming on.
     const Vector3d p = ned_from_enu(t.p_W) + frame_offset_NED_.value_or(Vector3d::Zero());
@@ -763,6 +771,21 @@ void Bridge::stream(const BridgeClock& now, BridgeOutput& out) {
   }
   ++stats_.setpoints_sent;
   if (!streaming_since_us_) streaming_since_us_ = now.steady_us;
+}
+
+PositionTarget Bridge::position_to_stream() const {
+  const bool armed = heartbeat_ && (heartbeat_->base_mode & mav_mode_flag::kSafetyArmed);
+  if (position_->motors == Motors::kOn || !last_on_position_ || !armed) return *position_;
+  // Motors off (a touch-down) while the autopilot still flies: not the stack's target, which
+  // follows the vehicle and so lets it slide on the top at hover thrust, but where the stack
+  // last flew it, never higher than the new target, pressed down until the autopilot's land
+  // detector agrees and a disarm is accepted.
+  PositionTarget t = *last_on_position_;
+  t.p_W.z() = std::min(t.p_W.z(), position_->p_W.z());
+  t.v_W = Vector3d(0, 0, -kTouchdownPushMps);
+  t.a_W.setZero();
+  t.motors = position_->motors;
+  return t;
 }
 
 void Bridge::forward_mocap(const PoseSample& pose, const BridgeClock& now, BridgeOutput& out) {

@@ -274,6 +274,9 @@ class Bridge {
   void reset_autopilot_state();
   void check_link(const BridgeClock& now, BridgeOutput& out);
   void stream(const BridgeClock& now, BridgeOutput& out);
+  /// The position target to send: the stack's, or after its motors-off while the autopilot is
+  /// still armed, the last MOTORS_ON one pressed down (kTouchdownPushMps).
+  PositionTarget position_to_stream() const;
   bool hold_setpoints() const;
   void decide_commands(const BridgeClock& now, BridgeOutput& out);
   bool decide_engage(const BridgeClock& now, BridgeOutput& out);
@@ -341,6 +344,7 @@ class Bridge {
   int64_t attitude_rx_steady_us_ = 0;
   std::optional<PositionTarget> position_;
   int64_t position_rx_steady_us_ = 0;
+  std::optional<PositionTarget> last_on_position_;  ///< the stack's newest MOTORS_ON target
   std::optional<PoseSample> mocap_;
   int64_t mocap_rx_steady_us_ = 0;
   int64_t mocap_sent_steady_us_ = INT64_MIN / 2;

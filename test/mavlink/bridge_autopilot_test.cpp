@@ -504,6 +504,64 @@ TEST(BridgeAutopilotTest, NoReArmWithinTheCooldownOfADisarm) {
   EXPECT_GE(l.t_us - disarmed_at, static_cast<int64_t>(p.rearm_cooldown_s * 1e6));
 }
 
+// PX4 SITL, position control: after autonomy's touch-down its motors-off targets follow the
+// vehicle with no descent, which PX4's land detector never takes for ground contact; the disarms
+// were refused, the vehicle hovered on the top and slid 7-8 cm off the centre before the LAND
+// the bridge asked for 2 s later disarmed it. The bridge now keeps the last MOTORS_ON target,
+// pressed down: PX4 detects the landing and takes the plain disarm.
+TEST(BridgeAutopilotTest, AfterTheStacksTouchDownPx4DetectsTheLandingAndDisarmsWithoutALand) {
+  Loop l(px4_params("position"), px4());
+  Motors motors = Motors::kOn;
+  Vector3d p_sp(0, 0, 1.2), v_sp = Vector3d::Zero();
+  int64_t next = 0;
+  l.stack = [&](BridgeInput& in) {
+    if (l.t_us < next) return;
+    next = l.t_us + 10'000;
+    PositionTarget t;
+    t.p_W = p_sp;
+    t.v_W = v_sp;
+    t.motors = motors;
+    in.position = t;
+  };
+  ASSERT_TRUE(l.run_until([&] { return l.ap.height_m() > 1.15; }, 30.0));
+  // The final descent: into the top at 0.5 m/s, the setpoint ending below it.
+  p_sp.z() = -0.3;
+  v_sp.z() = -0.5;
+  ASSERT_TRUE(l.run_until([&] { return l.ap.height_m() <= 0.0; }, 10.0));
+  // Touch-down: motors off, the target where the vehicle rests, nothing commanded.
+  motors = Motors::kOff;
+  p_sp.z() = 0.0;
+  v_sp.setZero();
+  ASSERT_TRUE(l.run_until([&] { return !l.ap.armed(); }, 5.0))
+      << "refused disarms " << l.ap.refused_disarms << ", mode " << l.ap.mode();
+  EXPECT_EQ(l.bridge->stats().lands_requested, 0u);
+  EXPECT_EQ(l.ap.forced_disarms, 0);
+  EXPECT_EQ(l.ap.mode(), "OFFBOARD");
+}
+
+TEST(ScriptedAutopilotTest, Px4InOffboardPositionTakesGroundContactOnlyUnderACommandedDescent) {
+  // MulticopterLandDetector.cpp, _get_ground_contact_state: with climb-rate control (an offboard
+  // position target) "ground contact requires commanded descent until landed", a trajectory
+  // setpoint sinking faster than 1.1 LNDMC_Z_VEL_MAX (0.25 m/s).
+  for (const double vz_down : {0.0, 0.2, 0.5}) {
+    ScriptedAutopilot ap(px4());
+    ap.start_flying(px4_mode::custom_mode(px4_mode::kOffboard, 0), 0.3, 0);
+    Sender gcs(1, 191);
+    for (int64_t t = 20'000; t <= 5'000'000; t += 20'000) {
+      SetPositionTargetLocalNed m;
+      m.target_system = 1;
+      m.coordinate_frame = mav_frame::kLocalNed;
+      m.type_mask =
+          position_target_typemask::kAccelIgnore | position_target_typemask::kYawRateIgnore;
+      m.z = 0.2f;  // NED: 0.2 m below the ground
+      m.vz = static_cast<float>(vz_down);
+      ap.step(gcs.pack(m, 0).bytes(), t);
+    }
+    EXPECT_EQ(ap.height_m(), 0.0) << vz_down;
+    EXPECT_EQ(ap.on_ground(), vz_down > 0.275) << vz_down;
+  }
+}
+
 // --- Issue 37: a forced disarm needs the operator's authority --------------------------------
 
 TEST(BridgeAutopilotTest, AKillWithoutTheOperatorsAuthorityIsAMotorsOffNeverAForcedDisarm) {

@@ -14,6 +14,8 @@ constexpr double kG = 9.81;
 /// LAND_DETECTOR_TRIGGER_SEC); PX4's maybe-landed then landed, about as long
 /// (src/modules/land_detector/MulticopterLandDetector.cpp).
 constexpr double kLandDetectS = 1.0;
+/// PX4's LNDMC_Z_VEL_MAX (src/modules/land_detector/land_detector_params_mc.yaml) [m/s].
+constexpr double kLndmcZVelMax = 0.25;
 /// Motors spooling up before a take-off clears the landed state (ArduCopter/mode_guided.cpp,
 /// angle_control_run; libraries/AC_AutoTakeoff).
 constexpr double kSpoolS = 0.5;
@@ -227,6 +229,7 @@ void ScriptedAutopilot::on_frame(const Frame& f) {
         if (accel_bits != position_target_typemask::kAccelIgnore)
           target_accel_NED = std::array<float, 3>{m.afx, m.afy, m.afz};
         target_z_ = -m.z;
+        target_vz_down_ = (m.type_mask & position_target_typemask::kVzIgnore) ? 0.0 : m.vz;
         ++position_used;
       }
     } else if constexpr (std::is_same_v<M, Odometry>) {
@@ -562,10 +565,17 @@ void ScriptedAutopilot::physics(double dt) {
     vz_ = vz_cmd;
     z_ += vz_ * dt;
   }
+  // PX4 flying a position or velocity target (climb-rate control): ground contact only under a
+  // commanded descent faster than 1.1 LNDMC_Z_VEL_MAX (MulticopterLandDetector.cpp,
+  // _get_ground_contact_state: "ground contact requires commanded descent until landed").
+  const bool climb_rate_control =
+      c_.flavour == Flavour::kPx4 && armed_ && in_offboard() && !offboard_attitude_;
+  const bool contact_possible = !climb_rate_control || target_vz_down_ >= 1.1 * kLndmcZVelMax;
   if (z_ <= 0) {
     z_ = 0;
     vz_ = std::max(0.0, vz_);
-    if (!landed_) {
+    if (!landed_ && !contact_possible) land_timer_s_ = 0;
+    if (!landed_ && contact_possible) {
       land_timer_s_ += dt;
       if (land_timer_s_ >= kLandDetectS) {
         landed_ = true;

@@ -150,6 +150,7 @@ class ScriptedAutopilot {
   bool use_thrust_ = false;
   int64_t angle_update_ = 0;
   double target_z_ = 0;
+  double target_vz_down_ = 0;  // PX4: the position target's commanded descent (NED vz) [m/s]
   int64_t offboard_signal_ = INT64_MIN / 2;  // PX4: the last offboard_control_mode
   bool offboard_attitude_ = false;
   // ArduCopter GCS failsafe.
