@@ -53,6 +53,9 @@ FAMILIES = {
                          "the same grain on both (gravel on gravel)",
     "landing_dim": "a nearly featureless dark top (slate) on a speckled floor (granite) in dim "
                    "light, a third of the usual ambient, sensor noise 4-6 grey levels",
+    "landing_shadows": "a low sun (15-40 deg up) and hard shadows on a photographed floor and "
+                       "top: the platform's own across the floor, a mast's or a parapet's across "
+                       "the top",
     "ingress_smooth_wall": "a photographed wall with large smooth regions and a busy photographed "
                            "room behind the opening",
     "landing_moving_cart": "a platform on a flat cart going round a path (line, circle, figure "
@@ -180,6 +183,52 @@ def _lighting(rng, light_dir):
             "light_dir_W": light_dir, "gain": round(rng.uniform(0.85, 1.15), 3),
             "lamp_W": [round(rng.uniform(-2, 2), 2), round(rng.uniform(-2, 2), 2), 3.0],
             "lamp_radius_m": 3.0}
+
+
+def _sunlit(rng, scene):
+    """Outdoors under a low sun: direct light 15-40 deg above the horizon from any side, an
+    ambient (sky) share of 20-35 %, no lamp, shadows cast; the gain keeps a sunlit floor as bright
+    as the halls' (shade 1). One or two casters out of view lay their shadows over the platform:
+    a mast (a thin stripe) or a parapet (a straight edge across the top)."""
+    elevation = math.radians(rng.uniform(15.0, 40.0))
+    azimuth = rng.uniform(0.0, 2 * math.pi)
+    sun = [math.cos(elevation) * math.cos(azimuth), math.cos(elevation) * math.sin(azimuth),
+           math.sin(elevation)]
+    ambient = rng.uniform(0.20, 0.35)
+    diffuse = 1.0 - ambient
+    lit = ambient + diffuse * math.sin(elevation)
+    scene["lighting"] = {"ambient": round(ambient, 3), "diffuse": round(diffuse, 3),
+                         "light_dir_W": [round(v, 4) for v in sun], "gain": round(1.0 / lit, 3),
+                         "falloff": 0.0, "shadows": True, "casters": []}
+    scene["randomize"].update({"light_dir_deg": 0, "light_falloff": 0.0})
+    p = scene["platform"]
+    cx, cy = p["center_xy_m"]
+    length, width, top = p["size_m"]
+    toward = (math.cos(azimuth), math.sin(azimuth))   # from the platform towards the sun
+    across = (-toward[1], toward[0])
+    half = [0.5 * v for v in scene["area"]["size_m"]]
+    # Where the way towards the sun leaves the flying area: the casters stand beyond it.
+    exit_m = min(((half[i] - c * (1 if toward[i] > 0 else -1)) / abs(toward[i])
+                  for i, c in enumerate((cx, cy)) if abs(toward[i]) > 1e-6), default=half[0])
+    for _ in range(rng.choice((1, 2))):
+        distance = exit_m + rng.uniform(0.3, 1.5)
+        side = rng.uniform(-0.5, 0.5) * min(length, width)
+        while True:
+            x = cx + toward[0] * distance + across[0] * side
+            y = cy + toward[1] * distance + across[1] * side
+            if max(abs(x) - half[0], abs(y) - half[1]) > 0.1:
+                break
+            distance += 0.1
+        yaw = math.degrees(azimuth)
+        if rng.random() < 0.5:  # a mast: its shadow runs over the whole top
+            thick = rng.uniform(0.06, 0.25)
+            height = top + (distance + max(length, width)) * math.tan(elevation) * rng.uniform(1.1, 2.0)
+            caster = [x, y, thick, thick, height, yaw]
+        else:  # a parapet across the sun: its shadow's edge falls on the top
+            reach = distance + rng.uniform(-0.5, 0.5) * min(length, width)
+            caster = [x, y, 0.2, rng.uniform(4.0, 8.0), top + reach * math.tan(elevation), yaw]
+        scene["lighting"]["casters"].append([round(v, 3) for v in caster])
+    return scene
 
 
 def _landing(rng, name, floor, platform):
@@ -419,6 +468,9 @@ def _draw(family, seed):
         scene["lighting"]["diffuse"] = round(scene["lighting"]["diffuse"] / 3, 3)
         scene["camera"]["noise_sigma"] = round(rng.uniform(4.0, 6.0), 2)
         return scene
+    if family == "landing_shadows":
+        return _sunlit(rng, _landing(rng, family, _photo(rng, SURFACE_PHOTOS, rng.uniform(1.5, 3.0)),
+                                     _platform(rng, lambda length: _top(rng, length))))
     if family == "landing_none_photo":
         return _landing(rng, family, _photo(rng, SURFACE_PHOTOS, rng.uniform(1.5, 3.0)), None)
     if family in ("landing_moving_cart", "landing_deck"):

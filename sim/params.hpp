@@ -305,6 +305,14 @@ struct LightingParams {
   double falloff = 0.0;
   Vector3d lamp_W = Vector3d(0.0, 0.0, 3.0);
   double lamp_radius_m = 3.0;
+  /// Cast shadows: the boxes and the casters block the light along light_dir_W (a distant sun);
+  /// a surface in shadow keeps only the ambient share of its shade. Off: no surface shadows
+  /// another.
+  bool shadows = false;
+  /// Shadow casters out of the camera's view (a mast, a parapet, a tree): boxes standing on the
+  /// floor, each [x, y, length, width, height, yaw_deg] [m, deg], that only cast shadows: neither
+  /// rendered nor touched.
+  std::vector<std::array<double, 6>> casters;
   static const ParamSchema<LightingParams>& schema();
   void validate() const;
 };

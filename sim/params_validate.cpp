@@ -582,6 +582,24 @@ const ParamSchema<LightingParams>& LightingParams::schema() {
     s.add("lamp_W", &P::lamp_W, Range::any(), "m", "brightest point of the light");
     s.add("lamp_radius_m", &P::lamp_radius_m, Range::gt(0), "m",
           "distance of the half-way illumination");
+    s.add("shadows", &P::shadows, Range::any(), "",
+          "cast shadows: the boxes and the casters block the light along light_dir_W (a distant "
+          "sun); a surface in shadow keeps only the ambient share of its shade");
+    s.add("casters", &P::casters, Range::any(), "m, deg",
+          "shadow casters out of the camera's view (a mast, a parapet, a tree): boxes standing on "
+          "the floor, each [x, y, length, width, height, yaw_deg], that only cast shadows, "
+          "neither rendered nor touched; needs shadows")
+        .check(
+            [](const P& p) {
+              for (const auto& c : p.casters) {
+                for (double v : c)
+                  if (!std::isfinite(v)) return false;
+                if (!(c[2] > 0 && c[3] > 0 && c[4] > 0)) return false;
+              }
+              return p.casters.empty() || p.shadows;
+            },
+            "each caster must be finite with length, width and height > 0, and casters need "
+            "shadows: true");
     return s;
   }();
   return schema;

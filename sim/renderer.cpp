@@ -16,14 +16,15 @@ constexpr float kNear = 1e-3f;          // [m] along the optical axis
 constexpr int kMaxRun = kTile * 4 * 4;  // rays of a tile's row at the largest supersampling
 constexpr int kMaxLevels = 32;          // of a texture's mip-map pyramid
 
-struct BoxFrame {    // one box, prepared for one frame
-  float M[9];        // camera direction -> box frame
-  float o[3];        // camera centre in the box frame
-  float h[3];        // half sizes
-  float shade[6];    // per face: axis * 2 + (positive side)
-  float lamp[3];     // the lamp in the box frame
-  float near_range;  // no point of the box is closer to the camera [m]
-  int texture;       // index into Scene::textures
+struct BoxFrame {     // one box, prepared for one frame
+  float M[9];         // camera direction -> box frame
+  float o[3];         // camera centre in the box frame
+  float h[3];         // half sizes
+  float shade[6];     // per face: axis * 2 + (positive side)
+  float shadowed[6];  // per face: the share of its shade left in a cast shadow (the ambient's)
+  float lamp[3];      // the lamp in the box frame
+  float near_range;   // no point of the box is closer to the camera [m]
+  int texture;        // index into Scene::textures
   bool visible;
   bool straddles;                 // has corners behind the camera: may cover any tile
   float x0, y0, x1, y1;           // bounds of its projection on the z = 1 plane
@@ -158,6 +159,59 @@ ALIGHT_SIMD_PASS void floor_coords_pass(
     trows[k] = tex.rows;
     tmax[k] = tex.max_level;
     tid[k] = tex.id;
+  }
+}
+
+// A box that blocks the light (LightingParams::shadows), prepared for one frame: world points
+// and the light's direction in its frame.
+struct Occluder {
+  Matrix3d R_OW;
+  Vector3d c_W, h, l_O;
+};
+
+// Whether the way from p_W towards the light (l_O in the box's frame) passes through the box:
+// a slab test along it beyond a millimetre, so a surface does not shadow itself.
+bool blocks(const Occluder& o, const Vector3d& p_W) {
+  const Vector3d q = o.R_OW * (p_W - o.c_W);
+  double t0 = 1e-3, t1 = std::numeric_limits<double>::infinity();
+  for (int a = 0; a < 3; ++a) {
+    if (std::abs(o.l_O[a]) < 1e-12) {
+      if (std::abs(q[a]) > o.h[a]) return false;
+      continue;
+    }
+    const double ta = (-o.h[a] - q[a]) / o.l_O[a], tb = (o.h[a] - q[a]) / o.l_O[a];
+    t0 = std::max(t0, std::min(ta, tb));
+    t1 = std::min(t1, std::max(ta, tb));
+    if (t0 > t1) return false;
+  }
+  return true;
+}
+
+// Cast shadows: the rays whose surface point sees an occluder towards the light keep only the
+// ambient share of their shade (floor_shadowed on the floor, the face's on a box). Scalar, and
+// run only for scenes with shadows.
+void shadow_pass(int count, const float* rx, const float* ry, const float* th, const int* hb,
+                 const int* ha, const Matrix3d& R_WC, const Vector3d& C_W,
+                 const std::vector<BoxFrame>& boxes, float floor_shadowed,
+                 const std::vector<Occluder>& occluders, float* sh) {
+  for (int k = 0; k < count; ++k) {
+    const float t = th[k];
+    if (!std::isfinite(t)) continue;
+    float share = floor_shadowed;
+    if (hb[k] >= 0) {
+      const BoxFrame& f = boxes[hb[k]];
+      const int a = ha[k];
+      const float q = f.o[a] + t * (f.M[a * 3] * rx[k] + f.M[a * 3 + 1] * ry[k] + f.M[a * 3 + 2]);
+      share = f.shadowed[a * 2 + (q > 0 ? 1 : 0)];
+    }
+    if (share >= 1.f) continue;  // facing away from the light: no direct light to lose
+    const Vector3d p_W = C_W + double(t) * (R_WC * Vector3d(rx[k], ry[k], 1.0));
+    for (const Occluder& o : occluders) {
+      if (blocks(o, p_W)) {
+        sh[k] *= share;
+        break;
+      }
+    }
   }
 }
 
@@ -458,6 +512,12 @@ void Renderer::render_rows(const Scene& scene, const Isometry3d& X_WC, float wei
         scene.lighting.gain *
         (scene.lighting.ambient + scene.lighting.diffuse * std::max(0.0, n_W.dot(light))));
   };
+  // In a cast shadow a surface keeps the ambient share of its shade (1: it faces away).
+  auto shadowed_of = [&](const Vector3d& n_W) {
+    const double lit =
+        scene.lighting.ambient + scene.lighting.diffuse * std::max(0.0, n_W.dot(light));
+    return lit > 0 ? static_cast<float>(scene.lighting.ambient / lit) : 1.f;
+  };
 
   // Per-frame preparation: world->camera, boxes in camera terms, and which tiles each box may
   // cover (a bit per box; the scenes hold a handful of boxes).
@@ -496,6 +556,8 @@ void Renderer::render_rows(const Scene& scene, const Isometry3d& X_WC, float wei
       f.h[a] = static_cast<float>(b.half_size_m[a]);
       f.shade[a * 2 + 0] = shade_of(-R_WO.col(a));
       f.shade[a * 2 + 1] = shade_of(R_WO.col(a));
+      f.shadowed[a * 2 + 0] = shadowed_of(-R_WO.col(a));
+      f.shadowed[a * 2 + 1] = shadowed_of(R_WO.col(a));
     }
     const Vector3d lamp_O = R_WO.transpose() * (lit.lamp_W - b.center_W);
     for (int a = 0; a < 3; ++a) f.lamp[a] = static_cast<float>(lamp_O[a]);
@@ -526,6 +588,16 @@ void Renderer::render_rows(const Scene& scene, const Isometry3d& X_WC, float wei
     f.visible = !behind_all;
     if (f.visible && !f.straddles) cv::convexHull(projected, f.hull, /*clockwise=*/false);
   }
+  std::vector<Occluder> occluders;
+  if (scene.lighting.shadows) {
+    auto add = [&](const Box& b) {
+      const Matrix3d R_OW = b.R_WO().transpose();
+      occluders.push_back({R_OW, b.center_W, b.half_size_m, R_OW * light});
+    };
+    for (const Box& b : scene.boxes) add(b);
+    for (const Box& b : scene.shadow_casters) add(b);
+  }
+  const float floor_shadowed = shadowed_of(Vector3d::UnitZ());
   // Nearest first, so a pixel stops testing boxes once its hit is nearer than the next box.
   std::sort(boxes.begin(), boxes.end(),
             [](const BoxFrame& a, const BoxFrame& b) { return a.near_range < b.near_range; });
@@ -631,6 +703,9 @@ void Renderer::render_rows(const Scene& scene, const Isometry3d& X_WC, float wei
                       shade.data(), tex_inv.data(), tex_cols.data(), tex_rows.data(),
                       tex_max.data(), tex_id.data());
     }
+
+    if (!occluders.empty())
+      shadow_pass(N, rx, ry, th, hb, ha, R_WC, C_W, boxes, floor_shadowed, occluders, shade.data());
 
     taps_pass(N, tex_u.data(), tex_v.data(), foot.data(), tex_inv.data(), tex_cols.data(),
               tex_rows.data(), tex_max.data(), taps.level.data(), taps.w.data(),

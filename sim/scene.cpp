@@ -117,6 +117,13 @@ Scene build_scene(const Scenario& sc, uint64_t seed) {
 
   scene.textures.push_back(Texture::make(sc.floor_texture, seed));
   scene.floor_texture = 0;
+  for (const auto& c : scene.lighting.casters) {
+    Box b;
+    b.half_size_m = 0.5 * Vector3d(c[2], c[3], c[4]);
+    b.center_W = Vector3d(c[0], c[1], 0.5 * c[4]);
+    b.set_yaw(c[5] * M_PI / 180.0);
+    scene.shadow_casters.push_back(b);
+  }
 
   if (sc.platform) {
     const PlatformParams& p = *sc.platform;

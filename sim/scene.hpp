@@ -79,6 +79,8 @@ struct Scene {
   int floor_texture = 0;
   std::vector<Box> boxes;
   LightingParams lighting;  ///< after randomisation
+  /// LightingParams::casters as boxes: they block the light (with shadows on), nothing else.
+  std::vector<Box> shadow_casters;
 
   /// The lamp's falloff at a point (LightingParams::falloff): multiplies the Lambertian shade.
   double illumination(const Vector3d& p_W) const {

@@ -260,6 +260,83 @@ TEST(SimRendererTest, TheLampsFalloffIsFixedInTheWorldAndFramesStillMatch) {
                                   << " under even light";
 }
 
+// Cast shadows (LightingParams::shadows, casters) under a low sun: a surface point whose way
+// towards the light meets the platform or a caster keeps the ambient share of its shade, every
+// other point is lit as without shadows. The truth is Scene::cast_ray from the point towards
+// the light, in double precision, with the caster added to the scene as a box.
+TEST(SimRendererTest, ALowSunCastsThePlatformsAndACastersShadowsOnFloorAndTop) {
+  Scene off = build_scene(test::quiet(test::scenario("landing_a")), 5);
+  ASSERT_TRUE(off.platform);
+  off.lighting.ambient = 0.3;
+  off.lighting.diffuse = 0.7;
+  off.lighting.gain = 1.0;
+  off.lighting.falloff = 0.0;
+  const Vector3d sun = Vector3d(0.8, 0.3, 0.45).normalized();  // about 25 deg above the horizon
+  off.lighting.light_dir_W = sun;
+  const Vector3d top = off.platform->top_center_W;
+  // A 20 cm mast 3 m towards the sun, tall enough for its shadow to cross the top.
+  const Vector2d at = top.head<2>() + 3.0 * sun.head<2>().normalized();
+  const double mast_h = 3.5 * sun.z() / sun.head<2>().norm() + 0.5;
+  Scene on = off;
+  on.lighting.shadows = true;
+  Box mast;
+  mast.half_size_m = Vector3d(0.1, 0.1, 0.5 * mast_h);
+  mast.center_W = Vector3d(at.x(), at.y(), 0.5 * mast_h);
+  on.shadow_casters.push_back(mast);
+  Scene truth = off;
+  truth.boxes.push_back(mast);
+
+  const CameraModel model = CameraModel::firefly_mv_4mm();
+  const Renderer renderer(model, 1);
+  const Isometry3d X_WC = make_transform(rotation_from_rpy(0.0, 0.0, 0.2) * R_BC_downward(),
+                                         Vector3d(top.x() - 0.2, top.y(), 1.6));
+  auto radiance = [&](const Scene& scene) {
+    cv::Mat acc(model.height, model.width, CV_32F, cv::Scalar(0));
+    renderer.accumulate(scene, X_WC, 1.f, acc);
+    return acc;
+  };
+  const cv::Mat a = radiance(off), b = radiance(on);
+  const auto in_shadow = [&](const Vector3d& p_W) {
+    return truth.cast_ray(p_W + 1e-3 * sun, sun, 100.0).has_value();
+  };
+  int floor_shadowed = 0, top_shadowed = 0, lit = 0;
+  for (int v = 5; v < model.height; v += 7) {
+    for (int u = 5; u < model.width; u += 7) {
+      const Vector3d d_W = X_WC.linear() * model.ray(Vector2d(u, v));
+      const auto hit = off.cast_ray(X_WC.translation(), d_W, 100.0);
+      if (!hit || a.at<float>(v, u) < 10) continue;
+      const Vector3d p_W = X_WC.translation() + hit->distance_m * d_W.normalized();
+      // Away from a shadow's edge by 5 mm either way along the surface: the float ray is not
+      // the double one.
+      const Vector3d e1 = sun.cross(Vector3d::UnitZ()).normalized() * 5e-3;
+      const Vector3d e2 = Vector3d(sun.x(), sun.y(), 0).normalized() * 5e-3;
+      const bool shadowed = in_shadow(p_W);
+      bool clear = true;
+      for (const Vector3d& e : {Vector3d(e1), Vector3d(-e1), Vector3d(e2), Vector3d(-e2)})
+        if (in_shadow(p_W + e) != shadowed) clear = false;
+      if (!clear) continue;
+      const bool on_top = hit->box == off.platform_box && hit->normal_W.z() > 0.9;
+      if (hit->box >= 0 && !on_top) continue;  // the sides
+      const double lit_share = 0.3 + 0.7 * std::max(0.0, hit->normal_W.dot(sun));
+      const double expected = shadowed ? 0.3 / lit_share : 1.0;
+      EXPECT_NEAR(b.at<float>(v, u) / a.at<float>(v, u), expected, 2e-3)
+          << u << ", " << v << (on_top ? " top" : " floor") << (shadowed ? " shadowed" : " lit");
+      if (shadowed)
+        ++(on_top ? top_shadowed : floor_shadowed);
+      else
+        ++lit;
+    }
+  }
+  // The view holds the platform's own shadow on the floor, the mast's across the top, and sun.
+  EXPECT_GT(floor_shadowed, 20);
+  EXPECT_GT(top_shadowed, 20);
+  EXPECT_GT(lit, 500);
+  // Without shadows the casters change nothing.
+  Scene casters_only = off;
+  casters_only.shadow_casters.push_back(mast);
+  EXPECT_EQ(cv::norm(radiance(casters_only), a, cv::NORM_INF), 0.0);
+}
+
 TEST(SimRendererTest, TexturesGiveHundredsOfFeaturesOnFloorPlatformAndWall) {
   const CameraModel model = CameraModel::firefly_mv_4mm();
   const Renderer renderer(model, 1);

@@ -84,6 +84,14 @@ with tempfile.TemporaryDirectory() as tmp:
                     assert 0.20 <= width <= length <= 0.50 and 0.08 <= height <= 0.22, p
                 if family == "landing_samegrain":
                     assert p["texture"] == s["area"]["floor_texture"], (seed, "not one grain")
+                if family == "landing_shadows":
+                    lit = s["lighting"]
+                    assert lit["shadows"] and 1 <= len(lit["casters"]) <= 2, lit
+                    assert 0.25 <= lit["light_dir_W"][2] <= 0.65, lit  # 15-40 deg up
+                    assert s["randomize"]["light_dir_deg"] == 0, s["randomize"]
+                    half_area = [0.5 * v for v in s["area"]["size_m"]]
+                    for x, y, *_ in lit["casters"]:  # out of the flying area
+                        assert max(abs(x) - half_area[0], abs(y) - half_area[1]) > 0, lit
                 if family == "landing_dim":
                     assert s["lighting"]["ambient"] <= 0.85 / 3 + 1e-3, s["lighting"]
                     assert 4.0 <= s["camera"]["noise_sigma"] <= 6.0, s["camera"]
