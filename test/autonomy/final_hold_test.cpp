@@ -30,6 +30,16 @@ struct Approach {
     const ApproachInputs in{pose, s.p_W_B, target, 0.0, 0.0, 0.01, t};
     return profile->step_approach(state, in);
   }
+  // Steps at e_W and v_W until the approach decides (at most max_steps): how many, and the last.
+  std::pair<int, ApproachStep> run(const Vector2d& e_W, const Vector2d& v_W, int max_steps = 1000) {
+    int steps = 0;
+    ApproachStep s;
+    do {
+      s = step(e_W, v_W);
+      ++steps;
+    } while (s.next == ApproachStep::Next::kContinue && steps < max_steps);
+    return {steps, s};
+  }
   // Down the last millimetre to the final height, centred and still: the hold begins.
   void arrive() {
     ASSERT_EQ(step(Vector2d::Zero(), Vector2d::Zero()).next, ApproachStep::Next::kContinue);
@@ -72,12 +82,7 @@ TEST(FinalHoldTest, WaitsAtTheFinalHeightUntilCalmForTheSettleTime) {
   for (int i = 0; i < 50; ++i)
     ASSERT_EQ(a.step(Vector2d(0.009, 0.006), Vector2d::Zero()).next, ApproachStep::Next::kContinue);
   // Calm and centred: the final descent after final_hold_settle_s (20 steps), not before.
-  int steps = 0;
-  ApproachStep s;
-  do {
-    s = a.step(Vector2d(0.002, 0.001), Vector2d(0.01, -0.01));
-    ++steps;
-  } while (s.next == ApproachStep::Next::kContinue && steps < 100);
+  const auto [steps, s] = a.run(Vector2d(0.002, 0.001), Vector2d(0.01, -0.01), 100);
   EXPECT_EQ(s.next, ApproachStep::Next::kFinalDescent);
   EXPECT_GE(steps, 20);
   EXPECT_LE(steps, 22);
@@ -96,12 +101,7 @@ TEST(FinalHoldTest, AGustDuringTheSettleTimeRestartsIt) {
 
 TEST(FinalHoldTest, NoCalmMomentWithinTheTimeoutIsATargetLost) {
   Approach a(with_hold());
-  ApproachStep s;
-  int steps = 0;
-  do {
-    s = a.step(Vector2d::Zero(), Vector2d(0.1, 0.1));
-    ++steps;
-  } while (s.next == ApproachStep::Next::kContinue && steps < 10'000);
+  const auto [steps, s] = a.run(Vector2d::Zero(), Vector2d(0.1, 0.1), 10'000);
   EXPECT_EQ(s.next, ApproachStep::Next::kTargetLost);
   EXPECT_NEAR(steps * 0.01, a.p.landing.final_hold_timeout_s, 0.03);
   EXPECT_NE(s.reason.find("final descent held"), std::string::npos) << s.reason;
@@ -115,22 +115,13 @@ TEST(FinalHoldTest, TheSpeedBoundGrowsWhileTheHoldWaits) {
   p.landing.final_hold_speed_mps = 0.02;
   p.landing.final_hold_speed_max_mps = 0.05;
   Approach a(p);
-  int steps = 0;
-  ApproachStep s;
-  do {
-    s = a.step(Vector2d(0.002, 0.0), Vector2d(0.04, 0.0));
-    ++steps;
-  } while (s.next == ApproachStep::Next::kContinue && steps < 1000);
+  auto [steps, s] = a.run(Vector2d(0.002, 0.0), Vector2d(0.04, 0.0));
   EXPECT_EQ(s.next, ApproachStep::Next::kFinalDescent);
   EXPECT_NEAR(steps * 0.01, 2.5 * 2.0 / 3.0 + p.landing.final_hold_settle_s, 0.03);
   // Without the growth the same vehicle waits out the timeout: a target lost.
   p.landing.final_hold_speed_max_mps = 0.0;
   Approach b(p);
-  steps = 0;
-  do {
-    s = b.step(Vector2d(0.002, 0.0), Vector2d(0.04, 0.0));
-    ++steps;
-  } while (s.next == ApproachStep::Next::kContinue && steps < 1000);
+  std::tie(steps, s) = b.run(Vector2d(0.002, 0.0), Vector2d(0.04, 0.0));
   EXPECT_EQ(s.next, ApproachStep::Next::kTargetLost);
 }
 
@@ -144,12 +135,7 @@ TEST(FinalHoldTest, HeldStillOffTheCentreItDescendsOnceTheTopLeavesRoom) {
   Approach a(p);
   std::get<LandingApproach>(a.state).fit_radius_m = room_m;
   a.arrive();
-  int steps = 0;
-  ApproachStep s;
-  do {
-    s = a.step(Vector2d(0.0, 0.03), Vector2d::Zero());
-    ++steps;
-  } while (s.next == ApproachStep::Next::kContinue && steps < 1000);
+  auto [steps, s] = a.run(Vector2d(0.0, 0.03), Vector2d::Zero());
   EXPECT_EQ(s.next, ApproachStep::Next::kFinalDescent) << s.reason;
   // The radius grows from a quarter of the timeout on, to the room at half of it.
   const double quarter_s = 0.25 * p.landing.final_hold_timeout_s;
@@ -160,11 +146,7 @@ TEST(FinalHoldTest, HeldStillOffTheCentreItDescendsOnceTheTopLeavesRoom) {
   // An unmeasured top leaves no room: the hold waits out its timeout, a target lost.
   Approach b(p);
   b.arrive();
-  steps = 0;
-  do {
-    s = b.step(Vector2d(0.0, 0.03), Vector2d::Zero());
-    ++steps;
-  } while (s.next == ApproachStep::Next::kContinue && steps < 1000);
+  std::tie(steps, s) = b.run(Vector2d(0.0, 0.03), Vector2d::Zero());
   EXPECT_EQ(s.next, ApproachStep::Next::kTargetLost);
 }
 
@@ -183,12 +165,7 @@ TEST(FinalHoldTest, SwingingTowardsTheCentreItDescendsSwingingOutItWaits) {
     Approach a(p);
     std::get<LandingApproach>(a.state).fit_radius_m = room_m;
     a.arrive();
-    int steps = 0;
-    ApproachStep s;
-    do {
-      s = a.step(e, v_W);
-      ++steps;
-    } while (s.next == ApproachStep::Next::kContinue && steps < 1000);
+    const auto [steps, s] = a.run(e, v_W);
     EXPECT_EQ(s.next, ApproachStep::Next::kFinalDescent) << s.reason;
     return steps * 0.01;
   };
