@@ -776,15 +776,16 @@ void Bridge::stream(const BridgeClock& now, BridgeOutput& out) {
 PositionTarget Bridge::position_to_stream() const {
   const bool armed = heartbeat_ && (heartbeat_->base_mode & mav_mode_flag::kSafetyArmed);
   if (position_->motors == Motors::kOn || !last_on_position_ || !armed) return *position_;
-  // Motors off (a touch-down) while the autopilot still flies: not the stack's target, which
-  // follows the vehicle and so lets it slide on the top at hover thrust, but where the stack
-  // last flew it, never higher than the new target, pressed down until the autopilot's land
-  // detector agrees and a disarm is accepted.
-  PositionTarget t = *last_on_position_;
-  t.p_W.z() = std::min(t.p_W.z(), position_->p_W.z());
-  t.v_W = Vector3d(0, 0, -kTouchdownPushMps);
+  // Motors off (a touch-down) while the autopilot still flies: the stack's target follows the
+  // vehicle, at its height and with no descent, which holds it on the top at hover thrust, free
+  // to slide. Sideways it stays the stack's (where the vehicle rests, riding a moving deck
+  // along), but its height is never above the last MOTORS_ON target's and a descent is
+  // commanded, pressing the vehicle down until the autopilot's land detector agrees and a
+  // disarm is accepted.
+  PositionTarget t = *position_;
+  t.p_W.z() = std::min(last_on_position_->p_W.z(), position_->p_W.z());
+  t.v_W.z() = -kTouchdownPushMps;
   t.a_W.setZero();
-  t.motors = position_->motors;
   return t;
 }
 

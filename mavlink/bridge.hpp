@@ -274,8 +274,8 @@ class Bridge {
   void reset_autopilot_state();
   void check_link(const BridgeClock& now, BridgeOutput& out);
   void stream(const BridgeClock& now, BridgeOutput& out);
-  /// The position target to send: the stack's, or after its motors-off while the autopilot is
-  /// still armed, the last MOTORS_ON one pressed down (kTouchdownPushMps).
+  /// The position target to send: the stack's; after its motors-off while the autopilot is
+  /// still armed, no higher than the last MOTORS_ON one and pressed down (kTouchdownPushMps).
   PositionTarget position_to_stream() const;
   bool hold_setpoints() const;
   void decide_commands(const BridgeClock& now, BridgeOutput& out);

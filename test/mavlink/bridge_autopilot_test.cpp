@@ -507,8 +507,9 @@ TEST(BridgeAutopilotTest, NoReArmWithinTheCooldownOfADisarm) {
 // PX4 SITL, position control: after autonomy's touch-down its motors-off targets follow the
 // vehicle with no descent, which PX4's land detector never takes for ground contact; the disarms
 // were refused, the vehicle hovered on the top and slid 7-8 cm off the centre before the LAND
-// the bridge asked for 2 s later disarmed it. The bridge now keeps the last MOTORS_ON target,
-// pressed down: PX4 detects the landing and takes the plain disarm.
+// the bridge asked for 2 s later disarmed it. The bridge now presses the vehicle down (no higher
+// than the last MOTORS_ON target, a descent commanded): PX4 detects the landing and takes the
+// plain disarm.
 TEST(BridgeAutopilotTest, AfterTheStacksTouchDownPx4DetectsTheLandingAndDisarmsWithoutALand) {
   Loop l(px4_params("position"), px4());
   Motors motors = Motors::kOn;

@@ -519,6 +519,46 @@ TEST(BridgeTest, PositionSetpointGoesOutInNedWithYawFromNorth) {
   EXPECT_TRUE(h.bridge.status(h.clock()).accel_feedforward);
 }
 
+// After the stack's motors-off, while the autopilot is still armed: sideways the stack's target
+// (where the vehicle rests, on a moving deck too), no higher than the last MOTORS_ON target, and
+// a descent commanded (PX4's land detector needs one); disarmed, the stack's target unchanged.
+TEST(BridgeTest, AfterMotorsOffTheTargetPressesTheArmedVehicleDown) {
+  BridgeParams p = px4_params();
+  p.control = "position";
+  Harness h(p);
+  h.ap.heartbeat(kOffboard, false);  // armed after the bridge came up: its own flight
+  h.step();
+  const auto send = [&](const Vector3d& p_W, Motors motors) {
+    PositionTarget t;
+    t.p_W = p_W;
+    t.motors = motors;
+    std::vector<SetPositionTargetLocalNed> m;
+    for (int i = 0; i < 100 && m.empty(); ++i) {  // until the stream's next period
+      BridgeInput in;
+      in.position = t;
+      h.step(in);
+      m = h.ap.take<SetPositionTargetLocalNed>();
+    }
+    EXPECT_FALSE(m.empty());
+    return m.empty() ? SetPositionTargetLocalNed{} : m.back();
+  };
+  send(Vector3d(1.0, 2.0, 1.0), Motors::kOn);
+  h.ap.heartbeat(kOffboard, true);
+  h.step();
+  send(Vector3d(1.0, 2.0, 0.1), Motors::kOn);  // the final descent's end, below the top
+  const auto m = send(Vector3d(1.05, 2.02, 0.4), Motors::kOff);
+  EXPECT_FLOAT_EQ(m.x, 2.02f);  // NED: north, east, down
+  EXPECT_FLOAT_EQ(m.y, 1.05f);
+  EXPECT_FLOAT_EQ(m.z, -0.1f);
+  EXPECT_FLOAT_EQ(m.vz, 0.5f);
+  EXPECT_FALSE(m.type_mask & position_target_typemask::kVzIgnore);
+  h.ap.heartbeat(kOffboard, false);
+  h.step();
+  const auto d = send(Vector3d(1.05, 2.02, 0.4), Motors::kOff);
+  EXPECT_FLOAT_EQ(d.z, -0.4f);
+  EXPECT_FLOAT_EQ(d.vz, 0.0f);
+}
+
 TEST(BridgeTest, PositionTargetsGoWithoutAccelerationUntilTheVersionIsKnown) {
   BridgeParams p = px4_params();
   p.control = "position";
