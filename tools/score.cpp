@@ -50,11 +50,14 @@ double relative_sink_mps(const sim_truth_t& t, const platform_truth_t& p) {
   const Eigen::Vector3d n = quat(p.orientation).toRotationMatrix().col(2);
   return -(Eigen::Vector3d(t.vel[0], t.vel[1], t.vel[2]) - v_deck).dot(n);
 }
-// |vehicle heading - platform heading| folded to [0, 90] deg (the top's long axis either way).
+// |vehicle heading - platform heading| folded to [0, 45] deg: the angle of the body's axes to the
+// nearer of the top's edges. The gear is square and autonomy turns it to the edges modulo 90 deg
+// (autonomy.landing.align_yaw_tol_deg, moving_landing.hpp), as the in-process closed loop scores
+// it (test/autonomy/closed_loop.cpp).
 double heading_error_deg(const sim_truth_t& t, const platform_truth_t& p) {
   const Eigen::Vector3d x = quat(t.orientation).toRotationMatrix().col(0);
   double d = std::atan2(x.y(), x.x()) - p.yaw_rad;
-  d = std::remainder(d, M_PI);  // in [-pi/2, pi/2]
+  d = std::remainder(d, M_PI / 2);  // in [-pi/4, pi/4]
   return std::abs(d) * 180.0 / M_PI;
 }
 std::string fmt(double v) {

@@ -109,6 +109,20 @@ TEST(ScoreMovingTest, TouchdownRelativeToTheMovingPlatform) {
   EXPECT_EQ(score_field(s, "touchdown_heading_error_deg"), "7.0000");
 }
 
+// The square gear is turned to the top's edges modulo 90 deg: a vehicle square to the short
+// edges, 3 deg off, is 3 deg off, not 87 (as the in-process loop scores it).
+TEST(ScoreMovingTest, TheHeadingErrorIsToTheNearerEdgeOfTheTop) {
+  DeckFlight f;
+  f.yaw_deg = 30.0 + 87.0;
+  f.deck_yaw_deg = 30.0;
+  const Score s = fly_onto_deck(f).result();
+  ASSERT_TRUE(s.touchdown_heading_error_deg);
+  EXPECT_NEAR(*s.touchdown_heading_error_deg, 3.0, 1e-9);
+  f.yaw_deg = 30.0 - 44.0;
+  ASSERT_TRUE(fly_onto_deck(f).result().touchdown_heading_error_deg);
+  EXPECT_NEAR(*fly_onto_deck(f).result().touchdown_heading_error_deg, 44.0, 1e-9);
+}
+
 TEST(ScoreMovingTest, AnImpactIsJudgedRelativeToTheDeck) {
   Scorer gear(1.0);  // takes 1 m/s
   // Sinking at 1.2 m/s in world onto a deck going down at 0.5 m/s: 0.7 m/s relative, landed.
