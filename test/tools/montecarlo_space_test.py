@@ -3,18 +3,15 @@ room (regression: a 120-flight campaign over LCM filled the disk, the last fligh
 the campaign then lost its own results.csv). No flight is flown: the threshold is set past any
 disk's free space.
 Usage: montecarlo_space_test.py SCRIPTS_DIR OUT_DIR"""
-import importlib.machinery
-import importlib.util
 import io
 import os
 import sys
 from contextlib import redirect_stderr, redirect_stdout
 
+import script_module
+
 scripts, out = sys.argv[1], sys.argv[2]
-loader = importlib.machinery.SourceFileLoader("montecarlo", os.path.join(scripts, "montecarlo"))
-spec = importlib.util.spec_from_loader("montecarlo", loader)
-mc = importlib.util.module_from_spec(spec)
-loader.exec_module(mc)
+mc = script_module.load(scripts, "montecarlo")
 
 flown = []
 mc.run_one = lambda *a: flown.append(a) or {}

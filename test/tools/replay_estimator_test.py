@@ -2,19 +2,15 @@
 started (its first estimate counts the IMU samples it had received), which input losses in the log
 stop the comparison, and that a single changed byte is found.
 Usage: replay_estimator_test.py SCRIPTS_DIR"""
-import importlib.machinery
-import importlib.util
 import os
 import struct
 import sys
 
+import script_module
+
 scripts = sys.argv[1]
 sys.path.insert(0, scripts)
-loader = importlib.machinery.SourceFileLoader("replay_estimator",
-                                              os.path.join(scripts, "replay-estimator"))
-spec = importlib.util.spec_from_loader("replay_estimator", loader)
-re_ = importlib.util.module_from_spec(spec)
-loader.exec_module(re_)
+re_ = script_module.load(scripts, "replay-estimator")
 import lcmlog  # noqa: E402
 
 failures = []

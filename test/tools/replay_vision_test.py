@@ -3,18 +3,15 @@ processed (from its targets' seq numbers), where the log lost poses, and which d
 losses explain (regression: a loaded lcm-logger lost the MOCAP_POSE next to a frame; the live
 node had interpolated across it, the replay could not, and the replay test failed).
 Usage: replay_vision_test.py SCRIPTS_DIR"""
-import importlib.machinery
-import importlib.util
 import os
 import struct
 import sys
 
+import script_module
+
 scripts = sys.argv[1]
 sys.path.insert(0, scripts)
-loader = importlib.machinery.SourceFileLoader("replay_vision", os.path.join(scripts, "replay-vision"))
-spec = importlib.util.spec_from_loader("replay_vision", loader)
-rv = importlib.util.module_from_spec(spec)
-loader.exec_module(rv)
+rv = script_module.load(scripts, "replay-vision")
 
 failures = []
 

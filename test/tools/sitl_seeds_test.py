@@ -3,18 +3,15 @@ its own seed and the next was counted from it, so --runs 6 --seed 10827 flew 108
 10833, 10837, 10842). No flight is flown: run_flight is replaced by a recorder that, like the real
 one, sets args.seed.
 Usage: sitl_seeds_test.py SCRIPTS_DIR OUT_DIR"""
-import importlib.machinery
-import importlib.util
 import io
 import os
 import sys
 from contextlib import redirect_stderr, redirect_stdout
 
+import script_module
+
 scripts, out = sys.argv[1], sys.argv[2]
-loader = importlib.machinery.SourceFileLoader("sitl", os.path.join(scripts, "sitl"))
-spec = importlib.util.spec_from_loader("sitl", loader)
-sitl = importlib.util.module_from_spec(spec)
-loader.exec_module(sitl)
+sitl = script_module.load(scripts, "sitl")
 
 os.makedirs(os.path.join(out, "bin"), exist_ok=True)
 for name in ["alight-launch", "alight-sim", "alight-mavlink", "alight-outer-loop", "alight-vision",
