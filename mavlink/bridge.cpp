@@ -216,7 +216,7 @@ BridgeOutput Bridge::update(const BridgeInput& in, const BridgeClock& now) {
   if (in.position) {
     position_ = in.position;
     position_rx_steady_us_ = now.steady_us;
-    if (in.position->motors == Motors::kOn) last_on_position_ = in.position;
+    if (in.position->motors == Motors::kOn) last_on_z_m_ = in.position->p_W.z();
     if (in.position->motors != Motors::kOn) need_motors_off_ = false;
     if (in.position->motors == Motors::kKill && !in.position->kill_authorised)
       ++stats_.kills_refused;
@@ -535,7 +535,7 @@ void Bridge::on_heartbeat(const Frame& f, const Heartbeat& m, const BridgeClock&
   }
   if (!armed && was_armed_) {
     disarmed_at_us_ = now.steady_us;
-    last_on_position_.reset();  // a touch-down's target is this flight's, not the next one's
+    last_on_z_m_.reset();  // a touch-down's height is this flight's, not the next one's
     if (flew_ || !ext_state_) need_motors_off_ = true;
     out.events.push_back(
         {false, std::string("disarmed") +
@@ -775,7 +775,7 @@ void Bridge::stream(const BridgeClock& now, BridgeOutput& out) {
 
 PositionTarget Bridge::position_to_stream() const {
   const bool armed = heartbeat_ && (heartbeat_->base_mode & mav_mode_flag::kSafetyArmed);
-  if (position_->motors == Motors::kOn || !last_on_position_ || !armed) return *position_;
+  if (position_->motors == Motors::kOn || !last_on_z_m_ || !armed) return *position_;
   // Motors off (a touch-down) while the autopilot still flies: the stack's target follows the
   // vehicle, at its height and with no descent, which holds it on the top at hover thrust, free
   // to slide. Sideways it stays the stack's (where the vehicle rests, riding a moving deck
@@ -783,7 +783,7 @@ PositionTarget Bridge::position_to_stream() const {
   // commanded, pressing the vehicle down until the autopilot's land detector agrees and a
   // disarm is accepted.
   PositionTarget t = *position_;
-  t.p_W.z() = std::min(last_on_position_->p_W.z(), position_->p_W.z());
+  t.p_W.z() = std::min(*last_on_z_m_, position_->p_W.z());
   t.v_W.z() = -kTouchdownPushMps;
   t.a_W.setZero();
   return t;

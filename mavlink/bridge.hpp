@@ -344,7 +344,7 @@ class Bridge {
   int64_t attitude_rx_steady_us_ = 0;
   std::optional<PositionTarget> position_;
   int64_t position_rx_steady_us_ = 0;
-  std::optional<PositionTarget> last_on_position_;  ///< the stack's newest MOTORS_ON target
+  std::optional<double> last_on_z_m_;  ///< the height of the stack's newest MOTORS_ON target [m]
   std::optional<PoseSample> mocap_;
   int64_t mocap_rx_steady_us_ = 0;
   int64_t mocap_sent_steady_us_ = INT64_MIN / 2;
