@@ -182,13 +182,18 @@ bool Autonomy::hold_if_vision_silent() {
   return true;
 }
 
-void Autonomy::enter_failsafe_descent(Failsafe cause, std::string reason) {
+void Autonomy::enter_failsafe_descent(Failsafe cause, std::string reason, const Vector2d& xy_W) {
   failsafe_ = cause;
   phases::FailsafeDescent f{pose_ ? pose_->p_W_B.z() : sp_p_W_.z(), now_utime_, std::nullopt,
                             TouchdownDetector(params_.landing)};
   f.touchdown.arm(now_utime_);
-  if (pose_) sp_p_W_.head<2>() = pose_->p_W_B.head<2>();
+  sp_p_W_.head<2>() = xy_W;
   enter(std::move(f), std::move(reason));
+}
+
+void Autonomy::enter_failsafe_descent(Failsafe cause, std::string reason) {
+  const Vector2d xy_W = pose_ ? pose_->p_W_B.head<2>() : sp_p_W_.head<2>();
+  enter_failsafe_descent(cause, std::move(reason), xy_W);
 }
 
 void Autonomy::enter_pose_lost() {
@@ -500,7 +505,7 @@ void Autonomy::finish_refinement(phases::Refinement& r) {
                             ") from n = " + std::to_string(estimator_.n());
   auto start = profile_->begin_approach(*pose_, yaw_sp_rad_, r.normal_sum_W, r.yaw4_sum, size_m);
   yaw_sp_rad_ = start.yaw_sp_rad;
-  enter(phases::Approach{std::move(start.state), r.last_found_utime},
+  enter(phases::Approach{std::move(start.state), r.last_found_utime, {}, {}, size_m},
         "refinement converged (eqs. 7-9): " + where);
 }
 
@@ -619,7 +624,8 @@ bool Autonomy::vision_disagrees(phases::Approach& a, const TargetMeasurement& m)
   const double mean_var = 0.5 * (cov(0, 0) + cov(1, 1));
   const double half_gap = std::hypot(0.5 * (cov(0, 0) - cov(1, 1)), cov(0, 1));
   const double sigma = std::sqrt(std::max(0.0, mean_var + half_gap));
-  const double gate_m = std::max(kVisionGateFloorM, 4.0 * sigma);
+  const double gate_m =
+      std::max(kVisionGateFloorM, 4.0 * sigma) + partial_view_slack_m(a.size_m, m.size_m);
   const double off_m = (m.p_W_target - estimate_W_).head<2>().norm();
   if (off_m <= gate_m) {
     a.disagree_since_utime.reset();
@@ -628,12 +634,15 @@ bool Autonomy::vision_disagrees(phases::Approach& a, const TargetMeasurement& m)
   ++vision_refused_;
   if (!a.disagree_since_utime) a.disagree_since_utime = m.utime;
   if (seconds(m.utime - *a.disagree_since_utime) >= kVisionDisagreeS) {
-    hold("vision disagrees with the estimate: every target for " + fmt(kVisionDisagreeS, 1) +
-             " s lay " + fmt(off_m) + " m from it (gate " + fmt(gate_m) +
-             " m): holding, then descending",
-         Failsafe::kVisionDisagrees, 0.0);
-    if (auto* h = std::get_if<phases::Hold>(&state_))
-      h->descend_at_utime = now_utime_ + static_cast<int64_t>(kFailsafeHoldS * 1e6);
+    // Held and descended over the profile's point, not where the vehicle happened to be: that
+    // may be over the top's edge.
+    failsafe_ = Failsafe::kVisionDisagrees;
+    const Vector3d here = pose_ ? pose_->p_W_B : sp_p_W_;
+    enter(phases::Hold{profile_->approach_failsafe_hold_W(here, sp_p_W_),
+                       now_utime_ + static_cast<int64_t>(kFailsafeHoldS * 1e6)},
+          "vision disagrees with the estimate: every target for " + fmt(kVisionDisagreeS, 1) +
+              " s lay " + fmt(off_m) + " m from it (gate " + fmt(gate_m) +
+              " m): holding, then descending");
   }
   return true;
 }
@@ -661,10 +670,15 @@ void Autonomy::step_phase(double dt_s) {
           sp_p_W_ = p;
         } else if constexpr (std::is_same_v<S, phases::Hold>) {
           sp_p_W_ = s.hold_p_W;
-          if (s.descend_at_utime && now_utime_ >= *s.descend_at_utime)
+          // Down only once over the hold point: the descent stays where the hold was put.
+          const Vector2d hold_xy(s.hold_p_W.x(), s.hold_p_W.y());
+          const bool over = std::hypot(p.x() - hold_xy.x(), p.y() - hold_xy.y()) <=
+                            params_.hover_tol_m;
+          if (s.descend_at_utime && now_utime_ >= *s.descend_at_utime && over)
             enter_failsafe_descent(failsafe_,
                                    "failsafe hold over: controlled descent, disarm on "
-                                   "touch-down");
+                                   "touch-down",
+                                   hold_xy);
         } else if constexpr (std::is_same_v<S, phases::Hover> || std::is_same_v<S, phases::Done>) {
           sp_p_W_ = s.hold_p_W;
         } else {

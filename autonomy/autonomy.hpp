@@ -47,6 +47,7 @@
 //    setpoint is never sent.
 
 #include <memory>
+#include <limits>
 #include <optional>
 #include <string>
 #include <variant>
@@ -93,6 +94,9 @@ struct Approach {
   std::optional<int64_t> disagree_since_utime;  ///< every found target far from the estimate
   /// A moving platform's approach (moving_landing.hpp): flown on the platform filter.
   std::optional<MovingApproach> moving;
+  /// The target's size the refinement measured (the full views' medians, as size_m of
+  /// TargetMeasurement); NaN: not measured.
+  Vector2d size_m = Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
 };
 struct FinalDescent {
   double z_sp_m = 0.0;
@@ -222,7 +226,9 @@ class Autonomy {
   void hold(const std::string& reason, Failsafe failsafe, double min_z_m);
   void enter_pose_lost();
   void enter_estimate_lost(const std::string& what);
-  /// FAILSAFE for `cause` (kPoseLost, kEstimateLost): controlled descent from here.
+  /// FAILSAFE for `cause`: controlled descent from the current altitude, over xy_W.
+  void enter_failsafe_descent(Failsafe cause, std::string reason, const Vector2d& xy_W);
+  /// ... over the vehicle (the setpoint's xy without a pose).
   void enter_failsafe_descent(Failsafe cause, std::string reason);
   void start_from_first_pose();
   Output make_output();

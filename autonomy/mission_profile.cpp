@@ -128,6 +128,11 @@ class LandingProfile final : public MissionProfile {
 
   double lost_hold_min_z_m() const override { return p_.detection.landing_height_m; }
 
+  Vector3d approach_failsafe_hold_W(const Vector3d& /*here_W*/,
+                                    const Vector3d& sp_W) const override {
+    return sp_W;
+  }
+
   // At final_height_m: the rapid final descent starts only in a calm moment
   // (calm_for_final_descent).
   bool final_descent_allowed(LandingApproach& a, const Vector2d& e_W,
@@ -235,6 +240,11 @@ class IngressProfile final : public MissionProfile {
 
   double lost_hold_min_z_m() const override { return 0.0; }
 
+  Vector3d approach_failsafe_hold_W(const Vector3d& here_W,
+                                    const Vector3d& /*sp_W*/) const override {
+    return here_W;
+  }
+
  private:
   AutonomyParams p_;
 };
@@ -254,6 +264,11 @@ std::string no_calm_moment(const LandingParams& L, const std::string& what) {
 Vector2d body_over_gear_xy(const LandingParams& L, const std::optional<PoseSample>& pose) {
   if (!L.aim_gear || !pose) return Vector2d::Zero();
   return L.gear_height_m * (pose->q_WB * Vector3d::UnitZ()).head<2>();
+}
+
+double partial_view_slack_m(const Vector2d& converged_m, const Vector2d& measured_m) {
+  if (!converged_m.allFinite() || !measured_m.allFinite()) return 0.0;
+  return 0.5 * (converged_m - measured_m).cwiseMax(0.0).norm();
 }
 
 double fit_radius_m(const LandingParams& L, double short_side_m) {

@@ -37,6 +37,12 @@ inline constexpr double kVisionGateFloorM = 0.1;
 /// Every found target refused this long is a sustained disagreement: longer than a stray plane
 /// fit lasts (it changes with the vantage every few frames) [s].
 inline constexpr double kVisionDisagreeS = 2.0;
+/// How much further from the estimate a found target may lie when it measured the target smaller
+/// than the refinement did (converged_m, measured_m: size_m's (long, short)): a view that
+/// saw part of the top (close over it, the top fills the view and its border is missed) has
+/// its centre up to half the missing extent off the true one. 0 when either is unmeasured [m].
+double partial_view_slack_m(const Vector2d& converged_m, const Vector2d& measured_m);
+
 /// A failsafe that holds before its controlled descent holds this long: time for the operator to
 /// take over, as PX4's COM_FAIL_ACT_T [s].
 inline constexpr double kFailsafeHoldS = 5.0;
@@ -183,6 +189,12 @@ class MissionProfile {
 
   /// Target lost and retries exhausted: hold at least this high [m].
   virtual double lost_hold_min_z_m() const = 0;
+
+  /// Where a failsafe taken in the approach holds, and then descends: here_W is the vehicle,
+  /// sp_W the approach's setpoint. Landing: the setpoint, over the estimate (the vehicle may
+  /// have swung over the top's edge, and a descent there tips it). Ingress: the vehicle (the
+  /// setpoint may lie in the opening).
+  virtual Vector3d approach_failsafe_hold_W(const Vector3d& here_W, const Vector3d& sp_W) const = 0;
 };
 
 }  // namespace alight::autonomy
