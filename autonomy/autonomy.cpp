@@ -672,8 +672,8 @@ void Autonomy::step_phase(double dt_s) {
           sp_p_W_ = s.hold_p_W;
           // Down only once over the hold point: the descent stays where the hold was put.
           const Vector2d hold_xy(s.hold_p_W.x(), s.hold_p_W.y());
-          const bool over = std::hypot(p.x() - hold_xy.x(), p.y() - hold_xy.y()) <=
-                            params_.hover_tol_m;
+          const bool over =
+              std::hypot(p.x() - hold_xy.x(), p.y() - hold_xy.y()) <= params_.hover_tol_m;
           if (s.descend_at_utime && now_utime_ >= *s.descend_at_utime && over)
             enter_failsafe_descent(failsafe_,
                                    "failsafe hold over: controlled descent, disarm on "

@@ -46,8 +46,8 @@
 //    non-finite poses, IMU samples, targets and NUDGE offsets are ignored, and a non-finite
 //    setpoint is never sent.
 
-#include <memory>
 #include <limits>
+#include <memory>
 #include <optional>
 #include <string>
 #include <variant>

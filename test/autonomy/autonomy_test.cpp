@@ -306,9 +306,7 @@ TEST(AutonomyTest, AFoundTargetSmallerThanTheTopMayLieAsFarOffAsThePartItMissed)
       if (!whole) m.size_m = Vector2d(0.19, 0.15);
     };
     ASSERT_TRUE(w.run_until(
-        [&] {
-          return w.autonomy.phase() == Phase::kLanded || w.autonomy.phase() == Phase::kHold;
-        },
+        [&] { return w.autonomy.phase() == Phase::kLanded || w.autonomy.phase() == Phase::kHold; },
         120))
         << w.out.status.reason;
     if (whole) {
