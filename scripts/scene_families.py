@@ -53,6 +53,9 @@ FAMILIES = {
                          "the same grain on both (gravel on gravel)",
     "landing_dim": "a nearly featureless dark top (slate) on a speckled floor (granite) in dim "
                    "light, a third of the usual ambient, sensor noise 4-6 grey levels",
+    "landing_wet": "a wet or glazed top mirroring the sky (clouds 20-60 m up) or a hall's ceiling "
+                   "(2-3.5 m above it), reflectance 0.1-0.5 seen straight down, on photographed "
+                   "floors and tops",
     "landing_shadows": "a low sun (15-40 deg up) and hard shadows on a photographed floor and "
                        "top: the platform's own across the floor, a mast's or a parapet's across "
                        "the top",
@@ -228,6 +231,23 @@ def _sunlit(rng, scene):
             reach = distance + rng.uniform(-0.5, 0.5) * min(length, width)
             caster = [x, y, 0.2, rng.uniform(4.0, 8.0), top + reach * math.tan(elevation), yaw]
         scene["lighting"]["casters"].append([round(v, 3) for v in caster])
+    return scene
+
+
+def _wet(rng, scene):
+    """The platform's top wet or glazed: outdoors it mirrors clouds (soft blobs metres across,
+    20-60 m up), indoors a hall's ceiling 2-3.5 m above it (a busy photograph: pipes, lamps,
+    beams). The mirrored share seen straight down is 0.1-0.5 (Fresnel's 2-4 % of a sky many
+    times brighter than the top, up to a glass top over a dark base)."""
+    if rng.random() < 0.5:
+        sky = _procedural(rng, "blobs", 1024, round(rng.uniform(0.05, 0.15), 3),
+                          rng.uniform(170, 235), rng.uniform(0.3, 0.8), rng.uniform(3.0, 10.0))
+        height = rng.uniform(20.0, 60.0)
+    else:
+        sky = _photo(rng, BUSY_PHOTOS, rng.uniform(3.0, 6.0))
+        height = rng.uniform(2.0, 3.5)
+    scene["platform"]["reflection"] = {"reflectance": round(rng.uniform(0.1, 0.5), 3),
+                                       "sky_height_m": round(height, 2), "sky": sky}
     return scene
 
 
@@ -471,6 +491,9 @@ def _draw(family, seed):
     if family == "landing_shadows":
         return _sunlit(rng, _landing(rng, family, _photo(rng, SURFACE_PHOTOS, rng.uniform(1.5, 3.0)),
                                      _platform(rng, lambda length: _top(rng, length))))
+    if family == "landing_wet":
+        return _wet(rng, _landing(rng, family, _photo(rng, SURFACE_PHOTOS, rng.uniform(1.5, 3.0)),
+                                  _platform(rng, lambda length: _top(rng, length))))
     if family == "landing_none_photo":
         return _landing(rng, family, _photo(rng, SURFACE_PHOTOS, rng.uniform(1.5, 3.0)), None)
     if family in ("landing_moving_cart", "landing_deck"):

@@ -31,7 +31,11 @@ Scenario load_scenario(const std::string& scenario_file) {
   Scenario::schema().read(root, s);
   s.file = scenario_file;
   load_image(s.floor_texture, scenario_file, "area.floor_texture");
-  if (s.platform) load_image(s.platform->texture, scenario_file, "platform.texture");
+  if (s.platform) {
+    load_image(s.platform->texture, scenario_file, "platform.texture");
+    if (s.platform->reflective)
+      load_image(s.platform->reflection.sky, scenario_file, "platform.reflection.sky");
+  }
   if (s.wall) {
     load_image(s.wall->texture, scenario_file, "wall.texture");
     load_image(s.wall->room_texture, scenario_file, "wall.room_texture");

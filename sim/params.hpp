@@ -113,6 +113,19 @@ struct PlatformMotionParams {
   void validate() const;
 };
 
+/// A wet, glazed or polished top (`platform.reflection`): over its own texture it mirrors the sky
+/// (clouds, or a hall's ceiling), a textured plane sky_height_m above the top. The mirrored share
+/// is Schlick's approximation of Fresnel's, reflectance at normal incidence rising to 1 at
+/// grazing, and the mirror image moves with the camera as the sky's image would, not with the
+/// top's texture.
+struct ReflectionParams {
+  double reflectance = 0.3;
+  double sky_height_m = 30.0;
+  TextureSpec sky{"blobs", 7, 1024, 0.05, 200, 0.6, 2.0, {}, {}};
+  static const ParamSchema<ReflectionParams>& schema();
+  void validate() const;
+};
+
 /// The elevated landing platform (paper 4.2): a box standing on the floor.
 struct PlatformParams {
   Vector2d center_xy_m = Vector2d(1.0, 0.0);
@@ -122,6 +135,9 @@ struct PlatformParams {
   /// `motion:` present: the platform moves; absent: it stands still.
   bool moving = false;
   PlatformMotionParams motion;
+  /// `reflection:` present: the top mirrors the sky; absent: it is matte.
+  bool reflective = false;
+  ReflectionParams reflection;
   static const ParamSchema<PlatformParams>& schema();
   void validate() const;
 };

@@ -260,6 +260,24 @@ const ParamSchema<PlatformParams>& PlatformParams::schema() {
               "how it moves (a cart, a vehicle's roof, a boat's deck; sim/README.md, \"Moving "
               "platforms\"); absent: it stands still",
               &P::moving);
+    s.section("reflection", &P::reflection, ReflectionParams::schema(),
+              "a wet, glazed or polished top that mirrors the sky; absent: a matte top",
+              &P::reflective);
+    return s;
+  }();
+  return schema;
+}
+
+const ParamSchema<ReflectionParams>& ReflectionParams::schema() {
+  using P = ReflectionParams;
+  static const ParamSchema<P> schema = [] {
+    ParamSchema<P> s;
+    s.add("reflectance", &P::reflectance, Range::closed(0, 1), "",
+          "share of the top's brightness that is the sky's mirror image, seen straight down "
+          "(Schlick's approximation raises it towards 1 at grazing)");
+    s.add("sky_height_m", &P::sky_height_m, Range::gt(0), "m",
+          "the mirrored sky (clouds, a ceiling) is a plane this far above the top");
+    s.section("sky", &P::sky, TextureSpec::schema(), "the sky's texture, seen in the mirror");
     return s;
   }();
   return schema;
@@ -707,6 +725,7 @@ void VehicleParams::validate() const { schema().validate(*this); }
 void TextureSpec::validate() const { schema().validate(*this); }
 void PlatformMotionParams::validate() const { schema().validate(*this); }
 void PlatformParams::validate() const { schema().validate(*this); }
+void ReflectionParams::validate() const { schema().validate(*this); }
 void WallParams::validate() const { schema().validate(*this); }
 void WindParams::validate() const { schema().validate(*this); }
 void MocapParams::validate() const { schema().validate(*this); }

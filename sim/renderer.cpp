@@ -22,6 +22,8 @@ struct BoxFrame {     // one box, prepared for one frame
   float h[3];         // half sizes
   float shade[6];     // per face: axis * 2 + (positive side)
   float shadowed[6];  // per face: the share of its shade left in a cast shadow (the ambient's)
+  float reflectance;  // its top face mirrors the sky (Box::reflectance); 0: matte
+  Vector3d up_W;      // its top face's normal
   float lamp[3];      // the lamp in the box frame
   float near_range;   // no point of the box is closer to the camera [m]
   int texture;        // index into Scene::textures
@@ -212,6 +214,38 @@ void shadow_pass(int count, const float* rx, const float* ry, const float* th, c
         break;
       }
     }
+  }
+}
+
+// A reflective top (ReflectionParams) on the rays that hit one: the mirrored share F of the value
+// becomes the sky's, where the ray reflected about the top's normal meets the plane z = sky_z,
+// its footprint grown by the longer way there. F is Schlick's approximation of Fresnel's
+// reflectance, r0 + (1 - r0)(1 - cos i)^5. Scalar, and run only for scenes with such a top.
+void reflection_pass(int count, const float* rx, const float* ry, const float* th, const int* hb,
+                     const int* ha, const float* foot, const Matrix3d& R_WC, const Vector3d& C_W,
+                     const std::vector<BoxFrame>& boxes, const Texture& sky, double sky_z,
+                     float sky_gain, float* value) {
+  for (int k = 0; k < count; ++k) {
+    const float t = th[k];
+    if (hb[k] < 0 || ha[k] != 2 || !std::isfinite(t)) continue;
+    const BoxFrame& f = boxes[hb[k]];
+    if (f.reflectance <= 0.f) continue;
+    const float q = f.o[2] + t * (f.M[6] * rx[k] + f.M[7] * ry[k] + f.M[8]);
+    if (q <= 0) continue;  // the bottom face
+    const Vector3d d_W = R_WC * Vector3d(rx[k], ry[k], 1.0);
+    const double range = double(t) * d_W.norm();
+    const Vector3d p_W = C_W + double(t) * d_W;
+    const Vector3d d = d_W.normalized();
+    const double cos_i = std::clamp(-d.dot(f.up_W), 0.0, 1.0);
+    const Vector3d r_W = d + 2.0 * cos_i * f.up_W;
+    if (r_W.z() <= 1e-6 || p_W.z() >= sky_z) continue;  // the mirror shows no sky
+    const double s = (sky_z - p_W.z()) / r_W.z();
+    const Vector3d at = p_W + s * r_W;
+    const double F = f.reflectance + (1.0 - f.reflectance) * std::pow(1.0 - cos_i, 5);
+    const float mirrored =
+        sky_gain * sky.sample(static_cast<float>(at.x()), static_cast<float>(at.y()),
+                              foot[k] * static_cast<float>((range + s) / range));
+    value[k] += static_cast<float>(F) * (mirrored - value[k]);
   }
 }
 
@@ -563,6 +597,8 @@ void Renderer::render_rows(const Scene& scene, const Isometry3d& X_WC, float wei
     for (int a = 0; a < 3; ++a) f.lamp[a] = static_cast<float>(lamp_O[a]);
     f.near_range = static_cast<float>((o.cwiseAbs() - b.half_size_m).cwiseMax(0.0).norm());
     f.texture = b.texture;
+    f.reflectance = scene.sky_texture >= 0 ? static_cast<float>(b.reflectance) : 0.f;
+    f.up_W = R_WO.col(2);
     // Cull: bounds of the projected corners on the z = 1 plane.
     bool behind_all = true;
     f.straddles = false;
@@ -598,6 +634,8 @@ void Renderer::render_rows(const Scene& scene, const Isometry3d& X_WC, float wei
     for (const Box& b : scene.shadow_casters) add(b);
   }
   const float floor_shadowed = shadowed_of(Vector3d::UnitZ());
+  const bool mirrors = std::any_of(boxes.begin(), boxes.end(),
+                                   [](const BoxFrame& f) { return f.reflectance > 0.f; });
   // Nearest first, so a pixel stops testing boxes once its hit is nearer than the next box.
   std::sort(boxes.begin(), boxes.end(),
             [](const BoxFrame& a, const BoxFrame& b) { return a.near_range < b.near_range; });
@@ -718,6 +756,10 @@ void Renderer::render_rows(const Scene& scene, const Isometry3d& X_WC, float wei
                taps.t_a[2].data(), taps.t_a[3].data(), taps.t_b[0].data(), taps.t_b[1].data(),
                taps.t_b[2].data(), taps.t_b[3].data());
     filter_pass(N, taps, th, shade.data(), kBackground, value.data());
+    if (mirrors)
+      reflection_pass(N, rx, ry, th, hb, ha, foot.data(), R_WC, C_W, boxes,
+                      scene.textures[scene.sky_texture], scene.sky_z_m,
+                      static_cast<float>(scene.lighting.gain), value.data());
     float* __restrict row = out + static_cast<size_t>(v) * out_step;
     if (n == 1) {  // the common case, as SIMD code
       for (int u = 0; u < W; ++u) row[u] += value[u] * inv_n;

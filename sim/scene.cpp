@@ -135,6 +135,12 @@ Scene build_scene(const Scenario& sc, uint64_t seed) {
     b.center_W = Vector3d(xy.x(), xy.y(), 0.5 * p.size_m.z());
     b.texture = static_cast<int>(scene.textures.size());
     scene.textures.push_back(Texture::make(p.texture, seed));
+    if (p.reflective) {
+      b.reflectance = p.reflection.reflectance;
+      scene.sky_texture = static_cast<int>(scene.textures.size());
+      scene.textures.push_back(Texture::make(p.reflection.sky, seed));
+      scene.sky_z_m = p.size_m.z() + p.reflection.sky_height_m;
+    }
     scene.platform_box = static_cast<int>(scene.boxes.size());
     scene.boxes.push_back(b);
     scene.platform = PlatformTruth{Vector3d(xy.x(), xy.y(), p.size_m.z()), p.size_m, b.yaw_rad()};

@@ -18,6 +18,9 @@ struct Box {
   Vector3d center_W = Vector3d::Zero();
   Vector3d half_size_m = Vector3d::Constant(0.5);
   int texture = 0;  ///< index into Scene::textures
+  /// Its top face mirrors Scene::sky_texture with this share seen straight down
+  /// (ReflectionParams); 0: matte.
+  double reflectance = 0.0;
 
   /// Turns the box about world z (its frame O: axes along its sides, origin at its centre).
   void set_yaw(double yaw_rad) {
@@ -81,6 +84,9 @@ struct Scene {
   LightingParams lighting;  ///< after randomisation
   /// LightingParams::casters as boxes: they block the light (with shadows on), nothing else.
   std::vector<Box> shadow_casters;
+  /// What a reflective top mirrors (ReflectionParams): a texture on the plane z = sky_z_m.
+  int sky_texture = -1;
+  double sky_z_m = 0.0;
 
   /// The lamp's falloff at a point (LightingParams::falloff): multiplies the Lambertian shade.
   double illumination(const Vector3d& p_W) const {

@@ -337,6 +337,82 @@ TEST(SimRendererTest, ALowSunCastsThePlatformsAndACastersShadowsOnFloorAndTop) {
   EXPECT_EQ(cv::norm(radiance(casters_only), a, cv::NORM_INF), 0.0);
 }
 
+TEST(SimRendererTest, AWetTopMirrorsTheSkyWhereTheReflectedRayMeetsIt) {
+  const Scene matte = build_scene(test::quiet(test::scenario("landing_a")), 5);
+  ASSERT_TRUE(matte.platform);
+  Scene wet = matte;
+  wet.boxes[wet.platform_box].reflectance = 0.3;
+  // A ceiling 4 m above of 1 m squares: a mirrored ray lands well inside one on most pixels.
+  const TextureSpec sky{"checker", 3, 256, 0.05, 150, 1.0, 1.0, {}, {}};
+  wet.sky_texture = static_cast<int>(wet.textures.size());
+  wet.textures.push_back(Texture::make(sky, 1));
+  const Vector3d top = matte.platform->top_center_W;
+  wet.sky_z_m = top.z() + 4.0;
+  const Texture& sky_tex = wet.textures[wet.sky_texture];
+  const Box& box = matte.boxes[matte.platform_box];
+
+  const CameraModel model = CameraModel::firefly_mv_4mm();
+  const Renderer renderer(model, 1);
+  // Straight down from 0.8 m over the top, and from 1.5 m beside it, 0.6 m up, looking at it
+  // (incidence about 68 deg, where Fresnel's reflectance has grown).
+  const Vector3d beside(top.x() - 1.5, top.y(), top.z() + 0.6);
+  const Vector3d z_C = (top - beside).normalized();
+  const Vector3d x_C = z_C.cross(Vector3d::UnitZ()).normalized();
+  Matrix3d R_oblique;
+  R_oblique << x_C, z_C.cross(x_C), z_C;
+  const std::vector<Isometry3d> views = {make_transform(R_BC_downward(), top + Vector3d(0, 0, 0.8)),
+                                         make_transform(R_oblique, beside)};
+  for (const Isometry3d& X_WC : views) {
+    SCOPED_TRACE(X_WC.translation().transpose());
+    auto radiance = [&](const Scene& scene) {
+      cv::Mat acc(model.height, model.width, CV_32F, cv::Scalar(0));
+      renderer.accumulate(scene, X_WC, 1.f, acc);
+      return acc;
+    };
+    const cv::Mat a = radiance(matte), b = radiance(wet);
+    int on_top = 0, elsewhere = 0;
+    double max_F = 0;
+    for (int v = 3; v < model.height; v += 5) {
+      for (int u = 3; u < model.width; u += 5) {
+        const Vector3d d = (X_WC.linear() * model.ray(Vector2d(u, v))).normalized();
+        const auto hit = matte.cast_ray(X_WC.translation(), d, 100.0);
+        if (!hit) continue;
+        const Vector3d p_W = X_WC.translation() + hit->distance_m * d;
+        // Clear of the top's outline by a centimetre: the float ray is not the double one.
+        const Vector3d q = box.to_local(p_W);
+        const double outside = (q.head<2>().cwiseAbs() - box.half_size_m.head<2>()).maxCoeff();
+        if (hit->box != matte.platform_box || hit->normal_W.z() < 0.9) {
+          if (outside < 0.01) continue;
+          EXPECT_EQ(b.at<float>(v, u), a.at<float>(v, u)) << u << ", " << v;
+          ++elsewhere;
+          continue;
+        }
+        if (outside > -0.01) continue;
+        const double cos_i = -d.z();
+        const Vector3d r = d + 2 * cos_i * Vector3d::UnitZ();
+        const Vector3d at = p_W + (wet.sky_z_m - p_W.z()) / r.z() * r;
+        const auto sky_at = [&](double dx, double dy) {
+          return sky_tex.sample(float(at.x() + dx), float(at.y() + dy), 1e-4f);
+        };
+        const float mirrored = sky_at(0, 0);
+        bool inside = true;  // of one square of the ceiling
+        for (const double e : {-0.1, 0.1})
+          inside = inside && sky_at(e, 0) == mirrored && sky_at(0, e) == mirrored;
+        if (!inside) continue;
+        const double F = 0.3 + 0.7 * std::pow(1 - cos_i, 5);
+        max_F = std::max(max_F, F);
+        const double expected =
+            a.at<float>(v, u) + F * (wet.lighting.gain * mirrored - a.at<float>(v, u));
+        EXPECT_NEAR(b.at<float>(v, u), expected, 0.05) << u << ", " << v;
+        ++on_top;
+      }
+    }
+    EXPECT_GT(on_top, 100);
+    EXPECT_GT(elsewhere, 1000);
+    if (X_WC.translation() == beside) EXPECT_GT(max_F, 0.35) << "Fresnel's rise towards grazing";
+  }
+}
+
 TEST(SimRendererTest, TexturesGiveHundredsOfFeaturesOnFloorPlatformAndWall) {
   const CameraModel model = CameraModel::firefly_mv_4mm();
   const Renderer renderer(model, 1);

@@ -25,6 +25,8 @@ def textures(s):
     out = [s["area"]["floor_texture"]]
     if "platform" in s:
         out.append(s["platform"]["texture"])
+        if "reflection" in s["platform"]:
+            out.append(s["platform"]["reflection"]["sky"])
     if "wall" in s:
         out += [s["wall"]["texture"], s["wall"]["room_texture"]]
     return out
@@ -92,6 +94,12 @@ with tempfile.TemporaryDirectory() as tmp:
                     half_area = [0.5 * v for v in s["area"]["size_m"]]
                     for x, y, *_ in lit["casters"]:  # out of the flying area
                         assert max(abs(x) - half_area[0], abs(y) - half_area[1]) > 0, lit
+                r = p.get("reflection")
+                assert (r is not None) == (family == "landing_wet"), family
+                if r:
+                    assert 0.1 <= r["reflectance"] <= 0.5, r
+                    # clouds far above, or a hall's ceiling
+                    assert 20 <= r["sky_height_m"] <= 60 or 2 <= r["sky_height_m"] <= 3.5, r
                 if family == "landing_dim":
                     assert s["lighting"]["ambient"] <= 0.85 / 3 + 1e-3, s["lighting"]
                     assert 4.0 <= s["camera"]["noise_sigma"] <= 6.0, s["camera"]
