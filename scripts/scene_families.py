@@ -54,8 +54,8 @@ FAMILIES = {
     "landing_dim": "a nearly featureless dark top (slate) on a speckled floor (granite) in dim "
                    "light, a third of the usual ambient, sensor noise 4-6 grey levels",
     "landing_wet": "a wet or glazed top mirroring the sky (clouds 20-60 m up) or a hall's ceiling "
-                   "(2-3.5 m above it), reflectance 0.1-0.5 seen straight down, on photographed "
-                   "floors and tops",
+                   "(2-3.5 m above it), 10-40 % (clouds) or 5-25 % (a ceiling) of its brightness "
+                   "mirrored seen straight down, on photographed floors and tops",
     "landing_shadows": "a low sun (15-40 deg up) and hard shadows on a photographed floor and "
                        "top: the platform's own across the floor, a mast's or a parapet's across "
                        "the top",
@@ -237,16 +237,18 @@ def _sunlit(rng, scene):
 def _wet(rng, scene):
     """The platform's top wet or glazed: outdoors it mirrors clouds (soft blobs metres across,
     20-60 m up), indoors a hall's ceiling 2-3.5 m above it (a busy photograph: pipes, lamps,
-    beams). The mirrored share seen straight down is 0.1-0.5 (Fresnel's 2-4 % of a sky many
-    times brighter than the top, up to a glass top over a dark base)."""
+    beams). The share of the top's brightness mirrored straight down is Fresnel's 2 % (water)
+    to 4 % (glass) of the mirrored surface's radiance against the top's own: a top of albedo
+    0.05-0.2 under a sky lit as brightly is 10-40 % mirror; a ceiling lit by the hall's lamps is
+    a few times darker than the sky, 5-25 %."""
     if rng.random() < 0.5:
         sky = _procedural(rng, "blobs", 1024, round(rng.uniform(0.05, 0.15), 3),
                           rng.uniform(170, 235), rng.uniform(0.3, 0.8), rng.uniform(3.0, 10.0))
-        height = rng.uniform(20.0, 60.0)
+        height, share = rng.uniform(20.0, 60.0), rng.uniform(0.10, 0.40)
     else:
         sky = _photo(rng, BUSY_PHOTOS, rng.uniform(3.0, 6.0))
-        height = rng.uniform(2.0, 3.5)
-    scene["platform"]["reflection"] = {"reflectance": round(rng.uniform(0.1, 0.5), 3),
+        height, share = rng.uniform(2.0, 3.5), rng.uniform(0.05, 0.25)
+    scene["platform"]["reflection"] = {"reflectance": round(share, 3),
                                        "sky_height_m": round(height, 2), "sky": sky}
     return scene
 
