@@ -264,6 +264,7 @@ class Autonomy {
   Vector3d sp_p_W_ = Vector3d::Zero();
   Vector3d sp_v_W_ = Vector3d::Zero();
   Vector3d sp_a_W_ = Vector3d::Zero();  // a moving platform's acceleration fed forward
+  double sp_yaw_rate_radps_ = 0.0;      // ... and its turn
   double yaw_sp_rad_ = 0.0;
   bool motors_on_ = false;
   bool geofence_clamped_ = false;
