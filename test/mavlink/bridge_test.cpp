@@ -494,7 +494,7 @@ TEST(BridgeTest, PositionSetpointGoesOutInNedWithYawFromNorth) {
   t.p_W = Vector3d(1, 2, 3);  // 1 m east, 2 m north, 3 m up
   t.v_W = Vector3d(0.1, 0, -0.2);
   t.a_W = Vector3d(0.3, -0.4, 0.5);
-  t.yaw_rad = 0;  // facing east
+  t.yaw_rad = 0;           // facing east
   t.yaw_rate_radps = 0.2;  // turning left
   t.motors = Motors::kOn;
   BridgeInput in;
