@@ -661,9 +661,7 @@ void Autonomy::add_waypoint(phases::Refinement& r, const Vector3d& X_W) {
 
 void Autonomy::step_phase(double dt_s) {
   const Vector3d p = pose_ ? pose_->p_W_B : sp_p_W_;
-  sp_v_W_.setZero();
-  sp_a_W_.setZero();
-  sp_yaw_rate_radps_ = 0.0;
+  zero_feedforward();
   std::visit(
       [&](auto& s) {
         using S = std::decay_t<decltype(s)>;
@@ -917,15 +915,19 @@ void Autonomy::step(phases::FailsafeDescent& s, const Vector3d& /*p*/, double /*
   }
 }
 
+void Autonomy::zero_feedforward() {
+  sp_v_W_.setZero();
+  sp_a_W_.setZero();
+  sp_yaw_rate_radps_ = 0.0;
+}
+
 Output Autonomy::make_output() {
   // The last line of defence: whatever got through, a non-finite setpoint is never sent (NaN
   // passes cwiseMax / cwiseMin, so the geofence alone does not stop it).
   if (!sp_p_W_.allFinite() || !sp_v_W_.allFinite() || !sp_a_W_.allFinite() ||
       !std::isfinite(yaw_sp_rad_) || !std::isfinite(sp_yaw_rate_radps_)) {
     sp_p_W_ = last_finite_sp_p_W_;
-    sp_v_W_.setZero();
-    sp_a_W_.setZero();
-    sp_yaw_rate_radps_ = 0.0;
+    zero_feedforward();
     yaw_sp_rad_ = last_finite_yaw_rad_;
     if (Vector3d* held = held_position(); held && !held->allFinite()) *held = last_finite_sp_p_W_;
     reason_ = "non-finite setpoint refused: holding the last finite one";
@@ -1014,9 +1016,7 @@ Output Autonomy::update(const Inputs& in, int64_t now_utime) {
   if (paused) {
     // At rest where the pause began: no progress, no measurement taken on the degraded pose.
     sp_p_W_ = pause_p_W_;
-    sp_v_W_.setZero();
-    sp_a_W_.setZero();
-    sp_yaw_rate_radps_ = 0.0;
+    zero_feedforward();
     return make_output();
   }
   if (in.target) {

@@ -231,6 +231,8 @@ class Autonomy {
   /// ... over the vehicle (the setpoint's xy without a pose).
   void enter_failsafe_descent(Failsafe cause, std::string reason);
   void start_from_first_pose();
+  /// The setpoint's feed-forwards (velocity, acceleration, yaw rate) back to none.
+  void zero_feedforward();
   Output make_output();
 
   // Whole run.
