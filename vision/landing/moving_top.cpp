@@ -210,11 +210,40 @@ int still_inside(const Correspondences& c, const std::vector<Placed>& cand,
 
 // A cut top's horizontal position variance: no information [m^2].
 constexpr double kCutPositionVar = 100.0;
+// A yaw known only to the quarter turn (the rectangle of a part of the top, or of too few
+// features): uniform over it [rad^2].
+constexpr double kUnknownYawVar = (M_PI / 4) * (M_PI / 4) / 3;
 
 double wrap_half_pi(double a) {
   while (a > M_PI / 2) a -= M_PI;
   while (a <= -M_PI / 2) a += M_PI;
   return a;
+}
+
+// The variance of the rectangle's yaw (of pts_W, whose rectangle has yaw_rad), the top's axes
+// modulo a quarter turn. The minimum-area rectangle's orientation rests on the few features
+// nearest the edges, so its error is not the similarity's turn between the frames: it is
+// estimated from the rectangles of kYawSplits interleaved subsets, whose yaws each carry about
+// kYawSplits times the variance of the whole set's (the split-sample estimate: the spread of
+// the subsets' yaws about their mean over kYawSplits (kYawSplits - 1)). Too few features for
+// the subsets: the variance of a yaw known only to the quarter turn.
+constexpr int kYawSplits = 4;
+double rect_yaw_variance(const std::vector<Vector3d>& pts_W, double yaw_rad) {
+  if (pts_W.size() < 4 * kYawSplits) return kUnknownYawVar;
+  double d[kYawSplits];
+  double mean = 0;
+  for (int k = 0; k < kYawSplits; ++k) {
+    std::vector<Vector3d> sub;
+    for (size_t i = k; i < pts_W.size(); i += kYawSplits) sub.push_back(pts_W[i]);
+    const auto rect = features_extent(sub, Vector3d::UnitZ());
+    if (!rect) return kUnknownYawVar;
+    const double a = std::atan2(rect->axis[0].y(), rect->axis[0].x());
+    d[k] = std::remainder(a - yaw_rad, M_PI / 2);  // the axes modulo a quarter turn
+    mean += d[k] / kYawSplits;
+  }
+  double ss = 0;
+  for (const double x : d) ss += (x - mean) * (x - mean);
+  return std::min(kUnknownYawVar, ss / (kYawSplits * (kYawSplits - 1)));
 }
 
 // Stage 4: the measurement of the accepted set: its rectangle (centre, size, yaw) at the
@@ -272,7 +301,11 @@ void measure(const std::vector<Placed>& cand, const std::vector<size_t>& in, con
   out->cov_v_W.topLeftCorner<2, 2>() =
       2 * var_r / (n * dt_s * dt_s) * Eigen::Matrix2d::Identity() + w * w.transpose();
   out->cov_v_W(2, 2) = d2 * d2 * var_s / (dt_s * dt_s);
-  out->var_yaw = var_s;  // the turn's variance equals the scale's (same residuals, same spread)
+  // The turn between the frames has the scale's variance (same residuals, same spread); the
+  // yaw itself is the rectangle's, known far less well, and not at all on a top cut by the
+  // border.
+  out->var_yaw =
+      out->cut ? kUnknownYawVar : std::max(var_s, rect_yaw_variance(pts_W, out->yaw_rad));
   out->var_yaw_rate = 2 * var_s / (dt_s * dt_s);
 }
 

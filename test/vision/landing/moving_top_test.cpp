@@ -127,6 +127,32 @@ TEST(MovingTopTest, MeasuresACartsPositionVelocityAndTurn) {
   ASSERT_EQ(m.inliers.size(), c.size());
 }
 
+// The yaw is the features' rectangle's, which rests on the few features nearest the edges: its
+// published variance must cover its error (the platform filter weighs it by that), far beyond
+// the frame-to-frame turn's. Sparse tops, 40 draws of the features.
+TEST(MovingTopTest, TheRectanglesYawErrorIsWithinItsPublishedVariance) {
+  MovingScene s = moving_cart_scene();
+  s.n_top = 24;
+  const MovingTopParams params;
+  int n = 0, beyond_3_sigma = 0;
+  double z2_sum = 0, var_turn_max = 0, var_yaw_min = 1e9;
+  for (uint64_t seed = 1; seed <= 40; ++seed) {
+    s.seed = seed;
+    const MovingTop m = find_moving_top(s.correspondences(), 0.25, 0.0, params);
+    if (!m.found() || m.cut) continue;
+    const double e = std::remainder(m.yaw_rad - s.top_2.psi, M_PI / 2);
+    z2_sum += e * e / m.var_yaw;
+    if (std::abs(e) > 3 * std::sqrt(m.var_yaw)) ++beyond_3_sigma;
+    var_turn_max = std::max(var_turn_max, m.var_yaw_rate * 0.25 * 0.25 / 2);
+    var_yaw_min = std::min(var_yaw_min, m.var_yaw);
+    ++n;
+  }
+  ASSERT_GE(n, 30);
+  EXPECT_LT(z2_sum / n, 3.0);
+  EXPECT_LE(beyond_3_sigma, n / 10);
+  EXPECT_GT(var_yaw_min, var_turn_max) << "the rectangle's yaw is not the turn's";
+}
+
 TEST(MovingTopTest, AWrongHeightLeavesErrorsWithinThePublishedCovariance) {
   // The top 7 cm higher than assumed, and the camera 0.4 m aside: the position is off by the
   // height error times the view angle's tangent, the velocity by the height error over the
