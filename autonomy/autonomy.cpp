@@ -599,6 +599,7 @@ void Autonomy::step_moving(phases::Approach& a, const Vector3d& /*p*/, double dt
       sp_v_W_ = st.sp_v_W;
       sp_a_W_ = st.sp_a_W;
       yaw_sp_rad_ = st.yaw_sp_rad;
+      sp_yaw_rate_radps_ = st.yaw_rate_radps;
       enter(std::move(f), st.reason);
       return;
     }
@@ -610,6 +611,7 @@ void Autonomy::step_moving(phases::Approach& a, const Vector3d& /*p*/, double dt
   sp_v_W_ = st.sp_v_W;
   sp_a_W_ = st.sp_a_W;
   yaw_sp_rad_ = st.yaw_sp_rad;
+  sp_yaw_rate_radps_ = st.yaw_rate_radps;
   reason_ = st.reason;
 }
 
@@ -659,8 +661,7 @@ void Autonomy::add_waypoint(phases::Refinement& r, const Vector3d& X_W) {
 
 void Autonomy::step_phase(double dt_s) {
   const Vector3d p = pose_ ? pose_->p_W_B : sp_p_W_;
-  sp_v_W_.setZero();
-  sp_a_W_.setZero();
+  zero_feedforward();
   std::visit(
       [&](auto& s) {
         using S = std::decay_t<decltype(s)>;
@@ -799,6 +800,9 @@ void Autonomy::step(phases::FinalDescent& s, const Vector3d& /*p*/, double dt_s)
     sp_p_W_ << pr.p_W, s.z_sp_m;
     sp_v_W_ << pr.v_W, s.z_sp_m > z_floor ? -L.final_descent_rate_mps : 0.0;
     sp_a_W_ << pr.a_W, 0.0;
+    // The gear stays turned onto the turning platform's edges all the way down.
+    yaw_sp_rad_ = aligned_yaw(pr.yaw_rad, yaw_sp_rad_);
+    sp_yaw_rate_radps_ = pr.yaw_rate_rps;
     estimate_W_ << pr.p_W, pr.top_z_m;
     if (pose_fresh()) {
       PoseSample rel = *pose_;
@@ -911,14 +915,19 @@ void Autonomy::step(phases::FailsafeDescent& s, const Vector3d& /*p*/, double /*
   }
 }
 
+void Autonomy::zero_feedforward() {
+  sp_v_W_.setZero();
+  sp_a_W_.setZero();
+  sp_yaw_rate_radps_ = 0.0;
+}
+
 Output Autonomy::make_output() {
   // The last line of defence: whatever got through, a non-finite setpoint is never sent (NaN
   // passes cwiseMax / cwiseMin, so the geofence alone does not stop it).
   if (!sp_p_W_.allFinite() || !sp_v_W_.allFinite() || !sp_a_W_.allFinite() ||
-      !std::isfinite(yaw_sp_rad_)) {
+      !std::isfinite(yaw_sp_rad_) || !std::isfinite(sp_yaw_rate_radps_)) {
     sp_p_W_ = last_finite_sp_p_W_;
-    sp_v_W_.setZero();
-    sp_a_W_.setZero();
+    zero_feedforward();
     yaw_sp_rad_ = last_finite_yaw_rad_;
     if (Vector3d* held = held_position(); held && !held->allFinite()) *held = last_finite_sp_p_W_;
     reason_ = "non-finite setpoint refused: holding the last finite one";
@@ -935,6 +944,7 @@ Output Autonomy::make_output() {
   sp.v_W = geofence_clamped_ ? Vector3d::Zero() : sp_v_W_;
   sp.a_W = geofence_clamped_ ? Vector3d::Zero() : sp_a_W_;
   sp.yaw_rad = yaw_sp_rad_;
+  sp.yaw_rate_radps = sp_yaw_rate_radps_;
   sp.motors_on = motors_on_;
   sp.kill =
       phase() == Phase::kKilled;  // the outer loop disarms in the air only on an explicit KILL
@@ -1006,8 +1016,7 @@ Output Autonomy::update(const Inputs& in, int64_t now_utime) {
   if (paused) {
     // At rest where the pause began: no progress, no measurement taken on the degraded pose.
     sp_p_W_ = pause_p_W_;
-    sp_v_W_.setZero();
-    sp_a_W_.setZero();
+    zero_feedforward();
     return make_output();
   }
   if (in.target) {

@@ -231,6 +231,8 @@ class Autonomy {
   /// ... over the vehicle (the setpoint's xy without a pose).
   void enter_failsafe_descent(Failsafe cause, std::string reason);
   void start_from_first_pose();
+  /// The setpoint's feed-forwards (velocity, acceleration, yaw rate) back to none.
+  void zero_feedforward();
   Output make_output();
 
   // Whole run.
@@ -264,6 +266,7 @@ class Autonomy {
   Vector3d sp_p_W_ = Vector3d::Zero();
   Vector3d sp_v_W_ = Vector3d::Zero();
   Vector3d sp_a_W_ = Vector3d::Zero();  // a moving platform's acceleration fed forward
+  double sp_yaw_rate_radps_ = 0.0;      // ... and its turn
   double yaw_sp_rad_ = 0.0;
   bool motors_on_ = false;
   bool geofence_clamped_ = false;

@@ -129,6 +129,7 @@ MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
   const double z_final = z_top + gear_height_m + params.final_height_m;
   if (s.z_sp_m <= 0) s.z_sp_m = std::max(z_final, std::min(pose.p_W_B.z(), z_follow));
   out.yaw_sp_rad = aligned_yaw(pr.yaw_rad, yaw_sp_rad);
+  out.yaw_rate_radps = pr.yaw_rate_rps;
   const Vector2d offset = pose.p_W_B.head<2>() - pr.p_W;
   const Vector2d rel_v = pose.v_W_B.head<2>() - pr.v_W;
   const bool matched =

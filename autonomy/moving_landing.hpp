@@ -75,6 +75,7 @@ struct MovingStep {
   Next next = Next::kContinue;
   Vector3d sp_p_W = Vector3d::Zero(), sp_v_W = Vector3d::Zero(), sp_a_W = Vector3d::Zero();
   double yaw_sp_rad = 0.0;
+  double yaw_rate_radps = 0.0;  ///< the platform's turn, fed forward
   std::string reason;
 };
 

@@ -751,7 +751,7 @@ void Bridge::stream(const BridgeClock& now, BridgeOutput& out) {
     m.target_system = *sysid_;
     m.target_component = static_cast<uint8_t>(params_.target_compid);
     m.coordinate_frame = mav_frame::kLocalNed;
-    m.type_mask = position_target_typemask::kYawRateIgnore;
+    m.type_mask = 0;
     if (accel_feedforward()) {
       const Vector3d a = ned_from_enu(t.a_W);
       m.afx = static_cast<float>(a.x());
@@ -767,6 +767,7 @@ void Bridge::stream(const BridgeClock& now, BridgeOutput& out) {
     m.vy = static_cast<float>(v.y());
     m.vz = static_cast<float>(v.z());
     m.yaw = static_cast<float>(yaw_ned_from_enu(t.yaw_rad));
+    m.yaw_rate = static_cast<float>(-t.yaw_rate_radps);  // about z up -> about z down
     send(m, now, out);
   }
   ++stats_.setpoints_sent;

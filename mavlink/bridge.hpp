@@ -111,6 +111,11 @@ struct PositionTarget {
   /// (takes_position_target_accel), else left out.
   Vector3d a_W = Vector3d::Zero();
   double yaw_rad = 0;  ///< heading from east, counter-clockwise
+  /// Feed-forward turn of the heading [rad/s] (a turning platform's), counter-clockwise. PX4
+  /// takes it as the yaw controller's feed-forward; ArduCopter since its yaw modes' rework
+  /// (ArduCopter/mode_guided.cpp, feae762e64, 2021-07) as the rate its yaw target advances at,
+  /// and before it keeps the yaw alone (ModeGuided::set_yaw_state).
+  double yaw_rate_radps = 0;
   Motors motors = Motors::kOff;
   /// motors KILL carries the operator's signed CMD_KILL, verified by the node: a forced disarm.
   /// A KILL without it is a plain motors-off.

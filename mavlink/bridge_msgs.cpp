@@ -50,6 +50,8 @@ std::optional<PositionTarget> position_from_msg(const position_setpoint_t& msg, 
   if (!finite_within(msg.a_W, 3, kMaxAccelMps2))
     return fail("acceleration not finite or beyond 50 m/s^2");
   if (!std::isfinite(msg.yaw_rad)) return fail("yaw not finite");
+  if (!finite_within(&msg.yaw_rate_radps, 1, kMaxYawRateRadps))
+    return fail("yaw rate not finite or beyond the limit");
   PositionTarget t;
   switch (msg.motors) {
     case position_setpoint_t::MOTORS_OFF:
@@ -69,6 +71,7 @@ std::optional<PositionTarget> position_from_msg(const position_setpoint_t& msg, 
   t.v_W = Vector3d(msg.v_W[0], msg.v_W[1], msg.v_W[2]);
   t.a_W = Vector3d(msg.a_W[0], msg.a_W[1], msg.a_W[2]);
   t.yaw_rad = msg.yaw_rad;
+  t.yaw_rate_radps = msg.yaw_rate_radps;
   return t;
 }
 

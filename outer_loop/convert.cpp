@@ -11,6 +11,7 @@ PositionSetpoint from_msg(const position_setpoint_t& msg) {
   sp.v_W = Vector3d(msg.v_W[0], msg.v_W[1], msg.v_W[2]);
   sp.a_W = Vector3d(msg.a_W[0], msg.a_W[1], msg.a_W[2]);
   sp.yaw_rad = msg.yaw_rad;
+  sp.yaw_rate_radps = msg.yaw_rate_radps;
   sp.motors_on = msg.motors == position_setpoint_t::MOTORS_ON;
   sp.kill = msg.motors == position_setpoint_t::MOTORS_KILL;
   sp.idle = msg.mode == position_setpoint_t::MODE_IDLE;
@@ -30,6 +31,7 @@ std::optional<PositionSetpoint> setpoint_from_msg(const position_setpoint_t& msg
     if (!std::isfinite(msg.a_W[i])) return refuse("setpoint: non-finite acceleration");
   }
   if (!std::isfinite(msg.yaw_rad)) return refuse("setpoint: non-finite yaw");
+  if (!std::isfinite(msg.yaw_rate_radps)) return refuse("setpoint: non-finite yaw rate");
   if (msg.motors != position_setpoint_t::MOTORS_OFF &&
       msg.motors != position_setpoint_t::MOTORS_ON &&
       msg.motors != position_setpoint_t::MOTORS_KILL)
@@ -49,6 +51,7 @@ position_setpoint_t to_msg(const PositionSetpoint& sp) {
     msg.a_W[i] = sp.a_W[i];
   }
   msg.yaw_rad = sp.yaw_rad;
+  msg.yaw_rate_radps = sp.yaw_rate_radps;
   msg.motors = sp.kill        ? position_setpoint_t::MOTORS_KILL
                : sp.motors_on ? position_setpoint_t::MOTORS_ON
                               : position_setpoint_t::MOTORS_OFF;

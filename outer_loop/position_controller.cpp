@@ -50,7 +50,7 @@ void clamp_norm(Eigen::Ref<Eigen::VectorXd> v, double limit) {
 
 bool all_finite(const PositionSetpoint& sp) {
   return sp.p_W.allFinite() && sp.v_W.allFinite() && sp.a_W.allFinite() &&
-         std::isfinite(sp.yaw_rad);
+         std::isfinite(sp.yaw_rad) && std::isfinite(sp.yaw_rate_radps);
 }
 
 bool all_finite(const PoseSample& pose) {
@@ -107,7 +107,7 @@ AttitudeCommand PositionController::disarmed(const char* reason) {
 AttitudeCommand PositionController::track(const Vector3d& p_sp, const Vector3d& v_sp,
                                           const Vector3d& a_sp, double yaw_sp,
                                           const PoseSample& pose, double dt_s, bool integrate,
-                                          bool precise) {
+                                          bool precise, double yaw_rate_ff_radps) {
   const auto& P = params_;
   const double kp_xy = precise ? P.precise_kp_xy_per_s2 : P.kp_xy_per_s2;
   const double kd_xy = precise ? P.precise_kd_xy_per_s : P.kd_xy_per_s;
@@ -162,7 +162,9 @@ AttitudeCommand PositionController::track(const Vector3d& p_sp, const Vector3d& 
   const double f_norm = std::sqrt(f_x * f_x + f_y * f_y + f_z * f_z);
   cmd.thrust_N = std::clamp(P.mass_kg * f_norm, P.thrust_min_N, P.thrust_max_N);
   const double max_rate = P.max_yaw_rate_dps * kDegToRad;
-  cmd.yaw_rate_radps = std::clamp(P.yaw_kp_per_s * wrap_angle(yaw_sp - yaw), -max_rate, max_rate);
+  // The feed-forward of a turning heading: without it a P loop trails a ramp by rate / kp.
+  cmd.yaw_rate_radps = std::clamp(P.yaw_kp_per_s * wrap_angle(yaw_sp - yaw) + yaw_rate_ff_radps,
+                                  -max_rate, max_rate);
   cmd.armed = true;
   cmd.mode = Mode::kNormal;
   return cmd;
@@ -434,7 +436,7 @@ AttitudeCommand PositionController::step(const std::optional<PositionSetpoint>& 
     setpoint_lost_since_.reset();
     still_since_.reset();
     auto c = track(inside_fence(setpoint->p_W), setpoint->v_W, setpoint->a_W, setpoint->yaw_rad,
-                   *pose, dt_s, true, setpoint->precise);
+                   *pose, dt_s, true, setpoint->precise, setpoint->yaw_rate_radps);
     c.reason = setpoint->precise ? "tracking (precise)" : "tracking";
     return c;
   }

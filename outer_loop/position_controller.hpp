@@ -85,7 +85,7 @@ class PositionController {
  private:
   AttitudeCommand track(const Vector3d& p_sp, const Vector3d& v_sp, const Vector3d& a_sp,
                         double yaw_sp, const PoseSample& pose, double dt_s, bool integrate,
-                        bool precise = false);
+                        bool precise = false, double yaw_rate_ff_radps = 0.0);
   AttitudeCommand level(double thrust_N) const;
   AttitudeCommand disarmed(const char* reason);
   double hover_thrust_N() const;

@@ -15,6 +15,7 @@ struct PositionSetpoint {
   Vector3d v_W = Vector3d::Zero();  ///< feed-forward velocity, world [m/s]
   Vector3d a_W = Vector3d::Zero();  ///< feed-forward acceleration, world [m/s^2]
   double yaw_rad = 0.0;             ///< heading setpoint about world z [rad]
+  double yaw_rate_radps = 0.0;      ///< feed-forward yaw rate about world z [rad/s]
   bool motors_on = false;           ///< false: motors off (landed, not yet taken off); honoured
                                     ///< in the air only with kill
   bool kill = false;                ///< operator KILL: disarm at once, even in the air

@@ -396,6 +396,25 @@ TEST(MovingApproachTest, MatchesThePlatformThenDescendsAndFailsSafeWhenTooFast) 
   EXPECT_EQ(st.next, MovingStep::Next::kTargetLost);
 }
 
+// A turning platform's heading is followed with its turn fed forward: an outer loop that only
+// corrects the heading error trails the turn by rate / kp (3.3 deg at 5 deg/s, kp 1.5 /s).
+TEST(MovingApproachTest, FeedsThePlatformsTurnForward) {
+  PlatformPath m;  // turning at 0.1 rad/s
+  PlatformFilter f{PlatformFilterParams{}};
+  std::mt19937_64 rng(3);
+  double t = kPfInterval;
+  for (; t < 6; t += kPfDt) f.update(measure_path(m, t, rng));
+  MovingApproach s;
+  PoseSample pose;
+  pose.p_W_B << m.p(t).x(), m.p(t).y(), 1.2;
+  const int64_t now = kPfT0 + int64_t(t * 1e6);
+  const auto st =
+      step_moving_approach(s, f, pose, now, 0.01, m.yaw(t), 0.1, 0.25, 1.0, MovingLandingParams{});
+  EXPECT_EQ(st.yaw_rate_radps, f.predict(now).yaw_rate_rps);
+  EXPECT_NEAR(st.yaw_rate_radps, m.omega, 0.07);  // each measured rate has a 0.05 rad/s sigma
+  EXPECT_NEAR(wrap_angle(st.yaw_sp_rad - m.yaw(t)), 0.0, 0.03);
+}
+
 TEST(MovingApproachTest, AlignsTheHeadingWithThePlatformsAxesTheNearestWay) {
   EXPECT_NEAR(aligned_yaw(0.2, 0.0), 0.2, 1e-12);
   EXPECT_NEAR(aligned_yaw(0.2, 1.5), 0.2 + M_PI / 2, 1e-12);

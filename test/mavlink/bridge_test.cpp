@@ -494,7 +494,8 @@ TEST(BridgeTest, PositionSetpointGoesOutInNedWithYawFromNorth) {
   t.p_W = Vector3d(1, 2, 3);  // 1 m east, 2 m north, 3 m up
   t.v_W = Vector3d(0.1, 0, -0.2);
   t.a_W = Vector3d(0.3, -0.4, 0.5);
-  t.yaw_rad = 0;  // facing east
+  t.yaw_rad = 0;           // facing east
+  t.yaw_rate_radps = 0.2;  // turning left
   t.motors = Motors::kOn;
   BridgeInput in;
   in.position = t;
@@ -509,7 +510,8 @@ TEST(BridgeTest, PositionSetpointGoesOutInNedWithYawFromNorth) {
   EXPECT_NEAR(m[0].yaw, M_PI / 2, 1e-6);
   EXPECT_EQ(m[0].coordinate_frame, mav_frame::kLocalNed);
   EXPECT_FALSE(m[0].type_mask & position_target_typemask::kXIgnore);
-  EXPECT_TRUE(m[0].type_mask & position_target_typemask::kYawRateIgnore);
+  EXPECT_FALSE(m[0].type_mask & position_target_typemask::kYawRateIgnore);
+  EXPECT_FLOAT_EQ(m[0].yaw_rate, -0.2f);  // about z down: a left turn is negative
   // The harness's autopilot said PX4 1.15: the acceleration goes too, in NED.
   EXPECT_FALSE(m[0].type_mask & position_target_typemask::kAccelIgnore);
   EXPECT_FLOAT_EQ(m[0].afx, -0.4f);

@@ -19,6 +19,7 @@ TEST(OuterLoopConvertTest, SetpointRoundTrips) {
   sp.v_W = {0.1, 0.2, -0.3};
   sp.a_W = {0.4, -0.5, 0.0};
   sp.yaw_rad = 0.7;
+  sp.yaw_rate_radps = -0.05;
   sp.motors_on = true;
   sp.idle = false;
   const auto msg = to_msg(sp);
@@ -35,6 +36,7 @@ TEST(OuterLoopConvertTest, SetpointRoundTrips) {
   EXPECT_EQ(back.v_W, sp.v_W);
   EXPECT_EQ(back.a_W, sp.a_W);
   EXPECT_EQ(back.yaw_rad, sp.yaw_rad);
+  EXPECT_EQ(back.yaw_rate_radps, sp.yaw_rate_radps);
   EXPECT_TRUE(back.motors_on);
   EXPECT_FALSE(back.idle);
   sp.motors_on = false;
@@ -95,7 +97,7 @@ TEST(OuterLoopRegression, NonFiniteSetpointIsRefusedAtConversion) {
   const position_setpoint_t good = to_msg(sp);
   std::string why;
   ASSERT_TRUE(setpoint_from_msg(good, &why));
-  for (int field = 0; field < 10; ++field) {
+  for (int field = 0; field < 11; ++field) {
     for (double bad : {std::nan(""), std::numeric_limits<double>::infinity()}) {
       position_setpoint_t m = good;
       if (field < 3)
@@ -104,8 +106,10 @@ TEST(OuterLoopRegression, NonFiniteSetpointIsRefusedAtConversion) {
         m.v_W[field - 3] = bad;
       else if (field < 9)
         m.a_W[field - 6] = bad;
-      else
+      else if (field == 9)
         m.yaw_rad = bad;
+      else
+        m.yaw_rate_radps = bad;
       why.clear();
       EXPECT_FALSE(setpoint_from_msg(m, &why)) << field;
       EXPECT_NE(why.find("non-finite"), std::string::npos) << why;

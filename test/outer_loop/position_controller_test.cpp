@@ -132,6 +132,23 @@ TEST(PositionControllerTest, TiltAndThrustAreLimited) {
   EXPECT_NEAR(down.thrust_N, 1.2 * (9.81 - p.max_accel_z_mps2), 1e-9);
 }
 
+// A turning heading (a turning platform's) is fed forward: on the heading, the command is the
+// turn; a P loop alone trails a ramp by rate / kp (3.3 deg at 5 deg/s with kp 1.5 /s).
+TEST(PositionControllerTest, AYawRateFeedForwardTurnsWithTheHeadingWithinTheLimit) {
+  auto p = params();
+  PositionController c(p);
+  auto sp = setpoint_at({0, 0, 1}, 0.2, kT0);
+  sp.yaw_rate_radps = 0.09;
+  auto cmd = c.update(sp, pose_at({0, 0, 1}, 0.2, kT0), kT0);
+  EXPECT_NEAR(cmd.yaw_rate_radps, 0.09, 1e-9);
+  sp.yaw_rate_radps = -0.09;
+  cmd = c.update(sp, pose_at({0, 0, 1}, 0.1, kT0), kT0);
+  EXPECT_NEAR(cmd.yaw_rate_radps, p.yaw_kp_per_s * 0.1 - 0.09, 1e-9);
+  sp.yaw_rate_radps = 100.0;
+  cmd = c.update(sp, pose_at({0, 0, 1}, 0.2, kT0), kT0);
+  EXPECT_NEAR(cmd.yaw_rate_radps, p.max_yaw_rate_dps * M_PI / 180, 1e-9);
+}
+
 TEST(PositionControllerTest, YawRateFollowsTheHeadingErrorWithinItsLimit) {
   auto p = params();
   PositionController c(p);
