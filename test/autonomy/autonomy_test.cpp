@@ -16,6 +16,22 @@ namespace {
 using test::command;
 using test::KinematicWorld;
 
+// The oracle vision of the forward camera, measuring the opening.
+test::OracleVisionParams ingress_vision() {
+  test::OracleVisionParams vp;
+  vp.mission = Mission::kIngress;
+  vp.R_BC = R_BC_forward();
+  vp.t_B_C = Vector3d(0.12, 0, 0);
+  return vp;
+}
+
+// The test parameters for a vehicle span_m wide (rotor tip to tip) flying ingress.
+AutonomyParams ingress_params(double span_m) {
+  auto params = test::test_params();
+  params.ingress.vehicle_span_m = span_m;
+  return params;
+}
+
 TEST(AutonomyTest, StartsIdleWithMotorsOff) {
   KinematicWorld w;
   w.step();
@@ -265,13 +281,7 @@ TEST(AutonomyRegression, TheVisionDisagreesFailsafeHoldsAndDescendsOverTheEstima
 
 // Ingress holds where the vehicle is: the approach's setpoint may lie in the opening.
 TEST(AutonomyTest, TheVisionDisagreesFailsafeOfIngressHoldsWhereTheVehicleIs) {
-  test::OracleVisionParams vp;
-  vp.mission = Mission::kIngress;
-  vp.R_BC = R_BC_forward();
-  vp.t_B_C = Vector3d(0.12, 0, 0);
-  auto params = test::test_params();
-  params.ingress.vehicle_span_m = 0.45;
-  KinematicWorld w(params, vp);
+  KinematicWorld w(ingress_params(0.45), ingress_vision());
   w.truth.opening_size_m = Vector2d(0.6, 0.6);
   w.takeoff_and_hover();
   w.send(Command::kGo, Mission::kIngress);
@@ -555,13 +565,7 @@ TEST(AutonomyTest, NudgeMovesTheHoverPointBoundedly) {
 }
 
 TEST(AutonomyTest, IngressAlignsFliesThroughWithinToleranceAndStopsPastTheWall) {
-  test::OracleVisionParams vp;
-  vp.mission = Mission::kIngress;
-  vp.R_BC = R_BC_forward();
-  vp.t_B_C = Vector3d(0.12, 0, 0);
-  auto params = test::test_params();
-  params.ingress.vehicle_span_m = 0.45;
-  KinematicWorld w(params, vp);
+  KinematicWorld w(ingress_params(0.45), ingress_vision());
   w.truth.opening_size_m = Vector2d(0.6, 0.6);
   w.takeoff_and_hover();
   w.send(Command::kGo, Mission::kIngress);
@@ -583,7 +587,7 @@ TEST(AutonomyTest, IngressAlignsFliesThroughWithinToleranceAndStopsPastTheWall) 
   ASSERT_EQ(w.autonomy.phase(), Phase::kDone) << w.out.status.reason;
   EXPECT_TRUE(through);
   EXPECT_LT(max_lateral_near_wall, 0.08);
-  EXPECT_NEAR(w.p.x(), 3.0 + params.ingress.pass_distance_m, 0.1);
+  EXPECT_NEAR(w.p.x(), 3.0 + w.autonomy.params().ingress.pass_distance_m, 0.1);
 }
 
 // Regression (closed-loop ingress_wide, seed 1): aligning on the normal, real vision has no
@@ -591,14 +595,9 @@ TEST(AutonomyTest, IngressAlignsFliesThroughWithinToleranceAndStopsPastTheWall) 
 // detection twice and the mission held. By default the converged estimate is flown blind.
 TEST(AutonomyTest, IngressFliesTheConvergedEstimateWithoutVisionUnlessALostCheckIsSet) {
   for (const double lost_timeout_s : {0.0, 3.0}) {
-    test::OracleVisionParams vp;
-    vp.mission = Mission::kIngress;
-    vp.R_BC = R_BC_forward();
-    vp.t_B_C = Vector3d(0.12, 0, 0);
-    auto params = test::test_params();
-    params.ingress.vehicle_span_m = 0.45;
+    auto params = ingress_params(0.45);
     params.ingress.lost_timeout_s = lost_timeout_s;
-    KinematicWorld w(params, vp);
+    KinematicWorld w(params, ingress_vision());
     w.takeoff_and_hover();
     w.send(Command::kGo, Mission::kIngress);
     ASSERT_TRUE(w.run_until_phase(Phase::kApproach, 120));
@@ -622,33 +621,22 @@ TEST(AutonomyTest, IngressFliesTheConvergedEstimateWithoutVisionUnlessALostCheck
 }
 
 TEST(AutonomyTest, IngressPausesWhileOutsideTheLateralTolerance) {
-  test::OracleVisionParams vp;
-  vp.mission = Mission::kIngress;
-  vp.R_BC = R_BC_forward();
-  vp.t_B_C = Vector3d(0.12, 0, 0);
-  auto params = test::test_params();
-  params.ingress.vehicle_span_m = 0.45;
-  KinematicWorld w(params, vp);
+  KinematicWorld w(ingress_params(0.45), ingress_vision());
   w.takeoff_and_hover();
   w.send(Command::kGo, Mission::kIngress);
   ASSERT_TRUE(w.run_until_phase(Phase::kApproach, 120));
   ASSERT_TRUE(w.run_until([&] { return w.out.setpoint.v_W.norm() > 0; }, 30)) << "through stage";
   const double x_sp = w.out.setpoint.p_W.x();
   for (int i = 0; i < 100; ++i) {
-    w.p.y() = w.autonomy.final_estimate().y() + params.ingress.lateral_tol_m + 0.03;
+    w.p.y() = w.autonomy.final_estimate().y() + w.autonomy.params().ingress.lateral_tol_m + 0.03;
     w.step();
   }
   EXPECT_DOUBLE_EQ(w.out.setpoint.p_W.x(), x_sp);
 }
 
 TEST(AutonomyTest, RefusesAnOpeningSmallerThanTheVehicle) {
-  test::OracleVisionParams vp;
-  vp.mission = Mission::kIngress;
-  vp.R_BC = R_BC_forward();
-  vp.t_B_C = Vector3d(0.12, 0, 0);
-  auto params = test::test_params();
-  params.ingress.vehicle_span_m = 0.75;  // STARMAC's rotor span vs the paper's 60 cm opening
-  KinematicWorld w(params, vp);
+  KinematicWorld w(ingress_params(0.75),
+                   ingress_vision());  // STARMAC's rotor span vs the paper's 60 cm opening
   w.truth.opening_size_m = Vector2d(0.6, 0.6);
   w.takeoff_and_hover();
   w.send(Command::kGo, Mission::kIngress);
@@ -768,11 +756,7 @@ TEST(AutonomyRegression, NanPlatformSizeIsNeverLandedOn) {
 
 // The same for an opening: NaN width skipped the vehicle-fits-the-opening check.
 TEST(AutonomyRegression, NanOpeningSizeIsNeverFlownThrough) {
-  test::OracleVisionParams vp;
-  vp.mission = Mission::kIngress;
-  vp.R_BC = R_BC_forward();
-  vp.t_B_C = Vector3d(0.12, 0, 0);
-  KinematicWorld w(test::test_params(), vp);
+  KinematicWorld w(test::test_params(), ingress_vision());
   w.corrupt_target = [](TargetMeasurement& m) {
     m.size_m.x() = std::numeric_limits<double>::quiet_NaN();
   };
