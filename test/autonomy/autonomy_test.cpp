@@ -100,9 +100,7 @@ TEST(AutonomyTest, GearTurnsToThePlatformsEdgesBeforeTouchdown) {
   for (const double platform_yaw_deg : {25.0, -40.0, 70.0}) {
     KinematicWorld w;
     w.truth.platform_yaw_rad = platform_yaw_deg * M_PI / 180.0;
-    w.takeoff_and_hover();
-    w.send(Command::kGo, Mission::kLanding);
-    ASSERT_TRUE(w.run_until_phase(Phase::kApproach, 120));
+    ASSERT_TRUE(w.go_to_approach(Mission::kLanding));
     const double z_approach = w.p.z();
     ASSERT_TRUE(w.run_until_phase(Phase::kLanded, 60)) << w.out.status.reason;
     // Modulo 90 deg the gear's sides lie along the platform's; the turn was the smaller one.
@@ -116,9 +114,7 @@ TEST(AutonomyTest, GearTurnsToThePlatformsEdgesBeforeTouchdown) {
 
 TEST(AutonomyTest, DescendsOnlyWhileInsideTheRadialTolerance) {
   KinematicWorld w;
-  w.takeoff_and_hover();
-  w.send(Command::kGo, Mission::kLanding);
-  ASSERT_TRUE(w.run_until_phase(Phase::kApproach, 120));
+  ASSERT_TRUE(w.go_to_approach(Mission::kLanding));
   // Let it settle above the estimate, then push it 5 cm outside the tolerance and hold it there.
   for (int i = 0; i < 100 && w.autonomy.phase() == Phase::kApproach; ++i) w.step();
   ASSERT_EQ(w.autonomy.phase(), Phase::kApproach);
@@ -210,9 +206,7 @@ TEST(AutonomyTest, VisionSilenceInRefinementRetriesDetectionThenHolds) {
 
 TEST(AutonomyTest, TargetLostDuringApproachGoesBackToDetection) {
   KinematicWorld w;
-  w.takeoff_and_hover();
-  w.send(Command::kGo, Mission::kLanding);
-  ASSERT_TRUE(w.run_until_phase(Phase::kApproach, 120));
+  ASSERT_TRUE(w.go_to_approach(Mission::kLanding));
   // Still high above the platform (held off the estimate, e.g. by wind, so it does not descend):
   // the camera should see it, but vision is silent.
   w.vision.silent = true;
@@ -233,9 +227,7 @@ TEST(AutonomyTest, TargetLostDuringApproachGoesBackToDetection) {
 // a move of the estimate.
 TEST(AutonomyRegression, TargetsFarFromTheEstimateAreRefusedAndASustainedStreamIsAFailsafe) {
   KinematicWorld w;
-  w.takeoff_and_hover();
-  w.send(Command::kGo, Mission::kLanding);
-  ASSERT_TRUE(w.run_until_phase(Phase::kApproach, 120));
+  ASSERT_TRUE(w.go_to_approach(Mission::kLanding));
   const Vector3d est = w.autonomy.final_estimate();
   w.corrupt_target = [](TargetMeasurement& m) { m.p_W_target.x() += 0.25; };
   bool held = false;
@@ -258,9 +250,7 @@ TEST(AutonomyRegression, TargetsFarFromTheEstimateAreRefusedAndASustainedStreamI
 // the estimate (the approach's setpoint), and the descent waits until the vehicle is over it.
 TEST(AutonomyRegression, TheVisionDisagreesFailsafeHoldsAndDescendsOverTheEstimate) {
   KinematicWorld w;
-  w.takeoff_and_hover();
-  w.send(Command::kGo, Mission::kLanding);
-  ASSERT_TRUE(w.run_until_phase(Phase::kApproach, 120));
+  ASSERT_TRUE(w.go_to_approach(Mission::kLanding));
   const Vector3d est = w.autonomy.final_estimate();
   w.corrupt_target = [](TargetMeasurement& m) { m.p_W_target.x() += 0.25; };
   // Swung 20 cm off, beyond the 27.9 cm top's half width, until the failsafe's hold.
@@ -283,9 +273,7 @@ TEST(AutonomyRegression, TheVisionDisagreesFailsafeHoldsAndDescendsOverTheEstima
 TEST(AutonomyTest, TheVisionDisagreesFailsafeOfIngressHoldsWhereTheVehicleIs) {
   KinematicWorld w(ingress_params(0.45), ingress_vision());
   w.truth.opening_size_m = Vector2d(0.6, 0.6);
-  w.takeoff_and_hover();
-  w.send(Command::kGo, Mission::kIngress);
-  ASSERT_TRUE(w.run_until_phase(Phase::kApproach, 120)) << w.out.status.reason;
+  ASSERT_TRUE(w.go_to_approach(Mission::kIngress)) << w.out.status.reason;
   w.corrupt_target = [](TargetMeasurement& m) { m.p_W_target.y() += 0.5; };
   Vector3d at_hold = w.p;
   for (int i = 0; i < 4000 && w.autonomy.phase() == Phase::kApproach; ++i) {
@@ -308,9 +296,7 @@ TEST(AutonomyTest, AFoundTargetSmallerThanTheTopMayLieAsFarOffAsThePartItMissed)
   EXPECT_DOUBLE_EQ(partial_view_slack_m(Vector2d::Constant(NAN), Vector2d(0.2, 0.1)), 0.0);
   for (const bool whole : {false, true}) {
     KinematicWorld w;
-    w.takeoff_and_hover();
-    w.send(Command::kGo, Mission::kLanding);
-    ASSERT_TRUE(w.run_until_phase(Phase::kApproach, 120));
+    ASSERT_TRUE(w.go_to_approach(Mission::kLanding));
     w.corrupt_target = [whole](TargetMeasurement& m) {
       m.p_W_target.x() += 0.15;
       if (!whole) m.size_m = Vector2d(0.19, 0.15);
@@ -331,9 +317,7 @@ TEST(AutonomyTest, AFoundTargetSmallerThanTheTopMayLieAsFarOffAsThePartItMissed)
 // A target or two off the estimate among good ones (a stray plane fit) changes nothing.
 TEST(AutonomyTest, AFewStrayTargetsInApproachAreRefusedWithoutAFailsafe) {
   KinematicWorld w;
-  w.takeoff_and_hover();
-  w.send(Command::kGo, Mission::kLanding);
-  ASSERT_TRUE(w.run_until_phase(Phase::kApproach, 120));
+  ASSERT_TRUE(w.go_to_approach(Mission::kLanding));
   int n = 0;
   w.corrupt_target = [&](TargetMeasurement& m) {
     if (++n % 5 == 0) m.p_W_target.y() -= 0.3;
@@ -345,9 +329,7 @@ TEST(AutonomyTest, AFewStrayTargetsInApproachAreRefusedWithoutAFailsafe) {
 
 TEST(AutonomyTest, VisionNotNeededBelowTheLostCheckHeight) {
   KinematicWorld w;
-  w.takeoff_and_hover();
-  w.send(Command::kGo, Mission::kLanding);
-  ASSERT_TRUE(w.run_until_phase(Phase::kApproach, 120));
+  ASSERT_TRUE(w.go_to_approach(Mission::kLanding));
   const double z_touch = w.autonomy.final_estimate().z() + w.gear_height_m;
   ASSERT_TRUE(w.run_until(
       [&] { return w.p.z() - z_touch < w.autonomy.params().landing.lost_check_height_m; }, 30));
@@ -390,9 +372,7 @@ TEST(AutonomyTest, DetectionFliesTheLawnmowerInsideTheArea) {
 
 TEST(AutonomyTest, MocapDropoutMidDescentFreezesThenFailsafeDescendsAndDisarmsOnTouchdown) {
   KinematicWorld w;
-  w.takeoff_and_hover();
-  w.send(Command::kGo, Mission::kLanding);
-  ASSERT_TRUE(w.run_until_phase(Phase::kApproach, 120));
+  ASSERT_TRUE(w.go_to_approach(Mission::kLanding));
   for (int i = 0; i < 100; ++i) w.step();
   w.mocap = false;
   for (int i = 0; i < 31; ++i) w.step();  // 0.31 s: stale
@@ -428,9 +408,7 @@ TEST(AutonomyTest, MocapBackWithinOneSecondResumesTheMission) {
 
 TEST(AutonomyTest, AbortMidDescentClimbsToASafeHeightAndHolds) {
   KinematicWorld w;
-  w.takeoff_and_hover();
-  w.send(Command::kGo, Mission::kLanding);
-  ASSERT_TRUE(w.run_until_phase(Phase::kApproach, 120));
+  ASSERT_TRUE(w.go_to_approach(Mission::kLanding));
   ASSERT_TRUE(w.run_until([&] { return w.p.z() < 0.9; }, 30));
   w.send(Command::kAbort);
   EXPECT_EQ(w.autonomy.phase(), Phase::kHold);
@@ -598,9 +576,7 @@ TEST(AutonomyTest, IngressFliesTheConvergedEstimateWithoutVisionUnlessALostCheck
     auto params = ingress_params(0.45);
     params.ingress.lost_timeout_s = lost_timeout_s;
     KinematicWorld w(params, ingress_vision());
-    w.takeoff_and_hover();
-    w.send(Command::kGo, Mission::kIngress);
-    ASSERT_TRUE(w.run_until_phase(Phase::kApproach, 120));
+    ASSERT_TRUE(w.go_to_approach(Mission::kIngress));
     w.vision.silent = true;
     // Held 10 cm beside the standoff point for 5 s (a gust), so it cannot align yet.
     const Vector3d align_W =
@@ -622,9 +598,7 @@ TEST(AutonomyTest, IngressFliesTheConvergedEstimateWithoutVisionUnlessALostCheck
 
 TEST(AutonomyTest, IngressPausesWhileOutsideTheLateralTolerance) {
   KinematicWorld w(ingress_params(0.45), ingress_vision());
-  w.takeoff_and_hover();
-  w.send(Command::kGo, Mission::kIngress);
-  ASSERT_TRUE(w.run_until_phase(Phase::kApproach, 120));
+  ASSERT_TRUE(w.go_to_approach(Mission::kIngress));
   ASSERT_TRUE(w.run_until([&] { return w.out.setpoint.v_W.norm() > 0; }, 30)) << "through stage";
   const double x_sp = w.out.setpoint.p_W.x();
   for (int i = 0; i < 100; ++i) {

@@ -159,6 +159,12 @@ struct KinematicWorld {
     send(Command::kTakeoff);
     run_until_phase(Phase::kHover, 10.0);
   }
+  /// Takes off, sends GO for `mission` and steps until APPROACH; whether it got there.
+  bool go_to_approach(Mission mission, double limit_s = 120) {
+    takeoff_and_hover();
+    send(Command::kGo, mission);
+    return run_until_phase(Phase::kApproach, limit_s);
+  }
 };
 
 }  // namespace alight::autonomy::test
