@@ -1,7 +1,9 @@
 """scripts/sitl --runs N flies seeds N0 .. N0 + N - 1 (regression: each flight set args.seed to
 its own seed and the next was counted from it, so --runs 6 --seed 10827 flew 10827, 10828, 10830,
 10833, 10837, 10842). No flight is flown: run_flight is replaced by a recorder that, like the real
-one, sets args.seed.
+one, sets args.seed. And the batch flies a copy of alight's executables made when it starts
+(regression: a rebuild during a batch of flights swapped processes under a flight, whose old and
+new processes no longer decoded each other's setpoints).
 Usage: sitl_seeds_test.py SCRIPTS_DIR OUT_DIR"""
 import io
 import os
@@ -39,6 +41,14 @@ if rc != 0:
     failures.append("exit %s, expected 0" % rc)
 if flown != list(range(10827, 10833)):
     failures.append("flew seeds %s, expected 10827..10832" % flown)
+snap = os.path.join(out, "runs", "bin")
+if os.path.realpath(sitl.BIN) != os.path.realpath(snap):
+    failures.append("flew from %s, expected the batch's copy %s" % (sitl.BIN, snap))
+with open(os.path.join(out, "bin", "alight-vision"), "w") as f:
+    f.write("rebuilt")  # a rebuild after the batch started
+copied = os.path.join(snap, "alight-vision")
+if not os.path.exists(copied) or os.path.getsize(copied) != 0:
+    failures.append("the batch's alight-vision is not the copy made at its start")
 if failures:
     print("\n".join(failures))
     sys.exit(1)
