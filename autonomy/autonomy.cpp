@@ -802,7 +802,7 @@ void Autonomy::step(phases::FinalDescent& s, const Vector3d& /*p*/, double dt_s)
     sp_a_W_ << pr.a_W, 0.0;
     // The gear stays turned onto the turning platform's edges all the way down.
     yaw_sp_rad_ = aligned_yaw(pr.yaw_rad, yaw_sp_rad_);
-    sp_yaw_rate_radps_ = pr.yaw_rate_rps;
+    sp_yaw_rate_radps_ = followed_turn_radps(pr.yaw_rate_rps, params_.moving_platform);
     estimate_W_ << pr.p_W, pr.top_z_m;
     if (pose_fresh()) {
       PoseSample rel = *pose_;

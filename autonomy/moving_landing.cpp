@@ -1,6 +1,7 @@
 // Landing on a moving platform (beyond paper 3.4.1; see moving_landing.hpp).
 #include "autonomy/moving_landing.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace alight::autonomy {
@@ -80,6 +81,11 @@ Release heave_release(const HeaveModel& heave, int64_t now_utime, double fall_s,
   return Release::kWait;
 }
 
+double followed_turn_radps(double yaw_rate_rps, const MovingLandingParams& params) {
+  const double max_rps = params.max_yaw_rate_dps * M_PI / 180;
+  return std::clamp(yaw_rate_rps, -max_rps, max_rps);
+}
+
 double aligned_yaw(double platform_yaw_rad, double current_rad) {
   const double q = M_PI / 2;
   const double k = std::round((current_rad - platform_yaw_rad) / q);
@@ -129,7 +135,7 @@ MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
   const double z_final = z_top + gear_height_m + params.final_height_m;
   if (s.z_sp_m <= 0) s.z_sp_m = std::max(z_final, std::min(pose.p_W_B.z(), z_follow));
   out.yaw_sp_rad = aligned_yaw(pr.yaw_rad, yaw_sp_rad);
-  out.yaw_rate_radps = pr.yaw_rate_rps;
+  out.yaw_rate_radps = followed_turn_radps(pr.yaw_rate_rps, params);
   const Vector2d offset = pose.p_W_B.head<2>() - pr.p_W;
   const Vector2d rel_v = pose.v_W_B.head<2>() - pr.v_W;
   const bool matched =

@@ -79,6 +79,10 @@ struct MovingStep {
   std::string reason;
 };
 
+/// The platform's turn as the heading's feed-forward: never beyond max_yaw_rate_dps, a turn the
+/// vehicle follows (a faster one is PLATFORM_TOO_FAST once it lasts too_fast_s) [rad/s].
+double followed_turn_radps(double yaw_rate_rps, const MovingLandingParams& params);
+
 /// The heading that puts the body's axes along the platform's (yaw mod 90 deg) nearest to
 /// `current` [rad].
 double aligned_yaw(double platform_yaw_rad, double current_rad);

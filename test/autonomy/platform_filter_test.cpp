@@ -413,6 +413,12 @@ TEST(MovingApproachTest, FeedsThePlatformsTurnForward) {
   EXPECT_EQ(st.yaw_rate_radps, f.predict(now).yaw_rate_rps);
   EXPECT_NEAR(st.yaw_rate_radps, m.omega, 0.07);  // each measured rate has a 0.05 rad/s sigma
   EXPECT_NEAR(wrap_angle(st.yaw_sp_rad - m.yaw(t)), 0.0, 0.03);
+  // Never more than a turn the vehicle follows.
+  MovingLandingParams slow;
+  slow.max_yaw_rate_dps = 2.0;
+  EXPECT_DOUBLE_EQ(followed_turn_radps(1.0, slow), 2.0 * M_PI / 180);
+  EXPECT_DOUBLE_EQ(followed_turn_radps(-1.0, slow), -2.0 * M_PI / 180);
+  EXPECT_DOUBLE_EQ(followed_turn_radps(0.01, slow), 0.01);
 }
 
 TEST(MovingApproachTest, AlignsTheHeadingWithThePlatformsAxesTheNearestWay) {
