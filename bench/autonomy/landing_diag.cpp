@@ -146,6 +146,10 @@ int main(int argc, char** argv) try {
     // The floor's smear over this frame's exposure [px], as the pipeline's guard saw it (0 with
     // the guard off).
     std::printf(" blur %.1f", r.blur_px);
+    // The body's turn rate and speed the guard saw (motion capture's) [rad/s, m/s].
+    if (pose)
+      std::printf(" w %.2f (%+.2f %+.2f %+.2f) v %.2f", pose->omega_B.norm(), pose->omega_B.x(),
+                  pose->omega_B.y(), pose->omega_B.z(), pose->v_W_B.norm());
     std::printf(" gain %.2f", f.gain);  // the camera's, flicker and automatic gain
     // The reference's baseline and age (the top's parallax falls with the baseline).
     std::printf(" b %.3f age %.2f tr %d%s", r.baseline_m,
