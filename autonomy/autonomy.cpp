@@ -503,7 +503,7 @@ void Autonomy::finish_refinement(phases::Refinement& r) {
   const std::string where = "estimate (" + fmt(estimate_W_.x()) + ", " + fmt(estimate_W_.y()) +
                             ", " + fmt(estimate_W_.z()) +
                             ") from n = " + std::to_string(estimator_.n());
-  auto start = profile_->begin_approach(*pose_, yaw_sp_rad_, r.normal_sum_W, r.yaw4_sum, size_m);
+  auto start = profile_->begin_approach(*pose_, yaw_sp_rad_, r.normal_sum_W, r.yaw4_sum);
   yaw_sp_rad_ = start.yaw_sp_rad;
   enter(phases::Approach{std::move(start.state), r.last_found_utime, {}, {}, size_m},
         "refinement converged (eqs. 7-9): " + where);
@@ -757,7 +757,8 @@ void Autonomy::step(phases::Approach& a, const Vector3d& p, double dt_s) {
     return;
   }
   const ApproachInputs in{
-      pose_, p, estimate_W_, yaw_sp_rad_, since_found_s(a.last_found_utime), dt_s, now_utime_};
+      pose_, p,          estimate_W_, yaw_sp_rad_, since_found_s(a.last_found_utime),
+      dt_s,  now_utime_, a.size_m};
   ApproachStep next = profile_->step_approach(a.how, in);
   if (next.next == ApproachStep::Next::kTargetLost) {
     target_lost(next.reason);
@@ -772,7 +773,7 @@ void Autonomy::step(phases::Approach& a, const Vector3d& p, double dt_s) {
     case ApproachStep::Next::kFinalDescent: {
       const auto& l = std::get<LandingApproach>(a.how);
       phases::FinalDescent f{l.z_sp_m, TouchdownDetector(params_.landing), !l.land_here, {}, {}};
-      f.fit_radius_m = l.fit_radius_m;
+      f.fit_radius_m = fit_radius_m(params_.landing, std::min(a.size_m.x(), a.size_m.y()));
       if (l.held_since_utime) f.held_s = seconds(now_utime_ - *l.held_since_utime);
       f.touchdown.arm(now_utime_);
       enter(std::move(f), std::move(next.reason));

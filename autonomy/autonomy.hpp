@@ -105,7 +105,7 @@ struct FinalDescent {
   std::optional<int64_t> paused_since_utime;  ///< a gust carried the vehicle off: stopped since
   std::optional<int64_t> calm_since_utime;    ///< ... and calm again since
   bool moving = false;                        ///< onto a moving platform: follows its filter
-  double fit_radius_m = 0.0;                  ///< LandingApproach::fit_radius_m
+  double fit_radius_m = 0.0;  ///< fit_radius_m of the approach's size_m (the final hold's room)
   double held_s = 0.0;  ///< the final hold's wait before the descent: the calm bounds it earned
 };
 struct Landed {};

@@ -63,13 +63,8 @@ class LandingProfile final : public MissionProfile {
   }
 
   Start begin_approach(const PoseSample& pose, double yaw_sp_rad, const Vector3d& /*normal_sum_W*/,
-                       const Vector2d& yaw4_sum, const Vector2d& size_m) const override {
-    Start s{LandingApproach{pose.p_W_B.z(),
-                            false,
-                            {},
-                            {},
-                            fit_radius_m(p_.landing, std::min(size_m.x(), size_m.y()))},
-            yaw_sp_rad};
+                       const Vector2d& yaw4_sum) const override {
+    Start s{LandingApproach{pose.p_W_B.z(), false, {}, {}}, yaw_sp_rad};
     if (p_.landing.align_yaw_tol_deg > 0 && yaw4_sum.norm() > 1e-9) {
       // The platform's edges modulo 90 deg (the gear is square): the turn of at most 45 deg.
       const double edges = std::atan2(yaw4_sum.y(), yaw4_sum.x()) / 4;
@@ -141,7 +136,8 @@ class LandingProfile final : public MissionProfile {
     if (L.final_hold_speed_mps <= 0 || a.land_here) return true;
     if (!a.held_since_utime) a.held_since_utime = in.now_utime;
     return calm_for_final_descent(L, e_W, in.pose, seconds(in.now_utime - *a.held_since_utime),
-                                  a.fit_radius_m, in.now_utime, a.calm_since_utime);
+                                  fit_radius_m(L, std::min(in.size_m.x(), in.size_m.y())),
+                                  in.now_utime, a.calm_since_utime);
   }
 
  private:
@@ -186,8 +182,7 @@ class IngressProfile final : public MissionProfile {
   }
 
   Start begin_approach(const PoseSample& /*pose*/, double /*yaw_sp_rad*/,
-                       const Vector3d& normal_sum_W, const Vector2d& /*yaw4_sum*/,
-                       const Vector2d& /*size_m*/) const override {
+                       const Vector3d& normal_sum_W, const Vector2d& /*yaw4_sum*/) const override {
     IngressApproach a;
     a.n_W = horizontal_normal(normal_sum_W);
     return {a, yaw_facing(a.n_W)};

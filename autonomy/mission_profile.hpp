@@ -16,6 +16,7 @@
 //    standoff, then advance along it only while the lateral and vertical errors are within
 //    tolerance, pass_distance beyond the wall -> DONE.
 
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -53,9 +54,6 @@ struct LandingApproach {
   bool land_here = false;  ///< operator LAND_HERE: onto the floor below, no target to lose
   std::optional<int64_t> held_since_utime;  ///< at final_height_m, waiting for calm
   std::optional<int64_t> calm_since_utime;  ///< ... calm (speed and e_r within) since
-  /// How far off the platform's centre the gear still lands with fit_margin_m of the top around
-  /// it (fit_radius_m of the measured size; 0: unmeasured, the hold's radius never grows).
-  double fit_radius_m = 0.0;
 
   /// The altitude setpoint is down to final_height_m above the platform top at top_z_m (the
   /// final hold, then the rapid descent).
@@ -126,6 +124,9 @@ struct ApproachInputs {
   double since_found_s = 0.0;  ///< since the target was last in sight
   double dt_s = 0.0;
   int64_t now_utime = 0;
+  /// The target's size the refinement measured (long, short; NaN: unmeasured): how far off the
+  /// centre the final hold may let the gear down (fit_radius_m).
+  Vector2d size_m = Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
 };
 
 /// What one approach step decided.
@@ -176,15 +177,13 @@ class MissionProfile {
   virtual std::optional<Refusal> refuse(double size_a_m, double size_b_m) const = 0;
 
   /// The approach's start from the converged refinement: its state and the yaw to fly it with.
-  /// yaw4_sum: sum of (cos, sin)(4 yaw) of the platform's measured long axis; size_m: the
-  /// target's measured size (the medians of the full views; NaN when unmeasured).
+  /// yaw4_sum: sum of (cos, sin)(4 yaw) of the platform's measured long axis.
   struct Start {
     ApproachState state;
     double yaw_sp_rad = 0.0;
   };
   virtual Start begin_approach(const PoseSample& pose, double yaw_sp_rad,
-                               const Vector3d& normal_sum_W, const Vector2d& yaw4_sum,
-                               const Vector2d& size_m) const = 0;
+                               const Vector3d& normal_sum_W, const Vector2d& yaw4_sum) const = 0;
   virtual ApproachStep step_approach(ApproachState& state, const ApproachInputs& in) const = 0;
 
   /// Target lost and retries exhausted: hold at least this high [m].

@@ -27,7 +27,7 @@ struct Approach {
     s.p_W_B = Vector3d(target.x() + e_W.x(), target.y() + e_W.y(), std::get<0>(state).z_sp_m);
     s.v_W_B = Vector3d(v_W.x(), v_W.y(), 0);
     pose = s;
-    const ApproachInputs in{pose, s.p_W_B, target, 0.0, 0.0, 0.01, t};
+    const ApproachInputs in{pose, s.p_W_B, target, 0.0, 0.0, 0.01, t, size_m};
     return profile->step_approach(state, in);
   }
   // Steps at e_W and v_W until the approach decides (at most max_steps): how many, and the last.
@@ -49,6 +49,8 @@ struct Approach {
   std::unique_ptr<const MissionProfile> profile;
   ApproachState state;
   Vector3d target{1.0, 0.5, 0.2};
+  /// The refinement's measured size (NaN: unmeasured, the hold's radius never grows).
+  Vector2d size_m = Vector2d::Constant(std::nan(""));
   std::optional<PoseSample> pose;
   int64_t t = test::kT0;
 };
@@ -133,7 +135,7 @@ TEST(FinalHoldTest, HeldStillOffTheCentreItDescendsOnceTheTopLeavesRoom) {
   const double room_m = fit_radius_m(p.landing, 0.279);
   EXPECT_NEAR(room_m, (0.279 - 0.15) / 2 - 0.02, 1e-12);
   Approach a(p);
-  std::get<LandingApproach>(a.state).fit_radius_m = room_m;
+  a.size_m = Vector2d(0.432, 0.279);
   a.arrive();
   auto [steps, s] = a.run(Vector2d(0.0, 0.03), Vector2d::Zero());
   EXPECT_EQ(s.next, ApproachStep::Next::kFinalDescent) << s.reason;
@@ -163,7 +165,7 @@ TEST(FinalHoldTest, SwingingTowardsTheCentreItDescendsSwingingOutItWaits) {
   ASSERT_GT(v_in.norm(), p.landing.final_hold_speed_max_mps);
   const auto time_to_descend = [&](const Vector2d& v_W) {
     Approach a(p);
-    std::get<LandingApproach>(a.state).fit_radius_m = room_m;
+    a.size_m = Vector2d(0.432, 0.279);
     a.arrive();
     const auto [steps, s] = a.run(e, v_W);
     EXPECT_EQ(s.next, ApproachStep::Next::kFinalDescent) << s.reason;
