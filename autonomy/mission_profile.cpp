@@ -85,17 +85,25 @@ class LandingProfile final : public MissionProfile {
     const Vector2d body_over_gear = body_over_gear_xy(L, in.pose);
     const Vector2d e_W = p.head<2>() - body_over_gear - target.head<2>();
     const double e_r = e_W.norm();
-    if (!a.land_here && p.z() - z_touch > L.lost_check_height_m &&
-        in.since_found_s > L.lost_timeout_s) {
-      out.next = ApproachStep::Next::kTargetLost;
-      out.reason = "no target seen for " + fmt(in.since_found_s, 1) + " s in approach";
-      return out;
-    }
     const bool turned =
         L.align_yaw_tol_deg <= 0 || !in.pose ||
         std::abs(wrap_angle(yaw_of(in.pose->q_WB.toRotationMatrix()) - in.yaw_sp_rad)) <=
             L.align_yaw_tol_deg * M_PI / 180.0;
-    if (e_r <= L.radial_tol_m && turned) {  // descend only inside the prescribed volume
+    const bool descending = e_r <= L.radial_tol_m && turned;
+    // Beyond the paper: a target unseen for lost_timeout_s is lost, counting only the time the
+    // vehicle was not descending onto the estimate. That descent moves the camera along its
+    // axis, so the top sits at the epipole, where its parallax against the floor vanishes and
+    // vision cannot part it from the floor (a top near the epipole, no target plane, small
+    // baseline): not seeing it there is no sign that it is gone. Held or moving sideways, vision
+    // has the parallax to see it. A sighting starts the count again.
+    a.unseen_s = std::min(in.since_found_s, a.unseen_s + (descending ? 0.0 : in.dt_s));
+    if (!a.land_here && p.z() - z_touch > L.lost_check_height_m && a.unseen_s > L.lost_timeout_s) {
+      out.next = ApproachStep::Next::kTargetLost;
+      out.reason = "no target seen for " + fmt(in.since_found_s, 1) + " s in approach (" +
+                   fmt(a.unseen_s, 1) + " s of it not descending)";
+      return out;
+    }
+    if (descending) {  // descend only inside the prescribed volume
       a.z_sp_m -= L.descent_rate_mps * in.dt_s;
       out.sp_v_W.z() = -L.descent_rate_mps;
     }

@@ -54,6 +54,9 @@ struct LandingApproach {
   bool land_here = false;  ///< operator LAND_HERE: onto the floor below, no target to lose
   std::optional<int64_t> held_since_utime;  ///< at final_height_m, waiting for calm
   std::optional<int64_t> calm_since_utime;  ///< ... calm (speed and e_r within) since
+  /// The time since the target was last seen that the vehicle spent not descending onto the
+  /// estimate (the lost-target check's count) [s].
+  double unseen_s = 0.0;
 
   /// The altitude setpoint is down to final_height_m above the platform top at top_z_m (the
   /// final hold, then the rapid descent).

@@ -221,6 +221,27 @@ TEST(AutonomyTest, TargetLostDuringApproachGoesBackToDetection) {
   EXPECT_GE(w.p.z(), 1.0) << "lost above lost_check_height_m, not during the final metres";
 }
 
+// The approach's descent moves the camera along its axis: the top sits at the epipole, without
+// parallax against the floor, and vision finds nothing there. Unseen for longer than
+// lost_timeout_s while descending onto the estimate is no lost target; held off the estimate
+// as long, it is (TargetLostDuringApproachGoesBackToDetection).
+TEST(AutonomyTest, UnseenWhileDescendingOntoTheEstimateIsNoLostTarget) {
+  AutonomyParams p = test::test_params();
+  p.landing.lost_timeout_s = 1.0;  // shorter than the descent to lost_check_height_m
+  KinematicWorld w(p);
+  ASSERT_TRUE(w.go_to_approach(Mission::kLanding));
+  w.vision.blind = true;
+  const auto& L = w.autonomy.params().landing;
+  const Vector3d est = w.autonomy.final_estimate();
+  double unseen_above_check_s = 0.0;
+  for (int i = 0; i < 3000 && w.autonomy.phase() == Phase::kApproach; ++i) {
+    w.step();
+    if (w.p.z() - (est.z() + L.gear_height_m) > L.lost_check_height_m) unseen_above_check_s += 0.01;
+  }
+  EXPECT_EQ(w.autonomy.phase(), Phase::kFinalDescent) << w.out.status.reason;
+  EXPECT_GT(unseen_above_check_s, L.lost_timeout_s);
+}
+
 // Regression: a forged VISION_TARGET (the platform 25 cm off) became autonomy's estimate and the
 // vehicle landed beside the platform. From APPROACH on the estimate is final: targets far from it
 // are refused and counted, and a stream of them is a named failsafe (hold, then descend), never
