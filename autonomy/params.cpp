@@ -143,7 +143,8 @@ const ParamSchema<LandingParams>& LandingParams::schema() {
     s.add("touchdown_still_s", &P::touchdown_still_s, Range::open_closed(0, 10), "s",
           "or: not descending this long although commanded");
     s.add("lost_timeout_s", &P::lost_timeout_s, Range::open_closed(0, 60), "s",
-          "target unseen this long during approach: lost");
+          "target unseen this long during approach, not counting the descent onto the "
+          "estimate (the top at the epipole): lost");
     s.add("lost_check_height_m", &P::lost_check_height_m, Range::ge(0), "m",
           "... checked only while the gear is higher above it");
     s.add("align_yaw_tol_deg", &P::align_yaw_tol_deg, Range::closed_open(0, 45), "deg",
