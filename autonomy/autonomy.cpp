@@ -584,6 +584,13 @@ void Autonomy::step_moving(phases::Approach& a, const Vector3d& /*p*/, double dt
       step_moving_approach(*a.moving, platform_, *pose_, now_utime_, dt_s, yaw_sp_rad_,
                            L.gear_height_m, L.descent_rate_mps, L.final_descent_rate_mps, M);
   const auto pr = platform_.predict(now_utime_);
+  const auto fly_step = [&] {
+    sp_p_W_ = st.sp_p_W;
+    sp_v_W_ = st.sp_v_W;
+    sp_a_W_ = st.sp_a_W;
+    yaw_sp_rad_ = st.yaw_sp_rad;
+    sp_yaw_rate_radps_ = st.yaw_rate_radps;
+  };
   switch (st.next) {
     case MovingStep::Next::kTargetLost:
       target_lost(st.reason);
@@ -595,11 +602,7 @@ void Autonomy::step_moving(phases::Approach& a, const Vector3d& /*p*/, double dt
     case MovingStep::Next::kFinalDescent: {
       phases::FinalDescent f{a.moving->z_sp_m, TouchdownDetector(L), false, {}, {}, true};
       f.touchdown.arm(now_utime_);
-      sp_p_W_ = st.sp_p_W;
-      sp_v_W_ = st.sp_v_W;
-      sp_a_W_ = st.sp_a_W;
-      yaw_sp_rad_ = st.yaw_sp_rad;
-      sp_yaw_rate_radps_ = st.yaw_rate_radps;
+      fly_step();
       enter(std::move(f), st.reason);
       return;
     }
@@ -607,11 +610,7 @@ void Autonomy::step_moving(phases::Approach& a, const Vector3d& /*p*/, double dt
       break;
   }
   estimate_W_ << pr.p_W, pr.top_z_m;
-  sp_p_W_ = st.sp_p_W;
-  sp_v_W_ = st.sp_v_W;
-  sp_a_W_ = st.sp_a_W;
-  yaw_sp_rad_ = st.yaw_sp_rad;
-  sp_yaw_rate_radps_ = st.yaw_rate_radps;
+  fly_step();
   reason_ = st.reason;
 }
 
