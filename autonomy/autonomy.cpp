@@ -167,7 +167,7 @@ double Autonomy::since_found_s(const std::optional<int64_t>& last_found_utime) c
 void Autonomy::hold(const std::string& reason, Failsafe failsafe, double min_z_m) {
   const Vector3d p = pose_ ? pose_->p_W_B : sp_p_W_;
   failsafe_ = failsafe;
-  enter(phases::Hold{Vector3d(p.x(), p.y(), std::max(p.z(), min_z_m))}, reason);
+  enter(phases::Hold{Vector3d(p.x(), p.y(), std::max(p.z(), min_z_m)), std::nullopt}, reason);
 }
 
 bool Autonomy::hold_if_vision_silent() {
@@ -341,7 +341,7 @@ void Autonomy::start_from_first_pose() {
   }
   failsafe_ =
       restored_.failsafe == Failsafe::kOperatorAbort ? Failsafe::kOperatorAbort : Failsafe::kNone;
-  enter(phases::Hold{p}, why + ": holding position, waiting for the operator");
+  enter(phases::Hold{p, std::nullopt}, why + ": holding position, waiting for the operator");
 }
 
 void Autonomy::refused_at_link(const OperatorCommand& cmd) {
@@ -422,7 +422,8 @@ void Autonomy::handle_command(const OperatorCommand& cmd) {
       profile_ = MissionProfile::make(Mission::kLanding, params_);
       estimate_W_ = Vector3d(pose_->p_W_B.x(), pose_->p_W_B.y(), params_.geofence.min_W_m.z());
       failsafe_ = Failsafe::kNone;
-      enter(phases::Approach{LandingApproach{pose_->p_W_B.z(), true, {}, {}}, std::nullopt},
+      enter(phases::Approach{LandingApproach{pose_->p_W_B.z(), true, {}, {}}, std::nullopt,
+                             std::nullopt, std::nullopt},
             "LAND_HERE: landing on the floor below");
       return;
     case Command::kNudge: {

@@ -159,9 +159,9 @@ void Node::enqueue(Subscription& sub, const void* data, uint32_t size) {
 
 Node::Node(const std::string& lcm_url, std::string name, std::optional<bus::BusKey> bus_key)
     : name_(std::move(name)),
-      start_steady_us_(steady_utime()),
       sealer_(bus::draw_source_id(), bus_key),
-      gatekeeper_(bus_key) {
+      gatekeeper_(bus_key),
+      start_steady_us_(steady_utime()) {
   install_signal_handlers();
   const std::string url = with_receive_buffer(lcm_url);
   lcm_ = std::make_unique<lcm::LCM>(url);

@@ -84,7 +84,7 @@ ALIGHT_SIMD_PASS void floor_pass(int count, const float* __restrict rx, const fl
   for (int k = 0; k < count; ++k) {
     const float dwz = R6 * rx[k] + R7 * ry[k] + R8;
     const float t = num / std::min(dwz, -1e-6f);
-    th[k] = (dwz < -1e-6f) & (Cz > 0.f) ? t : inf;
+    th[k] = ((dwz < -1e-6f) & (Cz > 0.f)) ? t : inf;
     hb[k] = -1;
     ha[k] = 0;
   }
@@ -383,7 +383,7 @@ ALIGHT_SIMD_PASS [[gnu::noinline]] void taps_pass(
     // are read at level 0, texel 0, and their value discarded.
     const float clamped = std::min(std::max(level, 0.f), max_level);
     const float la = static_cast<float>(static_cast<int>(clamped));  // no truncf on SSE2
-    const float between = (level > 0.f) & (level < max_level) ? 1.f : 0.f;
+    const float between = ((level > 0.f) & (level < max_level)) ? 1.f : 0.f;
     w[k] = between * (level - la);
     const float lb = std::min(la + 1.f, max_level);
     float x0 = tu[k] * inv, y0 = tv[k] * inv;

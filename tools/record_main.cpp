@@ -82,6 +82,7 @@ class Queue {
 };
 
 struct Recorder {
+  explicit Recorder(Queue* q) : queue(q) {}
   Queue* queue;
   std::mutex stats_mutex;
   std::map<std::string, int64_t> per_channel;
@@ -191,7 +192,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   Queue queue(static_cast<size_t>(max_queue_mb * 1024 * 1024));
-  Recorder rec{&queue};
+  Recorder rec(&queue);
   lcm::Subscription* sub = lcm.subscribe(channels, &Recorder::on, &rec);
   sub->setQueueCapacity(1'000'000);
   const int port = port_of(url);

@@ -258,7 +258,9 @@ TEST(PlatformFilterTest, AfterAGapAWrongMeasurementIsNotBelievedAndTheTopIsFound
   EXPECT_FALSE(f.believed());
   for (t += kPfDt; t < 3.2 + kConfirmS; t += kPfDt) {
     f.update(measure_path(m, t, rng));
-    if (f.believed()) EXPECT_LT(f.predict(kPfT0 + int64_t(t * 1e6)).v_W.norm(), 0.5);
+    if (f.believed()) {
+      EXPECT_LT(f.predict(kPfT0 + int64_t(t * 1e6)).v_W.norm(), 0.5);
+    }
   }
   EXPECT_TRUE(f.believed());
   EXPECT_NEAR(f.predict(kPfT0 + int64_t(t * 1e6)).v_W.x(), m.v, 0.05);

@@ -206,8 +206,9 @@ TEST(GatekeeperTest, AFloodOfPublisherIdsIsBoundedAndRefused) {
   Sealer genuine(1, std::nullopt);
   int64_t t = 0;
   for (int i = 0; i < 5000; ++i, t += kMs) {
-    if (i % 10 == 0)
+    if (i % 10 == 0) {
       ASSERT_TRUE(accepted(g.check("CAMERA", rx(sealed(genuine, "CAMERA", kT0 + t)), t)));
+    }
     Sealer flood(1000 + static_cast<uint64_t>(i), std::nullopt);
     EXPECT_EQ(g.check("CAMERA", rx(sealed(flood, "CAMERA", kT0 + t)), t + 1),
               Verdict::kSecondPublisher);

@@ -31,11 +31,21 @@ struct VectorProblem {
   }
 };
 
+// Element by element: GCC's -Wmaybe-uninitialized misreads Eigen's comma initializer on a
+// dynamic-size temporary.
 VectorXd rosenbrock(const VectorXd& x) {
-  return (VectorXd(2) << 10.0 * (x(1) - x(0) * x(0)), 1.0 - x(0)).finished();
+  VectorXd r(2);
+  r(0) = 10.0 * (x(1) - x(0) * x(0));
+  r(1) = 1.0 - x(0);
+  return r;
 }
 MatrixXd rosenbrock_jacobian(const VectorXd& x) {
-  return (MatrixXd(2, 2) << -20.0 * x(0), 10.0, -1.0, 0.0).finished();
+  MatrixXd J(2, 2);
+  J(0, 0) = -20.0 * x(0);
+  J(0, 1) = 10.0;
+  J(1, 0) = -1.0;
+  J(1, 1) = 0.0;
+  return J;
 }
 
 TEST(RobustLsqTest, LinearProblemIsSolvedExactlyInOneGaussNewtonStep) {

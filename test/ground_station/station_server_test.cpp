@@ -544,7 +544,9 @@ TEST_F(StationServerTest, HeadsOverTheLimitsOrTooSlowAreRefused) {
   GroundStationParams p = params();
   p.head_deadline_s = 0.5;
   p.max_header_count = 16;
-  Station station(p, StationOptions{.port = 0});
+  StationOptions opt;
+  opt.port = 0;
+  Station station(p, opt);
   const int port = station.start();
 
   int fd = connect_to(port);

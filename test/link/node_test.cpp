@@ -459,8 +459,12 @@ TEST(LinkNode, ChannelsCrossBothWaysSignedForEachBusAndNothingElse) {
                        [&](const node_status_t& m) { return m.pid == vehicle.pid(); });
   })) << ground.log();
   for (const auto& m : b.ground_status) {
-    if (m.pid == vehicle.pid()) EXPECT_EQ(m.node, "alight-link-vehicle");
-    if (m.pid == ground.pid()) EXPECT_EQ(m.node, "alight-link-ground");
+    if (m.pid == vehicle.pid()) {
+      EXPECT_EQ(m.node, "alight-link-vehicle");
+    }
+    if (m.pid == ground.pid()) {
+      EXPECT_EQ(m.node, "alight-link-ground");
+    }
   }
   const auto session = b.link_input(vehicle.pid(), "link:session");
   ASSERT_TRUE(session);

@@ -409,7 +409,9 @@ TEST(SimRendererTest, AWetTopMirrorsTheSkyWhereTheReflectedRayMeetsIt) {
     }
     EXPECT_GT(on_top, 100);
     EXPECT_GT(elsewhere, 1000);
-    if (X_WC.translation() == beside) EXPECT_GT(max_F, 0.35) << "Fresnel's rise towards grazing";
+    if (X_WC.translation() == beside) {
+      EXPECT_GT(max_F, 0.35) << "Fresnel's rise towards grazing";
+    }
   }
 }
 
