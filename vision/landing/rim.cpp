@@ -108,8 +108,9 @@ std::optional<SideGrid> read_side(const Correspondences& c, const cv::Mat& gray_
 // The side's rim, or nullopt when the two images do not show one step at the same place of the
 // top's plane (rim.hpp). step_m is half a pixel of the current image on the top.
 struct Rim {
-  double d_m;       // outward from the side where the rim crosses the middle of the stretch read
-  double turn_rad;  // the rim's turn from the side: offset d_m + (t - mid) tan(turn_rad)
+  double d_m;          // outward from the side where the rim crosses the middle of the stretch read
+  double turn_rad;     // the rim's turn from the side: offset d_m + (t - mid) tan(turn_rad)
+  bool turn_measured;  // false: the stretches gave no turn and the lines were read unturned
 };
 
 // The rim search's grid (rim_offset): profiles G_j = P[j - kRimK] - P[j + kRimK], across one
@@ -158,8 +159,9 @@ std::vector<double> rim_profile(const SideGrid& grid, const std::vector<float>& 
 // The rim's turn as a tangent (offset steps per step along the side): the strongest darkening
 // of each stretch in the current image, unturned, and a straight line through them (least
 // squares; the stretches more than a pixel off it dropped once). Fewer than three stretches that
-// step, or a turn beyond max_tan: 0.
-double rim_turn(const SideGrid& grid, const Side& side, double step_m, int n_d, double max_tan) {
+// step, or a turn beyond max_tan: nullopt (the lines are then read unturned).
+std::optional<double> rim_turn(const SideGrid& grid, const Side& side, double step_m, int n_d,
+                               double max_tan) {
   const int n_t = grid.n_t;
   std::vector<Eigen::Vector2d> at;  // (t - t_mid [m], offset [steps])
   for (int s = 0; s < kRimStretches; ++s) {
@@ -172,15 +174,14 @@ double rim_turn(const SideGrid& grid, const Side& side, double step_m, int n_d, 
                          [](const auto& a, const auto& b) { return a.second < b.second; });
     at.emplace_back(side.t_lo + 0.5 * (i0 + i1 - 1) * grid.t_step_m - grid.t_mid, strongest->first);
   }
-  double tan_turn = 0, a = 0, b = 0;
-  if (fit_line(at, &a, &b)) {
-    std::vector<Eigen::Vector2d> near;
-    for (const auto& q : at)
-      if (std::abs(q.y() - (a + b * q.x())) <= 2.0) near.push_back(q);
-    if (near.size() < at.size() && !fit_line(near, &a, &b)) b = 0;
-    if (std::abs(b * step_m) <= max_tan) tan_turn = b * step_m;
-  }
-  return tan_turn;
+  double a = 0, b = 0;
+  if (!fit_line(at, &a, &b)) return std::nullopt;
+  std::vector<Eigen::Vector2d> near;
+  for (const auto& q : at)
+    if (std::abs(q.y() - (a + b * q.x())) <= 2.0) near.push_back(q);
+  if (near.size() < at.size() && !fit_line(near, &a, &b)) return std::nullopt;
+  if (std::abs(b * step_m) > max_tan) return std::nullopt;
+  return b * step_m;
 }
 
 // The rim on the whole side's profiles (P1 the reference's, P2 the current image's, read along
@@ -189,7 +190,7 @@ double rim_turn(const SideGrid& grid, const Side& side, double step_m, int n_d, 
 // beyond the rim the profile stays below the top's level (its median inside the step) to the
 // search's end.
 std::optional<Rim> rim_of_profiles(const std::vector<double>& P1, const std::vector<double>& P2,
-                                   double step_m, double tan_turn) {
+                                   double step_m, std::optional<double> tan_turn) {
   const int k = kRimK, j0 = kRimJ0;
   const auto steps_1 = darkening_steps(P1, j0, k, kRimMinStep);
   const int n = static_cast<int>(P2.size());
@@ -204,7 +205,8 @@ std::optional<Rim> rim_of_profiles(const std::vector<double>& P1, const std::vec
     if (beyond > level - 0.5 * kRimMinStep) continue;
     for (const auto& step_1 : steps_1)
       if (std::abs(step_1.first - j2) <= 2 * kRimMaxDisagreementPx)
-        return Rim{std::max(0.0, (j2 - j0) * step_m), std::atan(tan_turn)};
+        return Rim{std::max(0.0, (j2 - j0) * step_m), std::atan(tan_turn.value_or(0.0)),
+                   tan_turn.has_value()};
     return std::nullopt;
   }
   return std::nullopt;
@@ -218,9 +220,10 @@ std::optional<Rim> rim_offset(const Correspondences& c, const cv::Mat& gray_1,
   const auto grid = read_side(c, gray_1, gray_2, H_12, X_WC2, side, 2 * step_m, kRimMaxLines,
                               2 * kRimStretches, step_m, -kRimJ0, n_d - kRimJ0, max_tan);
   if (!grid) return std::nullopt;
-  const double tan_turn = rim_turn(*grid, side, step_m, n_d, max_tan);
-  return rim_of_profiles(rim_profile(*grid, grid->g1, side, step_m, n_d, tan_turn, 0, grid->n_t),
-                         rim_profile(*grid, grid->g2, side, step_m, n_d, tan_turn, 0, grid->n_t),
+  const auto tan_turn = rim_turn(*grid, side, step_m, n_d, max_tan);
+  const double read_tan = tan_turn.value_or(0.0);
+  return rim_of_profiles(rim_profile(*grid, grid->g1, side, step_m, n_d, read_tan, 0, grid->n_t),
+                         rim_profile(*grid, grid->g2, side, step_m, n_d, read_tan, 0, grid->n_t),
                          step_m, tan_turn);
 }
 
@@ -436,7 +439,56 @@ std::optional<Rim> top_end_offset(const Correspondences& c, const cv::Mat& gray_
   if (!off_top_beyond(*s, f, *e) ||
       !floor_beyond(c, gray_1, *s, side, H_12_floor, static_cast<int>(std::lround(e->x())), *slope))
     return std::nullopt;
-  return Rim{std::max(0.0, e->x()) * px_m, std::atan(*slope * px_m)};
+  return Rim{std::max(0.0, e->x()) * px_m, std::atan(*slope * px_m), true};
+}
+
+// What every side's search reads: the images, the planes' homographies taking a current ray to
+// the reference's ray of the same point on the top / the floor, the current camera, half a pixel
+// on the top (step_m) and the end search's reach.
+struct SideSearch {
+  const Correspondences& c;
+  const cv::Mat &gray_1, &gray_2;
+  Matrix3d H_12_top, H_12_floor;
+  Isometry3d X_WC2;
+  double step_m, end_search_m;
+};
+
+// The side of `rect` on axis k towards sign, read along the middle of the other axis' extent
+// (near the corners the lines run into the neighbouring sides' rims): its rim, else its end.
+std::optional<Rim> side_rim(const SideSearch& q, const TopRect& rect, int k, int sign) {
+  const int o = 1 - k;
+  const double span = rect.hi[o] - rect.lo[o];
+  const double at = sign < 0 ? rect.lo[k] : rect.hi[k];
+  const Side side{rect.origin_W + at * rect.axis[k], sign * rect.axis[k], rect.axis[o],
+                  rect.lo[o] + 0.15 * span, rect.hi[o] - 0.15 * span};
+  auto rim = rim_offset(q.c, q.gray_1, q.gray_2, q.H_12_top, q.X_WC2, side, q.step_m);
+  if (!rim && q.end_search_m > 0)
+    rim = top_end_offset(q.c, q.gray_1, q.gray_2, q.H_12_top, q.H_12_floor, q.X_WC2, side,
+                         2 * q.step_m, q.end_search_m);
+  return rim;
+}
+
+// A side's rim as found on the features' extent.
+struct FoundRim {
+  int k, sign;
+  Vector3d at_W;    // from origin_W: where the rim crosses the middle of the stretch read
+  double turn_rad;  // the whole rectangle's turn that squares it to this rim
+  bool turn_measured;
+};
+
+// The rectangle's turn onto its rims: the median of the measured turns, where at least two
+// were measured and agree within 4 deg, and it exceeds half a degree. A rim whose stretches gave
+// no turn says nothing about it (its lines were read unturned), so it neither turns nor vetoes.
+std::optional<double> rims_turn(const std::vector<FoundRim>& found) {
+  std::vector<double> turns;
+  for (const auto& f : found)
+    if (f.turn_measured) turns.push_back(f.turn_rad);
+  if (turns.size() < 2) return std::nullopt;
+  std::sort(turns.begin(), turns.end());
+  const double turn = turns[turns.size() / 2];
+  if (turns.back() - turns.front() > 4.0 * M_PI / 180.0 || std::abs(turn) <= 0.5 * M_PI / 180.0)
+    return std::nullopt;
+  return turn;
 }
 
 }  // namespace
@@ -448,54 +500,51 @@ std::optional<TopRect> rim_rect(const Correspondences& c, const cv::Mat& gray_1,
                                 double end_search_m) {
   // The reference's point of the top's plane seen at a current ray: the top's homography
   // (calibrated, x2 ~ H x1), which explains the top's features, not the poses' motion.
-  const Matrix3d H_12 = planes.top.homography().inverse();
-  const Matrix3d H_12_floor = planes.floor.homography().inverse();
-  const double step_m =
-      0.5 * (X_WC2.inverse() * features.origin_W).z() / c.camera->K()(0, 0);  // half a pixel
-  struct Found {
-    int k, sign;
-    Vector3d at_W;    // from origin_W: where the rim crosses the middle of the stretch read
-    double turn_rad;  // the whole rectangle's turn that squares it to this rim
-  };
-  std::vector<Found> found;
+  const SideSearch q{c,
+                     gray_1,
+                     gray_2,
+                     planes.top.homography().inverse(),
+                     planes.floor.homography().inverse(),
+                     X_WC2,
+                     0.5 * (X_WC2.inverse() * features.origin_W).z() / c.camera->K()(0, 0),
+                     end_search_m};
+  std::vector<FoundRim> found;
   TopRect r = widened;
-  for (int k = 0; k < 2; ++k) {
-    // Along the middle of the other axis' extent: near the corners the lines run into the
-    // neighbouring sides' rims.
-    const int o = 1 - k;
-    const double span = features.hi[o] - features.lo[o];
-    const double t_lo = features.lo[o] + 0.15 * span, t_hi = features.hi[o] - 0.15 * span;
+  for (int k = 0; k < 2; ++k)
     for (const int sign : {-1, 1}) {
-      const double at = sign < 0 ? features.lo[k] : features.hi[k];
-      const Side side{features.origin_W + at * features.axis[k], sign * features.axis[k],
-                      features.axis[o], t_lo, t_hi};
-      auto rim = rim_offset(c, gray_1, gray_2, H_12, X_WC2, side, step_m);
-      if (!rim && end_search_m > 0)
-        rim = top_end_offset(c, gray_1, gray_2, H_12, H_12_floor, X_WC2, side, 2 * step_m,
-                             end_search_m);
+      const auto rim = side_rim(q, features, k, sign);
       if (!rim) continue;
-      const double s = at + sign * rim->d_m;
+      const double s = (sign < 0 ? features.lo[k] : features.hi[k]) + sign * rim->d_m;
       (sign < 0 ? r.lo[k] : r.hi[k]) = s;
       // The turn that takes axis k's side onto the rim, as a turn of the whole rectangle about
       // the top's normal (from the long axis towards the short one).
-      found.push_back({k, sign, s * features.axis[k] + 0.5 * (t_lo + t_hi) * features.axis[o],
-                       (k == 1 ? sign : -sign) * rim->turn_rad});
+      const int o = 1 - k;
+      found.push_back(
+          {k, sign,
+           s * features.axis[k] + 0.5 * (features.lo[o] + features.hi[o]) * features.axis[o],
+           (k == 1 ? sign : -sign) * rim->turn_rad, rim->turn_measured});
     }
-  }
   if (found.empty()) return std::nullopt;
-  if (found.size() < 2) return r;
-  std::vector<double> turns;
-  for (const auto& f : found) turns.push_back(f.turn_rad);
-  std::sort(turns.begin(), turns.end());
-  const double turn = turns[turns.size() / 2];
-  if (turns.back() - turns.front() > 4.0 * M_PI / 180.0 || std::abs(turn) <= 0.5 * M_PI / 180.0)
-    return r;
+  const auto turn = rims_turn(found);
+  if (!turn) return r;
   // Turned: the features' extent along the turned axes (widened where no rim is), each rim's
-  // side where its crossing lies along them.
-  const Vector3d l = std::cos(turn) * features.axis[0] + std::sin(turn) * features.axis[1];
-  const Vector3d sh = -std::sin(turn) * features.axis[0] + std::cos(turn) * features.axis[1];
-  TopRect t = widened_by_shortfall(features_rect(pts_W, features.origin_W, l, sh), pts_W.size());
-  for (const auto& f : found) (f.sign < 0 ? t.lo[f.k] : t.hi[f.k]) = f.at_W.dot(t.axis[f.k]);
+  // side where its crossing lies along them. A side without a rim was searched along the
+  // unturned side, whose far end may lie beyond the search's reach from the turned rim: it is
+  // searched again along the turned axes.
+  const Vector3d l = std::cos(*turn) * features.axis[0] + std::sin(*turn) * features.axis[1];
+  const Vector3d sh = -std::sin(*turn) * features.axis[0] + std::cos(*turn) * features.axis[1];
+  const TopRect turned = features_rect(pts_W, features.origin_W, l, sh);
+  TopRect t = widened_by_shortfall(turned, pts_W.size());
+  for (int k = 0; k < 2; ++k)
+    for (const int sign : {-1, 1}) {
+      const auto f = std::find_if(found.begin(), found.end(),
+                                  [&](const FoundRim& g) { return g.k == k && g.sign == sign; });
+      if (f != found.end()) {
+        (sign < 0 ? t.lo[k] : t.hi[k]) = f->at_W.dot(t.axis[k]);
+      } else if (const auto rim = side_rim(q, turned, k, sign)) {
+        (sign < 0 ? t.lo[k] : t.hi[k]) = (sign < 0 ? turned.lo[k] : turned.hi[k]) + sign * rim->d_m;
+      }
+    }
   return t;
 }
 

@@ -18,8 +18,11 @@
 // features' rectangle can be turned from the top's edges, and a line across a turned rim
 // spreads its step: the rim's turn (at most 15 deg) is the straight line through the
 // steps of short stretches of the side, and the lines are read along it. Rims that agree on a
-// turn turn the rectangle onto them. A side without a rim keeps the features' extent and its
-// half of side_from_extent's widening (never wider than the evidence shows); with one, the side
+// turn turn the rectangle onto them (a rim whose stretches gave no turn was read unturned and
+// says nothing about it), and each side without a rim is searched again along the turned
+// axes: the far end of a side turned from the features' lies beyond the first search's reach,
+// and its stretches then gave no turn either. A side without a rim keeps the features' extent and
+// its half of side_from_extent's widening (never wider than the evidence shows); with one, the side
 // ends at the rim. The plane check (gates.hpp) reads the features' hull, not the rim's
 // rectangle: the rim is measured only on a top the check accepts.
 //
@@ -56,9 +59,10 @@ constexpr double kTopEndSearchM = 0.1;
 /// The top out to its rims: each side of the features' extent (`features`, their points pts_W)
 /// moved to its rim where both images show one (else to the top's end within end_search_m of the
 /// side: find_landing_target passes kTopEndSearchM; 0, no end search), else widened as
-/// `widened`; nullopt where no side has either. Two or more rims that agree on a turn turn the
-/// rectangle onto them, each side with a rim then where its rim crosses the middle of the
-/// stretch read. gray_1 / gray_2: the reference and current raw images.
+/// `widened`; nullopt where no side has either. Two or more rims whose measured turns agree turn
+/// the rectangle onto them, each side with a rim then where its rim crosses the middle of the
+/// stretch read, and each side without one searched again along the turned axes.
+/// gray_1 / gray_2: the reference and current raw images.
 std::optional<TopRect> rim_rect(const Correspondences& c, const cv::Mat& gray_1,
                                 const cv::Mat& gray_2, const LandingPlanes& planes,
                                 const Isometry3d& X_WC2, const std::vector<Vector3d>& pts_W,

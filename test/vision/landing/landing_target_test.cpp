@@ -750,6 +750,28 @@ TEST(TopRim, RimsTurnedFromTheFeaturesTurnTheRectangleOntoTheEdges) {
   }
 }
 
+// Turned further (12 deg, as a rectangle of a dozen features on a top with one busy corner can
+// be), the far end of a long side lies beyond the search's reach from the features' side, and
+// that side's stretches give no turn of their own. The rims that do measure the turn turn the
+// rectangle, and each side they did not reach is searched again along the turned axes: the
+// sizes and centre as the scene has them, the yaw within 1.5 deg. A rim whose lines were read
+// unturned is no evidence against the turn.
+TEST(TopRim, ASideBeyondTheFirstSearchIsSearchedAgainAlongTheTurnedRims) {
+  const BoxScene scene;
+  const double turn = 12.0 * M_PI / 180.0;
+  const auto yaw_error_deg = [&](double yaw) {
+    return std::abs(std::remainder(yaw - scene.yaw, M_PI)) * 180.0 / M_PI;
+  };
+  for (uint64_t seed = 1; seed <= 4; ++seed) {
+    const BoxViews b = box_views(scene, seed, 0.03, 0.037, std::nullopt, turn);
+    PipelineParams params;
+    const TargetOutcome o = find_landing_target(b.view.c, params, b.image_1, b.image_2);
+    ASSERT_TRUE(found(o)) << "seed " << seed << ": " << to_string(o.reason);
+    EXPECT_LT(yaw_error_deg(o.estimate.yaw_rad), 1.5) << "seed " << seed;
+    expect_measured(o, scene, 0.01, 0.005, seed);
+  }
+}
+
 // No rim evidence, no change: a top, side faces and floor of one grey show no rim, and the edge
 // of a darker rug on the floor 2-4 cm beyond the top, within the search, steps in both images,
 // but at places of the top's plane 1.5 cm apart (it lies on the floor, the baseline across it).
