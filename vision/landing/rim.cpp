@@ -442,6 +442,10 @@ std::optional<Rim> top_end_offset(const Correspondences& c, const cv::Mat& gray_
   return Rim{std::max(0.0, e->x()) * px_m, std::atan(*slope * px_m), true};
 }
 
+// The side of `r` on axis k towards sign: its lo or its hi.
+double& side_of(TopRect& r, int k, int sign) { return sign < 0 ? r.lo[k] : r.hi[k]; }
+double side_of(const TopRect& r, int k, int sign) { return sign < 0 ? r.lo[k] : r.hi[k]; }
+
 // What every side's search reads: the images, the planes' homographies taking a current ray to
 // the reference's ray of the same point on the top / the floor, the current camera, half a pixel
 // on the top (step_m) and the end search's reach.
@@ -458,7 +462,7 @@ struct SideSearch {
 std::optional<Rim> side_rim(const SideSearch& q, const TopRect& rect, int k, int sign) {
   const int o = 1 - k;
   const double span = rect.hi[o] - rect.lo[o];
-  const double at = sign < 0 ? rect.lo[k] : rect.hi[k];
+  const double at = side_of(rect, k, sign);
   const Side side{rect.origin_W + at * rect.axis[k], sign * rect.axis[k], rect.axis[o],
                   rect.lo[o] + 0.15 * span, rect.hi[o] - 0.15 * span};
   auto rim = rim_offset(q.c, q.gray_1, q.gray_2, q.H_12_top, q.X_WC2, side, q.step_m);
@@ -514,8 +518,8 @@ std::optional<TopRect> rim_rect(const Correspondences& c, const cv::Mat& gray_1,
     for (const int sign : {-1, 1}) {
       const auto rim = side_rim(q, features, k, sign);
       if (!rim) continue;
-      const double s = (sign < 0 ? features.lo[k] : features.hi[k]) + sign * rim->d_m;
-      (sign < 0 ? r.lo[k] : r.hi[k]) = s;
+      const double s = side_of(features, k, sign) + sign * rim->d_m;
+      side_of(r, k, sign) = s;
       // The turn that takes axis k's side onto the rim, as a turn of the whole rectangle about
       // the top's normal (from the long axis towards the short one).
       const int o = 1 - k;
@@ -540,9 +544,9 @@ std::optional<TopRect> rim_rect(const Correspondences& c, const cv::Mat& gray_1,
       const auto f = std::find_if(found.begin(), found.end(),
                                   [&](const FoundRim& g) { return g.k == k && g.sign == sign; });
       if (f != found.end()) {
-        (sign < 0 ? t.lo[k] : t.hi[k]) = f->at_W.dot(t.axis[k]);
+        side_of(t, k, sign) = f->at_W.dot(t.axis[k]);
       } else if (const auto rim = side_rim(q, turned, k, sign)) {
-        (sign < 0 ? t.lo[k] : t.hi[k]) = (sign < 0 ? turned.lo[k] : turned.hi[k]) + sign * rim->d_m;
+        side_of(t, k, sign) = side_of(turned, k, sign) + sign * rim->d_m;
       }
     }
   return t;

@@ -724,6 +724,11 @@ TEST(TopRim, FeaturesShortOfTheEdgesMeasureTheTopToItsRim) {
   }
 }
 
+// How far a measured yaw is from the scene's long axis, modulo a half turn [deg].
+double long_axis_error_deg(double yaw, const BoxScene& scene) {
+  return std::abs(std::remainder(yaw - scene.yaw, M_PI)) * 180.0 / M_PI;
+}
+
 // A nearly blank top whose features' rectangle is turned 6 deg from its edges (as a minimum-area
 // rectangle of a few dozen features can be): each side's rim is read along its own turn, fitted
 // to where stretches of the side step, and the rims' agreement turns the rectangle onto the
@@ -731,10 +736,6 @@ TEST(TopRim, FeaturesShortOfTheEdgesMeasureTheTopToItsRim) {
 TEST(TopRim, RimsTurnedFromTheFeaturesTurnTheRectangleOntoTheEdges) {
   const BoxScene scene;
   const double turn = 6.0 * M_PI / 180.0;
-  const auto yaw_error_deg = [&](double yaw) {  // the long axis' direction, modulo a half turn
-    double d = std::remainder(yaw - scene.yaw, M_PI);
-    return std::abs(d) * 180.0 / M_PI;
-  };
   for (uint64_t seed = 1; seed <= 4; ++seed) {
     // Half-extents 12 x 6.5 cm turned 6 deg: 2.3 cm inside the long sides, 2.5 cm inside the
     // short ones at the nearest corner.
@@ -742,10 +743,10 @@ TEST(TopRim, RimsTurnedFromTheFeaturesTurnTheRectangleOntoTheEdges) {
     PipelineParams params;
     const TargetOutcome features = find_landing_target(b.view.c, params);
     ASSERT_TRUE(found(features)) << "seed " << seed << ": " << to_string(features.reason);
-    EXPECT_GT(yaw_error_deg(features.estimate.yaw_rad), 3.0) << "seed " << seed;
+    EXPECT_GT(long_axis_error_deg(features.estimate.yaw_rad, scene), 3.0) << "seed " << seed;
     const TargetOutcome o = find_landing_target(b.view.c, params, b.image_1, b.image_2);
     ASSERT_TRUE(found(o)) << "seed " << seed << ": " << to_string(o.reason);
-    EXPECT_LT(yaw_error_deg(o.estimate.yaw_rad), 1.5) << "seed " << seed;
+    EXPECT_LT(long_axis_error_deg(o.estimate.yaw_rad, scene), 1.5) << "seed " << seed;
     expect_measured(o, scene, 0.01, 0.005, seed);
   }
 }
@@ -759,15 +760,12 @@ TEST(TopRim, RimsTurnedFromTheFeaturesTurnTheRectangleOntoTheEdges) {
 TEST(TopRim, ASideBeyondTheFirstSearchIsSearchedAgainAlongTheTurnedRims) {
   const BoxScene scene;
   const double turn = 12.0 * M_PI / 180.0;
-  const auto yaw_error_deg = [&](double yaw) {
-    return std::abs(std::remainder(yaw - scene.yaw, M_PI)) * 180.0 / M_PI;
-  };
   for (uint64_t seed = 1; seed <= 4; ++seed) {
     const BoxViews b = box_views(scene, seed, 0.03, 0.037, std::nullopt, turn);
     PipelineParams params;
     const TargetOutcome o = find_landing_target(b.view.c, params, b.image_1, b.image_2);
     ASSERT_TRUE(found(o)) << "seed " << seed << ": " << to_string(o.reason);
-    EXPECT_LT(yaw_error_deg(o.estimate.yaw_rad), 1.5) << "seed " << seed;
+    EXPECT_LT(long_axis_error_deg(o.estimate.yaw_rad, scene), 1.5) << "seed " << seed;
     expect_measured(o, scene, 0.01, 0.005, seed);
   }
 }
