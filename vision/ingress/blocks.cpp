@@ -188,8 +188,10 @@ bool seen_through_wall(const Correspondences& c, const HomographyFit& fit, const
 }
 
 // Features on the inner faces within the wall's thickness of its front edge fit the wall's
-// homography: a block may hold one such inlier per 50 features seen through the wall.
+// homography: a block may hold one such inlier per 50 features seen through the wall, and one
+// at least (a dim room, a lens's dark corners: an opening seen through with fewer than 50).
 constexpr double kBlockInlierShare = 0.02;
+constexpr double kBlockStrayInliers = 1.0;
 
 Block best_block(const Correspondences& c, const HomographyFit& fit, const Cells& cells,
                  const IngressParams& p) {
@@ -205,7 +207,7 @@ Block best_block(const Correspondences& c, const HomographyFit& fit, const Cells
           if (wall_strip(n, edge, i0, j0, i1, j1)) continue;
           const int n_in = n.block(n.in, i0, j0, i1, j1);
           const int n_off = n.block(n.off, i0, j0, i1, j1);
-          if (n_in > kBlockInlierShare * n_off) continue;
+          if (n_in > std::max(kBlockStrayInliers, kBlockInlierShare * n_off)) continue;
           const double area = (xc[i1] - xc[i0]) * (yc[j1] - yc[j0]);
           if (n_off > best.n_off || (n_off == best.n_off && n_off > 0 && area > best_area)) {
             best = Block{i0, j0, i1, j1, n_off};

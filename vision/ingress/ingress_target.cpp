@@ -5,12 +5,31 @@
 #include <utility>
 
 #include "vision/geometry/homography.hpp"
+#include "vision/geometry/plane_gain.hpp"
 #include "vision/geometry/waypoint.hpp"
 #include "vision/ingress/blocks.hpp"
 #include "vision/ingress/opening.hpp"
 #include "vision/ingress/wall.hpp"
 
 namespace alight::vision {
+namespace {
+
+// The current smoothed view at the reference's photometry on the wall (plane_gain.hpp), so that
+// the off-wall mask and the faces difference parallax rather than the lens's falloff. The view
+// as it is where the wall's inliers set no gain.
+cv::Mat at_wall_photometry(const Correspondences& c, const HomographyFit& fit, cv::Size size,
+                           const cv::Mat& image_parallax, const cv::Mat& reference_parallax) {
+  if (image_parallax.empty() || reference_parallax.empty()) return image_parallax;
+  std::vector<Vector2d> wall_px;
+  for (size_t k = 0; k < c.size(); ++k)
+    if (fit.inlier[k]) wall_px.push_back(c.u2[k]);
+  const double scale = static_cast<double>(size.width) / image_parallax.cols;
+  const auto gain =
+      fit_plane_gain(image_parallax, reference_parallax, scale, fit.H, *c.camera, wall_px);
+  return gain ? remove_gain(image_parallax, scale, *c.camera, *gain) : image_parallax;
+}
+
+}  // namespace
 
 TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image,
                                   const cv::Mat& reference, const PipelineParams& params) {
@@ -44,8 +63,10 @@ TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image
   if (!wall.plane) return refuse(wall.plane.reason());
 
   // 2. The blocks.
+  const cv::Mat image_wall_photometry =
+      at_wall_photometry(c, fit, image.size(), image_parallax, reference_parallax);
   const Cells cells =
-      cut_into_cells(c, fit, image, image_parallax, reference_parallax, p, &out.lines);
+      cut_into_cells(c, fit, image, image_wall_photometry, reference_parallax, p, &out.lines);
   const Block b = best_block(c, fit, cells, p);
   out.estimate.n_inliers_target = b.n_off;
   if (b.n_off < p.min_outliers) return refuse(Reason::kNoOpening);
@@ -59,9 +80,8 @@ TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image
   OpeningBox box{cells.xc[b.i0], cells.xc[b.i1], cells.yc[b.j0], cells.yc[b.j1]};
   if (!cells.mask.empty() && image_parallax.size() == image.size()) {
     const Matrix3d K = c.camera->K();
-    const CutGeometry geometry{
-        Vector2d(K(0, 2), K(1, 2)), wall.depth_m, *wall.plane, c.camera, image_parallax,
-        reference_parallax};
+    const CutGeometry geometry{Vector2d(K(0, 2), K(1, 2)), wall.depth_m,      *wall.plane, c.camera,
+                               image_wall_photometry,      reference_parallax};
     box = to_front_edges(box, cells.mask.size(), geometry, p);
   }
 

@@ -6,6 +6,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "common/build_paths.hpp"
+#include "sim/camera_effects.hpp"
 #include "test/vision/mission_sim.hpp"
 #include "vision/node/diag_image.hpp"
 
@@ -56,6 +57,39 @@ TEST_P(IngressMissionTest, OpeningWidthAndCentre) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Seeds, IngressMissionTest, ::testing::Values(1, 2, 3, 4, 5, 6));
+
+// The same views through a lens whose corners get 45 % of the centre's light: the wall's points
+// change brightness as they move across the image, which the off-wall mask must not read as
+// parallax (plane_gain.hpp). The same bars as without it.
+class VignettedIngressMissionTest : public ::testing::TestWithParam<uint64_t> {};
+
+TEST_P(VignettedIngressMissionTest, OpeningWidthAndCentre) {
+  const std::string root = alight::build::source_dir();
+  const auto scene =
+      sim::build_scene(sim::load_scenario(root + "/config/scenarios/ingress.yaml"), GetParam());
+  ASSERT_TRUE(scene.opening);
+  const Vector3d c = scene.opening->center_W;
+  auto seq = render_sequence("ingress.yaml", GetParam(), "forward",
+                             Vector3d(c.x() - 1.5 - 0.12, c.y() - 0.12, c.z() + 0.03),
+                             Vector3d(0.0, 0.04, -0.005), Vector3d(0.01, 0.0, 0.02), 7);
+  const cv::Mat falloff = sim::vignetting_map(seq.rig.model, 0.45);
+  for (auto& f : seq.frames) {
+    cv::Mat light;
+    f.image.convertTo(light, CV_32F);
+    cv::multiply(light, falloff, light);
+    light.convertTo(f.image, CV_8U);
+  }
+  const FrameResult r = run(seq, Mission::kIngress).back();
+  ASSERT_TRUE(r.found()) << to_string(r.reason);
+  std::printf("vignetted ingress seed %llu: centre error %.4f m, width %.4f height %.4f\n",
+              static_cast<unsigned long long>(GetParam()), (r.target.p_W - c).norm(),
+              r.target.size_m[0], r.target.size_m[1]);
+  EXPECT_LT((r.target.p_W - c).norm(), 0.02);
+  EXPECT_NEAR(r.target.size_m[0], 0.60, 0.01);
+  EXPECT_NEAR(r.target.size_m[1], 0.60, 0.02);
+}
+
+INSTANTIATE_TEST_SUITE_P(Seeds, VignettedIngressMissionTest, ::testing::Values(1, 2, 3, 4, 5, 6));
 
 TEST(IngressMissionTest, NoOpeningInTheSolidWall) {
   const auto seq = render_sequence("ingress_solid.yaml", 3, "forward", Vector3d(1.5, -0.12, 1.2),
