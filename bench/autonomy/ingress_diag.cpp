@@ -47,7 +47,9 @@ int main(int argc, char** argv) try {
   std::printf("# opening centre (%.3f %.3f %.3f) size %.3f x %.3f thickness %.3f\n", centre_W.x(),
               centre_W.y(), centre_W.z(), size.x(), size.y(), w.thickness_m);
   const auto params = vision::load_node_params(vehicle);
-  const auto rig = sim::load_camera_rig(vehicle, "forward");
+  // The camera as rendered: the vision undistorts with the scenario's lens, as the node does.
+  auto rig = sim::load_camera_rig(vehicle, "forward");
+  rig.model = sim::with_lens(rig.model, scenario.camera.effects);
   vision::Pipeline pipeline(vision::Mission::kIngress, params.pipeline, rig.model, rig.mount);
   Phase phase = Phase::kIdle;
   ClosedLoopConfig c;

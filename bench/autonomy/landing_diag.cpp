@@ -72,7 +72,9 @@ int main(int argc, char** argv) try {
     corners_W.push_back(P.top_center_W + Vector3d(c * x - s * y, s * x + c * y, 0));
   }
   const auto params = vision::load_node_params(vehicle);
-  const auto rig = sim::load_camera_rig(vehicle, "downward");
+  // The camera as rendered: the vision undistorts with the scenario's lens, as the node does.
+  auto rig = sim::load_camera_rig(vehicle, "downward");
+  rig.model = sim::with_lens(rig.model, scenario.camera.effects);
   vision::Pipeline pipeline(vision::Mission::kLanding, params.pipeline, rig.model, rig.mount);
   auto shadow_params = params.pipeline;
   if (!shadow_prior.empty()) shadow_params.landing.floor_prior = shadow_prior;

@@ -174,7 +174,9 @@ int main(int argc, char** argv) try {
     scenario.camera.rate_hz = rate_hz;
     const bench::Recorded rec =
         bench::record_one_period(scenario, vehicle, sc.seed, loop_s, rate_hz, standoff_m);
-    const auto rig = sim::load_camera_rig(vehicle, scenario.camera.mount);
+    // The camera as rendered: the vision undistorts with the scenario's lens, as the node does.
+    auto rig = sim::load_camera_rig(vehicle, scenario.camera.mount);
+    rig.model = sim::with_lens(rig.model, scenario.camera.effects);
     const vision::Mission mission =
         scenario.wall ? vision::Mission::kIngress : vision::Mission::kLanding;
     vision::Pipeline pipeline(mission, params.pipeline, rig.model, rig.mount);

@@ -49,7 +49,7 @@ std::optional<double> window_mean(const cv::Mat& image, double u, double v, int 
 }
 
 struct Samples {
-  std::vector<Row6> rows;       // the basis at each point
+  std::vector<Row6> rows;  // the basis at each point
   std::vector<double> log_ratio;
 };
 

@@ -2,6 +2,7 @@
 #include "vision/ingress/opening.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 #include "vision/geometry/waypoint.hpp"
 
@@ -43,6 +44,81 @@ bool partial_behind_wall(const Correspondences& c, const HomographyFit& wall,
 
 }  // namespace
 
+// The cut's points taken through the lens are a curve bowing the other way about the edge; the
+// straight line fitted to them lies on the edge to second order in the distortion (the cut is
+// the edge's raw image less its mean bow). The line's own raw image then gives the bow that the
+// first order missed: the cut is moved by the difference between it and the line's raw mean, and
+// the line fitted again (kSideRounds times; a strong barrel lens leaves half a pixel after one).
+constexpr int kSideSamples = 17;
+constexpr int kSideRounds = 3;
+
+namespace {
+
+// A line across = offset + slope * along in normalised coordinates (along: y for a vertical side).
+struct SideLine {
+  double offset = 0, slope = 0;
+};
+
+// The line fitted to the raw segment's points taken through the lens.
+SideLine line_through_lens(const CameraModel& camera, const Vector2d& from, const Vector2d& to,
+                           bool vertical) {
+  double s_a = 0, s_b = 0, s_aa = 0, s_ab = 0;
+  for (int i = 0; i < kSideSamples; ++i) {
+    const Vector3d r = camera.ray(from + (to - from) * (i / double(kSideSamples - 1)));
+    const double along = vertical ? r.y() : r.x(), across = vertical ? r.x() : r.y();
+    s_a += along, s_b += across, s_aa += along * along, s_ab += along * across;
+  }
+  const double n = kSideSamples, det = n * s_aa - s_a * s_a;
+  SideLine line;
+  line.slope = det > 0 ? (n * s_ab - s_a * s_b) / det : 0.0;
+  line.offset = (s_b - line.slope * s_a) / n;
+  return line;
+}
+
+Vector3d ray_on(const SideLine& line, double along, bool vertical) {
+  const double across = line.offset + line.slope * along;
+  return vertical ? Vector3d(across, along, 1) : Vector3d(along, across, 1);
+}
+
+}  // namespace
+
+Vector2d side_middle(const CameraModel& camera, const Vector2d& from, const Vector2d& to,
+                     const Vector2d& centre) {
+  const Vector2d plain = from + 0.5 * (to - from);
+  if (!camera.has_distortion()) return plain;
+  const bool vertical = std::abs(to.y() - from.y()) >= std::abs(to.x() - from.x());
+  const int k = vertical ? 0 : 1;  // the raw coordinate across the side
+  const Vector3d r_from = camera.ray(from), r_to = camera.ray(to);
+  const double along_from = vertical ? r_from.y() : r_from.x();
+  const double along_to = vertical ? r_to.y() : r_to.x();
+  Vector2d a = from, b = to;
+  SideLine line = line_through_lens(camera, a, b, vertical);
+  for (int round = 1; round < kSideRounds; ++round) {
+    // The line's raw image, across the side, on average along the raw side (as the cut's
+    // pixels weigh it: one per raw row or column).
+    double sum = 0, length = 0;
+    std::optional<Vector2d> last;
+    for (int i = 0; i < kSideSamples; ++i) {
+      const double t = i / double(kSideSamples - 1);
+      const auto px =
+          camera.project(ray_on(line, along_from + t * (along_to - along_from), vertical));
+      if (!px) return plain;
+      if (last) {
+        const double step = (*px)(1 - k) - (*last)(1 - k);
+        sum += 0.5 * ((*px)(k) + (*last)(k)) * step, length += step;
+      }
+      last = px;
+    }
+    if (!(std::abs(length) > 0)) return plain;
+    const double shift = 0.5 * (from(k) + to(k)) - sum / length;
+    a(k) += shift, b(k) += shift;
+    line = line_through_lens(camera, a, b, vertical);
+  }
+  const Vector3d rc = camera.ray(centre);
+  const auto px = camera.project(ray_on(line, vertical ? rc.y() : rc.x(), vertical));
+  return px ? *px : plain;
+}
+
 Reason measure_opening(const Correspondences& c, const PlaneMotion& wall, const OpeningBox& box,
                        const PipelineParams& params, TargetEstimate* e) {
   const double left = box.left, right = box.right, top = box.top, bottom = box.bottom;
@@ -51,9 +127,12 @@ Reason measure_opening(const Correspondences& c, const PlaneMotion& wall, const 
     return compute_waypoint(wall, c.ray_of_pixel2(px), c.pose_1, c.pose_2, *c.mount,
                             params.waypoint);
   };
+  const CameraModel& cam = *c.camera;
   const auto w_c = on_wall(centre);
-  const auto w_l = on_wall({left, centre.y()}), w_r = on_wall({right, centre.y()});
-  const auto w_t = on_wall({centre.x(), top}), w_b = on_wall({centre.x(), bottom});
+  const auto w_l = on_wall(side_middle(cam, {left, top}, {left, bottom}, centre));
+  const auto w_r = on_wall(side_middle(cam, {right, top}, {right, bottom}, centre));
+  const auto w_t = on_wall(side_middle(cam, {left, top}, {right, top}, centre));
+  const auto w_b = on_wall(side_middle(cam, {left, bottom}, {right, bottom}, centre));
   for (const auto* w : {&w_c, &w_l, &w_r, &w_t, &w_b})
     if (!*w) return w->reason();
   e->p_W = w_c->p_W;

@@ -19,9 +19,19 @@
 
 namespace alight::vision {
 
+/// The raw pixel where a side of the box (the raw segment from -> to, a cut fitted along the
+/// whole side) crosses the row (a vertical side) or column (a horizontal one) of the box's
+/// centre, through the camera's lens: the straight line fitted to the side's points taken
+/// through the lens, evaluated at the centre's. Without distortion the segment's middle. Through
+/// a distorting lens the opening's straight edge bows in the raw image and a straight cut sits
+/// at the bow's mean, so the plain middle lies inside the edge (every width short); the line
+/// through the lens lies on the edge to second order in the distortion.
+Vector2d side_middle(const CameraModel& camera, const Vector2d& from, const Vector2d& to,
+                     const Vector2d& centre);
+
 /// The opening of box on the wall's plane (eqs. 4-6): the waypoint of its centre, the width
-/// between the middles of its left and right sides, the height between those of its top and
-/// bottom, the centre as the aiming pixel and the box as the outline, filled into *e. A
+/// between the middles of its left and right sides (side_middle), the height between those of
+/// its top and bottom, the centre as the aiming pixel and the box as the outline, filled into *e. A
 /// waypoint's failure is the reason (geometry/waypoint.hpp); an opening narrower or lower than
 /// min_size_m is kOpeningTooSmall (e filled all the same).
 Reason measure_opening(const Correspondences& c, const PlaneMotion& wall, const OpeningBox& box,

@@ -9,8 +9,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <random>
 #include <opencv2/imgproc.hpp>
+#include <random>
 
 namespace alight::vision {
 namespace {
@@ -42,8 +42,8 @@ cv::Mat view(const cv::Mat& t, const CameraModel& m, cv::Point shift, double cor
   cv::Mat out(m.height, m.width, CV_8UC1);
   for (int v = 0; v < m.height; ++v)
     for (int u = 0; u < m.width; ++u)
-      out.at<uint8_t>(v, u) = cv::saturate_cast<uint8_t>(
-          gain * vignette(m, u, v, corner) * t.at<float>(v + shift.y, u + shift.x));
+      out.at<uint8_t>(v, u) = cv::saturate_cast<uint8_t>(gain * vignette(m, u, v, corner) *
+                                                         t.at<float>(v + shift.y, u + shift.x));
   return out;
 }
 
@@ -71,7 +71,8 @@ double median_plane_difference(const cv::Mat& current, const cv::Mat& reference,
   std::vector<int> diffs;
   for (int v = 20; v < current.rows - 20; v += 2)
     for (int u = 20; u < current.cols - 20; u += 2)
-      diffs.push_back(std::abs(current.at<uint8_t>(v, u) - reference.at<uint8_t>(v - d.y, u - d.x)));
+      diffs.push_back(
+          std::abs(current.at<uint8_t>(v, u) - reference.at<uint8_t>(v - d.y, u - d.x)));
   std::nth_element(diffs.begin(), diffs.begin() + diffs.size() / 2, diffs.end());
   return diffs[diffs.size() / 2];
 }
@@ -83,12 +84,12 @@ TEST(PlaneGainTest, AMovedVignetteIsRecoveredAndRemoved) {
   const double corner = 0.5;
   const cv::Mat reference = view(t, m, cv::Point(40, 40), corner);
   const cv::Mat current = view(t, m, cv::Point(40, 40) - d, corner);
-  const auto g = fit_plane_gain(current, reference, 1.0, translation(d.x, d.y), m,
-                                grid_points(m, 25, 30));
+  const auto g =
+      fit_plane_gain(current, reference, 1.0, translation(d.x, d.y), m, grid_points(m, 25, 30));
   ASSERT_TRUE(g);
   EXPECT_GE(g->n_used, kMinPointsQuadratic);
-  for (const auto& [u, v] : {std::pair{100.0, 100.0}, {320.0, 240.0}, {560.0, 400.0},
-                             {80.0, 420.0}, {600.0, 60.0}}) {
+  for (const auto& [u, v] :
+       {std::pair{100.0, 100.0}, {320.0, 240.0}, {560.0, 400.0}, {80.0, 420.0}, {600.0, 60.0}}) {
     const double truth = vignette(m, u, v, corner) / vignette(m, u - d.x, v - d.y, corner);
     EXPECT_NEAR(fitted_gain(*g, m, u, v), truth, 0.01) << u << ", " << v;
   }
@@ -107,10 +108,10 @@ TEST(PlaneGainTest, ASmallerImageIsFittedInTheCameraFramesCoordinates) {
   cv::Mat reference, current;
   cv::resize(view(t, m, cv::Point(40, 40), corner), reference, {m.width / 2, m.height / 2}, 0, 0,
              cv::INTER_AREA);
-  cv::resize(view(t, m, cv::Point(40, 40) - d, corner), current, {m.width / 2, m.height / 2}, 0,
-             0, cv::INTER_AREA);
-  const auto g = fit_plane_gain(current, reference, 2.0, translation(d.x, d.y), m,
-                                grid_points(m, 25, 30));
+  cv::resize(view(t, m, cv::Point(40, 40) - d, corner), current, {m.width / 2, m.height / 2}, 0, 0,
+             cv::INTER_AREA);
+  const auto g =
+      fit_plane_gain(current, reference, 2.0, translation(d.x, d.y), m, grid_points(m, 25, 30));
   ASSERT_TRUE(g);
   for (const auto& [u, v] : {std::pair{100.0, 100.0}, {560.0, 400.0}}) {
     const double truth = vignette(m, u, v, corner) / vignette(m, u - d.x, v - d.y, corner);
@@ -222,8 +223,8 @@ TEST(PlaneGainTest, NoFalloffLeavesTheImageAsItIs) {
   const cv::Point d(15, 5);
   const cv::Mat reference = view(t, m, cv::Point(40, 40), 1.0);
   const cv::Mat current = view(t, m, cv::Point(40, 40) - d, 1.0);
-  const auto g = fit_plane_gain(current, reference, 1.0, translation(d.x, d.y), m,
-                                grid_points(m, 25, 30));
+  const auto g =
+      fit_plane_gain(current, reference, 1.0, translation(d.x, d.y), m, grid_points(m, 25, 30));
   ASSERT_TRUE(g);
   cv::Mat diff;
   cv::absdiff(remove_gain(current, 1.0, m, *g), current, diff);

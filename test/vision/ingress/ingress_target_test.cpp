@@ -14,6 +14,7 @@
 
 #include "common/params.hpp"
 #include "vision/geometry/waypoint.hpp"
+#include "vision/ingress/opening.hpp"
 #include "vision/ingress/wall.hpp"
 #include "vision/params.hpp"
 #include "vision/status.hpp"
@@ -917,6 +918,56 @@ TEST(AlignParamsTest, RotationPriorLoadedFromTheVehicleFileAndValidated) {
     EXPECT_NE(std::string(e.what()).find("rotation_prior_sigma_deg"), std::string::npos)
         << e.what();
   }
+}
+
+// A side of the box through a distorting lens: the opening's straight edge (normalised x =
+// -0.35 and y = -0.3, rays through a barrel lens and a fisheye) bows in the raw image, and the
+// cut fitted along the side sits at the bow's mean raw coordinate. The plain middle of that cut
+// lies inside the edge by pixels; side_middle finds the edge at the centre's row or column.
+TEST(OpeningSideMiddleTest, ASideThroughADistortingLensIsMeasuredOnTheEdge) {
+  CameraModel barrel;
+  barrel.D = {-0.35, 0.12, 0.0, 0.0, 0.0};
+  CameraModel fisheye;
+  fisheye.distortion = CameraModel::Distortion::kEquidistant;
+  fisheye.D = {-0.05, 0.01, 0.0, 0.0, 0.0};
+  for (const CameraModel& camera : {barrel, fisheye}) {
+    const Vector2d centre = *camera.project(Vector3d(0.02, 0.03, 1.0));
+    // The left edge from y = -0.3 to 0.3, the top edge from x = -0.35 to 0.4 (normalised); each
+    // cut the mean of the edge's raw coordinate along the raw image (a least-squares cut over
+    // the border's pixels, one per raw row or column).
+    double left_raw = 0, top_raw = 0, rows = 0, cols = 0;
+    constexpr int kN = 2001;
+    Vector2d last_l, last_t;
+    for (int i = 0; i < kN; ++i) {
+      const double t = i / double(kN - 1);
+      const Vector2d l = *camera.project(Vector3d(-0.35, -0.3 + 0.6 * t, 1.0));
+      const Vector2d p = *camera.project(Vector3d(-0.35 + 0.75 * t, -0.3, 1.0));
+      if (i > 0) {
+        left_raw += 0.5 * (l.x() + last_l.x()) * (l.y() - last_l.y()), rows += l.y() - last_l.y();
+        top_raw += 0.5 * (p.y() + last_t.y()) * (p.x() - last_t.x()), cols += p.x() - last_t.x();
+      }
+      last_l = l, last_t = p;
+    }
+    left_raw /= rows, top_raw /= cols;
+    const double v_top = camera.project(Vector3d(-0.35, -0.3, 1.0))->y();
+    const double v_bottom = camera.project(Vector3d(-0.35, 0.3, 1.0))->y();
+    const double u_left = camera.project(Vector3d(-0.35, -0.3, 1.0))->x();
+    const double u_right = camera.project(Vector3d(0.4, -0.3, 1.0))->x();
+    const Vector2d left_from(left_raw, v_top), left_to(left_raw, v_bottom);
+    const Vector2d top_from(u_left, top_raw), top_to(u_right, top_raw);
+    const Vector3d plain = camera.ray(0.5 * (left_from + left_to));
+    const Vector3d left = camera.ray(side_middle(camera, left_from, left_to, centre));
+    const Vector3d top = camera.ray(side_middle(camera, top_from, top_to, centre));
+    // In pixels at the focal length: the plain middle several inside, side_middle on the edge.
+    EXPECT_GT((plain.x() + 0.35) * camera.fx, 2.0);
+    EXPECT_NEAR(left.x(), -0.35, 0.5 / camera.fx);
+    EXPECT_NEAR(left.y(), 0.03, 1.0 / camera.fy);
+    EXPECT_NEAR(top.y(), -0.3, 0.5 / camera.fy);
+    EXPECT_NEAR(top.x(), 0.02, 1.0 / camera.fx);
+  }
+  // Without distortion the plain middle.
+  const CameraModel pinhole;
+  EXPECT_EQ(side_middle(pinhole, {100, 50}, {100, 250}, {300, 120}), Vector2d(100, 150));
 }
 
 }  // namespace
