@@ -119,10 +119,10 @@ bool falloff_is_plain(const Samples& s, const std::vector<char>& keep,
       rss_quadratic += std::pow(s.log_ratio[i] - s.rows[i].dot(c), 2);
       ++n;
     }
+  if (n <= 6) return false;
   double rss_mean = 0;
   for (size_t i = 0; i < s.rows.size(); ++i)
     if (keep[i]) rss_mean += std::pow(s.log_ratio[i] - sum / n, 2);
-  if (n <= 6) return false;
   if (rss_quadratic <= 0) return rss_mean > 0;
   const double f = ((rss_mean - rss_quadratic) / 5.0) / (rss_quadratic / (n - 6));
   return f > kMinFalloffF;

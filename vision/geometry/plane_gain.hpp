@@ -12,9 +12,11 @@
 // near-affine homography quadratic in x_2 to first order (the falloff's gradient is linear in the
 // position, the displacement near affine in it). So the log of the ratio of local means around
 // the plane's inlier features is fitted with a quadratic in the current view's normalised
-// coordinates, robustly (inliers next to the plane's border straddle it), and the current image
-// is divided by it: its pixels at the reference's photometry wherever the plane is seen. Where
-// nothing sets the gain (too few points, a model that would extrapolate), it is 1.
+// coordinates, robustly (inliers next to the plane's border straddle it), kept only where it
+// explains the points better than a constant by more than their noise, and the current image is
+// divided by it: its pixels at the reference's photometry wherever the plane is seen. Beyond the
+// points it was fitted to the gain is held within the range it takes on them; where too few
+// points set it, there is none (1).
 
 #include <Eigen/Core>
 #include <opencv2/core.hpp>

@@ -25,7 +25,7 @@ namespace alight::vision {
 /// through the lens, evaluated at the centre's. Without distortion the segment's middle. Through
 /// a distorting lens the opening's straight edge bows in the raw image and a straight cut sits
 /// at the bow's mean, so the plain middle lies inside the edge (every width short); the line
-/// through the lens lies on the edge to second order in the distortion.
+/// through the lens, corrected by the bow its own raw image shows, lies on the edge.
 Vector2d side_middle(const CameraModel& camera, const Vector2d& from, const Vector2d& to,
                      const Vector2d& centre);
 
