@@ -47,6 +47,17 @@ cv::Mat view(const cv::Mat& t, const CameraModel& m, cv::Point shift, double cor
   return out;
 }
 
+// A texture seen by the reference and, moved by d px (x2 = x1 + d), by the current view, both
+// through the same falloff; the current view's exposure `gain` times the reference's.
+struct Views {
+  cv::Mat reference, current;
+};
+Views moved_views(const CameraModel& m, uint64_t seed, cv::Point d, double corner,
+                  double gain = 1.0) {
+  const cv::Mat t = texture(m.height + 80, m.width + 80, seed);
+  return {view(t, m, cv::Point(40, 40), corner), view(t, m, cv::Point(40, 40) - d, corner, gain)};
+}
+
 // The current view sees the plane moved by (dx, dy) px against the reference: x2 = x1 + d.
 Matrix3d translation(double dx, double dy) {
   Matrix3d H = Matrix3d::Identity();
@@ -79,11 +90,9 @@ double median_plane_difference(const cv::Mat& current, const cv::Mat& reference,
 
 TEST(PlaneGainTest, AMovedVignetteIsRecoveredAndRemoved) {
   const CameraModel m;
-  const cv::Mat t = texture(m.height + 80, m.width + 80, 1);
   const cv::Point d(30, -20);  // the plane moved 30 px right and 20 px up in the current view
   const double corner = 0.5;
-  const cv::Mat reference = view(t, m, cv::Point(40, 40), corner);
-  const cv::Mat current = view(t, m, cv::Point(40, 40) - d, corner);
+  const auto [reference, current] = moved_views(m, 1, d, corner);
   const auto g =
       fit_plane_gain(current, reference, 1.0, translation(d.x, d.y), m, grid_points(m, 25, 30));
   ASSERT_TRUE(g);
@@ -147,9 +156,7 @@ TEST(PlaneGainTest, PointsOffThePlaneDoNotPullTheGain) {
 TEST(PlaneGainTest, AFewPointsGiveAGlobalGain) {
   // An exposure change of 0.8 and no vignette, measured at 10 points: a constant.
   const CameraModel m;
-  const cv::Mat t = texture(m.height + 80, m.width + 80, 5);
-  const cv::Mat reference = view(t, m, cv::Point(40, 40), 1.0);
-  const cv::Mat current = view(t, m, cv::Point(40, 40), 1.0, 0.8);
+  const auto [reference, current] = moved_views(m, 5, cv::Point(0, 0), 1.0, 0.8);
   std::vector<Vector2d> px;
   for (int i = 0; i < 10; ++i) px.emplace_back(100 + 45 * i, 120 + 20 * i);
   const auto g = fit_plane_gain(current, reference, 1.0, Matrix3d::Identity(), m, px);
@@ -162,10 +169,8 @@ TEST(PlaneGainTest, AFewPointsGiveAGlobalGain) {
 TEST(PlaneGainTest, TheModelIsNotExtrapolatedBeyondItsPoints) {
   // Points on the left half only: at the right edge the gain stays within what it is on them.
   const CameraModel m;
-  const cv::Mat t = texture(m.height + 80, m.width + 80, 6);
   const cv::Point d(30, 0);
-  const cv::Mat reference = view(t, m, cv::Point(40, 40), 0.4);
-  const cv::Mat current = view(t, m, cv::Point(40, 40) - d, 0.4);
+  const auto [reference, current] = moved_views(m, 6, d, 0.4);
   std::vector<Vector2d> px;
   for (const auto& p : grid_points(m, 20, 30))
     if (p.x() < 300) px.push_back(p);
@@ -182,10 +187,8 @@ TEST(PlaneGainTest, NoiseAloneKeepsAConstant) {
   // No falloff, sensor noise, a few dozen points: the ratios scatter by a few percent, and a
   // quadratic fitted to them would swing across the view; the constant explains them as well.
   const CameraModel m;
-  const cv::Mat t = texture(m.height + 80, m.width + 80, 9);
   const cv::Point d(25, 8);
-  cv::Mat reference = view(t, m, cv::Point(40, 40), 1.0);
-  cv::Mat current = view(t, m, cv::Point(40, 40) - d, 1.0, 1.02);
+  auto [reference, current] = moved_views(m, 9, d, 1.0, 1.02);
   cv::RNG rng(10);
   for (cv::Mat* image : {&reference, &current}) {
     cv::Mat noise(image->size(), CV_16S);
@@ -219,10 +222,8 @@ TEST(PlaneGainTest, TooFewOrTooDarkPointsGiveNoGain) {
 
 TEST(PlaneGainTest, NoFalloffLeavesTheImageAsItIs) {
   const CameraModel m;
-  const cv::Mat t = texture(m.height + 80, m.width + 80, 8);
   const cv::Point d(15, 5);
-  const cv::Mat reference = view(t, m, cv::Point(40, 40), 1.0);
-  const cv::Mat current = view(t, m, cv::Point(40, 40) - d, 1.0);
+  const auto [reference, current] = moved_views(m, 8, d, 1.0);
   const auto g =
       fit_plane_gain(current, reference, 1.0, translation(d.x, d.y), m, grid_points(m, 25, 30));
   ASSERT_TRUE(g);
