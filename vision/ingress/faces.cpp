@@ -17,6 +17,13 @@ constexpr double kMaxWallThicknessM = 0.4;
 // A face shows where the two views' difference, a line's mean, rises by more than the noise of
 // the smoothed images' difference (grey levels).
 constexpr double kFaceMinRise = 2.0;
+// The strip starts on the first pixel beyond the cut (the cut is rounded to a pixel, so its own
+// may lie on either side of the edge). A face's points that tell it from the wall are its
+// deepest, next to its far edge where the cut lies, and a face a few pixels wide has no others:
+// leaving out the first two sigma of the smoothing, where the room's difference spreads over
+// the border, left such a face unseen. That spread adds to the face's and the wall's models
+// alike.
+constexpr int kFaceFirstPx = 1;
 
 // One side's search: the cut line, the offsets k0 .. k_end searched towards the wall, the front
 // edge's candidates up to e_max, and the wall's motion to compare the views by.
@@ -203,8 +210,8 @@ double face_front_edge(int side, bool vertical, double a, double b, double mean_
   const int n_across = vertical ? g.image.cols : g.image.rows;
   const double reach =
       std::min(std::abs(a - centre) * kMaxWallThicknessM / g.wall_depth_m, 0.25 * n_across);
-  const int k0 = static_cast<int>(std::ceil(2 * p.parallax_blur_sigma_px)) + 1;
   const int e_max = static_cast<int>(std::floor(reach));
+  const int k0 = kFaceFirstPx;
   const int k_end = e_max + k0 + 8;  // beyond the farthest front edge: the wall's own level
   if (e_max <= k0) return a;
   const Vector3d n2 = g.wall.n_2();

@@ -33,9 +33,10 @@ struct CutGeometry {
 /// edge along the wall's normal and the wall beyond it explain the two views best. Searched as
 /// far as a face 0.4 m thick can reach: a face's far edge at `across` from the
 /// principal point has its front edge `across` t / Z further out, and it shows only on the side
-/// away from the principal point (beyond, the front edge hides it). The first 2 sigma of the
-/// mask's blur are left out (the room's difference spread over the border). `a` unchanged when
-/// no face shows (the cost rises by less than 2 grey levels a line over the search).
+/// away from the principal point (beyond, the front edge hides it). The search starts on the
+/// first pixel beyond the cut: a face's deepest points, next to its far edge, are the ones that
+/// tell it from the wall. `a` unchanged when no face shows (the cost rises by less than 2 grey
+/// levels a line over the search).
 double face_front_edge(int side, bool vertical, double a, double b, double mean_along, int lo,
                        int hi, const CutGeometry& geometry, const IngressParams& params);
 
