@@ -20,8 +20,8 @@ constexpr double kFaceMinRise = 2.0;
 // The strip starts on the first pixel beyond the cut (the cut is rounded to a pixel, so its own
 // may lie on either side of the edge). A face's points that tell it from the wall are its
 // deepest, next to its far edge where the cut lies, and a face a few pixels wide has no others:
-// leaving out the first two sigma of the smoothing, where the room's difference spreads over
-// the border, left such a face unseen. That spread adds to the face's and the wall's models
+// leaving out two sigma of the smoothing, where the room's difference spreads over the border,
+// would leave such a face unseen, and that spread adds to the face's and the wall's models
 // alike.
 constexpr int kFaceFirstPx = 1;
 
@@ -201,7 +201,7 @@ double least_cost_edge(const FaceSearch& s, const FaceCosts& c, int n_rows, doub
 }  // namespace
 
 double face_front_edge(int side, bool vertical, double a, double b, double mean_along, int lo,
-                       int hi, const CutGeometry& g, const IngressParams& p) {
+                       int hi, const CutGeometry& g) {
   if (!g.camera || g.image.empty() || g.reference.size() != g.image.size() ||
       !(g.wall_depth_m > 0) || !std::isfinite(g.wall_depth_m))
     return a;
@@ -235,8 +235,7 @@ double face_front_edge(int side, bool vertical, double a, double b, double mean_
   return least_cost_edge(s, face_costs(s, strip, lo, hi), strip.n_rows, a);
 }
 
-OpeningBox to_front_edges(const OpeningBox& box, cv::Size image_size, const CutGeometry& geometry,
-                          const IngressParams& p) {
+OpeningBox to_front_edges(const OpeningBox& box, cv::Size image_size, const CutGeometry& geometry) {
   const double w = box.right - box.left, h = box.bottom - box.top;
   auto span = [](double from, double to, int n) {
     return std::pair{std::clamp(static_cast<int>(std::ceil(from)), 0, n - 1),
@@ -245,10 +244,10 @@ OpeningBox to_front_edges(const OpeningBox& box, cv::Size image_size, const CutG
   const auto [y_lo, y_hi] = span(box.top + 0.1 * h, box.bottom - 0.1 * h, image_size.height);
   const auto [x_lo, x_hi] = span(box.left + 0.1 * w, box.right - 0.1 * w, image_size.width);
   const double y_mid = 0.5 * (box.top + box.bottom), x_mid = 0.5 * (box.left + box.right);
-  return {face_front_edge(-1, true, box.left, 0, y_mid, y_lo, y_hi, geometry, p),
-          face_front_edge(+1, true, box.right, 0, y_mid, y_lo, y_hi, geometry, p),
-          face_front_edge(-1, false, box.top, 0, x_mid, x_lo, x_hi, geometry, p),
-          face_front_edge(+1, false, box.bottom, 0, x_mid, x_lo, x_hi, geometry, p)};
+  return {face_front_edge(-1, true, box.left, 0, y_mid, y_lo, y_hi, geometry),
+          face_front_edge(+1, true, box.right, 0, y_mid, y_lo, y_hi, geometry),
+          face_front_edge(-1, false, box.top, 0, x_mid, x_lo, x_hi, geometry),
+          face_front_edge(+1, false, box.bottom, 0, x_mid, x_lo, x_hi, geometry)};
 }
 
 }  // namespace alight::vision

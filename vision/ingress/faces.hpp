@@ -14,7 +14,6 @@
 
 #include "common/camera_model.hpp"
 #include "vision/geometry/decomposition.hpp"
-#include "vision/params.hpp"
 
 namespace alight::vision {
 
@@ -38,7 +37,7 @@ struct CutGeometry {
 /// tell it from the wall. `a` unchanged when no face shows (the cost rises by less than 2 grey
 /// levels a line over the search).
 double face_front_edge(int side, bool vertical, double a, double b, double mean_along, int lo,
-                       int hi, const CutGeometry& geometry, const IngressParams& params);
+                       int hi, const CutGeometry& geometry);
 
 /// The block's box in the current image [px], its sides at the cuts or their front edges.
 struct OpeningBox {
@@ -50,7 +49,6 @@ struct OpeningBox {
 /// The wall lies outside the block on every side: it is not read from the mask beside the cut,
 /// where a flat room next to a cut on the face's far edge leaves the mask clear on the
 /// opening's side too. `image_size`: the current image's.
-OpeningBox to_front_edges(const OpeningBox& box, cv::Size image_size, const CutGeometry& geometry,
-                          const IngressParams& params);
+OpeningBox to_front_edges(const OpeningBox& box, cv::Size image_size, const CutGeometry& geometry);
 
 }  // namespace alight::vision

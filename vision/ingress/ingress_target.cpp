@@ -82,7 +82,7 @@ TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image
     const Matrix3d K = c.camera->K();
     const CutGeometry geometry{Vector2d(K(0, 2), K(1, 2)), wall.depth_m,      *wall.plane, c.camera,
                                image_wall_photometry,      reference_parallax};
-    box = to_front_edges(box, cells.mask.size(), geometry, p);
+    box = to_front_edges(box, cells.mask.size(), geometry);
   }
 
   // 4. The opening.

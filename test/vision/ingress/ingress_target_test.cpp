@@ -740,8 +740,8 @@ std::vector<JambSearch> search_jambs(double thickness_m) {
   for (const double y_jamb : {-0.3, 0.3}) {
     JambSearch j{px(3.0, y_jamb).x(), px(3.0 + thickness_m, y_jamb).x(), 0, 0};
     const int side = j.front > j.far ? 1 : -1;  // the wall beyond the front edge
-    j.found = face_front_edge(side, true, j.far, 0, 0.5 * (lo + hi), lo, hi, g, p);
-    j.found_wall_inside = face_front_edge(-side, true, j.far, 0, 0.5 * (lo + hi), lo, hi, g, p);
+    j.found = face_front_edge(side, true, j.far, 0, 0.5 * (lo + hi), lo, hi, g);
+    j.found_wall_inside = face_front_edge(-side, true, j.far, 0, 0.5 * (lo + hi), lo, hi, g);
     out.push_back(j);
   }
   return out;
@@ -786,11 +786,10 @@ TEST(FaceFrontEdgeTest, NoFaceWithoutEvidence) {
   g.camera = &s.camera;
   g.image = cv::Mat(480, 640, CV_8UC1, cv::Scalar(90));
   g.reference = g.image.clone();
-  IngressParams p;
-  EXPECT_EQ(face_front_edge(-1, true, 199.5, 0.0, 240, 120, 360, g, p), 199.5);
+  EXPECT_EQ(face_front_edge(-1, true, 199.5, 0.0, 240, 120, 360, g), 199.5);
   g.principal_px.x() = 100;
   g.image = s.image, g.reference = s.reference;
-  EXPECT_EQ(face_front_edge(-1, true, 199.5, 0.0, 240, 120, 360, g, p), 199.5);
+  EXPECT_EQ(face_front_edge(-1, true, 199.5, 0.0, 240, 120, 360, g), 199.5);
 }
 
 // Regression (issue 15, ingress_photo seed 9805): features on the inner faces (sill, jambs)
