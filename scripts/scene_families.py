@@ -423,23 +423,30 @@ def _moving_platform(rng, scene, speed_range, deck):
                                "roll_deg": round(rng.uniform(1.0, 3.0), 2),
                                "pitch_deg": round(rng.uniform(1.0, 3.0), 2),
                                "band_hz": [0.2, 0.5], "components": 4}
-    points = path_extent(motion)
     half = [0.5 * v for v in scene["area"]["size_m"]]
     margin = reach + 0.3
-    for attempt in range(2000):
-        if attempt % 50 == 49:  # no place for it this way round: turn the path
-            motion["path_heading_deg"] = round(rng.uniform(-180, 180), 1)
-            points = path_extent(motion)
-        # It starts where a static platform of the other families stands: in the vehicles'
-        # search rectangle (autonomy.detection.landing_area_*), so the first views may see it.
-        cx, cy = rng.uniform(-0.2, 2.0), rng.uniform(-0.5, 1.5)
-        inside = all(abs(cx + x) <= half[0] - margin and abs(cy + y) <= half[1] - margin
-                     for x, y in points)
-        clear = all(math.hypot(cx + x, cy + y) >= 0.5 + reach for x, y in points)
-        if inside and clear:
-            p["center_xy_m"] = [round(cx, 3), round(cy, 3)]
-            p["motion"] = motion
-            return scene
+    # A long stadium may find no place in the area clear of the start: after each 2000 draws
+    # the path shrinks by a tenth (its straights first), down to the draws' least.
+    for shrink in range(12):
+        points = path_extent(motion)
+        for attempt in range(2000):
+            if attempt % 50 == 49:  # no place for it this way round: turn the path
+                motion["path_heading_deg"] = round(rng.uniform(-180, 180), 1)
+                points = path_extent(motion)
+            # It starts where a static platform of the other families stands: in the vehicles'
+            # search rectangle (autonomy.detection.landing_area_*), so the first views may see it.
+            cx, cy = rng.uniform(-0.2, 2.0), rng.uniform(-0.5, 1.5)
+            inside = all(abs(cx + x) <= half[0] - margin and abs(cy + y) <= half[1] - margin
+                         for x, y in points)
+            clear = all(math.hypot(cx + x, cy + y) >= 0.5 + reach for x, y in points)
+            if inside and clear:
+                p["center_xy_m"] = [round(cx, 3), round(cy, 3)]
+                p["motion"] = motion
+                return scene
+        if motion["path_length_m"] > 1.0:
+            motion["path_length_m"] = round(max(1.0, 0.9 * motion["path_length_m"]), 3)
+        else:
+            motion["path_radius_m"] = round(max(0.4, 0.9 * motion["path_radius_m"]), 3)
     raise RuntimeError("no place for the path %r" % motion)
 
 
