@@ -19,6 +19,7 @@
 #include "common/build_paths.hpp"
 #include "common/params.hpp"
 #include "sim/params.hpp"
+#include "sim/platform_motion.hpp"
 #include "sim/scene.hpp"
 #include "vision/node/convert.hpp"
 #include "vision/params.hpp"
@@ -64,13 +65,29 @@ int main(int argc, char** argv) try {
   } else {
     std::printf("# no platform: a target's dC is its position, its size and dh its own\n");
   }
-  const double c = std::cos(P.yaw_rad), s = std::sin(P.yaw_rad);
-  std::vector<Vector3d> corners_W;
-  for (const auto& [a, b] : {std::pair{-1, -1}, {1, -1}, {1, 1}, {-1, 1}}) {
-    if (!scene.platform) break;  // no corners in view
-    const double x = a * P.size_m.x() / 2, y = b * P.size_m.y() / 2;
-    corners_W.push_back(P.top_center_W + Vector3d(c * x - s * y, s * x + c * y, 0));
-  }
+  // A moving platform's top where it is at a frame's time: its path and turn as the simulator
+  // moves it (the sea state's draws are not the simulator's, so a deck's heave, roll and pitch
+  // are left out: the corners are the level top's).
+  std::optional<sim::PlatformMotion> motion;
+  if (scene.platform && scenario.platform && scenario.platform->moving)
+    motion.emplace(scenario.platform->motion, P.top_center_W, P.yaw_rad, 0);
+  const auto corners_at = [&](int64_t utime) {
+    std::vector<Vector3d> corners_W;
+    if (!scene.platform) return corners_W;  // no corners in view
+    Vector3d centre = P.top_center_W;
+    double yaw = P.yaw_rad;
+    if (motion) {
+      const sim::PlatformPose pose = motion->at(1e-6 * double(utime - scenario.start_utime));
+      centre = pose.top_center_W;
+      yaw = pose.yaw_rad;
+    }
+    const double c = std::cos(yaw), s = std::sin(yaw);
+    for (const auto& [a, b] : {std::pair{-1, -1}, {1, -1}, {1, 1}, {-1, 1}}) {
+      const double x = a * P.size_m.x() / 2, y = b * P.size_m.y() / 2;
+      corners_W.push_back(centre + Vector3d(c * x - s * y, s * x + c * y, 0));
+    }
+    return corners_W;
+  };
   const auto params = vision::load_node_params(vehicle);
   // The camera as rendered: the vision undistorts with the scenario's lens, as the node does.
   auto rig = sim::load_camera_rig(vehicle, "downward");
@@ -106,7 +123,7 @@ int main(int argc, char** argv) try {
     const Isometry3d X_CW = f.X_WC.inverse();
     std::vector<cv::Point> truth_px;
     int in_image = 0;
-    for (const auto& p : corners_W)
+    for (const auto& p : corners_at(f.utime))
       if (const auto px = rig.model.project(X_CW * p)) {
         truth_px.emplace_back(static_cast<int>(px->x()), static_cast<int>(px->y()));
         in_image +=
@@ -192,6 +209,11 @@ int main(int argc, char** argv) try {
         std::printf(" p(%+.3f %+.3f %.3f) v(%+.3f %+.3f %+.3f) yaw %+.1f rate %+.1f deg/s",
                     m.p_W.x(), m.p_W.y(), m.p_W.z(), m.v_W.x(), m.v_W.y(), m.v_W.z(),
                     m.yaw_rad * 180 / M_PI, m.yaw_rate_rps * 180 / M_PI);
+      if (m.found() && motion) {  // against the truth at the frame's time
+        const sim::PlatformPose t = motion->at(1e-6 * double(f.utime - scenario.start_utime));
+        std::printf(" err p(%+.3f %+.3f) v(%+.3f %+.3f)", m.p_W.x() - t.top_center_W.x(),
+                    m.p_W.y() - t.top_center_W.y(), m.v_W.x() - t.v_W.x(), m.v_W.y() - t.v_W.y());
+      }
     }
     platform = vision::to_platform_msg(r);
     std::printf("\n");
