@@ -170,6 +170,52 @@ std::vector<size_t> common_motion(const std::vector<Placed>& cand, const MovingT
   return best;
 }
 
+// Stages 2 and 3's first gate: the largest common motion whose matches are not the floor's. A
+// cluster of floor matches just outside floor_tol_px (motion capture's noise, and its stamp's
+// error times the body's turn: a turning camera puts many floor matches a few pixels off the
+// known floor's prediction, and they share one apparent motion) is no top: most of its matches
+// are carried by the floor within a few tolerances. It is set aside and the largest motion among
+// the remaining candidates taken, up to kFloorClusters times (the floor seen through the
+// turn's error, once or twice split by the image's regions). *reason: kNoCommonMotion when the
+// first search finds no set of min_inliers, kOnFloor when every set found was the floor's.
+constexpr int kFloorClusters = 2;
+
+bool floor_cluster(const std::vector<Placed>& cand, const std::vector<size_t>& in,
+                   const MovingTopParams& params) {
+  const auto on_floor = std::count_if(in.begin(), in.end(), [&](size_t k) {
+    return cand[k].floor_err_px <= 3 * params.floor_tol_px;
+  });
+  return double(on_floor) > params.max_floor_share * double(in.size());
+}
+
+std::vector<size_t> motion_off_floor(const std::vector<Placed>& cand, const MovingTopParams& params,
+                                     Similarity2* S, MovingReason* reason) {
+  std::vector<size_t> pool(cand.size());
+  for (size_t k = 0; k < pool.size(); ++k) pool[k] = k;
+  for (int pass = 0;; ++pass) {
+    std::vector<Placed> sub;
+    for (size_t k : pool) sub.push_back(cand[k]);
+    std::vector<size_t> in;
+    for (size_t j : common_motion(sub, params, S)) in.push_back(pool[j]);
+    if (int(in.size()) < params.min_inliers) {
+      *reason = pass == 0 ? MovingReason::kNoCommonMotion : MovingReason::kOnFloor;
+      return in;
+    }
+    if (!floor_cluster(cand, in, params)) {
+      *reason = MovingReason::kOk;
+      return in;
+    }
+    if (pass == kFloorClusters) {
+      *reason = MovingReason::kOnFloor;
+      return in;
+    }
+    std::vector<uint8_t> taken(cand.size(), 0);
+    for (size_t k : in) taken[k] = 1;
+    pool.erase(std::remove_if(pool.begin(), pool.end(), [&](size_t k) { return taken[k]; }),
+               pool.end());
+  }
+}
+
 // A gate of stage 3, the last: the matches that stay put inside the moving set's footprint (its
 // rectangle on the top's plane in the current view, the inner kStillInner of it: at the assumed
 // height the edges may be a few centimetres off). A cart hides the floor under it; a still top's
@@ -334,18 +380,10 @@ MovingTop find_moving_top(const Correspondences& c, double dt_s, double floor_z_
   out.n_candidates = static_cast<int>(cand.size());
   if (out.n_candidates < params.min_inliers) return refuse(MovingReason::kTooFewCandidates);
   Similarity2 S;
-  const std::vector<size_t> in = common_motion(cand, params, &S);
+  const std::vector<size_t> in = motion_off_floor(cand, params, &S, &out.reason);
   out.n_inliers = static_cast<int>(in.size());
-  if (out.n_inliers < params.min_inliers) return refuse(MovingReason::kNoCommonMotion);
+  if (out.reason != MovingReason::kOk) return out;
   for (size_t k : in) out.inliers[cand[k].index] = 1;
-
-  // Stage 3: the gates. A cluster of floor matches just outside floor_tol_px (motion capture's
-  // noise) shares the floor's apparent motion on the top's plane: most of its matches are
-  // carried by the floor within a few tolerances.
-  const int on_floor = static_cast<int>(std::count_if(in.begin(), in.end(), [&](size_t k) {
-    return cand[k].floor_err_px <= 3 * params.floor_tol_px;
-  }));
-  if (on_floor > params.max_floor_share * out.n_inliers) return refuse(MovingReason::kOnFloor);
   Vector2d m1 = Vector2d::Zero(), m2 = Vector2d::Zero();
   for (size_t k : in) m1 += cand[k].p1, m2 += cand[k].p2;
   const double speed = (m2 - m1).norm() / out.n_inliers / dt_s;
