@@ -170,6 +170,11 @@ int main(int argc, char** argv) try {
       std::printf(" w %.2f (%+.2f %+.2f %+.2f) v %.2f", pose->omega_B.norm(), pose->omega_B.x(),
                   pose->omega_B.y(), pose->omega_B.z(), pose->v_W_B.norm());
     std::printf(" gain %.2f", f.gain);  // the camera's, flicker and automatic gain
+    if (motion) {  // the moving platform's truth: where it is relative to the camera, its velocity
+      const sim::PlatformPose t = motion->at(1e-6 * double(f.utime - scenario.start_utime));
+      std::printf(" plat rel(%+.2f %+.2f) v(%+.2f %+.2f)", t.top_center_W.x() - cam.x(),
+                  t.top_center_W.y() - cam.y(), t.v_W.x(), t.v_W.y());
+    }
     // The reference's baseline and age (the top's parallax falls with the baseline).
     std::printf(" b %.3f age %.2f tr %d%s", r.baseline_m,
                 r.ref_utime > 0 ? (f.utime - r.ref_utime) * 1e-6 : -1.0, r.n_tracked,
