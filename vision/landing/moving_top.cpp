@@ -384,6 +384,8 @@ MovingTop find_moving_top(const Correspondences& c, double dt_s, double floor_z_
   out.n_inliers = static_cast<int>(in.size());
   if (out.reason != MovingReason::kOk) return out;
   for (size_t k : in) out.inliers[cand[k].index] = 1;
+
+  // Stage 3, the other gates: a motion, a size and a still top's explanation (moving_top.hpp).
   Vector2d m1 = Vector2d::Zero(), m2 = Vector2d::Zero();
   for (size_t k : in) m1 += cand[k].p1, m2 += cand[k].p2;
   const double speed = (m2 - m1).norm() / out.n_inliers / dt_s;
