@@ -71,16 +71,15 @@ int main(int argc, char** argv) try {
   std::optional<sim::PlatformMotion> motion;
   if (scene.platform && scenario.platform && scenario.platform->moving)
     motion.emplace(scenario.platform->motion, P.top_center_W, P.yaw_rad, 0);
-  const auto corners_at = [&](int64_t utime) {
+  const auto moved_at = [&](int64_t utime) -> std::optional<sim::PlatformPose> {
+    if (!motion) return std::nullopt;
+    return motion->at(1e-6 * double(utime - scenario.start_utime));
+  };
+  const auto corners_at = [&](const std::optional<sim::PlatformPose>& moved) {
     std::vector<Vector3d> corners_W;
     if (!scene.platform) return corners_W;  // no corners in view
-    Vector3d centre = P.top_center_W;
-    double yaw = P.yaw_rad;
-    if (motion) {
-      const sim::PlatformPose pose = motion->at(1e-6 * double(utime - scenario.start_utime));
-      centre = pose.top_center_W;
-      yaw = pose.yaw_rad;
-    }
+    const Vector3d centre = moved ? moved->top_center_W : P.top_center_W;
+    const double yaw = moved ? moved->yaw_rad : P.yaw_rad;
     const double c = std::cos(yaw), s = std::sin(yaw);
     for (const auto& [a, b] : {std::pair{-1, -1}, {1, -1}, {1, 1}, {-1, 1}}) {
       const double x = a * P.size_m.x() / 2, y = b * P.size_m.y() / 2;
@@ -123,7 +122,8 @@ int main(int argc, char** argv) try {
     const Isometry3d X_CW = f.X_WC.inverse();
     std::vector<cv::Point> truth_px;
     int in_image = 0;
-    for (const auto& p : corners_at(f.utime))
+    const std::optional<sim::PlatformPose> moved = moved_at(f.utime);
+    for (const auto& p : corners_at(moved))
       if (const auto px = rig.model.project(X_CW * p)) {
         truth_px.emplace_back(static_cast<int>(px->x()), static_cast<int>(px->y()));
         in_image +=
@@ -170,11 +170,9 @@ int main(int argc, char** argv) try {
       std::printf(" w %.2f (%+.2f %+.2f %+.2f) v %.2f", pose->omega_B.norm(), pose->omega_B.x(),
                   pose->omega_B.y(), pose->omega_B.z(), pose->v_W_B.norm());
     std::printf(" gain %.2f", f.gain);  // the camera's, flicker and automatic gain
-    if (motion) {  // the moving platform's truth: where it is relative to the camera, its velocity
-      const sim::PlatformPose t = motion->at(1e-6 * double(f.utime - scenario.start_utime));
-      std::printf(" plat rel(%+.2f %+.2f) v(%+.2f %+.2f)", t.top_center_W.x() - cam.x(),
-                  t.top_center_W.y() - cam.y(), t.v_W.x(), t.v_W.y());
-    }
+    if (moved)  // the moving platform's truth: where it is relative to the camera, its velocity
+      std::printf(" plat rel(%+.2f %+.2f) v(%+.2f %+.2f)", moved->top_center_W.x() - cam.x(),
+                  moved->top_center_W.y() - cam.y(), moved->v_W.x(), moved->v_W.y());
     // The reference's baseline and age (the top's parallax falls with the baseline).
     std::printf(" b %.3f age %.2f tr %d%s", r.baseline_m,
                 r.ref_utime > 0 ? (f.utime - r.ref_utime) * 1e-6 : -1.0, r.n_tracked,
@@ -214,11 +212,10 @@ int main(int argc, char** argv) try {
         std::printf(" p(%+.3f %+.3f %.3f) v(%+.3f %+.3f %+.3f) yaw %+.1f rate %+.1f deg/s",
                     m.p_W.x(), m.p_W.y(), m.p_W.z(), m.v_W.x(), m.v_W.y(), m.v_W.z(),
                     m.yaw_rad * 180 / M_PI, m.yaw_rate_rps * 180 / M_PI);
-      if (m.found() && motion) {  // against the truth at the frame's time
-        const sim::PlatformPose t = motion->at(1e-6 * double(f.utime - scenario.start_utime));
-        std::printf(" err p(%+.3f %+.3f) v(%+.3f %+.3f)", m.p_W.x() - t.top_center_W.x(),
-                    m.p_W.y() - t.top_center_W.y(), m.v_W.x() - t.v_W.x(), m.v_W.y() - t.v_W.y());
-      }
+      if (m.found() && moved)  // against the truth at the frame's time
+        std::printf(" err p(%+.3f %+.3f) v(%+.3f %+.3f)", m.p_W.x() - moved->top_center_W.x(),
+                    m.p_W.y() - moved->top_center_W.y(), m.v_W.x() - moved->v_W.x(),
+                    m.v_W.y() - moved->v_W.y());
     }
     platform = vision::to_platform_msg(r);
     std::printf("\n");
