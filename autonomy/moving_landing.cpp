@@ -40,7 +40,7 @@ const ParamSchema<MovingLandingParams>& MovingLandingParams::schema() {
     s.add("max_yaw_rate_dps", &P::max_yaw_rate_dps, Range::gt(0), "deg/s",
           "a platform predicted turning faster is beyond what the vehicle follows");
     s.add("too_fast_s", &P::too_fast_s, Range::ge(0), "s",
-          "beyond those bounds this long, measured so filter.min_consistent times: the failsafe");
+          "beyond those bounds this long: the failsafe");
     s.add("heave_min_amplitude_m", &P::heave_min_amplitude_m, Range::ge(0), "m",
           "a fitted heave smaller than this is no heave: the last drop at once");
     s.add("heave_max_wait_s", &P::heave_max_wait_s, Range::ge(0), "s",
@@ -122,22 +122,13 @@ MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
   const bool believed = filter.believed();
   if (const auto why = believed ? too_fast(pr, params) : std::nullopt) {
     if (!s.too_fast_since_utime) s.too_fast_since_utime = now_utime;
-    // Measured too fast, not predicted so: a track's motion is confirmed by filter.min_consistent
-    // measurements, and one measurement after a gap (its velocity sigma grown to the gate's
-    // width) can carry the prediction beyond the bound on its own.
-    if (filter.utime() != s.too_fast_last_update_utime) {
-      s.too_fast_last_update_utime = filter.utime();
-      ++s.too_fast_updates;
-    }
-    if (double(now_utime - *s.too_fast_since_utime) * 1e-6 >= params.too_fast_s &&
-        s.too_fast_updates >= params.filter.min_consistent) {
+    if (double(now_utime - *s.too_fast_since_utime) * 1e-6 >= params.too_fast_s) {
       out.next = MovingStep::Next::kTooFast;
       out.reason = *why;
       return out;
     }
   } else {
     s.too_fast_since_utime.reset();
-    s.too_fast_updates = 0;
   }
   const double z_top = pr.top_z_m;
   const double z_follow = z_top + gear_height_m + params.follow_height_m;

@@ -16,8 +16,8 @@
 //     deck's, the lowest of the high half); no heave above heave_min_amplitude_m: at once;
 //     waited heave_max_wait_s: at once.
 //  4. The failsafe: a believed platform (PlatformFilter::believed) predicted faster than
-//     max_speed_mps or turning faster than max_yaw_rate_dps for too_fast_s, and measured so at
-//     least filter.min_consistent times in that while, is beyond what the vehicle follows
+//     max_speed_mps or turning faster than
+//     max_yaw_rate_dps for too_fast_s is beyond what the vehicle follows
 //     (Failsafe::kPlatformTooFast: climb and hold).
 // Pure: the time is passed in.
 
@@ -68,8 +68,6 @@ struct MovingApproach {
   std::optional<int64_t> matched_since_utime;
   std::optional<int64_t> at_final_since_utime;  ///< waiting for the heave since
   std::optional<int64_t> too_fast_since_utime;
-  int too_fast_updates = 0;  ///< the filter's updates seen since too_fast_since_utime
-  int64_t too_fast_last_update_utime = 0;
 };
 
 struct MovingStep {
