@@ -161,6 +161,10 @@ const char* target_reason_name(int8_t reason) {
       return "frames missing (gap)";
     case target_t::REASON_TOP_PARALLAX_GAP:
       return "top near the epipole (parallax gap)";
+    case target_t::REASON_OUTLINE_ON_FLOOR:
+      return "featureless outline on the floor";
+    case target_t::REASON_OUTLINE_UNMATCHED:
+      return "featureless outline not in the reference";
   }
   return "unknown";
 }

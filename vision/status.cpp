@@ -74,6 +74,10 @@ const char* to_string(Reason r) {
       return "frames missing (gap)";
     case Reason::kTopParallaxGap:
       return "top near the epipole (parallax gap)";
+    case Reason::kOutlineOnFloor:
+      return "featureless outline on the floor";
+    case Reason::kOutlineUnmatched:
+      return "featureless outline not in the reference";
   }
   return "unknown";
 }

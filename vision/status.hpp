@@ -50,6 +50,9 @@ enum class Reason : int8_t {
   kDuplicateFrame = 32,  ///< the previous frame's pixels again (the driver's repeat): not tracked
   kFrameGap = 33,        ///< no reference: a gap in the frames' times broke the tracks
   kTopParallaxGap = 34,  ///< landing: seen in part, the top reaching into the epipole's gap
+  // A top without features, found by its outline (landing/outline.hpp).
+  kOutlineOnFloor = 35,    ///< landing: a featureless outline that moves with the floor
+  kOutlineUnmatched = 36,  ///< landing: a featureless outline the reference does not show
 };
 
 const char* to_string(Reason r);

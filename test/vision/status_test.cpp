@@ -46,11 +46,13 @@ TEST(StatusTest, ReasonValuesAreTheTargetMessageConstants) {
   EXPECT_EQ(int(Reason::kDuplicateFrame), T::REASON_DUPLICATE_FRAME);
   EXPECT_EQ(int(Reason::kFrameGap), T::REASON_FRAME_GAP);
   EXPECT_EQ(int(Reason::kTopParallaxGap), T::REASON_TOP_PARALLAX_GAP);
+  EXPECT_EQ(int(Reason::kOutlineOnFloor), T::REASON_OUTLINE_ON_FLOOR);
+  EXPECT_EQ(int(Reason::kOutlineUnmatched), T::REASON_OUTLINE_UNMATCHED);
 }
 
 TEST(StatusTest, EveryReasonHasItsOwnName) {
   std::set<std::string> names;
-  for (int r = 0; r <= alight::target_t::REASON_TOP_PARALLAX_GAP; ++r) {
+  for (int r = 0; r <= alight::target_t::REASON_OUTLINE_UNMATCHED; ++r) {
     const std::string name = to_string(static_cast<Reason>(r));
     EXPECT_NE(name, "unknown") << r;
     EXPECT_TRUE(names.insert(name).second) << r << ": " << name;

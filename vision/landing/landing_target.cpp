@@ -4,6 +4,7 @@
 #include <utility>
 
 #include "vision/geometry/waypoint.hpp"
+#include "vision/landing/outline.hpp"
 #include "vision/landing/rim.hpp"
 
 namespace alight::vision {
@@ -117,7 +118,16 @@ TargetOutcome find_landing_target(const Correspondences& c, const PipelineParams
   }
   // Where the prior finds nothing either, the paper's outcome stands (a floor a few percent off
   // is the paper's bas-relief ambiguity, not a false platform).
-  return mode == "always" || found_or_partial(known) ? known : paper;
+  TargetOutcome result = mode == "always" || found_or_partial(known) ? known : paper;
+  // One plane in view, the floor's: a top without features of its own is measured by its
+  // outline (outline.hpp) on the known floor.
+  if (result.reason == Reason::kNoTargetPlane && !gray_1.empty())
+    if (auto outline = find_outline_top(c, result.labels, gray_1, gray_2, params)) {
+      outline->labels = std::move(result.labels);
+      outline->estimate.n_inliers_dominant = result.estimate.n_inliers_dominant;
+      return *outline;
+    }
+  return result;
 }
 
 }  // namespace alight::vision

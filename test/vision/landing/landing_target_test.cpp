@@ -16,6 +16,7 @@
 #include "test/vision/test_images.hpp"
 #include "vision/geometry/known_floor.hpp"
 #include "vision/geometry/waypoint.hpp"
+#include "vision/landing/outline.hpp"
 #include "vision/landing/rim.hpp"
 
 namespace alight::vision {
@@ -667,7 +668,7 @@ struct BoxViews {
 };
 BoxViews box_views(const BoxScene& scene, uint64_t seed, double inset_long, double inset_short,
                    std::optional<double> baseline_dir = std::nullopt,
-                   double features_turn_rad = 0.0, int n_floor = 140) {
+                   double features_turn_rad = 0.0, int n_floor = 140, int n_top = 80) {
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> U(-1, 1);
   const PoseSample p2 = level_pose(
@@ -679,7 +680,7 @@ BoxViews box_views(const BoxScene& scene, uint64_t seed, double inset_long, doub
   BoxViews b{View(p1, p2), {}, {}};
   View& v = b.view;
   const Isometry3d X_WO = scene.X_WO();
-  for (int k = 0; k < 80;) {
+  for (int k = 0; k < n_top;) {
     const Eigen::Vector2d q = Eigen::Rotation2Dd(features_turn_rad) *
                               Eigen::Vector2d((0.5 * scene.length - inset_long) * U(rng),
                                               (0.5 * scene.width - inset_short) * U(rng));
@@ -841,6 +842,138 @@ TEST(TopAlone, ATopAloneInsideBothViewsIsSeenWhole) {
     expect_measured(o, scene, 0.01, 0.01, seed);
     EXPECT_NEAR(o.estimate.height_m, scene.height, 0.01) << "seed " << seed;
   }
+}
+
+// A top without features (outline.hpp): a dark slate top on a lighter busy floor, every match
+// the floor's. The planes find one plane; the top's outline, carried onto the reference by the
+// plane at its height, measures it: centre within 5 mm, sides within 1 cm, height within 1 cm,
+// for three directions of camera 1 from camera 2 (a side face in view on some).
+BoxScene slate_on_granite() {
+  BoxScene scene;
+  scene.top_grey = 60;
+  scene.side_grey = 45;
+  scene.floor_grey = 150;
+  scene.floor_grain = 40;
+  return scene;
+}
+
+TEST(OutlineTop, AFeaturelessTopIsMeasuredByItsOutline) {
+  const BoxScene scene = slate_on_granite();
+  for (uint64_t seed = 1; seed <= 3; ++seed) {
+    const BoxViews b = box_views(scene, seed, 0, 0, std::nullopt, 0.0, 140, /*n_top=*/0);
+    PipelineParams params;
+    EXPECT_EQ(find_landing_target(b.view.c, params).reason, Reason::kNoTargetPlane)
+        << "seed " << seed;  // the features alone see the floor only
+    const TargetOutcome o = find_landing_target(b.view.c, params, b.image_1, b.image_2);
+    ASSERT_EQ(o.reason, Reason::kOk) << "seed " << seed << ": " << to_string(o.reason);
+    expect_measured(o, scene, 0.01, 0.01, seed);
+    EXPECT_NEAR(o.estimate.height_m, scene.height, 0.01) << "seed " << seed;
+    EXPECT_LT(long_axis_error_deg(o.estimate.yaw_rad, scene), 1.0) << "seed " << seed;
+    ASSERT_EQ(o.estimate.outline.size(), 4u) << "seed " << seed;
+  }
+}
+
+// Over a floor whose dark grains are as dark as the top (the grain 25 grey levels either way
+// about 80, the top at 60) the top's mean grey stands out little, its plainness does: found in
+// most views (a view whose rims the grain blurs is refused, never mismeasured), its centre
+// within 5 mm; the grain moves the rims' steps by a pixel or so, so its sides within 2 cm and
+// its height, from a side or two that move a few pixels per centimetre of it, within 3 cm.
+TEST(OutlineTop, ATopAsDarkAsTheFloorsGrainIsFoundByItsPlainness) {
+  BoxScene scene = slate_on_granite();
+  scene.floor_grey = 80;
+  scene.floor_grain = 25;
+  int found_views = 0;
+  for (uint64_t seed = 1; seed <= 3; ++seed) {
+    const BoxViews b = box_views(scene, seed, 0, 0, std::nullopt, 0.0, 140, /*n_top=*/0);
+    PipelineParams params;
+    const TargetOutcome o = find_landing_target(b.view.c, params, b.image_1, b.image_2);
+    if (o.reason != Reason::kOk) {
+      EXPECT_TRUE(o.reason == Reason::kOutlineUnmatched || o.reason == Reason::kSmallBaseline)
+          << "seed " << seed << ": " << to_string(o.reason);
+      continue;
+    }
+    ++found_views;
+    expect_measured(o, scene, 0.02, 0.02, seed);
+    EXPECT_NEAR(o.estimate.height_m, scene.height, 0.03) << "seed " << seed;
+  }
+  EXPECT_GE(found_views, 2);
+}
+
+// A featureless top the image's border cuts is left to later frames: its outline there is the
+// border's, and the sides it shows are too few to tell it from a chance region.
+TEST(OutlineTop, AFeaturelessTopCutByTheBorderIsNotTaken) {
+  const BoxScene scene = slate_on_granite();
+  const BoxViews whole = box_views(scene, 1, 0, 0, std::nullopt, 0.0, 140, /*n_top=*/0);
+  const Vector3d shift(0.0, 0.6, 0.0);  // the top across the image's border
+  PoseSample p1 = whole.view.c.pose_1, p2 = whole.view.c.pose_2;
+  p1.p_W_B += shift;
+  p2.p_W_B += shift;
+  View v(p1, p2);
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> U(-1, 1);
+  for (int k = 0; k < 140;) {
+    const Vector3d X(v.c.pose_2.p_W_B.x() + 0.7 * U(rng), v.c.pose_2.p_W_B.y() + 0.55 * U(rng), 0);
+    if (!scene.on_top(X, -0.05, -0.05)) k += v.add(X, rng);
+  }
+  const cv::Mat image_1 =
+      scene.render(v.camera, camera_in_world(v.c.pose_1.X_WB(), v.mount.X_BC()));
+  const cv::Mat image_2 =
+      scene.render(v.camera, camera_in_world(v.c.pose_2.X_WB(), v.mount.X_BC()));
+  PipelineParams params;
+  int corners_in_view = 0;  // the top is cut, not out of view
+  for (const double sx : {-0.5, 0.5})
+    for (const double sy : {-0.5, 0.5})
+      corners_in_view +=
+          v.pixel(v.c.pose_2,
+                  scene.X_WO() * Vector3d(sx * scene.length, sy * scene.width, 0.5 * scene.height))
+              .has_value();
+  ASSERT_GT(corners_in_view, 0);
+  ASSERT_LT(corners_in_view, 4);
+  EXPECT_TRUE(featureless_outlines(image_2, v.c, params).empty());
+  EXPECT_EQ(find_landing_target(v.c, params, image_1, image_2).reason, Reason::kNoTargetPlane);
+}
+
+// The same region painted on the floor (a mark, a shadow: 2 mm high) moves with the floor:
+// refused as such, never a top.
+TEST(OutlineTop, AFeaturelessMarkOnTheFloorIsRefusedAsOnTheFloor) {
+  BoxScene scene = slate_on_granite();
+  scene.height = 0.002;
+  for (uint64_t seed = 1; seed <= 2; ++seed) {
+    const BoxViews b = box_views(scene, seed, 0, 0, std::nullopt, 0.0, 140, /*n_top=*/0);
+    PipelineParams params;
+    const TargetOutcome o = find_landing_target(b.view.c, params, b.image_1, b.image_2);
+    EXPECT_EQ(o.reason, Reason::kOutlineOnFloor) << "seed " << seed << ": " << to_string(o.reason);
+  }
+}
+
+// An outline the reference does not show (the reference a bare floor: a region lit in one
+// frame only) is refused as unmatched; with camera 1 almost where camera 2 is, no side's
+// parallax tells a top from the floor (kSmallBaseline).
+TEST(OutlineTop, AnOutlineTheReferenceLacksOrCannotPlaceIsRefused) {
+  const BoxScene scene = slate_on_granite();
+  BoxScene bare = scene;
+  bare.centre_xy = {9.0, 9.0};  // out of view
+  const BoxViews b = box_views(scene, 2, 0, 0, std::nullopt, 0.0, 140, /*n_top=*/0);
+  PipelineParams params;
+  const cv::Mat floor_1 =
+      bare.render(b.view.camera, camera_in_world(b.view.c.pose_1.X_WB(), b.view.mount.X_BC()));
+  EXPECT_EQ(find_landing_target(b.view.c, params, floor_1, b.image_2).reason,
+            Reason::kOutlineUnmatched);
+  View near = b.view;
+  near.c.pose_1.p_W_B = near.c.pose_2.p_W_B + Vector3d(0.004, 0.0, 0.0);
+  const cv::Mat image_1 =
+      scene.render(near.camera, camera_in_world(near.c.pose_1.X_WB(), near.mount.X_BC()));
+  EXPECT_EQ(find_landing_target(near.c, params, image_1, b.image_2).reason, Reason::kSmallBaseline);
+}
+
+// A top with features of its own is the planes' to find or refuse: the outline never overrides
+// them (the textured top of TopRim found as before, its sizes from the rims).
+TEST(OutlineTop, ATopWithFeaturesIsNotMeasuredByItsOutline) {
+  BoxScene scene = slate_on_granite();
+  const BoxViews b = box_views(scene, 3, 0.02, 0.02);
+  PipelineParams params;
+  std::vector<Outline> outlines = featureless_outlines(b.image_2, b.view.c, params);
+  EXPECT_TRUE(outlines.empty());
 }
 
 // Each gate refuses with its own reason (gates.hpp): the 8 cm top of

@@ -1,0 +1,115 @@
+#pragma once
+// Landing, a top without features found by its outline (beyond the paper).
+//
+// The paper (Brockers et al., SPIE 2011, 3.2) finds the top as the second plane of the matched
+// features, and its Fig. 6b notes that features fall short of a featureless region. A top with
+// almost no texture of its own (a slate, a painted board, a dim top whose grain is under the
+// sensor's noise) gives no features at all: the planes find one plane, the floor's, and the
+// frame is refused kNoTargetPlane though the top is plain to see as a region of one grey level
+// with a sharp outline. Here, after the planes found no top:
+//
+//   1. candidates: maximally stable extremal regions (Matas et al., BMVC 2002, OpenCV's MSER)
+//      of the image's local texture at a quarter of its resolution (the grey level's standard
+//      deviation over 4 x 4 blocks): the stage runs only where the floor gave its features, so
+//      the floor is busy and a top without features is a plain region of it, whether or not
+//      its mean grey stands out from the floor's grains. Those that fill the rectangle of their
+//      second moments (a level top under a camera looking down is a rectangle in the image) and
+//      clear the border. A region the border cuts, or a box seen from aside whose side faces
+//      and shadow widen its region past a rectangle, is left to later frames: located from
+//      the sides such a region shows, over a busy floor, it was as often a chance region as
+//      the top;
+//   2. featureless: fewer than min_platform_inliers of the frame's matches inside it (a top
+//      with features is the planes' to find or to refuse, never this stage's);
+//   3. edges: each side refined at full resolution to the line through the strongest step of
+//      grey level across it, the corners where adjacent lines meet;
+//   4. height, side by side: the plane z = floor_z_m + h that carries the side onto the
+//      reference image (motion capture's poses: camera 2's rays intersected with the plane,
+//      projected into camera 1). The step across the side, read in the reference at the carried
+//      points, is there only near the right plane (the inner side is the same top, the outer
+//      the floor seen through parallax); about it, the reference's own rim is fitted as a line
+//      and each point's height is where its plane carries it onto that line. A side along the
+//      camera's motion moves along itself and tells nothing (kMinSideParallaxPx). The top's
+//      height is that of the largest set of sides that agree (kAgreePx); a side below it is on
+//      a side face: a face darker than the top (lit from above) belongs to a dark top's region,
+//      so that side of the outline is the face's foot, or between foot and rim where the face
+//      is narrow;
+//   5. the top: each side's line at its own height lies over the rim (a side face stands
+//      vertical), and where adjacent lines meet are the top's corners: its centre, sides and
+//      heading, as the features' rectangle gives them (extent.hpp).
+//
+// A mark or a shadow on the floor is such a region too; its outline moves with the floor (h
+// under min_height_m: kOutlineOnFloor). An outline the reference does not show at any height
+// (an edge of light, a reflection, a region the reference's view does not hold) is refused
+// kOutlineUnmatched.
+
+#include <opencv2/core.hpp>
+#include <optional>
+#include <vector>
+
+#include "vision/params.hpp"
+#include "vision/target.hpp"
+
+namespace alight::vision {
+
+/// A featureless region's outline in the current image: four raw pixels, in order around it.
+struct Outline {
+  std::vector<Vector2d> corners;
+  bool dark = true;  ///< the region darker than what surrounds it
+};
+
+/// The sides of an outline must read, in the reference, at least this share of the step across
+/// them in the current image at the height found: the inner side is the same top in both, the
+/// outer is the floor seen through parallax, of the same mean grey.
+constexpr double kMinOutlineAgreement = 0.5;
+
+/// A side above the floor must read this much more of its step at its height than at the
+/// floor's plane: a top's rim carried by the floor's plane lands a few pixels beside itself and
+/// reads little of it; a busy floor's chance agreement is about as large at any height.
+constexpr double kMinOutlineContrast = 0.5;
+
+/// A side counts for the height where the plane at the height found and the floor put its middle
+/// this far apart across it in the reference: the step is read 2 px either side of the rim, so
+/// a shift under twice that leaves it in reach of the floor's hypothesis.
+constexpr double kMinSideParallaxPx = 4.0;
+
+/// Two sides' heights agree where they differ by under this much of their own parallax [px]:
+/// a rim fitted over a side's points lies within a few tenths of a pixel.
+constexpr double kAgreePx = 1.5;
+
+/// Stage 1 and 2: the featureless rectangular regions of gray (CV_8UC1, the current raw image)
+/// with fewer than min_platform_inliers of c's current pixels (u2) inside, largest first, at
+/// most kMaxOutlines; each already refined (stage 3).
+std::vector<Outline> featureless_outlines(const cv::Mat& gray, const Correspondences& c,
+                                          const PipelineParams& params);
+
+/// The most candidates measured per frame (the largest): a top is one region, the rest of a
+/// frame's candidates are the floor's patches.
+constexpr size_t kMaxOutlines = 2;
+
+/// Stages 4 and 5 on one outline: the top measured from its outline between the reference
+/// (gray_1) and the current image (gray_2), or why not: kOutlineUnmatched (a side with parallax
+/// whose step the reference shows at no height), kOutlineOnFloor (no side above min_height_m),
+/// kSmallBaseline (fewer than two sides with parallax, or no rim among them),
+/// kHeightOutOfRange, kDecompositionFailed (a corner's ray misses its plane); kPartialView for a
+/// corner within edge_margin_px of the border (located, not measured).
+TargetOutcome top_of_outline(const Outline& o, const Correspondences& c, const cv::Mat& gray_1,
+                             const cv::Mat& gray_2, const PipelineParams& params);
+
+/// A region whose corners are the floor's own features (within kCornerFeaturePx of a match the
+/// planes took for the floor, at two corners or more) is a pattern of the floor: a tile, a
+/// slab, a painted rectangle, whose corners the detector finds on the floor's plane. A top's
+/// corners stand off that plane. The count of such corners; labels: one per match of c.
+constexpr double kCornerFeaturePx = 6.0;
+int corners_on_floor(const Outline& o, const Correspondences& c,
+                     const std::vector<Label>& labels);
+
+/// The stage as find_landing_target calls it after the planes found no top (labels: theirs, one
+/// per match): the first outline (featureless_outlines) measured as a top or located in part,
+/// else the first refusal (kOutlineOnFloor for one whose corners are the floor's, as
+/// corners_on_floor); nullopt where no featureless outline is in view.
+std::optional<TargetOutcome> find_outline_top(const Correspondences& c,
+                                              const std::vector<Label>& labels,
+                                              const cv::Mat& gray_1, const cv::Mat& gray_2,
+                                              const PipelineParams& params);
+
+}  // namespace alight::vision
