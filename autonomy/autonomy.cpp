@@ -805,6 +805,7 @@ void Autonomy::step(phases::FinalDescent& s, const Vector3d& /*p*/, double dt_s)
     yaw_sp_rad_ = aligned_yaw(pr.yaw_rad, yaw_sp_rad_);
     sp_yaw_rate_radps_ = followed_turn_radps(pr.yaw_rate_rps, params_.moving_platform);
     estimate_W_ << pr.p_W, pr.top_z_m;
+    s.touchdown.set_contact_z(pr.top_z_m + L.gear_height_m);
     if (pose_fresh()) {
       PoseSample rel = *pose_;
       rel.v_W_B.z() -= platform_.heave().vz(now_utime_) - platform_.heave().c;
@@ -832,6 +833,7 @@ void Autonomy::step(phases::FinalDescent& s, const Vector3d& /*p*/, double dt_s)
     sp_v_W_.z() = -L.final_descent_rate_mps;
   }
   sp_p_W_ << estimate_W_.head<2>() + body_over_gear_xy(L, pose_), s.z_sp_m;
+  s.touchdown.set_contact_z(z_touch);
   if (pose_fresh()) s.touchdown.add_pose(*pose_, s.z_sp_m, now_utime_);
   if (s.touchdown.detected()) {
     motors_on_ = false;

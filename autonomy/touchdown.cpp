@@ -11,13 +11,17 @@ void TouchdownDetector::arm(int64_t /*now_utime*/) {
   cue_ = "";
   peak_excess_mps2_ = 0.0;
   still_since_.reset();
+  contact_z_m_.reset();
+  last_z_m_.reset();
 }
 
 void TouchdownDetector::add_imu(const ImuSample& imu) {
   if (!armed_ || detected_) return;
   const double excess = imu.accel_B.norm() - g_;
   peak_excess_mps2_ = std::max(peak_excess_mps2_, excess);
-  if (excess > params_.touchdown_accel_mps2) {
+  const bool within_reach =
+      !contact_z_m_ || (last_z_m_ && *last_z_m_ <= *contact_z_m_ + kImpactReachM);
+  if (excess > params_.touchdown_accel_mps2 && within_reach) {
     detected_ = true;
     cue_ = "impact";
   }
@@ -25,6 +29,7 @@ void TouchdownDetector::add_imu(const ImuSample& imu) {
 
 void TouchdownDetector::add_pose(const PoseSample& pose, double z_setpoint_m, int64_t now_utime) {
   if (!armed_ || detected_) return;
+  last_z_m_ = pose.p_W_B.z();
   const bool blocked = z_setpoint_m < pose.p_W_B.z() - 0.1 && std::abs(pose.v_W_B.z()) < 0.05;
   if (!blocked) {
     still_since_.reset();

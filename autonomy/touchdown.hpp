@@ -7,6 +7,13 @@
 // of the specific force's magnitude well above g. A second cue covers a soft touch-down that
 // leaves no spike: the pose shows the body not descending for touchdown_still_s although the
 // altitude setpoint lies well below it (the platform holds it up).
+//
+// Where the body's height at contact is known (the platform's top, or the floor, under the
+// gear: set_contact_z), an impact counts only with the pose within kImpactReachM of it: an
+// autopilot that brakes a descent hard on top of a noisy IMU puts a spike of the same size into
+// the specific force with the gear still well above the top, and cutting the motors there drops
+// the vehicle onto the top's edge (PX4 SIH in SITL: 4-5 m/s^2 over g with the gear 12-15 cm
+// up).
 
 #include <cstdint>
 #include <optional>
@@ -26,6 +33,9 @@ class TouchdownDetector {
   void disarm() { armed_ = false; }
   bool armed() const { return armed_; }
 
+  /// The body's height when the gear meets the surface below [m, world z]; from then on an
+  /// impact counts only with the last pose within kImpactReachM above it.
+  void set_contact_z(double z_m) { contact_z_m_ = z_m; }
   void add_imu(const ImuSample& imu);
   /// z_setpoint_m: the altitude currently commanded.
   void add_pose(const PoseSample& pose, double z_setpoint_m, int64_t now_utime);
@@ -43,6 +53,12 @@ class TouchdownDetector {
   const char* cue_ = "";
   double peak_excess_mps2_ = 0.0;
   std::optional<int64_t> still_since_;
+  std::optional<double> contact_z_m_, last_z_m_;
 };
+
+/// How far above the contact height an impact still counts [m]: the estimate's height error
+/// (1-2 cm), a pose's latency times the descent's speed (about 1 cm) and a deck's heave
+/// between predictions, with room to spare; a braking spike comes a gear's length and more up.
+constexpr double kImpactReachM = 0.08;
 
 }  // namespace alight::autonomy

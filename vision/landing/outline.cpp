@@ -1,10 +1,10 @@
 // Landing, a top without features found by its outline (see outline.hpp).
 #include "vision/landing/outline.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <Eigen/Eigenvalues>
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -224,7 +224,8 @@ std::optional<std::vector<Vector2d>> refined(const cv::Mat& g, const std::vector
     std::vector<cv::Point2f> pts;
     for (int k = 0; k < kSideSamples; ++k) {
       const Vector2d u = a + (0.1 + 0.8 * k / (kSideSamples - 1.0)) * (b - a);
-      if (const auto off = strongest_step(g, u, n, sign, kSearchPx)) pts.push_back(to_cv(u + *off * n));
+      if (const auto off = strongest_step(g, u, n, sign, kSearchPx))
+        pts.push_back(to_cv(u + *off * n));
     }
     const auto line = fitted_line(pts, kSideSamples);
     if (!line) return std::nullopt;
@@ -282,8 +283,8 @@ int matches_inside(const Correspondences& c, const std::vector<Vector2d>& q) {
   for (const auto& p : q) poly.emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()));
   int n = 0;
   for (const auto& u : c.u2)
-    if (cv::pointPolygonTest(poly, cv::Point2f(static_cast<float>(u.x()), static_cast<float>(u.y())),
-                             false) > 0)
+    if (cv::pointPolygonTest(
+            poly, cv::Point2f(static_cast<float>(u.x()), static_cast<float>(u.y())), false) > 0)
       ++n;
   return n;
 }
@@ -542,8 +543,7 @@ Result<double> top_height(const std::array<std::optional<SideHeight>, 4>& height
 /// first), heading of the long sides, the outline; kPartialView where a corner lies within
 /// edge_margin_px of the image's border.
 TargetOutcome top_estimate(const Outline& o, const std::array<Vector3d, 4>& P, double h,
-                           const Correspondences& c, const PlaneMap& map,
-                           const LandingParams& L) {
+                           const Correspondences& c, const PlaneMap& map, const LandingParams& L) {
   TargetOutcome out;
   TargetEstimate& e = out.estimate;
   e.p_W = 0.25 * (P[0] + P[1] + P[2] + P[3]);
@@ -582,8 +582,7 @@ TargetOutcome refuse(Reason r) {
 std::vector<Outline> featureless_outlines(const cv::Mat& gray, const Correspondences& c,
                                           const PipelineParams& params) {
   std::vector<Outline> found;
-  if (gray.empty() || gray.type() != CV_8UC1 || gray.cols < 8 * kScale ||
-      gray.rows < 8 * kScale)
+  if (gray.empty() || gray.type() != CV_8UC1 || gray.cols < 8 * kScale || gray.rows < 8 * kScale)
     return found;
   const cv::Size small(gray.cols / kScale, gray.rows / kScale);
   const auto mser = cv::MSER::create(kMserDelta, static_cast<int>(kMinAreaPx / (kScale * kScale)),
@@ -609,8 +608,9 @@ std::vector<Outline> featureless_outlines(const cv::Mat& gray, const Corresponde
     const Vector2d place(box.x + 0.5 * box.width, box.y + 0.5 * box.height);
     if (static_cast<double>(regions[i].size()) < kMinBoxFill * box.area() ||
         grid.count_in_middle(box) >= params.landing.min_platform_inliers / 2 ||
-        std::any_of(places.begin(), places.end(),
-                    [&](const Vector2d& p) { return (p - place).norm() * kScale < kSamePlacePx; }) ||
+        std::any_of(
+            places.begin(), places.end(),
+            [&](const Vector2d& p) { return (p - place).norm() * kScale < kSamePlacePx; }) ||
         box.x <= 0 || box.y <= 0 || box.br().x >= small.width || box.br().y >= small.height)
       continue;
     if (auto q = region_quad(regions[i])) {
@@ -668,8 +668,7 @@ TargetOutcome top_of_outline(const Outline& o, const Correspondences& c, const c
   return top_estimate(o, P, h, c, map, L);
 }
 
-int corners_on_floor(const Outline& o, const Correspondences& c,
-                     const std::vector<Label>& labels) {
+int corners_on_floor(const Outline& o, const Correspondences& c, const std::vector<Label>& labels) {
   int n = 0;
   for (const auto& q : o.corners)
     for (size_t k = 0; k < c.size() && k < labels.size(); ++k)

@@ -100,8 +100,7 @@ TargetOutcome top_of_outline(const Outline& o, const Correspondences& c, const c
 /// slab, a painted rectangle, whose corners the detector finds on the floor's plane. A top's
 /// corners stand off that plane. The count of such corners; labels: one per match of c.
 constexpr double kCornerFeaturePx = 6.0;
-int corners_on_floor(const Outline& o, const Correspondences& c,
-                     const std::vector<Label>& labels);
+int corners_on_floor(const Outline& o, const Correspondences& c, const std::vector<Label>& labels);
 
 /// The stage as find_landing_target calls it after the planes found no top (labels: theirs, one
 /// per match): the first outline (featureless_outlines) measured as a top or located in part,
