@@ -34,7 +34,10 @@ namespace alight::vision {
 /// (cut_by_border), kTopParallaxGap for one reaching into the epipole's parallax gap
 /// (top_clear_of_epipole): both located, their centre not measured. gray_1 / gray_2: the reference
 /// and current raw images, CV_8UC1 of the camera's size (the photometric gate, and the extent out
-/// to the top's rim); either empty or of another kind: the features alone decide.
+/// to the top's rim); either empty or of another kind: the features alone decide. Where the
+/// planes find the floor alone (kNoTargetPlane) with both images and the known floor, a top
+/// without features is measured by its outline (outline.hpp: found, a partial view, or
+/// kOutlineOnFloor / kOutlineUnmatched and the stage's other refusals).
 TargetOutcome find_landing_target(const Correspondences& c, const PipelineParams& params,
                                   const cv::Mat& gray_1 = cv::Mat(),
                                   const cv::Mat& gray_2 = cv::Mat());
