@@ -45,6 +45,18 @@ double wrap_angle(double a) {
   return a <= -M_PI ? a + 2.0 * M_PI : a;
 }
 
+double wrap_axis_angle(double a) {
+  a = std::remainder(a, M_PI);
+  return a <= -M_PI / 2 ? a + M_PI : a;
+}
+
+std::optional<Vector3d> ray_at_height(const Vector3d& origin, const Vector3d& d, double z_m) {
+  if (!(std::abs(d.z()) > 1e-9)) return std::nullopt;
+  const double lambda = (z_m - origin.z()) / d.z();
+  if (!(lambda > 0)) return std::nullopt;
+  return origin + lambda * d;
+}
+
 bool is_rotation(const Matrix3d& R, double tol) {
   return (R.transpose() * R - Matrix3d::Identity()).cwiseAbs().maxCoeff() <= tol &&
          std::abs(R.determinant() - 1.0) <= tol;

@@ -7,6 +7,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <optional>
 
 namespace alight {
 
@@ -29,6 +30,11 @@ Vector3d rpy_from_rotation(const Matrix3d& R);
 double yaw_of(const Matrix3d& R_WB);
 /// Wraps an angle to (-pi, pi].
 double wrap_angle(double a_rad);
+/// Wraps an axis' direction to (-pi/2, pi/2]: a line's, where a and a + pi are the same.
+double wrap_axis_angle(double a_rad);
+/// Where the ray from `origin` along d (any length) meets the level plane z = z_m, in front of
+/// the origin; nullopt for a ray parallel to the plane or pointing away from it.
+std::optional<Vector3d> ray_at_height(const Vector3d& origin, const Vector3d& d, double z_m);
 
 /// True when R is orthonormal with det R = +1 within `tol`.
 bool is_rotation(const Matrix3d& R, double tol = 1e-9);

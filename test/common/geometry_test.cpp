@@ -63,6 +63,23 @@ TEST(GeometryTest, WrapAngle) {
   EXPECT_NEAR(wrap_angle(2 * M_PI + 0.1), 0.1, 1e-12);
 }
 
+TEST(GeometryTest, WrapAxisAngleTakesALineToTheHalfTurnAboutZero) {
+  EXPECT_EQ(wrap_axis_angle(M_PI / 2), M_PI / 2);
+  EXPECT_NEAR(wrap_axis_angle(-M_PI / 2), M_PI / 2, 1e-15);
+  EXPECT_NEAR(wrap_axis_angle(0.75 * M_PI), -0.25 * M_PI, 1e-12);
+  EXPECT_NEAR(wrap_axis_angle(-0.75 * M_PI), 0.25 * M_PI, 1e-12);
+  EXPECT_NEAR(wrap_axis_angle(2 * M_PI + 0.3), 0.3, 1e-12);
+}
+
+TEST(GeometryTest, RayAtHeightOnlyInFrontOfItsOrigin) {
+  const Vector3d c(1, 2, 1.5);
+  const auto p = ray_at_height(c, Vector3d(0.1, 0.2, -1), 0.5);
+  ASSERT_TRUE(p.has_value());
+  EXPECT_LT((*p - Vector3d(1.1, 2.2, 0.5)).norm(), 1e-12);
+  EXPECT_FALSE(ray_at_height(c, Vector3d(0.1, 0.2, 1), 0.5));  // pointing away
+  EXPECT_FALSE(ray_at_height(c, Vector3d(1, 0, 0), 0.5));      // parallel
+}
+
 TEST(GeometryTest, CameraInWorldComposesBodyAndMount) {
   const Isometry3d X_WB = make_transform(rotation_from_rpy(0, 0, M_PI / 2), Vector3d(1, 2, 3));
   const Isometry3d X_BC = make_transform(R_BC_downward(), Vector3d(0.1, 0, -0.05));

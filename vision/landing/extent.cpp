@@ -157,9 +157,7 @@ Reason measure_top(const Correspondences& c, const LandingPlanes& planes, const 
   const Vector3d& long_W = r.axis[swapped ? 1 : 0];
   // The plane is level (max_tilt_deg), so the long axis' direction in the world xy plane is the
   // platform's yaw; autonomy aligns the gear with the edges before touch-down.
-  e->yaw_rad = std::atan2(long_W.y(), long_W.x());
-  if (e->yaw_rad <= -M_PI / 2) e->yaw_rad += M_PI;
-  if (e->yaw_rad > M_PI / 2) e->yaw_rad -= M_PI;
+  e->yaw_rad = wrap_axis_angle(std::atan2(long_W.y(), long_W.x()));
   const auto px = c.pixel2(w_top->p_C2);
   e->pixel = px ? *px : (c.camera->K() * aim_ray).hnormalized();
   e->outline.clear();

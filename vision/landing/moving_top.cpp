@@ -79,18 +79,10 @@ struct Views {
   double focal_px = 1;
 };
 
-// Where the ray from camera centre c along d_W meets z = z_plane, in front of the camera.
-std::optional<Vector3d> on_plane(const Vector3d& c, const Vector3d& d_W, double z_plane) {
-  if (!(std::abs(d_W.z()) > 1e-9)) return std::nullopt;
-  const double lambda = (z_plane - c.z()) / d_W.z();
-  if (!(lambda > 0)) return std::nullopt;
-  return c + lambda * d_W;
-}
-
 // Transfer error of match i under the known floor: its reference ray onto the floor, into the
 // current camera, against its current ray [px]; infinite where either misses the floor.
 double floor_error_px(const Views& v, const Vector3d& r1, const Vector3d& r2, double floor_z_m) {
-  const auto F = on_plane(v.X_WC1.translation(), v.X_WC1.linear() * r1, floor_z_m);
+  const auto F = ray_at_height(v.X_WC1.translation(), v.X_WC1.linear() * r1, floor_z_m);
   if (!F) return INFINITY;
   const Vector3d x = v.X_WC2.inverse() * *F;
   if (!(x.z() > 1e-6)) return INFINITY;
@@ -115,8 +107,8 @@ std::vector<Placed> place_candidates(const Correspondences& c, const Views& v, d
       continue;
     }
     const Vector3d d1 = v.X_WC1.linear() * r1, d2 = v.X_WC2.linear() * r2;
-    const auto P1 = on_plane(v.X_WC1.translation(), d1, z_top);
-    const auto P2 = on_plane(v.X_WC2.translation(), d2, z_top);
+    const auto P1 = ray_at_height(v.X_WC1.translation(), d1, z_top);
+    const auto P2 = ray_at_height(v.X_WC2.translation(), d2, z_top);
     if (!P1 || !P2) continue;
     m.p1 = P1->head<2>();
     m.p2 = P2->head<2>();
@@ -248,7 +240,7 @@ int still_inside(const Correspondences& c, const std::vector<Placed>& cand,
   for (size_t i = 0; i < c.size(); ++i) {
     if (!carried[i]) continue;
     const auto P =
-        on_plane(v.X_WC2.translation(), v.X_WC2.linear() * c.camera->ray(c.u2[i]), z_top);
+        ray_at_height(v.X_WC2.translation(), v.X_WC2.linear() * c.camera->ray(c.u2[i]), z_top);
     if (P && inside(*P)) ++n;
   }
   return n;
@@ -259,12 +251,6 @@ constexpr double kCutPositionVar = 100.0;
 // A yaw known only to the quarter turn (the rectangle of a part of the top, or of too few
 // features): uniform over it [rad^2].
 constexpr double kUnknownYawVar = (M_PI / 4) * (M_PI / 4) / 3;
-
-double wrap_half_pi(double a) {
-  while (a > M_PI / 2) a -= M_PI;
-  while (a <= -M_PI / 2) a += M_PI;
-  return a;
-}
 
 // The variance of the rectangle's yaw (of pts_W, whose rectangle has yaw_rad), the top's axes
 // modulo a quarter turn. The minimum-area rectangle's orientation rests on the few features
@@ -319,7 +305,7 @@ void measure(const std::vector<Placed>& cand, const std::vector<size_t>& in, con
   const TopRect wide = widened_by_shortfall(*rect, in.size());
   out->size_m[0] = wide.hi[0] - wide.lo[0];
   out->size_m[1] = wide.hi[1] - wide.lo[1];
-  out->yaw_rad = wrap_half_pi(std::atan2(rect->axis[0].y(), rect->axis[0].x()));
+  out->yaw_rad = wrap_axis_angle(std::atan2(rect->axis[0].y(), rect->axis[0].x()));
   out->yaw_rate_rps = S.theta / dt_s;
   out->scale = S.s;
   // Heave: the reference's points at the assumed height (k_1 = 1), so s = k_2.

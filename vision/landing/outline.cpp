@@ -88,6 +88,12 @@ std::optional<Vector2d> meet(const Line2& a, const Line2& b) {
   return a.point + t * a.dir;
 }
 
+/// Sample k of kSideSamples along the side from a to b, between 10 and 90 % of it (clear of the
+/// corners' rounding).
+Vector2d side_sample(const Vector2d& a, const Vector2d& b, int k) {
+  return a + (0.1 + 0.8 * k / (kSideSamples - 1.0)) * (b - a);
+}
+
 Vector2d centroid(const std::vector<Vector2d>& q) {
   Vector2d m = Vector2d::Zero();
   for (const auto& p : q) m += p;
@@ -223,7 +229,7 @@ std::optional<std::vector<Vector2d>> refined(const cv::Mat& g, const std::vector
     const Vector2d n = outward(q, i);
     std::vector<cv::Point2f> pts;
     for (int k = 0; k < kSideSamples; ++k) {
-      const Vector2d u = a + (0.1 + 0.8 * k / (kSideSamples - 1.0)) * (b - a);
+      const Vector2d u = side_sample(a, b, k);
       if (const auto off = strongest_step(g, u, n, sign, kSearchPx))
         pts.push_back(to_cv(u + *off * n));
     }
@@ -302,11 +308,7 @@ class PlaneMap {
   Vector3d dir_W(const Vector2d& u) const { return X_WC2_.linear() * c_.ray_of_pixel2(u); }
   /// Where the ray dir_W from camera 2 meets z = z_m; nullopt behind the camera.
   std::optional<Vector3d> on_plane(const Vector3d& dir_W, double z_m) const {
-    const Vector3d C2 = X_WC2_.translation();
-    if (std::abs(dir_W.z()) < 1e-9) return std::nullopt;
-    const double lambda = (z_m - C2.z()) / dir_W.z();
-    if (!(lambda > 0)) return std::nullopt;
-    return C2 + lambda * dir_W;
+    return ray_at_height(X_WC2_.translation(), dir_W, z_m);
   }
   /// Camera 1's raw pixel of the point of z = z_m on the ray dir_W from camera 2.
   std::optional<Vector2d> to_1(const Vector3d& dir_W, double z_m) const {
@@ -337,32 +339,31 @@ struct Side {
   double far_step = 0;
 };
 
-/// The side from a to b with outward normal n: kSideSamples points between 10 and 90 % of it.
-Side side_between(const Vector2d& a, const Vector2d& b, const Vector2d& n, const cv::Mat& g2,
-                  double sign, const PlaneMap& map) {
-  const Vector2d d = (b - a).normalized();
-  Side s;
-  s.mid_W = map.dir_W(0.5 * (a + b));
-  s.a_W = map.dir_W(a);
-  s.b_W = map.dir_W(b);
-  for (int k = 0; k < kSideSamples; ++k) {
-    const Vector2d u = a + (0.1 + 0.8 * k / (kSideSamples - 1.0)) * (b - a);
-    double in = 0, out = 0, far = 0;
-    if (!grey_along(g2, u - kStepOffsetPx * n, d, &in) ||
-        !grey_along(g2, u + kStepOffsetPx * n, d, &out) || !grey_along(g2, u + kFarPx * n, d, &far))
-      continue;
-    s.points.push_back({map.dir_W(u), map.dir_W(u - kStepOffsetPx * n),
-                        map.dir_W(u + kStepOffsetPx * n), sign * (out - in)});
-    s.far_step += sign * (far - in);
-  }
-  return s;
-}
-
+/// Each side of quadrilateral q from the current image g2: its kSideSamples points, their
+/// steps (signed as a dark or bright region's rim) and the step kFarPx beyond.
 std::array<Side, 4> sides_of(const std::vector<Vector2d>& q, const cv::Mat& g2, bool dark,
                              const PlaneMap& map) {
+  const double sign = dark ? 1.0 : -1.0;
   std::array<Side, 4> sides;
-  for (size_t i = 0; i < 4; ++i)
-    sides[i] = side_between(q[i], q[(i + 1) % 4], outward(q, i), g2, dark ? 1.0 : -1.0, map);
+  for (size_t i = 0; i < 4; ++i) {
+    const Vector2d a = q[i], b = q[(i + 1) % 4];
+    const Vector2d d = (b - a).normalized(), n = outward(q, i);
+    Side& s = sides[i];
+    s.mid_W = map.dir_W(0.5 * (a + b));
+    s.a_W = map.dir_W(a);
+    s.b_W = map.dir_W(b);
+    for (int k = 0; k < kSideSamples; ++k) {
+      const Vector2d u = side_sample(a, b, k);
+      double in = 0, out = 0, far = 0;
+      if (!grey_along(g2, u - kStepOffsetPx * n, d, &in) ||
+          !grey_along(g2, u + kStepOffsetPx * n, d, &out) ||
+          !grey_along(g2, u + kFarPx * n, d, &far))
+        continue;
+      s.points.push_back({map.dir_W(u), map.dir_W(u - kStepOffsetPx * n),
+                          map.dir_W(u + kStepOffsetPx * n), sign * (out - in)});
+      s.far_step += sign * (far - in);
+    }
+  }
   return sides;
 }
 
@@ -554,10 +555,7 @@ TargetOutcome top_estimate(const Outline& o, const std::array<Vector3d, 4>& P, d
   const Vector3d along = s0 >= s1 ? (P[1] - P[0]) + (P[2] - P[3]) : (P[2] - P[1]) + (P[3] - P[0]);
   e.size_m[0] = std::max(s0, s1);
   e.size_m[1] = std::min(s0, s1);
-  double yaw = std::atan2(along.y(), along.x());
-  if (yaw <= -M_PI / 2) yaw += M_PI;
-  if (yaw > M_PI / 2) yaw -= M_PI;
-  e.yaw_rad = yaw;
+  e.yaw_rad = wrap_axis_angle(std::atan2(along.y(), along.x()));
   e.outline = o.corners;
   const auto px = c.pixel2(map.X_WC2().inverse() * e.p_W);
   e.pixel = px ? *px : centroid(o.corners);
