@@ -187,6 +187,7 @@ void Autonomy::enter_failsafe_descent(Failsafe cause, std::string reason, const 
   phases::FailsafeDescent f{pose_ ? pose_->p_W_B.z() : sp_p_W_.z(), now_utime_, std::nullopt,
                             TouchdownDetector(params_.landing)};
   f.touchdown.arm(now_utime_);
+  f.touchdown.confirm_impacts();
   sp_p_W_.head<2>() = xy_W;
   enter(std::move(f), std::move(reason));
 }
