@@ -468,6 +468,7 @@ void Autonomy::start_refinement(const TargetMeasurement& m) {
     estimator_.add(m.p_W_target);
     r.sizes_m.push_back(m.size_m);
     r.yaw4_sum = Vector2d(std::cos(4 * m.yaw_rad), std::sin(4 * m.yaw_rad));
+    r.yaw2_sum = Vector2d(std::cos(2 * m.yaw_rad), std::sin(2 * m.yaw_rad));
   }
   auto& entered =
       enter(std::move(r),
@@ -507,7 +508,10 @@ void Autonomy::finish_refinement(phases::Refinement& r) {
                             ") from n = " + std::to_string(estimator_.n());
   auto start = profile_->begin_approach(*pose_, yaw_sp_rad_, r.normal_sum_W, r.yaw4_sum);
   yaw_sp_rad_ = start.yaw_sp_rad;
-  enter(phases::Approach{std::move(start.state), r.last_found_utime, {}, {}, size_m},
+  const double views = std::max<double>(1.0, static_cast<double>(r.sizes_m.size()));
+  const TopRoom room =
+      top_room(params_.landing, size_m, r.yaw2_sum / views, r.yaw4_sum / views);
+  enter(phases::Approach{std::move(start.state), r.last_found_utime, {}, {}, size_m, room},
         "refinement converged (eqs. 7-9): " + where);
 }
 
@@ -552,6 +556,7 @@ void Autonomy::handle_target(const TargetMeasurement& m) {
     r->sizes_m.push_back(m.size_m);
     r->normal_sum_W += m.n_W;
     r->yaw4_sum += Vector2d(std::cos(4 * m.yaw_rad), std::sin(4 * m.yaw_rad));
+    r->yaw2_sum += Vector2d(std::cos(2 * m.yaw_rad), std::sin(2 * m.yaw_rad));
     if (params_.refinement.one_waypoint_per_vantage) {
       // Added when the dwell ends.
       if (r->at_vantage_since_utime) r->at_vantage_W.push_back(m.p_W_target);
@@ -759,7 +764,7 @@ void Autonomy::step(phases::Approach& a, const Vector3d& p, double dt_s) {
   }
   const ApproachInputs in{
       pose_, p,          estimate_W_, yaw_sp_rad_, since_found_s(a.last_found_utime),
-      dt_s,  now_utime_, a.size_m};
+      dt_s,  now_utime_, a.room};
   ApproachStep next = profile_->step_approach(a.how, in);
   if (next.next == ApproachStep::Next::kTargetLost) {
     target_lost(next.reason);
@@ -774,7 +779,7 @@ void Autonomy::step(phases::Approach& a, const Vector3d& p, double dt_s) {
     case ApproachStep::Next::kFinalDescent: {
       const auto& l = std::get<LandingApproach>(a.how);
       phases::FinalDescent f{l.z_sp_m, TouchdownDetector(params_.landing), !l.land_here, {}, {}};
-      f.fit_radius_m = fit_radius_m(params_.landing, std::min(a.size_m.x(), a.size_m.y()));
+      f.room = a.room;
       if (l.held_since_utime) f.held_s = seconds(now_utime_ - *l.held_since_utime);
       f.touchdown.arm(now_utime_);
       enter(std::move(f), std::move(next.reason));
@@ -857,10 +862,8 @@ Autonomy::FinalPause Autonomy::pause_final_descent(phases::FinalDescent& s, doub
   const double e_r = e_W.norm();
   if (!s.paused_since_utime) {
     // A descent that began on the hold's grown bounds pauses as much further out.
-    const CalmBounds began = calm_bounds(L, s.held_s, s.fit_radius_m);
-    const double pause_radial_m =
-        L.final_pause_radial_m + std::max(0.0, began.reach_m - began.radial_m);
-    if (e_r <= pause_radial_m || pose_->p_W_B.z() - z_touch_m <= L.final_pause_min_height_m)
+    if (!carried_off(L, e_W, calm_bounds(L, s.held_s, s.room), s.room) ||
+        pose_->p_W_B.z() - z_touch_m <= L.final_pause_min_height_m)
       return FinalPause::kNone;
     s.paused_since_utime = now_utime_;
     s.calm_since_utime.reset();
@@ -869,8 +872,10 @@ Autonomy::FinalPause Autonomy::pause_final_descent(phases::FinalDescent& s, doub
     s.z_sp_m = std::max(s.z_sp_m, pose_->p_W_B.z());
   }
   const double paused_s = seconds(now_utime_ - *s.paused_since_utime);
-  if (calm_for_final_descent(L, e_W, pose_, s.held_s + paused_s, s.fit_radius_m, now_utime_,
+  if (calm_for_final_descent(L, e_W, pose_, s.held_s + paused_s, s.room, now_utime_,
                              s.calm_since_utime)) {
+    // Resumed on the bounds the wait earned: the descent pauses again only beyond them.
+    s.held_s += paused_s;
     s.paused_since_utime.reset();
     reason_ = "final descent resumed: calm again";
     return FinalPause::kNone;

@@ -83,6 +83,7 @@ struct Refinement {
   std::vector<Vector2d> sizes_m;                 ///< every full view's measured size
   Vector3d normal_sum_W = Vector3d::Zero();      ///< sum of the measured normals
   Vector2d yaw4_sum = Vector2d::Zero();   ///< landing: sum of (cos, sin)(4 yaw), yaw mod 90 deg
+  Vector2d yaw2_sum = Vector2d::Zero();   ///< landing: sum of (cos, sin)(2 yaw), the long axis
   Vector3d vantage_W = Vector3d::Zero();  ///< the vantage point being flown to
   int64_t vantage_since_utime = 0;
   std::optional<int64_t> at_vantage_since_utime;  ///< dwelling at the vantage since
@@ -97,6 +98,7 @@ struct Approach {
   /// The target's size the refinement measured (the full views' medians, as size_m of
   /// TargetMeasurement); NaN: not measured.
   Vector2d size_m = Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
+  TopRoom room;  ///< the room that top leaves the gear (the final hold's bounds)
 };
 struct FinalDescent {
   double z_sp_m = 0.0;
@@ -105,7 +107,7 @@ struct FinalDescent {
   std::optional<int64_t> paused_since_utime;  ///< a gust carried the vehicle off: stopped since
   std::optional<int64_t> calm_since_utime;    ///< ... and calm again since
   bool moving = false;                        ///< onto a moving platform: follows its filter
-  double fit_radius_m = 0.0;  ///< fit_radius_m of the approach's size_m (the final hold's room)
+  TopRoom room;  ///< the approach's room (the final hold's bounds, the pause's)
   double held_s = 0.0;  ///< the final hold's wait before the descent: the calm bounds it earned
 };
 struct Landed {};

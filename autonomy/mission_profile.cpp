@@ -1,5 +1,6 @@
 #include "autonomy/mission_profile.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "autonomy/search_path.hpp"
@@ -144,8 +145,7 @@ class LandingProfile final : public MissionProfile {
     if (L.final_hold_speed_mps <= 0 || a.land_here) return true;
     if (!a.held_since_utime) a.held_since_utime = in.now_utime;
     return calm_for_final_descent(L, e_W, in.pose, seconds(in.now_utime - *a.held_since_utime),
-                                  fit_radius_m(L, std::min(in.size_m.x(), in.size_m.y())),
-                                  in.now_utime, a.calm_since_utime);
+                                  in.room, in.now_utime, a.calm_since_utime);
   }
 
  private:
@@ -274,12 +274,34 @@ double partial_view_slack_m(const Vector2d& converged_m, const Vector2d& measure
   return 0.5 * (converged_m - measured_m).cwiseMax(0.0).norm();
 }
 
-double fit_radius_m(const LandingParams& L, double short_side_m) {
-  const double r = 0.5 * (short_side_m - L.gear_footprint_m) - L.fit_margin_m;
+double fit_radius_m(const LandingParams& L, double side_m) {
+  const double r = 0.5 * (side_m - L.gear_footprint_m) - L.fit_margin_m;
   return r > 0 ? r : 0.0;  // NaN-safe: an unmeasured top leaves no room
 }
 
-CalmBounds calm_bounds(const LandingParams& L, double held_s, double fit_radius_m) {
+Vector2d TopRoom::in_top(const Vector2d& e_W) const {
+  return Vector2d(long_axis_W.dot(e_W), long_axis_W.x() * e_W.y() - long_axis_W.y() * e_W.x());
+}
+
+TopRoom top_room(const LandingParams& L, const Vector2d& size_m, const Vector2d& long_axis,
+                 const Vector2d& edges) {
+  TopRoom room;
+  const double across = fit_radius_m(L, std::min(size_m.x(), size_m.y()));
+  if (long_axis.allFinite() && long_axis.norm() >= kAxisAgreement) {
+    const double yaw = std::atan2(long_axis.y(), long_axis.x()) / 2;
+    room.long_axis_W = Vector2d(std::cos(yaw), std::sin(yaw));
+    room.half_m << std::max(across, fit_radius_m(L, std::max(size_m.x(), size_m.y()))), across;
+  } else if (edges.allFinite() && edges.norm() >= kAxisAgreement) {
+    const double yaw = std::atan2(edges.y(), edges.x()) / 4;
+    room.long_axis_W = Vector2d(std::cos(yaw), std::sin(yaw));
+    room.half_m.setConstant(across);
+  } else {
+    room.half_m.setConstant(across / std::sqrt(2.0));
+  }
+  return room;
+}
+
+CalmBounds calm_bounds(const LandingParams& L, double held_s, const TopRoom& room) {
   const double quarter_s = 0.25 * L.final_hold_timeout_s;
   const double relaxed = std::clamp(held_s / (2 * quarter_s), 0.0, 1.0);
   const double reach_relaxed = std::clamp((held_s - quarter_s) / quarter_s, 0.0, 1.0);
@@ -287,24 +309,27 @@ CalmBounds calm_bounds(const LandingParams& L, double held_s, double fit_radius_
   b.radial_m = std::min(L.radial_tol_m, L.final_hold_radial_m);
   b.speed_mps = L.final_hold_speed_mps +
                 std::max(0.0, L.final_hold_speed_max_mps - L.final_hold_speed_mps) * relaxed;
-  if (reach_relaxed > 0 && fit_radius_m > b.radial_m)
-    b.reach_m = b.radial_m + (fit_radius_m - b.radial_m) * reach_relaxed;
+  // Only where the top leaves room beyond the strict radius across it too.
+  if (reach_relaxed > 0 && room.half_m.minCoeff() > b.radial_m)
+    b.reach_m = Vector2d::Constant(b.radial_m) +
+                (room.half_m - Vector2d::Constant(b.radial_m)) * reach_relaxed;
   return b;
 }
 
 bool calm_for_final_descent(const LandingParams& L, const Vector2d& e_W,
                             const std::optional<PoseSample>& pose, double held_s,
-                            double fit_radius_m, int64_t now_utime,
+                            const TopRoom& room, int64_t now_utime,
                             std::optional<int64_t>& calm_since_utime) {
-  const CalmBounds b = calm_bounds(L, held_s, fit_radius_m);
+  const CalmBounds b = calm_bounds(L, held_s, room);
   bool calm = false;
   if (pose) {
     const Vector2d v_W = pose->v_W_B.head<2>();
-    const double e_r = e_W.norm();
     const double descent_s = L.final_height_m / L.final_descent_rate_mps;
-    const bool strict = e_r <= b.radial_m && v_W.norm() <= b.speed_mps;
-    const bool heading_in =
-        b.reach_m > 0 && e_r <= b.reach_m && (e_W + v_W * descent_s).norm() <= b.reach_m;
+    const bool strict = e_W.norm() <= b.radial_m && v_W.norm() <= b.speed_mps;
+    const auto within = [&](const Vector2d& x_W) {
+      return (room.in_top(x_W).cwiseAbs() - b.reach_m).maxCoeff() <= 0;
+    };
+    const bool heading_in = b.predicted() && within(e_W) && within(e_W + v_W * descent_s);
     calm = strict || heading_in;
   }
   if (!calm) {
@@ -313,6 +338,16 @@ bool calm_for_final_descent(const LandingParams& L, const Vector2d& e_W,
   }
   if (!calm_since_utime) calm_since_utime = now_utime;
   return seconds(now_utime - *calm_since_utime) >= L.final_hold_settle_s;
+}
+
+bool carried_off(const LandingParams& L, const Vector2d& e_W, const CalmBounds& began,
+                 const TopRoom& room) {
+  const Vector2d grown = began.predicted()
+                             ? Vector2d(began.reach_m - Vector2d::Constant(began.radial_m))
+                             : Vector2d::Zero();
+  const Vector2d bound = Vector2d::Constant(L.final_pause_radial_m) + grown;
+  if (!began.predicted()) return e_W.norm() > L.final_pause_radial_m;
+  return (room.in_top(e_W).cwiseAbs() - bound).maxCoeff() > 0;
 }
 
 std::unique_ptr<const MissionProfile> MissionProfile::make(Mission mission,

@@ -65,37 +65,69 @@ struct LandingApproach {
   }
 };
 
-/// How far the gear's centre may be off the centre of a top whose short side measures
-/// short_side_m and still touch down with fit_margin_m of the top around the gear [m]; 0 for an
+/// How far the gear's centre may be off the centre of a top whose side measures side_m and
+/// still touch down with fit_margin_m of the top around the gear, along that side [m]; 0 for an
 /// unmeasured (NaN) or too small top.
-double fit_radius_m(const LandingParams& L, double short_side_m);
+double fit_radius_m(const LandingParams& L, double side_m);
+
+/// The room the measured top leaves around the gear, along each of its axes. The gear is square
+/// and turned onto the top's edges (align_yaw_tol_deg), so the gear's centre may stray
+/// fit_radius_m of the long side along the long axis and fit_radius_m of the short side across
+/// it: a box in the top's frame, not a circle of the short side's room. A narrow top leaves an
+/// autopilot that holds to a few centimetres most of its room along its length.
+struct TopRoom {
+  Vector2d long_axis_W = Vector2d::UnitX();  ///< unit, horizontal: the box's first axis
+  Vector2d half_m = Vector2d::Zero();        ///< the room along long_axis_W and across it [m]
+  /// e_W in the top's frame: (along long_axis_W, across it).
+  Vector2d in_top(const Vector2d& e_W) const;
+};
+
+/// The room from the refinement's medians (size_m: long, short; NaN: unmeasured) and the
+/// consistency of its yaw measurements: long_axis (the mean of (cos, sin)(2 yaw), |.| <= 1) names
+/// the long axis when its length is at least kAxisAgreement; otherwise edges (the mean of
+/// (cos, sin)(4 yaw)) give a square of the short side's room on the edges' axes; with neither,
+/// the square inside the short side's circle (any direction).
+TopRoom top_room(const LandingParams& L, const Vector2d& size_m, const Vector2d& long_axis,
+                 const Vector2d& edges);
+
+/// How consistent the views' yaw must be (the length of the mean unit vector) to orient the room:
+/// about 30 deg of spread about the mean.
+constexpr double kAxisAgreement = 0.75;
 
 /// The final hold's bounds after held_s of waiting at the final height. At first e_r within
 /// min(radial_tol_m, final_hold_radial_m) and the horizontal speed within final_hold_speed_mps;
 /// over half of final_hold_timeout_s the speed bound grows to final_hold_speed_max_mps. From a
-/// quarter of it on, the predicted test's radius grows from the strict one to fit_radius_m
-/// (reached at half of it). A still, centred moment is worth waiting for, and a vehicle that
-/// holds to millimetres has one within the first quarter; one that rarely has it (an autopilot's
-/// position controller that holds to a few centimetres) should not wait for ever when the top
-/// leaves room.
+/// quarter of it on, the predicted test's box grows from the strict radius to the top's room
+/// along each axis (reached at half of it). A still, centred moment is worth waiting for, and a
+/// vehicle that holds to millimetres has one within the first quarter; one that rarely has it
+/// (an autopilot's position controller that holds to a few centimetres) should not wait for ever
+/// when the top leaves room.
 struct CalmBounds {
   double radial_m = 0.0;   ///< the strict test's e_r bound
   double speed_mps = 0.0;  ///< ... and its speed bound
-  double reach_m = 0.0;    ///< the predicted test's bound on e_r and where it heads (0: none yet)
+  /// The predicted test's bounds on the offset and where it heads, in the top's frame (zero:
+  /// none yet, or the top leaves no room beyond the strict radius across it).
+  Vector2d reach_m = Vector2d::Zero();
+  bool predicted() const { return reach_m.minCoeff() > 0; }
 };
-CalmBounds calm_bounds(const LandingParams& L, double held_s, double fit_radius_m);
+CalmBounds calm_bounds(const LandingParams& L, double held_s, const TopRoom& room);
 
 /// The final hold's calm moment (beyond the paper), for final_hold_settle_s on end: either the
 /// strict test (e_r and the speed within CalmBounds' radial_m and speed_mps), or the predicted
-/// one: e_r, and the offset the vehicle heads for over the rapid descent's duration
-/// (final_height_m / final_descent_rate_mps, e_W + v_W T), both within reach_m. The predicted
-/// test lets a vehicle swinging through the centre descend while it swings towards it.
-/// e_W: the gear's centre minus the target, horizontal. calm_since_utime is the window's own
-/// state; true once it has lasted.
+/// one: the offset, and the offset the vehicle heads for over the rapid descent's duration
+/// (final_height_m / final_descent_rate_mps, e_W + v_W T), both within reach_m along each of
+/// the top's axes. The predicted test lets a vehicle swinging through the centre descend while
+/// it swings towards it. e_W: the gear's centre minus the target, horizontal. calm_since_utime
+/// is the window's own state; true once it has lasted.
 bool calm_for_final_descent(const LandingParams& L, const Vector2d& e_W,
                             const std::optional<PoseSample>& pose, double held_s,
-                            double fit_radius_m, int64_t now_utime,
+                            const TopRoom& room, int64_t now_utime,
                             std::optional<int64_t>& calm_since_utime);
+
+/// A descent begun on the hold's bounds is carried off (final_pause_radial_m) as much further
+/// out along each axis as the bounds had grown: true when e_W lies beyond that.
+bool carried_off(const LandingParams& L, const Vector2d& e_W, const CalmBounds& began,
+                 const TopRoom& room);
 
 /// Beyond the paper: the horizontal offset of the body origin from the gear's centre
 /// (gear_height_m below it along the body's z axis) [m]. A body tilted against the wind holds
@@ -127,9 +159,9 @@ struct ApproachInputs {
   double since_found_s = 0.0;  ///< since the target was last in sight
   double dt_s = 0.0;
   int64_t now_utime = 0;
-  /// The target's size the refinement measured (long, short; NaN: unmeasured): how far off the
-  /// centre the final hold may let the gear down (fit_radius_m).
-  Vector2d size_m = Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
+  /// The room the refinement's measured top leaves the gear (top_room): how far off the centre
+  /// the final hold may let it down.
+  TopRoom room;
 };
 
 /// What one approach step decided.
