@@ -509,8 +509,7 @@ void Autonomy::finish_refinement(phases::Refinement& r) {
   auto start = profile_->begin_approach(*pose_, yaw_sp_rad_, r.normal_sum_W, r.yaw4_sum);
   yaw_sp_rad_ = start.yaw_sp_rad;
   const double views = std::max<double>(1.0, static_cast<double>(r.sizes_m.size()));
-  const TopRoom room =
-      top_room(params_.landing, size_m, r.yaw2_sum / views, r.yaw4_sum / views);
+  const TopRoom room = top_room(params_.landing, size_m, r.yaw2_sum / views, r.yaw4_sum / views);
   enter(phases::Approach{std::move(start.state), r.last_found_utime, {}, {}, size_m, room},
         "refinement converged (eqs. 7-9): " + where);
 }

@@ -107,7 +107,7 @@ struct FinalDescent {
   std::optional<int64_t> paused_since_utime;  ///< a gust carried the vehicle off: stopped since
   std::optional<int64_t> calm_since_utime;    ///< ... and calm again since
   bool moving = false;                        ///< onto a moving platform: follows its filter
-  TopRoom room;  ///< the approach's room (the final hold's bounds, the pause's)
+  TopRoom room;         ///< the approach's room (the final hold's bounds, the pause's)
   double held_s = 0.0;  ///< the final hold's wait before the descent: the calm bounds it earned
 };
 struct Landed {};

@@ -164,7 +164,7 @@ TEST(FinalHoldTest, SwingingTowardsTheCentreItDescendsSwingingOutItWaits) {
   const double room_m = fit_radius_m(p.landing, 0.279);
   const double descent_s = p.landing.final_height_m / p.landing.final_descent_rate_mps;
   const double quarter_s = 0.25 * p.landing.final_hold_timeout_s;
-  const Vector2d e(0.0, 0.007);  // across the top
+  const Vector2d e(0.0, 0.007);              // across the top
   const Vector2d v_in = -e * 2 / descent_s;  // heads for -e: as far off on the other side
   ASSERT_GT(v_in.norm(), p.landing.final_hold_speed_max_mps);
   const auto time_to_descend = [&](const Vector2d& v_W) {
@@ -326,8 +326,8 @@ TEST(TopRoomTest, TheLongSidesRoomAlongItsAxisTheShortSidesAcross) {
   L.fit_margin_m = 0.02;
   const Vector2d size(0.279, 0.216);
   const double yaw = 30.0 * M_PI / 180.0;
-  const Vector2d axis2(std::cos(2 * yaw), std::sin(2 * yaw)), axis4(std::cos(4 * yaw),
-                                                                     std::sin(4 * yaw));
+  const Vector2d axis2(std::cos(2 * yaw), std::sin(2 * yaw)),
+      axis4(std::cos(4 * yaw), std::sin(4 * yaw));
   const TopRoom room = top_room(L, size, axis2, axis4);
   EXPECT_NEAR(room.half_m.x(), fit_radius_m(L, 0.279), 1e-12);
   EXPECT_NEAR(room.half_m.y(), fit_radius_m(L, 0.216), 1e-12);

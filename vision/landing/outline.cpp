@@ -401,7 +401,8 @@ double side_parallax(const Side& s, const PlaneMap& map, double z_a, double z_b)
 /// of the points' heights. `rate`: the median of how far the side moves across itself per
 /// metre of height [px/m], which says how well its height is measured. nullopt for a side that
 /// steps too little (kMinSideStep), whose outside returns to its inside's grey (a line), whose
-/// agreement peaks twice (a repeated pattern), or whose rim the reference does not show.
+/// agreement peaks twice (a repeated pattern), or whose rim the reference does not show; the
+/// first three tell no height (*silent): the side itself, not the reference, says nothing.
 struct SideHeight {
   double h = 0, agreement = 0, rate = 0;
   double on_floor = 0;  ///< the agreement the floor's plane gives (h = 0)
@@ -411,7 +412,9 @@ struct SideHeight {
 };
 
 std::optional<SideHeight> side_height(const Side& s, const cv::Mat& g1, const PlaneMap& map,
-                                      double z0, double max_h, double range_px, double sign) {
+                                      double z0, double max_h, double range_px, double sign,
+                                      bool* silent) {
+  *silent = true;
   double cur = 0;
   for (const auto& p : s.points) cur += p.step;
   // A side must step as a rim does (kMinSideStep on average, and as much kFarPx beyond it): a
@@ -434,6 +437,7 @@ std::optional<SideHeight> side_height(const Side& s, const cv::Mat& g1, const Pl
   for (const auto& [h, a] : grid)
     if (std::abs(h - h_g) > kPeakWidthSteps * step && a >= kMaxSecondPeak * best)
       return std::nullopt;
+  *silent = false;
   std::vector<cv::Point2f> edge;
   for (const auto& p : s.points) {
     const auto u = map.to_1(p.rim_W, z0 + h_g), in = map.to_1(p.in_W, z0 + h_g),
@@ -639,8 +643,13 @@ TargetOutcome top_of_outline(const Outline& o, const Correspondences& c, const c
     if (const double range_px = side_parallax(sides[i], map, z0, z0 + L.max_height_m);
         range_px >= kMinSideParallaxPx) {
       ++informative;
-      heights[i] = side_height(sides[i], gray_1, map, z0, L.max_height_m, range_px, sign);
-      if (!heights[i] || heights[i]->agreement < kMinOutlineAgreement)
+      // A side that tells no height (too faint a step: a dim top on a dark floor; a pattern
+      // repeated across it) is left out, the top standing on the others (two must agree:
+      // top_height). One the reference does not show, or shows at no height with its step,
+      // refuses the outline.
+      bool silent = false;
+      heights[i] = side_height(sides[i], gray_1, map, z0, L.max_height_m, range_px, sign, &silent);
+      if ((!heights[i] && !silent) || (heights[i] && heights[i]->agreement < kMinOutlineAgreement))
         return refuse(Reason::kOutlineUnmatched);
     }
   if (informative < 2) return refuse(Reason::kSmallBaseline);

@@ -28,7 +28,9 @@
 //      points, is there only near the right plane (the inner side is the same top, the outer
 //      the floor seen through parallax); about it, the reference's own rim is fitted as a line
 //      and each point's height is where its plane carries it onto that line. A side along the
-//      camera's motion moves along itself and tells nothing (kMinSideParallaxPx). The top's
+//      camera's motion moves along itself and tells nothing (kMinSideParallaxPx), nor does one
+//      whose step is too faint or repeats across it (a dark floor beside a dark top): they are
+//      left out. The top's
 //      height is that of the largest set of sides that agree (kAgreePx); a side below it is on
 //      a side face: a face darker than the top (lit from above) belongs to a dark top's region,
 //      so that side of the outline is the face's foot, or between foot and rim where the face
