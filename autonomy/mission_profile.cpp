@@ -342,11 +342,9 @@ bool calm_for_final_descent(const LandingParams& L, const Vector2d& e_W,
 
 bool carried_off(const LandingParams& L, const Vector2d& e_W, const CalmBounds& began,
                  const TopRoom& room) {
-  const Vector2d grown = began.predicted()
-                             ? Vector2d(began.reach_m - Vector2d::Constant(began.radial_m))
-                             : Vector2d::Zero();
-  const Vector2d bound = Vector2d::Constant(L.final_pause_radial_m) + grown;
   if (!began.predicted()) return e_W.norm() > L.final_pause_radial_m;
+  const Vector2d bound =
+      Vector2d::Constant(L.final_pause_radial_m - began.radial_m) + began.reach_m;
   return (room.in_top(e_W).cwiseAbs() - bound).maxCoeff() > 0;
 }
 
