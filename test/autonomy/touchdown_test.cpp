@@ -62,6 +62,14 @@ ImuSample spike_at(double excess_mps2, int64_t utime) {
   return imu;
 }
 
+// A failsafe descent's detector: armed, confirming its impacts.
+TouchdownDetector confirming(const LandingParams& params) {
+  TouchdownDetector td(params);
+  td.arm(0);
+  td.confirm_impacts();
+  return td;
+}
+
 PoseSample moving(double z_m, double vz_mps) {
   PoseSample p = at_height(z_m);
   p.v_W_B.z() = vz_mps;
@@ -76,9 +84,7 @@ PoseSample moving(double z_m, double vz_mps) {
 TEST(TouchdownDetectorTest, AFailsafeImpactStandsOnlyWhenAPoseShowsTheBodyStopped) {
   const LandingParams params;
   const double over = params.touchdown_accel_mps2 + 1.0;
-  TouchdownDetector td(params);
-  td.arm(0);
-  td.confirm_impacts();
+  TouchdownDetector td = confirming(params);
   td.add_imu(spike_at(over, 1'000'000));
   td.add_pose(moving(1.57, -0.6), 0.0, 1'010'000);  // thrown about: still moving
   td.add_pose(moving(1.52, 0.3), 0.0, 1'100'000);
@@ -100,9 +106,7 @@ TEST(TouchdownDetectorTest, AFailsafeImpactStandsOnlyWhenAPoseShowsTheBodyStoppe
 // A blind descent (no pose at all since the impact) has nothing but the impact to go by.
 TEST(TouchdownDetectorTest, ABlindFailsafeDescentTakesTheImpactAlone) {
   const LandingParams params;
-  TouchdownDetector td(params);
-  td.arm(0);
-  td.confirm_impacts();
+  TouchdownDetector td = confirming(params);
   td.add_imu(spike_at(params.touchdown_accel_mps2 + 1.0, 2'000'000));
   td.add_imu(spike_at(0.0, 2'000'000 + static_cast<int64_t>(0.5 * kImpactConfirmS * 1e6)));
   EXPECT_FALSE(td.detected());
@@ -114,9 +118,7 @@ TEST(TouchdownDetectorTest, ABlindFailsafeDescentTakesTheImpactAlone) {
 // The final descent knows its contact height; confirming does not delay an impact there.
 TEST(TouchdownDetectorTest, ConfirmingLeavesAKnownContactAlone) {
   const LandingParams params;
-  TouchdownDetector td(params);
-  td.arm(0);
-  td.confirm_impacts();
+  TouchdownDetector td = confirming(params);
   td.set_contact_z(0.3);
   td.add_pose(at_height(0.31), 0.2, 1000);
   td.add_imu(spike_at(params.touchdown_accel_mps2 + 1.0, 2000));
