@@ -470,6 +470,7 @@ void Autonomy::start_refinement(const TargetMeasurement& m) {
     r.yaw4_sum = Vector2d(std::cos(4 * m.yaw_rad), std::sin(4 * m.yaw_rad));
     r.yaw2_sum = Vector2d(std::cos(2 * m.yaw_rad), std::sin(2 * m.yaw_rad));
   }
+  look_to_fit(r, m);
   auto& entered =
       enter(std::move(r),
             std::string(m.found ? "first waypoint X_V,1" : "first sighting (partly in view)") +
@@ -484,11 +485,26 @@ void Autonomy::next_vantage(phases::Refinement& r) {
   const Vector3d here = pose_ ? pose_->p_W_B : mu;
   const auto v = profile_->vantage(mu, estimator_.covariance(), estimator_.n(), here,
                                    r.normal_sum_W, sampler_);
-  r.vantage_W = v.p_W;
+  r.vantage_W = r.view ? vantage_in_view(*r.view, mu, v.p_W) : v.p_W;
   if (v.yaw_rad) yaw_sp_rad_ = *v.yaw_rad;
+  if (r.view) yaw_sp_rad_ = r.view->yaw_rad;
   r.vantage_since_utime = now_utime_;
   r.at_vantage_since_utime.reset();
   r.at_vantage_W.clear();
+}
+
+bool Autonomy::look_to_fit(phases::Refinement& r, const TargetMeasurement& m) {
+  if (!m.cut || mission() != Mission::kLanding || !params_.downward_view) return false;
+  const double from_z = r.view ? r.view->z_m : params_.detection.landing_height_m;
+  const double max_z = params_.geofence.max_W_m.z() - params_.hover_tol_m;
+  const auto v = view_to_fit(*params_.downward_view, m.size_m, m.yaw_rad, m.p_W_target.z(),
+                             yaw_sp_rad_, from_z, max_z);
+  if (!v) return false;
+  if (r.view && v->z_m < r.view->z_m + kViewStepM &&
+      std::abs(wrap_angle(v->yaw_rad - r.view->yaw_rad)) < kViewTurnRad)
+    return false;
+  r.view = *v;
+  return true;
 }
 
 void Autonomy::finish_refinement(phases::Refinement& r) {
@@ -550,6 +566,7 @@ void Autonomy::handle_target(const TargetMeasurement& m) {
       // between the vehicle and the true centre, so each vantage sees more of the target (in
       // Monte Carlo runs the draws around the first sighting alone kept it cut for 60 s).
       if (estimator_.n() == 0) r->first_sighting_W = m.p_W_target;
+      if (look_to_fit(*r, m)) next_vantage(*r);
       return;
     }
     r->sizes_m.push_back(m.size_m);

@@ -88,6 +88,8 @@ struct Refinement {
   int64_t vantage_since_utime = 0;
   std::optional<int64_t> at_vantage_since_utime;  ///< dwelling at the vantage since
   std::vector<Vector3d> at_vantage_W;             ///< waypoints seen while dwelling there
+  /// Landing: where the vantages look from since a view cut the top (mission_profile.hpp).
+  std::optional<ViewToFit> view;
 };
 struct Approach {
   ApproachState how;                            ///< the mission profile's own approach state
@@ -223,6 +225,9 @@ class Autonomy {
   void start_refinement(const TargetMeasurement& m);
   void finish_refinement(phases::Refinement& r);
   void next_vantage(phases::Refinement& r);
+  /// A landing top cut by the view's border: higher and turned vantages when it would not fit
+  /// the view from where they are (mission_profile.hpp, view_to_fit); true when they moved.
+  bool look_to_fit(phases::Refinement& r, const TargetMeasurement& m);
   void add_waypoint(phases::Refinement& r, const Vector3d& X_W);
   void target_lost(const std::string& what);
   void hold(const std::string& reason, Failsafe failsafe, double min_z_m);

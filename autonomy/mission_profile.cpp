@@ -274,6 +274,50 @@ double partial_view_slack_m(const Vector2d& converged_m, const Vector2d& measure
   return 0.5 * (converged_m - measured_m).cwiseMax(0.0).norm();
 }
 
+double range_to_fit(const DownwardView& view, const Vector2d& size_m, double top_yaw_rad,
+                    double view_yaw_rad, double pad_m) {
+  const double c = std::abs(std::cos(top_yaw_rad - view_yaw_rad));
+  const double s = std::abs(std::sin(top_yaw_rad - view_yaw_rad));
+  const double along_long = 0.5 * (c * size_m.x() + s * size_m.y()) + pad_m;
+  const double along_short = 0.5 * (s * size_m.x() + c * size_m.y()) + pad_m;
+  return std::max(along_long / view.tan_long, along_short / view.tan_short);
+}
+
+std::optional<ViewToFit> view_to_fit(const DownwardView& view, const Vector2d& size_m,
+                                     double top_yaw_rad, double top_z_m, double body_yaw_rad,
+                                     double from_z_m, double max_z_m) {
+  if (!(view.tan_long > 0 && view.tan_short > 0) || !size_m.allFinite() ||
+      !std::isfinite(top_yaw_rad) || !std::isfinite(top_z_m))
+    return std::nullopt;
+  const double view_yaw = body_yaw_rad + view.long_axis_yaw_B_rad;
+  if (top_z_m + range_to_fit(view, size_m, top_yaw_rad, view_yaw, kViewPadM) <= from_z_m)
+    return std::nullopt;
+  ViewToFit v;
+  v.top_yaw_rad = top_yaw_rad;
+  // The image's long axis along the top's: two headings half a turn apart; the nearer.
+  v.yaw_rad = wrap_angle(top_yaw_rad - view.long_axis_yaw_B_rad);
+  if (std::abs(wrap_angle(v.yaw_rad - body_yaw_rad)) > M_PI / 2)
+    v.yaw_rad = wrap_angle(v.yaw_rad + M_PI);
+  const double range = range_to_fit(view, size_m, top_yaw_rad, top_yaw_rad, kViewPadM);
+  v.z_m = std::clamp(top_z_m + range, from_z_m, std::max(from_z_m, max_z_m));
+  const double at = v.z_m - top_z_m;
+  v.slack_m =
+      Vector2d(at * view.tan_long - 0.5 * size_m.x(), at * view.tan_short - 0.5 * size_m.y())
+          .cwiseMax(0.0);
+  return v;
+}
+
+Vector3d vantage_in_view(const ViewToFit& view, const Vector3d& mu_W, const Vector3d& drawn_W) {
+  const Vector2d axis(std::cos(view.top_yaw_rad), std::sin(view.top_yaw_rad));
+  const Vector2d across(-axis.y(), axis.x());
+  const Vector2d d = (drawn_W - mu_W).head<2>();
+  const Vector2d half = 0.5 * view.slack_m;
+  const double a = std::clamp(axis.dot(d), -half.x(), half.x());
+  const double b = std::clamp(across.dot(d), -half.y(), half.y());
+  const Vector2d xy = mu_W.head<2>() + a * axis + b * across;
+  return Vector3d(xy.x(), xy.y(), view.z_m);
+}
+
 double fit_radius_m(const LandingParams& L, double side_m) {
   const double r = 0.5 * (side_m - L.gear_footprint_m) - L.fit_margin_m;
   return r > 0 ? r : 0.0;  // NaN-safe: an unmeasured top leaves no room

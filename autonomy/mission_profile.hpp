@@ -44,6 +44,44 @@ inline constexpr double kVisionDisagreeS = 2.0;
 /// its centre up to half the missing extent off the true one. 0 when either is unmeasured [m].
 double partial_view_slack_m(const Vector2d& converged_m, const Vector2d& measured_m);
 
+/// Refinement's look at a top its views cut (paper 3.4.1 flies the vantages at the search
+/// height, which takes the platform to fit the view from there): the height and heading from
+/// which the top fits the downward camera's view, and how far a vantage may stray from the top's
+/// centre with it whole in view.
+struct ViewToFit {
+  double z_m = 0.0;          ///< the vantages' height, world z [m]
+  double yaw_rad = 0.0;      ///< body yaw laying the image's long axis along the top's [rad]
+  double top_yaw_rad = 0.0;  ///< the top's long axis [rad]
+  Vector2d slack_m = Vector2d::Zero();  ///< room around the top along its long, short axis [m]
+};
+
+/// A top whole in the view stays this far inside the view's usable part on each side: the
+/// vantages' own scatter (vantage_sigma_floor_m's 8 cm) and the vision's reference image, taken
+/// a baseline (about 10 cm) before [m].
+inline constexpr double kViewPadM = 0.15;
+/// A cut view moves the vantages again only when it asks for this much more height [m] or this
+/// much more turn [rad]: less is inside kViewPadM, and every move costs a vantage's flight.
+inline constexpr double kViewStepM = 0.1;
+inline constexpr double kViewTurnRad = 10.0 * M_PI / 180.0;
+
+/// The range (camera to top) from which a top of size (long, short), its long axis at
+/// top_yaw, lies pad_m inside the usable view of a camera whose image's long axis lies at
+/// view_yaw (world) [m].
+double range_to_fit(const DownwardView& view, const Vector2d& size_m, double top_yaw_rad,
+                    double view_yaw_rad, double pad_m);
+
+/// From a cut view of the top (the extent in view, a lower bound of the top's; its long axis;
+/// its surface's height) and the body's yaw: nothing when that extent fits the view from
+/// from_z_m as the body is turned; else the body turned to lay the top's long axis along the
+/// image's (the nearer of the two turns) at the height it fits from, within [from_z_m, max_z_m].
+std::optional<ViewToFit> view_to_fit(const DownwardView& view, const Vector2d& size_m,
+                                     double top_yaw_rad, double top_z_m, double body_yaw_rad,
+                                     double from_z_m, double max_z_m);
+
+/// A vantage drawn around mu_W at the view's height, its offset from mu_W clipped to half the
+/// view's slack along each of the top's axes (the other half is the reference image's).
+Vector3d vantage_in_view(const ViewToFit& view, const Vector3d& mu_W, const Vector3d& drawn_W);
+
 /// A failsafe that holds before its controlled descent holds this long: time for the operator to
 /// take over, as PX4's COM_FAIL_ACT_T [s].
 inline constexpr double kFailsafeHoldS = 5.0;

@@ -1,5 +1,10 @@
 #include "autonomy/params.hpp"
 
+#include <algorithm>
+#include <cmath>
+
+#include "common/camera_mount.hpp"
+
 namespace alight::autonomy {
 
 const ParamSchema<TakeoffParams>& TakeoffParams::schema() {
@@ -358,9 +363,26 @@ void FailsafeParams::validate() const { schema().validate(*this); }
 void RestartParams::validate() const { schema().validate(*this); }
 void AutonomyParams::validate() const { schema().validate(*this); }
 
+DownwardView downward_view(const CameraModel& camera, const Matrix3d& R_BC) {
+  const double half_u = std::max(0.0, camera.width / 2.0 - kViewBorderPx) / camera.fx;
+  const double half_v = std::max(0.0, camera.height / 2.0 - kViewBorderPx) / camera.fy;
+  const bool u_long = half_u >= half_v;
+  // The image's x (u) and y (v) axes in the body; the camera looks down, so both lie near the
+  // body's x-y plane.
+  const Vector3d axis = R_BC.col(u_long ? 0 : 1);
+  return {std::max(half_u, half_v), std::min(half_u, half_v), std::atan2(axis.y(), axis.x())};
+}
+
 AutonomyParams load_params(const ParamNode& root) {
   AutonomyParams p;
   AutonomyParams::schema().read(root.child("autonomy"), p);
+  // The downward camera is declared once, under cameras.downward, as vision and the simulator
+  // read it.
+  if (const auto cameras = root.optional_child("cameras");
+      cameras && cameras->optional_child("downward")) {
+    const CameraMount mount = load_camera_mount(root, "downward");
+    p.downward_view = downward_view(load_camera_info(mount.camera_info_path), mount.R_BC);
+  }
   return p;
 }
 

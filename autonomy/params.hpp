@@ -5,9 +5,11 @@
 // `alight-params --defaults vehicle` prints them.
 
 #include <cstdint>
+#include <optional>
 #include <string>
 
 #include "autonomy/moving_landing.hpp"
+#include "common/camera_model.hpp"
 #include "common/geometry.hpp"
 #include "common/param_schema.hpp"
 
@@ -138,6 +140,20 @@ struct RestartParams {
   void validate() const;
 };
 
+/// The downward camera's view as refinement uses it to look at a top its views cut (derived from
+/// the vehicle file's cameras.downward and its camera_info when it declares one; not a
+/// parameter): the tangents of the half angles inside which the vision calls a top whole.
+struct DownwardView {
+  double tan_long = 0.0;             ///< along the image's long axis
+  double tan_short = 0.0;            ///< along its short axis
+  double long_axis_yaw_B_rad = 0.0;  ///< the image's long axis in the body's x-y plane [rad]
+};
+
+/// The view of a camera model and mounting, less the vision's border margin (a top with a
+/// feature this close to the border is cut: vision.landing.edge_margin_px's default) [px].
+inline constexpr double kViewBorderPx = 40.0;
+DownwardView downward_view(const CameraModel& camera, const Matrix3d& R_BC);
+
 struct AutonomyParams {
   uint64_t seed = 1;
   bool accept_unsigned_commands = false;
@@ -155,6 +171,8 @@ struct AutonomyParams {
   FailsafeParams failsafe;
   RestartParams restart;
   MovingLandingParams moving_platform;
+  /// Without one, refinement looks from the search height as it found the top.
+  std::optional<DownwardView> downward_view;
   static const ParamSchema<AutonomyParams>& schema();
   void validate() const;  ///< throws ParamError naming the full key and its value
 };

@@ -37,7 +37,12 @@ TEST(AutonomyParamsTest, VehicleFilesLoadWithThePapersThresholds) {
     EXPECT_DOUBLE_EQ(p.failsafe.pose_lost_s, 1.0) << v;
     EXPECT_DOUBLE_EQ(p.landing.gear_footprint_m, 0.15) << v;
     EXPECT_LE(p.status_period_s, 0.1) << v;
+    // The downward camera's view, derived from cameras.downward (the Firefly's 640 x 480).
+    ASSERT_TRUE(p.downward_view) << v;
+    EXPECT_NEAR(p.downward_view->tan_long, (320 - kViewBorderPx) / 666.667, 1e-6) << v;
+    EXPECT_NEAR(p.downward_view->tan_short, (240 - kViewBorderPx) / 666.667, 1e-6) << v;
   }
+  EXPECT_FALSE(load_params(ParamNode::from_string("autonomy: {}", "v.yaml")).downward_view);
 }
 
 TEST(AutonomyParamsTest, ErrorsNameTheNestedKey) {
