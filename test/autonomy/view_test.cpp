@@ -14,7 +14,9 @@ namespace alight::autonomy {
 namespace {
 
 // The paper's camera (640 x 480, f = 666.7 px) looking down, image right = vehicle right.
-DownwardView firefly_down() { return downward_view(CameraModel::firefly_mv_4mm(), R_BC_downward()); }
+DownwardView firefly_down() {
+  return downward_view(CameraModel::firefly_mv_4mm(), R_BC_downward());
+}
 
 TEST(DownwardViewTest, TheUsableHalfAnglesLeaveTheVisionsBorderAndTheLongAxisIsTheImagesWidth) {
   const DownwardView v = firefly_down();
@@ -25,9 +27,9 @@ TEST(DownwardViewTest, TheUsableHalfAnglesLeaveTheVisionsBorderAndTheLongAxisIsT
   // A camera turned a quarter about its axis: the long axis along the body's x.
   const Matrix3d turned =
       R_BC_downward() * Eigen::AngleAxisd(M_PI / 2, Vector3d::UnitZ()).toRotationMatrix();
-  EXPECT_NEAR(std::abs(std::cos(downward_view(CameraModel::firefly_mv_4mm(), turned)
-                                    .long_axis_yaw_B_rad)),
-              1.0, 1e-9);
+  EXPECT_NEAR(
+      std::abs(std::cos(downward_view(CameraModel::firefly_mv_4mm(), turned).long_axis_yaw_B_rad)),
+      1.0, 1e-9);
 }
 
 TEST(ViewToFitTest, ATopAlongTheImagesLongAxisFitsFromNearerThanOneAcrossIt) {
