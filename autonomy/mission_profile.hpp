@@ -56,8 +56,9 @@ struct ViewToFit {
 };
 
 /// A top whole in the view stays this far inside the view's usable part on each side: the
-/// vantages' own scatter (vantage_sigma_floor_m's 8 cm) and the vision's reference image, taken
-/// a baseline (about 10 cm) before [m].
+/// vantages' own scatter (vantage_sigma_floor_m's 8 cm) and part of the way to the vision's
+/// reference image, which may lie up to 0.3 m off (vision.landing.max_reference_baseline_m); a
+/// pad that covered all of it would put a large top's vantage above a room's geofence [m].
 inline constexpr double kViewPadM = 0.15;
 /// A cut view moves the vantages again only when it asks for this much more height [m] or this
 /// much more turn [rad]: less is inside kViewPadM, and every move costs a vantage's flight.
