@@ -35,8 +35,6 @@ const ParamSchema<MovingLandingParams>& MovingLandingParams::schema() {
           "matched this long before the descent starts");
     s.add("lost_timeout_s", &P::lost_timeout_s, Range::gt(0), "s",
           "no platform measurement for this long: target lost");
-    s.add("max_speed_mps", &P::max_speed_mps, Range::gt(0), "m/s",
-          "a platform predicted faster is beyond what the vehicle follows (PLATFORM_TOO_FAST)");
     s.add("max_yaw_rate_dps", &P::max_yaw_rate_dps, Range::gt(0), "deg/s",
           "a platform predicted turning faster is beyond what the vehicle follows");
     s.add("too_fast_s", &P::too_fast_s, Range::ge(0), "s",

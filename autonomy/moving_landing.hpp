@@ -43,9 +43,10 @@ struct MovingLandingParams {
   double match_radial_m = 0.05;
   double match_settle_s = 0.5;
   double lost_timeout_s = 1.0;  ///< no platform measurement for this long: target lost
-  /// What the vehicle follows [m/s]: the shipped vehicles' outer loop flies at most 1 m/s
-  /// (outer_loop.max_speed_xy_mps), and a follower needs a margin to close a gap.
-  double max_speed_mps = 0.9;
+  /// What the vehicle follows [m/s]: not a key of its own but kFollowedSpeedShare of the
+  /// vehicle's outer_loop.max_feedforward_xy_mps (load_params; followed_speed_mps); its default
+  /// that of the outer loop's default, 2 m/s.
+  double max_speed_mps = 1.6;
   double max_yaw_rate_dps = 20.0;
   double too_fast_s = 0.5;
   double heave_min_amplitude_m = 0.01;
@@ -55,6 +56,17 @@ struct MovingLandingParams {
   static const ParamSchema<MovingLandingParams>& schema();
   void validate() const;
 };
+
+/// The share of the velocity the vehicle's outer loop follows (its max_feedforward_xy_mps) a
+/// platform may move at and still be followed: the prediction overshoots a turn's start by up to
+/// a quarter of the speed, and the feed-forward must not saturate there.
+inline constexpr double kFollowedSpeedShare = 0.8;
+
+/// The fastest platform a vehicle whose outer loop follows a setpoint's velocity up to
+/// `max_feedforward_xy_mps` follows (MovingLandingParams::max_speed_mps) [m/s].
+inline double followed_speed_mps(double max_feedforward_xy_mps) {
+  return kFollowedSpeedShare * max_feedforward_xy_mps;
+}
 
 /// Whether the last drop starts now (step 3 of moving_landing.hpp).
 enum class Release { kWait, kNoHeave, kAfterCrest, kWaitedEnough };

@@ -383,6 +383,15 @@ AutonomyParams load_params(const ParamNode& root) {
     const CameraMount mount = load_camera_mount(root, "downward");
     p.downward_view = downward_view(load_camera_info(mount.camera_info_path), mount.R_BC);
   }
+  // The platform the vehicle follows is bounded by how fast its outer loop flies (the same file's
+  // outer_loop section, as alight-outer-loop reads it).
+  if (const auto outer = root.optional_child("outer_loop");
+      outer && outer->has("max_feedforward_xy_mps")) {
+    const double ff_mps = outer->get<double>("max_feedforward_xy_mps");
+    outer->check(std::isfinite(ff_mps) && ff_mps > 0, "max_feedforward_xy_mps",
+                 "must be a positive speed (the fastest platform followed derives from it)");
+    p.moving_platform.max_speed_mps = followed_speed_mps(ff_mps);
+  }
   return p;
 }
 

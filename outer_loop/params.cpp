@@ -110,7 +110,10 @@ const ParamSchema<OuterLoopParams>& OuterLoopParams::schema() {
             "must exceed geofence_min_W_m by more than 0.4 m on every axis");
     s.add("max_speed_xy_mps", &P::max_speed_xy_mps, Range::open_closed(0, 10), "m/s",
           "horizontal speed the position loop never asks for more of (a far setpoint is "
-          "approached at this speed)");
+          "approached at this speed, relative to the setpoint's own motion)");
+    s.add("max_feedforward_xy_mps", &P::max_feedforward_xy_mps, Range::open_closed(0, 10), "m/s",
+          "a setpoint's own horizontal velocity (a moving platform's) is followed up to this; "
+          "autonomy follows a platform up to 0.8 of it");
     s.add("max_speed_z_mps", &P::max_speed_z_mps, Range::open_closed(0, 5), "m/s",
           "vertical speed the position loop never asks for more of");
     s.add("failsafe_hold_s", &P::failsafe_hold_s, Range::closed(0, 30), "s",

@@ -66,6 +66,9 @@ struct OuterLoopParams {
   Vector3d geofence_min_W_m = Vector3d::Constant(-1e3);
   Vector3d geofence_max_W_m = Vector3d::Constant(1e3);
   double max_speed_xy_mps = 1.0;
+  /// A setpoint's own horizontal velocity (a moving platform's, fed forward) is followed up to
+  /// this, the far setpoint's approach at max_speed_xy_mps coming on top of it [m/s].
+  double max_feedforward_xy_mps = 2.0;
   double max_speed_z_mps = 1.0;
   double failsafe_hold_s = 2.0;
 

@@ -113,13 +113,14 @@ AttitudeCommand PositionController::track(const Vector3d& p_sp, const Vector3d& 
   const double kd_xy = precise ? P.precise_kd_xy_per_s : P.kd_xy_per_s;
   const double ki_xy = precise ? P.precise_ki_xy_per_s3 : P.ki_xy_per_s3;
   // Speed limits: at steady state the loop flies v = kp e / kd, so capping the error caps the
-  // speed it asks for; the feed-forward velocity is capped alike.
+  // speed it asks for relative to the setpoint; the setpoint's own velocity (a moving
+  // platform's, fed forward) has a bound of its own, what the vehicle follows.
   Vector3d e_p = p_sp - pose.p_W_B;
   clamp_norm(e_p.head<2>(), P.max_speed_xy_mps * kd_xy / kp_xy);
   const double e_z_max = P.max_speed_z_mps * P.kd_z_per_s / P.kp_z_per_s2;
   e_p.z() = std::clamp(e_p.z(), -e_z_max, e_z_max);
   Vector3d v_ff = v_sp;
-  clamp_norm(v_ff.head<2>(), P.max_speed_xy_mps);
+  clamp_norm(v_ff.head<2>(), P.max_feedforward_xy_mps);
   v_ff.z() = std::clamp(v_ff.z(), -P.max_speed_z_mps, P.max_speed_z_mps);
   const Vector3d e_v = v_ff - pose.v_W_B;
 
@@ -251,7 +252,7 @@ AttitudeCommand PositionController::land(const PoseSample& pose, int64_t now_uti
     // last fed forward (the platform's), or it is held to a world point while the top moves on
     // under it and drags it across the top until the land detector levels it.
     landing_v_xy_ = last_motors_on_ ? Vector2d(last_motors_on_->v_W.head<2>()) : Vector2d::Zero();
-    clamp_norm(landing_v_xy_, P.max_speed_xy_mps);
+    clamp_norm(landing_v_xy_, P.max_feedforward_xy_mps);
     // Autonomy was leading a descent: its motors-off is an arrival (at the impact, or once it saw
     // the vehicle stopped on the ground).
     landing_arrived_ = commanded_mps > P.land_vz_mps;

@@ -2,6 +2,8 @@
 #include "vision/pipeline.hpp"
 
 #include <algorithm>
+#include <cassert>
+#include <cmath>
 
 #include "vision/frontend/frame_checks.hpp"
 #include "vision/frontend/matcher.hpp"
@@ -212,7 +214,22 @@ void Pipeline::hold_reference(Reference* ref, const TrackedFrame& current, int64
   ref->held = true;
 }
 
-// The moving top (pipeline.hpp) against the newest earlier frame at least interval_s older,
+std::optional<size_t> moving_reference(const std::vector<double>& ages_s,
+                                       const std::vector<double>& ranges_m, double range_now_m,
+                                       double interval_s) {
+  assert(ages_s.size() == ranges_m.size());
+  std::optional<size_t> newest_old_enough, oldest_same_scale;
+  for (size_t k = 0; k < ages_s.size(); ++k) {
+    const bool same_scale = range_now_m > 0 && ranges_m[k] > 0 &&
+                            std::abs(range_now_m / ranges_m[k] - 1.0) <= kMovingMaxScaleChange;
+    if (!same_scale || !(ages_s[k] > 0)) continue;
+    if (!oldest_same_scale) oldest_same_scale = k;
+    if (ages_s[k] >= interval_s) newest_old_enough = k;
+  }
+  return newest_old_enough ? newest_old_enough : oldest_same_scale;
+}
+
+// The moving top (pipeline.hpp) against the earlier frame moving_reference picks among those
 // within max_interval_s; the current frame then joins the recent ones.
 void Pipeline::measure_moving(const std::shared_ptr<const TrackedFrame>& current, int64_t utime,
                               const PoseSample& pose, FrameResult* r) {
@@ -221,9 +238,17 @@ void Pipeline::measure_moving(const std::shared_ptr<const TrackedFrame>& current
   const auto age_s = [&](int64_t t) { return double(utime - t) * 1e-6; };
   while (!recent_.empty() && age_s(recent_.front().first->utime) > mp.max_interval_s)
     recent_.pop_front();
-  const std::pair<std::shared_ptr<const TrackedFrame>, PoseSample>* earlier = nullptr;
-  for (const auto& e : recent_)
-    if (age_s(e.first->utime) >= mp.interval_s) earlier = &e;
+  const auto range_m = [&](const PoseSample& s) {
+    return (s.p_W_B + s.q_WB * mount_.t_B_C).z() - mp.top_height_m;
+  };
+  std::vector<double> ages_s, ranges_m;
+  for (const auto& e : recent_) {
+    ages_s.push_back(age_s(e.first->utime));
+    ranges_m.push_back(range_m(e.second));
+  }
+  const auto k = moving_reference(ages_s, ranges_m, range_m(pose), mp.interval_s);
+  const std::pair<std::shared_ptr<const TrackedFrame>, PoseSample>* earlier =
+      k ? &recent_[*k] : nullptr;
   MovingTop m;
   if (!earlier) {
     m.reason = MovingReason::kNoEarlierFrame;

@@ -51,6 +51,7 @@
 #include <deque>
 #include <optional>
 #include <utility>
+#include <vector>
 
 #include "common/camera_model.hpp"
 #include "common/camera_mount.hpp"
@@ -68,6 +69,21 @@ namespace alight::vision {
 /// direct match of tracker.min_tracked features, not its age, so the bound is three times
 /// tracker.max_reference_age_s's 10 s and only retires a frame the scene may have changed under.
 constexpr double kHoldMaxAgeS = 30.0;
+
+/// The moving top's earlier frame is taken within this change of the camera's range to the top:
+/// a level top's features scale between two views as that range, the matcher's descriptors are
+/// sampled at the detector's scale, which comes in steps, and a feature is matched again across
+/// a few per cent of zoom, not across the third that a quarter second of the last drop makes.
+constexpr double kMovingMaxScaleChange = 0.1;
+
+/// The earlier frame the moving top is measured against, among recent frames (oldest first, their
+/// ages and the camera's ranges to the top's assumed height) [index]: the newest at least
+/// interval_s old within kMovingMaxScaleChange of the current range; in a fast descent none is,
+/// and then the oldest within it (close over the top a frame's displacement is tens of pixels).
+/// nullopt: no earlier frame within that change.
+std::optional<size_t> moving_reference(const std::vector<double>& ages_s,
+                                       const std::vector<double>& ranges_m, double range_now_m,
+                                       double interval_s);
 
 /// The outcome of one frame; reason says why nothing was found.
 struct FrameResult {

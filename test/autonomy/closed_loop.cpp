@@ -35,9 +35,13 @@ Vector3d estimate_error_rel_W(const sim::Truth& truth, const estimator::State& e
 
 ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
   const auto root = ParamNode::load_file(config.vehicle_file);
-  const outer_loop::OuterLoopParams ol_params = outer_loop::load_params(root);
+  outer_loop::OuterLoopParams ol_params = outer_loop::load_params(root);
   AutonomyParams au_params = load_params(root);
   au_params.seed = config.seed;
+  if (config.max_feedforward_xy_mps) {
+    ol_params.max_feedforward_xy_mps = *config.max_feedforward_xy_mps;
+    au_params.moving_platform.max_speed_mps = followed_speed_mps(*config.max_feedforward_xy_mps);
+  }
   sim::VehicleParams vehicle = sim::load_vehicle_params(config.vehicle_file);
   if (config.rotor_span_m) {
     // Scale the arms with the span so the rotor discs keep their size relative to the arms.

@@ -35,6 +35,9 @@ struct ClosedLoopConfig {
   std::optional<Vector2d> opening_size_m;
   /// Overrides the vehicle's rotor tip span (sim model and autonomy's fit check alike) [m].
   std::optional<double> rotor_span_m;
+  /// Overrides the velocity the outer loop follows a setpoint at (and so the fastest platform
+  /// autonomy follows, as load_params derives it) [m/s].
+  std::optional<double> max_feedforward_xy_mps;
   /// Real vision instead of the oracle: the simulator renders the mission's camera and this is
   /// called with each frame and the motion-capture pose interpolated at its exposure, paired by
   /// the vision node's policy (vision/node/frame_pose_pairing.hpp; nullopt when motion capture has

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "common/build_paths.hpp"
+#include "outer_loop/params.hpp"
 
 namespace alight::autonomy {
 namespace {
@@ -189,6 +190,35 @@ TEST(AutonomyParamsTest, EstimateHealthParametersLoadAndAreCheckedAtTheirFullKey
         load_params(std::string(alight::build::source_dir()) + "/config/vehicles/" + v + ".yaml");
     EXPECT_FALSE(p.failsafe.require_estimate) << v;
     EXPECT_DOUBLE_EQ(p.failsafe.estimate_silent_s, 0.5) << v;
+  }
+}
+
+TEST(AutonomyParamsTest, TheFollowedPlatformSpeedDerivesFromTheOuterLoopsLimit) {
+  // The shipped vehicles follow a setpoint's velocity up to 2 m/s: a platform up to 1.6 m/s.
+  for (const char* v : {"starmac", "pelican"}) {
+    const auto p =
+        load_params(std::string(alight::build::source_dir()) + "/config/vehicles/" + v + ".yaml");
+    EXPECT_DOUBLE_EQ(p.moving_platform.max_speed_mps, 1.6) << v;
+  }
+  const auto slow = load_params(
+      ParamNode::from_string("autonomy: {}\nouter_loop: {max_feedforward_xy_mps: 1.0}", "v.yaml"));
+  EXPECT_DOUBLE_EQ(slow.moving_platform.max_speed_mps, followed_speed_mps(1.0));
+  EXPECT_LT(slow.moving_platform.max_speed_mps, 1.0);
+  // Without the key: the outer loop's default (2 m/s). Declared once: the outer loop's key, not
+  // one of autonomy's own.
+  EXPECT_DOUBLE_EQ(
+      load_params(ParamNode::from_string("autonomy: {}", "v.yaml")).moving_platform.max_speed_mps,
+      followed_speed_mps(outer_loop::OuterLoopParams{}.max_feedforward_xy_mps));
+  EXPECT_THROW(load_params(ParamNode::from_string("autonomy: {moving_platform: {max_speed_mps: 3}}",
+                                                  "v.yaml")),
+               ParamError);
+  try {
+    load_params(
+        ParamNode::from_string("autonomy: {}\nouter_loop: {max_feedforward_xy_mps: -1}", "v.yaml"));
+    FAIL();
+  } catch (const ParamError& e) {
+    EXPECT_EQ(e.key(), "outer_loop.max_feedforward_xy_mps");
+    EXPECT_EQ(e.file(), "v.yaml");
   }
 }
 

@@ -311,6 +311,38 @@ TEST(OuterLoopRegression, AFarSetpointIsFlownSlowlyAndStopsInsideTheGeofence) {
   EXPECT_EQ(h.last->mode, Mode::kNormal);
 }
 
+// A moving setpoint (a platform followed, its velocity fed forward) is followed at its own speed
+// beyond max_speed_xy_mps, up to max_feedforward_xy_mps; faster, it falls behind, and the
+// vehicle never flies faster than the two together.
+TEST(OuterLoopTest, AMovingSetpointIsFollowedUpToTheFeedForwardBound) {
+  for (const double v_mps : {1.5, 3.0}) {
+    OuterLoopParams p = runner_params();
+    p.geofence_min_W_m = Vector3d(-100, -3, -0.5);
+    p.geofence_max_W_m = Vector3d(100, 3, 2.6);
+    ASSERT_LT(p.max_speed_xy_mps, 1.5);
+    ASSERT_GT(p.max_feedforward_xy_mps, 1.5);
+    ASSERT_LT(p.max_feedforward_xy_mps, 3.0);
+    Harness h({}, p);
+    h.model.hover_at({0, 0, 1.2});
+    double max_speed = 0;
+    for (int i = 0; i < 1000; ++i) {  // 10 s
+      PositionSetpoint sp = hover_sp({v_mps * 0.01 * i, 0, 1.2});
+      sp.v_W = Vector3d(v_mps, 0, 0);
+      h.step(sp);
+      max_speed = std::max(max_speed, h.model.v.head<2>().norm());
+    }
+    const double lag_m = v_mps * 0.01 * 999 - h.model.p.x();
+    EXPECT_LE(max_speed, (p.max_speed_xy_mps + p.max_feedforward_xy_mps) * 1.05) << v_mps;
+    if (v_mps <= p.max_feedforward_xy_mps) {
+      EXPECT_NEAR(h.model.v.x(), v_mps, 0.05) << "followed at its own speed";
+      EXPECT_LT(std::abs(lag_m), 0.1) << v_mps;
+    } else {
+      EXPECT_GT(lag_m, 1.0) << "beyond what the vehicle follows: left behind";
+    }
+    EXPECT_EQ(h.last->mode, Mode::kNormal) << v_mps;
+  }
+}
+
 // Pushed out of the flying area (a gust, a wrong pose): hold, then land and disarm there.
 TEST(OuterLoopRegression, LeavingTheGeofenceHoldsThenLands) {
   OuterLoopParams p = runner_params();

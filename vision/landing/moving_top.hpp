@@ -45,8 +45,9 @@ namespace alight::vision {
 /// Why no moving top was measured; values equal platform_motion_t's REASON_*.
 enum class MovingReason : int8_t {
   kOk = 0,
-  kNoEarlierFrame = 1,    ///< no frame within max_interval_s to measure the motion against
-  kNotAboveFloor = 2,     ///< a camera not above the floor (no known floor)
+  kNoEarlierFrame = 1,  ///< no frame within max_interval_s (and kMovingMaxScaleChange of the
+                        ///< camera's range to the top, pipeline.hpp) to measure the motion against
+  kNotAboveFloor = 2,   ///< a camera not above the floor (no known floor)
   kTooFewCandidates = 3,  ///< fewer than min_inliers matches off the floor
   kNoCommonMotion = 4,    ///< no min_inliers of them share one rigid motion
   kOnFloor = 5,           ///< the set's matches are the floor's (max_floor_share)

@@ -10,6 +10,7 @@
 
 #include "common/camera_model.hpp"
 #include "common/camera_mount.hpp"
+#include "vision/pipeline.hpp"
 
 namespace alight::vision {
 namespace {
@@ -294,6 +295,39 @@ TEST(MovingTopTest, TheSimilarityFitIsExactOnExactPoints) {
   EXPECT_NEAR(F->theta, S.theta, 1e-12);
   EXPECT_NEAR((F->t - S.t).norm(), 0, 1e-12);
   EXPECT_FALSE(fit_similarity({{1, 1}, {1, 1}}, {{0, 0}, {2, 2}}));
+}
+
+// The earlier frame of the moving top's measurement (vision/pipeline.hpp, moving_reference):
+// frames 33 ms apart, oldest first.
+TEST(MovingReferenceTest, AtAConstantHeightTheNewestFrameAtLeastTheIntervalOld) {
+  const std::vector<double> ages{0.5, 0.4, 0.3, 0.2, 0.1};
+  const std::vector<double> ranges(ages.size(), 1.0);
+  EXPECT_EQ(moving_reference(ages, ranges, 1.0, 0.25), std::optional<size_t>(2));
+  // None old enough yet: the oldest, as long as it is within the scale bound.
+  EXPECT_EQ(moving_reference({0.1, 0.033}, {1.0, 1.0}, 1.0, 0.25), std::optional<size_t>(0));
+  EXPECT_EQ(moving_reference({}, {}, 1.0, 0.25), std::nullopt);
+}
+
+TEST(MovingReferenceTest, InTheLastDropTheOldestFrameWithinTheScaleBound) {
+  // The camera 0.5 m/s down, 0.35 m over the top now: 1.7 cm a frame, 5 % of the range.
+  std::vector<double> ages, ranges;
+  for (int k = 8; k >= 1; --k) {
+    ages.push_back(k / 30.0);
+    ranges.push_back(0.35 + 0.5 * k / 30.0);
+  }
+  const auto k = moving_reference(ages, ranges, 0.35, 0.25);
+  ASSERT_TRUE(k);
+  // The frame 0.25 s back (0.47 m: a third farther) is beyond it; the one chosen is within it
+  // and the one before is not.
+  EXPECT_LE(std::abs(0.35 / ranges[*k] - 1.0), kMovingMaxScaleChange);
+  ASSERT_GT(*k, 0u);
+  EXPECT_GT(std::abs(0.35 / ranges[*k - 1] - 1.0), kMovingMaxScaleChange);
+  EXPECT_LT(ages[*k], 0.25);
+  // Closer still: a frame's descent alone is beyond the bound: nothing measured.
+  EXPECT_EQ(moving_reference({0.033}, {0.12}, 0.1, 0.25), std::nullopt);
+  // A camera at or below the assumed top, or a stamp not older than the current frame: no frame.
+  EXPECT_EQ(moving_reference({0.3}, {0.0}, 0.0, 0.25), std::nullopt);
+  EXPECT_EQ(moving_reference({0.0}, {1.0}, 1.0, 0.25), std::nullopt);
 }
 
 }  // namespace
