@@ -58,8 +58,8 @@ struct MovingLandingParams {
 };
 
 /// The share of the velocity the vehicle's outer loop follows (its max_feedforward_xy_mps) a
-/// platform may move at and still be followed: the prediction overshoots a turn's start by up to
-/// a quarter of the speed, and the feed-forward must not saturate there.
+/// platform may move at and still be followed: a fifth kept in hand, so that the prediction's
+/// velocity, which runs ahead of the platform's through a turn, is not cut off at the bound.
 inline constexpr double kFollowedSpeedShare = 0.8;
 
 /// The fastest platform a vehicle whose outer loop follows a setpoint's velocity up to

@@ -238,8 +238,10 @@ void Pipeline::measure_moving(const std::shared_ptr<const TrackedFrame>& current
   const auto age_s = [&](int64_t t) { return double(utime - t) * 1e-6; };
   while (!recent_.empty() && age_s(recent_.front().first->utime) > mp.max_interval_s)
     recent_.pop_front();
+  // The camera's height over the top's assumed plane (find_moving_top's z_top).
+  const double z_top = params_.landing.floor_z_m + mp.top_height_m;
   const auto range_m = [&](const PoseSample& s) {
-    return (s.p_W_B + s.q_WB * mount_.t_B_C).z() - mp.top_height_m;
+    return (s.p_W_B + s.q_WB * mount_.t_B_C).z() - z_top;
   };
   std::vector<double> ages_s, ranges_m;
   for (const auto& e : recent_) {
