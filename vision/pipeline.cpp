@@ -5,6 +5,7 @@
 #include <cassert>
 #include <cmath>
 
+#include "common/geometry.hpp"
 #include "vision/frontend/frame_checks.hpp"
 #include "vision/frontend/matcher.hpp"
 #include "vision/frontend/motion_blur.hpp"
@@ -241,7 +242,7 @@ void Pipeline::measure_moving(const std::shared_ptr<const TrackedFrame>& current
   // The camera's height over the top's assumed plane (find_moving_top's z_top).
   const double z_top = params_.landing.floor_z_m + mp.top_height_m;
   const auto range_m = [&](const PoseSample& s) {
-    return (s.p_W_B + s.q_WB * mount_.t_B_C).z() - z_top;
+    return camera_in_world(s.X_WB(), mount_.X_BC()).translation().z() - z_top;
   };
   std::vector<double> ages_s, ranges_m;
   for (const auto& e : recent_) {
