@@ -640,9 +640,10 @@ void Autonomy::step_moving(phases::Approach& a, const Vector3d& /*p*/, double dt
 bool Autonomy::vision_disagrees(phases::Approach& a, const TargetMeasurement& m) {
   // The estimate is final from APPROACH on; a target found far from it is refused and counted.
   // The gate: four of the waypoints' horizontal standard deviations (their stated noise), never
-  // tighter than kVisionGateFloorM. Every found target refused for kVisionDisagreeS is a
-  // sustained disagreement (a forged stream, or vision locked onto something else): hold, then
-  // descend; never a silent move of the estimate onto the new targets.
+  // tighter than kVisionGateFloorM. Every found target refused for kVisionDisagreeS, at least
+  // kVisionDisagreeMinTargets of them, is a sustained disagreement (a forged stream, or vision
+  // locked onto something else): hold, then descend; never a silent move of the estimate onto
+  // the new targets.
   const Eigen::Matrix2d cov = estimator_.covariance().topLeftCorner<2, 2>();
   // The larger eigenvalue of the symmetric 2x2 horizontal covariance, in closed form.
   const double mean_var = 0.5 * (cov(0, 0) + cov(1, 1));
@@ -653,20 +654,24 @@ bool Autonomy::vision_disagrees(phases::Approach& a, const TargetMeasurement& m)
   const double off_m = (m.p_W_target - estimate_W_).head<2>().norm();
   if (off_m <= gate_m) {
     a.disagree_since_utime.reset();
+    a.n_disagreeing = 0;
     return false;
   }
   ++vision_refused_;
   if (!a.disagree_since_utime) a.disagree_since_utime = m.utime;
-  if (seconds(m.utime - *a.disagree_since_utime) >= kVisionDisagreeS) {
+  ++a.n_disagreeing;
+  if (seconds(m.utime - *a.disagree_since_utime) >= kVisionDisagreeS &&
+      a.n_disagreeing >= kVisionDisagreeMinTargets) {
     // Held and descended over the profile's point, not where the vehicle happened to be: that
     // may be over the top's edge.
     failsafe_ = Failsafe::kVisionDisagrees;
     const Vector3d here = pose_ ? pose_->p_W_B : sp_p_W_;
     enter(phases::Hold{profile_->approach_failsafe_hold_W(here, sp_p_W_),
                        now_utime_ + static_cast<int64_t>(kFailsafeHoldS * 1e6)},
-          "vision disagrees with the estimate: every target for " + fmt(kVisionDisagreeS, 1) +
-              " s lay " + fmt(off_m) + " m from it (gate " + fmt(gate_m) +
-              " m): holding, then descending");
+          "vision disagrees with the estimate: every target for " +
+              fmt(seconds(m.utime - *a.disagree_since_utime), 1) + " s (" +
+              std::to_string(a.n_disagreeing) + ") lay " + fmt(off_m) + " m from it (gate " +
+              fmt(gate_m) + " m): holding, then descending");
   }
   return true;
 }

@@ -100,7 +100,8 @@ struct Approach {
   /// The target's size the refinement measured (the full views' medians, as size_m of
   /// TargetMeasurement); NaN: not measured.
   Vector2d size_m = Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
-  TopRoom room;  ///< the room that top leaves the gear (the final hold's bounds)
+  TopRoom room;           ///< the room that top leaves the gear (the final hold's bounds)
+  int n_disagreeing = 0;  ///< found targets far from the estimate since disagree_since_utime
 };
 struct FinalDescent {
   double z_sp_m = 0.0;

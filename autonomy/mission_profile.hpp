@@ -38,6 +38,11 @@ inline constexpr double kVisionGateFloorM = 0.1;
 /// Every found target refused this long is a sustained disagreement: longer than a stray plane
 /// fit lasts (it changes with the vantage every few frames) [s].
 inline constexpr double kVisionDisagreeS = 2.0;
+/// ... and at least this many of them: a forged stream or a vision locked onto something else
+/// refuses one a frame, while where vision finds the target only now and then (ingress' wait
+/// before the wall, a second or more between found targets) two strays seconds apart with
+/// nothing between them are no sustained disagreement.
+inline constexpr int kVisionDisagreeMinTargets = 5;
 /// How much further from the estimate a found target may lie when it measured the target smaller
 /// than the refinement did (converged_m, measured_m: size_m's (long, short)): a view that
 /// saw part of the top (close over it, the top fills the view and its border is missed) has

@@ -307,6 +307,44 @@ TEST(AutonomyTest, TheVisionDisagreesFailsafeOfIngressHoldsWhereTheVehicleIs) {
   EXPECT_LT(w.out.setpoint.p_W.x(), w.truth.opening_center_W.x() - 0.2) << "not in the wall";
 }
 
+// Regression (PX4 SITL, ingress_wide): waiting before the wall, vision found the opening only
+// now and then, and two strays 2.2 s apart with nothing found between them were taken for a
+// sustained disagreement: the flight held. Sustained takes kVisionDisagreeMinTargets refused
+// targets over kVisionDisagreeS; a slow stream of them still is one.
+TEST(AutonomyRegression, TwoStrayTargetsSecondsApartAreNoSustainedDisagreement) {
+  for (const bool stream : {false, true}) {
+    KinematicWorld w(ingress_params(0.45), ingress_vision());
+    w.truth.opening_size_m = Vector2d(0.6, 0.6);
+    ASSERT_TRUE(w.go_to_approach(Mission::kIngress)) << w.out.status.reason;
+    const int64_t t0 = w.t;
+    const double gap_s = stream ? 0.5 : kVisionDisagreeS + 0.2;
+    int strays = 0;
+    w.corrupt_target = [&](TargetMeasurement& m) {
+      const double s = (w.t - t0) * 1e-6;
+      if (!stream && strays == 2) return;  // then found, on the estimate
+      if (s >= 0.1 + strays * gap_s) {
+        ++strays;
+        m.p_W_target.y() += 0.5;
+      } else {
+        m.found = false;
+      }
+    };
+    bool approach_at_second = false;
+    for (int i = 0; i < 1000 && w.autonomy.phase() == Phase::kApproach; ++i) {
+      w.step();
+      if (strays == 2 && !approach_at_second) approach_at_second = true;
+    }
+    ASSERT_TRUE(approach_at_second) << "the second stray came in the approach";
+    if (stream) {
+      EXPECT_EQ(w.out.status.failsafe, Failsafe::kVisionDisagrees) << w.out.status.reason;
+      EXPECT_GE(strays, kVisionDisagreeMinTargets);
+    } else {
+      EXPECT_NE(w.out.status.failsafe, Failsafe::kVisionDisagrees) << w.out.status.reason;
+      EXPECT_EQ(strays, 2);
+    }
+  }
+}
+
 // Close over the top it fills the view, and a view that saw part of it locates the part's
 // centre: found, smaller than the refinement measured, and off the estimate by up to half the
 // missing extent. Such views are not a disagreement; one as far off and whole still is.
