@@ -8,6 +8,7 @@
 //   build/bin/alight_landing_diag --scenario FILE [--seed N] [--dump DIR] [--every K]
 
 #include <CLI/CLI.hpp>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -97,6 +98,10 @@ int main(int argc, char** argv) try {
   vision::Pipeline shadow(vision::Mission::kLanding, shadow_params, rig.model, rig.mount);
   Phase phase = Phase::kIdle;
   int n_waypoints = 0;
+  // The platform filter's fused measurements, its run within the gate, its refusals, whether its
+  // track is believed, and its refusals by the gate, by order and by size
+  // (autonomy/platform_filter.hpp).
+  std::array<int, 7> filter_state{};
   ClosedLoopConfig cfg;
   cfg.vehicle_file = vehicle;
   cfg.scenario_file = scenario_file;
@@ -109,6 +114,14 @@ int main(int argc, char** argv) try {
                   a.retries());
     phase = a.phase();
     n_waypoints = a.estimator().n();
+    const auto& pf = a.platform_filter();
+    filter_state = {pf.n_updates(),
+                    pf.n_consistent(),
+                    pf.n_rejected(),
+                    pf.believed() ? 1 : 0,
+                    pf.n_refused(PlatformFilter::Refusal::kGate),
+                    pf.n_refused(PlatformFilter::Refusal::kOutOfOrder),
+                    pf.n_refused(PlatformFilter::Refusal::kLargerThanTheTop)};
   };
   int n = 0;
   std::optional<platform_motion_t> platform;  // the last frame's VISION_PLATFORM
@@ -217,6 +230,9 @@ int main(int argc, char** argv) try {
                     m.p_W.y() - moved->top_center_W.y(), m.v_W.x() - moved->v_W.x(),
                     m.v_W.y() - moved->v_W.y());
     }
+    std::printf(" | filter fused %d run %d refused %d believed %d (gate %d order %d size %d)",
+                filter_state[0], filter_state[1], filter_state[2], filter_state[3], filter_state[4],
+                filter_state[5], filter_state[6]);
     platform = vision::to_platform_msg(r);
     std::printf("\n");
     if (!dump.empty() && n % every == 0) {
