@@ -44,11 +44,15 @@ PoseSample to_pose(const VehicleState& s, int64_t utime) {
 }
 }  // namespace
 
+Scene simulated_scene(const Scenario& scenario, uint64_t seed) {
+  return build_scene(scenario, substream(seed, 0));
+}
+
 Simulator::Simulator(const Scenario& scenario, const VehicleParams& vehicle, uint64_t seed,
                      std::optional<CameraRig> camera, std::optional<CameraRig> flow_camera)
     : scenario_(scenario),
       vehicle_(vehicle),
-      scene_(std::make_unique<Scene>(build_scene(scenario, substream(seed, 0)))),
+      scene_(std::make_unique<Scene>(simulated_scene(scenario, seed))),
       dynamics_(std::make_unique<Dynamics>(vehicle, *scene_)),
       now_utime_(scenario.start_utime),
       start_utime_(scenario.start_utime),

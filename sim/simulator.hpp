@@ -93,6 +93,11 @@ class AutoGain {
   double log_brightness_;  // the averaged metering at unit gain, log grey levels
 };
 
+/// The scene a Simulator built with `seed` flies in: built from a stream of the seed of its own,
+/// so a tool that needs the truth (the platform's placement after the scenario's randomize) sees
+/// the simulator's scene, not the one build_scene(scenario, seed) would draw.
+Scene simulated_scene(const Scenario& scenario, uint64_t seed);
+
 class Simulator {
  public:
   /// `camera`: the camera to render (extrinsics and intrinsics); without it take_camera()

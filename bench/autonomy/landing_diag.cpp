@@ -51,7 +51,9 @@ int main(int argc, char** argv) try {
   cv::setNumThreads(1);
 
   const auto scenario = sim::load_scenario(scenario_file);
-  const auto scene = sim::build_scene(scenario, seed);
+  // The truth is the scene the closed loop's simulator flies in (the scenario's randomize drawn
+  // as it draws it).
+  const auto scene = sim::simulated_scene(scenario, seed);
   // A scene without a platform (landing_none_photo) is flown against a zero-size "platform" at
   // the world origin on the floor: every target found is false, its errors are its position,
   // size and height.
