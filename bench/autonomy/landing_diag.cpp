@@ -8,7 +8,6 @@
 //   build/bin/alight_landing_diag --scenario FILE [--seed N] [--dump DIR] [--every K]
 
 #include <CLI/CLI.hpp>
-#include <array>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -100,10 +99,12 @@ int main(int argc, char** argv) try {
   vision::Pipeline shadow(vision::Mission::kLanding, shadow_params, rig.model, rig.mount);
   Phase phase = Phase::kIdle;
   int n_waypoints = 0;
-  // The platform filter's fused measurements, its run within the gate, its refusals, whether its
-  // track is believed, and its refusals by the gate, by order and by size
-  // (autonomy/platform_filter.hpp).
-  std::array<int, 7> filter_state{};
+  // The platform filter's state after the last step (autonomy/platform_filter.hpp).
+  struct {
+    int fused = 0, run = 0, refused = 0;  // fused, in a row within the gate, refused
+    int gate = 0, order = 0, size = 0;    // refused by the gate, as out of order, as too large
+    bool believed = false;
+  } filter;
   ClosedLoopConfig cfg;
   cfg.vehicle_file = vehicle;
   cfg.scenario_file = scenario_file;
@@ -117,13 +118,13 @@ int main(int argc, char** argv) try {
     phase = a.phase();
     n_waypoints = a.estimator().n();
     const auto& pf = a.platform_filter();
-    filter_state = {pf.n_updates(),
-                    pf.n_consistent(),
-                    pf.n_rejected(),
-                    pf.believed() ? 1 : 0,
-                    pf.n_refused(PlatformFilter::Refusal::kGate),
-                    pf.n_refused(PlatformFilter::Refusal::kOutOfOrder),
-                    pf.n_refused(PlatformFilter::Refusal::kLargerThanTheTop)};
+    filter.fused = pf.n_updates();
+    filter.run = pf.n_consistent();
+    filter.refused = pf.n_rejected();
+    filter.gate = pf.n_refused(PlatformFilter::Refusal::kGate);
+    filter.order = pf.n_refused(PlatformFilter::Refusal::kOutOfOrder);
+    filter.size = pf.n_refused(PlatformFilter::Refusal::kLargerThanTheTop);
+    filter.believed = pf.believed();
   };
   int n = 0;
   std::optional<platform_motion_t> platform;  // the last frame's VISION_PLATFORM
@@ -233,8 +234,8 @@ int main(int argc, char** argv) try {
                     m.v_W.y() - moved->v_W.y());
     }
     std::printf(" | filter fused %d run %d refused %d believed %d (gate %d order %d size %d)",
-                filter_state[0], filter_state[1], filter_state[2], filter_state[3], filter_state[4],
-                filter_state[5], filter_state[6]);
+                filter.fused, filter.run, filter.refused, filter.believed ? 1 : 0, filter.gate,
+                filter.order, filter.size);
     platform = vision::to_platform_msg(r);
     std::printf("\n");
     if (!dump.empty() && n % every == 0) {
