@@ -42,7 +42,10 @@ struct MovingLandingParams {
   double match_speed_mps = 0.1;
   double match_radial_m = 0.05;
   double match_settle_s = 0.5;
-  double lost_timeout_s = 1.0;  ///< no platform measurement for this long: target lost
+  /// No platform measurement for this long: target lost [s]. The filter's prediction carries a
+  /// cart through a gap this long (half a 0.6 m turn at 1 m/s), and the gaps of a follow last
+  /// over a second: the approach's first swing onto the platform and each turn's blur.
+  double lost_timeout_s = 2.0;
   /// What the vehicle follows [m/s]: not a key of its own but kFollowedSpeedShare of the
   /// vehicle's outer_loop.max_feedforward_xy_mps (load_params; followed_speed_mps); its default
   /// that of the outer loop's default, 2 m/s.
