@@ -245,6 +245,14 @@ int main(int argc, char** argv) try {
     return 2;
   }
   const fs::path dir = dir_template;
+  // The drawn scenes go with the run, however it ends (scripts/scenes draws them again).
+  struct RemoveOnExit {
+    fs::path path;
+    ~RemoveOnExit() {
+      std::error_code ignored;
+      fs::remove_all(path, ignored);
+    }
+  } remove_scenes{dir};
   std::printf("families %s, seeds %lld..%lld, %s, scenes in %s\n", families.c_str(),
               static_cast<long long>(seed0), static_cast<long long>(seed0 + runs - 1),
               no_mocap ? "on the onboard estimate" : "on motion capture", dir.c_str());
@@ -402,8 +410,6 @@ int main(int argc, char** argv) try {
     std::fprintf(stderr, "alight_families_bench: cannot write %s\n", csv_path.c_str());
     return 2;
   }
-  std::error_code ec;
-  fs::remove_all(dir, ec);
   return 0;
 } catch (const alight::ParamError& e) {
   // A bad scenario or vehicle file: the message names the file, the key and the value.

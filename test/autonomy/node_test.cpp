@@ -33,6 +33,7 @@
 
 #include "common/build_paths.hpp"
 #include "common/operator_auth.hpp"
+#include "test/support/scratch_dir.hpp"
 
 extern char** environ;
 
@@ -104,7 +105,7 @@ TEST(AutonomyNodeTest, AutoGoTakesOffStatusAtTenHertzAndKillStopsEverything) {
   lcm.subscribe(alight::channels::kPositionSetpoint, &Recorder::on_sp, &rec);
   lcm.subscribe(alight::channels::kAttitudeCmd, &Recorder::on_cmd, &rec);
   // The key the ground station and the vehicle share.
-  const auto key_path = std::filesystem::temp_directory_path() / "alight_autonomy_node_test.key";
+  const auto key_path = std::filesystem::path(alight::test::scratch_path("operator.key"));
   const std::string key_hex(64, 'a');
   {
     std::ofstream f(key_path);
@@ -113,15 +114,13 @@ TEST(AutonomyNodeTest, AutoGoTakesOffStatusAtTenHertzAndKillStopsEverything) {
   std::filesystem::permissions(
       key_path, std::filesystem::perms::owner_read | std::filesystem::perms::owner_write);
   const alight::OperatorKey key = alight::parse_key(key_hex, "test key");
-  const auto state_path =
-      std::filesystem::temp_directory_path() / "alight_autonomy_node_test_1.state";
+  const auto state_path = std::filesystem::path(alight::test::scratch_path("autonomy_1.state"));
   std::filesystem::remove(state_path);
   Process autonomy({bin + "alight-autonomy", "--config", config, "--lcm-url", kUrl, "--auto-go",
                     "landing", "--log-level", "warn", "--key-file", key_path.string(),
                     "--state-file", state_path.string()});
   // Its own state file: the per-URL default would carry latches from an earlier test run.
-  const auto outer_state_path =
-      std::filesystem::temp_directory_path() / "alight_autonomy_node_test_outer_1.state";
+  const auto outer_state_path = std::filesystem::path(alight::test::scratch_path("outer_1.state"));
   std::filesystem::remove(outer_state_path);
   Process outer({bin + "alight-outer-loop", "--config", config, "--lcm-url", kUrl, "--log-level",
                  "warn", "--state-file", outer_state_path.string()});
@@ -323,8 +322,7 @@ struct Bench {
 };
 
 std::string temp_file(const std::string& name) {
-  const auto path = std::filesystem::temp_directory_path() /
-                    ("alight_autonomy_node_test_" + std::to_string(getpid()) + "_" + name);
+  const std::filesystem::path path = alight::test::scratch_path(name);
   std::filesystem::remove(path);
   return path.string();
 }

@@ -44,6 +44,7 @@
 #include "common/build_paths.hpp"
 #include "common/bus_auth.hpp"
 #include "common/channels.hpp"
+#include "test/support/scratch_dir.hpp"
 
 extern char** environ;
 
@@ -56,11 +57,7 @@ constexpr const char* kGroundUrl = "udpm://239.255.76.67:7972?ttl=0";
 const std::string kBin = std::string(alight::build::binary_dir()) + "/bin/alight-link";
 constexpr double kDeadlineS = 30.0;
 
-std::string temp_path(const std::string& name) {
-  return (std::filesystem::temp_directory_path() /
-          ("alight_link_node_test_" + std::to_string(getpid()) + "_" + name))
-      .string();
-}
+std::string temp_path(const std::string& name) { return alight::test::scratch_path(name); }
 
 std::string read_file(const std::string& path) {
   std::ifstream f(path);

@@ -31,6 +31,7 @@
 
 #include "common/build_paths.hpp"
 #include "common/channels.hpp"
+#include "test/support/scratch_dir.hpp"
 #include "tools/vrpn_test_server.hpp"
 
 extern char** environ;
@@ -88,11 +89,7 @@ std::string read_file(const std::string& path) {
   return s.str();
 }
 
-std::string temp_path(const std::string& name) {
-  return (std::filesystem::temp_directory_path() /
-          ("alight_mocap_node_test_" + std::to_string(getpid()) + "_" + name))
-      .string();
-}
+std::string temp_path(const std::string& name) { return alight::test::scratch_path(name); }
 
 // A y-up Motive-like room in millimetres, server stamps used as they are. Timeouts and bounds
 // are wide: a stalled test machine must not turn into a refused stamp or a reconnection.
