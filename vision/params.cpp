@@ -193,9 +193,6 @@ const ParamSchema<MovingTopParams>& MovingTopParams::schema() {
           "|s - 1| of the plane's similarity between the views (heave over the camera's height)");
     s.add("min_size_m", &P::min_size_m, Range::ge(0), "m",
           "the inliers' extent, short side, at least this (SIZE)");
-    s.add("border_margin_px", &P::border_margin_px, Range::ge(0), "px",
-          "an inlier this close to the current image's border makes the top cut: its motion is "
-          "measured, its position not (horizontal covariance 100 m^2)");
     s.add("max_size_m", &P::max_size_m, Range::gt(0), "m",
           "the inliers' extent, long side, at most this (SIZE)")
         .check([](const P& p) { return p.max_size_m > p.min_size_m; }, "must exceed min_size_m");

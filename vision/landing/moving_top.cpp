@@ -387,7 +387,7 @@ MovingTop find_moving_top(const Correspondences& c, double dt_s, double floor_z_
   // a whole, but its visible part's centre is not its centre: its motion is measured, its
   // position is not (and a cut top may be narrow).
   out.cut = std::any_of(in.begin(), in.end(), [&](size_t k) {
-    return !c.camera->in_image(c.u2[cand[k].index], params.border_margin_px);
+    return !c.camera->in_image(c.u2[cand[k].index], params.edge_margin_px);
   });
   if (!rect || (!out.cut && rect->hi[1] - rect->lo[1] < params.min_size_m) ||
       rect->hi[0] - rect->lo[0] > params.max_size_m)

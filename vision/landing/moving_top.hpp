@@ -71,7 +71,7 @@ struct MovingTop {
   double yaw_rad = 0.0;             ///< long axis of the inliers' rectangle, (-pi/2, pi/2]
   double yaw_rate_rps = 0.0;        ///< its turn over the interval / dt_s [rad/s]
   double scale = 1.0;               ///< s of the similarity (heave, height error)
-  /// The top cut by the current image's border (border_margin_px): its motion is measured, its
+  /// The top cut by the current image's border (edge_margin_px): its motion is measured, its
   /// centre is not (cov_p_W's horizontal block 100 m^2; p_W the visible part's centre).
   bool cut = false;
   Matrix3d cov_p_W = Matrix3d::Zero();  ///< [m^2]

@@ -37,8 +37,12 @@ struct MovingTopParams {
   double max_yaw_rate_dps = 45.0;
   double max_scale_change = 0.15;  ///< |s - 1| of the plane's similarity: heave / camera height
   double min_size_m = 0.08;        ///< the features' extent, short side (a top seen whole)
-  double border_margin_px = 20.0;  ///< an inlier this close to the image's border: a cut top
-  double max_size_m = 1.0;         ///< long side
+  /// An inlier this close to the current image's border makes the top cut [px]: not a key of
+  /// its own but the still landing's vision.landing.edge_margin_px (a top with features this
+  /// close to the border is cut), which the pipeline passes. Closer, a band of the top bare of
+  /// features at the border (a print's margin) hides that the top goes on beyond it.
+  double edge_margin_px = 40.0;
+  double max_size_m = 1.0;  ///< long side
   /// The top's matches that the known floor also carries (within threshold_px): at most this
   /// share (a cluster of floor matches is no top).
   double max_floor_share = 0.25;

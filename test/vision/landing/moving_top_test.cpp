@@ -34,6 +34,8 @@ struct MovingScene {
   Vector2d top_size{0.43, 0.28};
   int n_floor = 200, n_top = 60;
   double noise_px = 0.3;
+  /// The top bare of features this close to the current image's border [px] (a print's margin).
+  double bare_border_px = 0;
   bool with_top = true;
   uint64_t seed = 7;
 
@@ -85,6 +87,8 @@ struct MovingScene {
     if (with_top)
       for (int i = 0; i < n_top; ++i) {
         const Vector2d local(0.5 * top_size.x() * u(rng), 0.5 * top_size.y() * u(rng));
+        const auto p2 = project(pose_2, top_2.point(local));
+        if (bare_border_px > 0 && p2 && !camera.in_image(*p2, bare_border_px)) continue;
         add(top_1.point(local), top_2.point(local));
       }
     return c;
@@ -126,6 +130,35 @@ TEST(MovingTopTest, MeasuresACartsPositionVelocityAndTurn) {
   // No floor match is taken for the top.
   const auto c = s.correspondences();
   ASSERT_EQ(m.inliers.size(), c.size());
+}
+
+TEST(MovingTopTest, ATopGoingOnPastTheBorderIsCutThoughItsFeaturesStopShortOfIt) {
+  // Followed 0.5 m above its top, a 43 cm top reaches past the image's border; its print stops
+  // 30 px short of the border. The features' rectangle is then a part of the top: its motion is
+  // measured, its centre is not (a cut top), as the still landing's edge_margin_px has it.
+  MovingScene s;
+  const double dt = 0.25;
+  s.pose_1 = MovingScene::at({0.0, 0.0, 0.71}, 0.0);
+  s.pose_2 = MovingScene::at({0.0, 0.5 * dt, 0.71}, 0.0);
+  s.pose_1.utime = 1'000'000, s.pose_2.utime = 1'250'000;
+  s.top_1.c = {0.12, 0.0};
+  s.top_2 = s.top_1;
+  s.top_2.c.y() += 0.5 * dt;
+  s.n_top = 200;
+  s.bare_border_px = 30;
+  MovingTopParams params;
+  const MovingTop m = find_moving_top(s.correspondences(), dt, 0.0, params);
+  ASSERT_TRUE(m.found()) << to_string(m.reason);
+  EXPECT_TRUE(m.cut);
+  EXPECT_GT(m.cov_p_W(0, 0), 1.0);  // no position
+  EXPECT_NEAR(m.v_W.y(), 0.5, 0.05);
+  // Counted from the features 20 px in, the same view passed for the whole top, its centre
+  // several centimetres off the top's.
+  params.edge_margin_px = 20;
+  const MovingTop whole = find_moving_top(s.correspondences(), dt, 0.0, params);
+  ASSERT_TRUE(whole.found()) << to_string(whole.reason);
+  EXPECT_FALSE(whole.cut);
+  EXPECT_GT((whole.p_W.head<2>() - s.top_2.c).norm(), 0.02);
 }
 
 // The yaw is the features' rectangle's, which rests on the few features nearest the edges: its
