@@ -136,8 +136,9 @@ MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
   out.yaw_rate_radps = followed_turn_radps(pr.yaw_rate_rps, params);
   const Vector2d offset = pose.p_W_B.head<2>() - pr.p_W;
   const Vector2d rel_v = pose.v_W_B.head<2>() - pr.v_W;
-  const bool matched =
-      believed && offset.norm() <= params.match_radial_m && rel_v.norm() <= params.match_speed_mps;
+  const bool measured = since_s <= kMatchedMeasuredS;
+  const bool matched = believed && measured && offset.norm() <= params.match_radial_m &&
+                       rel_v.norm() <= params.match_speed_mps;
   if (!matched) {
     s.matched_since_utime.reset();
   } else if (!s.matched_since_utime) {
@@ -155,7 +156,8 @@ MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
   if (s.z_sp_m > z_final) {
     out.reason = settled ? "descending with the moving platform"
                          : "matching the moving platform (" + fmt2(offset.norm()) + " m, " +
-                               fmt2(rel_v.norm()) + " m/s off)";
+                               fmt2(rel_v.norm()) + " m/s off" +
+                               (measured ? "" : ", unmeasured for " + fmt2(since_s) + " s") + ")";
     return out;
   }
   // At the final height: the last drop when matched and the heave allows it.

@@ -7,7 +7,7 @@
 //     platform's velocity and its turn's acceleration fed forward and its long axis as the heading
 //     (the nearest of the four ways a rectangle's axes align, as the still landing does), until the
 //     vehicle's velocity relative to the platform is within match_speed_mps and its offset within
-//     match_radial_m for match_settle_s.
+//     match_radial_m, the platform measured within kMatchedMeasuredS, for match_settle_s.
 //  2. Descend at landing.descent_rate_mps while matched (the paper's e_r rule on the relative
 //     state), holding the altitude whenever not, down to final_height_m over the top.
 //  3. The deck's heave: the last drop (landing.final_descent_rate_mps) starts when its contact,
@@ -59,6 +59,13 @@ struct MovingLandingParams {
   static const ParamSchema<MovingLandingParams>& schema();
   void validate() const;
 };
+
+/// Matched (step 1) only on a measurement this recent [s]: the prediction carries the follow
+/// through a gap (lost_timeout_s), but a cart that starts or ends a turn in the gap is off its
+/// predicted path by half its turn's acceleration times the gap squared, the match radius' 5 cm
+/// after a quarter second at 1.6 m/s^2; descending, or starting the last drop, on a prediction
+/// older than that puts the gear down beside the platform.
+inline constexpr double kMatchedMeasuredS = 0.25;
 
 /// The share of the velocity the vehicle's outer loop follows (its max_feedforward_xy_mps) a
 /// platform may move at and still be followed: a fifth kept in hand, so that the prediction's
