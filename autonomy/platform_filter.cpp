@@ -349,10 +349,7 @@ bool PlatformFilter::update(const PlatformMeasurement& m) {
   };
   if (stale(track_)) reset();
   if (stale(candidate_)) candidate_ = Track{};
-  // A track not believed yet may have started on a view of part of the top, which it would
-  // hold as its whole top and refuse every whole view after it: only a believed track's top
-  // refuses another object by its size.
-  if (believed(track_) && larger_than_the_top(track_, m)) {
+  if (larger_than_the_top(track_, m)) {
     refuse(Refusal::kLargerThanTheTop);
     return false;
   }

@@ -10,8 +10,7 @@
 // sides): it is kept in (-pi/4, pi/4], its innovation wrapped there. Measurements come in
 // exposure order. Each refusal is counted by its reason (Refusal):
 //  - not finite, or older than the filter's time;
-//  - its extent kLargerThanTheTop times a believed track's whole top: another object (a track
-//    not believed yet may have started on a view of part of the top, and takes the whole);
+//  - its extent kLargerThanTheTop times the track's whole top: another object;
 //  - its position and velocity innovation beyond gate_chi2 (Mahalanobis distance by the
 //    predicted covariance, 4 dof). The refused measurements start a candidate track of their
 //    own; after max_consecutive_rejections in a row, the candidate replaces the track once it is

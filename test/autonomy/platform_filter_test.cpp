@@ -286,37 +286,6 @@ TEST(PlatformFilterTest, AnExtentFarLargerThanTheTopIsAnotherObject) {
   EXPECT_TRUE(f.update(near_whole));
 }
 
-TEST(PlatformFilterRegression, ATrackStartedOnPartOfTheTopTakesTheWholeTopWhenItComesIntoView) {
-  // Bug: the first view caught a 30 x 21 cm top coming into view as 13 x 12 cm; the track kept
-  // that as its whole top and refused every whole view after it as another object (over 1.5
-  // times as large), so it was never believed while the cart crossed the view. Now only a
-  // believed track refuses a top by its size: one not believed yet takes the whole views.
-  const PlatformPath m = straight_path(0.75);
-  PlatformFilter f{PlatformFilterParams{}};
-  std::mt19937_64 rng(13);
-  double t = kPfInterval;
-  for (int i = 0; i < 2; ++i, t += kPfDt) {
-    auto part = measure_path(m, t, rng);
-    part.size_m = Vector2d(0.13, 0.12);
-    part.p_W.head<2>() -= Vector2d(0.08, 0.045);  // the corner's centre, not the top's
-    f.update(part);
-  }
-  const double whole_from = t;
-  bool whole_fused = false;
-  for (; t < whole_from + 1.0; t += kPfDt) {
-    auto whole = measure_path(m, t, rng);
-    whole.size_m = Vector2d(0.29, 0.21);
-    whole_fused = f.update(whole);
-  }
-  EXPECT_TRUE(whole_fused);
-  EXPECT_TRUE(f.believed());
-  EXPECT_LE(f.n_refused(PlatformFilter::Refusal::kLargerThanTheTop),
-            PlatformFilterParams{}.max_consecutive_rejections);
-  const auto pr = f.predict(kPfT0 + int64_t((t - kPfDt) * 1e6));
-  EXPECT_LT((pr.p_W - m.p(t - kPfDt)).norm(), 0.02);
-  EXPECT_NEAR(pr.v_W.x(), m.v, 0.05);
-}
-
 TEST(PlatformFilterTest, RoundATurnSeenInPartItsVelocitiesKeepTheTrackOnThePath) {
   // 0.5 m/s round 0.4 m, the top cut by the image's border for 3 s (vision's cut views: position
   // variance 100 m^2): the track goes on its measured velocities alone. Each is the mean over
