@@ -22,6 +22,8 @@ Pipeline::Pipeline(Mission mission, const PipelineParams& params, const CameraMo
     : mission_(mission), params_(params), camera_(camera), mount_(mount), tracker_(params.tracker) {
   assert(mission != Mission::kNone);
   params_.validate();
+  // The moving top's cut bound is the still landing's (moving_top_params.hpp).
+  params_.moving_top.edge_margin_px = params_.landing.edge_margin_px;
 }
 
 void Pipeline::reset() {
@@ -260,9 +262,7 @@ void Pipeline::measure_moving(const std::shared_ptr<const TrackedFrame>& current
     Correspondences c = correspondences(a, *current, match_frames(a, *current, params_.match));
     c.pose_1 = earlier->second;
     c.pose_2 = pose;
-    MovingTopParams with_margin = mp;
-    with_margin.edge_margin_px = params_.landing.edge_margin_px;
-    m = find_moving_top(c, age_s(a.utime), params_.landing.floor_z_m, with_margin);
+    m = find_moving_top(c, age_s(a.utime), params_.landing.floor_z_m, mp);
     r->moving_ref_utime = a.utime;
   }
   r->moving = std::move(m);

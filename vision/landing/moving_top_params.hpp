@@ -39,8 +39,8 @@ struct MovingTopParams {
   double min_size_m = 0.08;        ///< the features' extent, short side (a top seen whole)
   /// An inlier this close to the current image's border makes the top cut [px]: not a key of
   /// its own but the still landing's vision.landing.edge_margin_px (a top with features this
-  /// close to the border is cut), which the pipeline passes. Closer, a band of the top bare of
-  /// features at the border (a print's margin) hides that the top goes on beyond it.
+  /// close to the border is cut), which the pipeline sets when it is made. Closer, a band of the
+  /// top bare of features at the border (a print's margin) hides that the top goes on beyond it.
   double edge_margin_px = 40.0;
   double max_size_m = 1.0;  ///< long side
   /// The top's matches that the known floor also carries (within threshold_px): at most this
