@@ -43,6 +43,7 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
     au_params.moving_platform.max_speed_mps = followed_speed_mps(*config.max_feedforward_xy_mps);
   }
   sim::VehicleParams vehicle = sim::load_vehicle_params(config.vehicle_file);
+  if (config.detection_max_retries) au_params.detection.max_retries = *config.detection_max_retries;
   if (config.rotor_span_m) {
     // Scale the arms with the span so the rotor discs keep their size relative to the arms.
     vehicle.arm_length_m *= *config.rotor_span_m / vehicle.rotor_tip_span_m;

@@ -38,6 +38,8 @@ struct ClosedLoopConfig {
   /// Overrides the velocity the outer loop follows a setpoint at (and so the fastest platform
   /// autonomy follows, as load_params derives it) [m/s].
   std::optional<double> max_feedforward_xy_mps;
+  /// Overrides autonomy.detection.max_retries: the searches flown after the first.
+  std::optional<int> detection_max_retries;
   /// Real vision instead of the oracle: the simulator renders the mission's camera and this is
   /// called with each frame and the motion-capture pose interpolated at its exposure, paired by
   /// the vision node's policy (vision/node/frame_pose_pairing.hpp; nullopt when motion capture has
