@@ -38,12 +38,12 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
   outer_loop::OuterLoopParams ol_params = outer_loop::load_params(root);
   AutonomyParams au_params = load_params(root);
   au_params.seed = config.seed;
+  if (config.detection_max_retries) au_params.detection.max_retries = *config.detection_max_retries;
   if (config.max_feedforward_xy_mps) {
     ol_params.max_feedforward_xy_mps = *config.max_feedforward_xy_mps;
     au_params.moving_platform.max_speed_mps = followed_speed_mps(*config.max_feedforward_xy_mps);
   }
   sim::VehicleParams vehicle = sim::load_vehicle_params(config.vehicle_file);
-  if (config.detection_max_retries) au_params.detection.max_retries = *config.detection_max_retries;
   if (config.rotor_span_m) {
     // Scale the arms with the span so the rotor discs keep their size relative to the arms.
     vehicle.arm_length_m *= *config.rotor_span_m / vehicle.rotor_tip_span_m;
