@@ -235,7 +235,12 @@ bool PlatformFilter::partial_view(const Track& t, const PlatformMeasurement& m) 
   return ((extent(m) - whole).array() < -kPartialViewM).any();
 }
 
-bool PlatformFilter::larger_than_the_top(const Track& t, const PlatformMeasurement& m) {
+bool PlatformFilter::larger_than_the_top(const Track& t, const PlatformMeasurement& m) const {
+  // A track's first views are often of part of the top (it enters the view across the image's
+  // border, or blurred): measured against those, every view of the whole top would be refused
+  // until the track went stale. The whole top is known once as many views of it as make the
+  // track's motion believed were fused; before that a larger view is judged by the gate alone.
+  if (t.whole_extents.size() < static_cast<size_t>(params_.min_consistent)) return false;
   const Vector2d whole = whole_extent(t);
   if (!(whole.minCoeff() > 0)) return false;
   return (extent(m).array() > kLargerThanTheTop * whole.array()).any();

@@ -10,7 +10,8 @@
 // sides): it is kept in (-pi/4, pi/4], its innovation wrapped there. Measurements come in
 // exposure order. Each refusal is counted by its reason (Refusal):
 //  - not finite, or older than the filter's time;
-//  - its extent kLargerThanTheTop times the track's whole top: another object;
+//  - its extent kLargerThanTheTop times the track's whole top: another object (judged once the
+//    track holds min_consistent views of its whole top: its first may be of part of it);
 //  - its position and velocity innovation beyond gate_chi2 (Mahalanobis distance by the
 //    predicted covariance, 4 dof). The refused measurements start a candidate track of their
 //    own; after max_consecutive_rejections in a row, the candidate replaces the track once it is
@@ -175,7 +176,7 @@ class PlatformFilter {
   void start(Track& t, const PlatformMeasurement& m) const;
   static Vector2d whole_extent(const Track& t);
   static bool partial_view(const Track& t, const PlatformMeasurement& m);
-  static bool larger_than_the_top(const Track& t, const PlatformMeasurement& m);
+  bool larger_than_the_top(const Track& t, const PlatformMeasurement& m) const;
   Prediction predict(const Track& t, int64_t utime) const;
   bool believed(const Track& t) const;
   void refuse(Refusal r);

@@ -286,6 +286,35 @@ TEST(PlatformFilterTest, AnExtentFarLargerThanTheTopIsAnotherObject) {
   EXPECT_TRUE(f.update(near_whole));
 }
 
+TEST(PlatformFilterTest, ATrackWhoseFirstViewWasPartOfTheTopTakesTheWholeTopsViews) {
+  // The top enters the view across the image's border: the track starts on a view of a strip of
+  // it (0.25 x 0.11 m of a 0.28 x 0.22 m top). The whole top's views that follow are not refused
+  // as another object: the track is believed on them, and once it knows the whole top a far
+  // larger cluster is refused again.
+  PlatformPath m;
+  m.straight = true;
+  PlatformFilter f{PlatformFilterParams{}};
+  std::mt19937_64 rng(13);
+  double t = kPfInterval;
+  auto strip = measure_path(m, t, rng);
+  strip.size_m = Vector2d(0.25, 0.11);
+  ASSERT_TRUE(f.update(strip));
+  int refused_as_larger = 0;
+  for (t += kPfDt; t < 1.5; t += kPfDt) {
+    auto z = measure_path(m, t, rng);
+    z.size_m = Vector2d(0.28, 0.22);
+    f.update(z);
+    refused_as_larger = f.n_refused(PlatformFilter::Refusal::kLargerThanTheTop);
+  }
+  EXPECT_EQ(refused_as_larger, 0);
+  EXPECT_TRUE(f.believed());
+  EXPECT_NEAR(f.predict(kPfT0 + int64_t(t * 1e6)).v_W.x(), m.v, 0.1);
+  auto big = measure_path(m, t, rng);
+  big.size_m = Vector2d(0.75, 0.16);
+  EXPECT_FALSE(f.update(big));
+  EXPECT_EQ(f.n_refused(PlatformFilter::Refusal::kLargerThanTheTop), 1);
+}
+
 TEST(PlatformFilterTest, RoundATurnSeenInPartItsVelocitiesKeepTheTrackOnThePath) {
   // 0.5 m/s round 0.4 m, the top cut by the image's border for 3 s (vision's cut views: position
   // variance 100 m^2): the track goes on its measured velocities alone. Each is the mean over
