@@ -55,6 +55,14 @@ PlatformMeasurement measure_path(const PlatformPath& m, double t, std::mt19937_6
   return z;
 }
 
+// The same, of a top whose view vision measured size_m across (long, short).
+PlatformMeasurement measure_sized(const PlatformPath& m, double t, std::mt19937_64& rng,
+                                  const Vector2d& size_m) {
+  auto z = measure_path(m, t, rng);
+  z.size_m = size_m;
+  return z;
+}
+
 TEST(PlatformFilterTest, TracksAStraightDriftToItsVelocity) {
   PlatformPath m;
   m.straight = true;
@@ -272,18 +280,11 @@ TEST(PlatformFilterTest, AnExtentFarLargerThanTheTopIsAnotherObject) {
   PlatformFilter f{PlatformFilterParams{}};
   std::mt19937_64 rng(11);
   double t = kPfInterval;
-  for (; t < 2; t += kPfDt) {
-    auto z = measure_path(m, t, rng);
-    z.size_m = Vector2d(0.28, 0.24);
-    f.update(z);
-  }
-  auto big = measure_path(m, t, rng);
-  big.size_m = Vector2d(0.75, 0.16);  // near the top, yet a long thin cluster
-  EXPECT_FALSE(f.update(big));
+  for (; t < 2; t += kPfDt) f.update(measure_sized(m, t, rng, Vector2d(0.28, 0.24)));
+  // Near the top, yet a long thin cluster.
+  EXPECT_FALSE(f.update(measure_sized(m, t, rng, Vector2d(0.75, 0.16))));
   EXPECT_EQ(f.n_refused(PlatformFilter::Refusal::kLargerThanTheTop), 1);
-  auto near_whole = measure_path(m, t + kPfDt, rng);
-  near_whole.size_m = Vector2d(0.33, 0.27);
-  EXPECT_TRUE(f.update(near_whole));
+  EXPECT_TRUE(f.update(measure_sized(m, t + kPfDt, rng, Vector2d(0.33, 0.27))));
 }
 
 TEST(PlatformFilterTest, ATrackWhoseFirstViewWasPartOfTheTopTakesTheWholeTopsViews) {
@@ -291,27 +292,16 @@ TEST(PlatformFilterTest, ATrackWhoseFirstViewWasPartOfTheTopTakesTheWholeTopsVie
   // it (0.25 x 0.11 m of a 0.28 x 0.22 m top). The whole top's views that follow are not refused
   // as another object: the track is believed on them, and once it knows the whole top a far
   // larger cluster is refused again.
-  PlatformPath m;
-  m.straight = true;
+  const PlatformPath m = straight_path(0.8);
   PlatformFilter f{PlatformFilterParams{}};
   std::mt19937_64 rng(13);
   double t = kPfInterval;
-  auto strip = measure_path(m, t, rng);
-  strip.size_m = Vector2d(0.25, 0.11);
-  ASSERT_TRUE(f.update(strip));
-  int refused_as_larger = 0;
-  for (t += kPfDt; t < 1.5; t += kPfDt) {
-    auto z = measure_path(m, t, rng);
-    z.size_m = Vector2d(0.28, 0.22);
-    f.update(z);
-    refused_as_larger = f.n_refused(PlatformFilter::Refusal::kLargerThanTheTop);
-  }
-  EXPECT_EQ(refused_as_larger, 0);
+  ASSERT_TRUE(f.update(measure_sized(m, t, rng, Vector2d(0.25, 0.11))));
+  for (t += kPfDt; t < 1.5; t += kPfDt) f.update(measure_sized(m, t, rng, Vector2d(0.28, 0.22)));
+  EXPECT_EQ(f.n_refused(PlatformFilter::Refusal::kLargerThanTheTop), 0);
   EXPECT_TRUE(f.believed());
   EXPECT_NEAR(f.predict(kPfT0 + int64_t(t * 1e6)).v_W.x(), m.v, 0.1);
-  auto big = measure_path(m, t, rng);
-  big.size_m = Vector2d(0.75, 0.16);
-  EXPECT_FALSE(f.update(big));
+  EXPECT_FALSE(f.update(measure_sized(m, t, rng, Vector2d(0.75, 0.16))));
   EXPECT_EQ(f.n_refused(PlatformFilter::Refusal::kLargerThanTheTop), 1);
 }
 
