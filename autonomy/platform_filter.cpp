@@ -3,6 +3,7 @@
 
 #include <Eigen/Cholesky>
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <vector>
 
@@ -242,7 +243,7 @@ bool PlatformFilter::larger_than_the_top(const Track& t, const PlatformMeasureme
   // track's motion believed were fused; before that a larger view is judged by the gate alone.
   if (t.whole_extents.size() < static_cast<size_t>(params_.min_consistent)) return false;
   const Vector2d whole = whole_extent(t);
-  if (!(whole.minCoeff() > 0)) return false;
+  assert(whole.minCoeff() > 0);  // only views with a measured size join whole_extents
   return (extent(m).array() > kLargerThanTheTop * whole.array()).any();
 }
 
