@@ -2,7 +2,9 @@
 // outcome printed against the simulator's truth: reason, the platform's inliers and the floor's,
 // how much of the true platform top is in the image, and when found the waypoint's error, the
 // measured extent (long, short) minus the true size and the height error; autonomy's phase and
-// waypoint count. With --dump DIR the frames (true top outline green, measured red, features
+// waypoint count. On a moving platform also the body's offset from the top's centre, the moving
+// top's measurement (cut by the border or not) and the platform filter's prediction against the
+// truth. With --dump DIR the frames (true top outline green, measured red, features
 // coloured by label) are written as PNG for a look.
 //
 //   build/bin/alight_landing_diag --scenario FILE [--seed N] [--dump DIR] [--every K]
@@ -104,6 +106,7 @@ int main(int argc, char** argv) try {
     int fused = 0, run = 0, refused = 0;  // fused, in a row within the gate, refused
     int gate = 0, order = 0, size = 0;    // refused by the gate, as out of order, as too large
     bool believed = false;
+    std::optional<PlatformFilter> copy;  // autonomy's, for its prediction at a frame's time
   } filter;
   ClosedLoopConfig cfg;
   cfg.vehicle_file = vehicle;
@@ -125,6 +128,7 @@ int main(int argc, char** argv) try {
     filter.order = pf.n_refused(PlatformFilter::Refusal::kOutOfOrder);
     filter.size = pf.n_refused(PlatformFilter::Refusal::kLargerThanTheTop);
     filter.believed = pf.believed();
+    filter.copy = pf;
   };
   int n = 0;
   std::optional<platform_motion_t> platform;  // the last frame's VISION_PLATFORM
@@ -189,6 +193,9 @@ int main(int argc, char** argv) try {
     if (moved)  // the moving platform's truth: where it is relative to the camera, its velocity
       std::printf(" plat rel(%+.2f %+.2f) v(%+.2f %+.2f)", moved->top_center_W.x() - cam.x(),
                   moved->top_center_W.y() - cam.y(), moved->v_W.x(), moved->v_W.y());
+    if (moved && pose)  // the body's offset from the top's centre, what a touch-down scores
+      std::printf(" body off(%+.3f %+.3f)", pose->p_W_B.x() - moved->top_center_W.x(),
+                  pose->p_W_B.y() - moved->top_center_W.y());
     // The reference's baseline and age (the top's parallax falls with the baseline).
     std::printf(" b %.3f age %.2f tr %d%s", r.baseline_m,
                 r.ref_utime > 0 ? (f.utime - r.ref_utime) * 1e-6 : -1.0, r.n_tracked,
@@ -222,8 +229,9 @@ int main(int argc, char** argv) try {
     }
     if (r.moving) {  // the moving top (VISION_PLATFORM)
       const auto& m = *r.moving;
-      std::printf(" | moving %s cand %d in %d size %.2f x %.2f", vision::to_string(m.reason),
-                  m.n_candidates, m.n_inliers, m.size_m[0], m.size_m[1]);
+      std::printf(" | moving %s%s cand %d in %d size %.2f x %.2f", vision::to_string(m.reason),
+                  m.found() && m.cut ? " cut" : "", m.n_candidates, m.n_inliers, m.size_m[0],
+                  m.size_m[1]);
       if (m.found())
         std::printf(" p(%+.3f %+.3f %.3f) v(%+.3f %+.3f %+.3f) yaw %+.1f rate %+.1f deg/s",
                     m.p_W.x(), m.p_W.y(), m.p_W.z(), m.v_W.x(), m.v_W.y(), m.v_W.z(),
@@ -236,6 +244,14 @@ int main(int argc, char** argv) try {
     std::printf(" | filter fused %d run %d refused %d believed %d (gate %d order %d size %d)",
                 filter.fused, filter.run, filter.refused, filter.believed ? 1 : 0, filter.gate,
                 filter.order, filter.size);
+    // What autonomy follows: the filter's prediction at this frame's time (before the frame)
+    // against the truth.
+    if (filter.copy && filter.copy->initialised() && moved) {
+      const auto pr = filter.copy->predict(f.utime);
+      std::printf(" pred err (%+.3f %+.3f) v(%+.2f %+.2f) a(%+.2f %+.2f)",
+                  pr.p_W.x() - moved->top_center_W.x(), pr.p_W.y() - moved->top_center_W.y(),
+                  pr.v_W.x(), pr.v_W.y(), pr.a_W.x(), pr.a_W.y());
+    }
     platform = vision::to_platform_msg(r);
     std::printf("\n");
     if (!dump.empty() && n % every == 0) {
