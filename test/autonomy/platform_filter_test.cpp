@@ -35,15 +35,6 @@ struct PlatformPath {
     const double a = v * t / r;
     return r * Vector2d(std::cos(a), std::sin(a));
   }
-  Vector2d vel(double t) const {
-    if (straight) return Vector2d(v, 0);
-    if (eight) {
-      const auto [phi, side] = lobe(t);
-      return v * Vector2d(std::cos(phi), side * std::sin(phi));
-    }
-    const double a = v * t / r;
-    return v * Vector2d(-std::sin(a), std::cos(a));
-  }
   Vector2d accel(double t) const {  // the eight's (the circle's: towards its centre)
     if (!eight) return straight ? Vector2d::Zero() : Vector2d(-v * v / (r * r) * p(t));
     const auto [phi, side] = lobe(t);
@@ -263,7 +254,7 @@ TEST(PlatformFilterTest, PredictsTheTurnsAccelerationOnACircle) {
   for (; t < 6; t += kPfDt) f.update(measure_path(m, t, rng));
   const double now = t - kPfDt + 0.1;
   const auto p = f.predict(kPfT0 + int64_t(now * 1e6));
-  const Vector2d a_true = -m.v * m.v / m.r * m.p(now).normalized();
+  const Vector2d a_true = m.accel(now);
   EXPECT_LT((p.a_W - a_true).norm(), 0.25 * a_true.norm());
 }
 
