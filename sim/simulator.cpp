@@ -343,6 +343,7 @@ void Simulator::schedule_camera(CameraStream& cam) {
       const Isometry3d X_WB =
           pose ? pose->X_WB() : make_transform(state_.q_WB.toRotationMatrix(), state_.p_W_B);
       f.X_WC.push_back(camera_in_world(X_WB, X_BC));
+      f.X_WC_utime.push_back(t);
     }
   } else {
     // Bands of rows, each from the poses over its own exposure. A vibration blurs within the
@@ -358,13 +359,16 @@ void Simulator::schedule_camera(CameraStream& cam) {
       const int r1 = std::min(rows, r0 + band);
       const double t_mid = static_cast<double>(f.utime) + line_us * 0.5 * (r0 + r1 - 1);
       std::vector<Isometry3d> poses;
+      std::vector<int64_t> times;
       for (int i = 0; i < k; ++i) {
         const double t =
             k == 1 ? t_mid : t_mid - half_exposure + (2.0 * half_exposure * i) / (k - 1);
         poses.push_back(camera_pose_at(t, X_BC));
+        times.push_back(std::llround(t));
       }
       f.band_rows.push_back(r0);
       f.band_X_WC.push_back(std::move(poses));
+      f.band_utime.push_back(std::move(times));
     }
     f.band_rows.push_back(rows);
     f.X_WC = {camera_pose_at(static_cast<double>(f.utime), X_BC)};  // row 0's, at the stamp
@@ -424,15 +428,23 @@ std::optional<CameraFrame> Simulator::take_frame(CameraStream& cam) {
   cv::Mat acc(model.height, model.width, CV_32F, cv::Scalar(0));
   double gain = f.gain * cam.auto_gain.gain();
   if (f.ev != 0.0) gain *= std::exp2(f.ev);
-  place_platform(f.utime);  // a moving platform as at mid-exposure (not smeared over it)
+  // A moving platform where it was at each of the exposure's instants, as the camera: smeared
+  // by its motion relative to the camera (a vehicle keeping pace with it sees it sharp over a
+  // smeared floor), and skewed by a rolling shutter's readout as the floor is.
   if (f.band_X_WC.empty()) {
     const float w = static_cast<float>(gain / f.X_WC.size());
-    for (const auto& X_WC : f.X_WC) cam.renderer->accumulate(*scene_, X_WC, w, acc);
+    for (size_t i = 0; i < f.X_WC.size(); ++i) {
+      place_platform(f.X_WC_utime[i]);
+      cam.renderer->accumulate(*scene_, f.X_WC[i], w, acc);
+    }
   } else {
     for (size_t b = 0; b < f.band_X_WC.size(); ++b) {
       const float w = static_cast<float>(gain / f.band_X_WC[b].size());
-      for (const auto& X_WC : f.band_X_WC[b])
-        cam.renderer->accumulate_rows(*scene_, X_WC, w, f.band_rows[b], f.band_rows[b + 1], acc);
+      for (size_t i = 0; i < f.band_X_WC[b].size(); ++i) {
+        place_platform(f.band_utime[b][i]);
+        cam.renderer->accumulate_rows(*scene_, f.band_X_WC[b][i], w, f.band_rows[b],
+                                      f.band_rows[b + 1], acc);
+      }
     }
   }
   place_platform(now_utime_);

@@ -197,11 +197,13 @@ class Simulator {
     int64_t utime = 0, seq = 0;
     double gain = 1.0;
     size_t noise_offset = 0;
-    std::vector<Isometry3d> X_WC;  // over the exposure
+    std::vector<Isometry3d> X_WC;     // over the exposure
+    std::vector<int64_t> X_WC_utime;  // their times: a moving platform is placed at each
     // Camera effects: per band of rows [band_rows[b], band_rows[b + 1]) its poses over the
-    // exposure (rolling shutter, vibration); empty: the whole frame from X_WC.
+    // exposure (rolling shutter, vibration) and their times; empty: the whole frame from X_WC.
     std::vector<int> band_rows;
     std::vector<std::vector<Isometry3d>> band_X_WC;
+    std::vector<std::vector<int64_t>> band_utime;
     double ev = 0.0;
     bool duplicate = false;
     int64_t stamp = 0;  // the published stamp (utime plus the driver's jitter)

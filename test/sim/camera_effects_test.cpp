@@ -145,6 +145,45 @@ TEST(CameraEffectsTest, RollingShutterShearsAnEdgeByTheMotionDuringReadout) {
   EXPECT_EQ(fg.frames[3].line_delay_s, 0.0);
 }
 
+// The pixels of row v between the floor's grey (60) and the top's (220), exclusive of both
+// ends' 10 levels: the width of the top's edges the row crosses [px].
+int edge_width_px(const cv::Mat& img, int v) {
+  int n = 0;
+  for (int u = 0; u < img.cols; ++u) n += img.at<uchar>(v, u) > 70 && img.at<uchar>(v, u) < 210;
+  return n;
+}
+
+TEST(CameraEffectsTest, AMovingTopIsSmearedByItsMotionRelativeToTheCamera) {
+  // A cart at 1 m/s along world y (the image's u for the downward camera) under a 20 ms
+  // exposure, 1 m below the camera: seen from a vehicle keeping pace with it, its edges across
+  // the rows are sharp over the exposure; seen from a vehicle standing still, each is smeared
+  // over fx x 1 m/s x 20 ms / 1 m = 13.3 px.
+  Scenario s = flat_scene();
+  s.camera.exposure_s = 0.02;
+  s.camera.motion_blur_samples = 16;
+  s.platform->moving = true;
+  s.platform->motion.path = "line";
+  s.platform->motion.speed_mps = 1.0;
+  s.platform->motion.path_heading_deg = 90;
+  s.platform->motion.path_length_m = 2.0;
+  s.platform->motion.path_radius_m = 0.6;
+  s.validate();
+  const VehicleParams v = dragless();
+  const CameraRig rig = downward_rig();
+  const double body_z = 0.05 + 1.0 - rig.mount.t_B_C.z();
+  const double smear_px = rig.model.fx * 1.0 * 0.02 / 1.0;
+  const auto width = [&](const Vector3d& v0) {
+    Simulator sim(s, v, 1, rig);
+    const Flight f = fly(sim, Vector3d(0, 0, body_z), v0, 0.2, v);
+    EXPECT_GE(f.frames.size(), 4u);
+    return f.frames.size() < 4 ? -1 : edge_width_px(f.frames[3].pixels, 240);
+  };
+  const int keeping_pace = width(Vector3d(0, 1.0, 0));
+  const int standing = width(Vector3d::Zero());
+  EXPECT_LE(keeping_pace, 4);  // two edges, a pixel or two each
+  EXPECT_NEAR(standing, 2 * smear_px, 4.0);
+}
+
 TEST(CameraEffectsTest, TheLineDelayGoesOutAsImageMetadata) {
   CameraFrame f;
   f.pixels = cv::Mat(4, 4, CV_8U, cv::Scalar(0));
