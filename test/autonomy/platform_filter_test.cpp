@@ -109,7 +109,7 @@ TEST(PlatformFilterTest, FollowsATurnWithinTheLagOfItsModel) {
   EXPECT_LT(worst, 0.05);
 }
 
-// A figure eight's turn reverses at once where its lobes meet (a cart at 0.8 m/s round 0.5 m
+// A figure eight's turn reverses at once where its lobes meet (a cart at 0.8 m/s on 0.5 m
 // turns: 1.28 m/s^2 one way, then the other). The turn's acceleration the filter predicts, which
 // the approach feeds forward through the last drop, follows the new turn once the course's rate
 // (smoothed over course_tau_s, from velocities that lag by half vision's interval) has turned:
