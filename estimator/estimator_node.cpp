@@ -14,6 +14,7 @@
 #include <CLI/CLI.hpp>
 
 #include "common/camera_mount.hpp"
+#include "common/image_msg.hpp"
 #include "common/msg_convert.hpp"
 #include "common/node.hpp"
 #include "common/params.hpp"

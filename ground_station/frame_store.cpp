@@ -4,6 +4,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <vector>
 
+#include "common/image_msg.hpp"
 #include "common/msg_convert.hpp"
 
 namespace alight::ground_station {

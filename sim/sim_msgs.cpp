@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "common/image_msg.hpp"
 #include "common/msg_convert.hpp"
 
 namespace alight::sim {

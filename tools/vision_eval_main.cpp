@@ -28,6 +28,7 @@
 #include "common/camera_mount.hpp"
 #include "common/channels.hpp"
 #include "common/decode.hpp"
+#include "common/image_msg.hpp"
 #include "common/msg_convert.hpp"
 #include "common/params.hpp"
 #include "tools/vision_eval.hpp"

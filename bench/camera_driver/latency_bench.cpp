@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "common/build_paths.hpp"
+#include "common/image_msg.hpp"
 #include "common/msg_convert.hpp"
 #include "common/node.hpp"
 

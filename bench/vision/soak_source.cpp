@@ -32,6 +32,7 @@
 #include <thread>
 #include <vector>
 
+#include "common/image_msg.hpp"
 #include "common/msg_convert.hpp"
 #include "common/node.hpp"
 #include "outer_loop/params.hpp"

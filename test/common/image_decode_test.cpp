@@ -10,6 +10,7 @@
 #include <random>
 #include <set>
 
+#include "common/image_msg.hpp"
 #include "common/msg_convert.hpp"
 
 namespace alight {

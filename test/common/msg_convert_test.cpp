@@ -5,6 +5,8 @@
 #include <cstdint>
 #include <opencv2/imgproc.hpp>
 
+#include "common/image_msg.hpp"
+
 namespace alight {
 namespace {
 

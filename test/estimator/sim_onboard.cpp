@@ -5,6 +5,7 @@
 #include <algorithm>
 
 #include "common/camera_mount.hpp"
+#include "common/image_msg.hpp"
 #include "common/msg_convert.hpp"
 #include "common/params.hpp"
 #include "estimator/convert.hpp"

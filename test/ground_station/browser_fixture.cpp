@@ -16,6 +16,7 @@
 #include <opencv2/imgproc.hpp>
 #include <thread>
 
+#include "common/image_msg.hpp"
 #include "common/msg_convert.hpp"
 #include "common/node.hpp"
 #include "common/operator_auth.hpp"

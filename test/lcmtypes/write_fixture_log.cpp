@@ -9,6 +9,7 @@
 #include <opencv2/core.hpp>
 
 #include "common/channels.hpp"
+#include "common/image_msg.hpp"
 #include "common/msg_convert.hpp"
 
 namespace {

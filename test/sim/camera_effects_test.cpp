@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "common/build_paths.hpp"
+#include "common/image_msg.hpp"
 #include "common/msg_convert.hpp"
 #include "common/params.hpp"
 #include "sim/params.hpp"

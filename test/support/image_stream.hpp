@@ -17,6 +17,7 @@
 #include <thread>
 #include <vector>
 
+#include "common/image_msg.hpp"
 #include "common/msg_convert.hpp"
 #include "common/node.hpp"
 

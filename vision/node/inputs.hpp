@@ -11,6 +11,7 @@
 #include <string>
 
 #include "common/channels.hpp"
+#include "common/image_msg.hpp"
 #include "common/msg_convert.hpp"
 #include "common/pose_buffer.hpp"
 

@@ -46,6 +46,7 @@
 #include <optional>
 
 #include "common/camera_mount.hpp"
+#include "common/image_msg.hpp"
 #include "common/msg_convert.hpp"
 #include "common/node.hpp"
 #include "vision/node/convert.hpp"
