@@ -1,8 +1,6 @@
 #include "common/msg_convert.hpp"
 
-#include <algorithm>
 #include <cmath>
-#include <cstring>
 
 namespace alight {
 
