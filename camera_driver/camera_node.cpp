@@ -44,7 +44,6 @@
 #include "camera_driver/timestamp.hpp"
 #include "common/camera_model.hpp"
 #include "common/image_msg.hpp"
-#include "common/msg_convert.hpp"
 #include "common/node.hpp"
 #include "common/params.hpp"
 

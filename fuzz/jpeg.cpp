@@ -2,7 +2,6 @@
 // mutations go into the JPEG structure rather than the image_t around it. The first 4 bytes give
 // the message's width and height (0 = not stated, as a camera may send), the rest is the JPEG.
 #include "common/image_msg.hpp"
-#include "common/msg_convert.hpp"
 #include "fuzz/fuzz_support.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

@@ -2,7 +2,6 @@
 // colour as the ground station does, then re-encoded to JPEG as the station's video stream does.
 #include "common/channels.hpp"
 #include "common/image_msg.hpp"
-#include "common/msg_convert.hpp"
 #include "fuzz/fuzz_support.hpp"
 #include "ground_station/frame_store.hpp"
 #include "ground_station/state.hpp"

@@ -5,7 +5,6 @@
 #include <vector>
 
 #include "common/image_msg.hpp"
-#include "common/msg_convert.hpp"
 
 namespace alight::ground_station {
 

@@ -24,7 +24,6 @@
 
 #include "common/build_paths.hpp"
 #include "common/image_msg.hpp"
-#include "common/msg_convert.hpp"
 #include "common/node.hpp"
 
 namespace {

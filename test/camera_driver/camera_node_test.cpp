@@ -15,7 +15,6 @@
 #include "common/build_paths.hpp"
 #include "common/camera_model.hpp"
 #include "common/image_msg.hpp"
-#include "common/msg_convert.hpp"
 #include "common/node.hpp"
 #include "render_chessboard.hpp"
 

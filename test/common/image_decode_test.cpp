@@ -11,7 +11,6 @@
 #include <set>
 
 #include "common/image_msg.hpp"
-#include "common/msg_convert.hpp"
 
 namespace alight {
 namespace {

@@ -17,7 +17,6 @@
 #include <thread>
 
 #include "common/image_msg.hpp"
-#include "common/msg_convert.hpp"
 #include "common/node.hpp"
 #include "common/operator_auth.hpp"
 

@@ -8,7 +8,6 @@
 
 #include "common/channels.hpp"
 #include "common/image_msg.hpp"
-#include "common/msg_convert.hpp"
 #include "ground_station/frame_store.hpp"
 #include "ground_station/json_writer.hpp"
 

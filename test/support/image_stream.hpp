@@ -18,7 +18,6 @@
 #include <vector>
 
 #include "common/image_msg.hpp"
-#include "common/msg_convert.hpp"
 #include "common/node.hpp"
 
 namespace alight::testing {

@@ -17,7 +17,6 @@
 #include "common/build_paths.hpp"
 #include "common/channels.hpp"
 #include "common/image_msg.hpp"
-#include "common/msg_convert.hpp"
 
 namespace {
 
