@@ -29,10 +29,10 @@ if(ALIGHT_LLD)
   endif()
 endif()
 
-# A program records only the shared libraries it uses. Each test case runs in a process of its
-# own, and OpenCV's image codecs alone load about 130 libraries (GDAL, HDF5, Poppler, ...), whose
-# relocation costs about a tenth of a CPU second a process: over the test suite's 1,400
-# processes, more than the tests themselves in most executables.
+# A program records only the shared libraries it uses. Each test suite (each case of an
+# integration binary) runs in a process of its own, and OpenCV's image codecs alone load about
+# 130 libraries (GDAL, HDF5, Poppler, ...), whose relocation costs about a tenth of a CPU second
+# a process.
 add_link_options(LINKER:--as-needed)
 
 # Precompiled headers. Each test and node translation unit otherwise parses GoogleTest, CLI11,
@@ -145,11 +145,14 @@ endfunction()
 
 # alight_add_gtest(NAME SOURCES a.cpp b.cpp LIBS lib1 lib2 [LABELS l1 l2] [TIMEOUT s]
 #                  [RESOURCE_LOCK name] [INTEGRATION] [COST c])
-# One GoogleTest binary in build/bin/tests, its cases registered with CTest one by one.
-# Every case carries the label unit, or integration with INTEGRATION (processes over LCM, flights
-# in real time or many simulated ones, other programs): `scripts/test --quick` runs -L unit.
-# RESOURCE_LOCK: cases that share something (a fixed LCM port) never run at the same time.
-# COST: CTest starts costly cases first (a fresh tree has no timings of its own), so the long
+# One GoogleTest binary in build/bin/tests. A unit binary (label unit: `scripts/test --quick`
+# runs -L unit) is registered with CTest one suite at a time, `<binary>:<Suite>` (see
+# gtest_suites.cmake: a process's start-up costs more than most unit cases); an INTEGRATION one
+# (processes over LCM, flights in real time or many simulated ones, other programs) one case at
+# a time, so its long cases run in parallel.
+# TIMEOUT: seconds per case (a suite gets it times its number of cases).
+# RESOURCE_LOCK: tests that share something (a fixed LCM port) never run at the same time.
+# COST: CTest starts costly tests first (a fresh tree has no timings of its own), so the long
 # ones do not end up alone on one core at the end of the run.
 function(alight_add_gtest name)
   cmake_parse_arguments(ARG "INTEGRATION" "TIMEOUT;RESOURCE_LOCK;COST" "SOURCES;LIBS;LABELS"
@@ -166,6 +169,27 @@ function(alight_add_gtest name)
   if(NOT ARG_TIMEOUT)
     set(ARG_TIMEOUT 120)
   endif()
+  set(labels ${ARG_LABELS})
+  if(NOT ARG_INTEGRATION)
+    list(APPEND labels unit)
+    alight_unit_test_needs(${name})
+    # Listed when ctest runs (as PRE_TEST discovery), not after each link.
+    set(file ${CMAKE_CURRENT_BINARY_DIR}/${name}_suites.cmake)
+    string(CONCAT content
+      "set(_alight_exe [==[$<TARGET_FILE:${name}>]==])\n"
+      "set(_alight_name [==[${name}]==])\n"
+      "set(_alight_list [==[${CMAKE_CURRENT_BINARY_DIR}/${name}_suites.txt]==])\n"
+      "set(_alight_dir [==[${CMAKE_CURRENT_BINARY_DIR}]==])\n"
+      "set(_alight_labels [==[${labels}]==])\n"
+      "set(_alight_timeout ${ARG_TIMEOUT})\n"
+      "set(_alight_lock [==[${ARG_RESOURCE_LOCK}]==])\n"
+      "set(_alight_cost [==[${ARG_COST}]==])\n"
+      "include([==[${PROJECT_SOURCE_DIR}/cmake/gtest_suites.cmake]==])\n")
+    file(GENERATE OUTPUT ${file} CONTENT "${content}")
+    set_property(DIRECTORY APPEND PROPERTY TEST_INCLUDE_FILES ${file})
+    return()
+  endif()
+  list(APPEND labels integration)
   set(properties TIMEOUT ${ARG_TIMEOUT})
   if(ARG_RESOURCE_LOCK)
     list(APPEND properties RESOURCE_LOCK ${ARG_RESOURCE_LOCK})
@@ -180,13 +204,6 @@ function(alight_add_gtest name)
   # The labels are set by a file CTest reads after the discovered list: passed through
   # PROPERTIES, a list of labels would be flattened into separate arguments, all but the first
   # read as property names.
-  set(labels ${ARG_LABELS})
-  if(ARG_INTEGRATION)
-    list(APPEND labels integration)
-  else()
-    list(APPEND labels unit)
-    alight_unit_test_needs(${name})
-  endif()
   set(file ${CMAKE_CURRENT_BINARY_DIR}/${name}_labels.cmake)
   file(WRITE ${file}
     "if(${name}_TESTS)\n"
