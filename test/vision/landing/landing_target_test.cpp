@@ -615,9 +615,9 @@ struct BoxScene {
     return std::abs(q.x()) <= 0.5 * length - inset_long &&
            std::abs(q.y()) <= 0.5 * width - inset_short;
   }
-  double grey(const Vector3d& o_W, const Vector3d& d_W) const {
+  // The grey a ray from o_W along d_W sees; X_OW = X_WO().inverse(), once for all the rays.
+  double grey(const Isometry3d& X_OW, const Vector3d& o_W, const Vector3d& d_W) const {
     // Slab test in the box frame (Kay & Kajiya, SIGGRAPH 1986).
-    const Isometry3d X_OW = X_WO().inverse();
     const Vector3d o = X_OW * o_W, d = X_OW.linear() * d_W;
     const double h[3] = {0.5 * length, 0.5 * width, 0.5 * height};
     double t_in = -1e9, t_out = 1e9;
@@ -646,13 +646,14 @@ struct BoxScene {
   // The camera's image, 3 x 3 rays a pixel.
   cv::Mat render(const CameraModel& camera, const Isometry3d& X_WC) const {
     cv::Mat image(camera.height, camera.width, CV_8UC1);
+    const Isometry3d X_OW = X_WO().inverse();
     for (int v = 0; v < camera.height; ++v)
       for (int u = 0; u < camera.width; ++u) {
         double sum = 0;
         for (int i = -1; i <= 1; ++i)
           for (int j = -1; j <= 1; ++j) {
             const Vector3d r = camera.ray(Vector2d(u + i / 3.0, v + j / 3.0));
-            sum += grey(X_WC.translation(), X_WC.linear() * r);
+            sum += grey(X_OW, X_WC.translation(), X_WC.linear() * r);
           }
         image.at<uint8_t>(v, u) = cv::saturate_cast<uint8_t>(sum / 9);
       }
