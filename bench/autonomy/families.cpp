@@ -216,6 +216,10 @@ int main(int argc, char** argv) try {
   app.add_option("--time-limit", time_limit_s, "simulated seconds per mission at most")
       ->check(CLI::Range(10.0, 3600.0));
   app.add_flag("--verbose", verbose, "print each run's retries");
+  bool dry_run = false;
+  app.add_flag("--dry-run", dry_run,
+               "check the seeds against the split, draw and read every scene and the vehicle's "
+               "cameras, list the runs, fly nothing");
   std::string csv_path;
   app.add_option("--csv", csv_path, "write one row per run to this file");
   std::string purpose_text = "any";
@@ -279,6 +283,19 @@ int main(int argc, char** argv) try {
       x.effects = scenario.camera.effects;
       all.push_back(std::move(x));
     }
+  }
+
+  if (dry_run) {
+    // What a flight would read first: the vehicle's camera for the family's mission.
+    for (const auto& x : all) {
+      const bool landing = mission_of(x.family) == Mission::kLanding;
+      const auto rig = sim::load_camera_rig(vehicle, landing ? "downward" : "forward");
+      std::printf("%s seed %llu: %s, %s camera %dx%d\n", x.family.c_str(),
+                  static_cast<unsigned long long>(x.seed), x.scenario_file.c_str(),
+                  landing ? "downward" : "forward", rig.model.width, rig.model.height);
+    }
+    std::printf("dry run: %zu runs (%s), none flown\n", all.size(), seed_kind.c_str());
+    return 0;
   }
 
   std::atomic<size_t> next{0};
