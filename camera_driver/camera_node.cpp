@@ -42,6 +42,7 @@
 #include "camera_driver/stored_source.hpp"
 #include "camera_driver/supervisor.hpp"
 #include "camera_driver/timestamp.hpp"
+#include "common/build_paths.hpp"
 #include "common/camera_model.hpp"
 #include "common/image_msg.hpp"
 #include "common/node.hpp"
@@ -337,7 +338,9 @@ int run(int argc, char** argv) {
     p = load_params(o.args.config);
   } else {
     // Defaults; the camera_info default is the paper's camera in the source tree's config.
-    p.camera_info = (std::filesystem::path(ALIGHT_CONFIG_DIR) / "cameras" / p.camera_info).string();
+    p.camera_info =
+        (std::filesystem::path(alight::build::source_dir()) / "config" / "cameras" / p.camera_info)
+            .string();
   }
   if (!o.device.empty()) {
     p.device = o.device;

@@ -9,14 +9,11 @@
 #include <cstdio>
 #include <filesystem>
 
+#include "common/build_paths.hpp"
 #include "common/node.hpp"
 #include "common/operator_auth.hpp"
 #include "ground_station/params.hpp"
 #include "ground_station/station.hpp"
-
-#ifndef ALIGHT_GROUND_STATION_WEB_DIR
-#define ALIGHT_GROUND_STATION_WEB_DIR ""
-#endif
 
 namespace gs = alight::ground_station;
 
@@ -27,7 +24,9 @@ int main(int argc, char** argv) {
     args.add_to(app, false);
     std::string bind = "127.0.0.1";
     int port = -1;
-    std::string key_file, web_dir = ALIGHT_GROUND_STATION_WEB_DIR, sender;
+    // The page in the source tree this binary was built from.
+    std::string key_file,
+        web_dir = std::string(alight::build::source_dir()) + "/ground_station/web", sender;
     app.add_option("--bind", bind,
                    "Address to serve the page on (default 127.0.0.1; any other address "
                    "requires the session token printed at start for every command)");
