@@ -286,13 +286,16 @@ int main(int argc, char** argv) try {
   }
 
   if (dry_run) {
-    // What a flight would read first: the vehicle's camera for the family's mission.
+    // What a flight would read first: the vehicle's camera for the family's mission, once per
+    // mount.
+    std::map<std::string, CameraModel> cameras;
     for (const auto& x : all) {
-      const bool landing = mission_of(x.family) == Mission::kLanding;
-      const auto rig = sim::load_camera_rig(vehicle, landing ? "downward" : "forward");
+      const std::string mount = mission_of(x.family) == Mission::kLanding ? "downward" : "forward";
+      if (!cameras.count(mount)) cameras.emplace(mount, sim::load_camera_rig(vehicle, mount).model);
+      const CameraModel& camera = cameras.at(mount);
       std::printf("%s seed %llu: %s, %s camera %dx%d\n", x.family.c_str(),
-                  static_cast<unsigned long long>(x.seed), x.scenario_file.c_str(),
-                  landing ? "downward" : "forward", rig.model.width, rig.model.height);
+                  static_cast<unsigned long long>(x.seed), x.scenario_file.c_str(), mount.c_str(),
+                  camera.width, camera.height);
     }
     std::printf("dry run: %zu runs (%s), none flown\n", all.size(), seed_kind.c_str());
     return 0;
