@@ -285,5 +285,19 @@ TEST(AlightParamsTest, PrintsTheDumpOfAFileAndTheDefaultsOfEachKind) {
   }
 }
 
+TEST(AlightParamsTest, ChecksManyFilesInOneRunAndStopsAtTheFirstBadOneNamingIt) {
+  const std::string a = (kConfig / "scenarios/landing_a.yaml").string();
+  const std::string b = (kConfig / "scenarios/ingress.yaml").string();
+  const ToolRun good = run("--check " + a + " " + b + " --kind scenario");
+  EXPECT_EQ(good.exit_code, 0) << good.output;
+  EXPECT_EQ(good.output, "2 scenario files read\n");
+  const std::string bad = write(temp_dir("tool_check") / "no_name.yaml", "seed: 1\n");
+  const ToolRun r = run("--check " + a + " " + bad + " " + b + " --kind scenario");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find(bad + ": name = <missing>: required key is missing"), std::string::npos)
+      << r.output;
+  EXPECT_EQ(run("--check " + a + " --dump " + a).exit_code, 2);
+}
+
 }  // namespace
 }  // namespace alight::tools

@@ -32,7 +32,7 @@ def textures(s):
     return out
 
 
-checked = 0
+to_check = []
 with tempfile.TemporaryDirectory() as tmp:
     for family in scene_families.FAMILIES:
         for seed in range(1, 41):
@@ -127,15 +127,17 @@ with tempfile.TemporaryDirectory() as tmp:
                     assert abs(oy) + ow / 2 <= w["width_m"] / 2, (seed, oy, ow)
             speed = math.hypot(*s["wind"]["steady_mps"][:2])
             assert speed <= 0.7 + 1e-9 and s["wind"]["gust_sigma_mps"] <= 0.4 + 1e-9, s["wind"]
-            # The simulator's own loader accepts it: every key known, every value in range.
+            # The simulator's own loader accepts it: every key known, every value in range
+            # (read below, all in one alight-params).
             if seed <= 4:
                 path = os.path.join(tmp, "%s-%d.yaml" % (family, seed))
                 with open(path, "w") as f:
                     yaml.safe_dump(s, f)
-                r = subprocess.run([params_bin, "--dump", path, "--kind", "scenario"],
-                                   stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-                assert r.returncode == 0, (path, r.stderr)
-                checked += 1
+                to_check.append(path)
+    r = subprocess.run([params_bin, "--check"] + to_check + ["--kind", "scenario"],
+                       stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.strip() == "%d scenario files read" % len(to_check), r.stdout
     # Draws vary: 40 seeds of a family are 40 different scenes.
     for family in scene_families.FAMILIES:
         assert len({repr(scene_families.draw(family, k)) for k in range(1, 41)}) == 40, family
@@ -149,4 +151,4 @@ with tempfile.TemporaryDirectory() as tmp:
     except KeyError as e:
         assert "landing_tiles" in str(e), e
 print("scene families: %d families x 40 seeds checked, %d loaded by alight-params"
-      % (len(scene_families.FAMILIES), checked))
+      % (len(scene_families.FAMILIES), len(to_check)))
