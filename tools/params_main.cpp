@@ -28,7 +28,7 @@ int main(int argc, char** argv) {
                  "(exit 2 at the first bad one, naming it)");
   app.add_option("--defaults", defaults_kind, "print the defaults of a kind of file")
       ->check(CLI::IsMember(param_file_kinds()));
-  app.add_option("--kind", kind, "kind of the --dump file")
+  app.add_option("--kind", kind, "kind of the --dump or --check files")
       ->check(CLI::IsMember(param_file_kinds()));
   try {
     app.parse(argc, argv);
