@@ -4,6 +4,7 @@
 #include <bit>
 #include <cassert>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
@@ -332,14 +333,14 @@ ALIGHT_SIMD_PASS void box_coords_pass(
 struct Taps {  // per ray
   std::vector<int> level, offset_a, dx_a, dy_a, offset_b, dx_b, dy_b;
   std::vector<float> w, fx_a, fy_a, fx_b, fy_b;
-  std::vector<uint8_t> t_a[4], t_b[4];  // texels 00, 01, 10, 11 (converted in filter_pass)
+  // Texels 00, 01, 10, 11 of a level, one byte each from the lowest (converted in filter_pass):
+  // one store a level instead of four, the stores being what bounds the reads' pass.
+  std::vector<uint32_t> t_a, t_b;
   void resize(int n) {
     for (auto* v : {&level, &offset_a, &dx_a, &dy_a, &offset_b, &dx_b, &dy_b}) v->resize(n);
     for (auto* v : {&w, &fx_a, &fy_a, &fx_b, &fy_b}) v->resize(n);
-    for (int i = 0; i < 4; ++i) {
-      t_a[i].resize(n);
-      t_b[i].resize(n);
-    }
+    t_a.resize(n);
+    t_b.resize(n);
   }
 };
 
@@ -395,39 +396,30 @@ ALIGHT_SIMD_PASS [[gnu::noinline]] void taps_pass(
   }
 }
 
-// The texel reads: level a always, level b only where it is blended in. (Restrict parameters:
-// the texels are bytes, and a byte store may alias anything, so through the Taps' vectors the
-// compiler would reload every array's address after each store.)
+// The four texels at t (00), t + dx (01), t + dy (10) and t + dx + dy (11), packed as Taps keeps
+// them. Neighbours along a row (dx = 1, all but the wrapping column) are read as one pair.
+inline uint32_t texel_quad(const uint8_t* t, int dx, int dy) {
+  static_assert(std::endian::native == std::endian::little, "a pair's first byte is its lowest");
+  if (dx == 1) {
+    uint16_t top, bottom;
+    std::memcpy(&top, t, 2);
+    std::memcpy(&bottom, t + dy, 2);
+    return uint32_t(top) | uint32_t(bottom) << 16;
+  }
+  return uint32_t(t[0]) | uint32_t(t[dx]) << 8 | uint32_t(t[dy]) << 16 | uint32_t(t[dx + dy]) << 24;
+}
+
+// The texel reads: level a always, level b only where it is blended in.
 [[gnu::noinline]] void fetch_pass(int count, const int* __restrict tid, const int* __restrict level,
                                   const uint8_t* const* __restrict levels, const int* __restrict oa,
                                   const int* __restrict xa, const int* __restrict ya,
                                   const int* __restrict ob, const int* __restrict xb,
                                   const int* __restrict yb, const float* __restrict w,
-                                  uint8_t* __restrict a00, uint8_t* __restrict a01,
-                                  uint8_t* __restrict a10, uint8_t* __restrict a11,
-                                  uint8_t* __restrict b00, uint8_t* __restrict b01,
-                                  uint8_t* __restrict b10, uint8_t* __restrict b11) {
+                                  uint32_t* __restrict ta, uint32_t* __restrict tb) {
   for (int k = 0; k < count; ++k) {
     const uint8_t* const* lv = levels + tid[k] * kMaxLevels + level[k];
-    const uint8_t* a = lv[0] + oa[k];
-    const int dx = xa[k], dy = ya[k];
-    a00[k] = a[0];
-    a01[k] = a[dx];
-    a10[k] = a[dy];
-    a11[k] = a[dx + dy];
-    uint8_t q00 = 0, q01 = 0, q10 = 0, q11 = 0;
-    if (w[k] != 0.f) {
-      const uint8_t* b = lv[1] + ob[k];
-      const int ex = xb[k], ey = yb[k];
-      q00 = b[0];
-      q01 = b[ex];
-      q10 = b[ey];
-      q11 = b[ex + ey];
-    }
-    b00[k] = q00;
-    b01[k] = q01;
-    b10[k] = q10;
-    b11[k] = q11;
+    ta[k] = texel_quad(lv[0] + oa[k], xa[k], ya[k]);
+    tb[k] = w[k] != 0.f ? texel_quad(lv[1] + ob[k], xb[k], yb[k]) : 0u;
   }
 }
 
@@ -436,14 +428,8 @@ ALIGHT_SIMD_PASS [[gnu::noinline]] void filter_pass(int count, const Taps& taps,
                                                     const float* __restrict th,
                                                     const float* __restrict sh, float background,
                                                     float* __restrict value) {
-  const uint8_t* __restrict a00 = taps.t_a[0].data();
-  const uint8_t* __restrict a01 = taps.t_a[1].data();
-  const uint8_t* __restrict a10 = taps.t_a[2].data();
-  const uint8_t* __restrict a11 = taps.t_a[3].data();
-  const uint8_t* __restrict b00 = taps.t_b[0].data();
-  const uint8_t* __restrict b01 = taps.t_b[1].data();
-  const uint8_t* __restrict b10 = taps.t_b[2].data();
-  const uint8_t* __restrict b11 = taps.t_b[3].data();
+  const uint32_t* __restrict ta = taps.t_a.data();
+  const uint32_t* __restrict tb = taps.t_b.data();
   const float* __restrict fxa = taps.fx_a.data();
   const float* __restrict fya = taps.fy_a.data();
   const float* __restrict fxb = taps.fx_b.data();
@@ -451,8 +437,15 @@ ALIGHT_SIMD_PASS [[gnu::noinline]] void filter_pass(int count, const Taps& taps,
   const float* __restrict w = taps.w.data();
   const float inf = std::numeric_limits<float>::infinity();
   for (int k = 0; k < count; ++k) {
-    const float p00 = a00[k], p01 = a01[k], p10 = a10[k], p11 = a11[k];
-    const float q00 = b00[k], q01 = b01[k], q10 = b10[k], q11 = b11[k];
+    const uint32_t a = ta[k], b = tb[k];
+    const float p00 = static_cast<float>(static_cast<int>(a & 0xff));
+    const float p01 = static_cast<float>(static_cast<int>((a >> 8) & 0xff));
+    const float p10 = static_cast<float>(static_cast<int>((a >> 16) & 0xff));
+    const float p11 = static_cast<float>(static_cast<int>(a >> 24));
+    const float q00 = static_cast<float>(static_cast<int>(b & 0xff));
+    const float q01 = static_cast<float>(static_cast<int>((b >> 8) & 0xff));
+    const float q10 = static_cast<float>(static_cast<int>((b >> 16) & 0xff));
+    const float q11 = static_cast<float>(static_cast<int>(b >> 24));
     const float ta = p00 + fxa[k] * (p01 - p00);
     const float ba = p10 + fxa[k] * (p11 - p10);
     const float A = ta + fya[k] * (ba - ta);
@@ -752,9 +745,7 @@ void Renderer::render_rows(const Scene& scene, const Isometry3d& X_WC, float wei
               taps.fx_b.data(), taps.fy_b.data());
     fetch_pass(N, tex_id.data(), taps.level.data(), levels.data(), taps.offset_a.data(),
                taps.dx_a.data(), taps.dy_a.data(), taps.offset_b.data(), taps.dx_b.data(),
-               taps.dy_b.data(), taps.w.data(), taps.t_a[0].data(), taps.t_a[1].data(),
-               taps.t_a[2].data(), taps.t_a[3].data(), taps.t_b[0].data(), taps.t_b[1].data(),
-               taps.t_b[2].data(), taps.t_b[3].data());
+               taps.dy_b.data(), taps.w.data(), taps.t_a.data(), taps.t_b.data());
     filter_pass(N, taps, th, shade.data(), kBackground, value.data());
     if (mirrors)
       reflection_pass(N, rx, ry, th, hb, ha, foot.data(), R_WC, C_W, boxes,

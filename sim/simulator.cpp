@@ -452,14 +452,14 @@ std::optional<CameraFrame> Simulator::take_frame(CameraStream& cam) {
   cam.auto_gain.update(acc, gain);
   const float sigma = static_cast<float>(cam.params.noise_sigma);
   out.gain = gain;
-  out.pixels.create(model.height, model.width, CV_8U);
   const float* noise = cam.noise.data() + f.noise_offset;
   for (int v = 0; v < model.height; ++v) {
-    const float* a = acc.ptr<float>(v);
-    uchar* o = out.pixels.ptr<uchar>(v);
+    float* a = acc.ptr<float>(v);
     const float* nz = noise + static_cast<size_t>(v) * model.width;
-    for (int u = 0; u < model.width; ++u) o[u] = cv::saturate_cast<uchar>(a[u] + sigma * nz[u]);
+    for (int u = 0; u < model.width; ++u) a[u] += sigma * nz[u];
   }
+  // Rounded to the nearest (ties to even) and saturated, as saturate_cast<uchar> per pixel.
+  acc.convertTo(out.pixels, CV_8U);
   if (fx.driver && fx.dup_prob > 0) cam.last_pixels = out.pixels.clone();
   return out;
 }
