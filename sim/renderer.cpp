@@ -428,8 +428,8 @@ ALIGHT_SIMD_PASS [[gnu::noinline]] void filter_pass(int count, const Taps& taps,
                                                     const float* __restrict th,
                                                     const float* __restrict sh, float background,
                                                     float* __restrict value) {
-  const uint32_t* __restrict ta = taps.t_a.data();
-  const uint32_t* __restrict tb = taps.t_b.data();
+  const uint32_t* __restrict texels_a = taps.t_a.data();
+  const uint32_t* __restrict texels_b = taps.t_b.data();
   const float* __restrict fxa = taps.fx_a.data();
   const float* __restrict fya = taps.fy_a.data();
   const float* __restrict fxb = taps.fx_b.data();
@@ -437,7 +437,7 @@ ALIGHT_SIMD_PASS [[gnu::noinline]] void filter_pass(int count, const Taps& taps,
   const float* __restrict w = taps.w.data();
   const float inf = std::numeric_limits<float>::infinity();
   for (int k = 0; k < count; ++k) {
-    const uint32_t a = ta[k], b = tb[k];
+    const uint32_t a = texels_a[k], b = texels_b[k];
     const float p00 = static_cast<float>(static_cast<int>(a & 0xff));
     const float p01 = static_cast<float>(static_cast<int>((a >> 8) & 0xff));
     const float p10 = static_cast<float>(static_cast<int>((a >> 16) & 0xff));
