@@ -9,6 +9,7 @@
 
 #include "common/geometry.hpp"
 #include "vision/geometry/convex_hull.hpp"
+#include "vision/geometry/floor_classify.hpp"
 
 namespace alight::vision {
 namespace {
@@ -23,22 +24,6 @@ Matrix3d exp_so3(const Vector3d& w) {
   const double a = w.norm();
   if (a < 1e-12) return Matrix3d::Identity() + skew(w);
   return Eigen::AngleAxisd(a, w / a).toRotationMatrix();
-}
-
-// The point x1 of a plane of inverse distance rho, carried into camera 2 (unnormalised).
-Vector3d carry(const Matrix3d& R, const Vector3d& t, const Vector3d& n, double rho,
-               const Vector3d& x1) {
-  return R * (x1 - t * (rho * n.dot(x1)));
-}
-
-// Pixel residual of p against the ray x2, and its Jacobian on p; false behind camera 2.
-bool residual(const Vector3d& p, const Vector3d& x2, double f, Vector2d* r,
-              Eigen::Matrix<double, 2, 3>* J = nullptr) {
-  if (!(p.z() > 1e-9)) return false;
-  const double iz = 1.0 / p.z();
-  *r = f * (p.head<2>() * iz - x2.head<2>());
-  if (J) *J << f * iz, 0, -f * p.x() * iz * iz, 0, f * iz, -f * p.y() * iz * iz;
-  return std::isfinite(r->x()) && std::isfinite(r->y());
 }
 
 // The median over the matches in `mask` of the angle between where the planes at inverse
@@ -59,39 +44,6 @@ double median_parallax_angle(const std::vector<Vector3d>& x1, const std::vector<
   auto mid = angle.begin() + static_cast<std::ptrdiff_t>(angle.size() / 2);
   std::nth_element(angle.begin(), mid, angle.end());
   return *mid;
-}
-
-struct PerMatch {
-  double err_floor = 1e9;                         // transfer error under the floor [px]
-  double rho = 0, half_width = 0, err_rho = 1e9;  // best inverse distance, its tolerance
-};
-
-// Each match under rotation R: its floor error, its own best rho (1-D least squares of the
-// cross-multiplied equations) and the rho interval that keeps it within threshold_px.
-void classify(const std::vector<Vector3d>& x1, const std::vector<Vector3d>& x2, const Matrix3d& R,
-              const Vector3d& t, const Vector3d& n, double rho_floor, double f, double thr,
-              std::vector<PerMatch>* out) {
-  out->assign(x1.size(), PerMatch{});
-  const Vector3d Rt = R * t;
-  for (size_t i = 0; i < x1.size(); ++i) {
-    PerMatch& m = (*out)[i];
-    Vector2d r;
-    if (residual(carry(R, t, n, rho_floor, x1[i]), x2[i], f, &r)) m.err_floor = r.norm();
-    const Vector3d a = R * x1[i], b = Rt * n.dot(x1[i]);
-    const double u = x2[i].x(), v = x2[i].y();
-    const Vector2d c(b.x() - u * b.z(), b.y() - v * b.z());
-    const Vector2d e(a.x() - u * a.z(), a.y() - v * a.z());
-    const double cc = c.squaredNorm();
-    if (!(cc > 1e-18)) continue;
-    m.rho = c.dot(e) / cc;
-    const Vector3d p = a - m.rho * b;
-    if (!residual(p, x2[i], f, &r)) continue;
-    m.err_rho = r.norm();
-    // |d pixel / d rho| = f |c| / p_z: the rho step that moves the match by the rest of the
-    // threshold.
-    const double slack = std::sqrt(std::max(0.0, thr * thr - m.err_rho * m.err_rho));
-    m.half_width = slack * p.z() / (f * std::sqrt(cc));
-  }
 }
 
 struct TopMode {
@@ -253,7 +205,7 @@ struct Hypothesis {
 // bare floor otherwise make the whole floor a level "top" a few centimetres up).
 Hypothesis score_rotation(const PairFit& p, const Matrix3d& R, std::vector<PerMatch>* pm_out) {
   std::vector<PerMatch>& pm = *pm_out;
-  classify(p.x1, p.x2, R, p.t(), p.n, p.range.rho_f, p.f, p.thr, &pm);
+  classify_floor_matches(p.x1, p.x2, R, p.t(), p.n, p.range.rho_f, p.f, p.thr, &pm);
   Hypothesis h;
   for (size_t i = 0; i < p.size(); ++i) h.n_floor += pm[i].err_floor <= p.thr;
   h.top = top_mode(pm, p.range.rho_lo, p.range.rho_hi, p.range.max_half_width, p.thr);
@@ -285,7 +237,7 @@ Hypothesis score_rotation(const PairFit& p, const Matrix3d& R, std::vector<PerMa
 std::vector<size_t> floor_candidates(const PairFit& p) {
   std::vector<size_t> hyp;
   std::vector<PerMatch> pm0;
-  classify(p.x1, p.x2, p.motion.R_21, p.t(), p.n, p.range.rho_f, p.f, p.thr, &pm0);
+  classify_floor_matches(p.x1, p.x2, p.motion.R_21, p.t(), p.n, p.range.rho_f, p.f, p.thr, &pm0);
   for (size_t i = 0; i < p.size(); ++i)
     if (pm0[i].err_floor <= p.thr + p.f * p.max_w) hyp.push_back(i);
   constexpr size_t kMaxHypotheses = 96;
@@ -553,7 +505,7 @@ Result<KnownFloorPlanes> fit_known_top_alone(const std::vector<Vector3d>& x1,
   if (static_cast<int>(N) < params.min_platform_inliers) return R_::fail(Reason::kNoTargetPlane);
   const TopRange range = top_range(floor, params);
   std::vector<PerMatch> pm;
-  classify(x1, x2, motion.R_21, motion.t_12_m, floor.n_1, range.rho_f, f, thr, &pm);
+  classify_floor_matches(x1, x2, motion.R_21, motion.t_12_m, floor.n_1, range.rho_f, f, thr, &pm);
   const TopMode mode = top_mode(pm, range.rho_lo, range.rho_hi, range.max_half_width, thr);
   if (mode.count == 0) return R_::fail(Reason::kNoTargetPlane);
   const TopAlone alone = top_alone_of(pm, motion, floor, range, mode, thr);
