@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <memory>
 
 #if defined(__x86_64__) && defined(__GNUC__)
 #include <immintrin.h>
@@ -164,10 +165,15 @@ void match_group(const cv::Mat& d1, const cv::Mat& d2, const std::vector<int>& i
   const int n1 = int(idx1.size()), n2 = int(idx2.size()), len = d1.cols;
   if (n1 == 0 || n2 == 0) return;
   const int stride = (n2 + 15) & ~15;
-  // 32-byte aligned rows for the vector loads (stride is a multiple of 16 floats).
-  std::vector<float> bt_store(size_t(len) * stride + 8, 0.f);
-  const size_t shift = (32 - reinterpret_cast<uintptr_t>(bt_store.data()) % 32) % 32 / 4;
-  float* bt = bt_store.data() + shift;
+  // 32-byte aligned rows for the vector loads (stride is a multiple of 16 floats). Only the
+  // padding columns (j >= n2) are cleared, not the whole block (clearing it cost as much as
+  // filling it): they are multiplied but never chosen, and zeros keep stray denormals or NaNs
+  // out of the arithmetic.
+  const std::unique_ptr<float[]> bt_store(new float[size_t(len) * stride + 8]);
+  const size_t shift = (32 - reinterpret_cast<uintptr_t>(bt_store.get()) % 32) % 32 / 4;
+  float* bt = bt_store.get() + shift;
+  for (int k = 0; k < len; ++k)
+    std::fill(bt + size_t(k) * stride + n2, bt + size_t(k + 1) * stride, 0.f);
   for (int j = 0; j < n2; ++j) {
     const float* b = d2.ptr<float>(idx2[j]);
     for (int k = 0; k < len; ++k) bt[size_t(k) * stride + j] = b[k];

@@ -107,8 +107,8 @@ __attribute__((target("avx2"))) void classify_avx2(const std::vector<Vector3d>& 
     const __m256d ey = _mm256_sub_pd(a.y, _mm256_mul_pd(v, a.z));
     const __m256d cc = _mm256_add_pd(_mm256_mul_pd(cx, cx), _mm256_mul_pd(cy, cy));
     const __m256d ok_c = _mm256_cmp_pd(cc, _mm256_set1_pd(1e-18), _CMP_GT_OQ);
-    const __m256d rho = _mm256_div_pd(
-        _mm256_add_pd(_mm256_mul_pd(cx, ex), _mm256_mul_pd(cy, ey)), cc);
+    const __m256d rho =
+        _mm256_div_pd(_mm256_add_pd(_mm256_mul_pd(cx, ex), _mm256_mul_pd(cy, ey)), cc);
     const V3 p{_mm256_sub_pd(a.x, _mm256_mul_pd(rho, b.x)),
                _mm256_sub_pd(a.y, _mm256_mul_pd(rho, b.y)),
                _mm256_sub_pd(a.z, _mm256_mul_pd(rho, b.z))};
@@ -156,10 +156,10 @@ void classify_floor_matches(const std::vector<Vector3d>& x1, const std::vector<V
   classify_impl(x1, x2, R, t, n, rho_floor, f, thr, true, out);
 }
 
-void classify_floor_matches_scalar(const std::vector<Vector3d>& x1,
-                                   const std::vector<Vector3d>& x2, const Matrix3d& R,
-                                   const Vector3d& t, const Vector3d& n, double rho_floor, double f,
-                                   double thr, std::vector<PerMatch>* out) {
+void classify_floor_matches_scalar(const std::vector<Vector3d>& x1, const std::vector<Vector3d>& x2,
+                                   const Matrix3d& R, const Vector3d& t, const Vector3d& n,
+                                   double rho_floor, double f, double thr,
+                                   std::vector<PerMatch>* out) {
   classify_impl(x1, x2, R, t, n, rho_floor, f, thr, false, out);
 }
 

@@ -45,9 +45,9 @@ void classify_floor_matches(const std::vector<Vector3d>& x1, const std::vector<V
                             double rho_floor, double f, double thr, std::vector<PerMatch>* out);
 
 /// The same without the AVX2 variant (exposed for the test that both agree bit for bit).
-void classify_floor_matches_scalar(const std::vector<Vector3d>& x1,
-                                   const std::vector<Vector3d>& x2, const Matrix3d& R,
-                                   const Vector3d& t, const Vector3d& n, double rho_floor, double f,
-                                   double thr, std::vector<PerMatch>* out);
+void classify_floor_matches_scalar(const std::vector<Vector3d>& x1, const std::vector<Vector3d>& x2,
+                                   const Matrix3d& R, const Vector3d& t, const Vector3d& n,
+                                   double rho_floor, double f, double thr,
+                                   std::vector<PerMatch>* out);
 
 }  // namespace alight::vision

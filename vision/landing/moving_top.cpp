@@ -176,10 +176,11 @@ size_t inliers_of(const Similarity2& S, const CandidateLanes& L, std::vector<siz
   if (__builtin_cpu_supports("avx2")) {
     for (size_t k = 0; k < L.tol.size(); k += 4) {
       const int bits = fits_avx2(S, c, sn, L, k);
-      n += size_t(__builtin_popcount(unsigned(bits)));
-      if (in)
-        for (int j = 0; j < 4; ++j)
-          if (bits >> j & 1) in->push_back(k + size_t(j));
+      for (int j = 0; j < 4; ++j) {
+        if (!(bits >> j & 1)) continue;
+        ++n;
+        if (in) in->push_back(k + size_t(j));
+      }
     }
     return n;
   }
