@@ -14,12 +14,12 @@
 namespace alight::vision {
 namespace {
 
-// One match in the scalar loop's arithmetic (carry and residual of floor_classify.hpp).
+// One match in the scalar loop's arithmetic (plane_carry and plane_residual).
 void classify_one(const Vector3d& x1, const Vector3d& x2, const Matrix3d& R, const Vector3d& t,
                   const Vector3d& Rt, const Vector3d& n, double rho_floor, double f, double thr,
                   PerMatch* m) {
   Vector2d r;
-  if (residual(carry(R, t, n, rho_floor, x1), x2, f, &r)) m->err_floor = r.norm();
+  if (plane_residual(plane_carry(R, t, n, rho_floor, x1), x2, f, &r)) m->err_floor = r.norm();
   const Vector3d a = R * x1, b = Rt * n.dot(x1);
   const double u = x2.x(), v = x2.y();
   const Vector2d c(b.x() - u * b.z(), b.y() - v * b.z());
@@ -28,7 +28,7 @@ void classify_one(const Vector3d& x1, const Vector3d& x2, const Matrix3d& R, con
   if (!(cc > 1e-18)) return;
   m->rho = c.dot(e) / cc;
   const Vector3d p = a - m->rho * b;
-  if (!residual(p, x2, f, &r)) return;
+  if (!plane_residual(p, x2, f, &r)) return;
   m->err_rho = r.norm();
   // |d pixel / d rho| = f |c| / p_z: the rho step that moves the match by the rest of the
   // threshold.
@@ -59,8 +59,8 @@ __attribute__((target("avx2"))) inline V3 times(const Matrix3d& M, const V3& w) 
           _mm256_add_pd(term(M, 2, 0, w.x), _mm256_add_pd(term(M, 2, 1, w.y), term(M, 2, 2, w.z)))};
 }
 
-// residual(): the pixel residual's norm where p is in front of camera 2 and the residual finite,
-// *ok set per lane.
+// plane_residual(): the pixel residual's norm where p is in front of camera 2 and the residual
+// finite, *ok set per lane.
 __attribute__((target("avx2"))) inline __m256d residual_norm(const V3& p, __m256d u, __m256d v,
                                                              __m256d f, __m256d* ok) {
   const __m256d inf = _mm256_set1_pd(INFINITY);
@@ -91,7 +91,7 @@ __attribute__((target("avx2"))) void classify_avx2(const std::vector<Vector3d>& 
     const __m256d nd = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(_mm256_set1_pd(n.x()), a1.x),
                                                    _mm256_mul_pd(_mm256_set1_pd(n.y()), a1.y)),
                                      _mm256_mul_pd(_mm256_set1_pd(n.z()), a1.z));
-    // carry(): R (x1 - t (rho_floor nd)).
+    // plane_carry(): R (x1 - t (rho_floor nd)).
     const __m256d s = _mm256_mul_pd(rho_f, nd);
     const V3 w{_mm256_sub_pd(a1.x, _mm256_mul_pd(_mm256_set1_pd(t.x()), s)),
                _mm256_sub_pd(a1.y, _mm256_mul_pd(_mm256_set1_pd(t.y()), s)),

@@ -14,15 +14,15 @@ namespace alight::vision {
 
 /// The point x1 of a plane of inverse distance rho, carried into camera 2 (unnormalised):
 /// H = R (I - t n^T rho) applied to x1 (eq. 2 with the metric t12).
-inline Vector3d carry(const Matrix3d& R, const Vector3d& t, const Vector3d& n, double rho,
-                      const Vector3d& x1) {
+inline Vector3d plane_carry(const Matrix3d& R, const Vector3d& t, const Vector3d& n, double rho,
+                            const Vector3d& x1) {
   return R * (x1 - t * (rho * n.dot(x1)));
 }
 
 /// Pixel residual of p against the ray x2 (f: focal length [px]), and its Jacobian on p; false
 /// behind camera 2 or where the residual is not finite.
-inline bool residual(const Vector3d& p, const Vector3d& x2, double f, Vector2d* r,
-                     Eigen::Matrix<double, 2, 3>* J = nullptr) {
+inline bool plane_residual(const Vector3d& p, const Vector3d& x2, double f, Vector2d* r,
+                           Eigen::Matrix<double, 2, 3>* J = nullptr) {
   if (!(p.z() > 1e-9)) return false;
   const double iz = 1.0 / p.z();
   *r = f * (p.head<2>() * iz - x2.head<2>());

@@ -35,7 +35,7 @@ double median_parallax_angle(const std::vector<Vector3d>& x1, const std::vector<
   std::vector<double> angle;
   for (size_t i = 0; i < x1.size(); ++i) {
     if (!mask[i]) continue;
-    const Vector3d a = carry(R, t, n, rho_a, x1[i]), b = carry(R, t, n, rho_b, x1[i]);
+    const Vector3d a = plane_carry(R, t, n, rho_a, x1[i]), b = plane_carry(R, t, n, rho_b, x1[i]);
     if (!(a.z() > 1e-9) || !(b.z() > 1e-9)) continue;
     const double off_axis = 1.0 + x2[i].head<2>().squaredNorm();
     angle.push_back((a.head<2>() / a.z() - b.head<2>() / b.z()).norm() / off_axis);
@@ -257,10 +257,10 @@ std::optional<Vector3d> correction_for(const PairFit& p, size_t h) {
   Vector3d w = Vector3d::Zero();
   for (int it = 0; it < 2; ++it) {
     const Matrix3d R = exp_so3(w) * p.motion.R_21;
-    const Vector3d q = carry(R, p.t(), p.n, p.range.rho_f, p.x1[h]);
+    const Vector3d q = plane_carry(R, p.t(), p.n, p.range.rho_f, p.x1[h]);
     Vector2d r;
     Eigen::Matrix<double, 2, 3> Jp;
-    if (!residual(q, p.x2[h], p.f, &r, &Jp)) return std::nullopt;
+    if (!plane_residual(q, p.x2[h], p.f, &r, &Jp)) return std::nullopt;
     const Eigen::Matrix<double, 2, 3> J = Jp * -skew(q);  // left perturbation of R
     const Eigen::Matrix2d JJt = J * J.transpose();
     if (!(std::abs(JJt.determinant()) > 1e-12)) return std::nullopt;
@@ -305,9 +305,12 @@ void reclassify(const PairFit& p, RefinedPair* q) {
   for (size_t i = 0; i < p.size(); ++i) {
     Vector2d rf, rt;
     const double ef =
-        residual(carry(R, p.t(), p.n, p.range.rho_f, p.x1[i]), p.x2[i], p.f, &rf) ? rf.norm() : 1e9;
+        plane_residual(plane_carry(R, p.t(), p.n, p.range.rho_f, p.x1[i]), p.x2[i], p.f, &rf)
+            ? rf.norm()
+            : 1e9;
     const double et =
-        residual(carry(R, p.t(), p.n, q->rho_t, p.x1[i]), p.x2[i], p.f, &rt) ? rt.norm() : 1e9;
+        plane_residual(plane_carry(R, p.t(), p.n, q->rho_t, p.x1[i]), p.x2[i], p.f, &rt) ? rt.norm()
+                                                                                         : 1e9;
     q->fl[i] = ef <= p.thr && ef <= et;
     q->tp_fit[i] = !q->fl[i] && et <= p.thr;
     q->tp[i] = q->tp_fit[i] && ef >= 2 * p.thr;
@@ -329,10 +332,10 @@ RefinedPair refine(const PairFit& p, const Hypothesis& best) {
     for (size_t i = 0; i < p.size(); ++i) {
       if (!q.fl[i] && !q.tp_fit[i]) continue;
       const double rho = q.fl[i] ? p.range.rho_f : q.rho_t;
-      const Vector3d x = carry(R, p.t(), p.n, rho, p.x1[i]);
+      const Vector3d x = plane_carry(R, p.t(), p.n, rho, p.x1[i]);
       Vector2d r;
       Eigen::Matrix<double, 2, 3> Jp;
-      if (!residual(x, p.x2[i], p.f, &r, &Jp)) continue;
+      if (!plane_residual(x, p.x2[i], p.f, &r, &Jp)) continue;
       Eigen::Matrix<double, 2, 4> J = Eigen::Matrix<double, 2, 4>::Zero();
       J.leftCols<3>() = Jp * -skew(x);
       if (q.tp_fit[i]) J.col(3) = Jp * (R * p.t() * -p.n.dot(p.x1[i]));
@@ -365,7 +368,7 @@ Reason refined_pair_refusal(const PairFit& p, const RefinedPair& q) {
   const int hidden = hidden_floor(p, top_px, [&](size_t i) {
     if (!q.fl[i]) return false;
     Vector2d rt;
-    return !residual(carry(R, p.t(), p.n, q.rho_t, p.x1[i]), p.x2[i], p.f, &rt) ||
+    return !plane_residual(plane_carry(R, p.t(), p.n, q.rho_t, p.x1[i]), p.x2[i], p.f, &rt) ||
            rt.norm() > p.thr;
   });
   if (q.n_floor - hidden < p.params.min_floor_inliers) return Reason::kNoFloorAroundTop;
@@ -427,11 +430,10 @@ int floor_seen_beside(const std::vector<Vector3d>& x1, const std::vector<Vector3
   int seen = 0;
   for (size_t i = 0; i < x1.size(); ++i) {
     Vector2d r;
-    seen +=
-        alone.floor[i] &&
-        (!residual(carry(alone.motion.R_21, alone.motion.t_12_m, alone.n_1, alone.rho_top, x1[i]),
-                   x2[i], f, &r) ||
-         r.norm() > 2 * thr);
+    seen += alone.floor[i] && (!plane_residual(plane_carry(alone.motion.R_21, alone.motion.t_12_m,
+                                                           alone.n_1, alone.rho_top, x1[i]),
+                                               x2[i], f, &r) ||
+                               r.norm() > 2 * thr);
   }
   return seen;
 }

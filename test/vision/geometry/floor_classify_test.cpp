@@ -56,7 +56,9 @@ TEST(FloorClassifyTest, FloorCarriedAndTopAtItsInverseDistance) {
   ASSERT_EQ(pm.size(), v.x1.size());
   int tops = 0;
   for (size_t i = 0; i < pm.size(); ++i) {
-    if (v.on[i] == 0) EXPECT_LT(pm[i].err_floor, 1e-6) << i;
+    if (v.on[i] == 0) {
+      EXPECT_LT(pm[i].err_floor, 1e-6) << i;
+    }
     if (v.on[i] != 1) continue;
     EXPECT_GT(pm[i].err_floor, thr) << i;
     if (pm[i].half_width > 0.05) continue;  // little parallax: no verdict to check
