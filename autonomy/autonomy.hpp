@@ -100,7 +100,7 @@ struct Approach {
   /// The target's size the refinement measured (the full views' medians, as size_m of
   /// TargetMeasurement); NaN: not measured.
   Vector2d size_m = Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
-  TopRoom room;           ///< the room that top leaves the gear (the final hold's bounds)
+  TopRoom room{};         ///< the room that top leaves the gear (the final hold's bounds)
   int n_disagreeing = 0;  ///< found targets far from the estimate since disagree_since_utime
 };
 struct FinalDescent {
@@ -110,7 +110,7 @@ struct FinalDescent {
   std::optional<int64_t> paused_since_utime;  ///< a gust carried the vehicle off: stopped since
   std::optional<int64_t> calm_since_utime;    ///< ... and calm again since
   bool moving = false;                        ///< onto a moving platform: follows its filter
-  TopRoom room;         ///< the approach's room (the final hold's bounds, the pause's)
+  TopRoom room{};       ///< the approach's room (the final hold's bounds, the pause's)
   double held_s = 0.0;  ///< the final hold's wait before the descent: the calm bounds it earned
 };
 struct Landed {};

@@ -7,11 +7,8 @@
 #include <cmath>
 #include <random>
 
-#if defined(__x86_64__) && defined(__GNUC__)
-#include <immintrin.h>
-#endif
-
 #include "vision/landing/extent.hpp"
+#include "vision/landing/similarity_inliers.hpp"
 
 namespace alight::vision {
 
@@ -122,77 +119,6 @@ std::vector<Placed> place_candidates(const Correspondences& c, const Views& v, d
   return out;
 }
 
-// The candidates' coordinates as columns of four lanes (padded with candidates that fit nothing),
-// for the inlier count every RANSAC draw makes.
-struct CandidateLanes {
-  std::vector<double> p1x, p1y, p2x, p2y, tol;
-  size_t size = 0;
-  explicit CandidateLanes(const std::vector<Placed>& cand) : size(cand.size()) {
-    const size_t padded = (cand.size() + 3) / 4 * 4;
-    for (auto* v : {&p1x, &p1y, &p2x, &p2y}) v->assign(padded, 0.0);
-    tol.assign(padded, -1.0);  // a distance is never below -1: padding fits nothing
-    for (size_t k = 0; k < cand.size(); ++k) {
-      p1x[k] = cand[k].p1.x(), p1y[k] = cand[k].p1.y();
-      p2x[k] = cand[k].p2.x(), p2y[k] = cand[k].p2.y();
-      tol[k] = cand[k].tol_m;
-    }
-  }
-};
-
-// Whether candidate k fits S (c, sn: S's rotation), in Similarity2::apply's arithmetic.
-bool fits(const Similarity2& S, double c, double sn, const CandidateLanes& L, size_t k) {
-  const double qx = S.s * (c * L.p1x[k] - sn * L.p1y[k]) + S.t.x();
-  const double qy = S.s * (sn * L.p1x[k] + c * L.p1y[k]) + S.t.y();
-  const double dx = qx - L.p2x[k], dy = qy - L.p2y[k];
-  return std::sqrt(dx * dx + dy * dy) <= L.tol[k];
-}
-
-#if defined(__x86_64__) && defined(__GNUC__)
-// fits() four candidates at a time (the same operations in the same order): a bit per candidate.
-__attribute__((target("avx2"))) int fits_avx2(const Similarity2& S, double c, double sn,
-                                              const CandidateLanes& L, size_t k) {
-  const __m256d vc = _mm256_set1_pd(c), vs = _mm256_set1_pd(sn), s = _mm256_set1_pd(S.s);
-  const __m256d x = _mm256_loadu_pd(&L.p1x[k]), y = _mm256_loadu_pd(&L.p1y[k]);
-  const __m256d qx =
-      _mm256_add_pd(_mm256_mul_pd(s, _mm256_sub_pd(_mm256_mul_pd(vc, x), _mm256_mul_pd(vs, y))),
-                    _mm256_set1_pd(S.t.x()));
-  const __m256d qy =
-      _mm256_add_pd(_mm256_mul_pd(s, _mm256_add_pd(_mm256_mul_pd(vs, x), _mm256_mul_pd(vc, y))),
-                    _mm256_set1_pd(S.t.y()));
-  const __m256d dx = _mm256_sub_pd(qx, _mm256_loadu_pd(&L.p2x[k]));
-  const __m256d dy = _mm256_sub_pd(qy, _mm256_loadu_pd(&L.p2y[k]));
-  const __m256d d = _mm256_sqrt_pd(_mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy)));
-  return _mm256_movemask_pd(_mm256_cmp_pd(d, _mm256_loadu_pd(&L.tol[k]), _CMP_LE_OQ));
-}
-#endif
-
-// The candidates that fit S: their count, and their indices into *in where given (a RANSAC draw
-// counts first and collects only a new best).
-size_t inliers_of(const Similarity2& S, const CandidateLanes& L, std::vector<size_t>* in) {
-  const double c = std::cos(S.theta), sn = std::sin(S.theta);
-  if (in) in->clear();
-  size_t n = 0;
-#if defined(__x86_64__) && defined(__GNUC__)
-  if (__builtin_cpu_supports("avx2")) {
-    for (size_t k = 0; k < L.tol.size(); k += 4) {
-      const int bits = fits_avx2(S, c, sn, L, k);
-      for (int j = 0; j < 4; ++j) {
-        if (!(bits >> j & 1)) continue;
-        ++n;
-        if (in) in->push_back(k + size_t(j));
-      }
-    }
-    return n;
-  }
-#endif
-  for (size_t k = 0; k < L.size; ++k) {
-    if (!fits(S, c, sn, L, k)) continue;
-    ++n;
-    if (in) in->push_back(k);
-  }
-  return n;
-}
-
 std::optional<Similarity2> fit_on(const std::vector<Placed>& cand, const std::vector<size_t>& in) {
   std::vector<Vector2d> p, q;
   for (size_t k : in) p.push_back(cand[k].p1), q.push_back(cand[k].p2);
@@ -206,7 +132,10 @@ std::vector<size_t> common_motion(const std::vector<Placed>& cand, const MovingT
                                   Similarity2* S_out) {
   std::vector<size_t> best;
   if (cand.size() < 2) return best;
-  const CandidateLanes lanes(cand);
+  std::vector<Vector2d> p1, p2;
+  std::vector<double> tol;
+  for (const Placed& m : cand) p1.push_back(m.p1), p2.push_back(m.p2), tol.push_back(m.tol_m);
+  const SimilarityCandidates lanes(p1, p2, tol);
   std::mt19937_64 rng(params.seed);
   std::uniform_int_distribution<size_t> pick(0, cand.size() - 1);
   for (int it = 0; it < params.iterations; ++it) {
@@ -214,13 +143,14 @@ std::vector<size_t> common_motion(const std::vector<Placed>& cand, const MovingT
     if (a == b || (cand[a].p1 - cand[b].p1).norm() < 0.02) continue;
     const auto S = fit_similarity({cand[a].p1, cand[b].p1}, {cand[a].p2, cand[b].p2});
     if (!S || std::abs(S->s - 1) > params.max_scale_change) continue;
-    if (inliers_of(*S, lanes, nullptr) > best.size()) inliers_of(*S, lanes, &best), *S_out = *S;
+    if (similarity_inliers(*S, lanes, nullptr) > best.size())
+      similarity_inliers(*S, lanes, &best), *S_out = *S;
   }
   for (int refine = 0; refine < 2 && best.size() >= 3; ++refine) {
     const auto S = fit_on(cand, best);
     if (!S) break;
     std::vector<size_t> in;
-    if (inliers_of(*S, lanes, &in) < best.size()) break;
+    if (similarity_inliers(*S, lanes, &in) < best.size()) break;
     best = std::move(in), *S_out = *S;
   }
   return best;
