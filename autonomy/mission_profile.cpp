@@ -90,7 +90,7 @@ class LandingProfile final : public MissionProfile {
         L.align_yaw_tol_deg <= 0 || !in.pose ||
         std::abs(wrap_angle(yaw_of(in.pose->q_WB.toRotationMatrix()) - in.yaw_sp_rad)) <=
             L.align_yaw_tol_deg * M_PI / 180.0;
-    const bool descending = e_r <= L.radial_tol_m && turned;
+    const bool descending = e_r <= descent_tolerance_m(L, p.z() - z_touch) && turned;
     // Beyond the paper: a target unseen for lost_timeout_s is lost, counting only the time the
     // vehicle was not descending onto the estimate. That descent moves the camera along its
     // axis, so the top sits at the epipole, where its parallax against the floor vanishes and
@@ -262,6 +262,10 @@ std::string no_calm_moment(const LandingParams& L, const std::string& what) {
          fmt(L.final_hold_speed_mps, 2) +
          (speed_max_mps > L.final_hold_speed_mps ? " to " + fmt(speed_max_mps, 2) : "") +
          " m/s; or heading within the top's room)";
+}
+
+double descent_tolerance_m(const LandingParams& L, double gear_above_top_m) {
+  return L.radial_tol_m * std::max(1.0, gear_above_top_m / L.final_height_m);
 }
 
 Vector2d body_over_gear_xy(const LandingParams& L, const std::optional<PoseSample>& pose) {

@@ -109,6 +109,16 @@ struct LandingApproach {
   }
 };
 
+/// The landing approach's descent volume (paper 3.4.1: descend only while e_r(t) is within
+/// radial_tol_m), beyond the paper a cone: radial_tol_m at final_height_m and below, widening
+/// with the gear's height above the top at the same angle as seen from the top [m]. Higher up
+/// the same lateral error is a smaller angle off the top, and the descent onto it brings it to
+/// the final hold, which asks for radial_tol_m again before the rapid descent. A fixed cylinder
+/// made a hover of seconds at the refinement's height the price of each centimetre, and over a
+/// low top, whose parallax against the floor there is a few pixels, vision lost the top in that
+/// hover before e_r(t) closed.
+double descent_tolerance_m(const LandingParams& L, double gear_above_top_m);
+
 /// How far the gear's centre may be off the centre of a top whose side measures side_m and
 /// still touch down with fit_margin_m of the top around the gear, along that side [m]; 0 for an
 /// unmeasured (NaN) or too small top.

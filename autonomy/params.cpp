@@ -129,7 +129,8 @@ const ParamSchema<LandingParams>& LandingParams::schema() {
     s.add("descent_rate_mps", &P::descent_rate_mps, Range::open_closed(0, 1), "m/s",
           "v_des: x3(t+1) = x3(t) - v_des dt");
     s.add("radial_tol_m", &P::radial_tol_m, Range::gt(0), "m",
-          "descend only while e_r(t) is within this");
+          "descend only while e_r(t) is within this at final_height_m; above it, within the "
+          "cone of that angle seen from the top");
     s.add("final_height_m", &P::final_height_m, Range::gt(0), "m",
           "gear this high above the estimate: final descent");
     s.add("final_descent_rate_mps", &P::final_descent_rate_mps, Range::gt(0), "m/s",

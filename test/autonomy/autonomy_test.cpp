@@ -8,6 +8,7 @@
 #include <limits>
 
 #include "autonomy/convert.hpp"
+#include "autonomy/mission_profile.hpp"
 #include "kinematic_world.hpp"
 
 namespace alight::autonomy {
@@ -112,14 +113,30 @@ TEST(AutonomyTest, GearTurnsToThePlatformsEdgesBeforeTouchdown) {
   }
 }
 
+TEST(AutonomyTest, TheDescentVolumeIsAConeDownToTheFinalHeight) {
+  LandingParams L;
+  L.radial_tol_m = 0.015;
+  L.final_height_m = 0.25;
+  // radial_tol_m at the final height and below (the final hold asks for it again) ...
+  EXPECT_DOUBLE_EQ(descent_tolerance_m(L, 0.25), 0.015);
+  EXPECT_DOUBLE_EQ(descent_tolerance_m(L, 0.1), 0.015);
+  EXPECT_DOUBLE_EQ(descent_tolerance_m(L, -0.05), 0.015);
+  // ... above it the same angle seen from the top.
+  EXPECT_DOUBLE_EQ(descent_tolerance_m(L, 1.0), 0.06);
+  EXPECT_DOUBLE_EQ(descent_tolerance_m(L, 1.75), 0.105);
+}
+
 TEST(AutonomyTest, DescendsOnlyWhileInsideTheRadialTolerance) {
   KinematicWorld w;
   ASSERT_TRUE(w.go_to_approach(Mission::kLanding));
-  // Let it settle above the estimate, then push it 5 cm outside the tolerance and hold it there.
+  // Let it settle above the estimate, then push it 5 cm outside the descent cone at its height
+  // and hold it there.
   for (int i = 0; i < 100 && w.autonomy.phase() == Phase::kApproach; ++i) w.step();
   ASSERT_EQ(w.autonomy.phase(), Phase::kApproach);
-  const double tol = w.autonomy.params().landing.radial_tol_m;
+  const auto& L = w.autonomy.params().landing;
   const Vector3d est = w.autonomy.final_estimate();
+  const double tol = descent_tolerance_m(L, w.p.z() - (est.z() + L.gear_height_m));
+  EXPECT_GT(tol, L.radial_tol_m) << "the refinement's height is above the final height";
   const double z_sp = w.out.setpoint.p_W.z();
   for (int i = 0; i < 100; ++i) {
     w.p.head<2>() = est.head<2>() + Vector2d(tol + 0.05, 0);
@@ -210,9 +227,11 @@ TEST(AutonomyTest, TargetLostDuringApproachGoesBackToDetection) {
   // Still high above the platform (held off the estimate, e.g. by wind, so it does not descend):
   // the camera should see it, but vision is silent.
   w.vision.silent = true;
+  const auto& L = w.autonomy.params().landing;
   const Vector3d est = w.autonomy.final_estimate();
   for (int i = 0; i < 500 && w.autonomy.phase() == Phase::kApproach; ++i) {
-    w.p.head<2>() = est.head<2>() + Vector2d(0.1, 0);
+    const double off = descent_tolerance_m(L, w.p.z() - (est.z() + L.gear_height_m)) + 0.05;
+    w.p.head<2>() = est.head<2>() + Vector2d(off, 0);
     w.step();
   }
   ASSERT_EQ(w.autonomy.phase(), Phase::kDetection) << w.out.status.reason;
