@@ -64,8 +64,8 @@ size_t similarity_inliers_scalar(const Similarity2& S, const SimilarityCandidate
   if (in) in->clear();
   size_t n = 0;
   for (size_t k = 0; k < L.size_; ++k) {
-    if (!fits(S, c, sn, L.p1x_.data(), L.p1y_.data(), L.p2x_.data(), L.p2y_.data(),
-              L.tol_.data(), k))
+    if (!fits(S, c, sn, L.p1x_.data(), L.p1y_.data(), L.p2x_.data(), L.p2y_.data(), L.tol_.data(),
+              k))
       continue;
     ++n;
     if (in) in->push_back(k);
@@ -81,8 +81,8 @@ size_t similarity_inliers(const Similarity2& S, const SimilarityCandidates& L,
     if (in) in->clear();
     size_t n = 0;
     for (size_t k = 0; k < L.tol_.size(); k += 4) {
-      const int bits = fits4(S, c, sn, L.p1x_.data(), L.p1y_.data(), L.p2x_.data(),
-                             L.p2y_.data(), L.tol_.data(), k);
+      const int bits = fits4(S, c, sn, L.p1x_.data(), L.p1y_.data(), L.p2x_.data(), L.p2y_.data(),
+                             L.tol_.data(), k);
       for (int j = 0; j < 4; ++j) {
         if (!(bits >> j & 1)) continue;
         ++n;
