@@ -165,6 +165,8 @@ const char* target_reason_name(int8_t reason) {
       return "featureless outline on the floor";
     case target_t::REASON_OUTLINE_UNMATCHED:
       return "featureless outline not in the reference";
+    case target_t::REASON_OUTLINE_SILENT:
+      return "featureless outline too faint to place";
   }
   return "unknown";
 }

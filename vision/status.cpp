@@ -78,6 +78,8 @@ const char* to_string(Reason r) {
       return "featureless outline on the floor";
     case Reason::kOutlineUnmatched:
       return "featureless outline not in the reference";
+    case Reason::kOutlineSilent:
+      return "featureless outline too faint to place";
   }
   return "unknown";
 }

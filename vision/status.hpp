@@ -53,6 +53,7 @@ enum class Reason : int8_t {
   // A top without features, found by its outline (landing/outline.hpp).
   kOutlineOnFloor = 35,    ///< landing: a featureless outline that moves with the floor
   kOutlineUnmatched = 36,  ///< landing: a featureless outline the reference does not show
+  kOutlineSilent = 37,     ///< landing: a featureless outline none of whose sides tells a height
 };
 
 const char* to_string(Reason r);

@@ -653,6 +653,10 @@ TargetOutcome top_of_outline(const Outline& o, const Correspondences& c, const c
         return refuse(Reason::kOutlineUnmatched);
     }
   if (informative < 2) return refuse(Reason::kSmallBaseline);
+  // Not one side tells a height (in dim light a top's step on a busy floor sinks under the
+  // noise): nothing places the outline, neither on the floor nor above it.
+  if (std::none_of(heights.begin(), heights.end(), [](const auto& s) { return s.has_value(); }))
+    return refuse(Reason::kOutlineSilent);
   const auto top = top_height(heights, L);
   if (!top) return refuse(top.reason());
   const double h = top.value();

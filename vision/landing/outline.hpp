@@ -90,7 +90,8 @@ constexpr size_t kMaxOutlines = 2;
 
 /// Stages 4 and 5 on one outline: the top measured from its outline between the reference
 /// (gray_1) and the current image (gray_2), or why not: kOutlineUnmatched (a side with parallax
-/// whose step the reference shows at no height), kOutlineOnFloor (no side above min_height_m),
+/// whose step the reference shows at no height), kOutlineSilent (no side tells a height: each
+/// steps too faintly, is a line or repeats), kOutlineOnFloor (no side above min_height_m),
 /// kSmallBaseline (fewer than two sides with parallax, or no rim among them),
 /// kHeightOutOfRange, kDecompositionFailed (a corner's ray misses its plane); kPartialView for a
 /// corner within edge_margin_px of the border (located, not measured).

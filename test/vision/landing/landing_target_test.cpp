@@ -989,6 +989,28 @@ TEST(OutlineTop, AnOutlineTheReferenceLacksOrCannotPlaceIsRefused) {
   EXPECT_EQ(find_landing_target(near.c, params, image_1, b.image_2).reason, Reason::kSmallBaseline);
 }
 
+// An outline whose every side steps too faintly to tell a height (the top as grey as the floor
+// around it, as a dim top on a dim floor reads under the sensor's noise) is placed neither on
+// the floor nor above it, and says so; the same outline over the real images is the top.
+TEST(OutlineTop, AnOutlineNoSideOfWhichTellsAHeightIsPlacedNowhere) {
+  const BoxScene scene = slate_on_granite();
+  const BoxViews b = box_views(scene, 1, 0, 0, std::nullopt, 0.0, 140, /*n_top=*/0);
+  PipelineParams params;
+  const std::vector<Outline> outlines = featureless_outlines(b.image_2, b.view.c, params);
+  ASSERT_FALSE(outlines.empty());
+  EXPECT_EQ(top_of_outline(outlines[0], b.view.c, b.image_1, b.image_2, params).reason,
+            Reason::kOk);
+  BoxScene faint = scene;
+  faint.top_grey = faint.side_grey = faint.floor_grey;
+  faint.floor_grain = 0;
+  const auto render = [&](const PoseSample& p) {
+    return faint.render(b.view.camera, camera_in_world(p.X_WB(), b.view.mount.X_BC()));
+  };
+  const cv::Mat faint_1 = render(b.view.c.pose_1), faint_2 = render(b.view.c.pose_2);
+  EXPECT_EQ(top_of_outline(outlines[0], b.view.c, faint_1, faint_2, params).reason,
+            Reason::kOutlineSilent);
+}
+
 // A top with features of its own is the planes' to find or refuse: the outline never overrides
 // them (the textured top of TopRim found as before, its sizes from the rims).
 TEST(OutlineTop, ATopWithFeaturesIsNotMeasuredByItsOutline) {
