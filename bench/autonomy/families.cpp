@@ -24,7 +24,10 @@
 // refuses any other, and without --seed0 a fresh block of report seeds is drawn.
 //
 // --csv writes one row per run with scripts/montecarlo's column names (it runs this bench with
-// --in-process and summarises and plots the rows as it does its flights over LCM).
+// --in-process and summarises and plots the rows as it does its flights over LCM); with
+// --no-mocap two more: the relative estimate error (autonomy's platform estimate against the
+// vehicle's own estimated pose, taken into the true frame) entering the approach and at the
+// touch-down, whose difference is the onboard estimate's drift over the approach.
 
 #include <time.h>
 
@@ -90,6 +93,7 @@ struct Run {
   std::vector<double> cpu_ms;    ///< the vision's thread CPU time per frame
   double true_width_m = std::nan("");
   sim::CameraEffects effects;  ///< the scenario's camera effects (its lens: the vision's model)
+  bool onboard = false;        ///< flown on the onboard estimate (--no-mocap)
 };
 
 /// The families whose platform moves (platform.motion): their extra figures (relative to it).
@@ -153,7 +157,8 @@ bool write_csv(const std::string& path, const std::vector<Run>& all) {
        "opening_width_m,opening_center_error_m,crossing_offset_m,retries,mission_time_s,"
        "vision_frames,vision_found,vision_partial,vision_process_cpu_p50_ms,vision_process_cpu_p99_"
        "ms,"
-       "vision_process_cpu_max_ms\n";
+       "vision_process_cpu_max_ms,estimate_rel_error_at_approach_m,"
+       "estimate_rel_error_at_touchdown_m\n";
   const auto num = [](double v) {
     char b[32];
     std::snprintf(b, sizeof b, "%.6g", v);
@@ -179,7 +184,11 @@ bool write_csv(const std::string& path, const std::vector<Run>& all) {
       << (ingress && r.crossed_wall ? num(r.max_lateral_in_wall_m) : "") << ',' << r.retries << ','
       << (x.ok ? num(r.mission_time_s) : "") << ',' << x.frames << ',' << x.found << ','
       << x.partial << ',' << num(quantile(x.cpu_ms, 0.5)) << ',' << num(quantile(x.cpu_ms, 0.99))
-      << ',' << num(quantile(x.cpu_ms, 1.0)) << '\n';
+      << ',' << num(quantile(x.cpu_ms, 1.0)) << ','
+      << (landing && x.onboard ? num(r.estimate_error_rel_at_approach_W.head<2>().norm()) : "")
+      << ','
+      << (landing && x.onboard ? num(r.estimate_error_rel_at_touchdown_W.head<2>().norm()) : "")
+      << '\n';
   }
   return static_cast<bool>(f);
 }
@@ -320,6 +329,7 @@ int main(int argc, char** argv) try {
       c.seed = x.seed;
       c.time_limit_s = time_limit_s;
       c.onboard_estimate = no_mocap;
+      x.onboard = no_mocap;
       c.camera_vision = [&](const sim::CameraFrame& f, const std::optional<PoseSample>& p) {
         const double t0 = thread_cpu_ms();
         auto m = vision(f, p);

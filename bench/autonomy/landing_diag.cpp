@@ -1,5 +1,6 @@
 // Landing diagnostics: one scene flown in process with the real vision, every frame's
-// outcome printed against the simulator's truth: reason, the platform's inliers and the floor's,
+// outcome printed against the simulator's truth (with --no-mocap also the onboard estimate's
+// camera position error): reason, the platform's inliers and the floor's,
 // how much of the true platform top is in the image, and when found the waypoint's error, the
 // measured extent (long, short) minus the true size and the height error; autonomy's phase and
 // waypoint count. On a moving platform also the body's offset from the top's centre, the moving
@@ -7,7 +8,7 @@
 // truth. With --dump DIR the frames (true top outline green, measured red, features
 // coloured by label) are written as PNG for a look.
 //
-//   build/bin/alight_landing_diag --scenario FILE [--seed N] [--dump DIR] [--every K]
+//   build/bin/alight_landing_diag --scenario FILE [--seed N] [--no-mocap] [--dump DIR] [--every K]
 
 #include <CLI/CLI.hpp>
 #include <cmath>
@@ -48,6 +49,9 @@ int main(int argc, char** argv) try {
   app.add_option("--every", every);
   double time_limit_s = 240;
   app.add_option("--time-limit", time_limit_s, "simulated seconds after the start at most");
+  bool no_mocap = false;
+  app.add_flag("--no-mocap", no_mocap,
+               "fly on the onboard estimate (each frame then prints the camera's estimate error)");
   CLI11_PARSE(app, argc, argv);
   cv::setNumThreads(1);
 
@@ -114,6 +118,7 @@ int main(int argc, char** argv) try {
   cfg.mission = Mission::kLanding;
   cfg.seed = seed;
   cfg.time_limit_s = time_limit_s;
+  cfg.onboard_estimate = no_mocap;
   cfg.script = [&](const Autonomy& a, double, ScriptActions&) {
     if (a.phase() != phase)
       std::printf("# phase %s -> %s (retries %d)\n", phase_name(phase), phase_name(a.phase()),
@@ -154,6 +159,10 @@ int main(int argc, char** argv) try {
                 (f.utime - 1700000000000000) * 1e-6, phase_name(phase), n_waypoints, cam.x(),
                 cam.y(), cam.z(), vision::to_string(r.reason), r.n_matches,
                 r.target.n_inliers_target, r.target.n_inliers_dominant, in_image);
+    if (no_mocap && pose) {  // the onboard estimate's camera position minus the true one
+      const Vector3d e = camera_in_world(pose->X_WB(), rig.mount.X_BC()).translation() - cam;
+      std::printf(" est err(%+.3f %+.3f %+.3f)", e.x(), e.y(), e.z());
+    }
     {  // floor inliers inside the hull of the top's inliers (a top hides the floor under it)
       std::vector<cv::Point2f> top_px, hull;
       for (size_t i = 0; i < r.matched_px.size() && i < r.labels.size(); ++i)

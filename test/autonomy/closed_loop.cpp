@@ -301,11 +301,12 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
       const Vector3d e = es.p_W_B - truth.state.p_W_B;
       std::fprintf(stderr,
                    "ONB %.1f %-15s true %.3f %.3f %.3f err %+.3f %+.3f %+.3f v_err %+.3f %+.3f "
-                   "terrain %.3f (true %.3f) health %d %s\n",
+                   "terrain %.3f (true %.3f) sigma_xy %.3f %.3f health %d %s\n",
                    (now - t0) * 1e-6, phase_name(autonomy.phase()), truth.state.p_W_B.x(),
                    truth.state.p_W_B.y(), truth.state.p_W_B.z(), e.x(), e.y(), e.z(),
                    es.v_W_B.x() - truth.state.v_W_B.x(), es.v_W_B.y() - truth.state.v_W_B.y(),
-                   es.terrain_height_m, under_m, static_cast<int>(es.health),
+                   es.terrain_height_m, under_m, std::sqrt(es.cov_p()(0, 0)),
+                   std::sqrt(es.cov_p()(1, 1)), static_cast<int>(es.health),
                    estimator::health_reasons_text(es.health_reasons).c_str());
     }
     if (event) r.min_z_after_event_m = std::min(r.min_z_after_event_m, truth.state.p_W_B.z());
