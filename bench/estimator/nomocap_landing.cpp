@@ -28,6 +28,7 @@
 #include <map>
 #include <mutex>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -35,6 +36,7 @@
 
 #include "closed_loop.hpp"
 #include "common/build_paths.hpp"
+#include "common/params.hpp"
 #include "estimator/flow_odometry.hpp"
 #include "real_vision.hpp"
 #include "support/stats.hpp"
@@ -127,7 +129,7 @@ std::string one_line(const Run& x) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
+int main(int argc, char** argv) try {
   CLI::App app{
       "landing and ingress without motion capture on the onboard estimate, real vision, Monte "
       "Carlo"};
@@ -163,7 +165,8 @@ int main(int argc, char** argv) {
 
   std::atomic<size_t> next{0};
   std::mutex out;
-  const auto worker = [&] {
+  std::optional<alight::ParamError> config_error;  // the first run's (under `out`): no more runs
+  const auto run_all = [&] {
     for (size_t i = next++; i < runs.size(); i = next++) {
       Run& x = runs[i];
       const Mission mission = is_ingress(x.scenario) ? Mission::kIngress : Mission::kLanding;
@@ -189,9 +192,20 @@ int main(int argc, char** argv) {
       std::fflush(stdout);
     }
   };
+  // A bad vehicle or scenario file throws in the worker: stop every worker, then report it.
+  const auto worker = [&] {
+    try {
+      run_all();
+    } catch (const alight::ParamError& e) {
+      std::lock_guard<std::mutex> lock(out);
+      if (!config_error) config_error = e;
+      next = runs.size();
+    }
+  };
   std::vector<std::thread> threads;
   for (int j = 0; j < jobs; ++j) threads.emplace_back(worker);
   for (auto& t : threads) t.join();
+  if (config_error) throw *config_error;
 
   std::printf("\n%s, %s, seeds %d-%d:\n", mocap ? "on motion capture" : "without motion capture",
               vehicle.c_str(), first, first + seeds - 1);
@@ -282,4 +296,8 @@ int main(int argc, char** argv) {
   }
   std::fflush(stdout);
   return 0;
+} catch (const alight::ParamError& e) {
+  // A bad scenario or vehicle file: the message names the file, the key and the value.
+  std::fprintf(stderr, "estimator_nomocap_landing: configuration error: %s\n", e.what());
+  return 2;
 }
