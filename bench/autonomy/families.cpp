@@ -33,7 +33,6 @@
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -47,7 +46,6 @@
 #include <random>
 #include <sstream>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include "closed_loop.hpp"
@@ -55,6 +53,7 @@
 #include "common/params.hpp"
 #include "real_vision.hpp"
 #include "sim/params.hpp"
+#include "support/parallel_runs.hpp"
 #include "support/stats.hpp"
 #include "tools/seed_split.hpp"
 
@@ -310,61 +309,44 @@ int main(int argc, char** argv) try {
     return 0;
   }
 
-  std::atomic<size_t> next{0};
   std::mutex out;
-  std::optional<alight::ParamError> config_error;  // the first run's (under `out`): no more runs
-  const auto run_all = [&] {
-    for (size_t i = next++; i < all.size(); i = next++) {
-      Run& x = all[i];
-      const Mission mission = mission_of(x.family);
-      // The vision undistorts with the lens the simulator renders (camera.effects.lens).
-      const auto rig =
-          sim::load_camera_rig(vehicle, mission == Mission::kLanding ? "downward" : "forward");
-      RealVision vision(
-          vehicle, mission, [](vision::PipelineParams&) {}, sim::with_lens(rig.model, x.effects));
-      ClosedLoopConfig c;
-      c.vehicle_file = vehicle;
-      c.scenario_file = x.scenario_file;
-      c.mission = mission;
-      c.seed = x.seed;
-      c.time_limit_s = time_limit_s;
-      c.onboard_estimate = no_mocap;
-      x.onboard = no_mocap;
-      c.camera_vision = [&](const sim::CameraFrame& f, const std::optional<PoseSample>& p) {
-        const double t0 = thread_cpu_ms();
-        auto m = vision(f, p);
-        x.cpu_ms.push_back(thread_cpu_ms() - t0);
-        if (m && m->found && !m->partial && mission == Mission::kIngress)
-          x.widths_m.push_back(m->size_m.x());
-        return m;
-      };
-      c.camera_platform = [&] { return vision.take_platform(); };
-      x.r = fly_closed_loop(c);
-      x.frames = vision.frames;
-      x.found = vision.found;
-      x.partial = vision.partial;
-      x.platform_found = vision.platform_found;
-      x.ok = success(x);
-      std::lock_guard<std::mutex> lock(out);
-      std::printf("%s\n", one_line(x).c_str());
-      if (verbose)
-        for (const auto& why : x.r.retry_reasons) std::printf("    retry: %s\n", why.c_str());
-      std::fflush(stdout);
-    }
-  };
-  const auto worker = [&] {
-    try {
-      run_all();
-    } catch (const alight::ParamError& e) {
-      std::lock_guard<std::mutex> lock(out);
-      if (!config_error) config_error = e;
-      next = all.size();
-    }
-  };
-  std::vector<std::thread> threads;
-  for (int j = 0; j < jobs; ++j) threads.emplace_back(worker);
-  for (auto& t : threads) t.join();
-  if (config_error) throw *config_error;
+  alight::test::run_parallel(all.size(), jobs, [&](size_t i) {
+    Run& x = all[i];
+    const Mission mission = mission_of(x.family);
+    // The vision undistorts with the lens the simulator renders (camera.effects.lens).
+    const auto rig =
+        sim::load_camera_rig(vehicle, mission == Mission::kLanding ? "downward" : "forward");
+    RealVision vision(
+        vehicle, mission, [](vision::PipelineParams&) {}, sim::with_lens(rig.model, x.effects));
+    ClosedLoopConfig c;
+    c.vehicle_file = vehicle;
+    c.scenario_file = x.scenario_file;
+    c.mission = mission;
+    c.seed = x.seed;
+    c.time_limit_s = time_limit_s;
+    c.onboard_estimate = no_mocap;
+    x.onboard = no_mocap;
+    c.camera_vision = [&](const sim::CameraFrame& f, const std::optional<PoseSample>& p) {
+      const double t0 = thread_cpu_ms();
+      auto m = vision(f, p);
+      x.cpu_ms.push_back(thread_cpu_ms() - t0);
+      if (m && m->found && !m->partial && mission == Mission::kIngress)
+        x.widths_m.push_back(m->size_m.x());
+      return m;
+    };
+    c.camera_platform = [&] { return vision.take_platform(); };
+    x.r = fly_closed_loop(c);
+    x.frames = vision.frames;
+    x.found = vision.found;
+    x.partial = vision.partial;
+    x.platform_found = vision.platform_found;
+    x.ok = success(x);
+    std::lock_guard<std::mutex> lock(out);
+    std::printf("%s\n", one_line(x).c_str());
+    if (verbose)
+      for (const auto& why : x.r.retry_reasons) std::printf("    retry: %s\n", why.c_str());
+    std::fflush(stdout);
+  });
 
   std::printf("\n%s, seeds %lld..%lld (%s), %s:\n", vehicle.c_str(), static_cast<long long>(seed0),
               static_cast<long long>(seed0 + runs - 1), seed_kind.c_str(),

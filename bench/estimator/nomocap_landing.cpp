@@ -22,7 +22,6 @@
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -31,7 +30,6 @@
 #include <optional>
 #include <sstream>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include "closed_loop.hpp"
@@ -39,6 +37,7 @@
 #include "common/params.hpp"
 #include "estimator/flow_odometry.hpp"
 #include "real_vision.hpp"
+#include "support/parallel_runs.hpp"
 #include "support/stats.hpp"
 
 using namespace alight;
@@ -163,49 +162,31 @@ int main(int argc, char** argv) try {
   for (const auto& n : names)
     for (int s = first; s < first + seeds; ++s) runs.push_back(Run{n, s, {}, false});
 
-  std::atomic<size_t> next{0};
   std::mutex out;
-  std::optional<alight::ParamError> config_error;  // the first run's (under `out`): no more runs
-  const auto run_all = [&] {
-    for (size_t i = next++; i < runs.size(); i = next++) {
-      Run& x = runs[i];
-      const Mission mission = is_ingress(x.scenario) ? Mission::kIngress : Mission::kLanding;
-      RealVision vision(vehicle, mission);
-      ClosedLoopConfig c;
-      c.vehicle_file = vehicle;
-      c.scenario_file = scenario_file(x.scenario);
-      c.mission = mission;
-      c.seed = static_cast<uint64_t>(x.seed);
-      c.time_limit_s = time_limit_s;
-      c.onboard_estimate = !mocap;
-      c.camera_vision = [&vision](const sim::CameraFrame& f, const std::optional<PoseSample>& p) {
-        return vision(f, p);
-      };
-      x.r = fly_closed_loop(c);
-      x.ok = success(x.scenario, x.r);
-      // On motion capture the vehicle's frame is the true one: the target's error relative to
-      // the vehicle is its error.
-      if (mocap) x.r.estimate_error_rel_W = x.r.estimate_error_W;
-      std::lock_guard<std::mutex> lock(out);
-      std::printf("%s\n", one_line(x).c_str());
-      for (const auto& why : x.r.retry_reasons) std::printf("    retry: %s\n", why.c_str());
-      std::fflush(stdout);
-    }
-  };
-  // A bad vehicle or scenario file throws in the worker: stop every worker, then report it.
-  const auto worker = [&] {
-    try {
-      run_all();
-    } catch (const alight::ParamError& e) {
-      std::lock_guard<std::mutex> lock(out);
-      if (!config_error) config_error = e;
-      next = runs.size();
-    }
-  };
-  std::vector<std::thread> threads;
-  for (int j = 0; j < jobs; ++j) threads.emplace_back(worker);
-  for (auto& t : threads) t.join();
-  if (config_error) throw *config_error;
+  alight::test::run_parallel(runs.size(), jobs, [&](size_t i) {
+    Run& x = runs[i];
+    const Mission mission = is_ingress(x.scenario) ? Mission::kIngress : Mission::kLanding;
+    RealVision vision(vehicle, mission);
+    ClosedLoopConfig c;
+    c.vehicle_file = vehicle;
+    c.scenario_file = scenario_file(x.scenario);
+    c.mission = mission;
+    c.seed = static_cast<uint64_t>(x.seed);
+    c.time_limit_s = time_limit_s;
+    c.onboard_estimate = !mocap;
+    c.camera_vision = [&vision](const sim::CameraFrame& f, const std::optional<PoseSample>& p) {
+      return vision(f, p);
+    };
+    x.r = fly_closed_loop(c);
+    x.ok = success(x.scenario, x.r);
+    // On motion capture the vehicle's frame is the true one: the target's error relative to
+    // the vehicle is its error.
+    if (mocap) x.r.estimate_error_rel_W = x.r.estimate_error_W;
+    std::lock_guard<std::mutex> lock(out);
+    std::printf("%s\n", one_line(x).c_str());
+    for (const auto& why : x.r.retry_reasons) std::printf("    retry: %s\n", why.c_str());
+    std::fflush(stdout);
+  });
 
   std::printf("\n%s, %s, seeds %d-%d:\n", mocap ? "on motion capture" : "without motion capture",
               vehicle.c_str(), first, first + seeds - 1);
