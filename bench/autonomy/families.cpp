@@ -92,7 +92,6 @@ struct Run {
   std::vector<double> cpu_ms;    ///< the vision's thread CPU time per frame
   double true_width_m = std::nan("");
   sim::CameraEffects effects;  ///< the scenario's camera effects (its lens: the vision's model)
-  bool onboard = false;        ///< flown on the onboard estimate (--no-mocap)
 };
 
 /// The families whose platform moves (platform.motion): their extra figures (relative to it).
@@ -148,8 +147,9 @@ std::string one_line(const Run& x) {
   return buf;
 }
 
-/// One row per run; empty cells where a figure does not apply (as alight-score leaves it out).
-bool write_csv(const std::string& path, const std::vector<Run>& all) {
+/// One row per run; empty cells where a figure does not apply (as alight-score leaves it out);
+/// `onboard`: flown on the onboard estimate (its relative estimate errors are written).
+bool write_csv(const std::string& path, const std::vector<Run>& all, bool onboard) {
   std::ofstream f(path);
   f << "scenario,seed,mission,success,outcome,touchdown_lateral_error_m,touchdown_along_m,"
        "touchdown_across_m,platform_length_m,platform_width_m,opening_width_error_m,"
@@ -184,9 +184,8 @@ bool write_csv(const std::string& path, const std::vector<Run>& all) {
       << (x.ok ? num(r.mission_time_s) : "") << ',' << x.frames << ',' << x.found << ','
       << x.partial << ',' << num(quantile(x.cpu_ms, 0.5)) << ',' << num(quantile(x.cpu_ms, 0.99))
       << ',' << num(quantile(x.cpu_ms, 1.0)) << ','
-      << (landing && x.onboard ? num(r.estimate_error_rel_at_approach_W.head<2>().norm()) : "")
-      << ','
-      << (landing && x.onboard ? num(r.estimate_error_rel_at_touchdown_W.head<2>().norm()) : "")
+      << (landing && onboard ? num(r.estimate_error_rel_at_approach_W.head<2>().norm()) : "") << ','
+      << (landing && onboard ? num(r.estimate_error_rel_at_touchdown_W.head<2>().norm()) : "")
       << '\n';
   }
   return static_cast<bool>(f);
@@ -325,7 +324,6 @@ int main(int argc, char** argv) try {
     c.seed = x.seed;
     c.time_limit_s = time_limit_s;
     c.onboard_estimate = no_mocap;
-    x.onboard = no_mocap;
     c.camera_vision = [&](const sim::CameraFrame& f, const std::optional<PoseSample>& p) {
       const double t0 = thread_cpu_ms();
       auto m = vision(f, p);
@@ -418,7 +416,7 @@ int main(int argc, char** argv) try {
     for (const auto& [why, k] : failures) std::printf("    failed %dx: %s\n", k, why.c_str());
   }
   std::fflush(stdout);
-  if (!csv_path.empty() && !write_csv(csv_path, all)) {
+  if (!csv_path.empty() && !write_csv(csv_path, all, no_mocap)) {
     std::fprintf(stderr, "alight_families_bench: cannot write %s\n", csv_path.c_str());
     return 2;
   }
