@@ -253,7 +253,10 @@ bool Autonomy::react_to_estimate() {
     if (!degraded_since_utime_) degraded_since_utime_ = now_utime_;
   } else {
     degraded_since_utime_.reset();
-    if (was_paused && e && e->level == L::kOk) reason_ = "state estimate OK again: mission resumed";
+    // A pause in the hover has no mission to resume: GO is still to come (refused while paused).
+    if (was_paused && e && e->level == L::kOk)
+      reason_ = phase() == Phase::kHover ? "state estimate OK again: hovering, waiting for GO"
+                                         : "state estimate OK again: mission resumed";
   }
   if (!e || e->level == L::kOk || !airborne()) return false;
   const Phase current = phase();
@@ -1021,10 +1024,17 @@ Output Autonomy::update(const Inputs& in, int64_t now_utime) {
     estimate_ = in.estimate;
   }
   if (!started_ && pose_) start_from_first_pose();
-  if (in.command) handle_command(*in.command);
+  std::optional<std::string> command_reply;  // this update's command's answer (accepted or why not)
+  if (in.command) {
+    handle_command(*in.command);
+    command_reply = reason_;
+  }
   // Before the pose's checks: a stale pose freezes the mission for up to pose_lost_s, and a LOST
   // estimate must not wait behind it.
   const bool paused = react_to_estimate();
+  // A pause's progress would overwrite the answer before anything published it (a GO refused
+  // for the DEGRADED estimate that paused the hover): the operator reads the answer first.
+  if (paused && command_reply) reason_ = *command_reply;
 
   if (airborne() && phase() != Phase::kFailsafe) {
     const double age_s = pose_ ? seconds(now_utime_ - pose_->utime) : 1e9;

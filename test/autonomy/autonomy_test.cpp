@@ -1122,6 +1122,29 @@ TEST(AutonomyEstimateTest, ADegradedThatClearsWithinThePauseResumesTheMission) {
   EXPECT_EQ(w.autonomy.phase(), Phase::kDetection) << w.out.status.reason;
 }
 
+// A DEGRADED in the hover that clears within the pause: a GO sent during it is refused and the
+// status says why (not the pause's progress), then that the hover waits for GO (there is no
+// mission to resume); the next GO starts it.
+TEST(AutonomyEstimateTest, AGoRefusedDuringAPauseInTheHoverIsAnsweredAndAwaited) {
+  KinematicWorld w;
+  w.estimate = health(Level::kOk);
+  w.takeoff_and_hover();
+  w.estimate = health(Level::kDegraded, E::REASON_NO_FLOW);
+  for (int i = 0; i < kPauseSteps / 4; ++i) w.step();
+  EXPECT_TRUE(has(w.out.status.reason, "mission paused, holding position")) << w.out.status.reason;
+  w.send(Command::kGo, Mission::kLanding);
+  EXPECT_EQ(w.autonomy.phase(), Phase::kHover);
+  EXPECT_EQ(w.out.status.reason, "GO refused: state estimate degraded (no_flow)");
+  w.step();  // the pause's progress again
+  EXPECT_TRUE(has(w.out.status.reason, "mission paused, holding position")) << w.out.status.reason;
+  w.estimate = health(Level::kOk);
+  w.step();
+  EXPECT_EQ(w.autonomy.phase(), Phase::kHover);
+  EXPECT_EQ(w.out.status.reason, "state estimate OK again: hovering, waiting for GO");
+  w.send(Command::kGo, Mission::kLanding);
+  EXPECT_EQ(w.autonomy.phase(), Phase::kDetection) << w.out.status.reason;
+}
+
 TEST(AutonomyEstimateTest, DegradedWhileTakingOffHoldsWhereItIs) {
   KinematicWorld w;
   w.estimate = health(Level::kOk);
