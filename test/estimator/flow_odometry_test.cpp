@@ -210,6 +210,92 @@ TEST(FlowFitTest, CovarianceIsConsistentOverManySeededMotions) {
   EXPECT_LE(above_99, 9);
 }
 
+/// Makes a `fraction` of the correspondences points on lines (a floor's grout): each such point's
+/// second image slides along a random line direction by up to `slide_px` (where on the line it
+/// is found is arbitrary) and gets the line's normal in normalised image-2 coordinates; the rest
+/// keep a zero normal (corners).
+std::vector<Vector2d> to_lines(Corrs& c, double fraction, double slide_px, std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> u(0, 1), angle(0, M_PI), slide(-slide_px, slide_px);
+  std::vector<Vector2d> normals(c.r2.size(), Vector2d::Zero());
+  for (size_t i = 0; i < c.r2.size(); ++i) {
+    if (!(u(rng) < fraction)) continue;
+    const auto px = kCam.project(c.r2[i]);
+    if (!px) continue;
+    const double th = angle(rng);
+    const Vector2d t(std::cos(th), std::sin(th));
+    const Vector2d q = *px + slide(rng) * t;
+    c.r2[i] = kCam.ray(q);
+    const Vector3d a = kCam.ray(q), b = kCam.ray(q + t);
+    const Vector2d tangent = (b.head<2>() / b.z() - a.head<2>() / a.z()).normalized();
+    normals[i] = Vector2d(-tangent.y(), tangent.x());
+  }
+  return normals;
+}
+
+TEST(FlowFitTest, PointsOnLinesAloneOrAmongCornersGiveTheExactTOverD) {
+  // Without noise every equation holds exactly, wherever along its line each point was found.
+  std::mt19937_64 rng(21);
+  const FlowFitParams params;
+  for (const double fraction : {1.0, 0.5}) {
+    for (int trial = 0; trial < 10; ++trial) {
+      const Motion m = random_motion(rng);
+      Corrs k = floor_points(m, kCam, 150, rng, 0.0);
+      const std::vector<Vector2d> normals = to_lines(k, fraction, 20.0, rng);
+      const FlowFit f = fit_t_over_d(k.r1, k.r2, normals, m.R_C2C1(), m.n_C1(), kCam.fx, params);
+      ASSERT_EQ(f.reason, FlowReason::kOk) << fraction << " " << trial << to_string(f.reason);
+      EXPECT_EQ(f.inliers, 150);
+      EXPECT_LT((f.t_over_d_C1 - m.t_over_d()).norm(), 1e-9) << fraction << " " << trial;
+      // The slides are far beyond the 1 px threshold: without the normals, lines alone give no
+      // sample or a wrong one.
+      if (fraction == 1.0) {
+        const FlowFit g = fit_t_over_d(k.r1, k.r2, m.R_C2C1(), m.n_C1(), kCam.fx, params);
+        EXPECT_TRUE(g.reason != FlowReason::kOk || (g.t_over_d_C1 - m.t_over_d()).norm() > 1e-4)
+            << trial;
+      }
+    }
+  }
+  // Lines of one direction only leave the motion along them unfixed.
+  const Motion m =
+      make_motion(1.5, Vector3d::Zero(), Vector3d(0.5, 0.2, 0), Vector3d::Zero(), 1.0 / 30);
+  Corrs k = floor_points(m, kCam, 100, rng, 0.0);
+  std::vector<Vector2d> normals(k.r1.size(), Vector2d(1, 0));
+  EXPECT_EQ(fit_t_over_d(k.r1, k.r2, normals, m.R_C2C1(), m.n_C1(), kCam.fx, params).reason,
+            FlowReason::kDegenerate);
+  // A non-finite normal drops its point; too few equations left is counted as such.
+  normals.assign(k.r1.size(), Vector2d(NAN, 0));
+  EXPECT_EQ(fit_t_over_d(k.r1, k.r2, normals, m.R_C2C1(), m.n_C1(), kCam.fx, params).reason,
+            FlowReason::kTooFewTracks);
+}
+
+TEST(FlowFitTest, CovarianceWithPointsOnLinesIsConsistentOverManySeededMotions) {
+  // As for corners (below): the NEES of a correct covariance has mean 3. 70 % of the points on
+  // lines, slid along them by up to 10 px; noise up to 0.4 px; 20 % outliers.
+  std::mt19937_64 rng(23);
+  FlowFitParams params;
+  params.max_independent_points = 100000;
+  double sum = 0;
+  int n = 0, above_99 = 0;
+  for (int trial = 0; trial < 200; ++trial) {
+    const Motion m = random_motion(rng);
+    const double noise = std::uniform_real_distribution<double>(0.05, 0.4)(rng);
+    Corrs k = floor_points(m, kCam, 120, rng, noise);
+    add_outliers(k, m, kCam, 0.2, rng, nullptr);
+    const std::vector<Vector2d> normals = to_lines(k, 0.7, 10.0, rng);
+    const FlowFit f = fit_t_over_d(k.r1, k.r2, normals, m.R_C2C1(), m.n_C1(), kCam.fx, params);
+    ASSERT_EQ(f.reason, FlowReason::kOk) << trial;
+    const double q = nees(f, m.t_over_d());
+    sum += q;
+    ++n;
+    if (q > 11.34) ++above_99;  // chi2(3) 0.99
+  }
+  const double mean = sum / n;
+  std::printf("with lines, NEES over %d motions: mean %.2f, %d above the 99 %% bound\n", n, mean,
+              above_99);
+  EXPECT_GT(mean, 2.0);
+  EXPECT_LT(mean, 4.0);
+  EXPECT_LE(above_99, 6);
+}
+
 TEST(FlowFitTest, SensitivitiesMatchRefitsWithPerturbedRotationAndNormal) {
   std::mt19937_64 rng(4);
   const FlowFitParams params;
@@ -400,14 +486,14 @@ std::vector<Frame> frames_of(const Flight& f) {
   return out;
 }
 
-/// The camera image with the simulator's sensor noise (2 grey levels), seeded.
+/// The camera image with sensor noise (2 grey levels unless said), seeded.
 cv::Mat render(const sim::Renderer& renderer, const sim::Scene& scene, const Frame& fr,
-               uint64_t seed) {
+               uint64_t seed, double noise_sigma = 2.0) {
   const cv::Mat clean = renderer.render(scene, make_transform(fr.R_WC, fr.p_W_C));
   cv::Mat f, noise(clean.size(), CV_32F);
   clean.convertTo(f, CV_32F);
   cv::RNG rng(seed);
-  rng.fill(noise, cv::RNG::NORMAL, 0.0, 2.0);
+  rng.fill(noise, cv::RNG::NORMAL, 0.0, noise_sigma);
   cv::Mat out;
   cv::Mat(f + noise).convertTo(out, CV_8U);
   return out;
@@ -453,12 +539,13 @@ struct FlightStats {
 };
 
 FlightStats fly(const sim::Scene& scene, const std::vector<Frame>& frames,
-                const FlowFrontParams& params = {}, uint64_t noise_seed = 1) {
+                const FlowFrontParams& params = {}, uint64_t noise_seed = 1,
+                double noise_sigma = 2.0) {
   const sim::Renderer renderer(kCam);
   FlowOdometry flow(params, kCam);
   FlightStats s;
   for (size_t k = 0; k < frames.size(); ++k) {
-    const cv::Mat img = render(renderer, scene, frames[k], noise_seed * 1000 + k);
+    const cv::Mat img = render(renderer, scene, frames[k], noise_seed * 1000 + k, noise_sigma);
     const PairTruth t = k ? truth_of(frames[k - 1], frames[k]) : PairTruth{};
     const FlowResult r = flow.add_frame(img, frames[k].utime, k ? t.R_C2C1 : Matrix3d::Identity(),
                                         k ? t.n_C1 : Vector3d(0, 0, -1));
@@ -642,6 +729,99 @@ TEST(FlowRenderedTest, PropertyManySeededRandomMotionsAreWithinTheirCovariance) 
   // error 0.7 % of t/d.
   EXPECT_EQ(samples, pairs);
   EXPECT_LE(outside, 2);
+}
+
+/// The scene families' tiles (scripts/scenes landing_tiles): grout lines a texel (2 mm) wide,
+/// about a pixel from 1.5 m, blurred away by the halved tracking level.
+sim::Scene fine_tiles_scene(double tile_m = 0.34) {
+  sim::TextureSpec t = spec("tiles", 2048, 0.002, 173, tile_m, 796);
+  t.contrast = 0.7;
+  sim::Scene scene;
+  scene.textures.push_back(sim::Texture::make(t, 1));
+  scene.floor_texture = 0;
+  return scene;
+}
+
+/// The pairs from frame `from` on: how many, how many gave a sample.
+std::pair<int, int> pairs_and_samples_from(const FlightStats& s, size_t from) {
+  int pairs = 0, samples = 0;
+  for (size_t k = std::max<size_t>(from, 1); k < s.results.size(); ++k) {
+    ++pairs;
+    samples += s.results[k].sample ? 1 : 0;
+  }
+  return {pairs, samples};
+}
+
+TEST(FlowRenderedTest, AFloorWhoseCornersAreFinerThanTheTrackingLevelIsTrackedOneLevelFiner) {
+  const FlowFrontParams params;  // tracks on the halved image
+  ASSERT_EQ(params.track.downsample, 1);
+  Flight f;
+  f.frames = 75;  // 2.5 s
+  const FlightStats s = fly(fine_tiles_scene(), frames_of(f), params);
+  s.print("tiles, 2 mm grout");
+  // The halved level's detections find too few corners; after a second of that the front end
+  // moves down a level (for good: the halved level never offers enough again), and every later
+  // pair is tracked at full resolution and gives a sample.
+  ASSERT_EQ(s.results.size(), 75u);
+  size_t moved = 0;
+  while (moved < s.results.size() && s.results[moved].level == 1) ++moved;
+  EXPECT_GE(moved, 30u);
+  EXPECT_LT(moved, 60u);
+  for (size_t k = moved; k < s.results.size(); ++k) EXPECT_EQ(s.results[k].level, 0) << k;
+  const auto [pairs, samples] = pairs_and_samples_from(s, moved + 1);
+  EXPECT_EQ(samples, pairs);
+  EXPECT_LT(s.quantile(0.5), 0.01);
+  EXPECT_LT(s.quantile(0.9), 0.03);
+  EXPECT_LT(s.nees_sum / std::max(1, s.samples), 8.0);
+}
+
+TEST(FlowRenderedTest, LargeTilesAreTrackedOnTheirGroutLinesWhereTheirCornersAreTooFew) {
+  // 40 cm tiles from 1 m under a quieter sensor (1 grey level, as the tiles family draws it:
+  // fewer noise corners along the grout): a handful of grout crossings in view even at full
+  // resolution, too few for the fit; the points on the grout lines, found again across them,
+  // carry it.
+  Flight f;
+  f.p0_W.z() = 1.0;
+  f.frames = 75;
+  const FlowFrontParams params;
+  const FlightStats s = fly(fine_tiles_scene(0.40), frames_of(f), params, 1, 1.0);
+  s.print("tiles 40 cm, 2 mm grout");
+  // Down a level after a second, then points on lines from the next pair on.
+  int with_lines = 0;
+  for (size_t k = 40; k < s.results.size(); ++k) with_lines += s.results[k].lines > 0 ? 1 : 0;
+  const auto [pairs, samples] = pairs_and_samples_from(s, 40);
+  EXPECT_GE(with_lines, pairs - 2);
+  EXPECT_GE(samples, pairs - 2);
+  EXPECT_LT(s.quantile(0.5), 0.01);
+  EXPECT_LT(s.quantile(0.9), 0.03);
+  EXPECT_LT(s.nees_sum / std::max(1, s.samples), 8.0);
+}
+
+TEST(FlowRenderedTest, TheTrackingLevelReturnsToTheConfiguredOneOverARicherFloor) {
+  // Over 40 cm tiles from 1 m (down a level after a second), then (the floor swapped between
+  // two frames, as when a rug comes into view all at once) over the scenarios' noise floor: back
+  // at the halved level, still giving samples.
+  const sim::Renderer renderer(kCam);
+  const sim::Scene tiles = fine_tiles_scene(0.40), noise = floor_scene("noise");
+  Flight f;
+  f.p0_W.z() = 1.0;
+  f.frames = 75;
+  const auto frames = frames_of(f);
+  FlowOdometry flow(FlowFrontParams{}, kCam);
+  std::vector<FlowResult> out;
+  for (size_t k = 0; k < frames.size(); ++k) {
+    const sim::Scene& scene = k < 50 ? tiles : noise;
+    const PairTruth t = k ? truth_of(frames[k - 1], frames[k]) : PairTruth{};
+    out.push_back(flow.add_frame(render(renderer, scene, frames[k], k, 1.0), frames[k].utime,
+                                 k ? t.R_C2C1 : Matrix3d::Identity(),
+                                 k ? t.n_C1 : Vector3d(0, 0, -1)));
+  }
+  EXPECT_EQ(out[49].level, 0);
+  EXPECT_EQ(out.back().level, 1);
+  EXPECT_EQ(flow.level(), 1);
+  int samples_after = 0;
+  for (size_t k = 55; k < out.size(); ++k) samples_after += out[k].sample ? 1 : 0;
+  EXPECT_EQ(samples_after, static_cast<int>(out.size()) - 55);
 }
 
 TEST(FlowRenderedTest, SameFramesTwiceGiveIdenticalOutputs) {
