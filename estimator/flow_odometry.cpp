@@ -563,7 +563,6 @@ void FlowOdometry::reset() {
   line_rays_.clear();
   last_t_over_d_.reset();
   last_dt_s_ = 0.0;
-  starved_since_utime_.reset();
 }
 
 std::vector<Vector2d> FlowOdometry::feature_pixels() const {
@@ -576,7 +575,6 @@ std::vector<Vector2d> FlowOdometry::feature_pixels() const {
 FlowResult FlowOdometry::finish(FlowResult r) {
   ++counts_[static_cast<size_t>(r.reason)];
   r.features = static_cast<int>(points_.size());
-  r.level = level_;
   return r;
 }
 
@@ -594,19 +592,6 @@ cv::Mat border_mask(cv::Size size, double scale, double border_px) {
 }
 
 }  // namespace
-
-int FlowOdometry::count_corners(const cv::Mat& image) const {
-  const auto& t = params_.track;
-  const double s = static_cast<double>(camera_.width) / image.cols;
-  const cv::Mat mask = border_mask(image.size(), s, t.border_px);
-  if (mask.empty()) return 0;
-  std::vector<cv::Point2f> corners;
-  std::vector<float> quality;
-  cv::goodFeaturesToTrack(image, corners, t.max_features, t.quality_level, t.min_distance_px / s,
-                          mask, quality, 3, 3, false, 0.04);
-  return static_cast<int>(
-      std::count_if(quality.begin(), quality.end(), [&](float q) { return q >= t.min_quality; }));
-}
 
 void FlowOdometry::detect(int already, FlowResult& r) {
   const auto& t = params_.track;
@@ -655,57 +640,11 @@ void FlowOdometry::detect(int already, FlowResult& r) {
   r.detected += added;
 }
 
-// Stage: the tracking level, decided where features are detected (the tracks keep their
-// positions across a change, rescaled). Contract: afterwards the stored pyramid is of `gray` at
-// level_, and points_ are pixels of that level.
-//  - Finer once the level has held fewer than twice the fit's min_inliers features after every
-//    detection for kStarvedS: with tracks lost between frames and outliers, the pairs are
-//    refused for too few tracks or inliers. A floor whose corners are finer than the level
-//    (grout lines a texel wide, gone after pyrDown) offers more one level down for good; at full
-//    resolution nothing finer is left. Not at once: a camera a few centimetres to decimetres
-//    above the floor (on the ground, the take-off's climb) sees it magnified and blurred, the
-//    halved level starved for a while, and a finer one offers the texture's sampling and the
-//    sensor's noise, whose tracks bias the pairs. A floor with fewer but clean corners (30 cm tiles
-//    seen from 1.5 m) stays where its corners are tracked best (a full-resolution window sees a
-//    grout line, not its crossing).
-//  - Back at track.downsample when that level alone offers twice that count again (the margin
-//    keeps a floor near the threshold from changing level at every detection).
-namespace {
-// How long a tracking level must stay starved of corners before the front end moves down one: a
-// take-off's first second (on the ground and the climb through the first half metre).
-constexpr double kStarvedS = 1.0;
-}  // namespace
-
+// A floor offers too few corners at the tracking level when a detection leaves fewer than twice
+// the fit's min_inliers features: with tracks lost between frames and outliers, its pairs would
+// be refused for too few tracks or inliers.
 int FlowOdometry::few_corners() const {
   return std::min(2 * params_.fit.min_inliers, params_.track.max_features / 2);
-}
-
-void FlowOdometry::adapt_level(const cv::Mat& gray, int64_t utime, FlowResult& r) {
-  const int coarse = params_.track.downsample;
-  const int few = few_corners();
-  auto change_to = [&](int level) {
-    const double factor = std::ldexp(1.0, level_ - level);
-    for (auto& p : points_) p *= static_cast<float>(factor);
-    set_level(level);
-    previous_pyramid_ = pyramid_of(gray, nullptr);
-  };
-  if (level_ < coarse) {
-    cv::Mat image = gray;
-    for (int i = 0; i < coarse; ++i) cv::pyrDown(image, image);
-    if (count_corners(image) >= 2 * few) {
-      change_to(coarse);
-      detect(static_cast<int>(points_.size()), r);
-    }
-  }
-  if (static_cast<int>(points_.size()) >= few || level_ == 0) {
-    starved_since_utime_.reset();
-    return;
-  }
-  if (!starved_since_utime_) starved_since_utime_ = utime;
-  if (static_cast<double>(utime - *starved_since_utime_) * 1e-6 < kStarvedS) return;
-  starved_since_utime_.reset();
-  change_to(level_ - 1);
-  detect(static_cast<int>(points_.size()), r);
 }
 
 namespace {
@@ -713,8 +652,8 @@ namespace {
 // Points on lines: the oriented patch compared across a line, and the search's reach.
 constexpr int kLineHalfAcross = 4;  // samples each side of the point across the line: its profile
 constexpr int kLineHalfAlong = 3;   // and along it, averaging the sensor noise
-// Reach of the search across the line from the predicted position [px]: a pair's motion at
-// 1.5 m/s from 1.5 m at 30 Hz unpredicted (the first pair after a reset): f v / (h rate).
+// Reach of the search across the line from the predicted position [full-resolution px]: a pair's
+// motion at 1.5 m/s from 1.5 m at 30 Hz unpredicted (the first pair after a reset): f v / (h rate).
 constexpr int kLineSearchPx = 24;
 // The best match must cost less than this fraction of any other minimum of the search at least
 // kLineAliasPx away: a parallel line within reach (planks, narrow tiles) makes the match
@@ -800,23 +739,24 @@ std::optional<double> search_across(const cv::Mat& img, const Vector2d& p0, cons
 
 }  // namespace
 
-// Stage: points on the floor's lines of the stored frame (level 0), where too few corners are.
-// Contract: afterwards line_* hold at most `want` points (what the corners leave of max_features),
-// each on a strong edge
-// (larger structure-tensor eigenvalue at least quality_level of the image's best and min_quality:
-// the corners' thresholds), the largest across its line among its neighbours there, no two
-// closer than min_distance_px nor closer to a corner, spread over the grid as the corners are.
+// Stage: points on the floor's lines of the stored frame (the tracking level), where too few
+// corners are. Contract: afterwards line_* hold at most `want` points (what the corners leave of
+// max_features), each on a strong edge (larger structure-tensor eigenvalue at least quality_level
+// of the image's best and min_quality: the corners' thresholds), the largest across its line among
+// its neighbours there, no two closer than min_distance_px nor closer to a corner, spread over the
+// grid as the corners are.
 void FlowOdometry::detect_lines(int want) {
   line_px_.clear();
   line_normal_px_.clear();
   line_rays_.clear();
-  assert(level_ == 0);
   const auto& t = params_.track;
-  const cv::Mat& image = previous_pyramid_[0];
+  const double s = level_scale_;
+  const cv::Mat& image = previous_pyramid_[0];  // the tracking level
   if (want <= 0 || image.empty()) return;
   cv::Mat eig;  // per pixel: lambda1, lambda2, its eigenvector (x1, y1), the other's
   cv::cornerEigenValsAndVecs(image, eig, 3, 3);
-  const int border = static_cast<int>(std::ceil(t.border_px)) + kLineHalfAcross + kLineHalfAlong;
+  const int border =
+      static_cast<int>(std::ceil(t.border_px / s)) + kLineHalfAcross + kLineHalfAlong;
   struct Candidate {
     float lambda;
     int x, y;
@@ -843,7 +783,7 @@ void FlowOdometry::detect_lines(int want) {
            (a.lambda == b.lambda && (a.y < b.y || (a.y == b.y && a.x < b.x)));
   });
   cv::Mat mask(image.size(), CV_8U, cv::Scalar(255));
-  const int min_dist = static_cast<int>(std::ceil(t.min_distance_px));
+  const int min_dist = static_cast<int>(std::ceil(t.min_distance_px / s));
   for (const auto& p : points_)
     cv::circle(mask, cv::Point(cvRound(p.x), cvRound(p.y)), min_dist, cv::Scalar(0), cv::FILLED);
   const int cells = t.grid_cols * t.grid_rows;
@@ -865,12 +805,12 @@ void FlowOdometry::detect_lines(int want) {
       const Vector2d px(c.x, c.y);
       line_px_.push_back(px);
       line_normal_px_.push_back(Vector2d(e[2], e[3]).normalized());
-      line_rays_.push_back(camera_.ray(px));
+      line_rays_.push_back(camera_.ray(px * s));
     }
   }
 }
 
-// Stage: the previous frame's points on lines found again in image_2 (level 0). Contract: for each
+// Stage: the previous frame's points on lines found again in image_2 (the tracking level). For each
 // found, appends its ray in both images and the line's unit normal at the second in normalised
 // image-2 coordinates. Found: the best match across the line within kLineSearchPx of the
 // predicted position, unique and not at the search's end, and the search back from there into
@@ -880,20 +820,23 @@ void FlowOdometry::track_lines(const cv::Mat& image_2, const Matrix3d& R_C2C1, c
                                std::vector<Vector3d>& rays_2,
                                std::vector<Vector2d>& normals_2) const {
   const cv::Mat& image_1 = previous_pyramid_[0];
+  const double s = level_scale_;
+  const int reach = static_cast<int>(std::ceil(kLineSearchPx / s));
   std::vector<double> ref, back_ref;
   for (size_t i = 0; i < line_px_.size(); ++i) {
     const Vector2d& p1 = line_px_[i];
     const Vector2d& nrm = line_normal_px_[i];
-    const auto pred = predict_pixel(camera_, line_rays_[i], R_C2C1, n_C1, u_pred);
-    if (!pred || !pred->allFinite()) continue;
+    const auto pred_px = predict_pixel(camera_, line_rays_[i], R_C2C1, n_C1, u_pred);
+    if (!pred_px || !pred_px->allFinite()) continue;
+    const Vector2d pred = *pred_px / s;
     if (!line_strip(image_1, p1, nrm, -kLineHalfAcross, kLineHalfAcross, ref)) continue;
-    const auto s = search_across(image_2, *pred, nrm, ref, kLineSearchPx);
-    if (!s) continue;
-    const Vector2d p2 = *pred + *s * nrm;
+    const auto shift = search_across(image_2, pred, nrm, ref, reach);
+    if (!shift) continue;
+    const Vector2d p2 = pred + *shift * nrm;
     if (!line_strip(image_2, p2, nrm, -kLineHalfAcross, kLineHalfAcross, back_ref)) continue;
     const auto back = search_across(image_1, p1, nrm, back_ref, kLineAliasPx + 1);
     if (!back || !(std::abs(*back) <= params_.track.max_fb_error_px)) continue;
-    const Vector3d a = camera_.ray(p2), b = camera_.ray(p2 + Vector2d(-nrm.y(), nrm.x()));
+    const Vector3d a = camera_.ray(p2 * s), b = camera_.ray(p2 * s + Vector2d(-nrm.y(), nrm.x()));
     const Vector2d tangent = b.head<2>() / b.z() - a.head<2>() / a.z();
     if (!a.allFinite() || !(tangent.norm() > 0)) continue;
     rays_1.push_back(line_rays_[i]);
@@ -1024,11 +967,9 @@ FlowResult FlowOdometry::add_frame(const cv::Mat& gray, int64_t utime, const Mat
   last_dt_s_ = dt_s;
   if (static_cast<int>(points_.size()) < t.min_tracks) {
     detect(static_cast<int>(points_.size()), r);
-    adapt_level(gray, utime, r);
   }
   const int corners = static_cast<int>(points_.size());
-  if (corners >= few_corners()) starved_since_utime_.reset();  // starved frames in a row only
-  if (level_ == 0 && corners < few_corners()) {
+  if (corners < few_corners()) {
     detect_lines(t.max_features - corners);
   } else {
     line_px_.clear();

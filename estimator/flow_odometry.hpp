@@ -44,15 +44,11 @@
 // Front end: Shi-Tomasi corners (goodFeaturesToTrack, Shi & Tomasi 1994) spread over a grid,
 // pyramidal Lucas-Kanade (Bouguet 2000) from the previous frame with a forward-backward check
 // (Kalal, Mikolajczyk & Matas 2010), started where R_C2C1 and the last u predict; new corners
-// when too few tracks survive. Tracking runs on the image halved `downsample` times, which is
-// cheaper and sees the larger motion; a floor whose only corners are finer than that (grout lines
-// of a texel) gives too few there, and after a second of that the front end tracks one level
-// finer, back at the coarse level once it offers corners enough again (FlowOdometry::adapt_level).
-// Where even full resolution holds too few corners (large tiles: a handful of grout crossings in
-// view), points on the floor's lines (strong edges) join them: each is found again by a 1-D search
-// across its line from where the motion predicts it, checked back the same way, and enters the fit
-// as one equation along the line's normal (fit_t_over_d with normals). Pure: no LCM, no clock, no
-// files; time is the frames' utime.
+// when too few tracks survive. Where the tracking level holds too few corners (tiles: a handful
+// of grout crossings in view, their grout lines a texel wide), points on the floor's lines (strong
+// edges) join them: each is found again by a 1-D search across its line from where the motion
+// predicts it, checked back the same way, and enters the fit as one equation along the line's
+// normal (fit_t_over_d with normals). Pure: no LCM, no clock, no files; time is the frames' utime.
 
 #include <array>
 #include <cstdint>
@@ -138,7 +134,6 @@ struct FlowResult {
   int tracked = 0;   ///< features of the previous frame found again (after the FB check)
   int detected = 0;  ///< new features detected in this frame
   int features = 0;  ///< features carried to the next frame
-  int level = 0;     ///< times the image was halved for tracking the next pair [-]
   int lines = 0;     ///< points on lines found again across their line (part of `tracked`)
   explicit operator bool() const { return sample.has_value(); }
 };
@@ -165,9 +160,6 @@ class FlowOdometry {
   const std::array<int64_t, kNumFlowReasons>& counts() const { return counts_; }
   /// The current frame's features, full-resolution pixels (diagnostics).
   std::vector<Eigen::Vector2d> feature_pixels() const;
-  /// Times the image is halved for tracking the next pair: `track.downsample`, or finer while
-  /// the floor offers too few corners at that level.
-  int level() const { return level_; }
   const FlowFrontParams& params() const { return params_; }
   const CameraModel& camera() const { return camera_; }
 
@@ -179,17 +171,14 @@ class FlowOdometry {
                    const Eigen::Vector3d& n_C1, const Eigen::Vector3d& u_pred,
                    std::vector<Eigen::Vector3d>& rays_1, std::vector<Eigen::Vector3d>& rays_2,
                    std::vector<Eigen::Vector2d>& normals_2) const;
-  void adapt_level(const cv::Mat& gray, int64_t utime, FlowResult& r);
   int few_corners() const;
   void set_level(int level);
   std::vector<cv::Mat> pyramid_of(const cv::Mat& gray, int* max_level) const;
-  int count_corners(const cv::Mat& level_image) const;
 
   FlowFrontParams params_;
   CameraModel camera_;
-  int level_ = 0;                               // times the image is halved for tracking
-  std::optional<int64_t> starved_since_utime_;  // the level has held too few corners since
-  double level_scale_ = 1.0;                    // full-resolution pixels per tracking-level pixel
+  int level_ = 0;             // times the image is halved for tracking
+  double level_scale_ = 1.0;  // full-resolution pixels per tracking-level pixel
   cv::Size level_size_;
   cv::Size window_;
   cv::TermCriteria lk_criteria_;
@@ -199,8 +188,8 @@ class FlowOdometry {
   std::vector<cv::Mat> previous_pyramid_;
   std::vector<cv::Point2f> points_;    // tracking-level pixels of the previous frame's features
   std::vector<Eigen::Vector3d> rays_;  // their normalised rays
-  // Points on lines of the previous frame (full resolution, only where corners are too few even
-  // there): pixel, unit normal across the line (pixels), ray. Detected anew every frame.
+  // Points on lines of the previous frame (tracking-level pixels, only where corners are too
+  // few): pixel, unit normal across the line, ray. Detected anew every frame.
   std::vector<Eigen::Vector2d> line_px_, line_normal_px_;
   std::vector<Eigen::Vector3d> line_rays_;
   std::optional<Eigen::Vector3d> last_t_over_d_;  // of the last pair, for the prediction

@@ -2,13 +2,10 @@
 // node will run it), on frames rendered beforehand by the simulator: a downward camera at 1.5 m
 // flying 0.86 m/s and wobbling up to 40 deg/s over the scenarios' noise floor and over tiles of
 // 30 cm (few corners); and, as the tiles family draws them (grout a 2 mm texel wide, a quieter
-// sensor), 34 cm tiles from 1.5 m (their grout crossings only at full resolution: the front end
-// moves down a level) and 40 cm tiles from 1 m (too few crossings even there: points on the grout
-// lines join them). Half and full resolution (0: full resolution from the start, the peer of the
-// default's level chosen by the floor), Lucas-Kanade windows, two feature budgets; and the fit
-// alone on 150 correspondences with 30 % outliers. The CPU column is the one to read on a shared
-// machine; `level` is the tracking level the front end ended on, `lines` the points on lines per
-// pair.
+// sensor), 34 cm tiles from 1.5 m and 40 cm tiles from 1 m (too few grout crossings: points on
+// the grout lines join them). Half and full resolution, Lucas-Kanade windows, two feature budgets;
+// and the fit alone on 150 correspondences with 30 % outliers. The CPU column is the one to read
+// on a shared machine; `lines` is the points on lines per pair.
 //   build/bin/flow_bench [--benchmark_filter=...]
 
 #include <benchmark/benchmark.h>
@@ -122,7 +119,6 @@ void BM_FlowFrame(benchmark::State& state, const std::string& floor) {
   state.counters["samples_per_pair"] = pairs ? static_cast<double>(samples) / pairs : 0.0;
   state.counters["inliers"] = samples ? static_cast<double>(inliers) / samples : 0.0;
   state.counters["lines"] = pairs ? static_cast<double>(lines) / pairs : 0.0;
-  state.counters["level"] = flow.level();
 }
 
 void BM_Fit(benchmark::State& state) {
