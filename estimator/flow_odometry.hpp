@@ -44,11 +44,7 @@
 // Front end: Shi-Tomasi corners (goodFeaturesToTrack, Shi & Tomasi 1994) spread over a grid,
 // pyramidal Lucas-Kanade (Bouguet 2000) from the previous frame with a forward-backward check
 // (Kalal, Mikolajczyk & Matas 2010), started where R_C2C1 and the last u predict; new corners
-// when too few tracks survive. Where the tracking level holds too few corners (tiles: a handful
-// of grout crossings in view, their grout lines a texel wide), points on the floor's lines (strong
-// edges) join them: each is found again by a 1-D search across its line from where the motion
-// predicts it, checked back the same way, and enters the fit as one equation along the line's
-// normal (fit_t_over_d with normals). Pure: no LCM, no clock, no files; time is the frames' utime.
+// when too few tracks survive. Pure: no LCM, no clock, no files; time is the frames' utime.
 
 #include <array>
 #include <cstdint>
@@ -106,19 +102,6 @@ FlowFit fit_t_over_d(const std::vector<Eigen::Vector3d>& rays_1,
                      const std::vector<Eigen::Vector3d>& rays_2, const Eigen::Matrix3d& R_C2C1,
                      const Eigen::Vector3d& n_C1, double focal_px, const FlowFitParams& params);
 
-/// The same with points on lines among them (a floor's grout or plank joints: edges without a
-/// corner, found again only across the line): normals_2[i], where not zero, is the line's normal
-/// at the second ray in normalised image-2 coordinates, and only the error along it counts (one
-/// equation instead of a corner's two). The counts and thresholds of `params` are in corners:
-/// min_inliers asks for 2 min_inliers equations. A minimal sample with a line takes three points.
-/// The robust scale treats a line's error as a 1-D Gaussian's; the inlier threshold's
-/// truncation correction is a corner's (2-D) for both. normals_2 shorter than the rays: the rest
-/// are corners; a non-finite normal drops its correspondence.
-FlowFit fit_t_over_d(const std::vector<Eigen::Vector3d>& rays_1,
-                     const std::vector<Eigen::Vector3d>& rays_2,
-                     const std::vector<Eigen::Vector2d>& normals_2, const Eigen::Matrix3d& R_C2C1,
-                     const Eigen::Vector3d& n_C1, double focal_px, const FlowFitParams& params);
-
 /// Pixel of the floor point seen at ray_1 in the first camera, as the model predicts it in the
 /// second camera (x2 ~ R (I + u n^T) x1, then the lens); nullopt behind the camera.
 std::optional<Eigen::Vector2d> predict_pixel(const CameraModel& camera,
@@ -134,7 +117,6 @@ struct FlowResult {
   int tracked = 0;   ///< features of the previous frame found again (after the FB check)
   int detected = 0;  ///< new features detected in this frame
   int features = 0;  ///< features carried to the next frame
-  int lines = 0;     ///< points on lines found again across their line (part of `tracked`)
   explicit operator bool() const { return sample.has_value(); }
 };
 
@@ -166,18 +148,9 @@ class FlowOdometry {
  private:
   FlowResult finish(FlowResult r);
   void detect(int already_tracked, FlowResult& r);
-  void detect_lines(int want);
-  void track_lines(const cv::Mat& image_2, const Eigen::Matrix3d& R_C2C1,
-                   const Eigen::Vector3d& n_C1, const Eigen::Vector3d& u_pred,
-                   std::vector<Eigen::Vector3d>& rays_1, std::vector<Eigen::Vector3d>& rays_2,
-                   std::vector<Eigen::Vector2d>& normals_2) const;
-  int few_corners() const;
-  void set_level(int level);
-  std::vector<cv::Mat> pyramid_of(const cv::Mat& gray, int* max_level) const;
 
   FlowFrontParams params_;
   CameraModel camera_;
-  int level_ = 0;             // times the image is halved for tracking
   double level_scale_ = 1.0;  // full-resolution pixels per tracking-level pixel
   cv::Size level_size_;
   cv::Size window_;
@@ -188,10 +161,6 @@ class FlowOdometry {
   std::vector<cv::Mat> previous_pyramid_;
   std::vector<cv::Point2f> points_;    // tracking-level pixels of the previous frame's features
   std::vector<Eigen::Vector3d> rays_;  // their normalised rays
-  // Points on lines of the previous frame (tracking-level pixels, only where corners are too
-  // few): pixel, unit normal across the line, ray. Detected anew every frame.
-  std::vector<Eigen::Vector2d> line_px_, line_normal_px_;
-  std::vector<Eigen::Vector3d> line_rays_;
   std::optional<Eigen::Vector3d> last_t_over_d_;  // of the last pair, for the prediction
   double last_dt_s_ = 0.0;
   std::array<int64_t, kNumFlowReasons> counts_{};

@@ -1,11 +1,9 @@
 // Flow odometry cost per 640x480 frame on one thread (OpenCV too: cv::setNumThreads(1), as the
 // node will run it), on frames rendered beforehand by the simulator: a downward camera at 1.5 m
 // flying 0.86 m/s and wobbling up to 40 deg/s over the scenarios' noise floor and over tiles of
-// 30 cm (few corners); and, as the tiles family draws them (grout a 2 mm texel wide, a quieter
-// sensor), 34 cm tiles from 1.5 m and 40 cm tiles from 1 m (too few grout crossings: points on
-// the grout lines join them). Half and full resolution, Lucas-Kanade windows, two feature budgets;
-// and the fit alone on 150 correspondences with 30 % outliers. The CPU column is the one to read
-// on a shared machine; `lines` is the points on lines per pair.
+// 30 cm (few corners). Half and full resolution, Lucas-Kanade windows, two feature budgets; and
+// the fit alone on 150 correspondences with 30 % outliers. The CPU column is the one to read on a
+// shared machine.
 //   build/bin/flow_bench [--benchmark_filter=...]
 
 #include <benchmark/benchmark.h>
@@ -36,21 +34,11 @@ struct Frame {
 
 std::vector<Frame> render_flight(const std::string& floor, int n) {
   sim::TextureSpec t;
-  const bool family_tiles = floor == "fine_tiles" || floor == "large_tiles";
-  t.kind = family_tiles ? "tiles" : floor;
+  t.kind = floor;
   t.size_px = floor == "tiles" ? 1024 : 2048;
-  t.texel_m = floor == "tiles" ? 0.004 : family_tiles ? 0.002 : 0.003;
-  t.mean = floor == "tiles" ? 150 : family_tiles ? 173 : 110;
-  t.feature_m = floor == "tiles"         ? 0.30
-                : floor == "fine_tiles"  ? 0.34
-                : floor == "large_tiles" ? 0.40
-                                         : 0.03;
-  if (family_tiles) {
-    t.seed = 796;
-    t.contrast = 0.7;
-  }
-  const double height_m = floor == "large_tiles" ? 1.0 : 1.5;
-  const double noise_sigma = family_tiles ? 1.0 : 2.0;
+  t.texel_m = floor == "tiles" ? 0.004 : 0.003;
+  t.mean = floor == "tiles" ? 150 : 110;
+  t.feature_m = floor == "tiles" ? 0.30 : 0.03;
   sim::Scene scene;
   scene.textures.push_back(sim::Texture::make(t, 1));
   const CameraModel cam = CameraModel::firefly_mv_4mm();
@@ -63,11 +51,11 @@ std::vector<Frame> render_flight(const std::string& floor, int n) {
     Frame f;
     f.utime = 1'700'000'000'000'000 + static_cast<int64_t>(std::llround(t_s * 1e6));
     f.R_WC = R_WB * R_BC_downward();
-    f.p_W_C = Vector3d(0.8 * t_s, 0.3 * t_s, height_m);
+    f.p_W_C = Vector3d(0.8 * t_s, 0.3 * t_s, 1.5);
     cv::Mat img = renderer.render(scene, make_transform(f.R_WC, f.p_W_C)), fl,
             noise(img.size(), CV_32F);
     img.convertTo(fl, CV_32F);
-    rng.fill(noise, cv::RNG::NORMAL, 0.0, noise_sigma);
+    rng.fill(noise, cv::RNG::NORMAL, 0.0, 2.0);
     cv::Mat(fl + noise).convertTo(f.image, CV_8U);
     frames.push_back(f);
     const Vector3d w = Vector3d(30, 30, 20) * kDeg * std::sin(2 * M_PI * t_s / 1.2) / 30.0;
@@ -92,7 +80,7 @@ void BM_FlowFrame(benchmark::State& state, const std::string& floor) {
   params.track.window_px = static_cast<int>(state.range(2));
   FlowOdometry flow(params, CameraModel::firefly_mv_4mm());
   size_t k = 0;
-  int64_t samples = 0, pairs = 0, inliers = 0, lines = 0;
+  int64_t samples = 0, pairs = 0, inliers = 0;
   int64_t offset = 0;  // the flight replayed later each round, so stamps keep increasing
   for (auto _ : state) {
     if (k == frames.size()) {
@@ -108,7 +96,6 @@ void BM_FlowFrame(benchmark::State& state, const std::string& floor) {
     benchmark::DoNotOptimize(r.sample);
     if (k) {
       ++pairs;
-      lines += r.lines;
       if (r.sample) {
         ++samples;
         inliers += r.sample->inliers;
@@ -118,7 +105,6 @@ void BM_FlowFrame(benchmark::State& state, const std::string& floor) {
   }
   state.counters["samples_per_pair"] = pairs ? static_cast<double>(samples) / pairs : 0.0;
   state.counters["inliers"] = samples ? static_cast<double>(inliers) / samples : 0.0;
-  state.counters["lines"] = pairs ? static_cast<double>(lines) / pairs : 0.0;
 }
 
 void BM_Fit(benchmark::State& state) {
@@ -160,14 +146,6 @@ BENCHMARK_CAPTURE(BM_FlowFrame, noise, std::string("noise"))
     ->Args({1, 300, 15})
     ->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_FlowFrame, tiles, std::string("tiles"))
-    ->Args({1, 160, 15})
-    ->Args({0, 160, 15})
-    ->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_FlowFrame, fine_tiles, std::string("fine_tiles"))
-    ->Args({1, 160, 15})
-    ->Args({0, 160, 15})
-    ->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_FlowFrame, large_tiles, std::string("large_tiles"))
     ->Args({1, 160, 15})
     ->Args({0, 160, 15})
     ->Unit(benchmark::kMillisecond);
