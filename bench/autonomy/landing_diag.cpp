@@ -13,6 +13,7 @@
 #include <CLI/CLI.hpp>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <map>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -45,7 +46,8 @@ int main(int argc, char** argv) try {
                  "(its outcome printed after 'shadow'; the flight uses the vehicle file's)");
   app.add_option("--seed", seed);
   app.add_option("--vehicle", vehicle);
-  app.add_option("--dump", dump);
+  app.add_option("--dump", dump,
+                 "write every --every-th frame as PNG into this folder (made if missing)");
   app.add_option("--every", every);
   double time_limit_s = 240;
   app.add_option("--time-limit", time_limit_s, "simulated seconds after the start at most");
@@ -54,6 +56,16 @@ int main(int argc, char** argv) try {
                "fly on the onboard estimate (each frame then prints the camera's estimate error)");
   CLI11_PARSE(app, argc, argv);
   cv::setNumThreads(1);
+  if (!dump.empty()) {
+    // A missing folder made every frame's write fail without a word.
+    std::error_code ec;
+    std::filesystem::create_directories(dump, ec);
+    if (ec || !std::filesystem::is_directory(dump)) {
+      std::fprintf(stderr, "alight_landing_diag: --dump %s: cannot make the folder (%s)\n",
+                   dump.c_str(), ec.message().c_str());
+      return 2;
+    }
+  }
 
   const auto scenario = sim::load_scenario(scenario_file);
   // The truth is the scene the closed loop's simulator flies in (the scenario's randomize drawn
@@ -280,7 +292,8 @@ int main(int argc, char** argv) try {
       }
       char name[64];
       std::snprintf(name, sizeof name, "/f%05d.png", n);
-      cv::imwrite(dump + name, bgr);
+      if (!cv::imwrite(dump + name, bgr))
+        std::fprintf(stderr, "alight_landing_diag: cannot write %s%s\n", dump.c_str(), name);
     }
     ++n;
     return from_msg(vision::to_msg(r));
