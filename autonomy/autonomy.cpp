@@ -468,7 +468,7 @@ void Autonomy::start_refinement(const TargetMeasurement& m) {
   r.first_sighting_W = m.p_W_target;
   r.normal_sum_W = m.n_W;  // the plane's orientation is measured also from a part of it
   if (m.found) {
-    estimator_.add(m.p_W_target);
+    estimator_.add(m.p_W_target, frame_cov());
     r.sizes_m.push_back(m.size_m);
     r.yaw4_sum = Vector2d(std::cos(4 * m.yaw_rad), std::sin(4 * m.yaw_rad));
     r.yaw2_sum = Vector2d(std::cos(2 * m.yaw_rad), std::sin(2 * m.yaw_rad));
@@ -511,7 +511,8 @@ bool Autonomy::look_to_fit(phases::Refinement& r, const TargetMeasurement& m) {
 }
 
 void Autonomy::finish_refinement(phases::Refinement& r) {
-  estimate_W_ = estimator_.mean();
+  const TargetFilter filter = estimator_.filter();
+  estimate_W_ = filter.x;
   std::vector<double> a, b;
   for (const auto& s : r.sizes_m) {
     a.push_back(s.x());
@@ -529,8 +530,13 @@ void Autonomy::finish_refinement(phases::Refinement& r) {
   yaw_sp_rad_ = start.yaw_sp_rad;
   const double views = std::max<double>(1.0, static_cast<double>(r.sizes_m.size()));
   const TopRoom room = top_room(params_.landing, size_m, r.yaw2_sum / views, r.yaw4_sum / views);
-  enter(phases::Approach{std::move(start.state), r.last_found_utime, {}, {}, size_m, room},
-        "refinement converged (eqs. 7-9): " + where);
+  phases::Approach next{std::move(start.state), r.last_found_utime, {}, {}, size_m, room};
+  if (estimate_) {
+    const auto& R = params_.refinement;
+    next.anchor.emplace(filter, estimator_.waypoint_noise(), frame_cov(), R.vantage_dwell_s,
+                        R.gate_chi2);
+  }
+  enter(std::move(next), "refinement converged (eqs. 7-9): " + where);
 }
 
 void Autonomy::target_lost(const std::string& what) {
@@ -561,7 +567,10 @@ void Autonomy::handle_target(const TargetMeasurement& m) {
   } else if (auto* a = std::get_if<phases::Approach>(&state_)) {
     seen(a->last_found_utime);
     if (a->moving) return;  // flown on the platform filter, not on the still estimate
-    if (m.found && vision_disagrees(*a, m)) return;
+    if (!m.found || vision_disagrees(*a, m)) return;
+    if (a->anchor) {
+      if (const auto x = a->anchor->add(m.p_W_target, m.utime, frame_cov())) estimate_W_ = *x;
+    }
   } else if (auto* r = std::get_if<phases::Refinement>(&state_)) {
     seen(r->last_found_utime);
     if (!m.found) {
@@ -641,7 +650,8 @@ void Autonomy::step_moving(phases::Approach& a, const Vector3d& /*p*/, double dt
 }
 
 bool Autonomy::vision_disagrees(phases::Approach& a, const TargetMeasurement& m) {
-  // The estimate is final from APPROACH on; a target found far from it is refused and counted.
+  // The estimate is final from APPROACH on (on the onboard estimate it follows the frame's drift,
+  // by the targets that pass this gate); a target found far from it is refused and counted.
   // The gate: four of the waypoints' horizontal standard deviations (their stated noise), never
   // tighter than kVisionGateFloorM. Every found target refused for kVisionDisagreeS, at least
   // kVisionDisagreeMinTargets of them, is a sustained disagreement (a forged stream, or vision
@@ -680,7 +690,7 @@ bool Autonomy::vision_disagrees(phases::Approach& a, const TargetMeasurement& m)
 }
 
 void Autonomy::add_waypoint(phases::Refinement& r, const Vector3d& X_W) {
-  const auto verdict = estimator_.add(X_W);
+  const auto verdict = estimator_.add(X_W, frame_cov());
   if (verdict == RefinementEstimator::Verdict::kRestarted) {
     reason_ =
         "estimate restarted: " + std::to_string(params_.refinement.max_consecutive_rejections) +

@@ -102,6 +102,9 @@ struct Approach {
   Vector2d size_m = Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
   TopRoom room{};         ///< the room that top leaves the gear (the final hold's bounds)
   int n_disagreeing = 0;  ///< found targets far from the estimate since disagree_since_utime
+  /// Flying on the onboard estimate: the refinement's filter going on over the frame's drift
+  /// (refinement.hpp); none on motion capture, where the estimate is final (paper 3.4.1).
+  std::optional<ApproachAnchor> anchor{};
 };
 struct FinalDescent {
   double z_sp_m = 0.0;
@@ -191,6 +194,9 @@ class Autonomy {
   /// In flight: DEGRADED pauses the mission, and holds once it has lasted kDegradedPauseS; LOST
   /// (or silent) starts the failsafe descent. True while paused (no progress this step).
   bool react_to_estimate();
+  /// The position covariance of the frame the waypoints are measured in: the onboard estimate's
+  /// (its growth is the frame's drift), zero on motion capture (no STATE_ESTIMATE heard).
+  Matrix3d frame_cov() const { return estimate_ ? estimate_->position_cov : Matrix3d::Zero(); }
   /// Seconds since the target was last in sight (since the phase began when it never was).
   double since_found_s(const std::optional<int64_t>& last_found_utime) const;
   /// Leaves the current phase (destroying its state) for `state`.

@@ -323,6 +323,9 @@ EstimateHealth from_msg(const state_estimate_t& msg) {
                                                               : EstimateHealth::Level::kLost;
   e.reasons = static_cast<uint32_t>(msg.health_reasons);
   e.text = estimate_reasons_text(e.reasons);
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c)
+      e.position_cov(r, c) = 0.5 * (msg.cov_pva[9 * r + c] + msg.cov_pva[9 * c + r]);
   return e;
 }
 
@@ -332,6 +335,9 @@ state_estimate_t to_msg(const EstimateHealth& e, int64_t seq) {
   m.seq = seq;
   m.orientation[0] = 1.0;
   for (int i = 0; i < 9; ++i) m.cov_pva[10 * i] = 1e-4;  // a small diagonal: a healthy filter
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c)
+      if (e.position_cov(r, c) != 0.0) m.cov_pva[9 * r + c] = e.position_cov(r, c);
   switch (e.level) {
     case EstimateHealth::Level::kOk:
       m.health = state_estimate_t::HEALTH_OK;
@@ -374,6 +380,11 @@ std::optional<EstimateHealth> estimate_from_msg(const state_estimate_t& m, std::
   }
   if (!within(m.pos, 3, kMaxEstimatePositionM))
     return refuse<E>(why, "estimate: pos beyond any flying area");
+  for (int i = 0; i < 3; ++i) {
+    // A position standard deviation wider than any flying area is no estimate.
+    if (m.cov_pva[10 * i] > kMaxEstimatePositionM * kMaxEstimatePositionM)
+      return refuse<E>(why, "estimate: position variance beyond any flying area");
+  }
   return from_msg(m);
 }
 

@@ -1,6 +1,8 @@
 #include "autonomy/refinement.hpp"
 
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cassert>
 
 namespace alight::autonomy {
@@ -41,6 +43,7 @@ double RefinementEstimator::mahalanobis2(const Vector3d& X_W) const {
 
 void RefinementEstimator::reset() {
   samples_.clear();
+  frame_covs_.clear();
   consecutive_rejections_ = 0;
   have_change_ = false;
   last_change_.setZero();
@@ -63,27 +66,101 @@ void RefinementEstimator::prune_outliers() {
     }
     if (worst < 0) return;
     samples_.erase(samples_.begin() + worst);
+    frame_covs_.erase(frame_covs_.begin() + worst);
     ++n_rejected_;
   }
 }
 
-RefinementEstimator::Verdict RefinementEstimator::add(const Vector3d& X_W) {
-  assert(X_W.allFinite());
+RefinementEstimator::Verdict RefinementEstimator::add(const Vector3d& X_W,
+                                                      const Matrix3d& frame_cov) {
+  assert(X_W.allFinite() && frame_cov.allFinite());
   if (n() >= params_.gate_min_n && mahalanobis2(X_W) > params_.gate_chi2) {
     ++n_rejected_;
     if (++consecutive_rejections_ < params_.max_consecutive_rejections) return Verdict::kRejected;
     reset();
     samples_.push_back(X_W);
+    frame_covs_.push_back(frame_cov);
     return Verdict::kRestarted;
   }
   consecutive_rejections_ = 0;
   const Vector3d before = mean();
   const bool had = n() > 0;
   samples_.push_back(X_W);
+  frame_covs_.push_back(frame_cov);
   if (n() > params_.gate_min_n) prune_outliers();
   last_change_ = mean() - before;
   have_change_ = had;
   return Verdict::kAccepted;
+}
+
+Matrix3d frame_drift(const Matrix3d& from, const Matrix3d& to) {
+  const Eigen::SelfAdjointEigenSolver<Matrix3d> es(0.5 * ((to - from) + (to - from).transpose()));
+  const Vector3d grown = es.eigenvalues().cwiseMax(0.0);
+  return es.eigenvectors() * grown.asDiagonal() * es.eigenvectors().transpose();
+}
+
+Matrix3d RefinementEstimator::waypoint_noise() const {
+  const double floor2 = params_.gate_floor_sigma_m * params_.gate_floor_sigma_m;
+  Matrix3d R = Matrix3d::Zero();
+  for (int k = 1; k < n(); ++k) {
+    const Vector3d d = samples_[k] - samples_[k - 1];
+    R += d * d.transpose() - frame_drift(frame_covs_[k - 1], frame_covs_[k]);
+  }
+  if (n() > 1) R /= 2.0 * (n() - 1);
+  const Eigen::SelfAdjointEigenSolver<Matrix3d> es(R);
+  const Vector3d var = es.eigenvalues().cwiseMax(floor2);
+  return es.eigenvectors() * var.asDiagonal() * es.eigenvectors().transpose();
+}
+
+TargetFilter RefinementEstimator::filter() const {
+  if (n() == 0) return {};
+  bool drifted = false;
+  for (int k = 1; k < n() && !drifted; ++k)
+    drifted = !frame_drift(frame_covs_[k - 1], frame_covs_[k]).isZero(0.0);
+  const Matrix3d R = waypoint_noise();
+  if (!drifted) return {mean(), R / n()};  // the paper's estimate, bit for bit
+  Vector3d x = samples_[0];
+  Matrix3d P = R;
+  for (int k = 1; k < n(); ++k) {
+    P += frame_drift(frame_covs_[k - 1], frame_covs_[k]);
+    const Matrix3d K = (P + R).ldlt().solve(P.transpose()).transpose();  // P (P + R)^-1
+    x += K * (samples_[k] - x);
+    P = (Matrix3d::Identity() - K) * P;
+    P = 0.5 * (P + P.transpose());
+  }
+  // The drift after the last waypoint would widen P but cannot move x (the walk has zero mean).
+  return {x, P};
+}
+
+std::optional<Vector3d> ApproachAnchor::add(const Vector3d& p_W, int64_t utime,
+                                            const Matrix3d& frame_cov) {
+  assert(p_W.allFinite() && frame_cov.allFinite());
+  if (window_.empty()) window_start_utime_ = utime;
+  window_.push_back(p_W);
+  if (static_cast<double>(utime - window_start_utime_) * 1e-6 < dwell_s_) return std::nullopt;
+  // The dwell's waypoint: the median is robust to a stray frame among few (as the vantages').
+  Vector3d z;
+  for (int k = 0; k < 3; ++k) {
+    std::vector<double> v;
+    for (const auto& w : window_) v.push_back(w[k]);
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    z[k] = v[v.size() / 2];
+  }
+  window_.clear();
+  const Matrix3d P = f_.P + frame_drift(frame_cov_, frame_cov);
+  const Matrix3d S = P + R_;
+  const Vector3d nu = z - f_.x;
+  if (nu.dot(S.ldlt().solve(nu)) > gate_chi2_) {
+    ++n_refused_;
+    return std::nullopt;
+  }
+  const Matrix3d K = S.ldlt().solve(P.transpose()).transpose();  // P S^-1
+  f_.x += K * nu;
+  f_.P = (Matrix3d::Identity() - K) * P;
+  f_.P = 0.5 * (f_.P + f_.P.transpose());
+  frame_cov_ = frame_cov;
+  ++n_updates_;
+  return f_.x;
 }
 
 bool RefinementEstimator::converged() const {

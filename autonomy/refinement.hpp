@@ -19,7 +19,18 @@
 // the gate is removed (repeated while one is). If max_consecutive_rejections waypoints in a row are
 // rejected, the estimate itself was seeded by outliers (or the target moved): it restarts from the
 // newest waypoint.
+//
+// Without motion capture the waypoints are measured in the onboard estimate's frame, which drifts:
+// each waypoint carries the frame's position covariance when it was measured, and the growth of
+// that covariance between waypoints is the frame's drift. The mean is then the wrong estimate of
+// where the target lies in the frame now (it lags the drift by half the refinement); `current()`
+// is the Kalman filter (R. E. Kalman, 1960) of a target that walks with the frame: prediction by
+// the covariance's growth, update by each waypoint with the waypoints' own noise R, read from the
+// differences of consecutive waypoints less the drift between them. With no drift (motion capture)
+// it is the mean itself. Eqs. 7-9 and the gate stay on the mean: they judge whether the views
+// agree.
 
+#include <optional>
 #include <random>
 #include <vector>
 
@@ -28,14 +39,25 @@
 
 namespace alight::autonomy {
 
+/// A target's position in the (possibly drifting) frame and its covariance [m, m^2].
+struct TargetFilter {
+  Vector3d x = Vector3d::Zero();
+  Matrix3d P = Matrix3d::Zero();
+};
+
+/// The frame's drift between two of its position covariances: the positive part of the growth
+/// (the covariance may also shrink, a height fix; only growth is drift) [m^2].
+Matrix3d frame_drift(const Matrix3d& from, const Matrix3d& to);
+
 class RefinementEstimator {
  public:
   enum class Verdict { kAccepted, kRejected, kRestarted };
 
   explicit RefinementEstimator(const RefinementParams& params) : params_(params) {}
 
-  /// Adds one waypoint measurement X_V,i [m].
-  Verdict add(const Vector3d& X_W);
+  /// Adds one waypoint measurement X_V,i [m], measured in a frame whose position covariance was
+  /// frame_cov [m^2] (the onboard estimate's; zero on motion capture, whose frame does not drift).
+  Verdict add(const Vector3d& X_W, const Matrix3d& frame_cov = Matrix3d::Zero());
   void reset();
 
   int n() const { return static_cast<int>(samples_.size()); }
@@ -44,6 +66,14 @@ class RefinementEstimator {
   Vector3d mean() const;
   /// Sample covariance (divisor n - 1; zero when n < 2).
   Matrix3d covariance() const;
+  /// Where the target lies in the frame now: the filter over the waypoints with the frame's drift
+  /// between them; mean() when the frame did not drift (zero when n = 0).
+  Vector3d current() const { return filter().x; }
+  /// current() with its covariance (P = R / n-like on motion capture, where x is the mean).
+  TargetFilter filter() const;
+  /// The waypoints' own noise R [m^2]: half the spread of consecutive differences, less the drift
+  /// between them, never below the gate's floor (nor below it when n < 2).
+  Matrix3d waypoint_noise() const;
   /// Eqs. 7-9 on the change of the mean caused by the last accepted waypoint.
   bool converged() const;
   /// X^_n - X^_n-1 of the last accepted waypoint.
@@ -59,10 +89,44 @@ class RefinementEstimator {
 
   RefinementParams params_;
   std::vector<Vector3d> samples_;
+  std::vector<Matrix3d> frame_covs_;  // the frame's position covariance at each sample
   int n_rejected_ = 0;
   int consecutive_rejections_ = 0;
   bool have_change_ = false;
   Vector3d last_change_ = Vector3d::Zero();
+};
+
+/// The final estimate carried through the approach in a drifting frame (no motion capture): the
+/// frame goes on drifting while the vehicle flies over the target and descends, so the filter of
+/// the refinement goes on too, on waypoints formed as in the refinement (the median of the found
+/// targets over a dwell), predicted by the frame's drift, each gated by its innovation's squared
+/// Mahalanobis distance (gate_chi2). Contract: add() only targets vision found and autonomy's
+/// disagreement gate passed; the estimate moves only by what the waypoints and the stated drift
+/// explain.
+class ApproachAnchor {
+ public:
+  ApproachAnchor(const TargetFilter& start, const Matrix3d& R, const Matrix3d& frame_cov,
+                 double dwell_s, double gate_chi2)
+      : f_(start), R_(R), frame_cov_(frame_cov), dwell_s_(dwell_s), gate_chi2_(gate_chi2) {}
+
+  /// One found target at utime [us] in the frame whose position covariance is frame_cov. Returns
+  /// the new estimate when it closed a dwell whose waypoint passed the gate.
+  std::optional<Vector3d> add(const Vector3d& p_W, int64_t utime, const Matrix3d& frame_cov);
+
+  const TargetFilter& filter() const { return f_; }
+  int n_updates() const { return n_updates_; }
+  int n_refused() const { return n_refused_; }
+
+ private:
+  TargetFilter f_;
+  Matrix3d R_;
+  Matrix3d frame_cov_;  // at the last update
+  double dwell_s_;
+  double gate_chi2_;
+  std::vector<Vector3d> window_;
+  int64_t window_start_utime_ = 0;
+  int n_updates_ = 0;
+  int n_refused_ = 0;
 };
 
 /// Vantage points of the refinement phase: positions drawn from the bivariate normal N(mu, Sigma)

@@ -109,6 +109,8 @@ struct EstimateHealth {
   Level level = Level::kOk;
   uint32_t reasons = 0;  ///< state_estimate_t.REASON_* bits
   std::string text;      ///< the reasons as names, "no_flow|no_range" ("" for none)
+  /// Covariance of p_W_B [m^2] (cov_pva's position block): its growth is the frame's drift.
+  Matrix3d position_cov = Matrix3d::Zero();
 };
 
 /// What arrived since the last step (each optional is a new message, consumed by the step).
@@ -130,7 +132,10 @@ struct Status {
   int n_rejected = 0;      ///< waypoints rejected by the outlier gate
   int retries = 0;
   bool has_estimate = false;
-  Vector3d estimate_W = Vector3d::Zero();  ///< sample mean of the waypoints (X^_n)
+  /// The target estimate: in refinement the sample mean of the waypoints (X^_n); from the
+  /// approach on the estimate flown to (the mean on motion capture, refinement.hpp's filter of
+  /// the drifting frame on the onboard estimate).
+  Vector3d estimate_W = Vector3d::Zero();
   Matrix3d covariance = Matrix3d::Zero();  ///< sample covariance of the waypoints
   Vector3d setpoint_W = Vector3d::Zero();
   Failsafe failsafe = Failsafe::kNone;

@@ -1395,6 +1395,59 @@ TEST(AutonomyEstimateTest, LandHereOnADegradedEstimateLands) {
 }
 
 // A late STATE_ESTIMATE (stamped before the newest one) never replaces it.
+// Flying on the onboard estimate the frame drifts on through the approach: the target, as vision
+// sees it in that frame, walks (here 1.5 cm/s along x). The estimate follows as far as the stated
+// drift (the growth of STATE_ESTIMATE's position covariance) lets it; a frame that states no
+// drift keeps the estimate nearly where the refinement put it (as one more waypoint would move
+// the mean).
+TEST(AutonomyEstimateTest, OnTheOnboardEstimateTheApproachFollowsTheFramesStatedDrift) {
+  for (const bool stated : {true, false}) {
+    SCOPED_TRACE(stated ? "drift stated" : "no drift stated");
+    KinematicWorld w;
+    w.estimate = health(Level::kOk);
+    ASSERT_TRUE(w.go_to_approach(Mission::kLanding));
+    const Vector3d est = w.autonomy.final_estimate();
+    double walk_m = 0;
+    w.corrupt_target = [&](TargetMeasurement& m) { m.p_W_target.x() += walk_m; };
+    int steps = 0;
+    for (; steps < 3000 && w.autonomy.phase() == Phase::kApproach; ++steps) {
+      walk_m += 0.015 * 0.01;
+      // A random walk of 2 cm per square root of a second.
+      if (stated) w.estimate->position_cov.diagonal() += Vector3d(4e-6, 4e-6, 0.0);
+      w.step();
+    }
+    ASSERT_GT(steps, 200) << "an approach of a few seconds";
+    const double moved_m = w.autonomy.final_estimate().x() - est.x();
+    // A waypoint per dwell (0.8 s) lags the walk by about one dwell.
+    if (stated) {
+      EXPECT_GT(moved_m, 0.4 * walk_m) << "walked " << walk_m;
+      EXPECT_LT(moved_m, walk_m + 0.005) << "walked " << walk_m;
+    } else {
+      EXPECT_LT(std::abs(moved_m), 0.15 * walk_m) << "walked " << walk_m;
+    }
+    EXPECT_NEAR(w.autonomy.final_estimate().y(), est.y(), 0.005);
+  }
+}
+
+// A forged or mistaken stream far from the estimate is refused and is a failsafe also on the
+// onboard estimate, however much drift the frame states: the gate is the refinement's.
+TEST(AutonomyEstimateTest, OnTheOnboardEstimateTargetsFarFromTheEstimateAreStillAFailsafe) {
+  KinematicWorld w;
+  w.estimate = health(Level::kOk);
+  ASSERT_TRUE(w.go_to_approach(Mission::kLanding));
+  const Vector3d est = w.autonomy.final_estimate();
+  w.corrupt_target = [](TargetMeasurement& m) { m.p_W_target.x() += 0.25; };
+  double max_off = 0;
+  for (int i = 0; i < 4000 && w.autonomy.phase() != Phase::kFailsafe; ++i) {
+    w.estimate->position_cov.diagonal() += Vector3d(4e-6, 4e-6, 0.0);
+    w.step();
+    max_off = std::max(max_off, (w.autonomy.final_estimate() - est).norm());
+  }
+  EXPECT_EQ(max_off, 0.0) << "the estimate never moved";
+  EXPECT_EQ(w.autonomy.phase(), Phase::kFailsafe) << w.out.status.reason;
+  EXPECT_EQ(w.out.status.failsafe, Failsafe::kVisionDisagrees);
+}
+
 TEST(AutonomyEstimateTest, AnOlderEstimateDoesNotReplaceTheNewestOne) {
   KinematicWorld w;
   w.estimate = health(Level::kOk);

@@ -398,6 +398,28 @@ TEST(AutonomyConvertRegression, EstimateWithNonFiniteOrAbsurdValuesIsRefused) {
   m = good_estimate();
   m.pos[1] = -1e6;
   expect_refused(m, "pos beyond");
+  m = good_estimate();
+  m.cov_pva[10] = 1e9;  // a 31 km standard deviation
+  expect_refused(m, "position variance beyond");
+}
+
+// The position block of cov_pva reaches autonomy (its growth is the frame's drift), symmetrised.
+TEST(AutonomyConvertTest, EstimatePositionCovarianceFromTheWire) {
+  state_estimate_t m = good_estimate();
+  m.cov_pva[0] = 0.04;
+  m.cov_pva[1] = 0.01;  // (x, y)
+  m.cov_pva[9] = 0.03;  // (y, x): an asymmetric sender
+  m.cov_pva[10] = 0.09;
+  m.cov_pva[20] = 0.0025;
+  m.cov_pva[30] = 7.0;  // a velocity variance: not the position's
+  std::string why;
+  const auto e = estimate_from_msg(wire(m), &why);
+  ASSERT_TRUE(e) << why;
+  EXPECT_DOUBLE_EQ(e->position_cov(0, 0), 0.04);
+  EXPECT_DOUBLE_EQ(e->position_cov(0, 1), 0.02);
+  EXPECT_DOUBLE_EQ(e->position_cov(1, 0), 0.02);
+  EXPECT_DOUBLE_EQ(e->position_cov(1, 1), 0.09);
+  EXPECT_DOUBLE_EQ(e->position_cov(2, 2), 0.0025);
 }
 
 TEST(ConvertTest, PlatformMeasurementRoundTripsAndBadOnesAreRefusedWithAReason) {

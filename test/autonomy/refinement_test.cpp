@@ -123,6 +123,141 @@ TEST(VantageSamplerTest, DrawsRespectTheCutoffAndFollowTheDistribution) {
   EXPECT_NEAR(S(0, 1), 0.004, 0.0005);
 }
 
+// A frame that walks (the onboard estimate's drift): waypoint k is the fixed target seen from the
+// frame as it is then, plus the waypoints' noise; the frame's stated covariance grows by q per
+// waypoint. Returns the target in the frame at the last waypoint.
+Vector3d drifting_waypoints(RefinementEstimator& e, std::mt19937_64& rng, int n, double q,
+                            double sigma, Matrix3d* frame_cov_out = nullptr) {
+  std::normal_distribution<double> N(0.0, 1.0);
+  const Vector3d target(1.0, 0.5, 0.2);
+  Vector3d walk = Vector3d::Zero();
+  Matrix3d frame_cov = Matrix3d::Zero();
+  for (int k = 0; k < n; ++k) {
+    if (k > 0) {
+      walk += std::sqrt(q) * Vector3d(N(rng), N(rng), 0.0);
+      frame_cov.diagonal() += Vector3d(q, q, 0.0);
+    }
+    e.add(target + walk + sigma * Vector3d(N(rng), N(rng), N(rng)), frame_cov);
+  }
+  if (frame_cov_out) *frame_cov_out = frame_cov;
+  return target + walk;
+}
+
+TEST(RefinementDriftTest, WithoutDriftTheFilterIsTheMeanBitForBit) {
+  RefinementParams p;
+  RefinementEstimator e(p);
+  std::mt19937_64 rng(5);
+  drifting_waypoints(e, rng, 12, 0.0, 0.01);
+  EXPECT_EQ(e.current(), e.mean());
+  EXPECT_TRUE(e.filter().P.isApprox(e.waypoint_noise() / e.n()));
+}
+
+// Over many draws: the filter's and the mean's RMS horizontal error against the frame now, and the
+// filter's mean NEES (2 dimensions: 2 when its covariance states its error).
+struct DriftScore {
+  double rms_mean = 0, rms_filter = 0, nees = 0;
+};
+DriftScore score_drift(const RefinementParams& p, double q, double sigma, int n, uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  DriftScore d;
+  const int trials = 300;
+  for (int t = 0; t < trials; ++t) {
+    RefinementEstimator e(p);
+    const Vector3d now = drifting_waypoints(e, rng, n, q, sigma);
+    const auto f = e.filter();
+    const Vector2d err = (f.x - now).head<2>();
+    d.rms_mean += (e.mean() - now).head<2>().squaredNorm() / trials;
+    d.rms_filter += err.squaredNorm() / trials;
+    d.nees += err.dot(f.P.topLeftCorner<2, 2>().ldlt().solve(err)) / trials;
+  }
+  d.rms_mean = std::sqrt(d.rms_mean);
+  d.rms_filter = std::sqrt(d.rms_filter);
+  return d;
+}
+
+TEST(RefinementDriftTest, InADriftingFrameTheFilterFollowsTheFrameAndStatesItsError) {
+  RefinementParams p;
+  p.gate_min_n = 1000;  // the filter alone (the gate judges the views, not the drift)
+  // 1.5 cm of drift per waypoint, 1 cm of waypoint noise under the 3 cm floor (as flown): the
+  // mean lags the frame by half the refinement's drift; the filter, whose R is the floor, follows
+  // it and states no less than its error.
+  const DriftScore a = score_drift(p, 0.015 * 0.015, 0.01, 20, 11);
+  EXPECT_LT(a.rms_filter, 0.5 * a.rms_mean) << a.rms_filter << " vs " << a.rms_mean;
+  EXPECT_GT(a.nees, 0.5);
+  EXPECT_LT(a.nees, 2.3);
+  // Waypoints noisier than the floor (4 cm) and a slower drift (0.5 cm per waypoint): R is read
+  // from the waypoints, the filter still beats the mean and is consistent.
+  const DriftScore b = score_drift(p, 0.005 * 0.005, 0.04, 20, 12);
+  EXPECT_LT(b.rms_filter, b.rms_mean) << b.rms_filter << " vs " << b.rms_mean;
+  EXPECT_NEAR(b.nees, 2.0, 0.6);
+}
+
+TEST(RefinementDriftTest, TheWaypointNoiseIsReadWithoutTheDrift) {
+  RefinementParams p;
+  p.gate_min_n = 100000;  // no leave-one-out pass: it is quadratic in n
+  p.gate_floor_sigma_m = 0.001;
+  RefinementEstimator e(p);
+  std::mt19937_64 rng(3);
+  drifting_waypoints(e, rng, 2000, 0.02 * 0.02, 0.01);
+  const Matrix3d R = e.waypoint_noise();
+  EXPECT_NEAR(std::sqrt(R(0, 0)), 0.01, 0.0015);
+  EXPECT_NEAR(std::sqrt(R(1, 1)), 0.01, 0.0015);
+  EXPECT_NEAR(std::sqrt(R(2, 2)), 0.01, 0.0015);
+  // And never below the floor (identical waypoints).
+  RefinementEstimator same(p);
+  for (int k = 0; k < 5; ++k) same.add(Vector3d(1, 2, 3));
+  EXPECT_NEAR(same.waypoint_noise()(0, 0), 1e-6, 1e-12);
+}
+
+TEST(RefinementDriftTest, OnlyTheGrowthOfTheFramesCovarianceIsDrift) {
+  Matrix3d from = Matrix3d::Zero(), to = Matrix3d::Zero();
+  from.diagonal() << 0.01, 0.01, 0.04;
+  to.diagonal() << 0.02, 0.01, 0.01;  // x grew, z shrank (a height fix)
+  const Matrix3d d = frame_drift(from, to);
+  EXPECT_NEAR(d(0, 0), 0.01, 1e-15);
+  EXPECT_NEAR(d(1, 1), 0.0, 1e-15);
+  EXPECT_NEAR(d(2, 2), 0.0, 1e-15);
+}
+
+TEST(ApproachAnchorTest, FollowsTheFrameOneDwellAtATimeAndRefusesAJump) {
+  TargetFilter start{Vector3d(1, 0.5, 0.2), 1e-4 * Matrix3d::Identity()};
+  const Matrix3d R = 1e-4 * Matrix3d::Identity();
+  Matrix3d frame_cov = Matrix3d::Zero();
+  ApproachAnchor a(start, R, frame_cov, 0.5, 16.27);
+  // The frame has drifted 5 cm in x (stated: 5 cm sigma of growth) while the vehicle flew over.
+  frame_cov.diagonal() << 0.0025, 0.0025, 0.0;
+  int64_t t = 0;
+  EXPECT_FALSE(a.add(Vector3d(1.05, 0.5, 0.2), t, frame_cov)) << "no waypoint before a dwell";
+  std::optional<Vector3d> x;
+  for (int i = 0; i < 60 && !x; ++i) {
+    t += 50'000;
+    // One stray frame among the dwell's: the median ignores it.
+    x = a.add(Vector3d(i == 3 ? 1.5 : 1.05, 0.5, 0.2), t, frame_cov);
+  }
+  ASSERT_TRUE(x);
+  EXPECT_EQ(a.n_updates(), 1);
+  EXPECT_NEAR(x->x(), 1.05, 0.004) << "the drift is stated: the waypoint moves the estimate";
+  // No further drift: a waypoint 20 cm off is beyond the gate and refused.
+  std::optional<Vector3d> y;
+  for (int i = 0; i < 20; ++i) {
+    t += 50'000;
+    y = a.add(Vector3d(1.25, 0.5, 0.2), t, frame_cov);
+    EXPECT_FALSE(y);
+  }
+  EXPECT_GE(a.n_refused(), 1);
+  EXPECT_NEAR(a.filter().x.x(), x->x(), 1e-12);
+}
+
+TEST(ApproachAnchorTest, WithoutDriftTheEstimateBarelyMoves) {
+  // The refinement's estimate from 10 waypoints of 1 cm: a later waypoint 2 cm off moves it by a
+  // tenth of that, as an eleventh waypoint would the mean.
+  const Matrix3d R = 1e-4 * Matrix3d::Identity();
+  ApproachAnchor a({Vector3d(1, 0.5, 0.2), R / 10}, R, Matrix3d::Zero(), 0.5, 16.27);
+  std::optional<Vector3d> x;
+  for (int64_t t = 0; !x; t += 50'000) x = a.add(Vector3d(1.02, 0.5, 0.2), t, Matrix3d::Zero());
+  EXPECT_NEAR(x->x(), 1.0 + 0.02 / 11, 1e-9);
+}
+
 TEST(VantageSamplerTest, SeededAndUsesThePriorBeforeTwoWaypoints) {
   RefinementParams p;
   VantageSampler a(p, 9), b(p, 9), c(p, 10);
