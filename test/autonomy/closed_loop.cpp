@@ -93,7 +93,13 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
   outer_loop::AttitudeCommand att;
   int64_t now = t0;
   int64_t seq = 0;
-  bool takeoff_sent = false, go_sent = false;
+  // As alight-autonomy's --auto-go: TAKEOFF in IDLE and GO in HOVER once a second until obeyed
+  // (the autonomy refuses them while the onboard estimate is not OK), then never again.
+  std::optional<int64_t> takeoff_tried, go_tried;
+  bool took_off = false, went = false;
+  const auto retry_due = [&](const std::optional<int64_t>& tried) {
+    return !tried || now - *tried >= 1'000'000;
+  };
   int64_t terminal_since = -1;
   const bool trace = std::getenv("CLOSED_LOOP_TRACE") != nullptr;  // contact trace on stderr
   // The onboard estimate against the truth every 0.1 s on stderr.
@@ -108,7 +114,7 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
   ClosedLoopResult r;
 
   const auto step_autonomy = [&](Inputs in) {
-    if (!takeoff_sent && pose) {
+    if (!took_off && pose && autonomy.phase() == Phase::kIdle && retry_due(takeoff_tried)) {
       in.command = OperatorCommand{now,
                                    ++seq,
                                    "test",
@@ -116,8 +122,8 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
                                    Mission::kNone,
                                    Vector3d::Zero(),
                                    CommandAuth::kInternal};
-      takeoff_sent = true;
-    } else if (!go_sent && autonomy.phase() == Phase::kHover && !in.command) {
+      takeoff_tried = now;
+    } else if (!went && autonomy.phase() == Phase::kHover && !in.command && retry_due(go_tried)) {
       in.command = OperatorCommand{now,
                                    ++seq,
                                    "test",
@@ -125,10 +131,12 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
                                    config.mission,
                                    Vector3d::Zero(),
                                    CommandAuth::kInternal};
-      go_sent = true;
+      go_tried = now;
       r.tipped_before_go = simulator.truth().tipped;
     }
     const Output out = autonomy.update(in, now);
+    if (takeoff_tried && autonomy.phase() != Phase::kIdle) took_off = true;
+    if (go_tried && autonomy.phase() != Phase::kHover) went = true;
     setpoint = out.setpoint;
     r.mission_time_s = out.status.mission_time_s;
     r.reason = out.status.reason;
