@@ -569,7 +569,9 @@ void Autonomy::handle_target(const TargetMeasurement& m) {
     if (a->moving) return;  // flown on the platform filter, not on the still estimate
     if (!m.found || vision_disagrees(*a, m)) return;
     if (a->anchor) {
-      if (const auto x = a->anchor->add(m.p_W_target, m.utime, frame_cov())) estimate_W_ = *x;
+      const double slack_m = partial_view_slack_m(a->size_m, m.size_m);
+      if (const auto x = a->anchor->add(m.p_W_target, slack_m, m.utime, frame_cov()))
+        estimate_W_ = *x;
     }
   } else if (auto* r = std::get_if<phases::Refinement>(&state_)) {
     seen(r->last_found_utime);

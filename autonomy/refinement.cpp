@@ -132,9 +132,17 @@ TargetFilter RefinementEstimator::filter() const {
   return {x, P};
 }
 
-std::optional<Vector3d> ApproachAnchor::add(const Vector3d& p_W, int64_t utime,
+std::optional<Vector3d> ApproachAnchor::add(const Vector3d& p_W, double slack_m, int64_t utime,
                                             const Matrix3d& frame_cov) {
   assert(p_W.allFinite() && frame_cov.allFinite());
+  const double noise_h_m =
+      std::sqrt(Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(R_.topLeftCorner<2, 2>())
+                    .eigenvalues()
+                    .maxCoeff());
+  if (!(slack_m <= noise_h_m)) {
+    ++n_partial_;
+    return std::nullopt;
+  }
   if (window_.empty()) window_start_utime_ = utime;
   window_.push_back(p_W);
   if (static_cast<double>(utime - window_start_utime_) * 1e-6 < dwell_s_) return std::nullopt;

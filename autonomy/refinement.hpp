@@ -109,13 +109,18 @@ class ApproachAnchor {
                  double dwell_s, double gate_chi2)
       : f_(start), R_(R), frame_cov_(frame_cov), dwell_s_(dwell_s), gate_chi2_(gate_chi2) {}
 
-  /// One found target at utime [us] in the frame whose position covariance is frame_cov. Returns
-  /// the new estimate when it closed a dwell whose waypoint passed the gate.
-  std::optional<Vector3d> add(const Vector3d& p_W, int64_t utime, const Matrix3d& frame_cov);
+  /// One found target at utime [us] in the frame whose position covariance is frame_cov; slack_m
+  /// is how far a view that measured the target smaller than the refinement did may have put its
+  /// centre off (partial_view_slack_m). Low over a top, vision finds parts of it: a view whose
+  /// slack exceeds the waypoints' own horizontal noise is not taken. Returns the new estimate
+  /// when the target closed a dwell whose waypoint passed the gate.
+  std::optional<Vector3d> add(const Vector3d& p_W, double slack_m, int64_t utime,
+                              const Matrix3d& frame_cov);
 
   const TargetFilter& filter() const { return f_; }
   int n_updates() const { return n_updates_; }
   int n_refused() const { return n_refused_; }
+  int n_partial() const { return n_partial_; }
 
  private:
   TargetFilter f_;
@@ -127,6 +132,7 @@ class ApproachAnchor {
   int64_t window_start_utime_ = 0;
   int n_updates_ = 0;
   int n_refused_ = 0;
+  int n_partial_ = 0;
 };
 
 /// Vantage points of the refinement phase: positions drawn from the bivariate normal N(mu, Sigma)
