@@ -772,13 +772,7 @@ void Autonomy::step(phases::Refinement& r, const Vector3d& p, double /*dt_s*/) {
         next_vantage(r);
       } else if (!r.at_vantage_W.empty()) {
         // The vantage's waypoint: the median is robust to a stray frame among few.
-        Vector3d X_W;
-        for (int k = 0; k < 3; ++k) {
-          std::vector<double> v;
-          for (const auto& w : r.at_vantage_W) v.push_back(w[k]);
-          X_W[k] = median(v);
-        }
-        add_waypoint(r, X_W);
+        add_waypoint(r, componentwise_median(r.at_vantage_W));
         if (phase() != Phase::kRefinement) return;  // converged (or held): r is gone
         next_vantage(r);
       } else {

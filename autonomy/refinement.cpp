@@ -93,6 +93,18 @@ RefinementEstimator::Verdict RefinementEstimator::add(const Vector3d& X_W,
   return Verdict::kAccepted;
 }
 
+Vector3d componentwise_median(const std::vector<Vector3d>& points) {
+  assert(!points.empty());
+  Vector3d m;
+  std::vector<double> v(points.size());
+  for (int k = 0; k < 3; ++k) {
+    for (size_t i = 0; i < points.size(); ++i) v[i] = points[i][k];
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    m[k] = v[v.size() / 2];
+  }
+  return m;
+}
+
 Matrix3d frame_drift(const Matrix3d& from, const Matrix3d& to) {
   const Eigen::SelfAdjointEigenSolver<Matrix3d> es(0.5 * ((to - from) + (to - from).transpose()));
   const Vector3d grown = es.eigenvalues().cwiseMax(0.0);
@@ -114,15 +126,18 @@ Matrix3d RefinementEstimator::waypoint_noise() const {
 
 TargetFilter RefinementEstimator::filter() const {
   if (n() == 0) return {};
+  std::vector<Matrix3d> drifts(n(), Matrix3d::Zero());  // drifts[k]: from sample k - 1 to k
   bool drifted = false;
-  for (int k = 1; k < n() && !drifted; ++k)
-    drifted = !frame_drift(frame_covs_[k - 1], frame_covs_[k]).isZero(0.0);
+  for (int k = 1; k < n(); ++k) {
+    drifts[k] = frame_drift(frame_covs_[k - 1], frame_covs_[k]);
+    drifted |= !drifts[k].isZero(0.0);
+  }
   const Matrix3d R = waypoint_noise();
   if (!drifted) return {mean(), R / n()};  // the paper's estimate, bit for bit
   Vector3d x = samples_[0];
   Matrix3d P = R;
   for (int k = 1; k < n(); ++k) {
-    P += frame_drift(frame_covs_[k - 1], frame_covs_[k]);
+    P += drifts[k];
     const Matrix3d K = (P + R).ldlt().solve(P.transpose()).transpose();  // P (P + R)^-1
     x += K * (samples_[k] - x);
     P = (Matrix3d::Identity() - K) * P;
@@ -146,14 +161,7 @@ std::optional<Vector3d> ApproachAnchor::add(const Vector3d& p_W, double slack_m,
   if (window_.empty()) window_start_utime_ = utime;
   window_.push_back(p_W);
   if (static_cast<double>(utime - window_start_utime_) * 1e-6 < dwell_s_) return std::nullopt;
-  // The dwell's waypoint: the median is robust to a stray frame among few (as the vantages').
-  Vector3d z;
-  for (int k = 0; k < 3; ++k) {
-    std::vector<double> v;
-    for (const auto& w : window_) v.push_back(w[k]);
-    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-    z[k] = v[v.size() / 2];
-  }
+  const Vector3d z = componentwise_median(window_);  // the dwell's waypoint, as a vantage's
   window_.clear();
   const Matrix3d P = f_.P + frame_drift(frame_cov_, frame_cov);
   const Matrix3d S = P + R_;

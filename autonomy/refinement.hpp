@@ -23,7 +23,7 @@
 // Without motion capture the waypoints are measured in the onboard estimate's frame, which drifts:
 // each waypoint carries the frame's position covariance when it was measured, and the growth of
 // that covariance between waypoints is the frame's drift. The mean is then the wrong estimate of
-// where the target lies in the frame now (it lags the drift by half the refinement); `current()`
+// where the target lies in the frame now (it lags the drift by half the refinement); `filter()`
 // is the Kalman filter (R. E. Kalman, 1960) of a target that walks with the frame: prediction by
 // the covariance's growth, update by each waypoint with the waypoints' own noise R, read from the
 // differences of consecutive waypoints less the drift between them. With no drift (motion capture)
@@ -44,6 +44,10 @@ struct TargetFilter {
   Vector3d x = Vector3d::Zero();
   Matrix3d P = Matrix3d::Zero();
 };
+
+/// Each coordinate's median (the upper of the middle two for an even count) of non-empty points:
+/// a waypoint from a dwell's targets, robust to a stray frame among few.
+Vector3d componentwise_median(const std::vector<Vector3d>& points);
 
 /// The frame's drift between two of its position covariances: the positive part of the growth
 /// (the covariance may also shrink, a height fix; only growth is drift) [m^2].
@@ -66,10 +70,9 @@ class RefinementEstimator {
   Vector3d mean() const;
   /// Sample covariance (divisor n - 1; zero when n < 2).
   Matrix3d covariance() const;
-  /// Where the target lies in the frame now: the filter over the waypoints with the frame's drift
-  /// between them; mean() when the frame did not drift (zero when n = 0).
-  Vector3d current() const { return filter().x; }
-  /// current() with its covariance (P = R / n-like on motion capture, where x is the mean).
+  /// Where the target lies in the frame now, with its covariance: the filter over the waypoints
+  /// with the frame's drift between them; x = mean() and P = R / n when the frame did not drift
+  /// (zero when n = 0).
   TargetFilter filter() const;
   /// The waypoints' own noise R [m^2]: half the spread of consecutive differences, less the drift
   /// between them, never below the gate's floor (nor below it when n < 2).

@@ -148,7 +148,7 @@ TEST(RefinementDriftTest, WithoutDriftTheFilterIsTheMeanBitForBit) {
   RefinementEstimator e(p);
   std::mt19937_64 rng(5);
   drifting_waypoints(e, rng, 12, 0.0, 0.01);
-  EXPECT_EQ(e.current(), e.mean());
+  EXPECT_EQ(e.filter().x, e.mean());
   EXPECT_TRUE(e.filter().P.isApprox(e.waypoint_noise() / e.n()));
 }
 
@@ -217,6 +217,11 @@ TEST(RefinementDriftTest, OnlyTheGrowthOfTheFramesCovarianceIsDrift) {
   EXPECT_NEAR(d(0, 0), 0.01, 1e-15);
   EXPECT_NEAR(d(1, 1), 0.0, 1e-15);
   EXPECT_NEAR(d(2, 2), 0.0, 1e-15);
+}
+
+TEST(RefinementTest, TheComponentwiseMedianIgnoresAStrayAndTakesTheUpperMiddle) {
+  EXPECT_EQ(componentwise_median({{1, 5, 0}, {9, 4, 0}, {2, 6, 7}}), Vector3d(2, 5, 0));
+  EXPECT_EQ(componentwise_median({{1, 0, 0}, {3, 0, 0}}), Vector3d(3, 0, 0));
 }
 
 TEST(ApproachAnchorTest, FollowsTheFrameOneDwellAtATimeAndRefusesAJump) {
