@@ -105,10 +105,27 @@ Vector3d componentwise_median(const std::vector<Vector3d>& points) {
   return m;
 }
 
+namespace {
+
+// The symmetric S (its lower triangle) with every eigenvalue raised to at least floor.
+Matrix3d eigenvalues_at_least(const Matrix3d& S, double floor) {
+  const Eigen::SelfAdjointEigenSolver<Matrix3d> es(S);
+  const Vector3d lambda = es.eigenvalues().cwiseMax(floor);
+  return es.eigenvectors() * lambda.asDiagonal() * es.eigenvectors().transpose();
+}
+
+// The Kalman update of f (P already predicted) by z with noise R.
+void kalman_update(TargetFilter& f, const Vector3d& z, const Matrix3d& R) {
+  const Matrix3d K = (f.P + R).ldlt().solve(f.P.transpose()).transpose();  // P (P + R)^-1
+  f.x += K * (z - f.x);
+  f.P = (Matrix3d::Identity() - K) * f.P;
+  f.P = 0.5 * (f.P + f.P.transpose());
+}
+
+}  // namespace
+
 Matrix3d frame_drift(const Matrix3d& from, const Matrix3d& to) {
-  const Eigen::SelfAdjointEigenSolver<Matrix3d> es(0.5 * ((to - from) + (to - from).transpose()));
-  const Vector3d grown = es.eigenvalues().cwiseMax(0.0);
-  return es.eigenvectors() * grown.asDiagonal() * es.eigenvectors().transpose();
+  return eigenvalues_at_least(0.5 * ((to - from) + (to - from).transpose()), 0.0);
 }
 
 Matrix3d RefinementEstimator::waypoint_noise() const {
@@ -119,9 +136,7 @@ Matrix3d RefinementEstimator::waypoint_noise() const {
     R += d * d.transpose() - frame_drift(frame_covs_[k - 1], frame_covs_[k]);
   }
   if (n() > 1) R /= 2.0 * (n() - 1);
-  const Eigen::SelfAdjointEigenSolver<Matrix3d> es(R);
-  const Vector3d var = es.eigenvalues().cwiseMax(floor2);
-  return es.eigenvectors() * var.asDiagonal() * es.eigenvectors().transpose();
+  return eigenvalues_at_least(R, floor2);
 }
 
 TargetFilter RefinementEstimator::filter() const {
@@ -134,27 +149,30 @@ TargetFilter RefinementEstimator::filter() const {
   }
   const Matrix3d R = waypoint_noise();
   if (!drifted) return {mean(), R / n()};  // the paper's estimate, bit for bit
-  Vector3d x = samples_[0];
-  Matrix3d P = R;
+  TargetFilter f{samples_[0], R};
   for (int k = 1; k < n(); ++k) {
-    P += drifts[k];
-    const Matrix3d K = (P + R).ldlt().solve(P.transpose()).transpose();  // P (P + R)^-1
-    x += K * (samples_[k] - x);
-    P = (Matrix3d::Identity() - K) * P;
-    P = 0.5 * (P + P.transpose());
+    f.P += drifts[k];
+    kalman_update(f, samples_[k], R);
   }
   // The drift after the last waypoint would widen P but cannot move x (the walk has zero mean).
-  return {x, P};
+  return f;
 }
+
+ApproachAnchor::ApproachAnchor(const TargetFilter& start, const Matrix3d& R,
+                               const Matrix3d& frame_cov, double dwell_s, double gate_chi2)
+    : f_(start),
+      R_(R),
+      noise_h_m_(std::sqrt(Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(R.topLeftCorner<2, 2>())
+                               .eigenvalues()
+                               .maxCoeff())),
+      frame_cov_(frame_cov),
+      dwell_s_(dwell_s),
+      gate_chi2_(gate_chi2) {}
 
 std::optional<Vector3d> ApproachAnchor::add(const Vector3d& p_W, double slack_m, int64_t utime,
                                             const Matrix3d& frame_cov) {
   assert(p_W.allFinite() && frame_cov.allFinite());
-  const double noise_h_m =
-      std::sqrt(Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(R_.topLeftCorner<2, 2>())
-                    .eigenvalues()
-                    .maxCoeff());
-  if (!(slack_m <= noise_h_m)) {
+  if (!(slack_m <= noise_h_m_)) {
     ++n_partial_;
     return std::nullopt;
   }
@@ -164,16 +182,13 @@ std::optional<Vector3d> ApproachAnchor::add(const Vector3d& p_W, double slack_m,
   const Vector3d z = componentwise_median(window_);  // the dwell's waypoint, as a vantage's
   window_.clear();
   const Matrix3d P = f_.P + frame_drift(frame_cov_, frame_cov);
-  const Matrix3d S = P + R_;
   const Vector3d nu = z - f_.x;
-  if (nu.dot(S.ldlt().solve(nu)) > gate_chi2_) {
+  if (nu.dot((P + R_).ldlt().solve(nu)) > gate_chi2_) {
     ++n_refused_;
     return std::nullopt;
   }
-  const Matrix3d K = S.ldlt().solve(P.transpose()).transpose();  // P S^-1
-  f_.x += K * nu;
-  f_.P = (Matrix3d::Identity() - K) * P;
-  f_.P = 0.5 * (f_.P + f_.P.transpose());
+  f_.P = P;
+  kalman_update(f_, z, R_);
   frame_cov_ = frame_cov;
   ++n_updates_;
   return f_.x;

@@ -109,8 +109,7 @@ class RefinementEstimator {
 class ApproachAnchor {
  public:
   ApproachAnchor(const TargetFilter& start, const Matrix3d& R, const Matrix3d& frame_cov,
-                 double dwell_s, double gate_chi2)
-      : f_(start), R_(R), frame_cov_(frame_cov), dwell_s_(dwell_s), gate_chi2_(gate_chi2) {}
+                 double dwell_s, double gate_chi2);
 
   /// One found target at utime [us] in the frame whose position covariance is frame_cov; slack_m
   /// is how far a view that measured the target smaller than the refinement did may have put its
@@ -128,6 +127,7 @@ class ApproachAnchor {
  private:
   TargetFilter f_;
   Matrix3d R_;
+  double noise_h_m_;    // R's largest horizontal standard deviation: a partial view's bound
   Matrix3d frame_cov_;  // at the last update
   double dwell_s_;
   double gate_chi2_;
