@@ -50,6 +50,7 @@
 
 #include "closed_loop.hpp"
 #include "common/build_paths.hpp"
+#include "common/heap.hpp"
 #include "common/params.hpp"
 #include "real_vision.hpp"
 #include "sim/params.hpp"
@@ -237,6 +238,9 @@ int main(int argc, char** argv) try {
   app.add_option("--seeds-file", seeds_file, "the tune/report split of scene seeds");
   CLI11_PARSE(app, argc, argv);
   cv::setNumThreads(1);  // the jobs are the parallelism
+  // The vision's CPU per frame is the node's (common/node.cpp keeps freed memory): under glibc's
+  // defaults every frame's large buffers fault in again and the faults count as the vision's.
+  if (!alight::retain_freed_memory()) std::fprintf(stderr, "glibc refused the heap settings\n");
 
   const auto seed_split = alight::tools::SeedSplit::from(alight::ParamNode::load_file(seeds_file));
   if (seed0 < 0)

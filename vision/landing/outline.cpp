@@ -5,8 +5,10 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <functional>
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
+#include <utility>
 
 #include "common/geometry.hpp"
 #include "vision/geometry/bilinear.hpp"
@@ -581,6 +583,18 @@ TargetOutcome refuse(Reason r) {
 
 }  // namespace
 
+std::pair<double, double> height_search_range(const std::function<double(double)>& parallax_px,
+                                              double max_h, double diag_px) {
+  const double range_px = parallax_px(max_h);
+  if (range_px <= diag_px) return {max_h, range_px};
+  double lo = 0, hi = max_h;
+  for (int k = 0; k < 40; ++k) {
+    const double mid = 0.5 * (lo + hi);
+    (parallax_px(mid) <= diag_px ? lo : hi) = mid;
+  }
+  return {lo, parallax_px(lo)};
+}
+
 std::vector<Outline> featureless_outlines(const cv::Mat& gray, const Correspondences& c,
                                           const PipelineParams& params) {
   std::vector<Outline> found;
@@ -639,8 +653,11 @@ TargetOutcome top_of_outline(const Outline& o, const Correspondences& c, const c
   // Stage 4: each side that can tell a top within range from the floor, at its own height.
   std::array<std::optional<SideHeight>, 4> heights;
   int informative = 0;
+  const double diag_px = std::hypot(c.camera->width, c.camera->height);
   for (size_t i = 0; i < 4; ++i)
-    if (const double range_px = side_parallax(sides[i], map, z0, z0 + L.max_height_m);
+    if (const auto [max_h, range_px] =
+            height_search_range([&](double h) { return side_parallax(sides[i], map, z0, z0 + h); },
+                                L.max_height_m, diag_px);
         range_px >= kMinSideParallaxPx) {
       ++informative;
       // A side that tells no height (too faint a step: a dim top on a dark floor; a pattern
@@ -648,7 +665,7 @@ TargetOutcome top_of_outline(const Outline& o, const Correspondences& c, const c
       // top_height). One the reference does not show, or shows at no height with its step,
       // refuses the outline.
       bool silent = false;
-      heights[i] = side_height(sides[i], gray_1, map, z0, L.max_height_m, range_px, sign, &silent);
+      heights[i] = side_height(sides[i], gray_1, map, z0, max_h, range_px, sign, &silent);
       if ((!heights[i] && !silent) || (heights[i] && heights[i]->agreement < kMinOutlineAgreement))
         return refuse(Reason::kOutlineUnmatched);
     }

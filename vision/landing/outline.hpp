@@ -22,7 +22,8 @@
 //      with features is the planes' to find or to refuse, never this stage's);
 //   3. edges: each side refined at full resolution to the line through the strongest step of
 //      grey level across it, the corners where adjacent lines meet;
-//   4. height, side by side: the plane z = floor_z_m + h that carries the side onto the
+//   4. height, side by side (h up to max_height_m, or as far as the reference can show the
+//      side: height_search_range): the plane z = floor_z_m + h that carries the side onto the
 //      reference image (motion capture's poses: camera 2's rays intersected with the plane,
 //      projected into camera 1). The step across the side, read in the reference at the carried
 //      points, is there only near the right plane (the inner side is the same top, the outer
@@ -44,8 +45,10 @@
 // (an edge of light, a reflection, a region the reference's view does not hold) is refused
 // kOutlineUnmatched.
 
+#include <functional>
 #include <opencv2/core.hpp>
 #include <optional>
+#include <utility>
 #include <vector>
 
 #include "vision/params.hpp"
@@ -77,6 +80,16 @@ constexpr double kMinSideParallaxPx = 4.0;
 /// Two sides' heights agree where they differ by under this much of their own parallax [px]:
 /// a rim fitted over a side's points lies within a few tenths of a pixel.
 constexpr double kAgreePx = 1.5;
+
+/// The heights a side's plane is searched over (stage 4): from the floor up to max_h, or up to
+/// where the side's parallax across itself between the floor and the plane (parallax_px(h)
+/// [px], growing with h as the plane nears the cameras) reaches the reference's diagonal
+/// diag_px, whichever is lower; (that height, the parallax there). Below a reference camera only
+/// a little above the floor plus max_h, the parallax runs to 10^5 px and the search's grid (a
+/// step per 2 px of it) to as many heights, hundreds of milliseconds a frame, for
+/// planes that carry the side out of the reference. Bisected, to 2^-40 of max_h.
+std::pair<double, double> height_search_range(const std::function<double(double)>& parallax_px,
+                                              double max_h, double diag_px);
 
 /// Stage 1 and 2: the featureless rectangular regions of gray (CV_8UC1, the current raw image)
 /// with fewer than min_platform_inliers of c's current pixels (u2) inside, largest first, at

@@ -875,6 +875,21 @@ TEST(OutlineTop, AFeaturelessTopIsMeasuredByItsOutline) {
   }
 }
 
+// The heights a side is searched over end where its parallax reaches the reference's diagonal:
+// a plane just under the cameras carries the side 25000 px (a grid of 12500 heights), the
+// reference shows it up to where it has moved 800 px.
+TEST(OutlineTop, TheHeightSearchEndsWhereTheReferenceCannotShowTheSide) {
+  const auto near_camera = [](double h) { return 500.0 * h / (1.02 - h); };
+  const auto [h, range_px] = height_search_range(near_camera, 1.0, 800.0);
+  EXPECT_NEAR(h, 800.0 * 1.02 / 1300.0, 1e-9);  // 500 h / (1.02 - h) = 800
+  EXPECT_LE(range_px, 800.0);
+  EXPECT_NEAR(range_px, 800.0, 1e-6);
+  // Where the whole bound is in reach, it is the bound.
+  const auto [h_all, range_all] = height_search_range([](double z) { return 100.0 * z; }, 1.0, 800);
+  EXPECT_EQ(h_all, 1.0);
+  EXPECT_EQ(range_all, 100.0);
+}
+
 // Over a floor whose dark grains are as dark as the top (the grain 25 grey levels either way
 // about 80, the top at 60) the top's mean grey stands out little, its plainness does: found in
 // most views (a view whose rims the grain blurs is refused, never mismeasured), its centre
