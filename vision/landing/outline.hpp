@@ -85,9 +85,9 @@ constexpr double kAgreePx = 1.5;
 /// where the side's parallax across itself between the floor and the plane (parallax_px(h)
 /// [px], growing with h as the plane nears the cameras) reaches the reference's diagonal
 /// diag_px, whichever is lower; (that height, the parallax there). Below a reference camera only
-/// a little above the floor plus max_h, the parallax runs to 10^5 px and the search's grid (a
-/// step per 2 px of it) to as many heights, hundreds of milliseconds a frame, for
-/// planes that carry the side out of the reference. Bisected, to 2^-40 of max_h.
+/// a little above the floor plus max_h, the parallax grows without bound and the search's grid
+/// (a step per 2 px of it) with it, for planes that carry the side out of the reference: the
+/// frame's time would follow the camera's height, not the image. Bisected, to 2^-40 of max_h.
 std::pair<double, double> height_search_range(const std::function<double(double)>& parallax_px,
                                               double max_h, double diag_px);
 
