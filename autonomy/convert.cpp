@@ -103,8 +103,10 @@ TargetMeasurement from_msg(const target_t& msg) {
   t.found = msg.found;
   t.partial = !msg.found && (msg.reason == target_t::REASON_PARTIAL_VIEW ||
                              msg.reason == target_t::REASON_LOW_PARALLAX ||
-                             msg.reason == target_t::REASON_TOP_PARALLAX_GAP);
-  t.cut = !msg.found && msg.reason == target_t::REASON_PARTIAL_VIEW;
+                             msg.reason == target_t::REASON_TOP_PARALLAX_GAP ||
+                             msg.reason == target_t::REASON_TOP_RUNS_ON);
+  t.cut = !msg.found && (msg.reason == target_t::REASON_PARTIAL_VIEW ||
+                         msg.reason == target_t::REASON_TOP_RUNS_ON);
   t.p_W_target = Vector3d(msg.p_W_target[0], msg.p_W_target[1], msg.p_W_target[2]);
   t.n_W = Vector3d(msg.n_W[0], msg.n_W[1], msg.n_W[2]);
   t.size_m = Vector2d(msg.size_m[0], msg.size_m[1]);

@@ -65,8 +65,9 @@ struct TargetMeasurement {
   /// p_W_target is the centre of its visible part), or an opening seen with too little parallax
   /// to measure it (REASON_LOW_PARALLAX). Good enough to fly to, not to average.
   bool partial = false;
-  /// A partial view cut by the image border (REASON_PARTIAL_VIEW): size_m is the extent of the
-  /// part in view, a lower bound of the target's.
+  /// A partial view cut by the image border (REASON_PARTIAL_VIEW), or of a top running on past
+  /// its features (REASON_TOP_RUNS_ON): size_m is the extent of the part in view, a lower bound
+  /// of the target's.
   bool cut = false;
   Vector3d p_W_target = Vector3d::Zero();  ///< platform centre / opening centre [m]
   Vector3d n_W = Vector3d::UnitZ();        ///< target plane normal, towards the camera

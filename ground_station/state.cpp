@@ -167,6 +167,8 @@ const char* target_reason_name(int8_t reason) {
       return "featureless outline not in the reference";
     case target_t::REASON_OUTLINE_SILENT:
       return "featureless outline too faint to place";
+    case target_t::REASON_TOP_RUNS_ON:
+      return "top runs on past its features";
   }
   return "unknown";
 }

@@ -80,6 +80,8 @@ const char* to_string(Reason r) {
       return "featureless outline not in the reference";
     case Reason::kOutlineSilent:
       return "featureless outline too faint to place";
+    case Reason::kTopRunsOn:
+      return "top runs on past its features";
   }
   return "unknown";
 }

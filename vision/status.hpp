@@ -54,13 +54,15 @@ enum class Reason : int8_t {
   kOutlineOnFloor = 35,    ///< landing: a featureless outline that moves with the floor
   kOutlineUnmatched = 36,  ///< landing: a featureless outline the reference does not show
   kOutlineSilent = 37,     ///< landing: a featureless outline none of whose sides tells a height
+  kTopRunsOn = 38,  ///< landing: seen in part, the top running on past its features (rim.hpp)
 };
 
 const char* to_string(Reason r);
 
 /// Not found, but located: in view and worth flying to, never averaged into an estimate.
 inline bool located_only(Reason r) {
-  return r == Reason::kPartialView || r == Reason::kLowParallax || r == Reason::kTopParallaxGap;
+  return r == Reason::kPartialView || r == Reason::kLowParallax || r == Reason::kTopParallaxGap ||
+         r == Reason::kTopRunsOn;
 }
 
 /// A value or the reason there is none.

@@ -56,12 +56,16 @@ TEST(AutonomyConvertTest, LocatedOnlyTargetsArePartial) {
   m.p_W_target[0] = 3.0;
   m.n_W[0] = -1.0;
   for (const int8_t reason : {target_t::REASON_PARTIAL_VIEW, target_t::REASON_LOW_PARALLAX,
-                              target_t::REASON_TOP_PARALLAX_GAP}) {
+                              target_t::REASON_TOP_PARALLAX_GAP, target_t::REASON_TOP_RUNS_ON}) {
     m.reason = reason;
     const TargetMeasurement t = from_msg(wire(m));
     EXPECT_FALSE(t.found);
     EXPECT_TRUE(t.partial) << int(reason);
     EXPECT_EQ(t.p_W_target.x(), 3.0);
+    // Their size is the part in view, a lower bound, where the view was cut or the top ran on.
+    EXPECT_EQ(t.cut,
+              reason == target_t::REASON_PARTIAL_VIEW || reason == target_t::REASON_TOP_RUNS_ON)
+        << int(reason);
   }
   for (const int8_t reason : {target_t::REASON_NO_OPENING, target_t::REASON_SMALL_BASELINE}) {
     m.reason = reason;

@@ -49,11 +49,12 @@ TEST(StatusTest, ReasonValuesAreTheTargetMessageConstants) {
   EXPECT_EQ(int(Reason::kOutlineOnFloor), T::REASON_OUTLINE_ON_FLOOR);
   EXPECT_EQ(int(Reason::kOutlineUnmatched), T::REASON_OUTLINE_UNMATCHED);
   EXPECT_EQ(int(Reason::kOutlineSilent), T::REASON_OUTLINE_SILENT);
+  EXPECT_EQ(int(Reason::kTopRunsOn), T::REASON_TOP_RUNS_ON);
 }
 
 TEST(StatusTest, EveryReasonHasItsOwnName) {
   std::set<std::string> names;
-  for (int r = 0; r <= alight::target_t::REASON_OUTLINE_SILENT; ++r) {
+  for (int r = 0; r <= alight::target_t::REASON_TOP_RUNS_ON; ++r) {
     const std::string name = to_string(static_cast<Reason>(r));
     EXPECT_NE(name, "unknown") << r;
     EXPECT_TRUE(names.insert(name).second) << r << ": " << name;

@@ -17,7 +17,8 @@ TargetOutcome refuse(TargetOutcome out, Reason reason) {
 
 // The platform on the planes of one source: the gates on the planes, the top's features on its
 // plane, the level gate, the features' rectangle and its measurement, the height gate, the cut
-// by the border, the photometric gate, then on a top seen whole the extent out to its rims. Each
+// by the border, the photometric gate, then on a top seen whole the extent out to its rims (or
+// the top seen running on past a side, located only). Each
 // refusal is the first that applies, in that order; `out` carries the labels of the source's
 // first plane and its counts.
 TargetOutcome platform_of(const Correspondences& c, const PipelineParams& params,
@@ -67,14 +68,17 @@ TargetOutcome platform_of(const Correspondences& c, const PipelineParams& params
   // The top's rim, on a top seen whole (a cut top's size is never used): where the rims give no
   // estimate (a waypoint fails, the height leaves its range), the features' stands.
   if (out.reason == Reason::kOk && images) {
-    if (const auto rim =
-            rim_rect(c, gray_1, gray_2, planes, X_WC2, pts_W, *features, widened, kTopEndSearchM)) {
+    bool runs_on = false;
+    if (const auto rim = rim_rect(c, gray_1, gray_2, planes, X_WC2, pts_W, *features, widened,
+                                  kTopEndSearchM, &runs_on)) {
       TargetEstimate at_rim = out.estimate;
       if (measure_top(c, planes, *rim, X_WC2, params, &at_rim) == Reason::kOk &&
           at_rim.height_m >= params.landing.min_height_m &&
           at_rim.height_m <= params.landing.max_height_m)
         out.estimate = at_rim;
     }
+    // A top running on past a side of its features is in sight, its extent there unseen.
+    if (runs_on) out.reason = Reason::kTopRunsOn;
   }
   return out;
 }

@@ -3,6 +3,7 @@
 #include "vision/landing/rim.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <utility>
 
@@ -420,24 +421,21 @@ bool floor_beyond(const Correspondences& c, const cv::Mat& gray_1, const EndSear
   return 2 * on_floor >= off_top;
 }
 
-// Where the top's plane stops explaining the images beyond a side (rim.hpp, the top's end): the
-// side's offset and turn, or nullopt where the floor beyond shows no texture to tell it by, or
-// its lines do not end along one straight line. H_12_top / H_12_floor take a current ray to the
-// reference's ray of the same point on the top's / the floor's plane; px_m is a pixel of the
-// current image on the top.
+// Where the top's plane stops explaining the images beyond a side (rim.hpp, the top's end), on
+// the side's end search s: the side's offset and turn, or nullopt where the floor beyond shows
+// no texture to tell it by, or its lines do not end along one straight line. H_12_floor takes a
+// current ray to the reference's ray of the same point on the floor's plane; px_m is a pixel of
+// the current image on the top.
 std::optional<Rim> top_end_offset(const Correspondences& c, const cv::Mat& gray_1,
-                                  const cv::Mat& gray_2, const Matrix3d& H_12_top,
-                                  const Matrix3d& H_12_floor, const Isometry3d& X_WC2,
-                                  const Side& side, double px_m, double end_search_m) {
-  const auto s = end_search(c, gray_1, gray_2, H_12_top, X_WC2, side, px_m, end_search_m);
-  if (!s) return std::nullopt;
-  const auto slope = end_slope(*s, side, px_m);
+                                  const EndSearch& s, const Matrix3d& H_12_floor, const Side& side,
+                                  double px_m) {
+  const auto slope = end_slope(s, side, px_m);
   if (!slope) return std::nullopt;
-  const std::vector<double> f = share_off_top(*s, side, *slope, 0, s->grid.n_t);
-  const auto e = step_up(*s, f);
+  const std::vector<double> f = share_off_top(s, side, *slope, 0, s.grid.n_t);
+  const auto e = step_up(s, f);
   if (!e || e->y() < kTopEndMinRise) return std::nullopt;
-  if (!off_top_beyond(*s, f, *e) ||
-      !floor_beyond(c, gray_1, *s, side, H_12_floor, static_cast<int>(std::lround(e->x())), *slope))
+  if (!off_top_beyond(s, f, *e) ||
+      !floor_beyond(c, gray_1, s, side, H_12_floor, static_cast<int>(std::lround(e->x())), *slope))
     return std::nullopt;
   return Rim{std::max(0.0, e->x()) * px_m, std::atan(*slope * px_m), true};
 }
@@ -457,19 +455,118 @@ struct SideSearch {
   double step_m, end_search_m;
 };
 
+// A side with neither a rim nor an end may be the top's edge over a smooth floor, which neither
+// plane explains better than the other, or a side of the features only, the top running on past
+// them over print that gives no features (a photograph's smooth areas, blurred lettering) to an
+// edge beyond the search or beyond the image. The end search's pixels beyond the side tell the
+// two apart where they have texture: the top's plane alone explains those on the top, the
+// floor's alone those on the floor. The top runs on over offsets [j_from, j_to) (pixels past the
+// side) where the former are at least kRunsOnMinShare of those seen there and at least twice the
+// latter: half a floor's texture tells it, and a tenth is over the few pixels that fit both
+// planes by chance on a smooth top or floor. Unseen where under half of those offsets' pixels
+// are in both views (by either plane): there the views tell nothing.
+constexpr double kRunsOnMinShare = 0.1;
+enum class Past { kEnds, kRunsOn, kUnseen };
+Past top_runs_on(const Correspondences& c, const cv::Mat& gray_1, const EndSearch& s,
+                 const Matrix3d& H_12_floor, int j_from, int j_to) {
+  int cells = 0, seen = 0, top_only = 0, floor_only = 0;
+  for (int i = 0; i < s.grid.n_t; ++i)
+    for (int j = j_from; j < j_to; ++j) {
+      const auto at = s.cell(i, j);
+      ++cells;
+      if (at < 0 || s.grid.g2[at] < 0) continue;
+      const Vector3d r1 = H_12_floor * s.grid.point_C2(i, static_cast<int>(at % s.grid.n_g));
+      double v1_floor;
+      const auto u1 = r1.z() > 0 ? c.pixel1(r1) : std::nullopt;
+      if (!u1 || !bilinear_inside(gray_1, *u1, &v1_floor)) continue;
+      ++seen;
+      const bool on_top = s.e_top(at) <= s.tau;
+      const bool on_floor = std::abs(s.grid.g2[at] - s.gain * v1_floor) <= s.tau;
+      top_only += on_top && !on_floor;
+      floor_only += on_floor && !on_top;
+    }
+  if (2 * seen < cells) return Past::kUnseen;
+  return top_only > 0 && top_only >= kRunsOnMinShare * seen && top_only >= 2 * floor_only
+             ? Past::kRunsOn
+             : Past::kEnds;
+}
+
+// What a side's search read: its rim (or end), else what lies past it.
+struct SideRead {
+  std::optional<Rim> rim;
+  Past past = Past::kEnds;
+};
+
+// The walk's reads (past_side) take kWalkLines lines at most, a few pixels wide: a share over a
+// hundred-odd pixels tells a tenth from a half, and a walk reads a metre in 40 steps.
+constexpr int kWalkLines = 16;
+
+// What lies past a side over offsets [from_m, to_m) (top_runs_on): the end search's grid there,
+// unturned, with the gain and threshold of `cal`, calibrated on the top's own pixels inside the
+// features' side (past it the walk may already be on the floor).
+Past past_side(const SideSearch& q, const Side& side, const EndSearch& cal, double from_m,
+               double to_m) {
+  const double px_m = 2 * q.step_m;
+  EndSearch s;
+  s.j_lo = static_cast<int>(std::floor(from_m / px_m));
+  s.j_hi = std::max(s.j_lo + 1, static_cast<int>(std::ceil(to_m / px_m)));
+  s.gain = cal.gain, s.tau = cal.tau;
+  auto grid = read_side(q.c, q.gray_1, q.gray_2, q.H_12_top, q.X_WC2, side, px_m, kWalkLines,
+                        kWalkLines / 2, px_m, s.j_lo, s.j_hi, 0.0);
+  if (!grid) return Past::kUnseen;
+  s.grid = std::move(*grid);
+  return top_runs_on(q.c, q.gray_1, s, q.H_12_floor, s.j_lo, s.j_hi);
+}
+
+// How far past the features a side the top runs on past is followed: a top's side can lie a
+// large part of its length past features that cover a band of it.
+constexpr double kRunOnMaxM = 1.0;
+
 // The side of `rect` on axis k towards sign, read along the middle of the other axis' extent
-// (near the corners the lines run into the neighbouring sides' rims): its rim, else its end.
-std::optional<Rim> side_rim(const SideSearch& q, const TopRect& rect, int k, int sign) {
+// (near the corners the lines run into the neighbouring sides' rims): its rim, else its end. A
+// side without either past which the top runs on (over the second half of the rim search's reach,
+// so the top lies beyond half that reach) is walked outward half the rim search's reach
+// (kRimSearchM) at a time, while the top runs on over the next half reach, up to kRunOnMaxM.
+// Where it stops running on, the rim or end lies within the rim search's reach of the walk: the
+// rim is read there (one past which the top runs on too is print on the top, not its rim), else
+// the end; a stretch that tells neither way (smooth print, a smooth floor) leaves the side where
+// the walk stands, as far out as the top was seen. A walk that leaves the view, or kRunOnMaxM,
+// while the top runs on reports it running on (kRunsOn: its extent unseen). Without `walk`, the
+// rim and the end only.
+SideRead side_rim(const SideSearch& q, const TopRect& rect, int k, int sign, bool walk = true) {
   const int o = 1 - k;
   const double span = rect.hi[o] - rect.lo[o];
   const double at = side_of(rect, k, sign);
   const Side side{rect.origin_W + at * rect.axis[k], sign * rect.axis[k], rect.axis[o],
                   rect.lo[o] + 0.15 * span, rect.hi[o] - 0.15 * span};
-  auto rim = rim_offset(q.c, q.gray_1, q.gray_2, q.H_12_top, q.X_WC2, side, q.step_m);
-  if (!rim && q.end_search_m > 0)
-    rim = top_end_offset(q.c, q.gray_1, q.gray_2, q.H_12_top, q.H_12_floor, q.X_WC2, side,
-                         2 * q.step_m, q.end_search_m);
-  return rim;
+  if (auto rim = rim_offset(q.c, q.gray_1, q.gray_2, q.H_12_top, q.X_WC2, side, q.step_m))
+    return {rim, Past::kEnds};
+  if (q.end_search_m <= 0) return {};
+  const double px_m = 2 * q.step_m;
+  const auto s =
+      end_search(q.c, q.gray_1, q.gray_2, q.H_12_top, q.X_WC2, side, px_m, q.end_search_m);
+  if (!s) return {};
+  if (auto end = top_end_offset(q.c, q.gray_1, *s, q.H_12_floor, side, px_m))
+    return {end, Past::kEnds};
+  const double step_m = 0.5 * kRimSearchM;
+  if (!walk || past_side(q, side, *s, step_m, 2 * step_m) != Past::kRunsOn) return {};
+  for (double past = step_m;; past += step_m) {
+    if (past + step_m > kRunOnMaxM) return {std::nullopt, Past::kRunsOn};
+    const Past next = past_side(q, side, *s, past + step_m, past + 2 * step_m);
+    if (next == Past::kUnseen) return {std::nullopt, Past::kRunsOn};
+    if (next == Past::kRunsOn) continue;
+    Side out = side;
+    out.base_W += past * side.out_W;
+    if (const auto rim = rim_offset(q.c, q.gray_1, q.gray_2, q.H_12_top, q.X_WC2, out, q.step_m);
+        rim &&
+        past_side(q, side, *s, past + rim->d_m, past + rim->d_m + kRimSearchM) != Past::kRunsOn)
+      return {Rim{rim->d_m + past, rim->turn_rad, rim->turn_measured}, Past::kEnds};
+    if (const auto e =
+            end_search(q.c, q.gray_1, q.gray_2, q.H_12_top, q.X_WC2, out, px_m, q.end_search_m))
+      if (const auto end = top_end_offset(q.c, q.gray_1, *e, q.H_12_floor, out, px_m))
+        return {Rim{end->d_m + past, end->turn_rad, end->turn_measured}, Past::kEnds};
+    return {Rim{past, 0.0, false}, Past::kEnds};
+  }
 }
 
 // A side's rim as found on the features' extent.
@@ -501,7 +598,7 @@ std::optional<TopRect> rim_rect(const Correspondences& c, const cv::Mat& gray_1,
                                 const cv::Mat& gray_2, const LandingPlanes& planes,
                                 const Isometry3d& X_WC2, const std::vector<Vector3d>& pts_W,
                                 const TopRect& features, const TopRect& widened,
-                                double end_search_m) {
+                                double end_search_m, bool* runs_on) {
   // The reference's point of the top's plane seen at a current ray: the top's homography
   // (calibrated, x2 ~ H x1), which explains the top's features, not the poses' motion.
   const SideSearch q{c,
@@ -513,12 +610,18 @@ std::optional<TopRect> rim_rect(const Correspondences& c, const cv::Mat& gray_1,
                      0.5 * (X_WC2.inverse() * features.origin_W).z() / c.camera->K()(0, 0),
                      end_search_m};
   std::vector<FoundRim> found;
+  std::array<bool, 4> running{};  // index 2 k + (sign > 0)
+  const auto report = [&] {
+    if (runs_on) *runs_on = std::any_of(running.begin(), running.end(), [](bool b) { return b; });
+  };
   TopRect r = widened;
   for (int k = 0; k < 2; ++k)
     for (const int sign : {-1, 1}) {
-      const auto rim = side_rim(q, features, k, sign);
-      if (!rim) continue;
-      const double s = side_of(features, k, sign) + sign * rim->d_m;
+      const SideRead read = side_rim(q, features, k, sign);
+      running[2 * k + (sign > 0)] = read.past == Past::kRunsOn;
+      if (!read.rim) continue;
+      const Rim& rim = *read.rim;
+      const double s = side_of(features, k, sign) + sign * rim.d_m;
       side_of(r, k, sign) = s;
       // The turn that takes axis k's side onto the rim, as a turn of the whole rectangle about
       // the top's normal (from the long axis towards the short one).
@@ -526,15 +629,17 @@ std::optional<TopRect> rim_rect(const Correspondences& c, const cv::Mat& gray_1,
       found.push_back(
           {k, sign,
            s * features.axis[k] + 0.5 * (features.lo[o] + features.hi[o]) * features.axis[o],
-           (k == 1 ? sign : -sign) * rim->turn_rad, rim->turn_measured});
+           (k == 1 ? sign : -sign) * rim.turn_rad, rim.turn_measured});
     }
+  report();
   if (found.empty()) return std::nullopt;
   const auto turn = rims_turn(found);
   if (!turn) return r;
   // Turned: the features' extent along the turned axes (widened where no rim is), each rim's
   // side where its crossing lies along them. A side without a rim was searched along the
   // unturned side, whose far end may lie beyond the search's reach from the turned rim: it is
-  // searched again along the turned axes.
+  // searched again along the turned axes, and a rim found there ends the top on that side (not
+  // walked again: a walk ends at a rim, or out of view, whichever way the side is turned).
   const Vector3d l = std::cos(*turn) * features.axis[0] + std::sin(*turn) * features.axis[1];
   const Vector3d sh = -std::sin(*turn) * features.axis[0] + std::cos(*turn) * features.axis[1];
   const TopRect turned = features_rect(pts_W, features.origin_W, l, sh);
@@ -545,10 +650,12 @@ std::optional<TopRect> rim_rect(const Correspondences& c, const cv::Mat& gray_1,
                                   [&](const FoundRim& g) { return g.k == k && g.sign == sign; });
       if (f != found.end()) {
         side_of(t, k, sign) = f->at_W.dot(t.axis[k]);
-      } else if (const auto rim = side_rim(q, turned, k, sign)) {
-        side_of(t, k, sign) = side_of(turned, k, sign) + sign * rim->d_m;
+      } else if (const SideRead read = side_rim(q, turned, k, sign, false); read.rim) {
+        side_of(t, k, sign) = side_of(turned, k, sign) + sign * read.rim->d_m;
+        running[2 * k + (sign > 0)] = false;
       }
     }
+  report();
   return t;
 }
 

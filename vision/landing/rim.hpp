@@ -41,6 +41,15 @@
 // views) and where the floor's homography explains most of what the top's does not; a flat band
 // of floor that ends along a straight line parallel to the side still passes, and would widen
 // the top by the band.
+//
+// A top running on past its features: a large top's print can give features over a band of it
+// only (a photograph's smooth areas, blurred lettering), its edges well past the band or past
+// the image's border. Past such a side the end search's pixels that have texture follow the
+// top's plane, not the floor's; past a true edge over a busy floor they follow the floor's, and
+// a smooth floor tells neither way (the side then stands where the features put it). A side the
+// top runs on past is walked outward and read again until a rim or an end past which the top
+// does not run on; a walk that leaves the view while the top runs on reports it (the top is
+// located, not measured: its extent there is unseen).
 
 #include <opencv2/core.hpp>
 #include <optional>
@@ -58,15 +67,17 @@ constexpr double kTopEndSearchM = 0.1;
 
 /// The top out to its rims: each side of the features' extent (`features`, their points pts_W)
 /// moved to its rim where both images show one (else to the top's end within end_search_m of the
-/// side: find_landing_target passes kTopEndSearchM; 0, no end search), else widened as
+/// side: find_landing_target passes kTopEndSearchM; 0, no end search; a side the top runs on
+/// past walked out to its rim, its end or as far as the top is seen), else widened as
 /// `widened`; nullopt where no side has either. Two or more rims whose measured turns agree turn
 /// the rectangle onto them, each side with a rim then where its rim crosses the middle of the
 /// stretch read, and each side without one searched again along the turned axes.
-/// gray_1 / gray_2: the reference and current raw images.
+/// gray_1 / gray_2: the reference and current raw images. *runs_on (optional): whether the top
+/// runs on past a side out of the view (or beyond the walk's reach): its extent there unseen.
 std::optional<TopRect> rim_rect(const Correspondences& c, const cv::Mat& gray_1,
                                 const cv::Mat& gray_2, const LandingPlanes& planes,
                                 const Isometry3d& X_WC2, const std::vector<Vector3d>& pts_W,
                                 const TopRect& features, const TopRect& widened,
-                                double end_search_m);
+                                double end_search_m, bool* runs_on = nullptr);
 
 }  // namespace alight::vision

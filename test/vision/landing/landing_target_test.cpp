@@ -593,9 +593,9 @@ double grain(const Vector3d& X_W) {
 }
 
 // A box on the floor (a platform) and the floor around it, rendered by casting rays: the top
-// top_grey with a faint grain, the side faces side_grey, the floor floor_grey with a texture
-// and 60 grey levels darker beyond world y = floor_edge_y_m (the edge of a rug), and a busy grain
-// of floor_grain grey levels.
+// top_grey with a grain of top_grain grey levels (faint paper by default), the side faces
+// side_grey, the floor floor_grey with a texture and 60 grey levels darker beyond world y =
+// floor_edge_y_m (the edge of a rug), and a busy grain of floor_grain grey levels.
 struct BoxScene {
   Vector2d centre_xy = {1.0, 0.2};
   double yaw = 0.35, length = 0.30, width = 0.204, height = 0.15;
@@ -603,6 +603,7 @@ struct BoxScene {
   double floor_edge_y_m = std::numeric_limits<double>::infinity();
   double floor_grain = 0;       // a busy floor: grain() of this amplitude [grey levels]
   double floor_edge_drop = 60;  // the floor beyond floor_edge_y_m this much darker [grey levels]
+  double top_grain = 1;         // the top's grain() amplitude [grey levels]
 
   Isometry3d X_WO() const {  // box frame: axes along the sides, origin at the box's centre
     Isometry3d X = Isometry3d::Identity();
@@ -635,7 +636,7 @@ struct BoxScene {
     if (t_in <= t_out && t_in > 0) {
       if (axis != 2) return side_grey;
       const Vector3d X = o_W + t_in * d_W;
-      return top_grey + grain(X);
+      return top_grey + top_grain * grain(X);
     }
     const Vector3d X = o_W + (-o_W.z() / d_W.z()) * d_W;
     double g =
@@ -795,6 +796,41 @@ TEST(TopRim, NoStepOnTheTopsPlaneKeepsTheFeaturesExtent) {
     for (int k = 0; k < 2; ++k)
       EXPECT_NEAR(with.estimate.size_m[k], without.estimate.size_m[k], 1e-9) << "seed " << seed;
     EXPECT_NEAR((with.estimate.p_W - without.estimate.p_W).norm(), 0.0, 1e-9) << "seed " << seed;
+  }
+}
+
+// A top larger than the view whose features cover a band of it (a print's smooth areas or
+// blurred lettering give none): past the band's ends the top runs on, over print that gives no
+// features, to edges far beyond the view. No rim or end is found there, and the pixels past them
+// follow the top's plane, not the floor's: the top is located, its extent unseen, not a whole
+// top the size of the band. The same print on a top whose features reach within 2 cm of its ends,
+// over a busy floor, is seen whole; on a top whose ends lie in view, well past the band, the
+// sides are followed out to them.
+TEST(TopRim, ATopRunningOnPastItsFeaturesIsSeenInPart) {
+  for (uint64_t seed = 1; seed <= 4; ++seed) {
+    BoxScene scene;
+    scene.yaw = 0;
+    scene.top_grain = 30;
+    scene.floor_grain = 30;
+    scene.length = 3.0;  // its ends far beyond the view, the long sides in it
+    const BoxViews b = box_views(scene, seed, 0.5 * scene.length - 0.15, 0.01, M_PI / 2);
+    PipelineParams params;
+    EXPECT_EQ(find_landing_target(b.view.c, params).reason, Reason::kOk)
+        << "seed " << seed;  // the features alone: a whole top 0.3 m long
+    const TargetOutcome o = find_landing_target(b.view.c, params, b.image_1, b.image_2);
+    EXPECT_EQ(o.reason, Reason::kTopRunsOn) << "seed " << seed << ": " << to_string(o.reason);
+
+    scene.length = 0.34;
+    const BoxViews whole = box_views(scene, seed, 0.02, 0.01, M_PI / 2);
+    const TargetOutcome w = find_landing_target(whole.view.c, params, whole.image_1, whole.image_2);
+    EXPECT_EQ(w.reason, Reason::kOk) << "seed " << seed << ": " << to_string(w.reason);
+
+    // Ends in view 20 cm past the band, beyond the first searches' reach: followed out to them.
+    scene.length = 0.7;
+    const BoxViews band = box_views(scene, seed, 0.2, 0.01, M_PI / 2);
+    const TargetOutcome m = find_landing_target(band.view.c, params, band.image_1, band.image_2);
+    ASSERT_EQ(m.reason, Reason::kOk) << "seed " << seed << ": " << to_string(m.reason);
+    expect_measured(m, scene, 0.015, 0.01, seed);
   }
 }
 
