@@ -463,10 +463,11 @@ struct SideSearch {
 // floor's alone those on the floor. The top runs on over offsets [j_from, j_to) (pixels past the
 // side) where the former are at least kRunsOnMinShare of those seen there and at least twice the
 // latter: half a floor's texture tells it, and a tenth is over the few pixels that fit both
-// planes by chance on a smooth top or floor. Unseen where under half of those offsets' pixels
-// are in both views (by either plane): there the views tell nothing.
+// planes by chance on a smooth top or floor. Smooth where neither share reaches that tenth.
+// Unseen where under half of those offsets' pixels are in both views (by either plane): there
+// the views tell nothing.
 constexpr double kRunsOnMinShare = 0.1;
-enum class Past { kEnds, kRunsOn, kUnseen };
+enum class Past { kEnds, kRunsOn, kSmooth, kUnseen };
 Past top_runs_on(const Correspondences& c, const cv::Mat& gray_1, const EndSearch& s,
                  const Matrix3d& H_12_floor, int j_from, int j_to) {
   int cells = 0, seen = 0, top_only = 0, floor_only = 0;
@@ -486,9 +487,9 @@ Past top_runs_on(const Correspondences& c, const cv::Mat& gray_1, const EndSearc
       floor_only += on_floor && !on_top;
     }
   if (2 * seen < cells) return Past::kUnseen;
-  return top_only > 0 && top_only >= kRunsOnMinShare * seen && top_only >= 2 * floor_only
-             ? Past::kRunsOn
-             : Past::kEnds;
+  if (top_only > 0 && top_only >= kRunsOnMinShare * seen && top_only >= 2 * floor_only)
+    return Past::kRunsOn;
+  return floor_only >= kRunsOnMinShare * seen ? Past::kEnds : Past::kSmooth;
 }
 
 // What a side's search read: its rim (or end), else what lies past it.
@@ -518,6 +519,21 @@ Past past_side(const SideSearch& q, const Side& side, const EndSearch& cal, doub
   return top_runs_on(q.c, q.gray_1, s, q.H_12_floor, s.j_lo, s.j_hi);
 }
 
+// A smooth stretch the walk meets from `from_m` past the side may be bare print between rows of
+// lettering or a photograph's soft area, the top running on past it: the top shows again within
+// the end search's reach (kTopEndSearchM, a bare margin or band of print) before the floor
+// does. The stretch's length (to where the top shows again), or 0 where the floor shows first,
+// the view ends, or the reach is smooth throughout.
+double smooth_gap(const SideSearch& q, const Side& side, const EndSearch& cal, double from_m) {
+  const double step_m = 0.5 * kRimSearchM;
+  for (double d = step_m; d <= kTopEndSearchM; d += step_m) {
+    const Past p = past_side(q, side, cal, from_m + d, from_m + d + step_m);
+    if (p == Past::kRunsOn) return d;
+    if (p != Past::kSmooth) return 0.0;
+  }
+  return 0.0;
+}
+
 // How far past the features a side the top runs on past is followed: a top's side can lie a
 // large part of its length past features that cover a band of it.
 constexpr double kRunOnMaxM = 1.0;
@@ -527,10 +543,12 @@ constexpr double kRunOnMaxM = 1.0;
 // side without either past which the top runs on (over the second half of the rim search's reach,
 // so the top lies beyond half that reach) is walked outward half the rim search's reach
 // (kRimSearchM) at a time, while the top runs on over the next half reach, up to kRunOnMaxM.
-// Where it stops running on, the rim or end lies within the rim search's reach of the walk: the
-// rim is read there (one past which the top runs on too is print on the top, not its rim), else
-// the end; a stretch that tells neither way (smooth print, a smooth floor) leaves the side where
-// the walk stands, as far out as the top was seen. A walk that leaves the view, or kRunOnMaxM,
+// A smooth stretch past which the top shows again within the end search's reach is stepped
+// over (smooth_gap: bare print between rows). Where the top stops running on, the rim or end
+// lies within the rim search's reach of the walk: the rim is read there (one past which the top
+// runs on too is print on the top, not its rim), else the end; a stretch that tells neither way
+// to the end search's reach (smooth print, a smooth floor) leaves the side where the walk stands,
+// as far out as the top was seen. A walk that leaves the view, or kRunOnMaxM,
 // while the top runs on reports it running on (kRunsOn: its extent unseen). Without `walk`, the
 // rim and the end only.
 SideRead side_rim(const SideSearch& q, const TopRect& rect, int k, int sign, bool walk = true) {
@@ -555,6 +573,11 @@ SideRead side_rim(const SideSearch& q, const TopRect& rect, int k, int sign, boo
     const Past next = past_side(q, side, *s, past + step_m, past + 2 * step_m);
     if (next == Past::kUnseen) return {std::nullopt, Past::kRunsOn};
     if (next == Past::kRunsOn) continue;
+    const double gap = next == Past::kSmooth ? smooth_gap(q, side, *s, past + step_m) : 0.0;
+    if (gap > 0) {
+      past += gap;
+      continue;
+    }
     Side out = side;
     out.base_W += past * side.out_W;
     if (const auto rim = rim_offset(q.c, q.gray_1, q.gray_2, q.H_12_top, q.X_WC2, out, q.step_m);

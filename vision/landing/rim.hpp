@@ -48,7 +48,8 @@
 // top's plane, not the floor's; past a true edge over a busy floor they follow the floor's, and
 // a smooth floor tells neither way (the side then stands where the features put it). A side the
 // top runs on past is walked outward and read again until a rim or an end past which the top
-// does not run on; a walk that leaves the view while the top runs on reports it (the top is
+// does not run on, stepping over smooth stretches past which the top shows again (bare print
+// between rows); a walk that leaves the view while the top runs on reports it (the top is
 // located, not measured: its extent there is unseen).
 
 #include <opencv2/core.hpp>
