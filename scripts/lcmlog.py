@@ -18,6 +18,7 @@ import os
 import re
 import struct
 import sys
+import time
 
 SYNC = 0xEDA1DA01
 _HEADER = struct.Struct(">IqqII")  # sync, event number, utime, channel length, data length
@@ -71,6 +72,40 @@ def read_events(path, channel_regex=None):
             channel = channel.decode("utf-8", "replace")
             if pattern is None or pattern.fullmatch(channel):
                 yield Event(eventnum, utime, channel, data)
+
+
+def wait_started(procs, out_path, marker, log_path, timeout_s):
+    """Waits until a node's output (out_path) holds `marker`, the line it logs once subscribed,
+    and lcm-logger has created log_path (it does as it subscribes): what is played before both
+    listen is lost, and a loaded machine starts them late. False where a process in `procs`
+    exits or timeout_s passes first."""
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        if any(p.poll() is not None for p in procs):
+            return False
+        with open(out_path, errors="replace") as f:
+            up = marker in f.read()
+        if up and os.path.exists(log_path):
+            return True
+        time.sleep(0.05)
+    return False
+
+
+def wait_logged(path, n, quiet_s, timeout_s):
+    """Waits until the log being written at `path` holds n events, or none more come for quiet_s
+    (those it lacks are lost; the caller's comparison says which): the last messages through a
+    node and a logger arrive late on a loaded machine, not within a fixed time."""
+    last, since = -1, time.monotonic()
+    deadline = since + timeout_s
+    while time.monotonic() < deadline:
+        got = sum(1 for _ in read_events(path)) if os.path.exists(path) else 0
+        if got >= n:
+            return
+        if got != last:
+            last, since = got, time.monotonic()
+        elif time.monotonic() - since > quiet_s:
+            return
+        time.sleep(0.1)
 
 
 def write_events(path, events):

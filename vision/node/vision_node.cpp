@@ -244,6 +244,10 @@ int main(int argc, char** argv) {
           pairing.counts().timed_out, pairing.counts().unavailable, pairing.counts().queue_full,
           c.rejected_values + c.rejected_stamps, n_frame_errors, c.dropped, n_late);
     });
+    // Said once subscribed: what is published before this is not heard (scripts/replay-vision
+    // waits for it).
+    spdlog::info("alight-vision: listening on {} and {}", node.channel_name(channels::kCamera),
+                 node.channel_name(channels::kMocapPose));
     return node.run();
   });
 }
