@@ -18,9 +18,8 @@ TargetOutcome refuse(TargetOutcome out, Reason reason) {
 // The platform on the planes of one source: the gates on the planes, the top's features on its
 // plane, the level gate, the features' rectangle and its measurement, the height gate, the cut
 // by the border, the photometric gate, then on a top seen whole the extent out to its rims (or
-// the top seen running on past a side, located only). Each
-// refusal is the first that applies, in that order; `out` carries the labels of the source's
-// first plane and its counts.
+// the top seen running on past a side, located only). Each refusal is the first that applies,
+// in that order; `out` carries the labels of the source's first plane and its counts.
 TargetOutcome platform_of(const Correspondences& c, const PipelineParams& params,
                           const LandingPlanes& planes, TargetOutcome out, const cv::Mat& gray_1,
                           const cv::Mat& gray_2) {
