@@ -402,6 +402,19 @@ bool off_top_beyond(const EndSearch& s, const std::vector<double>& f, const Eige
 // The floor's plane explains at least half of the pixels beyond the end that the top's does not
 // (a floor, not a second top or a side face). H_12_floor takes a current ray to the reference's
 // ray of the same point on the floor's plane.
+// How far the floor's plane is from explaining the grid's pixel `at` on line i: the current
+// grey against the reference's at the same point of the floor's plane (H_12_floor takes a current
+// ray to the reference's ray of that point), evened by the search's gain; nullopt where the
+// reference does not see that point.
+std::optional<double> e_floor(const Correspondences& c, const cv::Mat& gray_1, const EndSearch& s,
+                              const Matrix3d& H_12_floor, int i, std::ptrdiff_t at) {
+  const Vector3d r1 = H_12_floor * s.grid.point_C2(i, static_cast<int>(at % s.grid.n_g));
+  double v1_floor;
+  const auto u1 = r1.z() > 0 ? c.pixel1(r1) : std::nullopt;
+  if (!u1 || !bilinear_inside(gray_1, *u1, &v1_floor)) return std::nullopt;
+  return std::abs(s.grid.g2[at] - s.gain * v1_floor);
+}
+
 bool floor_beyond(const Correspondences& c, const cv::Mat& gray_1, const EndSearch& s,
                   const Side& side, const Matrix3d& H_12_floor, int j_end, double slope) {
   int off_top = 0, on_floor = 0;
@@ -411,11 +424,8 @@ bool floor_beyond(const Correspondences& c, const cv::Mat& gray_1, const EndSear
       const auto at = s.cell(i, j + shift);
       if (at < 0 || s.grid.g2[at] < 0 || s.e_top(at) <= s.tau) continue;
       ++off_top;
-      const Vector3d r1 = H_12_floor * s.grid.point_C2(i, static_cast<int>(at % s.grid.n_g));
-      double v1_floor;
-      const auto u1 = r1.z() > 0 ? c.pixel1(r1) : std::nullopt;
-      on_floor += u1 && bilinear_inside(gray_1, *u1, &v1_floor) &&
-                  std::abs(s.grid.g2[at] - s.gain * v1_floor) <= s.tau;
+      const auto e = e_floor(c, gray_1, s, H_12_floor, i, at);
+      on_floor += e && *e <= s.tau;
     }
   }
   return 2 * on_floor >= off_top;
@@ -476,13 +486,11 @@ Past top_runs_on(const Correspondences& c, const cv::Mat& gray_1, const EndSearc
       const auto at = s.cell(i, j);
       ++cells;
       if (at < 0 || s.grid.g2[at] < 0) continue;
-      const Vector3d r1 = H_12_floor * s.grid.point_C2(i, static_cast<int>(at % s.grid.n_g));
-      double v1_floor;
-      const auto u1 = r1.z() > 0 ? c.pixel1(r1) : std::nullopt;
-      if (!u1 || !bilinear_inside(gray_1, *u1, &v1_floor)) continue;
+      const auto e = e_floor(c, gray_1, s, H_12_floor, i, at);
+      if (!e) continue;
       ++seen;
       const bool on_top = s.e_top(at) <= s.tau;
-      const bool on_floor = std::abs(s.grid.g2[at] - s.gain * v1_floor) <= s.tau;
+      const bool on_floor = *e <= s.tau;
       top_only += on_top && !on_floor;
       floor_only += on_floor && !on_top;
     }
