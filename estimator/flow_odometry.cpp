@@ -449,6 +449,13 @@ std::vector<Vector2d> FlowOdometry::feature_pixels() const {
   return out;
 }
 
+std::optional<double> gain_compensation(double previous_mean, double current_mean) {
+  if (!(previous_mean >= kMinMeanForGain && current_mean >= kMinMeanForGain)) return std::nullopt;
+  const double scale = previous_mean / current_mean;
+  if (std::abs(scale - 1.0) <= kGainTolerance) return std::nullopt;
+  return scale;
+}
+
 FlowResult FlowOdometry::finish(FlowResult r) {
   ++counts_[static_cast<size_t>(r.reason)];
   r.features = static_cast<int>(points_.size());
@@ -529,6 +536,7 @@ FlowResult FlowOdometry::add_frame(const cv::Mat& gray, int64_t utime, const Mat
   const int max_level =
       cv::buildOpticalFlowPyramid(level, pyramid, window_, t.pyramid_levels, true,
                                   cv::BORDER_REFLECT_101, cv::BORDER_CONSTANT, false);
+  const double level_mean = cv::mean(level)[0];
 
   const double dt_s = have_previous_ ? static_cast<double>(utime - previous_utime_) * 1e-6 : 0.0;
   const bool rotation_ok = R_C2C1.allFinite() && is_rotation(R_C2C1, 1e-6);
@@ -557,13 +565,23 @@ FlowResult FlowOdometry::add_frame(const cv::Mat& gray, int64_t utime, const Mat
           next[i] = cv::Point2f(static_cast<float>(px->x() / s), static_cast<float>(px->y() / s));
       }
     }
+    // This frame as the previous one's brightness would show it (the sensor's gain step).
+    std::vector<cv::Mat> matched;
+    if (previous_mean_ > 0) r.gain = level_mean / previous_mean_;
+    if (const auto scale = gain_compensation(previous_mean_, level_mean)) {
+      cv::Mat scaled;
+      level.convertTo(scaled, CV_8U, *scale);
+      cv::buildOpticalFlowPyramid(scaled, matched, window_, t.pyramid_levels, true,
+                                  cv::BORDER_REFLECT_101, cv::BORDER_CONSTANT, false);
+    }
+    const std::vector<cv::Mat>& current = matched.empty() ? pyramid : matched;
     std::vector<uint8_t> ok_fwd, ok_bwd;
     std::vector<float> err;
-    cv::calcOpticalFlowPyrLK(previous_pyramid_, pyramid, points_, next, ok_fwd, err, window_,
+    cv::calcOpticalFlowPyrLK(previous_pyramid_, current, points_, next, ok_fwd, err, window_,
                              max_level, lk_criteria_, cv::OPTFLOW_USE_INITIAL_FLOW);
     // Back from where it was found, started at the same displacement the forward pass assumed.
     for (size_t i = 0; i < points_.size(); ++i) back[i] = points_[i];
-    cv::calcOpticalFlowPyrLK(pyramid, previous_pyramid_, next, back, ok_bwd, err, window_,
+    cv::calcOpticalFlowPyrLK(current, previous_pyramid_, next, back, ok_bwd, err, window_,
                              max_level, lk_criteria_, cv::OPTFLOW_USE_INITIAL_FLOW);
     const double lo = t.border_px / s;
     const double hi_x = level_size_.width - 1 - t.border_px / s;
@@ -619,6 +637,7 @@ FlowResult FlowOdometry::add_frame(const cv::Mat& gray, int64_t utime, const Mat
   }
 
   previous_pyramid_ = std::move(pyramid);
+  previous_mean_ = level_mean;
   previous_utime_ = utime;
   have_previous_ = true;
   last_t_over_d_ = t_over_d;

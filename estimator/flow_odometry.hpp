@@ -44,7 +44,14 @@
 // Front end: Shi-Tomasi corners (goodFeaturesToTrack, Shi & Tomasi 1994) spread over a grid,
 // pyramidal Lucas-Kanade (Bouguet 2000) from the previous frame with a forward-backward check
 // (Kalal, Mikolajczyk & Matas 2010), started where R_C2C1 and the last u predict; new corners
-// when too few tracks survive. Pure: no LCM, no clock, no files; time is the frames' utime.
+// when too few tracks survive. Lucas-Kanade assumes each patch keeps its brightness, but the
+// sensor's automatic gain and the lights' flicker step the whole image by several percent from
+// one frame to the next; at the coarse pyramid levels, where a sparse floor (tiles' grout) leaves
+// only the shading of large patches, such a step reads as motion and sends the tracks off the
+// image. So the current frame is tracked scaled by the ratio of the two frames' mean grey levels
+// (gain_compensation: one multiplicative gain for the whole image, the sensor's model; Jin,
+// Favaro & Soatto 2001 fit a gain and an offset per patch instead); detection reads the frame
+// as it is. Pure: no LCM, no clock, no files; time is the frames' utime.
 
 #include <array>
 #include <cstdint>
@@ -110,13 +117,25 @@ std::optional<Eigen::Vector2d> predict_pixel(const CameraModel& camera,
                                              const Eigen::Vector3d& n_C1,
                                              const Eigen::Vector3d& t_over_d_C1);
 
+/// Two frames' mean grey levels (at the tracking level) agreeing this closely are tracked as
+/// they are: a quarter of a grey level at full scale, below the images' quantisation.
+inline constexpr double kGainTolerance = 1e-3;
+/// Below this mean grey level a frame is black: no ratio is taken from it.
+inline constexpr double kMinMeanForGain = 1.0;
+
+/// The factor that brings the current frame to the previous frame's brightness, previous_mean /
+/// current_mean, when both frames are lit (kMinMeanForGain) and the factor is more than
+/// kGainTolerance from 1; nullopt otherwise (track the frame as it is).
+std::optional<double> gain_compensation(double previous_mean, double current_mean);
+
 /// What a frame pair produced, also without a sample.
 struct FlowResult {
   std::optional<FlowSample> sample;  ///< set exactly when reason == kOk
   FlowReason reason = FlowReason::kOk;
-  int tracked = 0;   ///< features of the previous frame found again (after the FB check)
-  int detected = 0;  ///< new features detected in this frame
-  int features = 0;  ///< features carried to the next frame
+  int tracked = 0;    ///< features of the previous frame found again (after the FB check)
+  int detected = 0;   ///< new features detected in this frame
+  int features = 0;   ///< features carried to the next frame
+  double gain = 1.0;  ///< this frame's mean grey level over the previous one's (1: no pair)
   explicit operator bool() const { return sample.has_value(); }
 };
 
@@ -159,6 +178,7 @@ class FlowOdometry {
   bool have_previous_ = false;
   int64_t previous_utime_ = 0;
   std::vector<cv::Mat> previous_pyramid_;
+  double previous_mean_ = 0.0;         // the previous frame's mean grey level (tracking level)
   std::vector<cv::Point2f> points_;    // tracking-level pixels of the previous frame's features
   std::vector<Eigen::Vector3d> rays_;  // their normalised rays
   std::optional<Eigen::Vector3d> last_t_over_d_;  // of the last pair, for the prediction

@@ -1,9 +1,10 @@
 // Flow odometry cost per 640x480 frame on one thread (OpenCV too: cv::setNumThreads(1), as the
 // node will run it), on frames rendered beforehand by the simulator: a downward camera at 1.5 m
 // flying 0.86 m/s and wobbling up to 40 deg/s over the scenarios' noise floor and over tiles of
-// 30 cm (few corners). Half and full resolution, Lucas-Kanade windows, two feature budgets; and
-// the fit alone on 150 correspondences with 30 % outliers. The CPU column is the one to read on a
-// shared machine.
+// 30 cm (few corners). Half and full resolution, Lucas-Kanade windows, two feature budgets; the
+// same flights under a sensor gain that steps by up to 10 % a frame (flicker: the tracking's gain
+// compensation at work, its cost the difference from the steady flight); and the fit alone on 150
+// correspondences with 30 % outliers. The CPU column is the one to read on a shared machine.
 //   build/bin/flow_bench [--benchmark_filter=...]
 
 #include <benchmark/benchmark.h>
@@ -32,7 +33,7 @@ struct Frame {
   Vector3d p_W_C;
 };
 
-std::vector<Frame> render_flight(const std::string& floor, int n) {
+std::vector<Frame> render_flight(const std::string& floor, int n, bool flicker) {
   sim::TextureSpec t;
   t.kind = floor;
   t.size_px = floor == "tiles" ? 1024 : 2048;
@@ -46,13 +47,16 @@ std::vector<Frame> render_flight(const std::string& floor, int n) {
   std::vector<Frame> frames;
   Matrix3d R_WB = rotation_from_rpy(2 * kDeg, -3 * kDeg, 0.3);
   cv::RNG rng(1);
+  std::mt19937_64 gains(2);
+  std::uniform_real_distribution<float> jitter(-0.1f, 0.1f);
   for (int k = 0; k < n; ++k) {
     const double t_s = k / 30.0;
     Frame f;
     f.utime = 1'700'000'000'000'000 + static_cast<int64_t>(std::llround(t_s * 1e6));
     f.R_WC = R_WB * R_BC_downward();
     f.p_W_C = Vector3d(0.8 * t_s, 0.3 * t_s, 1.5);
-    cv::Mat img = renderer.render(scene, make_transform(f.R_WC, f.p_W_C)), fl,
+    const float gain = flicker ? 1.f + jitter(gains) : 1.f;
+    cv::Mat img = renderer.render(scene, make_transform(f.R_WC, f.p_W_C), gain), fl,
             noise(img.size(), CV_32F);
     img.convertTo(fl, CV_32F);
     rng.fill(noise, cv::RNG::NORMAL, 0.0, 2.0);
@@ -64,15 +68,16 @@ std::vector<Frame> render_flight(const std::string& floor, int n) {
   return frames;
 }
 
-const std::vector<Frame>& flight(const std::string& floor) {
-  static std::map<std::string, std::vector<Frame>> cache;
-  auto it = cache.find(floor);
-  if (it == cache.end()) it = cache.emplace(floor, render_flight(floor, 90)).first;
+const std::vector<Frame>& flight(const std::string& floor, bool flicker) {
+  static std::map<std::pair<std::string, bool>, std::vector<Frame>> cache;
+  auto it = cache.find({floor, flicker});
+  if (it == cache.end())
+    it = cache.emplace(std::make_pair(floor, flicker), render_flight(floor, 90, flicker)).first;
   return it->second;
 }
 
-void BM_FlowFrame(benchmark::State& state, const std::string& floor) {
-  const auto& frames = flight(floor);
+void BM_FlowFrame(benchmark::State& state, const std::string& floor, bool flicker) {
+  const auto& frames = flight(floor, flicker);
   FlowFrontParams params;
   params.track.downsample = static_cast<int>(state.range(0));
   params.track.max_features = static_cast<int>(state.range(1));
@@ -137,7 +142,7 @@ void BM_Fit(benchmark::State& state) {
 }
 
 // Args: downsample, max_features, window_px (the defaults: 1, 160, 15).
-BENCHMARK_CAPTURE(BM_FlowFrame, noise, std::string("noise"))
+BENCHMARK_CAPTURE(BM_FlowFrame, noise, std::string("noise"), false)
     ->Args({1, 160, 15})
     ->Args({1, 160, 11})
     ->Args({1, 160, 21})
@@ -145,9 +150,15 @@ BENCHMARK_CAPTURE(BM_FlowFrame, noise, std::string("noise"))
     ->Args({0, 160, 21})
     ->Args({1, 300, 15})
     ->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_FlowFrame, tiles, std::string("tiles"))
+BENCHMARK_CAPTURE(BM_FlowFrame, tiles, std::string("tiles"), false)
     ->Args({1, 160, 15})
     ->Args({0, 160, 15})
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_FlowFrame, noise_flicker, std::string("noise"), true)
+    ->Args({1, 160, 15})
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_FlowFrame, tiles_flicker, std::string("tiles"), true)
+    ->Args({1, 160, 15})
     ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Fit)->Unit(benchmark::kMicrosecond);
 
