@@ -77,6 +77,9 @@ struct FilterState {
   int64_t last_imu_gap_utime = 0;                        ///< end of the latest IMU gap (0: none)
   int64_t terrain_resets = 0;
   int64_t flow_on_floor = 0;           ///< flow samples judged against the floor, not the terrain
+  int64_t flow_gated_since_utime = 0;  ///< first of the flow's current run of refusals (0: none)
+  int64_t flow_gated_last_utime = 0;   ///< latest of that run
+  int64_t flow_inflated = 0;  ///< flow samples fused with their noise inflated after a run refused
   int64_t baro_gated_since_utime = 0;  ///< first of the baro's current run of refusals (0: none)
   int64_t baro_resets = 0;
 

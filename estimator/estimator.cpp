@@ -14,6 +14,9 @@ constexpr double kUsPerS = 1e6;
 // A barometer reading outside this is not an altitude anyone flies at (about -600 m to 9 km).
 constexpr double kMinPressurePa = 30000.0;
 constexpr double kMaxPressurePa = 110000.0;
+// The median of the chi-square distribution with 3 degrees of freedom: a flow sample's typical
+// normalised innovation.
+constexpr double kChi2Median3Dof = 2.366;
 
 int64_t to_us(double s) { return static_cast<int64_t>(std::llround(s * kUsPerS)); }
 
@@ -505,7 +508,29 @@ Outcome Estimator::apply_flow(const FlowSample& m, int64_t key, FilterState& s) 
         ++s.flow_on_floor;
       }
     }
-    o = fuse(s, r, H, R, p.gate_chi2);
+    double nis = 0;
+    o = fuse(s, r, H, R, p.gate_chi2, &nis);
+    // A run of samples the gate refuses says the model and the flow disagree by more than either
+    // knows: a plane the model does not have (a top in the camera's view while the rangefinder
+    // sees the floor, whose features outnumber a sparse floor's), not an outlier. Left to the IMU
+    // the estimate drifts until the flow can never pass again and the health goes DEGRADED. Past
+    // half the flow timeout of refusals on end (a refusal after as long a silence starts a run,
+    // so a lone outlier never passes) the sample is fused with its noise scaled so that its
+    // innovation is a typical one (covariance matching; Mehra 1972): the estimate follows the flow
+    // loosely, its covariance grows with the disagreement, and the health stays honest about a flow
+    // that even so does not fit.
+    const int64_t run_us = to_us(0.5 * params_.health.flow_timeout_s);
+    if (o == Outcome::kGate) {
+      if (s.flow_gated_since_utime == 0 || m.utime_to - s.flow_gated_last_utime > run_us)
+        s.flow_gated_since_utime = m.utime_to;
+      s.flow_gated_last_utime = m.utime_to;
+    }
+    if (o == Outcome::kGate && std::isfinite(nis) &&
+        m.utime_to - s.flow_gated_since_utime >= run_us) {
+      o = fuse(s, r, H, R * (nis / kChi2Median3Dof), p.gate_chi2);
+      if (o == Outcome::kFused) ++s.flow_inflated;
+    }
+    if (o == Outcome::kFused) s.flow_gated_since_utime = 0;
   }
   remove_clone(s, ci);
   return o;
@@ -547,6 +572,7 @@ State Estimator::state() const {
   out.cov = s.P.topLeftCorner<idx::kCore, idx::kCore>();
   out.counters.terrain_resets = s.terrain_resets;
   out.counters.flow_on_floor = s.flow_on_floor;
+  out.counters.flow_inflated = s.flow_inflated;
   out.counters.baro_resets = s.baro_resets;
 
   const auto& h = params_.health;

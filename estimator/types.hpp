@@ -97,6 +97,9 @@ struct Counters {
   int64_t terrain_resets = 0;  ///< platform steps: terrain state reset from the rangefinder
   /// Flow samples fused against the floor while the rangefinder's terrain was a platform's top.
   int64_t flow_on_floor = 0;
+  /// Flow samples fused with their noise inflated to their innovation, after the gate had refused
+  /// the flow for half of health.flow_timeout_s (Estimator::apply_flow).
+  int64_t flow_inflated = 0;
   int64_t baro_resets = 0;  ///< baro offset started over after baro.reset_after_s refused
   int64_t imu_gaps = 0;     ///< IMU intervals longer than health.imu_gap_s
   int64_t replays = 0;      ///< re-propagations from the history for delayed inputs

@@ -414,6 +414,7 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
     r.flow_rejected = s.counters.rejected(estimator::Sensor::kFlow);
     r.terrain_resets = static_cast<int>(s.counters.terrain_resets);
     r.flow_on_floor = s.counters.flow_on_floor;
+    r.flow_inflated = s.counters.flow_inflated;
     const auto& flow_counts = onboard->onboard().flow().counts();
     r.flow_reasons.assign(flow_counts.begin(), flow_counts.end());
     if (truth.platform || truth.opening)

@@ -127,6 +127,7 @@ struct ClosedLoopResult {
   std::string estimate_reasons;  ///< every health reason seen in flight, "no_flow|no_range"
   int64_t flow_fused = 0, flow_rejected = 0;  ///< the filter's verdicts on flow samples
   int64_t flow_on_floor = 0;  ///< ... judged against the floor while over the platform
+  int64_t flow_inflated = 0;  ///< ... fused with their noise inflated after a run refused
   /// The flow front end's frame pairs by outcome (estimator::FlowReason order): why it gave
   /// no sample.
   std::vector<int64_t> flow_reasons;
