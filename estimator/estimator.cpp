@@ -517,8 +517,8 @@ Outcome Estimator::apply_flow(const FlowSample& m, int64_t key, FilterState& s) 
     // half the flow timeout of refusals on end (a refusal after as long a silence starts a run,
     // so a lone outlier never passes) the sample is fused with its noise scaled so that its
     // innovation is a typical one (covariance matching; Mehra 1972): the estimate follows the flow
-    // loosely, its covariance grows with the disagreement, and the health stays honest about a flow
-    // that even so does not fit.
+    // loosely, its covariance shrinks only as far as the inflated noise allows, and a flow that
+    // even so does not pass (the state's own uncertainty dominating) still times out to DEGRADED.
     const int64_t run_us = to_us(0.5 * params_.health.flow_timeout_s);
     if (o == Outcome::kGate) {
       if (s.flow_gated_since_utime == 0 || m.utime_to - s.flow_gated_last_utime > run_us)
