@@ -62,10 +62,19 @@ FAMILIES = {
     "ingress_smooth_wall": "a photographed wall with large smooth regions and a busy photographed "
                            "room behind the opening",
     "landing_moving_cart": "a platform on a flat cart going round a path (line, circle, figure "
-                           "eight) at 0.5-1 m/s, photographed floor, wind",
-    "landing_deck": "a platform on a boat's deck going round a path at 0.2-0.5 m/s, heaving up to "
-                    "5 cm and rolling and pitching up to 3 deg (random sea, 0.2-0.5 Hz), wind",
+                           "eight) at 0.5-1 m/s, slowing for its turns (course turning at 8-15 "
+                           "deg/s), half of them turning with the path, photographed floor, wind",
+    "landing_deck": "a platform on a boat's deck going round a path at 0.2-0.5 m/s, slowing for "
+                    "its turns as the cart does, heaving up to 5 cm and rolling and pitching up "
+                    "to 3 deg (random sea, 0.2-0.5 Hz), wind",
+    "landing_moving_cart_agile": "the paths of landing_moving_cart taken at full speed through "
+                                 "their 0.4-0.8 m turns (the course turning at 36-143 deg/s, "
+                                 "past the issue's 15 deg/s), the heading kept",
+    "landing_deck_agile": "the paths of landing_deck taken at full speed through their turns "
+                          "(14-72 deg/s), the heading kept",
 }
+# Families that fly another's scenes with one thing changed (the same draws, the same seed).
+AGILE = {"landing_moving_cart_agile": "landing_moving_cart", "landing_deck_agile": "landing_deck"}
 
 # The simulator's limits for a moving platform (sim/params.hpp, PlatformMotionParams).
 MAX_PLATFORM_SPEED_MPS = 1.0
@@ -450,6 +459,20 @@ def _moving_platform(rng, scene, speed_range, deck):
     raise RuntimeError("no place for the path %r" % motion)
 
 
+def _turning(rng, scene):
+    """How the platform takes its path's turns, from a stream of its own (the path, its place and
+    the rest of the scene are drawn as before it): slowing for them so that its course turns at
+    most 8-15 deg/s, the issue's bound on a platform's turn (a cart, a car's roof or a boat turns
+    no tighter at these speeds), and in half of the scenes turning with its path as a cart does
+    (then with no turn of its own added, the sum within the bound)."""
+    m = scene["platform"]["motion"]
+    m["max_course_rate_dps"] = round(rng.uniform(8.0, MAX_PLATFORM_RATE_DPS), 2)
+    if rng.random() < 0.5:
+        m["heading_follows_path"] = True
+        m["yaw_rate_dps"] = 0.0
+    return scene
+
+
 def draw(family, seed):
     """The scenario (a dict, as a config/scenarios file holds) that `seed` draws from `family`
     (a base family, optionally with camera effects: landing_photo+rolling_shutter)."""
@@ -457,7 +480,13 @@ def draw(family, seed):
     if not known(family):
         raise KeyError("unknown scene family '%s' (known: %s; effects: %s)"
                        % (family, ", ".join(sorted(FAMILIES)), ", ".join(EFFECTS)))
-    s = _draw(base, seed)
+    if base in AGILE:  # the same scene, the turns at full speed
+        s = _draw(AGILE[base], seed)
+        s["name"] = base
+    else:
+        s = _draw(base, seed)
+        if base in AGILE.values():
+            _turning(random.Random("%s/%d/turns" % (base, seed)), s)
     for e in effects:
         _effect(random.Random("%s/%d/%s" % (base, seed, e)), e, s)
     if effects:

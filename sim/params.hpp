@@ -92,7 +92,14 @@ struct PlatformMotionParams {
   double path_length_m = 2.0;
   double path_radius_m = 1.0;
   bool heading_follows_path = false;  ///< a cart turns with its path; false: it keeps its yaw
-  double yaw_rate_dps = 0.0;          ///< a constant turn about world z (added)
+  /// The path's turns are taken at most this fast, the course turning at speed / radius [deg/s]:
+  /// a cart slows for its turns (at kTurnAccelMps2) and speeds up after. 0: every turn at
+  /// speed_mps.
+  double max_course_rate_dps = 0.0;
+  /// How fast a cart slows for a turn and speeds up after it [m/s^2]: a car's gentle braking
+  /// (0.05 g), well within what the vehicle following it can match.
+  static constexpr double kTurnAccelMps2 = 0.5;
+  double yaw_rate_dps = 0.0;  ///< a constant turn about world z (added)
   // Sines: amplitude * sin(2 pi frequency t + phase).
   double heave_amplitude_m = 0.0, heave_frequency_hz = 0.3, heave_phase_deg = 0.0;
   double roll_amplitude_deg = 0.0, roll_frequency_hz = 0.3, roll_phase_deg = 0.0;
@@ -105,6 +112,9 @@ struct PlatformMotionParams {
 
   /// Upper bound of the top centre's speed over all time [m/s].
   double peak_speed_bound_mps() const;
+  /// The speed along the path in its turns [m/s]: speed_mps, or less where max_course_rate_dps
+  /// bounds the course's turn rate on path_radius_m.
+  double turn_speed_mps() const;
   /// Upper bounds of the turn rates about world z, and of the roll and pitch rates [deg/s].
   double peak_yaw_rate_dps() const;
   double peak_roll_rate_dps() const;

@@ -1,6 +1,7 @@
 // The simulator's parameters declared (common/param_schema.hpp): pure (part of alight_sim), so a
 // test or a closed-loop harness that fills the structs in code gets the same checks as a loaded
 // file. Loading files (and image textures) is in params.cpp.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <functional>
@@ -132,9 +133,14 @@ double PlatformMotionParams::peak_speed_bound_mps() const {
   return velocity_mps.norm() + along_path + heave_rate;
 }
 
+double PlatformMotionParams::turn_speed_mps() const {
+  if (max_course_rate_dps <= 0) return speed_mps;
+  return std::min(speed_mps, path_radius_m * max_course_rate_dps * M_PI / 180.0);
+}
+
 double PlatformMotionParams::peak_yaw_rate_dps() const {
   const bool turns = heading_follows_path && path != "none";
-  const double path_rate = turns ? speed_mps / path_radius_m * 180.0 / M_PI : 0.0;
+  const double path_rate = turns ? turn_speed_mps() / path_radius_m * 180.0 / M_PI : 0.0;
   return std::abs(yaw_rate_dps) + path_rate;
 }
 
@@ -175,12 +181,17 @@ const ParamSchema<PlatformMotionParams>& PlatformMotionParams::schema() {
     s.add("path_radius_m", &P::path_radius_m, Range::open_closed(0.05, 20), "m",
           "the turns' radius (line, circle, figure_eight)");
     s.add("heading_follows_path", &P::heading_follows_path, Range::any(), "",
-          "the platform turns with its path as a cart does (yaw rate speed_mps / path_radius_m "
-          "in the turns); false: it keeps its yaw")
+          "the platform turns with its path as a cart does (yaw rate: the speed in the turns / "
+          "path_radius_m); false: it keeps its yaw")
         .check_with([](const P& p) {
           return over_limit(p.peak_yaw_rate_dps(), kMaxRateDps, "deg/s",
-                            "its turn rate (|yaw_rate_dps| + speed_mps / path_radius_m)");
+                            "its turn rate (|yaw_rate_dps| + the speed in the turns / "
+                            "path_radius_m)");
         });
+    s.add("max_course_rate_dps", &P::max_course_rate_dps, Range::closed(0, 360), "deg/s",
+          "the turns are taken at most this fast (speed / path_radius_m), slowing for them and "
+          "speeding up after at " +
+              number(kTurnAccelMps2) + " m/s^2 as a cart does; 0: every turn at speed_mps");
     s.add("yaw_rate_dps", &P::yaw_rate_dps, Range::closed(-kMaxRateDps, kMaxRateDps), "deg/s",
           "a constant turn about world z, added");
     // A sine's amplitude, frequency and phase; its peak rate (with the sea state's) bounded. A

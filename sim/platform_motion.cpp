@@ -17,6 +17,25 @@ PlatformMotion::PathPoint arc(double r, double u, double sign) {
   p.curvature = sign / r;
   return p;
 }
+// A straight of length L entered and left at v_in, at most v_max between, speeding up and
+// slowing at a: the distance and speed `tau` seconds after entering it (0 <= tau < duration()).
+struct Straight {
+  double v_in, v_peak, a, t_ramp, t_cruise;
+  Straight(double L, double v_in_, double v_max, double a_) : v_in(v_in_), a(a_) {
+    const double ramp = (v_max * v_max - v_in * v_in) / (2.0 * a);
+    v_peak = 2.0 * ramp <= L ? v_max : std::sqrt(v_in * v_in + a * L);
+    t_ramp = (v_peak - v_in) / a;
+    t_cruise = 2.0 * ramp <= L ? (L - 2.0 * ramp) / v_max : 0.0;
+  }
+  double duration() const { return 2.0 * t_ramp + t_cruise; }
+  PlatformMotion::Travel at(double tau) const {
+    const double up = (v_peak * v_peak - v_in * v_in) / (2.0 * a);
+    if (tau < t_ramp) return {v_in * tau + 0.5 * a * tau * tau, v_in + a * tau};
+    if (tau < t_ramp + t_cruise) return {up + v_peak * (tau - t_ramp), v_peak};
+    const double d = tau - t_ramp - t_cruise;
+    return {up + v_peak * t_cruise + v_peak * d - 0.5 * a * d * d, v_peak - a * d};
+  }
+};
 }  // namespace
 
 double PlatformMotion::Sine::value(double t) const {
@@ -81,10 +100,37 @@ PlatformMotion::PathPoint PlatformMotion::path_point(const PlatformMotionParams&
   return out;
 }
 
+PlatformMotion::Travel PlatformMotion::travel(const PlatformMotionParams& p, double t) {
+  if (p.path == "none" || p.speed_mps <= 0) return {};
+  const double v_turn = p.turn_speed_mps();
+  // Only the stadium has straights to speed up on; the other paths are turns throughout.
+  if (p.path != "line" || v_turn >= p.speed_mps) return {v_turn * t, v_turn};
+  const double L = p.path_length_m, half = M_PI * p.path_radius_m;
+  const Straight straight(L, v_turn, p.speed_mps, PlatformMotionParams::kTurnAccelMps2);
+  const double t_straight = straight.duration(), t_half = half / v_turn;
+  const double period = 2.0 * (t_straight + t_half);
+  const double laps = std::floor(t / period);
+  double tau = t - laps * period;
+  double s = laps * (2.0 * L + 2.0 * half);
+  for (int leg = 0; leg < 2; ++leg) {  // out and back: a straight, then half a turn
+    if (tau < t_straight) {
+      const Travel in = straight.at(tau);
+      return {s + in.s_m, in.speed_mps};
+    }
+    tau -= t_straight;
+    s += L;
+    if (tau < t_half || leg == 1) return {s + v_turn * std::min(tau, t_half), v_turn};
+    tau -= t_half;
+    s += half;
+  }
+  return {s, v_turn};  // not reached: the second leg's turn returns
+}
+
 PlatformPose PlatformMotion::at(double t) const {
   const PlatformMotionParams& p = params_;
-  const double speed = p.path == "none" ? 0.0 : p.speed_mps;
-  const PathPoint pp = path_point(p, speed * t);
+  const Travel along = travel(p, t);
+  const double speed = along.speed_mps;
+  const PathPoint pp = path_point(p, along.s_m);
   const double h = p.path_heading_deg * kDeg;
   const Eigen::Matrix2d R_h = Eigen::Rotation2Dd(h).toRotationMatrix();
 

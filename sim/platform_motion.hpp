@@ -1,9 +1,10 @@
 #pragma once
 // A moving platform's pose and velocity as a function of time: a cart, a vehicle's
 // roof, a boat's deck. Closed form, so the simulator's step, its renderer and the tests all see
-// the same platform at the same time: the path is travelled at a constant speed along straights
-// and circular arcs (line: a stadium; circle; figure_eight: two circles touching where it
-// starts), with a constant drift and turn added, and the deck heaves, rolls and pitches as sines
+// the same platform at the same time: the path is travelled along straights and circular arcs
+// (line: a stadium; circle; figure_eight: two circles touching where it starts) at a constant
+// speed, or slowing at a constant rate for turns whose course rate is bounded (a cart keeps its
+// grip), with a constant drift and turn added, and the deck heaves, rolls and pitches as sines
 // and as a seeded sum of sines over a band (a random sea state, as ship-motion simulators draw
 // one from a wave spectrum, here flat over the band).
 
@@ -58,6 +59,14 @@ class PlatformMotion {
     double curvature = 0.0;
   };
   static PathPoint path_point(const PlatformMotionParams& params, double s_m);
+
+  /// How far along the path the platform is `t_s` seconds after the start, and how fast it goes
+  /// there [m, m/s]: speed_mps throughout, or turn_speed_mps() in the turns with the straights
+  /// between entered and left at it, speeding up and slowing at kTurnAccelMps2.
+  struct Travel {
+    double s_m = 0.0, speed_mps = 0.0;
+  };
+  static Travel travel(const PlatformMotionParams& params, double t_s);
 
  private:
   PlatformMotionParams params_;

@@ -79,6 +79,62 @@ TEST(PlatformMotionTest, PathsAgainstTheirClosedForms) {
   }
 }
 
+// A cart that slows for its turns (max_course_rate_dps): the turns at radius times the bound,
+// the straights entered and left at that speed, the speed continuous and its change at most
+// kTurnAccelMps2, the velocity the pose's derivative, back at the start after one period.
+TEST(PlatformMotionTest, ACartSlowsForItsTurns) {
+  const double r = 0.6, v = 1.0, bound_dps = 15.0, L = 2.0;
+  const double v_turn = r * bound_dps * kMotionDeg;  // 0.157 m/s
+  const double a = PlatformMotionParams::kTurnAccelMps2;
+  PlatformMotionParams p = motion_path("line", v, r, L);
+  p.max_course_rate_dps = bound_dps;
+  p.heading_follows_path = true;
+  EXPECT_NEAR(p.turn_speed_mps(), v_turn, 1e-12);
+  EXPECT_NEAR(p.peak_yaw_rate_dps(), bound_dps, 1e-9);
+  const Vector3d top0(0.5, -0.5, 0.2);
+  PlatformMotion m(p, top0, 0.0, 1);
+  // The straight: up from v_turn to v over (v^2 - v_turn^2) / 2a, cruising, down again.
+  const double ramp_m = (v * v - v_turn * v_turn) / (2 * a), ramp_s = (v - v_turn) / a;
+  const double straight_s = 2 * ramp_s + (L - 2 * ramp_m) / v, half_s = M_PI * r / v_turn;
+  EXPECT_NEAR(PlatformMotion::travel(p, ramp_s).s_m, ramp_m, 1e-9);
+  EXPECT_NEAR(PlatformMotion::travel(p, ramp_s).speed_mps, v, 1e-9);
+  EXPECT_NEAR(PlatformMotion::travel(p, straight_s).s_m, L, 1e-9);
+  EXPECT_NEAR(PlatformMotion::travel(p, straight_s + 0.5 * half_s).speed_mps, v_turn, 1e-12);
+  EXPECT_NEAR(PlatformMotion::travel(p, straight_s + half_s).s_m, L + M_PI * r, 1e-9);
+  const double period = 2 * (straight_s + half_s);
+  EXPECT_TRUE(m.at(period).top_center_W.isApprox(top0, 1e-9)) << m.at(period).top_center_W;
+  EXPECT_NEAR(PlatformMotion::travel(p, 3 * period).s_m, 3 * (2 * L + 2 * M_PI * r), 1e-8);
+  double last_speed = v_turn;
+  for (double t = 0.0; t < 2 * period; t += 0.01) {
+    SCOPED_TRACE(t);
+    const PlatformPose P = m.at(t);
+    const double speed = P.v_W.head<2>().norm();
+    EXPECT_LE(speed, v + 1e-12);
+    EXPECT_GE(speed, v_turn - 1e-12);
+    EXPECT_LE(std::abs(speed - last_speed), a * 0.01 + 1e-9);  // no step in speed
+    last_speed = speed;
+    EXPECT_LE(std::abs(P.omega_W.z()), bound_dps * kMotionDeg + 1e-12);
+    const double h = 1e-6;
+    const Vector3d dp = (m.at(t + h).top_center_W - m.at(t - h).top_center_W) / (2 * h);
+    EXPECT_LT((dp - P.v_W).norm(), 1e-6) << dp.transpose() << " / " << P.v_W.transpose();
+  }
+  // A straight too short to reach speed_mps peaks where speeding up meets slowing down.
+  PlatformMotionParams shortp = motion_path("line", v, r, 0.5);
+  shortp.max_course_rate_dps = bound_dps;
+  const double peak = std::sqrt(v_turn * v_turn + a * 0.5);
+  EXPECT_NEAR(PlatformMotion::travel(shortp, (peak - v_turn) / a).speed_mps, peak, 1e-9);
+  EXPECT_NEAR(PlatformMotion::travel(shortp, (peak - v_turn) / a).s_m, 0.25, 1e-9);
+  // A circle is a turn throughout: at the bound's speed, the course turning at the bound.
+  PlatformMotionParams circle = motion_path("circle", v, r);
+  circle.max_course_rate_dps = bound_dps;
+  EXPECT_NEAR(PlatformMotion(circle, top0, 0, 1).at(3.0).v_W.norm(), v_turn, 1e-12);
+  // No bound, or one the speed keeps within: the constant speed, as before.
+  PlatformMotionParams loose = motion_path("line", 0.1, r, L);
+  loose.max_course_rate_dps = bound_dps;
+  EXPECT_DOUBLE_EQ(PlatformMotion::travel(loose, 7.0).s_m, 0.1 * 7.0);
+  EXPECT_DOUBLE_EQ(PlatformMotion::travel(motion_path("line", v, r, L), 7.0).s_m, 7.0);
+}
+
 TEST(PlatformMotionTest, DeckSinesAndTheirRates) {
   PlatformMotionParams p;
   p.heave_amplitude_m = 0.05;
@@ -301,6 +357,11 @@ TEST(PlatformMotionTest, TheLimitsAreRefusedWithTheKeyNamed) {
       {"{heave: {amplitude_m: 0.3, frequency_hz: 1.0}}", "platform.motion.heave.amplitude_m"},
       {"{sea_state: {band_hz: [0.5, 0.2]}}", "platform.motion.sea_state.band_hz"},
       {"{path: spiral}", "platform.motion.path"},
+      {"{path: line, speed_mps: 1.0, path_radius_m: 0.6, heading_follows_path: true, "
+       "max_course_rate_dps: 20}",
+       "platform.motion.heading_follows_path"},
+      {"{path: line, speed_mps: 1.0, max_course_rate_dps: -1}",
+       "platform.motion.max_course_rate_dps"},
   };
   int i = 0;
   for (const Case& c : cases) {
@@ -323,6 +384,12 @@ TEST(PlatformMotionTest, TheLimitsAreRefusedWithTheKeyNamed) {
       "motion_at_limit.yaml",
       "name: t\nplatform:\n  center_xy_m: [1.5, 1.0]\n  size_m: [0.4, 0.3, 0.1]\n"
       "  motion: {path: figure_eight, speed_mps: 1.0, yaw_rate_dps: -15}\n")));
+  // A cart turning with a path too tight for its speed, slowing for the turns: accepted.
+  EXPECT_NO_THROW(load_scenario(write_motion_scenario(
+      "motion_slowing_cart.yaml",
+      "name: t\nplatform:\n  center_xy_m: [1.5, 1.0]\n  size_m: [0.4, 0.3, 0.1]\n"
+      "  motion: {path: line, speed_mps: 1.0, path_radius_m: 0.6, heading_follows_path: true, "
+      "max_course_rate_dps: 15}\n")));
 }
 
 TEST(PlatformMotionTest, TheShippedMovingScenariosLoad) {

@@ -45,7 +45,8 @@ with tempfile.TemporaryDirectory() as tmp:
             if family.startswith("landing"):
                 assert ("platform" in s) == (family != "landing_none_photo"), family
                 assert s["camera"]["mount"] == "downward"
-            moving = family in ("landing_moving_cart", "landing_deck")
+            base = scene_families.AGILE.get(family, family)
+            moving = base in ("landing_moving_cart", "landing_deck")
             if "platform" in s:
                 assert ("motion" in s["platform"]) == moving, family
             if moving:
@@ -55,10 +56,25 @@ with tempfile.TemporaryDirectory() as tmp:
                 m = p["motion"]
                 (cx, cy), (length, width, height) = p["center_xy_m"], p["size_m"]
                 reach = 0.5 * math.hypot(length, width)
-                assert m["speed_mps"] <= (0.5 if family == "landing_deck" else 1.0) + 1e-9, m
+                assert m["speed_mps"] <= (0.5 if base == "landing_deck" else 1.0) + 1e-9, m
                 assert m["speed_mps"] <= scene_families.MAX_PLATFORM_SPEED_MPS, m
                 assert abs(m["yaw_rate_dps"]) <= scene_families.MAX_PLATFORM_RATE_DPS, m
-                assert not m["heading_follows_path"], m
+                if family in scene_families.AGILE:
+                    # The base family's scene, every turn at full speed, the heading kept.
+                    assert "max_course_rate_dps" not in m and not m["heading_follows_path"], m
+                    b = scene_families.draw(base, seed)
+                    turns = ("heading_follows_path", "yaw_rate_dps", "max_course_rate_dps")
+                    path = {k: v for k, v in m.items() if k not in turns}
+                    b_path = {k: v for k, v in b["platform"]["motion"].items() if k not in turns}
+                    assert path == b_path, (path, b_path)
+                    assert s["area"] == b["area"] and s["camera"] == b["camera"], family
+                else:
+                    # The bound on the platform's turn: its course (speed in the turns
+                    # over the radius) and, turning with its path, its heading.
+                    bound = m["max_course_rate_dps"]
+                    assert 0 < bound <= scene_families.MAX_PLATFORM_RATE_DPS, m
+                    if m["heading_follows_path"]:
+                        assert m["yaw_rate_dps"] == 0.0, m
                 half = [0.5 * v for v in s["area"]["size_m"]]
                 for x, y in scene_families.path_extent(m):
                     assert abs(cx + x) + reach <= half[0] and abs(cy + y) + reach <= half[1], \
@@ -66,7 +82,7 @@ with tempfile.TemporaryDirectory() as tmp:
                     assert math.hypot(cx + x, cy + y) - reach >= 0.5 - 1e-9, \
                         (family, seed, "path over the start", cx + x, cy + y)
                 sea = m.get("sea_state")
-                assert (sea is not None) == (family == "landing_deck"), m
+                assert (sea is not None) == (base == "landing_deck"), m
                 if sea:
                     assert sea["heave_m"] <= 0.05 and sea["roll_deg"] <= 3 and sea["pitch_deg"] <= 3
                     assert sea["band_hz"] == [0.2, 0.5], sea
