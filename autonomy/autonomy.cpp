@@ -605,7 +605,7 @@ void Autonomy::handle_platform(const PlatformMeasurement& m) {
     return;
   if (!platform_.believed() || !pose_) return;
   const auto pr = platform_.predict(now_utime_);
-  if (pr.v_W.norm() < M.min_speed_mps) return;
+  if (!moving_enough(pr, M)) return;
   estimator_.reset();
   estimate_W_ << pr.p_W, pr.top_z_m;
   enter(phases::Approach{LandingApproach{}, m.utime, {}, MovingApproach{}},

@@ -22,7 +22,8 @@ const ParamSchema<MovingLandingParams>& MovingLandingParams::schema() {
     s.add("enabled", &P::enabled, Range::any(), "",
           "land on a platform that vision measures moving (VISION_PLATFORM)");
     s.add("min_speed_mps", &P::min_speed_mps, Range::gt(0), "m/s",
-          "a platform this fast is landed on as a moving one");
+          "a platform this fast, its centre gone kMovedM from where its track began, is landed "
+          "on as a moving one");
     s.add("follow_height_m", &P::follow_height_m, Range::gt(0), "m",
           "matching the platform's velocity this high above its top");
     s.add("final_height_m", &P::final_height_m, Range::gt(0), "m",
@@ -88,6 +89,10 @@ double aligned_yaw(double platform_yaw_rad, double current_rad) {
   const double q = M_PI / 2;
   const double k = std::round((current_rad - platform_yaw_rad) / q);
   return platform_yaw_rad + k * q;
+}
+
+bool moving_enough(const PlatformFilter::Prediction& p, const MovingLandingParams& params) {
+  return p.v_W.norm() >= params.min_speed_mps && p.travelled_m >= kMovedM;
 }
 
 std::optional<std::string> too_fast(const PlatformFilter::Prediction& p,

@@ -3,6 +3,9 @@
 // approach and the final descent flown on the platform filter's prediction
 // (autonomy/platform_filter.hpp) instead of the refinement's fixed estimate.
 //
+//  0. Entry (moving_enough): a believed platform at least min_speed_mps fast whose centre has
+//     gone kMovedM from where its track began; slower or not yet gone that far, the still
+//     landing goes on.
 //  1. Match: over the platform's predicted centre at follow_height_m above its top, the
 //     platform's velocity and its turn's acceleration fed forward and its long axis as the heading
 //     (the nearest of the four ways a rectangle's axes align, as the still landing does), until the
@@ -32,7 +35,11 @@ namespace alight::autonomy {
 
 struct MovingLandingParams {
   bool enabled = true;
-  double min_speed_mps = 0.15;  ///< a platform this fast is landed on as a moving one
+  /// A platform this fast, seen to move (moving_enough), is landed on as a moving one [m/s]:
+  /// the still landing averages a fixed point over its refinement's seconds, so a top creeping
+  /// at a few centimetres a second (a cart slowed for its turn) leaves it, or is never detected
+  /// (the second homography aligns a still scene).
+  double min_speed_mps = 0.05;
   /// Matching the platform this high above its top [m]: the camera's view there is wide enough
   /// that a cart's turn stays in it while the vehicle follows.
   double follow_height_m = 1.0;
@@ -77,6 +84,17 @@ inline constexpr double kFollowedSpeedShare = 0.8;
 inline double followed_speed_mps(double max_feedforward_xy_mps) {
   return kFollowedSpeedShare * max_feedforward_xy_mps;
 }
+
+/// A believed track whose centre has gone this far from where it began moves [m]: over three
+/// times what a still top's measured centre wanders (its height's 5 cm uncertainty times the
+/// view angle's tangent, 1-3 cm, as the vehicle moves over it), and under what a top creeping at
+/// min_speed_mps covers in the two seconds a track is young. A slow top's velocity alone is lost
+/// in the filter's 5-10 cm/s of noise.
+inline constexpr double kMovedM = 0.10;
+
+/// The believed platform `p` moves: its speed at least min_speed_mps and its centre kMovedM from
+/// where its track began.
+bool moving_enough(const PlatformFilter::Prediction& p, const MovingLandingParams& params);
 
 /// Whether the last drop starts now (step 3 of moving_landing.hpp).
 enum class Release { kWait, kNoHeave, kAfterCrest, kWaitedEnough };

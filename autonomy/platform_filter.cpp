@@ -181,6 +181,7 @@ PlatformFilter::Prediction PlatformFilter::predict(const Track& t, int64_t utime
   }
   p.cov_p = Pp.topLeftCorner<2, 2>();
   p.cov_v = Pp.bottomRightCorner<2, 2>();
+  p.travelled_m = (p.p_W - t.p_start).norm();
   p.yaw_rad = wrap_quarter(t.yaw(0) + dt * t.yaw(1));
   p.yaw_rate_rps = t.yaw(1);
   p.var_yaw = t.P_yaw(0, 0) + 2 * dt * t.P_yaw(0, 1) + dt * dt * t.P_yaw(1, 1) +
@@ -250,6 +251,7 @@ bool PlatformFilter::larger_than_the_top(const Track& t, const PlatformMeasureme
 void PlatformFilter::start(Track& t, const PlatformMeasurement& m) const {
   t = Track{};
   t.x << m.p_W.x(), m.p_W.y(), m.v_W.x(), m.v_W.y();
+  t.p_start = m.p_W.head<2>();
   t.P = measurement_cov(m, params_);
   t.yaw = Vector2d(wrap_quarter(m.yaw_rad), m.yaw_rate_rps);
   t.P_yaw = Vector2d(m.var_yaw + 1e-4, m.var_yaw_rate + 1e-4).asDiagonal();

@@ -143,6 +143,9 @@ class PlatformFilter {
     double yaw_rad = 0;  ///< the axes' direction, in (-pi/4, pi/4] [rad]
     double yaw_rate_rps = 0, var_yaw = 0;
     double top_z_m = 0;  ///< the top's height, the measurements' z averaged [m]
+    /// How far the centre is from where the track began [m]: a motion shown by the positions,
+    /// which vision measures to 1-2 cm, where a slow one's velocity is lost in its noise.
+    double travelled_m = 0;
   };
   Prediction predict(int64_t utime) const { return predict(track_, utime); }
   const HeaveModel& heave() const { return track_.heave; }
@@ -159,6 +162,7 @@ class PlatformFilter {
   struct Track {
     int64_t t_utime = 0;  // 0: not started
     int64_t since_utime = 0;
+    Vector2d p_start = Vector2d::Zero();          // the centre where it began
     Eigen::Vector4d x = Eigen::Vector4d::Zero();  // x, y, vx, vy
     Eigen::Matrix4d P = Eigen::Matrix4d::Zero();
     Vector2d yaw = Vector2d::Zero();  // psi, omega

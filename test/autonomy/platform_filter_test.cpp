@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <optional>
 #include <random>
@@ -93,6 +94,46 @@ TEST(PlatformFilterTest, TracksAStraightDriftToItsVelocity) {
   // The axes' direction, mod a quarter turn.
   EXPECT_NEAR(std::remainder(p.yaw_rad - m.yaw(t - kPfDt + 0.1), M_PI / 2), 0.0, 0.02);
   EXPECT_EQ(f.n_rejected(), 0);
+}
+
+TEST(MovingApproachTest, ACreepingTopIsLandedOnAsMovingAndAStillOneNever) {
+  // A cart slowed to 6 cm/s for its turn, and a still top, each measured with vision's
+  // velocity noise (its 0.1 m/s floor) and 2 cm of position noise: the creeper is moving once
+  // its centre has gone far enough, within two seconds; the still top's noise never reads as
+  // motion, though its filtered speed passes min_speed_mps.
+  const MovingLandingParams params;
+  for (const double v : {0.06, 0.0}) {
+    PlatformPath m;
+    m.straight = true;
+    m.v = v;
+    PlatformFilter f{PlatformFilterParams{}};
+    std::mt19937_64 rng(7);
+    std::optional<double> moving_at;
+    double fastest_mps = 0;
+    for (double t = kPfInterval; t < 6; t += kPfDt) {
+      f.update(measure_path(m, t, rng, 0.02, 0.1));
+      const auto p = f.predict(kPfT0 + int64_t(t * 1e6));
+      if (f.believed()) fastest_mps = std::max(fastest_mps, p.v_W.norm());
+      if (f.believed() && moving_enough(p, params) && !moving_at) moving_at = t;
+    }
+    if (v > 0) {
+      ASSERT_TRUE(moving_at.has_value());
+      EXPECT_LT(*moving_at, 3.0) << "seen to move within two seconds of its first 10 cm";
+    } else {
+      EXPECT_FALSE(moving_at.has_value()) << "a still top moved at " << *moving_at << " s";
+      EXPECT_GT(fastest_mps, params.min_speed_mps) << "its speed alone would have moved it";
+    }
+  }
+  // A fast track just begun has not yet gone far enough to show it; a slow one that has gone
+  // far is still under min_speed_mps.
+  PlatformFilter::Prediction p;
+  p.v_W = Vector2d(0.8, 0.0);
+  p.travelled_m = 0.05;
+  EXPECT_FALSE(moving_enough(p, params));
+  p.travelled_m = 0.12;
+  EXPECT_TRUE(moving_enough(p, params));
+  p.v_W = Vector2d(0.04, 0.0);
+  EXPECT_FALSE(moving_enough(p, params)) << "under min_speed_mps";
 }
 
 TEST(PlatformFilterTest, FollowsATurnWithinTheLagOfItsModel) {
