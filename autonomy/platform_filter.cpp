@@ -225,13 +225,20 @@ Vector2d PlatformFilter::whole_extent(const Track& t) {
     std::vector<double> v;
     v.reserve(t.whole_extents.size());
     for (const auto& e : t.whole_extents) v.push_back(e(i));
-    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-    whole(i) = v[v.size() / 2];
+    // The lower median: of two views, one larger than the top (a cluster of the floor beside it)
+    // is never the whole top that the other is judged short of.
+    const size_t mid = (v.size() - 1) / 2;
+    std::nth_element(v.begin(), v.begin() + mid, v.end());
+    whole(i) = v[mid];
   }
   return whole;
 }
 
-bool PlatformFilter::partial_view(const Track& t, const PlatformMeasurement& m) {
+bool PlatformFilter::partial_view(const Track& t, const PlatformMeasurement& m) const {
+  // A track's first views may be of part of the top, or of the top with the floor beside it:
+  // judged against one or two of them, every later view of the whole top would be short of it
+  // and never counted towards it.
+  if (t.whole_extents.size() < static_cast<size_t>(params_.min_consistent)) return false;
   const Vector2d whole = whole_extent(t);
   if (!(whole.minCoeff() > 0) || !(m.size_m.minCoeff() > 0)) return false;
   return ((extent(m) - whole).array() < -kPartialViewM).any();
@@ -328,7 +335,8 @@ PlatformFilter::Fused PlatformFilter::fuse(Track& t, const PlatformMeasurement& 
   }
   t.t_utime = m.utime;
   ++t.n_consistent;
-  if (!partial && m.size_m.minCoeff() > 0) {
+  const bool cut = m.cov_p_W.topLeftCorner<2, 2>().diagonal().maxCoeff() >= kCutPositionVarM2;
+  if (!partial && !cut && m.size_m.minCoeff() > 0) {
     t.whole_extents.push_back(extent(m));
     if (t.whole_extents.size() > kExtentsKept) t.whole_extents.pop_front();
   }

@@ -17,9 +17,11 @@
 //    own; after max_consecutive_rejections in a row, the candidate replaces the track once it is
 //    believed itself (the platform is not where it was believed), or at once while the track is
 //    not believed yet.
-// A measurement whose extent falls short of the track's whole top (the median extent of its
-// measurements that were not short) by kPartialViewM shows part of the top: its position is not
-// the top's centre and is not fused, its velocity is (the part moves with the whole).
+// A measurement whose extent falls short of the track's whole top (the lower median extent of its
+// measurements that were not short, judged once min_consistent of them are held) by
+// kPartialViewM shows part of the top: its position is not the top's centre and is not fused, its
+// velocity is (the part moves with the whole). A view vision marks as cut by the image's border
+// (its position variance kCutPositionVarM2 or more) never counts towards the whole top.
 // A track is believed (believed()) after min_consistent measurements in a row, each within the
 // gate, over at least kConfirmS: a short burst of wrong measurements (a mismatched frame pair
 // during the search reads as a fast platform) never is. A track not measured for kConfirmS is
@@ -107,6 +109,11 @@ HeaveModel fit_heave(const std::deque<std::pair<int64_t, double>>& vz, double mi
 /// 1.5 cm, the measured extents' own scatter from one frame to the next.
 inline constexpr double kPartialViewM = 0.03;
 
+/// A measurement's horizontal position variance from which vision does not know where the top's
+/// centre is (platform_motion_t: a top cut by the image's border, 100 m^2) [m^2]: its extent is
+/// the visible part's.
+inline constexpr double kCutPositionVarM2 = 1.0;
+
 /// A measured extent this many times the track's whole top (on either side) is not that top: a
 /// mismatched cluster of the floor or the vehicle's own motion read as one. The views of one
 /// top from the search height down to the last drop's differ by under a third.
@@ -179,7 +186,7 @@ class PlatformFilter {
   Fused fuse(Track& t, const PlatformMeasurement& m) const;
   void start(Track& t, const PlatformMeasurement& m) const;
   static Vector2d whole_extent(const Track& t);
-  static bool partial_view(const Track& t, const PlatformMeasurement& m);
+  bool partial_view(const Track& t, const PlatformMeasurement& m) const;
   bool larger_than_the_top(const Track& t, const PlatformMeasurement& m) const;
   Prediction predict(const Track& t, int64_t utime) const;
   bool believed(const Track& t) const;
