@@ -235,10 +235,6 @@ Vector2d PlatformFilter::whole_extent(const Track& t) {
 }
 
 bool PlatformFilter::partial_view(const Track& t, const PlatformMeasurement& m) const {
-  // A track's first views may be of part of the top, or of the top with the floor beside it:
-  // judged against one or two of them, every later view of the whole top would be short of it
-  // and never counted towards it.
-  if (t.whole_extents.size() < static_cast<size_t>(params_.min_consistent)) return false;
   const Vector2d whole = whole_extent(t);
   if (!(whole.minCoeff() > 0) || !(m.size_m.minCoeff() > 0)) return false;
   return ((extent(m) - whole).array() < -kPartialViewM).any();

@@ -18,15 +18,14 @@
 //    believed itself (the platform is not where it was believed), or at once while the track is
 //    not believed yet.
 // A measurement whose extent falls short of the track's whole top (the lower median extent of its
-// measurements that were not short, judged once min_consistent of them are held) by
-// kPartialViewM shows part of the top: its position is not the top's centre and is not fused, its
-// velocity is (the part moves with the whole). A view vision marks as cut by the image's border
-// (its position variance kCutPositionVarM2 or more) never counts towards the whole top.
-// A track is believed (believed()) after min_consistent measurements in a row, each within the
-// gate, over at least kConfirmS: a short burst of wrong measurements (a mismatched frame pair
-// during the search reads as a fast platform) never is. A track not measured for kConfirmS is
-// confirmed again (its grown covariance lets a wrong measurement through the gate). Pure: time
-// passed in.
+// measurements that were not short) by kPartialViewM shows part of the top: its position is not the
+// top's centre and is not fused, its velocity is (the part moves with the whole). A view vision
+// marks as cut by the image's border (its position variance kCutPositionVarM2 or more) never counts
+// towards the whole top. A track is believed (believed()) after min_consistent measurements in a
+// row, each within the gate, over at least kConfirmS: a short burst of wrong measurements (a
+// mismatched frame pair during the search reads as a fast platform) never is. A track not measured
+// for kConfirmS is confirmed again (its grown covariance lets a wrong measurement through the
+// gate). Pure: time passed in.
 //
 // The prediction turns the velocity at the course's turn rate (the filtered velocity's direction
 // over course_tau_s): a cart round a bend is led into it, not extrapolated off its path. A
