@@ -234,7 +234,7 @@ Vector2d PlatformFilter::whole_extent(const Track& t) {
   return whole;
 }
 
-bool PlatformFilter::partial_view(const Track& t, const PlatformMeasurement& m) const {
+bool PlatformFilter::partial_view(const Track& t, const PlatformMeasurement& m) {
   const Vector2d whole = whole_extent(t);
   if (!(whole.minCoeff() > 0) || !(m.size_m.minCoeff() > 0)) return false;
   return ((extent(m) - whole).array() < -kPartialViewM).any();

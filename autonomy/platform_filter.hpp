@@ -185,7 +185,7 @@ class PlatformFilter {
   Fused fuse(Track& t, const PlatformMeasurement& m) const;
   void start(Track& t, const PlatformMeasurement& m) const;
   static Vector2d whole_extent(const Track& t);
-  bool partial_view(const Track& t, const PlatformMeasurement& m) const;
+  static bool partial_view(const Track& t, const PlatformMeasurement& m);
   bool larger_than_the_top(const Track& t, const PlatformMeasurement& m) const;
   Prediction predict(const Track& t, int64_t utime) const;
   bool believed(const Track& t) const;
