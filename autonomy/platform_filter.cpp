@@ -261,6 +261,43 @@ void PlatformFilter::start(Track& t, const PlatformMeasurement& m) const {
   t.since_utime = m.utime;
 }
 
+// The course's turn rate from the filtered velocity's direction (v0 before the update, the track's
+// after it, dt apart). A fast top (a cart round a bend): each update's whole turn, not the
+// innovation's share of it (the prediction's own turn leaves about half of it), smoothed over
+// about course_tau_s. A creeping one: its direction's change over the last kCourseBaselineM of its
+// path, where one update's turn is lost in the direction's noise (the filtered velocity's 1-2 cm/s
+// on 10 cm/s), yet a circle's turn carries it centimetres aside over a last drop. Below
+// kCourseMinSpeedMps the direction is that noise: no turn.
+void PlatformFilter::follow_course(Track& t, int64_t utime, const Vector2d& v0, double dt) const {
+  const Vector2d v1 = t.x.tail<2>();
+  const double speed = v1.norm();
+  if (!(dt > 0)) return;
+  if (speed < kCourseMinSpeedMps) {
+    t.course.clear();
+    t.course_rate = 0;
+    return;
+  }
+  const double heading = std::atan2(v1.y(), v1.x());
+  if (t.course.empty()) {
+    t.course.push_back({utime, heading, 0.0});
+  } else {
+    const CourseSample& last = t.course.back();
+    t.course.push_back({utime, last.heading + wrap_angle(heading - last.heading),
+                        last.path_m + speed * dt});
+  }
+  const double path = t.course.back().path_m;
+  while (t.course.size() > 2 && path - t.course[1].path_m >= kCourseBaselineM)
+    t.course.pop_front();
+  if (v0.norm() > kFastCourseMps && speed > kFastCourseMps) {
+    const double rate = std::atan2(v0.x() * v1.y() - v0.y() * v1.x(), v0.dot(v1)) / dt;
+    const double k = std::min(1.0, dt / params_.course_tau_s);
+    t.course_rate += k * (rate - t.course_rate);
+  } else if (path - t.course.front().path_m >= kCourseBaselineM) {
+    const CourseSample& first = t.course.front();
+    t.course_rate = (t.course.back().heading - first.heading) / (double(utime - first.utime) * 1e-6);
+  }
+}
+
 PlatformFilter::Fused PlatformFilter::fuse(Track& t, const PlatformMeasurement& m) const {
   const bool partial = partial_view(t, m);
   if (t.t_utime == 0) {
@@ -302,17 +339,9 @@ PlatformFilter::Fused PlatformFilter::fuse(Track& t, const PlatformMeasurement& 
     const double d2 = innov.dot(ldlt.solve(innov));
     if (!(d2 <= params_.gate_chi2)) return Fused::kOutsideGate;
     const Eigen::Matrix4d K = Pp * ldlt.solve(Eigen::Matrix4d::Identity());
-    // The course's turn rate, smoothed over about course_tau_s (from the filtered velocity's
-    // direction, only while it is fast enough to have one): its whole turn since the last update,
-    // not the innovation's share of it, which the prediction's own turn leaves about half of.
     const Vector2d v0 = t.x.tail<2>();
     t.x = xp + K * innov;
-    const Vector2d v1 = t.x.tail<2>();
-    if (v0.norm() > 0.2 && v1.norm() > 0.2 && dt > 0) {
-      const double rate = std::atan2(v0.x() * v1.y() - v0.y() * v1.x(), v0.dot(v1)) / dt;
-      const double k = std::min(1.0, dt / params_.course_tau_s);
-      t.course_rate += k * (rate - t.course_rate);
-    }
+    follow_course(t, m.utime, v0, dt);
     t.P = (Eigen::Matrix4d::Identity() - K) * Pp;
     t.P = 0.5 * (t.P + t.P.transpose()).eval();
     // Yaw and its rate: the same filter in one dimension pair.

@@ -28,7 +28,8 @@
 // gate). Pure: time passed in.
 //
 // The prediction turns the velocity at the course's turn rate (the filtered velocity's direction
-// over course_tau_s): a cart round a bend is led into it, not extrapolated off its path. A
+// over course_tau_s, or over kCourseBaselineM of a creeping top's path): a cart round a bend is
+// led into it, not extrapolated off its path. A
 // measured velocity is the mean over vision's interval, the velocity at its middle: it is turned
 // on to the measurement's time at that rate before it is fused.
 //
@@ -123,6 +124,16 @@ inline constexpr double kLargerThanTheTop = 1.5;
 /// match tolerance, whatever the velocities it measured say.
 inline constexpr double kConfirmS = 0.5;
 
+/// Faster than this, the course's turn is followed update by update (course_tau_s) [m/s]: a
+/// fifth of a second of a 1 m/s cart's frames turn its filtered velocity by more than its noise.
+inline constexpr double kFastCourseMps = 0.2;
+/// Slower, the course's turn is its direction's change over this much of its path [m]: at the
+/// filtered velocity's 1-2 cm/s of noise, a creeping top's turn known within a few degrees a
+/// second; a 10 cm/s top covers it in 2.5 s, a quarter of a slow circle.
+inline constexpr double kCourseBaselineM = 0.25;
+/// Slower than this, a top has no course [m/s]: its filtered velocity's direction is noise.
+inline constexpr double kCourseMinSpeedMps = 0.05;
+
 class PlatformFilter {
  public:
   /// Why a measurement was refused.
@@ -164,6 +175,11 @@ class PlatformFilter {
   int n_partial() const { return n_partial_; }
 
  private:
+  // The filtered velocity's direction (unwrapped) [rad] and the path travelled [m] at a time [us].
+  struct CourseSample {
+    int64_t utime = 0;
+    double heading = 0, path_m = 0;
+  };
   // One track: the filter's state since it (re)started.
   struct Track {
     int64_t t_utime = 0;  // 0: not started
@@ -174,6 +190,7 @@ class PlatformFilter {
     Vector2d yaw = Vector2d::Zero();  // psi, omega
     Matrix2d P_yaw = Matrix2d::Zero();
     double course_rate = 0;  // the velocity's turn rate [rad/s]
+    std::deque<CourseSample> course;  // the filtered velocity's direction along the path
     double top_z_sum = 0;
     int n_z = 0;
     std::deque<std::pair<int64_t, double>> vz;
@@ -183,6 +200,7 @@ class PlatformFilter {
   };
   enum class Fused { kAccepted, kAcceptedPartial, kOutsideGate };
   Fused fuse(Track& t, const PlatformMeasurement& m) const;
+  void follow_course(Track& t, int64_t utime, const Vector2d& v0, double dt) const;
   void start(Track& t, const PlatformMeasurement& m) const;
   static Vector2d whole_extent(const Track& t);
   static bool partial_view(const Track& t, const PlatformMeasurement& m);
