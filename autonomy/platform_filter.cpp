@@ -208,8 +208,12 @@ namespace {
 
 // A part of the top's position variance: no information [m^2].
 constexpr double kUnknownPositionVar = 1e2;
-// The whole top's extent is the median of this many of its latest views: a few seconds of them.
-constexpr size_t kExtentsKept = 64;
+// The whole top's extent is judged among this many of the latest views: ten seconds of them and
+// more, a long follow's views of part of the top among them.
+constexpr size_t kExtentsKept = 256;
+// Views that agree on an extent before it can be the whole top's: a fifth of a second of the
+// camera's frames.
+constexpr int kWholeTopViews = 6;
 
 Vector2d extent(const PlatformMeasurement& m) {
   return Vector2d(m.size_m.maxCoeff(), m.size_m.minCoeff());
@@ -217,25 +221,28 @@ Vector2d extent(const PlatformMeasurement& m) {
 
 }  // namespace
 
-// The median of the track's views of its whole top (zero: none yet) [m].
+// The whole top's extent (zero: no view yet) [m]: the largest extent kWholeTopViews of the track's
+// latest views agree on, each within kPartialViewM of it on both sides; while none is that well
+// supported, the one most are (of those as well supported, the larger). A cluster of the floor read
+// as the top is seen in a frame or two; views of part of the top differ from one another as the
+// part seen grows (the top entering the view) or may repeat (the vehicle following at a steady
+// offset), but are smaller than the whole top, seen view after view. So neither the first views (a
+// part, or a cluster) nor the latest decide what the whole top is.
 Vector2d PlatformFilter::whole_extent(const Track& t) {
-  if (t.whole_extents.empty()) return Vector2d::Zero();
-  Vector2d whole;
-  for (int i = 0; i < 2; ++i) {
-    std::vector<double> v;
-    v.reserve(t.whole_extents.size());
-    for (const auto& e : t.whole_extents) v.push_back(e(i));
-    // The lower median: of two views, one larger than the top (a cluster of the floor beside it)
-    // is never the whole top that the other is judged short of.
-    const size_t mid = (v.size() - 1) / 2;
-    std::nth_element(v.begin(), v.begin() + mid, v.end());
-    whole(i) = v[mid];
+  Vector2d mode = Vector2d::Zero(), largest = Vector2d::Zero();
+  int best = 0;
+  for (const Vector2d& e : t.extents) {
+    int support = 0;
+    for (const Vector2d& o : t.extents)
+      support += ((o - e).cwiseAbs().array() <= kPartialViewM).all();
+    if (support > best || (support == best && e.prod() > mode.prod())) best = support, mode = e;
+    if (support >= kWholeTopViews && e.prod() > largest.prod()) largest = e;
   }
-  return whole;
+  return largest.prod() > 0 ? largest : mode;
 }
 
 bool PlatformFilter::partial_view(const Track& t, const PlatformMeasurement& m) {
-  const Vector2d whole = whole_extent(t);
+  const Vector2d& whole = t.whole;
   if (!(whole.minCoeff() > 0) || !(m.size_m.minCoeff() > 0)) return false;
   return ((extent(m) - whole).array() < -kPartialViewM).any();
 }
@@ -245,9 +252,9 @@ bool PlatformFilter::larger_than_the_top(const Track& t, const PlatformMeasureme
   // border, or blurred): measured against those, every view of the whole top would be refused
   // until the track went stale. The whole top is known once as many views of it as make the
   // track's motion believed were fused; before that a larger view is judged by the gate alone.
-  if (t.whole_extents.size() < static_cast<size_t>(params_.min_consistent)) return false;
-  const Vector2d whole = whole_extent(t);
-  assert(whole.minCoeff() > 0);  // only views with a measured size join whole_extents
+  if (t.extents.size() < static_cast<size_t>(params_.min_consistent)) return false;
+  const Vector2d& whole = t.whole;
+  assert(whole.minCoeff() > 0);  // only views with a measured size join extents
   return (extent(m).array() > kLargerThanTheTop * whole.array()).any();
 }
 
@@ -282,19 +289,19 @@ void PlatformFilter::follow_course(Track& t, int64_t utime, const Vector2d& v0, 
     t.course.push_back({utime, heading, 0.0});
   } else {
     const CourseSample& last = t.course.back();
-    t.course.push_back({utime, last.heading + wrap_angle(heading - last.heading),
-                        last.path_m + speed * dt});
+    t.course.push_back(
+        {utime, last.heading + wrap_angle(heading - last.heading), last.path_m + speed * dt});
   }
   const double path = t.course.back().path_m;
-  while (t.course.size() > 2 && path - t.course[1].path_m >= kCourseBaselineM)
-    t.course.pop_front();
+  while (t.course.size() > 2 && path - t.course[1].path_m >= kCourseBaselineM) t.course.pop_front();
   if (v0.norm() > kFastCourseMps && speed > kFastCourseMps) {
     const double rate = std::atan2(v0.x() * v1.y() - v0.y() * v1.x(), v0.dot(v1)) / dt;
     const double k = std::min(1.0, dt / params_.course_tau_s);
     t.course_rate += k * (rate - t.course_rate);
   } else if (path - t.course.front().path_m >= kCourseBaselineM) {
     const CourseSample& first = t.course.front();
-    t.course_rate = (t.course.back().heading - first.heading) / (double(utime - first.utime) * 1e-6);
+    t.course_rate =
+        (t.course.back().heading - first.heading) / (double(utime - first.utime) * 1e-6);
   }
 }
 
@@ -360,10 +367,13 @@ PlatformFilter::Fused PlatformFilter::fuse(Track& t, const PlatformMeasurement& 
   }
   t.t_utime = m.utime;
   ++t.n_consistent;
+  // Every view not cut by the border, whether it shows the whole top or part of it: which it is
+  // is judged against the others (whole_extent), never against the first ones alone.
   const bool cut = m.cov_p_W.topLeftCorner<2, 2>().diagonal().maxCoeff() >= kCutPositionVarM2;
-  if (!partial && !cut && m.size_m.minCoeff() > 0) {
-    t.whole_extents.push_back(extent(m));
-    if (t.whole_extents.size() > kExtentsKept) t.whole_extents.pop_front();
+  if (!cut && m.size_m.minCoeff() > 0) {
+    t.extents.push_back(extent(m));
+    if (t.extents.size() > kExtentsKept) t.extents.pop_front();
+    t.whole = whole_extent(t);
   }
   t.top_z_sum += m.p_W.z();
   ++t.n_z;

@@ -11,14 +11,14 @@
 // exposure order. Each refusal is counted by its reason (Refusal):
 //  - not finite, or older than the filter's time;
 //  - its extent kLargerThanTheTop times the track's whole top: another object (judged once the
-//    track holds min_consistent views of its whole top: its first may be of part of it);
+//    track holds min_consistent views: its first may be of part of it);
 //  - its position and velocity innovation beyond gate_chi2 (Mahalanobis distance by the
 //    predicted covariance, 4 dof). The refused measurements start a candidate track of their
 //    own; after max_consecutive_rejections in a row, the candidate replaces the track once it is
 //    believed itself (the platform is not where it was believed), or at once while the track is
 //    not believed yet.
-// A measurement whose extent falls short of the track's whole top (the lower median extent of its
-// measurements that were not short) by kPartialViewM shows part of the top: its position is not the
+// A measurement whose extent falls short of the track's whole top (the extent most of its latest
+// views agree on, whole_extent) by kPartialViewM shows part of the top: its position is not the
 // top's centre and is not fused, its velocity is (the part moves with the whole). A view vision
 // marks as cut by the image's border (its position variance kCutPositionVarM2 or more) never counts
 // towards the whole top. A track is believed (believed()) after min_consistent measurements in a
@@ -189,14 +189,15 @@ class PlatformFilter {
     Eigen::Matrix4d P = Eigen::Matrix4d::Zero();
     Vector2d yaw = Vector2d::Zero();  // psi, omega
     Matrix2d P_yaw = Matrix2d::Zero();
-    double course_rate = 0;  // the velocity's turn rate [rad/s]
+    double course_rate = 0;           // the velocity's turn rate [rad/s]
     std::deque<CourseSample> course;  // the filtered velocity's direction along the path
     double top_z_sum = 0;
     int n_z = 0;
     std::deque<std::pair<int64_t, double>> vz;
     HeaveModel heave;
     int n_consistent = 0;
-    std::deque<Vector2d> whole_extents;  // (long, short) of the views of the whole top [m]
+    std::deque<Vector2d> extents;       // (long, short) of its views not cut by the border [m]
+    Vector2d whole = Vector2d::Zero();  // whole_extent(extents)
   };
   enum class Fused { kAccepted, kAcceptedPartial, kOutsideGate };
   Fused fuse(Track& t, const PlatformMeasurement& m) const;
