@@ -208,6 +208,9 @@ namespace {
 
 // A part of the top's position variance: no information [m^2].
 constexpr double kUnknownPositionVar = 1e2;
+// A view marked cut that spans the whole top: its centre's sigma [m], its extent's tolerance
+// (kPartialViewM) halved.
+constexpr double kCutWholeSigmaM = 0.5 * kPartialViewM;
 // The whole top's extent is judged among this many of the latest views: ten seconds of them and
 // more, a long follow's views of part of the top among them.
 constexpr size_t kExtentsKept = 256;
@@ -239,6 +242,11 @@ Vector2d PlatformFilter::whole_extent(const Track& t) {
     if (support >= kWholeTopViews && e.prod() > largest.prod()) largest = e;
   }
   return largest.prod() > 0 ? largest : mode;
+}
+
+bool PlatformFilter::shows_whole_top(const Track& t, const PlatformMeasurement& m) {
+  if (!cut(m) || !(t.whole.minCoeff() > 0) || !(m.size_m.minCoeff() > 0)) return false;
+  return ((extent(m) - t.whole).cwiseAbs().array() <= kPartialViewM).all();
 }
 
 bool PlatformFilter::partial_view(const Track& t, const PlatformMeasurement& m) {
@@ -317,7 +325,15 @@ PlatformFilter::Fused PlatformFilter::fuse(Track& t, const PlatformMeasurement& 
       t.since_utime = m.utime;
     }
     Eigen::Matrix4d R = measurement_cov(m, params_);
-    if (partial) R.topLeftCorner<2, 2>() = kUnknownPositionVar * Matrix2d::Identity();
+    if (partial) {
+      R.topLeftCorner<2, 2>() = kUnknownPositionVar * Matrix2d::Identity();
+    } else if (shows_whole_top(t, m)) {
+      // Vision marks a view cut when the top's features come near the border, but this one
+      // spans the whole top: none of it lies beyond the border, its centre is the top's.
+      R.topLeftCorner<2, 2>() =
+          (kCutWholeSigmaM * kCutWholeSigmaM + params_.min_sigma_m * params_.min_sigma_m) *
+          Matrix2d::Identity();
+    }
     // The measured velocity is the mean over vision's interval, the velocity at its middle: in a
     // turn it is turned on to the measurement's time at the course's rate, or each one pulls the
     // track's velocity back into the turn's past and its position out of the turn.
@@ -367,10 +383,15 @@ PlatformFilter::Fused PlatformFilter::fuse(Track& t, const PlatformMeasurement& 
   }
   t.t_utime = m.utime;
   ++t.n_consistent;
-  // Every view not cut by the border, whether it shows the whole top or part of it: which it is
-  // is judged against the others (whole_extent), never against the first ones alone.
-  const bool cut = m.cov_p_W.topLeftCorner<2, 2>().diagonal().maxCoeff() >= kCutPositionVarM2;
-  if (!cut && m.size_m.minCoeff() > 0) {
+  // Every view not cut by the border, whether it shows the whole top or part of it: which it is is
+  // judged against the others (whole_extent), never against the first ones alone. A view vision
+  // marks cut only once it spans at least the whole top believed so far: a top followed close
+  // fills the view, most views of it come near the border, and the whole top is seen in view
+  // after view of them; but a part cut off by the border at a steady offset is seen as steadily,
+  // and never becomes the whole top.
+  const bool no_smaller =
+      t.whole.minCoeff() > 0 && ((extent(m) - t.whole).array() >= -kPartialViewM).all();
+  if (m.size_m.minCoeff() > 0 && (!cut(m) || no_smaller)) {
     t.extents.push_back(extent(m));
     if (t.extents.size() > kExtentsKept) t.extents.pop_front();
     t.whole = whole_extent(t);

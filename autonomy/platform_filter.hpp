@@ -20,12 +20,13 @@
 // A measurement whose extent falls short of the track's whole top (the extent most of its latest
 // views agree on, whole_extent) by kPartialViewM shows part of the top: its position is not the
 // top's centre and is not fused, its velocity is (the part moves with the whole). A view vision
-// marks as cut by the image's border (its position variance kCutPositionVarM2 or more) never counts
-// towards the whole top. A track is believed (believed()) after min_consistent measurements in a
-// row, each within the gate, over at least kConfirmS: a short burst of wrong measurements (a
-// mismatched frame pair during the search reads as a fast platform) never is. A track not measured
-// for kConfirmS is confirmed again (its grown covariance lets a wrong measurement through the
-// gate). Pure: time passed in.
+// marks as cut by the image's border (its position variance kCutPositionVarM2 or more) counts
+// towards the whole top too; one whose extent is the whole top's has nothing beyond the border, and
+// its position is fused (within kPartialViewM / 2). A track is believed (believed()) after
+// min_consistent measurements in a row, each within the gate, over at least kConfirmS: a short
+// burst of wrong measurements (a mismatched frame pair during the search reads as a fast platform)
+// never is. A track not measured for kConfirmS is confirmed again (its grown covariance lets a
+// wrong measurement through the gate). Pure: time passed in.
 //
 // The prediction turns the velocity at the course's turn rate (the filtered velocity's direction
 // over course_tau_s, or over kCourseBaselineM of a creeping top's path): a cart round a bend is
@@ -205,6 +206,10 @@ class PlatformFilter {
   void start(Track& t, const PlatformMeasurement& m) const;
   static Vector2d whole_extent(const Track& t);
   static bool partial_view(const Track& t, const PlatformMeasurement& m);
+  static bool shows_whole_top(const Track& t, const PlatformMeasurement& m);
+  static bool cut(const PlatformMeasurement& m) {
+    return m.cov_p_W.topLeftCorner<2, 2>().diagonal().maxCoeff() >= kCutPositionVarM2;
+  }
   bool larger_than_the_top(const Track& t, const PlatformMeasurement& m) const;
   Prediction predict(const Track& t, int64_t utime) const;
   bool believed(const Track& t) const;

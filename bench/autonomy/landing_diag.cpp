@@ -269,9 +269,10 @@ int main(int argc, char** argv) try {
     // against the truth.
     if (filter.copy && filter.copy->initialised() && moved) {
       const auto pr = filter.copy->predict(f.utime);
-      std::printf(" pred err (%+.3f %+.3f) v(%+.2f %+.2f) a(%+.2f %+.2f)",
+      std::printf(" pred err (%+.3f %+.3f) sd %.3f v(%+.2f %+.2f) a(%+.2f %+.2f)",
                   pr.p_W.x() - moved->top_center_W.x(), pr.p_W.y() - moved->top_center_W.y(),
-                  pr.v_W.x(), pr.v_W.y(), pr.a_W.x(), pr.a_W.y());
+                  std::sqrt(std::max(pr.cov_p(0, 0), pr.cov_p(1, 1))), pr.v_W.x(), pr.v_W.y(),
+                  pr.a_W.x(), pr.a_W.y());
     }
     platform = vision::to_platform_msg(r);
     std::printf("\n");
