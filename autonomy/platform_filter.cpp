@@ -224,24 +224,45 @@ Vector2d extent(const PlatformMeasurement& m) {
 
 }  // namespace
 
-// The whole top's extent (zero: no view yet) [m]: the largest extent kWholeTopViews of the track's
-// latest views agree on, each within kPartialViewM of it on both sides; while none is that well
-// supported, the one most are (of those as well supported, the larger). A cluster of the floor read
-// as the top is seen in a frame or two; views of part of the top differ from one another as the
-// part seen grows (the top entering the view) or may repeat (the vehicle following at a steady
-// offset), but are smaller than the whole top, seen view after view. So neither the first views (a
-// part, or a cluster) nor the latest decide what the whole top is.
+// The whole top's extent (zero: no view yet) [m]: the extent most of the track's latest views
+// agree on (each within kPartialViewM of it on both sides), or, where kWholeTopViews of them agree
+// on one that is larger (by more than kPartialViewM on a side, on no side smaller), that one's
+// instead, and so on up. A cluster of the floor read as the top is seen in a frame or two; views
+// of part of the top differ from one another as the part seen grows (the top entering the view)
+// or repeat (the vehicle following at a steady offset), but are smaller than the whole top, seen
+// view after view. So neither the first views (a part, or a cluster) nor the most frequent
+// decide what the whole top is; and the whole top's extent is its views' best supported one, not
+// the largest within their scatter, against which the typical view would fall short.
 Vector2d PlatformFilter::whole_extent(const Track& t) {
-  Vector2d mode = Vector2d::Zero(), largest = Vector2d::Zero();
-  int best = 0;
-  for (const Vector2d& e : t.extents) {
-    int support = 0;
-    for (const Vector2d& o : t.extents)
-      support += ((o - e).cwiseAbs().array() <= kPartialViewM).all();
-    if (support > best || (support == best && e.prod() > mode.prod())) best = support, mode = e;
-    if (support >= kWholeTopViews && e.prod() > largest.prod()) largest = e;
+  const size_t n = t.extents.size();
+  std::vector<int> support(n, 0);
+  for (size_t i = 0; i < n; ++i)
+    for (size_t j = 0; j < n; ++j)
+      support[i] += ((t.extents[j] - t.extents[i]).cwiseAbs().array() <= kPartialViewM).all();
+  // The best supported of the extents `eligible` admits (of those as well supported, the larger).
+  const auto best = [&](const auto& eligible) -> std::optional<size_t> {
+    std::optional<size_t> b;
+    for (size_t i = 0; i < n; ++i) {
+      if (!eligible(i)) continue;
+      if (!b || support[i] > support[*b] ||
+          (support[i] == support[*b] && t.extents[i].prod() > t.extents[*b].prod()))
+        b = i;
+    }
+    return b;
+  };
+  auto whole = best([](size_t) { return true; });
+  if (!whole) return Vector2d::Zero();
+  for (size_t steps = 0; steps < n; ++steps) {
+    const Vector2d w = t.extents[*whole];
+    const auto larger = best([&](size_t i) {
+      const Eigen::Array2d d = t.extents[i] - w;
+      return support[i] >= kWholeTopViews && (d >= -kPartialViewM).all() &&
+             (d > kPartialViewM).any();
+    });
+    if (!larger) break;
+    whole = larger;
   }
-  return largest.prod() > 0 ? largest : mode;
+  return t.extents[*whole];
 }
 
 bool PlatformFilter::shows_whole_top(const Track& t, const PlatformMeasurement& m) {

@@ -475,6 +475,23 @@ TEST(PlatformFilterRegression, ViewsMarkedCutThatSpanTheWholeTopLocateIt) {
   EXPECT_TRUE(f.believed());
 }
 
+TEST(PlatformFilterRegression, TheWholeTopsViewsScatteredAboutItsExtentAreWholeViews) {
+  // Views of the whole 0.36 x 0.33 m top, their extents scattered 2 cm either way from one frame
+  // to the next. Taken as the largest extent six views agree on, the whole top sat at the top of
+  // that scatter and a typical view fell 3 cm short of it: judged part of the top, its position
+  // not fused, the track 4 cm off through the approach.
+  const PlatformPath m = straight_path(0.2);
+  PlatformFilter f{PlatformFilterParams{}};
+  std::mt19937_64 rng(37);
+  std::uniform_real_distribution<double> scatter(-0.02, 0.02);
+  double t = kPfInterval;
+  int n = 0;
+  for (; t < 5; t += kPfDt, ++n)
+    f.update(measure_sized(m, t, rng, Vector2d(0.36 + scatter(rng), 0.33 + scatter(rng))));
+  EXPECT_LT(f.n_partial(), n / 10);
+  EXPECT_LT((f.predict(kPfT0 + int64_t(t * 1e6)).p_W - m.p(t)).norm(), 0.02);
+}
+
 TEST(PlatformFilterTest, ASteadyFollowsRepeatedViewsOfPartOfTheTopStayPartial) {
   // A cart followed at a steady offset: the whole 0.41 x 0.23 m top seen for 2 s, then for 8 s
   // the same part of it (0.29 x 0.23 m, its centre 6 cm off, towards the camera) view after
