@@ -136,6 +136,14 @@ TEST(MovingApproachTest, ACreepingTopIsLandedOnAsMovingAndAStillOneNever) {
   EXPECT_FALSE(moving_enough(p, params)) << "under min_speed_mps";
 }
 
+// The same, marked by vision as cut by the image's border (its position unknown, 100 m^2).
+PlatformMeasurement measure_cut(const PlatformPath& m, double t, std::mt19937_64& rng,
+                                const Vector2d& size_m) {
+  auto z = measure_sized(m, t, rng, size_m);
+  z.cov_p_W.topLeftCorner<2, 2>() = 100.0 * Matrix2d::Identity();
+  return z;
+}
+
 TEST(PlatformFilterTest, FollowsATurnWithinTheLagOfItsModel) {
   // 0.8 m/s round a 0.6 m circle: 1.07 m/s^2 of centripetal acceleration, the model's white
   // noise. Over the second lap the position error stays within a few centimetres.
@@ -420,9 +428,7 @@ TEST(PlatformFilterRegression, ATracksFirstViewsNeverMakeTheWholeTopsViewsPartia
   first.p_W.head<2>() += Vector2d(0.10, 0.07);
   ASSERT_TRUE(f.update(first));
   t += kPfDt;
-  auto cut = measure_sized(m, t, rng, Vector2d(0.82, 0.23));
-  cut.cov_p_W.topLeftCorner<2, 2>() = 100.0 * Matrix2d::Identity();
-  f.update(cut);
+  f.update(measure_cut(m, t, rng, Vector2d(0.82, 0.23)));
   for (t += kPfDt; t < 2.5; t += kPfDt) f.update(measure_sized(m, t, rng, Vector2d(0.43, 0.22)));
   EXPECT_LT((f.predict(kPfT0 + int64_t(t * 1e6)).p_W - m.p(t)).norm(), 0.02);
   // The first two whole views are judged against the cut one until they outnumber it.
@@ -440,11 +446,7 @@ TEST(PlatformFilterRegression, ATrackWhoseFirstWholeViewWasAClusterTakesTheTopsV
   PlatformFilter f{PlatformFilterParams{}};
   std::mt19937_64 rng(19);
   double t = kPfInterval;
-  for (; t < 0.8; t += kPfDt) {
-    auto cut = measure_sized(m, t, rng, Vector2d(0.30, 0.15));
-    cut.cov_p_W.topLeftCorner<2, 2>() = 100.0 * Matrix2d::Identity();
-    f.update(cut);
-  }
+  for (; t < 0.8; t += kPfDt) f.update(measure_cut(m, t, rng, Vector2d(0.30, 0.15)));
   auto cluster = measure_sized(m, t, rng, Vector2d(0.55, 0.37));
   cluster.p_W.head<2>() += Vector2d(-0.10, 0.07);
   f.update(cluster);
@@ -466,11 +468,7 @@ TEST(PlatformFilterRegression, ViewsMarkedCutThatSpanTheWholeTopLocateIt) {
   auto part = measure_sized(m, t, rng, Vector2d(0.24, 0.12));
   part.p_W.head<2>() += Vector2d(0.13, -0.05);
   ASSERT_TRUE(f.update(part));
-  for (t += kPfDt; t < 4; t += kPfDt) {
-    auto whole = measure_sized(m, t, rng, Vector2d(0.44, 0.27));
-    whole.cov_p_W.topLeftCorner<2, 2>() = 100.0 * Matrix2d::Identity();
-    f.update(whole);
-  }
+  for (t += kPfDt; t < 4; t += kPfDt) f.update(measure_cut(m, t, rng, Vector2d(0.44, 0.27)));
   EXPECT_LT((f.predict(kPfT0 + int64_t(t * 1e6)).p_W - m.p(t)).norm(), 0.02);
   EXPECT_TRUE(f.believed());
 }
