@@ -17,16 +17,18 @@
 //    own; after max_consecutive_rejections in a row, the candidate replaces the track once it is
 //    believed itself (the platform is not where it was believed), or at once while the track is
 //    not believed yet.
-// A measurement whose extent falls short of the track's whole top (the extent most of its latest
-// views agree on, whole_extent) by kPartialViewM shows part of the top: its position is not the
-// top's centre and is not fused, its velocity is (the part moves with the whole). A view vision
-// marks as cut by the image's border (its position variance kCutPositionVarM2 or more) counts
-// towards the whole top too; one whose extent is the whole top's has nothing beyond the border, and
-// its position is fused (within kPartialViewM / 2). A track is believed (believed()) after
-// min_consistent measurements in a row, each within the gate, over at least kConfirmS: a short
-// burst of wrong measurements (a mismatched frame pair during the search reads as a fast platform)
-// never is. A track not measured for kConfirmS is confirmed again (its grown covariance lets a
-// wrong measurement through the gate). Pure: time passed in.
+// A measurement whose extent falls short of the track's whole top (the extent its latest views
+// agree on best, or a larger one kWholeTopViews of them agree on: whole_extent) by kPartialViewM
+// shows part of the top: its position is not the top's centre and is not fused, its velocity is
+// (the part moves with the whole). A view vision marks as cut by the image's border (its position
+// variance kCutPositionVarM2 or more) counts towards the whole top too once it spans the whole top
+// believed so far; one whose extent is the
+// whole top's has nothing beyond the border, and its position is fused (within kPartialViewM / 2).
+// A track is believed (believed()) after min_consistent measurements in a row, each within the
+// gate, over at least kConfirmS: a short burst of wrong measurements (a mismatched frame pair
+// during the search reads as a fast platform) never is. A track not measured for kConfirmS is
+// confirmed again (its grown covariance lets a wrong measurement through the gate). Pure: time
+// passed in.
 //
 // The prediction turns the velocity at the course's turn rate (the filtered velocity's direction
 // over course_tau_s, or over kCourseBaselineM of a creeping top's path): a cart round a bend is
@@ -197,7 +199,7 @@ class PlatformFilter {
     std::deque<std::pair<int64_t, double>> vz;
     HeaveModel heave;
     int n_consistent = 0;
-    std::deque<Vector2d> extents;       // (long, short) of its views not cut by the border [m]
+    std::deque<Vector2d> extents;       // (long, short) of its views (fuse: which ones) [m]
     Vector2d whole = Vector2d::Zero();  // whole_extent(extents)
   };
   enum class Fused { kAccepted, kAcceptedPartial, kOutsideGate };
