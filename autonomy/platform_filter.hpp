@@ -22,8 +22,8 @@
 // shows part of the top: its position is not the top's centre and is not fused, its velocity is
 // (the part moves with the whole). A view vision marks as cut by the image's border (its position
 // variance kCutPositionVarM2 or more) counts towards the whole top too once it spans the whole top
-// believed so far; one whose extent is the
-// whole top's has nothing beyond the border, and its position is fused (within kPartialViewM / 2).
+// believed so far; one whose extent is the whole top's has nothing beyond the border, and its
+// position is fused (within kPartialViewM / 2).
 // A track is believed (believed()) after min_consistent measurements in a row, each within the
 // gate, over at least kConfirmS: a short burst of wrong measurements (a mismatched frame pair
 // during the search reads as a fast platform) never is. A track not measured for kConfirmS is
