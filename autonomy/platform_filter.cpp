@@ -410,9 +410,8 @@ PlatformFilter::Fused PlatformFilter::fuse(Track& t, const PlatformMeasurement& 
   // fills the view, most views of it come near the border, and the whole top is seen in view
   // after view of them; but a part cut off by the border at a steady offset is seen as steadily,
   // and never becomes the whole top.
-  const bool no_smaller =
-      t.whole.minCoeff() > 0 && ((extent(m) - t.whole).array() >= -kPartialViewM).all();
-  if (m.size_m.minCoeff() > 0 && (!cut(m) || no_smaller)) {
+  const bool spans_whole = t.whole.minCoeff() > 0 && !partial;
+  if (m.size_m.minCoeff() > 0 && (!cut(m) || spans_whole)) {
     t.extents.push_back(extent(m));
     if (t.extents.size() > kExtentsKept) t.extents.pop_front();
     t.whole = whole_extent(t);
