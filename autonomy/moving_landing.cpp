@@ -107,6 +107,11 @@ std::optional<std::string> too_fast(const PlatformFilter::Prediction& p,
   return std::nullopt;
 }
 
+bool touched_down_on_top(double body_z_m, double top_z_m, double gear_height_m,
+                         double heave_amplitude_m) {
+  return body_z_m - gear_height_m >= top_z_m - heave_amplitude_m - kBesideTopM;
+}
+
 MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
                                 const PoseSample& pose, int64_t now_utime, double dt_s,
                                 double yaw_sp_rad, double gear_height_m, double descent_rate_mps,

@@ -96,6 +96,18 @@ inline constexpr double kMovedM = 0.10;
 /// where its track began.
 bool moving_enough(const PlatformFilter::Prediction& p, const MovingLandingParams& params);
 
+/// A touch-down with the gear this far below the top's height, beyond the deck's heave, is
+/// beside the platform, on the floor, not on its top [m]. The top's height is the one vision
+/// assumes for a moving top (vision.moving_top.top_height_m, 0.15 m; the heave measured about
+/// it), off by up to 7 cm for the 8-22 cm tops it is meant for, and a deck's roll at its edge
+/// adds 1-2 cm; the floor lies the assumed height, 15 cm, below.
+inline constexpr double kBesideTopM = 0.12;
+
+/// Whether a touch-down with the body at body_z_m came down on the platform's top (its height
+/// top_z_m, heaving by heave_amplitude_m) and not beside it (kBesideTopM).
+bool touched_down_on_top(double body_z_m, double top_z_m, double gear_height_m,
+                         double heave_amplitude_m);
+
 /// Whether the last drop starts now (step 3 of moving_landing.hpp).
 enum class Release { kWait, kNoHeave, kAfterCrest, kWaitedEnough };
 Release heave_release(const HeaveModel& heave, int64_t now_utime, double fall_s, double waited_s,
