@@ -852,15 +852,16 @@ void Autonomy::step(phases::FinalDescent& s, const Vector3d& /*p*/, double dt_s)
       end_utime_ = now_utime_;
       // Down on the ground beside the platform (its prediction ran off in the drop's blind end):
       // on the ground all the same, but not landed on the platform, and the status says so.
-      const double gear_z = pose_ ? pose_->p_W_B.z() - L.gear_height_m : pr.top_z_m;
       if (!pose_ || touched_down_on_top(pose_->p_W_B.z(), pr.top_z_m, L.gear_height_m,
-                                        platform_.heave().amplitude_m()))
+                                        platform_.heave().amplitude_m())) {
         enter(phases::Landed{}, std::string("touch-down on the moving platform (") +
                                     s.touchdown.cue() + "): motors off");
-      else
+      } else {
+        const double below_m = pr.top_z_m - (pose_->p_W_B.z() - L.gear_height_m);
         enter(phases::Landed{}, std::string("touch-down beside the moving platform (") +
-                                    s.touchdown.cue() + ", the gear " + fmt(pr.top_z_m - gear_z) +
+                                    s.touchdown.cue() + ", the gear " + fmt(below_m) +
                                     " m below its top): motors off");
+      }
     }
     return;
   }
