@@ -852,12 +852,11 @@ void Autonomy::step(phases::FinalDescent& s, const Vector3d& /*p*/, double dt_s)
       end_utime_ = now_utime_;
       // Down on the ground beside the platform (its prediction ran off in the drop's blind end):
       // on the ground all the same, but not landed on the platform, and the status says so.
-      if (!pose_ || touched_down_on_top(pose_->p_W_B.z(), pr.top_z_m, L.gear_height_m,
-                                        platform_.heave().amplitude_m())) {
+      const double below_m = pose_ ? pr.top_z_m - (pose_->p_W_B.z() - L.gear_height_m) : 0.0;
+      if (touched_down_on_top(below_m, platform_.heave().amplitude_m())) {
         enter(phases::Landed{}, std::string("touch-down on the moving platform (") +
                                     s.touchdown.cue() + "): motors off");
       } else {
-        const double below_m = pr.top_z_m - (pose_->p_W_B.z() - L.gear_height_m);
         enter(phases::Landed{}, std::string("touch-down beside the moving platform (") +
                                     s.touchdown.cue() + ", the gear " + fmt(below_m) +
                                     " m below its top): motors off");

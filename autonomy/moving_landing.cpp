@@ -107,9 +107,8 @@ std::optional<std::string> too_fast(const PlatformFilter::Prediction& p,
   return std::nullopt;
 }
 
-bool touched_down_on_top(double body_z_m, double top_z_m, double gear_height_m,
-                         double heave_amplitude_m) {
-  return body_z_m - gear_height_m >= top_z_m - heave_amplitude_m - kBesideTopM;
+bool touched_down_on_top(double gear_below_top_m, double heave_amplitude_m) {
+  return gear_below_top_m <= heave_amplitude_m + kBesideTopM;
 }
 
 MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,

@@ -103,10 +103,9 @@ bool moving_enough(const PlatformFilter::Prediction& p, const MovingLandingParam
 /// adds 1-2 cm; the floor lies the assumed height, 15 cm, below.
 inline constexpr double kBesideTopM = 0.12;
 
-/// Whether a touch-down with the body at body_z_m came down on the platform's top (its height
-/// top_z_m, heaving by heave_amplitude_m) and not beside it (kBesideTopM).
-bool touched_down_on_top(double body_z_m, double top_z_m, double gear_height_m,
-                         double heave_amplitude_m);
+/// Whether a touch-down with the gear gear_below_top_m under the platform's top's height (the
+/// top heaving by heave_amplitude_m) came down on the top and not beside it (kBesideTopM).
+bool touched_down_on_top(double gear_below_top_m, double heave_amplitude_m);
 
 /// Whether the last drop starts now (step 3 of moving_landing.hpp).
 enum class Release { kWait, kNoHeave, kAfterCrest, kWaitedEnough };

@@ -668,14 +668,14 @@ TEST(MovingApproachRegression, NeverDescendsOnAPredictionLongUnmeasured) {
 }
 
 TEST(MovingApproachTest, ATouchDownWellBelowTheTopIsBesideThePlatform) {
-  // The top's height as vision assumes it, 0.15 m; the gear 0.1 m below the body. On a top of
-  // 0.08 or 0.22 m the body rests at 0.18 or 0.32 m; on the floor beside it, at 0.10 m.
-  EXPECT_TRUE(touched_down_on_top(0.18, 0.15, 0.1, 0.0));
-  EXPECT_TRUE(touched_down_on_top(0.32, 0.15, 0.1, 0.0));
-  EXPECT_FALSE(touched_down_on_top(0.10, 0.15, 0.1, 0.0));
+  // The top's height as vision assumes it, 0.15 m. On a top of 0.08 or 0.22 m the gear rests
+  // 0.07 m below or above that height; on the floor beside it, 0.15 m below.
+  EXPECT_TRUE(touched_down_on_top(0.07, 0.0));
+  EXPECT_TRUE(touched_down_on_top(-0.07, 0.0));
+  EXPECT_FALSE(touched_down_on_top(0.15, 0.0));
   // A deck heaving 5 cm either way: its trough is still its top.
-  EXPECT_TRUE(touched_down_on_top(0.13, 0.15, 0.1, 0.05));
-  EXPECT_FALSE(touched_down_on_top(0.05, 0.15, 0.1, 0.05));
+  EXPECT_TRUE(touched_down_on_top(0.12, 0.05));
+  EXPECT_FALSE(touched_down_on_top(0.20, 0.05));
 }
 
 // A turning platform's heading is followed with its turn fed forward: an outer loop that only
