@@ -152,7 +152,11 @@ TEST_F(StationServerTest, ManyClientsDoNotStallTheLcmLoopOrGrowMemory) {
   StationOptions opt;
   opt.key = key();
   opt.port = 0;
-  Station station(params(), opt);
+  // A loop that waited for a client would wait out the client's timeout; a long one keeps that
+  // stall far above anything a loaded machine's scheduler does to a loop that never waits.
+  GroundStationParams p = params();
+  p.client_timeout_s = 6.0;
+  Station station(p, opt);
   Node node(kLcmUrl, "gs-server-test");
   station.attach(node);
   std::atomic<int> status_received{0};
@@ -270,13 +274,13 @@ TEST_F(StationServerTest, ManyClientsDoNotStallTheLcmLoopOrGrowMemory) {
       status_sent.load(), rss_after_warmup, rss_end, rss_end - rss_after_warmup);
 
   EXPECT_GT(steps_end - steps_after_warmup, 500u) << "the clients did not exercise the server";
-  // The LCM loop never waited for a client. A loop blocked by a client would stall for a client
-  // timeout (1 s) or forever; on a loaded 2-core machine (30 threads here, Chromium and other
-  // tests beside) the scheduler alone delays single iterations by up to a few hundred ms
-  // (measured: longest iteration 60-220 ms, 99% of messages within 20-160 ms). The bounds sit
-  // between the two.
-  EXPECT_LT(p99_latency_s, 0.25);
-  EXPECT_LT(max_iteration_s, 0.75);
+  // The LCM loop never waited for a client. A loop blocked by a client would stall for the
+  // client timeout (6 s here) or forever; on a loaded 2-core machine (30 threads here, Chromium
+  // and other tests beside) the scheduler alone delays single iterations and messages by up to
+  // a few hundred ms. The bounds sit far from both, so the test judges blocking, not speed; the
+  // latencies above are printed for a reader, not asserted.
+  EXPECT_LT(max_iteration_s, p.client_timeout_s / 2);
+  EXPECT_LT(sorted_s.back(), p.client_timeout_s / 2);
   EXPECT_GE(status_received.load(), status_sent.load() * 95 / 100);
   // Thousands of connections after warm-up, and memory stays flat (a leak of even 1 KiB per
   // connection would show as several MiB).
