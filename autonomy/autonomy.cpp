@@ -468,7 +468,7 @@ void Autonomy::start_refinement(const TargetMeasurement& m) {
   r.first_sighting_W = m.p_W_target;
   r.normal_sum_W = m.n_W;  // the plane's orientation is measured also from a part of it
   if (m.found) {
-    estimator_.add(m.p_W_target, frame_cov());
+    estimator_.add(m.p_W_target, frame_cov(), m.size_m);
     r.sizes_m.push_back(m.size_m);
     r.yaw4_sum = Vector2d(std::cos(4 * m.yaw_rad), std::sin(4 * m.yaw_rad));
     r.yaw2_sum = Vector2d(std::cos(2 * m.yaw_rad), std::sin(2 * m.yaw_rad));
@@ -494,6 +494,7 @@ void Autonomy::next_vantage(phases::Refinement& r) {
   r.vantage_since_utime = now_utime_;
   r.at_vantage_since_utime.reset();
   r.at_vantage_W.clear();
+  r.at_vantage_size_m.clear();
 }
 
 bool Autonomy::look_to_fit(phases::Refinement& r, const TargetMeasurement& m) {
@@ -589,10 +590,13 @@ void Autonomy::handle_target(const TargetMeasurement& m) {
     r->yaw2_sum += Vector2d(std::cos(2 * m.yaw_rad), std::sin(2 * m.yaw_rad));
     if (params_.refinement.one_waypoint_per_vantage) {
       // Added when the dwell ends.
-      if (r->at_vantage_since_utime) r->at_vantage_W.push_back(m.p_W_target);
+      if (r->at_vantage_since_utime) {
+        r->at_vantage_W.push_back(m.p_W_target);
+        r->at_vantage_size_m.push_back(m.size_m);
+      }
       return;
     }
-    add_waypoint(*r, m.p_W_target);
+    add_waypoint(*r, m.p_W_target, m.size_m);
   }
 }
 
@@ -691,12 +695,16 @@ bool Autonomy::vision_disagrees(phases::Approach& a, const TargetMeasurement& m)
   return true;
 }
 
-void Autonomy::add_waypoint(phases::Refinement& r, const Vector3d& X_W) {
-  const auto verdict = estimator_.add(X_W, frame_cov());
+void Autonomy::add_waypoint(phases::Refinement& r, const Vector3d& X_W, const Vector2d& size_m) {
+  const auto verdict = estimator_.add(X_W, frame_cov(), size_m);
   if (verdict == RefinementEstimator::Verdict::kRestarted) {
     reason_ =
         "estimate restarted: " + std::to_string(params_.refinement.max_consecutive_rejections) +
         " waypoints in a row outside the gate";
+  } else if (verdict == RefinementEstimator::Verdict::kSetAside) {
+    reason_ = "waypoint set aside: its view measured the target " + fmt(size_m.x()) + " x " +
+              fmt(size_m.y()) + " m, a part of it (" +
+              std::to_string(estimator_.n_set_aside()) + " set aside)";
   }
   if (estimator_.converged()) finish_refinement(r);  // leaves REFINEMENT: r is gone
 }
@@ -772,7 +780,8 @@ void Autonomy::step(phases::Refinement& r, const Vector3d& p, double /*dt_s*/) {
         next_vantage(r);
       } else if (!r.at_vantage_W.empty()) {
         // The vantage's waypoint: the median is robust to a stray frame among few.
-        add_waypoint(r, componentwise_median(r.at_vantage_W));
+        add_waypoint(r, componentwise_median(r.at_vantage_W),
+                     componentwise_median_2d(r.at_vantage_size_m));
         if (phase() != Phase::kRefinement) return;  // converged (or held): r is gone
         next_vantage(r);
       } else {

@@ -88,6 +88,7 @@ struct Refinement {
   int64_t vantage_since_utime = 0;
   std::optional<int64_t> at_vantage_since_utime;  ///< dwelling at the vantage since
   std::vector<Vector3d> at_vantage_W;             ///< waypoints seen while dwelling there
+  std::vector<Vector2d> at_vantage_size_m;        ///< and the sizes those views measured
   /// Landing: where the vantages look from since a view cut the top (mission_profile.hpp).
   std::optional<ViewToFit> view;
 };
@@ -235,7 +236,7 @@ class Autonomy {
   /// A landing top cut by the view's border: higher and turned vantages when it would not fit
   /// the view from where they are (mission_profile.hpp, view_to_fit); true when they moved.
   bool look_to_fit(phases::Refinement& r, const TargetMeasurement& m);
-  void add_waypoint(phases::Refinement& r, const Vector3d& X_W);
+  void add_waypoint(phases::Refinement& r, const Vector3d& X_W, const Vector2d& size_m);
   void target_lost(const std::string& what);
   void hold(const std::string& reason, Failsafe failsafe, double min_z_m);
   void enter_pose_lost();

@@ -273,11 +273,6 @@ Vector2d body_over_gear_xy(const LandingParams& L, const std::optional<PoseSampl
   return L.gear_height_m * (pose->q_WB * Vector3d::UnitZ()).head<2>();
 }
 
-double partial_view_slack_m(const Vector2d& converged_m, const Vector2d& measured_m) {
-  if (!converged_m.allFinite() || !measured_m.allFinite()) return 0.0;
-  return 0.5 * (converged_m - measured_m).cwiseMax(0.0).norm();
-}
-
 double range_to_fit(const DownwardView& view, const Vector2d& size_m, double top_yaw_rad,
                     double view_yaw_rad, double pad_m) {
   const double c = std::abs(std::cos(top_yaw_rad - view_yaw_rad));

@@ -43,11 +43,6 @@ inline constexpr double kVisionDisagreeS = 2.0;
 /// before the wall, a second or more between found targets) two strays seconds apart with
 /// nothing between them are no sustained disagreement.
 inline constexpr int kVisionDisagreeMinTargets = 5;
-/// How much further from the estimate a found target may lie when it measured the target smaller
-/// than the refinement did (converged_m, measured_m: size_m's (long, short)): a view that
-/// saw part of the top (close over it, the top fills the view and its border is missed) has
-/// its centre up to half the missing extent off the true one. 0 when either is unmeasured [m].
-double partial_view_slack_m(const Vector2d& converged_m, const Vector2d& measured_m);
 
 /// Refinement's look at a top its views cut (paper 3.4.1 flies the vantages at the search
 /// height, which takes the platform to fit the view from there): the height and heading from

@@ -42,6 +42,8 @@ double RefinementEstimator::mahalanobis2(const Vector3d& X_W) const {
 }
 
 void RefinementEstimator::reset() {
+  views_.clear();
+  whole_.clear();
   samples_.clear();
   frame_covs_.clear();
   consecutive_rejections_ = 0;
@@ -65,28 +67,60 @@ void RefinementEstimator::prune_outliers() {
       }
     }
     if (worst < 0) return;
-    samples_.erase(samples_.begin() + worst);
-    frame_covs_.erase(frame_covs_.begin() + worst);
+    views_.erase(views_.begin() + whole_[worst]);
+    sort_views();  // one size fewer: the target's may move
     ++n_rejected_;
   }
 }
 
+Vector2d RefinementEstimator::target_size_m(const Vector2d& with_size_m) const {
+  std::vector<Vector2d> sizes;
+  for (const View& v : views_)
+    if (v.size_m.allFinite()) sizes.push_back(v.size_m);
+  if (with_size_m.allFinite()) sizes.push_back(with_size_m);
+  return sizes.empty() ? Vector2d::Constant(kUnmeasured) : componentwise_median_2d(sizes);
+}
+
+bool RefinementEstimator::whole(const Vector2d& size_m, const Vector2d& target_size_m) const {
+  return partial_view_slack_m(target_size_m, size_m) <= params_.gate_floor_sigma_m;
+}
+
+void RefinementEstimator::sort_views() {
+  const Vector2d target = target_size_m(Vector2d::Constant(kUnmeasured));
+  whole_.clear();
+  samples_.clear();
+  frame_covs_.clear();
+  for (int i = 0; i < static_cast<int>(views_.size()); ++i) {
+    if (!whole(views_[i].size_m, target)) continue;
+    whole_.push_back(i);
+    samples_.push_back(views_[i].X_W);
+    frame_covs_.push_back(views_[i].frame_cov);
+  }
+}
+
 RefinementEstimator::Verdict RefinementEstimator::add(const Vector3d& X_W,
-                                                      const Matrix3d& frame_cov) {
+                                                      const Matrix3d& frame_cov,
+                                                      const Vector2d& size_m) {
   assert(X_W.allFinite() && frame_cov.allFinite());
+  if (!whole(size_m, target_size_m(size_m))) {
+    views_.push_back({X_W, frame_cov, size_m});
+    sort_views();
+    have_change_ = false;
+    return Verdict::kSetAside;
+  }
   if (n() >= params_.gate_min_n && mahalanobis2(X_W) > params_.gate_chi2) {
     ++n_rejected_;
     if (++consecutive_rejections_ < params_.max_consecutive_rejections) return Verdict::kRejected;
     reset();
-    samples_.push_back(X_W);
-    frame_covs_.push_back(frame_cov);
+    views_.push_back({X_W, frame_cov, size_m});
+    sort_views();
     return Verdict::kRestarted;
   }
   consecutive_rejections_ = 0;
   const Vector3d before = mean();
   const bool had = n() > 0;
-  samples_.push_back(X_W);
-  frame_covs_.push_back(frame_cov);
+  views_.push_back({X_W, frame_cov, size_m});
+  sort_views();
   if (n() > params_.gate_min_n) prune_outliers();
   last_change_ = mean() - before;
   have_change_ = had;
@@ -103,6 +137,19 @@ Vector3d componentwise_median(const std::vector<Vector3d>& points) {
     m[k] = v[v.size() / 2];
   }
   return m;
+}
+
+Vector2d componentwise_median_2d(const std::vector<Vector2d>& points) {
+  assert(!points.empty());
+  std::vector<Vector3d> p3;
+  p3.reserve(points.size());
+  for (const Vector2d& p : points) p3.emplace_back(p.x(), p.y(), 0.0);
+  return componentwise_median(p3).head<2>();
+}
+
+double partial_view_slack_m(const Vector2d& whole_m, const Vector2d& measured_m) {
+  if (!whole_m.allFinite() || !measured_m.allFinite()) return 0.0;
+  return 0.5 * (whole_m - measured_m).cwiseMax(0.0).norm();
 }
 
 namespace {

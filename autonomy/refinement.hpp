@@ -29,7 +29,18 @@
 // differences of consecutive waypoints less the drift between them. With no drift (motion capture)
 // it is the mean itself. Eqs. 7-9 and the gate stay on the mean: they judge whether the views
 // agree.
+//
+// Beyond the paper, a view of part of the target measured as the whole: vision takes a block of
+// an opening's cells for the opening where a smooth room behind one side shows no parallax, or
+// the band of a top's features for the top; such a view's centre lies up to half the missing
+// extent off the true one, and its dwell can repeat it at every frame. Each waypoint carries the
+// size its dwell measured; the estimate is formed from the waypoints whose size is the
+// target's (the median of every waypoint's), within what lets the centre lie no farther off
+// than the gate's floor sigma. The others are set aside, not dropped: the median is read again
+// at every waypoint, so which waypoints count follows the many (views set aside count again once
+// views of their size outnumber the others, and the reverse).
 
+#include <limits>
 #include <optional>
 #include <random>
 #include <vector>
@@ -48,6 +59,12 @@ struct TargetFilter {
 /// Each coordinate's median (the upper of the middle two for an even count) of non-empty points:
 /// a waypoint from a dwell's targets, robust to a stray frame among few.
 Vector3d componentwise_median(const std::vector<Vector3d>& points);
+Vector2d componentwise_median_2d(const std::vector<Vector2d>& points);
+
+/// How far a view's centre may lie from the target's when it measured the target smaller than
+/// the whole (whole_m, measured_m: size_m's two sides): a view that saw part of it has its centre
+/// up to half the missing extent off. 0 when either is unmeasured (non-finite) [m].
+double partial_view_slack_m(const Vector2d& whole_m, const Vector2d& measured_m);
 
 /// The frame's drift between two of its position covariances: the positive part of the growth
 /// (the covariance may also shrink, a height fix; only growth is drift) [m^2].
@@ -55,17 +72,25 @@ Matrix3d frame_drift(const Matrix3d& from, const Matrix3d& to);
 
 class RefinementEstimator {
  public:
-  enum class Verdict { kAccepted, kRejected, kRestarted };
+  static constexpr double kUnmeasured = std::numeric_limits<double>::quiet_NaN();
+  enum class Verdict { kAccepted, kRejected, kRestarted, kSetAside };
 
   explicit RefinementEstimator(const RefinementParams& params) : params_(params) {}
 
   /// Adds one waypoint measurement X_V,i [m], measured in a frame whose position covariance was
-  /// frame_cov [m^2] (the onboard estimate's; zero on motion capture, whose frame does not drift).
-  Verdict add(const Vector3d& X_W, const Matrix3d& frame_cov = Matrix3d::Zero());
+  /// frame_cov [m^2] (the onboard estimate's; zero on motion capture, whose frame does not drift),
+  /// of a target its view measured size_m [m] (non-finite: unmeasured, taken as whole).
+  /// kSetAside: kept, but its size shows a view of part of the target; no change is judged by it
+  /// (eqs. 8-9 wait for the next whole waypoint).
+  Verdict add(const Vector3d& X_W, const Matrix3d& frame_cov = Matrix3d::Zero(),
+              const Vector2d& size_m = Vector2d::Constant(kUnmeasured));
   void reset();
 
+  /// The waypoints the estimate is formed from: whole views, within the gate.
   int n() const { return static_cast<int>(samples_.size()); }
   int n_rejected() const { return n_rejected_; }
+  /// Waypoints kept but set aside as views of part of the target.
+  int n_set_aside() const { return static_cast<int>(views_.size()) - n(); }
   /// X^_n, the sample mean (zero when n = 0).
   Vector3d mean() const;
   /// Sample covariance (divisor n - 1; zero when n < 2).
@@ -86,13 +111,23 @@ class RefinementEstimator {
   const std::vector<Vector3d>& samples() const { return samples_; }
 
  private:
+  struct View {
+    Vector3d X_W;
+    Matrix3d frame_cov;
+    Vector2d size_m;
+  };
   static Vector3d mean_of(const std::vector<Vector3d>& s, int skip);
   static Matrix3d cov_of(const std::vector<Vector3d>& s, const Vector3d& mu, int skip);
+  bool whole(const Vector2d& size_m, const Vector2d& target_size_m) const;
+  Vector2d target_size_m(const Vector2d& with_size_m) const;
+  void sort_views();
   void prune_outliers();
 
   RefinementParams params_;
-  std::vector<Vector3d> samples_;
-  std::vector<Matrix3d> frame_covs_;  // the frame's position covariance at each sample
+  std::vector<View> views_;           // every waypoint kept, whole or set aside, in order
+  std::vector<int> whole_;            // views_' indices of the whole ones, in order
+  std::vector<Vector3d> samples_;     // their positions ...
+  std::vector<Matrix3d> frame_covs_;  // ... and the frame's position covariance at each
   int n_rejected_ = 0;
   int consecutive_rejections_ = 0;
   bool have_change_ = false;

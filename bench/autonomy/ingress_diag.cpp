@@ -131,9 +131,12 @@ int main(int argc, char** argv) try {
     return from_msg(vision::to_msg(r));
   };
   const auto r = fly_closed_loop(c);
-  std::printf("# result %s: %s crossed %d collided %d offset %.3f est err %.3f retries %d\n",
-              phase_name(r.phase), r.reason.c_str(), r.crossed_wall, r.collided,
-              r.max_lateral_in_wall_m, r.estimate_error_W.norm(), r.retries);
+  const Vector3d& est = r.estimate_error_W;
+  std::printf(
+      "# result %s: %s crossed %d collided %d offset %.3f est err %.3f (%+.3f %+.3f %+.3f) "
+      "retries %d\n",
+      phase_name(r.phase), r.reason.c_str(), r.crossed_wall, r.collided, r.max_lateral_in_wall_m,
+      est.norm(), est.x(), est.y(), est.z(), r.retries);
   return 0;
 } catch (const alight::ParamError& e) {
   // A bad scenario or vehicle file: the message names the file, the key and the value.

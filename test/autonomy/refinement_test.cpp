@@ -57,6 +57,57 @@ TEST(RefinementTest, HorizontalChangeIsTheNormNotTheSumOfXAndY) {
   EXPECT_FALSE(e.converged());
 }
 
+TEST(RefinementTest, AViewOfPartOfTheTargetIsSetAsideWhileWholeViewsAreTheMany) {
+  // An opening 1.0 x 0.8 m centred at the origin; views that took its lower 0.3 m for the
+  // whole (a smooth room above showed no parallax) put the centre 0.25 m low.
+  RefinementParams p;
+  p.n_min = 3;
+  p.gate_min_n = 100;  // the sizes alone
+  RefinementEstimator e(p);
+  const Vector2d whole(1.0, 0.8), part(1.0, 0.3), larger(1.02, 0.81);
+  const Vector3d centre(3, 0, 1.2), low = centre - Vector3d(0, 0, 0.25);
+  for (int i = 0; i < 3; ++i) e.add(centre, Matrix3d::Zero(), whole);
+  EXPECT_EQ(e.add(low, Matrix3d::Zero(), part), RefinementEstimator::Verdict::kSetAside);
+  EXPECT_EQ(e.n(), 3);
+  EXPECT_EQ(e.n_set_aside(), 1);
+  EXPECT_TRUE(e.mean().isApprox(centre));
+  EXPECT_FALSE(e.converged()) << "a view set aside judges no change";
+  // A view measuring it a little larger is whole (vision's views fall short, rarely long).
+  EXPECT_EQ(e.add(centre, Matrix3d::Zero(), larger), RefinementEstimator::Verdict::kAccepted);
+  EXPECT_TRUE(e.converged());
+  // Once the part's views are the many, its size reads as the target's: they count again (the
+  // larger views stay whole), and the whole ones come back once they are the many again.
+  for (int i = 0; i < 4; ++i) e.add(low, Matrix3d::Zero(), part);
+  EXPECT_EQ(e.n_set_aside(), 0);
+  EXPECT_EQ(e.n(), 9);
+  for (int i = 0; i < 3; ++i) e.add(centre, Matrix3d::Zero(), whole);
+  EXPECT_EQ(e.n(), 7);
+  EXPECT_EQ(e.n_set_aside(), 5);
+  EXPECT_TRUE(e.mean().isApprox(centre));
+  // Within the gate's floor sigma of the whole's centre (a side 6 cm short) a view is whole.
+  const double floor = p.gate_floor_sigma_m;
+  EXPECT_EQ(e.add(centre, Matrix3d::Zero(), whole - Vector2d(0, 1.9 * floor)),
+            RefinementEstimator::Verdict::kAccepted);
+  EXPECT_EQ(e.add(centre, Matrix3d::Zero(), whole - Vector2d(0, 2.1 * floor)),
+            RefinementEstimator::Verdict::kSetAside);
+}
+
+TEST(RefinementTest, WaypointsWithoutASizeAreWhole) {
+  RefinementParams p;
+  p.gate_min_n = 100;
+  RefinementEstimator e(p);
+  e.add(Vector3d(1, 0, 0), Matrix3d::Zero(), Vector2d(1.0, 0.8));
+  EXPECT_EQ(e.add(Vector3d(2, 0, 0)), RefinementEstimator::Verdict::kAccepted);
+  EXPECT_EQ(e.add(Vector3d(3, 0, 0), Matrix3d::Zero(), Vector2d(1.0, 0.8)),
+            RefinementEstimator::Verdict::kAccepted);
+  EXPECT_EQ(e.n(), 3);
+  EXPECT_DOUBLE_EQ(partial_view_slack_m(Vector2d(1.0, 0.8), Vector2d(0.4, 0.0)), 0.5);
+  EXPECT_DOUBLE_EQ(partial_view_slack_m(Vector2d(1.0, 0.8), Vector2d(1.2, 0.9)), 0.0);
+  EXPECT_EQ(partial_view_slack_m(Vector2d(1.0, 0.8),
+                                 Vector2d::Constant(RefinementEstimator::kUnmeasured)),
+            0.0);
+}
+
 TEST(RefinementTest, GateRejectsAFarOutlierAndKeepsTheMean) {
   RefinementParams p;
   RefinementEstimator e(p);
