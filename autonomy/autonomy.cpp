@@ -703,8 +703,8 @@ void Autonomy::add_waypoint(phases::Refinement& r, const Vector3d& X_W, const Ve
         " waypoints in a row outside the gate";
   } else if (verdict == RefinementEstimator::Verdict::kSetAside) {
     reason_ = "waypoint set aside: its view measured the target " + fmt(size_m.x()) + " x " +
-              fmt(size_m.y()) + " m, a part of it (" +
-              std::to_string(estimator_.n_set_aside()) + " set aside)";
+              fmt(size_m.y()) + " m, a part of it (" + std::to_string(estimator_.n_set_aside()) +
+              " set aside)";
   }
   if (estimator_.converged()) finish_refinement(r);  // leaves REFINEMENT: r is gone
 }
