@@ -81,8 +81,8 @@ Vector2d RefinementEstimator::target_size_m(const Vector2d& with_size_m) const {
   return sizes.empty() ? Vector2d::Constant(kUnmeasured) : componentwise_median_2d(sizes);
 }
 
-bool RefinementEstimator::whole(const Vector2d& size_m, const Vector2d& target_size_m) const {
-  return partial_view_slack_m(target_size_m, size_m) <= params_.gate_floor_sigma_m;
+bool RefinementEstimator::whole(const Vector2d& size_m, const Vector2d& target_m) const {
+  return partial_view_slack_m(target_m, size_m) <= params_.gate_floor_sigma_m;
 }
 
 void RefinementEstimator::sort_views() {

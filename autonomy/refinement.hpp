@@ -118,8 +118,13 @@ class RefinementEstimator {
   };
   static Vector3d mean_of(const std::vector<Vector3d>& s, int skip);
   static Matrix3d cov_of(const std::vector<Vector3d>& s, const Vector3d& mu, int skip);
-  bool whole(const Vector2d& size_m, const Vector2d& target_size_m) const;
+  /// Whether a view that measured size_m saw the whole of a target of size target_m: its centre
+  /// no more than the gate's floor sigma off for what it missed (unmeasured: whole).
+  bool whole(const Vector2d& size_m, const Vector2d& target_m) const;
+  /// The componentwise median of the kept views' measured sizes and with_size_m (non-finite
+  /// ones left out; non-finite when none is measured).
   Vector2d target_size_m(const Vector2d& with_size_m) const;
+  /// Rebuilds whole_, samples_ and frame_covs_ from views_ against the target's size now.
   void sort_views();
   void prune_outliers();
 

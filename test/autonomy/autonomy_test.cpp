@@ -702,7 +702,9 @@ TEST(AutonomyTest, RefinementSetsAsideWaypointsWhoseViewsMeasuredPartOfTheOpenin
     // Averaged in, the part's waypoints put the estimate 7 cm low.
     EXPECT_LT(err.norm(), 0.03) << "part views " << part_views << ": " << err.transpose();
     EXPECT_EQ(set_aside, part_views);
-    if (part_views) EXPECT_GE(n_part, 10) << "three seconds of views, over several vantages";
+    if (part_views) {
+      EXPECT_GE(n_part, 10) << "three seconds of views, over several vantages";
+    }
   }
 }
 
