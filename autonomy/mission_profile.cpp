@@ -163,10 +163,19 @@ class IngressProfile final : public MissionProfile {
     return {{d.ingress_start_W_m, d.ingress_end_W_m}, d.ingress_yaw_deg * M_PI / 180.0};
   }
 
-  Vantage vantage(const Vector3d& mu_W, const Matrix3d& S_W, int n, const Vector3d& /*here_W*/,
+  Vantage vantage(const Vector3d& mu_W, const Matrix3d& S_W, int n, const Vector3d& here_W,
                   const Vector3d& normal_sum_W, VantageSampler& sampler) const override {
     // In the plane parallel to the wall at the standoff: along-wall t and vertical z.
     const Vector3d nh = horizontal_normal(normal_sum_W);
+    // One frame's sighting (a partial view, or the detection's waypoint before any dwell) never
+    // draws the vehicle towards the wall: a smooth wall misread as the busy room's back wall
+    // seen through the opening puts the sighting metres beyond the true wall, and the standoff
+    // from it lies behind the wall. Until a dwell's waypoint stands beside it, the vantage keeps
+    // the vehicle's own distance from the sighted plane where that is the larger: a sighting
+    // from nearer than the standoff (the search pass) backs off to it as before, one from
+    // farther (GO where the hover sees the opening) closes in after the first dwell.
+    double standoff_m = p_.refinement.ingress_standoff_m;
+    if (n <= 1) standoff_m = std::max(standoff_m, nh.dot(here_W - mu_W));
     const Vector3d t(-nh.y(), nh.x(), 0);
     Eigen::Matrix<double, 3, 2> B;
     B.col(0) = t;
@@ -174,8 +183,7 @@ class IngressProfile final : public MissionProfile {
     const Vector2d mu2(t.dot(mu_W), mu_W.z());
     const Eigen::Matrix2d S2 = B.transpose() * S_W * B;
     const Vector2d d = sampler.draw(mu2, S2, n) - mu2;
-    return {mu_W + nh * p_.refinement.ingress_standoff_m + t * d.x() + Vector3d::UnitZ() * d.y(),
-            yaw_facing(nh)};
+    return {mu_W + nh * standoff_m + t * d.x() + Vector3d::UnitZ() * d.y(), yaw_facing(nh)};
   }
 
   std::optional<Refusal> refuse(double size_a_m, double size_b_m) const override {

@@ -11,7 +11,8 @@
 //    margins; above the estimate at the current altitude, descend at v_des (x3(t+1) = x3(t) -
 //    v_des dt) only while the radial error e_r(t) is within radial_tol (and the yaw turned onto
 //    the platform's edges), final_height above the platform -> FINAL_DESCENT.
-//  - Ingress: a pass along the wall; vantages in the plane parallel to the wall at a standoff;
+//  - Ingress: a pass along the wall; vantages in the plane parallel to the wall at a standoff
+//    (no nearer than the vehicle already is while one frame's sighting is all there is);
 //    the opening must take the vehicle plus clearance; align on the opening's normal at a
 //    standoff, then advance along it only while the lateral and vertical errors are within
 //    tolerance, pass_distance beyond the wall -> DONE.

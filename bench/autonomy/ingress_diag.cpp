@@ -57,7 +57,17 @@ int main(int argc, char** argv) try {
   c.scenario_file = scenario_file;
   c.mission = Mission::kIngress;
   c.seed = seed;
-  c.script = [&](const Autonomy& a, double, ScriptActions&) { phase = a.phase(); };
+  // Each change of phase, and of refinement's vantage, as a line of its own: where autonomy sent
+  // the vehicle, beside what the vision saw.
+  Vector3d vantage = Vector3d::Zero();
+  c.script = [&](const Autonomy& a, double t_s, ScriptActions&) {
+    const Vector3d v = a.current_vantage();
+    if (a.phase() != phase || (v - vantage).norm() > 1e-3)
+      std::printf("# %7.3f %s -> %s vantage (%.2f %.2f %.2f)\n", t_s, phase_name(phase),
+                  phase_name(a.phase()), v.x(), v.y(), v.z());
+    phase = a.phase();
+    vantage = v;
+  };
   int n = 0;
   c.camera_vision = [&](const sim::CameraFrame& f, const std::optional<PoseSample>& pose) {
     const auto r = pipeline.process(f.pixels, f.utime, pose, f.exposure_s, f.line_delay_s);
@@ -109,6 +119,11 @@ int main(int argc, char** argv) try {
                   r.target.size_m[1] - size.y(), e.x(), e.y(), e.z(), r.target.n_inliers_target,
                   r.target.n_inliers_dominant);
       std::printf(" boxW %+.3f boxH %+.3f", box_w - size.x(), box_h - size.y());
+    } else if (r.reason == vision::Reason::kPartialView) {
+      // A partial view reaches autonomy as a first sighting: where it put the target.
+      const Vector3d e = r.target.p_W - centre_W;
+      std::printf(" sighting dC(%+.3f %+.3f %+.3f) in %d/%d", e.x(), e.y(), e.z(),
+                  r.target.n_inliers_target, r.target.n_inliers_dominant);
     } else {
       std::printf(" in %d/%d", r.target.n_inliers_target, r.target.n_inliers_dominant);
     }
@@ -137,6 +152,7 @@ int main(int argc, char** argv) try {
       "retries %d\n",
       phase_name(r.phase), r.reason.c_str(), r.crossed_wall, r.collided, r.max_lateral_in_wall_m,
       est.norm(), est.x(), est.y(), est.z(), r.retries);
+  for (const auto& why : r.retry_reasons) std::printf("# retry: %s\n", why.c_str());
   return 0;
 } catch (const alight::ParamError& e) {
   // A bad scenario or vehicle file: the message names the file, the key and the value.

@@ -708,6 +708,57 @@ TEST(AutonomyTest, RefinementSetsAsideWaypointsWhoseViewsMeasuredPartOfTheOpenin
   }
 }
 
+TEST(AutonomyTest, ASightingOfOneFrameBeyondTheWallNeverDrawsTheVehicleTowardsIt) {
+  // From the search pass 1.5 m in front of the wall, a partial view sighted on the room's back
+  // wall, 3 m beyond the opening, and nothing seen after it: the vantage at the standoff from it
+  // would lie 0.7 m behind the wall. The same sighting on the opening backs off to the standoff.
+  for (const double beyond_m : {0.0, 3.0}) {
+    SCOPED_TRACE(beyond_m);
+    AutonomyParams params = ingress_params(0.45);
+    params.refinement.ingress_standoff_m = 2.3;  // the vehicles' files: farther than the pass
+    KinematicWorld w(params, ingress_vision());
+    w.takeoff_and_hover();
+    bool sighted = false;
+    Vector3d at_sighting = Vector3d::Zero(), sighting = Vector3d::Zero();
+    w.corrupt_target = [&](TargetMeasurement& m) {
+      if (sighted) {
+        m.found = m.partial = false;
+        return;
+      }
+      if (w.p.x() < w.autonomy.params().detection.ingress_start_W_m.x() - 0.05) {
+        m.found = m.partial = false;  // seen from the pass only
+        return;
+      }
+      if (!m.found && !m.partial) return;
+      m.found = false;
+      m.partial = m.cut = true;
+      m.p_W_target = w.truth.opening_center_W + Vector3d(beyond_m, 0, 0);
+      sighted = true;
+      at_sighting = w.p;
+      sighting = m.p_W_target;
+    };
+    w.send(Command::kGo, Mission::kIngress);
+    ASSERT_TRUE(w.run_until_phase(Phase::kRefinement, 60)) << w.out.status.reason;
+    const Vector3d vantage = w.autonomy.current_vantage();
+    const double standoff_m = w.autonomy.params().refinement.ingress_standoff_m;
+    ASSERT_LT(at_sighting.x(), sighting.x() - 0.5 - beyond_m) << "sighted from in front";
+    double max_x = w.p.x();
+    w.run_until(
+        [&] {
+          max_x = std::max(max_x, w.p.x());
+          return false;
+        },
+        2.5);
+    EXPECT_EQ(w.autonomy.phase(), Phase::kRefinement) << w.out.status.reason;
+    if (beyond_m > 0) {
+      EXPECT_NEAR(vantage.x(), at_sighting.x(), 1e-9) << "held its distance, not drawn in";
+      EXPECT_LT(max_x, at_sighting.x() + 0.02);
+    } else {
+      EXPECT_NEAR(vantage.x(), sighting.x() - standoff_m, 1e-9) << "backed off to the standoff";
+    }
+  }
+}
+
 TEST(AutonomyTest, IngressPausesWhileOutsideTheLateralTolerance) {
   KinematicWorld w(ingress_params(0.45), ingress_vision());
   ASSERT_TRUE(w.go_to_approach(Mission::kIngress));
