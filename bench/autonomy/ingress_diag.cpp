@@ -136,6 +136,14 @@ int main(int argc, char** argv) try {
         cv::rectangle(bgr, cv::Point(r.target.outline[0].x(), r.target.outline[0].y()),
                       cv::Point(r.target.outline[2].x(), r.target.outline[2].y()), {0, 0, 255});
       for (const auto& l : r.lines) cv::line(bgr, {l[0], l[1]}, {l[2], l[3]}, {255, 0, 0});
+      // The matches: the wall's inliers yellow, those seen through it magenta, the rest grey.
+      for (size_t k = 0; k < r.matched_px.size() && k < r.labels.size(); ++k) {
+        const cv::Scalar colour = r.labels[k] == vision::Label::kDominant ? cv::Scalar(0, 255, 255)
+                                  : r.labels[k] == vision::Label::kTarget
+                                      ? cv::Scalar(255, 0, 255)
+                                      : cv::Scalar(128, 128, 128);
+        cv::circle(bgr, cv::Point(r.matched_px[k].x(), r.matched_px[k].y()), 2, colour, -1);
+      }
       char name[64];
       std::snprintf(name, sizeof name, "/f%05d.png", n);
       cv::imwrite(dump + name, bgr);
