@@ -38,25 +38,21 @@ TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image
                              mask ? parallax_image(reference, params.ingress) : cv::Mat(), params);
 }
 
-TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image,
-                                  const cv::Mat& image_parallax, const cv::Mat& reference_parallax,
-                                  const PipelineParams& params) {
-  assert(c.camera && c.mount);
+namespace {
+
+// Stages 2-4 with `wall` as the wall; the wall's labels and inlier count filled in first.
+TargetOutcome find_opening(const Correspondences& c, const Wall& wall,
+                           const std::vector<std::optional<Vector3d>>& X_W_match,
+                           const cv::Mat& image, const cv::Mat& image_parallax,
+                           const cv::Mat& reference_parallax, const PipelineParams& params) {
   const IngressParams& p = params.ingress;
+  const HomographyFit& fit = *wall.fit;
   TargetOutcome out;
   out.labels.assign(c.size(), Label::kOutlier);
   const auto refuse = [&](Reason reason) {
     out.reason = reason;
     return std::move(out);
   };
-  // 1. The wall.
-  const auto planes = fit_two_homographies(c.x1, c.x2, params.homography);
-  if (!planes) return refuse(planes.reason());
-  if (mocap_motion(c.pose_1, c.pose_2, *c.mount).baseline_m < params.waypoint.min_baseline_m)
-    return refuse(Reason::kSmallBaseline);
-  const auto X_W_match = triangulate_matches(c, kMaxRayGapPx);
-  const Wall wall = choose_wall(c, *planes, X_W_match, params);
-  const HomographyFit& fit = *wall.fit;
   for (size_t i = 0; i < c.size(); ++i)
     if (fit.inlier[i]) out.labels[i] = Label::kDominant;
   out.estimate.n_inliers_dominant = fit.n_inliers;
@@ -90,6 +86,43 @@ TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image
       r != Reason::kOk)
     return refuse(r);
   out.reason = opening_checks(c, fit, b, out.labels, X_W_match, out.estimate, p);
+  return out;
+}
+
+}  // namespace
+
+TargetOutcome find_ingress_target(const Correspondences& c, const cv::Mat& image,
+                                  const cv::Mat& image_parallax, const cv::Mat& reference_parallax,
+                                  const PipelineParams& params) {
+  assert(c.camera && c.mount);
+  const auto refuse = [&](Reason reason) {
+    TargetOutcome out;
+    out.labels.assign(c.size(), Label::kOutlier);
+    out.reason = reason;
+    return out;
+  };
+  // 1. The wall.
+  const auto planes = fit_two_homographies(c.x1, c.x2, params.homography);
+  if (!planes) return refuse(planes.reason());
+  if (mocap_motion(c.pose_1, c.pose_2, *c.mount).baseline_m < params.waypoint.min_baseline_m)
+    return refuse(Reason::kSmallBaseline);
+  const auto X_W_match = triangulate_matches(c, kMaxRayGapPx);
+  const Wall wall = choose_wall(c, *planes, X_W_match, params);
+  TargetOutcome out =
+      find_opening(c, wall, X_W_match, image, image_parallax, reference_parallax, params);
+  // Beyond the paper: what is seen through the dominant plane lies in front of it, so it is no
+  // wall but the busy room behind a smooth wall's opening; the wall of few features in front of
+  // it (wall.hpp) is tried instead, and kept where it finds the opening or a view of part of it.
+  if ((out.reason == Reason::kNotBehindWall || out.reason == Reason::kPartialNotBehind) &&
+      wall.fit == &planes->first) {
+    HomographyFit few_fit;
+    if (const auto few =
+            few_feature_wall(c, planes->first, wall.depth_m, X_W_match, params, &few_fit)) {
+      TargetOutcome other =
+          find_opening(c, *few, X_W_match, image, image_parallax, reference_parallax, params);
+      if (other.reason == Reason::kOk || located_only(other.reason)) return other;
+    }
+  }
   return out;
 }
 

@@ -41,6 +41,28 @@ struct Wall {
   double depth_m;  ///< median depth of its triangulated inliers in camera 2 (infinity: none)
 };
 
+/// The fewest matches a wall of few features (few_feature_wall) is taken from: three define
+/// the plane, the rest confirm it.
+inline constexpr int kFewWallMinPoints = 6;
+
+/// Beyond the paper: a smooth wall (sky, snow, a blurred photograph) holds a handful of
+/// features, too few for a homography of its own (eight degrees of freedom, and mismatches among
+/// them: the second search finds none, or one whose motion disagrees), while the busy room
+/// behind a large opening holds the dominant plane. With motion capture's motion the wall's
+/// plane has three unknowns: among the triangulated outliers of the dominant plane lying 0.5 m
+/// in front of it (dominant_depth_m, camera 2), the plane through three of them (seeded draws)
+/// that is upright (normal within 30 deg of the horizontal: from low down the floor is nearer
+/// too), faces the camera (within 60 deg of its axis: no plane through both cameras' centres)
+/// and transfers the most of them within homography.threshold_px under its induced homography,
+/// then the plane that best transfers those (closed form). nullopt when fewer than
+/// kFewWallMinPoints support it. *fit receives its homography (the plane-induced one) and
+/// inliers among every match; the Wall points to it. find_ingress_target tries it where the
+/// dominant plane, taken for the wall, shows nothing behind it.
+std::optional<Wall> few_feature_wall(const Correspondences& c, const HomographyFit& dominant,
+                                     double dominant_depth_m,
+                                     const std::vector<std::optional<Vector3d>>& X_W_match,
+                                     const PipelineParams& params, HomographyFit* fit);
+
 /// The wall: the first homography, or the second where it decomposes and is nearer by 0.5 m
 /// (a dark, flat wall photograph can hold fewer matches than the room seen through a large
 /// opening; on a solid wall the second search can find the wall again,

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <functional>
 #include <limits>
 #include <opencv2/imgproc.hpp>
 #include <random>
@@ -297,21 +298,82 @@ TEST(IngressTargetTest, EachStageRefusesWithItsOwnReason) {
 
 // Regression (closed-loop ingress_wide, seed 1): through a wide opening the room's back wall
 // held more matches than the wall around it and became the dominant plane; the wall's own
-// features then formed an inlier-free block and "openings" were reported at x = 6 m.
-TEST(IngressTargetTest, BackWallAsDominantPlaneIsNoOpening) {
+// features then formed an inlier-free block and "openings" were reported at x = 6 m. What is
+// seen through that plane lies in front of it, so the wall of few features in front of it
+// (wall.hpp, few_feature_wall) is tried instead: a smooth wall's handful of features, too few
+// for a homography of their own, give the wall's plane under motion capture's motion.
+TEST(IngressTargetTest, BackWallAsDominantPlaneGivesWayToTheWallOfFewFeaturesInFront) {
   const WallScene s(60, 150);
   PipelineParams params;
   params.ingress.parallax_mask = false;
   // No second plane among the back wall's outliers (the wall's 60 too few for it): the
-  // dominant plane is taken for the wall.
+  // dominant plane is taken for the wall first.
   params.homography.min_inliers = 61;
   const TargetOutcome t = find_ingress_target(s.c, s.image, cv::Mat(), params);
-  EXPECT_EQ(t.reason, Reason::kNotBehindWall) << "at " << t.estimate.p_W.transpose();
-  // Without the check the block (the wall's own features, running to the image's border) is
-  // left to the partial view's check: the behind check is the one that refuses it first.
+  ASSERT_EQ(t.reason, Reason::kOk) << to_string(t.reason);
+  EXPECT_LT((t.estimate.p_W - Vector3d(3.0, 0.0, 1.2)).norm(), 0.01) << t.estimate.p_W.transpose();
+  EXPECT_NEAR(t.estimate.size_m[0], 0.6, 0.01);
+  EXPECT_NEAR(t.estimate.size_m[1], 0.6, 0.01);
+  EXPECT_EQ(t.estimate.n_inliers_dominant, 60);  // the wall's features, not the room's
+  // Without the behind check the dominant plane's block (the wall's own features, running to
+  // the image's border) is refused as a partial view first, and nothing is tried instead.
   params.ingress.min_behind_share = 0.0;
   const TargetOutcome unchecked = find_ingress_target(s.c, s.image, cv::Mat(), params);
   EXPECT_EQ(unchecked.reason, Reason::kPartialNotFramed) << to_string(unchecked.reason);
+}
+
+// The wall of few features is upright and faces the camera: from low down the floor in front of
+// the wall is nearer than the room too, and is no wall.
+TEST(FewFeatureWallTest, TheFloorInFrontIsNoWallAndAnUprightPlaneIs) {
+  CameraModel camera;
+  CameraMount mount;
+  mount.R_BC = R_BC_forward();
+  Correspondences c;
+  c.camera = &camera;
+  c.mount = &mount;
+  c.pose_1.p_W_B = Vector3d(1.5, -0.15, 0.5);
+  c.pose_2.p_W_B = Vector3d(1.5, 0.15, 0.5);
+  c.pose_2.utime = 100'000;
+  const Isometry3d X_CW1 = camera_in_world(c.pose_1.X_WB(), mount.X_BC()).inverse();
+  const Isometry3d X_CW2 = camera_in_world(c.pose_2.X_WB(), mount.X_BC()).inverse();
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const auto add_n = [&](int n, const std::function<Vector3d()>& draw) {
+    int k = 0;
+    for (int tries = 0; k < n && tries < 100 * n; ++tries)
+      k += add_match(camera, X_CW1, X_CW2, draw(), &c);
+    return k == n;
+  };
+  ASSERT_TRUE(add_n(80, [&] { return Vector3d(6.1, -1.5 + 3 * u(rng), 1.5 * u(rng)); }));
+  const size_t n_room = c.size();
+  // The floor from 1.7 m ahead (the view's lower edge) to 1 m short of the room.
+  ASSERT_TRUE(add_n(20, [&] { return Vector3d(3.2 + 1.8 * u(rng), -0.5 + u(rng), 0.0); }));
+  HomographyFit room;
+  room.inlier.assign(c.size(), 0);
+  for (size_t k = 0; k < n_room; ++k) room.inlier[k] = 1;
+  room.n_inliers = static_cast<int>(n_room);
+  const double room_depth_m = 6.1 - 1.5;
+  PipelineParams params;
+  HomographyFit fit;
+  auto X_W = triangulate_matches(c, kMaxRayGapPx);
+  EXPECT_FALSE(few_feature_wall(c, room, room_depth_m, X_W, params, &fit)) << "the floor";
+  // An upright wall at x = 3 m in front of the room.
+  ASSERT_TRUE(add_n(12, [&] { return Vector3d(3.0, -0.6 + 1.2 * u(rng), 0.3 + 0.6 * u(rng)); }));
+  room.inlier.resize(c.size(), 0);
+  X_W = triangulate_matches(c, kMaxRayGapPx);
+  const auto wall = few_feature_wall(c, room, room_depth_m, X_W, params, &fit);
+  ASSERT_TRUE(wall);
+  ASSERT_TRUE(wall->plane);
+  EXPECT_EQ(wall->fit, &fit);
+  EXPECT_NEAR(wall->depth_m, 3.0 - 1.5, 0.02);
+  EXPECT_EQ(fit.n_inliers, 12);  // the wall's twelve, none of the floor's or the room's
+  for (size_t k = 0; k < c.size(); ++k) EXPECT_EQ(fit.inlier[k] != 0, k >= c.size() - 12) << k;
+  // Its plane: the waypoint of the ray to a wall point lies on it.
+  const Vector3d p_W(3.0, 0.1, 0.6);
+  const auto wp = compute_waypoint(*wall->plane, camera.ray(*camera.project(X_CW2 * p_W)), c.pose_1,
+                                   c.pose_2, mount);
+  ASSERT_TRUE(wp);
+  EXPECT_LT((wp->p_W - p_W).norm(), 1e-6);
 }
 
 // Regression (issue 15, ingress_photo: a dark, flat wall photograph, the room's bright and
