@@ -2,6 +2,8 @@
 // Ingress target (paper 3.3, Fig. 7): the opening in a wall in one frame, as four named stages:
 //
 //   1. wall (wall.hpp): which plane is the wall, the dominant homography or the nearer of two;
+//      beyond the paper, where what is seen through it lies in front of it, a smooth wall's
+//      plane from a handful of features under motion capture's motion (stages 2-4 again);
 //   2. blocks (mask.hpp, cuts.hpp, blocks.hpp): the image cut into cells by straight lines (the
 //      paper's edges of the grey image or, beyond it, the border of the off-wall mask), a 2-D
 //      histogram of the wall's inliers and the features seen through the wall, and the block of
