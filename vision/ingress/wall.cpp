@@ -103,6 +103,10 @@ std::optional<Vector3d> plane_of_transfers(const Correspondences& c, const std::
   return m.allFinite() ? std::optional<Vector3d>(m) : std::nullopt;
 }
 
+// A room's back wall lies metres behind the wall; a second fit of the wall itself lies at its
+// depth, within the triangulation's centimetres: the wall is nearer than another plane by this.
+constexpr double kNearerMarginM = 0.5;
+
 // A wall is upright: its normal within this of the horizontal (a plane nearer than the
 // dominant one can also be the floor seen from low down, which is no wall).
 constexpr double kWallMaxNormalZ = 0.5;  // sin 30 deg
@@ -115,13 +119,46 @@ constexpr double kWallMinFacing = 0.5;  // cos 60 deg
 // of the wall's, so 300 miss it with odds under 1e-4.
 constexpr int kFewWallDraws = 300;
 
+// The wall of plane m (m . X1 = 1, camera 1) under the known motion: its induced homography and
+// inliers (transfer within thr_px) among every match into *fit, its motion (motion capture's by
+// construction: t12 of unit length, n1~ = m s) and the median depth of its triangulated
+// inliers in camera 2. nullopt under kFewWallMinPoints inliers.
+std::optional<Wall> known_motion_wall(const Correspondences& c, const Vector3d& m,
+                                      const Matrix3d& R_21, const Vector3d& t_21,
+                                      const std::vector<std::optional<Vector3d>>& X_W_match,
+                                      double thr_px, HomographyFit* fit) {
+  const Isometry3d X_C2W = camera_in_world(c.pose_2.X_WB(), c.mount->X_BC()).inverse();
+  fit->H = plane_homography(c.camera->K(), R_21, t_21, m);
+  fit->inlier.assign(c.size(), 0);
+  fit->n_inliers = 0;
+  double sq = 0;
+  std::vector<double> z;
+  for (size_t k = 0; k < c.size(); ++k) {
+    const double e = transfer_px(fit->H, c, k);
+    if (!(e < thr_px)) continue;
+    fit->inlier[k] = 1;
+    ++fit->n_inliers;
+    sq += e * e;
+    if (X_W_match[k]) z.push_back((X_C2W * *X_W_match[k]).z());
+  }
+  if (fit->n_inliers < kFewWallMinPoints || z.empty()) return std::nullopt;
+  fit->rms_px = std::sqrt(sq / fit->n_inliers);
+  fit->iterations = kFewWallDraws;
+  std::nth_element(z.begin(), z.begin() + z.size() / 2, z.end());
+  const double s = t_21.norm();
+  PlaneMotion motion;
+  motion.R_21 = R_21;
+  motion.t_12 = -(R_21.transpose() * t_21) / s;
+  motion.n_1 = m * s;
+  return Wall{fit, Result<PlaneMotion>::ok(motion), z[z.size() / 2]};
+}
+
 }  // namespace
 
 std::optional<Wall> few_feature_wall(const Correspondences& c, const HomographyFit& dominant,
                                      double dominant_depth_m,
                                      const std::vector<std::optional<Vector3d>>& X_W_match,
                                      const PipelineParams& params, HomographyFit* fit) {
-  constexpr double kNearerMarginM = 0.5;  // as choose_wall's
   const Isometry3d X_WC1 = camera_in_world(c.pose_1.X_WB(), c.mount->X_BC());
   const Isometry3d X_WC2 = camera_in_world(c.pose_2.X_WB(), c.mount->X_BC());
   const Isometry3d X_C1W = X_WC1.inverse(), X_C2W = X_WC2.inverse();
@@ -174,30 +211,7 @@ std::optional<Wall> few_feature_wall(const Correspondences& c, const HomographyF
   // 3. The plane that best transfers its supporters, and its inliers among every match.
   const auto m = plane_of_transfers(c, best, R_21, t_21);
   if (!m || !wall_like(*m)) return std::nullopt;
-  fit->H = plane_homography(K, R_21, t_21, *m);
-  fit->inlier.assign(c.size(), 0);
-  fit->n_inliers = 0;
-  double sq = 0;
-  std::vector<double> z;
-  for (size_t k = 0; k < c.size(); ++k) {
-    const double e = transfer_px(fit->H, c, k);
-    if (!(e < thr)) continue;
-    fit->inlier[k] = 1;
-    ++fit->n_inliers;
-    sq += e * e;
-    if (X_W_match[k]) z.push_back((X_C2W * *X_W_match[k]).z());
-  }
-  if (fit->n_inliers < kFewWallMinPoints || z.empty()) return std::nullopt;
-  fit->rms_px = std::sqrt(sq / fit->n_inliers);
-  fit->iterations = kFewWallDraws;
-  std::nth_element(z.begin(), z.begin() + z.size() / 2, z.end());
-  // Its motion is motion capture's by construction: t12 of unit length, n1~ = m s.
-  const double s = t_21.norm();
-  PlaneMotion motion;
-  motion.R_21 = R_21;
-  motion.t_12 = -(R_21.transpose() * t_21) / s;
-  motion.n_1 = *m * s;
-  return Wall{fit, Result<PlaneMotion>::ok(motion), z[z.size() / 2]};
+  return known_motion_wall(c, *m, R_21, t_21, X_W_match, thr, fit);
 }
 
 std::vector<std::optional<Vector3d>> triangulate_matches(const Correspondences& c,
@@ -216,9 +230,6 @@ Wall choose_wall(const Correspondences& c, const PlanePair& planes,
                  const std::vector<std::optional<Vector3d>>& X_W_match,
                  const PipelineParams& params) {
   Wall wall = candidate(c, planes.first, X_W_match, params);
-  // A room's back wall lies metres behind the wall; a second fit of the wall itself lies at its
-  // depth, within the triangulation's centimetres.
-  constexpr double kNearerMarginM = 0.5;
   if (planes.second) {
     Wall other = candidate(c, *planes.second, X_W_match, params);
     if (other.plane && (!wall.plane || other.depth_m < wall.depth_m - kNearerMarginM))
