@@ -18,6 +18,7 @@
 #include "common/params.hpp"
 #include "sim/params.hpp"
 #include "vision/node/convert.hpp"
+#include "vision/node/diag_image.hpp"
 #include "vision/params.hpp"
 #include "vision/pipeline.hpp"
 
@@ -129,21 +130,10 @@ int main(int argc, char** argv) try {
     }
     std::printf(" lines %zu base %.2f\n", r.lines.size(), r.baseline_m);
     if (!dump.empty() && n % every == 0) {
-      cv::Mat bgr;
-      cv::cvtColor(f.pixels, bgr, cv::COLOR_GRAY2BGR);
-      cv::rectangle(bgr, cv::Point(tl, tt), cv::Point(tr, tb), {0, 255, 0});
-      if (r.found())
-        cv::rectangle(bgr, cv::Point(r.target.outline[0].x(), r.target.outline[0].y()),
-                      cv::Point(r.target.outline[2].x(), r.target.outline[2].y()), {0, 0, 255});
-      for (const auto& l : r.lines) cv::line(bgr, {l[0], l[1]}, {l[2], l[3]}, {255, 0, 0});
-      // The matches: the wall's inliers yellow, those seen through it magenta, the rest grey.
-      for (size_t k = 0; k < r.matched_px.size() && k < r.labels.size(); ++k) {
-        const cv::Scalar colour = r.labels[k] == vision::Label::kDominant ? cv::Scalar(0, 255, 255)
-                                  : r.labels[k] == vision::Label::kTarget
-                                      ? cv::Scalar(255, 0, 255)
-                                      : cv::Scalar(128, 128, 128);
-        cv::circle(bgr, cv::Point(r.matched_px[k].x(), r.matched_px[k].y()), 2, colour, -1);
-      }
+      // The node's diagnostic image (matches by label, lines, the found outline), with the true
+      // front-face box over it.
+      cv::Mat bgr = vision::draw_diag_image(f.pixels, r);
+      cv::rectangle(bgr, cv::Point(tl, tt), cv::Point(tr, tb), {255, 0, 255});
       char name[64];
       std::snprintf(name, sizeof name, "/f%05d.png", n);
       cv::imwrite(dump + name, bgr);

@@ -75,8 +75,8 @@ Matrix3d plane_homography(const Matrix3d& K, const Matrix3d& R_21, const Vector3
   return K * (R_21 + t_21 * m.transpose()) * K.inverse();
 }
 double transfer_px(const Matrix3d& H, const Correspondences& c, size_t k) {
-  const Vector3d x = H * c.x1[k].homogeneous();
-  return x.z() > 0 ? (x.hnormalized() - c.x2[k]).norm() : std::numeric_limits<double>::infinity();
+  return (H * c.x1[k].homogeneous()).z() > 0 ? transfer_error(H, c.x1[k], c.x2[k])
+                                             : std::numeric_limits<double>::infinity();
 }
 
 // The plane m that best transfers matches `ks` under the known motion, in closed form: with r1,
