@@ -5,6 +5,7 @@
 #include <cassert>
 #include <cmath>
 #include <cstring>
+#include <opencv2/imgproc.hpp>
 
 #if defined(__x86_64__) && defined(__GNUC__)
 #include <immintrin.h>
@@ -201,7 +202,87 @@ cv::Mat warp_abs_diff_impl(const cv::Mat& image, const cv::Mat& reference, const
   return out;
 }
 
+// Where each node's place along its row or column of the grid falls for a pixel: the node
+// before it and the weight of the node after (bilinear between nodes).
+struct Run {
+  int node, begin, end;  // the pixels [begin, end) lie between node and node + 1
+};
+struct Lerp {
+  std::vector<int> node;
+  std::vector<float> frac;
+  std::vector<Run> runs;
+};
+
+Lerp lerp_of(int n, int step, int nodes) {
+  Lerp l{std::vector<int>(n), std::vector<float>(n), {}};
+  for (int u = 0; u < n; ++u) {
+    const int i = std::min(u / step, nodes - 2);
+    const float x0 = i * step, x1 = std::min((i + 1) * step, n - 1);
+    l.node[u] = i;
+    l.frac[u] = (u - x0) / (x1 - x0);
+    if (l.runs.empty() || l.runs.back().node != i) l.runs.push_back({i, u, u});
+    l.runs.back().end = u + 1;
+  }
+  return l;
+}
+
+// Bilinear between the four nodes a0, b0 (this row of nodes) and a1, b1 (the next) for n pixels
+// at fractions fx across, fy down. A run of the default grid's 8 pixels is a loop of fixed count,
+// which the compiler vectorises.
+void lerp_run(float fy, float a0, float b0, float a1, float b1, const float* fx, int n,
+              float* out) {
+  const auto at = [&](int u) {
+    return (1 - fy) * ((1 - fx[u]) * a0 + fx[u] * b0) + fy * ((1 - fx[u]) * a1 + fx[u] * b1);
+  };
+  if (n == 8) {
+    for (int u = 0; u < 8; ++u) out[u] = at(u);
+  } else {
+    for (int u = 0; u < n; ++u) out[u] = at(u);
+  }
+}
+
 }  // namespace
+
+cv::Mat grid_remap_abs_diff(const cv::Mat& image, const cv::Mat& reference,
+                            const std::vector<float>& node_x, const std::vector<float>& node_y,
+                            int nodes_across, int step) {
+  assert(image.type() == CV_8UC1 && reference.type() == CV_8UC1);
+  assert(reference.cols >= 2 && reference.rows >= 2 && image.cols >= 2 && image.rows >= 2);
+  assert(step >= 1 && node_x.size() == node_y.size());
+  const int cols = image.cols, rows = image.rows, gw = nodes_across;
+  const int gh = static_cast<int>(node_x.size()) / gw;
+  assert(gw == (cols - 1 + step - 1) / step + 1 && gh == (rows - 1 + step - 1) / step + 1);
+  const Lerp across = lerp_of(cols, step, gw), down = lerp_of(rows, step, gh);
+  // seen: where the reference holds the pixel nearest the map's point, as cv::remap's nearest
+  // neighbour rounds it (to the nearest, ties to even: -0.5 is pixel 0, cols - 0.5 is pixel
+  // cols when cols is even); NaN is not seen.
+  const float hi_x = reference.cols - 0.5f, hi_y = reference.rows - 0.5f;
+  const bool tie_x_in = (reference.cols - 1) % 2 == 0, tie_y_in = (reference.rows - 1) % 2 == 0;
+  cv::Mat map_x(image.size(), CV_32FC1), map_y(image.size(), CV_32FC1);
+  cv::Mat seen(image.size(), CV_8UC1);
+  for (int v = 0; v < rows; ++v) {
+    const int j = down.node[v];
+    const float fy = down.frac[v];
+    const float *x0 = &node_x[j * gw], *x1 = x0 + gw, *y0 = &node_y[j * gw], *y1 = y0 + gw;
+    float* mx = map_x.ptr<float>(v);
+    float* my = map_y.ptr<float>(v);
+    for (const auto& [i, u0, u1] : across.runs)
+      lerp_run(fy, x0[i], x0[i + 1], x1[i], x1[i + 1], &across.frac[u0], u1 - u0, mx + u0);
+    for (const auto& [i, u0, u1] : across.runs)
+      lerp_run(fy, y0[i], y0[i + 1], y1[i], y1[i + 1], &across.frac[u0], u1 - u0, my + u0);
+    uint8_t* s = seen.ptr<uint8_t>(v);
+    for (int u = 0; u < cols; ++u) {
+      const bool in_x = mx[u] >= -0.5f && (mx[u] < hi_x || (tie_x_in && mx[u] == hi_x));
+      const bool in_y = my[u] >= -0.5f && (my[u] < hi_y || (tie_y_in && my[u] == hi_y));
+      s[u] = in_x && in_y ? 255 : 0;
+    }
+  }
+  cv::Mat warped, diff;
+  cv::remap(reference, warped, map_x, map_y, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
+  cv::absdiff(image, warped, diff);
+  cv::bitwise_and(diff, seen, diff);
+  return diff;
+}
 
 cv::Mat warp_abs_diff(const cv::Mat& image, const cv::Mat& reference, const Matrix3d& H_12) {
   return warp_abs_diff_impl(image, reference, H_12, true);

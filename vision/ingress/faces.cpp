@@ -8,6 +8,8 @@
 #include <utility>
 #include <vector>
 
+#include "vision/geometry/pixel_rays.hpp"
+
 namespace alight::vision {
 namespace {
 
@@ -68,6 +70,8 @@ FaceStrip read_strip(const FaceSearch& s, int lo, int hi) {
   constexpr int kMaxRows = 48;
   FaceStrip f;
   f.n_k = s.k_end - s.k0 + 1;
+  // A lens's rays are kept per pixel (pixel_rays.hpp); without one a ray is two divisions.
+  PixelRays* rays = s.g.camera->has_distortion() ? &pixel_rays(*s.g.camera) : nullptr;
   const int step = std::max(1, (hi - lo + 1 + kMaxRows - 1) / kMaxRows);
   for (int t = lo; t <= hi; t += step) {
     const int x0 = static_cast<int>(std::lround(s.a0 + s.b * (t - s.mean_along)));
@@ -80,7 +84,8 @@ FaceStrip read_strip(const FaceSearch& s, int lo, int hi) {
         break;
       }
       const Vector2d u = s.pixel(t, x);
-      const Vector3d r = s.g.camera->ray(u);
+      const Vector3d r =
+          rays ? rays->at(static_cast<int>(u.x()), static_cast<int>(u.y())) : s.g.camera->ray(u);
       const auto ref = s.reference_at(s.n2, r);
       if (!ref) {
         whole = false;

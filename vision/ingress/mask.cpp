@@ -7,6 +7,7 @@
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 
+#include "vision/geometry/pixel_rays.hpp"
 #include "vision/geometry/warp_diff.hpp"
 
 namespace alight::vision {
@@ -30,46 +31,26 @@ Coarse coarse_grid(cv::Size size, int d) {
 // ~100 ms a frame). A pixel the reference did not see differs by 0: no evidence, counts as wall.
 cv::Mat remapped_difference(const cv::Mat& a, const cv::Mat& b, const Coarse& g,
                             const Matrix3d& H_21, const CameraModel& camera, int d) {
-  const cv::Size small_size = g.small;
   const double sx = g.sx, sy = g.sy;
-  cv::Mat diff, warped, seen;
-  const cv::Mat seen_ref(small_size, CV_8UC1, cv::Scalar(255));
   const int kStep = std::max(2, 8 / d);
   const Matrix3d K = camera.K(), K_inv = K.inverse(), H_12 = H_21.inverse();
-  const int cols = small_size.width, rows = small_size.height;
-  const int gw = (cols - 1 + kStep - 1) / kStep + 1;
-  const int gh = (rows - 1 + kStep - 1) / kStep + 1;
-  std::vector<cv::Point2f> grid(gw * gh);
+  const int cols = g.small.width, rows = g.small.height;
+  const int gw = (cols - 1 + kStep - 1) / kStep + 1, gh = (rows - 1 + kStep - 1) / kStep + 1;
+  // At full size the nodes are whole pixels, whose rays are kept (pixel_rays.hpp).
+  PixelRays* table = d == 1 ? &pixel_rays(camera) : nullptr;
+  std::vector<float> grid_x(gw * gh), grid_y(gw * gh);
   for (int j = 0; j < gh; ++j)
     for (int i = 0; i < gw; ++i) {
-      const double us = std::min(i * kStep, cols - 1), vs = std::min(j * kStep, rows - 1);
-      const Vector2d u2(sx * (us + 0.5) - 0.5, sy * (vs + 0.5) - 0.5);
-      const Vector3d r1 = K_inv * (H_12 * (K * camera.ray(u2)));
+      const int us = std::min(i * kStep, cols - 1), vs = std::min(j * kStep, rows - 1);
+      const Vector3d r2 = table
+                              ? table->at(us, vs)
+                              : camera.ray(Vector2d(sx * (us + 0.5) - 0.5, sy * (vs + 0.5) - 0.5));
+      const Vector3d r1 = K_inv * (H_12 * (K * r2));
       const auto u1 = r1.z() > 0 ? camera.project(r1) : std::nullopt;
-      grid[j * gw + i] = u1 ? cv::Point2f((u1->x() + 0.5) / sx - 0.5, (u1->y() + 0.5) / sy - 0.5)
-                            : cv::Point2f(-1e6f, -1e6f);
+      grid_x[j * gw + i] = u1 ? static_cast<float>((u1->x() + 0.5) / sx - 0.5) : -1e6f;
+      grid_y[j * gw + i] = u1 ? static_cast<float>((u1->y() + 0.5) / sy - 0.5) : -1e6f;
     }
-  cv::Mat map_x(small_size, CV_32FC1), map_y(small_size, CV_32FC1);
-  for (int v = 0; v < rows; ++v) {
-    const int j = std::min(v / kStep, gh - 2);
-    const float y0 = j * kStep, y1 = std::min((j + 1) * kStep, rows - 1);
-    const float fy = (v - y0) / (y1 - y0);
-    for (int u = 0; u < cols; ++u) {
-      const int i = std::min(u / kStep, gw - 2);
-      const float x0 = i * kStep, x1 = std::min((i + 1) * kStep, cols - 1);
-      const float fx = (u - x0) / (x1 - x0);
-      const cv::Point2f q =
-          (1 - fy) * ((1 - fx) * grid[j * gw + i] + fx * grid[j * gw + i + 1]) +
-          fy * ((1 - fx) * grid[(j + 1) * gw + i] + fx * grid[(j + 1) * gw + i + 1]);
-      map_x.at<float>(v, u) = q.x;
-      map_y.at<float>(v, u) = q.y;
-    }
-  }
-  cv::remap(b, warped, map_x, map_y, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
-  cv::remap(seen_ref, seen, map_x, map_y, cv::INTER_NEAREST, cv::BORDER_CONSTANT);
-  cv::absdiff(a, warped, diff);
-  diff.setTo(0, seen == 0);
-  return diff;
+  return grid_remap_abs_diff(a, b, grid_x, grid_y, gw, kStep);
 }
 
 // Where each current pixel's wall point lies in the reference image, and how much the two

@@ -2,12 +2,17 @@
 // answers: identity and whole-pixel shifts give plain differences, a half-pixel shift the mean
 // of two neighbours, what the reference did not see (outside it, behind the camera) differs by
 // 0, the AVX2 and scalar variants agree bit for bit, and a perspective warp agrees with
-// cv::warpPerspective away from the reference's border.
+// cv::warpPerspective away from the reference's border; the map given on a grid of nodes (a lens)
+// gives cv::remap's own difference, with what it did not see at 0.
 #include "vision/geometry/warp_diff.hpp"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <opencv2/imgproc.hpp>
+#include <tuple>
+#include <vector>
 
 namespace alight::vision {
 namespace {
@@ -116,6 +121,62 @@ TEST(WarpAbsDiffTest, AgreesWithWarpPerspectiveAwayFromTheBorder) {
     cv::minMaxLoc(gap, nullptr, &worst);
     EXPECT_LE(worst, 1.0) << "scale " << scale;  // rounding of the sub-pixel position only
     EXPECT_GT(cv::countNonZero(seen), 200000);
+  }
+}
+
+// The grid's map written out pixel by pixel, sampled by cv::remap, unseen where cv::remap's
+// nearest neighbour finds nothing: what grid_remap_abs_diff must give bit for bit.
+cv::Mat remap_difference_by_hand(const cv::Mat& a, const cv::Mat& b, const std::vector<float>& nx,
+                                 const std::vector<float>& ny, int gw, int step) {
+  const int gh = static_cast<int>(nx.size()) / gw;
+  cv::Mat map_x(a.size(), CV_32FC1), map_y(a.size(), CV_32FC1);
+  for (int v = 0; v < a.rows; ++v)
+    for (int u = 0; u < a.cols; ++u) {
+      const int i = std::min(u / step, gw - 2), j = std::min(v / step, gh - 2);
+      const float x0 = i * step, x1 = std::min((i + 1) * step, a.cols - 1);
+      const float y0 = j * step, y1 = std::min((j + 1) * step, a.rows - 1);
+      const float fx = (u - x0) / (x1 - x0), fy = (v - y0) / (y1 - y0);
+      const auto lerp = [&](const std::vector<float>& n) {
+        return (1 - fy) * ((1 - fx) * n[j * gw + i] + fx * n[j * gw + i + 1]) +
+               fy * ((1 - fx) * n[(j + 1) * gw + i] + fx * n[(j + 1) * gw + i + 1]);
+      };
+      map_x.at<float>(v, u) = lerp(nx);
+      map_y.at<float>(v, u) = lerp(ny);
+    }
+  cv::Mat warped, seen, diff;
+  cv::remap(b, warped, map_x, map_y, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
+  cv::remap(cv::Mat(b.size(), CV_8UC1, cv::Scalar(255)), seen, map_x, map_y, cv::INTER_NEAREST,
+            cv::BORDER_CONSTANT);
+  cv::absdiff(a, warped, diff);
+  diff.setTo(0, seen == 0);
+  return diff;
+}
+
+TEST(GridRemapAbsDiffTest, IsCvRemapsDifferenceOfTheBilinearMapBitForBit) {
+  for (const auto& [rows, cols, step] : {std::tuple{480, 640, 8}, std::tuple{61, 83, 4},
+                                         std::tuple{37, 41, 2}, std::tuple{20, 30, 7}}) {
+    const cv::Mat a = noise(rows, cols, 21), b = noise(rows, cols, 22);
+    const int gw = (cols - 1 + step - 1) / step + 1, gh = (rows - 1 + step - 1) / step + 1;
+    std::vector<float> nx(gw * gh), ny(gw * gh);
+    cv::RNG rng(23);
+    for (int j = 0; j < gh; ++j)
+      for (int i = 0; i < gw; ++i) {
+        // A barrel-like bend, shifted so part of the view leaves the reference, exact ties at
+        // the border's half pixels, and a node that sees nothing.
+        const double x = std::min(i * step, cols - 1), y = std::min(j * step, rows - 1);
+        const double r2 =
+            std::pow((x - cols / 2.0) / cols, 2) + std::pow((y - rows / 2.0) / rows, 2);
+        nx[j * gw + i] =
+            static_cast<float>(x * (1 - 0.2 * r2) + 0.1 * cols + rng.uniform(-0.3, 0.3));
+        ny[j * gw + i] = static_cast<float>(y * (1 - 0.2 * r2) - 0.05 * rows);
+      }
+    nx[gw + 1] = -0.5f, ny[gw + 1] = rows - 0.5f;
+    nx[gw * (gh - 1)] = -1e6f, ny[gw * (gh - 1)] = -1e6f;
+    const cv::Mat d = grid_remap_abs_diff(a, b, nx, ny, gw, step);
+    const cv::Mat expected = remap_difference_by_hand(a, b, nx, ny, gw, step);
+    EXPECT_EQ(cv::countNonZero(d != expected), 0) << rows << " x " << cols << " every " << step;
+    EXPECT_GT(cv::countNonZero(expected == 0), cv::countNonZero(a == b) + cols / 20)
+        << "part of the view is unseen";
   }
 }
 
