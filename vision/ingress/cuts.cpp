@@ -123,13 +123,16 @@ void hough_lines(const std::vector<cv::Point>& px, cv::Size size, double theta_l
   const int stride = n_rho + 2;  // a zero bin before and after each row and angle
   std::vector<int> votes(static_cast<size_t>(n_theta + 2) * stride, 0);
   const int rho_offset = (n_rho - 1) / 2;
+  // The points in float once, not once per angle.
+  std::vector<float> xs(px.size()), ys(px.size());
+  for (size_t i = 0; i < px.size(); ++i)
+    xs[i] = static_cast<float>(px[i].x), ys[i] = static_cast<float>(px[i].y);
   float theta = static_cast<float>(theta_lo);
   for (int k = 0; k < n_theta; ++k, theta += static_cast<float>(theta_step)) {
     const float c = static_cast<float>(std::cos(static_cast<double>(theta)));
     const float s = static_cast<float>(std::sin(static_cast<double>(theta)));
     int* row = votes.data() + static_cast<size_t>(k + 1) * stride + 1 + rho_offset;
-    for (const cv::Point& q : px)
-      ++row[cvRound(static_cast<float>(q.x) * c + static_cast<float>(q.y) * s)];
+    for (size_t i = 0; i < xs.size(); ++i) ++row[cvRound(xs[i] * c + ys[i] * s)];
   }
   std::vector<int> peaks;
   for (int k = 0; k < n_theta; ++k)
