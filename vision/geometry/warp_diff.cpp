@@ -271,10 +271,11 @@ cv::Mat grid_remap_abs_diff(const cv::Mat& image, const cv::Mat& reference,
     for (const auto& [i, u0, u1] : across.runs)
       lerp_run(fy, y0[i], y0[i + 1], y1[i], y1[i + 1], &across.frac[u0], u1 - u0, my + u0);
     uint8_t* s = seen.ptr<uint8_t>(v);
+    // Bitwise, not short-circuit: the loop has no branch and is vectorised.
     for (int u = 0; u < cols; ++u) {
-      const bool in_x = mx[u] >= -0.5f && (mx[u] < hi_x || (tie_x_in && mx[u] == hi_x));
-      const bool in_y = my[u] >= -0.5f && (my[u] < hi_y || (tie_y_in && my[u] == hi_y));
-      s[u] = in_x && in_y ? 255 : 0;
+      const bool in_x = (mx[u] >= -0.5f) & ((mx[u] < hi_x) | (tie_x_in & (mx[u] == hi_x)));
+      const bool in_y = (my[u] >= -0.5f) & ((my[u] < hi_y) | (tie_y_in & (my[u] == hi_y)));
+      s[u] = static_cast<uint8_t>(-static_cast<int>(in_x & in_y));
     }
   }
   cv::Mat warped, diff;
