@@ -31,9 +31,10 @@ cv::Mat warp_abs_diff_scalar(const cv::Mat& image, const cv::Mat& reference, con
 /// |image(u) - reference(m(u))| for a map m that is no homography (a distorting lens bends it),
 /// given at nodes every `step` pixels: node (i, j) at pixel (min(i step, cols - 1),
 /// min(j step, rows - 1)), `node_x` and `node_y` row-major, `nodes_across` a row, each the
-/// reference pixel the node's pixel sees (-1e6 or NaN: none). Between nodes the map is bilinear
-/// (in float, as written), the reference sampled by cv::remap (bilinear, 0 outside); where the
-/// reference pixel nearest m(u) (cv::remap's rounding) is outside the reference the difference
+/// reference pixel the node's pixel sees (a node that sees nothing: NaN, or -1e6, which puts the
+/// pixels between it and its neighbours far outside the reference). Between nodes the map is
+/// bilinear (in float, as written), the reference sampled by cv::remap (bilinear, 0 outside); where
+/// the reference pixel nearest m(u) (cv::remap's rounding) is outside the reference the difference
 /// is 0. image and reference CV_8UC1, at least 2 x 2; step >= 1.
 cv::Mat grid_remap_abs_diff(const cv::Mat& image, const cv::Mat& reference,
                             const std::vector<float>& node_x, const std::vector<float>& node_y,
