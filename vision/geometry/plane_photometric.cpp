@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "vision/geometry/bilinear.hpp"
+#include "vision/geometry/pixel_rays.hpp"
 
 namespace alight::vision {
 
@@ -25,9 +26,12 @@ std::optional<PlanePhotometry> plane_photometry(
   // A pixel's reference position at gamma 0 and 1; between and beyond, along the straight line
   // through them (the lens bends it by a negligible amount over a parallax of a few pixels).
   const double x_max = gray_1.cols - 1, y_max = gray_1.rows - 1;
+  // A lens's rays are kept per pixel (pixel_rays.hpp); without one a ray is two divisions.
+  PixelRays* rays = camera.has_distortion() ? &pixel_rays(camera) : nullptr;
   for (const cv::Point& q : pixels_u2) {
     if (q.x < 0 || q.y < 0 || q.x >= gray_2.cols || q.y >= gray_2.rows) continue;
     const Vector3d x2 = K * (rolling_2 ? ray_at_epoch(camera, Vector2d(q.x, q.y), *readout_2)
+                             : rays    ? rays->at(q.x, q.y)
                                        : camera.ray(Vector2d(q.x, q.y)));
     const Vector3d a = Hf_inv * x2, b = Ht_inv * x2;
     if (!(a.z() > 0 && b.z() > 0)) continue;
