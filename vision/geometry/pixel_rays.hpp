@@ -1,10 +1,10 @@
 #pragma once
 // The undistorted ray through each whole pixel of a distorting camera, kept once computed.
-// Undistorting is an iteration per pixel (CameraModel::undistort); the ingress mask's grid and
-// the faces' search ask for the same few thousand pixels' rays on every frame. The table is
-// filled on first use of each pixel (no frame pays for the whole image at once), one table per
-// thread (a bench flies several pipelines on threads of their own), made again when the camera
-// changes. Its rays are CameraModel::ray's, bit for bit.
+// Undistorting is an iteration per pixel (CameraModel::undistort); the ingress mask's grid, the
+// faces' search and the landing's photometric gate ask for the same pixels' rays on every frame.
+// The table is filled on first use of each pixel (no frame pays for the whole image at once), one
+// table per thread (a bench flies several pipelines on threads of their own), made again when the
+// camera changes. Its rays are CameraModel::ray's, bit for bit.
 
 #include <vector>
 
