@@ -25,7 +25,8 @@ class PixelRays {
   std::vector<Vector2d> xn_;  // row-major; NaN: not yet computed
 };
 
-/// This thread's table for `camera`.
+/// This thread's table for `camera`; it holds that camera's rays until this thread next asks for
+/// another camera's (so read it within one stage, never keep it across stages).
 PixelRays& pixel_rays(const CameraModel& camera);
 
 }  // namespace alight::vision
