@@ -6,9 +6,9 @@
 namespace alight::vision {
 
 bool PixelRays::made_for(const CameraModel& c) const {
-  return made_ && c.width == camera_.width && c.height == camera_.height && c.fx == camera_.fx &&
-         c.fy == camera_.fy && c.cx == camera_.cx && c.cy == camera_.cy && c.D == camera_.D &&
-         c.distortion == camera_.distortion;
+  return !xn_.empty() && c.width == camera_.width && c.height == camera_.height &&
+         c.fx == camera_.fx && c.fy == camera_.fy && c.cx == camera_.cx && c.cy == camera_.cy &&
+         c.D == camera_.D && c.distortion == camera_.distortion;
 }
 
 Vector3d PixelRays::at(int x, int y) {
@@ -23,7 +23,6 @@ PixelRays& pixel_rays(const CameraModel& camera) {
   thread_local PixelRays table;
   if (!table.made_for(camera)) {
     table.camera_ = camera;
-    table.made_ = true;
     table.xn_.assign(static_cast<size_t>(camera.width) * camera.height,
                      Vector2d::Constant(std::numeric_limits<double>::quiet_NaN()));
   }

@@ -21,7 +21,6 @@ class PixelRays {
   friend PixelRays& pixel_rays(const CameraModel& camera);
   bool made_for(const CameraModel& c) const;
   CameraModel camera_;
-  bool made_ = false;
   std::vector<Vector2d> xn_;  // row-major; NaN: not yet computed
 };
 
