@@ -55,6 +55,7 @@ enum class Reason : int8_t {
   kOutlineUnmatched = 36,  ///< landing: a featureless outline the reference does not show
   kOutlineSilent = 37,     ///< landing: a featureless outline none of whose sides tells a height
   kTopRunsOn = 38,  ///< landing: seen in part, the top running on past its features (rim.hpp)
+                    ///< or past a featureless outline printed on it (outline.hpp)
 };
 
 const char* to_string(Reason r);

@@ -546,6 +546,40 @@ Result<double> top_height(const std::array<std::optional<SideHeight>, 4>& height
   return Result<double>::ok(h);
 }
 
+/// A side face's points next to its rim lie within a few centimetres of the top's height, where
+/// the plane z_top carries them within the homography's threshold: seen from 1-2 m, the band of
+/// a face that close to the rim spans up to about 10 px of the image beside the outline.
+constexpr double kFaceBandPx = 12.0;
+
+/// A print on a larger top (a dark panel of a photograph, a painted square) has an outline of
+/// its own at the top's height, and a top of the same grain as its floor may show little else:
+/// the top runs on past it. The matches beyond the outline by kFaceBandPx or more, and within
+/// its own longer side of it, that the plane z = z_top carries onto their reference pixel
+/// (within tol_px) while the floor's plane puts them at least twice that far off: the top's own
+/// points past the outline (a side face's lie below z_top, a floor's on z_floor). Their count;
+/// one is enough (a floor match fits z_top by chance only where it was mismatched to a pixel
+/// the floor's parallax does not explain).
+int top_matches_beyond(const Outline& o, const Correspondences& c, const PlaneMap& map,
+                       double z_top, double z_floor, double tol_px) {
+  std::vector<cv::Point2f> poly;
+  double reach_px = 0;
+  for (size_t i = 0; i < 4; ++i) {
+    poly.push_back(to_cv(o.corners[i]));
+    reach_px = std::max(reach_px, (o.corners[(i + 1) % 4] - o.corners[i]).norm());
+  }
+  int n = 0;
+  for (size_t k = 0; k < c.size(); ++k) {
+    const double inside = cv::pointPolygonTest(poly, to_cv(c.u2[k]), true);
+    if (inside > -kFaceBandPx || -inside > reach_px) continue;
+    const Vector3d dir = map.X_WC2().linear() * c.ray2(k);
+    const auto on_top = map.to_1(dir, z_top), on_floor = map.to_1(dir, z_floor);
+    if (on_top && (*on_top - c.u1[k]).norm() <= tol_px &&
+        (!on_floor || (*on_floor - c.u1[k]).norm() >= 2 * tol_px))
+      ++n;
+  }
+  return n;
+}
+
 /// The target (stage 5) of the top whose corners at height h are P: centre, sides (long
 /// first), heading of the long sides, the outline; kPartialView where a corner lies within
 /// edge_margin_px of the image's border.
@@ -693,7 +727,11 @@ TargetOutcome top_of_outline(const Outline& o, const Correspondences& c, const c
   if (rims == 0) return refuse(Reason::kSmallBaseline);
   std::array<Vector3d, 4> P;
   if (!top_corners(o, side_z, map, z0 + h, &P)) return refuse(Reason::kDecompositionFailed);
-  return top_estimate(o, P, h, c, map, L);
+  TargetOutcome out = top_estimate(o, P, h, c, map, L);
+  if (out.reason == Reason::kOk &&
+      top_matches_beyond(o, c, map, z0 + h, z0, params.homography.threshold_px) > 0)
+    out.reason = Reason::kTopRunsOn;
+  return out;
 }
 
 int corners_on_floor(const Outline& o, const Correspondences& c, const std::vector<Label>& labels) {

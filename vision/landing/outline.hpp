@@ -38,7 +38,12 @@
 //      is narrow;
 //   5. the top: each side's line at its own height lies over the rim (a side face stands
 //      vertical), and where adjacent lines meet are the top's corners: its centre, sides and
-//      heading, as the features' rectangle gives them (extent.hpp).
+//      heading, as the features' rectangle gives them (extent.hpp);
+//   6. a print, not the top: a plain panel printed on a larger top (a photograph's dark square)
+//      has an outline at the top's height too. Where a match beyond the outline (clear of the
+//      band of a side face next to the rim, within the outline's size) is carried onto its
+//      reference pixel by the plane at that height and not by the floor's, the top runs on past
+//      the outline: located, its extent unseen [kTopRunsOn].
 //
 // A mark or a shadow on the floor is such a region too; its outline moves with the floor (h
 // under min_height_m: kOutlineOnFloor). An outline the reference does not show at any height
@@ -107,7 +112,8 @@ constexpr size_t kMaxOutlines = 2;
 /// steps too faintly, is a line or repeats), kOutlineOnFloor (no side above min_height_m),
 /// kSmallBaseline (fewer than two sides with parallax, or no rim among them),
 /// kHeightOutOfRange, kDecompositionFailed (a corner's ray misses its plane); kPartialView for a
-/// corner within edge_margin_px of the border (located, not measured).
+/// corner within edge_margin_px of the border, kTopRunsOn for a top running on past the outline
+/// (stage 6; both located, not measured).
 TargetOutcome top_of_outline(const Outline& o, const Correspondences& c, const cv::Mat& gray_1,
                              const cv::Mat& gray_2, const PipelineParams& params);
 

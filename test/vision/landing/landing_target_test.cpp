@@ -605,6 +605,10 @@ struct BoxScene {
   double floor_edge_drop = 60;   // the floor beyond floor_edge_y_m this much darker [grey levels]
   double top_grain = 1;          // the top's grain() amplitude [grey levels]
   Vector2d top_bare_x = {0, 0};  // no grain where bare[0] <= |x| < bare[1] (box frame) [m]
+  // A plain panel printed on the top: x in [panel[0], panel[1]), y in [panel[2], panel[3]) (box
+  // frame) [m], of panel_grey; none where empty.
+  Eigen::Vector4d panel = Eigen::Vector4d::Zero();
+  double panel_grey = 60;
 
   Isometry3d X_WO() const {  // box frame: axes along the sides, origin at the box's centre
     Isometry3d X = Isometry3d::Identity();
@@ -637,7 +641,10 @@ struct BoxScene {
     if (t_in <= t_out && t_in > 0) {
       if (axis != 2) return side_grey;
       const Vector3d X = o_W + t_in * d_W;
-      const double x = std::abs((o + t_in * d).x());
+      const Vector3d q = o + t_in * d;
+      if (q.x() >= panel[0] && q.x() < panel[1] && q.y() >= panel[2] && q.y() < panel[3])
+        return panel_grey;
+      const double x = std::abs(q.x());
       const bool bare = x >= top_bare_x.x() && x < top_bare_x.y();
       return top_grey + (bare ? 0.0 : top_grain) * grain(X);
     }
@@ -1086,6 +1093,42 @@ TEST(OutlineTop, AnOutlineNoSideOfWhichTellsAHeightIsPlacedNowhere) {
   const cv::Mat faint_1 = render(b.view.c.pose_1), faint_2 = render(b.view.c.pose_2);
   EXPECT_EQ(top_of_outline(outlines[0], b.view.c, faint_1, faint_2, params).reason,
             Reason::kOutlineSilent);
+}
+
+// Issue 41 (landing_samegrain 11135: a photograph's dark square on a 28 x 26 cm top of the
+// same grain as its floor, measured as a 14 x 13 cm top and refused as too small): a plain
+// panel printed on a larger top has an outline at the top's height too. A grained top 40 x 32 cm
+// with a dark panel over one quarter, its own features too few for the planes (8, all beyond
+// the panel): the top's plane carries them onto the reference and the floor's does not, so the
+// top runs on past the panel. Located (the panel lies on the top), its extent unseen
+// [kTopRunsOn]; never measured as the panel. Without those matches the views alone do not tell
+// the panel from a top, and it is measured as one.
+TEST(OutlineTop, APanelPrintedOnALargerTopIsNotTheTop) {
+  BoxScene scene = slate_on_granite();
+  scene.length = 0.40;
+  scene.width = 0.32;
+  scene.top_grey = 200;
+  scene.top_grain = 30;
+  scene.panel = Eigen::Vector4d(0.0, 0.2, 0.0, 0.16);
+  for (uint64_t seed = 1; seed <= 3; ++seed) {
+    BoxViews b = box_views(scene, seed, 0, 0, std::nullopt, 0.0, 140, /*n_top=*/0);
+    PipelineParams params;
+    const TargetOutcome alone = find_landing_target(b.view.c, params, b.image_1, b.image_2);
+    ASSERT_EQ(alone.reason, Reason::kOk) << "seed " << seed << ": " << to_string(alone.reason);
+    EXPECT_NEAR(alone.estimate.size_m[0], 0.2, 0.02) << "seed " << seed;  // the panel
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> U(-1, 1);
+    for (int k = 0; k < 8;) {
+      const Vector3d q(0.18 * U(rng), 0.14 * U(rng), 0.5 * scene.height);
+      if (q.x() > -0.05 && q.y() > -0.05) continue;  // 5 cm or more from the panel
+      k += b.view.add(scene.X_WO() * q, rng);
+    }
+    ASSERT_LT(static_cast<int>(b.view.c.size()), 140 + params.landing.min_platform_inliers);
+    const TargetOutcome o = find_landing_target(b.view.c, params, b.image_1, b.image_2);
+    ASSERT_EQ(o.reason, Reason::kTopRunsOn) << "seed " << seed << ": " << to_string(o.reason);
+    const Vector3d panel_W = scene.X_WO() * Vector3d(0.1, 0.08, 0.5 * scene.height);
+    EXPECT_LT((o.estimate.p_W - panel_W).head<2>().norm(), 0.02) << "seed " << seed;
+  }
 }
 
 // A top with features of its own is the planes' to find or refuse: the outline never overrides
