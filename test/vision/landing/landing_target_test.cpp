@@ -1131,6 +1131,54 @@ TEST(OutlineTop, APanelPrintedOnALargerTopIsNotTheTop) {
   }
 }
 
+// A featureless top's own side faces can hold matches (a box's print running down its sides):
+// those next to the rim lie within a few centimetres of the top's height, where the top's plane
+// carries them within the homography's threshold, and within kFaceBandPx of the outline. They
+// are no top running on past it: the top is measured, as without them.
+TEST(OutlineTop, MatchesOnTheTopsOwnSideFacesDoNotMakeItRunOn) {
+  const BoxScene scene = slate_on_granite();
+  int measured = 0;
+  for (uint64_t seed = 1; seed <= 4; ++seed) {
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> U(-1, 1);
+    // Camera 2 beside the box (its faces towards the camera in view), camera 1 17 cm from it.
+    const double at = M_PI * U(rng), dir = M_PI * U(rng);
+    const PoseSample p2 = level_pose(Vector3d(scene.centre_xy.x() + 0.32 * std::cos(at),
+                                              scene.centre_xy.y() + 0.32 * std::sin(at), 1.54),
+                                     0.1 * U(rng));
+    const PoseSample p1 =
+        level_pose(p2.p_W_B + Vector3d(0.17 * std::cos(dir), 0.17 * std::sin(dir), 0.0), 0.05);
+    View v(p1, p2);
+    for (int k = 0; k < 140;) {
+      const Vector3d X(p2.p_W_B.x() + 0.7 * U(rng), p2.p_W_B.y() + 0.55 * U(rng), 0.0);
+      if (!scene.on_top(X, -0.05, -0.05)) k += v.add(X, rng);
+    }
+    const size_t n_floor = v.c.size();
+    // Points in the upper fifth of the faces that face camera 2.
+    for (int k = 0; k < 400 && v.c.size() < n_floor + 8; ++k) {
+      const int face = k % 4;
+      const double along = 0.45 * U(rng), z = scene.height * (0.85 + 0.1 * U(rng));
+      const double sx = face == 0 ? 0.5 : face == 1 ? -0.5 : 0.0;
+      const double sy = face == 2 ? 0.5 : face == 3 ? -0.5 : 0.0;
+      const Vector3d q(sx != 0 ? sx * scene.length : along * scene.length,
+                       sy != 0 ? sy * scene.width : along * scene.width, z - 0.5 * scene.height);
+      const Vector3d n_W = scene.X_WO().linear() * Vector3d(2 * sx, 2 * sy, 0);
+      const Vector3d X_W = scene.X_WO() * q;
+      if (n_W.dot(p2.p_W_B - X_W) > 0 && n_W.dot(p1.p_W_B - X_W) > 0) v.add(X_W, rng);
+    }
+    ASSERT_GT(v.c.size(), n_floor) << "seed " << seed;
+    const cv::Mat image_1 = scene.render(v.camera, camera_in_world(p1.X_WB(), v.mount.X_BC()));
+    const cv::Mat image_2 = scene.render(v.camera, camera_in_world(p2.X_WB(), v.mount.X_BC()));
+    PipelineParams params;
+    const TargetOutcome o = find_landing_target(v.c, params, image_1, image_2);
+    EXPECT_NE(o.reason, Reason::kTopRunsOn) << "seed " << seed;
+    if (o.reason != Reason::kOk) continue;
+    ++measured;
+    expect_measured(o, scene, 0.02, 0.02, seed);
+  }
+  EXPECT_GE(measured, 2);
+}
+
 // A top with features of its own is the planes' to find or refuse: the outline never overrides
 // them (the textured top of TopRim found as before, its sizes from the rims).
 TEST(OutlineTop, ATopWithFeaturesIsNotMeasuredByItsOutline) {
