@@ -641,32 +641,20 @@ TEST(MovingApproachTest, MatchesThePlatformThenDescendsAndFailsSafeWhenTooFast) 
   EXPECT_EQ(st.next, MovingStep::Next::kTargetLost);
 }
 
-// A platform on a straight path tracked for 2 s (its last measurement at t), the vehicle over it.
-struct TrackedPlatform {
-  PlatformPath m;
-  PlatformFilter f{PlatformFilterParams{}};
-  std::mt19937_64 rng;
-  double t = 0;
-  int64_t now = 0;
-  PoseSample pose;
-  TrackedPlatform(double speed_mps, uint64_t seed) : m(straight_path(speed_mps)), rng(seed) {
-    t = track_until_2s(f, m, rng);
-    now = kPfT0 + int64_t(t * 1e6);
-    pose.p_W_B << m.p(t).x(), m.p(t).y(), 1.2;
-  }
-};
-
 TEST(MovingApproachRegression, NeverDescendsOnAPredictionLongUnmeasured) {
   // Bug: over a prediction 1.5 s unmeasured (inside lost_timeout_s), the vehicle matched the
   // prediction, descended and started the last drop: the gear came down on the floor 2.4 m from
   // the cart, which had turned away in the gap. Matched now needs a measurement within
   // kMatchedMeasuredS: the follow goes on over the gap, the descent waits.
-  TrackedPlatform p(0.5, 6);
-  PlatformFilter& f = p.f;
-  PoseSample& pose = p.pose;
-  const int64_t now = p.now;
+  const PlatformPath m = straight_path(0.5);
+  PlatformFilter f{PlatformFilterParams{}};
+  std::mt19937_64 rng(6);
+  const double t = track_until_2s(f, m, rng);
+  const int64_t now = kPfT0 + int64_t(t * 1e6);
   MovingLandingParams params;
   MovingApproach s;
+  PoseSample pose;
+  pose.p_W_B << m.p(t).x(), m.p(t).y(), 1.2;
   MovingStep st;
   for (int k = 0; k <= 150; ++k) {  // 1.5 s on the prediction, exactly over it
     const auto pr = f.predict(now + k * 10000);
@@ -686,14 +674,15 @@ TEST(MovingApproachRegression, NeverDescendsOnAPredictionLongUnmeasured) {
 // stays under kFollowUnmeasuredSigmaM (a gap of a swing's or a turn's blurred frames), then
 // held where it last stood, no velocity fed forward; a measurement resumes the follow.
 TEST(MovingApproachTest, AnUnmeasuredPredictionIsFollowedOnlyWhileItIsCertainEnough) {
-  TrackedPlatform p(1.0, 8);
-  PlatformFilter& f = p.f;
-  const PlatformPath& m = p.m;
-  PoseSample& pose = p.pose;
-  const double t = p.t;
-  const int64_t now = p.now;
+  const PlatformPath m = straight_path(1.0);
+  PlatformFilter f{PlatformFilterParams{}};
+  std::mt19937_64 rng(8);
+  const double t = track_until_2s(f, m, rng);
+  const int64_t now = kPfT0 + int64_t(t * 1e6);
   MovingLandingParams params;
   MovingApproach s;
+  PoseSample pose;
+  pose.p_W_B << m.p(t).x(), m.p(t).y(), 1.2;
   MovingStep st;
   std::optional<double> held_after_s;
   Vector2d held_W = Vector2d::Zero();
@@ -717,7 +706,7 @@ TEST(MovingApproachTest, AnUnmeasuredPredictionIsFollowedOnlyWhileItIsCertainEno
   EXPECT_LT((held_W - m.p(t)).norm(), 1.0 * (*held_after_s + 0.05));
   // Measured again: followed again, at the platform's velocity.
   const double t2 = t + 1.5;
-  f.update(measure_path(m, t2, p.rng));
+  f.update(measure_path(m, t2, rng));
   st = step_moving_approach(s, f, pose, kPfT0 + int64_t(t2 * 1e6), 0.01, 0.0, 0.1, 0.25, 1.0,
                             params);
   EXPECT_NEAR((st.sp_p_W.head<2>() - f.predict(kPfT0 + int64_t(t2 * 1e6)).p_W).norm(), 0.0, 1e-9);
