@@ -111,12 +111,6 @@ bool touched_down_on_top(double gear_below_top_m, double heave_amplitude_m) {
   return gear_below_top_m <= heave_amplitude_m + kBesideTopM;
 }
 
-double unmeasured_sigma_m(const PlatformFilter::Prediction& p) {
-  const Matrix2d& P = p.cov_p;  // symmetric: its larger eigenvalue in closed form
-  const double mid = 0.5 * (P(0, 0) + P(1, 1)), half = 0.5 * (P(0, 0) - P(1, 1));
-  return std::sqrt(std::max(0.0, mid + std::hypot(half, P(0, 1))));
-}
-
 MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
                                 const PoseSample& pose, int64_t now_utime, double dt_s,
                                 double yaw_sp_rad, double gear_height_m, double descent_rate_mps,
@@ -168,18 +162,6 @@ MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
     out.sp_v_W.z() = -descent_rate_mps;
   }
   out.sp_p_W << pr.p_W, s.z_sp_m;
-  // Unmeasured, and the prediction too uncertain to follow: hold where it last stood.
-  if (measured) {
-    s.unmeasured_hold_W.reset();
-  } else if (s.unmeasured_hold_W || unmeasured_sigma_m(pr) > kFollowUnmeasuredSigmaM) {
-    if (!s.unmeasured_hold_W) s.unmeasured_hold_W = pr.p_W;
-    out.sp_p_W.head<2>() = *s.unmeasured_hold_W;
-    out.sp_v_W.head<2>().setZero();
-    out.sp_a_W.setZero();
-    out.reason = "holding where the moving platform was last predicted (unmeasured for " +
-                 fmt2(since_s) + " s)";
-    return out;
-  }
   if (s.z_sp_m > z_final) {
     out.reason = settled ? "descending with the moving platform"
                          : "matching the moving platform (" + fmt2(offset.norm()) + " m, " +

@@ -114,25 +114,8 @@ Release heave_release(const HeaveModel& heave, int64_t now_utime, double fall_s,
 const char* to_string(Release r);
 
 /// The moving approach's own state.
-/// An unmeasured platform's prediction is followed while its position's standard deviation
-/// along its most uncertain direction (the filter's, growing with the time unmeasured) stays
-/// under this [m]: half the short side of the view 1 m over the top (the Firefly's 4 mm lens
-/// sees about 1.1 x 0.8 m there). Beyond it the top predicted at the view's centre is as likely
-/// out of the view as in it, and the prediction, carried on at the platform's speed, leads the
-/// vehicle where the platform is not known to be (a cart turning away while the prediction runs
-/// straight on), out of the flying area in the end. About two thirds of a second of a prediction at
-/// the filter's acceleration density: a swing's or a turn's blurred frames. Then the vehicle holds
-/// where the prediction last stood (no velocity fed forward) until the platform is measured again,
-/// or is lost (lost_timeout_s).
-inline constexpr double kFollowUnmeasuredSigmaM = 0.4;
-
-/// The predicted position's standard deviation along its most uncertain direction [m].
-double unmeasured_sigma_m(const PlatformFilter::Prediction& p);
-
 struct MovingApproach {
   double z_sp_m = 0.0;
-  /// Where the vehicle holds while the platform's prediction is too uncertain to follow.
-  std::optional<Vector2d> unmeasured_hold_W;
   std::optional<int64_t> matched_since_utime;
   std::optional<int64_t> at_final_since_utime;  ///< waiting for the heave since
   std::optional<int64_t> too_fast_since_utime;
