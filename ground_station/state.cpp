@@ -168,7 +168,7 @@ const char* target_reason_name(int8_t reason) {
     case target_t::REASON_OUTLINE_SILENT:
       return "featureless outline too faint to place";
     case target_t::REASON_TOP_RUNS_ON:
-      return "top runs on past its features";
+      return "top runs on past its features or outline";
   }
   return "unknown";
 }

@@ -81,7 +81,7 @@ const char* to_string(Reason r) {
     case Reason::kOutlineSilent:
       return "featureless outline too faint to place";
     case Reason::kTopRunsOn:
-      return "top runs on past its features";
+      return "top runs on past its features or outline";
   }
   return "unknown";
 }
