@@ -43,8 +43,12 @@ int main(int argc, char** argv) {
     std::string line;
     while (std::getline(std::cin, line)) {
       if (line.rfind("phase ", 0) == 0) phase = std::stoi(line.substr(6));
-      if (line == "ack off") acknowledge = false;  // a vehicle that no longer answers
-      if (line == "ack on") acknowledge = true;
+      if (line == "ack off" || line == "ack on") {
+        acknowledge = line == "ack on";  // off: a vehicle that no longer answers
+        // Said back, so that the test presses a key only once the switch is in force.
+        std::printf("{\"event\":\"ack\",\"on\":%s}\n", acknowledge ? "true" : "false");
+        std::fflush(stdout);
+      }
       if (line == "quit") break;
     }
     quit = true;

@@ -201,12 +201,17 @@ async function main() {
     (await page.textContent('#sent')).includes('acknowledged'));
   await waitFor('a clock offset shown', async () =>
     /clock offset [+-]\d/.test(await page.textContent('#clock-offset')));
+  // The fixture reads its stdin on a thread of its own: the key is pressed once it said the
+  // switch is in force (a loaded machine could otherwise acknowledge the command first).
+  const ackSwitched = (on) => fixture.lines.some((l) => l.includes(`"event":"ack","on":${on}`));
   fixture.child.stdin.write('ack off\n');
+  await waitFor('the fixture no longer acknowledging', () => ackSwitched(false));
   await page.keyboard.press('a');
   await waitFor('NOT ACKNOWLEDGED alarm', async () =>
     (await page.isVisible('#ack-alarm')) &&
-    (await page.textContent('#ack-alarm')).includes('NOT ACKNOWLEDGED'), 5000);
+    (await page.textContent('#ack-alarm')).includes('NOT ACKNOWLEDGED'));
   fixture.child.stdin.write('ack on\n');
+  await waitFor('the fixture acknowledging again', () => ackSwitched(true));
   console.log('ok: commands acknowledged, clock offset shown, NOT ACKNOWLEDGED alarm when unanswered');
 
   // 6. Screenshot artifact, after the plots have some history.
