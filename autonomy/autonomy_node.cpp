@@ -54,7 +54,10 @@ int main(int argc, char** argv) {
     app.add_option(
         "--key-file", key_file,
         "HMAC key shared with the ground station (overrides autonomy.operator_key_file)");
-    std::string state_file;
+    std::string state_file, site_file;
+    app.add_option("--site", site_file,
+                   "the room flown in (a file's area: section; a simulator scenario is one): "
+                   "narrows autonomy.geofence to its walls and ceiling");
     app.add_option("--state-file", state_file,
                    "where the KILL / failsafe latches survive a restart (default: "
                    "$XDG_RUNTIME_DIR/alight/ or /tmp/alight-<uid>/, one file per LCM URL)");
@@ -65,7 +68,15 @@ int main(int argc, char** argv) {
     }
     args.finalize();
 
-    const au::AutonomyParams params = au::load_params(args.config);
+    const au::AutonomyParams params = [&] {
+      au::AutonomyParams p = au::load_params(args.config);
+      if (!site_file.empty()) au::fit_to_site(p, alight::load_site(site_file), site_file);
+      spdlog::info("geofence [{:.2f} {:.2f} {:.2f}] .. [{:.2f} {:.2f} {:.2f}] m{}",
+                   p.geofence.min_W_m.x(), p.geofence.min_W_m.y(), p.geofence.min_W_m.z(),
+                   p.geofence.max_W_m.x(), p.geofence.max_W_m.y(), p.geofence.max_W_m.z(),
+                   site_file.empty() ? "" : " (the site " + site_file + ")");
+      return p;
+    }();
     if (state_file.empty()) state_file = au::default_state_path(args.lcm_url);
     const std::string boot_id = au::read_boot_id();
     const int64_t session = static_cast<int64_t>(::getppid());

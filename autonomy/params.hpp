@@ -12,6 +12,7 @@
 #include "common/camera_model.hpp"
 #include "common/geometry.hpp"
 #include "common/param_schema.hpp"
+#include "common/site.hpp"
 
 namespace alight::autonomy {
 
@@ -180,5 +181,16 @@ struct AutonomyParams {
 /// Reads the `autonomy:` section of a vehicle file (finish() on it).
 AutonomyParams load_params(const std::string& vehicle_file);
 AutonomyParams load_params(const ParamNode& vehicle_root);
+
+/// The autonomy's setpoints stay this far inside a site's walls and ceiling: as far as the
+/// outer loop keeps its own setpoints inside its fence (outer_loop::kFenceInsetM), whose box is
+/// the site's walls themselves [m].
+inline constexpr double kSiteWallClearanceM = 0.2;
+
+/// Narrows `p.geofence` to the site (common/site.hpp) kSiteWallClearanceM inside its walls and
+/// ceiling: every setpoint, a moving platform's predicted follow too, stays in the room flown
+/// in. Throws ParamError naming `site_file` when the vehicle's geofence and the site leave less
+/// than the geofence's 0.5 m on an axis, or no room above takeoff.height_m.
+void fit_to_site(AutonomyParams& p, const SiteArea& site, const std::string& site_file);
 
 }  // namespace alight::autonomy

@@ -32,6 +32,10 @@ int main(int argc, char** argv) {
     ol::RunnerOptions options;
     std::string cmd_channel = alight::channels::kAttitudeCmd, state_file;
     double state_max_age_s = 10.0;
+    std::string site_file;
+    app.add_option("--site", site_file,
+                   "the room flown in (a file's area: section; a simulator scenario is one): "
+                   "narrows outer_loop.geofence to its walls and ceiling");
     app.add_option("--pose-channel", options.pose_channel, "pose_t input");
     app.add_option("--setpoint-channel", options.setpoint_channel, "position_setpoint_t input");
     app.add_option("--cmd-channel", cmd_channel, "attitude_cmd_t output");
@@ -49,7 +53,15 @@ int main(int argc, char** argv) {
     args.finalize();
     if (state_file.empty()) state_file = ol::default_state_path(args.lcm_url);
 
-    const ol::OuterLoopParams params = ol::load_params(args.config);
+    const ol::OuterLoopParams params = [&] {
+      ol::OuterLoopParams p = ol::load_params(args.config);
+      if (!site_file.empty()) ol::fit_to_site(p, alight::load_site(site_file), site_file);
+      spdlog::info("outer loop: geofence [{:.2f} {:.2f} {:.2f}] .. [{:.2f} {:.2f} {:.2f}] m{}",
+                   p.geofence_min_W_m.x(), p.geofence_min_W_m.y(), p.geofence_min_W_m.z(),
+                   p.geofence_max_W_m.x(), p.geofence_max_W_m.y(), p.geofence_max_W_m.z(),
+                   site_file.empty() ? "" : " (the site " + site_file + ")");
+      return p;
+    }();
     std::string error;
     const auto record = ol::load_state(state_file, &error);
     if (!error.empty()) spdlog::warn("outer loop: {}: starting from the ground state", error);

@@ -7,6 +7,7 @@
 
 #include "common/geometry.hpp"
 #include "common/param_schema.hpp"
+#include "common/site.hpp"
 
 namespace alight::outer_loop {
 
@@ -86,5 +87,10 @@ struct OuterLoopParams {
 OuterLoopParams load_params(const std::string& vehicle_file);
 /// Same, from a parsed file's root node.
 OuterLoopParams load_params(const ParamNode& vehicle_root);
+
+/// Narrows the geofence to the site's walls and ceiling (common/site.hpp): the room flown in,
+/// its setpoints kept kFenceInsetM inside as ever. Throws ParamError naming `site_file` when the
+/// vehicle's geofence and the site leave 2 x kFenceInsetM or less on an axis.
+void fit_to_site(OuterLoopParams& p, const SiteArea& site, const std::string& site_file);
 
 }  // namespace alight::outer_loop

@@ -51,6 +51,10 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
     au_params.ingress.vehicle_span_m = *config.rotor_span_m;
   }
   sim::Scenario scenario = sim::load_scenario(config.scenario_file);
+  // The site is the scenario's flying area, as the simulated launch files pass it (--site).
+  const SiteArea site{scenario.area_size_m, scenario.area_center_xy_m, scenario.area_height_m};
+  fit_to_site(au_params, site, config.scenario_file);
+  outer_loop::fit_to_site(ol_params, site, config.scenario_file);
   std::unique_ptr<estimator::test::SimOnboard> onboard;
   // Ingress without motion capture renders the downward camera for the flow besides the
   // forward one for the vision (alight-sim --flow-camera); landing shares its downward frames.

@@ -222,5 +222,68 @@ TEST(AutonomyParamsTest, TheFollowedPlatformSpeedDerivesFromTheOuterLoopsLimit) 
   }
 }
 
+// A site narrows both geofences to the room flown in: the shipped vehicle's reaches x = 4.5 m
+// for the ingress room behind its wall, the landing room's wall stands at x = 3 m.
+TEST(SiteTest, TheLandingRoomNarrowsTheVehiclesGeofencesTheIngressRoomLeavesThem) {
+  const std::string root = alight::build::source_dir();
+  const std::string vehicle = root + "/config/vehicles/pelican.yaml";
+  const std::string landing = root + "/config/scenarios/landing_moving_cart.yaml";
+  const std::string ingress = root + "/config/scenarios/ingress.yaml";
+  AutonomyParams au = load_params(vehicle);
+  outer_loop::OuterLoopParams ol = outer_loop::load_params(vehicle);
+  const AutonomyParams au_vehicle = au;
+  const outer_loop::OuterLoopParams ol_vehicle = ol;
+  ASSERT_GT(au.geofence.max_W_m.x(), 4.0);
+
+  fit_to_site(au, load_site(landing), landing);
+  outer_loop::fit_to_site(ol, load_site(landing), landing);
+  EXPECT_DOUBLE_EQ(au.geofence.max_W_m.x(), 3.0 - kSiteWallClearanceM);
+  EXPECT_DOUBLE_EQ(ol.geofence_max_W_m.x(), 3.0);
+  // The outer loop keeps its setpoints as far inside its fence as the autonomy keeps its own
+  // inside the walls: both stop at the same place.
+  EXPECT_DOUBLE_EQ(ol.geofence_max_W_m.x() - outer_loop::kFenceInsetM, au.geofence.max_W_m.x());
+  EXPECT_EQ(au.geofence.min_W_m, au_vehicle.geofence.min_W_m);
+  EXPECT_EQ(au.geofence.max_W_m.z(), au_vehicle.geofence.max_W_m.z());
+
+  AutonomyParams au_in = au_vehicle;
+  outer_loop::OuterLoopParams ol_in = ol_vehicle;
+  fit_to_site(au_in, load_site(ingress), ingress);
+  outer_loop::fit_to_site(ol_in, load_site(ingress), ingress);
+  EXPECT_EQ(au_in.geofence.min_W_m, au_vehicle.geofence.min_W_m);
+  EXPECT_EQ(au_in.geofence.max_W_m, au_vehicle.geofence.max_W_m);
+  EXPECT_EQ(ol_in.geofence_max_W_m, ol_vehicle.geofence_max_W_m);
+}
+
+TEST(SiteTest, ASiteWithNoRoomForTheFlightIsAnErrorNamingTheSiteFile) {
+  const std::string vehicle =
+      std::string(alight::build::source_dir()) + "/config/vehicles/pelican.yaml";
+  AutonomyParams au = load_params(vehicle);
+  SiteArea beside;
+  beside.center_xy_m = Vector2d(20.0, 0.0);
+  try {
+    fit_to_site(au, beside, "sites/far.yaml");
+    ADD_FAILURE() << "a site beside the geofence accepted";
+  } catch (const ParamError& e) {
+    EXPECT_EQ(e.file(), "sites/far.yaml");
+    EXPECT_EQ(e.key(), "area");
+  }
+  SiteArea low;
+  low.height_m = au.takeoff.height_m;  // the ceiling at the take-off height
+  try {
+    fit_to_site(au, low, "sites/low.yaml");
+    ADD_FAILURE() << "a ceiling below the take-off height accepted";
+  } catch (const ParamError& e) {
+    EXPECT_EQ(e.file(), "sites/low.yaml");
+    EXPECT_EQ(e.key(), "area.height_m");
+  }
+  outer_loop::OuterLoopParams ol = outer_loop::load_params(vehicle);
+  try {
+    outer_loop::fit_to_site(ol, beside, "sites/far.yaml");
+    ADD_FAILURE() << "a site beside the outer loop's geofence accepted";
+  } catch (const ParamError& e) {
+    EXPECT_EQ(e.file(), "sites/far.yaml");
+  }
+}
+
 }  // namespace
 }  // namespace alight::autonomy

@@ -2,6 +2,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <filesystem>
+
+#include "common/build_paths.hpp"
+
 namespace alight::launcher {
 namespace {
 
@@ -92,6 +97,30 @@ TEST(LaunchFileTest, SubstitutesKnownVariablesOnly) {
   EXPECT_EQ(substitute("${UNKNOWN}-${A}", vars), "${UNKNOWN}-x");
   EXPECT_EQ(substitute("plain", vars), "plain");
   EXPECT_EQ(substitute("${unterminated", vars), "${unterminated");
+}
+
+// The vehicle file's geofences are the vehicle's (the shipped ones reach the ingress room behind
+// its wall); the room flown in is the site's. Every shipped launch file that runs the outer loop
+// or the autonomy hands them one (docs/configuration.md, "Sites").
+TEST(ShippedLaunchFiles, TheOuterLoopAndTheAutonomyFlyInASite) {
+  const std::filesystem::path dir = std::string(build::source_dir()) + "/config/launch";
+  int checked = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    const LaunchFile lf = load_launch_file(entry.path().string());
+    for (const auto& p : lf.processes) {
+      if (p.command.empty() ||
+          (p.command[0] != "alight-autonomy" && p.command[0] != "alight-outer-loop"))
+        continue;
+      const auto site = std::find(p.command.begin(), p.command.end(), "--site");
+      ASSERT_NE(site, p.command.end()) << entry.path() << ": " << p.name << " has no --site";
+      ASSERT_NE(site + 1, p.command.end()) << entry.path();
+      const bool simulated = entry.path().filename().string().rfind("sim_", 0) == 0;
+      EXPECT_EQ(*(site + 1), simulated ? "${ALIGHT_SCENARIO}" : "${ALIGHT_SITE}")
+          << entry.path() << ": " << p.name;
+      ++checked;
+    }
+  }
+  EXPECT_GE(checked, 15);
 }
 
 }  // namespace
