@@ -104,6 +104,11 @@ AttitudeCommand PositionController::disarmed(const char* reason) {
   return c;
 }
 
+double fence_stopping_speed(double distance_m, double brake_mps2, double lag_s) {
+  if (!(distance_m > 0.0)) return 0.0;
+  return brake_mps2 * (-lag_s + std::sqrt(lag_s * lag_s + 2.0 * distance_m / brake_mps2));
+}
+
 AttitudeCommand PositionController::track(const Vector3d& p_sp, const Vector3d& v_sp,
                                           const Vector3d& a_sp, double yaw_sp,
                                           const PoseSample& pose, double dt_s, bool integrate,
@@ -122,6 +127,25 @@ AttitudeCommand PositionController::track(const Vector3d& p_sp, const Vector3d& 
   Vector3d v_ff = v_sp;
   clamp_norm(v_ff.head<2>(), P.max_feedforward_xy_mps);
   v_ff.z() = std::clamp(v_ff.z(), -P.max_speed_z_mps, P.max_speed_z_mps);
+  // Towards a wall of the fence, the velocity the loop asks for (v_ff + kp e / kd: it demands
+  // kd (that - v)) is one it stops from before the wall's inset, and beyond the inset one that
+  // brings it back as the position loop would; on such an axis it asks for exactly that, with no
+  // position error and no feed-forward acceleration.
+  Vector3d a_ff = a_sp;
+  const double brake_mps2 =
+      kFenceBrakeShare * P.gravity_mps2 * std::tan(P.max_tilt_deg * kDegToRad);
+  for (int i = 0; i < 2; ++i) {
+    const double v_ask = v_ff[i] + kp_xy / kd_xy * e_p[i];
+    const double to_wall_m = v_ask > 0 ? P.geofence_max_W_m[i] - kFenceInsetM - pose.p_W_B[i]
+                                       : pose.p_W_B[i] - (P.geofence_min_W_m[i] + kFenceInsetM);
+    const double v_max = to_wall_m > 0 ? fence_stopping_speed(to_wall_m, brake_mps2, 1.0 / kd_xy)
+                                       : kp_xy / kd_xy * to_wall_m;
+    if (std::abs(v_ask) > v_max) {
+      v_ff[i] = v_ask > 0 ? v_max : -v_max;
+      e_p[i] = 0.0;
+      a_ff[i] = 0.0;
+    }
+  }
   const Vector3d e_v = v_ff - pose.v_W_B;
 
   // Conditional integration: near the setpoint, or while not moving (a steady offset, e.g. a
@@ -141,8 +165,8 @@ AttitudeCommand PositionController::track(const Vector3d& p_sp, const Vector3d& 
   // lags a turning setpoint by a / kp, and the integrator cannot learn a disturbance that turns
   // with it.
   Vector2d a_xy =
-      kp_xy * e_p.head<2>() + kd_xy * e_v.head<2>() + integral_mps2_.head<2>() + a_sp.head<2>();
-  last_demand_z_mps2_ = P.kp_z_per_s2 * e_p.z() + P.kd_z_per_s * e_v.z() + a_sp.z();
+      kp_xy * e_p.head<2>() + kd_xy * e_v.head<2>() + integral_mps2_.head<2>() + a_ff.head<2>();
+  last_demand_z_mps2_ = P.kp_z_per_s2 * e_p.z() + P.kd_z_per_s * e_v.z() + a_ff.z();
   const double a_z =
       std::clamp(last_demand_z_mps2_ + integral_mps2_.z(), -P.max_accel_z_mps2, P.max_accel_z_mps2);
   const double f_z = P.gravity_mps2 + a_z;  // > 0 since max_accel_z < g

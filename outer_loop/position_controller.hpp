@@ -34,8 +34,11 @@
 // The autopilot's own limits, whatever the setpoints say (PX4 and ArduPilot keep them in the
 // autopilot): setpoints are kept kFenceInsetM inside the geofence; a far setpoint is approached at
 // no more than max_speed_*_mps (the position error is capped at the one that asks for that speed
-// at steady state, v = kp e / kd); leaving the fence starts the landing failsafe (hold
-// failsafe_hold_s where it is, then descend and disarm on the ground).
+// at steady state, v = kp e / kd); towards a wall of the fence the horizontal speed asked for is
+// one the vehicle stops from before that wall's inset (fence_stopping_speed: ArduPilot's fence
+// avoidance, PX4's predicted breach), so a setpoint that runs fast into the fence (a moving
+// platform's follow) is not overshot beyond it; leaving the fence starts the landing failsafe
+// (hold failsafe_hold_s where it is, then descend and disarm on the ground).
 //
 // Defence in depth: the node refuses non-finite input, but update() also never lets one
 // through: a non-finite setpoint or pose is replaced by the last finite one, a non-finite
@@ -49,6 +52,16 @@
 #include "outer_loop/setpoint.hpp"
 
 namespace alight::outer_loop {
+
+/// The share of the tilt-limited horizontal acceleration (g tan(max_tilt_deg)) the loop counts on
+/// to stop before a wall of the fence: the PD loop does not brake at the tilt limit from the
+/// first instant, and the rest is left for the wind.
+inline constexpr double kFenceBrakeShare = 0.5;
+
+/// The fastest speed towards a wall `distance_m` away that a velocity loop of time constant
+/// `lag_s` braking at `brake_mps2` stops from short of it: v lag + v^2 / (2 brake) = distance;
+/// 0 at or beyond the wall [m/s].
+double fence_stopping_speed(double distance_m, double brake_mps2, double lag_s);
 
 /// What must survive a restart of the outer loop (the node keeps it in its state file).
 struct PersistentState {

@@ -366,5 +366,40 @@ TEST(OuterLoopRegression, LeavingTheGeofenceHoldsThenLands) {
   EXPECT_LE(h.model.p.x(), p.geofence_max_W_m.x()) << "held inside the fence";
 }
 
+// Regression: a moving platform's follow ran on an unmeasured prediction towards a wall of the
+// room, the vehicle catching it up at nearly twice its speed, and overshot the setpoint, held at
+// the fence's inset, out of the room. Towards a wall the loop asks only for a speed it stops
+// from before the inset.
+TEST(OuterLoopRegression, AFollowRunningIntoTheFenceStopsInsideIt) {
+  OuterLoopParams p = runner_params();
+  p.geofence_min_W_m = Vector3d(-3, -3, -0.5);
+  p.geofence_max_W_m = Vector3d(3, 3, 2.6);
+  Harness h({}, p);
+  h.model.hover_at({1.2, 1.0, 1.2});
+  double max_x = -10, max_speed = 0;
+  for (int i = 0; i < 500; ++i) {  // 5 s
+    PositionSetpoint sp = hover_sp({1.7 + 0.96 * 0.01 * i, 1.4, 1.2});
+    sp.v_W = Vector3d(0.96, 0.0, 0.0);
+    h.step(sp);
+    max_x = std::max(max_x, h.model.p.x());
+    max_speed = std::max(max_speed, h.model.v.head<2>().norm());
+  }
+  EXPECT_GT(max_speed, 1.3) << "the catch-up that overshot";
+  EXPECT_LE(max_x, p.geofence_max_W_m.x() - 0.5 * kFenceInsetM) << "within half the inset";
+  EXPECT_NEAR(h.model.p.x(), p.geofence_max_W_m.x() - kFenceInsetM, 0.05);
+  EXPECT_NEAR(h.model.p.y(), 1.4, 0.05) << "the other axis followed as ever";
+  EXPECT_EQ(h.last->mode, Mode::kNormal);
+}
+
+TEST(FenceStoppingSpeed, StopsWithinTheDistanceAndIsZeroAtTheWall) {
+  EXPECT_EQ(fence_stopping_speed(0.0, 1.8, 0.3), 0.0);
+  EXPECT_EQ(fence_stopping_speed(-0.5, 1.8, 0.3), 0.0);
+  for (const double d : {0.05, 0.3, 1.0, 4.0}) {
+    const double v = fence_stopping_speed(d, 1.8, 0.3);
+    EXPECT_NEAR(v * 0.3 + v * v / (2 * 1.8), d, 1e-12) << d;
+  }
+  EXPECT_NEAR(fence_stopping_speed(1.0, 2.0, 0.0), 2.0, 1e-12);  // no lag: sqrt(2 a d)
+}
+
 }  // namespace
 }  // namespace alight::outer_loop
