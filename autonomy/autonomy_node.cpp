@@ -27,6 +27,7 @@
 #include "autonomy/convert.hpp"
 #include "autonomy/params.hpp"
 #include "autonomy/restart_state.hpp"
+#include "autonomy/text.hpp"
 #include "common/msg_convert.hpp"
 #include "common/node.hpp"
 #include "common/operator_auth.hpp"
@@ -130,7 +131,8 @@ int main(int argc, char** argv) {
     int64_t now_utime = 0;
     int64_t last_status_utime = 0;
     int64_t last_status_wall = 0;
-    std::string last_phase_reason;
+    std::string last_phase_reason, last_phase_kind;
+    int64_t last_reason_log_utime = 0;
     alight::autonomy_status_t last_status{};
     int64_t internal_seq = 0;
     std::optional<alight::operator_cmd_t> kill_authority;  // the signed KILL, once verified
@@ -187,12 +189,19 @@ int main(int argc, char** argv) {
         if (out.setpoint.kill && kill_authority) sp.kill_authority = *kill_authority;
         node.publish(ch::kPositionSetpoint, sp);
       }
+      // Logged, and published at once, when what the reason says changes; its numbers alone
+      // (a follow's offset changes every step) at most once a second of sensor time, and
+      // AUTONOMY_STATUS carries them every status_period_s.
       const std::string phase_reason =
           std::string(au::phase_name(out.status.phase)) + ": " + out.status.reason;
-      const bool changed = phase_reason != last_phase_reason;
-      if (changed) {
+      const std::string phase_kind = au::reason_kind(phase_reason);
+      const bool changed = phase_kind != last_phase_kind;
+      if (changed ||
+          (phase_reason != last_phase_reason && now_utime - last_reason_log_utime >= 1'000'000)) {
         spdlog::info("{}", phase_reason);
         last_phase_reason = phase_reason;
+        last_phase_kind = phase_kind;
+        last_reason_log_utime = now_utime;
       }
       if (changed || (now_utime - last_status_utime) * 1e-6 >= params.status_period_s * 0.5) {
         last_status = au::to_msg(out.status);
