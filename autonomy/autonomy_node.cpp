@@ -72,10 +72,8 @@ int main(int argc, char** argv) {
     const au::AutonomyParams params = [&] {
       au::AutonomyParams p = au::load_params(args.config);
       if (!site_file.empty()) au::fit_to_site(p, alight::load_site(site_file), site_file);
-      spdlog::info("geofence [{:.2f} {:.2f} {:.2f}] .. [{:.2f} {:.2f} {:.2f}] m{}",
-                   p.geofence.min_W_m.x(), p.geofence.min_W_m.y(), p.geofence.min_W_m.z(),
-                   p.geofence.max_W_m.x(), p.geofence.max_W_m.y(), p.geofence.max_W_m.z(),
-                   site_file.empty() ? "" : " (the site " + site_file + ")");
+      spdlog::info("geofence {}",
+                   alight::fence_text(p.geofence.min_W_m, p.geofence.max_W_m, site_file));
       return p;
     }();
     if (state_file.empty()) state_file = au::default_state_path(args.lcm_url);

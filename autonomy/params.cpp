@@ -402,7 +402,7 @@ AutonomyParams load_params(const std::string& vehicle_file) {
 
 void fit_to_site(AutonomyParams& p, const SiteArea& site, const std::string& site_file) {
   if (!narrow_to_site(site, kSiteWallClearanceM, 0.5, p.geofence.min_W_m, p.geofence.max_W_m))
-    throw ParamError(site_file, "area", "",
+    throw ParamError(site_file, "area", site_text(site),
                      "leaves less than 0.5 m on an axis of the vehicle's autonomy.geofence, " +
                          std::to_string(kSiteWallClearanceM) + " m inside its walls");
   if (!(p.takeoff.height_m < p.geofence.max_W_m.z()))

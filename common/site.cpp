@@ -1,5 +1,8 @@
 #include "common/site.hpp"
 
+#include <algorithm>
+#include <cstdio>
+
 #include "common/params.hpp"
 
 namespace alight {
@@ -14,6 +17,20 @@ bool narrow_to_site(const SiteArea& site, double inset_m, double min_span_m, Vec
   fence_min = lo;
   fence_max = hi;
   return true;
+}
+
+std::string fence_text(const Vector3d& lo, const Vector3d& hi, const std::string& site_file) {
+  char buf[128];
+  std::snprintf(buf, sizeof buf, "[%.2f %.2f %.2f] .. [%.2f %.2f %.2f] m", lo.x(), lo.y(), lo.z(),
+                hi.x(), hi.y(), hi.z());
+  return std::string(buf) + (site_file.empty() ? "" : " (the site " + site_file + ")");
+}
+
+std::string site_text(const SiteArea& s) {
+  char buf[160];
+  std::snprintf(buf, sizeof buf, "size_m [%g, %g] around [%g, %g], height_m %g", s.size_m.x(),
+                s.size_m.y(), s.center_xy_m.x(), s.center_xy_m.y(), s.height_m);
+  return buf;
 }
 
 SiteArea load_site(const std::string& path) {

@@ -27,6 +27,14 @@ struct SiteArea {
 bool narrow_to_site(const SiteArea& site, double inset_m, double min_span_m, Vector3d& fence_min,
                     Vector3d& fence_max);
 
+/// "[x y z] .. [x y z] m" (centimetres), and " (the site FILE)" when `site_file` is not empty:
+/// the geofence in force, as the nodes log it at start.
+std::string fence_text(const Vector3d& fence_min, const Vector3d& fence_max,
+                       const std::string& site_file);
+
+/// "size_m [x, y] around [x, y], height_m h": a site in an error message.
+std::string site_text(const SiteArea& site);
+
 /// Reads the `area:` section of `path` (size_m, center_xy_m and height_m, all required and
 /// positive where they are extents). The file's other sections and the area's other keys (a
 /// scenario's floor texture) are the simulator's and are not read. Throws ParamError naming the

@@ -56,10 +56,8 @@ int main(int argc, char** argv) {
     const ol::OuterLoopParams params = [&] {
       ol::OuterLoopParams p = ol::load_params(args.config);
       if (!site_file.empty()) ol::fit_to_site(p, alight::load_site(site_file), site_file);
-      spdlog::info("outer loop: geofence [{:.2f} {:.2f} {:.2f}] .. [{:.2f} {:.2f} {:.2f}] m{}",
-                   p.geofence_min_W_m.x(), p.geofence_min_W_m.y(), p.geofence_min_W_m.z(),
-                   p.geofence_max_W_m.x(), p.geofence_max_W_m.y(), p.geofence_max_W_m.z(),
-                   site_file.empty() ? "" : " (the site " + site_file + ")");
+      spdlog::info("outer loop: geofence {}",
+                   alight::fence_text(p.geofence_min_W_m, p.geofence_max_W_m, site_file));
       return p;
     }();
     std::string error;

@@ -155,7 +155,7 @@ OuterLoopParams load_params(const std::string& vehicle_file) {
 
 void fit_to_site(OuterLoopParams& p, const SiteArea& site, const std::string& site_file) {
   if (!narrow_to_site(site, 0.0, 2 * kFenceInsetM, p.geofence_min_W_m, p.geofence_max_W_m))
-    throw ParamError(site_file, "area", "",
+    throw ParamError(site_file, "area", site_text(site),
                      "leaves 0.4 m or less on an axis of the vehicle's outer_loop geofence");
 }
 

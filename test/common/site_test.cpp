@@ -88,5 +88,15 @@ TEST(NarrowToSite, ASiteBesideTheFenceLeavesItAsItWas) {
   EXPECT_DOUBLE_EQ(lo.x(), 2.6);
 }
 
+TEST(SiteText, NamesTheSiteAndTheFenceInForce) {
+  SiteArea room;
+  room.center_xy_m = Vector2d(1.5, 0.0);
+  EXPECT_EQ(site_text(room), "size_m [6, 6] around [1.5, 0], height_m 4");
+  EXPECT_EQ(fence_text(Vector3d(-2.8, -2.8, 0), Vector3d(2.8, 2.8, 2.3), ""),
+            "[-2.80 -2.80 0.00] .. [2.80 2.80 2.30] m");
+  EXPECT_EQ(fence_text(Vector3d::Zero(), Vector3d::Ones(), "room.yaml"),
+            "[0.00 0.00 0.00] .. [1.00 1.00 1.00] m (the site room.yaml)");
+}
+
 }  // namespace
 }  // namespace alight
