@@ -11,6 +11,7 @@
 
 #include "common/build_paths.hpp"
 #include "outer_loop/params.hpp"
+#include "test/common/expect_param_error.hpp"
 
 namespace alight::autonomy {
 namespace {
@@ -260,29 +261,22 @@ TEST(SiteTest, ASiteWithNoRoomForTheFlightIsAnErrorNamingTheSiteFile) {
   AutonomyParams au = load_params(vehicle);
   SiteArea beside;
   beside.center_xy_m = Vector2d(20.0, 0.0);
-  try {
-    fit_to_site(au, beside, "sites/far.yaml");
-    ADD_FAILURE() << "a site beside the geofence accepted";
-  } catch (const ParamError& e) {
-    EXPECT_EQ(e.file(), "sites/far.yaml");
-    EXPECT_EQ(e.key(), "area");
-  }
+  const ParamError far =
+      alight::test::expect_param_error([&] { fit_to_site(au, beside, "sites/far.yaml"); });
+  EXPECT_EQ(far.file(), "sites/far.yaml");
+  EXPECT_EQ(far.key(), "area");
+  EXPECT_EQ(far.value(), site_text(beside));
   SiteArea low;
   low.height_m = au.takeoff.height_m;  // the ceiling at the take-off height
-  try {
-    fit_to_site(au, low, "sites/low.yaml");
-    ADD_FAILURE() << "a ceiling below the take-off height accepted";
-  } catch (const ParamError& e) {
-    EXPECT_EQ(e.file(), "sites/low.yaml");
-    EXPECT_EQ(e.key(), "area.height_m");
-  }
+  const ParamError ceiling =
+      alight::test::expect_param_error([&] { fit_to_site(au, low, "sites/low.yaml"); });
+  EXPECT_EQ(ceiling.file(), "sites/low.yaml");
+  EXPECT_EQ(ceiling.key(), "area.height_m");
   outer_loop::OuterLoopParams ol = outer_loop::load_params(vehicle);
-  try {
-    outer_loop::fit_to_site(ol, beside, "sites/far.yaml");
-    ADD_FAILURE() << "a site beside the outer loop's geofence accepted";
-  } catch (const ParamError& e) {
-    EXPECT_EQ(e.file(), "sites/far.yaml");
-  }
+  EXPECT_EQ(alight::test::expect_param_error([&] {
+              outer_loop::fit_to_site(ol, beside, "sites/far.yaml");
+            }).file(),
+            "sites/far.yaml");
 }
 
 }  // namespace
