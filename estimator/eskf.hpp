@@ -80,6 +80,7 @@ struct FilterState {
   int64_t flow_gated_since_utime = 0;  ///< first of the flow's current run of refusals (0: none)
   int64_t flow_gated_last_utime = 0;   ///< latest of that run
   int64_t flow_inflated = 0;  ///< flow samples fused with their noise inflated after a run refused
+  int64_t flow_second = 0;    ///< flow samples fused on the front end's second motion
   int64_t baro_gated_since_utime = 0;  ///< first of the baro's current run of refusals (0: none)
   int64_t baro_resets = 0;
 

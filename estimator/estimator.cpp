@@ -31,6 +31,56 @@ MeasCov flow_noise(const FlowSample& m, const FlowParams& p) {
   R.diagonal().array() += p.sigma_floor * p.sigma_floor;
   return R;
 }
+
+/// The sample with another motion of its (FlowSample::others) in place of its own.
+FlowSample with_motion(const FlowSample& m, const FlowMotion& other) {
+  FlowSample out = m;
+  out.t_over_d_C1 = other.t_over_d_C1;
+  out.cov = other.cov;
+  out.inliers = other.inliers;
+  out.J_rotation = other.J_rotation;
+  out.J_normal = other.J_normal;
+  out.others.clear();
+  return out;
+}
+
+/// Whether a flow sample refused by the gate (innovation r, the model's prediction `predicted`)
+/// differs from the model by a scale alone, as a plane at another depth gives: its t/d the
+/// model's times k, the model plane's depth over that plane's. The best k is at least
+/// `min_ratio` (no plane in view lies deeper than the floor), and the innovation less its part
+/// along the prediction passes the gate. A platform moving under the camera differs by its own
+/// motion: followed, its t/d is nearly zero (k near 0); crossed, it is off the prediction's
+/// direction.
+bool depth_only(const MeasVec& r, const Vector3d& predicted, double min_ratio, const MeasJac& H,
+                const MeasCov& R, FilterState& s, double gate_chi2) {
+  const double pp = predicted.squaredNorm();
+  if (!(pp > 0)) return false;
+  const double k_minus_1 = r.dot(predicted) / pp;
+  if (1.0 + k_minus_1 < min_ratio) return false;
+  const MeasVec rest = r - k_minus_1 * predicted;
+  double nis = 0;
+  fuse(s, rest, H, R, -1.0, &nis);  // a negative gate refuses: only the NIS
+  return std::isfinite(nis) && nis <= gate_chi2;
+}
+
+/// Whether a sample's own motion passes the checks of add_flow: finite, a plausible size, a
+/// covariance that is one, min_inliers behind it; the refusal's outcome otherwise.
+std::optional<Outcome> refusal(const FlowSample& m, const FlowParams& p) {
+  if (!m.t_over_d_C1.allFinite() || !m.cov.allFinite() || !m.J_rotation.allFinite() ||
+      !m.J_normal.allFinite())
+    return Outcome::kNonFinite;
+  if (m.utime_from <= 0 || m.utime_to <= m.utime_from || m.t_over_d_C1.norm() > p.max_t_over_d)
+    return Outcome::kAbsurd;
+  // A covariance must be symmetric and, with the floor added, positive definite.
+  const double scale = std::max(1e-12, m.cov.cwiseAbs().maxCoeff());
+  if ((m.cov - m.cov.transpose()).cwiseAbs().maxCoeff() > 1e-6 * scale ||
+      (m.cov.diagonal().array() < 0).any() ||
+      Eigen::LLT<Matrix3d>(Matrix3d(flow_noise(m, p))).info() != Eigen::Success)
+    return Outcome::kAbsurd;
+  if (m.utime_to - m.utime_from > to_us(p.max_span_s)) return Outcome::kGeometry;
+  if (m.inliers < p.min_inliers) return Outcome::kTooFewInliers;
+  return std::nullopt;
+}
 }  // namespace
 
 Estimator::Estimator(const EstimatorParams& params) : params_(params) {
@@ -175,26 +225,16 @@ Outcome Estimator::add_baro(const BaroSample& m) {
 }
 
 Outcome Estimator::add_flow(const FlowSample& m) {
-  const auto& p = params_.flow;
-  if (!m.t_over_d_C1.allFinite() || !m.cov.allFinite() || !m.J_rotation.allFinite() ||
-      !m.J_normal.allFinite())
-    return reject(Sensor::kFlow, Outcome::kNonFinite);
-  if (m.utime_from <= 0 || m.utime_to <= m.utime_from || m.t_over_d_C1.norm() > p.max_t_over_d)
-    return reject(Sensor::kFlow, Outcome::kAbsurd);
-  // A covariance must be symmetric and, with the floor added, positive definite.
-  const double scale = std::max(1e-12, m.cov.cwiseAbs().maxCoeff());
-  if ((m.cov - m.cov.transpose()).cwiseAbs().maxCoeff() > 1e-6 * scale ||
-      (m.cov.diagonal().array() < 0).any() ||
-      Eigen::LLT<Matrix3d>(Matrix3d(flow_noise(m, p))).info() != Eigen::Success)
-    return reject(Sensor::kFlow, Outcome::kAbsurd);
-  if (m.utime_to - m.utime_from > to_us(p.max_span_s))
-    return reject(Sensor::kFlow, Outcome::kGeometry);
-  if (m.inliers < p.min_inliers) return reject(Sensor::kFlow, Outcome::kTooFewInliers);
+  if (const auto why = refusal(m, params_.flow)) return reject(Sensor::kFlow, *why);
   Event e;
   e.utime = m.utime_to;
   e.order = 2;
   e.sensor = Sensor::kFlow;
   e.flow = m;
+  // Another motion is checked as the sample's own; one that fails is left out, the sample stays.
+  e.flow.others.clear();
+  for (const FlowMotion& other : m.others)
+    if (!refusal(with_motion(m, other), params_.flow)) e.flow.others.push_back(other);
   return add_event(std::move(e), m.utime_from);
 }
 
@@ -467,23 +507,37 @@ Outcome Estimator::apply_flow(const FlowSample& m, int64_t key, FilterState& s) 
   const int ci = s.clone_index(key);
   if (ci < 0) return Outcome::kNoClone;
   // The model over a plane at the terrain's height (a state) or at the floor's (height 0).
-  const auto model_over = [&](bool floor, MeasVec* r, MeasJac* H) {
+  const auto model_over = [&](const FlowSample& f, bool floor, MeasVec* r, MeasJac* H) {
     Nominal x = s.x;
     if (floor) x.terrain_m = 0.0;
     FlowModel model = flow_model(x, s.clones[ci], R_BC_, p.t_B_C_m);
-    add_input_sensitivities(model, x, s.clones[ci], R_BC_, m.J_rotation, m.J_normal);
+    add_input_sensitivities(model, x, s.clones[ci], R_BC_, f.J_rotation, f.J_normal);
     if (floor) model.H_core.col(idx::kTerrain).setZero();
-    *r = m.t_over_d_C1 - model.t_over_d;
+    *r = f.t_over_d_C1 - model.t_over_d;
     *H = MeasJac::Zero(3, s.dim());
     H->leftCols<idx::kCore>() = model.H_core;
     H->middleCols<kCloneDim>(idx::kCore + kCloneDim * ci) = model.H_clone;
     return model.height_m;
   };
-  MeasVec r;
-  MeasJac H;
-  Outcome o = Outcome::kGeometry;
-  if (model_over(false, &r, &H) >= p.min_height_m) {
-    MeasCov R = flow_noise(m, p);
+  // One motion's update against the plane it fits better, and its NIS; nullopt where the camera
+  // is too near the terrain.
+  struct Update {
+    MeasVec r;
+    MeasJac H;
+    MeasCov R;
+    double nis = 0;
+    bool on_floor = false;
+    Vector3d predicted = Vector3d::Zero();  ///< the model's t/d
+    /// The model plane's depth over the floor's (1 on the floor): the least ratio of depths a
+    /// plane in view can have to it.
+    double min_depth_ratio = 1.0;
+  };
+  const auto update_for = [&](const FlowSample& f) -> std::optional<Update> {
+    Update u;
+    const double over_terrain_m = model_over(f, false, &u.r, &u.H);
+    if (over_terrain_m < p.min_height_m) return std::nullopt;
+    if (s.x.terrain_m > 0) u.min_depth_ratio = over_terrain_m / (over_terrain_m + s.x.terrain_m);
+    u.R = flow_noise(f, p);
     // Over a platform the rangefinder's terrain is its top, while the front end's dominant plane
     // stays the floor until the platform fills most of the view (below about 0.5 m over it), and
     // in between its fit may take features of both: the two planes give t/d apart by the
@@ -496,18 +550,44 @@ Outcome Estimator::apply_flow(const FlowSample& m, int64_t key, FilterState& s) 
     MeasVec r_floor;
     MeasJac H_floor;
     if (step_m > 0 && std::abs(s.x.terrain_m) >= step_m &&
-        model_over(true, &r_floor, &H_floor) >= p.min_height_m) {
-      const MeasVec between = r_floor - r;  // prediction over the terrain minus over the floor
-      R += 0.25 * between * between.transpose();
-      double nis_terrain = 0, nis_floor = 0;
-      fuse(s, r, H, R, -1.0, &nis_terrain);  // a negative gate refuses: only the NIS
-      fuse(s, r_floor, H_floor, R, -1.0, &nis_floor);
-      if (nis_floor < nis_terrain) {
-        r = r_floor;
-        H = H_floor;
-        ++s.flow_on_floor;
+        model_over(f, true, &r_floor, &H_floor) >= p.min_height_m) {
+      const MeasVec between = r_floor - u.r;  // prediction over the terrain minus over the floor
+      u.R += 0.25 * between * between.transpose();
+      double nis_floor = 0;
+      fuse(s, u.r, u.H, u.R, -1.0, &u.nis);  // a negative gate refuses: only the NIS
+      fuse(s, r_floor, H_floor, u.R, -1.0, &nis_floor);
+      if (nis_floor < u.nis) {
+        u.r = r_floor;
+        u.H = H_floor;
+        u.nis = nis_floor;
+        u.on_floor = true;
+        u.min_depth_ratio = 1.0;
       }
+    } else {
+      fuse(s, u.r, u.H, u.R, -1.0, &u.nis);
     }
+    u.predicted = f.t_over_d_C1 - u.r;
+    return u;
+  };
+  std::optional<Update> u = update_for(m);
+  bool on_second = false;
+  // Two motions in view (a textured platform moving under the camera over a sparse floor): the
+  // one the prediction explains better is the floor's. Taking the larger, the platform's, the
+  // estimate would follow the platform: a vehicle holding over it moves with it while its
+  // estimate stands still.
+  for (const FlowMotion& other : m.others) {
+    const std::optional<Update> b = update_for(with_motion(m, other));
+    if (b && (!u || b->nis < u->nis)) {
+      u = b;
+      on_second = true;
+    }
+  }
+  Outcome o = Outcome::kGeometry;
+  if (u) {
+    if (u->on_floor) ++s.flow_on_floor;
+    const MeasVec& r = u->r;
+    const MeasJac& H = u->H;
+    const MeasCov& R = u->R;
     double nis = 0;
     o = fuse(s, r, H, R, p.gate_chi2, &nis);
     // A run of samples the gate refuses says the model and the flow disagree by more than either
@@ -525,12 +605,20 @@ Outcome Estimator::apply_flow(const FlowSample& m, int64_t key, FilterState& s) 
         s.flow_gated_since_utime = m.utime_to;
       s.flow_gated_last_utime = m.utime_to;
     }
+    // Only a plane at another depth, though: its t/d is the model's scaled (a top nearer the
+    // camera than the terrain, or farther). A motion of its own (a platform moving under the
+    // camera, its features all the front end has) is not the camera's, and the estimate that
+    // followed it would move with the platform: left to the IMU, the flow times out to DEGRADED.
     if (o == Outcome::kGate && std::isfinite(nis) &&
-        m.utime_to - s.flow_gated_since_utime >= run_us) {
+        m.utime_to - s.flow_gated_since_utime >= run_us &&
+        depth_only(r, u->predicted, u->min_depth_ratio, H, R, s, p.gate_chi2)) {
       o = fuse(s, r, H, R * (nis / kChi2Median3Dof), p.gate_chi2);
       if (o == Outcome::kFused) ++s.flow_inflated;
     }
-    if (o == Outcome::kFused) s.flow_gated_since_utime = 0;
+    if (o == Outcome::kFused) {
+      s.flow_gated_since_utime = 0;
+      if (on_second) ++s.flow_second;
+    }
   }
   remove_clone(s, ci);
   return o;
@@ -573,6 +661,7 @@ State Estimator::state() const {
   out.counters.terrain_resets = s.terrain_resets;
   out.counters.flow_on_floor = s.flow_on_floor;
   out.counters.flow_inflated = s.flow_inflated;
+  out.counters.flow_second = s.flow_second;
   out.counters.baro_resets = s.baro_resets;
 
   const auto& h = params_.health;

@@ -419,6 +419,27 @@ std::optional<Vector2d> predict_pixel(const CameraModel& camera, const Vector3d&
 
 // --- Front end ---------------------------------------------------------------------------------
 
+std::optional<FlowMotion> second_motion(const std::vector<Vector3d>& rays_1,
+                                        const std::vector<Vector3d>& rays_2,
+                                        const std::vector<uint8_t>& inlier, const Matrix3d& R_C2C1,
+                                        const Vector3d& n_C1, double focal_px,
+                                        const FlowFitParams& params) {
+  assert(rays_1.size() == rays_2.size() && inlier.size() == rays_1.size());
+  std::vector<Vector3d> out_1, out_2;
+  for (size_t k = 0; k < rays_1.size(); ++k)
+    if (!inlier[k]) out_1.push_back(rays_1[k]), out_2.push_back(rays_2[k]);
+  if (static_cast<int>(out_1.size()) < params.min_inliers) return std::nullopt;
+  const FlowFit fit = fit_t_over_d(out_1, out_2, R_C2C1, n_C1, focal_px, params);
+  if (fit.reason != FlowReason::kOk) return std::nullopt;
+  FlowMotion m;
+  m.t_over_d_C1 = fit.t_over_d_C1;
+  m.cov = fit.cov;
+  m.inliers = fit.inliers;
+  m.J_rotation = fit.J_rotation;
+  m.J_normal = fit.J_normal;
+  return m;
+}
+
 FlowOdometry::FlowOdometry(const FlowFrontParams& params, const CameraModel& camera)
     : params_(params), camera_(camera) {
   params_.validate();
@@ -619,6 +640,9 @@ FlowResult FlowOdometry::add_frame(const cv::Mat& gray, int64_t utime, const Mat
         sample.J_rotation = fit.J_rotation;
         sample.J_normal = fit.J_normal;
         sample.residual_rms_px = fit.residual_rms_px;
+        if (auto other = second_motion(rays_1, rays_2, fit.inlier, R_C2C1, n_C1.normalized(),
+                                       camera_.fx, params_.fit))
+          sample.others.push_back(*other);
         r.sample = sample;
         t_over_d = fit.t_over_d_C1;
         inlier = fit.inlier;

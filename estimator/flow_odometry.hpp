@@ -109,6 +109,17 @@ FlowFit fit_t_over_d(const std::vector<Eigen::Vector3d>& rays_1,
                      const std::vector<Eigen::Vector3d>& rays_2, const Eigen::Matrix3d& R_C2C1,
                      const Eigen::Vector3d& n_C1, double focal_px, const FlowFitParams& params);
 
+/// Another motion in view (FlowSample::others): the fit of the correspondences a first fit
+/// left out (inlier: its per-correspondence flags), when they are min_inliers or more and share
+/// one; nullopt otherwise. A platform moving under the camera is a plane of its own motion: over
+/// a sparse floor its features may outnumber the floor's, and the first fit is then the
+/// platform's.
+std::optional<FlowMotion> second_motion(const std::vector<Eigen::Vector3d>& rays_1,
+                                        const std::vector<Eigen::Vector3d>& rays_2,
+                                        const std::vector<uint8_t>& inlier,
+                                        const Eigen::Matrix3d& R_C2C1, const Eigen::Vector3d& n_C1,
+                                        double focal_px, const FlowFitParams& params);
+
 /// Pixel of the floor point seen at ray_1 in the first camera, as the model predicts it in the
 /// second camera (x2 ~ R (I + u n^T) x1, then the lens); nullopt behind the camera.
 std::optional<Eigen::Vector2d> predict_pixel(const CameraModel& camera,

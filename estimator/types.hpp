@@ -7,7 +7,9 @@
 #include <Eigen/Geometry>
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
+#include <vector>
 
 namespace alight::estimator {
 
@@ -46,6 +48,15 @@ struct BaroSample {
 /// frames, the estimated attitude at the first; Estimator::attitude_at gives the same to first
 /// order). Their errors are then the estimate's attitude errors, and the sensitivities below enter
 /// the flow update's Jacobian (add_input_sensitivities; zero: no dependence).
+/// Another motion among the front end's outliers (flow_odometry.hpp, FlowSample::others).
+struct FlowMotion {
+  Vector3d t_over_d_C1 = Vector3d::Zero();  ///< [-]
+  Matrix3d cov = Matrix3d::Identity();      ///< [-]
+  int inliers = 0;
+  Matrix3d J_rotation = Matrix3d::Zero();  ///< as FlowSample's [1/rad]
+  Matrix3d J_normal = Matrix3d::Zero();    ///< [-]
+};
+
 struct FlowSample {
   int64_t utime_from = 0;
   int64_t utime_to = 0;
@@ -58,6 +69,12 @@ struct FlowSample {
   Matrix3d J_rotation = Matrix3d::Zero();
   Matrix3d J_normal = Matrix3d::Zero();
   double residual_rms_px = 0.0;  ///< inliers' reprojection error, root mean square [px]
+  /// Other motions in view: the largest set among the fit's outliers that shares one
+  /// (min_inliers or more; the front end fits at most one). Where a textured platform moving
+  /// under the camera outnumbers a sparse floor's features, the fit above is the platform's and
+  /// this one the floor's (or the reverse): the filter fuses whichever its prediction explains
+  /// best (Estimator::apply_flow).
+  std::vector<FlowMotion> others;
 };
 
 /// What the estimator did with an input. kFused and kQueued are not rejections; every other
@@ -100,6 +117,9 @@ struct Counters {
   /// Flow samples fused with their noise inflated to their innovation, after the gate had refused
   /// the flow for half of health.flow_timeout_s (Estimator::apply_flow).
   int64_t flow_inflated = 0;
+  /// Flow samples fused on the front end's second motion (FlowSample::second), the first's
+  /// being the one the prediction explained worse.
+  int64_t flow_second = 0;
   int64_t baro_resets = 0;  ///< baro offset started over after baro.reset_after_s refused
   int64_t imu_gaps = 0;     ///< IMU intervals longer than health.imu_gap_s
   int64_t replays = 0;      ///< re-propagations from the history for delayed inputs

@@ -180,6 +180,41 @@ TEST(FlowFitTest, NoiseAndThirtyPercentOutliersStayWithinTheCovariance) {
   }
 }
 
+TEST(FlowFitTest, APlatformMovingUnderTheCameraLeavesTheFloorAsTheSecondMotion) {
+  // A textured top moving at 0.6 m/s across a sparse floor: 90 of its points against 50 of the
+  // floor's. The first fit is the top's motion (the camera's relative to it); the second, among
+  // its outliers, the floor's, the camera's own.
+  std::mt19937_64 rng(5);
+  const FlowFitParams params;
+  for (int trial = 0; trial < 10; ++trial) {
+    const Motion floor = random_motion(rng);
+    Motion top = floor;  // the camera's motion seen from the top: its own less the top's
+    const Vector3d v_top_W(0.6 * std::cos(trial), 0.6 * std::sin(trial), 0.0);
+    top.p_W_C2 -= v_top_W / 30.0;
+    Corrs k = floor_points(top, kCam, 90, rng, 0.2);
+    const Corrs f = floor_points(floor, kCam, 50, rng, 0.2);
+    k.r1.insert(k.r1.end(), f.r1.begin(), f.r1.end());
+    k.r2.insert(k.r2.end(), f.r2.begin(), f.r2.end());
+    const FlowFit fit = fit_t_over_d(k.r1, k.r2, floor.R_C2C1(), floor.n_C1(), kCam.fx, params);
+    ASSERT_EQ(fit.reason, FlowReason::kOk) << trial;
+    EXPECT_LT((fit.t_over_d_C1 - top.t_over_d()).norm(), 1e-3) << trial;
+    const auto second =
+        second_motion(k.r1, k.r2, fit.inlier, floor.R_C2C1(), floor.n_C1(), kCam.fx, params);
+    ASSERT_TRUE(second) << trial;
+    EXPECT_LT((second->t_over_d_C1 - floor.t_over_d()).norm(), 1e-3) << trial;
+    EXPECT_GE(second->inliers, 40) << trial;
+    EXPECT_LE(second->inliers, 50) << trial;
+    const Vector3d e = second->t_over_d_C1 - floor.t_over_d();
+    EXPECT_LT(e.dot(second->cov.ldlt().solve(e)), 20.0) << trial;
+  }
+  // A floor alone leaves no second motion: its few outliers share none.
+  const Motion m = random_motion(rng);
+  Corrs k = floor_points(m, kCam, 150, rng, 0.2);
+  const FlowFit fit = fit_t_over_d(k.r1, k.r2, m.R_C2C1(), m.n_C1(), kCam.fx, params);
+  ASSERT_EQ(fit.reason, FlowReason::kOk);
+  EXPECT_FALSE(second_motion(k.r1, k.r2, fit.inlier, m.R_C2C1(), m.n_C1(), kCam.fx, params));
+}
+
 TEST(FlowFitTest, CovarianceIsConsistentOverManySeededMotions) {
   // Property: the normalised estimation error squared of a correct covariance is chi2(3): mean 3.
   // Noise up to 0.4 px in each image (0.57 px together, against the 1 px inlier threshold) and
