@@ -44,25 +44,6 @@ FlowSample with_motion(const FlowSample& m, const FlowMotion& other) {
   return out;
 }
 
-/// Whether a flow sample refused by the gate (innovation r, the model's prediction `predicted`)
-/// differs from the model by a scale alone, as a plane at another depth gives: its t/d the
-/// model's times k, the model plane's depth over that plane's. The best k is at least
-/// `min_ratio` (no plane in view lies deeper than the floor), and the innovation less its part
-/// along the prediction passes the gate. A platform moving under the camera differs by its own
-/// motion: followed, its t/d is nearly zero (k near 0); crossed, it is off the prediction's
-/// direction.
-bool depth_only(const MeasVec& r, const Vector3d& predicted, double min_ratio, const MeasJac& H,
-                const MeasCov& R, FilterState& s, double gate_chi2) {
-  const double pp = predicted.squaredNorm();
-  if (!(pp > 0)) return false;
-  const double k_minus_1 = r.dot(predicted) / pp;
-  if (1.0 + k_minus_1 < min_ratio) return false;
-  const MeasVec rest = r - k_minus_1 * predicted;
-  double nis = 0;
-  fuse(s, rest, H, R, -1.0, &nis);  // a negative gate refuses: only the NIS
-  return std::isfinite(nis) && nis <= gate_chi2;
-}
-
 /// Whether a sample's own motion passes the checks of add_flow: finite, a plausible size, a
 /// covariance that is one, min_inliers behind it; the refusal's outcome otherwise.
 std::optional<Outcome> refusal(const FlowSample& m, const FlowParams& p) {
@@ -527,16 +508,10 @@ Outcome Estimator::apply_flow(const FlowSample& m, int64_t key, FilterState& s) 
     MeasCov R;
     double nis = 0;
     bool on_floor = false;
-    Vector3d predicted = Vector3d::Zero();  ///< the model's t/d
-    /// The model plane's depth over the floor's (1 on the floor): the least ratio of depths a
-    /// plane in view can have to it.
-    double min_depth_ratio = 1.0;
   };
   const auto update_for = [&](const FlowSample& f) -> std::optional<Update> {
     Update u;
-    const double over_terrain_m = model_over(f, false, &u.r, &u.H);
-    if (over_terrain_m < p.min_height_m) return std::nullopt;
-    if (s.x.terrain_m > 0) u.min_depth_ratio = over_terrain_m / (over_terrain_m + s.x.terrain_m);
+    if (model_over(f, false, &u.r, &u.H) < p.min_height_m) return std::nullopt;
     u.R = flow_noise(f, p);
     // Over a platform the rangefinder's terrain is its top, while the front end's dominant plane
     // stays the floor until the platform fills most of the view (below about 0.5 m over it), and
@@ -561,12 +536,10 @@ Outcome Estimator::apply_flow(const FlowSample& m, int64_t key, FilterState& s) 
         u.H = H_floor;
         u.nis = nis_floor;
         u.on_floor = true;
-        u.min_depth_ratio = 1.0;
       }
     } else {
       fuse(s, u.r, u.H, u.R, -1.0, &u.nis);
     }
-    u.predicted = f.t_over_d_C1 - u.r;
     return u;
   };
   std::optional<Update> u = update_for(m);
@@ -605,13 +578,8 @@ Outcome Estimator::apply_flow(const FlowSample& m, int64_t key, FilterState& s) 
         s.flow_gated_since_utime = m.utime_to;
       s.flow_gated_last_utime = m.utime_to;
     }
-    // Only a plane at another depth, though: its t/d is the model's scaled (a top nearer the
-    // camera than the terrain, or farther). A motion of its own (a platform moving under the
-    // camera, its features all the front end has) is not the camera's, and the estimate that
-    // followed it would move with the platform: left to the IMU, the flow times out to DEGRADED.
     if (o == Outcome::kGate && std::isfinite(nis) &&
-        m.utime_to - s.flow_gated_since_utime >= run_us &&
-        depth_only(r, u->predicted, u->min_depth_ratio, H, R, s, p.gate_chi2)) {
+        m.utime_to - s.flow_gated_since_utime >= run_us) {
       o = fuse(s, r, H, R * (nis / kChi2Median3Dof), p.gate_chi2);
       if (o == Outcome::kFused) ++s.flow_inflated;
     }
