@@ -537,8 +537,8 @@ Outcome Estimator::apply_flow(const FlowSample& m, int64_t key, FilterState& s) 
         u.nis = nis_floor;
         u.on_floor = true;
       }
-    } else {
-      fuse(s, u.r, u.H, u.R, -1.0, &u.nis);
+    } else if (!m.others.empty()) {
+      fuse(s, u.r, u.H, u.R, -1.0, &u.nis);  // for the choice between the motions below
     }
     return u;
   };

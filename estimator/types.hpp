@@ -7,7 +7,6 @@
 #include <Eigen/Geometry>
 #include <array>
 #include <cstdint>
-#include <optional>
 #include <string>
 #include <vector>
 
@@ -38,6 +37,15 @@ struct BaroSample {
   double pressure_pa = 0.0;
 };
 
+/// Another motion among the front end's outliers (flow_odometry.hpp, FlowSample::others).
+struct FlowMotion {
+  Vector3d t_over_d_C1 = Vector3d::Zero();  ///< [-]
+  Matrix3d cov = Matrix3d::Identity();      ///< [-]
+  int inliers = 0;
+  Matrix3d J_rotation = Matrix3d::Zero();  ///< as FlowSample's [1/rad]
+  Matrix3d J_normal = Matrix3d::Zero();    ///< [-]
+};
+
 /// The flow front end's output for two consecutive frames: the camera's translation between the
 /// exposures at utime_from and utime_to, in the camera frame at utime_from, divided by the distance
 /// d of that camera from the (horizontal) plane below. From the floor-plane homography
@@ -48,15 +56,6 @@ struct BaroSample {
 /// frames, the estimated attitude at the first; Estimator::attitude_at gives the same to first
 /// order). Their errors are then the estimate's attitude errors, and the sensitivities below enter
 /// the flow update's Jacobian (add_input_sensitivities; zero: no dependence).
-/// Another motion among the front end's outliers (flow_odometry.hpp, FlowSample::others).
-struct FlowMotion {
-  Vector3d t_over_d_C1 = Vector3d::Zero();  ///< [-]
-  Matrix3d cov = Matrix3d::Identity();      ///< [-]
-  int inliers = 0;
-  Matrix3d J_rotation = Matrix3d::Zero();  ///< as FlowSample's [1/rad]
-  Matrix3d J_normal = Matrix3d::Zero();    ///< [-]
-};
-
 struct FlowSample {
   int64_t utime_from = 0;
   int64_t utime_to = 0;
@@ -117,7 +116,7 @@ struct Counters {
   /// Flow samples fused with their noise inflated to their innovation, after the gate had refused
   /// the flow for half of health.flow_timeout_s (Estimator::apply_flow).
   int64_t flow_inflated = 0;
-  /// Flow samples fused on the front end's second motion (FlowSample::second), the first's
+  /// Flow samples fused on another motion of the front end's (FlowSample::others), its own
   /// being the one the prediction explained worse.
   int64_t flow_second = 0;
   int64_t baro_resets = 0;  ///< baro offset started over after baro.reset_after_s refused
