@@ -273,7 +273,32 @@ bool PlatformFilter::shows_whole_top(const Track& t, const PlatformMeasurement& 
 bool PlatformFilter::partial_view(const Track& t, const PlatformMeasurement& m) {
   const Vector2d& whole = t.whole;
   if (!(whole.minCoeff() > 0) || !(m.size_m.minCoeff() > 0)) return false;
-  return ((extent(m) - whole).array() < -kPartialViewM).any();
+  const Eigen::Array2d d = extent(m) - whole;
+  // A view wider than the whole top on one side is no part of it: the whole top believed is not
+  // this one's (a cluster seen first), and the view joins the extents that judge it again.
+  return (d < -kPartialViewM).any() && (d <= kPartialViewM).all();
+}
+
+void PlatformFilter::add_extent(Track& t, const PlatformMeasurement& m) {
+  t.extents.push_back(extent(m));
+  if (t.extents.size() > kExtentsKept) t.extents.pop_front();
+  const Vector2d before = t.whole;
+  t.whole = whole_extent(t);
+  forget_centre_of_another_top(t, before);
+}
+
+// The track's centre was fused from the views that matched the whole top believed before; where
+// the whole top is now shorter on a side than that (by more than kPartialViewM), those views were
+// of something else (a cluster beside the top, read first) or of more than the top, and their
+// centre may lie anywhere the two extents reach: the position's variance grows by that reach,
+// so the next view of the whole top places it rather than being refused by the gate against it.
+// A whole top that only grew (the first views were of part of it) keeps the centre: the parts'
+// positions were not fused.
+void PlatformFilter::forget_centre_of_another_top(Track& t, const Vector2d& before) {
+  if (!(before.minCoeff() > 0) || !((t.whole - before).array() < -kPartialViewM).any()) return;
+  const double reach_m = 0.5 * (before.norm() + t.whole.norm());
+  t.P.topLeftCorner<2, 2>() += reach_m * reach_m * Matrix2d::Identity();
+  ++t.n_other_tops;
 }
 
 bool PlatformFilter::larger_than_the_top(const Track& t, const PlatformMeasurement& m) const {
@@ -411,11 +436,7 @@ PlatformFilter::Fused PlatformFilter::fuse(Track& t, const PlatformMeasurement& 
   // after view of them; but a part cut off by the border at a steady offset is seen as steadily,
   // and never becomes the whole top.
   const bool spans_whole = t.whole.minCoeff() > 0 && !partial;
-  if (m.size_m.minCoeff() > 0 && (!cut(m) || spans_whole)) {
-    t.extents.push_back(extent(m));
-    if (t.extents.size() > kExtentsKept) t.extents.pop_front();
-    t.whole = whole_extent(t);
-  }
+  if (m.size_m.minCoeff() > 0 && (!cut(m) || spans_whole)) add_extent(t, m);
   t.top_z_sum += m.p_W.z();
   ++t.n_z;
   // The heave: each vertical velocity is the mean over its interval, so at the interval's middle.
@@ -442,6 +463,10 @@ bool PlatformFilter::update(const PlatformMeasurement& m) {
   if (stale(track_)) reset();
   if (stale(candidate_)) candidate_ = Track{};
   if (larger_than_the_top(track_, m)) {
+    // Wider on one side but shorter on another, the view is not fused, yet it may be the top
+    // and the whole top believed a thin cluster read first: its extent joins the others, and
+    // views of the top that outnumber the cluster's make it the whole top again.
+    if (((extent(m) - track_.whole).array() < -kPartialViewM).any()) add_extent(track_, m);
     refuse(Refusal::kLargerThanTheTop);
     return false;
   }

@@ -23,7 +23,10 @@
 // (the part moves with the whole). A view vision marks as cut by the image's border (its position
 // variance kCutPositionVarM2 or more) counts towards the whole top too once it spans the whole top
 // believed so far; one whose extent is the whole top's has nothing beyond the border, and its
-// position is fused (within kPartialViewM / 2).
+// position is fused (within kPartialViewM / 2). A view wider than the whole top on a side is no
+// part of it and joins the extents too; where they then make the whole top shorter on a side
+// than before, the centre fused on the old one was another object's, and its variance grows
+// (forget_centre_of_another_top).
 // A track is believed (believed()) after min_consistent measurements in a row, each within the
 // gate, over at least kConfirmS: a short burst of wrong measurements (a mismatched frame pair
 // during the search reads as a fast platform) never is. A track not measured for kConfirmS is
@@ -176,6 +179,9 @@ class PlatformFilter {
   int n_consistent() const { return track_.n_consistent; }
   /// Measurements fused as views of part of the top (velocity only).
   int n_partial() const { return n_partial_; }
+  /// Times the track's whole top was judged another than the one its centre was fused on
+  /// (the centre's variance then grown to the two extents' reach).
+  int n_other_tops() const { return track_.n_other_tops; }
 
  private:
   // The filtered velocity's direction (unwrapped) [rad] and the path travelled [m] at a time [us].
@@ -201,6 +207,7 @@ class PlatformFilter {
     int n_consistent = 0;
     std::deque<Vector2d> extents;       // (long, short) of its views (fuse: which ones) [m]
     Vector2d whole = Vector2d::Zero();  // whole_extent(extents)
+    int n_other_tops = 0;               // whole tops given up (forget_centre_of_another_top)
   };
   enum class Fused { kAccepted, kAcceptedPartial, kOutsideGate };
   Fused fuse(Track& t, const PlatformMeasurement& m) const;
@@ -209,6 +216,10 @@ class PlatformFilter {
   static Vector2d whole_extent(const Track& t);
   static bool partial_view(const Track& t, const PlatformMeasurement& m);
   static bool shows_whole_top(const Track& t, const PlatformMeasurement& m);
+  static void forget_centre_of_another_top(Track& t, const Vector2d& before);
+  // Adds a view's extent to the track's, judges the whole top again (whole_extent) and forgets a
+  // centre fused on another top.
+  static void add_extent(Track& t, const PlatformMeasurement& m);
   static bool cut(const PlatformMeasurement& m) {
     return m.cov_p_W.topLeftCorner<2, 2>().diagonal().maxCoeff() >= kCutPositionVarM2;
   }

@@ -455,6 +455,38 @@ TEST(PlatformFilterRegression, ATrackWhoseFirstWholeViewWasAClusterTakesTheTopsV
   EXPECT_LE(f.n_partial(), 2);
 }
 
+TEST(PlatformFilterRegression, AThinClusterTakenForTheWholeTopGivesWayToTheTopsCutViews) {
+  // A deck's 0.48 x 0.30 m top entering the view (cut views of a strip of it), then six
+  // uncut views of a long thin cluster (0.80 x 0.12-0.15 m, its centre 38 cm off) that made the
+  // track believed and became its whole top, then the top itself view after view, marked cut
+  // though it spans the whole top. Judged against the thin cluster, each was part of it (its
+  // 0.48 m side short of 0.80) and never located the top: the track stayed 38 cm off and the
+  // vehicle came down beside the deck.
+  const PlatformPath m = straight_path(0.12);
+  PlatformFilter f{PlatformFilterParams{}};
+  std::mt19937_64 rng(41);
+  double t = kPfInterval;
+  for (; t < 0.6; t += kPfDt) f.update(measure_cut(m, t, rng, Vector2d(0.12, 0.07)));
+  for (const double w : {0.12, 0.15, 0.15, 0.14, 0.15, 0.13}) {
+    auto cluster = measure_sized(m, t, rng, Vector2d(0.80, w));
+    cluster.p_W.head<2>() += Vector2d(0.33, -0.19);
+    f.update(cluster);
+    t += kPfDt;
+  }
+  ASSERT_TRUE(f.believed());
+  const double t_views = t;
+  double err_quarter_second = -1;
+  for (; t < 3; t += kPfDt) {
+    f.update(measure_cut(m, t, rng, Vector2d(0.48, 0.30)));
+    if (err_quarter_second < 0 && t >= t_views + 0.25)  // located within a quarter second
+      err_quarter_second = (f.predict(kPfT0 + int64_t(t * 1e6)).p_W - m.p(t)).norm();
+  }
+  EXPECT_LT(err_quarter_second, 0.03);
+  EXPECT_LT((f.predict(kPfT0 + int64_t(t * 1e6)).p_W - m.p(t)).norm(), 0.02);
+  EXPECT_EQ(f.n_other_tops(), 1);
+  EXPECT_TRUE(f.believed());
+}
+
 TEST(PlatformFilterRegression, ViewsMarkedCutThatSpanTheWholeTopLocateIt) {
   // A track begun on one view of part of a 0.44 x 0.27 m top (0.24 x 0.12 m, its centre 14 cm
   // off, not marked cut), then the whole top view after view, each marked cut (its features
