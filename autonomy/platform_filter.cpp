@@ -290,8 +290,9 @@ void PlatformFilter::add_extent(Track& t, const PlatformMeasurement& m) {
 // The track's centre was fused from the views that matched the whole top believed before; where
 // the whole top is now shorter on a side than that (by more than kPartialViewM), those views were
 // of something else (a cluster beside the top, read first) or of more than the top, and their
-// centre may lie anywhere the two extents reach: the position's variance grows by that reach,
-// so the next view of the whole top places it rather than being refused by the gate against it.
+// centre may lie anywhere the two extents reach: the position's variance grows by that reach
+// squared (half the two diagonals), so the next view of the whole top places it rather than being
+// refused by the gate against it.
 // A whole top that only grew (the first views were of part of it) keeps the centre: the parts'
 // positions were not fused.
 void PlatformFilter::forget_centre_of_another_top(Track& t, const Vector2d& before) {
