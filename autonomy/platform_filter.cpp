@@ -222,6 +222,11 @@ Vector2d extent(const PlatformMeasurement& m) {
   return Vector2d(m.size_m.maxCoeff(), m.size_m.minCoeff());
 }
 
+// Extent a falls short of extent b on a side by more than a view's scatter (kPartialViewM).
+bool shorter_on_a_side(const Vector2d& a, const Vector2d& b) {
+  return ((a - b).array() < -kPartialViewM).any();
+}
+
 }  // namespace
 
 // The whole top's extent (zero: no view yet) [m]: the extent most of the track's latest views
@@ -255,9 +260,8 @@ Vector2d PlatformFilter::whole_extent(const Track& t) {
   for (size_t steps = 0; steps < n; ++steps) {
     const Vector2d w = t.extents[*whole];
     const auto larger = best([&](size_t i) {
-      const Eigen::Array2d d = t.extents[i] - w;
-      return support[i] >= kWholeTopViews && (d >= -kPartialViewM).all() &&
-             (d > kPartialViewM).any();
+      return support[i] >= kWholeTopViews && !shorter_on_a_side(t.extents[i], w) &&
+             shorter_on_a_side(w, t.extents[i]);
     });
     if (!larger) break;
     whole = larger;
@@ -273,10 +277,9 @@ bool PlatformFilter::shows_whole_top(const Track& t, const PlatformMeasurement& 
 bool PlatformFilter::partial_view(const Track& t, const PlatformMeasurement& m) {
   const Vector2d& whole = t.whole;
   if (!(whole.minCoeff() > 0) || !(m.size_m.minCoeff() > 0)) return false;
-  const Eigen::Array2d d = extent(m) - whole;
   // A view wider than the whole top on one side is no part of it: the whole top believed is not
   // this one's (a cluster seen first), and the view joins the extents that judge it again.
-  return (d < -kPartialViewM).any() && (d <= kPartialViewM).all();
+  return shorter_on_a_side(extent(m), whole) && !shorter_on_a_side(whole, extent(m));
 }
 
 void PlatformFilter::add_extent(Track& t, const PlatformMeasurement& m) {
@@ -296,7 +299,7 @@ void PlatformFilter::add_extent(Track& t, const PlatformMeasurement& m) {
 // A whole top that only grew (the first views were of part of it) keeps the centre: the parts'
 // positions were not fused.
 void PlatformFilter::forget_centre_of_another_top(Track& t, const Vector2d& before) {
-  if (!(before.minCoeff() > 0) || !((t.whole - before).array() < -kPartialViewM).any()) return;
+  if (!(before.minCoeff() > 0) || !shorter_on_a_side(t.whole, before)) return;
   const double reach_m = 0.5 * (before.norm() + t.whole.norm());
   t.P.topLeftCorner<2, 2>() += reach_m * reach_m * Matrix2d::Identity();
   ++t.n_other_tops;
@@ -467,7 +470,7 @@ bool PlatformFilter::update(const PlatformMeasurement& m) {
     // Wider on one side but shorter on another, the view is not fused, yet it may be the top
     // and the whole top believed a thin cluster read first: its extent joins the others, and
     // views of the top that outnumber the cluster's make it the whole top again.
-    if (((extent(m) - track_.whole).array() < -kPartialViewM).any()) add_extent(track_, m);
+    if (shorter_on_a_side(extent(m), track_.whole)) add_extent(track_, m);
     refuse(Refusal::kLargerThanTheTop);
     return false;
   }
