@@ -168,6 +168,8 @@ class Autonomy {
   /// The vantage point refinement flies to (zero outside REFINEMENT).
   Vector3d current_vantage() const;
   int retries() const { return retries_; }
+  /// Why the phase is what it is (AutonomyStatus::reason).
+  const std::string& reason() const { return reason_; }
   /// Whether the first pose has been seen (and the start decided: on the ground, or flying).
   bool started() const { return started_; }
   /// Started while the vehicle was flying (or with a restored KILL): take-off and --auto-go

@@ -182,6 +182,8 @@ class PlatformFilter {
   /// Times the track's whole top was judged another than the one its centre was fused on
   /// (the centre's variance then grown to the two extents' reach).
   int n_other_tops() const { return track_.n_other_tops; }
+  /// The track's whole top (long, short side) [m]; zero before its first measured extent.
+  Vector2d whole_top() const { return track_.whole; }
 
  private:
   // The filtered velocity's direction (unwrapped) [rad] and the path travelled [m] at a time [us].

@@ -133,8 +133,8 @@ int main(int argc, char** argv) try {
   cfg.onboard_estimate = no_mocap;
   cfg.script = [&](const Autonomy& a, double, ScriptActions&) {
     if (a.phase() != phase)
-      std::printf("# phase %s -> %s (retries %d)\n", phase_name(phase), phase_name(a.phase()),
-                  a.retries());
+      std::printf("# phase %s -> %s (retries %d): %s\n", phase_name(phase), phase_name(a.phase()),
+                  a.retries(), a.reason().c_str());
     phase = a.phase();
     n_waypoints = a.estimator().n();
     const auto& pf = a.platform_filter();
@@ -265,6 +265,10 @@ int main(int argc, char** argv) try {
     std::printf(" | filter fused %d run %d refused %d believed %d (gate %d order %d size %d)",
                 filter.fused, filter.run, filter.refused, filter.believed ? 1 : 0, filter.gate,
                 filter.order, filter.size);
+    if (filter.copy)
+      std::printf(" partial %d other tops %d whole %.2f x %.2f", filter.copy->n_partial(),
+                  filter.copy->n_other_tops(), filter.copy->whole_top().x(),
+                  filter.copy->whole_top().y());
     // What autonomy follows: the filter's prediction at this frame's time (before the frame)
     // against the truth.
     if (filter.copy && filter.copy->initialised() && moved) {
