@@ -60,6 +60,9 @@ constexpr double kCoarseSearchPx = 5.0;
 /// A rectangle turned 45 degrees fills half its bounding box; under that, the region is a
 /// floor's grains joined.
 constexpr double kMinBoxFill = 0.45;
+/// OpenCV's MSER leaves the image's outermost ring of pixels out of every region: a region the
+/// border cuts ends this far inside it [quarter-resolution px].
+constexpr int kMserRing = 1;
 /// Regions whose centres lie this close are one region at several of MSER's thresholds [px].
 constexpr double kSamePlacePx = 32.0;
 
@@ -178,16 +181,21 @@ cv::Point2f to_cv(const Vector2d& u) {
 }
 
 /// The image's local texture at the quarter resolution: the grey level's standard deviation
-/// over each kScale x kScale block, its variance smoothed over a block either way, in steps of
-/// an eighth of a grey level. Over a busy floor a top of one grey level is a plain region of it
-/// where its mean grey need not stand out: the floor's dark grains are as dark as the top.
+/// over a window a block either way of each kScale x kScale block (the blocks' means and mean
+/// squares smoothed before they are differenced, so that the differences between blocks count),
+/// in steps of an eighth of a grey level. Over a busy floor a top of one grey level is a plain
+/// region of it where its mean grey need not stand out: the floor's dark grains are as dark as
+/// the top. A grain larger than a block (a coarse floor seen close) varies little inside one,
+/// as little as the sensor's noise varies a plain top in dim light, and shows only between
+/// blocks.
 cv::Mat texture_map(const cv::Mat& gray, const cv::Size& small) {
   cv::Mat f, mean, mean_sq;
   gray.convertTo(f, CV_32F);
   cv::resize(f, mean, small, 0, 0, cv::INTER_AREA);
   cv::resize(f.mul(f), mean_sq, small, 0, 0, cv::INTER_AREA);
-  cv::Mat var = cv::max(mean_sq - mean.mul(mean), 0.0);
-  cv::GaussianBlur(var, var, cv::Size(0, 0), 1.0);
+  cv::GaussianBlur(mean, mean, cv::Size(0, 0), 1.0);
+  cv::GaussianBlur(mean_sq, mean_sq, cv::Size(0, 0), 1.0);
+  const cv::Mat var = cv::max(mean_sq - mean.mul(mean), 0.0);
   cv::Mat sd, out;
   cv::sqrt(var, sd);
   sd.convertTo(out, CV_8U, kTextureScale);
@@ -248,14 +256,41 @@ std::optional<std::vector<Vector2d>> refined(const cv::Mat& g, const std::vector
   return corners;
 }
 
+/// The direction of a region's sides [rad, modulo a quarter turn]: the mean of four times the
+/// angle of its outline's normals (the gradient of its mask smoothed over a pixel), weighted by
+/// the gradient's strength, so that a rectangle's four sides agree whatever their lengths. The
+/// second moments' axes are no such direction for a square (its moments are alike along every
+/// direction), and for a nearly square top they follow the grains joined at its rim.
+double side_direction(const std::vector<cv::Point>& region) {
+  const cv::Rect box = cv::boundingRect(region);
+  constexpr int kPad = 3;  // the smoothed mask's slope stays inside
+  cv::Mat mask(box.height + 2 * kPad, box.width + 2 * kPad, CV_32F, cv::Scalar(0));
+  for (const auto& p : region) mask.at<float>(p.y - box.y + kPad, p.x - box.x + kPad) = 1.0f;
+  cv::GaussianBlur(mask, mask, cv::Size(0, 0), 1.0);
+  cv::Mat gx, gy;
+  cv::Sobel(mask, gx, CV_32F, 1, 0);
+  cv::Sobel(mask, gy, CV_32F, 0, 1);
+  double c4 = 0, s4 = 0;  // sum of |g| e^{4 i angle}: (gx + i gy)^4 / |g|^3
+  for (int y = 0; y < mask.rows; ++y)
+    for (int x = 0; x < mask.cols; ++x) {
+      const double u = gx.at<float>(y, x), v = gy.at<float>(y, x), m2 = u * u + v * v;
+      if (m2 < 1e-12) continue;
+      const double re = u * u - v * v, im = 2 * u * v, m3 = m2 * std::sqrt(m2);
+      c4 += (re * re - im * im) / m3;
+      s4 += 2 * re * im / m3;
+    }
+  return 0.25 * std::atan2(s4, c4);
+}
+
 /// Stage 1's quadrilateral of one region clear of the border at the quarter resolution, in
 /// full-resolution pixels; nullopt where the region is not a rectangle's (see outline.hpp).
 std::optional<std::vector<Vector2d>> region_quad(const std::vector<cv::Point>& region) {
   // A level top under a camera that looks down is a rectangle in the image (a similarity of
-  // it), kept near one by the vehicle's tilt. Its sides from the region's second moments (a
-  // uniform rectangle's variance along a side of length a is a^2 / 12): the floor's dark grains
-  // that join the region at its rim move them little, where they would widen the region's
-  // bounding rectangle. The sides are refined at full resolution after.
+  // it), kept near one by the vehicle's tilt. Its sides' direction from its outline
+  // (side_direction), their lengths from the region's second moments along them (a uniform
+  // rectangle's variance along a side of length a is a^2 / 12): the floor's dark grains that
+  // join the region at its rim move them little, where they would widen the region's bounding
+  // rectangle. The sides are refined at full resolution after.
   const double n = static_cast<double>(region.size());
   Vector2d mean = Vector2d::Zero();
   for (const auto& p : region) mean += Vector2d(p.x, p.y);
@@ -266,10 +301,11 @@ std::optional<std::vector<Vector2d>> region_quad(const std::vector<cv::Point>& r
     cov += d * d.transpose();
   }
   cov /= n;
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(cov);
-  const Vector2d half(std::sqrt(3.0 * std::max(eig.eigenvalues()(0), 0.0)),
-                      std::sqrt(3.0 * std::max(eig.eigenvalues()(1), 0.0)));
-  const Eigen::Matrix2d axes = eig.eigenvectors();
+  const double t = side_direction(region);
+  Eigen::Matrix2d axes;
+  axes << std::cos(t), -std::sin(t), std::sin(t), std::cos(t);
+  const Vector2d half(std::sqrt(3.0 * std::max(axes.col(0).dot(cov * axes.col(0)), 0.0)),
+                      std::sqrt(3.0 * std::max(axes.col(1).dot(cov * axes.col(1)), 0.0)));
   if (half.minCoeff() < 1.0) return std::nullopt;
   int inside = 0;
   for (const auto& p : region) {
@@ -661,7 +697,8 @@ std::vector<Outline> featureless_outlines(const cv::Mat& gray, const Corresponde
         std::any_of(
             places.begin(), places.end(),
             [&](const Vector2d& p) { return (p - place).norm() * kScale < kSamePlacePx; }) ||
-        box.x <= 0 || box.y <= 0 || box.br().x >= small.width || box.br().y >= small.height)
+        box.x <= kMserRing || box.y <= kMserRing || box.br().x >= small.width - kMserRing ||
+        box.br().y >= small.height - kMserRing)
       continue;
     if (auto q = region_quad(regions[i])) {
       quads.push_back(std::move(*q));
