@@ -28,6 +28,12 @@ constexpr int kMserDelta = 5;
 /// The smallest region measured [full-resolution px]: a top under about 40 px across gives
 /// its centre to no better than the features' rectangle would.
 constexpr double kMinAreaPx = 1500.0;
+/// The least side of an outline measured, refined [full-resolution px], half the side of
+/// kMinAreaPx's square: a plain region narrower is a stroke of the floor's pattern (a painted
+/// line, a gap between boards), as plain as a top and as long, where a top to land on is several
+/// times wider at any search height. The region's own width is no measure of it: the floor's
+/// smooth grains that join a stroke's region at its rim widen it.
+constexpr double kMinSidePx = 20.0;
 /// A top's region fills the rectangle of its moments and lies in it, but for the floor's grains
 /// joined at its rim and corners the quarter resolution rounds; a floor's blotch does not.
 constexpr double kMinFill = 0.85;
@@ -320,6 +326,12 @@ std::optional<std::vector<Vector2d>> region_quad(const std::vector<cv::Point>& r
   // A quarter-resolution pixel x covers full pixels kScale x .. kScale x + kScale - 1.
   for (const auto& p : quad) q.push_back(kScale * p + Vector2d::Constant(0.5 * (kScale - 1)));
   return q;
+}
+
+double shortest_side(const std::vector<Vector2d>& q) {
+  double s = std::numeric_limits<double>::infinity();
+  for (size_t i = 0; i < q.size(); ++i) s = std::min(s, (q[(i + 1) % q.size()] - q[i]).norm());
+  return s;
 }
 
 int matches_inside(const Correspondences& c, const std::vector<Vector2d>& q) {
@@ -709,7 +721,8 @@ std::vector<Outline> featureless_outlines(const cv::Mat& gray, const Corresponde
     if (found.size() == kMaxOutlines) break;
     if (matches_inside(c, q) >= params.landing.min_platform_inliers) continue;
     const bool dark = darker_inside(gray, q);
-    if (auto r = refined(gray, q, dark)) found.push_back({std::move(*r), dark});
+    if (auto r = refined(gray, q, dark); r && shortest_side(*r) >= kMinSidePx)
+      found.push_back({std::move(*r), dark});
   }
   return found;
 }

@@ -23,7 +23,9 @@
 //   2. featureless: fewer than min_platform_inliers of the frame's matches inside it (a top
 //      with features is the planes' to find or to refuse, never this stage's);
 //   3. edges: each side refined at full resolution to the line through the strongest step of
-//      grey level across it, the corners where adjacent lines meet;
+//      grey level across it, the corners where adjacent lines meet; an outline narrower than
+//      a top to land on can be from the search height (kMinSidePx) is a stroke of the floor's
+//      pattern, not measured;
 //   4. height, side by side (h up to max_height_m, or as far as the reference can show the
 //      side: height_search_range): the plane z = floor_z_m + h that carries the side onto the
 //      reference image (motion capture's poses: camera 2's rays intersected with the plane,

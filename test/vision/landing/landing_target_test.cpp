@@ -1019,6 +1019,30 @@ TEST(OutlineTop, ATopOnACoarseGrainedFloorIsFoundByItsPlainness) {
   EXPECT_GE(found_views, 2);
 }
 
+// A plain stroke across a busy floor (a painted line, a gap between boards; here 1.5 cm wide
+// and 40 cm long, some 6 px across from the search height) is as plain as a top and as long,
+// and no top: it gives no candidate, where the same stroke 8 cm wide does. Both run along the
+// image's columns, filling their bounding boxes as a top does (turned, a long stroke fills too
+// little of its box to be a candidate at all).
+TEST(OutlineTop, APlainStrokeAcrossTheFloorIsNoCandidate) {
+  BoxScene stroke = slate_on_granite();
+  stroke.yaw = 0.0;
+  stroke.length = 0.40;
+  stroke.width = 0.015;
+  stroke.height = 0.002;
+  BoxScene band = stroke;
+  band.width = 0.08;
+  int bands_found = 0;
+  for (uint64_t seed = 1; seed <= 3; ++seed) {
+    PipelineParams params;
+    const BoxViews b = box_views(stroke, seed, 0, 0, std::nullopt, 0.0, 140, /*n_top=*/0);
+    EXPECT_TRUE(featureless_outlines(b.image_2, b.view.c, params).empty()) << "seed " << seed;
+    const BoxViews w = box_views(band, seed, 0, 0, std::nullopt, 0.0, 140, /*n_top=*/0);
+    bands_found += !featureless_outlines(w.image_2, w.view.c, params).empty();
+  }
+  EXPECT_GE(bands_found, 2);
+}
+
 // A square top has the same second moments along every direction: its outline's sides come
 // from the directions of its rim, and are measured along the top's edges (a view whose
 // reference does not show a side is refused as such).
