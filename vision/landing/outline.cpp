@@ -628,6 +628,80 @@ int top_matches_beyond(const Outline& o, const Correspondences& c, const PlaneMa
   return n;
 }
 
+/// Where the image just beyond a side is read for its motion [px past the outline]: past the
+/// band of a side face next to the rim (kFaceBandPx), three rows 3 px apart.
+constexpr double kOutsideOffsetPx = kFaceBandPx + 2.0;
+constexpr int kOutsideRows = 3;
+constexpr double kOutsideRowStepPx = 3.0;
+/// The outside must vary along the side for its motion to be read: a plain floor beside a top,
+/// or a plain top beside a print, reads alike on both planes [grey levels, standard deviation].
+constexpr double kMinOutsideTexture = 6.0;
+/// The outside moves with the top where the top's plane carries it onto the reference with this
+/// correlation, and leaves at most this share of what the floor's plane leaves uncorrelated: a
+/// rim's outside is the floor, seen through a parallax of several pixels at least
+/// (kMinSideParallaxPx), which no texture of that scale survives unchanged; a smooth one changes
+/// little, but less under the plane it lies in.
+constexpr double kMinOutsideCorrelation = 0.6;
+constexpr double kMaxOutsideResidualShare = 0.5;
+
+/// Pearson's correlation of a and b; 0 where either is flat.
+double correlation(const std::vector<double>& a, const std::vector<double>& b) {
+  const double n = static_cast<double>(a.size());
+  double ma = 0, mb = 0;
+  for (size_t k = 0; k < a.size(); ++k) {
+    ma += a[k];
+    mb += b[k];
+  }
+  ma /= n;
+  mb /= n;
+  double sab = 0, saa = 0, sbb = 0;
+  for (size_t k = 0; k < a.size(); ++k) {
+    sab += (a[k] - ma) * (b[k] - mb);
+    saa += (a[k] - ma) * (a[k] - ma);
+    sbb += (b[k] - mb) * (b[k] - mb);
+  }
+  return saa > 0 && sbb > 0 ? sab / std::sqrt(saa * sbb) : 0.0;
+}
+
+/// Stage 6, by the outline's own sides: how many sides' outsides (read beyond a side face's
+/// band) the plane z_top carries onto the reference, and the floor's does not. A print's
+/// outside is the top it is printed on; a top's is the floor, below it.
+int sides_with_top_outside(const Outline& o, const cv::Mat& gray_1, const cv::Mat& gray_2,
+                           const PlaneMap& map, double z_top, double z_floor) {
+  int n = 0;
+  for (size_t i = 0; i < 4; ++i) {
+    const Vector2d a = o.corners[i], b = o.corners[(i + 1) % 4];
+    const Vector2d nrm = outward(o.corners, i);
+    std::vector<double> v2, v_top, v_floor;
+    for (int r = 0; r < kOutsideRows; ++r)
+      for (int k = 0; k < 2 * kSideSamples; ++k) {
+        const Vector2d u = a + (0.1 + 0.8 * k / (2 * kSideSamples - 1.0)) * (b - a) +
+                           (kOutsideOffsetPx + r * kOutsideRowStepPx) * nrm;
+        const Vector3d dir = map.dir_W(u);
+        const auto u_top = map.to_1(dir, z_top), u_floor = map.to_1(dir, z_floor);
+        double g2 = 0, g_top = 0, g_floor = 0;
+        if (!u_top || !u_floor || !bilinear_inside(gray_2, u, &g2) ||
+            !bilinear_inside(gray_1, *u_top, &g_top) || !bilinear_inside(gray_1, *u_floor, &g_floor))
+          continue;
+        v2.push_back(g2);
+        v_top.push_back(g_top);
+        v_floor.push_back(g_floor);
+      }
+    if (v2.size() < static_cast<size_t>(kOutsideRows * kSideSamples)) continue;  // half unseen
+    double m = 0, m2 = 0;
+    for (const double v : v2) {
+      m += v;
+      m2 += v * v;
+    }
+    m /= static_cast<double>(v2.size());
+    if (m2 / static_cast<double>(v2.size()) - m * m < kMinOutsideTexture * kMinOutsideTexture)
+      continue;
+    const double c_top = correlation(v2, v_top), c_floor = correlation(v2, v_floor);
+    n += c_top >= kMinOutsideCorrelation && 1.0 - c_top <= kMaxOutsideResidualShare * (1.0 - c_floor);
+  }
+  return n;
+}
+
 /// The target (stage 5) of the top whose corners at height h are P: centre, sides (long
 /// first), heading of the long sides, the outline; kPartialView where a corner lies within
 /// edge_margin_px of the image's border.
@@ -779,7 +853,8 @@ TargetOutcome top_of_outline(const Outline& o, const Correspondences& c, const c
   if (!top_corners(o, side_z, map, z0 + h, &P)) return refuse(Reason::kDecompositionFailed);
   TargetOutcome out = top_estimate(o, P, h, c, map, L);
   if (out.reason == Reason::kOk &&
-      top_matches_beyond(o, c, map, z0 + h, z0, params.homography.threshold_px) > 0)
+      (top_matches_beyond(o, c, map, z0 + h, z0, params.homography.threshold_px) > 0 ||
+       sides_with_top_outside(o, gray_1, gray_2, map, z0 + h, z0) > 0))
     out.reason = Reason::kTopRunsOn;
   return out;
 }

@@ -46,8 +46,10 @@
 //   6. a print, not the top: a plain panel printed on a larger top (a photograph's dark square)
 //      has an outline at the top's height too. Where a match beyond the outline (clear of the
 //      band of a side face next to the rim, within the outline's size) is carried onto its
-//      reference pixel by the plane at that height and not by the floor's, the top runs on past
-//      the outline: located, its extent unseen [kTopRunsOn].
+//      reference pixel by the plane at that height and not by the floor's, or where the image
+//      just beyond a side (past that band) moves with the plane at that height rather than the
+//      floor's (a rim's outside is the floor, a print's the top), the top runs on past the
+//      outline: located, its extent unseen [kTopRunsOn].
 //
 // A mark or a shadow on the floor is such a region too; its outline moves with the floor (h
 // under min_height_m: kOutlineOnFloor). An outline the reference does not show at any height

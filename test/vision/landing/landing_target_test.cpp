@@ -1186,7 +1186,10 @@ TEST(OutlineTop, AnOutlineNoSideOfWhichTellsAHeightIsPlacedNowhere) {
 // the panel): the top's plane carries them onto the reference and the floor's does not, so the
 // top runs on past the panel. Located (the panel lies on the top), its extent unseen
 // [kTopRunsOn]; never measured as the panel. Without those matches the views alone do not tell
-// the panel from a top, and it is measured as one.
+// the panel from a top by the matches; the panel's own sides do where the top's grain runs on
+// past them: beyond two of them the top's plane carries the image onto the reference, where
+// beyond a top's rim the floor's does (sides_with_top_outside). On a plain top nothing
+// beyond the panel's sides moves, and it is measured as a top.
 TEST(OutlineTop, APanelPrintedOnALargerTopIsNotTheTop) {
   BoxScene scene = slate_on_granite();
   scene.length = 0.40;
@@ -1198,8 +1201,13 @@ TEST(OutlineTop, APanelPrintedOnALargerTopIsNotTheTop) {
     BoxViews b = box_views(scene, seed, 0, 0, std::nullopt, 0.0, 140, /*n_top=*/0);
     PipelineParams params;
     const TargetOutcome alone = find_landing_target(b.view.c, params, b.image_1, b.image_2);
-    ASSERT_EQ(alone.reason, Reason::kOk) << "seed " << seed << ": " << to_string(alone.reason);
-    EXPECT_NEAR(alone.estimate.size_m[0], 0.2, 0.02) << "seed " << seed;  // the panel
+    EXPECT_EQ(alone.reason, Reason::kTopRunsOn) << "seed " << seed << ": " << to_string(alone.reason);
+    BoxScene plain = scene;
+    plain.top_grain = 1;
+    const BoxViews p = box_views(plain, seed, 0, 0, std::nullopt, 0.0, 140, /*n_top=*/0);
+    const TargetOutcome on_plain = find_landing_target(p.view.c, params, p.image_1, p.image_2);
+    ASSERT_EQ(on_plain.reason, Reason::kOk) << "seed " << seed << ": " << to_string(on_plain.reason);
+    EXPECT_NEAR(on_plain.estimate.size_m[0], 0.2, 0.02) << "seed " << seed;  // the panel
     std::mt19937_64 rng(seed);
     std::uniform_real_distribution<double> U(-1, 1);
     for (int k = 0; k < 8;) {
