@@ -681,7 +681,8 @@ int sides_with_top_outside(const Outline& o, const cv::Mat& gray_1, const cv::Ma
         const auto u_top = map.to_1(dir, z_top), u_floor = map.to_1(dir, z_floor);
         double g2 = 0, g_top = 0, g_floor = 0;
         if (!u_top || !u_floor || !bilinear_inside(gray_2, u, &g2) ||
-            !bilinear_inside(gray_1, *u_top, &g_top) || !bilinear_inside(gray_1, *u_floor, &g_floor))
+            !bilinear_inside(gray_1, *u_top, &g_top) ||
+            !bilinear_inside(gray_1, *u_floor, &g_floor))
           continue;
         v2.push_back(g2);
         v_top.push_back(g_top);
@@ -697,7 +698,8 @@ int sides_with_top_outside(const Outline& o, const cv::Mat& gray_1, const cv::Ma
     if (m2 / static_cast<double>(v2.size()) - m * m < kMinOutsideTexture * kMinOutsideTexture)
       continue;
     const double c_top = correlation(v2, v_top), c_floor = correlation(v2, v_floor);
-    n += c_top >= kMinOutsideCorrelation && 1.0 - c_top <= kMaxOutsideResidualShare * (1.0 - c_floor);
+    n += c_top >= kMinOutsideCorrelation &&
+         1.0 - c_top <= kMaxOutsideResidualShare * (1.0 - c_floor);
   }
   return n;
 }

@@ -1201,12 +1201,14 @@ TEST(OutlineTop, APanelPrintedOnALargerTopIsNotTheTop) {
     BoxViews b = box_views(scene, seed, 0, 0, std::nullopt, 0.0, 140, /*n_top=*/0);
     PipelineParams params;
     const TargetOutcome alone = find_landing_target(b.view.c, params, b.image_1, b.image_2);
-    EXPECT_EQ(alone.reason, Reason::kTopRunsOn) << "seed " << seed << ": " << to_string(alone.reason);
+    EXPECT_EQ(alone.reason, Reason::kTopRunsOn)
+        << "seed " << seed << ": " << to_string(alone.reason);
     BoxScene plain = scene;
     plain.top_grain = 1;
     const BoxViews p = box_views(plain, seed, 0, 0, std::nullopt, 0.0, 140, /*n_top=*/0);
     const TargetOutcome on_plain = find_landing_target(p.view.c, params, p.image_1, p.image_2);
-    ASSERT_EQ(on_plain.reason, Reason::kOk) << "seed " << seed << ": " << to_string(on_plain.reason);
+    ASSERT_EQ(on_plain.reason, Reason::kOk)
+        << "seed " << seed << ": " << to_string(on_plain.reason);
     EXPECT_NEAR(on_plain.estimate.size_m[0], 0.2, 0.02) << "seed " << seed;  // the panel
     std::mt19937_64 rng(seed);
     std::uniform_real_distribution<double> U(-1, 1);
