@@ -644,7 +644,8 @@ constexpr double kMinOutsideTexture = 6.0;
 constexpr double kMinOutsideCorrelation = 0.6;
 constexpr double kMaxOutsideResidualShare = 0.5;
 
-/// Pearson's correlation of a and b; 0 where either is flat.
+/// Pearson's correlation of a and b; 0 where either is flat (cv::matchTemplate's
+/// TM_CCOEFF_NORMED gives 1 for a flat template, which would read a plain outside as moving).
 double correlation(const std::vector<double>& a, const std::vector<double>& b) {
   const double n = static_cast<double>(a.size());
   double ma = 0, mb = 0;
