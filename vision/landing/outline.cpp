@@ -1,11 +1,12 @@
 // Landing, a top without features found by its outline (see outline.hpp).
 #include "vision/landing/outline.hpp"
 
-#include <Eigen/Eigenvalues>
+#include <Eigen/Core>
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
 #include <utility>
