@@ -100,10 +100,10 @@ std::optional<Vector2d> meet(const Line2& a, const Line2& b) {
   return a.point + t * a.dir;
 }
 
-/// Sample k of kSideSamples along the side from a to b, between 10 and 90 % of it (clear of the
+/// Sample k of n along the side from a to b, between 10 and 90 % of it (clear of the
 /// corners' rounding).
-Vector2d side_sample(const Vector2d& a, const Vector2d& b, int k) {
-  return a + (0.1 + 0.8 * k / (kSideSamples - 1.0)) * (b - a);
+Vector2d side_sample(const Vector2d& a, const Vector2d& b, int k, int n = kSideSamples) {
+  return a + (0.1 + 0.8 * k / (n - 1.0)) * (b - a);
 }
 
 Vector2d centroid(const std::vector<Vector2d>& q) {
@@ -677,7 +677,7 @@ int sides_with_top_outside(const Outline& o, const cv::Mat& gray_1, const cv::Ma
     std::vector<double> v2, v_top, v_floor;
     for (int r = 0; r < kOutsideRows; ++r)
       for (int k = 0; k < 2 * kSideSamples; ++k) {
-        const Vector2d u = a + (0.1 + 0.8 * k / (2 * kSideSamples - 1.0)) * (b - a) +
+        const Vector2d u = side_sample(a, b, k, 2 * kSideSamples) +
                            (kOutsideOffsetPx + r * kOutsideRowStepPx) * nrm;
         const Vector3d dir = map.dir_W(u);
         const auto u_top = map.to_1(dir, z_top), u_floor = map.to_1(dir, z_floor);
@@ -691,14 +691,9 @@ int sides_with_top_outside(const Outline& o, const cv::Mat& gray_1, const cv::Ma
         v_floor.push_back(g_floor);
       }
     if (v2.size() < static_cast<size_t>(kOutsideRows * kSideSamples)) continue;  // half unseen
-    double m = 0, m2 = 0;
-    for (const double v : v2) {
-      m += v;
-      m2 += v * v;
-    }
-    m /= static_cast<double>(v2.size());
-    if (m2 / static_cast<double>(v2.size()) - m * m < kMinOutsideTexture * kMinOutsideTexture)
-      continue;
+    cv::Scalar mean, sd;
+    cv::meanStdDev(v2, mean, sd);
+    if (sd[0] < kMinOutsideTexture) continue;
     const double c_top = correlation(v2, v_top), c_floor = correlation(v2, v_floor);
     n += c_top >= kMinOutsideCorrelation &&
          1.0 - c_top <= kMaxOutsideResidualShare * (1.0 - c_floor);
