@@ -169,6 +169,8 @@ const char* target_reason_name(int8_t reason) {
       return "featureless outline too faint to place";
     case target_t::REASON_TOP_RUNS_ON:
       return "top runs on past its features or outline";
+    case target_t::REASON_TOP_TOO_SMALL:
+      return "featureless outline narrower than the gear";
   }
   return "unknown";
 }

@@ -1,5 +1,7 @@
 #include "vision/params.hpp"
 
+#include <cmath>
+
 namespace alight::vision {
 
 const ParamSchema<StarParams>& StarParams::schema() {
@@ -425,6 +427,12 @@ void NodeParams::validate() const { schema().validate(*this); }
 NodeParams load_node_params(const ParamNode& root) {
   NodeParams p;
   if (const auto n = root.optional_child("vision")) NodeParams::schema().read(*n, p);
+  if (const auto a = root.optional_child("autonomy"))
+    if (const auto l = a->optional_child("landing")) {
+      double& gear = p.pipeline.landing.gear_footprint_m;
+      l->read("gear_footprint_m", gear);
+      l->check(std::isfinite(gear) && gear > 0, "gear_footprint_m", "must be finite and > 0");
+    }
   return p;
 }
 

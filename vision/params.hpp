@@ -125,6 +125,12 @@ struct LandingParams {
   // Beyond the paper: frames smeared by the camera's motion are not used (motion_blur.hpp).
   double max_motion_blur_px = 8.0;
   double assumed_exposure_s = 0.01;
+  /// The vehicle's landing gear, square, this wide [m]: not a key of vision's but the vehicle
+  /// file's autonomy.landing.gear_footprint_m (load_node_params), declared there once. A
+  /// featureless outline narrower than the gear is no top to land on (outline.hpp); autonomy
+  /// adds its fit margin to the converged estimate, so the bound here leaves room for a single
+  /// frame's error on a top that does fit.
+  double gear_footprint_m = 0.15;
   static const ParamSchema<LandingParams>& schema();
   void validate() const;
 };
@@ -213,7 +219,8 @@ struct NodeParams {
 };
 
 /// Reads the `vision:` section of a vehicle file (absent: the defaults; missing keys keep their
-/// defaults; unknown keys are an error).
+/// defaults; unknown keys are an error), and the gear's footprint from its `autonomy.landing`
+/// section (LandingParams::gear_footprint_m; a ParamError naming the key unless finite and > 0).
 NodeParams load_node_params(const ParamNode& vehicle_root);
 NodeParams load_node_params(const std::string& vehicle_file);
 

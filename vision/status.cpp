@@ -82,6 +82,8 @@ const char* to_string(Reason r) {
       return "featureless outline too faint to place";
     case Reason::kTopRunsOn:
       return "top runs on past its features or outline";
+    case Reason::kTopTooSmall:
+      return "featureless outline narrower than the gear";
   }
   return "unknown";
 }

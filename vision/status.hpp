@@ -56,6 +56,7 @@ enum class Reason : int8_t {
   kOutlineSilent = 37,     ///< landing: a featureless outline none of whose sides tells a height
   kTopRunsOn = 38,  ///< landing: seen in part, the top running on past its features (rim.hpp)
                     ///< or past a featureless outline printed on it (outline.hpp)
+  kTopTooSmall = 39,  ///< landing: a featureless outline narrower than the vehicle's gear
 };
 
 const char* to_string(Reason r);

@@ -165,5 +165,24 @@ TEST(VisionParamsTest, WithoutAVisionSectionTheDefaultsApply) {
   EXPECT_EQ(p.max_pose_wait_s, NodeParams{}.max_pose_wait_s);
 }
 
+// The gear's footprint is autonomy's key, declared there once; the vision reads it from the
+// same file (the least top an outline may be, outline.hpp), and no vision key sets it.
+TEST(VisionParamsTest, TheGearFootprintIsReadFromAutonomysLandingSection) {
+  EXPECT_EQ(load_node_params(ParamNode::from_string("vision: {}\n", "v.yaml"))
+                .pipeline.landing.gear_footprint_m,
+            LandingParams{}.gear_footprint_m);
+  const NodeParams p = load_node_params(
+      ParamNode::from_string("autonomy: {landing: {gear_footprint_m: 0.3}}\n", "vehicle.yaml"));
+  EXPECT_EQ(p.pipeline.landing.gear_footprint_m, 0.3);
+  for (const std::string bad : {"0", "-0.1", ".nan", ".inf"}) {
+    const ParamError e = vision_error("autonomy: {landing: {gear_footprint_m: " + bad + "}}\n");
+    EXPECT_EQ(e.key(), "autonomy.landing.gear_footprint_m") << bad;
+    EXPECT_EQ(e.file(), "vehicle.yaml") << bad;
+  }
+  const ParamError e = vision_error("vision: {landing: {gear_footprint_m: 0.3}}\n");
+  EXPECT_EQ(e.key(), "vision.landing.gear_footprint_m");
+  EXPECT_NE(std::string(e.what()).find("unknown key"), std::string::npos) << e.what();
+}
+
 }  // namespace
 }  // namespace alight::vision

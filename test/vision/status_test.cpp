@@ -50,11 +50,12 @@ TEST(StatusTest, ReasonValuesAreTheTargetMessageConstants) {
   EXPECT_EQ(int(Reason::kOutlineUnmatched), T::REASON_OUTLINE_UNMATCHED);
   EXPECT_EQ(int(Reason::kOutlineSilent), T::REASON_OUTLINE_SILENT);
   EXPECT_EQ(int(Reason::kTopRunsOn), T::REASON_TOP_RUNS_ON);
+  EXPECT_EQ(int(Reason::kTopTooSmall), T::REASON_TOP_TOO_SMALL);
 }
 
 TEST(StatusTest, EveryReasonHasItsOwnName) {
   std::set<std::string> names;
-  for (int r = 0; r <= alight::target_t::REASON_TOP_RUNS_ON; ++r) {
+  for (int r = 0; r <= alight::target_t::REASON_TOP_TOO_SMALL; ++r) {
     const std::string name = to_string(static_cast<Reason>(r));
     EXPECT_NE(name, "unknown") << r;
     EXPECT_TRUE(names.insert(name).second) << r << ": " << name;

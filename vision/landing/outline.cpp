@@ -851,6 +851,14 @@ TargetOutcome top_of_outline(const Outline& o, const Correspondences& c, const c
   std::array<Vector3d, 4> P;
   if (!top_corners(o, side_z, map, z0 + h, &P)) return refuse(Reason::kDecompositionFailed);
   TargetOutcome out = top_estimate(o, P, h, c, map, L);
+  // No gear stands on a top narrower than itself, whatever the region is; on a coarse floor a
+  // patch of the pattern that a chance agreement of its grains placed above the floor is such a
+  // region. It is whole in view (stage 1 leaves out regions the border cuts): its width is
+  // measured, not a lower bound.
+  if (out.estimate.size_m[1] < L.gear_footprint_m) {
+    out.reason = Reason::kTopTooSmall;
+    return out;
+  }
   if (out.reason == Reason::kOk &&
       (top_matches_beyond(o, c, map, z0 + h, z0, params.homography.threshold_px) > 0 ||
        sides_with_top_outside(o, gray_1, gray_2, map, z0 + h, z0) > 0))

@@ -42,7 +42,9 @@
 //      is narrow;
 //   5. the top: each side's line at its own height lies over the rim (a side face stands
 //      vertical), and where adjacent lines meet are the top's corners: its centre, sides and
-//      heading, as the features' rectangle gives them (extent.hpp);
+//      heading, as the features' rectangle gives them (extent.hpp). A top narrower than the
+//      vehicle's gear (gear_footprint_m) is none to land on: a patch of a coarse floor's pattern
+//      placed above it by chance, or a top too small [kTopTooSmall];
 //   6. a print, not the top: a plain panel printed on a larger top (a photograph's dark square)
 //      has an outline at the top's height too. Where a match beyond the outline (clear of the
 //      band of a side face next to the rim, within the outline's size) is carried onto its
@@ -119,7 +121,8 @@ constexpr size_t kMaxOutlines = 2;
 /// kSmallBaseline (fewer than two sides with parallax, or no rim among them),
 /// kHeightOutOfRange, kDecompositionFailed (a corner's ray misses its plane); kPartialView for a
 /// corner within edge_margin_px of the border, kTopRunsOn for a top running on past the outline
-/// (stage 6; both located, not measured).
+/// (stage 6; both located, not measured); kTopTooSmall (its estimate kept) for a top narrower
+/// than the gear.
 TargetOutcome top_of_outline(const Outline& o, const Correspondences& c, const cv::Mat& gray_1,
                              const cv::Mat& gray_2, const PipelineParams& params);
 

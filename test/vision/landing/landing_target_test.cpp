@@ -1044,6 +1044,31 @@ TEST(OutlineTop, APlainStrokeAcrossTheFloorIsNoCandidate) {
   EXPECT_GE(bands_found, 2);
 }
 
+// A featureless top narrower than the vehicle's gear (10 x 14 cm under a 15 cm gear) is measured
+// and refused, its estimate kept: no gear stands on it; under a gear it fits, the same views
+// find it.
+TEST(OutlineTop, ATopNarrowerThanTheGearIsNoneToLandOn) {
+  BoxScene scene = slate_on_granite();
+  scene.length = 0.14;
+  scene.width = 0.10;
+  int refused = 0;
+  for (uint64_t seed = 1; seed <= 3; ++seed) {
+    const BoxViews b = box_views(scene, seed, 0, 0, std::nullopt, 0.0, 140, /*n_top=*/0);
+    PipelineParams params;
+    ASSERT_GT(scene.width, 0.5 * params.landing.gear_footprint_m);
+    const TargetOutcome o = find_landing_target(b.view.c, params, b.image_1, b.image_2);
+    if (o.reason == Reason::kOutlineUnmatched) continue;
+    ASSERT_EQ(o.reason, Reason::kTopTooSmall) << "seed " << seed << ": " << to_string(o.reason);
+    ++refused;
+    EXPECT_NEAR(o.estimate.size_m[1], scene.width, 0.01) << "seed " << seed;
+    params.landing.gear_footprint_m = 0.5 * scene.width;
+    const TargetOutcome fits = find_landing_target(b.view.c, params, b.image_1, b.image_2);
+    ASSERT_EQ(fits.reason, Reason::kOk) << "seed " << seed << ": " << to_string(fits.reason);
+    expect_measured(fits, scene, 0.01, 0.01, seed);
+  }
+  EXPECT_GE(refused, 2);
+}
+
 // A square top has the same second moments along every direction: its outline's sides come
 // from the directions of its rim, and are measured along the top's edges (a view whose
 // reference does not show a side is refused as such).
