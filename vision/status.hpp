@@ -54,8 +54,8 @@ enum class Reason : int8_t {
   kOutlineOnFloor = 35,    ///< landing: a featureless outline that moves with the floor
   kOutlineUnmatched = 36,  ///< landing: a featureless outline the reference does not show
   kOutlineSilent = 37,     ///< landing: a featureless outline none of whose sides tells a height
-  kTopRunsOn = 38,  ///< landing: seen in part, the top running on past its features (rim.hpp)
-                    ///< or past a featureless outline printed on it (outline.hpp)
+  kTopRunsOn = 38,    ///< landing: seen in part, the top running on past its features (rim.hpp)
+                      ///< or past a featureless outline printed on it (outline.hpp)
   kTopTooSmall = 39,  ///< landing: a featureless outline narrower than the vehicle's gear
 };
 
