@@ -499,9 +499,21 @@ void Autonomy::next_vantage(phases::Refinement& r) {
 
 bool Autonomy::look_to_fit(phases::Refinement& r, const TargetMeasurement& m) {
   if (!m.cut || mission() != Mission::kLanding || !params_.downward_view) return false;
+  r.cut_views.push_back(m);
+  if (r.cut_views.size() > kCutViewsToFit) r.cut_views.erase(r.cut_views.begin());
+  // An unmeasured long side (NaN) sorts first, so the order stays strict.
+  const auto long_side = [](const TargetMeasurement& v) {
+    return std::isnan(v.size_m.x()) ? -std::numeric_limits<double>::infinity() : v.size_m.x();
+  };
+  std::vector<const TargetMeasurement*> views;
+  for (const auto& v : r.cut_views) views.push_back(&v);
+  const auto mid = views.begin() + static_cast<std::ptrdiff_t>((views.size() - 1) / 2);
+  std::nth_element(views.begin(), mid, views.end(),
+                   [&](const auto* a, const auto* b) { return long_side(*a) < long_side(*b); });
+  const TargetMeasurement& fit = **mid;
   const double from_z = r.view ? r.view->z_m : params_.detection.landing_height_m;
   const double max_z = params_.geofence.max_W_m.z() - params_.hover_tol_m;
-  const auto v = view_to_fit(*params_.downward_view, m.size_m, m.yaw_rad, m.p_W_target.z(),
+  const auto v = view_to_fit(*params_.downward_view, fit.size_m, fit.yaw_rad, fit.p_W_target.z(),
                              yaw_sp_rad_, from_z, max_z);
   if (!v) return false;
   if (r.view && v->z_m < r.view->z_m + kViewStepM &&

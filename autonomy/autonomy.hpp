@@ -91,6 +91,7 @@ struct Refinement {
   std::vector<Vector2d> at_vantage_size_m;        ///< and the sizes those views measured
   /// Landing: where the vantages look from since a view cut the top (mission_profile.hpp).
   std::optional<ViewToFit> view;
+  std::vector<TargetMeasurement> cut_views;  ///< the latest kCutViewsToFit cut views, oldest first
 };
 struct Approach {
   ApproachState how;                            ///< the mission profile's own approach state

@@ -65,6 +65,12 @@ inline constexpr double kViewPadM = 0.15;
 /// much more turn [rad]: less is inside kViewPadM, and every move costs a vantage's flight.
 inline constexpr double kViewStepM = 0.1;
 inline constexpr double kViewTurnRad = 10.0 * M_PI / 180.0;
+/// The vantages fit the cut view whose long side is the (lower) median of the latest this many:
+/// one frame's extent is one walk to the rims, and a seam or a shadow's edge taken for a rim
+/// measures a top up to twice its size; fitting that sends the vantages up, where the top's
+/// parallax against the floor, which the vision tells it by, shrinks with the height squared.
+/// The median follows a top whose cut views grow as more of it comes into view two views late.
+inline constexpr size_t kCutViewsToFit = 5;
 
 /// The range (camera to top) from which a top of size (long, short), its long axis at
 /// top_yaw, lies pad_m inside the usable view of a camera whose image's long axis lies at

@@ -121,5 +121,31 @@ TEST(ViewToFitTest, CutViewsOfATopTooBigForTheViewRaiseAndTurnTheVantages) {
   }
 }
 
+// One cut view in five measuring the top at four times its size (a seam taken for a rim) moves
+// no vantage; the same size in most of the latest views raises them.
+TEST(ViewToFitTest, ALoneOversizedCutViewRaisesNoVantage) {
+  for (const int every : {5, 1}) {
+    AutonomyParams params = test::test_params();
+    params.downward_view = firefly_down();
+    test::KinematicWorld w(params);
+    int n = 0;
+    w.corrupt_target = [&](TargetMeasurement& m) {
+      m.found = false;
+      m.partial = m.cut = true;
+      m.size_m = ++n % every == 0 ? Vector2d(1.3, 0.6) : Vector2d(0.3, 0.2);
+      m.yaw_rad = 0.6;
+    };
+    w.takeoff_and_hover();
+    w.send(Command::kGo, Mission::kLanding);
+    ASSERT_TRUE(w.run_until_phase(Phase::kRefinement, 60));
+    const bool climbed = w.run_until([&] { return w.p.z() > 1.9; }, 15);
+    EXPECT_EQ(climbed, every == 1) << "every " << every;
+    if (every != 1) {
+      EXPECT_GE(n, 50);  // the oversized views kept coming
+      EXPECT_NEAR(w.autonomy.current_vantage().z(), params.detection.landing_height_m, 1e-9);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace alight::autonomy
