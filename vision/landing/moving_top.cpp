@@ -7,6 +7,8 @@
 #include <cmath>
 #include <random>
 
+#include "vision/geometry/bilinear.hpp"
+
 #include "vision/landing/extent.hpp"
 #include "vision/landing/similarity_inliers.hpp"
 
@@ -32,6 +34,8 @@ const char* to_string(MovingReason r) {
       return "size_out_of_range";
     case MovingReason::kStillTop:
       return "still_top";
+    case MovingReason::kStillPixels:
+      return "still_pixels";
   }
   return "unknown";
 }
@@ -240,6 +244,97 @@ int still_inside(const Correspondences& c, const std::vector<Placed>& cand,
   return n;
 }
 
+// A gate of stage 3: the set's own pixels under a still top and under the measured motion.
+// Around each inlier's current feature (up to kMaxPatches of them, evenly spread over the set)
+// a patch of (2 kPatchHalf + 1)^2 pixels, each placed on the top's plane from view 2 and read in
+// the earlier image where a still top had it and where the motion had it; each patch's
+// zero-mean normalised cross-correlation with the current one, the best over shifts of up to
+// kPatchSlackPx in the earlier image (both hypotheses alike: the poses' stamps and the
+// exposure's smear misplace a frame by a pixel or two, and a fine print decorrelates within
+// one). A patch the still top had outside the earlier image is explained by nothing there (-1).
+// ncc_still / ncc_moving: the medians over the patches the motion had inside it.
+constexpr int kPatchHalf = 4;
+constexpr int kPatchSlackPx = 2;
+constexpr size_t kMaxPatches = 32;
+
+double ncc(const std::vector<double>& a, const std::vector<double>& b) {
+  const double n = double(a.size());
+  double ma = 0, mb = 0;
+  for (size_t i = 0; i < a.size(); ++i) ma += a[i] / n, mb += b[i] / n;
+  double ab = 0, aa = 0, bb = 0;
+  for (size_t i = 0; i < a.size(); ++i) {
+    ab += (a[i] - ma) * (b[i] - mb);
+    aa += (a[i] - ma) * (a[i] - ma);
+    bb += (b[i] - mb) * (b[i] - mb);
+  }
+  return aa > 0 && bb > 0 ? ab / std::sqrt(aa * bb) : 0.0;
+}
+
+// The best correlation of `now` with gray_1 read at `at` shifted by up to kPatchSlackPx; NaN
+// when a shifted patch leaves the image.
+double best_shifted_ncc(const cv::Mat& gray_1, const std::vector<double>& now,
+                        const std::vector<Vector2d>& at) {
+  double best = NAN;
+  std::vector<double> then(at.size());
+  for (int dy = -kPatchSlackPx; dy <= kPatchSlackPx; ++dy)
+    for (int dx = -kPatchSlackPx; dx <= kPatchSlackPx; ++dx) {
+      for (size_t i = 0; i < at.size(); ++i)
+        if (!bilinear_inside(gray_1, at[i] + Vector2d(dx, dy), &then[i])) return NAN;
+      const double q = ncc(now, then);
+      if (!(q <= best)) best = q;
+    }
+  return best;
+}
+
+double median_of(std::vector<double> x) {
+  if (x.empty()) return NAN;
+  std::nth_element(x.begin(), x.begin() + x.size() / 2, x.end());
+  return x[x.size() / 2];
+}
+
+void patch_ncc(const Correspondences& c, const std::vector<Placed>& cand,
+               const std::vector<size_t>& in, const Similarity2& S, const Views& v, double z_top,
+               const cv::Mat& gray_1, const cv::Mat& gray_2, MovingTop* out) {
+  const Isometry3d X_C1W = v.X_WC1.inverse();
+  const double cs = std::cos(S.theta), sn = std::sin(S.theta);
+  const auto in_view_1 = [&](const Vector2d& xy) -> std::optional<Vector2d> {
+    const Vector3d p_C1 = X_C1W * Vector3d(xy.x(), xy.y(), z_top);
+    if (!(p_C1.z() > 0)) return std::nullopt;
+    return c.pixel1(p_C1);
+  };
+  constexpr size_t kPatchPixels = (2 * kPatchHalf + 1) * (2 * kPatchHalf + 1);
+  const double step = std::max(1.0, double(in.size()) / kMaxPatches);
+  std::vector<double> stills, moveds;
+  for (double f = 0; f < double(in.size()); f += step) {
+    const Vector2d u0 = c.u2[cand[in[size_t(f)]].index].array().round();
+    std::vector<double> now;
+    std::vector<Vector2d> still, moved;
+    for (int dy = -kPatchHalf; dy <= kPatchHalf; ++dy)
+      for (int dx = -kPatchHalf; dx <= kPatchHalf; ++dx) {
+        const Vector2d u2 = u0 + Vector2d(dx, dy);
+        if (!(u2.x() >= 0 && u2.y() >= 0 && u2.x() < gray_2.cols && u2.y() < gray_2.rows)) continue;
+        const auto P = ray_at_height(v.X_WC2.translation(),
+                                     v.X_WC2.linear() * c.ray_of_pixel2(u2), z_top);
+        if (!P) continue;
+        const Vector2d d = (P->head<2>() - S.t) / S.s;  // S^-1: where the motion had it
+        const auto u_still = in_view_1(P->head<2>());
+        const auto u_moved = in_view_1(Vector2d(cs * d.x() + sn * d.y(), -sn * d.x() + cs * d.y()));
+        if (!u_moved) continue;
+        now.push_back(gray_2.at<uint8_t>(int(u2.y()), int(u2.x())));
+        still.push_back(u_still ? *u_still : Vector2d(-1e9, -1e9));
+        moved.push_back(*u_moved);
+      }
+    if (now.size() != kPatchPixels) continue;
+    const double b = best_shifted_ncc(gray_1, now, moved);
+    if (std::isnan(b)) continue;
+    const double a = best_shifted_ncc(gray_1, now, still);
+    stills.push_back(std::isnan(a) ? -1.0 : a);
+    moveds.push_back(b);
+  }
+  out->ncc_still = median_of(stills);
+  out->ncc_moving = median_of(moveds);
+}
+
 // A cut top's horizontal position variance: no information [m^2].
 constexpr double kCutPositionVar = 100.0;
 // A yaw known only to the quarter turn (the rectangle of a part of the top, or of too few
@@ -338,7 +433,8 @@ void measure(const std::vector<Placed>& cand, const std::vector<size_t>& in, con
 }  // namespace
 
 MovingTop find_moving_top(const Correspondences& c, double dt_s, double floor_z_m,
-                          const MovingTopParams& params) {
+                          const MovingTopParams& params, const cv::Mat& gray_1,
+                          const cv::Mat& gray_2) {
   assert(c.camera && c.mount && dt_s > 0);
   MovingTop out;
   out.dt_s = dt_s;
@@ -389,6 +485,11 @@ MovingTop find_moving_top(const Correspondences& c, double dt_s, double floor_z_
   if (still_inside(c, cand, carried, in, *rect, v, floor_z_m, params) >=
       kStillShare * out.n_inliers)
     return refuse(MovingReason::kStillTop);
+  if (!gray_1.empty() && !gray_2.empty()) {
+    assert(gray_1.type() == CV_8UC1 && gray_2.type() == CV_8UC1);
+    patch_ncc(c, cand, in, S, v, z_top, gray_1, gray_2, &out);
+    if (out.ncc_still >= out.ncc_moving - kStillNccGap) return refuse(MovingReason::kStillPixels);
+  }
   measure(cand, in, S, v, dt_s, floor_z_m, params, &out);
   return out;
 }
