@@ -246,42 +246,53 @@ int still_inside(const Correspondences& c, const std::vector<Placed>& cand,
 
 // A gate of stage 3: the set's own pixels under a still top and under the measured motion.
 // Around each inlier's current feature (up to kMaxPatches of them, evenly spread over the set)
-// a patch of (2 kPatchHalf + 1)^2 pixels, each placed on the top's plane from view 2 and read in
-// the earlier image where a still top had it and where the motion had it; each patch's
-// zero-mean normalised cross-correlation with the current one, the best over shifts of up to
-// kPatchSlackPx in the earlier image (both hypotheses alike: the poses' stamps and the
-// exposure's smear misplace a frame by a pixel or two, and a fine print decorrelates within
-// one). A patch the still top had outside the earlier image is explained by nothing there (-1).
-// ncc_still / ncc_moving: the medians over the patches the motion had inside it.
+// a patch of (2 kPatchHalf + 1)^2 pixels, placed on the top's plane from view 2 and read in the
+// earlier image where a still top had it and where the motion had it; each patch's zero-mean
+// normalised cross-correlation with the current one, the best over shifts of up to
+// kPatchSlackPx (both hypotheses alike: the poses' stamps and the exposure's smear misplace a
+// frame by a pixel or two, and a fine print decorrelates within one). Over a patch the map
+// from the current image to the earlier one is affine to a small fraction of a pixel (the
+// plane's homography across 9 pixels), so each is read once on a grid widened by the slack and
+// the shifts are steps on that grid. A patch the still top had outside the earlier image is
+// explained by nothing there (-1); one the two hypotheses place within a patch's width of each
+// other has no vote (they read the same pixels: a platform creeping a few millimetres a frame,
+// whose measured speed is harmless either way). ncc_still / ncc_moving: the medians over the
+// patches that vote, NaN when none does.
 constexpr int kPatchHalf = 4;
 constexpr int kPatchSlackPx = 2;
 constexpr size_t kMaxPatches = 32;
+constexpr int kPatchSide = 2 * kPatchHalf + 1;
+constexpr int kGridSide = kPatchSide + 2 * kPatchSlackPx;
 
-double ncc(const std::vector<double>& a, const std::vector<double>& b) {
-  const double n = double(a.size());
-  double ma = 0, mb = 0;
-  for (size_t i = 0; i < a.size(); ++i) ma += a[i] / n, mb += b[i] / n;
-  double ab = 0, aa = 0, bb = 0;
-  for (size_t i = 0; i < a.size(); ++i) {
-    ab += (a[i] - ma) * (b[i] - mb);
-    aa += (a[i] - ma) * (a[i] - ma);
-    bb += (b[i] - mb) * (b[i] - mb);
-  }
-  return aa > 0 && bb > 0 ? ab / std::sqrt(aa * bb) : 0.0;
+// The earlier image on the grid around a patch: m0 the centre's pixel there, J the map's
+// derivative (columns: per current pixel along x, y). False where the grid leaves the image.
+bool read_grid(const cv::Mat& gray_1, const Vector2d& m0, const Eigen::Matrix2d& J,
+               double* grid) {
+  constexpr int h = kPatchHalf + kPatchSlackPx;
+  for (int j = -h; j <= h; ++j)
+    for (int i = -h; i <= h; ++i)
+      if (!bilinear_inside(gray_1, m0 + J * Vector2d(i, j), &grid[(j + h) * kGridSide + i + h]))
+        return false;
+  return true;
 }
 
-// The best correlation of `now` with gray_1 read at `at` shifted by up to kPatchSlackPx; NaN
-// when a shifted patch leaves the image.
-double best_shifted_ncc(const cv::Mat& gray_1, const std::vector<double>& now,
-                        const std::vector<Vector2d>& at) {
-  double best = NAN;
-  std::vector<double> then(at.size());
-  for (int dy = -kPatchSlackPx; dy <= kPatchSlackPx; ++dy)
-    for (int dx = -kPatchSlackPx; dx <= kPatchSlackPx; ++dx) {
-      for (size_t i = 0; i < at.size(); ++i)
-        if (!bilinear_inside(gray_1, at[i] + Vector2d(dx, dy), &then[i])) return NAN;
-      const double q = ncc(now, then);
-      if (!(q <= best)) best = q;
+// The best zero-mean normalised cross-correlation of the current patch with the grid's windows.
+double best_window_ncc(const double* now, const double* grid) {
+  constexpr double n = kPatchSide * kPatchSide;
+  double mn = 0, vn = 0;
+  for (int k = 0; k < kPatchSide * kPatchSide; ++k) mn += now[k] / n;
+  for (int k = 0; k < kPatchSide * kPatchSide; ++k) vn += (now[k] - mn) * (now[k] - mn);
+  double best = -1;
+  for (int sy = 0; sy <= 2 * kPatchSlackPx; ++sy)
+    for (int sx = 0; sx <= 2 * kPatchSlackPx; ++sx) {
+      double s = 0, ss = 0, sc = 0;
+      for (int j = 0; j < kPatchSide; ++j)
+        for (int i = 0; i < kPatchSide; ++i) {
+          const double g = grid[(j + sy) * kGridSide + i + sx];
+          s += g, ss += g * g, sc += g * (now[j * kPatchSide + i] - mn);
+        }
+      const double vg = ss - s * s / n;
+      if (vn > 0 && vg > 0) best = std::max(best, sc / std::sqrt(vn * vg));
     }
   return best;
 }
@@ -297,39 +308,60 @@ void patch_ncc(const Correspondences& c, const std::vector<Placed>& cand,
                const cv::Mat& gray_1, const cv::Mat& gray_2, MovingTop* out) {
   const Isometry3d X_C1W = v.X_WC1.inverse();
   const double cs = std::cos(S.theta), sn = std::sin(S.theta);
+  // A current pixel's point on the top's plane, and that point's pixel in the earlier image
+  // under each hypothesis (still: where it is; moving: S^-1 of it).
+  const auto on_plane = [&](const Vector2d& u2) {
+    return ray_at_height(v.X_WC2.translation(), v.X_WC2.linear() * c.ray_of_pixel2(u2), z_top);
+  };
   const auto in_view_1 = [&](const Vector2d& xy) -> std::optional<Vector2d> {
     const Vector3d p_C1 = X_C1W * Vector3d(xy.x(), xy.y(), z_top);
     if (!(p_C1.z() > 0)) return std::nullopt;
     return c.pixel1(p_C1);
   };
-  constexpr size_t kPatchPixels = (2 * kPatchHalf + 1) * (2 * kPatchHalf + 1);
+  const auto map = [&](const Vector2d& u2, bool moved) -> std::optional<Vector2d> {
+    const auto P = on_plane(u2);
+    if (!P) return std::nullopt;
+    if (!moved) return in_view_1(P->head<2>());
+    const Vector2d d = (P->head<2>() - S.t) / S.s;
+    return in_view_1(Vector2d(cs * d.x() + sn * d.y(), -sn * d.x() + cs * d.y()));
+  };
+  // The centre's image and the map's derivative from the patch's edges (central differences).
+  const auto affine = [&](const Vector2d& u0, bool moved, Vector2d* m0, Eigen::Matrix2d* J) {
+    const auto c0 = map(u0, moved);
+    const auto xp = map(u0 + Vector2d(kPatchHalf, 0), moved);
+    const auto xm = map(u0 - Vector2d(kPatchHalf, 0), moved);
+    const auto yp = map(u0 + Vector2d(0, kPatchHalf), moved);
+    const auto ym = map(u0 - Vector2d(0, kPatchHalf), moved);
+    if (!c0 || !xp || !xm || !yp || !ym) return false;
+    *m0 = *c0;
+    J->col(0) = (*xp - *xm) / (2.0 * kPatchHalf);
+    J->col(1) = (*yp - *ym) / (2.0 * kPatchHalf);
+    return true;
+  };
   const double step = std::max(1.0, double(in.size()) / kMaxPatches);
   std::vector<double> stills, moveds;
+  double now[kPatchSide * kPatchSide], grid[kGridSide * kGridSide];
   for (double f = 0; f < double(in.size()); f += step) {
     const Vector2d u0 = c.u2[cand[in[size_t(f)]].index].array().round();
-    std::vector<double> now;
-    std::vector<Vector2d> still, moved;
-    for (int dy = -kPatchHalf; dy <= kPatchHalf; ++dy)
-      for (int dx = -kPatchHalf; dx <= kPatchHalf; ++dx) {
-        const Vector2d u2 = u0 + Vector2d(dx, dy);
-        if (!(u2.x() >= 0 && u2.y() >= 0 && u2.x() < gray_2.cols && u2.y() < gray_2.rows)) continue;
-        const auto P = ray_at_height(v.X_WC2.translation(),
-                                     v.X_WC2.linear() * c.ray_of_pixel2(u2), z_top);
-        if (!P) continue;
-        const Vector2d d = (P->head<2>() - S.t) / S.s;  // S^-1: where the motion had it
-        const auto u_still = in_view_1(P->head<2>());
-        const auto u_moved = in_view_1(Vector2d(cs * d.x() + sn * d.y(), -sn * d.x() + cs * d.y()));
-        if (!u_moved) continue;
-        now.push_back(gray_2.at<uint8_t>(int(u2.y()), int(u2.x())));
-        still.push_back(u_still ? *u_still : Vector2d(-1e9, -1e9));
-        moved.push_back(*u_moved);
-      }
-    if (now.size() != kPatchPixels) continue;
-    const double b = best_shifted_ncc(gray_1, now, moved);
-    if (std::isnan(b)) continue;
-    const double a = best_shifted_ncc(gray_1, now, still);
-    stills.push_back(std::isnan(a) ? -1.0 : a);
-    moveds.push_back(b);
+    if (!(u0.x() >= kPatchHalf && u0.y() >= kPatchHalf && u0.x() < gray_2.cols - kPatchHalf &&
+          u0.y() < gray_2.rows - kPatchHalf))
+      continue;
+    for (int j = 0; j < kPatchSide; ++j)
+      for (int i = 0; i < kPatchSide; ++i)
+        now[j * kPatchSide + i] =
+            gray_2.at<uint8_t>(int(u0.y()) + j - kPatchHalf, int(u0.x()) + i - kPatchHalf);
+    Vector2d m_moved, m_still;
+    Eigen::Matrix2d J_moved, J_still;
+    if (!affine(u0, true, &m_moved, &J_moved) || !read_grid(gray_1, m_moved, J_moved, grid))
+      continue;
+    const bool still_mapped = affine(u0, false, &m_still, &J_still);
+    if (still_mapped && (m_still - m_moved).norm() < kPatchSide) continue;
+    const double moving = best_window_ncc(now, grid);
+    double still = -1;
+    if (still_mapped && read_grid(gray_1, m_still, J_still, grid))
+      still = best_window_ncc(now, grid);
+    stills.push_back(still);
+    moveds.push_back(moving);
   }
   out->ncc_still = median_of(stills);
   out->ncc_moving = median_of(moveds);

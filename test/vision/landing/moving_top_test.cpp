@@ -412,6 +412,25 @@ TEST(MovingTopTest, ACartsPixelsFollowItsMotionNotAStillTop) {
   EXPECT_NEAR(m.v_W.x(), 0.9, 0.05);
 }
 
+// A top creeping 4 mm over the interval (the camera flies 25 cm over it, so the floor does not
+// carry its matches): the two hypotheses read the same pixels of the earlier image, so its
+// pixels give no verdict and its motion is kept.
+TEST(MovingTopTest, ACreepingTopsPixelsGiveNoVerdict) {
+  MovingScene s = moving_cart_scene();
+  s.pose_2 = MovingScene::at({0.25, 0.0, 1.5}, 0.3);
+  s.pose_2.utime = 1'250'000;
+  s.top_2 = s.top_1;
+  s.top_2.c += Vector2d(0.004, 0.0);
+  const Print print = Print::random(21), floor = Print::random(22);
+  const cv::Mat g1 = render(s, s.pose_1, s.top_1, s.top_size, print, floor);
+  const cv::Mat g2 = render(s, s.pose_2, s.top_2, s.top_size, print, floor);
+  const MovingTop m = find_moving_top(s.correspondences(), 0.25, 0.0, MovingTopParams{}, g1, g2);
+  ASSERT_TRUE(m.found()) << to_string(m.reason);
+  EXPECT_TRUE(std::isnan(m.ncc_still) && std::isnan(m.ncc_moving))
+      << "still " << m.ncc_still << " moving " << m.ncc_moving;
+  EXPECT_NEAR(m.v_W.x(), 0.016, 0.03);
+}
+
 TEST(MovingTopTest, RefusesAPlatformFasterThanTheBound) {
   MovingScene s = moving_cart_scene();
   MovingTopParams params;
