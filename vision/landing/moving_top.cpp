@@ -8,7 +8,6 @@
 #include <random>
 
 #include "vision/geometry/bilinear.hpp"
-
 #include "vision/landing/extent.hpp"
 #include "vision/landing/similarity_inliers.hpp"
 
@@ -266,8 +265,7 @@ constexpr int kGridSide = kPatchSide + 2 * kPatchSlackPx;
 
 // The earlier image on the grid around a patch: m0 the centre's pixel there, J the map's
 // derivative (columns: per current pixel along x, y). False where the grid leaves the image.
-bool read_grid(const cv::Mat& gray_1, const Vector2d& m0, const Eigen::Matrix2d& J,
-               double* grid) {
+bool read_grid(const cv::Mat& gray_1, const Vector2d& m0, const Eigen::Matrix2d& J, double* grid) {
   constexpr int h = kPatchHalf + kPatchSlackPx;
   for (int j = -h; j <= h; ++j)
     for (int i = -h; i <= h; ++i)

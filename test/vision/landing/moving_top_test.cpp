@@ -348,7 +348,8 @@ cv::Mat render(const MovingScene& s, const PoseSample& pose, const MovingTopTrut
       const Vector2d e = P.head<2>() - top.c;
       const Vector2d local(std::cos(top.psi) * e.x() + std::sin(top.psi) * e.y(),
                            -std::sin(top.psi) * e.x() + std::cos(top.psi) * e.y());
-      const bool on_top = std::abs(local.x()) < 0.5 * size.x() && std::abs(local.y()) < 0.5 * size.y();
+      const bool on_top =
+          std::abs(local.x()) < 0.5 * size.x() && std::abs(local.y()) < 0.5 * size.y();
       const double grey =
           on_top ? top_print.at(local) : floor_print.at((o + (0 - o.z()) / d.z() * d).head<2>());
       g.at<uint8_t>(v, u) = cv::saturate_cast<uint8_t>(grey);
@@ -378,7 +379,8 @@ TEST(MovingTopTest, ARepeatedPrintsPixelsRefuseItsPeriodAsMotion) {
   int twins = 0;
   while (twins < 24) {
     const Vector2d l(ux(rng), uy(rng) - 0.21);
-    const auto p1 = s.project(s.pose_1, top.point(l)), p2 = s.project(s.pose_2, top.point(l + period));
+    const auto p1 = s.project(s.pose_1, top.point(l)),
+               p2 = s.project(s.pose_2, top.point(l + period));
     if (!p1 || !p2 || std::abs(l.y() + period.y()) > 0.33) continue;
     c.u1.push_back(*p1);
     c.u2.push_back(*p2);
