@@ -262,7 +262,7 @@ void Pipeline::measure_moving(const std::shared_ptr<const TrackedFrame>& current
     Correspondences c = correspondences(a, *current, match_frames(a, *current, params_.match));
     c.pose_1 = earlier->second;
     c.pose_2 = pose;
-    m = find_moving_top(c, age_s(a.utime), params_.landing.floor_z_m, mp);
+    m = find_moving_top(c, age_s(a.utime), params_.landing.floor_z_m, mp, a.image, current->image);
     r->moving_ref_utime = a.utime;
   }
   r->moving = std::move(m);

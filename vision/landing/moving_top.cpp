@@ -7,6 +7,7 @@
 #include <cmath>
 #include <random>
 
+#include "vision/geometry/bilinear.hpp"
 #include "vision/landing/extent.hpp"
 #include "vision/landing/similarity_inliers.hpp"
 
@@ -32,6 +33,8 @@ const char* to_string(MovingReason r) {
       return "size_out_of_range";
     case MovingReason::kStillTop:
       return "still_top";
+    case MovingReason::kStillPixels:
+      return "still_pixels";
   }
   return "unknown";
 }
@@ -240,6 +243,128 @@ int still_inside(const Correspondences& c, const std::vector<Placed>& cand,
   return n;
 }
 
+// A gate of stage 3: the set's own pixels under a still top and under the measured motion.
+// Around each inlier's current feature (up to kMaxPatches of them, evenly spread over the set)
+// a patch of (2 kPatchHalf + 1)^2 pixels, placed on the top's plane from view 2 and read in the
+// earlier image where a still top had it and where the motion had it; each patch's zero-mean
+// normalised cross-correlation with the current one, the best over shifts of up to
+// kPatchSlackPx (both hypotheses alike: the poses' stamps and the exposure's smear misplace a
+// frame by a pixel or two, and a fine print decorrelates within one). Over a patch the map
+// from the current image to the earlier one is affine to a small fraction of a pixel (the
+// plane's homography across 9 pixels), so each is read once on a grid widened by the slack and
+// the shifts are steps on that grid. A patch the still top had outside the earlier image is
+// explained by nothing there (-1); one the two hypotheses place within a patch's width of each
+// other has no vote (they read the same pixels: a platform creeping a few millimetres a frame,
+// whose measured speed is harmless either way). ncc_still / ncc_moving: the medians over the
+// patches that vote, NaN when none does.
+constexpr int kPatchHalf = 4;
+constexpr int kPatchSlackPx = 2;
+constexpr size_t kMaxPatches = 32;
+constexpr int kPatchSide = 2 * kPatchHalf + 1;
+constexpr int kGridSide = kPatchSide + 2 * kPatchSlackPx;
+
+// The earlier image on the grid around a patch: m0 the centre's pixel there, J the map's
+// derivative (columns: per current pixel along x, y). False where the grid leaves the image.
+bool read_grid(const cv::Mat& gray_1, const Vector2d& m0, const Eigen::Matrix2d& J, double* grid) {
+  constexpr int h = kPatchHalf + kPatchSlackPx;
+  for (int j = -h; j <= h; ++j)
+    for (int i = -h; i <= h; ++i)
+      if (!bilinear_inside(gray_1, m0 + J * Vector2d(i, j), &grid[(j + h) * kGridSide + i + h]))
+        return false;
+  return true;
+}
+
+// The best zero-mean normalised cross-correlation of the current patch with the grid's windows.
+double best_window_ncc(const double* now, const double* grid) {
+  constexpr double n = kPatchSide * kPatchSide;
+  double mn = 0, vn = 0;
+  for (int k = 0; k < kPatchSide * kPatchSide; ++k) mn += now[k] / n;
+  for (int k = 0; k < kPatchSide * kPatchSide; ++k) vn += (now[k] - mn) * (now[k] - mn);
+  double best = -1;
+  for (int sy = 0; sy <= 2 * kPatchSlackPx; ++sy)
+    for (int sx = 0; sx <= 2 * kPatchSlackPx; ++sx) {
+      double s = 0, ss = 0, sc = 0;
+      for (int j = 0; j < kPatchSide; ++j)
+        for (int i = 0; i < kPatchSide; ++i) {
+          const double g = grid[(j + sy) * kGridSide + i + sx];
+          s += g, ss += g * g, sc += g * (now[j * kPatchSide + i] - mn);
+        }
+      const double vg = ss - s * s / n;
+      if (vn > 0 && vg > 0) best = std::max(best, sc / std::sqrt(vn * vg));
+    }
+  return best;
+}
+
+double median_of(std::vector<double> x) {
+  if (x.empty()) return NAN;
+  std::nth_element(x.begin(), x.begin() + x.size() / 2, x.end());
+  return x[x.size() / 2];
+}
+
+void patch_ncc(const Correspondences& c, const std::vector<Placed>& cand,
+               const std::vector<size_t>& in, const Similarity2& S, const Views& v, double z_top,
+               const cv::Mat& gray_1, const cv::Mat& gray_2, MovingTop* out) {
+  const Isometry3d X_C1W = v.X_WC1.inverse();
+  const double cs = std::cos(S.theta), sn = std::sin(S.theta);
+  // A current pixel's point on the top's plane, and that point's pixel in the earlier image
+  // under each hypothesis (still: where it is; moving: S^-1 of it).
+  const auto on_plane = [&](const Vector2d& u2) {
+    return ray_at_height(v.X_WC2.translation(), v.X_WC2.linear() * c.ray_of_pixel2(u2), z_top);
+  };
+  const auto in_view_1 = [&](const Vector2d& xy) -> std::optional<Vector2d> {
+    const Vector3d p_C1 = X_C1W * Vector3d(xy.x(), xy.y(), z_top);
+    if (!(p_C1.z() > 0)) return std::nullopt;
+    return c.pixel1(p_C1);
+  };
+  const auto map = [&](const Vector2d& u2, bool moved) -> std::optional<Vector2d> {
+    const auto P = on_plane(u2);
+    if (!P) return std::nullopt;
+    if (!moved) return in_view_1(P->head<2>());
+    const Vector2d d = (P->head<2>() - S.t) / S.s;
+    return in_view_1(Vector2d(cs * d.x() + sn * d.y(), -sn * d.x() + cs * d.y()));
+  };
+  // The centre's image and the map's derivative from the patch's edges (central differences).
+  const auto affine = [&](const Vector2d& u0, bool moved, Vector2d* m0, Eigen::Matrix2d* J) {
+    const auto c0 = map(u0, moved);
+    const auto xp = map(u0 + Vector2d(kPatchHalf, 0), moved);
+    const auto xm = map(u0 - Vector2d(kPatchHalf, 0), moved);
+    const auto yp = map(u0 + Vector2d(0, kPatchHalf), moved);
+    const auto ym = map(u0 - Vector2d(0, kPatchHalf), moved);
+    if (!c0 || !xp || !xm || !yp || !ym) return false;
+    *m0 = *c0;
+    J->col(0) = (*xp - *xm) / (2.0 * kPatchHalf);
+    J->col(1) = (*yp - *ym) / (2.0 * kPatchHalf);
+    return true;
+  };
+  const double step = std::max(1.0, double(in.size()) / kMaxPatches);
+  std::vector<double> stills, moveds;
+  double now[kPatchSide * kPatchSide], grid[kGridSide * kGridSide];
+  for (double f = 0; f < double(in.size()); f += step) {
+    const Vector2d u0 = c.u2[cand[in[size_t(f)]].index].array().round();
+    if (!(u0.x() >= kPatchHalf && u0.y() >= kPatchHalf && u0.x() < gray_2.cols - kPatchHalf &&
+          u0.y() < gray_2.rows - kPatchHalf))
+      continue;
+    for (int j = 0; j < kPatchSide; ++j)
+      for (int i = 0; i < kPatchSide; ++i)
+        now[j * kPatchSide + i] =
+            gray_2.at<uint8_t>(int(u0.y()) + j - kPatchHalf, int(u0.x()) + i - kPatchHalf);
+    Vector2d m_moved, m_still;
+    Eigen::Matrix2d J_moved, J_still;
+    if (!affine(u0, true, &m_moved, &J_moved) || !read_grid(gray_1, m_moved, J_moved, grid))
+      continue;
+    const bool still_mapped = affine(u0, false, &m_still, &J_still);
+    if (still_mapped && (m_still - m_moved).norm() < kPatchSide) continue;
+    const double moving = best_window_ncc(now, grid);
+    double still = -1;
+    if (still_mapped && read_grid(gray_1, m_still, J_still, grid))
+      still = best_window_ncc(now, grid);
+    stills.push_back(still);
+    moveds.push_back(moving);
+  }
+  out->ncc_still = median_of(stills);
+  out->ncc_moving = median_of(moveds);
+}
+
 // A cut top's horizontal position variance: no information [m^2].
 constexpr double kCutPositionVar = 100.0;
 // A yaw known only to the quarter turn (the rectangle of a part of the top, or of too few
@@ -338,7 +463,8 @@ void measure(const std::vector<Placed>& cand, const std::vector<size_t>& in, con
 }  // namespace
 
 MovingTop find_moving_top(const Correspondences& c, double dt_s, double floor_z_m,
-                          const MovingTopParams& params) {
+                          const MovingTopParams& params, const cv::Mat& gray_1,
+                          const cv::Mat& gray_2) {
   assert(c.camera && c.mount && dt_s > 0);
   MovingTop out;
   out.dt_s = dt_s;
@@ -389,6 +515,11 @@ MovingTop find_moving_top(const Correspondences& c, double dt_s, double floor_z_
   if (still_inside(c, cand, carried, in, *rect, v, floor_z_m, params) >=
       kStillShare * out.n_inliers)
     return refuse(MovingReason::kStillTop);
+  if (!gray_1.empty() && !gray_2.empty()) {
+    assert(gray_1.type() == CV_8UC1 && gray_2.type() == CV_8UC1);
+    patch_ncc(c, cand, in, S, v, z_top, gray_1, gray_2, &out);
+    if (out.ncc_still >= out.ncc_moving - kStillNccGap) return refuse(MovingReason::kStillPixels);
+  }
   measure(cand, in, S, v, dt_s, floor_z_m, params, &out);
   return out;
 }

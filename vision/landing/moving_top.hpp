@@ -32,7 +32,9 @@
 // platform and matches its speed, which is what the approach does.
 
 #include <cassert>
+#include <cmath>
 #include <cstdint>
+#include <opencv2/core.hpp>
 #include <optional>
 #include <vector>
 
@@ -57,6 +59,8 @@ enum class MovingReason : int8_t {
                           ///< top: longer than max_size_m)
   kStillTop = 8,          ///< a still top explains as many matches (a pattern repeated along
                           ///< the top matched to its next copy)
+  kStillPixels = 9,       ///< a still top explains the set's pixels as well as its motion does
+                          ///< (a repeated pattern whose still matches the ratio test dropped)
 };
 
 const char* to_string(MovingReason r);
@@ -80,12 +84,19 @@ struct MovingTop {
   double size_m[2] = {0, 0};  ///< the inliers' extent (long, short) [m]
   int n_candidates = 0;       ///< matches off the floor
   int n_inliers = 0;
+  /// The set's pixels against the earlier image (kStillPixels): their normalised
+  /// cross-correlation where a still top had them and where the measured motion had them; NaN
+  /// where not compared (no images, too few pixels seen in both).
+  double ncc_still = NAN, ncc_moving = NAN;
   std::vector<uint8_t> inliers;  ///< per correspondence
 };
 
 /// The top's motion between c's reference (pose_1) and current (pose_2) views, dt_s apart.
+/// gray_1 / gray_2: the two raw images (CV_8UC1 of the camera's size) for the kStillPixels
+/// gate; empty: no such gate.
 MovingTop find_moving_top(const Correspondences& c, double dt_s, double floor_z_m,
-                          const MovingTopParams& params);
+                          const MovingTopParams& params, const cv::Mat& gray_1 = {},
+                          const cv::Mat& gray_2 = {});
 
 /// A 2-D similarity q = s R(theta) p + t.
 struct Similarity2 {
@@ -100,6 +111,16 @@ struct Similarity2 {
 /// still top whose pattern repeats keeps its true matches beside the ones to the next copy,
 /// though the ratio test drops most of both (each feature has a twin), so a quarter is asked.
 inline constexpr double kStillShare = 0.25;
+
+/// The set's pixels that a still top explains (the median patch correlation where a still top
+/// had each feature) within this of what its motion explains: the motion is no better than a
+/// still top's, and the set is a pattern repeated along a still top (kStillPixels). Each
+/// feature of a repeated print has a twin in its own image, so the ratio test drops most of
+/// its still matches with the ones to the next copy and what survives of either is chance:
+/// kStillTop's count of still matches misses it, the pixels do not (they follow both within a
+/// few hundredths). Where a moving top's feature was lies now the floor or another part of
+/// it, a third or more below the motion's correlation.
+inline constexpr double kStillNccGap = 0.15;
 
 /// Least-squares similarity from p to q (Umeyama 1991, in 2-D); nullopt when p has no extent.
 std::optional<Similarity2> fit_similarity(const std::vector<Vector2d>& p,

@@ -6,6 +6,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <opencv2/core.hpp>
+#include <optional>
 #include <random>
 
 #include "common/camera_model.hpp"
@@ -307,6 +309,128 @@ TEST(MovingTopTest, ATopWhosePatternRepeatsIsNotMovingByOnePeriod) {
       << to_string(m.reason) << " at " << m.v_W.head<2>().norm() << " m/s";
   // The cart's measurement keeps its motion: no still matches of its own.
   EXPECT_TRUE(find_moving_top(moving_cart_scene().correspondences(), 0.25, 0.0, {}).found());
+}
+
+// A print of smooth texture: a sum of plane waves 2-8 cm long at random directions and phases;
+// with `period_y`, every wave repeats along y over it (a photograph tiled along the top).
+struct Print {
+  std::vector<Vector3d> waves;  // (kx, ky, phase) [rad/m, rad/m, rad]
+  double at(const Vector2d& p) const {
+    double g = 0;
+    for (const Vector3d& w : waves) g += std::cos(w.x() * p.x() + w.y() * p.y() + w.z());
+    return 128 + 100 * g / std::sqrt(double(waves.size()));
+  }
+  static Print random(uint64_t seed, std::optional<double> period_y = std::nullopt) {
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> u(0, 1);
+    Print p;
+    for (int i = 0; i < 24; ++i) {
+      const double k = 2 * M_PI / (0.02 + 0.06 * u(rng)), a = 2 * M_PI * u(rng);
+      double ky = k * std::sin(a);
+      if (period_y) ky = 2 * M_PI / *period_y * std::round(ky * *period_y / (2 * M_PI));
+      p.waves.emplace_back(k * std::cos(a), ky, 2 * M_PI * u(rng));
+    }
+    return p;
+  }
+};
+
+// The camera's image at `pose`: each pixel's ray met with the top's plane inside `top`'s
+// rectangle of `size` (its print in the top's own frame), else with the floor (z = 0).
+cv::Mat render(const MovingScene& s, const PoseSample& pose, const MovingTopTruth& top,
+               const Vector2d& size, const Print& top_print, const Print& floor_print) {
+  const Isometry3d X_WC = camera_in_world(pose.X_WB(), s.mount.X_BC());
+  cv::Mat g(s.camera.height, s.camera.width, CV_8UC1);
+  for (int v = 0; v < g.rows; ++v)
+    for (int u = 0; u < g.cols; ++u) {
+      const Vector3d d = X_WC.linear() * s.camera.ray(Vector2d(u, v));
+      const Vector3d o = X_WC.translation();
+      const Vector3d P = o + (top.h - o.z()) / d.z() * d;
+      const Vector2d e = P.head<2>() - top.c;
+      const Vector2d local(std::cos(top.psi) * e.x() + std::sin(top.psi) * e.y(),
+                           -std::sin(top.psi) * e.x() + std::cos(top.psi) * e.y());
+      const bool on_top =
+          std::abs(local.x()) < 0.5 * size.x() && std::abs(local.y()) < 0.5 * size.y();
+      const double grey =
+          on_top ? top_print.at(local) : floor_print.at((o + (0 - o.z()) / d.z() * d).head<2>());
+      g.at<uint8_t>(v, u) = cv::saturate_cast<uint8_t>(grey);
+    }
+  return g;
+}
+
+// The same still top with a print that repeats every 0.42 m, as the images show it, and only
+// its features matched to their next copy: the ratio test dropped every still match (each
+// feature has a twin), so no match stays put and the count of still matches has nothing to
+// see. The pixels do: where a still top had each feature, the earlier image shows the same
+// print as where the period's motion had it.
+TEST(MovingTopTest, ARepeatedPrintsPixelsRefuseItsPeriodAsMotion) {
+  MovingScene s = moving_cart_scene();
+  s.pose_2 = MovingScene::at({0.005, 0.0, 1.5}, 0.3);
+  s.pose_2.utime = 1'250'000;
+  MovingTopTruth top;
+  top.c = {0.1, 0.05};
+  top.psi = 0.56;
+  const Vector2d size(0.8, 0.7), period(0.0, 0.42);
+  s.top_1 = s.top_2 = top;  // it hides the floor under it; its own matches are added below
+  s.top_size = size;
+  s.n_top = 0;
+  Correspondences c = s.correspondences();
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> ux(-0.38, 0.38), uy(-0.33, 0.33);
+  int twins = 0;
+  while (twins < 24) {
+    const Vector2d l(ux(rng), uy(rng) - 0.21);
+    const auto p1 = s.project(s.pose_1, top.point(l)),
+               p2 = s.project(s.pose_2, top.point(l + period));
+    if (!p1 || !p2 || std::abs(l.y() + period.y()) > 0.33) continue;
+    c.u1.push_back(*p1);
+    c.u2.push_back(*p2);
+    c.x1.push_back((s.camera.K() * s.camera.ray(*p1)).hnormalized());
+    c.x2.push_back((s.camera.K() * s.camera.ray(*p2)).hnormalized());
+    ++twins;
+  }
+  const MovingTop blind = find_moving_top(c, 0.25, 0.0, MovingTopParams{});
+  ASSERT_TRUE(blind.found()) << "the matches alone are a moving top: " << to_string(blind.reason);
+  const Print print = Print::random(11, period.y()), floor = Print::random(12);
+  const cv::Mat g1 = render(s, s.pose_1, top, size, print, floor);
+  const cv::Mat g2 = render(s, s.pose_2, top, size, print, floor);
+  const MovingTop m = find_moving_top(c, 0.25, 0.0, MovingTopParams{}, g1, g2);
+  EXPECT_EQ(m.reason, MovingReason::kStillPixels)
+      << to_string(m.reason) << ": still " << m.ncc_still << " moving " << m.ncc_moving;
+  EXPECT_GT(m.ncc_still, 0.9);
+}
+
+// A cart whose print does not repeat keeps its motion: where each feature was, the earlier
+// image shows what the cart left there.
+TEST(MovingTopTest, ACartsPixelsFollowItsMotionNotAStillTop) {
+  const MovingScene s = moving_cart_scene();
+  const Print print = Print::random(21), floor = Print::random(22);
+  const cv::Mat g1 = render(s, s.pose_1, s.top_1, s.top_size, print, floor);
+  const cv::Mat g2 = render(s, s.pose_2, s.top_2, s.top_size, print, floor);
+  const MovingTop m = find_moving_top(s.correspondences(), 0.25, 0.0, MovingTopParams{}, g1, g2);
+  ASSERT_TRUE(m.found()) << to_string(m.reason) << ": still " << m.ncc_still << " moving "
+                         << m.ncc_moving;
+  EXPECT_GT(m.ncc_moving, 0.9);
+  EXPECT_LT(m.ncc_still, m.ncc_moving - kStillNccGap);
+  EXPECT_NEAR(m.v_W.x(), 0.9, 0.05);
+}
+
+// A top creeping 4 mm over the interval (the camera flies 25 cm over it, so the floor does not
+// carry its matches): the two hypotheses read the same pixels of the earlier image, so its
+// pixels give no verdict and its motion is kept.
+TEST(MovingTopTest, ACreepingTopsPixelsGiveNoVerdict) {
+  MovingScene s = moving_cart_scene();
+  s.pose_2 = MovingScene::at({0.25, 0.0, 1.5}, 0.3);
+  s.pose_2.utime = 1'250'000;
+  s.top_2 = s.top_1;
+  s.top_2.c += Vector2d(0.004, 0.0);
+  const Print print = Print::random(21), floor = Print::random(22);
+  const cv::Mat g1 = render(s, s.pose_1, s.top_1, s.top_size, print, floor);
+  const cv::Mat g2 = render(s, s.pose_2, s.top_2, s.top_size, print, floor);
+  const MovingTop m = find_moving_top(s.correspondences(), 0.25, 0.0, MovingTopParams{}, g1, g2);
+  ASSERT_TRUE(m.found()) << to_string(m.reason);
+  EXPECT_TRUE(std::isnan(m.ncc_still) && std::isnan(m.ncc_moving))
+      << "still " << m.ncc_still << " moving " << m.ncc_moving;
+  EXPECT_NEAR(m.v_W.x(), 0.016, 0.03);
 }
 
 TEST(MovingTopTest, RefusesAPlatformFasterThanTheBound) {

@@ -113,6 +113,7 @@ TEST(VisionConvertTest, MovingTopBecomesVisionPlatformOnlyWhereMeasured) {
   EXPECT_EQ(refused->n_candidates, 50);
   static_assert(int(MovingReason::kSizeOutOfRange) == platform_motion_t::REASON_SIZE_OUT_OF_RANGE);
   static_assert(int(MovingReason::kStillTop) == platform_motion_t::REASON_STILL_TOP);
+  static_assert(int(MovingReason::kStillPixels) == platform_motion_t::REASON_STILL_PIXELS);
   static_assert(int(MovingReason::kNoEarlierFrame) == platform_motion_t::REASON_NO_EARLIER_FRAME);
 }
 
