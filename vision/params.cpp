@@ -356,7 +356,8 @@ const ParamSchema<PipelineParams>& PipelineParams::schema() {
     s.add("max_reference_baseline_m", &P::max_reference_baseline_m, Range::gt(0), "m",
           "the reference is the oldest tracked frame (3.1.1) no farther than this from the "
           "current camera: a target must be in view in both images, and a 0.6 m baseline (a "
-          "search pass at 0.4 m/s) leaves a 43 cm platform wholly in neither")
+          "search pass at 0.4 m/s) leaves a 43 cm platform wholly in neither; landing above "
+          "the search height, the view's share kReferenceViewShare where that is more")
         .check([](const P& p) { return p.max_reference_baseline_m > p.waypoint.min_baseline_m; },
                "must exceed waypoint.min_baseline_m");
     s.section("star", &P::star, StarParams::schema(),

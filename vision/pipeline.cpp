@@ -73,6 +73,19 @@ bool Pipeline::spun(const TrackedFrame& f) const {
   return max_blur_px() > 0 && f.spin_blur_px > max_blur_px();
 }
 
+double landing_baseline_bound_m(double max_reference_baseline_m, const CameraModel& camera,
+                                double range_m) {
+  const double view_m = range_m * std::min(camera.width / camera.fx, camera.height / camera.fy);
+  return std::max(max_reference_baseline_m, kReferenceViewShare * view_m);
+}
+
+double Pipeline::max_baseline_m(const PoseSample& pose) const {
+  if (mission_ != Mission::kLanding) return params_.max_reference_baseline_m;
+  const double range_m =
+      camera_in_world(pose.X_WB(), mount_.X_BC()).translation().z() - params_.landing.floor_z_m;
+  return landing_baseline_bound_m(params_.max_reference_baseline_m, camera_, range_m);
+}
+
 bool Pipeline::holds() const {
   return mission_ == Mission::kLanding && params_.landing.hold_reference;
 }
@@ -181,7 +194,7 @@ Pipeline::Reference Pipeline::tracked_reference(const ReferenceTracker::Update& 
       }
       ref.frame = h[k];
       if ((camera_in_world(pose_k->second.X_WB(), mount_.X_BC()).translation() - c_now).norm() <=
-          params_.max_reference_baseline_m)
+          max_baseline_m(pose))
         break;
     }
   }
@@ -202,12 +215,12 @@ Pipeline::Reference Pipeline::tracked_reference(const ReferenceTracker::Update& 
 // multiplies the false targets over floors without a platform.
 void Pipeline::hold_reference(Reference* ref, const TrackedFrame& current, int64_t utime,
                               const PoseSample& pose) const {
-  if (!(holds() && ref->baseline_m < params_.max_reference_baseline_m && held_ &&
-        held_->utime < utime && double(utime - held_->utime) * 1e-6 <= kHoldMaxAgeS))
+  const double max_baseline = max_baseline_m(pose);
+  if (!(holds() && ref->baseline_m < max_baseline && held_ && held_->utime < utime &&
+        double(utime - held_->utime) * 1e-6 <= kHoldMaxAgeS))
     return;
   const double held_baseline_m = mocap_motion(held_pose_, pose, mount_).baseline_m;
-  if (!(held_baseline_m > ref->baseline_m && held_baseline_m <= params_.max_reference_baseline_m))
-    return;
+  if (!(held_baseline_m > ref->baseline_m && held_baseline_m <= max_baseline)) return;
   auto m = match_frames(*held_, current, params_.match);
   if (static_cast<int>(m.size()) < params_.tracker.min_tracked) return;
   ref->frame = held_;

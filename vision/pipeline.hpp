@@ -76,6 +76,19 @@ constexpr double kHoldMaxAgeS = 30.0;
 /// a few per cent of zoom, not across the third that a quarter second of the last drop makes.
 constexpr double kMovingMaxScaleChange = 0.1;
 
+/// While landing, the reference may lie this share of the view's short side (across the floor at
+/// the camera's range) from the camera when that is more than max_reference_baseline_m. The bound
+/// keeps a top in view in both images, which the view's footprint sets (0.3 m is this share of
+/// it 1.5 m over the floor, the search height); the top's parallax, what tells it from the
+/// floor, falls with the range squared at a fixed baseline, and a vantage climbed to fit a large
+/// top keeps it only with a baseline that grows with its view.
+constexpr double kReferenceViewShare = 0.27;
+
+/// The reference's farthest distance from a landing camera range_m over the floor [m]:
+/// max_reference_baseline_m, or kReferenceViewShare of the view's short side where that is more.
+double landing_baseline_bound_m(double max_reference_baseline_m, const CameraModel& camera,
+                                double range_m);
+
 /// The earlier frame the moving top is measured against, among recent frames (oldest first, their
 /// ages and the camera's ranges to the top's assumed height) [index]: the newest at least
 /// interval_s old within kMovingMaxScaleChange of the current range; in a fast descent none is,
@@ -152,6 +165,10 @@ class Pipeline {
   void measure_moving(const std::shared_ptr<const TrackedFrame>& current, int64_t utime,
                       const PoseSample& pose, FrameResult* r);
   bool holds() const;
+  /// The reference's farthest distance from the camera at `pose` [m]: max_reference_baseline_m,
+  /// or while landing kReferenceViewShare of the view's short side at the camera's range to the
+  /// floor where that is more.
+  double max_baseline_m(const PoseSample& pose) const;
 
   Mission mission_;
   PipelineParams params_;

@@ -275,14 +275,32 @@ TEST(TargetLostWhileHovering, AGapInTheFramesDropsTheHeldReference) {
 }
 
 TEST(TargetLostWhileHovering, AHeldReferenceOutOfViewIsNotHeld) {
-  // Hovering far from where the reference was held: beyond max_reference_baseline_m it gives
-  // way to the tracked reference.
-  const int n_move = 7, n_hover = 12;
+  // Hovering far from where the reference was held: beyond the bound (the view's share at the
+  // camera's 1.7 m, 0.33 m) it gives way to the tracked reference.
+  const int n_move = 11, n_hover = 12;
   auto params = short_history(true);
-  params.max_reference_baseline_m = 0.2;  // the move is 24 cm
   const auto seq = move_then_hover(n_move, n_hover);
+  const double range_m =
+      camera_in_world(seq.frames.back().pose.X_WB(), seq.rig.mount.X_BC()).translation().z();
+  const double bound =
+      landing_baseline_bound_m(params.max_reference_baseline_m, seq.rig.model, range_m);
+  ASSERT_GT(bound, params.max_reference_baseline_m);
+  // The move takes the camera beyond the bound from where it began.
+  ASSERT_GT((seq.frames[n_move - 1].pose.p_W_B - seq.frames[0].pose.p_W_B).norm(), bound);
   const auto results = run(seq, Mission::kLanding, params);
-  for (int i = n_move; i < n_move + n_hover; ++i) EXPECT_LE(results[i].baseline_m, 0.2 + 1e-9) << i;
+  for (int i = n_move; i < n_move + n_hover; ++i)
+    EXPECT_LE(results[i].baseline_m, bound + 1e-9) << i;
+}
+
+TEST(LandingBaselineBound, GrowsWithTheViewAboveTheSearchHeight) {
+  const CameraModel camera = CameraModel::firefly_mv_4mm();
+  // At the search height the vehicle file's bound; climbed, the view's share.
+  EXPECT_DOUBLE_EQ(landing_baseline_bound_m(0.3, camera, 1.5), 0.3);
+  const double short_side_m = 2.2 * camera.height / camera.fy;
+  EXPECT_NEAR(landing_baseline_bound_m(0.3, camera, 2.2), kReferenceViewShare * short_side_m,
+              1e-12);
+  EXPECT_GT(landing_baseline_bound_m(0.3, camera, 2.2), 0.4);
+  EXPECT_DOUBLE_EQ(landing_baseline_bound_m(0.6, camera, 2.2), 0.6);
 }
 
 TEST(TargetLostWhileHovering, AHeldReferenceExpiresAfterHoldMaxAge) {
