@@ -184,6 +184,7 @@ Pipeline::Reference Pipeline::tracked_reference(const ReferenceTracker::Update& 
   if (up.reference) {
     const auto& h = tracker_.history();
     const Vector3d c_now = camera_in_world(pose.X_WB(), mount_.X_BC()).translation();
+    const double max_baseline = max_baseline_m(pose);
     for (size_t k = 0; k + 1 < h.size(); ++k) {
       const auto pose_k = std::find_if(poses_.begin(), poses_.end(),
                                        [&](const auto& e) { return e.first == h[k]->utime; });
@@ -194,7 +195,7 @@ Pipeline::Reference Pipeline::tracked_reference(const ReferenceTracker::Update& 
       }
       ref.frame = h[k];
       if ((camera_in_world(pose_k->second.X_WB(), mount_.X_BC()).translation() - c_now).norm() <=
-          max_baseline_m(pose))
+          max_baseline)
         break;
     }
   }

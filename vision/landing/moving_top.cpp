@@ -306,34 +306,29 @@ void patch_ncc(const Correspondences& c, const std::vector<Placed>& cand,
                const cv::Mat& gray_1, const cv::Mat& gray_2, MovingTop* out) {
   const Isometry3d X_C1W = v.X_WC1.inverse();
   const double cs = std::cos(S.theta), sn = std::sin(S.theta);
-  // A current pixel's point on the top's plane, and that point's pixel in the earlier image
-  // under each hypothesis (still: where it is; moving: S^-1 of it).
-  const auto on_plane = [&](const Vector2d& u2) {
-    return ray_at_height(v.X_WC2.translation(), v.X_WC2.linear() * c.ray_of_pixel2(u2), z_top);
-  };
-  const auto in_view_1 = [&](const Vector2d& xy) -> std::optional<Vector2d> {
-    const Vector3d p_C1 = X_C1W * Vector3d(xy.x(), xy.y(), z_top);
+  // A point on the top's plane's pixel in the earlier image under each hypothesis (still: where
+  // it is; moving: S^-1 of it).
+  const auto map = [&](const Vector2d& xy, bool moved) -> std::optional<Vector2d> {
+    Vector2d at = xy;
+    if (moved) {
+      const Vector2d d = (xy - S.t) / S.s;
+      at = Vector2d(cs * d.x() + sn * d.y(), -sn * d.x() + cs * d.y());
+    }
+    const Vector3d p_C1 = X_C1W * Vector3d(at.x(), at.y(), z_top);
     if (!(p_C1.z() > 0)) return std::nullopt;
     return c.pixel1(p_C1);
   };
-  const auto map = [&](const Vector2d& u2, bool moved) -> std::optional<Vector2d> {
-    const auto P = on_plane(u2);
-    if (!P) return std::nullopt;
-    if (!moved) return in_view_1(P->head<2>());
-    const Vector2d d = (P->head<2>() - S.t) / S.s;
-    return in_view_1(Vector2d(cs * d.x() + sn * d.y(), -sn * d.x() + cs * d.y()));
-  };
-  // The centre's image and the map's derivative from the patch's edges (central differences).
-  const auto affine = [&](const Vector2d& u0, bool moved, Vector2d* m0, Eigen::Matrix2d* J) {
-    const auto c0 = map(u0, moved);
-    const auto xp = map(u0 + Vector2d(kPatchHalf, 0), moved);
-    const auto xm = map(u0 - Vector2d(kPatchHalf, 0), moved);
-    const auto yp = map(u0 + Vector2d(0, kPatchHalf), moved);
-    const auto ym = map(u0 - Vector2d(0, kPatchHalf), moved);
-    if (!c0 || !xp || !xm || !yp || !ym) return false;
-    *m0 = *c0;
-    J->col(0) = (*xp - *xm) / (2.0 * kPatchHalf);
-    J->col(1) = (*yp - *ym) / (2.0 * kPatchHalf);
+  // The patch's centre and edges (central differences) placed on the top's plane once, from the
+  // current view; their images give each hypothesis's centre and the map's derivative.
+  const Vector2d kEdges[5] = {
+      {0, 0}, {kPatchHalf, 0}, {-kPatchHalf, 0}, {0, kPatchHalf}, {0, -kPatchHalf}};
+  const auto affine = [&](const Vector2d(&xy)[5], bool moved, Vector2d* m0, Eigen::Matrix2d* J) {
+    std::optional<Vector2d> m[5];
+    for (int e = 0; e < 5; ++e)
+      if (!(m[e] = map(xy[e], moved))) return false;
+    *m0 = *m[0];
+    J->col(0) = (*m[1] - *m[2]) / (2.0 * kPatchHalf);
+    J->col(1) = (*m[3] - *m[4]) / (2.0 * kPatchHalf);
     return true;
   };
   const double step = std::max(1.0, double(in.size()) / kMaxPatches);
@@ -348,11 +343,19 @@ void patch_ncc(const Correspondences& c, const std::vector<Placed>& cand,
       for (int i = 0; i < kPatchSide; ++i)
         now[j * kPatchSide + i] =
             gray_2.at<uint8_t>(int(u0.y()) + j - kPatchHalf, int(u0.x()) + i - kPatchHalf);
+    Vector2d xy[5];
+    bool placed = true;
+    for (int e = 0; e < 5 && placed; ++e) {
+      const auto P = ray_at_height(v.X_WC2.translation(),
+                                   v.X_WC2.linear() * c.ray_of_pixel2(u0 + kEdges[e]), z_top);
+      if ((placed = P.has_value())) xy[e] = P->head<2>();
+    }
     Vector2d m_moved, m_still;
     Eigen::Matrix2d J_moved, J_still;
-    if (!affine(u0, true, &m_moved, &J_moved) || !read_grid(gray_1, m_moved, J_moved, grid))
+    if (!placed || !affine(xy, true, &m_moved, &J_moved) ||
+        !read_grid(gray_1, m_moved, J_moved, grid))
       continue;
-    const bool still_mapped = affine(u0, false, &m_still, &J_still);
+    const bool still_mapped = affine(xy, false, &m_still, &J_still);
     if (still_mapped && (m_still - m_moved).norm() < kPatchSide) continue;
     const double moving = best_window_ncc(now, grid);
     double still = -1;
