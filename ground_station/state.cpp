@@ -171,6 +171,18 @@ const char* target_reason_name(int8_t reason) {
       return "top runs on past its features or outline";
     case target_t::REASON_TOP_TOO_SMALL:
       return "featureless outline narrower than the gear";
+    case target_t::REASON_DECOMPOSITION_AMBIGUOUS:
+      return "decomposition ambiguous (no prior)";
+    case target_t::REASON_PLANES_DISAGREE:
+      return "the two planes' motions disagree";
+    case target_t::REASON_ALIGNED_PLANE_BEHIND:
+      return "aligned plane behind a camera";
+    case target_t::REASON_AIM_BEHIND_CAMERA:
+      return "target's centre not in front of the camera";
+    case target_t::REASON_CORNER_OFF_PLANE:
+      return "outline corner off its plane";
+    case target_t::REASON_TOP_POINTS_FEW:
+      return "too few top features on its plane";
   }
   return "unknown";
 }

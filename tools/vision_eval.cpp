@@ -157,6 +157,10 @@ const char* hint(Reason reason) {
     case Reason::kMotionBlur:
       return "frames smeared by the camera's motion: a shorter exposure (more light or gain), or"
              " slower turns";
+    case Reason::kPlanesDisagree:
+      return "the floor's and the top's homographies give two motions: a wrong lens model"
+             " (distortion, focal length) bends one plane more than the other; or the top's"
+             " matches are few or on a repeated print";
     case Reason::kMotionDisagrees:
       return "a plane's motion disagrees with the pose's: check the camera's mount (t_B_C_m,"
              " rotation), its calibration and the pose's latency";

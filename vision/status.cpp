@@ -84,6 +84,18 @@ const char* to_string(Reason r) {
       return "top runs on past its features or outline";
     case Reason::kTopTooSmall:
       return "featureless outline narrower than the gear";
+    case Reason::kDecompositionAmbiguous:
+      return "decomposition ambiguous (no prior)";
+    case Reason::kPlanesDisagree:
+      return "the two planes' motions disagree";
+    case Reason::kAlignedPlaneBehind:
+      return "aligned plane behind a camera";
+    case Reason::kAimBehindCamera:
+      return "target's centre not in front of the camera";
+    case Reason::kCornerOffPlane:
+      return "outline corner off its plane";
+    case Reason::kTopPointsFew:
+      return "too few top features on its plane";
   }
   return "unknown";
 }

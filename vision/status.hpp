@@ -21,7 +21,7 @@ enum class Reason : int8_t {
   kNoDominantPlane = 6,      ///< no homography with enough inliers (all outliers)
   kNoTargetPlane = 7,        ///< only one plane in view
   kNoOpening = 8,            ///< ingress: no block of cells seen through the wall
-  kDecompositionFailed = 9,  ///< no physically valid decomposition, or planes disagree
+  kDecompositionFailed = 9,  ///< no decomposition puts the plane in front of both cameras
   kBadImage = 10,            ///< empty, wrong type or too small
   kPartialView = 11,         ///< target found but cut by the image border: its centre is unknown
   kLowParallax = 12,  ///< ingress: the opening in view, but too little parallax to measure it
@@ -57,6 +57,14 @@ enum class Reason : int8_t {
   kTopRunsOn = 38,    ///< landing: seen in part, the top running on past its features (rim.hpp)
                       ///< or past a featureless outline printed on it (outline.hpp)
   kTopTooSmall = 39,  ///< landing: a featureless outline narrower than the vehicle's gear
+  // The geometry's refusals past the homographies, each its own (decomposition.hpp,
+  // alignment.hpp, waypoint.hpp, extent.hpp, outline.hpp).
+  kDecompositionAmbiguous = 40,  ///< two decompositions in front, no prior to choose between them
+  kPlanesDisagree = 41,          ///< no pair of the two planes' decompositions agrees in motion
+  kAlignedPlaneBehind = 42,  ///< the jointly refined motion puts a plane behind a camera
+  kAimBehindCamera = 43,     ///< the target's centre or its ray not in front on its plane
+  kCornerOffPlane = 44,      ///< landing: a featureless outline's corner ray misses its plane
+  kTopPointsFew = 45,        ///< landing: under 4 distinct top features placed on the top's plane
 };
 
 const char* to_string(Reason r);

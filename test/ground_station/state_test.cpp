@@ -123,7 +123,7 @@ TEST(StationStateTest, CountsTargetsByReasonWithEachGatesName) {
   EXPECT_TRUE(contains(json, "\"top tilted\":2"));
   EXPECT_TRUE(contains(json, "\"no floor around the top\":1"));
   // Every reason the vision sends has a name.
-  for (int r = target_t::REASON_OK; r <= target_t::REASON_TOP_TOO_SMALL; ++r)
+  for (int r = target_t::REASON_OK; r <= target_t::REASON_TOP_POINTS_FEW; ++r)
     EXPECT_STRNE(target_reason_name(static_cast<int8_t>(r)), "unknown") << r;
 }
 

@@ -51,11 +51,17 @@ TEST(StatusTest, ReasonValuesAreTheTargetMessageConstants) {
   EXPECT_EQ(int(Reason::kOutlineSilent), T::REASON_OUTLINE_SILENT);
   EXPECT_EQ(int(Reason::kTopRunsOn), T::REASON_TOP_RUNS_ON);
   EXPECT_EQ(int(Reason::kTopTooSmall), T::REASON_TOP_TOO_SMALL);
+  EXPECT_EQ(int(Reason::kDecompositionAmbiguous), T::REASON_DECOMPOSITION_AMBIGUOUS);
+  EXPECT_EQ(int(Reason::kPlanesDisagree), T::REASON_PLANES_DISAGREE);
+  EXPECT_EQ(int(Reason::kAlignedPlaneBehind), T::REASON_ALIGNED_PLANE_BEHIND);
+  EXPECT_EQ(int(Reason::kAimBehindCamera), T::REASON_AIM_BEHIND_CAMERA);
+  EXPECT_EQ(int(Reason::kCornerOffPlane), T::REASON_CORNER_OFF_PLANE);
+  EXPECT_EQ(int(Reason::kTopPointsFew), T::REASON_TOP_POINTS_FEW);
 }
 
 TEST(StatusTest, EveryReasonHasItsOwnName) {
   std::set<std::string> names;
-  for (int r = 0; r <= alight::target_t::REASON_TOP_TOO_SMALL; ++r) {
+  for (int r = 0; r <= alight::target_t::REASON_TOP_POINTS_FEW; ++r) {
     const std::string name = to_string(static_cast<Reason>(r));
     EXPECT_NE(name, "unknown") << r;
     EXPECT_TRUE(names.insert(name).second) << r << ": " << name;

@@ -157,7 +157,7 @@ Result<TwoPlaneMotion> align_two_planes(const Matrix3d& H_a, const std::vector<V
         out.rms_before = std::sqrt(jp.transfer_cost(x0) / double(rays_1a.size() + rays_1b.size()));
       }
     }
-  if (!any) return R::fail(Reason::kDecompositionFailed);
+  if (!any) return R::fail(Reason::kPlanesDisagree);
   const size_t n_points = rays_1a.size() + rays_1b.size();
   refine(s, jp, params.max_iterations, params.robust);
   out.R_21 = nearest_rotation(s.R);
@@ -168,7 +168,7 @@ Result<TwoPlaneMotion> align_two_planes(const Matrix3d& H_a, const std::vector<V
   // The refined planes must still lie in front of both cameras.
   if (positive_depth({out.plane_a()}, rays_1a, rays_2a, dparams).empty() ||
       positive_depth({out.plane_b()}, rays_1b, rays_2b, dparams).empty())
-    return R::fail(Reason::kDecompositionFailed);
+    return R::fail(Reason::kAlignedPlaneBehind);
   return R::ok(out);
 }
 

@@ -49,8 +49,9 @@ std::optional<RotationPrior> rotation_prior(const Matrix3d& R_21_mocap, const Al
 
 /// Aligns the calibrated homographies of two planes given each one's inlier rays (normalised,
 /// z = 1) in both images. Fails with kSmallBaseline (no translation in either), or
-/// kDecompositionFailed (no candidate in front of the cameras, or no pair of candidates agrees
-/// within the limits: the two "planes" are not two planes of one rigid scene).
+/// kDecompositionFailed (either plane has no candidate in front of the cameras), kPlanesDisagree
+/// (no pair of candidates agrees within the limits: the two "planes" are not two planes of one
+/// rigid scene), or kAlignedPlaneBehind (the joint refinement moved a plane behind a camera).
 Result<TwoPlaneMotion> align_two_planes(const Matrix3d& H_a, const std::vector<Vector3d>& rays_1a,
                                         const std::vector<Vector3d>& rays_2a, const Matrix3d& H_b,
                                         const std::vector<Vector3d>& rays_1b,

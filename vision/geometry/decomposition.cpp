@@ -111,7 +111,7 @@ Result<PlaneMotion> decompose(const Matrix3d& H_cal, const std::vector<Vector3d>
     same = same && rotation_angle(m.R_21, front[0].R_21) < 1e-6 &&
            direction_angle(m.n_1, front[0].n_1) < 1e-6;
   if (same) return Result<PlaneMotion>::ok(front[0]);
-  return Result<PlaneMotion>::fail(Reason::kDecompositionFailed);
+  return Result<PlaneMotion>::fail(Reason::kDecompositionAmbiguous);
 }
 
 }  // namespace alight::vision

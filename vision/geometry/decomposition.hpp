@@ -61,7 +61,8 @@ struct DecompositionPrior {
 
 /// Decomposes and disambiguates: positive depth, then the candidate closest to the prior (the
 /// rotation first, then the normal). Fails with kSmallBaseline (no translation part) or
-/// kDecompositionFailed (no candidate in front of both cameras, or two left and no prior).
+/// kDecompositionFailed (no candidate in front of both cameras), kDecompositionAmbiguous (two
+/// left, distinct, and no prior).
 Result<PlaneMotion> decompose(const Matrix3d& H_cal, const std::vector<Vector3d>& rays_1,
                               const std::vector<Vector3d>& rays_2, const DecompositionPrior& prior,
                               const DecompositionParams& params = {});

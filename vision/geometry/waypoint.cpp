@@ -37,7 +37,7 @@ Result<Waypoint> compute_waypoint(const PlaneMotion& motion, const Vector3d& ray
   const Vector3d n_2 = motion.n_2();  // eq. 4 [1/baseline]
   const double denom = n_2.dot(ray_2);
   if (!(denom > 1e-9) || !std::isfinite(denom))
-    return Result<Waypoint>::fail(Reason::kDecompositionFailed);
+    return Result<Waypoint>::fail(Reason::kAimBehindCamera);
   w.p_C2 = s * ray_2 / denom;  // eq. 5
   const Matrix3d R_V2 = pose_2.q_WB.toRotationMatrix();
   w.p_W = pose_2.p_W_B + R_V2 * mount.t_B_C + R_V2 * mount.R_BC * w.p_C2;  // eq. 6 (current pose)

@@ -38,7 +38,7 @@ struct Waypoint {
 /// Waypoint of the plane point seen along `ray_2` (normalised, undistorted (x2, y2, 1) in the
 /// current image) given the decomposition of that plane's homography. Fails with
 /// kSmallBaseline (s < min_baseline_m), kMotionDisagrees (the decomposed motion off motion
-/// capture's beyond max_translation_angle_deg or max_rotation_error_deg) or kDecompositionFailed
+/// capture's beyond max_translation_angle_deg or max_rotation_error_deg) or kAimBehindCamera
 /// (the ray does not meet the plane in front of the camera).
 Result<Waypoint> compute_waypoint(const PlaneMotion& motion, const Vector3d& ray_2,
                                   const PoseSample& pose_1, const PoseSample& pose_2,

@@ -113,6 +113,13 @@ std::optional<TopRect> features_extent(const std::vector<Vector3d>& pts_W, const
                        a_short.x() * e1 + a_short.y() * e2);
 }
 
+Result<TopRect> top_features_rect(const std::vector<Vector3d>& pts_W, const Vector3d& n_W) {
+  if (pts_W.size() < 4) return Result<TopRect>::fail(Reason::kTopPointsFew);
+  auto rect = features_extent(pts_W, n_W);
+  if (!rect) return Result<TopRect>::fail(Reason::kTopPointsFew);
+  return Result<TopRect>::ok(*rect);
+}
+
 TopRect features_rect(const std::vector<Vector3d>& pts_W, const Vector3d& mean,
                       const Vector3d& ax_long, const Vector3d& ax_short) {
   TopRect r{mean, {ax_long, ax_short}, {1e9, 1e9}, {-1e9, -1e9}};
@@ -138,7 +145,7 @@ Reason measure_top(const Correspondences& c, const LandingPlanes& planes, const 
   const Vector3d centre_W =
       r.origin_W + 0.5 * (r.lo[0] + r.hi[0]) * r.axis[0] + 0.5 * (r.lo[1] + r.hi[1]) * r.axis[1];
   const Vector3d centre_C2 = X_WC2.inverse() * centre_W;
-  if (centre_C2.z() <= 0) return Reason::kDecompositionFailed;
+  if (centre_C2.z() <= 0) return Reason::kAimBehindCamera;
   const Vector3d aim_ray = centre_C2 / centre_C2.z();
   const auto w_top =
       compute_waypoint(planes.top, aim_ray, c.pose_1, c.pose_2, *c.mount, params.waypoint);

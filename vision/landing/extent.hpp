@@ -62,6 +62,10 @@ Vector3d top_normal_W(const LandingPlanes& planes, const Isometry3d& X_WC2);
 /// along those axes from their mean. nullopt when the rectangle has no extent.
 std::optional<TopRect> features_extent(const std::vector<Vector3d>& pts_W, const Vector3d& n_W);
 
+/// The features' rectangle of the top's points (features_extent), or kTopPointsFew: under four
+/// points (a plane's fewest), or a rectangle without extent.
+Result<TopRect> top_features_rect(const std::vector<Vector3d>& pts_W, const Vector3d& n_W);
+
 /// The extent of pts_W along two axes, from `mean`.
 TopRect features_rect(const std::vector<Vector3d>& pts_W, const Vector3d& mean,
                       const Vector3d& ax_long, const Vector3d& ax_short);
@@ -72,7 +76,7 @@ TopRect widened_by_shortfall(TopRect r, size_t n);
 
 /// The estimate of a top measured as r: the waypoint of its centre on the top's plane and the
 /// height above the floor's along the same ray (eqs. 4-6), its sizes (long first), yaw and
-/// outline. kDecompositionFailed when the centre is behind camera 2, else the waypoints' reason
+/// outline. kAimBehindCamera when the centre is behind camera 2, else the waypoints' reason
 /// (geometry/waypoint.hpp) where either fails; kOk with *e filled.
 Reason measure_top(const Correspondences& c, const LandingPlanes& planes, const TopRect& r,
                    const Isometry3d& X_WC2, const PipelineParams& params, TargetEstimate* e);

@@ -41,11 +41,10 @@ TargetOutcome platform_of(const Correspondences& c, const PipelineParams& params
   const Isometry3d X_WC2 = camera_in_world(c.pose_2.X_WB(), c.mount->X_BC());
   const std::vector<Vector3d> pts_W =
       top_points_W(c, planes, H_top_px, X_WC2, mocap.baseline_m, params);
-  if (pts_W.size() < 4) return refuse(std::move(out), Reason::kDecompositionFailed);
   const Vector3d n_W = top_normal_W(planes, X_WC2);
   if (!top_level(n_W, params.landing)) return refuse(std::move(out), Reason::kTopTilted);
-  const auto features = features_extent(pts_W, n_W);
-  if (!features) return refuse(std::move(out), Reason::kDecompositionFailed);
+  const auto features = top_features_rect(pts_W, n_W);
+  if (!features) return refuse(std::move(out), features.reason());
   const TopRect widened = widened_by_shortfall(*features, pts_W.size());
   if (const Reason r = measure_top(c, planes, widened, X_WC2, params, &out.estimate);
       r != Reason::kOk)

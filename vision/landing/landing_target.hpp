@@ -29,8 +29,8 @@ namespace alight::vision {
 /// "fallback" keeps the paper's where they give a platform (found or a partial view) on a floor
 /// that is the known floor (floor_agrees) and takes the known floor's otherwise, the paper's
 /// outcome standing where neither gives one; "always" and "off" use one source only. Fails with
-/// the planes' reasons (planes.hpp), a gate's (gates.hpp), or the extent's (kDecompositionFailed,
-/// kMotionDisagrees: extent.hpp); kPartialView for a top cut by either image's border
+/// the planes' reasons (planes.hpp), a gate's (gates.hpp), kTopPointsFew (under four
+/// distinct top features placed on its plane), or the extent's (extent.hpp); kPartialView for a top cut by either image's border
 /// (cut_by_border), kTopParallaxGap for one reaching into the epipole's parallax gap
 /// (top_clear_of_epipole): both located, their centre not measured. gray_1 / gray_2: the reference
 /// and current raw images, CV_8UC1 of the camera's size (the photometric gate, and the extent out

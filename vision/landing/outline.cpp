@@ -849,7 +849,7 @@ TargetOutcome top_of_outline(const Outline& o, const Correspondences& c, const c
   }
   if (rims == 0) return refuse(Reason::kSmallBaseline);
   std::array<Vector3d, 4> P;
-  if (!top_corners(o, side_z, map, z0 + h, &P)) return refuse(Reason::kDecompositionFailed);
+  if (!top_corners(o, side_z, map, z0 + h, &P)) return refuse(Reason::kCornerOffPlane);
   TargetOutcome out = top_estimate(o, P, h, c, map, L);
   // No gear stands on a top narrower than itself, whatever the region is; on a coarse floor a
   // patch of the pattern that a chance agreement of its grains placed above the floor is such a

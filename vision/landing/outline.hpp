@@ -119,7 +119,7 @@ constexpr size_t kMaxOutlines = 2;
 /// whose step the reference shows at no height), kOutlineSilent (no side tells a height: each
 /// steps too faintly, is a line or repeats), kOutlineOnFloor (no side above min_height_m),
 /// kSmallBaseline (fewer than two sides with parallax, or no rim among them),
-/// kHeightOutOfRange, kDecompositionFailed (a corner's ray misses its plane); kPartialView for a
+/// kHeightOutOfRange, kCornerOffPlane (a corner's ray misses its plane); kPartialView for a
 /// corner within edge_margin_px of the border, kTopRunsOn for a top running on past the outline
 /// (stage 6; both located, not measured); kTopTooSmall (its estimate kept) for a top narrower
 /// than the gear.

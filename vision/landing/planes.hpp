@@ -32,7 +32,7 @@ struct LandingPlanes {
 /// The paper's planes: two free homographies, aligned; the nearer is the top. Labels the first
 /// homography's inliers kDominant in out->labels and counts them in out->estimate. Fails with
 /// kTooFewMatches / kNoDominantPlane (no first homography), kNoTargetPlane (no second one with
-/// min_platform_inliers), or the alignment's reason (kSmallBaseline, kDecompositionFailed).
+/// min_platform_inliers), or the alignment's reason (alignment.hpp).
 Result<LandingPlanes> paper_planes(const Correspondences& c, const PipelineParams& params,
                                    TargetOutcome* out);
 

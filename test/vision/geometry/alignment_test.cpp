@@ -116,7 +116,7 @@ TEST(AlignmentTest, HomographiesOfDifferentMotionsAreRefused) {
   const Fitted f = fit(s), g = fit(other);
   const auto a = align_two_planes(f.Ha, f.r1a, f.r2a, g.Hb, g.r1b, g.r2b);
   EXPECT_FALSE(a);
-  EXPECT_EQ(a.reason(), Reason::kDecompositionFailed);
+  EXPECT_EQ(a.reason(), Reason::kPlanesDisagree);
 }
 
 TEST(AlignmentTest, RotationPriorIsOffByDefaultAndWeighsFeatureNoiseAgainstItsSigma) {

@@ -140,7 +140,26 @@ TEST(WaypointTest, RayParallelToThePlaneIsRefused) {
   PlaneMotion m = s.truth();
   const Vector3d n2 = m.n_2();
   const Vector3d ray = n2.cross(Vector3d::UnitX());  // n2^T ray = 0
-  EXPECT_FALSE(compute_waypoint(m, ray / ray.z(), s.pose_1, s.pose_2, s.mount));
+  const auto w = compute_waypoint(m, ray / ray.z(), s.pose_1, s.pose_2, s.mount);
+  EXPECT_FALSE(w);
+  EXPECT_EQ(w.reason(), Reason::kAimBehindCamera);
+}
+
+TEST(WaypointTest, RayMeetingThePlaneBehindTheCameraIsRefused) {
+  const Scene s;
+  const PlaneMotion m = s.truth();
+  // A ray past the plane's horizon (n2^T ray < 0, in front of the camera: z > 0) meets the plane
+  // only behind the camera.
+  const Vector3d n2 = m.n_2();
+  Vector3d along = n2.cross(Vector3d::UnitX());
+  if (along.z() < 0) along = -along;
+  ASSERT_GT(along.z(), 1e-6);
+  const Vector3d ray = along - 0.5 * along.z() / n2.z() * n2;
+  ASSERT_GT(ray.z(), 0);
+  ASSERT_LT(n2.dot(ray), 0);
+  const auto w = compute_waypoint(m, ray / ray.z(), s.pose_1, s.pose_2, s.mount);
+  EXPECT_FALSE(w);
+  EXPECT_EQ(w.reason(), Reason::kAimBehindCamera);
 }
 
 TEST(WaypointTest, PatternAngleFollowsTheCameraYaw) {

@@ -387,6 +387,24 @@ TEST(LandingTopExtent, AStrayTopMatchOnTheFloorDoesNotStretchTheTop) {
   }
 }
 
+TEST(LandingTopExtent, TooFewOrCoincidentTopPointsHaveNoRectangle) {
+  const Vector3d up = Vector3d::UnitZ();
+  const std::vector<Vector3d> three = {{0, 0, 0.2}, {0.3, 0, 0.2}, {0, 0.2, 0.2}};
+  const auto few = top_features_rect(three, up);
+  ASSERT_FALSE(few);
+  EXPECT_EQ(few.reason(), Reason::kTopPointsFew);
+  const std::vector<Vector3d> one_point(5, Vector3d(0.1, 0.1, 0.2));
+  const auto none = top_features_rect(one_point, up);
+  ASSERT_FALSE(none);
+  EXPECT_EQ(none.reason(), Reason::kTopPointsFew);
+  std::vector<Vector3d> four = three;
+  four.emplace_back(0.3, 0.2, 0.2);
+  const auto rect = top_features_rect(four, up);
+  ASSERT_TRUE(rect) << to_string(rect.reason());
+  EXPECT_NEAR(rect->hi[0] - rect->lo[0], 0.3, 1e-6);
+  EXPECT_NEAR(rect->hi[1] - rect->lo[1], 0.2, 1e-6);
+}
+
 // Over the tile floor (few floor matches around the top, many on it, a fifth mismatches, some of
 // random pixel pairs) 8-22 cm tops are found, at their height.
 TEST(FalseTargetOverABareFloor, TopsOverFewFloorMatchesAreFound) {
