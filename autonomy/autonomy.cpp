@@ -6,6 +6,7 @@
 #include <type_traits>
 
 #include "autonomy/text.hpp"
+#include "common/median.hpp"
 
 namespace alight::autonomy {
 
@@ -81,12 +82,6 @@ bool finite(const PoseSample& s) {
          s.omega_B.allFinite() && std::abs(s.q_WB.norm() - 1.0) < 1e-3;
 }
 
-double median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  const size_t mid = v.size() / 2;
-  std::nth_element(v.begin(), v.begin() + mid, v.end());
-  return v[mid];
-}
 }  // namespace
 
 Autonomy::Autonomy(const AutonomyParams& params, const RestartState& restored)
@@ -531,7 +526,7 @@ void Autonomy::finish_refinement(phases::Refinement& r) {
     a.push_back(s.x());
     b.push_back(s.y());
   }
-  const Vector2d size_m(median(a), median(b));
+  const Vector2d size_m(a.empty() ? 0.0 : upper_median(a), b.empty() ? 0.0 : upper_median(b));
   if (const auto refusal = profile_->refuse(size_m.x(), size_m.y())) {
     hold(refusal->why, Failsafe::kNone, refusal->hold_min_z_m);
     return;

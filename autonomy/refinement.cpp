@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cassert>
 
+#include "common/median.hpp"
+
 namespace alight::autonomy {
 
 Vector3d RefinementEstimator::mean_of(const std::vector<Vector3d>& s, int skip) {
@@ -133,8 +135,7 @@ Vector3d componentwise_median(const std::vector<Vector3d>& points) {
   std::vector<double> v(points.size());
   for (int k = 0; k < 3; ++k) {
     for (size_t i = 0; i < points.size(); ++i) v[i] = points[i][k];
-    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-    m[k] = v[v.size() / 2];
+    m[k] = upper_median(v);
   }
   return m;
 }

@@ -8,6 +8,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "common/median.hpp"
+
 namespace alight::lsq {
 namespace {
 
@@ -152,9 +154,7 @@ Summary solve(const Problem& problem, const Options& options) {
 
 std::vector<double> cauchy_weights(const std::vector<double>& e, double min_sigma) {
   if (e.empty()) return {};
-  std::vector<double> sorted = e;
-  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
-  const double sigma = std::max(sorted[sorted.size() / 2] / 1.177, min_sigma);
+  const double sigma = std::max(upper_median(e) / 1.177, min_sigma);
   const double c = 2.385 * sigma;
   std::vector<double> w(e.size());
   for (size_t k = 0; k < e.size(); ++k) w[k] = 1.0 / (1.0 + (e[k] / c) * (e[k] / c));

@@ -9,6 +9,7 @@
 #include <opencv2/video/tracking.hpp>
 #include <random>
 
+#include "common/median.hpp"
 #include "common/robust_lsq.hpp"
 
 namespace alight::estimator {
@@ -127,16 +128,9 @@ double untruncated_sigma(double sigma_kept, double T) {
   return s;
 }
 
-double median_of(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  return *mid;
-}
-
 // Robust scale of 2-D residual lengths: the median length of a 2-D Gaussian is 1.1774 sigma.
 double robust_sigma(const std::vector<double>& lengths, double min_sigma) {
-  return std::max(min_sigma, median_of(lengths) / 1.1774);
+  return lengths.empty() ? min_sigma : std::max(min_sigma, upper_median(lengths) / 1.1774);
 }
 
 // Levenberg-Marquardt with Huber weights over `idx`, from u (moved in place). Residuals in pixels

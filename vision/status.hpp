@@ -61,10 +61,10 @@ enum class Reason : int8_t {
   // alignment.hpp, waypoint.hpp, extent.hpp, outline.hpp).
   kDecompositionAmbiguous = 40,  ///< two decompositions in front, no prior to choose between them
   kPlanesDisagree = 41,          ///< no pair of the two planes' decompositions agrees in motion
-  kAlignedPlaneBehind = 42,  ///< the jointly refined motion puts a plane behind a camera
-  kAimBehindCamera = 43,     ///< the target's centre or its ray not in front on its plane
-  kCornerOffPlane = 44,      ///< landing: a featureless outline's corner ray misses its plane
-  kTopPointsFew = 45,        ///< landing: under 4 distinct top features placed on the top's plane
+  kAlignedPlaneBehind = 42,      ///< the jointly refined motion puts a plane behind a camera
+  kAimBehindCamera = 43,         ///< the target's centre or its ray not in front on its plane
+  kCornerOffPlane = 44,          ///< landing: a featureless outline's corner ray misses its plane
+  kTopPointsFew = 45,  ///< landing: under 4 distinct top features placed on the top's plane
 };
 
 const char* to_string(Reason r);

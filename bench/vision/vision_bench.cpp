@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "common/heap.hpp"
+#include "common/median.hpp"
 #include "test/vision/test_images.hpp"
 #include "vision/frontend/matcher.hpp"
 #include "vision/frontend/star_detector.hpp"
@@ -39,11 +40,7 @@ struct Clock {
 };
 double ms_since(double t0_ms) { return Clock::now() - t0_ms; }
 
-double median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
-}
+double median(const std::vector<double>& v) { return v.empty() ? 0 : upper_median(v); }
 
 /// Mean corner error of H_est against H_true over the four corners of a rectangle [px].
 double rect_error(const Matrix3d& H_est, const Matrix3d& H_true, const cv::Rect& r) {

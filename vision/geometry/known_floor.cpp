@@ -8,6 +8,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "common/geometry.hpp"
+#include "common/median.hpp"
 #include "vision/geometry/convex_hull.hpp"
 #include "vision/geometry/floor_classify.hpp"
 
@@ -40,10 +41,7 @@ double median_parallax_angle(const std::vector<Vector3d>& x1, const std::vector<
     const double off_axis = 1.0 + x2[i].head<2>().squaredNorm();
     angle.push_back((a.head<2>() / a.z() - b.head<2>() / b.z()).norm() / off_axis);
   }
-  if (angle.empty()) return 0.0;
-  auto mid = angle.begin() + static_cast<std::ptrdiff_t>(angle.size() / 2);
-  std::nth_element(angle.begin(), mid, angle.end());
-  return *mid;
+  return angle.empty() ? 0.0 : upper_median(angle);
 }
 
 struct TopMode {

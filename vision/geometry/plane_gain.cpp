@@ -6,6 +6,8 @@
 #include <cassert>
 #include <cmath>
 
+#include "common/median.hpp"
+
 namespace alight::vision {
 namespace {
 
@@ -78,12 +80,6 @@ Samples sample_ratios(const cv::Mat& image, const cv::Mat& reference, double sca
   return s;
 }
 
-double median_of(std::vector<double> v) {
-  assert(!v.empty());
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
-}
-
 // Least squares over the kept points: the full quadratic where enough points support it and it
 // is well posed, else the constant term alone.
 Eigen::Matrix<double, 6, 1> fit(const Samples& s, const std::vector<char>& keep, int n_keep,
@@ -100,7 +96,7 @@ Eigen::Matrix<double, 6, 1> fit(const Samples& s, const std::vector<char>& keep,
   std::vector<double> kept;
   for (size_t i = 0; i < s.rows.size(); ++i)
     if (keep[i]) kept.push_back(s.log_ratio[i]);
-  c(0) = median_of(kept);
+  c(0) = upper_median(kept);
   return c;
 }
 
@@ -151,7 +147,7 @@ std::optional<PlaneGain> fit_plane_gain(const cv::Mat& image, const cv::Mat& ref
     g.c = fit(s, keep, n_keep, round > 0);
     std::vector<double> residual(n);
     for (int i = 0; i < n; ++i) residual[i] = std::abs(s.log_ratio[i] - s.rows[i].dot(g.c));
-    const double limit = std::max(kMinRejectLog, kRejectSigmas * 1.4826 * median_of(residual));
+    const double limit = std::max(kMinRejectLog, kRejectSigmas * 1.4826 * upper_median(residual));
     int kept = 0;
     for (int i = 0; i < n; ++i) kept += residual[i] <= limit;
     if (kept < kMinPointsConstant) break;  // keep the last fit's points

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 
+#include "common/median.hpp"
 #include "vision/geometry/pixel_rays.hpp"
 #include "vision/geometry/warp_diff.hpp"
 
@@ -80,10 +81,7 @@ double wall_threshold(const cv::Mat& diff, const Coarse& g, const std::vector<Ve
       on_wall.push_back(diff.at<uint8_t>(v, u));
   }
   double threshold = p.parallax_min_diff;
-  if (!on_wall.empty()) {
-    std::nth_element(on_wall.begin(), on_wall.begin() + on_wall.size() / 2, on_wall.end());
-    threshold = std::max(threshold, p.parallax_noise_k * on_wall[on_wall.size() / 2]);
-  }
+  if (!on_wall.empty()) threshold = std::max(threshold, p.parallax_noise_k * upper_median(on_wall));
   return threshold;
 }
 

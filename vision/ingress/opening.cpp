@@ -4,15 +4,11 @@
 #include <algorithm>
 #include <cmath>
 
+#include "common/median.hpp"
 #include "vision/geometry/waypoint.hpp"
 
 namespace alight::vision {
 namespace {
-
-double median(std::vector<double>& v) {
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
-}
 
 // A partial view's features lie well behind the wall's own features, both triangulated with
 // motion capture's poses: a poor homography (few inliers, its plane in front of the wall) leaves
@@ -39,7 +35,7 @@ bool partial_behind_wall(const Correspondences& c, const HomographyFit& wall,
     if (labels[k] == Label::kTarget)
       if (const auto d = offset(k)) block_offset.push_back(*d);
   return !(wall_offset.empty() || static_cast<int>(block_offset.size()) < p.min_outliers ||
-           median(block_offset) > median(wall_offset) - kPartialBehindM);
+           upper_median(block_offset) > upper_median(wall_offset) - kPartialBehindM);
 }
 
 }  // namespace
@@ -183,10 +179,8 @@ Reason opening_checks(const Correspondences& c, const HomographyFit& wall, const
   if (cut && !partial_behind_wall(c, wall, labels, X_W_match, e, p))
     return Reason::kPartialNotBehind;
   if (!cut && p.min_opening_parallax_px > 0) {
-    auto& v = behind.parallax_px;
-    const auto mid = v.begin() + v.size() / 2;
-    if (!v.empty()) std::nth_element(v.begin(), mid, v.end());
-    if (v.empty() || *mid < p.min_opening_parallax_px) return Reason::kLowParallax;
+    const auto& v = behind.parallax_px;
+    if (v.empty() || upper_median(v) < p.min_opening_parallax_px) return Reason::kLowParallax;
   }
   return cut ? Reason::kPartialView : Reason::kOk;
 }

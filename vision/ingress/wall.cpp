@@ -8,6 +8,7 @@
 #include <random>
 #include <utility>
 
+#include "common/median.hpp"
 #include "vision/geometry/waypoint.hpp"
 
 namespace alight::vision {
@@ -60,10 +61,7 @@ Wall candidate(const Correspondences& c, const HomographyFit& f,
       plane = Result<PlaneMotion>::fail(Reason::kMotionDisagrees);
   }
   double depth = std::numeric_limits<double>::infinity();
-  if (!z.empty()) {
-    std::nth_element(z.begin(), z.begin() + z.size() / 2, z.end());
-    depth = z[z.size() / 2];
-  }
+  if (!z.empty()) depth = upper_median(z);
   return Wall{&f, std::move(plane), depth};
 }
 
@@ -144,13 +142,12 @@ std::optional<Wall> known_motion_wall(const Correspondences& c, const Vector3d& 
   if (fit->n_inliers < kFewWallMinPoints || z.empty()) return std::nullopt;
   fit->rms_px = std::sqrt(sq / fit->n_inliers);
   fit->iterations = kFewWallDraws;
-  std::nth_element(z.begin(), z.begin() + z.size() / 2, z.end());
   const double s = t_21.norm();
   PlaneMotion motion;
   motion.R_21 = R_21;
   motion.t_12 = -(R_21.transpose() * t_21) / s;
   motion.n_1 = m * s;
-  return Wall{fit, Result<PlaneMotion>::ok(motion), z[z.size() / 2]};
+  return Wall{fit, Result<PlaneMotion>::ok(motion), upper_median(z)};
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 #include <opencv2/imgproc.hpp>
 #include <optional>
 
+#include "common/median.hpp"
 #include "vision/geometry/convex_hull.hpp"
 #include "vision/geometry/plane_photometric.hpp"
 
@@ -210,15 +211,13 @@ Reason photometric_gate(const Correspondences& c, const LandingPlanes& planes,
 
 bool floor_patches_agree(std::vector<double> gammas, const PhotometricLimits& limits) {
   if (gammas.empty()) return true;
-  std::nth_element(gammas.begin(), gammas.begin() + gammas.size() / 2, gammas.end());
-  const double median = gammas[gammas.size() / 2];
+  const double median = upper_median(gammas);
   if (std::abs(median) > limits.tol) return false;
   constexpr size_t kSpreadPatches = 5;  // fewer have no spread to speak of
   if (gammas.size() < kSpreadPatches) return true;
   std::vector<double> dev;
   for (const double g : gammas) dev.push_back(std::abs(g - median));
-  std::nth_element(dev.begin(), dev.begin() + dev.size() / 2, dev.end());
-  return 1.4826 * dev[dev.size() / 2] <= limits.max_floor_spread;
+  return 1.4826 * upper_median(dev) <= limits.max_floor_spread;
 }
 
 }  // namespace alight::vision

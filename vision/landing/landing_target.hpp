@@ -30,13 +30,13 @@ namespace alight::vision {
 /// that is the known floor (floor_agrees) and takes the known floor's otherwise, the paper's
 /// outcome standing where neither gives one; "always" and "off" use one source only. Fails with
 /// the planes' reasons (planes.hpp), a gate's (gates.hpp), kTopPointsFew (under four
-/// distinct top features placed on its plane), or the extent's (extent.hpp); kPartialView for a top cut by either image's border
-/// (cut_by_border), kTopParallaxGap for one reaching into the epipole's parallax gap
-/// (top_clear_of_epipole): both located, their centre not measured. gray_1 / gray_2: the reference
-/// and current raw images, CV_8UC1 of the camera's size (the photometric gate, and the extent out
-/// to the top's rim); either empty or of another kind: the features alone decide. Where the
-/// planes find the floor alone (kNoTargetPlane) with both images and the known floor, a top
-/// without features is measured by its outline (outline.hpp: found, a partial view, or
+/// distinct top features placed on its plane), or the extent's (extent.hpp); kPartialView for a top
+/// cut by either image's border (cut_by_border), kTopParallaxGap for one reaching into the
+/// epipole's parallax gap (top_clear_of_epipole): both located, their centre not measured. gray_1 /
+/// gray_2: the reference and current raw images, CV_8UC1 of the camera's size (the photometric
+/// gate, and the extent out to the top's rim); either empty or of another kind: the features alone
+/// decide. Where the planes find the floor alone (kNoTargetPlane) with both images and the known
+/// floor, a top without features is measured by its outline (outline.hpp: found, a partial view, or
 /// kOutlineOnFloor / kOutlineUnmatched and the stage's other refusals).
 TargetOutcome find_landing_target(const Correspondences& c, const PipelineParams& params,
                                   const cv::Mat& gray_1 = cv::Mat(),

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <random>
 
+#include "common/median.hpp"
 #include "vision/geometry/bilinear.hpp"
 #include "vision/landing/extent.hpp"
 #include "vision/landing/similarity_inliers.hpp"
@@ -295,12 +296,6 @@ double best_window_ncc(const double* now, const double* grid) {
   return best;
 }
 
-double median_of(std::vector<double> x) {
-  if (x.empty()) return NAN;
-  std::nth_element(x.begin(), x.begin() + x.size() / 2, x.end());
-  return x[x.size() / 2];
-}
-
 void patch_ncc(const Correspondences& c, const std::vector<Placed>& cand,
                const std::vector<size_t>& in, const Similarity2& S, const Views& v, double z_top,
                const cv::Mat& gray_1, const cv::Mat& gray_2, MovingTop* out) {
@@ -364,8 +359,8 @@ void patch_ncc(const Correspondences& c, const std::vector<Placed>& cand,
     stills.push_back(still);
     moveds.push_back(moving);
   }
-  out->ncc_still = median_of(stills);
-  out->ncc_moving = median_of(moveds);
+  out->ncc_still = stills.empty() ? NAN : upper_median(stills);
+  out->ncc_moving = moveds.empty() ? NAN : upper_median(moveds);
 }
 
 // A cut top's horizontal position variance: no information [m^2].

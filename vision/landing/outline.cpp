@@ -12,6 +12,7 @@
 #include <utility>
 
 #include "common/geometry.hpp"
+#include "common/median.hpp"
 #include "vision/geometry/bilinear.hpp"
 #include "vision/landing/gates.hpp"
 
@@ -513,13 +514,9 @@ std::optional<SideHeight> side_height(const Side& s, const cv::Mat& g1, const Pl
     rates.push_back(std::abs(rate));
   }
   if (hs.size() < s.points.size() / 2 || hs.empty()) return std::nullopt;
-  const auto median = [](std::vector<double> v) {
-    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
-    return v[v.size() / 2];
-  };
   SideHeight r;
-  r.h = std::clamp(median(hs), 0.0, max_h);
-  r.rate = median(rates);
+  r.h = std::clamp(upper_median(hs), 0.0, max_h);
+  r.rate = upper_median(rates);
   r.agreement = share(r.h);
   r.on_floor = share(0.0);
   return r;

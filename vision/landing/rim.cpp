@@ -7,6 +7,7 @@
 #include <cmath>
 #include <utility>
 
+#include "common/median.hpp"
 #include "vision/geometry/bilinear.hpp"
 
 namespace alight::vision {
@@ -240,9 +241,7 @@ std::optional<Rim> rim_of_profiles(const std::vector<double>& P1, const std::vec
     const int inner = static_cast<int>(std::floor(j2)) - k;
     const int outer = static_cast<int>(std::ceil(j2)) + k;
     if (inner < 1 || outer + 4 * k > n) break;  // too near the search's end to tell
-    std::vector<double> in(P2.begin(), P2.begin() + inner);
-    std::nth_element(in.begin(), in.begin() + in.size() / 2, in.end());
-    const double level = in[in.size() / 2];
+    const double level = upper_median(std::vector<double>(P2.begin(), P2.begin() + inner));
     const double beyond = *std::max_element(P2.begin() + outer, P2.end());
     if (beyond > level - 0.5 * kRimMinStep) continue;
     for (const auto& step_1 : steps_1)
