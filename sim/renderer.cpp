@@ -61,6 +61,11 @@ struct SurfaceTex {
   float cols, rows;  // of level 0 (powers of two)
   float max_level;
   int id;  // index into the frame's level pointers
+  // Where a box's top reads the texture at its centre [m]: an image's centre, so that a
+  // photograph printed on a top (at least its size) is seen whole, not rolled about the
+  // texture's origin with its four corners and their seams meeting at the top's centre; 0 for
+  // the procedural kinds, which have no seams.
+  float top_u0, top_v0;
 };
 
 // The passes over a row's rays below are plain loops over arrays, written so that the compiler
@@ -277,10 +282,7 @@ ALIGHT_SIMD_PASS void box_coords_pass(
   const float r2 = lamp[3], la = lamp[4], lb = lamp[5];
   const float s0n = f.shade[0], s0p = f.shade[1], s1n = f.shade[2], s1p = f.shade[3],
               s2n = f.shade[4], s2p = f.shade[5];
-  // The top and bottom show their texture's centre at theirs: a photograph printed on a top (at
-  // least its size) is seen whole, not rolled about the texture's origin so that its four corners
-  // meet, with their seams, at the top's centre.
-  const float half_u = 0.5f * tex.cols / tex.inv_texel, half_v = 0.5f * tex.rows / tex.inv_texel;
+  const float half_u = tex.top_u0, half_v = tex.top_v0;
   for (int c0 = k0; c0 < k1; c0 += kMaxRun) {
     const int c1 = std::min(k1, c0 + kMaxRun);
     for (int k = c0; k < c1; ++k) {
@@ -677,9 +679,16 @@ void Renderer::render_rows(const Scene& scene, const Isometry3d& X_WC, float wei
       assert(tex.level(l).isContinuous());
       levels[i * kMaxLevels + l] = tex.level(l).ptr<uint8_t>();
     }
-    surface_tex[i] = SurfaceTex{tex.inv_texel_m(), static_cast<float>(tex.level(0).cols),
-                                static_cast<float>(tex.level(0).rows),
-                                static_cast<float>(tex.n_levels() - 1), static_cast<int>(i)};
+    const float cols = static_cast<float>(tex.level(0).cols),
+                rows = static_cast<float>(tex.level(0).rows);
+    const float centred = tex.has_seams() ? 0.5f : 0.f;
+    surface_tex[i] = SurfaceTex{tex.inv_texel_m(),
+                                cols,
+                                rows,
+                                static_cast<float>(tex.n_levels() - 1),
+                                static_cast<int>(i),
+                                centred * cols / tex.inv_texel_m(),
+                                centred * rows / tex.inv_texel_m()};
   }
   // Per row and box: the rays [first, second) it was hit on, when tested.
   std::vector<std::pair<int, int>> box_span(boxes.size());
