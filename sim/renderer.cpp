@@ -61,6 +61,11 @@ struct SurfaceTex {
   float cols, rows;  // of level 0 (powers of two)
   float max_level;
   int id;  // index into the frame's level pointers
+  // Where a box's top reads the texture at its centre [m]: an image's centre, so that a
+  // photograph printed on a top (at least its size) is seen whole, not rolled about the
+  // texture's origin with its four corners and their seams meeting at the top's centre; 0 for
+  // the procedural kinds, which have no seams.
+  float top_u0, top_v0;
 };
 
 // The passes over a row's rays below are plain loops over arrays, written so that the compiler
@@ -277,6 +282,7 @@ ALIGHT_SIMD_PASS void box_coords_pass(
   const float r2 = lamp[3], la = lamp[4], lb = lamp[5];
   const float s0n = f.shade[0], s0p = f.shade[1], s1n = f.shade[2], s1p = f.shade[3],
               s2n = f.shade[4], s2p = f.shade[5];
+  const float half_u = tex.top_u0, half_v = tex.top_v0;
   for (int c0 = k0; c0 < k1; c0 += kMaxRun) {
     const int c1 = std::min(k1, c0 + kMaxRun);
     for (int k = c0; k < c1; ++k) {
@@ -290,10 +296,10 @@ ALIGHT_SIMD_PASS void box_coords_pass(
       const float wx = ha[k] == 0 ? 1.f : 0.f, wy = ha[k] == 1 ? 1.f : 0.f, wz = 1.f - wx - wy;
       const float d_axis = wx * d0 + wy * d1 + wz * d2;
       const float pos = d_axis < 0 ? 1.f : 0.f, neg = 1.f - pos;  // entering the + / - side
-      // Face coordinates; each face gets its own offset into the tile so faces differ.
-      const float u = wx * (q1 + 1.7f) + wy * (q0 + 3.1f) + wz * q0;
-      const float v =
-          wx * (q2 + pos * 0.9f + neg * 2.3f) + wy * (q2 + pos * 0.4f + neg * 1.3f) + wz * q1;
+      // Face coordinates; each side face gets its own offset into the tile so faces differ.
+      const float u = wx * (q1 + 1.7f) + wy * (q0 + 3.1f) + wz * (q0 + half_u);
+      const float v = wx * (q2 + pos * 0.9f + neg * 2.3f) + wy * (q2 + pos * 0.4f + neg * 1.3f) +
+                      wz * (q1 + half_v);
       const float cosi = std::max(0.05f, std::abs(d_axis) / rlen[k]);
       const float face_shade = wx * (pos * s0p + neg * s0n) + wy * (pos * s1p + neg * s1n) +
                                wz * (pos * s2p + neg * s2n);
@@ -673,9 +679,16 @@ void Renderer::render_rows(const Scene& scene, const Isometry3d& X_WC, float wei
       assert(tex.level(l).isContinuous());
       levels[i * kMaxLevels + l] = tex.level(l).ptr<uint8_t>();
     }
-    surface_tex[i] = SurfaceTex{tex.inv_texel_m(), static_cast<float>(tex.level(0).cols),
-                                static_cast<float>(tex.level(0).rows),
-                                static_cast<float>(tex.n_levels() - 1), static_cast<int>(i)};
+    const float cols = static_cast<float>(tex.level(0).cols),
+                rows = static_cast<float>(tex.level(0).rows);
+    const float centred = tex.has_seams() ? 0.5f : 0.f;
+    surface_tex[i] = SurfaceTex{tex.inv_texel_m(),
+                                cols,
+                                rows,
+                                static_cast<float>(tex.n_levels() - 1),
+                                static_cast<int>(i),
+                                centred * cols / tex.inv_texel_m(),
+                                centred * rows / tex.inv_texel_m()};
   }
   // Per row and box: the rays [first, second) it was hit on, when tested.
   std::vector<std::pair<int, int>> box_span(boxes.size());

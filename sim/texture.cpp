@@ -194,6 +194,7 @@ Texture Texture::from_image(const cv::Mat& mono8, double texel_m) {
   assert(mono8.type() == CV_8UC1 && !mono8.empty());
   Texture t;
   t.inv_texel_m_ = static_cast<float>(1.0 / texel_m);
+  t.has_seams_ = true;
   // Wrapping by bit masks needs power-of-two sides; the image is scaled to the nearest below
   // (at most 4096) and its texel size applies to the scaled pixels.
   const int w = std::min(4096, floor_pow2(mono8.cols)), h = std::min(4096, floor_pow2(mono8.rows));

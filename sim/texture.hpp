@@ -45,6 +45,9 @@ class Texture {
   double texel_m() const { return 1.0 / inv_texel_m_; }
   /// Texels per metre, exactly as sample() uses it (the renderer's batched sampling mirrors it).
   float inv_texel_m() const { return inv_texel_m_; }
+  /// An image's: its edges meet at seams where it repeats (the procedural kinds are periodic,
+  /// without seams).
+  bool has_seams() const { return has_seams_; }
 
   static float fast_log2(float x) {
     // Mip level selection needs about 0.1 of a level: log2 from the float's exponent and a
@@ -84,6 +87,7 @@ class Texture {
 
   std::vector<Level> levels_;
   float inv_texel_m_ = 250.f;
+  bool has_seams_ = false;
 };
 
 /// The procedural textures, exposed for tests: a size_px x size_px mono8 tile that wraps.

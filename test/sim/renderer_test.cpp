@@ -116,6 +116,40 @@ TEST(SimRendererTest, PlatformCornersProjectOntoTheRenderedCorners) {
   }
 }
 
+// A photograph printed on a top shows whole: its centre at the top's centre, its border at the
+// top's rims. A white square in the middle half of a black photograph is white at the top's
+// centre and black near its corners (rolled about the texture's origin, the photograph's black
+// corners would meet at the centre).
+TEST(SimRendererTest, APhotographOnATopIsCentredOnIt) {
+  Scenario sc = flat(test::scenario("landing_a"));
+  sc.lighting.light_dir_W = Vector3d(0, 0, 1);
+  sc.platform->yaw_deg = 23.0;
+  cv::Mat photo(256, 256, CV_8U, cv::Scalar(0));
+  photo(cv::Rect(64, 64, 128, 128)).setTo(255);
+  TextureSpec& t = sc.platform->texture;
+  t.kind = "image";
+  t.image = photo;
+  const Scene probe = build_scene(sc, 1);
+  const Vector3d half = probe.boxes.at(0).half_size_m;
+  t.texel_m = 1.1 * 2.0 * half.head<2>().maxCoeff() / 256.0;  // the photo a little larger
+  const Scene scene = build_scene(sc, 1);
+  const Box& box = scene.boxes.at(0);
+  const CameraModel model = CameraModel::firefly_mv_4mm();
+  Renderer renderer(model, 4);
+  const Vector3d top_W = box.center_W + box.R_WO() * Vector3d(0, 0, half.z());
+  const Isometry3d X_WC =
+      make_transform(rotation_from_rpy(0.03, -0.02, 0.3) * R_BC_downward(), top_W + Vector3d(0.02, 0.01, 0.9));
+  cv::Mat img;
+  renderer.render(scene, X_WC).convertTo(img, CV_32F);
+  const float centre = bilinear(img, project(model, X_WC, top_W));
+  for (const auto& [sx, sy] : {std::pair{1, 1}, {-1, 1}, {-1, -1}, {1, -1}}) {
+    const Vector3d near_corner_W =
+        top_W + box.R_WO() * Vector3d(0.85 * sx * half.x(), 0.85 * sy * half.y(), 0.0);
+    const float corner = bilinear(img, project(model, X_WC, near_corner_W));
+    EXPECT_GT(centre, corner + 100.f) << "corner " << sx << " " << sy;
+  }
+}
+
 TEST(SimRendererTest, OpeningCornersProjectOntoTheRenderedCorners) {
   Scenario sc = flat(test::scenario("ingress"));
   sc.lighting.light_dir_W = Vector3d(-1, 0, 0);  // the wall's face lit, the opening's sides dark
