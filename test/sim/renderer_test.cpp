@@ -137,8 +137,8 @@ TEST(SimRendererTest, APhotographOnATopIsCentredOnIt) {
   const CameraModel model = CameraModel::firefly_mv_4mm();
   Renderer renderer(model, 4);
   const Vector3d top_W = box.center_W + box.R_WO() * Vector3d(0, 0, half.z());
-  const Isometry3d X_WC =
-      make_transform(rotation_from_rpy(0.03, -0.02, 0.3) * R_BC_downward(), top_W + Vector3d(0.02, 0.01, 0.9));
+  const Isometry3d X_WC = make_transform(rotation_from_rpy(0.03, -0.02, 0.3) * R_BC_downward(),
+                                         top_W + Vector3d(0.02, 0.01, 0.9));
   cv::Mat img;
   renderer.render(scene, X_WC).convertTo(img, CV_32F);
   const float centre = bilinear(img, project(model, X_WC, top_W));
