@@ -282,7 +282,7 @@ ALIGHT_SIMD_PASS void box_coords_pass(
   const float r2 = lamp[3], la = lamp[4], lb = lamp[5];
   const float s0n = f.shade[0], s0p = f.shade[1], s1n = f.shade[2], s1p = f.shade[3],
               s2n = f.shade[4], s2p = f.shade[5];
-  const float half_u = tex.top_u0, half_v = tex.top_v0;
+  const float top_u0 = tex.top_u0, top_v0 = tex.top_v0;
   for (int c0 = k0; c0 < k1; c0 += kMaxRun) {
     const int c1 = std::min(k1, c0 + kMaxRun);
     for (int k = c0; k < c1; ++k) {
@@ -297,9 +297,9 @@ ALIGHT_SIMD_PASS void box_coords_pass(
       const float d_axis = wx * d0 + wy * d1 + wz * d2;
       const float pos = d_axis < 0 ? 1.f : 0.f, neg = 1.f - pos;  // entering the + / - side
       // Face coordinates; each side face gets its own offset into the tile so faces differ.
-      const float u = wx * (q1 + 1.7f) + wy * (q0 + 3.1f) + wz * (q0 + half_u);
+      const float u = wx * (q1 + 1.7f) + wy * (q0 + 3.1f) + wz * (q0 + top_u0);
       const float v = wx * (q2 + pos * 0.9f + neg * 2.3f) + wy * (q2 + pos * 0.4f + neg * 1.3f) +
-                      wz * (q1 + half_v);
+                      wz * (q1 + top_v0);
       const float cosi = std::max(0.05f, std::abs(d_axis) / rlen[k]);
       const float face_shade = wx * (pos * s0p + neg * s0n) + wy * (pos * s1p + neg * s1n) +
                                wz * (pos * s2p + neg * s2n);
