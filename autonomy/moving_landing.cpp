@@ -1,6 +1,7 @@
 // Landing on a moving platform (beyond paper 3.4.1; see moving_landing.hpp).
 #include "autonomy/moving_landing.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -133,6 +134,10 @@ DropCheck check_drop(const PlatformFilter& filter, const PoseSample& pose, int64
   const double cy = std::cos(pr.yaw_rad), sy = std::sin(pr.yaw_rad);
   c.off_m << cy * e_W.x() + sy * e_W.y(), -sy * e_W.x() + cy * e_W.y();
   c.room_m = drop_room_m(filter.whole_top(), gear.gear_footprint_m);
+  c.centre_sd_m =
+      std::sqrt(Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(pr.cov_p, Eigen::EigenvaluesOnly)
+                    .eigenvalues()
+                    .maxCoeff());
   if (c.gear_above_m <= gear.final_descent_rate_mps * params.fall_lag_s) {
     c.verdict = Drop::kCommitted;
   } else if (std::isfinite(c.room_m) && c.off_m.cwiseAbs().maxCoeff() > c.room_m) {
@@ -142,7 +147,9 @@ DropCheck check_drop(const PlatformFilter& filter, const PoseSample& pose, int64
 }
 
 bool aimed_for_drop(const DropCheck& c, const LandingGear& gear) {
-  return !std::isfinite(c.room_m) || c.off_m.cwiseAbs().maxCoeff() <= c.room_m - gear.fit_margin_m;
+  return !std::isfinite(c.room_m) ||
+         (c.off_m.cwiseAbs().maxCoeff() <= c.room_m - gear.fit_margin_m &&
+          c.centre_sd_m <= c.room_m);
 }
 
 MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
@@ -217,7 +224,8 @@ MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
     out.reason = std::string("moving platform matched, final descent (") + to_string(r) + ")";
     return out;
   }
-  const std::string off = "the gear " + fmt3(c.off_m.cwiseAbs().maxCoeff()) + " m off its centre";
+  const std::string off = "the gear " + fmt3(c.off_m.cwiseAbs().maxCoeff()) +
+                          " m off its centre, known to " + fmt3(c.centre_sd_m) + " m";
   if (waited_s >= gear.final_hold_timeout_s) {
     out.next = MovingStep::Next::kTooFast;
     out.reason = "no moment to drop onto the moving platform in " + fmt2(waited_s) + " s (" + off +
@@ -226,7 +234,8 @@ MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
   }
   out.reason = !settled ? std::string("over the moving platform: matching")
                : !aimed ? "over the moving platform: " + off + ", beyond the room to drop " +
-                              fmt3(c.room_m - gear.fit_margin_m) + " m"
+                              fmt3(c.room_m - gear.fit_margin_m) + " m (the centre " +
+                              fmt3(c.room_m) + ")"
                         : std::string("over the moving platform: ") + to_string(r);
   return out;
 }

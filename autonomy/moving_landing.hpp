@@ -152,6 +152,7 @@ struct DropCheck {
   Vector2d off_m = Vector2d::Zero();  ///< the gear's centre from the predicted centre, top's axes
   double room_m = 0.0;                ///< drop_room_m
   double gear_above_m = 0.0;          ///< the gear over the top (its heave included) [m]
+  double centre_sd_m = 0.0;  ///< the predicted centre's standard deviation, its worst axis [m]
 };
 /// Whether the last drop goes on. Committed while the gear is within final_descent_rate_mps x
 /// fall_lag_s of the top (the altitude loop's lag: a climb ordered there still touches down);
@@ -163,7 +164,9 @@ DropCheck check_drop(const PlatformFilter& filter, const PoseSample& pose, int64
 
 /// The last drop starts only with the gear's centre within the room less fit_margin_m on both of
 /// the top's axes (check_drop's): the aim the still landing keeps, and the go-around's own
-/// margin, so that a drop is not given up where it begins.
+/// margin, so that a drop is not given up where it begins; and on a predicted centre known within
+/// the room (its standard deviation): a top seen only cut by the border for seconds has a centre
+/// the filter has not placed, and a drop matched to it lands wherever it drifted.
 bool aimed_for_drop(const DropCheck& c, const LandingGear& gear);
 
 /// The moving approach's own state.

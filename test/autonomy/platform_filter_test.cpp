@@ -745,7 +745,7 @@ TEST(MovingApproachTest, AlignsTheHeadingWithThePlatformsAxesTheNearestWay) {
 // square) rests whole on it within 5 cm of its centre across. Carried beyond that while above
 // the altitude loop's lag, the drop is given up; within the lag it is committed; a banked body
 // whose origin is within the room hangs its gear beyond it. The drop starts only within the room
-// less the aim's margin (2 cm).
+// less the aim's margin (2 cm), and on a centre the filter places within the room.
 TEST(MovingDropTest, TheGearCarriedBeyondTheTopsRoomGivesTheDropUpAboveTheLagOnly) {
   const PlatformPath m = straight_path(0.5);
   PlatformFilter f{PlatformFilterParams{}};
@@ -779,6 +779,21 @@ TEST(MovingDropTest, TheGearCarriedBeyondTheTopsRoomGivesTheDropUpAboveTheLagOnl
   PoseSample banked = at(0.04, 0.3);
   banked.q_WB = Quaterniond(Eigen::AngleAxisd(0.3, Vector3d(along.x(), along.y(), 0)));
   EXPECT_EQ(check(banked).verdict, Drop::kOffTheTop);
+  EXPECT_LT(check(at(0.0, 0.3)).centre_sd_m, 0.02);
+  // Then seen only cut by the border for 8 s: its velocity measured, its centre not; over the
+  // centre the filter predicts, the drop does not start on it.
+  double t = 2;
+  for (; t < 10; t += kPfDt) {
+    auto cut = measure_sized(m, t, rng, Vector2d(0.30, 0.25));  // part of it
+    cut.cov_p_W.topLeftCorner<2, 2>() = 1e2 * Matrix2d::Identity();
+    f.update(cut);
+  }
+  const int64_t later = kPfT0 + int64_t(t * 1e6);
+  PoseSample over;
+  over.p_W_B << f.predict(later).p_W, f.predict(later).top_z_m + gear.gear_height_m + 0.3;
+  const DropCheck unplaced = check_drop(f, over, later, gear, params);
+  EXPECT_GT(unplaced.centre_sd_m, unplaced.room_m);
+  EXPECT_FALSE(aimed_for_drop(unplaced, gear));
   // A top not measured yet (no whole top) has no edge to judge by.
   PlatformFilter unmeasured{PlatformFilterParams{}};
   std::mt19937_64 rng2(43);
