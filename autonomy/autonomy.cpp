@@ -649,8 +649,8 @@ void Autonomy::step_moving(phases::Approach& a, const Vector3d& /*p*/, double dt
       target_lost(st.reason);
       return;
     case MovingStep::Next::kTooFast:
-      hold(st.reason + ": beyond what the vehicle follows, climbing and holding",
-           Failsafe::kPlatformTooFast, pr.top_z_m + L.gear_height_m + M.follow_height_m + 0.3);
+      hold(st.reason + ", climbing and holding", Failsafe::kPlatformTooFast,
+           pr.top_z_m + L.gear_height_m + M.follow_height_m + 0.3);
       return;
     case MovingStep::Next::kFinalDescent: {
       phases::FinalDescent f{a.moving->z_sp_m, TouchdownDetector(L), false, {}, {}, true};

@@ -108,10 +108,11 @@ std::optional<std::string> too_fast(const PlatformFilter::Prediction& p,
   const double speed = p.v_W.norm();
   const double rate_dps = std::abs(p.yaw_rate_rps) * 180 / M_PI;
   if (speed > params.max_speed_mps)
-    return "platform at " + fmt2(speed) + " m/s, beyond " + fmt2(params.max_speed_mps);
+    return "platform at " + fmt2(speed) + " m/s, beyond " + fmt2(params.max_speed_mps) +
+           ": beyond what the vehicle follows";
   if (rate_dps > params.max_yaw_rate_dps)
     return "platform turning at " + fmt2(rate_dps) + " deg/s, beyond " +
-           fmt2(params.max_yaw_rate_dps);
+           fmt2(params.max_yaw_rate_dps) + ": beyond what the vehicle follows";
   return std::nullopt;
 }
 
@@ -229,7 +230,7 @@ MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
   if (waited_s >= gear.final_hold_timeout_s) {
     out.next = MovingStep::Next::kTooFast;
     out.reason = "no moment to drop onto the moving platform in " + fmt2(waited_s) + " s (" + off +
-                 ", its room " + fmt3(c.room_m) + " m)";
+                 ", its room " + fmt3(c.room_m) + " m): beyond what the vehicle lands on";
     return out;
   }
   out.reason = !settled ? std::string("over the moving platform: matching")

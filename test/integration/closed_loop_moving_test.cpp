@@ -76,15 +76,16 @@ INSTANTIATE_TEST_SUITE_P(Moving, MovingPlatformLandingTest,
 
 // The shipped cart's turns (95 deg/s of course, 1.7 m/s^2) start and end within the last drop's
 // second wherever it begins, and the vehicle trails each by more than the room the top's short
-// side leaves its gear: every drop is given up (a go-around), and the fourth is the named
-// failsafe. No touch-down beside or over the top's edge, no collision: the drops that landed
-// before the go-around (half of them, the others 18-29 cm off the top's centre) were luck.
-TEST(MovingPlatformFailsafeTest, TheShippedCartsTurnsGiveEveryDropUpAndEndInTheNamedFailsafe) {
+// side leaves its gear; its top, cut by the border in every view from the final height, has a
+// centre the filter does not place within that room. No drop is finished: each begun is given up
+// (a go-around), and the fourth, or no moment to drop within landing.final_hold_timeout_s, is the
+// named failsafe. No touch-down beside or over the top's edge, no collision: the drops that
+// landed before the go-around (half of them, the others 18-29 cm off the top's centre) were luck.
+TEST(MovingPlatformFailsafeTest, TheShippedCartsTurnsEndInTheNamedFailsafeWithoutATouchDown) {
   RealVision vision(path("config/vehicles/pelican.yaml"), Mission::kLanding);
   const auto r = fly_closed_loop(moving_config(Case{"landing_moving_cart", 7}, &vision));
   std::printf("landing_moving_cart seed 7: %s, phase %s\n", r.reason.c_str(), phase_name(r.phase));
   EXPECT_EQ(r.phase, Phase::kHold) << r.reason;
-  EXPECT_NE(r.reason.find("last drop given up"), std::string::npos) << r.reason;
   EXPECT_NE(r.reason.find("beyond what the vehicle lands on"), std::string::npos) << r.reason;
   EXPECT_FALSE(r.landed);
   EXPECT_FALSE(r.collided);
