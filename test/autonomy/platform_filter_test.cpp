@@ -746,12 +746,18 @@ TEST(MovingApproachTest, AlignsTheHeadingWithThePlatformsAxesTheNearestWay) {
 // the altitude loop's lag, the drop is given up; within the lag it is committed; a banked body
 // whose origin is within the room hangs its gear beyond it. The drop starts only within the room
 // less the aim's margin (2 cm), and on a centre the filter places within the room.
+// A top of size_m on m measured every kPfDt up to 2 s.
+PlatformFilter followed_for_2s(const PlatformPath& m, const Vector2d& size_m,
+                               std::mt19937_64& rng) {
+  PlatformFilter f{PlatformFilterParams{}};
+  for (double t = kPfInterval; t < 2; t += kPfDt) f.update(measure_sized(m, t, rng, size_m));
+  return f;
+}
+
 TEST(MovingDropTest, TheGearCarriedBeyondTheTopsRoomGivesTheDropUpAboveTheLagOnly) {
   const PlatformPath m = straight_path(0.5);
-  PlatformFilter f{PlatformFilterParams{}};
   std::mt19937_64 rng(41);
-  for (double t = kPfInterval; t < 2; t += kPfDt)
-    f.update(measure_sized(m, t, rng, Vector2d(0.41, 0.25)));
+  PlatformFilter f = followed_for_2s(m, Vector2d(0.41, 0.25), rng);
   const LandingGear gear;
   const MovingLandingParams params;
   ASSERT_NEAR(drop_room_m(f.whole_top(), gear.gear_footprint_m), 0.05, 1e-9);
@@ -809,10 +815,9 @@ TEST(MovingDropTest, TheGearCarriedBeyondTheTopsRoomGivesTheDropUpAboveTheLagOnl
 // lands on.
 TEST(MovingDropTest, NoAimedMomentAtTheFinalHeightIsTheFailsafe) {
   const PlatformPath m = straight_path(0.5);
-  PlatformFilter f{PlatformFilterParams{}};
   std::mt19937_64 rng(47);
-  double t = kPfInterval;
-  for (; t < 2; t += kPfDt) f.update(measure_sized(m, t, rng, Vector2d(0.41, 0.18)));
+  PlatformFilter f = followed_for_2s(m, Vector2d(0.41, 0.18), rng);
+  double t = 2;
   const LandingGear gear;  // room (0.18 - 0.15) / 2 = 1.5 cm, less the 2 cm margin: none
   const MovingLandingParams params;
   MovingApproach s;
