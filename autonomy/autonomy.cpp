@@ -69,6 +69,11 @@ static_assert(kAt<Phase::kIdle, phases::Idle> && kAt<Phase::kTakeoff, phases::Ta
 
 double seconds(int64_t dt_utime) { return static_cast<double>(dt_utime) * 1e-6; }
 
+LandingGear landing_gear(const LandingParams& L) {
+  return LandingGear{L.gear_height_m,    L.gear_footprint_m,       L.fit_margin_m,
+                     L.descent_rate_mps, L.final_descent_rate_mps, L.final_hold_timeout_s};
+}
+
 /// A DEGRADED estimate first pauses the mission (position held on it, nothing advanced) and
 /// holds for the operator only once it has lasted this long [s], as PX4 holds for
 /// COM_FAIL_ACT_T before a failsafe's action and goes on when the condition clears within it.
@@ -400,6 +405,7 @@ void Autonomy::handle_command(const OperatorCommand& cmd) {
       }
       profile_ = MissionProfile::make(cmd.mission, params_);
       retries_ = 0;
+      drop_go_arounds_ = 0;
       failsafe_ = Failsafe::kNone;
       go_utime_ = now_utime_;
       end_utime_.reset();
@@ -628,9 +634,8 @@ void Autonomy::step_moving(phases::Approach& a, const Vector3d& /*p*/, double dt
   const auto& L = params_.landing;
   const auto& M = params_.moving_platform;
   if (!pose_) return;
-  const MovingStep st =
-      step_moving_approach(*a.moving, platform_, *pose_, now_utime_, dt_s, yaw_sp_rad_,
-                           L.gear_height_m, L.descent_rate_mps, L.final_descent_rate_mps, M);
+  const MovingStep st = step_moving_approach(*a.moving, platform_, *pose_, now_utime_, dt_s,
+                                             yaw_sp_rad_, landing_gear(L), M);
   const auto pr = platform_.predict(now_utime_);
   const auto fly_step = [&] {
     sp_p_W_ = st.sp_p_W;
@@ -644,8 +649,8 @@ void Autonomy::step_moving(phases::Approach& a, const Vector3d& /*p*/, double dt
       target_lost(st.reason);
       return;
     case MovingStep::Next::kTooFast:
-      hold(st.reason + ": beyond what the vehicle follows, climbing and holding",
-           Failsafe::kPlatformTooFast, pr.top_z_m + L.gear_height_m + M.follow_height_m + 0.3);
+      hold(st.reason + ", climbing and holding", Failsafe::kPlatformTooFast,
+           pr.top_z_m + L.gear_height_m + M.follow_height_m + 0.3);
       return;
     case MovingStep::Next::kFinalDescent: {
       phases::FinalDescent f{a.moving->z_sp_m, TouchdownDetector(L), false, {}, {}, true};
@@ -660,6 +665,25 @@ void Autonomy::step_moving(phases::Approach& a, const Vector3d& /*p*/, double dt
   estimate_W_ << pr.p_W, pr.top_z_m;
   fly_step();
   reason_ = st.reason;
+}
+
+void Autonomy::go_around(const DropCheck& c) {
+  const auto& L = params_.landing;
+  const auto& M = params_.moving_platform;
+  ++drop_go_arounds_;
+  const auto pr = platform_.predict(now_utime_);
+  const std::string why = "the gear " + fmt(c.off_m.cwiseAbs().maxCoeff(), 3) +
+                          " m off the moving top's centre, beyond its room " + fmt(c.room_m, 3) +
+                          " m, " + fmt(c.gear_above_m) + " m above it";
+  if (drop_go_arounds_ > kMaxDropGoArounds) {
+    hold("last drop given up " + std::to_string(drop_go_arounds_) + " times (" + why +
+             "): beyond what the vehicle lands on, climbing and holding",
+         Failsafe::kPlatformTooFast, pr.top_z_m + L.gear_height_m + M.follow_height_m + 0.3);
+    return;
+  }
+  enter(phases::Approach{LandingApproach{}, platform_.utime(), {}, MovingApproach{}},
+        "last drop given up (" + why + "): go-around " + std::to_string(drop_go_arounds_) + " of " +
+            std::to_string(kMaxDropGoArounds) + ", matching again at the final height");
 }
 
 bool Autonomy::vision_disagrees(phases::Approach& a, const TargetMeasurement& m) {
@@ -846,6 +870,14 @@ void Autonomy::step(phases::FinalDescent& s, const Vector3d& /*p*/, double dt_s)
     // Onto the moving platform: over its predicted centre, its velocity fed forward; a lost
     // platform does not stop the drop (finishing it is the safe end, as in the still landing).
     // Resting is judged relative to the deck's predicted heave.
+    if (pose_fresh()) {
+      const DropCheck c =
+          check_drop(platform_, *pose_, now_utime_, landing_gear(L), params_.moving_platform);
+      if (c.verdict == Drop::kOffTheTop) {  // leaves the phase: s is gone after this
+        go_around(c);
+        return;
+      }
+    }
     const auto pr = platform_.predict(now_utime_);
     const double z_floor = pr.top_z_m + L.gear_height_m - L.final_depth_m;
     if (s.z_sp_m > z_floor)

@@ -169,6 +169,8 @@ class Autonomy {
   /// The vantage point refinement flies to (zero outside REFINEMENT).
   Vector3d current_vantage() const;
   int retries() const { return retries_; }
+  /// Last drops onto a moving platform given up this mission (moving_landing.hpp, step 5).
+  int drop_go_arounds() const { return drop_go_arounds_; }
   /// Why the phase is what it is (AutonomyStatus::reason).
   const std::string& reason() const { return reason_; }
   /// Whether the first pose has been seen (and the start decided: on the ground, or flying).
@@ -216,6 +218,9 @@ class Autonomy {
   /// the filter trusts moving starts the moving approach.
   void handle_platform(const PlatformMeasurement& m);
   void step_moving(phases::Approach& a, const Vector3d& p, double dt_s);
+  /// The last drop onto a moving platform carried off its top (check_drop): back to the moving
+  /// approach at the final height, or the failsafe after kMaxDropGoArounds.
+  void go_around(const DropCheck& c);
   // APPROACH: true (and counted) when `m` lies outside the gate around the final estimate; a
   // sustained disagreement enters the VISION_DISAGREES failsafe.
   bool vision_disagrees(phases::Approach& a, const TargetMeasurement& m);
@@ -292,6 +297,7 @@ class Autonomy {
   // The mission (from GO or LAND_HERE; none after TAKEOFF).
   std::unique_ptr<const MissionProfile> profile_;
   int retries_ = 0;
+  int drop_go_arounds_ = 0;
   std::optional<int64_t> go_utime_;
   std::optional<int64_t> end_utime_;
   Vector3d estimate_W_ = Vector3d::Zero();  // the final estimate, from APPROACH on

@@ -1,8 +1,10 @@
 // Landing on a moving platform (beyond paper 3.4.1; see moving_landing.hpp).
 #include "autonomy/moving_landing.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace alight::autonomy {
 namespace {
@@ -10,6 +12,12 @@ namespace {
 std::string fmt2(double v) {
   char b[32];
   std::snprintf(b, sizeof b, "%.2f", v);
+  return b;
+}
+
+std::string fmt3(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.3f", v);
   return b;
 }
 
@@ -100,10 +108,11 @@ std::optional<std::string> too_fast(const PlatformFilter::Prediction& p,
   const double speed = p.v_W.norm();
   const double rate_dps = std::abs(p.yaw_rate_rps) * 180 / M_PI;
   if (speed > params.max_speed_mps)
-    return "platform at " + fmt2(speed) + " m/s, beyond " + fmt2(params.max_speed_mps);
+    return "platform at " + fmt2(speed) + " m/s, beyond " + fmt2(params.max_speed_mps) +
+           ": beyond what the vehicle follows";
   if (rate_dps > params.max_yaw_rate_dps)
     return "platform turning at " + fmt2(rate_dps) + " deg/s, beyond " +
-           fmt2(params.max_yaw_rate_dps);
+           fmt2(params.max_yaw_rate_dps) + ": beyond what the vehicle follows";
   return std::nullopt;
 }
 
@@ -111,10 +120,45 @@ bool touched_down_on_top(double gear_below_top_m, double heave_amplitude_m) {
   return gear_below_top_m <= heave_amplitude_m + kBesideTopM;
 }
 
+double drop_room_m(const Vector2d& whole_top_m, double gear_footprint_m) {
+  if (!(whole_top_m.minCoeff() > 0)) return std::numeric_limits<double>::quiet_NaN();
+  return std::max(0.0, 0.5 * (whole_top_m.minCoeff() - gear_footprint_m));
+}
+
+DropCheck check_drop(const PlatformFilter& filter, const PoseSample& pose, int64_t now_utime,
+                     const LandingGear& gear, const MovingLandingParams& params) {
+  DropCheck c;
+  const auto pr = filter.predict(now_utime);
+  const Vector3d gear_W = pose.p_W_B - gear.gear_height_m * (pose.q_WB * Vector3d::UnitZ());
+  c.gear_above_m = gear_W.z() - (pr.top_z_m + filter.heave().z(now_utime));
+  const Vector2d e_W = gear_W.head<2>() - pr.p_W;
+  const double cy = std::cos(pr.yaw_rad), sy = std::sin(pr.yaw_rad);
+  c.off_m << cy * e_W.x() + sy * e_W.y(), -sy * e_W.x() + cy * e_W.y();
+  c.room_m = drop_room_m(filter.whole_top(), gear.gear_footprint_m);
+  c.centre_sd_m =
+      std::sqrt(Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(pr.cov_p, Eigen::EigenvaluesOnly)
+                    .eigenvalues()
+                    .maxCoeff());
+  if (c.gear_above_m <= gear.final_descent_rate_mps * params.fall_lag_s) {
+    c.verdict = Drop::kCommitted;
+  } else if (std::isfinite(c.room_m) && c.off_m.cwiseAbs().maxCoeff() > c.room_m) {
+    c.verdict = Drop::kOffTheTop;
+  }
+  return c;
+}
+
+bool aimed_for_drop(const DropCheck& c, const LandingGear& gear) {
+  return !std::isfinite(c.room_m) ||
+         (c.off_m.cwiseAbs().maxCoeff() <= c.room_m - gear.fit_margin_m &&
+          c.centre_sd_m <= c.room_m);
+}
+
 MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
                                 const PoseSample& pose, int64_t now_utime, double dt_s,
-                                double yaw_sp_rad, double gear_height_m, double descent_rate_mps,
-                                double final_descent_rate_mps, const MovingLandingParams& params) {
+                                double yaw_sp_rad, const LandingGear& gear,
+                                const MovingLandingParams& params) {
+  const double gear_height_m = gear.gear_height_m;
+  const double descent_rate_mps = gear.descent_rate_mps;
   MovingStep out;
   out.yaw_sp_rad = yaw_sp_rad;
   const double since_s = double(now_utime - filter.utime()) * 1e-6;
@@ -172,15 +216,28 @@ MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
   // At the final height: the last drop when matched and the heave allows it.
   if (!s.at_final_since_utime) s.at_final_since_utime = now_utime;
   const double waited_s = double(now_utime - *s.at_final_since_utime) * 1e-6;
-  const double fall_s = params.final_height_m / final_descent_rate_mps + params.fall_lag_s;
+  const double fall_s = params.final_height_m / gear.final_descent_rate_mps + params.fall_lag_s;
   const Release r = heave_release(filter.heave(), now_utime, fall_s, waited_s, params);
-  if (settled && r != Release::kWait) {
+  const DropCheck c = check_drop(filter, pose, now_utime, gear, params);
+  const bool aimed = aimed_for_drop(c, gear);
+  if (settled && aimed && r != Release::kWait) {
     out.next = MovingStep::Next::kFinalDescent;
     out.reason = std::string("moving platform matched, final descent (") + to_string(r) + ")";
     return out;
   }
-  out.reason = settled ? std::string("over the moving platform: ") + to_string(r)
-                       : "over the moving platform: matching";
+  const std::string off = "the gear " + fmt3(c.off_m.cwiseAbs().maxCoeff()) +
+                          " m off its centre, known to " + fmt3(c.centre_sd_m) + " m";
+  if (waited_s >= gear.final_hold_timeout_s) {
+    out.next = MovingStep::Next::kTooFast;
+    out.reason = "no moment to drop onto the moving platform in " + fmt2(waited_s) + " s (" + off +
+                 ", its room " + fmt3(c.room_m) + " m): beyond what the vehicle lands on";
+    return out;
+  }
+  out.reason = !settled ? std::string("over the moving platform: matching")
+               : !aimed ? "over the moving platform: " + off + ", beyond the room to drop " +
+                              fmt3(c.room_m - gear.fit_margin_m) + " m (the centre " +
+                              fmt3(c.room_m) + ")"
+                        : std::string("over the moving platform: ") + to_string(r);
   return out;
 }
 

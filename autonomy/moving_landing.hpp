@@ -22,6 +22,14 @@
 //     max_speed_mps or turning faster than
 //     max_yaw_rate_dps for too_fast_s is beyond what the vehicle follows
 //     (Failsafe::kPlatformTooFast: climb and hold).
+//  5. The go-around (check_drop): in the last drop, while the gear is above the altitude loop's
+//     lag over the top, its centre carried off the predicted centre beyond the room the top's
+//     short side leaves the gear gives the drop up: back to step 1 at the final height. A cart
+//     that turns in the drop carries the vehicle, which trails it, off the top's edge; finishing
+//     the drop there tips it. The drop starts only within that room less the aim's margin
+//     (aimed_for_drop). After kMaxDropGoArounds, or final_hold_timeout_s at the final height
+//     without a drop, the platform is beyond what the vehicle lands on
+//     (Failsafe::kPlatformTooFast).
 // Pure: the time is passed in.
 
 #include <optional>
@@ -113,6 +121,54 @@ Release heave_release(const HeaveModel& heave, int64_t now_utime, double fall_s,
                       const MovingLandingParams& params);
 const char* to_string(Release r);
 
+/// The last drop given up this many times, the platform is beyond what the vehicle lands on
+/// (Failsafe::kPlatformTooFast), as a precision landing's retries are bounded (ArduPilot's
+/// PLND_RET_MAX): each go-around costs the match and the settle again, a few seconds, and a
+/// platform that carries the vehicle off three drops in a row does so in its steady motion, not
+/// by one unlucky turn.
+inline constexpr int kMaxDropGoArounds = 3;
+
+/// The room the top leaves the gear's centre on each of its axes with the whole gear still on
+/// it [m]: half of the short side (the filter's whole top) less half the gear's footprint. The
+/// filter's axes are a direction mod 90 deg (which one is long is not known in the drop), so the
+/// room is a square of the short side's; nothing is kept in hand for aiming (fit_margin_m), this
+/// is where the vehicle starts to tip, not where it aims. NaN for a top not measured yet.
+double drop_room_m(const Vector2d& whole_top_m, double gear_footprint_m);
+
+/// The still landing's figures the moving one shares (autonomy.landing).
+struct LandingGear {
+  double gear_height_m = 0.1;           ///< the gear below the body's origin [m]
+  double gear_footprint_m = 0.15;       ///< the square gear's side [m]
+  double fit_margin_m = 0.02;           ///< the top kept around the gear by the aim [m]
+  double descent_rate_mps = 0.25;       ///< to the final height [m/s]
+  double final_descent_rate_mps = 1.0;  ///< the last drop [m/s]
+  double final_hold_timeout_s = 10.0;   ///< at the final height without a drop this long [s]
+};
+
+/// Step 5 of moving_landing.hpp.
+enum class Drop { kGoOn, kCommitted, kOffTheTop };
+struct DropCheck {
+  Drop verdict = Drop::kGoOn;
+  Vector2d off_m = Vector2d::Zero();  ///< the gear's centre from the predicted centre, top's axes
+  double room_m = 0.0;                ///< drop_room_m
+  double gear_above_m = 0.0;          ///< the gear over the top (its heave included) [m]
+  double centre_sd_m = 0.0;  ///< the predicted centre's standard deviation, its worst axis [m]
+};
+/// Whether the last drop goes on. Committed while the gear is within final_descent_rate_mps x
+/// fall_lag_s of the top (the altitude loop's lag: a climb ordered there still touches down);
+/// otherwise off the top when the gear's centre (gear_height_m below the body along its z axis:
+/// a banked body's gear hangs outwards) lies beyond drop_room_m on either of the top's axes.
+/// A top not measured (no whole top yet) goes on: nothing says where its edge is.
+DropCheck check_drop(const PlatformFilter& filter, const PoseSample& pose, int64_t now_utime,
+                     const LandingGear& gear, const MovingLandingParams& params);
+
+/// The last drop starts only with the gear's centre within the room less fit_margin_m on both of
+/// the top's axes (check_drop's): the aim the still landing keeps, and the go-around's own
+/// margin, so that a drop is not given up where it begins; and on a predicted centre known within
+/// the room (its standard deviation): a top seen only cut by the border for seconds has a centre
+/// the filter has not placed, and a drop matched to it lands wherever it drifted.
+bool aimed_for_drop(const DropCheck& c, const LandingGear& gear);
+
 /// The moving approach's own state.
 struct MovingApproach {
   double z_sp_m = 0.0;
@@ -138,12 +194,12 @@ double followed_turn_radps(double yaw_rate_rps, const MovingLandingParams& param
 /// `current` [rad].
 double aligned_yaw(double platform_yaw_rad, double current_rad);
 
-/// One step of steps 1-4. `descent_rate_mps`, `final_descent_rate_mps`, `gear_height_m`: the
-/// still landing's (autonomy.landing).
+/// One step of steps 1-4. At the final height without a drop for final_hold_timeout_s (the gear
+/// never aimed, or no crest): the platform is beyond what the vehicle lands on (kTooFast).
 MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
                                 const PoseSample& pose, int64_t now_utime, double dt_s,
-                                double yaw_sp_rad, double gear_height_m, double descent_rate_mps,
-                                double final_descent_rate_mps, const MovingLandingParams& params);
+                                double yaw_sp_rad, const LandingGear& gear,
+                                const MovingLandingParams& params);
 
 /// The platform's motion beyond what the vehicle follows (step 4), or nullopt.
 std::optional<std::string> too_fast(const PlatformFilter::Prediction& p,

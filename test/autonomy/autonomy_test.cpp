@@ -1568,5 +1568,51 @@ TEST(AutonomyRestart, EstimateLostFailsafeSurvivesARestart) {
   EXPECT_TRUE(w.out.setpoint.motors_on);
 }
 
+// Issue 40: a platform moving round a 0.5 m circle at 0.2 m/s, followed onto its 0.43 x 0.28 m
+// top. A gust carrying the vehicle 10 cm off the top's centre in the last drop, beyond the
+// 6.5 cm its short side leaves the 15 cm gear, gives the drop up (back to the moving approach);
+// the fourth such drop is the PLATFORM_TOO_FAST failsafe, a hold with the motors on. Without the
+// gusts the drop lands on the top.
+KinematicWorld moving_world() {
+  KinematicWorld w;
+  w.circle_speed_mps = 0.2;
+  w.feed_forward = true;
+  w.move_platform();
+  return w;
+}
+
+TEST(AutonomyMovingDrop, ADropCarriedOffTheTopGoesAroundAndTheFourthIsTheFailsafe) {
+  KinematicWorld w = moving_world();
+  ASSERT_TRUE(w.go_to_approach(Mission::kLanding));
+  for (int k = 1; k <= kMaxDropGoArounds + 1; ++k) {
+    ASSERT_TRUE(w.run_until_phase(Phase::kFinalDescent, 30)) << w.autonomy.reason();
+    w.step();
+    ASSERT_EQ(w.autonomy.phase(), Phase::kFinalDescent);
+    w.p.x() += 0.10;  // the gust
+    w.step();
+    if (k <= kMaxDropGoArounds) {
+      EXPECT_EQ(w.autonomy.phase(), Phase::kApproach) << w.autonomy.reason();
+      EXPECT_EQ(w.autonomy.drop_go_arounds(), k);
+      EXPECT_NE(w.autonomy.reason().find("last drop given up"), std::string::npos)
+          << w.autonomy.reason();
+    }
+  }
+  EXPECT_EQ(w.autonomy.phase(), Phase::kHold) << w.autonomy.reason();
+  EXPECT_EQ(w.autonomy.failsafe(), Failsafe::kPlatformTooFast);
+  EXPECT_TRUE(w.out.setpoint.motors_on);
+  EXPECT_NE(w.autonomy.reason().find("beyond what the vehicle lands on"), std::string::npos)
+      << w.autonomy.reason();
+}
+
+TEST(AutonomyMovingDrop, WithoutAGustTheDropLandsOnTheMovingTop) {
+  KinematicWorld w = moving_world();
+  ASSERT_TRUE(w.go_to_approach(Mission::kLanding));
+  ASSERT_TRUE(w.run_until_phase(Phase::kLanded, 60)) << w.autonomy.reason();
+  EXPECT_EQ(w.autonomy.drop_go_arounds(), 0);
+  EXPECT_NE(w.autonomy.reason().find("on the moving platform"), std::string::npos)
+      << w.autonomy.reason();
+  EXPECT_LT((w.p - w.truth.platform_center_W).head<2>().norm(), 0.0645);
+}
+
 }  // namespace
 }  // namespace alight::autonomy

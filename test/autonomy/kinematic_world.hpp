@@ -67,6 +67,14 @@ struct KinematicWorld {
   /// The onboard estimate's health (STATE_ESTIMATE, issue 17), sent every step stamped with its
   /// time; none: no STATE_ESTIMATE at all (flying on motion capture).
   std::optional<EstimateHealth> estimate;
+  /// A platform moving round a circle (its top level, its axes still): its centre at
+  /// circle_centre_W + circle_r_m (cos, sin)(circle_speed_mps t / r), and vision's moving-top
+  /// measurement (VISION_PLATFORM, exact) every third step. Zero speed: a still platform.
+  double circle_speed_mps = 0.0, circle_r_m = 0.5;
+  Vector2d circle_centre_W = Vector2d(1.0, 0.5);
+  /// The vehicle follows the setpoint's velocity too (the outer loop's feed-forward): a moving
+  /// platform is followed without the position lag's trail.
+  bool feed_forward = false;
 
   double ground_z(const Vector3d& q) const {
     if (truth.has_platform) {
@@ -101,7 +109,8 @@ struct KinematicWorld {
     } else if (out.setpoint.motors_on && mocap_age_s > 0.3) {
       // the outer loop holds level: drifts nowhere in this model
     } else if (out.setpoint.motors_on) {
-      Vector3d vel = (out.setpoint.p_W - p) / 0.3;
+      Vector3d vel =
+          (out.setpoint.p_W - p) / 0.3 + (feed_forward ? out.setpoint.v_W : Vector3d::Zero());
       if (vel.norm() > 1.0) vel *= 1.0 / vel.norm();
       p += vel * dt;
       yaw = out.setpoint.yaw_rad;
@@ -130,6 +139,10 @@ struct KinematicWorld {
       in.estimate->utime = t;
     }
     truth.vehicle = pose();
+    if (circle_speed_mps > 0) {
+      move_platform();
+      if ((t - kT0) % 30'000 == 0) in.platform = platform_measurement();
+    }
     if (target) {
       in.target = target;
     } else if (vision_on) {
@@ -137,6 +150,25 @@ struct KinematicWorld {
       if (in.target && corrupt_target) corrupt_target(*in.target);
     }
     out = autonomy.update(in, t);
+  }
+
+  Vector2d circle_p(int64_t at) const {
+    const double a = circle_speed_mps * double(at - kT0) * 1e-6 / circle_r_m;
+    return circle_centre_W + circle_r_m * Vector2d(std::cos(a), std::sin(a));
+  }
+  void move_platform() { truth.platform_center_W.head<2>() = circle_p(t); }
+  PlatformMeasurement platform_measurement() const {
+    PlatformMeasurement m;
+    m.utime = t;
+    m.ref_utime = t - 250'000;
+    m.p_W = truth.platform_center_W;
+    m.v_W.head<2>() = (circle_p(t) - circle_p(m.ref_utime)) / 0.25;
+    m.cov_p_W = 1e-4 * Matrix3d::Identity();
+    m.cov_v_W = 2.5e-3 * Matrix3d::Identity();
+    m.var_yaw = 1e-4;
+    m.var_yaw_rate = 1e-4;
+    m.size_m = truth.platform_size_m.head<2>();
+    return m;
   }
 
   void send(Command c, Mission m = Mission::kNone) { step(command(c, ++seq, m)); }

@@ -638,7 +638,7 @@ TEST(MovingApproachTest, MatchesThePlatformThenDescendsAndFailsSafeWhenTooFast) 
   PoseSample pose;
   pose.p_W_B << m.p(t).x() + 0.3, m.p(t).y(), 1.2;
   const int64_t now = kPfT0 + int64_t(t * 1e6);
-  auto st = step_moving_approach(s, f, pose, now, 0.01, 0.0, 0.1, 0.25, 1.0, params);
+  auto st = step_moving_approach(s, f, pose, now, 0.01, 0.0, LandingGear{}, params);
   EXPECT_EQ(st.next, MovingStep::Next::kContinue);
   // Over the predicted centre, the platform's velocity fed forward, no descent while unmatched.
   EXPECT_NEAR(st.sp_p_W.x(), m.p(t).x(), 0.03);
@@ -654,22 +654,22 @@ TEST(MovingApproachTest, MatchesThePlatformThenDescendsAndFailsSafeWhenTooFast) 
     const auto pr = f.predict(now + k * 10000);
     pose.p_W_B.head<2>() = pr.p_W;
     pose.v_W_B << pr.v_W, 0;
-    st = step_moving_approach(s, f, pose, now + k * 10000, 0.01, 0.0, 0.1, 0.25, 1.0, params);
+    st = step_moving_approach(s, f, pose, now + k * 10000, 0.01, 0.0, LandingGear{}, params);
   }
   EXPECT_LT(st.sp_p_W.z(), z0);
   EXPECT_LT(st.sp_v_W.z(), 0.0);
   // The same platform beyond max_speed_mps for too_fast_s: the failsafe.
   params.max_speed_mps = 0.4;
   MovingApproach s2;
-  st = step_moving_approach(s2, f, pose, now, 0.01, 0.0, 0.1, 0.25, 1.0, params);
+  st = step_moving_approach(s2, f, pose, now, 0.01, 0.0, LandingGear{}, params);
   EXPECT_EQ(st.next, MovingStep::Next::kContinue);
-  st = step_moving_approach(s2, f, pose, now + int64_t(params.too_fast_s * 1e6), 0.01, 0.0, 0.1,
-                            0.25, 1.0, params);
+  st = step_moving_approach(s2, f, pose, now + int64_t(params.too_fast_s * 1e6), 0.01, 0.0,
+                            LandingGear{}, params);
   EXPECT_EQ(st.next, MovingStep::Next::kTooFast);
   // Not measured for lost_timeout_s: lost.
   MovingApproach s3;
   st = step_moving_approach(s3, f, pose, f.utime() + int64_t((params.lost_timeout_s + 0.1) * 1e6),
-                            0.01, 0.0, 0.1, 0.25, 1.0, MovingLandingParams{});
+                            0.01, 0.0, LandingGear{}, MovingLandingParams{});
   EXPECT_EQ(st.next, MovingStep::Next::kTargetLost);
 }
 
@@ -692,7 +692,7 @@ TEST(MovingApproachRegression, NeverDescendsOnAPredictionLongUnmeasured) {
     const auto pr = f.predict(now + k * 10000);
     pose.p_W_B.head<2>() = pr.p_W;
     pose.v_W_B << pr.v_W, 0;
-    st = step_moving_approach(s, f, pose, now + k * 10000, 0.01, 0.0, 0.1, 0.25, 1.0, params);
+    st = step_moving_approach(s, f, pose, now + k * 10000, 0.01, 0.0, LandingGear{}, params);
     ASSERT_EQ(st.next, MovingStep::Next::kContinue);
     EXPECT_EQ(st.sp_v_W.z(), 0.0) << "descending " << k * 0.01 << " s after the last measurement";
   }
@@ -723,7 +723,7 @@ TEST(MovingApproachTest, FeedsThePlatformsTurnForward) {
   pose.p_W_B << m.p(t).x(), m.p(t).y(), 1.2;
   const int64_t now = kPfT0 + int64_t(t * 1e6);
   const auto st =
-      step_moving_approach(s, f, pose, now, 0.01, m.yaw(t), 0.1, 0.25, 1.0, MovingLandingParams{});
+      step_moving_approach(s, f, pose, now, 0.01, m.yaw(t), LandingGear{}, MovingLandingParams{});
   EXPECT_EQ(st.yaw_rate_radps, f.predict(now).yaw_rate_rps);
   EXPECT_NEAR(st.yaw_rate_radps, m.omega, 0.07);  // each measured rate has a 0.05 rad/s sigma
   EXPECT_NEAR(wrap_angle(st.yaw_sp_rad - m.yaw(t)), 0.0, 0.03);
@@ -739,6 +739,104 @@ TEST(MovingApproachTest, AlignsTheHeadingWithThePlatformsAxesTheNearestWay) {
   EXPECT_NEAR(aligned_yaw(0.2, 0.0), 0.2, 1e-12);
   EXPECT_NEAR(aligned_yaw(0.2, 1.5), 0.2 + M_PI / 2, 1e-12);
   EXPECT_NEAR(aligned_yaw(-1.4, 0.1), -1.4 + M_PI / 2, 1e-12);
+}
+
+// The last drop's go-around (moving_landing.hpp, step 5) on a 0.41 x 0.25 m top: the gear (15 cm
+// square) rests whole on it within 5 cm of its centre across. Carried beyond that while above
+// the altitude loop's lag, the drop is given up; within the lag it is committed; a banked body
+// whose origin is within the room hangs its gear beyond it. The drop starts only within the room
+// less the aim's margin (2 cm), and on a centre the filter places within the room.
+// A top of size_m on m measured every kPfDt up to 2 s.
+PlatformFilter followed_for_2s(const PlatformPath& m, const Vector2d& size_m,
+                               std::mt19937_64& rng) {
+  PlatformFilter f{PlatformFilterParams{}};
+  for (double t = kPfInterval; t < 2; t += kPfDt) f.update(measure_sized(m, t, rng, size_m));
+  return f;
+}
+
+TEST(MovingDropTest, TheGearCarriedBeyondTheTopsRoomGivesTheDropUpAboveTheLagOnly) {
+  const PlatformPath m = straight_path(0.5);
+  std::mt19937_64 rng(41);
+  PlatformFilter f = followed_for_2s(m, Vector2d(0.41, 0.25), rng);
+  const LandingGear gear;
+  const MovingLandingParams params;
+  ASSERT_NEAR(drop_room_m(f.whole_top(), gear.gear_footprint_m), 0.05, 1e-9);
+  const int64_t now = f.utime();
+  const auto pr = f.predict(now);
+  const Vector2d along(std::cos(pr.yaw_rad), std::sin(pr.yaw_rad));
+  const Vector2d across(-along.y(), along.x());
+  const auto at = [&](double off_m, double gear_above_m) {
+    PoseSample pose;
+    pose.p_W_B << pr.p_W + off_m * across, pr.top_z_m + gear.gear_height_m + gear_above_m;
+    return pose;
+  };
+  const auto check = [&](const PoseSample& pose) { return check_drop(f, pose, now, gear, params); };
+  EXPECT_EQ(check(at(0.02, 0.3)).verdict, Drop::kGoOn);
+  EXPECT_TRUE(aimed_for_drop(check(at(0.02, 0.3)), gear));
+  EXPECT_EQ(check(at(0.04, 0.3)).verdict, Drop::kGoOn);
+  EXPECT_FALSE(aimed_for_drop(check(at(0.04, 0.3)), gear));  // within the room, not the aim's
+  const DropCheck off = check(at(0.07, 0.3));
+  EXPECT_EQ(off.verdict, Drop::kOffTheTop);
+  EXPECT_NEAR(off.off_m.cwiseAbs().maxCoeff(), 0.07, 1e-6);
+  EXPECT_NEAR(off.gear_above_m, 0.3, 1e-3);  // the fitted heave of the noise: under a millimetre
+  // Within final_descent_rate_mps x fall_lag_s (0.15 m) of the top a climb still touches down.
+  EXPECT_EQ(check(at(0.07, 0.1)).verdict, Drop::kCommitted);
+  // Banked 0.3 rad across the top: the origin 4 cm off, the gear 0.1 m below it 3 cm further.
+  PoseSample banked = at(0.04, 0.3);
+  banked.q_WB = Quaterniond(Eigen::AngleAxisd(0.3, Vector3d(along.x(), along.y(), 0)));
+  EXPECT_EQ(check(banked).verdict, Drop::kOffTheTop);
+  EXPECT_LT(check(at(0.0, 0.3)).centre_sd_m, 0.02);
+  // Then seen only cut by the border for 8 s: its velocity measured, its centre not; over the
+  // centre the filter predicts, the drop does not start on it.
+  double t = 2;
+  for (; t < 10; t += kPfDt) {
+    auto cut = measure_sized(m, t, rng, Vector2d(0.30, 0.25));  // part of it
+    cut.cov_p_W.topLeftCorner<2, 2>() = 1e2 * Matrix2d::Identity();
+    f.update(cut);
+  }
+  const int64_t later = kPfT0 + int64_t(t * 1e6);
+  PoseSample over;
+  over.p_W_B << f.predict(later).p_W, f.predict(later).top_z_m + gear.gear_height_m + 0.3;
+  const DropCheck unplaced = check_drop(f, over, later, gear, params);
+  EXPECT_GT(unplaced.centre_sd_m, unplaced.room_m);
+  EXPECT_FALSE(aimed_for_drop(unplaced, gear));
+  // A top not measured yet (no whole top) has no edge to judge by.
+  PlatformFilter unmeasured{PlatformFilterParams{}};
+  std::mt19937_64 rng2(43);
+  for (double t = kPfInterval; t < 2; t += kPfDt) unmeasured.update(measure_path(m, t, rng2));
+  ASSERT_EQ(unmeasured.whole_top().minCoeff(), 0.0);
+  const DropCheck blind = check_drop(unmeasured, at(0.3, 0.3), unmeasured.utime(), gear, params);
+  EXPECT_EQ(blind.verdict, Drop::kGoOn);
+  EXPECT_TRUE(aimed_for_drop(blind, gear));
+}
+
+// At the final height the last drop waits for the gear's aim; never aimed (a top narrower than
+// the gear and its margins) for final_hold_timeout_s, the platform is beyond what the vehicle
+// lands on.
+TEST(MovingDropTest, NoAimedMomentAtTheFinalHeightIsTheFailsafe) {
+  const PlatformPath m = straight_path(0.5);
+  std::mt19937_64 rng(47);
+  PlatformFilter f = followed_for_2s(m, Vector2d(0.41, 0.18), rng);
+  double t = 2;
+  const LandingGear gear;  // room (0.18 - 0.15) / 2 = 1.5 cm, less the 2 cm margin: none
+  const MovingLandingParams params;
+  MovingApproach s;
+  MovingStep st;
+  for (int k = 0; k <= int((gear.final_hold_timeout_s + params.match_settle_s + 1) / kPfDt); ++k) {
+    t += kPfDt;
+    f.update(measure_sized(m, t, rng, Vector2d(0.41, 0.18)));
+    const int64_t now = kPfT0 + int64_t(t * 1e6);
+    const auto pr = f.predict(now);
+    PoseSample pose;  // over the centre, matched, at the final height
+    pose.p_W_B << pr.p_W, pr.top_z_m + gear.gear_height_m + params.final_height_m;
+    pose.v_W_B << pr.v_W, 0.0;
+    s.z_sp_m = pose.p_W_B.z();
+    st = step_moving_approach(s, f, pose, now, kPfDt, 0.0, gear, params);
+    ASSERT_NE(st.next, MovingStep::Next::kFinalDescent) << st.reason;
+    if (st.next != MovingStep::Next::kContinue) break;
+  }
+  EXPECT_EQ(st.next, MovingStep::Next::kTooFast);
+  EXPECT_NE(st.reason.find("no moment to drop"), std::string::npos) << st.reason;
 }
 
 }  // namespace
