@@ -183,6 +183,10 @@ const char* target_reason_name(int8_t reason) {
       return "outline corner off its plane";
     case target_t::REASON_TOP_POINTS_FEW:
       return "too few top features on its plane";
+    case target_t::REASON_TOP_MATCHES_FEW:
+      return "too few matches at the top's height";
+    case target_t::REASON_NO_TOP_HEIGHT:
+      return "nothing above the known floor";
   }
   return "unknown";
 }

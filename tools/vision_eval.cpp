@@ -161,6 +161,12 @@ const char* hint(Reason reason) {
       return "the floor's and the top's homographies give two motions: a wrong lens model"
              " (distortion, focal length) bends one plane more than the other; or the top's"
              " matches are few or on a repeated print";
+    case Reason::kTopMatchesFew:
+      return "the top holds too few matches: a small top seen from far, or one with little print"
+             " (a top without print is outlined where the floor has texture around it)";
+    case Reason::kNoTopHeight:
+      return "nothing stands off the known floor: is the platform in view, and is"
+             " vision.landing.floor_z_m the floor's height in the pose's frame?";
     case Reason::kMotionDisagrees:
       return "a plane's motion disagrees with the pose's: check the camera's mount (t_B_C_m,"
              " rotation), its calibration and the pose's latency";

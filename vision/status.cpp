@@ -96,6 +96,10 @@ const char* to_string(Reason r) {
       return "outline corner off its plane";
     case Reason::kTopPointsFew:
       return "too few top features on its plane";
+    case Reason::kTopMatchesFew:
+      return "too few matches at the top's height";
+    case Reason::kNoTopHeight:
+      return "nothing above the known floor";
   }
   return "unknown";
 }

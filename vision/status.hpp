@@ -65,7 +65,16 @@ enum class Reason : int8_t {
   kAimBehindCamera = 43,         ///< the target's centre or its ray not in front on its plane
   kCornerOffPlane = 44,          ///< landing: a featureless outline's corner ray misses its plane
   kTopPointsFew = 45,  ///< landing: under 4 distinct top features placed on the top's plane
+  // The known floor's refusals of a top (known_floor.hpp).
+  kTopMatchesFew = 46,  ///< landing: a top's height shared by under min_platform_inliers matches
+  kNoTopHeight = 47,    ///< landing: no match off the known floor in the top's height range
 };
+
+/// The floor alone explains the view, no top plane with enough matches on it (the paper's second
+/// homography, or the known floor's top): where a top without features may still be outlined.
+inline bool no_top_plane(Reason r) {
+  return r == Reason::kNoTargetPlane || r == Reason::kTopMatchesFew || r == Reason::kNoTopHeight;
+}
 
 const char* to_string(Reason r);
 

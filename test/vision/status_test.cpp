@@ -57,11 +57,13 @@ TEST(StatusTest, ReasonValuesAreTheTargetMessageConstants) {
   EXPECT_EQ(int(Reason::kAimBehindCamera), T::REASON_AIM_BEHIND_CAMERA);
   EXPECT_EQ(int(Reason::kCornerOffPlane), T::REASON_CORNER_OFF_PLANE);
   EXPECT_EQ(int(Reason::kTopPointsFew), T::REASON_TOP_POINTS_FEW);
+  EXPECT_EQ(int(Reason::kTopMatchesFew), T::REASON_TOP_MATCHES_FEW);
+  EXPECT_EQ(int(Reason::kNoTopHeight), T::REASON_NO_TOP_HEIGHT);
 }
 
 TEST(StatusTest, EveryReasonHasItsOwnName) {
   std::set<std::string> names;
-  for (int r = 0; r <= alight::target_t::REASON_TOP_POINTS_FEW; ++r) {
+  for (int r = 0; r <= alight::target_t::REASON_NO_TOP_HEIGHT; ++r) {
     const std::string name = to_string(static_cast<Reason>(r));
     EXPECT_NE(name, "unknown") << r;
     EXPECT_TRUE(names.insert(name).second) << r << ": " << name;

@@ -358,7 +358,7 @@ Reason refined_pair_refusal(const PairFit& p, const RefinedPair& q) {
   if (!(q.w.norm() <= p.max_w) || !(q.rho_t > p.range.rho_f) || !std::isfinite(q.rho_t))
     return Reason::kTopFitDiverged;
   if (q.n_floor < p.params.min_floor_inliers) return Reason::kNoDominantPlane;
-  if (q.n_top < p.params.min_platform_inliers) return Reason::kNoTargetPlane;
+  if (q.n_top < p.params.min_platform_inliers) return Reason::kTopMatchesFew;
   const Matrix3d R = exp_so3(q.w) * p.motion.R_21;
   std::vector<Vector2d> top_px;
   for (size_t i = 0; i < p.size(); ++i)
@@ -474,7 +474,8 @@ Result<KnownFloorPlanes> fit_known_floor_planes(const std::vector<Vector3d>& x1,
   const Hypothesis best = best_hypothesis(p);
   if (best.score < 0 || best.n_floor < params.min_floor_inliers)
     return R_::fail(Reason::kNoDominantPlane);
-  if (best.top.count < params.min_platform_inliers) return R_::fail(Reason::kNoTargetPlane);
+  if (best.top.count < params.min_platform_inliers)
+    return R_::fail(best.top.count == 0 ? Reason::kNoTopHeight : Reason::kTopMatchesFew);
   const RefinedPair q = refine(p, best);
   if (const Reason r = refined_pair_refusal(p, q); r != Reason::kOk) return R_::fail(r);
 
@@ -502,15 +503,15 @@ Result<KnownFloorPlanes> fit_known_top_alone(const std::vector<Vector3d>& x1,
   using R_ = Result<KnownFloorPlanes>;
   const size_t N = x1.size();
   if (const Reason r = refused(N, x2.size(), motion, f, thr); r != Reason::kOk) return R_::fail(r);
-  if (static_cast<int>(N) < params.min_platform_inliers) return R_::fail(Reason::kNoTargetPlane);
+  if (static_cast<int>(N) < params.min_platform_inliers) return R_::fail(Reason::kTooFewMatches);
   const TopRange range = top_range(floor, params);
   std::vector<PerMatch> pm;
   classify_floor_matches(x1, x2, motion.R_21, motion.t_12_m, floor.n_1, range.rho_f, f, thr, &pm);
   const TopMode mode = top_mode(pm, range.rho_lo, range.rho_hi, range.max_half_width, thr);
-  if (mode.count == 0) return R_::fail(Reason::kNoTargetPlane);
+  if (mode.count == 0) return R_::fail(Reason::kNoTopHeight);
   const TopAlone alone = top_alone_of(pm, motion, floor, range, mode, thr);
   const KnownFloorPlanes& out = alone.planes;
-  if (out.n_top < params.min_platform_inliers) return R_::fail(Reason::kNoTargetPlane);
+  if (out.n_top < params.min_platform_inliers) return R_::fail(Reason::kTopMatchesFew);
   // The top alone must hold a clear majority of the matches: the rest (the floor's few, blur's
   // strays) never outvote it, and a mode that holds half of them is one of two rival planes.
   constexpr double kTopAloneMinShare = 0.6;

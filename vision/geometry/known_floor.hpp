@@ -78,8 +78,10 @@ struct KnownFloorPlanes {
 /// Fits the floor (known up to the rotation correction) and a level top from normalised rays
 /// (z = 1) of the matches; focal_px converts the thresholds. Fails with kSmallBaseline (no
 /// translation), kTooFewMatches, kNoDominantPlane (fewer than min_floor_inliers on the floor) or
-/// kNoTargetPlane (no top with min_platform_inliers, or its free normal off the floor's by more
-/// than max_normal_angle_deg).
+/// a top's refusal: kNoTopHeight (no match off the floor in the top's height range),
+/// kTopMatchesFew (a height the matches share, but fewer than min_platform_inliers on it, before
+/// the refinement or after it), kTopNotParallel (its free normal off the floor's by more than
+/// max_normal_angle_deg).
 Result<KnownFloorPlanes> fit_known_floor_planes(const std::vector<Vector3d>& rays_1,
                                                 const std::vector<Vector3d>& rays_2,
                                                 const KnownMotion& motion, const KnownPlane& floor,

@@ -123,7 +123,7 @@ TargetOutcome find_landing_target(const Correspondences& c, const PipelineParams
   TargetOutcome result = mode == "always" || found_or_partial(known) ? known : paper;
   // One plane in view, the floor's: a top without features of its own is measured by its
   // outline (outline.hpp) on the known floor.
-  if (result.reason == Reason::kNoTargetPlane && !gray_1.empty())
+  if (no_top_plane(result.reason) && !gray_1.empty())
     if (auto outline = find_outline_top(c, result.labels, gray_1, gray_2, params)) {
       outline->labels = std::move(result.labels);
       outline->estimate.n_inliers_dominant = result.estimate.n_inliers_dominant;

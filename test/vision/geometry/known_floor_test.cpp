@@ -194,10 +194,36 @@ TEST(KnownFloorTest, BareFloorWithMismatchesHasNoTop) {
     const auto fit = fit_known_floor_planes(s.r1, s.r2, s.mocap, s.floor, f, params, 2.0);
     ASSERT_FALSE(fit) << "seed " << seed << ": a top of " << fit->n_top;
     EXPECT_TRUE(
-        fit.reason() == Reason::kNoTargetPlane ||
+        fit.reason() == Reason::kTopMatchesFew || fit.reason() == Reason::kNoTopHeight ||
         (fit.reason() >= Reason::kTopNotParallel && fit.reason() <= Reason::kTopAloneLowParallax))
         << to_string(fit.reason());
   }
+}
+
+// The known floor names why it has no top: a bare floor whose matches all carry with it has
+// nothing at a top's height; a top 9 cm up holding 6 matches (a small top seen from far, under
+// min_platform_inliers 12) has a height its matches share, too few of them. Neither is the
+// paper's second homography (NO_TARGET_PLANE), and both leave the frame to the outline search.
+TEST(KnownFloorTest, ABareFloorHasNoTopHeightAndAFewMatchesTopTooFewMatches) {
+  const double f = CameraModel::firefly_mv_4mm().K()(0, 0);
+  LandingParams params;
+  int bare_no_height = 0, small_few = 0;
+  for (uint64_t seed = 1; seed <= 10; ++seed) {
+    const Scene bare = make_scene(300 + seed, 0.09, 80, 0, 0, 0.15 * kDeg);
+    const auto none =
+        fit_known_floor_planes(bare.r1, bare.r2, bare.mocap, bare.floor, f, params, 2.0);
+    ASSERT_FALSE(none) << "seed " << seed;
+    bare_no_height += none.reason() == Reason::kNoTopHeight;
+    const Scene small = make_scene(400 + seed, 0.09, 80, 6, 0, 0.15 * kDeg);
+    const auto few =
+        fit_known_floor_planes(small.r1, small.r2, small.mocap, small.floor, f, params, 2.0);
+    ASSERT_FALSE(few) << "seed " << seed;
+    small_few += few.reason() == Reason::kTopMatchesFew;
+    EXPECT_TRUE(no_top_plane(none.reason()) && no_top_plane(few.reason()))
+        << to_string(none.reason()) << ", " << to_string(few.reason());
+  }
+  EXPECT_GE(bare_no_height, 9);
+  EXPECT_GE(small_few, 9);
 }
 
 // The approach's last metre over a top on a bland floor (landing_lowtex seed 9917, lost in the
