@@ -649,8 +649,7 @@ void Autonomy::step_moving(phases::Approach& a, const Vector3d& /*p*/, double dt
       target_lost(st.reason);
       return;
     case MovingStep::Next::kTooFast:
-      hold(st.reason + ", climbing and holding", Failsafe::kPlatformTooFast,
-           pr.top_z_m + L.gear_height_m + M.follow_height_m + 0.3);
+      platform_too_fast(st.reason + ", climbing and holding");
       return;
     case MovingStep::Next::kFinalDescent: {
       phases::FinalDescent f{a.moving->z_sp_m, TouchdownDetector(L), false, {}, {}, true};
@@ -667,18 +666,20 @@ void Autonomy::step_moving(phases::Approach& a, const Vector3d& /*p*/, double dt
   reason_ = st.reason;
 }
 
-void Autonomy::go_around(const DropCheck& c) {
-  const auto& L = params_.landing;
-  const auto& M = params_.moving_platform;
-  ++drop_go_arounds_;
+void Autonomy::platform_too_fast(const std::string& reason) {
   const auto pr = platform_.predict(now_utime_);
+  hold(reason, Failsafe::kPlatformTooFast,
+       pr.top_z_m + params_.landing.gear_height_m + params_.moving_platform.follow_height_m + 0.3);
+}
+
+void Autonomy::go_around(const DropCheck& c) {
+  ++drop_go_arounds_;
   const std::string why = "the gear " + fmt(c.off_m.cwiseAbs().maxCoeff(), 3) +
                           " m off the moving top's centre, beyond its room " + fmt(c.room_m, 3) +
                           " m, " + fmt(c.gear_above_m) + " m above it";
   if (drop_go_arounds_ > kMaxDropGoArounds) {
-    hold("last drop given up " + std::to_string(drop_go_arounds_) + " times (" + why +
-             "): beyond what the vehicle lands on, climbing and holding",
-         Failsafe::kPlatformTooFast, pr.top_z_m + L.gear_height_m + M.follow_height_m + 0.3);
+    platform_too_fast("last drop given up " + std::to_string(drop_go_arounds_) + " times (" + why +
+                      "): beyond what the vehicle lands on, climbing and holding");
     return;
   }
   enter(phases::Approach{LandingApproach{}, platform_.utime(), {}, MovingApproach{}},

@@ -221,6 +221,8 @@ class Autonomy {
   /// The last drop onto a moving platform carried off its top (check_drop): back to the moving
   /// approach at the final height, or the failsafe after kMaxDropGoArounds.
   void go_around(const DropCheck& c);
+  /// Failsafe::kPlatformTooFast: climb over the platform's follow height and hold.
+  void platform_too_fast(const std::string& reason);
   // APPROACH: true (and counted) when `m` lies outside the gate around the final estimate; a
   // sustained disagreement enters the VISION_DISAGREES failsafe.
   bool vision_disagrees(phases::Approach& a, const TargetMeasurement& m);

@@ -6,22 +6,9 @@
 #include <cmath>
 #include <limits>
 
+#include "autonomy/text.hpp"
+
 namespace alight::autonomy {
-namespace {
-
-std::string fmt2(double v) {
-  char b[32];
-  std::snprintf(b, sizeof b, "%.2f", v);
-  return b;
-}
-
-std::string fmt3(double v) {
-  char b[32];
-  std::snprintf(b, sizeof b, "%.3f", v);
-  return b;
-}
-
-}  // namespace
 
 const ParamSchema<MovingLandingParams>& MovingLandingParams::schema() {
   using P = MovingLandingParams;
@@ -108,11 +95,11 @@ std::optional<std::string> too_fast(const PlatformFilter::Prediction& p,
   const double speed = p.v_W.norm();
   const double rate_dps = std::abs(p.yaw_rate_rps) * 180 / M_PI;
   if (speed > params.max_speed_mps)
-    return "platform at " + fmt2(speed) + " m/s, beyond " + fmt2(params.max_speed_mps) +
+    return "platform at " + fmt(speed, 2) + " m/s, beyond " + fmt(params.max_speed_mps, 2) +
            ": beyond what the vehicle follows";
   if (rate_dps > params.max_yaw_rate_dps)
-    return "platform turning at " + fmt2(rate_dps) + " deg/s, beyond " +
-           fmt2(params.max_yaw_rate_dps) + ": beyond what the vehicle follows";
+    return "platform turning at " + fmt(rate_dps, 2) + " deg/s, beyond " +
+           fmt(params.max_yaw_rate_dps, 2) + ": beyond what the vehicle follows";
   return std::nullopt;
 }
 
@@ -164,7 +151,7 @@ MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
   const double since_s = double(now_utime - filter.utime()) * 1e-6;
   if (!filter.initialised() || since_s > params.lost_timeout_s) {
     out.next = MovingStep::Next::kTargetLost;
-    out.reason = "moving platform not measured for " + fmt2(since_s) + " s";
+    out.reason = "moving platform not measured for " + fmt(since_s, 2) + " s";
     return out;
   }
   const auto pr = filter.predict(now_utime);
@@ -208,9 +195,9 @@ MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
   out.sp_p_W << pr.p_W, s.z_sp_m;
   if (s.z_sp_m > z_final) {
     out.reason = settled ? "descending with the moving platform"
-                         : "matching the moving platform (" + fmt2(offset.norm()) + " m, " +
-                               fmt2(rel_v.norm()) + " m/s off" +
-                               (measured ? "" : ", unmeasured for " + fmt2(since_s) + " s") + ")";
+                         : "matching the moving platform (" + fmt(offset.norm(), 2) + " m, " +
+                               fmt(rel_v.norm(), 2) + " m/s off" +
+                               (measured ? "" : ", unmeasured for " + fmt(since_s, 2) + " s") + ")";
     return out;
   }
   // At the final height: the last drop when matched and the heave allows it.
@@ -225,18 +212,18 @@ MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
     out.reason = std::string("moving platform matched, final descent (") + to_string(r) + ")";
     return out;
   }
-  const std::string off = "the gear " + fmt3(c.off_m.cwiseAbs().maxCoeff()) +
-                          " m off its centre, known to " + fmt3(c.centre_sd_m) + " m";
+  const std::string off = "the gear " + fmt(c.off_m.cwiseAbs().maxCoeff(), 3) +
+                          " m off its centre, known to " + fmt(c.centre_sd_m, 3) + " m";
   if (waited_s >= gear.final_hold_timeout_s) {
     out.next = MovingStep::Next::kTooFast;
-    out.reason = "no moment to drop onto the moving platform in " + fmt2(waited_s) + " s (" + off +
-                 ", its room " + fmt3(c.room_m) + " m): beyond what the vehicle lands on";
+    out.reason = "no moment to drop onto the moving platform in " + fmt(waited_s, 2) + " s (" +
+                 off + ", its room " + fmt(c.room_m, 3) + " m): beyond what the vehicle lands on";
     return out;
   }
   out.reason = !settled ? std::string("over the moving platform: matching")
-               : !aimed ? "over the moving platform: " + off + ", beyond the room to drop " +
-                              fmt3(c.room_m - gear.fit_margin_m) + " m (the centre " +
-                              fmt3(c.room_m) + ")"
+               : !aimed ? "over the moving platform: " + off + "; it drops within " +
+                              fmt(c.room_m - gear.fit_margin_m, 3) +
+                              " m on a centre known within " + fmt(c.room_m, 3) + " m"
                         : std::string("over the moving platform: ") + to_string(r);
   return out;
 }
