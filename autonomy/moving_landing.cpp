@@ -119,8 +119,7 @@ DropCheck check_drop(const PlatformFilter& filter, const PoseSample& pose, int64
   const Vector3d gear_W = pose.p_W_B - gear.gear_height_m * (pose.q_WB * Vector3d::UnitZ());
   c.gear_above_m = gear_W.z() - (pr.top_z_m + filter.heave().z(now_utime));
   const Vector2d e_W = gear_W.head<2>() - pr.p_W;
-  const double cy = std::cos(pr.yaw_rad), sy = std::sin(pr.yaw_rad);
-  c.off_m << cy * e_W.x() + sy * e_W.y(), -sy * e_W.x() + cy * e_W.y();
+  c.off_m = Eigen::Rotation2Dd(-pr.yaw_rad) * e_W;
   c.room_m = drop_room_m(filter.whole_top(), gear.gear_footprint_m);
   c.centre_sd_m =
       std::sqrt(Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(pr.cov_p, Eigen::EigenvaluesOnly)
@@ -144,8 +143,6 @@ MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
                                 const PoseSample& pose, int64_t now_utime, double dt_s,
                                 double yaw_sp_rad, const LandingGear& gear,
                                 const MovingLandingParams& params) {
-  const double gear_height_m = gear.gear_height_m;
-  const double descent_rate_mps = gear.descent_rate_mps;
   MovingStep out;
   out.yaw_sp_rad = yaw_sp_rad;
   const double since_s = double(now_utime - filter.utime()) * 1e-6;
@@ -169,8 +166,8 @@ MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
     s.too_fast_since_utime.reset();
   }
   const double z_top = pr.top_z_m;
-  const double z_follow = z_top + gear_height_m + params.follow_height_m;
-  const double z_final = z_top + gear_height_m + params.final_height_m;
+  const double z_follow = z_top + gear.gear_height_m + params.follow_height_m;
+  const double z_final = z_top + gear.gear_height_m + params.final_height_m;
   if (s.z_sp_m <= 0) s.z_sp_m = std::max(z_final, std::min(pose.p_W_B.z(), z_follow));
   out.yaw_sp_rad = aligned_yaw(pr.yaw_rad, yaw_sp_rad);
   out.yaw_rate_radps = followed_turn_radps(pr.yaw_rate_rps, params);
@@ -189,8 +186,8 @@ MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
   out.sp_v_W << pr.v_W, 0.0;
   out.sp_a_W << pr.a_W, 0.0;
   if (settled && s.z_sp_m > z_final) {
-    s.z_sp_m = std::max(z_final, s.z_sp_m - descent_rate_mps * dt_s);
-    out.sp_v_W.z() = -descent_rate_mps;
+    s.z_sp_m = std::max(z_final, s.z_sp_m - gear.descent_rate_mps * dt_s);
+    out.sp_v_W.z() = -gear.descent_rate_mps;
   }
   out.sp_p_W << pr.p_W, s.z_sp_m;
   if (s.z_sp_m > z_final) {
