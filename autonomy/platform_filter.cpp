@@ -243,14 +243,16 @@ Vector2d PlatformFilter::whole_extent(const Track& t) {
   std::vector<int> support(n, 0);
   for (size_t i = 0; i < n; ++i)
     for (size_t j = 0; j < n; ++j)
-      support[i] += ((t.extents[j] - t.extents[i]).cwiseAbs().array() <= kPartialViewM).all();
+      support[i] +=
+          ((t.extents[j].extent - t.extents[i].extent).cwiseAbs().array() <= kPartialViewM).all();
   // The best supported of the extents `eligible` admits (of those as well supported, the larger).
   const auto best = [&](const auto& eligible) -> std::optional<size_t> {
     std::optional<size_t> b;
     for (size_t i = 0; i < n; ++i) {
       if (!eligible(i)) continue;
       if (!b || support[i] > support[*b] ||
-          (support[i] == support[*b] && t.extents[i].prod() > t.extents[*b].prod()))
+          (support[i] == support[*b] &&
+           t.extents[i].extent.prod() > t.extents[*b].extent.prod()))
         b = i;
     }
     return b;
@@ -258,15 +260,15 @@ Vector2d PlatformFilter::whole_extent(const Track& t) {
   auto whole = best([](size_t) { return true; });
   if (!whole) return Vector2d::Zero();
   for (size_t steps = 0; steps < n; ++steps) {
-    const Vector2d w = t.extents[*whole];
+    const Vector2d w = t.extents[*whole].extent;
     const auto larger = best([&](size_t i) {
-      return support[i] >= kWholeTopViews && !shorter_on_a_side(t.extents[i], w) &&
-             shorter_on_a_side(w, t.extents[i]);
+      const Vector2d& e = t.extents[i].extent;
+      return support[i] >= kWholeTopViews && !shorter_on_a_side(e, w) && shorter_on_a_side(w, e);
     });
     if (!larger) break;
     whole = larger;
   }
-  return t.extents[*whole];
+  return t.extents[*whole].extent;
 }
 
 bool PlatformFilter::shows_whole_top(const Track& t, const PlatformMeasurement& m) {
@@ -282,8 +284,23 @@ bool PlatformFilter::partial_view(const Track& t, const PlatformMeasurement& m) 
   return shorter_on_a_side(extent(m), whole) && !shorter_on_a_side(whole, extent(m));
 }
 
+// A view marked cut joins the extents once it spans at least the whole top believed so far (a top
+// followed close fills the view, most views of it come near the border, and the whole top is seen
+// in view after view of them), unless it is larger
+// than a whole top kWholeTopViews views have shown uncut: that top was seen entire inside the
+// image, and a cut view beyond it holds more than the top (the cart's sides seen past its edge,
+// placed on the top's plane).
+bool PlatformFilter::cut_view_joins(const Track& t, const PlatformMeasurement& m, bool partial) {
+  if (!(t.whole.minCoeff() > 0) || partial) return false;
+  if (!shorter_on_a_side(t.whole, extent(m))) return true;
+  const auto uncut_whole = std::count_if(t.extents.begin(), t.extents.end(), [&](const auto& v) {
+    return !v.cut && ((v.extent - t.whole).cwiseAbs().array() <= kPartialViewM).all();
+  });
+  return uncut_whole < kWholeTopViews;
+}
+
 void PlatformFilter::add_extent(Track& t, const PlatformMeasurement& m) {
-  t.extents.push_back(extent(m));
+  t.extents.push_back({extent(m), cut(m)});
   if (t.extents.size() > kExtentsKept) t.extents.pop_front();
   const Vector2d before = t.whole;
   t.whole = whole_extent(t);
@@ -406,16 +423,30 @@ PlatformFilter::Fused PlatformFilter::fuse(Track& t, const PlatformMeasurement& 
             Pp(i + 2, i + 2) += q(1, 1);
       }
     }
-    const Eigen::Vector4d innov = z - xp;
-    const Eigen::Matrix4d S = Pp + R;
+    // The measured velocity is the measured point's (vision's p_W, the visible part's centre on
+    // a view of part of the top): the top's turn adds its lever arm from the centre,
+    // v_m = v + w J (p_m - p) with J the quarter turn, so a view of one end of a turning top does
+    // not carry the centre along with that end. p_m is where the velocity was taken, exact
+    // whatever its variance as the top's centre; w's own variance widens the velocity's.
+    const double w = t.yaw(1);
+    Matrix2d J;
+    J << 0, -1, 1, 0;
+    const Vector2d lever = m.p_W.head<2>() - ahead.p_W;
+    Eigen::Matrix4d H = Eigen::Matrix4d::Identity();
+    H.bottomLeftCorner<2, 2>() = -w * J;
+    R.bottomRightCorner<2, 2>() += t.P_yaw(1, 1) * lever.squaredNorm() * Matrix2d::Identity();
+    Eigen::Vector4d h = xp;
+    h.tail<2>() += w * J * lever;
+    const Eigen::Vector4d innov = z - h;
+    const Eigen::Matrix4d S = H * Pp * H.transpose() + R;
     const Eigen::LDLT<Eigen::Matrix4d> ldlt(S);
     const double d2 = innov.dot(ldlt.solve(innov));
     if (!(d2 <= params_.gate_chi2)) return Fused::kOutsideGate;
-    const Eigen::Matrix4d K = Pp * ldlt.solve(Eigen::Matrix4d::Identity());
+    const Eigen::Matrix4d K = Pp * H.transpose() * ldlt.solve(Eigen::Matrix4d::Identity());
     const Vector2d v0 = t.x.tail<2>();
     t.x = xp + K * innov;
     follow_course(t, m.utime, v0, dt);
-    t.P = (Eigen::Matrix4d::Identity() - K) * Pp;
+    t.P = (Eigen::Matrix4d::Identity() - K * H) * Pp;
     t.P = 0.5 * (t.P + t.P.transpose()).eval();
     // Yaw and its rate: the same filter in one dimension pair.
     Matrix2d Fy;
@@ -435,12 +466,9 @@ PlatformFilter::Fused PlatformFilter::fuse(Track& t, const PlatformMeasurement& 
   ++t.n_consistent;
   // Every view not cut by the border, whether it shows the whole top or part of it: which it is is
   // judged against the others (whole_extent), never against the first ones alone. A view vision
-  // marks cut only once it spans at least the whole top believed so far: a top followed close
-  // fills the view, most views of it come near the border, and the whole top is seen in view
-  // after view of them; but a part cut off by the border at a steady offset is seen as steadily,
-  // and never becomes the whole top.
-  const bool spans_whole = t.whole.minCoeff() > 0 && !partial;
-  if (m.size_m.minCoeff() > 0 && (!cut(m) || spans_whole)) add_extent(t, m);
+  // marks cut only as cut_view_joins says: a part cut off by the border at a steady offset is
+  // seen as steadily as the whole top, and never becomes it.
+  if (m.size_m.minCoeff() > 0 && (!cut(m) || cut_view_joins(t, m, partial))) add_extent(t, m);
   t.top_z_sum += m.p_W.z();
   ++t.n_z;
   // The heave: each vertical velocity is the mean over its interval, so at the interval's middle.

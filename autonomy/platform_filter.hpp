@@ -22,7 +22,8 @@
 // shows part of the top: its position is not the top's centre and is not fused, its velocity is
 // (the part moves with the whole). A view vision marks as cut by the image's border (its position
 // variance kCutPositionVarM2 or more) counts towards the whole top too once it spans the whole top
-// believed so far; one whose extent is the whole top's has nothing beyond the border, and its
+// believed so far, unless it is larger than a whole top seen uncut (it holds more than the top);
+// one whose extent is the whole top's has nothing beyond the border, and its
 // position is fused (within kPartialViewM / 2). A view wider than the whole top on a side is no
 // part of it and joins the extents too; where they then make the whole top shorter on a side
 // than before, the centre fused on the old one was another object's, and its variance grows
@@ -207,7 +208,11 @@ class PlatformFilter {
     std::deque<std::pair<int64_t, double>> vz;
     HeaveModel heave;
     int n_consistent = 0;
-    std::deque<Vector2d> extents;       // (long, short) of its views (fuse: which ones) [m]
+    struct View {
+      Vector2d extent = Vector2d::Zero();  // (long, short) [m]
+      bool cut = false;                    // marked cut by the image's border
+    };
+    std::deque<View> extents;           // of its views (fuse: which ones)
     Vector2d whole = Vector2d::Zero();  // whole_extent(extents)
     int n_other_tops = 0;               // whole tops given up (forget_centre_of_another_top)
   };
@@ -218,6 +223,7 @@ class PlatformFilter {
   static Vector2d whole_extent(const Track& t);
   static bool partial_view(const Track& t, const PlatformMeasurement& m);
   static bool shows_whole_top(const Track& t, const PlatformMeasurement& m);
+  static bool cut_view_joins(const Track& t, const PlatformMeasurement& m, bool partial);
   static void forget_centre_of_another_top(Track& t, const Vector2d& before);
   // Adds a view's extent to the track's, judges the whole top again (whole_extent) and forgets a
   // centre fused on another top.

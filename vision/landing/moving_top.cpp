@@ -430,7 +430,13 @@ void measure(const std::vector<Placed>& cand, const std::vector<size_t>& in, con
   const double d2 = zc2 - z_top;
   const double dz = d2 - d2 / S.s;
   out->p_W = Vector3d(centre.x(), centre.y(), z_top + dz);
-  const Vector2d vel = (m2 - m1) / dt_s;
+  // The matches' mean displacement is the velocity of their centroid; the top turns about its
+  // own axis, so the point reported (the rectangle's centre, away from the centroid where the
+  // features cluster on one side or the view shows only part of the top) moves at that plus the
+  // turn's lever arm.
+  const double omega = S.theta / dt_s;
+  const Vector2d lever = centre.head<2>() - 0.5 * (m1 + m2);
+  const Vector2d vel = (m2 - m1) / dt_s + omega * Vector2d(-lever.y(), lever.x());
   out->v_W = Vector3d(vel.x(), vel.y(), dz / dt_s);
 
   // Residuals: per axis, 4 parameters fitted over 2n coordinates.

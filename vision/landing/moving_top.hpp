@@ -71,7 +71,9 @@ struct MovingTop {
   bool found() const { return reason == MovingReason::kOk; }
   double dt_s = 0.0;                ///< between the two exposures [s]
   Vector3d p_W = Vector3d::Zero();  ///< centre of the inliers' rectangle (z: top_height_m + heave)
-  Vector3d v_W = Vector3d::Zero();  ///< mean velocity over the interval (z: from the heave) [m/s]
+  /// p_W's mean velocity over the interval as a point of the top (its turn's lever arm from the
+  /// matches' centroid included; z: from the heave) [m/s]
+  Vector3d v_W = Vector3d::Zero();
   double yaw_rad = 0.0;             ///< long axis of the inliers' rectangle, (-pi/2, pi/2]
   double yaw_rate_rps = 0.0;        ///< its turn over the interval / dt_s [rad/s]
   double scale = 1.0;               ///< s of the similarity (heave, height error)
