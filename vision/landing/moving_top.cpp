@@ -363,6 +363,19 @@ void patch_ncc(const Correspondences& c, const std::vector<Placed>& cand,
   out->ncc_moving = moveds.empty() ? NAN : upper_median(moveds);
 }
 
+// Whether the inliers come within margin_px of two opposite borders of the current image.
+bool fills_view_across(const Correspondences& c, const std::vector<Placed>& cand,
+                       const std::vector<size_t>& in, double margin_px) {
+  const double w = c.camera->width - 0.5 - margin_px, h = c.camera->height - 0.5 - margin_px;
+  const double lo = -0.5 + margin_px;
+  bool left = false, right = false, top = false, bottom = false;
+  for (size_t k : in) {
+    const Vector2d& u = c.u2[cand[k].index];
+    left |= u.x() < lo, right |= u.x() > w, top |= u.y() < lo, bottom |= u.y() > h;
+  }
+  return (left && right) || (top && bottom);
+}
+
 // A cut top's horizontal position variance: no information [m^2].
 constexpr double kCutPositionVar = 100.0;
 // A yaw known only to the quarter turn (the rectangle of a part of the top, or of too few
@@ -433,10 +446,11 @@ void measure(const std::vector<Placed>& cand, const std::vector<size_t>& in, con
   // The matches' mean displacement is the velocity of their centroid; the top turns about its
   // own axis, so the point reported (the rectangle's centre, away from the centroid where the
   // features cluster on one side or the view shows only part of the top) moves at that plus the
-  // turn's lever arm.
-  const double omega = S.theta / dt_s;
-  const Vector2d lever = centre.head<2>() - 0.5 * (m1 + m2);
-  const Vector2d vel = (m2 - m1) / dt_s + omega * Vector2d(-lever.y(), lever.x());
+  // turn's lever arm: it came from where the turn back by theta puts it, relative to the
+  // centroid's current place.
+  const Vector2d lever = centre.head<2>() - m2;
+  const Vector2d vel =
+      (m2 - m1 + lever - Eigen::Rotation2Dd(-S.theta) * lever) / dt_s;
   out->v_W = Vector3d(vel.x(), vel.y(), dz / dt_s);
 
   // Residuals: per axis, 4 parameters fitted over 2n coordinates.
@@ -525,6 +539,10 @@ MovingTop find_moving_top(const Correspondences& c, double dt_s, double floor_z_
     if (out.ncc_still >= out.ncc_moving - kStillNccGap) return refuse(MovingReason::kStillPixels);
   }
   measure(cand, in, S, v, dt_s, floor_z_m, params, &out);
+  // Inliers near two opposite borders: the top fills the view across, and the inliers' extent is
+  // the view's footprint, not the top's; where the footprint is about the top's size, it read as
+  // the whole top and placed the top's centre under the camera. No extent is measured.
+  if (fills_view_across(c, cand, in, params.edge_margin_px)) out.size_m[0] = out.size_m[1] = 0;
   return out;
 }
 

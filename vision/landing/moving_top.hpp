@@ -83,7 +83,9 @@ struct MovingTop {
   Matrix3d cov_p_W = Matrix3d::Zero();  ///< [m^2]
   Matrix3d cov_v_W = Matrix3d::Zero();  ///< [m^2/s^2]
   double var_yaw = 0.0, var_yaw_rate = 0.0;
-  double size_m[2] = {0, 0};  ///< the inliers' extent (long, short) [m]
+  /// The inliers' extent (long, short); zero where they reach two opposite borders (the top
+  /// fills the view across: the extent is the view's) [m]
+  double size_m[2] = {0, 0};
   int n_candidates = 0;       ///< matches off the floor
   int n_inliers = 0;
   /// The set's pixels against the earlier image (kStillPixels): their normalised

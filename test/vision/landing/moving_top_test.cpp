@@ -35,6 +35,8 @@ struct MovingScene {
   MovingTopTruth top_1, top_2;
   Vector2d top_size{0.43, 0.28};
   int n_floor = 200, n_top = 60;
+  /// Features on the top's +x end only (its outer quarter), besides n_top over all of it.
+  int n_top_end = 0;
   double noise_px = 0.3;
   /// The top bare of features this close to the current image's border [px] (a print's margin).
   double bare_border_px = 0;
@@ -91,6 +93,11 @@ struct MovingScene {
         const Vector2d local(0.5 * top_size.x() * u(rng), 0.5 * top_size.y() * u(rng));
         const auto p2 = project(pose_2, top_2.point(local));
         if (bare_border_px > 0 && p2 && !camera.in_image(*p2, bare_border_px)) continue;
+        add(top_1.point(local), top_2.point(local));
+      }
+    if (with_top)
+      for (int i = 0; i < n_top_end; ++i) {
+        const Vector2d local(0.125 * top_size.x() * (3 + u(rng)), 0.5 * top_size.y() * u(rng));
         add(top_1.point(local), top_2.point(local));
       }
     return c;
@@ -153,6 +160,7 @@ TEST(MovingTopTest, ATopGoingOnPastTheBorderIsCutThoughItsFeaturesStopShortOfIt)
   ASSERT_TRUE(m.found()) << to_string(m.reason);
   EXPECT_TRUE(m.cut);
   EXPECT_GT(m.cov_p_W(0, 0), 1.0);  // no position
+  EXPECT_GT(m.size_m[1], 0.0);      // past one border only: the visible part's extent
   EXPECT_NEAR(m.v_W.y(), 0.5, 0.05);
   // Counted from the features 20 px in, the same view passed for the whole top, its centre
   // several centimetres off the top's.
@@ -161,6 +169,46 @@ TEST(MovingTopTest, ATopGoingOnPastTheBorderIsCutThoughItsFeaturesStopShortOfIt)
   ASSERT_TRUE(whole.found()) << to_string(whole.reason);
   EXPECT_FALSE(whole.cut);
   EXPECT_GT((whole.p_W.head<2>() - s.top_2.c).norm(), 0.02);
+}
+
+TEST(MovingTopTest, TheVelocityIsTheRectanglesCentresNotTheFeaturesCentroids) {
+  // A cart turning at 40 deg/s whose print crowds one end of its top: the matches' centroid
+  // lies towards that end, and its velocity differs from the rectangle's centre's by the turn's
+  // lever arm (9 cm/s). The velocity published is p_W's, as a point of the top.
+  MovingScene s = moving_cart_scene();
+  const double dt = 0.25, w = 40 * M_PI / 180;
+  s.top_2.psi = s.top_1.psi + w * dt;
+  s.n_top = 20;
+  s.n_top_end = 120;
+  const MovingTop m = find_moving_top(s.correspondences(), dt, 0.0, MovingTopParams{});
+  ASSERT_TRUE(m.found()) << to_string(m.reason);
+  // The true mean velocity of the top's point under p_W: where it was (turned back with the
+  // top) to where it is, over the interval.
+  const Vector2d local = Eigen::Rotation2Dd(-s.top_2.psi) * (m.p_W.head<2>() - s.top_2.c);
+  const Vector2d was = s.top_1.c + Eigen::Rotation2Dd(s.top_1.psi) * local;
+  const Vector2d v_true = (m.p_W.head<2>() - was) / dt;
+  EXPECT_LT((m.v_W.head<2>() - v_true).norm(), 0.02) << m.v_W.transpose() << " " << v_true.transpose();
+}
+
+TEST(MovingTopTest, ATopThatFillsTheViewAcrossHasNoMeasuredExtent) {
+  // 0.5 m above a 0.7 x 0.6 m top: its features reach every border of the image. Their extent is
+  // the view's footprint, not the top's: none is published (a footprint about the top's size
+  // read as the whole top and placed the centre under the camera).
+  MovingScene s;
+  const double dt = 0.25;
+  s.pose_1 = MovingScene::at({0.0, 0.0, 0.65}, 0.0);
+  s.pose_2 = MovingScene::at({0.0, 0.5 * dt, 0.65}, 0.0);
+  s.pose_1.utime = 1'000'000, s.pose_2.utime = 1'250'000;
+  s.top_size = {0.7, 0.6};
+  s.top_2 = s.top_1;
+  s.top_2.c.y() += 0.5 * dt;
+  s.n_top = 400;
+  const MovingTop m = find_moving_top(s.correspondences(), dt, 0.0, MovingTopParams{});
+  ASSERT_TRUE(m.found()) << to_string(m.reason);
+  EXPECT_TRUE(m.cut);
+  EXPECT_EQ(m.size_m[0], 0.0);
+  EXPECT_EQ(m.size_m[1], 0.0);
+  EXPECT_NEAR(m.v_W.y(), 0.5, 0.05);
 }
 
 // The yaw is the features' rectangle's, which rests on the few features nearest the edges: its
