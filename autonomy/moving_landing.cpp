@@ -125,6 +125,7 @@ DropCheck check_drop(const PlatformFilter& filter, const PoseSample& pose, int64
       std::sqrt(Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(pr.cov_p, Eigen::EigenvaluesOnly)
                     .eigenvalues()
                     .maxCoeff());
+  c.placed_views = filter.n_placed();
   if (c.gear_above_m <= gear.final_descent_rate_mps * params.fall_lag_s) {
     c.verdict = Drop::kCommitted;
   } else if (std::isfinite(c.room_m) && c.off_m.cwiseAbs().maxCoeff() > c.room_m) {
@@ -136,7 +137,7 @@ DropCheck check_drop(const PlatformFilter& filter, const PoseSample& pose, int64
 bool aimed_for_drop(const DropCheck& c, const LandingGear& gear) {
   return !std::isfinite(c.room_m) ||
          (c.off_m.cwiseAbs().maxCoeff() <= c.room_m - gear.fit_margin_m &&
-          c.centre_sd_m <= c.room_m);
+          c.centre_sd_m <= c.room_m && c.placed_views >= kPlacedToDrop);
 }
 
 MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
@@ -210,7 +211,8 @@ MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
     return out;
   }
   const std::string off = "the gear " + fmt(c.off_m.cwiseAbs().maxCoeff(), 3) +
-                          " m off its centre, known to " + fmt(c.centre_sd_m, 3) + " m";
+                          " m off its centre, known to " + fmt(c.centre_sd_m, 3) + " m, placed by " +
+                          std::to_string(c.placed_views) + " views in a row";
   if (waited_s >= gear.final_hold_timeout_s) {
     out.next = MovingStep::Next::kTooFast;
     out.reason = "no moment to drop onto the moving platform in " + fmt(waited_s, 2) + " s (" +
@@ -220,7 +222,8 @@ MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
   out.reason = !settled ? std::string("over the moving platform: matching")
                : !aimed ? "over the moving platform: " + off + "; it drops within " +
                               fmt(c.room_m - gear.fit_margin_m, 3) +
-                              " m on a centre known within " + fmt(c.room_m, 3) + " m"
+                              " m on a centre known within " + fmt(c.room_m, 3) + " m, placed by " +
+                              std::to_string(kPlacedToDrop) + ""
                         : std::string("over the moving platform: ") + to_string(r);
   return out;
 }

@@ -153,7 +153,13 @@ struct DropCheck {
   double room_m = 0.0;                ///< drop_room_m
   double gear_above_m = 0.0;          ///< the gear over the top (its heave included) [m]
   double centre_sd_m = 0.0;  ///< the predicted centre's standard deviation, its worst axis [m]
+  int placed_views = 0;      ///< PlatformFilter::n_placed
 };
+/// Views in a row that must have placed the top's centre before the last drop starts on it. One
+/// view's centre can be 10-20 cm off (the view's footprint or the cart's side read as the whole
+/// top) while its variance says 1-2 cm; a second and third placed within the filter's gate of it
+/// confirm it, one outside the gate puts it in doubt.
+inline constexpr int kPlacedToDrop = 3;
 /// Whether the last drop goes on. Committed while the gear is within final_descent_rate_mps x
 /// fall_lag_s of the top (the altitude loop's lag: a climb ordered there still touches down);
 /// otherwise off the top when the gear's centre (gear_height_m below the body along its z axis:
@@ -166,7 +172,8 @@ DropCheck check_drop(const PlatformFilter& filter, const PoseSample& pose, int64
 /// the top's axes (check_drop's): the aim the still landing keeps, and the go-around's own
 /// margin, so that a drop is not given up where it begins; and on a predicted centre known within
 /// the room (its standard deviation): a top seen only cut by the border for seconds has a centre
-/// the filter has not placed, and a drop matched to it lands wherever it drifted.
+/// the filter has not placed, and a drop matched to it lands wherever it drifted; placed by
+/// kPlacedToDrop views in a row.
 bool aimed_for_drop(const DropCheck& c, const LandingGear& gear);
 
 /// The moving approach's own state.

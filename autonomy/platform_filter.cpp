@@ -2,6 +2,7 @@
 #include "autonomy/platform_filter.hpp"
 
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cassert>
 #include <cmath>
@@ -320,6 +321,7 @@ void PlatformFilter::forget_centre_of_another_top(Track& t, const Vector2d& befo
   const double reach_m = 0.5 * (before.norm() + t.whole.norm());
   t.P.topLeftCorner<2, 2>() += reach_m * reach_m * Matrix2d::Identity();
   ++t.n_other_tops;
+  t.n_placed = 0;
 }
 
 bool PlatformFilter::larger_than_the_top(const Track& t, const PlatformMeasurement& m) const {
@@ -382,6 +384,8 @@ void PlatformFilter::follow_course(Track& t, int64_t utime, const Vector2d& v0, 
 
 PlatformFilter::Fused PlatformFilter::fuse(Track& t, const PlatformMeasurement& m) const {
   const bool partial = partial_view(t, m);
+  const bool places = places_centre(t, m);
+  bool placed_unchecked = true;  // no centre to test the view against
   if (t.t_utime == 0) {
     start(t, m);
   } else {
@@ -437,6 +441,10 @@ PlatformFilter::Fused PlatformFilter::fuse(Track& t, const PlatformMeasurement& 
     R.bottomRightCorner<2, 2>() += t.P_yaw(1, 1) * lever.squaredNorm() * Matrix2d::Identity();
     Eigen::Vector4d h = xp;
     h.tail<2>() += w * J * lever;
+    placed_unchecked =
+        Eigen::SelfAdjointEigenSolver<Matrix2d>(Pp.topLeftCorner<2, 2>(), Eigen::EigenvaluesOnly)
+            .eigenvalues()
+            .maxCoeff() > kPartialViewM * kPartialViewM;
     const Eigen::Vector4d innov = z - h;
     const Eigen::Matrix4d S = H * Pp * H.transpose() + R;
     const Eigen::LDLT<Eigen::Matrix4d> ldlt(S);
@@ -464,6 +472,7 @@ PlatformFilter::Fused PlatformFilter::fuse(Track& t, const PlatformMeasurement& 
   }
   t.t_utime = m.utime;
   ++t.n_consistent;
+  if (places) t.n_placed = placed_unchecked ? 1 : t.n_placed + 1;
   // Every view not cut by the border, whether it shows the whole top or part of it: which it is is
   // judged against the others (whole_extent), never against the first ones alone. A view vision
   // marks cut only as cut_view_joins says: a part cut off by the border at a steady offset is
@@ -511,6 +520,8 @@ bool PlatformFilter::update(const PlatformMeasurement& m) {
   }
   refuse(Refusal::kGate);
   ++consecutive_rejections_;
+  // A view that would have placed the centre elsewhere: the placements before it are in doubt.
+  if (places_centre(track_, m)) track_.n_placed = 0;
   // The refused measurements as a track of their own: a candidate that refuses one in turn
   // starts over from it.
   if (fuse(candidate_, m) == Fused::kOutsideGate) {

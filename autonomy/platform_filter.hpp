@@ -183,6 +183,12 @@ class PlatformFilter {
   /// Times the track's whole top was judged another than the one its centre was fused on
   /// (the centre's variance then grown to the two extents' reach).
   int n_other_tops() const { return track_.n_other_tops; }
+  /// Views in a row that placed the centre (their positions fused as the top's: not of part of
+  /// it, not cut unless showing the whole top), each within the gate of the ones before: none
+  /// that would have placed it was refused since, the centre was not forgotten since
+  /// (forget_centre_of_another_top), and none came when the centre's predicted sd was beyond
+  /// kPartialViewM (a view the gate cannot test against the centre starts the count again).
+  int n_placed() const { return track_.n_placed; }
   /// The track's whole top (long, short side) [m]; zero before its first measured extent.
   Vector2d whole_top() const { return track_.whole; }
 
@@ -215,6 +221,7 @@ class PlatformFilter {
     std::deque<View> extents;           // of its views (fuse: which ones)
     Vector2d whole = Vector2d::Zero();  // whole_extent(extents)
     int n_other_tops = 0;               // whole tops given up (forget_centre_of_another_top)
+    int n_placed = 0;                   // n_placed()
   };
   enum class Fused { kAccepted, kAcceptedPartial, kOutsideGate };
   Fused fuse(Track& t, const PlatformMeasurement& m) const;
@@ -223,6 +230,9 @@ class PlatformFilter {
   static Vector2d whole_extent(const Track& t);
   static bool partial_view(const Track& t, const PlatformMeasurement& m);
   static bool shows_whole_top(const Track& t, const PlatformMeasurement& m);
+  static bool places_centre(const Track& t, const PlatformMeasurement& m) {
+    return !partial_view(t, m) && (!cut(m) || shows_whole_top(t, m));
+  }
   static bool cut_view_joins(const Track& t, const PlatformMeasurement& m, bool partial);
   static void forget_centre_of_another_top(Track& t, const Vector2d& before);
   // Adds a view's extent to the track's, judges the whole top again (whole_extent) and forgets a

@@ -870,6 +870,43 @@ TEST(MovingDropTest, TheGearCarriedBeyondTheTopsRoomGivesTheDropUpAboveTheLagOnl
   EXPECT_TRUE(aimed_for_drop(blind, gear));
 }
 
+TEST(MovingDropTest, TheDropStartsOnACentrePlacedByThreeViewsInARowNotByOne) {
+  // A 0.41 x 0.25 m top seen only in part for 6 s (its centre's variance grown past the room);
+  // then one view of the whole top places the centre 12 cm off (a footprint read as the top), its
+  // variance 2 cm: over it the drop waits. The whole views after it, on the true centre, are
+  // refused by the gate against it: the placement is in doubt, no drop. Three views in a row of
+  // the whole top that agree place it.
+  const PlatformPath m = straight_path(0.5);
+  std::mt19937_64 rng(47);
+  PlatformFilter f = followed_for_2s(m, Vector2d(0.41, 0.25), rng);
+  EXPECT_GE(f.n_placed(), kPlacedToDrop);
+  double t = 2;
+  for (; t < 8; t += kPfDt) f.update(measure_sized(m, t, rng, Vector2d(0.25, 0.20)));
+  const LandingGear gear;
+  const MovingLandingParams params;
+  const auto over_centre = [&](double at_t) {
+    const int64_t now = kPfT0 + int64_t(at_t * 1e6);
+    PoseSample pose;
+    pose.p_W_B << f.predict(now).p_W, f.predict(now).top_z_m + gear.gear_height_m + 0.3;
+    return check_drop(f, pose, now, gear, params);
+  };
+  auto wrong = measure_sized(m, t, rng, Vector2d(0.41, 0.25));
+  seen_at(wrong, m, Vector2d(0, 0.12));
+  ASSERT_TRUE(f.update(wrong));
+  EXPECT_EQ(f.n_placed(), 1);  // the centre unplaced before it: no test of it
+  EXPECT_LT(over_centre(t).centre_sd_m, over_centre(t).room_m);
+  EXPECT_FALSE(aimed_for_drop(over_centre(t), gear));
+  t += kPfDt;
+  EXPECT_FALSE(f.update(measure_sized(m, t, rng, Vector2d(0.41, 0.25))));
+  EXPECT_EQ(f.n_placed(), 0);
+  EXPECT_FALSE(aimed_for_drop(over_centre(t), gear));
+  // The track gives way to the true centre's views (a candidate believed on them), which place it.
+  for (t += kPfDt; t < 10; t += kPfDt) f.update(measure_sized(m, t, rng, Vector2d(0.41, 0.25)));
+  EXPECT_GE(f.n_placed(), kPlacedToDrop);
+  EXPECT_LT((f.predict(f.utime()).p_W - m.p(t - kPfDt)).norm(), 0.02);
+  EXPECT_TRUE(aimed_for_drop(over_centre(t - kPfDt), gear));
+}
+
 // At the final height the last drop waits for the gear's aim; never aimed (a top narrower than
 // the gear and its margins) for final_hold_timeout_s, the platform is beyond what the vehicle
 // lands on.
