@@ -241,11 +241,14 @@ bool shorter_on_a_side(const Vector2d& a, const Vector2d& b) {
 // the largest within their scatter, against which the typical view would fall short.
 Vector2d PlatformFilter::whole_extent(const Track& t) {
   const size_t n = t.extents.size();
-  std::vector<int> support(n, 0);
+  std::vector<int> support(n, 0), uncut(n, 0);
   for (size_t i = 0; i < n; ++i)
-    for (size_t j = 0; j < n; ++j)
-      support[i] +=
+    for (size_t j = 0; j < n; ++j) {
+      const bool agree =
           ((t.extents[j].extent - t.extents[i].extent).cwiseAbs().array() <= kPartialViewM).all();
+      support[i] += agree;
+      uncut[i] += agree && !t.extents[j].cut;
+    }
   // The best supported of the extents `eligible` admits (of those as well supported, the larger).
   const auto best = [&](const auto& eligible) -> std::optional<size_t> {
     std::optional<size_t> b;
@@ -262,9 +265,15 @@ Vector2d PlatformFilter::whole_extent(const Track& t) {
   if (!whole) return Vector2d::Zero();
   for (size_t steps = 0; steps < n; ++steps) {
     const Vector2d w = t.extents[*whole].extent;
+    // A larger extent only views cut by the border support must outnumber the views that showed
+    // the smaller one uncut: a cut view holding more than the top (the cart's side seen past its
+    // edge, placed on the top's plane) does not outgrow a top seen whole inside the image, while
+    // a top followed close, seen mostly cut, outgrows the parts of it seen uncut.
+    const int needed = std::max(kWholeTopViews, uncut[*whole] + 1);
     const auto larger = best([&](size_t i) {
       const Vector2d& e = t.extents[i].extent;
-      return support[i] >= kWholeTopViews && !shorter_on_a_side(e, w) && shorter_on_a_side(w, e);
+      return (support[i] >= needed || (uncut[i] > 0 && support[i] >= kWholeTopViews)) &&
+             !shorter_on_a_side(e, w) && shorter_on_a_side(w, e);
     });
     if (!larger) break;
     whole = larger;
@@ -283,21 +292,6 @@ bool PlatformFilter::partial_view(const Track& t, const PlatformMeasurement& m) 
   // A view wider than the whole top on one side is no part of it: the whole top believed is not
   // this one's (a cluster seen first), and the view joins the extents that judge it again.
   return shorter_on_a_side(extent(m), whole) && !shorter_on_a_side(whole, extent(m));
-}
-
-// A view marked cut joins the extents once it spans at least the whole top believed so far (a top
-// followed close fills the view, most views of it come near the border, and the whole top is seen
-// in view after view of them), unless it is larger
-// than a whole top kWholeTopViews views have shown uncut: that top was seen entire inside the
-// image, and a cut view beyond it holds more than the top (the cart's sides seen past its edge,
-// placed on the top's plane).
-bool PlatformFilter::cut_view_joins(const Track& t, const PlatformMeasurement& m, bool partial) {
-  if (!(t.whole.minCoeff() > 0) || partial) return false;
-  if (!shorter_on_a_side(t.whole, extent(m))) return true;
-  const auto uncut_whole = std::count_if(t.extents.begin(), t.extents.end(), [&](const auto& v) {
-    return !v.cut && ((v.extent - t.whole).cwiseAbs().array() <= kPartialViewM).all();
-  });
-  return uncut_whole < kWholeTopViews;
 }
 
 void PlatformFilter::add_extent(Track& t, const PlatformMeasurement& m) {
@@ -475,9 +469,12 @@ PlatformFilter::Fused PlatformFilter::fuse(Track& t, const PlatformMeasurement& 
   if (places) t.n_placed = placed_unchecked ? 1 : t.n_placed + 1;
   // Every view not cut by the border, whether it shows the whole top or part of it: which it is is
   // judged against the others (whole_extent), never against the first ones alone. A view vision
-  // marks cut only as cut_view_joins says: a part cut off by the border at a steady offset is
-  // seen as steadily as the whole top, and never becomes it.
-  if (m.size_m.minCoeff() > 0 && (!cut(m) || cut_view_joins(t, m, partial))) add_extent(t, m);
+  // marks cut only once it spans at least the whole top believed so far: a top followed close
+  // fills the view, most views of it come near the border, and the whole top is seen in view
+  // after view of them; but a part cut off by the border at a steady offset is seen as steadily,
+  // and never becomes the whole top.
+  const bool spans_whole = t.whole.minCoeff() > 0 && !partial;
+  if (m.size_m.minCoeff() > 0 && (!cut(m) || spans_whole)) add_extent(t, m);
   t.top_z_sum += m.p_W.z();
   ++t.n_z;
   // The heave: each vertical velocity is the mean over its interval, so at the interval's middle.

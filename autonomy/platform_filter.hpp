@@ -22,7 +22,8 @@
 // shows part of the top: its position is not the top's centre and is not fused, its velocity is
 // (the part moves with the whole). A view vision marks as cut by the image's border (its position
 // variance kCutPositionVarM2 or more) counts towards the whole top too once it spans the whole top
-// believed so far, unless it is larger than a whole top seen uncut (it holds more than the top);
+// believed so far (a larger one that only cut views support becomes the whole top once they
+// outnumber the views that showed the smaller one uncut: a cut view can hold more than the top);
 // one whose extent is the whole top's has nothing beyond the border, and its
 // position is fused (within kPartialViewM / 2). A view wider than the whole top on a side is no
 // part of it and joins the extents too; where they then make the whole top shorter on a side
@@ -233,7 +234,6 @@ class PlatformFilter {
   static bool places_centre(const Track& t, const PlatformMeasurement& m) {
     return !partial_view(t, m) && (!cut(m) || shows_whole_top(t, m));
   }
-  static bool cut_view_joins(const Track& t, const PlatformMeasurement& m, bool partial);
   static void forget_centre_of_another_top(Track& t, const Vector2d& before);
   // Adds a view's extent to the track's, judges the whole top again (whole_extent) and forgets a
   // centre fused on another top.

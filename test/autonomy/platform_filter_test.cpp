@@ -599,6 +599,25 @@ TEST(PlatformFilterTest, CutViewsLargerThanAWholeTopSeenUncutDoNotGrowIt) {
   EXPECT_LT(worst, 0.03);
 }
 
+TEST(PlatformFilterTest, ATopSeenUncutOnlyInPartAndThenCutInWholeIsTheWholeOne) {
+  // A 0.46 x 0.29 m top whose print leaves one end bare: from the search height its views are of
+  // the printed part (0.34 x 0.24 m), inside the image; then followed close, every view cut by
+  // the border, most of them spanning the whole top. Those outnumber the part's uncut views: the
+  // whole top is theirs, and views of the part are again parts.
+  const PlatformPath m = straight_path(0.3);
+  PlatformFilter f{PlatformFilterParams{}};
+  std::mt19937_64 rng(53);
+  double t = kPfInterval;
+  for (int k = 0; k < 8; ++k, t += kPfDt) {
+    auto part = measure_sized(m, t, rng, Vector2d(0.34, 0.24));
+    seen_at(part, m, Vector2d(0.06, 0.02));
+    f.update(part);
+  }
+  for (; t < 3; t += kPfDt) f.update(measure_cut(m, t, rng, Vector2d(0.46, 0.29)));
+  EXPECT_NEAR(f.whole_top().x(), 0.46, kPartialViewM);
+  EXPECT_NEAR(f.whole_top().y(), 0.29, kPartialViewM);
+}
+
 TEST(PlatformFilterTest, ATrackWhoseFirstViewWasPartOfTheTopTakesTheWholeTopsViews) {
   // The top enters the view across the image's border: the track starts on a view of a strip of
   // it (0.25 x 0.11 m of a 0.28 x 0.22 m top). The whole top's views that follow are not refused
