@@ -211,8 +211,8 @@ MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
     return out;
   }
   const std::string off = "the gear " + fmt(c.off_m.cwiseAbs().maxCoeff(), 3) +
-                          " m off its centre, known to " + fmt(c.centre_sd_m, 3) + " m, placed by " +
-                          std::to_string(c.placed_views) + " views in a row";
+                          " m off its centre, known to " + fmt(c.centre_sd_m, 3) +
+                          " m, placed by " + std::to_string(c.placed_views) + " views in a row";
   if (waited_s >= gear.final_hold_timeout_s) {
     out.next = MovingStep::Next::kTooFast;
     out.reason = "no moment to drop onto the moving platform in " + fmt(waited_s, 2) + " s (" +
@@ -223,7 +223,7 @@ MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
                : !aimed ? "over the moving platform: " + off + "; it drops within " +
                               fmt(c.room_m - gear.fit_margin_m, 3) +
                               " m on a centre known within " + fmt(c.room_m, 3) + " m, placed by " +
-                              std::to_string(kPlacedToDrop) + ""
+                              std::to_string(kPlacedToDrop) + " views in a row"
                         : std::string("over the moving platform: ") + to_string(r);
   return out;
 }

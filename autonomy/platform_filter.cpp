@@ -255,8 +255,7 @@ Vector2d PlatformFilter::whole_extent(const Track& t) {
     for (size_t i = 0; i < n; ++i) {
       if (!eligible(i)) continue;
       if (!b || support[i] > support[*b] ||
-          (support[i] == support[*b] &&
-           t.extents[i].extent.prod() > t.extents[*b].extent.prod()))
+          (support[i] == support[*b] && t.extents[i].extent.prod() > t.extents[*b].extent.prod()))
         b = i;
     }
     return b;

@@ -371,7 +371,7 @@ bool fills_view_across(const Correspondences& c, const std::vector<Placed>& cand
   bool left = false, right = false, top = false, bottom = false;
   for (size_t k : in) {
     const Vector2d& u = c.u2[cand[k].index];
-    left |= u.x() < lo, right |= u.x() > w, top |= u.y() < lo, bottom |= u.y() > h;
+    left |= u.x()<lo, right |= u.x()> w, top |= u.y()<lo, bottom |= u.y()> h;
   }
   return (left && right) || (top && bottom);
 }
@@ -449,8 +449,7 @@ void measure(const std::vector<Placed>& cand, const std::vector<size_t>& in, con
   // turn's lever arm: it came from where the turn back by theta puts it, relative to the
   // centroid's current place.
   const Vector2d lever = centre.head<2>() - m2;
-  const Vector2d vel =
-      (m2 - m1 + lever - Eigen::Rotation2Dd(-S.theta) * lever) / dt_s;
+  const Vector2d vel = (m2 - m1 + lever - Eigen::Rotation2Dd(-S.theta) * lever) / dt_s;
   out->v_W = Vector3d(vel.x(), vel.y(), dz / dt_s);
 
   // Residuals: per axis, 4 parameters fitted over 2n coordinates.

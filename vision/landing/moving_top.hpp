@@ -74,9 +74,9 @@ struct MovingTop {
   /// p_W's mean velocity over the interval as a point of the top (its turn's lever arm from the
   /// matches' centroid included; z: from the heave) [m/s]
   Vector3d v_W = Vector3d::Zero();
-  double yaw_rad = 0.0;             ///< long axis of the inliers' rectangle, (-pi/2, pi/2]
-  double yaw_rate_rps = 0.0;        ///< its turn over the interval / dt_s [rad/s]
-  double scale = 1.0;               ///< s of the similarity (heave, height error)
+  double yaw_rad = 0.0;       ///< long axis of the inliers' rectangle, (-pi/2, pi/2]
+  double yaw_rate_rps = 0.0;  ///< its turn over the interval / dt_s [rad/s]
+  double scale = 1.0;         ///< s of the similarity (heave, height error)
   /// The top cut by the current image's border (edge_margin_px): its motion is measured, its
   /// centre is not (cov_p_W's horizontal block 100 m^2; p_W the visible part's centre).
   bool cut = false;
@@ -86,7 +86,7 @@ struct MovingTop {
   /// The inliers' extent (long, short); zero where they reach two opposite borders (the top
   /// fills the view across: the extent is the view's) [m]
   double size_m[2] = {0, 0};
-  int n_candidates = 0;       ///< matches off the floor
+  int n_candidates = 0;  ///< matches off the floor
   int n_inliers = 0;
   /// The set's pixels against the earlier image (kStillPixels): their normalised
   /// cross-correlation where a still top had them and where the measured motion had them; NaN

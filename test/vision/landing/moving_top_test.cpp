@@ -187,7 +187,8 @@ TEST(MovingTopTest, TheVelocityIsTheRectanglesCentresNotTheFeaturesCentroids) {
   const Vector2d local = Eigen::Rotation2Dd(-s.top_2.psi) * (m.p_W.head<2>() - s.top_2.c);
   const Vector2d was = s.top_1.c + Eigen::Rotation2Dd(s.top_1.psi) * local;
   const Vector2d v_true = (m.p_W.head<2>() - was) / dt;
-  EXPECT_LT((m.v_W.head<2>() - v_true).norm(), 0.02) << m.v_W.transpose() << " " << v_true.transpose();
+  EXPECT_LT((m.v_W.head<2>() - v_true).norm(), 0.02)
+      << m.v_W.transpose() << " " << v_true.transpose();
 }
 
 TEST(MovingTopTest, ATopThatFillsTheViewAcrossHasNoMeasuredExtent) {
