@@ -213,6 +213,18 @@ MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
   const std::string off = "the gear " + fmt(c.off_m.cwiseAbs().maxCoeff(), 3) +
                           " m off its centre, known to " + fmt(c.centre_sd_m, 3) +
                           " m, placed by " + std::to_string(c.placed_views) + " views in a row";
+  if (waited_s < gear.final_hold_timeout_s && settled && c.centre_sd_m > c.room_m) {
+    // Close over the top it fills the view, and its views, cut by the border, place nothing:
+    // from the follow height it is seen whole. Climb there and descend again (the wait for a
+    // moment to drop runs on from the first arrival here).
+    s.z_sp_m = z_follow;
+    ++s.placing_climbs;
+    out.sp_p_W.z() = s.z_sp_m;
+    out.reason = "over the moving platform: its centre not placed (" + off + ", its room " +
+                 fmt(c.room_m, 3) + " m): climbing to see the top whole (" +
+                 std::to_string(s.placing_climbs) + ")";
+    return out;
+  }
   if (waited_s >= gear.final_hold_timeout_s) {
     out.next = MovingStep::Next::kTooFast;
     out.reason = "no moment to drop onto the moving platform in " + fmt(waited_s, 2) + " s (" +

@@ -30,6 +30,10 @@
 //     (aimed_for_drop). After kMaxDropGoArounds, or final_hold_timeout_s at the final height
 //     without a drop, the platform is beyond what the vehicle lands on
 //     (Failsafe::kPlatformTooFast).
+//  6. The centre unplaced at the final height (its standard deviation beyond the room): close
+//     over the top it fills the view and its views, cut by the border, place nothing; matched,
+//     the vehicle climbs back to follow_height_m, where the top is seen whole, and descends
+//     again; final_hold_timeout_s runs on from its first arrival at the final height.
 // Pure: the time is passed in.
 
 #include <optional>
@@ -182,6 +186,7 @@ struct MovingApproach {
   std::optional<int64_t> matched_since_utime;
   std::optional<int64_t> at_final_since_utime;  ///< waiting for the heave since
   std::optional<int64_t> too_fast_since_utime;
+  int placing_climbs = 0;  ///< climbs to the follow height to place the centre (step 6)
 };
 
 struct MovingStep {

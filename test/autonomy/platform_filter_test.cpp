@@ -955,5 +955,46 @@ TEST(MovingDropTest, NoAimedMomentAtTheFinalHeightIsTheFailsafe) {
   EXPECT_NE(st.reason.find("no moment to drop"), std::string::npos) << st.reason;
 }
 
+// At the final height over a centre the filter has not placed (seen only in part for seconds:
+// close over the top its views are cut by the border), the vehicle climbs back to the follow
+// height, where the top is seen whole; its whole views there place the centre, and back at the
+// final height the drop starts.
+TEST(MovingDropTest, AnUnplacedCentreAtTheFinalHeightIsClimbedAwayFromAndPlacedFromHigher) {
+  const PlatformPath m = straight_path(0.5);
+  std::mt19937_64 rng(59);
+  PlatformFilter f = followed_for_2s(m, Vector2d(0.41, 0.25), rng);
+  double t = 2;
+  for (; t < 8; t += kPfDt) f.update(measure_sized(m, t, rng, Vector2d(0.25, 0.20)));
+  const LandingGear gear;
+  const MovingLandingParams params;
+  MovingApproach s;
+  const auto step = [&](double z_above_top) {
+    const int64_t now = kPfT0 + int64_t(t * 1e6);
+    const auto pr = f.predict(now);
+    PoseSample pose;  // over the centre, matched
+    pose.p_W_B << pr.p_W, pr.top_z_m + gear.gear_height_m + z_above_top;
+    pose.v_W_B << pr.v_W, 0.0;
+    return std::pair(step_moving_approach(s, f, pose, now, kPfDt, 0.0, gear, params), pr);
+  };
+  s.z_sp_m = f.predict(f.utime()).top_z_m + gear.gear_height_m + params.final_height_m;
+  MovingStep st;
+  for (double t_end = t + 1.0; t < t_end; t += kPfDt) {
+    f.update(measure_sized(m, t, rng, Vector2d(0.25, 0.20)));  // still part of it
+    st = step(params.final_height_m).first;
+    if (st.reason.find("climbing to see the top whole") != std::string::npos) break;
+  }
+  ASSERT_NE(st.reason.find("climbing to see the top whole"), std::string::npos) << st.reason;
+  EXPECT_EQ(st.next, MovingStep::Next::kContinue);
+  const double z_follow =
+      f.predict(f.utime()).top_z_m + gear.gear_height_m + params.follow_height_m;
+  EXPECT_NEAR(st.sp_p_W.z(), z_follow, 1e-9);
+  // Up there the whole top is seen; back down, the drop starts on the centre they placed.
+  for (double t_end = t + 1.0; t < t_end; t += kPfDt)
+    f.update(measure_sized(m, t, rng, Vector2d(0.41, 0.25)));
+  s.z_sp_m = f.predict(f.utime()).top_z_m + gear.gear_height_m + params.final_height_m;
+  st = step(params.final_height_m).first;
+  EXPECT_EQ(st.next, MovingStep::Next::kFinalDescent) << st.reason;
+}
+
 }  // namespace
 }  // namespace alight::autonomy
