@@ -120,6 +120,19 @@ MovingScene moving_cart_scene() {
   return s;
 }
 
+// A top at 0.5 m/s along y under a camera flying with it at camera_z, level, dt apart; the top's
+// centre at c.
+MovingScene followed_close(double camera_z, const Vector2d& c, double dt) {
+  MovingScene s;
+  s.pose_1 = MovingScene::at({0.0, 0.0, camera_z}, 0.0);
+  s.pose_2 = MovingScene::at({0.0, 0.5 * dt, camera_z}, 0.0);
+  s.pose_1.utime = 1'000'000, s.pose_2.utime = 1'000'000 + int64_t(dt * 1e6);
+  s.top_1.c = c;
+  s.top_2 = s.top_1;
+  s.top_2.c.y() += 0.5 * dt;
+  return s;
+}
+
 TEST(MovingTopTest, MeasuresACartsPositionVelocityAndTurn) {
   const MovingScene s = moving_cart_scene();
   const MovingTopParams params;
@@ -145,14 +158,8 @@ TEST(MovingTopTest, ATopGoingOnPastTheBorderIsCutThoughItsFeaturesStopShortOfIt)
   // Followed 0.5 m above its top, a 43 cm top reaches past the image's border; its print stops
   // 30 px short of the border. The features' rectangle is then a part of the top: its motion is
   // measured, its centre is not (a cut top), as the still landing's edge_margin_px has it.
-  MovingScene s;
   const double dt = 0.25;
-  s.pose_1 = MovingScene::at({0.0, 0.0, 0.71}, 0.0);
-  s.pose_2 = MovingScene::at({0.0, 0.5 * dt, 0.71}, 0.0);
-  s.pose_1.utime = 1'000'000, s.pose_2.utime = 1'250'000;
-  s.top_1.c = {0.12, 0.0};
-  s.top_2 = s.top_1;
-  s.top_2.c.y() += 0.5 * dt;
+  MovingScene s = followed_close(0.71, {0.12, 0.0}, dt);
   s.n_top = 200;
   s.bare_border_px = 30;
   MovingTopParams params;
@@ -195,14 +202,9 @@ TEST(MovingTopTest, ATopThatFillsTheViewAcrossHasNoMeasuredExtent) {
   // 0.5 m above a 0.7 x 0.6 m top: its features reach every border of the image. Their extent is
   // the view's footprint, not the top's: none is published (a footprint about the top's size
   // read as the whole top and placed the centre under the camera).
-  MovingScene s;
   const double dt = 0.25;
-  s.pose_1 = MovingScene::at({0.0, 0.0, 0.65}, 0.0);
-  s.pose_2 = MovingScene::at({0.0, 0.5 * dt, 0.65}, 0.0);
-  s.pose_1.utime = 1'000'000, s.pose_2.utime = 1'250'000;
+  MovingScene s = followed_close(0.65, {0.0, 0.0}, dt);
   s.top_size = {0.7, 0.6};
-  s.top_2 = s.top_1;
-  s.top_2.c.y() += 0.5 * dt;
   s.n_top = 400;
   const MovingTop m = find_moving_top(s.correspondences(), dt, 0.0, MovingTopParams{});
   ASSERT_TRUE(m.found()) << to_string(m.reason);
