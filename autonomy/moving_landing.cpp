@@ -213,10 +213,12 @@ MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
   const std::string off = "the gear " + fmt(c.off_m.cwiseAbs().maxCoeff(), 3) +
                           " m off its centre, known to " + fmt(c.centre_sd_m, 3) +
                           " m, placed by " + std::to_string(c.placed_views) + " views in a row";
-  if (waited_s < gear.final_hold_timeout_s && settled && c.centre_sd_m > c.room_m) {
+  if (waited_s < gear.final_hold_timeout_s && settled && c.centre_sd_m > c.room_m &&
+      c.room_m > gear.fit_margin_m) {
     // Close over the top it fills the view, and its views, cut by the border, place nothing:
     // from the follow height it is seen whole. Climb there and descend again (the wait for a
-    // moment to drop runs on from the first arrival here).
+    // moment to drop runs on from the first arrival here). A top with no room for the aim is
+    // never dropped onto, placed or not: no climb.
     s.z_sp_m = z_follow;
     ++s.placing_climbs;
     out.sp_p_W.z() = s.z_sp_m;
