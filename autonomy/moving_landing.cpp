@@ -1,7 +1,6 @@
 // Landing on a moving platform (beyond paper 3.4.1; see moving_landing.hpp).
 #include "autonomy/moving_landing.hpp"
 
-#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -121,10 +120,7 @@ DropCheck check_drop(const PlatformFilter& filter, const PoseSample& pose, int64
   const Vector2d e_W = gear_W.head<2>() - pr.p_W;
   c.off_m = Eigen::Rotation2Dd(-pr.yaw_rad) * e_W;
   c.room_m = drop_room_m(filter.whole_top(), gear.gear_footprint_m);
-  c.centre_sd_m =
-      std::sqrt(Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(pr.cov_p, Eigen::EigenvaluesOnly)
-                    .eigenvalues()
-                    .maxCoeff());
+  c.centre_sd_m = std::sqrt(worst_axis_var(pr.cov_p));
   c.placed_views = filter.n_placed();
   if (c.gear_above_m <= gear.final_descent_rate_mps * params.fall_lag_s) {
     c.verdict = Drop::kCommitted;

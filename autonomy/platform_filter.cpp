@@ -158,6 +158,12 @@ bool PlatformFilter::believed(const Track& t) const {
          double(t.t_utime - t.since_utime) * 1e-6 >= kConfirmS;
 }
 
+double worst_axis_var(const Matrix2d& cov) {
+  return Eigen::SelfAdjointEigenSolver<Matrix2d>(cov, Eigen::EigenvaluesOnly)
+      .eigenvalues()
+      .maxCoeff();
+}
+
 PlatformFilter::Prediction PlatformFilter::predict(const Track& t, int64_t utime) const {
   Prediction p;
   const double dt = std::max(0.0, double(utime - t.t_utime) * 1e-6);
@@ -434,10 +440,7 @@ PlatformFilter::Fused PlatformFilter::fuse(Track& t, const PlatformMeasurement& 
     R.bottomRightCorner<2, 2>() += t.P_yaw(1, 1) * lever.squaredNorm() * Matrix2d::Identity();
     Eigen::Vector4d h = xp;
     h.tail<2>() += w * J * lever;
-    placed_unchecked =
-        Eigen::SelfAdjointEigenSolver<Matrix2d>(Pp.topLeftCorner<2, 2>(), Eigen::EigenvaluesOnly)
-            .eigenvalues()
-            .maxCoeff() > kPartialViewM * kPartialViewM;
+    placed_unchecked = worst_axis_var(Pp.topLeftCorner<2, 2>()) > kPartialViewM * kPartialViewM;
     const Eigen::Vector4d innov = z - h;
     const Eigen::Matrix4d S = H * Pp * H.transpose() + R;
     const Eigen::LDLT<Eigen::Matrix4d> ldlt(S);

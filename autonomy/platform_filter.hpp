@@ -111,6 +111,9 @@ struct HeaveModel {
 HeaveModel fit_heave(const std::deque<std::pair<int64_t, double>>& vz, double min_hz,
                      double max_hz);
 
+/// A horizontal covariance's variance along its worst axis (its largest eigenvalue) [m^2].
+double worst_axis_var(const Matrix2d& cov);
+
 /// A measured extent this much shorter than the track's whole top (on either side): a view of
 /// part of it [m]. Close over the top, it fills the view and the inliers' rectangle is the
 /// visible part's, its centre pulled towards the camera by up to half the shortfall: beyond
