@@ -33,7 +33,7 @@ const ParamSchema<MovingLandingParams>& MovingLandingParams::schema() {
     s.add("max_yaw_rate_dps", &P::max_yaw_rate_dps, Range::gt(0), "deg/s",
           "a platform predicted turning faster is beyond what the vehicle follows");
     s.add("too_fast_s", &P::too_fast_s, Range::ge(0), "s",
-          "beyond those bounds this long: the failsafe");
+          "beyond those bounds this long, over filter.min_consistent fused views: the failsafe");
     s.add("heave_min_amplitude_m", &P::heave_min_amplitude_m, Range::ge(0), "m",
           "a fitted heave smaller than this is no heave: the last drop at once");
     s.add("heave_max_wait_s", &P::heave_max_wait_s, Range::ge(0), "s",
@@ -153,8 +153,13 @@ MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
   // but neither judged too fast nor descended onto.
   const bool believed = filter.believed();
   if (const auto why = believed ? too_fast(pr, params) : std::nullopt) {
-    if (!s.too_fast_since_utime) s.too_fast_since_utime = now_utime;
-    if (double(now_utime - *s.too_fast_since_utime) * 1e-6 >= params.too_fast_s) {
+    if (!s.too_fast_since_utime) {
+      s.too_fast_since_utime = now_utime;
+      s.too_fast_since_updates = filter.n_updates();
+    }
+    const bool measured_fast =
+        filter.n_updates() - s.too_fast_since_updates >= params.filter.min_consistent;
+    if (double(now_utime - *s.too_fast_since_utime) * 1e-6 >= params.too_fast_s && measured_fast) {
       out.next = MovingStep::Next::kTooFast;
       out.reason = *why;
       return out;

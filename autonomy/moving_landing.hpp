@@ -19,9 +19,11 @@
 //     deck's, the lowest of the high half); no heave above heave_min_amplitude_m: at once;
 //     waited heave_max_wait_s: at once.
 //  4. The failsafe: a believed platform (PlatformFilter::believed) predicted faster than
-//     max_speed_mps or turning faster than
-//     max_yaw_rate_dps for too_fast_s is beyond what the vehicle follows
-//     (Failsafe::kPlatformTooFast: climb and hold).
+//     max_speed_mps or turning faster than max_yaw_rate_dps for too_fast_s, over which the
+//     filter fused at least filter.min_consistent views (as many as make a track's motion
+//     believed), is beyond what the vehicle follows (Failsafe::kPlatformTooFast: climb and hold).
+//     The views ask that the speed be measured: one wrong view fused after a gap (the gate
+//     widened by it) sets a speed the prediction then carries unmeasured.
 //  5. The go-around (check_drop): in the last drop, while the gear is above the altitude loop's
 //     lag over the top, its centre carried off the predicted centre beyond the room the top's
 //     short side leaves the gear gives the drop up: back to step 1 at the final height. A cart
@@ -186,6 +188,7 @@ struct MovingApproach {
   std::optional<int64_t> matched_since_utime;
   std::optional<int64_t> at_final_since_utime;  ///< waiting for the heave since
   std::optional<int64_t> too_fast_since_utime;
+  int too_fast_since_updates = 0;  ///< the filter's fused views when it began
   int placing_climbs = 0;  ///< climbs to the follow height to place the centre (step 6)
 };
 

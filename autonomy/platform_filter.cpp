@@ -138,6 +138,8 @@ const char* PlatformFilter::to_string(Refusal r) {
       return "beyond the gate";
     case Refusal::kLargerThanTheTop:
       return "larger than the top";
+    case Refusal::kBeyondReach:
+      return "a velocity beyond the platform's reach";
   }
   return "?";
 }
@@ -446,6 +448,10 @@ PlatformFilter::Fused PlatformFilter::fuse(Track& t, const PlatformMeasurement& 
     const Eigen::LDLT<Eigen::Matrix4d> ldlt(S);
     const double d2 = innov.dot(ldlt.solve(innov));
     if (!(d2 <= params_.gate_chi2)) return Fused::kOutsideGate;
+    const double reach_mps =
+        kMaxPlatformAccelMps2 * dt +
+        3.0 * std::sqrt(worst_axis_var(t.P.bottomRightCorner<2, 2>() + R.bottomRightCorner<2, 2>()));
+    if (innov.tail<2>().norm() > reach_mps) return Fused::kBeyondReach;
     const Eigen::Matrix4d K = Pp * H.transpose() * ldlt.solve(Eigen::Matrix4d::Identity());
     const Vector2d v0 = t.x.tail<2>();
     t.x = xp + K * innov;
@@ -510,20 +516,25 @@ bool PlatformFilter::update(const PlatformMeasurement& m) {
     refuse(Refusal::kLargerThanTheTop);
     return false;
   }
-  if (const Fused f = fuse(track_, m); f != Fused::kOutsideGate) {
+  const auto refused_by = [](Fused f) {
+    return f == Fused::kBeyondReach ? Refusal::kBeyondReach : Refusal::kGate;
+  };
+  const auto fused = [](Fused f) { return f == Fused::kAccepted || f == Fused::kAcceptedPartial; };
+  const Fused f = fuse(track_, m);
+  if (fused(f)) {
     n_partial_ += f == Fused::kAcceptedPartial;
     consecutive_rejections_ = 0;
     candidate_ = Track{};
     ++n_updates_;
     return true;
   }
-  refuse(Refusal::kGate);
+  refuse(refused_by(f));
   ++consecutive_rejections_;
   // A view that would have placed the centre elsewhere: the placements before it are in doubt.
   if (places_centre(track_, m)) track_.n_placed = 0;
   // The refused measurements as a track of their own: a candidate that refuses one in turn
   // starts over from it.
-  if (fuse(candidate_, m) == Fused::kOutsideGate) {
+  if (!fused(fuse(candidate_, m))) {
     candidate_ = Track{};
     fuse(candidate_, m);
   }

@@ -13,7 +13,12 @@
 //  - its extent kLargerThanTheTop times the track's whole top: another object (judged once the
 //    track holds min_consistent views: its first may be of part of it);
 //  - its position and velocity innovation beyond gate_chi2 (Mahalanobis distance by the
-//    predicted covariance, 4 dof). The refused measurements start a candidate track of their
+//    predicted covariance, 4 dof);
+//  - its velocity farther from the prediction than kMaxPlatformAccelMps2 reaches since the
+//    track's last update, plus three sigmas of the track's velocity then and of the
+//    measurement's: the white acceleration's variance grows with the gap (accel_psd dt), and
+//    after a few frames unmeasured the gate admits velocities no platform reaches in that time.
+//    The refused measurements start a candidate track of their
 //    own; after max_consecutive_rejections in a row, the candidate replaces the track once it is
 //    believed itself (the platform is not where it was believed), or at once while the track is
 //    not believed yet.
@@ -135,6 +140,11 @@ inline constexpr double kLargerThanTheTop = 1.5;
 /// match tolerance, whatever the velocities it measured say.
 inline constexpr double kConfirmS = 0.5;
 
+/// A platform's velocity changes at most this fast [m/s^2]: the turn accel_psd is sized for (a
+/// cart at 1 m/s round a 0.6 m bend, 1.7 m/s^2) with a margin; the families' carts slow for
+/// their turns at 0.5 m/s^2 and turn their course at 0.26 m/s^2.
+inline constexpr double kMaxPlatformAccelMps2 = 2.0;
+
 /// Faster than this, the course's turn is followed update by update (course_tau_s) [m/s]: a
 /// fifth of a second of a 1 m/s cart's frames turn its filtered velocity by more than its noise.
 inline constexpr double kFastCourseMps = 0.2;
@@ -148,8 +158,8 @@ inline constexpr double kCourseMinSpeedMps = 0.05;
 class PlatformFilter {
  public:
   /// Why a measurement was refused.
-  enum class Refusal { kNotFinite, kOutOfOrder, kGate, kLargerThanTheTop };
-  static constexpr int kRefusals = 4;
+  enum class Refusal { kNotFinite, kOutOfOrder, kGate, kLargerThanTheTop, kBeyondReach };
+  static constexpr int kRefusals = 5;
   static const char* to_string(Refusal r);
 
   explicit PlatformFilter(const PlatformFilterParams& params);
@@ -227,7 +237,7 @@ class PlatformFilter {
     int n_other_tops = 0;               // whole tops given up (forget_centre_of_another_top)
     int n_placed = 0;                   // n_placed()
   };
-  enum class Fused { kAccepted, kAcceptedPartial, kOutsideGate };
+  enum class Fused { kAccepted, kAcceptedPartial, kOutsideGate, kBeyondReach };
   Fused fuse(Track& t, const PlatformMeasurement& m) const;
   void follow_course(Track& t, int64_t utime, const Vector2d& v0, double dt) const;
   void start(Track& t, const PlatformMeasurement& m) const;

@@ -120,7 +120,8 @@ int main(int argc, char** argv) try {
   // The platform filter's state after the last step (autonomy/platform_filter.hpp).
   struct {
     int fused = 0, run = 0, refused = 0;  // fused, in a row within the gate, refused
-    int gate = 0, order = 0, size = 0;    // refused by the gate, as out of order, as too large
+    int gate = 0, order = 0, size = 0, reach = 0;  // refused by the gate, as out of order, as too
+                                                   // large, as beyond the platform's reach
     bool believed = false;
     std::optional<PlatformFilter> copy;  // autonomy's, for its prediction at a frame's time
   } filter;
@@ -144,6 +145,7 @@ int main(int argc, char** argv) try {
     filter.gate = pf.n_refused(PlatformFilter::Refusal::kGate);
     filter.order = pf.n_refused(PlatformFilter::Refusal::kOutOfOrder);
     filter.size = pf.n_refused(PlatformFilter::Refusal::kLargerThanTheTop);
+    filter.reach = pf.n_refused(PlatformFilter::Refusal::kBeyondReach);
     filter.believed = pf.believed();
     filter.copy = pf;
   };
@@ -262,9 +264,10 @@ int main(int argc, char** argv) try {
                     m.p_W.y() - moved->top_center_W.y(), m.v_W.x() - moved->v_W.x(),
                     m.v_W.y() - moved->v_W.y());
     }
-    std::printf(" | filter fused %d run %d refused %d believed %d (gate %d order %d size %d)",
-                filter.fused, filter.run, filter.refused, filter.believed ? 1 : 0, filter.gate,
-                filter.order, filter.size);
+    std::printf(
+        " | filter fused %d run %d refused %d believed %d (gate %d order %d size %d reach %d)",
+        filter.fused, filter.run, filter.refused, filter.believed ? 1 : 0, filter.gate,
+        filter.order, filter.size, filter.reach);
     if (filter.copy)
       std::printf(" partial %d other tops %d whole %.2f x %.2f", filter.copy->n_partial(),
                   filter.copy->n_other_tops(), filter.copy->whole_top().x(),

@@ -411,6 +411,47 @@ TEST(PlatformFilterTest, AfterAGapAWrongMeasurementIsNotBelievedAndTheTopIsFound
   EXPECT_NEAR(f.predict(kPfT0 + int64_t(t * 1e6)).v_W.x(), m.v, 0.05);
 }
 
+TEST(PlatformFilterTest, AVelocityNoPlatformReachesInTheGapIsRefused) {
+  // A top followed in views cut by the border (its velocity measured, its centre not), then
+  // unmeasured for 0.4 s (frames blurred as the approach sets off): the white acceleration's
+  // variance lets the gate pass a view at 2.2 m/s off the track's 0.3 m/s. Fused, it would set a
+  // speed beyond the failsafe's and a course turning the prediction round in circles. No platform
+  // changes its velocity by that in 0.4 s: refused by its own reason, the track goes on.
+  const PlatformPath m = straight_path(0.3);
+  const auto cut_view = [&](double t, std::mt19937_64& rng) {
+    auto z = measure_path(m, t, rng);
+    z.cov_p_W = 100.0 * Matrix3d::Identity();  // platform_motion_t's cut top
+    return z;
+  };
+  const auto followed_cut = [&](PlatformFilter& f, std::mt19937_64& rng) {
+    double t = kPfInterval;
+    for (; t < 2; t += kPfDt) f.update(cut_view(t, rng));
+    return t;
+  };
+  using R = PlatformFilter::Refusal;
+  PlatformFilter f{PlatformFilterParams{}};
+  std::mt19937_64 rng(12);
+  double t = followed_cut(f, rng);
+  ASSERT_TRUE(f.believed());
+  t += 0.4;
+  auto wild = cut_view(t, rng);
+  wild.v_W.head<2>() += Vector2d(-0.3, 2.2);
+  EXPECT_FALSE(f.update(wild));
+  EXPECT_EQ(f.n_refused(R::kBeyondReach), 1);
+  EXPECT_EQ(f.n_refused(R::kGate), 0) << "the gate alone would have fused it";
+  EXPECT_NEAR(f.predict(kPfT0 + int64_t(t * 1e6)).v_W.x(), m.v, 0.05);
+  for (t += kPfDt; t < 3; t += kPfDt) EXPECT_TRUE(f.update(cut_view(t, rng)));
+  EXPECT_TRUE(f.believed());
+  // A change the platform can make in the same gap (0.4 m/s: 1 m/s^2) is fused.
+  PlatformFilter g{PlatformFilterParams{}};
+  std::mt19937_64 rng2(12);
+  const double u = followed_cut(g, rng2) + 0.4;
+  auto braked = cut_view(u, rng2);
+  braked.v_W.x() -= 0.4;
+  EXPECT_TRUE(g.update(braked));
+  EXPECT_EQ(g.n_refused(R::kBeyondReach), 0);
+}
+
 TEST(PlatformFilterTest, AnExtentFarLargerThanTheTopIsAnotherObject) {
   PlatformPath m;
   m.straight = true;
@@ -737,13 +778,29 @@ TEST(MovingApproachTest, MatchesThePlatformThenDescendsAndFailsSafeWhenTooFast) 
   }
   EXPECT_LT(st.sp_p_W.z(), z0);
   EXPECT_LT(st.sp_v_W.z(), 0.0);
-  // The same platform beyond max_speed_mps for too_fast_s: the failsafe.
+  // The same platform beyond max_speed_mps for too_fast_s, measured all the while: the failsafe.
+  // Predicted so fast but not measured over that span (its speed set by one view before a gap),
+  // it is followed on.
   params.max_speed_mps = 0.4;
+  t += 0.6 + kPfDt;  // past the measurements of the descent above
+  const int64_t later = kPfT0 + int64_t(t * 1e6);
   MovingApproach s2;
-  st = step_moving_approach(s2, f, pose, now, 0.01, 0.0, LandingGear{}, params);
+  st = step_moving_approach(s2, f, pose, later, 0.01, 0.0, LandingGear{}, params);
   EXPECT_EQ(st.next, MovingStep::Next::kContinue);
-  st = step_moving_approach(s2, f, pose, now + int64_t(params.too_fast_s * 1e6), 0.01, 0.0,
+  st = step_moving_approach(s2, f, pose, later + int64_t(params.too_fast_s * 1e6), 0.01, 0.0,
                             LandingGear{}, params);
+  EXPECT_EQ(st.next, MovingStep::Next::kContinue) << "unmeasured";
+  MovingApproach s4;
+  st = step_moving_approach(s4, f, pose, later, 0.01, 0.0, LandingGear{}, params);
+  for (double u = t; st.next == MovingStep::Next::kContinue && u < t + 2; u += kPfDt) {
+    f.update(measure_path(m, u, rng));
+    st = step_moving_approach(s4, f, pose, kPfT0 + int64_t(u * 1e6), 0.01, 0.0, LandingGear{},
+                              params);
+    if (st.next == MovingStep::Next::kTooFast) {
+      EXPECT_GE(u - t, params.too_fast_s - 1e-6);
+      EXPECT_LT(u - t, params.too_fast_s + 2 * kPfDt);
+    }
+  }
   EXPECT_EQ(st.next, MovingStep::Next::kTooFast);
   // Not measured for lost_timeout_s: lost.
   MovingApproach s3;
