@@ -160,15 +160,20 @@ std::vector<size_t> common_motion(const std::vector<Placed>& cand, const MovingT
   return best;
 }
 
-// Stages 2 and 3's first gate: the largest common motion whose matches are not the floor's. A
-// cluster of floor matches just outside floor_tol_px (motion capture's noise, and its stamp's
-// error times the body's turn: a turning camera puts many floor matches a few pixels off the
-// known floor's prediction, and they share one apparent motion) is no top: most of its matches
-// are carried by the floor within a few tolerances. It is set aside and the largest motion among
-// the remaining candidates taken, up to kFloorClusters times (the floor seen through the
-// turn's error, once or twice split by the image's regions). *reason: kNoCommonMotion when the
-// first search finds no set of min_inliers, kOnFloor when every set found was the floor's.
-constexpr int kFloorClusters = 2;
+// Stages 2 and 3's first gates: the largest common motion whose matches are not the floor's and
+// whose motion a platform makes. A cluster of floor matches just outside floor_tol_px (motion
+// capture's noise, and its stamp's error times the body's turn: a turning camera puts many floor
+// matches a few pixels off the known floor's prediction, and they share one apparent motion) is
+// no top: most of its matches are carried by the floor within a few tolerances. A motion faster
+// than max_speed_mps, turning faster than max_yaw_rate_dps or scaled beyond max_scale_change is
+// none either: a floor of one pattern repeated (a chessboard, tiles) matches each copy to the
+// next, and those matches share one rigid motion of a period per interval, metres a second,
+// often the largest set in the view. Either is set aside and the largest motion among the
+// remaining candidates taken, up to kSetsAside times (the floor seen through the turn's error,
+// once or twice split by the image's regions; a pattern's copies along either of its axes).
+// *reason: kNoCommonMotion when the first search finds no set of min_inliers, else the first set
+// aside's (kOnFloor, kTooFast) when every set found was set aside.
+constexpr int kSetsAside = 2;
 
 bool floor_cluster(const std::vector<Placed>& cand, const std::vector<size_t>& in,
                    const MovingTopParams& params) {
@@ -178,25 +183,41 @@ bool floor_cluster(const std::vector<Placed>& cand, const std::vector<size_t>& i
   return double(on_floor) > params.max_floor_share * double(in.size());
 }
 
-std::vector<size_t> motion_off_floor(const std::vector<Placed>& cand, const MovingTopParams& params,
-                                     Similarity2* S, MovingReason* reason) {
+bool beyond_a_platform(const std::vector<Placed>& cand, const std::vector<size_t>& in,
+                       const Similarity2& S, double dt_s, const MovingTopParams& params) {
+  Vector2d shift = Vector2d::Zero();
+  for (size_t k : in) shift += cand[k].p2 - cand[k].p1;
+  const double speed = shift.norm() / double(in.size()) / dt_s;
+  return speed > params.max_speed_mps ||
+         std::abs(S.theta) / dt_s > params.max_yaw_rate_dps * M_PI / 180 ||
+         std::abs(S.s - 1) > params.max_scale_change;
+}
+
+std::vector<size_t> platform_motion(const std::vector<Placed>& cand, double dt_s,
+                                    const MovingTopParams& params, Similarity2* S,
+                                    MovingReason* reason) {
   std::vector<size_t> pool(cand.size());
   for (size_t k = 0; k < pool.size(); ++k) pool[k] = k;
+  MovingReason first_aside = MovingReason::kOk;
   for (int pass = 0;; ++pass) {
     std::vector<Placed> sub;
     for (size_t k : pool) sub.push_back(cand[k]);
     std::vector<size_t> in;
     for (size_t j : common_motion(sub, params, S)) in.push_back(pool[j]);
     if (int(in.size()) < params.min_inliers) {
-      *reason = pass == 0 ? MovingReason::kNoCommonMotion : MovingReason::kOnFloor;
+      *reason = pass == 0 ? MovingReason::kNoCommonMotion : first_aside;
       return in;
     }
-    if (!floor_cluster(cand, in, params)) {
+    const MovingReason why = floor_cluster(cand, in, params)                  ? MovingReason::kOnFloor
+                             : beyond_a_platform(cand, in, *S, dt_s, params) ? MovingReason::kTooFast
+                                                                              : MovingReason::kOk;
+    if (why == MovingReason::kOk) {
       *reason = MovingReason::kOk;
       return in;
     }
-    if (pass == kFloorClusters) {
-      *reason = MovingReason::kOnFloor;
+    if (pass == 0) first_aside = why;
+    if (pass == kSetsAside) {
+      *reason = first_aside;
       return in;
     }
     std::vector<uint8_t> taken(cand.size(), 0);
@@ -503,19 +524,12 @@ MovingTop find_moving_top(const Correspondences& c, double dt_s, double floor_z_
   out.n_candidates = static_cast<int>(cand.size());
   if (out.n_candidates < params.min_inliers) return refuse(MovingReason::kTooFewCandidates);
   Similarity2 S;
-  const std::vector<size_t> in = motion_off_floor(cand, params, &S, &out.reason);
+  const std::vector<size_t> in = platform_motion(cand, dt_s, params, &S, &out.reason);
   out.n_inliers = static_cast<int>(in.size());
   if (out.reason != MovingReason::kOk) return out;
   for (size_t k : in) out.inliers[cand[k].index] = 1;
 
-  // Stage 3, the other gates: a motion, a size and a still top's explanation (moving_top.hpp).
-  Vector2d m1 = Vector2d::Zero(), m2 = Vector2d::Zero();
-  for (size_t k : in) m1 += cand[k].p1, m2 += cand[k].p2;
-  const double speed = (m2 - m1).norm() / out.n_inliers / dt_s;
-  if (speed > params.max_speed_mps ||
-      std::abs(S.theta) / dt_s > params.max_yaw_rate_dps * M_PI / 180 ||
-      std::abs(S.s - 1) > params.max_scale_change)
-    return refuse(MovingReason::kTooFast);
+  // Stage 3, the other gates: a size and a still top's explanation (moving_top.hpp).
   std::vector<Vector3d> pts_W;
   for (size_t k : in) pts_W.emplace_back(cand[k].p2.x(), cand[k].p2.y(), z_top);
   const auto rect = features_extent(pts_W, Vector3d::UnitZ());

@@ -20,8 +20,9 @@
 // s = k_2 / k_1 also carries the top's heave (a deck) over the interval. A similarity fitted by
 // RANSAC (two matches a draw, seeded) gives the top's inliers, its displacement, its turn and
 // its heave; the inliers' rectangle its centre, size and yaw. A set that is a cluster of the
-// floor's matches is set aside and the next motion taken; gates refuse the floor's alone, an
-// implausible motion or size, and a motion that a still top explains as well (a pattern
+// floor's matches, or whose motion no platform makes (a floor pattern matched to its next copy),
+// is set aside and the next motion taken; gates refuse the floor's alone, an implausible motion
+// alone, a size out of range, and a motion that a still top explains as well (a pattern
 // repeated along the top: its descriptors match the next copy, one period away, and those
 // matches share one rigid motion), each with its own reason.
 //
@@ -54,7 +55,7 @@ enum class MovingReason : int8_t {
   kNoCommonMotion = 4,    ///< no min_inliers of them share one rigid motion
   kOnFloor = 5,           ///< the set's matches are the floor's (max_floor_share)
   kTooFast = 6,           ///< faster than max_speed_mps / max_yaw_rate_dps, or a scale change
-                          ///< beyond max_scale_change
+                          ///< beyond max_scale_change (the first set set aside so)
   kSizeOutOfRange = 7,    ///< the inliers' extent outside [min_size_m, max_size_m] (a cut
                           ///< top: longer than max_size_m)
   kStillTop = 8,          ///< a still top explains as many matches (a pattern repeated along
