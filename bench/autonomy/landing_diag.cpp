@@ -216,9 +216,14 @@ int main(int argc, char** argv) try {
     if (moved)  // the moving platform's truth: where it is relative to the camera, its velocity
       std::printf(" plat rel(%+.2f %+.2f) v(%+.2f %+.2f)", moved->top_center_W.x() - cam.x(),
                   moved->top_center_W.y() - cam.y(), moved->v_W.x(), moved->v_W.y());
+    // The body's heading off the top's axes (mod a quarter turn), what a touch-down scores too.
+    const auto quarter_deg = [](double a_rad) {
+      return std::remainder(a_rad, M_PI / 2) * 180 / M_PI;
+    };
     if (moved && pose)  // the body's offset from the top's centre, what a touch-down scores
-      std::printf(" body off(%+.3f %+.3f)", pose->p_W_B.x() - moved->top_center_W.x(),
-                  pose->p_W_B.y() - moved->top_center_W.y());
+      std::printf(" body off(%+.3f %+.3f) yaw %+.1f", pose->p_W_B.x() - moved->top_center_W.x(),
+                  pose->p_W_B.y() - moved->top_center_W.y(),
+                  quarter_deg(yaw_of(pose->q_WB.toRotationMatrix()) - moved->yaw_rad));
     // The reference's baseline and age (the top's parallax falls with the baseline).
     std::printf(" b %.3f age %.2f tr %d%s", r.baseline_m,
                 r.ref_utime > 0 ? (f.utime - r.ref_utime) * 1e-6 : -1.0, r.n_tracked,
@@ -260,9 +265,10 @@ int main(int argc, char** argv) try {
                     m.p_W.x(), m.p_W.y(), m.p_W.z(), m.v_W.x(), m.v_W.y(), m.v_W.z(),
                     m.yaw_rad * 180 / M_PI, m.yaw_rate_rps * 180 / M_PI);
       if (m.found() && moved)  // against the truth at the frame's time
-        std::printf(" err p(%+.3f %+.3f) v(%+.3f %+.3f)", m.p_W.x() - moved->top_center_W.x(),
-                    m.p_W.y() - moved->top_center_W.y(), m.v_W.x() - moved->v_W.x(),
-                    m.v_W.y() - moved->v_W.y());
+        std::printf(" err p(%+.3f %+.3f) v(%+.3f %+.3f) yaw %+.1f",
+                    m.p_W.x() - moved->top_center_W.x(), m.p_W.y() - moved->top_center_W.y(),
+                    m.v_W.x() - moved->v_W.x(), m.v_W.y() - moved->v_W.y(),
+                    quarter_deg(m.yaw_rad - moved->yaw_rad));
     }
     std::printf(
         " | filter fused %d run %d refused %d believed %d (gate %d order %d size %d reach %d)",
@@ -276,10 +282,10 @@ int main(int argc, char** argv) try {
     // against the truth.
     if (filter.copy && filter.copy->initialised() && moved) {
       const auto pr = filter.copy->predict(f.utime);
-      std::printf(" pred err (%+.3f %+.3f) sd %.3f v(%+.2f %+.2f) a(%+.2f %+.2f)",
+      std::printf(" pred err (%+.3f %+.3f) sd %.3f v(%+.2f %+.2f) a(%+.2f %+.2f) yaw %+.1f",
                   pr.p_W.x() - moved->top_center_W.x(), pr.p_W.y() - moved->top_center_W.y(),
                   std::sqrt(std::max(pr.cov_p(0, 0), pr.cov_p(1, 1))), pr.v_W.x(), pr.v_W.y(),
-                  pr.a_W.x(), pr.a_W.y());
+                  pr.a_W.x(), pr.a_W.y(), quarter_deg(pr.yaw_rad - moved->yaw_rad));
     }
     platform = vision::to_platform_msg(r);
     std::printf("\n");
