@@ -189,7 +189,7 @@ struct MovingApproach {
   std::optional<int64_t> at_final_since_utime;  ///< waiting for the heave since
   std::optional<int64_t> too_fast_since_utime;
   int too_fast_since_updates = 0;  ///< the filter's fused views when it began
-  int placing_climbs = 0;  ///< climbs to the follow height to place the centre (step 6)
+  int placing_climbs = 0;          ///< climbs to the follow height to place the centre (step 6)
 };
 
 struct MovingStep {

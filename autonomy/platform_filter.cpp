@@ -448,9 +448,8 @@ PlatformFilter::Fused PlatformFilter::fuse(Track& t, const PlatformMeasurement& 
     const Eigen::LDLT<Eigen::Matrix4d> ldlt(S);
     const double d2 = innov.dot(ldlt.solve(innov));
     if (!(d2 <= params_.gate_chi2)) return Fused::kOutsideGate;
-    const double reach_mps =
-        kMaxPlatformAccelMps2 * dt +
-        3.0 * std::sqrt(worst_axis_var(t.P.bottomRightCorner<2, 2>() + R.bottomRightCorner<2, 2>()));
+    const Matrix2d var_v = t.P.bottomRightCorner<2, 2>() + R.bottomRightCorner<2, 2>();
+    const double reach_mps = kMaxPlatformAccelMps2 * dt + 3.0 * std::sqrt(worst_axis_var(var_v));
     if (innov.tail<2>().norm() > reach_mps) return Fused::kBeyondReach;
     const Eigen::Matrix4d K = Pp * H.transpose() * ldlt.solve(Eigen::Matrix4d::Identity());
     const Vector2d v0 = t.x.tail<2>();

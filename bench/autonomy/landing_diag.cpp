@@ -119,7 +119,7 @@ int main(int argc, char** argv) try {
   int n_waypoints = 0;
   // The platform filter's state after the last step (autonomy/platform_filter.hpp).
   struct {
-    int fused = 0, run = 0, refused = 0;  // fused, in a row within the gate, refused
+    int fused = 0, run = 0, refused = 0;           // fused, in a row within the gate, refused
     int gate = 0, order = 0, size = 0, reach = 0;  // refused by the gate, as out of order, as too
                                                    // large, as beyond the platform's reach
     bool believed = false;

@@ -208,9 +208,10 @@ std::vector<size_t> platform_motion(const std::vector<Placed>& cand, double dt_s
       *reason = pass == 0 ? MovingReason::kNoCommonMotion : first_aside;
       return in;
     }
-    const MovingReason why = floor_cluster(cand, in, params)                  ? MovingReason::kOnFloor
-                             : beyond_a_platform(cand, in, *S, dt_s, params) ? MovingReason::kTooFast
-                                                                              : MovingReason::kOk;
+    const MovingReason why = floor_cluster(cand, in, params) ? MovingReason::kOnFloor
+                             : beyond_a_platform(cand, in, *S, dt_s, params)
+                                 ? MovingReason::kTooFast
+                                 : MovingReason::kOk;
     if (why == MovingReason::kOk) {
       *reason = MovingReason::kOk;
       return in;
