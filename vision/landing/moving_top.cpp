@@ -393,7 +393,10 @@ bool fills_view_across(const Correspondences& c, const std::vector<Placed>& cand
   bool left = false, right = false, top = false, bottom = false;
   for (size_t k : in) {
     const Vector2d& u = c.u2[cand[k].index];
-    left |= u.x()<lo, right |= u.x()> w, top |= u.y()<lo, bottom |= u.y()> h;
+    left = left || u.x() < lo;
+    right = right || u.x() > w;
+    top = top || u.y() < lo;
+    bottom = bottom || u.y() > h;
   }
   return (left && right) || (top && bottom);
 }
