@@ -417,14 +417,19 @@ std::optional<FlowMotion> second_motion(const std::vector<Vector3d>& rays_1,
                                         const std::vector<Vector3d>& rays_2,
                                         const std::vector<uint8_t>& inlier, const Matrix3d& R_C2C1,
                                         const Vector3d& n_C1, double focal_px,
-                                        const FlowFitParams& params) {
+                                        const FlowFitParams& params,
+                                        std::vector<uint8_t>* second_inlier) {
   assert(rays_1.size() == rays_2.size() && inlier.size() == rays_1.size());
+  if (second_inlier) second_inlier->assign(rays_1.size(), 0);
   std::vector<Vector3d> out_1, out_2;
+  std::vector<size_t> from;  // each left-out correspondence's index among all
   for (size_t k = 0; k < rays_1.size(); ++k)
-    if (!inlier[k]) out_1.push_back(rays_1[k]), out_2.push_back(rays_2[k]);
+    if (!inlier[k]) out_1.push_back(rays_1[k]), out_2.push_back(rays_2[k]), from.push_back(k);
   if (static_cast<int>(out_1.size()) < params.min_inliers) return std::nullopt;
   const FlowFit fit = fit_t_over_d(out_1, out_2, R_C2C1, n_C1, focal_px, params);
   if (fit.reason != FlowReason::kOk) return std::nullopt;
+  if (second_inlier)
+    for (size_t j = 0; j < from.size(); ++j) (*second_inlier)[from[j]] = fit.inlier[j];
   FlowMotion m;
   m.t_over_d_C1 = fit.t_over_d_C1;
   m.cov = fit.cov;
@@ -477,40 +482,73 @@ FlowResult FlowOdometry::finish(FlowResult r) {
   return r;
 }
 
-void FlowOdometry::detect(int already, FlowResult& r) {
+int FlowOdometry::cell_of(const cv::Point2f& p) const {
+  const auto& t = params_.track;
+  const int cx =
+      std::clamp(static_cast<int>(p.x * t.grid_cols / level_size_.width), 0, t.grid_cols - 1);
+  const int cy =
+      std::clamp(static_cast<int>(p.y * t.grid_rows / level_size_.height), 0, t.grid_rows - 1);
+  return cy * t.grid_cols + cx;
+}
+
+std::vector<int> FlowOdometry::tracks_per_cell() const {
+  std::vector<int> in_cell(static_cast<size_t>(params_.track.grid_cols * params_.track.grid_rows));
+  for (const auto& p : points_) ++in_cell[static_cast<size_t>(cell_of(p))];
+  return in_cell;
+}
+
+double FlowOdometry::empty_cell_share() const {
+  const std::vector<int> in_cell = tracks_per_cell();
+  return static_cast<double>(std::count(in_cell.begin(), in_cell.end(), 0)) /
+         static_cast<double>(in_cell.size());
+}
+
+cv::Rect FlowOdometry::empty_cells_box() const {
+  const auto& t = params_.track;
+  const std::vector<int> in_cell = tracks_per_cell();
+  cv::Rect box;
+  for (int cy = 0; cy < t.grid_rows; ++cy)
+    for (int cx = 0; cx < t.grid_cols; ++cx) {
+      if (in_cell[static_cast<size_t>(cy * t.grid_cols + cx)] > 0) continue;
+      const int x0 = cx * level_size_.width / t.grid_cols;
+      const int y0 = cy * level_size_.height / t.grid_rows;
+      const cv::Rect cell(x0, y0, (cx + 1) * level_size_.width / t.grid_cols - x0,
+                          (cy + 1) * level_size_.height / t.grid_rows - y0);
+      box = box.area() > 0 ? (box | cell) : cell;
+    }
+  return box;
+}
+
+void FlowOdometry::detect(int already, FlowResult& r, const cv::Rect& region) {
   const auto& t = params_.track;
   const int want = t.max_features - already;
   if (want <= 0) return;
   const cv::Mat& image = previous_pyramid_[0];  // the frame being stored (see add_frame)
   const double s = level_scale_;
   const int border = static_cast<int>(std::ceil(t.border_px / s));
-  cv::Mat mask(level_size_, CV_8U, cv::Scalar(0));
-  const cv::Rect inner(border, border, level_size_.width - 2 * border,
-                       level_size_.height - 2 * border);
+  const cv::Rect inner =
+      cv::Rect(border, border, level_size_.width - 2 * border, level_size_.height - 2 * border) &
+      region;
   if (inner.width <= 0 || inner.height <= 0) return;
-  mask(inner).setTo(255);
+  // Only the region is searched (its corners' quality against its own strongest: a sparse
+  // floor's corners are not measured against a textured top's elsewhere in the view).
+  cv::Mat mask(inner.size(), CV_8U, cv::Scalar(255));
   const double min_dist = t.min_distance_px / s;
   for (const auto& p : points_)
-    cv::circle(mask, cv::Point(cvRound(p.x), cvRound(p.y)), static_cast<int>(std::ceil(min_dist)),
-               cv::Scalar(0), cv::FILLED);
+    cv::circle(mask, cv::Point(cvRound(p.x) - inner.x, cvRound(p.y) - inner.y),
+               static_cast<int>(std::ceil(min_dist)), cv::Scalar(0), cv::FILLED);
   std::vector<cv::Point2f> corners;
   std::vector<float> quality;
-  cv::goodFeaturesToTrack(image, corners, 4 * t.max_features, t.quality_level, min_dist, mask,
-                          quality, 3, 3, false, 0.04);
+  cv::goodFeaturesToTrack(image(inner), corners, 4 * t.max_features, t.quality_level, min_dist,
+                          mask, quality, 3, 3, false, 0.04);
+  for (auto& c : corners)
+    c += cv::Point2f(static_cast<float>(inner.x), static_cast<float>(inner.y));
 
   // Spread over the grid: first up to `cap` per cell (counting the surviving tracks), strongest
   // first, then the strongest of the rest.
   const int cells = t.grid_cols * t.grid_rows;
   const int cap = (t.max_features + cells - 1) / cells;
-  auto cell_of = [&](const cv::Point2f& p) {
-    const int cx =
-        std::clamp(static_cast<int>(p.x * t.grid_cols / level_size_.width), 0, t.grid_cols - 1);
-    const int cy =
-        std::clamp(static_cast<int>(p.y * t.grid_rows / level_size_.height), 0, t.grid_rows - 1);
-    return cy * t.grid_cols + cx;
-  };
-  std::vector<int> in_cell(static_cast<size_t>(cells), 0);
-  for (const auto& p : points_) ++in_cell[static_cast<size_t>(cell_of(p))];
+  std::vector<int> in_cell = tracks_per_cell();
   std::vector<uint8_t> taken(corners.size(), 0);
   int added = 0;
   for (int pass = 0; pass < 2 && added < want; ++pass) {
@@ -634,15 +672,21 @@ FlowResult FlowOdometry::add_frame(const cv::Mat& gray, int64_t utime, const Mat
         sample.J_rotation = fit.J_rotation;
         sample.J_normal = fit.J_normal;
         sample.residual_rms_px = fit.residual_rms_px;
+        std::vector<uint8_t> second_inlier;
         if (auto other = second_motion(rays_1, rays_2, fit.inlier, R_C2C1, n_C1.normalized(),
-                                       camera_.fx, params_.fit))
+                                       camera_.fx, params_.fit, &second_inlier))
           sample.others.push_back(*other);
         r.sample = sample;
         t_over_d = fit.t_over_d_C1;
         inlier = fit.inlier;
+        // The second motion's points stay tracked too: a textured platform moving under the
+        // camera outnumbers the floor's points, and were they dropped with the outliers the floor
+        // would be seen only in the frame after each detection, the estimate left with the
+        // platform's motion.
+        for (size_t k = 0; k < inlier.size(); ++k) inlier[k] |= second_inlier[k];
       }
     }
-    // Off-floor and badly tracked points leave with the fit's outliers.
+    // Badly tracked points and those of neither motion (a still box's sides) leave.
     points_.clear();
     rays_.clear();
     for (size_t k = 0; k < kept_points.size(); ++k) {
@@ -660,7 +704,11 @@ FlowResult FlowOdometry::add_frame(const cv::Mat& gray, int64_t utime, const Mat
   have_previous_ = true;
   last_t_over_d_ = t_over_d;
   last_dt_s_ = dt_s;
-  if (static_cast<int>(points_.size()) < t.min_tracks) detect(static_cast<int>(points_.size()), r);
+  const int kept = static_cast<int>(points_.size());
+  if (kept < t.min_tracks)
+    detect(kept, r, cv::Rect(cv::Point(0, 0), level_size_));
+  else if (empty_cell_share() > kMaxEmptyCellShare)
+    detect(kept, r, empty_cells_box());
   return finish(r);
 }
 

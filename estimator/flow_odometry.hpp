@@ -44,14 +44,16 @@
 // Front end: Shi-Tomasi corners (goodFeaturesToTrack, Shi & Tomasi 1994) spread over a grid,
 // pyramidal Lucas-Kanade (Bouguet 2000) from the previous frame with a forward-backward check
 // (Kalal, Mikolajczyk & Matas 2010), started where R_C2C1 and the last u predict; new corners
-// when too few tracks survive. Lucas-Kanade assumes each patch keeps its brightness, but the
-// sensor's automatic gain and the lights' flicker step the whole image by several percent from
-// one frame to the next; at the coarse pyramid levels, where a sparse floor (tiles' grout) leaves
-// only the shading of large patches, such a step reads as motion and sends the tracks off the
-// image. So the current frame is tracked scaled by the ratio of the two frames' mean grey levels
-// (gain_compensation: one multiplicative gain for the whole image, the sensor's model; Jin,
-// Favaro & Soatto 2001 fit a gain and an offset per patch instead); detection reads the frame
-// as it is. Pure: no LCM, no clock, no files; time is the frames' utime.
+// when too few tracks survive, or in the cells of the detection grid the tracks have left
+// (kMaxEmptyCellShare); the points of the fit and of the second motion (second_motion) stay.
+// Lucas-Kanade assumes each patch keeps its brightness, but the sensor's automatic gain and the
+// lights' flicker step the whole image by several percent from one frame to the next; at the coarse
+// pyramid levels, where a sparse floor (tiles' grout) leaves only the shading of large patches,
+// such a step reads as motion and sends the tracks off the image. So the current frame is tracked
+// scaled by the ratio of the two frames' mean grey levels (gain_compensation: one multiplicative
+// gain for the whole image, the sensor's model; Jin, Favaro & Soatto 2001 fit a gain and an offset
+// per patch instead); detection reads the frame as it is. Pure: no LCM, no clock, no files; time is
+// the frames' utime.
 
 #include <array>
 #include <cstdint>
@@ -113,12 +115,14 @@ FlowFit fit_t_over_d(const std::vector<Eigen::Vector3d>& rays_1,
 /// left out (inlier: its per-correspondence flags), when they are min_inliers or more and share
 /// one; nullopt otherwise. A platform moving under the camera is a plane of its own motion: over
 /// a sparse floor its features may outnumber the floor's, and the first fit is then the
-/// platform's.
+/// platform's. `second_inlier` (optional) gets the second fit's inliers as flags over all the
+/// correspondences (all zero without a second motion).
 std::optional<FlowMotion> second_motion(const std::vector<Eigen::Vector3d>& rays_1,
                                         const std::vector<Eigen::Vector3d>& rays_2,
                                         const std::vector<uint8_t>& inlier,
                                         const Eigen::Matrix3d& R_C2C1, const Eigen::Vector3d& n_C1,
-                                        double focal_px, const FlowFitParams& params);
+                                        double focal_px, const FlowFitParams& params,
+                                        std::vector<uint8_t>* second_inlier = nullptr);
 
 /// Pixel of the floor point seen at ray_1 in the first camera, as the model predicts it in the
 /// second camera (x2 ~ R (I + u n^T) x1, then the lens); nullopt behind the camera.
@@ -138,6 +142,14 @@ inline constexpr double kMinMeanForGain = 1.0;
 /// current_mean, when both frames are lit (kMinMeanForGain) and the factor is more than
 /// kGainTolerance from 1; nullopt otherwise (track the frame as it is).
 std::optional<double> gain_compensation(double previous_mean, double current_mean);
+
+/// More than this share of the detection grid's cells without a track: the tracks have left a
+/// region of the view, and new features are detected there though min_tracks survive. A
+/// textured top filling the middle of the view, moving with the camera, keeps its own tracks
+/// while the floor's around it leave at the border; its tracks alone can hold min_tracks, and
+/// the floor (the camera's own motion, FlowSample::others) would not be seen again. On a floor
+/// textured all over, a few border cells at a time empty as the view moves on.
+inline constexpr double kMaxEmptyCellShare = 0.125;  // six of the default grid's 48
 
 /// What a frame pair produced, also without a sample.
 struct FlowResult {
@@ -177,7 +189,12 @@ class FlowOdometry {
 
  private:
   FlowResult finish(FlowResult r);
-  void detect(int already_tracked, FlowResult& r);
+  // New features in `region` (tracking-level pixels) up to max_features in all.
+  void detect(int already_tracked, FlowResult& r, const cv::Rect& region);
+  cv::Rect empty_cells_box() const;  // the smallest box holding every grid cell without a track
+  int cell_of(const cv::Point2f& tracking_px) const;  // its detection grid cell, row-major
+  std::vector<int> tracks_per_cell() const;
+  double empty_cell_share() const;  // of the grid's cells, those without a track
 
   FlowFrontParams params_;
   CameraModel camera_;
