@@ -497,15 +497,8 @@ std::vector<int> FlowOdometry::tracks_per_cell() const {
   return in_cell;
 }
 
-double FlowOdometry::empty_cell_share() const {
-  const std::vector<int> in_cell = tracks_per_cell();
-  return static_cast<double>(std::count(in_cell.begin(), in_cell.end(), 0)) /
-         static_cast<double>(in_cell.size());
-}
-
-cv::Rect FlowOdometry::empty_cells_box() const {
+cv::Rect FlowOdometry::empty_cells_box(const std::vector<int>& in_cell) const {
   const auto& t = params_.track;
-  const std::vector<int> in_cell = tracks_per_cell();
   cv::Rect box;
   for (int cy = 0; cy < t.grid_rows; ++cy)
     for (int cx = 0; cx < t.grid_cols; ++cx) {
@@ -705,10 +698,12 @@ FlowResult FlowOdometry::add_frame(const cv::Mat& gray, int64_t utime, const Mat
   last_t_over_d_ = t_over_d;
   last_dt_s_ = dt_s;
   const int kept = static_cast<int>(points_.size());
+  const std::vector<int> in_cell = tracks_per_cell();
+  const auto empty = static_cast<double>(std::count(in_cell.begin(), in_cell.end(), 0));
   if (kept < t.min_tracks)
     detect(kept, r, cv::Rect(cv::Point(0, 0), level_size_));
-  else if (empty_cell_share() > kMaxEmptyCellShare)
-    detect(kept, r, empty_cells_box());
+  else if (empty > kMaxEmptyCellShare * static_cast<double>(in_cell.size()))
+    detect(kept, r, empty_cells_box(in_cell));
   return finish(r);
 }
 

@@ -191,10 +191,10 @@ class FlowOdometry {
   FlowResult finish(FlowResult r);
   // New features in `region` (tracking-level pixels) up to max_features in all.
   void detect(int already_tracked, FlowResult& r, const cv::Rect& region);
-  cv::Rect empty_cells_box() const;  // the smallest box holding every grid cell without a track
+  // The smallest box holding every grid cell without a track (in_cell: tracks_per_cell()).
+  cv::Rect empty_cells_box(const std::vector<int>& in_cell) const;
   int cell_of(const cv::Point2f& tracking_px) const;  // its detection grid cell, row-major
   std::vector<int> tracks_per_cell() const;
-  double empty_cell_share() const;  // of the grid's cells, those without a track
 
   FlowFrontParams params_;
   CameraModel camera_;
