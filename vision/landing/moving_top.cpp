@@ -10,7 +10,6 @@
 #include "common/median.hpp"
 #include "vision/geometry/bilinear.hpp"
 #include "vision/landing/extent.hpp"
-#include "vision/landing/rim.hpp"
 #include "vision/landing/similarity_inliers.hpp"
 
 namespace alight::vision {
@@ -503,49 +502,6 @@ void measure(const std::vector<Placed>& cand, const std::vector<size_t>& in, con
   out->var_yaw_rate = 2 * var_s / (dt_s * dt_s);
 }
 
-// The plane z = h's homography from the reference view to the current one on calibrated rays
-// (x2 ~ H x1), its points moved by S in the plane between the views (the top's motion; the
-// identity for the floor): a plane point (x, y, h) is seen from a camera at p as
-// R_CW [e1 e2 (h e3 - p)] (x, y, 1).
-Matrix3d plane_homography(const Views& v, double h, const Similarity2& S) {
-  const auto G = [h](const Isometry3d& X_WC) {
-    Matrix3d M;
-    M << Vector3d::UnitX(), Vector3d::UnitY(), h * Vector3d::UnitZ() - X_WC.translation();
-    return Matrix3d(X_WC.linear().transpose() * M);
-  };
-  const double a = S.s * std::cos(S.theta), b = S.s * std::sin(S.theta);
-  Matrix3d A;
-  A << a, -b, S.t.x(), b, a, S.t.y(), 0, 0, 1;
-  return G(v.X_WC2) * A * G(v.X_WC1).inverse();
-}
-
-// A yaw from the top's rims: sigma 1 deg, the median of two or more rims' turns that agree
-// within kRimsAgreeRad, each read over a side's stretches to a degree or two [rad^2].
-constexpr double kRimYawVar = (M_PI / 180) * (M_PI / 180);
-
-// Stage 5: the yaw from the top's rims (rim.hpp) on a view not cut by the border. The
-// rectangle of the features turns with the few of them nearest its sides, some degrees a frame
-// and for seconds the same way while the same features are seen; the top's rims are straight
-// lines whose turn the two views show on the top's plane moved by its motion (S). Where two or
-// more rims agree on a turn, the yaw is the features' turned by it; elsewhere the features'
-// stands.
-void rim_yaw(const Correspondences& c, const std::vector<Placed>& cand,
-             const std::vector<size_t>& in, const Similarity2& S, const Views& v, double z_top,
-             double floor_z_m, const cv::Mat& gray_1, const cv::Mat& gray_2, MovingTop* out) {
-  std::vector<Vector3d> pts_W;
-  for (size_t k : in) pts_W.emplace_back(cand[k].p2.x(), cand[k].p2.y(), z_top);
-  const auto rect = features_extent(pts_W, Vector3d::UnitZ());
-  if (!rect) return;
-  double turn = NAN;
-  rim_rect(c, gray_1, gray_2, plane_homography(v, z_top, S),
-           plane_homography(v, floor_z_m, Similarity2{}), v.X_WC2, pts_W, *rect,
-           widened_by_shortfall(*rect, pts_W.size()), kTopEndSearchM, nullptr, &turn);
-  if (!std::isfinite(turn)) return;
-  const Vector3d l = std::cos(turn) * rect->axis[0] + std::sin(turn) * rect->axis[1];
-  out->yaw_rad = wrap_axis_angle(std::atan2(l.y(), l.x()));
-  out->var_yaw = kRimYawVar;
-}
-
 }  // namespace
 
 MovingTop find_moving_top(const Correspondences& c, double dt_s, double floor_z_m,
@@ -600,8 +556,6 @@ MovingTop find_moving_top(const Correspondences& c, double dt_s, double floor_z_
     if (out.ncc_still >= out.ncc_moving - kStillNccGap) return refuse(MovingReason::kStillPixels);
   }
   measure(cand, in, S, v, dt_s, floor_z_m, params, &out);
-  if (!out.cut && !gray_1.empty() && !gray_2.empty())
-    rim_yaw(c, cand, in, S, v, z_top, floor_z_m, gray_1, gray_2, &out);
   // Inliers near two opposite borders: the top fills the view across, and the inliers' extent is
   // the view's footprint, not the top's; where the footprint is about the top's size, it read as
   // the whole top and placed the top's centre under the camera. No extent is measured.

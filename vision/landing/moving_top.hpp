@@ -19,10 +19,7 @@
 // by (z_c - h_assumed) / (z_c - h), so the two sets are related by a similarity whose scale
 // s = k_2 / k_1 also carries the top's heave (a deck) over the interval. A similarity fitted by
 // RANSAC (two matches a draw, seeded) gives the top's inliers, its displacement, its turn and
-// its heave; the inliers' rectangle its centre, size and yaw. With both images, on a view not
-// cut by the border, the yaw is the top's rims' where two or more agree (rim.hpp, the two views
-// compared on the top's plane moved by the similarity): the rectangle turns with its few
-// outermost features, the rims are the top's sides. A set that is a cluster of the
+// its heave; the inliers' rectangle its centre, size and yaw. A set that is a cluster of the
 // floor's matches, or whose motion no platform makes (a floor pattern matched to its next copy),
 // is set aside and the next motion taken; gates refuse the floor's alone, an implausible motion
 // alone, a size out of range, and a motion that a still top explains as well (a pattern
@@ -101,7 +98,7 @@ struct MovingTop {
 
 /// The top's motion between c's reference (pose_1) and current (pose_2) views, dt_s apart.
 /// gray_1 / gray_2: the two raw images (CV_8UC1 of the camera's size) for the kStillPixels
-/// gate and the rims' yaw; empty: neither.
+/// gate; empty: no such gate.
 MovingTop find_moving_top(const Correspondences& c, double dt_s, double floor_z_m,
                           const MovingTopParams& params, const cv::Mat& gray_1 = {},
                           const cv::Mat& gray_2 = {});

@@ -649,16 +649,18 @@ struct FoundRim {
 };
 
 // The rectangle's turn onto its rims: the median of the measured turns, where at least two
-// were measured and agree within kRimsAgreeRad. A rim whose stretches gave no turn says nothing
-// about it (its lines were read unturned), so it neither turns nor vetoes.
+// were measured and agree within 4 deg, and it exceeds half a degree. A rim whose stretches gave
+// no turn says nothing about it (its lines were read unturned), so it neither turns nor vetoes.
 std::optional<double> rims_turn(const std::vector<FoundRim>& found) {
   std::vector<double> turns;
   for (const auto& f : found)
     if (f.turn_measured) turns.push_back(f.turn_rad);
   if (turns.size() < 2) return std::nullopt;
   std::sort(turns.begin(), turns.end());
-  if (turns.back() - turns.front() > kRimsAgreeRad) return std::nullopt;
-  return turns[turns.size() / 2];
+  const double turn = turns[turns.size() / 2];
+  if (turns.back() - turns.front() > 4.0 * M_PI / 180.0 || std::abs(turn) <= 0.5 * M_PI / 180.0)
+    return std::nullopt;
+  return turn;
 }
 
 }  // namespace
@@ -668,24 +670,13 @@ std::optional<TopRect> rim_rect(const Correspondences& c, const cv::Mat& gray_1,
                                 const Isometry3d& X_WC2, const std::vector<Vector3d>& pts_W,
                                 const TopRect& features, const TopRect& widened,
                                 double end_search_m, bool* runs_on) {
-  // The top's homography (calibrated, x2 ~ H x1) explains the top's features, not the poses'
-  // motion.
-  return rim_rect(c, gray_1, gray_2, planes.top.homography(), planes.floor.homography(), X_WC2,
-                  pts_W, features, widened, end_search_m, runs_on);
-}
-
-std::optional<TopRect> rim_rect(const Correspondences& c, const cv::Mat& gray_1,
-                                const cv::Mat& gray_2, const Matrix3d& H_21_top,
-                                const Matrix3d& H_21_floor, const Isometry3d& X_WC2,
-                                const std::vector<Vector3d>& pts_W, const TopRect& features,
-                                const TopRect& widened, double end_search_m, bool* runs_on,
-                                double* turn_rad) {
-  // The reference's point of the top's plane seen at a current ray.
+  // The reference's point of the top's plane seen at a current ray: the top's homography
+  // (calibrated, x2 ~ H x1), which explains the top's features, not the poses' motion.
   const SideSearch q{c,
                      gray_1,
                      gray_2,
-                     H_21_top.inverse(),
-                     H_21_floor.inverse(),
+                     planes.top.homography().inverse(),
+                     planes.floor.homography().inverse(),
                      X_WC2,
                      0.5 * (X_WC2.inverse() * features.origin_W).z() / c.camera->K()(0, 0),
                      end_search_m};
@@ -714,10 +705,7 @@ std::optional<TopRect> rim_rect(const Correspondences& c, const cv::Mat& gray_1,
   report();
   if (found.empty()) return std::nullopt;
   const auto turn = rims_turn(found);
-  if (turn && turn_rad) *turn_rad = *turn;
-  // Under half a degree the rectangle stays as the features put it (their rims' turn is within
-  // what a side's stretches tell).
-  if (!turn || std::abs(*turn) <= 0.5 * M_PI / 180.0) return r;
+  if (!turn) return r;
   // Turned: the features' extent along the turned axes (widened where no rim is), each rim's
   // side where its crossing lies along them. A side without a rim was searched along the
   // unturned side, whose far end may lie beyond the search's reach from the turned rim: it is

@@ -1,6 +1,5 @@
 #pragma once
-// Landing, the extent out to the top's rims (beyond the paper; stage 3, after extent.hpp; also
-// the moving top's yaw, moving_top.hpp).
+// Landing, the extent out to the top's rims (beyond the paper; stage 3, after extent.hpp).
 //
 // The paper (Brockers et al., SPIE 2011, 3.2) finds the top's plane and its centre from the
 // top's features and measures no size; its Fig. 6b notes that features alone fall short of a
@@ -81,21 +80,5 @@ std::optional<TopRect> rim_rect(const Correspondences& c, const cv::Mat& gray_1,
                                 const Isometry3d& X_WC2, const std::vector<Vector3d>& pts_W,
                                 const TopRect& features, const TopRect& widened,
                                 double end_search_m, bool* runs_on = nullptr);
-
-/// Measured turns of two or more rims within this of each other agree on the rectangle's turn
-/// (their median) [rad]: a side's stretches give its rim's turn to a degree or two.
-constexpr double kRimsAgreeRad = 4.0 * M_PI / 180.0;
-
-/// The same with the top's and the floor's homographies given (calibrated: x2 ~ H x1 from the
-/// reference to the current view), for a top that moves between the views (moving_top.hpp:
-/// its plane's homography carries its motion). *turn_rad (optional): the turn from the
-/// features' long axis towards their short one that the rims agree on (kRimsAgreeRad), also
-/// where it is too small to turn the rectangle; untouched where they do not agree.
-std::optional<TopRect> rim_rect(const Correspondences& c, const cv::Mat& gray_1,
-                                const cv::Mat& gray_2, const Matrix3d& H_21_top,
-                                const Matrix3d& H_21_floor, const Isometry3d& X_WC2,
-                                const std::vector<Vector3d>& pts_W, const TopRect& features,
-                                const TopRect& widened, double end_search_m,
-                                bool* runs_on = nullptr, double* turn_rad = nullptr);
 
 }  // namespace alight::vision
