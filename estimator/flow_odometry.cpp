@@ -512,7 +512,8 @@ cv::Rect FlowOdometry::empty_cells_box(const std::vector<int>& in_cell) const {
   return box;
 }
 
-void FlowOdometry::detect(int already, FlowResult& r, const cv::Rect& region) {
+void FlowOdometry::detect(int already, FlowResult& r, const cv::Rect& region,
+                          std::vector<int> in_cell) {
   const auto& t = params_.track;
   const int want = t.max_features - already;
   if (want <= 0) return;
@@ -541,7 +542,6 @@ void FlowOdometry::detect(int already, FlowResult& r, const cv::Rect& region) {
   // first, then the strongest of the rest.
   const int cells = t.grid_cols * t.grid_rows;
   const int cap = (t.max_features + cells - 1) / cells;
-  std::vector<int> in_cell = tracks_per_cell();
   std::vector<uint8_t> taken(corners.size(), 0);
   int added = 0;
   for (int pass = 0; pass < 2 && added < want; ++pass) {
@@ -701,9 +701,9 @@ FlowResult FlowOdometry::add_frame(const cv::Mat& gray, int64_t utime, const Mat
   const std::vector<int> in_cell = tracks_per_cell();
   const auto empty = static_cast<double>(std::count(in_cell.begin(), in_cell.end(), 0));
   if (kept < t.min_tracks)
-    detect(kept, r, cv::Rect(cv::Point(0, 0), level_size_));
+    detect(kept, r, cv::Rect(cv::Point(0, 0), level_size_), in_cell);
   else if (empty > kMaxEmptyCellShare * static_cast<double>(in_cell.size()))
-    detect(kept, r, empty_cells_box(in_cell));
+    detect(kept, r, empty_cells_box(in_cell), in_cell);
   return finish(r);
 }
 

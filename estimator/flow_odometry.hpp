@@ -189,8 +189,9 @@ class FlowOdometry {
 
  private:
   FlowResult finish(FlowResult r);
-  // New features in `region` (tracking-level pixels) up to max_features in all.
-  void detect(int already_tracked, FlowResult& r, const cv::Rect& region);
+  // New features in `region` (tracking-level pixels) up to max_features in all; in_cell: the
+  // tracks per grid cell before them (tracks_per_cell()).
+  void detect(int already_tracked, FlowResult& r, const cv::Rect& region, std::vector<int> in_cell);
   // The smallest box holding every grid cell without a track (in_cell: tracks_per_cell()).
   cv::Rect empty_cells_box(const std::vector<int>& in_cell) const;
   int cell_of(const cv::Point2f& tracking_px) const;  // its detection grid cell, row-major
