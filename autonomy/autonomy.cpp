@@ -637,8 +637,9 @@ void Autonomy::step_moving(phases::Approach& a, const Vector3d& /*p*/, double dt
   const auto& L = params_.landing;
   const auto& M = params_.moving_platform;
   if (!pose_) return;
-  const MovingStep st = step_moving_approach(*a.moving, platform_, *pose_, now_utime_, dt_s,
-                                             yaw_sp_rad_, landing_gear(L), M);
+  const MovingStep st = step_moving_approach(
+      *a.moving, platform_, *pose_, now_utime_, dt_s, yaw_sp_rad_, landing_gear(L), M,
+      params_.downward_view ? &*params_.downward_view : nullptr);
   const auto pr = platform_.predict(now_utime_);
   const auto fly_step = [&] {
     sp_p_W_ = st.sp_p_W;

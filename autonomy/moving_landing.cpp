@@ -5,6 +5,8 @@
 #include <cmath>
 #include <limits>
 
+#include "autonomy/mission_profile.hpp"
+#include "autonomy/params.hpp"
 #include "autonomy/text.hpp"
 
 namespace alight::autonomy {
@@ -85,6 +87,21 @@ double aligned_yaw(double platform_yaw_rad, double current_rad) {
   return platform_yaw_rad + k * q;
 }
 
+double final_view_height_m(const DownwardView& view, const Vector2d& whole_top_m, bool long_known,
+                           const MovingLandingParams& params) {
+  if (!(whole_top_m.minCoeff() > 0)) return params.final_height_m;
+  const double pad_m = view.offset_m + params.match_radial_m;
+  double range_m = range_to_fit(view, whole_top_m, 0.0, 0.0, pad_m);
+  if (!long_known)
+    range_m = std::max(range_m, range_to_fit(view, whole_top_m, M_PI / 2, 0.0, pad_m));
+  return std::clamp(range_m, params.final_height_m, params.follow_height_m);
+}
+
+double long_axis_yaw(const DownwardView& view, double long_yaw_rad, double current_rad) {
+  const double base = long_yaw_rad - view.long_axis_yaw_B_rad;
+  return base + M_PI * std::round((current_rad - base) / M_PI);
+}
+
 bool moving_enough(const PlatformFilter::Prediction& p, const MovingLandingParams& params) {
   return p.v_W.norm() >= params.min_speed_mps && p.travelled_m >= kMovedM;
 }
@@ -139,7 +156,7 @@ bool aimed_for_drop(const DropCheck& c, const LandingGear& gear) {
 MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
                                 const PoseSample& pose, int64_t now_utime, double dt_s,
                                 double yaw_sp_rad, const LandingGear& gear,
-                                const MovingLandingParams& params) {
+                                const MovingLandingParams& params, const DownwardView* view) {
   MovingStep out;
   out.yaw_sp_rad = yaw_sp_rad;
   const double since_s = double(now_utime - filter.utime()) * 1e-6;
@@ -169,9 +186,14 @@ MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
   }
   const double z_top = pr.top_z_m;
   const double z_follow = z_top + gear.gear_height_m + params.follow_height_m;
-  const double z_final = z_top + gear.gear_height_m + params.final_height_m;
+  const double final_m = s.final_view_height_m.value_or(params.final_height_m);
+  const double z_final = z_top + gear.gear_height_m + final_m;
   if (s.z_sp_m <= 0) s.z_sp_m = std::max(z_final, std::min(pose.p_W_B.z(), z_follow));
-  out.yaw_sp_rad = aligned_yaw(pr.yaw_rad, yaw_sp_rad);
+  // After a climb to place the centre, the image's long axis along the top's: the top's length
+  // then fits the view from the lowest height.
+  out.yaw_sp_rad = s.final_view_height_m && view && pr.long_axis_known
+                       ? long_axis_yaw(*view, pr.long_yaw_rad, yaw_sp_rad)
+                       : aligned_yaw(pr.yaw_rad, yaw_sp_rad);
   out.yaw_rate_radps = followed_turn_radps(pr.yaw_rate_rps, params);
   const Vector2d offset = pose.p_W_B.head<2>() - pr.p_W;
   const Vector2d rel_v = pose.v_W_B.head<2>() - pr.v_W;
@@ -202,7 +224,7 @@ MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
   // At the final height: the last drop when matched and the heave allows it.
   if (!s.at_final_since_utime) s.at_final_since_utime = now_utime;
   const double waited_s = double(now_utime - *s.at_final_since_utime) * 1e-6;
-  const double fall_s = params.final_height_m / gear.final_descent_rate_mps + params.fall_lag_s;
+  const double fall_s = final_m / gear.final_descent_rate_mps + params.fall_lag_s;
   const Release r = heave_release(filter.heave(), now_utime, fall_s, waited_s, params);
   const DropCheck c = check_drop(filter, pose, now_utime, gear, params);
   const bool aimed = aimed_for_drop(c, gear);
@@ -222,6 +244,9 @@ MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
     // never dropped onto, placed or not: no climb.
     s.z_sp_m = z_follow;
     ++s.placing_climbs;
+    if (view)
+      s.final_view_height_m =
+          final_view_height_m(*view, filter.whole_top(), pr.long_axis_known, params);
     out.sp_p_W.z() = s.z_sp_m;
     out.reason = "over the moving platform: its centre not placed (" + off + ", its room " +
                  fmt(c.room_m, 3) + " m): climbing to see the top whole (" +

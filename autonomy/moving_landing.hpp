@@ -34,8 +34,12 @@
 //     (Failsafe::kPlatformTooFast).
 //  6. The centre unplaced at the final height (its standard deviation beyond the room): close
 //     over the top it fills the view and its views, cut by the border, place nothing; matched,
-//     the vehicle climbs back to follow_height_m, where the top is seen whole, and descends
-//     again; final_hold_timeout_s runs on from its first arrival at the final height.
+//     the vehicle climbs back to follow_height_m, where the top is seen whole, turns the image's
+//     long axis along the top's (once the whole views have told which it is) and descends again,
+//     now only to the height from which the whole top fits the view (final_view_height_m, never
+//     below final_height_m nor above follow_height_m), so that the views there place the centre
+//     and the drop starts from it; final_hold_timeout_s runs on from its first arrival at the
+//     final height.
 // Pure: the time is passed in.
 
 #include <optional>
@@ -46,6 +50,8 @@
 #include "common/pose_buffer.hpp"
 
 namespace alight::autonomy {
+
+struct DownwardView;  // autonomy/params.hpp
 
 struct MovingLandingParams {
   bool enabled = true;
@@ -182,6 +188,18 @@ DropCheck check_drop(const PlatformFilter& filter, const PoseSample& pose, int64
 /// kPlacedToDrop views in a row.
 bool aimed_for_drop(const DropCheck& c, const LandingGear& gear);
 
+/// Step 6: the gear's height over a top of `whole_top_m` (long, short) from which the whole top
+/// lies in the camera's usable view with the image's long axis along the top's (or, the long axis
+/// unknown, either way), the body within match_radial_m of the top's centre and the camera
+/// view.offset_m off the body's: between final_height_m and follow_height_m [m]. The camera is
+/// taken at the gear's height (it sits a few centimetres above it: a margin).
+double final_view_height_m(const DownwardView& view, const Vector2d& whole_top_m, bool long_known,
+                           const MovingLandingParams& params);
+
+/// The body's heading that lays the image's long axis along the top's long axis at
+/// `long_yaw_rad` (the nearer of the two to `current_rad`) [rad].
+double long_axis_yaw(const DownwardView& view, double long_yaw_rad, double current_rad);
+
 /// The moving approach's own state.
 struct MovingApproach {
   double z_sp_m = 0.0;
@@ -190,6 +208,9 @@ struct MovingApproach {
   std::optional<int64_t> too_fast_since_utime;
   int too_fast_since_updates = 0;  ///< the filter's fused views when it began
   int placing_climbs = 0;          ///< climbs to the follow height to place the centre (step 6)
+  /// After a climb (step 6): the gear's height over the top for the last drop
+  /// (final_view_height_m; before it, final_height_m) [m].
+  std::optional<double> final_view_height_m;
 };
 
 struct MovingStep {
@@ -211,10 +232,13 @@ double aligned_yaw(double platform_yaw_rad, double current_rad);
 
 /// One step of steps 1-4. At the final height without a drop for final_hold_timeout_s (the gear
 /// never aimed, or no crest): the platform is beyond what the vehicle lands on (kTooFast).
+/// `view`: the downward camera's (nullptr: none declared; step 6 then climbs and comes back to
+/// final_height_m).
 MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
                                 const PoseSample& pose, int64_t now_utime, double dt_s,
                                 double yaw_sp_rad, const LandingGear& gear,
-                                const MovingLandingParams& params);
+                                const MovingLandingParams& params,
+                                const DownwardView* view = nullptr);
 
 /// The platform's motion beyond what the vehicle follows (step 4), or nullopt.
 std::optional<std::string> too_fast(const PlatformFilter::Prediction& p,

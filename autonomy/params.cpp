@@ -383,6 +383,7 @@ AutonomyParams load_params(const ParamNode& root) {
       cameras && cameras->optional_child("downward")) {
     const CameraMount mount = load_camera_mount(root, "downward");
     p.downward_view = downward_view(load_camera_info(mount.camera_info_path), mount.R_BC);
+    p.downward_view->offset_m = mount.t_B_C.head<2>().norm();
   }
   // The platform the vehicle follows is bounded by how fast its outer loop flies (the same file's
   // outer_loop section, as alight-outer-loop reads it).

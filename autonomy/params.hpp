@@ -148,6 +148,7 @@ struct DownwardView {
   double tan_long = 0.0;             ///< along the image's long axis
   double tan_short = 0.0;            ///< along its short axis
   double long_axis_yaw_B_rad = 0.0;  ///< the image's long axis in the body's x-y plane [rad]
+  double offset_m = 0.0;  ///< the camera's centre from the body's origin, horizontally [m]
 };
 
 /// The view of a camera model and mounting, less the vision's border margin (a top with a

@@ -192,6 +192,8 @@ PlatformFilter::Prediction PlatformFilter::predict(const Track& t, int64_t utime
   p.cov_v = Pp.bottomRightCorner<2, 2>();
   p.travelled_m = (p.p_W - t.p_start).norm();
   p.yaw_rad = wrap_quarter(t.yaw(0) + dt * t.yaw(1));
+  p.long_axis_known = std::abs(t.long_votes) >= kLongAxisVotes;
+  p.long_yaw_rad = wrap_axis_angle(t.yaw(0) + dt * t.yaw(1) + (t.long_votes < 0 ? M_PI / 2 : 0.0));
   p.yaw_rate_rps = t.yaw(1);
   p.var_yaw = t.P_yaw(0, 0) + 2 * dt * t.P_yaw(0, 1) + dt * dt * t.P_yaw(1, 1) +
               cv_noise(params_.yaw_accel_psd, dt)(0, 0);
@@ -226,6 +228,9 @@ constexpr size_t kExtentsKept = 256;
 // Views that agree on an extent before it can be the whole top's: a fifth of a second of the
 // camera's frames.
 constexpr int kWholeTopViews = 6;
+// The share of the best supported extent's views a larger one must gather to replace the whole
+// (whole_extent): a second's views against four seconds of the smaller one's.
+constexpr double kLargerShare = 0.25;
 
 Vector2d extent(const PlatformMeasurement& m) {
   return Vector2d(m.size_m.maxCoeff(), m.size_m.minCoeff());
@@ -270,17 +275,26 @@ Vector2d PlatformFilter::whole_extent(const Track& t) {
   };
   auto whole = best([](size_t) { return true; });
   if (!whole) return Vector2d::Zero();
+  const double share = kLargerShare * support[*whole];
   for (size_t steps = 0; steps < n; ++steps) {
     const Vector2d w = t.extents[*whole].extent;
     // A larger extent only views cut by the border support must outnumber the views that showed
     // the smaller one uncut: a cut view holding more than the top (the cart's side seen past its
     // edge, placed on the top's plane) does not outgrow a top seen whole inside the image, while
     // a top followed close, seen mostly cut, outgrows the parts of it seen uncut.
+    // And one larger than the whole top believed so far must gather a kLargerShare of the
+    // best supported extent's support: a view of more than the top (the top with a stretch of floor
+    // that moved alike, a cart's side) comes in bursts of a few frames, while the whole top, once
+    // in view after its parts, is seen view after view. A whole top believed too large is the
+    // dangerous error: the top's own views then read as parts of it (their centres not fused)
+    // and the burst's centre places the drop. The whole top believed keeps its place without
+    // (a long follow's views of one part outnumber it in the window).
     const int needed = std::max(kWholeTopViews, uncut[*whole] + 1);
     const auto larger = best([&](size_t i) {
       const Vector2d& e = t.extents[i].extent;
+      const bool grows = t.whole.minCoeff() > 0 && shorter_on_a_side(t.whole, e);
       return (support[i] >= needed || (uncut[i] > 0 && support[i] >= kWholeTopViews)) &&
-             !shorter_on_a_side(e, w) && shorter_on_a_side(w, e);
+             (!grows || support[i] >= share) && !shorter_on_a_side(e, w) && shorter_on_a_side(w, e);
     });
     if (!larger) break;
     whole = larger;
@@ -468,8 +482,16 @@ PlatformFilter::Fused PlatformFilter::fuse(Track& t, const PlatformMeasurement& 
     Sy(1, 1) += m.var_yaw_rate + 1e-6;
     const Matrix2d Ky = Py * Sy.inverse();
     t.yaw = yp + Ky * iy;
+    const double unwrapped = t.yaw(0);
     t.yaw(0) = wrap_quarter(t.yaw(0));
+    // Wrapped a quarter turn: the axis the votes were for is now the other one.
+    if (std::abs(t.yaw(0) - unwrapped) > M_PI / 4) t.long_votes = -t.long_votes;
     t.P_yaw = (Matrix2d::Identity() - Ky) * Py;
+  }
+  if (places && m.size_m.maxCoeff() - m.size_m.minCoeff() > kPartialViewM) {
+    const double along = std::cos(2 * (m.yaw_rad - t.yaw(0)));  // +1 along yaw(0), -1 across
+    t.long_votes = std::clamp(t.long_votes + (along >= 0 ? 1.0 : -1.0), -kLongAxisVotesKept,
+                              kLongAxisVotesKept);
   }
   t.t_utime = m.utime;
   ++t.n_consistent;

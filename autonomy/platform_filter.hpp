@@ -116,6 +116,13 @@ struct HeaveModel {
 HeaveModel fit_heave(const std::deque<std::pair<int64_t, double>>& vz, double min_hz,
                      double max_hz);
 
+/// Whole views (placing the centre, their long side longer than the short by more than a view's
+/// scatter, kPartialViewM) that must agree more for one of the filter's two axes than for the
+/// other before it is the top's long one (Prediction::long_axis_known); the votes are kept within
+/// kLongAxisVotesKept of even, so that a few wrong early ones are outvoted within a second.
+inline constexpr double kLongAxisVotes = 3;
+inline constexpr double kLongAxisVotesKept = 30;
+
 /// A horizontal covariance's variance along its worst axis (its largest eigenvalue) [m^2].
 double worst_axis_var(const Matrix2d& cov);
 
@@ -180,6 +187,10 @@ class PlatformFilter {
     Matrix2d cov_p = Matrix2d::Zero(), cov_v = Matrix2d::Zero();
     double yaw_rad = 0;  ///< the axes' direction, in (-pi/4, pi/4] [rad]
     double yaw_rate_rps = 0, var_yaw = 0;
+    /// The top's long axis, in (-pi/2, pi/2] [rad]: yaw_rad or a quarter turn from it, as the
+    /// whole views' long sides voted (long_axis_known).
+    double long_yaw_rad = 0;
+    bool long_axis_known = false;
     double top_z_m = 0;  ///< the top's height, the measurements' z averaged [m]
     /// How far the centre is from where the track began [m]: a motion shown by the positions,
     /// which vision measures to 1-2 cm, where a slow one's velocity is lost in its noise.
@@ -236,6 +247,9 @@ class PlatformFilter {
     Vector2d whole = Vector2d::Zero();  // whole_extent(extents)
     int n_other_tops = 0;               // whole tops given up (forget_centre_of_another_top)
     int n_placed = 0;                   // n_placed()
+    // The whole views' votes for their long side lying along yaw(0)'s axis (+1 each) or across
+    // it (-1), within +-kLongAxisVotesKept: turned over with yaw(0) when it wraps a quarter.
+    double long_votes = 0;
   };
   enum class Fused { kAccepted, kAcceptedPartial, kOutsideGate, kBeyondReach };
   Fused fuse(Track& t, const PlatformMeasurement& m) const;

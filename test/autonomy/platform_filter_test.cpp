@@ -11,6 +11,7 @@
 #include <utility>
 
 #include "autonomy/moving_landing.hpp"
+#include "autonomy/params.hpp"
 
 namespace alight::autonomy {
 namespace {
@@ -590,6 +591,51 @@ TEST(PlatformFilterTest, ASteadyFollowsRepeatedViewsOfPartOfTheTopStayPartial) {
   EXPECT_LT((f.predict(kPfT0 + int64_t(t * 1e6)).p_W - m.p(t)).norm(), 0.03);
 }
 
+TEST(PlatformFilterTest, ABurstOfViewsOfMoreThanTheTopDoesNotBecomeTheWholeTop) {
+  // The whole 0.47 x 0.20 m top seen for 6 s, then for a third of a second views of 0.66 x
+  // 0.22 m (the top and a stretch of floor at each end that moved alike: within the gate and
+  // under kLargerThanTheTop); then the top again. The burst does not become the whole top, whose
+  // own views would then read as parts of it.
+  const PlatformPath m = straight_path(0.3);
+  PlatformFilter f{PlatformFilterParams{}};
+  std::mt19937_64 rng(61);
+  double t = kPfInterval;
+  for (; t < 6; t += kPfDt) f.update(measure_sized(m, t, rng, Vector2d(0.47, 0.20)));
+  for (const double end = t + 0.34; t < end; t += kPfDt) {
+    f.update(measure_sized(m, t, rng, Vector2d(0.66, 0.22)));
+  }
+  EXPECT_TRUE(f.whole_top().isApprox(Vector2d(0.47, 0.20), 1e-9)) << f.whole_top().transpose();
+  for (const double end = t + 1; t < end; t += kPfDt)
+    f.update(measure_sized(m, t, rng, Vector2d(0.47, 0.20)));
+  EXPECT_LT((f.predict(kPfT0 + int64_t(t * 1e6)).p_W - m.p(t)).norm(), 0.02);
+  EXPECT_LT(f.n_partial(), 3);
+}
+
+TEST(PlatformFilterTest, TheLongAxisIsVotedByTheWholeViewsAndKeptThroughTheQuarterWrap) {
+  // A 0.44 x 0.25 m top whose long axis starts at 30 deg and turns at 0.3 rad/s past 45 deg and
+  // on to 84 deg: the filter's yaw (the axes mod a quarter turn) wraps from +45 to -45 deg on
+  // the way, its long axis stays the top's.
+  PlatformPath m = straight_path(0.3);
+  m.psi0 = 30 * M_PI / 180;
+  m.omega = 0.3;
+  PlatformFilter f{PlatformFilterParams{}};
+  std::mt19937_64 rng(67);
+  double t = kPfInterval;
+  EXPECT_FALSE(f.predict(kPfT0).long_axis_known);
+  for (; t < 3.1; t += kPfDt) {
+    f.update(measure_sized(m, t, rng, Vector2d(0.44, 0.25)));
+    const auto pr = f.predict(f.utime());
+    if (f.n_updates() < 3) continue;
+    ASSERT_TRUE(pr.long_axis_known) << t;
+    EXPECT_NEAR(std::remainder(pr.long_yaw_rad - m.yaw(t), M_PI), 0.0, 0.05) << t;
+  }
+  EXPECT_LT(f.predict(f.utime()).yaw_rad, 0.0);  // wrapped: -6 deg, the long axis 84
+  // A square top's views say nothing of a long axis.
+  PlatformFilter sq{PlatformFilterParams{}};
+  for (t = kPfInterval; t < 2; t += kPfDt) sq.update(measure_sized(m, t, rng, Vector2d(0.3, 0.3)));
+  EXPECT_FALSE(sq.predict(sq.utime()).long_axis_known);
+}
+
 TEST(PlatformFilterTest, ATurningTopSeenInPartIsFollowedAtItsCentreNotAtThePartSeen) {
   // A top turning at 12 deg/s, followed close for 6 s after 2 s of whole views: only one end of
   // it in view (0.22 x 0.18 m of 0.44 x 0.25 m, its centre 11 cm from the top's, turning with
@@ -1051,6 +1097,65 @@ TEST(MovingDropTest, AnUnplacedCentreAtTheFinalHeightIsClimbedAwayFromAndPlacedF
   s.z_sp_m = f.predict(f.utime()).top_z_m + gear.gear_height_m + params.final_height_m;
   st = step(params.final_height_m).first;
   EXPECT_EQ(st.next, MovingStep::Next::kFinalDescent) << st.reason;
+}
+
+// The same with the camera's view declared: after the climb the body turns the image's long axis
+// along the top's and descends only to where the whole top fits the view; there the drop starts.
+TEST(MovingDropTest, AfterTheClimbTheDropStartsFromWhereTheWholeTopFitsTheView) {
+  const PlatformPath m = straight_path(0.5);  // the top's long axis at 0.3 rad, turning 0.1 rad/s
+  std::mt19937_64 rng(59);
+  PlatformFilter f = followed_for_2s(m, Vector2d(0.46, 0.25), rng);
+  double t = 2;
+  for (; t < 8; t += kPfDt) f.update(measure_sized(m, t, rng, Vector2d(0.25, 0.20)));
+  const LandingGear gear;
+  const MovingLandingParams params;
+  // A 640 x 480 camera of 666.7 px looking down, its image's long axis across the body (y), 5 cm
+  // off the body's centre.
+  const DownwardView view{280 / 666.7, 200 / 666.7, M_PI / 2, 0.05};
+  const double view_m = final_view_height_m(view, Vector2d(0.46, 0.25), true, params);
+  // Half the long side, the camera's offset and the match radius over the long axis' tangent.
+  EXPECT_NEAR(view_m, (0.23 + 0.05 + params.match_radial_m) / view.tan_long, 1e-9);
+  EXPECT_GT(final_view_height_m(view, Vector2d(0.46, 0.25), false, params), view_m);
+  EXPECT_EQ(final_view_height_m(view, Vector2d(0.04, 0.04), true, params), params.final_height_m);
+  EXPECT_EQ(final_view_height_m(view, Vector2d(2.0, 1.0), true, params), params.follow_height_m);
+  MovingApproach s;
+  double yaw_sp = 0.0;
+  const auto step = [&](double z_above_top) {
+    const int64_t now = kPfT0 + int64_t(t * 1e6);
+    const auto pr = f.predict(now);
+    PoseSample pose;  // over the centre, matched
+    pose.p_W_B << pr.p_W, pr.top_z_m + gear.gear_height_m + z_above_top;
+    pose.v_W_B << pr.v_W, 0.0;
+    const auto st = step_moving_approach(s, f, pose, now, kPfDt, yaw_sp, gear, params, &view);
+    yaw_sp = st.yaw_sp_rad;
+    return st;
+  };
+  s.z_sp_m = f.predict(f.utime()).top_z_m + gear.gear_height_m + params.final_height_m;
+  MovingStep st;
+  for (double t_end = t + 1.0; t < t_end; t += kPfDt) {
+    f.update(measure_sized(m, t, rng, Vector2d(0.25, 0.20)));
+    st = step(params.final_height_m);
+    if (st.reason.find("climbing to see the top whole") != std::string::npos) break;
+  }
+  ASSERT_NE(st.reason.find("climbing to see the top whole"), std::string::npos) << st.reason;
+  ASSERT_TRUE(s.final_view_height_m.has_value());
+  EXPECT_NEAR(*s.final_view_height_m, view_m, 1e-9);
+  // Seen whole from up there: the image's long axis turned along the top's.
+  for (double t_end = t + 1.0; t < t_end; t += kPfDt) {
+    f.update(measure_sized(m, t, rng, Vector2d(0.46, 0.25)));
+    st = step(params.follow_height_m);
+  }
+  EXPECT_NEAR(std::remainder(yaw_sp + view.long_axis_yaw_B_rad - m.yaw(t), M_PI), 0.0, 0.05);
+  // Down to the view's height, not below it; there the drop starts.
+  const double z_top = f.predict(f.utime()).top_z_m + gear.gear_height_m;
+  s.matched_since_utime = kPfT0;  // matched and settled all along
+  for (double t_end = t + 3.0; t < t_end && st.next == MovingStep::Next::kContinue; t += kPfDt) {
+    f.update(measure_sized(m, t, rng, Vector2d(0.46, 0.25)));
+    st = step(s.z_sp_m - z_top);
+    EXPECT_GE(s.z_sp_m - z_top, view_m - 1e-9);
+  }
+  EXPECT_EQ(st.next, MovingStep::Next::kFinalDescent) << st.reason;
+  EXPECT_NEAR(s.z_sp_m - z_top, view_m, 1e-9);
 }
 
 }  // namespace
