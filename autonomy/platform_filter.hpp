@@ -23,7 +23,8 @@
 //    believed itself (the platform is not where it was believed), or at once while the track is
 //    not believed yet.
 // A measurement whose extent falls short of the track's whole top (the extent its latest views
-// agree on best, or a larger one kWholeTopViews of them agree on: whole_extent) by kPartialViewM
+// agree on best, or a larger one kWholeTopViews of them agree on, and, larger than the whole top
+// believed so far, a quarter as many as the best supported one: whole_extent) by kPartialViewM
 // shows part of the top: its position is not the top's centre and is not fused, its velocity is
 // (the part moves with the whole). A view vision marks as cut by the image's border (its position
 // variance kCutPositionVarM2 or more) counts towards the whole top too once it spans the whole top
@@ -33,7 +34,8 @@
 // position is fused (within kPartialViewM / 2). A view wider than the whole top on a side is no
 // part of it and joins the extents too; where they then make the whole top shorter on a side
 // than before, the centre fused on the old one was another object's, and its variance grows
-// (forget_centre_of_another_top).
+// (forget_centre_of_another_top). The whole views, clearly longer than wide, vote which of the
+// filter's two axes is the top's long one (Prediction::long_yaw_rad).
 // A track is believed (believed()) after min_consistent measurements in a row, each within the
 // gate, over at least kConfirmS: a short burst of wrong measurements (a mismatched frame pair
 // during the search reads as a fast platform) never is. A track not measured for kConfirmS is
