@@ -452,9 +452,9 @@ void Autonomy::handle_command(const OperatorCommand& cmd) {
   }
 }
 
-void Autonomy::start_detection(const std::string& reason, bool widened) {
+void Autonomy::start_detection(const std::string& reason) {
   assert(pose_ && profile_);
-  auto search = profile_->search(pose_->p_W_B, widened);
+  auto search = profile_->search(pose_->p_W_B);
   if (search.yaw_rad) yaw_sp_rad_ = *search.yaw_rad;
   phases::Detection d;
   d.path.start(pose_->p_W_B, std::move(search.path_W));
@@ -553,7 +553,7 @@ void Autonomy::finish_refinement(phases::Refinement& r) {
   enter(std::move(next), "refinement converged (eqs. 7-9): " + where);
 }
 
-void Autonomy::target_lost(const std::string& what, bool unseen) {
+void Autonomy::target_lost(const std::string& what) {
   ++retries_;
   estimator_.reset();
   if (retries_ > params_.detection.max_retries) {
@@ -562,11 +562,8 @@ void Autonomy::target_lost(const std::string& what, bool unseen) {
          Failsafe::kNone, profile_->lost_hold_min_z_m());
     return;
   }
-  const bool widened = unseen && mission() == Mission::kLanding;
   start_detection("target lost (" + what + "): detection retry " + std::to_string(retries_) +
-                      " of " + std::to_string(params_.detection.max_retries) +
-                      (widened ? " over the whole flying area" : ""),
-                  widened);
+                  " of " + std::to_string(params_.detection.max_retries));
 }
 
 void Autonomy::handle_target(const TargetMeasurement& m) {
@@ -793,7 +790,7 @@ void Autonomy::step(phases::Detection& s, const Vector3d& p, double dt_s) {
   sp_p_W_ = s.path.carrot();
   sp_v_W_ = s.path.carrot_velocity();
   if (s.path.finished(p, params_.hover_tol_m)) {
-    target_lost("search path flown without a detection", /*unseen=*/true);
+    target_lost("search path flown without a detection");
   }
 }
 

@@ -239,8 +239,7 @@ class Autonomy {
   enum class FinalPause { kNone, kPaused, kGaveUp };
   FinalPause pause_final_descent(phases::FinalDescent& s, double z_touch_m);
   void step(phases::FailsafeDescent& s, const Vector3d& p, double dt_s);
-  /// `widened`: the search pass before saw nothing (MissionProfile::search).
-  void start_detection(const std::string& reason, bool widened = false);
+  void start_detection(const std::string& reason);
   void start_refinement(const TargetMeasurement& m);
   void finish_refinement(phases::Refinement& r);
   void next_vantage(phases::Refinement& r);
@@ -248,8 +247,7 @@ class Autonomy {
   /// the view from where they are (mission_profile.hpp, view_to_fit); true when they moved.
   bool look_to_fit(phases::Refinement& r, const TargetMeasurement& m);
   void add_waypoint(phases::Refinement& r, const Vector3d& X_W, const Vector2d& size_m);
-  /// `unseen`: the whole search path was flown without a sighting; the retry's search widens.
-  void target_lost(const std::string& what, bool unseen = false);
+  void target_lost(const std::string& what);
   void hold(const std::string& reason, Failsafe failsafe, double min_z_m);
   void enter_pose_lost();
   void enter_estimate_lost(const std::string& what);

@@ -31,15 +31,13 @@ class LandingProfile final : public MissionProfile {
 
   Mission mission() const override { return Mission::kLanding; }
 
-  Search search(const Vector3d& p_W, bool widened) const override {
+  Search search(const Vector3d& p_W) const override {
     // Up (or down) to the search height above where we are: a safe hover, then the lawnmower.
     const auto& d = p_.detection;
     Search s;
     s.path_W.emplace_back(p_W.x(), p_W.y(), d.landing_height_m);
-    const SearchArea a =
-        widened ? flying_area_search(p_)
-                : SearchArea{d.landing_area_min_W_m, d.landing_area_max_W_m, d.lane_spacing_m};
-    const auto lm = lawnmower(a.min_W, a.max_W, a.lane_spacing_m, d.landing_height_m);
+    const auto lm = lawnmower(d.landing_area_min_W_m, d.landing_area_max_W_m, d.lane_spacing_m,
+                              d.landing_height_m);
     s.path_W.insert(s.path_W.end(), lm.begin(), lm.end());
     return s;
   }
@@ -160,7 +158,7 @@ class IngressProfile final : public MissionProfile {
 
   Mission mission() const override { return Mission::kIngress; }
 
-  Search search(const Vector3d& /*p_W*/, bool /*widened*/) const override {
+  Search search(const Vector3d& /*p_W*/) const override {
     const auto& d = p_.detection;
     return {{d.ingress_start_W_m, d.ingress_end_W_m}, d.ingress_yaw_deg * M_PI / 180.0};
   }
@@ -281,26 +279,6 @@ double descent_tolerance_m(const LandingParams& L, double gear_above_top_m) {
 Vector2d body_over_gear_xy(const LandingParams& L, const std::optional<PoseSample>& pose) {
   if (!L.aim_gear || !pose) return Vector2d::Zero();
   return L.gear_height_m * (pose->q_WB * Vector3d::UnitZ()).head<2>();
-}
-
-SearchArea flying_area_search(const AutonomyParams& p) {
-  const auto& d = p.detection;
-  SearchArea a{p.geofence.min_W_m.head<2>(), p.geofence.max_W_m.head<2>(), d.lane_spacing_m};
-  if (!p.downward_view) return a;
-  // The view's half width across the lanes on the floor (its short side: the lanes' direction
-  // and the body's heading are not tied).
-  const double half_m = p.downward_view->tan_short * d.landing_height_m;
-  if (!(half_m > 0)) return a;
-  a.lane_spacing_m = 2 * half_m;
-  for (int i = 0; i < 2; ++i) {
-    if (a.max_W(i) - a.min_W(i) <= 2 * half_m) {  // one lane down the middle sees it all
-      a.min_W(i) = a.max_W(i) = 0.5 * (a.min_W(i) + a.max_W(i));
-    } else {
-      a.min_W(i) += half_m;
-      a.max_W(i) -= half_m;
-    }
-  }
-  return a;
 }
 
 double range_to_fit(const DownwardView& view, const Vector2d& size_m, double top_yaw_rad,

@@ -72,20 +72,6 @@ inline constexpr double kViewTurnRad = 10.0 * M_PI / 180.0;
 /// The median follows a top whose cut views grow as more of it comes into view two views late.
 inline constexpr size_t kCutViewsToFit = 5;
 
-/// A lawnmower's rectangle and the spacing of its lanes (along x).
-struct SearchArea {
-  Vector2d min_W = Vector2d::Zero(), max_W = Vector2d::Zero();
-  double lane_spacing_m = 0.0;
-};
-
-/// The landing's search after a pass that saw nothing (beyond paper 3.4.1, whose platform stands
-/// where the search looks): a moving platform's path may leave the given landing area for most of
-/// a pass, so the retry covers the whole flying area (the geofence, already narrowed to the
-/// site), its lanes as far apart as the downward camera sees across them on the floor from the
-/// search height, and kept half that inside the fence (a lane on the fence looks half beyond
-/// it). Without a declared camera, the lanes are detection.lane_spacing_m apart over the fence.
-SearchArea flying_area_search(const AutonomyParams& p);
-
 /// The range (camera to top) from which a top of size (long, short), its long axis at
 /// top_yaw, lies pad_m inside the usable view of a camera whose image's long axis lies at
 /// view_yaw (world) [m].
@@ -257,14 +243,12 @@ class MissionProfile {
   virtual Mission mission() const = 0;
 
   /// Detection: the search path from the vehicle at p_W, and the yaw to fly it with (none: keep
-  /// the current one). `widened`: the pass before flew its whole path without a sighting; a
-  /// landing then searches the whole flying area (the platform may have moved out of the given
-  /// one), an ingress flies its wall again.
+  /// the current one).
   struct Search {
     std::vector<Vector3d> path_W;
     std::optional<double> yaw_rad;
   };
-  virtual Search search(const Vector3d& p_W, bool widened) const = 0;
+  virtual Search search(const Vector3d& p_W) const = 0;
 
   /// Refinement: the next vantage point around mu_W with covariance S_W of n waypoints; here_W:
   /// the vehicle (mu_W without a pose); normal_sum_W: the sum of the measured target normals.

@@ -6,7 +6,6 @@
 
 #include <random>
 
-#include "autonomy/mission_profile.hpp"
 #include "autonomy/search_path.hpp"
 
 namespace alight::autonomy {
@@ -356,39 +355,6 @@ TEST(SearchPathTest, LawnmowerCoversTheRectangleLaneByLane) {
   EXPECT_EQ(pts[2], Vector3d(2, 0.5, 1.2));
   EXPECT_EQ(pts[3], Vector3d(0, 0.5, 1.2));
   EXPECT_EQ(pts[5], Vector3d(2, 1, 1.2));
-}
-
-TEST(SearchPathTest, ASearchThatSawNothingCoversTheFlyingAreaAsFarApartAsTheCameraSees) {
-  AutonomyParams p;
-  p.geofence.min_W_m = Vector3d(-2.8, -2.8, 0);
-  p.geofence.max_W_m = Vector3d(4.5, 2.8, 2.3);
-  p.detection.landing_height_m = 1.6;
-  p.detection.lane_spacing_m = 0.5;
-  // Without a declared camera: the given lanes' spacing over the whole fence.
-  SearchArea a = flying_area_search(p);
-  EXPECT_EQ(a.min_W, Vector2d(-2.8, -2.8));
-  EXPECT_EQ(a.max_W, Vector2d(4.5, 2.8));
-  EXPECT_EQ(a.lane_spacing_m, 0.5);
-  // A 640 x 480 camera of 666.7 px focal length looking down: (240 - 40) / 666.7 = 0.3 across
-  // the lanes, 0.48 m each side on the floor from 1.6 m.
-  p.downward_view = DownwardView{0.45, 0.3, 0.0};
-  a = flying_area_search(p);
-  EXPECT_NEAR(a.lane_spacing_m, 0.96, 1e-12);
-  EXPECT_TRUE(a.min_W.isApprox(Vector2d(-2.32, -2.32)));
-  EXPECT_TRUE(a.max_W.isApprox(Vector2d(4.02, 2.32)));
-  // Every point of the fence's floor within the view of a lane: lanes at most twice the half
-  // width apart, the outer ones half of it inside the fence.
-  const auto pts = lawnmower(a.min_W, a.max_W, a.lane_spacing_m, 1.6);
-  ASSERT_GE(pts.size(), 12u);
-  for (size_t i = 2; i < pts.size(); i += 2)
-    EXPECT_LE(pts[i].y() - pts[i - 2].y(), a.lane_spacing_m + 1e-9);
-  // A fence narrower than the view on an axis: one lane down its middle.
-  p.geofence.min_W_m.y() = 0.0;
-  p.geofence.max_W_m.y() = 0.8;
-  a = flying_area_search(p);
-  EXPECT_NEAR(a.min_W.y(), 0.4, 1e-12);
-  EXPECT_NEAR(a.max_W.y(), 0.4, 1e-12);
-  EXPECT_EQ(lawnmower(a.min_W, a.max_W, a.lane_spacing_m, 1.6).size(), 2u);
 }
 
 TEST(SearchPathTest, CarrotMovesAtTheSpeedAndWaitsForTheVehicle) {
