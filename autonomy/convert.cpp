@@ -243,6 +243,16 @@ std::optional<PlatformMeasurement> platform_from_msg(const platform_motion_t& m,
   p.var_yaw = m.var_yaw;
   p.var_yaw_rate = m.var_yaw_rate;
   p.size_m = Vector2d(m.size_m[0], m.size_m[1]);
+  if (m.version >= 2) {
+    // Where the top was placed from: only a camera above the plane placed it.
+    if (!finite(m.camera_W, 3) || !finite(m.ref_camera_W, 3) || !std::isfinite(m.plane_z_m))
+      return refuse<P>(why, "platform: non-finite camera_W, ref_camera_W or plane_z_m");
+    if (!(m.camera_W[2] > m.plane_z_m) || !(m.ref_camera_W[2] > m.plane_z_m))
+      return refuse<P>(why, "platform: a camera not above plane_z_m");
+    p.camera_W = Vector3d(m.camera_W[0], m.camera_W[1], m.camera_W[2]);
+    p.ref_camera_W = Vector3d(m.ref_camera_W[0], m.ref_camera_W[1], m.ref_camera_W[2]);
+    p.plane_z_m = m.plane_z_m;
+  }
   return p;
 }
 
@@ -269,6 +279,16 @@ platform_motion_t to_msg(const PlatformMeasurement& p, int64_t seq) {
   m.size_m[0] = p.size_m.x();
   m.size_m[1] = p.size_m.y();
   m.scale = 1.0;
+  if (p.placed_from_cameras()) {
+    for (int i = 0; i < 3; ++i) {
+      m.camera_W[i] = p.camera_W[i];
+      m.ref_camera_W[i] = p.ref_camera_W[i];
+    }
+    m.plane_z_m = p.plane_z_m;
+  } else {
+    // A version-2 message carries cameras; one without them is sent as version 1 says.
+    m.version = 1;
+  }
   return m;
 }
 

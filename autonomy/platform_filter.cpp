@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <optional>
 #include <vector>
 
 namespace alight::autonomy {
@@ -83,45 +84,132 @@ double HeaveModel::z(int64_t utime) const {
   return (-a * std::cos(w_rps * t) + b * std::sin(w_rps * t)) / w_rps;
 }
 
-HeaveModel fit_heave(const std::deque<std::pair<int64_t, double>>& vz, double min_hz,
-                     double max_hz) {
-  HeaveModel best;
-  if (vz.size() < 8) return best;
-  const int64_t t0 = vz.front().first;
-  const double span_s = double(vz.back().first - t0) * 1e-6;
-  // A sine is told from a drift only over most of a period.
+namespace {
+
+// The heave's frequencies for a window spanning span_s: a sine is told from a drift only over
+// most of a period; none where no frequency of the band is.
+std::vector<double> heave_frequencies_hz(double span_s, double min_hz, double max_hz) {
+  std::vector<double> f;
   const double lo_hz = std::max(min_hz, 0.6 / std::max(span_s, 1e-3));
-  if (!(lo_hz < max_hz)) return best;
-  double best_sse = INFINITY;
+  if (!(lo_hz < max_hz)) return f;
   constexpr int kGrid = 60;
-  for (int k = 0; k <= kGrid; ++k) {
-    const double f = lo_hz * std::pow(max_hz / lo_hz, double(k) / kGrid);
+  for (int k = 0; k <= kGrid; ++k) f.push_back(lo_hz * std::pow(max_hz / lo_hz, double(k) / kGrid));
+  return f;
+}
+
+}  // namespace
+
+namespace {
+
+// One sample's row of the vertical model at angular frequency w (0: no sine) and time t from the
+// window's start: vz = a sin + b cos + c + (dh + z(t)) g, z(t) = (-a cos + b sin) / w the heave's
+// height (TopHeight: the height's error is the plane's distance to the top, heave included).
+Eigen::Vector4d vertical_row(const VerticalSample& s, double w, double t) {
+  if (!(w > 0)) return Eigen::Vector4d(0, 0, 1, s.g_per_s);
+  const double sn = std::sin(w * t), cs = std::cos(w * t);
+  return Eigen::Vector4d(sn - s.g_per_s * cs / w, cs + s.g_per_s * sn / w, 1, s.g_per_s);
+}
+
+struct VerticalFit {
+  Eigen::Vector4d x = Eigen::Vector4d::Zero();  // a, b, c, dh
+  double w = 0, sse = INFINITY, var_dh = 0;
+};
+
+// Least squares of the vertical model over the samples per frequency of the band (none over
+// less than most of a period: drift and dh alone), the best one's. dh_given: dh held at it
+// (the heave's fit), else fitted; priors (kHeaveDriftSigmaMps, kTopHeightPriorSigmaM) only where
+// dh is fitted, each velocity of kVerticalSigmaMps.
+VerticalFit fit_vertical(const std::deque<VerticalSample>& samples, double min_hz, double max_hz,
+                         std::optional<double> dh_given) {
+  VerticalFit best;
+  const int64_t t0 = samples.front().utime;
+  const double span_s = double(samples.back().utime - t0) * 1e-6;
+  std::vector<double> freqs = heave_frequencies_hz(span_s, min_hz, max_hz);
+  if (dh_given && freqs.empty()) return best;  // the heave's fit needs a sine
+  if (freqs.empty()) freqs.push_back(0.0);
+  const double wv = 1.0 / (kVerticalSigmaMps * kVerticalSigmaMps);
+  const int n = dh_given ? 3 : 4;
+  for (const double f : freqs) {
     const double w = 2 * M_PI * f;
-    Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
-    Eigen::Vector3d y = Eigen::Vector3d::Zero();
-    for (const auto& [t_us, v] : vz) {
-      const double t = double(t_us - t0) * 1e-6;
-      const Eigen::Vector3d row(std::sin(w * t), std::cos(w * t), 1.0);
-      A += row * row.transpose();
-      y += row * v;
+    Eigen::Matrix4d A = Eigen::Matrix4d::Zero();
+    Eigen::Vector4d y = Eigen::Vector4d::Zero();
+    for (const auto& s : samples) {
+      const Eigen::Vector4d r = vertical_row(s, w, double(s.utime - t0) * 1e-6);
+      const double v = s.vz_mps - (dh_given ? *dh_given * s.g_per_s : 0.0);
+      A += wv * r * r.transpose();
+      y += wv * r * v;
     }
-    const Eigen::LDLT<Eigen::Matrix3d> ldlt(A);
+    if (!(w > 0)) A(0, 0) += 1.0, A(1, 1) += 1.0;  // no sine: its terms pinned at zero
+    if (!dh_given) {
+      A(2, 2) += 1.0 / (kHeaveDriftSigmaMps * kHeaveDriftSigmaMps);
+      A(3, 3) += 1.0 / (kTopHeightPriorSigmaM * kTopHeightPriorSigmaM);
+    }
+    const Eigen::MatrixXd An = A.topLeftCorner(n, n);
+    const Eigen::LDLT<Eigen::MatrixXd> ldlt(An);
     if (ldlt.info() != Eigen::Success) continue;
-    const Eigen::Vector3d sol = ldlt.solve(y);
-    if (!sol.allFinite()) continue;
+    Eigen::Vector4d x = Eigen::Vector4d::Zero();
+    x.head(n) = ldlt.solve(y.head(n));
+    if (dh_given) x(3) = *dh_given;
+    if (!x.allFinite()) continue;
     double sse = 0;
-    for (const auto& [t_us, v] : vz) {
-      const double t = double(t_us - t0) * 1e-6;
-      const double r = v - (sol(0) * std::sin(w * t) + sol(1) * std::cos(w * t) + sol(2));
+    for (const auto& s : samples) {
+      const double r = s.vz_mps - vertical_row(s, w, double(s.utime - t0) * 1e-6).dot(x);
       sse += r * r;
     }
-    if (sse < best_sse) {
-      best_sse = sse;
-      best.w_rps = w, best.a = sol(0), best.b = sol(1), best.c = sol(2), best.t0_utime = t0;
-    }
+    if (!(sse < best.sse)) continue;
+    best.x = x, best.w = w, best.sse = sse;
+    if (!dh_given) best.var_dh = ldlt.solve(Eigen::VectorXd::Unit(4, 3))(3);
   }
-  best.rms_mps = std::sqrt(best_sse / double(vz.size()));
   return best;
+}
+
+}  // namespace
+
+HeaveModel fit_heave(const std::deque<VerticalSample>& samples, double dh_m, double min_hz,
+                     double max_hz) {
+  HeaveModel h;
+  if (samples.size() < 8) return h;
+  const VerticalFit f = fit_vertical(samples, min_hz, max_hz, dh_m);
+  if (!(f.w > 0)) return h;
+  h.w_rps = f.w, h.a = f.x(0), h.b = f.x(1), h.c = f.x(2), h.t0_utime = samples.front().utime;
+  h.rms_mps = std::sqrt(f.sse / double(samples.size()));
+  return h;
+}
+
+// dh and the heave fitted together (vertical_row), dh's variance the normal matrix's inverse
+// scaled up by the residuals where they exceed kVerticalSigmaMps.
+TopHeight fit_top_height(const std::deque<VerticalSample>& samples, double min_hz, double max_hz) {
+  TopHeight h;
+  if (samples.size() < 8) return h;
+  const VerticalFit f = fit_vertical(samples, min_hz, max_hz, std::nullopt);
+  if (!(f.var_dh > 0)) return h;
+  const double misfit =
+      f.sse / std::max(1.0, double(samples.size()) - 4) / (kVerticalSigmaMps * kVerticalSigmaMps);
+  h.dh_m = f.x(3);
+  h.var_m2 = f.var_dh * std::max(1.0, misfit);
+  h.utime = samples.back().utime;
+  return h;
+}
+
+PlatformMeasurement placed_at_height(const PlatformMeasurement& m, double dh_m) {
+  if (!m.placed_from_cameras() || dh_m == 0.0) return m;
+  const double range_2 = m.camera_W.z() - m.plane_z_m, range_1 = m.ref_camera_W.z() - m.plane_z_m;
+  if (!(std::min(range_1, range_2) - dh_m >= kMinPlacingRangeM)) return m;
+  const double dt = double(m.utime - m.ref_utime) * 1e-6;
+  // Each view's points lie k times as far from its camera's nadir as the top's.
+  const double k = range_2 / (range_2 - dh_m);
+  const double g = (m.ref_camera_W.z() - m.camera_W.z()) / (dt * (range_1 - dh_m));
+  PlatformMeasurement out = m;
+  const Vector2d nadir = m.camera_W.head<2>();
+  out.p_W.head<2>() = nadir + (m.p_W.head<2>() - nadir) / k;
+  out.p_W.z() += dh_m - dh_m * g * dt;
+  const Vector2d v_cam = (m.camera_W - m.ref_camera_W).head<2>() / dt;
+  out.v_W.head<2>() = v_cam + (m.v_W.head<2>() - v_cam) / k;
+  out.v_W.z() -= dh_m * g;
+  out.size_m /= k;
+  out.cov_p_W.topLeftCorner<2, 2>() /= k * k;
+  out.cov_v_W.topLeftCorner<2, 2>() /= k * k;
+  return out;
 }
 
 PlatformFilter::PlatformFilter(const PlatformFilterParams& params) : params_(params) {
@@ -197,7 +285,8 @@ PlatformFilter::Prediction PlatformFilter::predict(const Track& t, int64_t utime
   p.yaw_rate_rps = t.yaw(1);
   p.var_yaw = t.P_yaw(0, 0) + 2 * dt * t.P_yaw(0, 1) + dt * dt * t.P_yaw(1, 1) +
               cv_noise(params_.yaw_accel_psd, dt)(0, 0);
-  p.top_z_m = t.n_z > 0 ? t.top_z_sum / t.n_z : 0.0;
+  // Vision's z is its plane's plus the heave it read, which holds dh g dt of the height's error.
+  p.top_z_m = t.n_z > 0 ? (t.top_z_sum + t.dh_m * (double(t.n_z) - t.g_dt_sum)) / t.n_z : 0.0;
   return p;
 }
 
@@ -254,11 +343,18 @@ bool shorter_on_a_side(const Vector2d& a, const Vector2d& b) {
 // the largest within their scatter, against which the typical view would fall short.
 Vector2d PlatformFilter::whole_extent(const Track& t) {
   const size_t n = t.extents.size();
+  // Each view's extent at the top's height as now measured: it shrinks about its camera's nadir
+  // by (range - dh) / range.
+  std::vector<Vector2d> e(n);
+  for (size_t i = 0; i < n; ++i) {
+    const Track::View& v = t.extents[i];
+    const bool placed = std::isfinite(v.range_m) && v.range_m - t.dh_m >= kMinPlacingRangeM;
+    e[i] = placed ? Vector2d(v.extent * (v.range_m - t.dh_m) / v.range_m) : v.extent;
+  }
   std::vector<int> support(n, 0), uncut(n, 0);
   for (size_t i = 0; i < n; ++i)
     for (size_t j = 0; j < n; ++j) {
-      const bool agree =
-          ((t.extents[j].extent - t.extents[i].extent).cwiseAbs().array() <= kPartialViewM).all();
+      const bool agree = ((e[j] - e[i]).cwiseAbs().array() <= kPartialViewM).all();
       support[i] += agree;
       uncut[i] += agree && !t.extents[j].cut;
     }
@@ -268,7 +364,7 @@ Vector2d PlatformFilter::whole_extent(const Track& t) {
     for (size_t i = 0; i < n; ++i) {
       if (!eligible(i)) continue;
       if (!b || support[i] > support[*b] ||
-          (support[i] == support[*b] && t.extents[i].extent.prod() > t.extents[*b].extent.prod()))
+          (support[i] == support[*b] && e[i].prod() > e[*b].prod()))
         b = i;
     }
     return b;
@@ -277,7 +373,7 @@ Vector2d PlatformFilter::whole_extent(const Track& t) {
   if (!whole) return Vector2d::Zero();
   const double share = kLargerShare * support[*whole];
   for (size_t steps = 0; steps < n; ++steps) {
-    const Vector2d w = t.extents[*whole].extent;
+    const Vector2d w = e[*whole];
     // A larger extent only views cut by the border support must outnumber the views that showed
     // the smaller one uncut: a cut view holding more than the top (the cart's side seen past its
     // edge, placed on the top's plane) does not outgrow a top seen whole inside the image, while
@@ -291,15 +387,15 @@ Vector2d PlatformFilter::whole_extent(const Track& t) {
     // (a long follow's views of one part outnumber it in the window).
     const int needed = std::max(kWholeTopViews, uncut[*whole] + 1);
     const auto larger = best([&](size_t i) {
-      const Vector2d& e = t.extents[i].extent;
-      const bool grows = t.whole.minCoeff() > 0 && shorter_on_a_side(t.whole, e);
+      const bool grows = t.whole.minCoeff() > 0 && shorter_on_a_side(t.whole, e[i]);
       return (support[i] >= needed || (uncut[i] > 0 && support[i] >= kWholeTopViews)) &&
-             (!grows || support[i] >= share) && !shorter_on_a_side(e, w) && shorter_on_a_side(w, e);
+             (!grows || support[i] >= share) && !shorter_on_a_side(e[i], w) &&
+             shorter_on_a_side(w, e[i]);
     });
     if (!larger) break;
     whole = larger;
   }
-  return t.extents[*whole].extent;
+  return e[*whole];
 }
 
 bool PlatformFilter::shows_whole_top(const Track& t, const PlatformMeasurement& m) {
@@ -315,8 +411,10 @@ bool PlatformFilter::partial_view(const Track& t, const PlatformMeasurement& m) 
   return shorter_on_a_side(extent(m), whole) && !shorter_on_a_side(whole, extent(m));
 }
 
-void PlatformFilter::add_extent(Track& t, const PlatformMeasurement& m) {
-  t.extents.push_back({extent(m), cut(m)});
+void PlatformFilter::add_extent(Track& t, const PlatformMeasurement& raw) {
+  const double range_m =
+      raw.placed_from_cameras() ? raw.camera_W.z() - raw.plane_z_m : double(INFINITY);
+  t.extents.push_back({extent(raw), cut(raw), range_m});
   if (t.extents.size() > kExtentsKept) t.extents.pop_front();
   const Vector2d before = t.whole;
   t.whole = whole_extent(t);
@@ -351,7 +449,9 @@ bool PlatformFilter::larger_than_the_top(const Track& t, const PlatformMeasureme
 }
 
 void PlatformFilter::start(Track& t, const PlatformMeasurement& m) const {
+  const double dh_m = t.dh_m;
   t = Track{};
+  t.dh_m = dh_m;
   t.x << m.p_W.x(), m.p_W.y(), m.v_W.x(), m.v_W.y();
   t.p_start = m.p_W.head<2>();
   t.P = measurement_cov(m, params_);
@@ -397,7 +497,25 @@ void PlatformFilter::follow_course(Track& t, int64_t utime, const Vector2d& v0, 
   }
 }
 
-PlatformFilter::Fused PlatformFilter::fuse(Track& t, const PlatformMeasurement& m) const {
+namespace {
+
+// The measurement's vertical velocity at its interval's middle, with the velocity a height error
+// of one metre adds there (TopHeight) at the height dh_m believed.
+VerticalSample vertical_sample(const PlatformMeasurement& raw, double dh_m) {
+  VerticalSample s{(raw.utime + raw.ref_utime) / 2, raw.v_W.z(), 0.0};
+  if (!raw.placed_from_cameras()) return s;
+  const double dt = double(raw.utime - raw.ref_utime) * 1e-6;
+  const double range_1 = raw.ref_camera_W.z() - raw.plane_z_m - dh_m;
+  if (range_1 >= kMinPlacingRangeM)
+    s.g_per_s = (raw.ref_camera_W.z() - raw.camera_W.z()) / (dt * range_1);
+  return s;
+}
+
+}  // namespace
+
+PlatformFilter::Fused PlatformFilter::fuse(Track& t, const PlatformMeasurement& raw) const {
+  if (t.t_utime == 0) t.dh_m = height_.dh_m;
+  const PlatformMeasurement m = placed_at_height(raw, t.dh_m);
   const bool partial = partial_view(t, m);
   const bool places = places_centre(t, m);
   bool placed_unchecked = true;  // no centre to test the view against
@@ -503,23 +621,57 @@ PlatformFilter::Fused PlatformFilter::fuse(Track& t, const PlatformMeasurement& 
   // after view of them; but a part cut off by the border at a steady offset is seen as steadily,
   // and never becomes the whole top.
   const bool spans_whole = t.whole.minCoeff() > 0 && !partial;
-  if (m.size_m.minCoeff() > 0 && (!cut(m) || spans_whole)) add_extent(t, m);
-  t.top_z_sum += m.p_W.z();
-  ++t.n_z;
+  if (m.size_m.minCoeff() > 0 && (!cut(m) || spans_whole)) add_extent(t, raw);
   // The heave: each vertical velocity is the mean over its interval, so at the interval's middle.
-  t.vz.emplace_back((m.utime + m.ref_utime) / 2, m.v_W.z());
+  const VerticalSample vz = vertical_sample(raw, t.dh_m);
+  t.top_z_sum += raw.p_W.z();
+  t.g_dt_sum += vz.g_per_s * double(raw.utime - raw.ref_utime) * 1e-6;
+  ++t.n_z;
+  t.placed_from_cameras = raw.placed_from_cameras();
+  t.vz.push_back(vz);
   while (!t.vz.empty() &&
-         double(t.vz.back().first - t.vz.front().first) * 1e-6 > params_.heave_window_s)
+         double(t.vz.back().utime - t.vz.front().utime) * 1e-6 > params_.heave_window_s)
     t.vz.pop_front();
-  t.heave = fit_heave(t.vz, params_.heave_min_hz, params_.heave_max_hz);
+  t.heave = fit_heave(t.vz, t.dh_m, params_.heave_min_hz, params_.heave_max_hz);
   return partial ? Fused::kAcceptedPartial : Fused::kAccepted;
 }
 
-bool PlatformFilter::update(const PlatformMeasurement& m) {
-  if (!finite(m) || m.utime <= 0 || m.ref_utime >= m.utime) {
+// The track's window fitted for the top's height (fit_top_height), kept where it knows the height
+// better than the one kept, grown by kTopHeightDriftM2PerS since; the track's whole top and heave
+// then judged again at it.
+void PlatformFilter::measure_height(Track& t) {
+  const TopHeight w = fit_top_height(t.vz, params_.heave_min_hz, params_.heave_max_hz);
+  if (!(w.var_m2 > 0)) return;
+  const double kept_var =
+      height_.var_m2 > 0
+          ? height_.var_m2 +
+                kTopHeightDriftM2PerS * std::max(0.0, double(w.utime - height_.utime) * 1e-6)
+          : double(INFINITY);
+  if (!(w.var_m2 < kept_var)) return;
+  height_ = w;
+  at_height(t);
+  t.heave = fit_heave(t.vz, t.dh_m, params_.heave_min_hz, params_.heave_max_hz);
+}
+
+// The track's whole top judged again at the height kept (its views' extents scale with it); not a
+// change of top, so the centre is kept.
+void PlatformFilter::at_height(Track& t) const {
+  if (t.dh_m == height_.dh_m) return;
+  t.dh_m = height_.dh_m;
+  if (!t.extents.empty()) t.whole = whole_extent(t);
+}
+
+bool PlatformFilter::update(const PlatformMeasurement& raw) {
+  at_height(track_);
+  at_height(candidate_);
+  const bool cameras_finite =
+      !raw.placed_from_cameras() || (raw.camera_W.allFinite() && raw.ref_camera_W.allFinite());
+  if (!finite(raw) || !cameras_finite || raw.utime <= 0 || raw.ref_utime >= raw.utime) {
     refuse(Refusal::kNotFinite);
     return false;
   }
+  // Judged as the track's views are: at the top's height.
+  const PlatformMeasurement m = placed_at_height(raw, height_.dh_m);
   if (initialised() && m.utime <= track_.t_utime) {
     refuse(Refusal::kOutOfOrder);
     return false;
@@ -533,7 +685,7 @@ bool PlatformFilter::update(const PlatformMeasurement& m) {
     // Wider on one side but shorter on another, the view is not fused, yet it may be the top
     // and the whole top believed a thin cluster read first: its extent joins the others, and
     // views of the top that outnumber the cluster's make it the whole top again.
-    if (shorter_on_a_side(extent(m), track_.whole)) add_extent(track_, m);
+    if (shorter_on_a_side(extent(m), track_.whole)) add_extent(track_, raw);
     refuse(Refusal::kLargerThanTheTop);
     return false;
   }
@@ -541,8 +693,9 @@ bool PlatformFilter::update(const PlatformMeasurement& m) {
     return f == Fused::kBeyondReach ? Refusal::kBeyondReach : Refusal::kGate;
   };
   const auto fused = [](Fused f) { return f == Fused::kAccepted || f == Fused::kAcceptedPartial; };
-  const Fused f = fuse(track_, m);
+  const Fused f = fuse(track_, raw);
   if (fused(f)) {
+    if (believed(track_)) measure_height(track_);
     n_partial_ += f == Fused::kAcceptedPartial;
     consecutive_rejections_ = 0;
     candidate_ = Track{};
@@ -555,9 +708,9 @@ bool PlatformFilter::update(const PlatformMeasurement& m) {
   if (places_centre(track_, m)) track_.n_placed = 0;
   // The refused measurements as a track of their own: a candidate that refuses one in turn
   // starts over from it.
-  if (!fused(fuse(candidate_, m))) {
+  if (!fused(fuse(candidate_, raw))) {
     candidate_ = Track{};
-    fuse(candidate_, m);
+    fuse(candidate_, raw);
   }
   // Many in a row: the platform is not where the track believed. A believed track gives way
   // only to a candidate believed in turn (a burst of wrong measurements never replaces it).

@@ -78,7 +78,60 @@ struct PlatformMeasurement {
   Matrix3d cov_p_W = Matrix3d::Identity(), cov_v_W = Matrix3d::Identity();
   double var_yaw = 1.0, var_yaw_rate = 1.0;
   Vector2d size_m = Vector2d::Zero();
+  /// The cameras the top was placed from (current, earlier exposure) and the level plane vision
+  /// placed it on (platform_motion_t version 2); plane_z_m NaN: not sent, the top is taken at
+  /// vision's plane.
+  Vector3d camera_W = Vector3d::Zero(), ref_camera_W = Vector3d::Zero();
+  double plane_z_m = NAN;
+  bool placed_from_cameras() const { return std::isfinite(plane_z_m); }
 };
+
+/// The top's height less the plane vision placed it on (dh), measured from the vertical
+/// velocities vision reads while the camera climbs or descends. A level top dh above the plane
+/// is placed by each view scaled about its camera's nadir by (z_c - plane) / (z_c - plane - dh);
+/// between two cameras at z_1 and z_2, dt apart, that reads as the top rising at
+/// dh g with g = (z_1 - z_2) / (dt (z_1 - plane - dh)) (vision/landing/moving_top.hpp), on top of
+/// the deck's heave. Fitted over the heave's window jointly with the heave (a sine, and a drift
+/// held near zero: a deck's mean height does not move, a cart's floor is level) and dh held near
+/// zero by kTopHeightPriorSigmaM; a window where the camera barely moved vertically knows little
+/// of it (its variance stays near the prior's), so the best informed window's is kept, its
+/// variance grown by kTopHeightDriftM2PerS since.
+struct TopHeight {
+  double dh_m = 0.0;
+  double var_m2 = 0.0;  ///< 0: not measured (dh_m 0)
+  int64_t utime = 0;    ///< of the window it was fitted over (its last sample)
+};
+
+/// One vertical velocity vision measured: the interval's middle [us], the velocity [m/s], and g
+/// [1/s], the velocity a height error of one metre adds (TopHeight), 0 without cameras.
+struct VerticalSample {
+  int64_t utime = 0;
+  double vz_mps = 0.0, g_per_s = 0.0;
+};
+
+/// The spread of the tops' heights the plane is set among (8-30 cm about vision's 15 cm) [m].
+inline constexpr double kTopHeightPriorSigmaM = 0.1;
+/// The spread of a deck's mean vertical velocity over the heave's window (none on a level floor
+/// or a moored deck) [m/s]: so that a steady descent's reading is the height's, not a drift.
+inline constexpr double kHeaveDriftSigmaMps = 0.005;
+/// A vertical velocity's noise where the fit's residuals say less [m/s]: vision's over a quarter
+/// second from 1-2 px of scale noise on a top a few hundred pixels across.
+inline constexpr double kVerticalSigmaMps = 0.02;
+/// How fast a kept height goes stale [m^2/s]: the top does not change height, but a window fitted
+/// with a wrong heave frequency can be confident and wrong; a better informed one replaces it.
+inline constexpr double kTopHeightDriftM2PerS = 1e-5;
+/// The height error is applied only with the camera this far above the top at the least [m].
+inline constexpr double kMinPlacingRangeM = 0.1;
+
+/// dh from one window of samples (TopHeight): the least-squares fit of a sine of the best
+/// frequency in min_hz..max_hz (none over less than most of a period), a drift and dh g to the
+/// velocities, with the priors above; var_m2 from the fit's residuals.
+TopHeight fit_top_height(const std::deque<VerticalSample>& samples, double min_hz, double max_hz);
+
+/// The measurement placed again on the level plane plane_z_m + dh instead of plane_z_m: position,
+/// velocity and extent scaled about the cameras' nadirs, the vertical velocity less dh g, z
+/// raised by dh. Unchanged without cameras or with a camera within kMinPlacingRangeM of that plane.
+PlatformMeasurement placed_at_height(const PlatformMeasurement& m, double dh_m);
 
 struct PlatformFilterParams {
   /// Horizontal acceleration spectral density [m^2/s^3]: a cart at 1 m/s round a 0.6 m turn
@@ -114,8 +167,9 @@ struct HeaveModel {
   double z(int64_t utime) const;
 };
 
-/// Fits the heave to (time, vz) samples: the best frequency on a grid of min_hz..max_hz.
-HeaveModel fit_heave(const std::deque<std::pair<int64_t, double>>& vz, double min_hz,
+/// Fits the heave to the samples with the height's error dh_m taken out (TopHeight): the best
+/// frequency on a grid of min_hz..max_hz; none over less than most of a period.
+HeaveModel fit_heave(const std::deque<VerticalSample>& samples, double dh_m, double min_hz,
                      double max_hz);
 
 /// Whole views (placing the centre, their long side longer than the short by more than a view's
@@ -218,6 +272,9 @@ class PlatformFilter {
   int n_placed() const { return track_.n_placed; }
   /// The track's whole top (long, short side) [m]; zero before its first measured extent.
   Vector2d whole_top() const { return track_.whole; }
+  /// The top's height less vision's plane, as measured so far (kept through the filter's
+  /// restarts: the platform's, not a track's).
+  const TopHeight& top_height() const { return height_; }
 
  private:
   // The filtered velocity's direction (unwrapped) [rad] and the path travelled [m] at a time [us].
@@ -236,14 +293,18 @@ class PlatformFilter {
     Matrix2d P_yaw = Matrix2d::Zero();
     double course_rate = 0;           // the velocity's turn rate [rad/s]
     std::deque<CourseSample> course;  // the filtered velocity's direction along the path
-    double top_z_sum = 0;
+    double top_z_sum = 0;             // of the measurements' z as vision placed them
+    double g_dt_sum = 0;              // of their VerticalSample::g_per_s times their interval [m/m]
     int n_z = 0;
-    std::deque<std::pair<int64_t, double>> vz;
+    bool placed_from_cameras = false;  // its measurements carry their cameras (version 2)
+    std::deque<VerticalSample> vz;
     HeaveModel heave;
+    double dh_m = 0;  // the filter's TopHeight when the track last fused (whole_extent's)
     int n_consistent = 0;
     struct View {
-      Vector2d extent = Vector2d::Zero();  // (long, short) [m]
+      Vector2d extent = Vector2d::Zero();  // (long, short) as vision placed it [m]
       bool cut = false;                    // marked cut by the image's border
+      double range_m = INFINITY;           // its camera's height over vision's plane [m]
     };
     std::deque<View> extents;           // of its views (fuse: which ones)
     Vector2d whole = Vector2d::Zero();  // whole_extent(extents)
@@ -254,7 +315,8 @@ class PlatformFilter {
     double long_votes = 0;
   };
   enum class Fused { kAccepted, kAcceptedPartial, kOutsideGate, kBeyondReach };
-  Fused fuse(Track& t, const PlatformMeasurement& m) const;
+  // raw: as vision placed it; fused placed at the track's height (placed_at_height, t.dh_m).
+  Fused fuse(Track& t, const PlatformMeasurement& raw) const;
   void follow_course(Track& t, int64_t utime, const Vector2d& v0, double dt) const;
   void start(Track& t, const PlatformMeasurement& m) const;
   static Vector2d whole_extent(const Track& t);
@@ -283,6 +345,10 @@ class PlatformFilter {
   int consecutive_rejections_ = 0, n_updates_ = 0, n_rejected_ = 0;
   int n_partial_ = 0;
   std::array<int, kRefusals> refused_{};
+  TopHeight height_;
+  // The track's window fitted for the top's height; kept where better informed than height_.
+  void measure_height(Track& t);
+  void at_height(Track& t) const;
 };
 
 }  // namespace alight::autonomy

@@ -275,9 +275,10 @@ int main(int argc, char** argv) try {
         filter.fused, filter.run, filter.refused, filter.believed ? 1 : 0, filter.gate,
         filter.order, filter.size, filter.reach);
     if (filter.copy)
-      std::printf(" partial %d other tops %d whole %.2f x %.2f", filter.copy->n_partial(),
-                  filter.copy->n_other_tops(), filter.copy->whole_top().x(),
-                  filter.copy->whole_top().y());
+      std::printf(" partial %d other tops %d whole %.2f x %.2f top dh %+.3f sd %.3f",
+                  filter.copy->n_partial(), filter.copy->n_other_tops(),
+                  filter.copy->whole_top().x(), filter.copy->whole_top().y(),
+                  filter.copy->top_height().dh_m, std::sqrt(filter.copy->top_height().var_m2));
     // What autonomy follows: the filter's prediction at this frame's time (before the frame)
     // against the truth.
     if (filter.copy && filter.copy->initialised() && moved) {

@@ -467,6 +467,35 @@ TEST(ConvertTest, PlatformMeasurementRoundTripsAndBadOnesAreRefusedWithAReason) 
   m.ref_utime = m.utime;
   EXPECT_FALSE(platform_from_msg(m, &why));
   EXPECT_NE(why.find("earlier frame"), std::string::npos) << why;
+  // Without cameras: a version-1 message, read with the top at vision's plane.
+  EXPECT_EQ(to_msg(p, 4).version, 1);
+  EXPECT_FALSE(platform_from_msg(to_msg(p, 4), &why)->placed_from_cameras());
+  // Version 2: the cameras and the plane come through; non-finite or a camera not above the
+  // plane is refused.
+  p.camera_W = Vector3d(0.6, -0.1, 1.0);
+  p.ref_camera_W = Vector3d(0.4, -0.1, 1.1);
+  p.plane_z_m = 0.15;
+  m = to_msg(p, 4);
+  EXPECT_EQ(m.version, platform_motion_t::VERSION);
+  const auto placed = platform_from_msg(m, &why);
+  ASSERT_TRUE(placed) << why;
+  EXPECT_EQ(placed->camera_W, p.camera_W);
+  EXPECT_EQ(placed->ref_camera_W, p.ref_camera_W);
+  EXPECT_EQ(placed->plane_z_m, 0.15);
+  m.ref_camera_W[2] = NAN;
+  EXPECT_FALSE(platform_from_msg(m, &why));
+  EXPECT_NE(why.find("ref_camera_W"), std::string::npos) << why;
+  m = to_msg(p, 4);
+  m.camera_W[2] = 0.1;
+  EXPECT_FALSE(platform_from_msg(m, &why));
+  EXPECT_NE(why.find("not above"), std::string::npos) << why;
+  // An older sender (version 1) is read without them, whatever the fields hold.
+  m = to_msg(p, 4);
+  m.version = 1;
+  m.camera_W[0] = NAN;
+  const auto old = platform_from_msg(m, &why);
+  ASSERT_TRUE(old) << why;
+  EXPECT_FALSE(old->placed_from_cameras());
 }
 
 }  // namespace

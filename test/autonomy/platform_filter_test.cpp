@@ -764,6 +764,106 @@ TEST(PlatformFilterTest, FitsAKnownHeave) {
   EXPECT_NEAR(h.vz(ahead), vz_true, 0.03);
 }
 
+// The camera over a moving top: its centre at the path's point plus `offset` (the camera is not
+// over the top's centre), at height z(t) [m].
+struct CameraPath {
+  Vector2d offset{0.05, 0.03};
+  double z0 = 1.3, descent_mps = 0.3, z_end = 0.6;
+  Vector3d at(const PlatformPath& m, double t) const {
+    return Vector3d(m.p(t).x() + offset.x(), m.p(t).y() + offset.y(),
+                    std::max(z_end, z0 - descent_mps * t));
+  }
+};
+
+// measure_path's measurement as vision places it (vision/landing/moving_top.hpp): the top's
+// points from each camera on the plane at plane_z_m, so scaled about each camera's nadir by
+// (z_c - plane_z_m) / (z_c - h) for the top at h; the heave read from the two scales. The top's
+// true height at t is m.z(t) + top_above_m.
+PlatformMeasurement placed_by_vision(const PlatformPath& m, const CameraPath& cam, double t,
+                                     double top_above_m, const Vector2d& size, std::mt19937_64& rng,
+                                     double plane_z_m = 0.15) {
+  PlatformMeasurement z = measure_path(m, t, rng, 0.005, 0.03);
+  const double t1 = t - kPfInterval;
+  const Vector3d c1 = cam.at(m, t1), c2 = cam.at(m, t);
+  const double h1 = m.z(t1) + top_above_m, h2 = m.z(t) + top_above_m;
+  const double k1 = (c1.z() - plane_z_m) / (c1.z() - h1), k2 = (c2.z() - plane_z_m) / (c2.z() - h2);
+  const Vector2d p1 = c1.head<2>() + (m.p(t1) - c1.head<2>()) * k1;
+  const Vector2d p2 = c2.head<2>() + (z.p_W.head<2>() - c2.head<2>()) * k2;
+  z.v_W.head<2>() += (p2 - p1) / kPfInterval - (z.p_W.head<2>() - m.p(t1)) / kPfInterval;
+  z.p_W.head<2>() = p2;
+  const double d2 = c2.z() - plane_z_m, dz = d2 - d2 * k1 / k2;
+  std::normal_distribution<double> n(0, 0.01);
+  z.p_W.z() = plane_z_m + dz;
+  z.v_W.z() = dz / kPfInterval + n(rng);
+  z.size_m = size * k2;
+  z.camera_W = c2, z.ref_camera_W = c1, z.plane_z_m = plane_z_m;
+  return z;
+}
+
+TEST(TopHeightTest, ATopTallerThanVisionsPlaneIsMeasuredWhileTheCameraDescends) {
+  // A cart's top 6 cm above vision's plane (21 cm for 15), 48 x 22 cm, at 0.8 m/s; the camera
+  // follows 6 cm off its centre, descending from 1.3 m to 0.6 m. Vision places each view's points
+  // 7-12 % too far from its nadir and reads the descent as the top rising; the filter measures
+  // the height from that and places the top again.
+  PlatformPath m;
+  m.straight = true, m.omega = 0;
+  const CameraPath cam;
+  const Vector2d size(0.48, 0.22);
+  const double above = 0.06;
+  PlatformFilter f{PlatformFilterParams{}}, plain{PlatformFilterParams{}};
+  std::mt19937_64 rng(11), rng_plain(11);
+  double t = kPfInterval;
+  for (; t < 6; t += kPfDt) {
+    f.update(placed_by_vision(m, cam, t, above, size, rng));
+    PlatformMeasurement z = placed_by_vision(m, cam, t, above, size, rng_plain);
+    z.plane_z_m = NAN;  // a version-1 sender: no cameras
+    plain.update(z);
+  }
+  t -= kPfDt;
+  ASSERT_TRUE(f.believed());
+  EXPECT_NEAR(f.top_height().dh_m, above, 0.01);
+  EXPECT_LT(std::sqrt(f.top_height().var_m2), 0.01);
+  const int64_t now = kPfT0 + int64_t(t * 1e6);
+  const auto pr = f.predict(now);
+  EXPECT_NEAR(pr.top_z_m, m.z(t) + above, 0.01);
+  EXPECT_LT((pr.p_W - m.p(t)).norm(), 0.01);
+  EXPECT_NEAR(f.whole_top().x(), size.x(), 0.015);
+  EXPECT_NEAR(f.whole_top().y(), size.y(), 0.015);
+  // Taken at vision's plane, the top is that much larger and lower.
+  EXPECT_EQ(plain.top_height().dh_m, 0.0);
+  EXPECT_GT(plain.whole_top().x(), size.x() + 0.03);
+  EXPECT_LT(plain.predict(now).top_z_m, m.z(t) + 0.01);
+}
+
+TEST(TopHeightTest, ADecksHeightIsToldFromItsHeaveAndALevelCameraLeavesItUnmeasured) {
+  // A deck 6 cm below vision's plane heaving 5 cm at 0.3 Hz: the descent's reading is told from
+  // the heave's sine, and the heave is fitted on what the height leaves.
+  PlatformPath m;
+  m.straight = true, m.omega = 0, m.v = 0.4;
+  m.A = 0.05, m.f = 0.3;
+  CameraPath cam;
+  cam.descent_mps = 0.15;
+  const Vector2d size(0.40, 0.30);
+  PlatformFilter f{PlatformFilterParams{}};
+  std::mt19937_64 rng(12);
+  double t = kPfInterval;
+  for (; t < 8; t += kPfDt) f.update(placed_by_vision(m, cam, t, -0.06, size, rng));
+  // The heave leaves the height less well known than a level cart's: within half the error
+  // vision's plane had, and within three of its own sigmas.
+  EXPECT_NEAR(f.top_height().dh_m, -0.06, 0.025);
+  EXPECT_LT(std::abs(f.top_height().dh_m + 0.06), 3 * std::sqrt(f.top_height().var_m2));
+  EXPECT_NEAR(f.heave().amplitude_m(), m.A, 0.01);
+  EXPECT_NEAR(f.whole_top().x(), size.x(), 0.02);
+  // A camera that never climbs or descends tells nothing of the height: it stays vision's plane.
+  cam.descent_mps = 0;
+  cam.z0 = 0.8;
+  PlatformFilter level{PlatformFilterParams{}};
+  for (t = kPfInterval; t < 8; t += kPfDt)
+    level.update(placed_by_vision(m, cam, t, -0.06, size, rng));
+  EXPECT_LT(std::abs(level.top_height().dh_m), 0.01);
+  EXPECT_GT(std::sqrt(level.top_height().var_m2), 0.05);
+}
+
 TEST(HeaveReleaseTest, TheLastDropStartsSoThatContactFollowsACrest) {
   // Heave z = A sin(w t): crests at w t = pi/2 + 2 pi k. The release must put the contact
   // (fall_s after it) in the quarter period after a crest, and one comes within a period.

@@ -463,6 +463,9 @@ void measure(const std::vector<Placed>& cand, const std::vector<size_t>& in, con
   out->yaw_rad = wrap_axis_angle(std::atan2(rect->axis[0].y(), rect->axis[0].x()));
   out->yaw_rate_rps = S.theta / dt_s;
   out->scale = S.s;
+  out->camera_W = v.X_WC2.translation();
+  out->ref_camera_W = v.X_WC1.translation();
+  out->plane_z_m = z_top;
   // Heave: the reference's points at the assumed height (k_1 = 1), so s = k_2.
   const double zc2 = v.X_WC2.translation().z();
   const double d2 = zc2 - z_top;

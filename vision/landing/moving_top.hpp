@@ -78,6 +78,10 @@ struct MovingTop {
   double yaw_rad = 0.0;       ///< long axis of the inliers' rectangle, (-pi/2, pi/2]
   double yaw_rate_rps = 0.0;  ///< its turn over the interval / dt_s [rad/s]
   double scale = 1.0;         ///< s of the similarity (heave, height error)
+  /// The cameras the top was placed from (current, earlier) and the plane it was placed on
+  /// (floor_z_m + top_height_m): a reader that follows the top measures its height from them.
+  Vector3d camera_W = Vector3d::Zero(), ref_camera_W = Vector3d::Zero();
+  double plane_z_m = 0.0;
   /// The top cut by the current image's border (edge_margin_px): its motion is measured, its
   /// centre is not (cov_p_W's horizontal block 100 m^2; p_W the visible part's centre).
   bool cut = false;

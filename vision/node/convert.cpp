@@ -57,6 +57,11 @@ std::optional<platform_motion_t> to_platform_msg(const FrameResult& r) {
   m.size_m[0] = t.size_m[0];
   m.size_m[1] = t.size_m[1];
   m.scale = t.scale;
+  for (int i = 0; i < 3; ++i) {
+    m.camera_W[i] = t.camera_W[i];
+    m.ref_camera_W[i] = t.ref_camera_W[i];
+  }
+  m.plane_z_m = t.plane_z_m;
   return m;
 }
 

@@ -154,6 +154,34 @@ TEST(MovingTopTest, MeasuresACartsPositionVelocityAndTurn) {
   ASSERT_EQ(m.inliers.size(), c.size());
 }
 
+TEST(MovingTopTest, ATopTallerThanAssumedUnderADescendingCameraReadsAsRisingAndLarger) {
+  // The top is 12 cm taller than the 15 cm assumed and moves level; the camera descends at
+  // 0.4 m/s from 1.5 m. Each view's points are scaled about its camera's nadir by (z_c - 0.15) /
+  // (z_c - h), so the extent is that much too large, and the scale's change over the interval reads
+  // as the top rising at dh (z_c1 - z_c2) / (dt (z_c1 - h)): what a reader following the top over
+  // many pairs measures its height from, given the cameras and the plane published with it.
+  const double dt = 0.25, h = 0.27, vz_cam = -0.4;
+  MovingScene s = followed_close(1.5, {0.0, 0.0}, dt);
+  s.pose_2.p_W_B.z() += vz_cam * dt;
+  s.top_1.h = s.top_2.h = h;
+  s.n_top = 120;
+  const MovingTopParams params;
+  const MovingTop m = find_moving_top(s.correspondences(), dt, 0.0, params);
+  ASSERT_TRUE(m.found()) << to_string(m.reason);
+  const Isometry3d X_WC1 = camera_in_world(s.pose_1.X_WB(), s.mount.X_BC());
+  const Isometry3d X_WC2 = camera_in_world(s.pose_2.X_WB(), s.mount.X_BC());
+  EXPECT_LT((m.camera_W - X_WC2.translation()).norm(), 1e-9);
+  EXPECT_LT((m.ref_camera_W - X_WC1.translation()).norm(), 1e-9);
+  EXPECT_DOUBLE_EQ(m.plane_z_m, params.top_height_m);
+  const double z1 = X_WC1.translation().z(), z2 = X_WC2.translation().z();
+  const double dh = h - params.top_height_m;
+  EXPECT_NEAR(m.v_W.z(), dh * (z1 - z2) / (dt * (z1 - h)), 0.01);
+  EXPECT_GT(m.v_W.z(), 0.02);  // a level top, read as rising
+  const double k2 = (z2 - params.top_height_m) / (z2 - h);
+  EXPECT_NEAR(m.size_m[0] / k2, s.top_size.x(), 0.04);
+  EXPECT_GT(m.size_m[0], s.top_size.x() + 0.03);
+}
+
 TEST(MovingTopTest, ATopGoingOnPastTheBorderIsCutThoughItsFeaturesStopShortOfIt) {
   // Followed 0.5 m above its top, a 43 cm top reaches past the image's border; its print stops
   // 30 px short of the border. The features' rectangle is then a part of the top: its motion is

@@ -86,6 +86,9 @@ TEST(VisionConvertTest, MovingTopBecomesVisionPlatformOnlyWhereMeasured) {
   m.yaw_rate_rps = 0.1;
   m.size_m[0] = 0.4, m.size_m[1] = 0.3;
   m.n_candidates = 50, m.n_inliers = 40;
+  m.camera_W = Vector3d(1.1, 2.05, 0.9);
+  m.ref_camera_W = Vector3d(0.9, 2.0, 1.0);
+  m.plane_z_m = 0.15;
   r.moving = m;
   r.moving_ref_utime = 4'750'000;
   const auto msg = to_platform_msg(r);
@@ -102,6 +105,9 @@ TEST(VisionConvertTest, MovingTopBecomesVisionPlatformOnlyWhereMeasured) {
   EXPECT_EQ(msg->cov_p_W[8], 1e-4);
   EXPECT_EQ(msg->size_m[1], 0.3);
   EXPECT_EQ(msg->n_inliers, 40);
+  EXPECT_EQ(msg->camera_W[2], 0.9);  // version 2: where the top was placed from
+  EXPECT_EQ(msg->ref_camera_W[0], 0.9);
+  EXPECT_EQ(msg->plane_z_m, 0.15);
   // Not found: the reason (platform_motion_t's value) and the counts only.
   m.reason = MovingReason::kOnFloor;
   r.moving = m;
