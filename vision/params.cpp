@@ -168,9 +168,9 @@ const ParamSchema<MovingTopParams>& MovingTopParams::schema() {
           "measure a moving platform's top on every landing frame (VISION_PLATFORM); "
           "VISION_TARGET does not depend on it");
     s.add("top_height_m", &P::top_height_m, Range::closed(0, 2), "m",
-          "the top's expected height above the floor: an independently moving plane's depth is "
-          "not observable from two level views; its error scales with the view angle (position) "
-          "and the relative speed (velocity), both driven to zero by the approach");
+          "the plane the top is placed on, above the floor: an independently moving plane's depth "
+          "is not observable from two level views; published with each measurement, so that "
+          "autonomy measures the true height over many (a climbing or descending camera)");
     s.add("top_height_sigma_m", &P::top_height_sigma_m, Range::ge(0), "m",
           "its uncertainty, carried into the published covariances");
     s.add("interval_s", &P::interval_s, Range::gt(0), "s",

@@ -30,7 +30,10 @@
 // camera (its motion absorbs the baseline). It is taken as moving_top.top_height_m; the error
 // this leaves (position: dh times the tangent of the view angle; velocity: dh over the camera's
 // height times the speed relative to the camera) vanishes as the vehicle comes over the
-// platform and matches its speed, which is what the approach does.
+// platform and matches its speed, which is what the approach does. Over many pairs the height is
+// observable: a camera climbing or descending reads a top dh above the plane as rising at
+// dh (z_1 - z_2) / (dt (z_1 - h)). So each measurement carries its two cameras and the plane,
+// and autonomy's platform filter measures the height and places the top again (TopHeight).
 
 #include <cassert>
 #include <cmath>

@@ -15,7 +15,8 @@ struct MovingTopParams {
   /// baseline), so the top's points are placed at this height. The error it leaves is the
   /// height error times the tangent of the view angle in position and times the relative
   /// speed over the camera's height in velocity: both vanish as the vehicle comes over the
-  /// platform and matches its speed.
+  /// platform and matches its speed. Autonomy measures the true height over many pairs (the
+  /// plane and cameras are published with each measurement).
   double top_height_m = 0.15;
   double top_height_sigma_m = 0.05;  ///< its uncertainty, carried into the covariances [m]
   /// The earlier frame the top's motion is measured against: the newest at least this much
