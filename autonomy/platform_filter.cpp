@@ -97,10 +97,6 @@ std::vector<double> heave_frequencies_hz(double span_s, double min_hz, double ma
   return f;
 }
 
-}  // namespace
-
-namespace {
-
 // One sample's row of the vertical model at angular frequency w (0: no sine) and time t from the
 // window's start: vz = a sin + b cos + c + (dh + z(t)) g, z(t) = (-a cos + b sin) / w the heave's
 // height (TopHeight: the height's error is the plane's distance to the top, heave included).
@@ -127,7 +123,17 @@ VerticalFit fit_vertical(const std::deque<VerticalSample>& samples, double min_h
   std::vector<double> freqs = heave_frequencies_hz(span_s, min_hz, max_hz);
   if (dh_given && freqs.empty()) return best;  // the heave's fit needs a sine
   if (freqs.empty()) freqs.push_back(0.0);
-  const double wv = 1.0 / (kVerticalSigmaMps * kVerticalSigmaMps);
+  // Each velocity is a mean over its interval, and the camera's frames come several to an
+  // interval: the samples' errors are shared by the ones within an interval of each other, so
+  // the window holds only as many independent ones as intervals fit in its span; each sample
+  // weighs that share of an independent one.
+  double interval_s = 0;
+  for (const auto& s : samples) interval_s += s.interval_s;
+  interval_s /= double(samples.size());
+  const double n_samples = double(samples.size());
+  const double shared =
+      n_samples / std::clamp(span_s / std::max(interval_s, 1e-3) + 1, 1.0, n_samples);
+  const double wv = 1.0 / (kVerticalSigmaMps * kVerticalSigmaMps * shared);
   const int n = dh_given ? 3 : 4;
   for (const double f : freqs) {
     const double w = 2 * M_PI * f;
@@ -502,9 +508,9 @@ namespace {
 // The measurement's vertical velocity at its interval's middle, with the velocity a height error
 // of one metre adds there (TopHeight) at the height dh_m believed.
 VerticalSample vertical_sample(const PlatformMeasurement& raw, double dh_m) {
-  VerticalSample s{(raw.utime + raw.ref_utime) / 2, raw.v_W.z(), 0.0};
-  if (!raw.placed_from_cameras()) return s;
   const double dt = double(raw.utime - raw.ref_utime) * 1e-6;
+  VerticalSample s{(raw.utime + raw.ref_utime) / 2, raw.v_W.z(), 0.0, dt};
+  if (!raw.placed_from_cameras()) return s;
   const double range_1 = raw.ref_camera_W.z() - raw.plane_z_m - dh_m;
   if (range_1 >= kMinPlacingRangeM)
     s.g_per_s = (raw.ref_camera_W.z() - raw.camera_W.z()) / (dt * range_1);
@@ -647,7 +653,18 @@ void PlatformFilter::measure_height(Track& t) {
           ? height_.var_m2 +
                 kTopHeightDriftM2PerS * std::max(0.0, double(w.utime - height_.utime) * 1e-6)
           : double(INFINITY);
+  // A window that disagrees (its own variance and the kept one's): adopted only once the windows
+  // have disagreed for kTopHeightDisagreeS; one that agrees ends the disagreement.
+  const double gap = w.dh_m - height_.dh_m;
+  const bool disagrees =
+      height_.var_m2 > 0 &&
+      gap * gap > kTopHeightGateSigmas * kTopHeightGateSigmas * (w.var_m2 + kept_var);
+  if (!disagrees)
+    height_.disagreed_utime = 0;
+  else if (height_.disagreed_utime == 0)
+    height_.disagreed_utime = w.utime;
   if (!(w.var_m2 < kept_var)) return;
+  if (disagrees && double(w.utime - height_.disagreed_utime) * 1e-6 < kTopHeightDisagreeS) return;
   height_ = w;
   at_height(t);
   t.heave = fit_heave(t.vz, t.dh_m, params_.heave_min_hz, params_.heave_max_hz);

@@ -100,13 +100,17 @@ struct TopHeight {
   double dh_m = 0.0;
   double var_m2 = 0.0;  ///< 0: not measured (dh_m 0)
   int64_t utime = 0;    ///< of the window it was fitted over (its last sample)
+  /// Since when the better informed windows have disagreed with it (0: none do) [us].
+  int64_t disagreed_utime = 0;
 };
 
-/// One vertical velocity vision measured: the interval's middle [us], the velocity [m/s], and g
-/// [1/s], the velocity a height error of one metre adds (TopHeight), 0 without cameras.
+/// One vertical velocity vision measured: the interval's middle [us], the velocity [m/s], g
+/// [1/s], the velocity a height error of one metre adds (TopHeight), 0 without cameras, and the
+/// interval it is the mean over [s] (samples whose intervals overlap share their errors).
 struct VerticalSample {
   int64_t utime = 0;
   double vz_mps = 0.0, g_per_s = 0.0;
+  double interval_s = 0.25;
 };
 
 /// The spread of the tops' heights the plane is set among (8-30 cm about vision's 15 cm) [m].
@@ -120,6 +124,11 @@ inline constexpr double kVerticalSigmaMps = 0.02;
 /// How fast a kept height goes stale [m^2/s]: the top does not change height, but a window fitted
 /// with a wrong heave frequency can be confident and wrong; a better informed one replaces it.
 inline constexpr double kTopHeightDriftM2PerS = 1e-5;
+/// A better informed window that disagrees with the height kept by more than this many sigmas
+/// of the two (each window's heave is a model: a sea state's is not one sine, and its misfit
+/// leaks into dh) replaces it only after kTopHeightDisagreeS of windows that all disagree.
+inline constexpr double kTopHeightGateSigmas = 3.0;
+inline constexpr double kTopHeightDisagreeS = 1.0;
 /// The height error is applied only with the camera this far above the top at the least [m].
 inline constexpr double kMinPlacingRangeM = 0.1;
 
