@@ -109,6 +109,7 @@ Eigen::Vector4d vertical_row(const VerticalSample& s, double w, double t) {
 struct VerticalFit {
   Eigen::Vector4d x = Eigen::Vector4d::Zero();  // a, b, c, dh
   double w = 0, sse = INFINITY, var_dh = 0;
+  size_t n = 0;  // samples fitted
 };
 
 // Least squares of the vertical model over the samples per frequency of the band (none over
@@ -163,7 +164,7 @@ VerticalFit fit_vertical(const std::deque<VerticalSample>& samples, double min_h
       sse += r * r;
     }
     if (!(sse < best.sse)) continue;
-    best.x = x, best.w = w, best.sse = sse;
+    best.x = x, best.w = w, best.sse = sse, best.n = samples.size();
     if (!dh_given) best.var_dh = ldlt.solve(Eigen::VectorXd::Unit(4, 3))(3);
   }
   return best;
@@ -187,10 +188,28 @@ HeaveModel fit_heave(const std::deque<VerticalSample>& samples, double dh_m, dou
 TopHeight fit_top_height(const std::deque<VerticalSample>& samples, double min_hz, double max_hz) {
   TopHeight h;
   if (samples.size() < 8) return h;
-  const VerticalFit f = fit_vertical(samples, min_hz, max_hz, std::nullopt);
+  VerticalFit f = fit_vertical(samples, min_hz, max_hz, std::nullopt);
   if (!(f.var_dh > 0)) return h;
+  // Fitted again without the velocities beyond kVerticalOutlierSigmas of the residuals' robust
+  // spread (a mismatched set, a burst of a sea state's misfit): a few frames of them would pull
+  // dh by centimetres where the camera moves fast vertically (g large).
+  const int64_t t0 = samples.front().utime;
+  std::vector<double> abs_r;
+  for (const auto& s : samples)
+    abs_r.push_back(
+        std::abs(s.vz_mps - vertical_row(s, f.w, double(s.utime - t0) * 1e-6).dot(f.x)));
+  std::vector<double> sorted = abs_r;
+  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+  const double spread = std::max(0.5 * kVerticalSigmaMps, 1.4826 * sorted[sorted.size() / 2]);
+  std::deque<VerticalSample> kept;
+  for (size_t i = 0; i < samples.size(); ++i)
+    if (abs_r[i] <= kVerticalOutlierSigmas * spread) kept.push_back(samples[i]);
+  if (kept.size() < samples.size() && kept.size() >= 8) {
+    const VerticalFit g = fit_vertical(kept, min_hz, max_hz, std::nullopt);
+    if (g.var_dh > 0) f = g;
+  }
   const double misfit =
-      f.sse / std::max(1.0, double(samples.size()) - 4) / (kVerticalSigmaMps * kVerticalSigmaMps);
+      f.sse / std::max(1.0, double(f.n) - 4) / (kVerticalSigmaMps * kVerticalSigmaMps);
   h.dh_m = f.x(3);
   h.var_m2 = f.var_dh * std::max(1.0, misfit);
   h.utime = samples.back().utime;

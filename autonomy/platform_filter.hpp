@@ -93,9 +93,11 @@ struct PlatformMeasurement {
 /// dh g with g = (z_1 - z_2) / (dt (z_1 - plane - dh)) (vision/landing/moving_top.hpp), on top of
 /// the deck's heave. Fitted over the heave's window jointly with the heave (a sine, and a drift
 /// held near zero: a deck's mean height does not move, a cart's floor is level) and dh held near
-/// zero by kTopHeightPriorSigmaM; a window where the camera barely moved vertically knows little
-/// of it (its variance stays near the prior's), so the best informed window's is kept, its
-/// variance grown by kTopHeightDriftM2PerS since.
+/// zero by kTopHeightPriorSigmaM; the velocities are means over overlapping intervals, so a
+/// window weighs as many independent ones as intervals fit in its span. A window where the camera
+/// barely moved vertically knows little of dh (its variance stays near the prior's), so the best
+/// informed window's is kept, its variance grown by kTopHeightDriftM2PerS since; one that
+/// disagrees with it beyond kTopHeightGateSigmas waits kTopHeightDisagreeS of disagreeing windows.
 struct TopHeight {
   double dh_m = 0.0;
   double var_m2 = 0.0;  ///< 0: not measured (dh_m 0)
@@ -121,6 +123,10 @@ inline constexpr double kHeaveDriftSigmaMps = 0.005;
 /// A vertical velocity's noise where the fit's residuals say less [m/s]: vision's over a quarter
 /// second from 1-2 px of scale noise on a top a few hundred pixels across.
 inline constexpr double kVerticalSigmaMps = 0.02;
+/// A velocity this many times the residuals' robust spread (1.4826 times their median, at least
+/// half kVerticalSigmaMps) off the window's fit is left out of dh's fit: a normal residual is
+/// that far once in several hundred samples.
+inline constexpr double kVerticalOutlierSigmas = 3.0;
 /// How fast a kept height goes stale [m^2/s]: the top does not change height, but a window fitted
 /// with a wrong heave frequency can be confident and wrong; a better informed one replaces it.
 inline constexpr double kTopHeightDriftM2PerS = 1e-5;

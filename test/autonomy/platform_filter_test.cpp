@@ -769,9 +769,12 @@ TEST(PlatformFilterTest, FitsAKnownHeave) {
 struct CameraPath {
   Vector2d offset{0.05, 0.03};
   double z0 = 1.3, descent_mps = 0.3, z_end = 0.6;
+  /// A second descent from z_end from this time on, down to z_last [s, m].
+  double resume_s = INFINITY, z_last = 0.45;
   Vector3d at(const PlatformPath& m, double t) const {
-    return Vector3d(m.p(t).x() + offset.x(), m.p(t).y() + offset.y(),
-                    std::max(z_end, z0 - descent_mps * t));
+    double z = std::max(z_end, z0 - descent_mps * t);
+    if (t > resume_s) z = std::max(z_last, z_end - descent_mps * (t - resume_s));
+    return Vector3d(m.p(t).x() + offset.x(), m.p(t).y() + offset.y(), z);
   }
 };
 
@@ -833,6 +836,55 @@ TEST(TopHeightTest, ATopTallerThanVisionsPlaneIsMeasuredWhileTheCameraDescends) 
   EXPECT_EQ(plain.top_height().dh_m, 0.0);
   EXPECT_GT(plain.whole_top().x(), size.x() + 0.03);
   EXPECT_LT(plain.predict(now).top_z_m, m.z(t) + 0.01);
+}
+
+TEST(TopHeightTest, AFewWrongVelocitiesInALaterDescentDoNotMoveTheHeight) {
+  // The height learned in a first descent, from 1.6 m to 0.7 m; in a second, a fifth of a second
+  // of vision's vertical velocities read 15 cm/s high (a mismatched set): left out of the fit.
+  PlatformPath m;
+  m.straight = true, m.omega = 0;
+  CameraPath cam;
+  cam.z0 = 1.6, cam.z_end = 0.7, cam.resume_s = 5.0, cam.z_last = 0.5;
+  const Vector2d size(0.48, 0.22);
+  const double above = 0.06;
+  PlatformFilter f{PlatformFilterParams{}};
+  std::mt19937_64 rng(13);
+  double worst_after = 0;
+  for (double t = kPfInterval; t < 7; t += kPfDt) {
+    PlatformMeasurement z = placed_by_vision(m, cam, t, above, size, rng);
+    if (t > 5.3 && t < 5.5) z.v_W.z() += 0.15;
+    f.update(z);
+    if (t > 4.5) worst_after = std::max(worst_after, std::abs(f.top_height().dh_m - above));
+  }
+  EXPECT_LT(worst_after, 0.015);
+}
+
+TEST(TopHeightTest, WindowsThatDisagreeWithTheHeightKeptWaitASecondOfThemBeforeReplacingIt) {
+  // From the second descent on, every velocity reads 10 cm/s high (say, a camera height that has
+  // drifted): not a few outliers but a new story, told by better informed windows that disagree
+  // with the height kept by more than three sigmas. It is kept for the first second of them, and
+  // taken once they have disagreed that long.
+  PlatformPath m;
+  m.straight = true, m.omega = 0;
+  CameraPath cam;
+  cam.z0 = 1.6, cam.z_end = 0.7, cam.resume_s = 5.0, cam.z_last = 0.45;
+  const Vector2d size(0.48, 0.22);
+  const double above = 0.06;
+  PlatformFilter f{PlatformFilterParams{}};
+  std::mt19937_64 rng(14);
+  double first_disagreement = 0, kept_until = 0;
+  for (double t = kPfInterval; t < 9; t += kPfDt) {
+    PlatformMeasurement z = placed_by_vision(m, cam, t, above, size, rng);
+    if (t > 5.0) z.v_W.z() += 0.1;
+    f.update(z);
+    const TopHeight& h = f.top_height();
+    if (first_disagreement == 0 && h.disagreed_utime != 0)
+      first_disagreement = double(h.disagreed_utime - kPfT0) * 1e-6;
+    if (std::abs(h.dh_m - above) < 0.015) kept_until = t;
+  }
+  ASSERT_GT(first_disagreement, 5.0);
+  EXPECT_GE(kept_until, first_disagreement + kTopHeightDisagreeS - 2 * kPfDt);
+  EXPECT_GT(std::abs(f.top_height().dh_m - above), 0.03);  // the new story taken in the end
 }
 
 TEST(TopHeightTest, ADecksHeightIsToldFromItsHeaveAndALevelCameraLeavesItUnmeasured) {
