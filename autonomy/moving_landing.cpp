@@ -215,6 +215,18 @@ MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
   }
   out.sp_p_W << pr.p_W, s.z_sp_m;
   if (s.z_sp_m > z_final) {
+    // Following without matching well enough to descend: the vehicle trails the platform's turns
+    // (within the speed it follows, so not too_fast), and following on for ever is no landing.
+    // The wait is the final height's for a moment to drop, counted over the whole approach (a
+    // moment matched now and then descends a step, but does not start it over).
+    if (!settled) s.unsettled_s += dt_s;
+    if (s.unsettled_s >= gear.final_hold_timeout_s) {
+      out.next = MovingStep::Next::kTooFast;
+      out.reason = "not matched with the moving platform for " + fmt(s.unsettled_s, 2) + " s (" +
+                   fmt(offset.norm(), 2) + " m, " + fmt(rel_v.norm(), 2) +
+                   " m/s off now): beyond what the vehicle lands on";
+      return out;
+    }
     out.reason = settled ? "descending with the moving platform"
                          : "matching the moving platform (" + fmt(offset.norm(), 2) + " m, " +
                                fmt(rel_v.norm(), 2) + " m/s off" +

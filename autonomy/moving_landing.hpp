@@ -154,7 +154,8 @@ struct LandingGear {
   double fit_margin_m = 0.02;           ///< the top kept around the gear by the aim [m]
   double descent_rate_mps = 0.25;       ///< to the final height [m/s]
   double final_descent_rate_mps = 1.0;  ///< the last drop [m/s]
-  double final_hold_timeout_s = 10.0;   ///< at the final height without a drop this long [s]
+  /// At the final height without a drop, or above it never matched, this long [s].
+  double final_hold_timeout_s = 10.0;
 };
 
 /// Step 5 of moving_landing.hpp.
@@ -204,6 +205,8 @@ double long_axis_yaw(const DownwardView& view, double long_yaw_rad, double curre
 struct MovingApproach {
   double z_sp_m = 0.0;
   std::optional<int64_t> matched_since_utime;
+  /// Time spent above the final height not settled on the platform (no descent) [s].
+  double unsettled_s = 0.0;
   std::optional<int64_t> at_final_since_utime;  ///< waiting for the heave since
   std::optional<int64_t> too_fast_since_utime;
   int too_fast_since_updates = 0;  ///< the filter's fused views when it began
@@ -231,7 +234,10 @@ double followed_turn_radps(double yaw_rate_rps, const MovingLandingParams& param
 double aligned_yaw(double platform_yaw_rad, double current_rad);
 
 /// One step of steps 1-4. At the final height without a drop for final_hold_timeout_s (the gear
-/// never aimed, or no crest): the platform is beyond what the vehicle lands on (kTooFast).
+/// never aimed, or no crest): the platform is beyond what the vehicle lands on (kTooFast). Above
+/// it, not matched well enough to descend for final_hold_timeout_s in all (a platform whose turns
+/// the vehicle trails, within the speed it follows; a moment matched now and then does not start
+/// the wait over): the same.
 /// `view`: the downward camera's (nullptr: none declared; step 6 then climbs and comes back to
 /// final_height_m).
 MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,

@@ -1007,6 +1007,41 @@ TEST(MovingApproachTest, MatchesThePlatformThenDescendsAndFailsSafeWhenTooFast) 
   EXPECT_EQ(st.next, MovingStep::Next::kTargetLost);
 }
 
+TEST(MovingApproachTest, APlatformNotMatchedForTheFinalHoldsWaitIsTheFailsafe) {
+  // The vehicle trails the platform by 30 cm (a cart whose turns it lags, within the speed it
+  // follows), matched now and then for a second: it descends a step each time, but after
+  // final_hold_timeout_s unmatched in all the platform is beyond what the vehicle lands on, as at
+  // the final height.
+  const PlatformPath m = straight_path(0.5);
+  PlatformFilter f{PlatformFilterParams{}};
+  std::mt19937_64 rng(15);
+  const double t0 = track_until_2s(f, m, rng);
+  const MovingLandingParams params;
+  LandingGear gear;
+  gear.final_hold_timeout_s = 3.0;
+  MovingApproach s;
+  PoseSample pose;
+  MovingStep st;
+  double u = t0, trailed_s = 0;
+  for (; u < t0 + 12.0 && st.next == MovingStep::Next::kContinue; u += kPfDt) {
+    f.update(measure_path(m, u, rng));
+    const bool trailing = std::fmod(u - t0, 2.0) < 1.0;  // a second off, a second on
+    const auto pr = f.predict(kPfT0 + int64_t(u * 1e6));
+    pose.p_W_B << pr.p_W.x() - (trailing ? 0.3 : 0.0), pr.p_W.y(), 1.2;
+    pose.v_W_B << pr.v_W, 0;
+    st = step_moving_approach(s, f, pose, kPfT0 + int64_t(u * 1e6), kPfDt, 0.0, gear, params);
+    if (trailing) {
+      trailed_s += kPfDt;
+      EXPECT_EQ(st.sp_v_W.z(), 0.0);
+    }
+  }
+  EXPECT_EQ(st.next, MovingStep::Next::kTooFast);
+  EXPECT_NE(st.reason.find("beyond what the vehicle lands on"), std::string::npos) << st.reason;
+  // The unmatched time counted: the trailing seconds and each matched second's settling.
+  EXPECT_GE(trailed_s, 0.5 * gear.final_hold_timeout_s);
+  EXPECT_LE(trailed_s, gear.final_hold_timeout_s + kPfDt);
+}
+
 TEST(MovingApproachRegression, NeverDescendsOnAPredictionLongUnmeasured) {
   // Bug: over a prediction 1.5 s unmeasured (inside lost_timeout_s), the vehicle matched the
   // prediction, descended and started the last drop: the gear came down on the floor 2.4 m from
