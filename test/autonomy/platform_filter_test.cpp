@@ -838,15 +838,25 @@ TEST(TopHeightTest, ATopTallerThanVisionsPlaneIsMeasuredWhileTheCameraDescends) 
   EXPECT_LT(plain.predict(now).top_z_m, m.z(t) + 0.01);
 }
 
+// A cart's top 6 cm above vision's plane, 48 x 22 cm, under a camera descending from 1.6 m to
+// 0.7 m, and again from 5 s on down to z_last.
+struct TwoDescents {
+  PlatformPath m;
+  CameraPath cam;
+  Vector2d size{0.48, 0.22};
+  double above = 0.06;
+};
+TwoDescents two_descents(double z_last) {
+  TwoDescents d;
+  d.m.straight = true, d.m.omega = 0;
+  d.cam.z0 = 1.6, d.cam.z_end = 0.7, d.cam.resume_s = 5.0, d.cam.z_last = z_last;
+  return d;
+}
+
 TEST(TopHeightTest, AFewWrongVelocitiesInALaterDescentDoNotMoveTheHeight) {
   // The height learned in a first descent, from 1.6 m to 0.7 m; in a second, a fifth of a second
   // of vision's vertical velocities read 15 cm/s high (a mismatched set): left out of the fit.
-  PlatformPath m;
-  m.straight = true, m.omega = 0;
-  CameraPath cam;
-  cam.z0 = 1.6, cam.z_end = 0.7, cam.resume_s = 5.0, cam.z_last = 0.5;
-  const Vector2d size(0.48, 0.22);
-  const double above = 0.06;
+  const auto [m, cam, size, above] = two_descents(0.5);
   PlatformFilter f{PlatformFilterParams{}};
   std::mt19937_64 rng(13);
   double worst_after = 0;
@@ -864,12 +874,7 @@ TEST(TopHeightTest, WindowsThatDisagreeWithTheHeightKeptWaitASecondOfThemBeforeR
   // drifted): not a few outliers but a new story, told by better informed windows that disagree
   // with the height kept by more than three sigmas. It is kept for the first second of them, and
   // taken once they have disagreed that long.
-  PlatformPath m;
-  m.straight = true, m.omega = 0;
-  CameraPath cam;
-  cam.z0 = 1.6, cam.z_end = 0.7, cam.resume_s = 5.0, cam.z_last = 0.45;
-  const Vector2d size(0.48, 0.22);
-  const double above = 0.06;
+  const auto [m, cam, size, above] = two_descents(0.45);
   PlatformFilter f{PlatformFilterParams{}};
   std::mt19937_64 rng(14);
   double first_disagreement = 0, kept_until = 0;
