@@ -182,7 +182,9 @@ const ParamSchema<LandingParams>& LandingParams::schema() {
     s.add("final_hold_settle_s", &P::final_hold_settle_s, Range::ge(0), "s",
           "... both within for this long");
     s.add("final_hold_timeout_s", &P::final_hold_timeout_s, Range::gt(0), "s",
-          "held this long without a calm moment: target lost (detection retry, then hold)");
+          "held this long without a calm moment: target lost (detection retry, then hold); over a "
+          "moving platform, this long at the final height without a drop, or in all above it "
+          "not matched well enough to descend: PLATFORM_TOO_FAST");
     s.add("final_pause_radial_m", &P::final_pause_radial_m, Range::ge(0), "m",
           "beyond the paper (as ArduPilot's PLND_XY_DIST_MAX): a gust that carries the vehicle "
           "more than this off the estimate during the final descent, with the gear still more "
