@@ -216,6 +216,21 @@ TopHeight fit_top_height(const std::deque<VerticalSample>& samples, double min_h
   return h;
 }
 
+namespace {
+
+// g of TopHeight: the vertical velocity a height error of one metre adds to the measurement, the
+// top taken dh_m above vision's plane [1/s]; 0 without cameras or with the earlier camera within
+// kMinPlacingRangeM of the top.
+double height_error_rate(const PlatformMeasurement& m, double dh_m) {
+  if (!m.placed_from_cameras()) return 0.0;
+  const double range_1 = m.ref_camera_W.z() - m.plane_z_m - dh_m;
+  if (!(range_1 >= kMinPlacingRangeM)) return 0.0;
+  const double dt = double(m.utime - m.ref_utime) * 1e-6;
+  return (m.ref_camera_W.z() - m.camera_W.z()) / (dt * range_1);
+}
+
+}  // namespace
+
 PlatformMeasurement placed_at_height(const PlatformMeasurement& m, double dh_m) {
   if (!m.placed_from_cameras() || dh_m == 0.0) return m;
   const double range_2 = m.camera_W.z() - m.plane_z_m, range_1 = m.ref_camera_W.z() - m.plane_z_m;
@@ -223,7 +238,7 @@ PlatformMeasurement placed_at_height(const PlatformMeasurement& m, double dh_m) 
   const double dt = double(m.utime - m.ref_utime) * 1e-6;
   // Each view's points lie k times as far from its camera's nadir as the top's.
   const double k = range_2 / (range_2 - dh_m);
-  const double g = (m.ref_camera_W.z() - m.camera_W.z()) / (dt * (range_1 - dh_m));
+  const double g = height_error_rate(m, dh_m);
   PlatformMeasurement out = m;
   const Vector2d nadir = m.camera_W.head<2>();
   out.p_W.head<2>() = nadir + (m.p_W.head<2>() - nadir) / k;
@@ -527,13 +542,8 @@ namespace {
 // The measurement's vertical velocity at its interval's middle, with the velocity a height error
 // of one metre adds there (TopHeight) at the height dh_m believed.
 VerticalSample vertical_sample(const PlatformMeasurement& raw, double dh_m) {
-  const double dt = double(raw.utime - raw.ref_utime) * 1e-6;
-  VerticalSample s{(raw.utime + raw.ref_utime) / 2, raw.v_W.z(), 0.0, dt};
-  if (!raw.placed_from_cameras()) return s;
-  const double range_1 = raw.ref_camera_W.z() - raw.plane_z_m - dh_m;
-  if (range_1 >= kMinPlacingRangeM)
-    s.g_per_s = (raw.ref_camera_W.z() - raw.camera_W.z()) / (dt * range_1);
-  return s;
+  return {(raw.utime + raw.ref_utime) / 2, raw.v_W.z(), height_error_rate(raw, dh_m),
+          double(raw.utime - raw.ref_utime) * 1e-6};
 }
 
 }  // namespace
@@ -652,7 +662,6 @@ PlatformFilter::Fused PlatformFilter::fuse(Track& t, const PlatformMeasurement& 
   t.top_z_sum += raw.p_W.z();
   t.g_dt_sum += vz.g_per_s * double(raw.utime - raw.ref_utime) * 1e-6;
   ++t.n_z;
-  t.placed_from_cameras = raw.placed_from_cameras();
   t.vz.push_back(vz);
   while (!t.vz.empty() &&
          double(t.vz.back().utime - t.vz.front().utime) * 1e-6 > params_.heave_window_s)

@@ -311,7 +311,6 @@ class PlatformFilter {
     double top_z_sum = 0;             // of the measurements' z as vision placed them
     double g_dt_sum = 0;              // of their VerticalSample::g_per_s times their interval [m/m]
     int n_z = 0;
-    bool placed_from_cameras = false;  // its measurements carry their cameras (version 2)
     std::deque<VerticalSample> vz;
     HeaveModel heave;
     double dh_m = 0;  // the filter's TopHeight when the track last fused (whole_extent's)
