@@ -253,6 +253,7 @@ std::optional<PlatformMeasurement> platform_from_msg(const platform_motion_t& m,
     p.ref_camera_W = Vector3d(m.ref_camera_W[0], m.ref_camera_W[1], m.ref_camera_W[2]);
     p.plane_z_m = m.plane_z_m;
   }
+  if (m.version >= 3) p.outline = m.outline;
   return p;
 }
 
@@ -279,6 +280,7 @@ platform_motion_t to_msg(const PlatformMeasurement& p, int64_t seq) {
   m.size_m[0] = p.size_m.x();
   m.size_m[1] = p.size_m.y();
   m.scale = 1.0;
+  m.outline = p.outline;
   if (p.placed_from_cameras()) {
     for (int i = 0; i < 3; ++i) {
       m.camera_W[i] = p.camera_W[i];

@@ -658,6 +658,13 @@ PlatformFilter::Fused PlatformFilter::fuse(Track& t, const PlatformMeasurement& 
   const bool spans_whole = t.whole.minCoeff() > 0 && !partial;
   if (m.size_m.minCoeff() > 0 && (!cut(m) || spans_whole)) add_extent(t, raw);
   // The heave: each vertical velocity is the mean over its interval, so at the interval's middle.
+  // An outline's is too coarse to read it (PlatformMeasurement::outline): its top is taken on
+  // the plane it was placed on, dh below the top believed, without a heave.
+  if (raw.outline) {
+    t.top_z_sum += raw.placed_from_cameras() ? raw.plane_z_m : raw.p_W.z();
+    ++t.n_z;
+    return partial ? Fused::kAcceptedPartial : Fused::kAccepted;
+  }
   const VerticalSample vz = vertical_sample(raw, t.dh_m);
   t.top_z_sum += raw.p_W.z();
   t.g_dt_sum += vz.g_per_s * double(raw.utime - raw.ref_utime) * 1e-6;

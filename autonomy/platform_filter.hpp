@@ -84,6 +84,10 @@ struct PlatformMeasurement {
   Vector3d camera_W = Vector3d::Zero(), ref_camera_W = Vector3d::Zero();
   double plane_z_m = NAN;
   bool placed_from_cameras() const { return std::isfinite(plane_z_m); }
+  /// Measured by its outline (platform_motion_t version 3): four corners give the scale, and so
+  /// the heave, to a few per cent, as much as a deck heaves over an interval; its vertical
+  /// velocity is left out of the heave and the top's height.
+  bool outline = false;
 };
 
 /// The top's height less the plane vision placed it on (dh), measured from the vertical

@@ -14,6 +14,7 @@
 #include "vision/geometry/waypoint.hpp"
 #include "vision/ingress/ingress_target.hpp"
 #include "vision/landing/landing_target.hpp"
+#include "vision/landing/moving_outline.hpp"
 
 namespace alight::vision {
 
@@ -246,14 +247,26 @@ std::optional<size_t> moving_reference(const std::vector<double>& ages_s,
   return newest_old_enough ? newest_old_enough : oldest_same_scale;
 }
 
+// Whether the features found no set moving as a platform: too few off the floor, none sharing
+// a motion, or every set found the floor's or beyond a platform (a floor's pattern matched to
+// its next copy, found before a plain top's few features). A set found and refused by a later
+// gate (size, a still top) is the top's features' verdict.
+namespace {
+bool features_found_no_set(MovingReason r) {
+  return r == MovingReason::kTooFewCandidates || r == MovingReason::kNoCommonMotion ||
+         r == MovingReason::kOnFloor || r == MovingReason::kTooFast;
+}
+}  // namespace
+
 // The moving top (pipeline.hpp) against the earlier frame moving_reference picks among those
-// within max_interval_s; the current frame then joins the recent ones.
+// within max_interval_s; the current frame then joins the recent ones. Where the features find
+// no set moving as a platform, the top is measured by its outline (moving_outline.hpp).
 void Pipeline::measure_moving(const std::shared_ptr<const TrackedFrame>& current, int64_t utime,
                               const PoseSample& pose, FrameResult* r) {
   const MovingTopParams& mp = params_.moving_top;
   if (mission_ != Mission::kLanding || !mp.enabled) return;
   const auto age_s = [&](int64_t t) { return double(utime - t) * 1e-6; };
-  while (!recent_.empty() && age_s(recent_.front().first->utime) > mp.max_interval_s)
+  while (!recent_.empty() && age_s(recent_.front().frame->utime) > mp.max_interval_s)
     recent_.pop_front();
   // The camera's height over the top's assumed plane (find_moving_top's z_top).
   const double z_top = params_.landing.floor_z_m + mp.top_height_m;
@@ -262,25 +275,73 @@ void Pipeline::measure_moving(const std::shared_ptr<const TrackedFrame>& current
   };
   std::vector<double> ages_s, ranges_m;
   for (const auto& e : recent_) {
-    ages_s.push_back(age_s(e.first->utime));
-    ranges_m.push_back(range_m(e.second));
+    ages_s.push_back(age_s(e.frame->utime));
+    ranges_m.push_back(range_m(e.pose));
   }
   const auto k = moving_reference(ages_s, ranges_m, range_m(pose), mp.interval_s);
-  const std::pair<std::shared_ptr<const TrackedFrame>, PoseSample>* earlier =
-      k ? &recent_[*k] : nullptr;
+  Recent now{current, pose, std::nullopt};
   MovingTop m;
-  if (!earlier) {
+  if (!k) {
     m.reason = MovingReason::kNoEarlierFrame;
   } else {
-    const TrackedFrame& a = *earlier->first;
+    const Recent& earlier = recent_[*k];
+    const TrackedFrame& a = *earlier.frame;
     Correspondences c = correspondences(a, *current, match_frames(a, *current, params_.match));
-    c.pose_1 = earlier->second;
+    c.pose_1 = earlier.pose;
     c.pose_2 = pose;
     m = find_moving_top(c, age_s(a.utime), params_.landing.floor_z_m, mp, a.image, current->image);
     r->moving_ref_utime = a.utime;
+    if (features_found_no_set(m.reason)) {
+      now.outlines = plain_outlines(*current);
+      if (!now.outlines->empty())
+        m = measure_moving_outline(*current, pose, *now.outlines, *k, ages_s, ranges_m,
+                                   range_m(pose), &r->moving_ref_utime);
+    }
   }
   r->moving = std::move(m);
-  recent_.emplace_back(current, pose);
+  recent_.push_back(std::move(now));
+}
+
+// A frame's plain regions by the image alone (featureless_outlines with no matches): a top plain
+// enough to give too few features for its motion may still give some, more in one frame than in
+// the next, and its outline is wanted in both.
+std::vector<Outline> Pipeline::plain_outlines(const TrackedFrame& f) const {
+  Correspondences none;
+  none.camera = &camera_;
+  return featureless_outlines(f.image, none, params_, kMaxMovingOutlines);
+}
+
+// The recent frames moving_reference would accept at some interval (the range within
+// kMovingMaxScaleChange, at least half interval_s old), frame k among them: a plain top's region
+// is found in most frames, not in all (its print's own edges split it in some), and its motion is
+// confirmed by two (moving_outline.hpp). *ref_utime: the earlier frame measured against, or k's.
+MovingTop Pipeline::measure_moving_outline(const TrackedFrame& current, const PoseSample& pose,
+                                           const std::vector<Outline>& now, size_t k,
+                                           const std::vector<double>& ages_s,
+                                           const std::vector<double>& ranges_m, double range_now_m,
+                                           int64_t* ref_utime) {
+  const MovingTopParams& mp = params_.moving_top;
+  std::vector<EarlierOutlines> earlier;
+  std::vector<size_t> frame_of;
+  for (size_t j = 0; j < recent_.size(); ++j) {
+    if (!(j == k || (ages_s[j] >= 0.5 * mp.interval_s && range_now_m > 0 && ranges_m[j] > 0 &&
+                     std::abs(range_now_m / ranges_m[j] - 1.0) <= kMovingMaxScaleChange)))
+      continue;
+    Recent& e = recent_[j];
+    if (!e.outlines) e.outlines = plain_outlines(*e.frame);
+    if (e.outlines->empty()) continue;
+    earlier.push_back({&*e.outlines, e.pose, &e.frame->readout, ages_s[j]});
+    frame_of.push_back(j);
+  }
+  Correspondences views;  // the cameras alone: the outlines' corners need no matches
+  views.camera = &camera_;
+  views.mount = &mount_;
+  views.readout_2 = &current.readout;
+  views.pose_2 = pose;
+  size_t used = 0;
+  MovingTop m = find_moving_outline(earlier, now, views, params_.landing.floor_z_m, mp, &used);
+  if (m.found()) *ref_utime = recent_[frame_of[used]].frame->utime;
+  return m;
 }
 
 // The matches as undistorted (K * ray) and raw pixels of both frames; under a rolling shutter

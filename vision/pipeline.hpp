@@ -59,6 +59,7 @@
 #include "vision/frontend/frame_checks.hpp"
 #include "vision/frontend/reference_tracker.hpp"
 #include "vision/landing/moving_top.hpp"
+#include "vision/landing/outline.hpp"
 #include "vision/params.hpp"
 #include "vision/target.hpp"
 
@@ -164,6 +165,14 @@ class Pipeline {
   bool spun(const TrackedFrame& f) const;
   void measure_moving(const std::shared_ptr<const TrackedFrame>& current, int64_t utime,
                       const PoseSample& pose, FrameResult* r);
+  /// The moving top by its outline (moving_outline.hpp) against the recent frames, the earlier
+  /// frame k first; its earlier frame's utime in *ref_utime.
+  MovingTop measure_moving_outline(const TrackedFrame& current, const PoseSample& pose,
+                                   const std::vector<Outline>& now, size_t k,
+                                   const std::vector<double>& ages_s,
+                                   const std::vector<double>& ranges_m, double range_now_m,
+                                   int64_t* ref_utime);
+  std::vector<Outline> plain_outlines(const TrackedFrame& f) const;
   bool holds() const;
   /// The reference's farthest distance from the camera at `pose` [m]: max_reference_baseline_m,
   /// or while landing kReferenceViewShare of the view's short side at the camera's range to the
@@ -187,8 +196,14 @@ class Pipeline {
   std::optional<uint64_t> last_hash_;
   PoseSample last_pose_;  // the pose of last_hash_'s frame
   std::optional<ScenePlane> wall_plane_;
-  // The last max_interval_s of frames and their poses, for the moving top (moving_top).
-  std::deque<std::pair<std::shared_ptr<const TrackedFrame>, PoseSample>> recent_;
+  // The last max_interval_s of frames and their poses, for the moving top (moving_top), and
+  // each one's plain regions' outlines once found (moving_outline).
+  struct Recent {
+    std::shared_ptr<const TrackedFrame> frame;
+    PoseSample pose;
+    std::optional<std::vector<Outline>> outlines;
+  };
+  std::deque<Recent> recent_;
   int64_t seq_ = 0;
 };
 

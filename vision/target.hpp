@@ -37,7 +37,10 @@ struct Correspondences {
   size_t size() const { return x1.size(); }
   Vector3d ray1(size_t k) const { return r1.empty() ? camera->ray(u1[k]) : r1[k]; }
   Vector3d ray2(size_t k) const { return r2.empty() ? camera->ray(u2[k]) : r2[k]; }
-  /// The ray of the current frame's row 0 through its raw pixel u.
+  /// The ray of the reference's / current frame's row 0 through its raw pixel u.
+  Vector3d ray_of_pixel1(const Vector2d& u) const {
+    return readout_1 ? ray_at_epoch(*camera, u, *readout_1) : camera->ray(u);
+  }
   Vector3d ray_of_pixel2(const Vector2d& u) const {
     return readout_2 ? ray_at_epoch(*camera, u, *readout_2) : camera->ray(u);
   }

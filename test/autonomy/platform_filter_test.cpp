@@ -921,6 +921,39 @@ TEST(TopHeightTest, ADecksHeightIsToldFromItsHeaveAndALevelCameraLeavesItUnmeasu
   EXPECT_GT(std::sqrt(level.top_height().var_m2), 0.05);
 }
 
+// A top vision measured by its outline (platform_motion_t version 3) moves the track as any other
+// measurement, but its vertical velocity (four corners' scale, a few per cent) is no heave: the
+// same deck's outline measurements leave the heave unfitted and the height unmeasured, and the
+// top is taken on vision's plane; where features measure it too, they alone fit the heave.
+TEST(TopHeightTest, AnOutlinesMeasurementsGiveNoHeaveAndNoHeight) {
+  PlatformPath m;
+  m.straight = true, m.omega = 0, m.v = 0.4;
+  m.A = 0.05, m.f = 0.3;
+  CameraPath cam;
+  cam.descent_mps = 0.15;
+  const Vector2d size(0.40, 0.30);
+  PlatformFilter outlines{PlatformFilterParams{}}, mixed{PlatformFilterParams{}};
+  std::mt19937_64 rng(12);
+  double t = kPfInterval;
+  int n = 0;
+  for (; t < 8; t += kPfDt, ++n) {
+    PlatformMeasurement z = placed_by_vision(m, cam, t, -0.06, size, rng);
+    // The outline's scale is off by a few per cent: a vertical velocity of 0.2 m/s.
+    PlatformMeasurement o = z;
+    o.outline = true;
+    o.v_W.z() += (n % 2 ? 0.2 : -0.2);
+    outlines.update(o);
+    mixed.update(n % 3 ? o : z);
+  }
+  EXPECT_TRUE(outlines.believed());
+  EXPECT_EQ(outlines.heave().w_rps, 0.0);
+  EXPECT_EQ(outlines.top_height().dh_m, 0.0);
+  EXPECT_NEAR(outlines.predict(kPfT0 + int64_t(t * 1e6)).top_z_m, 0.15, 1e-9);
+  EXPECT_NEAR(outlines.whole_top().x(), size.x(), 0.04);  // placed at vision's plane
+  // Mixed with the features' every third frame, the heave is theirs.
+  EXPECT_NEAR(mixed.heave().amplitude_m(), m.A, 0.015);
+}
+
 TEST(HeaveReleaseTest, TheLastDropStartsSoThatContactFollowsACrest) {
   // Heave z = A sin(w t): crests at w t = pi/2 + 2 pi k. The release must put the contact
   // (fall_s after it) in the quarter period after a crest, and one comes within a period.

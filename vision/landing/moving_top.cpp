@@ -36,6 +36,8 @@ const char* to_string(MovingReason r) {
       return "still_top";
     case MovingReason::kStillPixels:
       return "still_pixels";
+    case MovingReason::kOutlineUnpaired:
+      return "outline_unpaired";
   }
   return "unknown";
 }

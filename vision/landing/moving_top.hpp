@@ -65,6 +65,8 @@ enum class MovingReason : int8_t {
                           ///< the top matched to its next copy)
   kStillPixels = 9,       ///< a still top explains the set's pixels as well as its motion does
                           ///< (a repeated pattern whose still matches the ratio test dropped)
+  kOutlineUnpaired = 10,  ///< too few features, and a featureless outline in view that no
+                          ///< earlier outline follows by a platform's motion (moving_outline.hpp)
 };
 
 const char* to_string(MovingReason r);
@@ -94,8 +96,10 @@ struct MovingTop {
   /// The inliers' extent (long, short); zero where they reach two opposite borders (the top
   /// fills the view across: the extent is the view's) [m]
   double size_m[2] = {0, 0};
-  int n_candidates = 0;  ///< matches off the floor
-  int n_inliers = 0;
+  int n_candidates = 0;  ///< matches off the floor (by its outline: the outlines in view)
+  int n_inliers = 0;     ///< matches on the top (by its outline: its four corners)
+  /// Measured by its outline in both frames (moving_outline.hpp), not by its features.
+  bool outline = false;
   /// The set's pixels against the earlier image (kStillPixels): their normalised
   /// cross-correlation where a still top had them and where the measured motion had them; NaN
   /// where not compared (no images, too few pixels seen in both).

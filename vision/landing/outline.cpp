@@ -748,7 +748,7 @@ std::pair<double, double> height_search_range(const std::function<double(double)
 }
 
 std::vector<Outline> featureless_outlines(const cv::Mat& gray, const Correspondences& c,
-                                          const PipelineParams& params) {
+                                          const PipelineParams& params, size_t max_outlines) {
   std::vector<Outline> found;
   if (gray.empty() || gray.type() != CV_8UC1 || gray.cols < 8 * kScale || gray.rows < 8 * kScale)
     return found;
@@ -767,7 +767,7 @@ std::vector<Outline> featureless_outlines(const cv::Mat& gray, const Corresponde
   const MatchGrid grid(c, small);
   std::vector<Vector2d> places;  // the box centres of the regions taken, at quarter resolution
   for (size_t i : order) {
-    if (quads.size() == 2 * kMaxOutlines) break;
+    if (quads.size() == 2 * max_outlines) break;
     const cv::Rect& box = boxes[i];
     // Cheap refusals first (a busy image has hundreds of regions): a region that fills under
     // kMinBoxFill of its box is no rectangle's in any turn; one with features in the middle of
@@ -788,7 +788,7 @@ std::vector<Outline> featureless_outlines(const cv::Mat& gray, const Corresponde
     }
   }
   for (const auto& q : quads) {
-    if (found.size() == kMaxOutlines) break;
+    if (found.size() == max_outlines) break;
     if (matches_inside(c, q) >= params.landing.min_platform_inliers) continue;
     const bool dark = darker_inside(gray, q);
     if (auto r = refined(gray, q, dark); r && shortest_side(*r) >= kMinSidePx)

@@ -104,15 +104,16 @@ constexpr double kAgreePx = 1.5;
 std::pair<double, double> height_search_range(const std::function<double(double)>& parallax_px,
                                               double max_h, double diag_px);
 
-/// Stage 1 and 2: the featureless rectangular regions of gray (CV_8UC1, the current raw image)
-/// with fewer than min_platform_inliers of c's current pixels (u2) inside, largest first, at
-/// most kMaxOutlines; each already refined (stage 3).
-std::vector<Outline> featureless_outlines(const cv::Mat& gray, const Correspondences& c,
-                                          const PipelineParams& params);
-
 /// The most candidates measured per frame (the largest): a top is one region, the rest of a
 /// frame's candidates are the floor's patches.
 constexpr size_t kMaxOutlines = 2;
+
+/// Stage 1 and 2: the featureless rectangular regions of gray (CV_8UC1, the current raw image)
+/// with fewer than min_platform_inliers of c's current pixels (u2) inside, largest first, at
+/// most max_outlines; each already refined (stage 3).
+std::vector<Outline> featureless_outlines(const cv::Mat& gray, const Correspondences& c,
+                                          const PipelineParams& params,
+                                          size_t max_outlines = kMaxOutlines);
 
 /// Stages 4 and 5 on one outline: the top measured from its outline between the reference
 /// (gray_1) and the current image (gray_2), or why not: kOutlineUnmatched (a side with parallax

@@ -41,6 +41,7 @@ std::optional<platform_motion_t> to_platform_msg(const FrameResult& r) {
   m.reason = static_cast<int8_t>(t.reason);
   m.n_candidates = t.n_candidates;
   m.n_inliers = t.n_inliers;
+  m.outline = t.outline;
   if (!t.found()) return m;
   for (int i = 0; i < 3; ++i) {
     m.p_W[i] = t.p_W[i];

@@ -117,10 +117,21 @@ TEST(VisionConvertTest, MovingTopBecomesVisionPlatformOnlyWhereMeasured) {
   EXPECT_EQ(refused->reason, platform_motion_t::REASON_ON_FLOOR);
   EXPECT_EQ(refused->p_W[0], 0.0);
   EXPECT_EQ(refused->n_candidates, 50);
+  EXPECT_FALSE(refused->outline);
+  // Version 3: a top measured by its outline says so, also when its outline is refused.
+  m.outline = true;
+  m.reason = MovingReason::kOutlineUnpaired;
+  r.moving = m;
+  const auto unpaired = to_platform_msg(r);
+  ASSERT_TRUE(unpaired);
+  EXPECT_EQ(unpaired->version, 3);
+  EXPECT_TRUE(unpaired->outline);
+  EXPECT_EQ(unpaired->reason, platform_motion_t::REASON_OUTLINE_UNPAIRED);
   static_assert(int(MovingReason::kSizeOutOfRange) == platform_motion_t::REASON_SIZE_OUT_OF_RANGE);
   static_assert(int(MovingReason::kStillTop) == platform_motion_t::REASON_STILL_TOP);
   static_assert(int(MovingReason::kStillPixels) == platform_motion_t::REASON_STILL_PIXELS);
   static_assert(int(MovingReason::kNoEarlierFrame) == platform_motion_t::REASON_NO_EARLIER_FRAME);
+  static_assert(int(MovingReason::kOutlineUnpaired) == platform_motion_t::REASON_OUTLINE_UNPAIRED);
 }
 
 }  // namespace
