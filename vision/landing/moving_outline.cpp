@@ -178,8 +178,7 @@ void measure(const std::array<Vector2d, 4>& p, const std::array<Vector2d, 4>& q,
 
 // Whether the points xy at times t (three) lie on one straight track at one speed: the
 // least-squares line through them (per axis, over t) within tol_m of each.
-bool on_one_track(const std::array<double, 3>& t, const std::array<Vector2d, 3>& xy,
-                  double tol_m) {
+bool on_one_track(const std::array<double, 3>& t, const std::array<Vector2d, 3>& xy, double tol_m) {
   const double mt = (t[0] + t[1] + t[2]) / 3;
   const Vector2d mx = (xy[0] + xy[1] + xy[2]) / 3;
   double stt = 0;
@@ -233,24 +232,27 @@ MovingTop find_moving_outline(const std::vector<EarlierOutlines>& earlier,
   // The still rectangles set aside: the floor's and still tops' up to twice the assumed top's
   // height (kStillTopHeights). Any height a camera's motion leaves free would absorb a platform
   // moving along that motion.
-  const double still_max_z = std::min(z_low - 0.05, floor_z_m + kStillTopHeights * params.top_height_m);
+  const double still_max_z =
+      std::min(z_low - 0.05, floor_z_m + kStillTopHeights * params.top_height_m);
 
   std::optional<MovingReason> first;
   for (const Outline& o : now) {
     const Placed p2 = place(o, cam_2);
     if (!p2.ok) continue;
-    // Stage 2, against every earlier frame: a floor's pattern region is found in most frames
-    // where it stays, and paired with a copy one period on in any other.
+    // Stage 2, against every earlier frame interval_s old or more: a floor's pattern region is
+    // found in most frames where it stays, and paired with a copy one period on in any other; a
+    // younger frame leaves a slow platform's motion within the tolerance.
     std::optional<MovingReason> still;
     for (size_t j = 0; j < views.size() && !still; ++j) {
+      if (earlier[j].dt_s < params.interval_s) continue;
       const View& v = views[j];
       const std::vector<Outline>& e_px = *earlier[j].outlines;
       for (size_t e = 0; e < v.placed.size() && !still; ++e) {
         if (!v.placed[e].ok || v.placed[e].dark != p2.dark) continue;
         for (int k = 0; k < 4 && !still; ++k) {
           double h = 0;
-          if (still_residual_px(v.placed[e], p2, k, e_px[e], v.cam, floor_z_m - 0.05,
-                                still_max_z, &h) <= kOutlineStillPx)
+          if (still_residual_px(v.placed[e], p2, k, e_px[e], v.cam, floor_z_m - 0.05, still_max_z,
+                                &h) <= kOutlineStillPx)
             still = h < floor_z_m + 0.5 * params.top_height_m ? MovingReason::kOnFloor
                                                               : MovingReason::kStillTop;
         }
@@ -279,8 +281,9 @@ MovingTop find_moving_outline(const std::vector<EarlierOutlines>& earlier,
       for (size_t b = 0; b < pairs.size(); ++b) {
         const double ta = earlier[pairs[a].first].dt_s, tb = earlier[pairs[b].first].dt_s;
         if (!(tb - ta >= kMinOutlineSpanS)) continue;
-        if (!on_one_track({0.0, -ta, -tb}, {m2, centre(pairs[a].first, pairs[a].second),
-                                             centre(pairs[b].first, pairs[b].second)},
+        if (!on_one_track({0.0, -ta, -tb},
+                          {m2, centre(pairs[a].first, pairs[a].second),
+                           centre(pairs[b].first, pairs[b].second)},
                           tol_m))
           continue;
         // The longer interval measures the motion best.

@@ -13,9 +13,10 @@
 // exposures, related by the top's similarity as its features would be:
 //
 //   1. placed: each outline's corners on the plane floor_z_m + top_height_m from its own camera;
-//   2. still: a current outline that an outline of the same shading in any recent frame matches
-//      as a rectangle that stayed put at some height from the floor up to kStillTopHeights times
-//      the top's assumed height (the level plane through it carries each corner from view to
+//   2. still: a current outline that an outline of the same shading in any recent frame at
+//      least interval_s old (a younger one leaves a slow platform's motion within the tolerance)
+//      matches as a rectangle that stayed put at some height from the floor up to kStillTopHeights
+//      times the top's assumed height (the level plane through it carries each corner from view to
 //      view within kOutlineStillPx) is the floor's pattern or a still top, the still landing's
 //      (kOnFloor below half the assumed top height, else kStillTop): a chessboard's square is
 //      such an outline in every frame, and a square paired with its neighbour would move by one

@@ -35,8 +35,8 @@ PoseSample outline_camera_at(const Vector3d& p, double yaw) {
 
 constexpr double kOutlineDt = 0.25;  // the earliest frame's age; the middle one's is half of it
 
-// Three exposures, kOutlineDt and kOutlineDt / 2 before the current one, of a camera at 1.5 m flying 0.3 m/s
-// along y, and the rectangle (a deck) at each: r[0] the earliest, r[2] the current.
+// Three exposures, kOutlineDt and kOutlineDt / 2 before the current one, of a camera at 1.5 m
+// flying 0.3 m/s along y, and the rectangle (a deck) at each: r[0] the earliest, r[2] the current.
 struct OutlineScene {
   CameraModel camera = CameraModel::firefly_mv_4mm();
   CameraMount mount;
@@ -44,7 +44,8 @@ struct OutlineScene {
   OutlineRect r[3];
   std::vector<Outline> outlines[2];  // the earlier frames'
   OutlineScene() {
-    for (int i = 0; i < 3; ++i) pose[i] = outline_camera_at({0.0, 0.3 * kOutlineDt * i / 2, 1.5}, 0.3);
+    for (int i = 0; i < 3; ++i)
+      pose[i] = outline_camera_at({0.0, 0.3 * kOutlineDt * i / 2, 1.5}, 0.3);
   }
   // A deck at 0.4 m/s along x turning 8 deg/s.
   static OutlineScene deck() {
@@ -123,7 +124,8 @@ TEST(MovingOutlineTest, OneEarlierFrameAloneConfirmsNoMotion) {
 TEST(MovingOutlineTest, ARectangleThatStaysPutIsTheFloorsOrAStillTop) {
   OutlineScene s;
   for (OutlineRect& r : s.r) r.h = 0.0;
-  MovingTop m = s.measure({s.outline(s.r[0], 0, 1)}, {s.outline(s.r[1], 1)}, {s.outline(s.r[2], 2)});
+  MovingTop m =
+      s.measure({s.outline(s.r[0], 0, 1)}, {s.outline(s.r[1], 1)}, {s.outline(s.r[2], 2)});
   EXPECT_EQ(m.reason, MovingReason::kOnFloor) << to_string(m.reason);
   for (OutlineRect& r : s.r) r.h = 0.25;
   m = s.measure({s.outline(s.r[0], 0)}, {s.outline(s.r[1], 1)}, {s.outline(s.r[2], 2)});
@@ -131,9 +133,9 @@ TEST(MovingOutlineTest, ARectangleThatStaysPutIsTheFloorsOrAStillTop) {
 }
 
 // A chessboard's square and its neighbour one period (30 cm) along: paired with the neighbour
-// it would move at 1.2-2.4 m/s, a platform's speed. Where the square itself is in any earlier
-// frame, it stayed put: the floor's. Where it is in none, the neighbour, paired in both earlier
-// frames, stayed put between them: off the track of any one motion.
+// it would move at 1.2-2.4 m/s, a platform's speed. Where the square itself is in an earlier
+// frame interval_s old, it stayed put: the floor's. Where it is in none, the neighbour, paired in
+// both earlier frames, stayed put between them: off the track of any one motion.
 TEST(MovingOutlineTest, AFloorSquareIsNotPairedWithItsNeighbourOnePeriodOn) {
   OutlineScene s;
   OutlineRect square;
@@ -142,8 +144,8 @@ TEST(MovingOutlineTest, AFloorSquareIsNotPairedWithItsNeighbourOnePeriodOn) {
   square.c = {0.1, 0.1};
   OutlineRect neighbour = square;
   neighbour.c.x() -= 0.20;
-  MovingTop m = s.measure({s.outline(neighbour, 0)}, {s.outline(neighbour, 1), s.outline(square, 1)},
-                          {s.outline(square, 2)});
+  MovingTop m = s.measure({s.outline(neighbour, 0), s.outline(square, 0)},
+                          {s.outline(neighbour, 1)}, {s.outline(square, 2)});
   EXPECT_EQ(m.reason, MovingReason::kOnFloor) << to_string(m.reason);
   m = s.measure({s.outline(neighbour, 0)}, {s.outline(neighbour, 1)}, {s.outline(square, 2)});
   EXPECT_EQ(m.reason, MovingReason::kOutlineUnpaired) << to_string(m.reason);
