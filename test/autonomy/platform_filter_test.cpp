@@ -892,14 +892,24 @@ TEST(TopHeightTest, WindowsThatDisagreeWithTheHeightKeptWaitASecondOfThemBeforeR
   EXPECT_GT(std::abs(f.top_height().dh_m - above), 0.03);  // the new story taken in the end
 }
 
-TEST(TopHeightTest, ADecksHeightIsToldFromItsHeaveAndALevelCameraLeavesItUnmeasured) {
-  // A deck 6 cm below vision's plane heaving 5 cm at 0.3 Hz: the descent's reading is told from
-  // the heave's sine, and the heave is fitted on what the height leaves.
+// A deck at 0.4 m/s heaving 5 cm at 0.3 Hz under a camera descending at 0.15 m/s.
+PlatformPath heaving_deck() {
   PlatformPath m;
   m.straight = true, m.omega = 0, m.v = 0.4;
   m.A = 0.05, m.f = 0.3;
+  return m;
+}
+CameraPath slow_descent() {
   CameraPath cam;
   cam.descent_mps = 0.15;
+  return cam;
+}
+
+TEST(TopHeightTest, ADecksHeightIsToldFromItsHeaveAndALevelCameraLeavesItUnmeasured) {
+  // A deck 6 cm below vision's plane heaving 5 cm at 0.3 Hz: the descent's reading is told from
+  // the heave's sine, and the heave is fitted on what the height leaves.
+  const PlatformPath m = heaving_deck();
+  CameraPath cam = slow_descent();
   const Vector2d size(0.40, 0.30);
   PlatformFilter f{PlatformFilterParams{}};
   std::mt19937_64 rng(12);
@@ -926,11 +936,8 @@ TEST(TopHeightTest, ADecksHeightIsToldFromItsHeaveAndALevelCameraLeavesItUnmeasu
 // same deck's outline measurements leave the heave unfitted and the height unmeasured, and the
 // top is taken on vision's plane; where features measure it too, they alone fit the heave.
 TEST(TopHeightTest, AnOutlinesMeasurementsGiveNoHeaveAndNoHeight) {
-  PlatformPath m;
-  m.straight = true, m.omega = 0, m.v = 0.4;
-  m.A = 0.05, m.f = 0.3;
-  CameraPath cam;
-  cam.descent_mps = 0.15;
+  const PlatformPath m = heaving_deck();
+  const CameraPath cam = slow_descent();
   const Vector2d size(0.40, 0.30);
   PlatformFilter outlines{PlatformFilterParams{}}, mixed{PlatformFilterParams{}};
   std::mt19937_64 rng(12);
