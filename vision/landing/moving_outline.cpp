@@ -159,21 +159,10 @@ void measure(const std::array<Vector2d, 4>& p, const std::array<Vector2d, 4>& q,
   // kOutlineCornerPx at the top's depth.
   const double px_m = kOutlineCornerPx * depth_m(cam_2, m2, z_top) / cam_2.c->camera->K()(0, 0);
   const double var_r = std::max(pr.r2_sum / 4, px_m * px_m);
-  const double sh = params.top_height_sigma_m / std::max(0.1, d2);
-  const Vector2d u = (m2 - cam_2.X_WC.translation().head<2>()) * sh;
-  const Vector2d v_cam = (cam_2.X_WC.translation() - cam_1.X_WC.translation()).head<2>() / dt_s;
-  const Vector2d w = (vel - v_cam) * sh;
-  const double var_s = var_r / std::max(1e-6, spread);
-  out->cov_p_W.setZero();
-  out->cov_p_W.topLeftCorner<2, 2>() = var_r / 4 * Eigen::Matrix2d::Identity() + u * u.transpose();
-  out->cov_p_W(2, 2) = params.top_height_sigma_m * params.top_height_sigma_m + d2 * d2 * var_s;
-  out->cov_v_W.setZero();
-  out->cov_v_W.topLeftCorner<2, 2>() =
-      2 * var_r / (4 * dt_s * dt_s) * Eigen::Matrix2d::Identity() + w * w.transpose();
-  out->cov_v_W(2, 2) = d2 * d2 * var_s / (dt_s * dt_s);
+  const double var_s = set_covariances(var_r, 4, spread, m2, vel, cam_1.X_WC.translation(),
+                                       cam_2.X_WC.translation(), dt_s, params, out);
   // The long sides' direction: two sides of length L, each end off by the corners' error.
   out->var_yaw = std::max(var_s, var_r / std::max(1e-6, sides.long_m * sides.long_m));
-  out->var_yaw_rate = 2 * var_s / (dt_s * dt_s);
 }
 
 // Whether the points xy at times t (three) lie on one straight track at one speed: the

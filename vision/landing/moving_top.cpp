@@ -70,6 +70,29 @@ std::optional<Similarity2> fit_similarity(const std::vector<Vector2d>& p,
   return S;
 }
 
+double set_covariances(double var_r, double n, double spread, const Vector2d& centre_W,
+                       const Vector2d& vel_W, const Vector3d& ref_camera_W,
+                       const Vector3d& camera_W, double dt_s, const MovingTopParams& params,
+                       MovingTop* out) {
+  const double d2 = camera_W.z() - out->plane_z_m;
+  const double sh = params.top_height_sigma_m / std::max(0.1, d2);
+  // A height error scales the points about each camera's nadir: the centre moves along its
+  // offset from camera 2's nadir, the velocity along the speed relative to the camera.
+  const Vector2d u = (centre_W - camera_W.head<2>()) * sh;
+  const Vector2d v_cam = (camera_W - ref_camera_W).head<2>() / dt_s;
+  const Vector2d w = (vel_W - v_cam) * sh;
+  const double var_s = var_r / std::max(1e-6, spread);
+  out->cov_p_W.setZero();
+  out->cov_p_W.topLeftCorner<2, 2>() = var_r / n * Eigen::Matrix2d::Identity() + u * u.transpose();
+  out->cov_p_W(2, 2) = params.top_height_sigma_m * params.top_height_sigma_m + d2 * d2 * var_s;
+  out->cov_v_W.setZero();
+  out->cov_v_W.topLeftCorner<2, 2>() =
+      2 * var_r / (n * dt_s * dt_s) * Eigen::Matrix2d::Identity() + w * w.transpose();
+  out->cov_v_W(2, 2) = d2 * d2 * var_s / (dt_s * dt_s);
+  out->var_yaw_rate = 2 * var_s / (dt_s * dt_s);
+  return var_s;
+}
+
 namespace {
 
 // One match placed in the world: its rays from both cameras and, off the floor, its points on
@@ -484,27 +507,15 @@ void measure(const std::vector<Placed>& cand, const std::vector<size_t>& in, con
 
   // Residuals: per axis, 4 parameters fitted over 2n coordinates.
   const double var_r = r2_sum / std::max(1.0, 2 * n - 4);
-  const double sh = params.top_height_sigma_m / std::max(0.1, d2);
-  // A height error scales the points about each camera's nadir: the centre moves along its
-  // offset from camera 2's nadir, the velocity along the speed relative to the camera.
-  const Vector2d u = (centre.head<2>() - v.X_WC2.translation().head<2>()) * sh;
-  const Vector2d v_cam = (v.X_WC2.translation() - v.X_WC1.translation()).head<2>() / dt_s;
-  const Vector2d w = (vel - v_cam) * sh;
-  const double var_s = var_r / std::max(1e-6, spread);
-  out->cov_p_W.setZero();
-  out->cov_p_W.topLeftCorner<2, 2>() = var_r / n * Eigen::Matrix2d::Identity() + u * u.transpose();
-  out->cov_p_W(2, 2) = params.top_height_sigma_m * params.top_height_sigma_m + d2 * d2 * var_s;
+  const double var_s =
+      set_covariances(var_r, n, spread, centre.head<2>(), vel, v.X_WC1.translation(),
+                      v.X_WC2.translation(), dt_s, params, out);
   if (out->cut) out->cov_p_W.topLeftCorner<2, 2>() = kCutPositionVar * Eigen::Matrix2d::Identity();
-  out->cov_v_W.setZero();
-  out->cov_v_W.topLeftCorner<2, 2>() =
-      2 * var_r / (n * dt_s * dt_s) * Eigen::Matrix2d::Identity() + w * w.transpose();
-  out->cov_v_W(2, 2) = d2 * d2 * var_s / (dt_s * dt_s);
   // The turn between the frames has the scale's variance (same residuals, same spread); the
   // yaw itself is the rectangle's, known far less well, and not at all on a top cut by the
   // border.
   out->var_yaw =
       out->cut ? kUnknownYawVar : std::max(var_s, rect_yaw_variance(pts_W, out->yaw_rad));
-  out->var_yaw_rate = 2 * var_s / (dt_s * dt_s);
 }
 
 }  // namespace

@@ -138,6 +138,18 @@ inline constexpr double kStillShare = 0.25;
 /// it, a third or more below the motion's correlation.
 inline constexpr double kStillNccGap = 0.15;
 
+/// The covariances of a top measured from n points on its plane (out->plane_z_m set), their
+/// fit's residual variance var_r per coordinate [m^2] and spread (their summed squared distance
+/// from their centre) [m^2]: position and velocity from the residuals over n points and the
+/// height's uncertainty (a height error scales each view's points about its camera's nadir: the
+/// centre moves along its offset from the current camera's nadir, the velocity along the speed
+/// relative to the camera), z from the scale's variance var_r / spread, and the turn's rate.
+/// Sets cov_p_W, cov_v_W, var_yaw_rate; returns the scale's (and the turn's) variance.
+double set_covariances(double var_r, double n, double spread, const Vector2d& centre_W,
+                       const Vector2d& vel_W, const Vector3d& ref_camera_W,
+                       const Vector3d& camera_W, double dt_s, const MovingTopParams& params,
+                       MovingTop* out);
+
 /// Least-squares similarity from p to q (Umeyama 1991, in 2-D); nullopt when p has no extent.
 std::optional<Similarity2> fit_similarity(const std::vector<Vector2d>& p,
                                           const std::vector<Vector2d>& q);
