@@ -232,15 +232,18 @@ void Pipeline::hold_reference(Reference* ref, const TrackedFrame& current, int64
   ref->held = true;
 }
 
+bool same_moving_scale(double range_now_m, double range_m) {
+  return range_now_m > 0 && range_m > 0 &&
+         std::abs(range_now_m / range_m - 1.0) <= kMovingMaxScaleChange;
+}
+
 std::optional<size_t> moving_reference(const std::vector<double>& ages_s,
                                        const std::vector<double>& ranges_m, double range_now_m,
                                        double interval_s) {
   assert(ages_s.size() == ranges_m.size());
   std::optional<size_t> newest_old_enough, oldest_same_scale;
   for (size_t k = 0; k < ages_s.size(); ++k) {
-    const bool same_scale = range_now_m > 0 && ranges_m[k] > 0 &&
-                            std::abs(range_now_m / ranges_m[k] - 1.0) <= kMovingMaxScaleChange;
-    if (!same_scale || !(ages_s[k] > 0)) continue;
+    if (!same_moving_scale(range_now_m, ranges_m[k]) || !(ages_s[k] > 0)) continue;
     if (!oldest_same_scale) oldest_same_scale = k;
     if (ages_s[k] >= interval_s) newest_old_enough = k;
   }
@@ -324,8 +327,8 @@ MovingTop Pipeline::measure_moving_outline(const TrackedFrame& current, const Po
   std::vector<EarlierOutlines> earlier;
   std::vector<size_t> frame_of;
   for (size_t j = 0; j < recent_.size(); ++j) {
-    if (!(j == k || (ages_s[j] >= 0.5 * mp.interval_s && range_now_m > 0 && ranges_m[j] > 0 &&
-                     std::abs(range_now_m / ranges_m[j] - 1.0) <= kMovingMaxScaleChange)))
+    if (!(j == k ||
+          (ages_s[j] >= 0.5 * mp.interval_s && same_moving_scale(range_now_m, ranges_m[j]))))
       continue;
     Recent& e = recent_[j];
     if (!e.outlines) e.outlines = plain_outlines(*e.frame);

@@ -77,6 +77,10 @@ constexpr double kHoldMaxAgeS = 30.0;
 /// a few per cent of zoom, not across the third that a quarter second of the last drop makes.
 constexpr double kMovingMaxScaleChange = 0.1;
 
+/// Whether a frame whose camera is range_m from the top's plane shows the top at the current
+/// frame's scale (range_now_m): both positive, within kMovingMaxScaleChange.
+bool same_moving_scale(double range_now_m, double range_m);
+
 /// While landing, the reference may lie this share of the view's short side (across the floor at
 /// the camera's range) from the camera when that is more than max_reference_baseline_m. The bound
 /// keeps a top in view in both images, which the view's footprint sets (0.3 m is this share of

@@ -295,13 +295,11 @@ MovingTop find_moving_outline(const std::vector<EarlierOutlines>& earlier,
     Vector2d shift = Vector2d::Zero();
     for (int i = 0; i < 4; ++i) shift += (q[i] - p[i]) / 4;
     const Sides sides = sides_of(q);
-    const MovingReason why =
-        shift.norm() / dt_s > params.max_speed_mps ||
-                std::abs(pr.S.theta) / dt_s > params.max_yaw_rate_dps * M_PI / 180
-            ? MovingReason::kTooFast
-        : sides.short_m < params.min_size_m || sides.long_m > params.max_size_m
-            ? MovingReason::kSizeOutOfRange
-            : MovingReason::kOk;
+    const MovingReason why = motion_beyond_a_platform(shift.norm() / dt_s, pr.S, dt_s, params)
+                                 ? MovingReason::kTooFast
+                             : sides.short_m < params.min_size_m || sides.long_m > params.max_size_m
+                                 ? MovingReason::kSizeOutOfRange
+                                 : MovingReason::kOk;
     if (why != MovingReason::kOk) {
       if (!first) first = why;
       continue;

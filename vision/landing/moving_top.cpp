@@ -93,6 +93,13 @@ double set_covariances(double var_r, double n, double spread, const Vector2d& ce
   return var_s;
 }
 
+bool motion_beyond_a_platform(double speed_mps, const Similarity2& S, double dt_s,
+                              const MovingTopParams& params) {
+  return speed_mps > params.max_speed_mps ||
+         std::abs(S.theta) / dt_s > params.max_yaw_rate_dps * M_PI / 180 ||
+         std::abs(S.s - 1) > params.max_scale_change;
+}
+
 namespace {
 
 // One match placed in the world: its rays from both cameras and, off the floor, its points on
@@ -212,10 +219,7 @@ bool beyond_a_platform(const std::vector<Placed>& cand, const std::vector<size_t
                        const Similarity2& S, double dt_s, const MovingTopParams& params) {
   Vector2d shift = Vector2d::Zero();
   for (size_t k : in) shift += cand[k].p2 - cand[k].p1;
-  const double speed = shift.norm() / double(in.size()) / dt_s;
-  return speed > params.max_speed_mps ||
-         std::abs(S.theta) / dt_s > params.max_yaw_rate_dps * M_PI / 180 ||
-         std::abs(S.s - 1) > params.max_scale_change;
+  return motion_beyond_a_platform(shift.norm() / double(in.size()) / dt_s, S, dt_s, params);
 }
 
 std::vector<size_t> platform_motion(const std::vector<Placed>& cand, double dt_s,

@@ -138,6 +138,11 @@ inline constexpr double kStillShare = 0.25;
 /// it, a third or more below the motion's correlation.
 inline constexpr double kStillNccGap = 0.15;
 
+/// A motion no platform makes (kTooFast): faster than max_speed_mps, turning faster than
+/// max_yaw_rate_dps, or scaled beyond max_scale_change over dt_s.
+bool motion_beyond_a_platform(double speed_mps, const Similarity2& S, double dt_s,
+                              const MovingTopParams& params);
+
 /// The covariances of a top measured from n points on its plane (out->plane_z_m set), their
 /// fit's residual variance var_r per coordinate [m^2] and spread (their summed squared distance
 /// from their centre) [m^2]: position and velocity from the residuals over n points and the
