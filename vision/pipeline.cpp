@@ -265,7 +265,8 @@ bool features_found_no_set(MovingReason r) {
 // within max_interval_s; the current frame then joins the recent ones. Where the features find
 // no set moving as a platform, the top is measured by its outline (moving_outline.hpp).
 void Pipeline::measure_moving(const std::shared_ptr<const TrackedFrame>& current, int64_t utime,
-                              const PoseSample& pose, FrameResult* r) {
+                              const PoseSample& pose, const PlainRegions& regions_now,
+                              FrameResult* r) {
   const MovingTopParams& mp = params_.moving_top;
   if (mission_ != Mission::kLanding || !mp.enabled) return;
   const auto age_s = [&](int64_t t) { return double(utime - t) * 1e-6; };
@@ -295,7 +296,7 @@ void Pipeline::measure_moving(const std::shared_ptr<const TrackedFrame>& current
     m = find_moving_top(c, age_s(a.utime), params_.landing.floor_z_m, mp, a.image, current->image);
     r->moving_ref_utime = a.utime;
     if (features_found_no_set(m.reason)) {
-      now.outlines = plain_outlines(*current);
+      now.outlines = plain_outlines(regions_now);
       if (!now.outlines->empty())
         m = measure_moving_outline(*current, pose, *now.outlines, *k, ages_s, ranges_m,
                                    range_m(pose), &r->moving_ref_utime);
@@ -308,10 +309,10 @@ void Pipeline::measure_moving(const std::shared_ptr<const TrackedFrame>& current
 // A frame's plain regions by the image alone (featureless_outlines with no matches): a top plain
 // enough to give too few features for its motion may still give some, more in one frame than in
 // the next, and its outline is wanted in both.
-std::vector<Outline> Pipeline::plain_outlines(const TrackedFrame& f) const {
+std::vector<Outline> Pipeline::plain_outlines(const PlainRegions& regions) const {
   Correspondences none;
   none.camera = &camera_;
-  return featureless_outlines(f.image, none, params_, kMaxMovingOutlines);
+  return featureless_outlines(regions, none, params_, kMaxMovingOutlines);
 }
 
 // The recent frames moving_reference would accept at some interval (the range within
@@ -331,7 +332,7 @@ MovingTop Pipeline::measure_moving_outline(const TrackedFrame& current, const Po
           (ages_s[j] >= 0.5 * mp.interval_s && same_moving_scale(range_now_m, ranges_m[j]))))
       continue;
     Recent& e = recent_[j];
-    if (!e.outlines) e.outlines = plain_outlines(*e.frame);
+    if (!e.outlines) e.outlines = plain_outlines(PlainRegions(e.frame->image));
     if (e.outlines->empty()) continue;
     earlier.push_back({&*e.outlines, e.pose, &e.frame->readout, ages_s[j]});
     frame_of.push_back(j);
@@ -420,11 +421,14 @@ FrameResult Pipeline::process(const cv::Mat& gray, int64_t utime,
   frame.value().level = level;
   const auto up = track(std::move(frame.value()), utime, *pose);
   r.n_tracked = up.n_tracked;
+  // The current frame's plain regions, found where first wanted (the moving top's outline, the
+  // still landing's) and shared.
+  const PlainRegions regions_now(up.current ? up.current->image : cv::Mat());
   if (up.current && smeared(*up.current)) {
-    if (!spun(*up.current)) measure_moving(up.current, utime, *pose, &r);
+    if (!spun(*up.current)) measure_moving(up.current, utime, *pose, regions_now, &r);
     return fail(Reason::kMotionBlur);
   }
-  if (up.current) measure_moving(up.current, utime, *pose, &r);
+  if (up.current) measure_moving(up.current, utime, *pose, regions_now, &r);
   // No tracked reference (the tracks just broke): only the held one can serve.
   const bool held_only = up.status == Reason::kNoReference && up.current && holds() && held_;
   if (up.status != Reason::kOk && !held_only)
@@ -462,7 +466,7 @@ FrameResult Pipeline::process(const cv::Mat& gray, int64_t utime,
     image_1 = scaled;
   }
   const TargetOutcome t = mission_ == Mission::kLanding
-                              ? find_landing_target(c, params_, image_1, gray)
+                              ? find_landing_target(c, params_, image_1, gray, &regions_now)
                               : find_ingress_target(c, gray, parallax ? b.image : cv::Mat(),
                                                     parallax ? image_1 : cv::Mat(), params_);
   if (mission_ == Mission::kIngress && (t.reason == Reason::kOk || located_only(t.reason)))

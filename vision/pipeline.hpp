@@ -167,8 +167,10 @@ class Pipeline {
   bool smeared(const TrackedFrame& f) const;
   /// Smeared by the camera's turning (spin_blur_px past the same bound).
   bool spun(const TrackedFrame& f) const;
+  /// regions_now: the current frame's plain regions, shared with the still landing's outline
+  /// stage on the same frame.
   void measure_moving(const std::shared_ptr<const TrackedFrame>& current, int64_t utime,
-                      const PoseSample& pose, FrameResult* r);
+                      const PoseSample& pose, const PlainRegions& regions_now, FrameResult* r);
   /// The moving top by its outline (moving_outline.hpp) against the recent frames, the earlier
   /// frame k first; its earlier frame's utime in *ref_utime.
   MovingTop measure_moving_outline(const TrackedFrame& current, const PoseSample& pose,
@@ -176,7 +178,7 @@ class Pipeline {
                                    const std::vector<double>& ages_s,
                                    const std::vector<double>& ranges_m, double range_now_m,
                                    int64_t* ref_utime);
-  std::vector<Outline> plain_outlines(const TrackedFrame& f) const;
+  std::vector<Outline> plain_outlines(const PlainRegions& regions) const;
   bool holds() const;
   /// The reference's farthest distance from the camera at `pose` [m]: max_reference_baseline_m,
   /// or while landing kReferenceViewShare of the view's short side at the camera's range to the

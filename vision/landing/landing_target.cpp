@@ -88,7 +88,8 @@ bool found_or_partial(const TargetOutcome& o) {
 }  // namespace
 
 TargetOutcome find_landing_target(const Correspondences& c, const PipelineParams& params,
-                                  const cv::Mat& gray_1, const cv::Mat& gray_2) {
+                                  const cv::Mat& gray_1, const cv::Mat& gray_2,
+                                  const PlainRegions* regions_2) {
   assert(c.camera && c.mount);
   const auto usable = [&](const cv::Mat& m) {
     return !m.empty() && m.type() == CV_8UC1 && m.cols == c.camera->width &&
@@ -124,7 +125,7 @@ TargetOutcome find_landing_target(const Correspondences& c, const PipelineParams
   // One plane in view, the floor's: a top without features of its own is measured by its
   // outline (outline.hpp) on the known floor.
   if (no_top_plane(result.reason) && !gray_1.empty())
-    if (auto outline = find_outline_top(c, result.labels, gray_1, gray_2, params)) {
+    if (auto outline = find_outline_top(c, result.labels, gray_1, gray_2, params, regions_2)) {
       outline->labels = std::move(result.labels);
       outline->estimate.n_inliers_dominant = result.estimate.n_inliers_dominant;
       return *outline;

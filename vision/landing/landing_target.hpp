@@ -20,6 +20,7 @@
 
 #include "vision/landing/extent.hpp"
 #include "vision/landing/gates.hpp"
+#include "vision/landing/outline.hpp"
 #include "vision/params.hpp"
 #include "vision/target.hpp"
 
@@ -37,9 +38,11 @@ namespace alight::vision {
 /// gate, and the extent out to the top's rim); either empty or of another kind: the features alone
 /// decide. Where the planes find the floor alone (kNoTargetPlane) with both images and the known
 /// floor, a top without features is measured by its outline (outline.hpp: found, a partial view, or
-/// kOutlineOnFloor / kOutlineUnmatched and the stage's other refusals).
+/// kOutlineOnFloor / kOutlineUnmatched and the stage's other refusals); regions_2: gray_2's
+/// plain regions where the caller keeps them for other stages (outline.hpp's PlainRegions).
 TargetOutcome find_landing_target(const Correspondences& c, const PipelineParams& params,
                                   const cv::Mat& gray_1 = cv::Mat(),
-                                  const cv::Mat& gray_2 = cv::Mat());
+                                  const cv::Mat& gray_2 = cv::Mat(),
+                                  const PlainRegions* regions_2 = nullptr);
 
 }  // namespace alight::vision

@@ -747,26 +747,64 @@ std::pair<double, double> height_search_range(const std::function<double(double)
   return {lo, parallax_px(lo)};
 }
 
+const PlainRegions::Found& PlainRegions::found() const {
+  if (found_) return *found_;
+  found_.emplace();
+  Found& f = *found_;
+  if (gray_.empty() || gray_.type() != CV_8UC1 || gray_.cols < 8 * kScale ||
+      gray_.rows < 8 * kScale)
+    return f;
+  f.small = cv::Size(gray_.cols / kScale, gray_.rows / kScale);
+  const auto mser = cv::MSER::create(kMserDelta, static_cast<int>(kMinAreaPx / (kScale * kScale)),
+                                     f.small.area() / 2);
+  mser->detectRegions(texture_map(gray_, f.small), f.regions, f.boxes);
+  // Largest first; MSER gives one region at several thresholds: one candidate per place.
+  f.largest_first.resize(f.regions.size());
+  for (size_t i = 0; i < f.largest_first.size(); ++i) f.largest_first[i] = i;
+  std::sort(f.largest_first.begin(), f.largest_first.end(),
+            [&](size_t a, size_t b) { return f.regions[a].size() > f.regions[b].size(); });
+  memo_.resize(f.regions.size());
+  return f;
+}
+
+const std::optional<std::vector<Vector2d>>& PlainRegions::quad(size_t i) const {
+  const Found& f = found();
+  assert(i < f.regions.size());
+  if (!memo_[i].quad) memo_[i].quad = region_quad(f.regions[i]);
+  return *memo_[i].quad;
+}
+
+const std::optional<Outline>& PlainRegions::outline(size_t i) const {
+  if (memo_.size() <= i || !memo_[i].outline) {
+    const auto& q = quad(i);
+    std::optional<Outline> o;
+    if (q) {
+      const bool dark = darker_inside(gray_, *q);
+      if (auto r = refined(gray_, *q, dark); r && shortest_side(*r) >= kMinSidePx)
+        o = Outline{std::move(*r), dark};
+    }
+    memo_[i].outline = std::move(o);
+  }
+  return *memo_[i].outline;
+}
+
 std::vector<Outline> featureless_outlines(const cv::Mat& gray, const Correspondences& c,
                                           const PipelineParams& params, size_t max_outlines) {
+  return featureless_outlines(PlainRegions(gray), c, params, max_outlines);
+}
+
+std::vector<Outline> featureless_outlines(const PlainRegions& plain, const Correspondences& c,
+                                          const PipelineParams& params, size_t max_outlines) {
   std::vector<Outline> found;
-  if (gray.empty() || gray.type() != CV_8UC1 || gray.cols < 8 * kScale || gray.rows < 8 * kScale)
-    return found;
-  const cv::Size small(gray.cols / kScale, gray.rows / kScale);
-  const auto mser = cv::MSER::create(kMserDelta, static_cast<int>(kMinAreaPx / (kScale * kScale)),
-                                     small.area() / 2);
-  std::vector<std::vector<cv::Point>> regions;
-  std::vector<cv::Rect> boxes;
-  mser->detectRegions(texture_map(gray, small), regions, boxes);
-  // Largest first; MSER gives one region at several thresholds: one candidate per place.
-  std::vector<size_t> order(regions.size());
-  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
-  std::sort(order.begin(), order.end(),
-            [&](size_t a, size_t b) { return regions[a].size() > regions[b].size(); });
-  std::vector<std::vector<Vector2d>> quads;
+  const PlainRegions::Found& f = plain.found();
+  if (f.regions.empty()) return found;
+  const cv::Size& small = f.small;
+  const auto& regions = f.regions;
+  const auto& boxes = f.boxes;
+  std::vector<size_t> quads;  // regions with a rectangle
   const MatchGrid grid(c, small);
   std::vector<Vector2d> places;  // the box centres of the regions taken, at quarter resolution
-  for (size_t i : order) {
+  for (size_t i : f.largest_first) {
     if (quads.size() == 2 * max_outlines) break;
     const cv::Rect& box = boxes[i];
     // Cheap refusals first (a busy image has hundreds of regions): a region that fills under
@@ -782,17 +820,15 @@ std::vector<Outline> featureless_outlines(const cv::Mat& gray, const Corresponde
         box.x <= kMserRing || box.y <= kMserRing || box.br().x >= small.width - kMserRing ||
         box.br().y >= small.height - kMserRing)
       continue;
-    if (auto q = region_quad(regions[i])) {
-      quads.push_back(std::move(*q));
+    if (plain.quad(i)) {
+      quads.push_back(i);
       places.push_back(place);
     }
   }
-  for (const auto& q : quads) {
+  for (size_t i : quads) {
     if (found.size() == max_outlines) break;
-    if (matches_inside(c, q) >= params.landing.min_platform_inliers) continue;
-    const bool dark = darker_inside(gray, q);
-    if (auto r = refined(gray, q, dark); r && shortest_side(*r) >= kMinSidePx)
-      found.push_back({std::move(*r), dark});
+    if (matches_inside(c, *plain.quad(i)) >= params.landing.min_platform_inliers) continue;
+    if (const auto& o = plain.outline(i)) found.push_back(*o);
   }
   return found;
 }
@@ -877,8 +913,11 @@ int corners_on_floor(const Outline& o, const Correspondences& c, const std::vect
 std::optional<TargetOutcome> find_outline_top(const Correspondences& c,
                                               const std::vector<Label>& labels,
                                               const cv::Mat& gray_1, const cv::Mat& gray_2,
-                                              const PipelineParams& params) {
-  const std::vector<Outline> outlines = featureless_outlines(gray_2, c, params);
+                                              const PipelineParams& params,
+                                              const PlainRegions* regions_2) {
+  const PlainRegions own(regions_2 ? cv::Mat() : gray_2);
+  const std::vector<Outline> outlines =
+      featureless_outlines(regions_2 ? *regions_2 : own, c, params);
   if (outlines.empty()) return std::nullopt;
   std::optional<TargetOutcome> first;
   for (const auto& o : outlines) {

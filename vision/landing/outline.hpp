@@ -108,9 +108,46 @@ std::pair<double, double> height_search_range(const std::function<double(double)
 /// frame's candidates are the floor's patches.
 constexpr size_t kMaxOutlines = 2;
 
-/// Stage 1 and 2: the featureless rectangular regions of gray (CV_8UC1, the current raw image)
-/// with fewer than min_platform_inliers of c's current pixels (u2) inside, largest first, at
-/// most max_outlines; each already refined (stage 3).
+/// Stage 1's maximally stable regions of one image (CV_8UC1, raw) and what the image alone says
+/// of each (its rectangle, stage 3's refined outline): found on first use and kept, so that the
+/// still landing's outline stage and the moving top's (each with its own matches) read one
+/// frame's at the cost of one texture map, one MSER and one refinement a region.
+class PlainRegions {
+ public:
+  struct Found {
+    cv::Size small;  ///< the texture map's size (a quarter of the resolution)
+    std::vector<std::vector<cv::Point>> regions;
+    std::vector<cv::Rect> boxes;
+    std::vector<size_t> largest_first;  ///< indices into regions
+  };
+  explicit PlainRegions(cv::Mat gray) : gray_(std::move(gray)) {}
+  const cv::Mat& image() const { return gray_; }
+  /// Empty for an image too small or not CV_8UC1.
+  const Found& found() const;
+  /// Region i's rectangle at the quarter resolution, raw pixels (stage 1); nullopt for a region
+  /// that is no rectangle's.
+  const std::optional<std::vector<Vector2d>>& quad(size_t i) const;
+  /// Region i's outline refined at full resolution (stage 3) with its shading; nullopt where it
+  /// has no rectangle, a side finds no line or the outline is narrower than a top.
+  const std::optional<Outline>& outline(size_t i) const;
+
+ private:
+  struct Memo {
+    std::optional<std::optional<std::vector<Vector2d>>> quad;
+    std::optional<std::optional<Outline>> outline;
+  };
+  cv::Mat gray_;
+  mutable std::optional<Found> found_;
+  mutable std::vector<Memo> memo_;  // one per region, once found_ is
+};
+
+/// Stage 1 and 2: the featureless rectangular regions of the image (regions.image(), the
+/// current raw image) with fewer than min_platform_inliers of c's current pixels (u2) inside,
+/// largest first, at most max_outlines; each already refined (stage 3).
+std::vector<Outline> featureless_outlines(const PlainRegions& regions, const Correspondences& c,
+                                          const PipelineParams& params,
+                                          size_t max_outlines = kMaxOutlines);
+/// The same on an image whose regions nobody keeps.
 std::vector<Outline> featureless_outlines(const cv::Mat& gray, const Correspondences& c,
                                           const PipelineParams& params,
                                           size_t max_outlines = kMaxOutlines);
@@ -137,10 +174,12 @@ int corners_on_floor(const Outline& o, const Correspondences& c, const std::vect
 /// The stage as find_landing_target calls it after the planes found no top (labels: theirs, one
 /// per match): the first outline (featureless_outlines) measured as a top or located in part,
 /// else the first refusal (kOutlineOnFloor for one whose corners are the floor's, as
-/// corners_on_floor); nullopt where no featureless outline is in view.
+/// corners_on_floor); nullopt where no featureless outline is in view. regions_2: gray_2's
+/// regions where the caller keeps them (the same pixels), else found here.
 std::optional<TargetOutcome> find_outline_top(const Correspondences& c,
                                               const std::vector<Label>& labels,
                                               const cv::Mat& gray_1, const cv::Mat& gray_2,
-                                              const PipelineParams& params);
+                                              const PipelineParams& params,
+                                              const PlainRegions* regions_2 = nullptr);
 
 }  // namespace alight::vision

@@ -1269,6 +1269,43 @@ TEST(OutlineTop, APanelPrintedOnALargerTopIsNotTheTop) {
   }
 }
 
+// One frame's plain regions serve the still landing (with its matches) and the moving top (by
+// the image alone, more outlines) in either order as each would find them alone: the regions,
+// their rectangles and refinements are the image's; the matches only choose among them. With
+// features on the top the two callers' outlines differ (the still landing's leaves the top out).
+TEST(OutlineTop, OneFramesPlainRegionsServeEachCallerAsAlone) {
+  const BoxScene scene = slate_on_granite();
+  PipelineParams params;
+  const auto same = [](const std::vector<Outline>& a, const std::vector<Outline>& b) {
+    if (a.size() != b.size()) return false;
+    for (size_t i = 0; i < a.size(); ++i)
+      if (a[i].dark != b[i].dark || a[i].corners != b[i].corners) return false;
+    return true;
+  };
+  int differ = 0;
+  for (const int n_top : {0, 40})
+    for (uint64_t seed = 1; seed <= 3; ++seed) {
+      const BoxViews b = box_views(scene, seed, 0, 0, std::nullopt, 0.0, 140, n_top);
+      Correspondences none;
+      none.camera = &b.view.camera;
+      const auto still = featureless_outlines(b.image_2, b.view.c, params);
+      const auto moving = featureless_outlines(b.image_2, none, params, 4);
+      ASSERT_FALSE(moving.empty()) << "seed " << seed;
+      differ += !same(still, moving);
+      const PlainRegions moving_first(b.image_2), still_first(b.image_2);
+      EXPECT_TRUE(same(featureless_outlines(moving_first, none, params, 4), moving));
+      EXPECT_TRUE(same(featureless_outlines(moving_first, b.view.c, params), still));
+      EXPECT_TRUE(same(featureless_outlines(still_first, b.view.c, params), still));
+      EXPECT_TRUE(same(featureless_outlines(still_first, none, params, 4), moving));
+      const TargetOutcome alone = find_landing_target(b.view.c, params, b.image_1, b.image_2);
+      const TargetOutcome shared =
+          find_landing_target(b.view.c, params, b.image_1, b.image_2, &moving_first);
+      EXPECT_EQ(shared.reason, alone.reason) << "seed " << seed << " n_top " << n_top;
+      EXPECT_EQ(shared.estimate.p_W, alone.estimate.p_W) << "seed " << seed << " n_top " << n_top;
+    }
+  EXPECT_GT(differ, 0);
+}
+
 // A featureless top's own side faces can hold matches (a box's print running down its sides):
 // those next to the rim lie within a few centimetres of the top's height, where the top's plane
 // carries them within the homography's threshold, and within kFaceBandPx of the outline. They
