@@ -126,6 +126,8 @@ struct FrameResult {
   /// (no pose, a bad image, no features, a smeared frame).
   std::optional<MovingTop> moving;
   int64_t moving_ref_utime = 0;
+  /// For the diagnostic image: the moving top's inliers in the current frame (raw pixels).
+  std::vector<Vector2d> moving_px;
 };
 
 class Pipeline {

@@ -6,7 +6,7 @@
 // waypoint count. On a moving platform also the body's offset from the top's centre, the moving
 // top's measurement (cut by the border or not) and the platform filter's prediction against the
 // truth. With --dump DIR the frames (true top outline green, measured red, features
-// coloured by label) are written as PNG for a look.
+// coloured by label, the moving top's set as magenta crosses) are written as PNG for a look.
 //
 //   build/bin/alight_landing_diag --scenario FILE [--seed N] [--no-mocap] [--dump DIR] [--every K]
 
@@ -132,10 +132,19 @@ int main(int argc, char** argv) try {
   cfg.seed = seed;
   cfg.time_limit_s = time_limit_s;
   cfg.onboard_estimate = no_mocap;
-  cfg.script = [&](const Autonomy& a, double, ScriptActions&) {
+  // Autonomy's reason within a phase, printed where its words change (its figures change each
+  // step): what the vehicle waits for.
+  std::string said;
+  const auto words = [](const std::string& r) {
+    return r.substr(0, r.find_first_of("(0123456789"));
+  };
+  cfg.script = [&](const Autonomy& a, double t, ScriptActions&) {
     if (a.phase() != phase)
       std::printf("# phase %s -> %s (retries %d): %s\n", phase_name(phase), phase_name(a.phase()),
                   a.retries(), a.reason().c_str());
+    else if (words(a.reason()) != said)
+      std::printf("# %.3f reason: %s\n", t, a.reason().c_str());
+    said = words(a.reason());
     phase = a.phase();
     n_waypoints = a.estimator().n();
     const auto& pf = a.platform_filter();
@@ -305,6 +314,8 @@ int main(int argc, char** argv) try {
                                       : cv::Scalar(0, 255, 255);
         cv::circle(bgr, cv::Point(r.matched_px[i].x(), r.matched_px[i].y()), 2, colour, -1);
       }
+      for (const auto& u : r.moving_px)  // the moving top's set
+        cv::drawMarker(bgr, cv::Point(u.x(), u.y()), {255, 0, 255}, cv::MARKER_CROSS, 5);
       char name[64];
       std::snprintf(name, sizeof name, "/f%05d.png", n);
       if (!cv::imwrite(dump + name, bgr))
