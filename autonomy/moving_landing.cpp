@@ -147,10 +147,13 @@ DropCheck check_drop(const PlatformFilter& filter, const PoseSample& pose, int64
   return c;
 }
 
+bool centre_placed(const DropCheck& c) {
+  return c.centre_sd_m <= c.room_m && c.placed_views >= kPlacedToDrop;
+}
+
 bool aimed_for_drop(const DropCheck& c, const LandingGear& gear) {
   return !std::isfinite(c.room_m) ||
-         (c.off_m.cwiseAbs().maxCoeff() <= c.room_m - gear.fit_margin_m &&
-          c.centre_sd_m <= c.room_m && c.placed_views >= kPlacedToDrop);
+         (c.off_m.cwiseAbs().maxCoeff() <= c.room_m - gear.fit_margin_m && centre_placed(c));
 }
 
 MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
@@ -248,13 +251,24 @@ MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
   const std::string off = "the gear " + fmt(c.off_m.cwiseAbs().maxCoeff(), 3) +
                           " m off its centre, known to " + fmt(c.centre_sd_m, 3) +
                           " m, placed by " + std::to_string(c.placed_views) + " views in a row";
-  if (waited_s < gear.final_hold_timeout_s && settled && c.centre_sd_m > c.room_m &&
-      c.room_m > gear.fit_margin_m) {
+  // A centre the views at this height do not place: its standard deviation past the room, or
+  // settled without kPlacedToDrop views in a row for kUnplacedClimbS (views that keep the
+  // deviation small but are all cut).
+  if (settled && std::isfinite(c.room_m) && !centre_placed(c)) {
+    if (!s.unplaced_since_utime) s.unplaced_since_utime = now_utime;
+  } else {
+    s.unplaced_since_utime.reset();
+  }
+  const bool unplaced = c.centre_sd_m > c.room_m ||
+                        (s.unplaced_since_utime &&
+                         double(now_utime - *s.unplaced_since_utime) * 1e-6 >= kUnplacedClimbS);
+  if (waited_s < gear.final_hold_timeout_s && settled && unplaced && c.room_m > gear.fit_margin_m) {
     // Close over the top it fills the view, and its views, cut by the border, place nothing:
     // from the follow height it is seen whole. Climb there and descend again (the wait for a
     // moment to drop runs on from the first arrival here). A top with no room for the aim is
     // never dropped onto, placed or not: no climb.
     s.z_sp_m = z_follow;
+    s.unplaced_since_utime.reset();
     ++s.placing_climbs;
     if (view)
       s.final_view_height_m =

@@ -32,7 +32,8 @@
 //     (aimed_for_drop). After kMaxDropGoArounds, or final_hold_timeout_s at the final height
 //     without a drop, the platform is beyond what the vehicle lands on
 //     (Failsafe::kPlatformTooFast).
-//  6. The centre unplaced at the final height (its standard deviation beyond the room): close
+//  6. The centre unplaced at the final height (its standard deviation beyond the room, or fewer
+//     than kPlacedToDrop views in a row placing it for kUnplacedClimbS while settled): close
 //     over the top it fills the view and its views, cut by the border, place nothing; matched,
 //     the vehicle climbs back to follow_height_m, where the top is seen whole, turns the image's
 //     long axis along the top's (once the whole views have told which it is) and descends again,
@@ -173,6 +174,16 @@ struct DropCheck {
 /// top) while its variance says 1-2 cm; a second and third placed within the filter's gate of it
 /// confirm it, one outside the gate puts it in doubt.
 inline constexpr int kPlacedToDrop = 3;
+/// The predicted centre known within the room (its standard deviation) and placed by
+/// kPlacedToDrop views in a row: what the last drop needs of the centre besides the aim.
+bool centre_placed(const DropCheck& c);
+/// Settled over a centre not placed this long at the final height, the views there place
+/// nothing (step 6: cut by the border, close over a top that fills the view) and the vehicle
+/// climbs to see it whole [s]. Where the top is seen whole, kPlacedToDrop views in a row come in
+/// a few tenths of a second (a view every frame or two); a centre whose standard deviation
+/// outgrows the room climbs at once.
+inline constexpr double kUnplacedClimbS = 1.0;
+
 /// Whether the last drop goes on. Committed while the gear is within final_descent_rate_mps x
 /// fall_lag_s of the top (the altitude loop's lag: a climb ordered there still touches down);
 /// otherwise off the top when the gear's centre (gear_height_m below the body along its z axis:
@@ -183,10 +194,9 @@ DropCheck check_drop(const PlatformFilter& filter, const PoseSample& pose, int64
 
 /// The last drop starts only with the gear's centre within the room less fit_margin_m on both of
 /// the top's axes (check_drop's): the aim the still landing keeps, and the go-around's own
-/// margin, so that a drop is not given up where it begins; and on a predicted centre known within
-/// the room (its standard deviation): a top seen only cut by the border for seconds has a centre
-/// the filter has not placed, and a drop matched to it lands wherever it drifted; placed by
-/// kPlacedToDrop views in a row.
+/// margin, so that a drop is not given up where it begins; and on a placed centre
+/// (centre_placed): a top seen only cut by the border for seconds has a centre the filter has
+/// not placed, and a drop matched to it lands wherever it drifted.
 bool aimed_for_drop(const DropCheck& c, const LandingGear& gear);
 
 /// Step 6: the gear's height over a top of `whole_top_m` (long, short) from which the whole top
@@ -211,6 +221,8 @@ struct MovingApproach {
   std::optional<int64_t> too_fast_since_utime;
   int too_fast_since_updates = 0;  ///< the filter's fused views when it began
   int placing_climbs = 0;          ///< climbs to the follow height to place the centre (step 6)
+  /// Settled at the final height over a centre not placed (centre_placed) since.
+  std::optional<int64_t> unplaced_since_utime;
   /// After a climb (step 6): the gear's height over the top for the last drop
   /// (final_view_height_m; before it, final_height_m) [m].
   std::optional<double> final_view_height_m;

@@ -1331,6 +1331,52 @@ TEST(MovingDropTest, AnUnplacedCentreAtTheFinalHeightIsClimbedAwayFromAndPlacedF
   EXPECT_EQ(st.next, MovingStep::Next::kFinalDescent) << st.reason;
 }
 
+// At the final height over a centre the views keep in doubt: every third view places it 15 cm
+// off (a view holding more than the top) and is refused, which starts the count of views in a row
+// over, while the others keep its deviation well within the room. No drop starts (never three in
+// a row); settled there kUnplacedClimbS, the vehicle climbs to see the top whole, not before.
+TEST(MovingDropTest, ACentreNoThreeViewsInARowPlaceIsClimbedAwayFromAfterAWhile) {
+  const PlatformPath m = straight_path(0.5);
+  std::mt19937_64 rng(61);
+  const Vector2d top(0.41, 0.25);
+  PlatformFilter f = followed_for_2s(m, top, rng);
+  double t = 2;
+  const LandingGear gear;
+  const MovingLandingParams params;
+  MovingApproach s;
+  s.matched_since_utime = kPfT0;  // matched and settled all along
+  s.z_sp_m = f.predict(f.utime()).top_z_m + gear.gear_height_m + params.final_height_m;
+  int k = 0;
+  const auto view = [&] {
+    PlatformMeasurement z = measure_sized(m, t, rng, top);
+    if (k++ % 3 == 2) z.p_W.x() += 0.15;
+    f.update(z);
+  };
+  for (; k < 6; t += kPfDt) view();  // the last one refused
+  ASSERT_EQ(f.n_placed(), 0);
+  std::optional<double> climbed_after_s;
+  const double t0 = t;
+  for (double t_end = t + 3.0; t < t_end && !climbed_after_s; t += kPfDt) {
+    view();
+    const int64_t now = kPfT0 + int64_t(t * 1e6);
+    const auto pr = f.predict(now);
+    PoseSample pose;  // over the centre, matched, at the final height
+    pose.p_W_B << pr.p_W, pr.top_z_m + gear.gear_height_m + params.final_height_m;
+    pose.v_W_B << pr.v_W, 0.0;
+    const MovingStep st = step_moving_approach(s, f, pose, now, kPfDt, 0.0, gear, params);
+    ASSERT_NE(st.next, MovingStep::Next::kFinalDescent) << st.reason;
+    const DropCheck c = check_drop(f, pose, now, gear, params);
+    EXPECT_LE(c.centre_sd_m, c.room_m);
+    EXPECT_LT(c.placed_views, kPlacedToDrop);
+    if (st.reason.find("climbing to see the top whole") != std::string::npos)
+      climbed_after_s = t - t0;
+  }
+  ASSERT_TRUE(climbed_after_s.has_value());
+  EXPECT_GE(*climbed_after_s, kUnplacedClimbS - 1e-9);
+  EXPECT_LT(*climbed_after_s, kUnplacedClimbS + 2 * kPfDt);
+  EXPECT_EQ(s.placing_climbs, 1);
+}
+
 // The same with the camera's view declared: after the climb the body turns the image's long axis
 // along the top's and descends only to where the whole top fits the view; there the drop starts.
 TEST(MovingDropTest, AfterTheClimbTheDropStartsFromWhereTheWholeTopFitsTheView) {
