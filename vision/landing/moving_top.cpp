@@ -257,6 +257,50 @@ std::vector<size_t> platform_motion(const std::vector<Placed>& cand, double dt_s
   }
 }
 
+// Stage 3's first step: the set as one region of the plane. The top is one piece, its matches
+// spread over its print; a match elsewhere that shares its motion by chance (a floor feature
+// mismatched by the motion's few pixels, likelier the slower the top) lies apart from them and,
+// taken into the set, stretches its rectangle, turns its yaw and may touch the border (the view
+// then read as cut). The set's matches are linked where two lie within kLinkSpacings times the
+// median distance of a match to its nearest (placed at the current exposure); a linked piece of
+// at most kStrayMatches matches is left out. Over matches spread evenly, a match's nearest lies
+// beyond four times the median distance with a probability of e^-11; a part of the top's print
+// apart from the rest (a detail at one end of a plain top) holds several: left out, the views
+// would show part of the top.
+constexpr double kLinkSpacings = 4.0;
+constexpr size_t kStrayMatches = 2;
+
+std::vector<size_t> one_region(const std::vector<Placed>& cand, const std::vector<size_t>& in) {
+  const size_t n = in.size();
+  if (n < 3) return in;
+  const auto d = [&](size_t i, size_t j) { return (cand[in[i]].p2 - cand[in[j]].p2).norm(); };
+  std::vector<double> nearest(n, INFINITY);
+  for (size_t i = 0; i < n; ++i)
+    for (size_t j = i + 1; j < n; ++j) {
+      const double dij = d(i, j);
+      nearest[i] = std::min(nearest[i], dij);
+      nearest[j] = std::min(nearest[j], dij);
+    }
+  std::vector<double> sorted = nearest;
+  std::nth_element(sorted.begin(), sorted.begin() + n / 2, sorted.end());
+  const double link_m = kLinkSpacings * sorted[n / 2];
+  std::vector<size_t> root(n);
+  for (size_t i = 0; i < n; ++i) root[i] = i;
+  const auto find = [&](size_t i) {
+    while (root[i] != i) i = root[i] = root[root[i]];
+    return i;
+  };
+  for (size_t i = 0; i < n; ++i)
+    for (size_t j = i + 1; j < n; ++j)
+      if (d(i, j) <= link_m) root[find(i)] = find(j);
+  std::vector<size_t> size(n, 0);
+  for (size_t i = 0; i < n; ++i) ++size[find(i)];
+  std::vector<size_t> kept;
+  for (size_t i = 0; i < n; ++i)
+    if (size[find(i)] > kStrayMatches) kept.push_back(in[i]);
+  return kept;
+}
+
 // A gate of stage 3, the last: the matches that stay put inside the moving set's footprint (its
 // rectangle on the top's plane in the current view, the inner kStillInner of it: at the assumed
 // height the edges may be a few centimetres off). A cart hides the floor under it; a still top's
@@ -548,7 +592,15 @@ MovingTop find_moving_top(const Correspondences& c, double dt_s, double floor_z_
   out.n_candidates = static_cast<int>(cand.size());
   if (out.n_candidates < params.min_inliers) return refuse(MovingReason::kTooFewCandidates);
   Similarity2 S;
-  const std::vector<size_t> in = platform_motion(cand, dt_s, params, &S, &out.reason);
+  std::vector<size_t> in = platform_motion(cand, dt_s, params, &S, &out.reason);
+  if (out.reason == MovingReason::kOk) {
+    const size_t n_motion = in.size();
+    in = one_region(cand, in);
+    if (int(in.size()) < params.min_inliers)
+      out.reason = MovingReason::kNoCommonMotion;
+    else if (in.size() < n_motion)  // the motion of the top's own matches
+      if (const auto S_top = fit_on(cand, in)) S = *S_top;
+  }
   out.n_inliers = static_cast<int>(in.size());
   if (out.reason != MovingReason::kOk) return out;
   for (size_t k : in) out.inliers[cand[k].index] = 1;

@@ -19,10 +19,11 @@
 // by (z_c - h_assumed) / (z_c - h), so the two sets are related by a similarity whose scale
 // s = k_2 / k_1 also carries the top's heave (a deck) over the interval. A similarity fitted by
 // RANSAC (two matches a draw, seeded) gives the top's inliers, its displacement, its turn and
-// its heave; the inliers' rectangle its centre, size and yaw. A set that is a cluster of the
-// floor's matches, or whose motion no platform makes (a floor pattern matched to its next copy),
-// is set aside and the next motion taken; gates refuse the floor's alone, an implausible motion
-// alone, a size out of range, and a motion that a still top explains as well (a pattern
+// its heave (a few matches apart from the rest that share its motion by chance left out: the
+// top is one region); the inliers' rectangle its centre, size and yaw. A set that is a cluster of
+// the floor's matches, or whose motion no platform makes (a floor pattern matched to its next
+// copy), is set aside and the next motion taken; gates refuse the floor's alone, an implausible
+// motion alone, a size out of range, and a motion that a still top explains as well (a pattern
 // repeated along the top: its descriptors match the next copy, one period away, and those
 // matches share one rigid motion), each with its own reason.
 //

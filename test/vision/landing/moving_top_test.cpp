@@ -154,6 +154,33 @@ TEST(MovingTopTest, MeasuresACartsPositionVelocityAndTurn) {
   ASSERT_EQ(m.inliers.size(), c.size());
 }
 
+// Two matches apart from the top that share its motion (a floor feature mismatched by the
+// motion's few pixels, a speck on the top's plane) are no part of its rectangle: without them
+// left out, they stretch its length by a quarter metre and turn its yaw.
+TEST(MovingTopTest, MatchesApartFromTheTopThatShareItsMotionAreLeftOut) {
+  const MovingScene s = moving_cart_scene();
+  const MovingTopParams params;
+  Correspondences c = s.correspondences();
+  const size_t n_scene = c.size();
+  for (const Vector2d local : {Vector2d(-0.47, 0.0), Vector2d(-0.49, -0.03)}) {
+    const auto p1 = s.project(s.pose_1, s.top_1.point(local));
+    const auto p2 = s.project(s.pose_2, s.top_2.point(local));
+    ASSERT_TRUE(p1 && p2);
+    c.u1.push_back(*p1), c.u2.push_back(*p2);
+    c.x1.push_back((s.camera.K() * s.camera.ray(*p1)).hnormalized());
+    c.x2.push_back((s.camera.K() * s.camera.ray(*p2)).hnormalized());
+  }
+  const MovingTop m = find_moving_top(c, 0.25, 0.0, params);
+  ASSERT_TRUE(m.found()) << to_string(m.reason);
+  EXPECT_EQ(m.inliers[n_scene], 0);
+  EXPECT_EQ(m.inliers[n_scene + 1], 0);
+  EXPECT_NEAR(m.size_m[0], s.top_size.x(), 0.05);
+  EXPECT_NEAR(m.yaw_rad, s.top_2.psi, 3 * M_PI / 180);
+  const MovingTop alone = find_moving_top(s.correspondences(), 0.25, 0.0, params);
+  EXPECT_EQ(m.n_inliers, alone.n_inliers);
+  EXPECT_EQ(m.p_W, alone.p_W);
+}
+
 TEST(MovingTopTest, ATopTallerThanAssumedUnderADescendingCameraReadsAsRisingAndLarger) {
   // The top is 12 cm taller than the 15 cm assumed and moves level; the camera descends at
   // 0.4 m/s from 1.5 m. Each view's points are scaled about its camera's nadir by (z_c - 0.15) /
