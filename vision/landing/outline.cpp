@@ -775,8 +775,8 @@ const std::optional<std::vector<Vector2d>>& PlainRegions::quad(size_t i) const {
 }
 
 const std::optional<Outline>& PlainRegions::outline(size_t i) const {
-  if (memo_.size() <= i || !memo_[i].outline) {
-    const auto& q = quad(i);
+  const auto& q = quad(i);  // the regions found first
+  if (!memo_[i].outline) {
     std::optional<Outline> o;
     if (q) {
       const bool dark = darker_inside(gray_, *q);

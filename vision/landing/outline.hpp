@@ -124,8 +124,8 @@ class PlainRegions {
   const cv::Mat& image() const { return gray_; }
   /// Empty for an image too small or not CV_8UC1.
   const Found& found() const;
-  /// Region i's rectangle at the quarter resolution, raw pixels (stage 1); nullopt for a region
-  /// that is no rectangle's.
+  /// Region i's rectangle (stage 1) in the image's raw pixels; nullopt for a region that is no
+  /// rectangle's.
   const std::optional<std::vector<Vector2d>>& quad(size_t i) const;
   /// Region i's outline refined at full resolution (stage 3) with its shading; nullopt where it
   /// has no rectangle, a side finds no line or the outline is narrower than a top.

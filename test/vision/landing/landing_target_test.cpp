@@ -998,8 +998,9 @@ int grained_floor_views_measured(const BoxScene& scene, bool candidate_each_view
   for (uint64_t seed = 1; seed <= 3; ++seed) {
     const BoxViews b = box_views(scene, seed, 0, 0, std::nullopt, 0.0, 140, /*n_top=*/0);
     PipelineParams params;
-    if (candidate_each_view)
+    if (candidate_each_view) {
       EXPECT_FALSE(featureless_outlines(b.image_2, b.view.c, params).empty()) << "seed " << seed;
+    }
     const TargetOutcome o = find_landing_target(b.view.c, params, b.image_1, b.image_2);
     if (o.reason != Reason::kOk) {
       EXPECT_TRUE(o.reason == Reason::kOutlineUnmatched || o.reason == Reason::kOutlineSilent ||

@@ -162,7 +162,7 @@ TEST(MovingTopTest, MatchesApartFromTheTopThatShareItsMotionAreLeftOut) {
   const MovingTopParams params;
   Correspondences c = s.correspondences();
   const size_t n_scene = c.size();
-  for (const Vector2d local : {Vector2d(-0.47, 0.0), Vector2d(-0.49, -0.03)}) {
+  for (const Vector2d& local : {Vector2d(-0.47, 0.0), Vector2d(-0.49, -0.03)}) {
     const auto p1 = s.project(s.pose_1, s.top_1.point(local));
     const auto p2 = s.project(s.pose_2, s.top_2.point(local));
     ASSERT_TRUE(p1 && p2);
