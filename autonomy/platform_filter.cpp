@@ -348,6 +348,10 @@ namespace {
 
 // A part of the top's position variance: no information [m^2].
 constexpr double kUnknownPositionVar = 1e2;
+// The yaw of a view whose extent is not the whole top's is its features' rectangle's, a
+// cluster's, whatever the spread of its features says: known only to the quarter turn (uniform
+// over it) [rad^2]. Its turn between the frames stays the top's.
+constexpr double kUnknownYawVar = (M_PI / 4) * (M_PI / 4) / 3;
 // A view marked cut that spans the whole top: its centre's sigma [m], its extent's tolerance
 // (kPartialViewM) halved.
 constexpr double kCutWholeSigmaM = 0.5 * kPartialViewM;
@@ -438,9 +442,14 @@ Vector2d PlatformFilter::whole_extent(const Track& t) {
   return e[*whole];
 }
 
+bool PlatformFilter::spans_whole_top(const Track& t, const PlatformMeasurement& m) {
+  if (!(t.whole.minCoeff() > 0) || !(m.size_m.minCoeff() > 0)) return true;
+  return ((extent(m) - t.whole).cwiseAbs().array() <= kPartialViewM).all();
+}
+
 bool PlatformFilter::shows_whole_top(const Track& t, const PlatformMeasurement& m) {
   if (!cut(m) || !(t.whole.minCoeff() > 0) || !(m.size_m.minCoeff() > 0)) return false;
-  return ((extent(m) - t.whole).cwiseAbs().array() <= kPartialViewM).all();
+  return spans_whole_top(t, m);
 }
 
 bool PlatformFilter::partial_view(const Track& t, const PlatformMeasurement& m) {
@@ -631,7 +640,7 @@ PlatformFilter::Fused PlatformFilter::fuse(Track& t, const PlatformMeasurement& 
     const Matrix2d Py = Fy * t.P_yaw * Fy.transpose() + cv_noise(params_.yaw_accel_psd, dt);
     const Vector2d iy(wrap_quarter(m.yaw_rad - yp(0)), m.yaw_rate_rps - yp(1));
     Matrix2d Sy = Py;
-    Sy(0, 0) += m.var_yaw + 1e-6;
+    Sy(0, 0) += (spans_whole_top(t, m) ? m.var_yaw : std::max(m.var_yaw, kUnknownYawVar)) + 1e-6;
     Sy(1, 1) += m.var_yaw_rate + 1e-6;
     const Matrix2d Ky = Py * Sy.inverse();
     t.yaw = yp + Ky * iy;

@@ -340,6 +340,9 @@ class PlatformFilter {
   static Vector2d whole_extent(const Track& t);
   static bool partial_view(const Track& t, const PlatformMeasurement& m);
   static bool shows_whole_top(const Track& t, const PlatformMeasurement& m);
+  // The view's extent is the whole top believed on both sides (within kPartialViewM), or no whole
+  // top or no extent is known to judge it by: its rectangle's yaw is taken as the top's.
+  static bool spans_whole_top(const Track& t, const PlatformMeasurement& m);
   static bool places_centre(const Track& t, const PlatformMeasurement& m) {
     return !partial_view(t, m) && (!cut(m) || shows_whole_top(t, m));
   }

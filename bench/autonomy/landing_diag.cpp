@@ -270,9 +270,10 @@ int main(int argc, char** argv) try {
                   vision::to_string(m.reason), m.found() && m.cut ? " cut" : "", m.n_candidates,
                   m.n_inliers, m.ncc_still, m.ncc_moving, m.size_m[0], m.size_m[1]);
       if (m.found())
-        std::printf(" p(%+.3f %+.3f %.3f) v(%+.3f %+.3f %+.3f) yaw %+.1f rate %+.1f deg/s",
+        std::printf(" p(%+.3f %+.3f %.3f) v(%+.3f %+.3f %+.3f) yaw %+.1f sd %.1f rate %+.1f deg/s",
                     m.p_W.x(), m.p_W.y(), m.p_W.z(), m.v_W.x(), m.v_W.y(), m.v_W.z(),
-                    m.yaw_rad * 180 / M_PI, m.yaw_rate_rps * 180 / M_PI);
+                    m.yaw_rad * 180 / M_PI, std::sqrt(m.var_yaw) * 180 / M_PI,
+                    m.yaw_rate_rps * 180 / M_PI);
       if (m.found() && moved)  // against the truth at the frame's time
         std::printf(" err p(%+.3f %+.3f) v(%+.3f %+.3f) yaw %+.1f",
                     m.p_W.x() - moved->top_center_W.x(), m.p_W.y() - moved->top_center_W.y(),
