@@ -250,6 +250,26 @@ std::optional<size_t> moving_reference(const std::vector<double>& ages_s,
   return newest_old_enough ? newest_old_enough : oldest_same_scale;
 }
 
+std::optional<size_t> slow_top_reference(const std::vector<double>& ages_s,
+                                         const std::vector<double>& ranges_m, double range_now_m,
+                                         double first_age_s) {
+  assert(ages_s.size() == ranges_m.size());
+  for (size_t k = 0; k < ages_s.size(); ++k) {
+    if (!same_moving_scale(range_now_m, ranges_m[k])) continue;
+    if (ages_s[k] >= kSlowTopIntervalGain * first_age_s && first_age_s > 0) return k;
+    return std::nullopt;  // the oldest at this scale is too young
+  }
+  return std::nullopt;
+}
+
+bool creeping_top(const MovingTop& m, double first_dt_s, double focal_px,
+                  const MovingTopParams& params) {
+  const double depth_m = m.camera_W.z() - m.plane_z_m;
+  if (!(depth_m > 0 && focal_px > 0 && first_dt_s > 0)) return false;
+  const double reach_m = kFloorClusterTols * params.floor_tol_px * depth_m / focal_px;
+  return m.v_W.head<2>().norm() * first_dt_s <= kSlowTopMaxShift * reach_m;
+}
+
 // Whether the features found no set moving as a platform: too few off the floor, none sharing
 // a motion, or every set found the floor's or beyond a platform (a floor's pattern matched to
 // its next copy, found before a plain top's few features). A set found and refused by a later
@@ -295,6 +315,23 @@ void Pipeline::measure_moving(const std::shared_ptr<const TrackedFrame>& current
     c.pose_2 = pose;
     m = find_moving_top(c, age_s(a.utime), params_.landing.floor_z_m, mp, a.image, current->image);
     r->moving_ref_utime = a.utime;
+    if (m.reason == MovingReason::kOnFloor) {
+      if (const auto k2 = slow_top_reference(ages_s, ranges_m, range_m(pose), ages_s[*k])) {
+        const TrackedFrame& b = *recent_[*k2].frame;
+        Correspondences c2 =
+            correspondences(b, *current, match_frames(b, *current, params_.match));
+        c2.pose_1 = recent_[*k2].pose;
+        c2.pose_2 = pose;
+        MovingTop slow =
+            find_moving_top(c2, age_s(b.utime), params_.landing.floor_z_m, mp, b.image,
+                            current->image);
+        if (slow.found() && creeping_top(slow, ages_s[*k], camera_.K()(0, 0), mp)) {
+          m = std::move(slow);
+          c = std::move(c2);
+          r->moving_ref_utime = b.utime;
+        }
+      }
+    }
     if (features_found_no_set(m.reason)) {
       now.outlines = plain_outlines(regions_now);
       if (!now.outlines->empty())

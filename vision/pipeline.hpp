@@ -103,6 +103,33 @@ std::optional<size_t> moving_reference(const std::vector<double>& ages_s,
                                        const std::vector<double>& ranges_m, double range_now_m,
                                        double interval_s);
 
+/// A top whose features the known floor carries (MovingReason::kOnFloor) may be a platform
+/// creeping through its turn: at 5 cm/s it moves 1.3 cm in a quarter second, under the floor
+/// test's tolerance (3 floor_tol_px, 1.9 cm at 1.4 m), where the still landing refuses it as a
+/// top whose plane moved against the floor's. It is measured again against the oldest frame within
+/// max_interval_s, when that is at least this many times the first interval (less shows it
+/// hardly farther from the floor's prediction).
+constexpr double kSlowTopIntervalGain = 1.5;
+
+/// What the longer interval measures is kept only where the first could not have told it from the
+/// floor: its displacement over the first interval within this many times the floor cluster's
+/// reach (kFloorClusterTols floor_tol_px at the top's depth). A floor whose pattern repeats (a
+/// chessboard) matched to its next copy is set aside at the first interval as faster than
+/// max_speed_mps, but over the longer one its period may read under it.
+constexpr double kSlowTopMaxShift = 2.0;
+
+/// Whether the top m, measured over a longer interval, moved over first_dt_s within
+/// kSlowTopMaxShift of the floor cluster's reach for a camera of focal_px.
+bool creeping_top(const MovingTop& m, double first_dt_s, double focal_px,
+                  const MovingTopParams& params);
+
+/// The earlier frame a top set aside as the floor's against the frame first_age_s old is measured
+/// against (kSlowTopIntervalGain) [index]: the oldest within kMovingMaxScaleChange of the current
+/// range, if kSlowTopIntervalGain times first_age_s old or more; else nullopt.
+std::optional<size_t> slow_top_reference(const std::vector<double>& ages_s,
+                                         const std::vector<double>& ranges_m, double range_now_m,
+                                         double first_age_s);
+
 /// The outcome of one frame; reason says why nothing was found.
 struct FrameResult {
   int64_t utime = 0;      ///< exposure time of the current image [us]

@@ -210,7 +210,7 @@ constexpr int kSetsAside = 2;
 bool floor_cluster(const std::vector<Placed>& cand, const std::vector<size_t>& in,
                    const MovingTopParams& params) {
   const auto on_floor = std::count_if(in.begin(), in.end(), [&](size_t k) {
-    return cand[k].floor_err_px <= 3 * params.floor_tol_px;
+    return cand[k].floor_err_px <= kFloorClusterTols * params.floor_tol_px;
   });
   return double(on_floor) > params.max_floor_share * double(in.size());
 }

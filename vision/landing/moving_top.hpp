@@ -72,6 +72,11 @@ enum class MovingReason : int8_t {
 
 const char* to_string(MovingReason r);
 
+/// A set of matches is the floor's (kOnFloor) when more than max_floor_share of them lie within
+/// this many floor_tol_px of where the known floor carries them: a floor cluster just outside the
+/// tolerance (motion capture's noise and stamp) is set aside with the floor.
+inline constexpr double kFloorClusterTols = 3.0;
+
 /// The top's state at the current exposure, from its motion since the earlier one.
 struct MovingTop {
   MovingReason reason = MovingReason::kOk;

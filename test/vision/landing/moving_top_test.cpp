@@ -598,6 +598,62 @@ TEST(MovingTopTest, TheSimilarityFitIsExactOnExactPoints) {
   EXPECT_FALSE(fit_similarity({{1, 1}, {1, 1}}, {{0, 0}, {2, 2}}));
 }
 
+// A deck slowed to 6 cm/s for its turn under a camera hovering 1.4 m over its top (the vantage
+// over a first sighting): over a quarter second it moves 1.5 cm, 7 px, and the known floor
+// carries its matches within the floor test's tolerance, so its set is the floor's; against a
+// frame 0.6 s old (kSlowTopIntervalGain's retry, slow_top_reference) it is measured at its speed.
+TEST(MovingTopTest, ATopCreepingUnderAHoveringCameraIsMeasuredOverALongerInterval) {
+  const auto creeping = [](double dt) {
+    MovingScene s;
+    s.pose_1 = MovingScene::at({1.0, 0.1, 1.55}, 0.2);
+    s.pose_2 = MovingScene::at({1.0, 0.1, 1.55}, 0.2);
+    s.pose_1.utime = 1'000'000, s.pose_2.utime = 1'000'000 + int64_t(dt * 1e6);
+    s.top_1.c = {1.05, 0.15};
+    s.top_1.psi = 0.1;
+    s.top_size = {0.30, 0.24};
+    s.top_2 = s.top_1;
+    s.top_2.c += dt * Vector2d(-0.055, -0.025);
+    return s;
+  };
+  const MovingTopParams params;
+  const MovingTop quarter = find_moving_top(creeping(0.25).correspondences(), 0.25, 0.0, params);
+  EXPECT_EQ(quarter.reason, MovingReason::kOnFloor) << to_string(quarter.reason);
+  const MovingTop longer = find_moving_top(creeping(0.6).correspondences(), 0.6, 0.0, params);
+  ASSERT_TRUE(longer.found()) << to_string(longer.reason);
+  EXPECT_NEAR(longer.v_W.x(), -0.055, 0.015);
+  EXPECT_NEAR(longer.v_W.y(), -0.025, 0.015);
+  EXPECT_NEAR((longer.p_W.head<2>() - creeping(0.6).top_2.c).norm(), 0, 0.03);
+  // What the first interval could not tell from the floor is kept (1.5 cm against a reach of
+  // 1.9 cm at 1.4 m)...
+  const double focal_px = CameraModel::firefly_mv_4mm().K()(0, 0);
+  EXPECT_TRUE(creeping_top(longer, 0.25, focal_px, params));
+  // ...a floor's repeated pattern read at 1.9 m/s over the longer interval (a chessboard's copy
+  // one period on, too fast over the first) is not.
+  MovingTop pattern = longer;
+  pattern.v_W = Vector3d(0.0, 1.9, 0.0);
+  EXPECT_FALSE(creeping_top(pattern, 0.25, focal_px, params));
+  pattern.plane_z_m = pattern.camera_W.z();  // no depth: nothing kept
+  pattern.v_W = longer.v_W;
+  EXPECT_FALSE(creeping_top(pattern, 0.25, focal_px, params));
+}
+
+// The earlier frame a top set aside as the floor's is measured against again: the oldest at the
+// current scale, if it is kSlowTopIntervalGain times the first's age or more.
+TEST(MovingReferenceTest, ASlowTopIsMeasuredAgainstTheOldestFrameAtItsScale) {
+  const std::vector<double> ages{0.6, 0.5, 0.4, 0.3, 0.2, 0.1};
+  const std::vector<double> ranges(ages.size(), 1.4);
+  EXPECT_EQ(slow_top_reference(ages, ranges, 1.4, 0.3), std::optional<size_t>(0));
+  // The oldest not older enough than the first: nothing gained.
+  EXPECT_EQ(slow_top_reference(ages, ranges, 1.4, 0.45), std::nullopt);
+  // The oldest at another scale (a climb) is passed over for the oldest at this one.
+  std::vector<double> climbing = ranges;
+  climbing[0] = 1.0;
+  EXPECT_EQ(slow_top_reference(ages, climbing, 1.4, 0.3), std::optional<size_t>(1));
+  climbing[1] = 1.0;
+  EXPECT_EQ(slow_top_reference(ages, climbing, 1.4, 0.3), std::nullopt);
+  EXPECT_EQ(slow_top_reference({}, {}, 1.4, 0.25), std::nullopt);
+}
+
 // The earlier frame of the moving top's measurement (vision/pipeline.hpp, moving_reference):
 // frames 33 ms apart, oldest first.
 TEST(MovingReferenceTest, AtAConstantHeightTheNewestFrameAtLeastTheIntervalOld) {
