@@ -176,7 +176,8 @@ const ParamSchema<MovingTopParams>& MovingTopParams::schema() {
     s.add("interval_s", &P::interval_s, Range::gt(0), "s",
           "the earlier frame: the newest at least this much older than the current one");
     s.add("max_interval_s", &P::max_interval_s, Range::gt(0), "s",
-          "no earlier frame within this: nothing measured")
+          "no earlier frame within this: nothing measured; the oldest within it measures again a "
+          "top the floor carries over interval_s (one creeping through its turn)")
         .check([](const P& p) { return p.max_interval_s >= p.interval_s; },
                "must not be below interval_s");
     s.add("floor_tol_px", &P::floor_tol_px, Range::gt(0), "px",

@@ -23,7 +23,10 @@ struct MovingTopParams {
   /// older than the current one [s]. Long enough that the top's displacement stands above the
   /// features' noise, short enough that a turning path is still straight over it.
   double interval_s = 0.25;
-  double max_interval_s = 0.6;  ///< no earlier frame within this: nothing measured [s]
+  /// No earlier frame within this: nothing measured; the oldest within it measures again a top
+  /// whose matches the floor carries over interval_s (one creeping through its turn:
+  /// kSlowTopIntervalGain, vision/pipeline.hpp) [s]
+  double max_interval_s = 0.6;
   /// A match lies on the floor when the known floor (motion capture's motion) carries it within
   /// this [px]: motion capture's orientation noise moves the image by 1-2 px.
   double floor_tol_px = 3.0;
