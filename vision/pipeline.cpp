@@ -318,13 +318,11 @@ void Pipeline::measure_moving(const std::shared_ptr<const TrackedFrame>& current
     if (m.reason == MovingReason::kOnFloor) {
       if (const auto k2 = slow_top_reference(ages_s, ranges_m, range_m(pose), ages_s[*k])) {
         const TrackedFrame& b = *recent_[*k2].frame;
-        Correspondences c2 =
-            correspondences(b, *current, match_frames(b, *current, params_.match));
+        Correspondences c2 = correspondences(b, *current, match_frames(b, *current, params_.match));
         c2.pose_1 = recent_[*k2].pose;
         c2.pose_2 = pose;
-        MovingTop slow =
-            find_moving_top(c2, age_s(b.utime), params_.landing.floor_z_m, mp, b.image,
-                            current->image);
+        MovingTop slow = find_moving_top(c2, age_s(b.utime), params_.landing.floor_z_m, mp, b.image,
+                                         current->image);
         if (slow.found() && creeping_top(slow, ages_s[*k], camera_.K()(0, 0), mp)) {
           m = std::move(slow);
           c = std::move(c2);
