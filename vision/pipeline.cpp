@@ -253,12 +253,9 @@ std::optional<size_t> moving_reference(const std::vector<double>& ages_s,
 std::optional<size_t> slow_top_reference(const std::vector<double>& ages_s,
                                          const std::vector<double>& ranges_m, double range_now_m,
                                          double first_age_s) {
-  assert(ages_s.size() == ranges_m.size());
-  for (size_t k = 0; k < ages_s.size(); ++k) {
-    if (!same_moving_scale(range_now_m, ranges_m[k])) continue;
-    if (ages_s[k] >= kSlowTopIntervalGain * first_age_s && first_age_s > 0) return k;
-    return std::nullopt;  // the oldest at this scale is too young
-  }
+  // No frame is an infinite interval old: the oldest at this scale.
+  const auto k = moving_reference(ages_s, ranges_m, range_now_m, INFINITY);
+  if (k && first_age_s > 0 && ages_s[*k] >= kSlowTopIntervalGain * first_age_s) return k;
   return std::nullopt;
 }
 
