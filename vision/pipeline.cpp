@@ -305,25 +305,25 @@ void Pipeline::measure_moving(const std::shared_ptr<const TrackedFrame>& current
   if (!k) {
     m.reason = MovingReason::kNoEarlierFrame;
   } else {
-    const Recent& earlier = recent_[*k];
-    const TrackedFrame& a = *earlier.frame;
-    Correspondences c = correspondences(a, *current, match_frames(a, *current, params_.match));
-    c.pose_1 = earlier.pose;
-    c.pose_2 = pose;
-    m = find_moving_top(c, age_s(a.utime), params_.landing.floor_z_m, mp, a.image, current->image);
-    r->moving_ref_utime = a.utime;
+    // The current frame matched against recent frame j, and the moving top between them.
+    const auto against = [&](size_t j, Correspondences* c) {
+      const TrackedFrame& a = *recent_[j].frame;
+      *c = correspondences(a, *current, match_frames(a, *current, params_.match));
+      c->pose_1 = recent_[j].pose;
+      c->pose_2 = pose;
+      return find_moving_top(*c, ages_s[j], params_.landing.floor_z_m, mp, a.image, current->image);
+    };
+    Correspondences c;
+    m = against(*k, &c);
+    r->moving_ref_utime = recent_[*k].frame->utime;
     if (m.reason == MovingReason::kOnFloor) {
       if (const auto k2 = slow_top_reference(ages_s, ranges_m, range_m(pose), ages_s[*k])) {
-        const TrackedFrame& b = *recent_[*k2].frame;
-        Correspondences c2 = correspondences(b, *current, match_frames(b, *current, params_.match));
-        c2.pose_1 = recent_[*k2].pose;
-        c2.pose_2 = pose;
-        MovingTop slow = find_moving_top(c2, age_s(b.utime), params_.landing.floor_z_m, mp, b.image,
-                                         current->image);
+        Correspondences c2;
+        MovingTop slow = against(*k2, &c2);
         if (slow.found() && creeping_top(slow, ages_s[*k], camera_.K()(0, 0), mp)) {
           m = std::move(slow);
           c = std::move(c2);
-          r->moving_ref_utime = b.utime;
+          r->moving_ref_utime = recent_[*k2].frame->utime;
         }
       }
     }
