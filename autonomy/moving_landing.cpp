@@ -148,7 +148,7 @@ DropCheck check_drop(const PlatformFilter& filter, const PoseSample& pose, int64
 }
 
 bool centre_placed(const DropCheck& c) {
-  return c.centre_sd_m <= c.room_m && c.placed_views >= kPlacedToDrop;
+  return kCentreSigmas * c.centre_sd_m <= c.room_m && c.placed_views >= kPlacedToDrop;
 }
 
 bool aimed_for_drop(const DropCheck& c, const LandingGear& gear) {

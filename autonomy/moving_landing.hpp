@@ -174,8 +174,12 @@ struct DropCheck {
 /// top) while its variance says 1-2 cm; a second and third placed within the filter's gate of it
 /// confirm it, one outside the gate puts it in doubt.
 inline constexpr int kPlacedToDrop = 3;
-/// The predicted centre known within the room (its standard deviation) and placed by
-/// kPlacedToDrop views in a row: what the last drop needs of the centre besides the aim.
+/// Standard deviations of the predicted centre that must fit in the room before the last drop.
+/// The drop itself drifts a centimetre or two downwind, so a centre known to one sigma of the
+/// room leaves a third of drops beyond it; two sigma leaves one in twenty.
+inline constexpr double kCentreSigmas = 2.0;
+/// The predicted centre known within the room (kCentreSigmas of its standard deviation) and
+/// placed by kPlacedToDrop views in a row: what the last drop needs of the centre besides the aim.
 bool centre_placed(const DropCheck& c);
 /// Settled over a centre not placed this long at the final height, the views there place
 /// nothing (step 6: cut by the border, close over a top that fills the view) and the vehicle
