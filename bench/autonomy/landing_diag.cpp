@@ -267,8 +267,9 @@ int main(int argc, char** argv) try {
     if (r.moving) {  // the moving top (VISION_PLATFORM)
       const auto& m = *r.moving;
       std::printf(" | moving %s%s cand %d in %d ncc still %.2f moving %.2f size %.2f x %.2f",
-                  vision::to_string(m.reason), m.found() && m.cut ? " cut" : "", m.n_candidates,
-                  m.n_inliers, m.ncc_still, m.ncc_moving, m.size_m[0], m.size_m[1]);
+                  vision::to_string(m.reason),
+                  m.found() && m.cut ? " cut" : (m.found() && m.edges ? " edges" : ""),
+                  m.n_candidates, m.n_inliers, m.ncc_still, m.ncc_moving, m.size_m[0], m.size_m[1]);
       if (m.found())
         std::printf(" p(%+.3f %+.3f %.3f) v(%+.3f %+.3f %+.3f) yaw %+.1f sd %.1f rate %+.1f deg/s",
                     m.p_W.x(), m.p_W.y(), m.p_W.z(), m.v_W.x(), m.v_W.y(), m.v_W.z(),

@@ -10,6 +10,7 @@
 #include "common/median.hpp"
 #include "vision/geometry/bilinear.hpp"
 #include "vision/landing/extent.hpp"
+#include "vision/landing/moving_edges.hpp"
 #include "vision/landing/similarity_inliers.hpp"
 
 namespace alight::vision {
@@ -509,9 +510,11 @@ double rect_yaw_variance(const std::vector<Vector3d>& pts_W, double yaw_rad) {
 // Stage 4: the measurement of the accepted set: its rectangle (centre, size, yaw) at the
 // current exposure, its velocity, turn and heave over the interval, and their covariances from
 // the fit's residuals and the height's uncertainty (moving_top.hpp).
+// edges: the top's rectangle out to its edges (moving_edges.hpp) with its yaw's variance, where
+// found; else the features' rectangle widened by their shortfall.
 void measure(const std::vector<Placed>& cand, const std::vector<size_t>& in, const Similarity2& S,
              const Views& v, double dt_s, double floor_z_m, const MovingTopParams& params,
-             MovingTop* out) {
+             const std::optional<std::pair<TopRect, double>>& edges, MovingTop* out) {
   const double n = double(in.size());
   std::vector<Vector3d> pts_W;
   Vector2d m1 = Vector2d::Zero(), m2 = Vector2d::Zero();
@@ -526,11 +529,13 @@ void measure(const std::vector<Placed>& cand, const std::vector<size_t>& in, con
     pts_W.emplace_back(cand[k].p2.x(), cand[k].p2.y(), z_top);
     spread += (cand[k].p2 - m2).squaredNorm();
   }
-  const auto rect = features_extent(pts_W, Vector3d::UnitZ());
-  assert(rect);  // the size gate ran on the same points
+  const auto features = features_extent(pts_W, Vector3d::UnitZ());
+  assert(features);  // the size gate ran on the same points
+  const TopRect* rect = edges ? &edges->first : &*features;
   Vector3d centre = rect->origin_W;
   for (int a = 0; a < 2; ++a) centre += 0.5 * (rect->lo[a] + rect->hi[a]) * rect->axis[a];
-  const TopRect wide = widened_by_shortfall(*rect, in.size());
+  const TopRect wide = edges ? *rect : widened_by_shortfall(*rect, in.size());
+  out->edges = edges.has_value();
   out->size_m[0] = wide.hi[0] - wide.lo[0];
   out->size_m[1] = wide.hi[1] - wide.lo[1];
   out->yaw_rad = wrap_axis_angle(std::atan2(rect->axis[0].y(), rect->axis[0].x()));
@@ -563,7 +568,8 @@ void measure(const std::vector<Placed>& cand, const std::vector<size_t>& in, con
   // yaw itself is the rectangle's, known far less well, and not at all on a top cut by the
   // border.
   out->var_yaw =
-      out->cut ? kUnknownYawVar : std::max(var_s, rect_yaw_variance(pts_W, out->yaw_rad));
+      out->cut ? kUnknownYawVar
+               : std::max(var_s, edges ? edges->second : rect_yaw_variance(pts_W, out->yaw_rad));
 }
 
 }  // namespace
@@ -627,7 +633,14 @@ MovingTop find_moving_top(const Correspondences& c, double dt_s, double floor_z_
     patch_ncc(c, cand, in, S, v, z_top, gray_1, gray_2, &out);
     if (out.ncc_still >= out.ncc_moving - kStillNccGap) return refuse(MovingReason::kStillPixels);
   }
-  measure(cand, in, S, v, dt_s, floor_z_m, params, &out);
+  // Stage 4: the top's edges by its motion, on a top seen whole (moving_edges.hpp).
+  std::optional<std::pair<TopRect, double>> edges;
+  double var_yaw = 0;
+  if (!out.cut && !gray_1.empty() && !gray_2.empty())
+    if (auto r = edges_by_motion(c, v.X_WC1, v.X_WC2, S, z_top, floor_z_m, pts_W, params, gray_1,
+                                 gray_2, &var_yaw))
+      edges.emplace(*r, var_yaw);
+  measure(cand, in, S, v, dt_s, floor_z_m, params, edges, &out);
   // Inliers near two opposite borders: the top fills the view across, and the inliers' extent is
   // the view's footprint, not the top's; where the footprint is about the top's size, it read as
   // the whole top and placed the top's centre under the camera. No extent is measured.

@@ -520,6 +520,105 @@ TEST(MovingTopTest, ACartsPixelsFollowItsMotionNotAStillTop) {
   EXPECT_NEAR(m.v_W.x(), 0.9, 0.05);
 }
 
+// A print whose subject is a blob: its print inside an ellipse of semi-axes `axes` about
+// `centre`, turned `turn` in the top's frame, a plain grey around it (a photograph of a fruit on a
+// plain cloth).
+struct BlobPrint {
+  Print subject = Print::random(31);
+  Vector2d centre{0.05, -0.02}, axes{0.09, 0.05};
+  double turn = 35 * M_PI / 180;
+  bool inside(const Vector2d& p) const {
+    const Vector2d d = p - centre;
+    const double a = std::cos(turn) * d.x() + std::sin(turn) * d.y();
+    const double b = -std::sin(turn) * d.x() + std::cos(turn) * d.y();
+    return (a / axes.x()) * (a / axes.x()) + (b / axes.y()) * (b / axes.y()) < 1;
+  }
+  double at(const Vector2d& p) const { return inside(p) ? subject.at(p) : 175.0; }
+};
+
+// The cart of moving_cart_scene with its print's features on the blob alone: the features'
+// rectangle is the blob's, turned 35 deg from the top and off its centre; the pixels that follow
+// the cart's motion out to its rims give the top's own (moving_edges.hpp).
+TEST(MovingTopTest, ATopWhosePrintIsABlobIsMeasuredOutToItsEdges) {
+  MovingScene s = moving_cart_scene();
+  s.n_top = 0;
+  Correspondences c = s.correspondences();
+  const BlobPrint blob;
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> ux(-0.2, 0.2), uy(-0.12, 0.12);
+  std::normal_distribution<double> noise(0, s.noise_px);
+  for (int added = 0; added < 40;) {
+    const Vector2d l(ux(rng), uy(rng));
+    if (!blob.inside(l)) continue;
+    const auto p1 = s.project(s.pose_1, s.top_1.point(l)),
+               p2 = s.project(s.pose_2, s.top_2.point(l));
+    if (!p1 || !p2) continue;
+    c.u1.push_back(*p1 + Vector2d(noise(rng), noise(rng)));
+    c.u2.push_back(*p2 + Vector2d(noise(rng), noise(rng)));
+    c.x1.push_back((s.camera.K() * s.camera.ray(c.u1.back())).hnormalized());
+    c.x2.push_back((s.camera.K() * s.camera.ray(c.u2.back())).hnormalized());
+    ++added;
+  }
+  const auto yaw_error_deg = [&](const MovingTop& m) {
+    return std::abs(std::remainder(m.yaw_rad - s.top_2.psi, M_PI / 2)) * 180 / M_PI;
+  };
+  const MovingTop features = find_moving_top(c, 0.25, 0.0, MovingTopParams{});
+  ASSERT_TRUE(features.found()) << to_string(features.reason);
+  EXPECT_FALSE(features.edges);
+  EXPECT_GT(yaw_error_deg(features), 8.0) << "the features' rectangle is the blob's";
+
+  const Print floor = Print::random(22);
+  const auto image = [&](const PoseSample& pose, const MovingTopTruth& top) {
+    cv::Mat g(s.camera.height, s.camera.width, CV_8UC1);
+    const Isometry3d X_WC = camera_in_world(pose.X_WB(), s.mount.X_BC());
+    for (int v = 0; v < g.rows; ++v)
+      for (int u = 0; u < g.cols; ++u) {
+        const Vector3d d = X_WC.linear() * s.camera.ray(Vector2d(u, v));
+        const Vector3d o = X_WC.translation();
+        const Vector2d e = (o + (top.h - o.z()) / d.z() * d).head<2>() - top.c;
+        const Vector2d local(std::cos(top.psi) * e.x() + std::sin(top.psi) * e.y(),
+                             -std::sin(top.psi) * e.x() + std::cos(top.psi) * e.y());
+        const bool on_top = std::abs(local.x()) < 0.5 * s.top_size.x() &&
+                            std::abs(local.y()) < 0.5 * s.top_size.y();
+        g.at<uint8_t>(v, u) = cv::saturate_cast<uint8_t>(
+            on_top ? blob.at(local) : floor.at((o + (0 - o.z()) / d.z() * d).head<2>()));
+      }
+    return g;
+  };
+  const cv::Mat g1 = image(s.pose_1, s.top_1), g2 = image(s.pose_2, s.top_2);
+  const MovingTop m = find_moving_top(c, 0.25, 0.0, MovingTopParams{}, g1, g2);
+  ASSERT_TRUE(m.found()) << to_string(m.reason);
+  EXPECT_TRUE(m.edges);
+  EXPECT_LT(yaw_error_deg(m), 1.5);
+  // The votes stop up to half a patch inside the rims (moving_edges.cpp).
+  for (int k = 0; k < 2; ++k) {
+    EXPECT_LT(m.size_m[k], s.top_size[k] + 0.005);
+    EXPECT_GT(m.size_m[k], s.top_size[k] - 0.025);
+  }
+  EXPECT_LT((m.p_W.head<2>() - s.top_2.c).norm(), 0.01);
+  // Its velocity is the centre's: the cart's (the turn's lever arm from the blob included).
+  EXPECT_NEAR(m.v_W.x(), 0.9, 0.05);
+  // The yaw's variance covers its error; the features' did not.
+  EXPECT_LT(yaw_error_deg(m), 3 * std::sqrt(m.var_yaw) * 180 / M_PI);
+}
+
+// A top printed all over: its pixels follow its motion everywhere, and its edges are its rims.
+TEST(MovingTopTest, ATopPrintedAllOverIsMeasuredOutToItsRims) {
+  const MovingScene s = moving_cart_scene();
+  const Print print = Print::random(21), floor = Print::random(22);
+  const cv::Mat g1 = render(s, s.pose_1, s.top_1, s.top_size, print, floor);
+  const cv::Mat g2 = render(s, s.pose_2, s.top_2, s.top_size, print, floor);
+  const MovingTop m = find_moving_top(s.correspondences(), 0.25, 0.0, MovingTopParams{}, g1, g2);
+  ASSERT_TRUE(m.found()) << to_string(m.reason);
+  EXPECT_TRUE(m.edges);
+  for (int k = 0; k < 2; ++k) {
+    EXPECT_LT(m.size_m[k], s.top_size[k] + 0.005);
+    EXPECT_GT(m.size_m[k], s.top_size[k] - 0.025);
+  }
+  EXPECT_LT(std::abs(std::remainder(m.yaw_rad - s.top_2.psi, M_PI / 2)) * 180 / M_PI, 2.0);
+  EXPECT_LT((m.p_W.head<2>() - s.top_2.c).norm(), 0.01);
+}
+
 // A top creeping 4 mm over the interval (the camera flies 25 cm over it, so the floor does not
 // carry its matches): the two hypotheses read the same pixels of the earlier image, so its
 // pixels give no verdict and its motion is kept.
