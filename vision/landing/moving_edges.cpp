@@ -32,7 +32,8 @@ std::optional<Grid> cells(const Correspondences& c, const Isometry3d& X_WC1,
   Vector2d lo(INFINITY, INFINITY), hi(-INFINITY, -INFINITY);
   for (const double a : {features.lo[0], features.hi[0]})
     for (const double b : {features.lo[1], features.hi[1]}) {
-      const Vector2d p = (features.origin_W + a * features.axis[0] + b * features.axis[1]).head<2>();
+      const Vector2d p =
+          (features.origin_W + a * features.axis[0] + b * features.axis[1]).head<2>();
       lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
     }
   const Vector2d centre = 0.5 * (lo + hi);
@@ -125,8 +126,8 @@ cv::Mat votes(const Grid& g, const cv::Mat& gray_1, const cv::Mat& gray_2) {
   const cv::Mat d_floor = msd(read(gray_1, g.map_floor));
   // A patch votes only where every cell of it is in view, and its centre's hypotheses apart.
   cv::Mat whole;
-  cv::erode(g.in_view, whole, cv::Mat::ones(kPatchCells, kPatchCells, CV_8U), cv::Point(-1, -1),
-            1, cv::BORDER_CONSTANT, 0);
+  cv::erode(g.in_view, whole, cv::Mat::ones(kPatchCells, kPatchCells, CV_8U), cv::Point(-1, -1), 1,
+            cv::BORDER_CONSTANT, 0);
   const float r2 = float(kVoteRatio * kVoteRatio), m2 = float(kMinDiff * kMinDiff),
               e2 = float(kExplainedDiff * kExplainedDiff);
   cv::Mat v = cv::Mat::zeros(g.n, g.n, CV_8U);
@@ -231,9 +232,8 @@ bool passes(const GridRect& r, const cv::Mat& v, const Grid& g,
 }  // namespace
 
 std::optional<TopRect> edges_by_motion(const Correspondences& c, const Isometry3d& X_WC1,
-                                       const Isometry3d& X_WC2, const Similarity2& S,
-                                       double z_top, double floor_z_m,
-                                       const std::vector<Vector3d>& pts_W,
+                                       const Isometry3d& X_WC2, const Similarity2& S, double z_top,
+                                       double floor_z_m, const std::vector<Vector3d>& pts_W,
                                        const MovingTopParams& params, const cv::Mat& gray_1,
                                        const cv::Mat& gray_2, double* var_yaw) {
   assert(c.camera && var_yaw && gray_1.type() == CV_8UC1 && gray_2.type() == CV_8UC1);
@@ -274,6 +274,16 @@ std::optional<TopRect> edges_by_motion(const Correspondences& c, const Isometry3
     const double lo = sgn * r.lo[src] * g->cell_m, hi = sgn * r.hi[src] * g->cell_m;
     out.lo[k] = std::min(lo, hi), out.hi[k] = std::max(lo, hi);
   }
+  // Stage 5: the votes also carry what moves with the top below it (a side face in view, the
+  // platform's shadow on the floor), a few centimetres past a rim. Where the features cover most
+  // of the votes' rectangle, their extent along its axes (widened by their shortfall) measures the
+  // sides; where they cover under kBlobShare of it, the print's subject is a blob and the votes'
+  // extent stands.
+  const TopRect feat = widened_by_shortfall(
+      features_rect(pts_W, out.origin_W, out.axis[0], out.axis[1]), pts_W.size());
+  const auto area = [](const TopRect& t) { return (t.hi[0] - t.lo[0]) * (t.hi[1] - t.lo[1]); };
+  if (area(feat) >= kBlobShare * area(out))
+    for (int k = 0; k < 2; ++k) out.lo[k] = feat.lo[k], out.hi[k] = feat.hi[k];
   // Each end of a side is placed to about its band of cells: the turn to that over the side.
   const double rim_m = kBandCells * g->cell_m, long_m = out.hi[0] - out.lo[0];
   *var_yaw = 2 * (rim_m / long_m) * (rim_m / long_m) / 3;

@@ -28,9 +28,19 @@
 //      most of its sides), at most kMaxFloorInside of the cells inside it the floor's, the
 //      rectangle and kBandCells around it inside both images and the window (a side at the image's
 //      border is the border's), every feature of the set inside it, and its sides within the
-//      sizes a top has (min_size_m, max_size_m).
+//      sizes a top has (min_size_m, max_size_m);
+//   5. the sides: the votes also carry what moves with the top below it (a side face in view,
+//      the platform's shadow on the floor), a few centimetres past a rim; where the features'
+//      extent along the rectangle's axes (widened by their shortfall, extent.hpp) covers
+//      kBlobShare of its area or more, it gives the sides (its yaw the rectangle's); under that,
+//      the print's subject is a blob and the votes' sides stand.
 //
-// nullopt where any stage fails: the features' rectangle stands.
+// nullopt where any of stages 1-4 fails: the features' rectangle stands.
+//
+// A print plain towards the top's trailing end: where the top covered the floor at the earlier
+// exposure too, both hypotheses explain a plain print, and the trailing rim's patches hold floor
+// that neither explains: the votes can stop at the print's subject there, and the rectangle is
+// short of the top on that side (its yaw still the sides').
 
 #include <optional>
 #include <vector>
@@ -70,15 +80,18 @@ inline constexpr double kSideSupport = 0.5;
 inline constexpr int kSideSegments = 8;
 /// At most this share of the cells inside the rectangle may vote for the floor.
 inline constexpr double kMaxFloorInside = 0.03;
+/// Features whose extent covers under this share of the votes' rectangle are a print's subject,
+/// not the top: a top printed all over gives features to within their shortfall of its rims
+/// (nine tenths of its area and more), the orange photograph's fruit a third of it.
+inline constexpr double kBlobShare = 0.5;
 
-/// The top's rectangle at the current exposure out to its edges (axes long, short), and its yaw's
+/// The top's rectangle at the current exposure with the edges' axes (long, short), and its yaw's
 /// variance [rad^2] in *var_yaw; nullopt where no rectangle passes the checks. pts_W: the set's
 /// features on the top's plane z_top (current exposure); S: the top's motion over the interval
 /// (earlier to current, on the plane at z_top); X_WC1 / X_WC2: the cameras.
 std::optional<TopRect> edges_by_motion(const Correspondences& c, const Isometry3d& X_WC1,
-                                       const Isometry3d& X_WC2, const Similarity2& S,
-                                       double z_top, double floor_z_m,
-                                       const std::vector<Vector3d>& pts_W,
+                                       const Isometry3d& X_WC2, const Similarity2& S, double z_top,
+                                       double floor_z_m, const std::vector<Vector3d>& pts_W,
                                        const MovingTopParams& params, const cv::Mat& gray_1,
                                        const cv::Mat& gray_2, double* var_yaw);
 

@@ -20,9 +20,9 @@
 // s = k_2 / k_1 also carries the top's heave (a deck) over the interval. A similarity fitted by
 // RANSAC (two matches a draw, seeded) gives the top's inliers, its displacement, its turn and
 // its heave (a few matches apart from the rest that share its motion by chance left out: the
-// top is one region); the inliers' rectangle its centre, size and yaw, or, on a top seen whole,
-// the rectangle out to the top's edges by the pixels that follow its motion (moving_edges.hpp:
-// a print's subject can be a blob off the top's centre and turned from it). A set that is a cluster
+// top is one region); the inliers' rectangle its centre, size and yaw, on a top seen whole along
+// the axes of the top's edges by the pixels that follow its motion (moving_edges.hpp: a print's
+// subject can be a blob off the top's centre and turned from it). A set that is a cluster
 // of the floor's matches, or whose motion no platform makes (a floor pattern matched to its next
 // copy), is set aside and the next motion taken; gates refuse the floor's alone, an implausible
 // motion alone, a size out of range, and a motion that a still top explains as well (a pattern
@@ -108,8 +108,8 @@ struct MovingTop {
   int n_inliers = 0;     ///< matches on the top (by its outline: its four corners)
   /// Measured by its outline in both frames (moving_outline.hpp), not by its features.
   bool outline = false;
-  /// Its rectangle (centre, size, yaw) out to the top's edges by its motion (moving_edges.hpp),
-  /// not the features' widened by their shortfall.
+  /// Its rectangle's axes (yaw) are the top's edges' by its motion (moving_edges.hpp), and so are
+  /// its centre and size where the features cover under kBlobShare of it.
   bool edges = false;
   /// The set's pixels against the earlier image (kStillPixels): their normalised
   /// cross-correlation where a still top had them and where the measured motion had them; NaN
