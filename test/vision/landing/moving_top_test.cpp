@@ -505,14 +505,18 @@ TEST(MovingTopTest, ARepeatedPrintsPixelsRefuseItsPeriodAsMotion) {
   EXPECT_GT(m.ncc_still, 0.9);
 }
 
-// A cart whose print does not repeat keeps its motion: where each feature was, the earlier
-// image shows what the cart left there.
-TEST(MovingTopTest, ACartsPixelsFollowItsMotionNotAStillTop) {
-  const MovingScene s = moving_cart_scene();
+// moving_cart_scene's cart printed all over, measured with both images.
+MovingTop printed_cart(const MovingScene& s) {
   const Print print = Print::random(21), floor = Print::random(22);
   const cv::Mat g1 = render(s, s.pose_1, s.top_1, s.top_size, print, floor);
   const cv::Mat g2 = render(s, s.pose_2, s.top_2, s.top_size, print, floor);
-  const MovingTop m = find_moving_top(s.correspondences(), 0.25, 0.0, MovingTopParams{}, g1, g2);
+  return find_moving_top(s.correspondences(), 0.25, 0.0, MovingTopParams{}, g1, g2);
+}
+
+// A cart whose print does not repeat keeps its motion: where each feature was, the earlier
+// image shows what the cart left there.
+TEST(MovingTopTest, ACartsPixelsFollowItsMotionNotAStillTop) {
+  const MovingTop m = printed_cart(moving_cart_scene());
   ASSERT_TRUE(m.found()) << to_string(m.reason) << ": still " << m.ncc_still << " moving "
                          << m.ncc_moving;
   EXPECT_GT(m.ncc_moving, 0.9);
@@ -611,10 +615,7 @@ TEST(MovingTopTest, ATopWhosePrintIsABlobIsMeasuredOutToItsEdges) {
 // gives the sides (the votes can carry a side face or the platform's shadow past a rim).
 TEST(MovingTopTest, ATopPrintedAllOverIsMeasuredOnItsRimsAxes) {
   const MovingScene s = moving_cart_scene();
-  const Print print = Print::random(21), floor = Print::random(22);
-  const cv::Mat g1 = render(s, s.pose_1, s.top_1, s.top_size, print, floor);
-  const cv::Mat g2 = render(s, s.pose_2, s.top_2, s.top_size, print, floor);
-  const MovingTop m = find_moving_top(s.correspondences(), 0.25, 0.0, MovingTopParams{}, g1, g2);
+  const MovingTop m = printed_cart(s);
   ASSERT_TRUE(m.found()) << to_string(m.reason);
   EXPECT_TRUE(m.edges);
   EXPECT_NEAR(m.size_m[0], s.top_size.x(), 0.015);
