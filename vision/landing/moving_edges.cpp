@@ -145,13 +145,11 @@ cv::Mat votes(const Grid& g, const cv::Mat& gray_1, const cv::Mat& gray_2) {
 
 // A rectangle in grid coordinates: axis a at angle theta, b a quarter turn on; extents along each.
 struct GridRect {
-  double theta = 0;
+  explicit GridRect(double turn = 0) : theta(turn), cs(std::cos(turn)), sn(std::sin(turn)) {}
+  double theta, cs, sn;
   double lo[2] = {0, 0}, hi[2] = {0, 0};
   double area() const { return (hi[0] - lo[0]) * (hi[1] - lo[1]); }
-  Vector2d along(double x, double y) const {
-    const double cs = std::cos(theta), sn = std::sin(theta);
-    return {cs * x + sn * y, -sn * x + cs * y};
-  }
+  Vector2d along(double x, double y) const { return {cs * x + sn * y, -sn * x + cs * y}; }
 };
 
 constexpr size_t kMaxRectPoints = 2000;
@@ -162,8 +160,7 @@ GridRect trimmed_rect(const std::vector<Vector2d>& pts) {
   const size_t k = size_t(kTrimShare * double(pts.size()));
   std::vector<double> a(pts.size()), b(pts.size());
   const auto at = [&](double theta) {
-    GridRect r;
-    r.theta = theta;
+    GridRect r(theta);
     for (size_t i = 0; i < pts.size(); ++i) {
       const Vector2d p = r.along(pts[i].x(), pts[i].y());
       a[i] = p.x(), b[i] = p.y();
@@ -259,7 +256,7 @@ std::optional<TopRect> edges_by_motion(const Correspondences& c, const Isometry3
 
   // Grid axes are the world's: the rectangle's axes in the world, the long one first.
   const int l = (r.hi[0] - r.lo[0]) >= (r.hi[1] - r.lo[1]) ? 0 : 1;
-  const Vector3d a(std::cos(r.theta), std::sin(r.theta), 0), b(-a.y(), a.x(), 0);
+  const Vector3d a(r.cs, r.sn, 0), b(-a.y(), a.x(), 0);
   TopRect out;
   out.origin_W = Vector3d(g->origin.x(), g->origin.y(), z_top);
   out.axis[0] = l == 0 ? a : b;
