@@ -28,7 +28,7 @@ constexpr int kMapStride = 4;
 // Stage 1: the window and each cell's pixels under the two hypotheses.
 std::optional<Grid> cells(const Correspondences& c, const Isometry3d& X_WC1,
                           const Isometry3d& X_WC2, const Similarity2& S, double z_top,
-                          double floor_z_m, const TopRect& features, const cv::Size& image) {
+                          double floor_z_m, const TopRect& features) {
   Vector2d lo(INFINITY, INFINITY), hi(-INFINITY, -INFINITY);
   for (const double a : {features.lo[0], features.hi[0]})
     for (const double b : {features.lo[1], features.hi[1]}) {
@@ -77,9 +77,6 @@ std::optional<Grid> cells(const Correspondences& c, const Isometry3d& X_WC1,
   g.in_view = cv::Mat::zeros(g.n, g.n, CV_8U);
   g.separated = cv::Mat::zeros(g.n, g.n, CV_8U);
   cv::Mat* maps[3] = {&g.map_2, &g.map_top, &g.map_floor};
-  const auto inside = [&](const Vector2d& u) {
-    return u.x() >= 0 && u.y() >= 0 && u.x() <= image.width - 1 && u.y() <= image.height - 1;
-  };
   for (int j = 0; j < g.n; ++j) {
     const int cj = std::min(j / kMapStride, nc - 2);
     const double fj = double(j - cj * kMapStride) / kMapStride;
@@ -94,7 +91,8 @@ std::optional<Grid> cells(const Correspondences& c, const Isometry3d& X_WC1,
       std::array<Vector2d, 3> u;
       for (int k = 0; k < 3; ++k) {
         u[k] = (1 - fj) * ((1 - fi) * a[k] + fi * b[k]) + fj * ((1 - fi) * e[k] + fi * f[k]);
-        all_in = all_in && inside(u[k]);  // NaN is never inside
+        // Half a pixel in: every pixel bilinear reads is the image's (NaN is never in it).
+        all_in = all_in && c.camera->in_image(u[k], 0.5);
         maps[k]->at<cv::Vec2f>(j, i) =
             all_in ? cv::Vec2f(float(u[k].x()), float(u[k].y())) : cv::Vec2f(-10.f, -10.f);
       }
@@ -228,16 +226,15 @@ bool passes(const GridRect& r, const cv::Mat& v, const Grid& g,
 
 }  // namespace
 
-std::optional<TopRect> edges_by_motion(const Correspondences& c, const Isometry3d& X_WC1,
-                                       const Isometry3d& X_WC2, const Similarity2& S, double z_top,
-                                       double floor_z_m, const std::vector<Vector3d>& pts_W,
-                                       const MovingTopParams& params, const cv::Mat& gray_1,
-                                       const cv::Mat& gray_2, double* var_yaw) {
-  assert(c.camera && var_yaw && gray_1.type() == CV_8UC1 && gray_2.type() == CV_8UC1);
-  const auto features = features_extent(pts_W, Vector3d::UnitZ());
-  if (!features) return std::nullopt;
-  const auto g =
-      cells(c, X_WC1, X_WC2, S, z_top, floor_z_m, *features, cv::Size(gray_2.cols, gray_2.rows));
+std::optional<EdgesRect> edges_by_motion(const Correspondences& c, const Isometry3d& X_WC1,
+                                         const Isometry3d& X_WC2, const Similarity2& S,
+                                         double z_top, double floor_z_m, const TopRect& features,
+                                         const std::vector<Vector3d>& pts_W,
+                                         const MovingTopParams& params, const cv::Mat& gray_1,
+                                         const cv::Mat& gray_2) {
+  assert(c.camera && gray_1.type() == CV_8UC1 && gray_2.type() == CV_8UC1);
+  assert(gray_2.cols == c.camera->width && gray_2.rows == c.camera->height);
+  const auto g = cells(c, X_WC1, X_WC2, S, z_top, floor_z_m, features);
   if (!g) return std::nullopt;
   const cv::Mat v = votes(*g, gray_1, gray_2);
   std::vector<Vector2d> top;
@@ -257,7 +254,8 @@ std::optional<TopRect> edges_by_motion(const Correspondences& c, const Isometry3
   // Grid axes are the world's: the rectangle's axes in the world, the long one first.
   const int l = (r.hi[0] - r.lo[0]) >= (r.hi[1] - r.lo[1]) ? 0 : 1;
   const Vector3d a(r.cs, r.sn, 0), b(-a.y(), a.x(), 0);
-  TopRect out;
+  EdgesRect e;
+  TopRect& out = e.rect;
   out.origin_W = Vector3d(g->origin.x(), g->origin.y(), z_top);
   out.axis[0] = l == 0 ? a : b;
   out.axis[1] = l == 0 ? b : -a;  // right-handed: (long, short, z)
@@ -283,8 +281,8 @@ std::optional<TopRect> edges_by_motion(const Correspondences& c, const Isometry3
     for (int k = 0; k < 2; ++k) out.lo[k] = feat.lo[k], out.hi[k] = feat.hi[k];
   // Each end of a side is placed to about its band of cells: the turn to that over the side.
   const double rim_m = kBandCells * g->cell_m, long_m = out.hi[0] - out.lo[0];
-  *var_yaw = 2 * (rim_m / long_m) * (rim_m / long_m) / 3;
-  return out;
+  e.var_yaw = 2 * (rim_m / long_m) * (rim_m / long_m) / 3;
+  return e;
 }
 
 }  // namespace alight::vision

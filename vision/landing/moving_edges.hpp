@@ -85,14 +85,22 @@ inline constexpr double kMaxFloorInside = 0.03;
 /// (nine tenths of its area and more), the orange photograph's fruit a third of it.
 inline constexpr double kBlobShare = 0.5;
 
-/// The top's rectangle at the current exposure with the edges' axes (long, short), and its yaw's
-/// variance [rad^2] in *var_yaw; nullopt where no rectangle passes the checks. pts_W: the set's
-/// features on the top's plane z_top (current exposure); S: the top's motion over the interval
-/// (earlier to current, on the plane at z_top); X_WC1 / X_WC2: the cameras.
-std::optional<TopRect> edges_by_motion(const Correspondences& c, const Isometry3d& X_WC1,
-                                       const Isometry3d& X_WC2, const Similarity2& S, double z_top,
-                                       double floor_z_m, const std::vector<Vector3d>& pts_W,
-                                       const MovingTopParams& params, const cv::Mat& gray_1,
-                                       const cv::Mat& gray_2, double* var_yaw);
+/// The top's rectangle at the current exposure with the edges' axes (long, short) and its yaw's
+/// variance.
+struct EdgesRect {
+  TopRect rect;
+  double var_yaw = 0;  ///< [rad^2]
+};
+
+/// The top's EdgesRect; nullopt where no rectangle passes the checks. features: the set's
+/// features' rectangle (features_extent) of pts_W, its features on the top's plane z_top (current
+/// exposure); S: the top's motion over the interval (earlier to current, on the plane at z_top);
+/// X_WC1 / X_WC2: the cameras; gray_1 / gray_2: the raw images, of the camera's size.
+std::optional<EdgesRect> edges_by_motion(const Correspondences& c, const Isometry3d& X_WC1,
+                                         const Isometry3d& X_WC2, const Similarity2& S,
+                                         double z_top, double floor_z_m, const TopRect& features,
+                                         const std::vector<Vector3d>& pts_W,
+                                         const MovingTopParams& params, const cv::Mat& gray_1,
+                                         const cv::Mat& gray_2);
 
 }  // namespace alight::vision

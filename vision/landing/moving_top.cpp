@@ -514,7 +514,7 @@ double rect_yaw_variance(const std::vector<Vector3d>& pts_W, double yaw_rad) {
 // found; else the features' rectangle widened by their shortfall.
 void measure(const std::vector<Placed>& cand, const std::vector<size_t>& in, const Similarity2& S,
              const Views& v, double dt_s, double floor_z_m, const MovingTopParams& params,
-             const std::optional<std::pair<TopRect, double>>& edges, MovingTop* out) {
+             const std::optional<EdgesRect>& edges, MovingTop* out) {
   const double n = double(in.size());
   std::vector<Vector3d> pts_W;
   Vector2d m1 = Vector2d::Zero(), m2 = Vector2d::Zero();
@@ -531,7 +531,7 @@ void measure(const std::vector<Placed>& cand, const std::vector<size_t>& in, con
   }
   const auto features = features_extent(pts_W, Vector3d::UnitZ());
   assert(features);  // the size gate ran on the same points
-  const TopRect* rect = edges ? &edges->first : &*features;
+  const TopRect* rect = edges ? &edges->rect : &*features;
   Vector3d centre = rect->origin_W;
   for (int a = 0; a < 2; ++a) centre += 0.5 * (rect->lo[a] + rect->hi[a]) * rect->axis[a];
   const TopRect wide = edges ? *rect : widened_by_shortfall(*rect, in.size());
@@ -569,7 +569,7 @@ void measure(const std::vector<Placed>& cand, const std::vector<size_t>& in, con
   // border.
   out->var_yaw =
       out->cut ? kUnknownYawVar
-               : std::max(var_s, edges ? edges->second : rect_yaw_variance(pts_W, out->yaw_rad));
+               : std::max(var_s, edges ? edges->var_yaw : rect_yaw_variance(pts_W, out->yaw_rad));
 }
 
 }  // namespace
@@ -634,12 +634,10 @@ MovingTop find_moving_top(const Correspondences& c, double dt_s, double floor_z_
     if (out.ncc_still >= out.ncc_moving - kStillNccGap) return refuse(MovingReason::kStillPixels);
   }
   // Stage 4: the top's edges by its motion, on a top seen whole (moving_edges.hpp).
-  std::optional<std::pair<TopRect, double>> edges;
-  double var_yaw = 0;
+  std::optional<EdgesRect> edges;
   if (!out.cut && !gray_1.empty() && !gray_2.empty())
-    if (auto r = edges_by_motion(c, v.X_WC1, v.X_WC2, S, z_top, floor_z_m, pts_W, params, gray_1,
-                                 gray_2, &var_yaw))
-      edges.emplace(*r, var_yaw);
+    edges = edges_by_motion(c, v.X_WC1, v.X_WC2, S, z_top, floor_z_m, *rect, pts_W, params, gray_1,
+                            gray_2);
   measure(cand, in, S, v, dt_s, floor_z_m, params, edges, &out);
   // Inliers near two opposite borders: the top fills the view across, and the inliers' extent is
   // the view's footprint, not the top's; where the footprint is about the top's size, it read as
