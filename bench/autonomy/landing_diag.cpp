@@ -132,6 +132,28 @@ int main(int argc, char** argv) try {
   cfg.seed = seed;
   cfg.time_limit_s = time_limit_s;
   cfg.onboard_estimate = no_mocap;
+  // The onboard estimator's verdict on the frame the vision is about to read (without motion
+  // capture): the front end's reason, the filter's outcome, the fit's inliers and its other
+  // motions' (the second fit of a platform moving under the camera), and the running counts of
+  // samples fused on the other motion and with inflated noise.
+  std::string flow_note;
+  std::optional<estimator::FlowSample> flow_sample;
+  cfg.on_flow_frame = [&](const estimator::Onboard& o) {
+    const auto& f = o.last_frame();
+    flow_sample = f.sample;
+    char buf[160];
+    int k = std::snprintf(buf, sizeof buf, " | flow %s %s", estimator::to_string(f.flow),
+                          estimator::to_string(f.fused));
+    if (f.sample) {
+      k += std::snprintf(buf + k, sizeof buf - k, " in %d", f.sample->inliers);
+      for (const auto& m : f.sample->others)
+        k += std::snprintf(buf + k, sizeof buf - k, " other %d", m.inliers);
+    }
+    const auto c = o.state().counters;
+    std::snprintf(buf + k, sizeof buf - k, " second %lld inflated %lld",
+                  static_cast<long long>(c.flow_second), static_cast<long long>(c.flow_inflated));
+    flow_note = buf;
+  };
   // Autonomy's reason within a phase, printed where its words change (its figures change each
   // step): what the vehicle waits for.
   std::string said;
@@ -163,9 +185,12 @@ int main(int argc, char** argv) try {
   // Each frame's camera pose from motion capture (as the vision gets it) and the truth, to tell
   // how far the motion the vision assumes between reference and current is off.
   std::map<int64_t, std::pair<Isometry3d, Isometry3d>> cams;
+  std::map<int64_t, Isometry3d> truth_cams;  // the last frames' true camera poses
   cfg.camera_vision = [&](const sim::CameraFrame& f, const std::optional<PoseSample>& pose) {
     const auto r = pipeline.process(f.pixels, f.utime, pose, f.exposure_s, f.line_delay_s);
     if (pose) cams[f.utime] = {camera_in_world(pose->X_WB(), rig.mount.X_BC()), f.X_WC};
+    truth_cams[f.utime] = f.X_WC;
+    while (truth_cams.size() > 4) truth_cams.erase(truth_cams.begin());
     while (!cams.empty() && cams.begin()->first < f.utime - 5000000) cams.erase(cams.begin());
     const Isometry3d X_CW = f.X_WC.inverse();
     std::vector<cv::Point> truth_px;
@@ -300,6 +325,29 @@ int main(int argc, char** argv) try {
                   pr.a_W.x(), pr.a_W.y(), quarter_deg(pr.yaw_rad - moved->yaw_rad));
     }
     platform = vision::to_platform_msg(r);
+    std::printf("%s", flow_note.c_str());
+    // Each flow motion against the truth: the camera's motion over the floor and over the top
+    // (speed each would give, m/s off).
+    if (flow_sample && moved) {
+      const auto a = truth_cams.find(flow_sample->utime_from);
+      const auto b = truth_cams.find(flow_sample->utime_to);
+      if (a != truth_cams.end() && b != truth_cams.end()) {
+        const double dt = (flow_sample->utime_to - flow_sample->utime_from) * 1e-6;
+        const Isometry3d& X1 = a->second;
+        const double d = X1.translation().z();
+        const Vector3d dp = b->second.translation() - X1.translation();
+        const Matrix3d R_C1W = X1.linear().transpose();
+        const Vector3d floor_td = R_C1W * dp / d;
+        const Vector3d top_td = R_C1W * (dp - moved->v_W * dt) / d;
+        const auto off = [&](const Vector3d& td, const Vector3d& truth) {
+          return (td - truth).norm() * d / dt;
+        };
+        std::printf(" | vs floor/top %.2f/%.2f", off(flow_sample->t_over_d_C1, floor_td),
+                    off(flow_sample->t_over_d_C1, top_td));
+        for (const auto& m : flow_sample->others)
+          std::printf(" other %.2f/%.2f", off(m.t_over_d_C1, floor_td), off(m.t_over_d_C1, top_td));
+      }
+    }
     std::printf("\n");
     if (!dump.empty() && n % every == 0) {
       cv::Mat bgr;

@@ -238,12 +238,18 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
       prev_along = along;
     }
     if (onboard && flow_rig) {
-      if (auto f = simulator.take_flow_camera()) onboard->add_frame(*f);
+      if (auto f = simulator.take_flow_camera()) {
+        onboard->add_frame(*f);
+        if (config.on_flow_frame) config.on_flow_frame(onboard->onboard());
+      }
     }
     if (config.camera_vision) {
       if (auto f = simulator.take_camera()) {
         // Landing: the estimator and the vision share the downward frame.
-        if (onboard && !flow_rig) onboard->add_frame(*f);
+        if (onboard && !flow_rig) {
+          onboard->add_frame(*f);
+          if (config.on_flow_frame) config.on_flow_frame(onboard->onboard());
+        }
         const int64_t exposure_utime = f->utime;
         frames.add_frame(std::move(*f), exposure_utime);
       }

@@ -16,6 +16,7 @@
 
 #include "autonomy/autonomy.hpp"
 #include "common/pose_buffer.hpp"
+#include "estimator/onboard.hpp"
 #include "oracle_vision.hpp"
 #include "sim/simulator.hpp"
 
@@ -62,6 +63,9 @@ struct ClosedLoopConfig {
   /// flow_camera, alight-sim --flow-camera) and only the estimator sees it. With camera_vision
   /// only (the oracle measures in the true frame, not the estimate's).
   bool onboard_estimate = false;
+  /// With onboard_estimate: called after each downward frame reached the onboard estimator
+  /// (diagnostics: its last_frame() and state()).
+  std::function<void(const estimator::Onboard&)> on_flow_frame;
 };
 
 struct ScriptActions {
