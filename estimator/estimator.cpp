@@ -26,9 +26,13 @@ bool event_before(const auto& a, const auto& b) {
   return a.seq < b.seq;
 }
 
-MeasCov flow_noise(const FlowSample& m, const FlowParams& p) {
+/// The sample's noise with the camera `height_m` (> 0) over the plane it saw: the front end's
+/// covariance plus sigma_floor_mps as t/d over the sample's interval (FlowParams::sigma_floor_mps).
+MeasCov flow_noise(const FlowSample& m, const FlowParams& p, double height_m) {
+  assert(height_m > 0);
   MeasCov R = 0.5 * p.cov_scale * (m.cov + m.cov.transpose());
-  R.diagonal().array() += p.sigma_floor * p.sigma_floor;
+  const double floor = p.sigma_floor_mps * (m.utime_to - m.utime_from) / kUsPerS / height_m;
+  R.diagonal().array() += floor * floor;
   return R;
 }
 
@@ -52,11 +56,12 @@ std::optional<Outcome> refusal(const FlowSample& m, const FlowParams& p) {
     return Outcome::kNonFinite;
   if (m.utime_from <= 0 || m.utime_to <= m.utime_from || m.t_over_d_C1.norm() > p.max_t_over_d)
     return Outcome::kAbsurd;
-  // A covariance must be symmetric and, with the floor added, positive definite.
+  // A covariance must be symmetric and, with the floor added (at any height: whether it is
+  // one does not depend on it), positive definite.
   const double scale = std::max(1e-12, m.cov.cwiseAbs().maxCoeff());
   if ((m.cov - m.cov.transpose()).cwiseAbs().maxCoeff() > 1e-6 * scale ||
       (m.cov.diagonal().array() < 0).any() ||
-      Eigen::LLT<Matrix3d>(Matrix3d(flow_noise(m, p))).info() != Eigen::Success)
+      Eigen::LLT<Matrix3d>(Matrix3d(flow_noise(m, p, 1.0))).info() != Eigen::Success)
     return Outcome::kAbsurd;
   if (m.utime_to - m.utime_from > to_us(p.max_span_s)) return Outcome::kGeometry;
   if (m.inliers < p.min_inliers) return Outcome::kTooFewInliers;
@@ -511,8 +516,9 @@ Outcome Estimator::apply_flow(const FlowSample& m, int64_t key, FilterState& s) 
   };
   const auto update_for = [&](const FlowSample& f) -> std::optional<Update> {
     Update u;
-    if (model_over(f, false, &u.r, &u.H) < p.min_height_m) return std::nullopt;
-    u.R = flow_noise(f, p);
+    const double height_m = model_over(f, false, &u.r, &u.H);
+    if (height_m < p.min_height_m) return std::nullopt;
+    u.R = flow_noise(f, p, height_m);
     // Over a platform the rangefinder's terrain is its top, while the front end's dominant plane
     // stays the floor until the platform fills most of the view (below about 0.5 m over it), and
     // in between its fit may take features of both: the two planes give t/d apart by the
@@ -643,9 +649,14 @@ State Estimator::state() const {
     return (s.utime - s.last_fused_utime[static_cast<int>(sensor)]) / kUsPerS;
   };
   if (age_s(Sensor::kFlow) > h.flow_timeout_s) flag(kNoFlow, Health::kDegraded);
-  // Below the rangefinder's blind zone (resting on the floor) no reading is expected.
+  // Below the rangefinder's blind zone (resting on the floor) no reading is expected; nor where
+  // the estimate cannot tell, within two sigma of its height, that it is above it (resting, the
+  // flow's noise as a velocity is large a few centimetres over the floor: sigma_floor_mps).
   const RangeModel range = range_model(s.x, params_.range.t_B_R_m, range_d_B_);
-  if (range.range_m > params_.range.min_range_m && age_s(Sensor::kRange) > h.range_timeout_s)
+  const double range_var =
+      (range.H * s.P.topLeftCorner<idx::kCore, idx::kCore>() * range.H.transpose())(0, 0);
+  if (range.range_m - 2.0 * std::sqrt(std::max(0.0, range_var)) > params_.range.min_range_m &&
+      age_s(Sensor::kRange) > h.range_timeout_s)
     flag(kNoRange, Health::kDegraded);
   if (h.baro_timeout_s > 0 && age_s(Sensor::kBaro) > h.baro_timeout_s)
     flag(kNoBaro, Health::kDegraded);

@@ -151,9 +151,9 @@ const ParamSchema<FlowParams>& FlowParams::schema() {
           "a larger translation over height is absurd");
     s.add("cov_scale", &P::cov_scale, Range::open_closed(0, 1000), "",
           "the front end's covariance is scaled by this");
-    s.add("sigma_floor", &P::sigma_floor, Range::closed(0, 1), "",
-          "sigma added on each axis of t_over_d (what the front end's covariance leaves out: "
-          "1e-4 is 4.5 mm/s at 1.5 m and 30 Hz)");
+    s.add("sigma_floor_mps", &P::sigma_floor_mps, Range::closed(0, 1), "m/s",
+          "sigma added on each axis of t_over_d as a velocity (sigma * dt / height): what the "
+          "front end's covariance leaves out");
     s.add("gate_chi2", &P::gate_chi2, Range::gt(0), "", "chi-square gate (3 dof: 16.27 = 99.9 %)");
     return s;
   }();

@@ -94,11 +94,15 @@ struct FlowParams {
   double min_height_m = 0.05;  ///< camera height above terrain below: refused [m]
   double max_t_over_d = 5.0;   ///< |t/d| above: absurd [-]
   double cov_scale = 1.0;      ///< the front end's covariance times this [-]
-  /// Plus this sigma on each axis [-]. The front end's own covariance is its image noise
-  /// alone, about a third of its error on the simulator's floor (1.7 mm/s at 1.5 m); 1e-4 is
-  /// 4.5 mm/s at 1.5 m and 30 Hz, the error on its worst floor (tiles, p90 6.6 mm/s). It was
-  /// 0.002 (90 mm/s), which left the velocity to the IMU between flow samples it barely trusted.
-  double sigma_floor = 1e-4;
+  /// Plus this sigma on each axis, as a velocity: sigma_floor_mps * dt / d of t/d over a sample
+  /// of dt seconds taken d metres over the plane [m/s]. The front end's own covariance is its
+  /// image noise alone, about a third of its error on the simulator's floor (1.7 mm/s at 1.5 m);
+  /// 4.5 mm/s is the error on its worst floor (tiles, p90 6.6 mm/s). A velocity and not a fixed
+  /// t/d: what the covariance leaves out (the floor's relief, the lens model, the exposure's
+  /// timing) is nearly as large a velocity near the floor as at 1.5 m, a t/d five times as large
+  /// at 0.3 m; a fixed t/d made the filter five times too sure of the take-off's first samples,
+  /// and one drift of a few cm/s there then failed every later sample's gate.
+  double sigma_floor_mps = 0.0045;
   double gate_chi2 = 16.27;  ///< chi-square gate (3 dof; 16.27 = 99.9 %)
 
   Matrix3d R_BC() const;  ///< camera axes in body

@@ -586,6 +586,19 @@ TEST(EstimatorTest, OnTheFloorNoRangeIsExpectedAndHealthIsOk) {
 
 // ---- Health
 
+TEST(EstimatorTest, ARangefinderSilentInFlightIsFlaggedThoughRestingOneIsNot) {
+  // Hovering at 1.2 m the rangefinder's beam is a metre past its blind zone, far beyond the
+  // estimate's doubt about its height: its silence is a fault (compare the resting vehicle of
+  // OnTheFloorNoRangeIsExpectedAndHealthIsOk).
+  const EstimatorParams p = default_params(1.2);
+  SensorConfig cfg;
+  cfg.range = false;
+  const Flight f = test::simulate(test::hover(1.2, 1.2), 4.0, cfg, p, 2);
+  const State s = fly(f, p).state();
+  EXPECT_EQ(s.health, Health::kDegraded);
+  EXPECT_TRUE(s.health_reasons & kNoRange) << health_reasons_text(s.health_reasons);
+}
+
 TEST(EstimatorTest, HealthDegradesWithoutFlowAndIsLostWhenTheImuStops) {
   const EstimatorParams p = default_params(1.2);
   SensorConfig cfg;

@@ -197,10 +197,6 @@ Flight simulate(const Trajectory& traj, double duration_s, const SensorConfig& c
   if (cfg.flow) {
     const auto& fp = params.flow;
     const Matrix3d R_BC = fp.R_BC();
-    const Matrix3d R_noise =
-        (fp.cov_scale * cfg.flow_sigma * cfg.flow_sigma + fp.sigma_floor * fp.sigma_floor) *
-        Matrix3d::Identity();
-    const Matrix3d L = R_noise.llt().matrixL();
     const double dt = 1.0 / cfg.flow_rate_hz;
     double t0 = cfg.start_s + 0.0021;
     for (double t1 = t0 + dt; t1 <= cfg.start_s + duration_s; t0 = t1, t1 += dt) {
@@ -213,7 +209,11 @@ Flight simulate(const Trajectory& traj, double duration_s, const SensorConfig& c
       in.flow.utime_from = utime_of(t0);
       in.flow.utime_to = utime_of(t1);
       in.flow.t_over_d_C1 = R_BC.transpose() * k0.R.transpose() * (p_C2 - p_C1) / d1;
-      if (noisy) in.flow.t_over_d_C1 += L * randn3();
+      if (noisy) {  // the noise the filter assumes (FlowParams::sigma_floor_mps)
+        const double floor = fp.sigma_floor_mps * dt / d1;
+        in.flow.t_over_d_C1 +=
+            std::sqrt(fp.cov_scale * cfg.flow_sigma * cfg.flow_sigma + floor * floor) * randn3();
+      }
       in.flow.cov = cfg.flow_sigma * cfg.flow_sigma * Matrix3d::Identity();
       in.flow.inliers = 100;
       in.arrival_utime = in.flow.utime_to + static_cast<int64_t>(cfg.flow_delay_s * 1e6);
