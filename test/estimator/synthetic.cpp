@@ -208,7 +208,8 @@ Flight simulate(const Trajectory& traj, double duration_s, const SensorConfig& c
       in.kind = Kind::kFlow;
       in.flow.utime_from = utime_of(t0);
       in.flow.utime_to = utime_of(t1);
-      in.flow.t_over_d_C1 = R_BC.transpose() * k0.R.transpose() * (p_C2 - p_C1) / d1;
+      in.flow.t_over_d_C1 = R_BC.transpose() * k0.R.transpose() *
+                            (p_C2 - p_C1 + cfg.flow_velocity_error_W_mps * dt) / d1;
       if (noisy) {  // the noise the filter assumes (FlowParams::sigma_floor_mps)
         const double floor = fp.sigma_floor_mps * dt / d1;
         in.flow.t_over_d_C1 +=

@@ -46,6 +46,10 @@ struct SensorConfig {
   bool noise = true;  ///< false: perfect sensors, no biases
   bool range = true, baro = true, flow = true;
   double flow_sigma = 0.003;  ///< front end's sigma of t_over_d on each axis [-]
+  /// An error of the flow the front end's covariance does not hold (the floor's relief, the lens
+  /// model, the exposures' timing), as a velocity of the camera over the floor, world axes: each
+  /// sample's displacement is off by it times the sample's interval [m/s].
+  Eigen::Vector3d flow_velocity_error_W_mps = Eigen::Vector3d::Zero();
   double baro_offset0_m = 40.0;
   std::optional<Platform> platform;
   /// The flow's plane is the floor even over the platform (a platform small in the camera's
