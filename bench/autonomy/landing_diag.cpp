@@ -326,8 +326,8 @@ int main(int argc, char** argv) try {
     }
     platform = vision::to_platform_msg(r);
     std::printf("%s", flow_note.c_str());
-    // Each flow motion against the truth: the camera's motion over the floor and over the top
-    // (speed each would give, m/s off).
+    // Each flow motion against the truth: the camera's motion over the floor and relative to the
+    // top, each over its plane's distance (how far off, as a speed over the floor, m/s).
     if (flow_sample && moved) {
       const auto a = truth_cams.find(flow_sample->utime_from);
       const auto b = truth_cams.find(flow_sample->utime_to);
@@ -338,7 +338,7 @@ int main(int argc, char** argv) try {
         const Vector3d dp = b->second.translation() - X1.translation();
         const Matrix3d R_C1W = X1.linear().transpose();
         const Vector3d floor_td = R_C1W * dp / d;
-        const Vector3d top_td = R_C1W * (dp - moved->v_W * dt) / d;
+        const Vector3d top_td = R_C1W * (dp - moved->v_W * dt) / (d - moved->top_center_W.z());
         const auto off = [&](const Vector3d& td, const Vector3d& truth) {
           return (td - truth).norm() * d / dt;
         };
