@@ -17,6 +17,7 @@
 #include <map>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <string>
 
 #include "autonomy/convert.hpp"
 #include "closed_loop.hpp"
@@ -141,18 +142,15 @@ int main(int argc, char** argv) try {
   cfg.on_flow_frame = [&](const estimator::Onboard& o) {
     const auto& f = o.last_frame();
     flow_sample = f.sample;
-    char buf[160];
-    int k = std::snprintf(buf, sizeof buf, " | flow %s %s", estimator::to_string(f.flow),
-                          estimator::to_string(f.fused));
+    flow_note = std::string(" | flow ") + estimator::to_string(f.flow) + " " +
+                estimator::to_string(f.fused);
     if (f.sample) {
-      k += std::snprintf(buf + k, sizeof buf - k, " in %d", f.sample->inliers);
-      for (const auto& m : f.sample->others)
-        k += std::snprintf(buf + k, sizeof buf - k, " other %d", m.inliers);
+      flow_note += " in " + std::to_string(f.sample->inliers);
+      for (const auto& m : f.sample->others) flow_note += " other " + std::to_string(m.inliers);
     }
     const auto c = o.state().counters;
-    std::snprintf(buf + k, sizeof buf - k, " second %lld inflated %lld",
-                  static_cast<long long>(c.flow_second), static_cast<long long>(c.flow_inflated));
-    flow_note = buf;
+    flow_note +=
+        " second " + std::to_string(c.flow_second) + " inflated " + std::to_string(c.flow_inflated);
   };
   // Autonomy's reason within a phase, printed where its words change (its figures change each
   // step): what the vehicle waits for.
