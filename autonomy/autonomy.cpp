@@ -232,6 +232,12 @@ std::optional<Autonomy::EstimateCondition> Autonomy::estimate_condition() const 
   return EstimateCondition{L::kLost, "state estimate lost (" + why + ")"};
 }
 
+std::optional<double> Autonomy::terrain_m() const {
+  if (!estimate_ || seconds(now_utime_ - estimate_->utime) > params_.failsafe.estimate_silent_s)
+    return std::nullopt;
+  return estimate_->terrain_m;
+}
+
 std::optional<std::string> Autonomy::estimate_refusal() const {
   const auto e = estimate_condition();
   if (!e) {
@@ -636,7 +642,7 @@ void Autonomy::step_moving(phases::Approach& a, const Vector3d& /*p*/, double dt
   if (!pose_) return;
   const MovingStep st = step_moving_approach(
       *a.moving, platform_, *pose_, now_utime_, dt_s, yaw_sp_rad_, landing_gear(L), M,
-      params_.downward_view ? &*params_.downward_view : nullptr);
+      params_.downward_view ? &*params_.downward_view : nullptr, terrain_m());
   const auto pr = platform_.predict(now_utime_);
   const auto fly_step = [&] {
     sp_p_W_ = st.sp_p_W;
@@ -651,6 +657,12 @@ void Autonomy::step_moving(phases::Approach& a, const Vector3d& /*p*/, double dt
       return;
     case MovingStep::Next::kTooFast:
       platform_too_fast(st.reason + ", climbing and holding");
+      return;
+    case MovingStep::Next::kFloorUnderTop:
+      // The track followed is not the platform (the floor seen through a drifted estimate): its
+      // measurements would start the same approach again.
+      platform_.reset();
+      target_lost(st.reason);
       return;
     case MovingStep::Next::kFinalDescent: {
       phases::FinalDescent f{a.moving->z_sp_m, TouchdownDetector(L), false, {}, {}, true};
@@ -675,9 +687,12 @@ void Autonomy::platform_too_fast(const std::string& reason) {
 
 void Autonomy::go_around(const DropCheck& c) {
   ++drop_go_arounds_;
-  const std::string why = "the gear " + fmt(c.off_m.cwiseAbs().maxCoeff(), 3) +
-                          " m off the moving top's centre, beyond its room " + fmt(c.room_m, 3) +
-                          " m, " + fmt(c.gear_above_m) + " m above it";
+  const std::string why = c.beam == Beam::kFloor
+                              ? "the rangefinder reads the floor under the gear, " +
+                                    fmt(c.gear_above_m) + " m above the moving top"
+                              : "the gear " + fmt(c.off_m.cwiseAbs().maxCoeff(), 3) +
+                                    " m off the moving top's centre, beyond its room " +
+                                    fmt(c.room_m, 3) + " m, " + fmt(c.gear_above_m) + " m above it";
   if (drop_go_arounds_ > kMaxDropGoArounds) {
     platform_too_fast("last drop given up " + std::to_string(drop_go_arounds_) + " times (" + why +
                       "): beyond what the vehicle lands on, climbing and holding");
@@ -873,8 +888,8 @@ void Autonomy::step(phases::FinalDescent& s, const Vector3d& /*p*/, double dt_s)
     // platform does not stop the drop (finishing it is the safe end, as in the still landing).
     // Resting is judged relative to the deck's predicted heave.
     if (pose_fresh()) {
-      const DropCheck c =
-          check_drop(platform_, *pose_, now_utime_, landing_gear(L), params_.moving_platform);
+      const DropCheck c = check_drop(platform_, *pose_, now_utime_, landing_gear(L),
+                                     params_.moving_platform, terrain_m());
       if (c.verdict == Drop::kOffTheTop) {  // leaves the phase: s is gone after this
         go_around(c);
         return;

@@ -203,6 +203,9 @@ class Autonomy {
   /// The position covariance of the frame the waypoints are measured in: the onboard estimate's
   /// (its growth is the frame's drift), zero on motion capture (no STATE_ESTIMATE heard).
   Matrix3d frame_cov() const { return estimate_ ? estimate_->position_cov : Matrix3d::Zero(); }
+  /// The surface under the onboard estimate's rangefinder (W) while the estimate is fresh and
+  /// fuses one; nullopt on motion capture, without a rangefinder, or a silent estimate.
+  std::optional<double> terrain_m() const;
   /// Seconds since the target was last in sight (since the phase began when it never was).
   double since_found_s(const std::optional<int64_t>& last_found_utime) const;
   /// Leaves the current phase (destroying its state) for `state`.

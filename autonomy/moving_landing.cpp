@@ -119,6 +119,24 @@ std::optional<std::string> too_fast(const PlatformFilter::Prediction& p,
   return std::nullopt;
 }
 
+const char* to_string(Beam b) {
+  switch (b) {
+    case Beam::kUnknown:
+      return "unknown";
+    case Beam::kTop:
+      return "top";
+    case Beam::kFloor:
+      return "floor";
+  }
+  return "?";
+}
+
+Beam beam_under(std::optional<double> terrain_m, double top_low_m) {
+  if (!terrain_m || !std::isfinite(*terrain_m) || !(top_low_m >= 2 * kFloorBandM))
+    return Beam::kUnknown;
+  return std::abs(*terrain_m) < kFloorBandM ? Beam::kFloor : Beam::kTop;
+}
+
 bool touched_down_on_top(double gear_below_top_m, double heave_amplitude_m) {
   return gear_below_top_m <= heave_amplitude_m + kBesideTopM;
 }
@@ -129,7 +147,8 @@ double drop_room_m(const Vector2d& whole_top_m, double gear_footprint_m) {
 }
 
 DropCheck check_drop(const PlatformFilter& filter, const PoseSample& pose, int64_t now_utime,
-                     const LandingGear& gear, const MovingLandingParams& params) {
+                     const LandingGear& gear, const MovingLandingParams& params,
+                     std::optional<double> terrain_m) {
   DropCheck c;
   const auto pr = filter.predict(now_utime);
   const Vector3d gear_W = pose.p_W_B - gear.gear_height_m * (pose.q_WB * Vector3d::UnitZ());
@@ -139,9 +158,11 @@ DropCheck check_drop(const PlatformFilter& filter, const PoseSample& pose, int64
   c.room_m = drop_room_m(filter.whole_top(), gear.gear_footprint_m);
   c.centre_sd_m = std::sqrt(worst_axis_var(pr.cov_p));
   c.placed_views = filter.n_placed();
+  c.beam = beam_under(terrain_m, pr.top_z_m - filter.heave().amplitude_m());
   if (c.gear_above_m <= gear.final_descent_rate_mps * params.fall_lag_s) {
     c.verdict = Drop::kCommitted;
-  } else if (std::isfinite(c.room_m) && c.off_m.cwiseAbs().maxCoeff() > c.room_m) {
+  } else if ((std::isfinite(c.room_m) && c.off_m.cwiseAbs().maxCoeff() > c.room_m) ||
+             c.beam == Beam::kFloor) {
     c.verdict = Drop::kOffTheTop;
   }
   return c;
@@ -152,6 +173,7 @@ bool centre_placed(const DropCheck& c) {
 }
 
 bool aimed_for_drop(const DropCheck& c, const LandingGear& gear) {
+  if (c.beam == Beam::kFloor) return false;
   return !std::isfinite(c.room_m) ||
          (c.off_m.cwiseAbs().maxCoeff() <= c.room_m - gear.fit_margin_m && centre_placed(c));
 }
@@ -159,7 +181,8 @@ bool aimed_for_drop(const DropCheck& c, const LandingGear& gear) {
 MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
                                 const PoseSample& pose, int64_t now_utime, double dt_s,
                                 double yaw_sp_rad, const LandingGear& gear,
-                                const MovingLandingParams& params, const DownwardView* view) {
+                                const MovingLandingParams& params, const DownwardView* view,
+                                std::optional<double> terrain_m) {
   MovingStep out;
   out.yaw_sp_rad = yaw_sp_rad;
   const double since_s = double(now_utime - filter.utime()) * 1e-6;
@@ -210,6 +233,22 @@ MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
   }
   const bool settled = s.matched_since_utime &&
                        double(now_utime - *s.matched_since_utime) * 1e-6 >= params.match_settle_s;
+  // Step 7: settled over the predicted centre, the beam is on the top if the track is the
+  // platform's.
+  const double top_low_m = pr.top_z_m - filter.heave().amplitude_m();
+  if (settled && beam_under(terrain_m, top_low_m) == Beam::kFloor) {
+    if (!s.floor_under_since_utime) s.floor_under_since_utime = now_utime;
+    if (double(now_utime - *s.floor_under_since_utime) * 1e-6 >= kFloorUnderTopS) {
+      out.next = MovingStep::Next::kFloorUnderTop;
+      out.reason = "the rangefinder reads the floor (" + fmt(*terrain_m, 3) +
+                   " m) under the moving platform's predicted top (" + fmt(top_low_m, 3) +
+                   " m at its lowest) for " + fmt(kFloorUnderTopS, 2) +
+                   " s: the platform is not where its track says";
+      return out;
+    }
+  } else {
+    s.floor_under_since_utime.reset();
+  }
   out.sp_v_W << pr.v_W, 0.0;
   out.sp_a_W << pr.a_W, 0.0;
   if (settled && s.z_sp_m > z_final) {
@@ -241,7 +280,7 @@ MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
   const double waited_s = double(now_utime - *s.at_final_since_utime) * 1e-6;
   const double fall_s = final_m / gear.final_descent_rate_mps + params.fall_lag_s;
   const Release r = heave_release(filter.heave(), now_utime, fall_s, waited_s, params);
-  const DropCheck c = check_drop(filter, pose, now_utime, gear, params);
+  const DropCheck c = check_drop(filter, pose, now_utime, gear, params, terrain_m);
   const bool aimed = aimed_for_drop(c, gear);
   if (settled && aimed && r != Release::kWait) {
     out.next = MovingStep::Next::kFinalDescent;
@@ -286,6 +325,9 @@ MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
     return out;
   }
   out.reason = !settled ? std::string("over the moving platform: matching")
+               : c.beam == Beam::kFloor
+                   ? "over the moving platform: the rangefinder reads the floor under it (" +
+                         fmt(*terrain_m, 3) + " m)"
                : !aimed ? "over the moving platform: " + off + "; it drops within " +
                               fmt(c.room_m - gear.fit_margin_m, 3) +
                               " m on a centre known within " + fmt(c.room_m, 3) + " m, placed by " +

@@ -41,6 +41,15 @@
 //     below final_height_m nor above follow_height_m), so that the views there place the centre
 //     and the drop starts from it; final_hold_timeout_s runs on from its first arrival at the
 //     final height.
+//  7. The rangefinder's word (beam_under): flying on the onboard estimate, the surface its
+//     rangefinder reads under the vehicle (state_estimate_t.terrain_height_m) must be the top
+//     the vision's platform predicts there, not the take-off floor, before the last drop and
+//     through it. The vision places the top with the camera's motion the estimate gives; an
+//     estimate that drifted with the platform (the flow fused its motion) makes the still floor
+//     seen through it move like a top, and the vehicle matched to it settles over the floor. The
+//     rangefinder does not follow the estimate: settled over the predicted centre with the floor
+//     under the beam for kFloorUnderTopS, the platform is not where the track says (target lost,
+//     the track forgotten); in the drop, the gear is going down beside the top (the go-around).
 // Pure: the time is passed in.
 
 #include <optional>
@@ -124,6 +133,24 @@ bool moving_enough(const PlatformFilter::Prediction& p, const MovingLandingParam
 /// adds 1-2 cm; the floor lies the assumed height, 15 cm, below.
 inline constexpr double kBesideTopM = 0.12;
 
+/// What the rangefinder reads under the vehicle against the predicted top (step 7).
+enum class Beam { kUnknown, kTop, kFloor };
+const char* to_string(Beam b);
+/// A surface under the beam within this of the take-off floor (z = 0 in W, the estimator's
+/// terrain convention: a terrain stepped back to within its step gate of 0 is set to 0) is the
+/// floor [m]: half the lowest top vision's moving tops are set among (8 cm), and four times the
+/// estimator's terrain error over the floor (1 cm).
+inline constexpr double kFloorBandM = 0.04;
+/// The floor under a settled vehicle this long says the platform is elsewhere [s]: coming over
+/// the top, the estimator's terrain steps onto it within its reset window (0.15 s of readings
+/// refused by its step gate); a beam crossing the top's edge reads the floor for moments.
+inline constexpr double kFloorUnderTopS = 0.5;
+/// Step 7: the rangefinder's surface under the vehicle, terrain_m (W; nullopt: no rangefinder
+/// fused, nothing said), against a top whose lowest point (its heave's trough) is top_low_m: the
+/// floor when within kFloorBandM of it while the top never comes within twice that (a lower top
+/// is not told from the floor by the estimator's step gate), the top otherwise.
+Beam beam_under(std::optional<double> terrain_m, double top_low_m);
+
 /// Whether a touch-down with the gear gear_below_top_m under the platform's top's height (the
 /// top heaving by heave_amplitude_m) came down on the top and not beside it (kBesideTopM).
 bool touched_down_on_top(double gear_below_top_m, double heave_amplitude_m);
@@ -166,8 +193,9 @@ struct DropCheck {
   Vector2d off_m = Vector2d::Zero();  ///< the gear's centre from the predicted centre, top's axes
   double room_m = 0.0;                ///< drop_room_m
   double gear_above_m = 0.0;          ///< the gear over the top (its heave included) [m]
-  double centre_sd_m = 0.0;  ///< the predicted centre's standard deviation, its worst axis [m]
-  int placed_views = 0;      ///< PlatformFilter::n_placed
+  double centre_sd_m = 0.0;    ///< the predicted centre's standard deviation, its worst axis [m]
+  int placed_views = 0;        ///< PlatformFilter::n_placed
+  Beam beam = Beam::kUnknown;  ///< beam_under at the predicted top's trough
 };
 /// Views in a row that must have placed the top's centre before the last drop starts on it. One
 /// view's centre can be 10-20 cm off (the view's footprint or the cart's side read as the whole
@@ -192,9 +220,12 @@ inline constexpr double kUnplacedClimbS = 1.0;
 /// fall_lag_s of the top (the altitude loop's lag: a climb ordered there still touches down);
 /// otherwise off the top when the gear's centre (gear_height_m below the body along its z axis:
 /// a banked body's gear hangs outwards) lies beyond drop_room_m on either of the top's axes.
-/// A top not measured (no whole top yet) goes on: nothing says where its edge is.
+/// A top not measured (no whole top yet) goes on: nothing says where its edge is. Off the top too
+/// where the rangefinder reads the floor under the gear (step 7; terrain_m: the estimate's
+/// terrain, nullopt without a rangefinder).
 DropCheck check_drop(const PlatformFilter& filter, const PoseSample& pose, int64_t now_utime,
-                     const LandingGear& gear, const MovingLandingParams& params);
+                     const LandingGear& gear, const MovingLandingParams& params,
+                     std::optional<double> terrain_m = std::nullopt);
 
 /// The last drop starts only with the gear's centre within the room less fit_margin_m on both of
 /// the top's axes (check_drop's): the aim the still landing keeps, and the go-around's own
@@ -230,10 +261,14 @@ struct MovingApproach {
   /// After a climb (step 6): the gear's height over the top for the last drop
   /// (final_view_height_m; before it, final_height_m) [m].
   std::optional<double> final_view_height_m;
+  /// Settled with the rangefinder reading the floor under the vehicle since (step 7).
+  std::optional<int64_t> floor_under_since_utime;
 };
 
 struct MovingStep {
-  enum class Next { kContinue, kFinalDescent, kTargetLost, kTooFast };
+  /// kFloorUnderTop: step 7, the track's platform is not under the vehicle (target lost, and the
+  /// track is not the platform's).
+  enum class Next { kContinue, kFinalDescent, kTargetLost, kTooFast, kFloorUnderTop };
   Next next = Next::kContinue;
   Vector3d sp_p_W = Vector3d::Zero(), sp_v_W = Vector3d::Zero(), sp_a_W = Vector3d::Zero();
   double yaw_sp_rad = 0.0;
@@ -255,12 +290,14 @@ double aligned_yaw(double platform_yaw_rad, double current_rad);
 /// the vehicle trails, within the speed it follows; a moment matched now and then does not start
 /// the wait over): the same.
 /// `view`: the downward camera's (nullptr: none declared; step 6 then climbs and comes back to
-/// final_height_m).
+/// final_height_m). `terrain_m`: the surface under the estimate's rangefinder (step 7; nullopt:
+/// none fused).
 MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
                                 const PoseSample& pose, int64_t now_utime, double dt_s,
                                 double yaw_sp_rad, const LandingGear& gear,
                                 const MovingLandingParams& params,
-                                const DownwardView* view = nullptr);
+                                const DownwardView* view = nullptr,
+                                std::optional<double> terrain_m = std::nullopt);
 
 /// The platform's motion beyond what the vehicle follows (step 4), or nullopt.
 std::optional<std::string> too_fast(const PlatformFilter::Prediction& p,

@@ -112,7 +112,12 @@ struct EstimateHealth {
   std::string text;      ///< the reasons as names, "no_flow|no_range" ("" for none)
   /// Covariance of p_W_B [m^2] (cov_pva's position block): its growth is the frame's drift.
   Matrix3d position_cov = Matrix3d::Zero();
+  /// The height in W of the surface under the rangefinder (terrain_height_m), while the estimator
+  /// fuses one (some range fused, and no REASON_NO_RANGE); nullopt otherwise.
+  std::optional<double> terrain_m;
 };
+/// state_estimate_t.REASON_NO_RANGE (autonomy/convert.cpp checks it).
+inline constexpr uint32_t kEstimateReasonNoRange = 4;
 
 /// What arrived since the last step (each optional is a new message, consumed by the step).
 struct Inputs {

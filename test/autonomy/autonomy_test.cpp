@@ -1614,5 +1614,35 @@ TEST(AutonomyMovingDrop, WithoutAGustTheDropLandsOnTheMovingTop) {
   EXPECT_LT((w.p - w.truth.platform_center_W).head<2>().norm(), 0.0645);
 }
 
+// On the onboard estimate its rangefinder's surface under the vehicle must be the top the track
+// predicts (moving_landing.hpp step 7). Reading the floor there (the track is the floor seen
+// through a drifted estimate) the vehicle never drops: target lost, the track forgotten, the
+// detection flown again. Reading the top, it lands as on motion capture.
+TEST(AutonomyMovingDrop, OnTheOnboardEstimateTheRangefinderMustReadTheTopUnderTheTrack) {
+  for (const bool floor : {true, false}) {
+    SCOPED_TRACE(floor ? "the floor under the beam" : "the top under the beam");
+    KinematicWorld w = moving_world();
+    w.estimate = health(Level::kOk);
+    ASSERT_TRUE(w.go_to_approach(Mission::kLanding));
+    w.estimate->terrain_m = floor ? 0.003 : w.truth.platform_center_W.z() - 0.004;
+    if (!floor) {
+      ASSERT_TRUE(w.run_until_phase(Phase::kLanded, 60)) << w.autonomy.reason();
+      EXPECT_NE(w.autonomy.reason().find("on the moving platform"), std::string::npos)
+          << w.autonomy.reason();
+      continue;
+    }
+    bool dropped = false;
+    for (int i = 0; i < 6000 && w.autonomy.phase() != Phase::kDetection; ++i) {
+      w.step();
+      dropped = dropped || w.autonomy.phase() == Phase::kFinalDescent;
+    }
+    EXPECT_FALSE(dropped);
+    ASSERT_EQ(w.autonomy.phase(), Phase::kDetection) << w.autonomy.reason();
+    EXPECT_TRUE(has(w.autonomy.reason(), "rangefinder reads the floor")) << w.autonomy.reason();
+    EXPECT_TRUE(has(w.autonomy.reason(), "detection retry 1")) << w.autonomy.reason();
+    EXPECT_TRUE(w.out.setpoint.motors_on);
+  }
+}
+
 }  // namespace
 }  // namespace alight::autonomy

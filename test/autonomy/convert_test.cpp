@@ -426,6 +426,29 @@ TEST(AutonomyConvertTest, EstimatePositionCovarianceFromTheWire) {
   EXPECT_DOUBLE_EQ(e->position_cov(2, 2), 0.0025);
 }
 
+// The surface under the rangefinder reaches autonomy only while the estimator fuses a
+// rangefinder (moving_landing.hpp step 7): none fused yet, or one gone silent (REASON_NO_RANGE),
+// says nothing of what is under the vehicle.
+TEST(AutonomyConvertTest, TerrainFromTheWireOnlyWhileARangefinderIsFused) {
+  state_estimate_t m = good_estimate();
+  m.terrain_height_m = 0.21;
+  std::string why;
+  EXPECT_FALSE(estimate_from_msg(wire(m), &why)->terrain_m);  // no range fused
+  m.n_fused[1] = 40;
+  ASSERT_TRUE(estimate_from_msg(wire(m), &why)->terrain_m);
+  EXPECT_DOUBLE_EQ(*estimate_from_msg(wire(m), &why)->terrain_m, 0.21);
+  m.health = state_estimate_t::HEALTH_DEGRADED;
+  m.health_reasons = state_estimate_t::REASON_NO_RANGE;
+  EXPECT_FALSE(estimate_from_msg(wire(m), &why)->terrain_m);
+  m.health_reasons = state_estimate_t::REASON_NO_FLOW;  // another reason: the range still holds
+  EXPECT_TRUE(estimate_from_msg(wire(m), &why)->terrain_m);
+  EstimateHealth h;  // and back
+  h.terrain_m = -0.004;
+  const auto back = estimate_from_msg(wire(to_msg(h, 1)), &why);
+  ASSERT_TRUE(back && back->terrain_m) << why;
+  EXPECT_DOUBLE_EQ(*back->terrain_m, -0.004);
+}
+
 TEST(ConvertTest, PlatformMeasurementRoundTripsAndBadOnesAreRefusedWithAReason) {
   PlatformMeasurement p;
   p.utime = 2'000'000;

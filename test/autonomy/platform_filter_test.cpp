@@ -1324,6 +1324,89 @@ TEST(MovingDropTest, NoAimedMomentAtTheFinalHeightIsTheFailsafe) {
   EXPECT_NE(st.reason.find("no moment to drop"), std::string::npos) << st.reason;
 }
 
+// Step 7: on the onboard estimate the rangefinder's surface under the vehicle must be the
+// predicted top. Settled at the final height over a track whose "top" is the floor (a drifted
+// estimate makes the still floor move like a top), the drop never starts and the track is given
+// up after kFloorUnderTopS; over the top, or with no rangefinder fused, the drop starts.
+// The rangefinder's surface under the vehicle (step 7).
+enum class Under { kNoRangefinder, kTop, kFloor };
+MovingStep settle_at_final_height(Under under, int seed, double* settled_to_end_s) {
+  const PlatformPath m = straight_path(0.5);
+  std::mt19937_64 rng(seed);
+  PlatformFilter f = followed_for_2s(m, Vector2d(0.41, 0.25), rng);
+  double t = 2;
+  const LandingGear gear;
+  const MovingLandingParams params;
+  MovingApproach s;
+  MovingStep st;
+  std::optional<double> settled_t;
+  for (int k = 0; k <= int(5.0 / kPfDt); ++k) {
+    t += kPfDt;
+    f.update(measure_sized(m, t, rng, Vector2d(0.41, 0.25)));
+    const int64_t now = kPfT0 + int64_t(t * 1e6);
+    const auto pr = f.predict(now);
+    PoseSample pose;  // over the centre, matched, at the final height
+    pose.p_W_B << pr.p_W, pr.top_z_m + gear.gear_height_m + params.final_height_m;
+    pose.v_W_B << pr.v_W, 0.0;
+    s.z_sp_m = pose.p_W_B.z();
+    std::optional<double> terrain;  // the estimator's error over either: a few millimetres
+    if (under == Under::kTop) terrain = pr.top_z_m - 0.004;
+    if (under == Under::kFloor) terrain = 0.006;
+    st = step_moving_approach(s, f, pose, now, kPfDt, 0.0, gear, params, nullptr, terrain);
+    if (s.matched_since_utime && !settled_t)
+      settled_t = double(*s.matched_since_utime - kPfT0) * 1e-6 + params.match_settle_s;
+    if (st.next != MovingStep::Next::kContinue) break;
+  }
+  *settled_to_end_s = settled_t ? t - *settled_t : -1;
+  return st;
+}
+
+TEST(MovingDropTest, TheRangefinderReadingTheFloorUnderThePredictedTopGivesTheTrackUp) {
+  double waited_s = 0;
+  const MovingStep top = settle_at_final_height(Under::kTop, 61, &waited_s);
+  EXPECT_EQ(top.next, MovingStep::Next::kFinalDescent) << top.reason;
+  const MovingStep none = settle_at_final_height(Under::kNoRangefinder, 61, &waited_s);
+  EXPECT_EQ(none.next, MovingStep::Next::kFinalDescent) << none.reason;
+  const MovingStep floor = settle_at_final_height(Under::kFloor, 61, &waited_s);
+  EXPECT_EQ(floor.next, MovingStep::Next::kFloorUnderTop) << floor.reason;
+  EXPECT_NE(floor.reason.find("rangefinder reads the floor"), std::string::npos) << floor.reason;
+  EXPECT_NEAR(waited_s, kFloorUnderTopS, 2 * kPfDt);
+}
+
+TEST(MovingDropTest, TheBeamTellsTheFloorOnlyUnderATopItCanTellFromIt) {
+  EXPECT_EQ(beam_under(std::nullopt, 0.15), Beam::kUnknown);
+  EXPECT_EQ(beam_under(NAN, 0.15), Beam::kUnknown);
+  EXPECT_EQ(beam_under(0.01, 0.15), Beam::kFloor);
+  EXPECT_EQ(beam_under(-0.02, 0.15), Beam::kFloor);
+  EXPECT_EQ(beam_under(0.14, 0.15), Beam::kTop);
+  EXPECT_EQ(beam_under(0.06, 0.15), Beam::kTop);  // a deck's trough read low: not the floor
+  // A top never more than twice the floor's band above it (a mat, a deck heaving to the floor):
+  // the estimator's step gate does not tell it from the floor.
+  EXPECT_EQ(beam_under(0.0, 0.07), Beam::kUnknown);
+}
+
+TEST(MovingDropTest, TheBeamOnTheFloorInTheDropGoesAround) {
+  const PlatformPath m = straight_path(0.5);
+  std::mt19937_64 rng(63);
+  PlatformFilter f = followed_for_2s(m, Vector2d(0.41, 0.25), rng);
+  const LandingGear gear;
+  const MovingLandingParams params;
+  const int64_t now = f.utime();
+  const auto pr = f.predict(now);
+  const auto at = [&](double gear_above_m) {
+    PoseSample pose;
+    pose.p_W_B << pr.p_W, pr.top_z_m + gear.gear_height_m + gear_above_m;
+    return pose;
+  };
+  EXPECT_EQ(check_drop(f, at(0.3), now, gear, params, pr.top_z_m).verdict, Drop::kGoOn);
+  const DropCheck floor = check_drop(f, at(0.3), now, gear, params, 0.0);
+  EXPECT_EQ(floor.verdict, Drop::kOffTheTop);
+  EXPECT_EQ(floor.beam, Beam::kFloor);
+  EXPECT_FALSE(aimed_for_drop(floor, gear));
+  // Within the altitude loop's lag of the top a climb still touches down.
+  EXPECT_EQ(check_drop(f, at(0.1), now, gear, params, 0.0).verdict, Drop::kCommitted);
+}
+
 // At the final height over a centre the filter has not placed (seen only in part for seconds:
 // close over the top its views are cut by the border), the vehicle climbs back to the follow
 // height, where the top is seen whole; its whole views there place the centre, and back at the
