@@ -497,28 +497,6 @@ Outcome Estimator::apply_baro(const BaroSample& m, FilterState& s) {
   return o;
 }
 
-// Which of a sample's two motions is the floor's, by the rangefinder rather than the estimate:
-// the prediction's choice follows the estimate, and an estimate that drifted towards a moving
-// platform's motion goes on choosing the platform (a still floor seen through it then moves like
-// a top for the vision). Over the floor (the terrain state within the step gate of the take-off
-// floor) the beam falls on the floor, and the motion among whose features it falls (its
-// kBeamNeighbours-th nearest under kBeamClearShare of the other's) is the floor's. Over a raised
-// terrain the beam's motion is the top's, but the other is not always the floor's: a turning or
-// rolling top's flow is no single motion of the camera's, and its features split between the two
-// fits (both then the top's). nullopt (the prediction decides): one motion, no rays, a raised
-// terrain, or the beam clearly among neither (a top's edge under it).
-constexpr double kBeamClearShare = 0.5;
-std::optional<bool> Estimator::floor_by_beam(const FlowSample& m, const FilterState& s) const {
-  if (m.others.size() != 1 || !(params_.range.step_min_m > 0)) return std::nullopt;
-  if (std::abs(s.x.terrain_m) >= params_.range.step_min_m) return std::nullopt;
-  const Vector3d beam_C = (R_BC_.transpose() * params_.range.d_B).normalized();
-  const double own = beam_gap_rad(m.rays_C1, beam_C);
-  const double other = beam_gap_rad(m.others.front().rays_C1, beam_C);
-  if (other < kBeamClearShare * own) return true;
-  if (own < kBeamClearShare * other) return false;
-  return std::nullopt;
-}
-
 // Flow spans two times. Stochastic cloning (preferred over the velocity approximation
 // t ~ R_CB R_WB^T v dt): the model above is exact in p and q at both exposures, the lever arm of
 // the camera under rotation (t_B_C x omega) and any acceleration inside the interval are
@@ -527,6 +505,27 @@ std::optional<bool> Estimator::floor_by_beam(const FlowSample& m, const FilterSt
 // the interval as the velocity at one end (an error of a dt / 2, 3 % of the displacement at
 // 2 m/s^2 and 30 Hz, as large as the flow noise) and drop that correlation. The cost is a 6-dim
 // augmentation for one frame interval; the history already visits utime_from on every replay.
+// Which of a sample's two motions is the floor's, by the rangefinder rather than the estimate:
+// the prediction's choice follows the estimate, and an estimate that drifted towards a moving
+// platform's motion goes on choosing the platform (a still floor seen through it then moves like
+// a top for the vision). The beam falls among one motion's features (its kBeamNeighbours-th
+// nearest under kBeamClearShare of the other's): over the floor (the terrain state within the
+// step gate of the take-off floor) that motion is the floor's; over a raised terrain (a top) it
+// is the top's and the floor's is the other. nullopt (the prediction decides): one motion, no
+// rays, or the beam clearly among neither (both motions around it: a top's edge under it).
+constexpr double kBeamClearShare = 0.5;
+std::optional<bool> Estimator::floor_by_beam(const FlowSample& m, const FilterState& s) const {
+  if (m.others.size() != 1 || !(params_.range.step_min_m > 0)) return std::nullopt;
+  const Vector3d beam_C = (R_BC_.transpose() * params_.range.d_B).normalized();
+  const double own = beam_gap_rad(m.rays_C1, beam_C);
+  const double other = beam_gap_rad(m.others.front().rays_C1, beam_C);
+  const bool own_under = own < kBeamClearShare * other;
+  const bool other_under = other < kBeamClearShare * own;
+  if (!own_under && !other_under) return std::nullopt;
+  const bool raised = std::abs(s.x.terrain_m) >= params_.range.step_min_m;
+  return raised ? own_under : other_under;
+}
+
 Outcome Estimator::apply_flow(const FlowSample& m, int64_t key, FilterState& s) {
   const auto& p = params_.flow;
   const int ci = s.clone_index(key);
@@ -553,8 +552,17 @@ Outcome Estimator::apply_flow(const FlowSample& m, int64_t key, FilterState& s) 
     double nis = 0;
     bool on_floor = false;
   };
-  const auto update_for = [&](const FlowSample& f) -> std::optional<Update> {
+  // on_floor: the sample is the floor's, seen beside a raised terrain (the beam's choice below):
+  // modelled over the floor alone.
+  const auto update_for = [&](const FlowSample& f, bool on_floor = false) -> std::optional<Update> {
     Update u;
+    if (on_floor) {
+      const double floor_height_m = model_over(f, true, &u.r, &u.H);
+      if (floor_height_m < p.min_height_m) return std::nullopt;
+      u.R = flow_noise(f, p, floor_height_m);
+      u.on_floor = true;
+      return u;
+    }
     const double height_m = model_over(f, false, &u.r, &u.H);
     if (height_m < p.min_height_m) return std::nullopt;
     u.R = flow_noise(f, p, height_m);
@@ -591,8 +599,9 @@ Outcome Estimator::apply_flow(const FlowSample& m, int64_t key, FilterState& s) 
   bool on_second = false;
   if (const auto floor_is_second = floor_by_beam(m, s)) {
     // Two motions in view, the floor's told by the rangefinder (floor_by_beam).
+    const bool raised = std::abs(s.x.terrain_m) >= params_.range.step_min_m;
     on_second = *floor_is_second;
-    u = update_for(on_second ? with_motion(m, m.others.front()) : m);
+    u = update_for(on_second ? with_motion(m, m.others.front()) : m, raised);
   } else {
     // Two motions in view (a textured platform moving under the camera over a sparse floor),
     // neither clearly under the beam: the one the prediction explains better is the floor's.
