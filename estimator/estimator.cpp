@@ -44,25 +44,8 @@ FlowSample with_motion(const FlowSample& m, const FlowMotion& other) {
   out.inliers = other.inliers;
   out.J_rotation = other.J_rotation;
   out.J_normal = other.J_normal;
-  out.rays_C1 = other.rays_C1;
   out.others.clear();
   return out;
-}
-
-/// The angle between the beam (unit, camera 1) and the kBeamNeighbours-th nearest of rays [rad];
-/// infinite with fewer finite rays. The k-th, not the nearest: one stray inlier of a motion does
-/// not put it under the beam.
-constexpr size_t kBeamNeighbours = 3;
-double beam_gap_rad(const std::vector<Vector3d>& rays, const Vector3d& beam_C) {
-  std::vector<double> gaps;
-  for (const Vector3d& r : rays) {
-    const double n = r.norm();
-    if (std::isfinite(n) && n > 0)
-      gaps.push_back(std::acos(std::clamp(r.dot(beam_C) / n, -1.0, 1.0)));
-  }
-  if (gaps.size() < kBeamNeighbours) return INFINITY;
-  std::nth_element(gaps.begin(), gaps.begin() + (kBeamNeighbours - 1), gaps.end());
-  return gaps[kBeamNeighbours - 1];
 }
 
 /// Whether a sample's own motion passes the checks of add_flow: finite, a plausible size, a
@@ -505,27 +488,6 @@ Outcome Estimator::apply_baro(const BaroSample& m, FilterState& s) {
 // the interval as the velocity at one end (an error of a dt / 2, 3 % of the displacement at
 // 2 m/s^2 and 30 Hz, as large as the flow noise) and drop that correlation. The cost is a 6-dim
 // augmentation for one frame interval; the history already visits utime_from on every replay.
-// Which of a sample's two motions is the floor's, by the rangefinder rather than the estimate:
-// the prediction's choice follows the estimate, and an estimate that drifted towards a moving
-// platform's motion goes on choosing the platform (a still floor seen through it then moves like
-// a top for the vision). The beam falls among one motion's features (its kBeamNeighbours-th
-// nearest under kBeamClearShare of the other's): over the floor (the terrain state within the
-// step gate of the take-off floor) that motion is the floor's; over a raised terrain (a top) it
-// is the top's and the floor's is the other. nullopt (the prediction decides): one motion, no
-// rays, or the beam clearly among neither (both motions around it: a top's edge under it).
-constexpr double kBeamClearShare = 0.5;
-std::optional<bool> Estimator::floor_by_beam(const FlowSample& m, const FilterState& s) const {
-  if (m.others.size() != 1 || !(params_.range.step_min_m > 0)) return std::nullopt;
-  const Vector3d beam_C = (R_BC_.transpose() * params_.range.d_B).normalized();
-  const double own = beam_gap_rad(m.rays_C1, beam_C);
-  const double other = beam_gap_rad(m.others.front().rays_C1, beam_C);
-  const bool own_under = own < kBeamClearShare * other;
-  const bool other_under = other < kBeamClearShare * own;
-  if (!own_under && !other_under) return std::nullopt;
-  const bool raised = std::abs(s.x.terrain_m) >= params_.range.step_min_m;
-  return raised ? own_under : other_under;
-}
-
 Outcome Estimator::apply_flow(const FlowSample& m, int64_t key, FilterState& s) {
   const auto& p = params_.flow;
   const int ci = s.clone_index(key);
@@ -552,17 +514,8 @@ Outcome Estimator::apply_flow(const FlowSample& m, int64_t key, FilterState& s) 
     double nis = 0;
     bool on_floor = false;
   };
-  // on_floor: the sample is the floor's, seen beside a raised terrain (the beam's choice below):
-  // modelled over the floor alone.
-  const auto update_for = [&](const FlowSample& f, bool on_floor = false) -> std::optional<Update> {
+  const auto update_for = [&](const FlowSample& f) -> std::optional<Update> {
     Update u;
-    if (on_floor) {
-      const double floor_height_m = model_over(f, true, &u.r, &u.H);
-      if (floor_height_m < p.min_height_m) return std::nullopt;
-      u.R = flow_noise(f, p, floor_height_m);
-      u.on_floor = true;
-      return u;
-    }
     const double height_m = model_over(f, false, &u.r, &u.H);
     if (height_m < p.min_height_m) return std::nullopt;
     u.R = flow_noise(f, p, height_m);
@@ -595,25 +548,17 @@ Outcome Estimator::apply_flow(const FlowSample& m, int64_t key, FilterState& s) 
     }
     return u;
   };
-  std::optional<Update> u;
+  std::optional<Update> u = update_for(m);
   bool on_second = false;
-  if (const auto floor_is_second = floor_by_beam(m, s)) {
-    // Two motions in view, the floor's told by the rangefinder (floor_by_beam).
-    const bool raised = std::abs(s.x.terrain_m) >= params_.range.step_min_m;
-    on_second = *floor_is_second;
-    u = update_for(on_second ? with_motion(m, m.others.front()) : m, raised);
-  } else {
-    // Two motions in view (a textured platform moving under the camera over a sparse floor),
-    // neither clearly under the beam: the one the prediction explains better is the floor's.
-    // Taking the larger, the platform's, the estimate would follow the platform: a vehicle
-    // holding over it moves with it while its estimate stands still.
-    u = update_for(m);
-    for (const FlowMotion& other : m.others) {
-      const std::optional<Update> b = update_for(with_motion(m, other));
-      if (b && (!u || b->nis < u->nis)) {
-        u = b;
-        on_second = true;
-      }
+  // Two motions in view (a textured platform moving under the camera over a sparse floor): the
+  // one the prediction explains better is the floor's. Taking the larger, the platform's, the
+  // estimate would follow the platform: a vehicle holding over it moves with it while its
+  // estimate stands still.
+  for (const FlowMotion& other : m.others) {
+    const std::optional<Update> b = update_for(with_motion(m, other));
+    if (b && (!u || b->nis < u->nis)) {
+      u = b;
+      on_second = true;
     }
   }
   Outcome o = Outcome::kGeometry;

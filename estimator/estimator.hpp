@@ -125,9 +125,6 @@ class Estimator {
   Outcome apply_range(const RangeSample& m, FilterState& s);
   Outcome apply_baro(const BaroSample& m, FilterState& s);
   Outcome apply_flow(const FlowSample& m, int64_t key, FilterState& s);
-  /// Of a sample's two motions, whether the floor's is the second (FlowSample::others); nullopt
-  /// where the rangefinder's beam does not tell (apply_flow).
-  std::optional<bool> floor_by_beam(const FlowSample& m, const FilterState& s) const;
   /// The platform-step condition on the streak; the terrain its readings agree on.
   bool terrain_reset_due(const FilterState& s, double* terrain_m) const;
   void prune();

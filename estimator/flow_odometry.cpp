@@ -436,8 +436,6 @@ std::optional<FlowMotion> second_motion(const std::vector<Vector3d>& rays_1,
   m.inliers = fit.inliers;
   m.J_rotation = fit.J_rotation;
   m.J_normal = fit.J_normal;
-  for (size_t j = 0; j < from.size(); ++j)
-    if (fit.inlier[j]) m.rays_C1.push_back(rays_1[from[j]]);
   return m;
 }
 
@@ -667,8 +665,6 @@ FlowResult FlowOdometry::add_frame(const cv::Mat& gray, int64_t utime, const Mat
         sample.J_rotation = fit.J_rotation;
         sample.J_normal = fit.J_normal;
         sample.residual_rms_px = fit.residual_rms_px;
-        for (size_t k = 0; k < fit.inlier.size(); ++k)
-          if (fit.inlier[k]) sample.rays_C1.push_back(rays_1[k]);
         std::vector<uint8_t> second_inlier;
         if (auto other = second_motion(rays_1, rays_2, fit.inlier, R_C2C1, n_C1.normalized(),
                                        camera_.fx, params_.fit, &second_inlier))

@@ -44,7 +44,6 @@ struct FlowMotion {
   int inliers = 0;
   Matrix3d J_rotation = Matrix3d::Zero();  ///< as FlowSample's [1/rad]
   Matrix3d J_normal = Matrix3d::Zero();    ///< [-]
-  std::vector<Vector3d> rays_C1;           ///< as FlowSample's
 };
 
 /// The flow front end's output for two consecutive frames: the camera's translation between the
@@ -69,10 +68,6 @@ struct FlowSample {
   Matrix3d J_rotation = Matrix3d::Zero();
   Matrix3d J_normal = Matrix3d::Zero();
   double residual_rms_px = 0.0;  ///< inliers' reprojection error, root mean square [px]
-  /// The inliers' rays at utime_from (camera 1, any length; empty: not given): with two motions
-  /// in view, the one the rangefinder's beam falls among is the surface under the vehicle
-  /// (Estimator::apply_flow).
-  std::vector<Vector3d> rays_C1;
   /// Other motions in view: the largest set among the fit's outliers that shares one
   /// (min_inliers or more; the front end fits at most one). Where a textured platform moving
   /// under the camera outnumbers a sparse floor's features, the fit above is the platform's and

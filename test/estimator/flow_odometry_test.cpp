@@ -10,7 +10,6 @@
 
 #include <gtest/gtest.h>
 
-#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <opencv2/imgcodecs.hpp>
@@ -205,10 +204,6 @@ TEST(FlowFitTest, APlatformMovingUnderTheCameraLeavesTheFloorAsTheSecondMotion) 
     EXPECT_LT((second->t_over_d_C1 - floor.t_over_d()).norm(), 1e-3) << trial;
     EXPECT_GE(second->inliers, 40) << trial;
     EXPECT_LE(second->inliers, 50) << trial;
-    // Its inliers' rays (which the rangefinder's beam falls among): the floor's, the last 50.
-    ASSERT_EQ(second->rays_C1.size(), size_t(second->inliers)) << trial;
-    for (const Vector3d& r : second->rays_C1)
-      EXPECT_NE(std::find(k.r1.begin() + 90, k.r1.end(), r), k.r1.end()) << trial;
     const Vector3d e = second->t_over_d_C1 - floor.t_over_d();
     EXPECT_LT(e.dot(second->cov.ldlt().solve(e)), 20.0) << trial;
   }
