@@ -1298,6 +1298,31 @@ TEST(MovingDropTest, TheDropStartsOnACentrePlacedByThreeViewsInARowNotByOne) {
 // At the final height the last drop waits for the gear's aim; never aimed (a top narrower than
 // the gear and its margins) for final_hold_timeout_s, the platform is beyond what the vehicle
 // lands on.
+// The rangefinder's surface under the vehicle (moving_landing.hpp step 7).
+enum class Under { kNoRangefinder, kTop, kFloor };
+
+// One step kPfDt on: a view of the top of size_m on m fused, then the vehicle over the predicted
+// centre, matched, at the final height, its rangefinder reading `under` (the estimator's error
+// over either: a few millimetres).
+MovingStep step_over_the_centre(PlatformFilter& f, MovingApproach& s, const PlatformPath& m,
+                                const Vector2d& size_m, std::mt19937_64& rng, double* t,
+                                Under under = Under::kNoRangefinder) {
+  const LandingGear gear;
+  const MovingLandingParams params;
+  *t += kPfDt;
+  f.update(measure_sized(m, *t, rng, size_m));
+  const int64_t now = kPfT0 + int64_t(*t * 1e6);
+  const auto pr = f.predict(now);
+  PoseSample pose;
+  pose.p_W_B << pr.p_W, pr.top_z_m + gear.gear_height_m + params.final_height_m;
+  pose.v_W_B << pr.v_W, 0.0;
+  s.z_sp_m = pose.p_W_B.z();
+  std::optional<double> terrain;
+  if (under == Under::kTop) terrain = pr.top_z_m - 0.004;
+  if (under == Under::kFloor) terrain = 0.006;
+  return step_moving_approach(s, f, pose, now, kPfDt, 0.0, gear, params, nullptr, terrain);
+}
+
 TEST(MovingDropTest, NoAimedMomentAtTheFinalHeightIsTheFailsafe) {
   const PlatformPath m = straight_path(0.5);
   std::mt19937_64 rng(47);
@@ -1308,15 +1333,7 @@ TEST(MovingDropTest, NoAimedMomentAtTheFinalHeightIsTheFailsafe) {
   MovingApproach s;
   MovingStep st;
   for (int k = 0; k <= int((gear.final_hold_timeout_s + params.match_settle_s + 1) / kPfDt); ++k) {
-    t += kPfDt;
-    f.update(measure_sized(m, t, rng, Vector2d(0.41, 0.18)));
-    const int64_t now = kPfT0 + int64_t(t * 1e6);
-    const auto pr = f.predict(now);
-    PoseSample pose;  // over the centre, matched, at the final height
-    pose.p_W_B << pr.p_W, pr.top_z_m + gear.gear_height_m + params.final_height_m;
-    pose.v_W_B << pr.v_W, 0.0;
-    s.z_sp_m = pose.p_W_B.z();
-    st = step_moving_approach(s, f, pose, now, kPfDt, 0.0, gear, params);
+    st = step_over_the_centre(f, s, m, Vector2d(0.41, 0.18), rng, &t);
     ASSERT_NE(st.next, MovingStep::Next::kFinalDescent) << st.reason;
     if (st.next != MovingStep::Next::kContinue) break;
   }
@@ -1328,31 +1345,17 @@ TEST(MovingDropTest, NoAimedMomentAtTheFinalHeightIsTheFailsafe) {
 // predicted top. Settled at the final height over a track whose "top" is the floor (a drifted
 // estimate makes the still floor move like a top), the drop never starts and the track is given
 // up after kFloorUnderTopS; over the top, or with no rangefinder fused, the drop starts.
-// The rangefinder's surface under the vehicle (step 7).
-enum class Under { kNoRangefinder, kTop, kFloor };
 MovingStep settle_at_final_height(Under under, int seed, double* settled_to_end_s) {
   const PlatformPath m = straight_path(0.5);
   std::mt19937_64 rng(seed);
   PlatformFilter f = followed_for_2s(m, Vector2d(0.41, 0.25), rng);
   double t = 2;
-  const LandingGear gear;
   const MovingLandingParams params;
   MovingApproach s;
   MovingStep st;
   std::optional<double> settled_t;
   for (int k = 0; k <= int(5.0 / kPfDt); ++k) {
-    t += kPfDt;
-    f.update(measure_sized(m, t, rng, Vector2d(0.41, 0.25)));
-    const int64_t now = kPfT0 + int64_t(t * 1e6);
-    const auto pr = f.predict(now);
-    PoseSample pose;  // over the centre, matched, at the final height
-    pose.p_W_B << pr.p_W, pr.top_z_m + gear.gear_height_m + params.final_height_m;
-    pose.v_W_B << pr.v_W, 0.0;
-    s.z_sp_m = pose.p_W_B.z();
-    std::optional<double> terrain;  // the estimator's error over either: a few millimetres
-    if (under == Under::kTop) terrain = pr.top_z_m - 0.004;
-    if (under == Under::kFloor) terrain = 0.006;
-    st = step_moving_approach(s, f, pose, now, kPfDt, 0.0, gear, params, nullptr, terrain);
+    st = step_over_the_centre(f, s, m, Vector2d(0.41, 0.25), rng, &t, under);
     if (s.matched_since_utime && !settled_t)
       settled_t = double(*s.matched_since_utime - kPfT0) * 1e-6 + params.match_settle_s;
     if (st.next != MovingStep::Next::kContinue) break;
