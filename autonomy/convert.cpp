@@ -312,6 +312,8 @@ static_assert(kCommandRejectSlots ==
 
 static_assert(kEstimateReasonNoFlow == state_estimate_t::REASON_NO_FLOW);
 static_assert(kEstimateReasonNoRange == state_estimate_t::REASON_NO_RANGE);
+// state_estimate_t.n_fused's rows: IMU, range, baro, flow.
+constexpr int kRangeFused = 1;
 
 std::string estimate_reasons_text(uint32_t reasons) {
   using E = state_estimate_t;
@@ -351,8 +353,7 @@ EstimateHealth from_msg(const state_estimate_t& msg) {
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c)
       e.position_cov(r, c) = 0.5 * (msg.cov_pva[9 * r + c] + msg.cov_pva[9 * c + r]);
-  constexpr int kRange = 1;  // n_fused: IMU, range, baro, flow
-  if (msg.n_fused[kRange] > 0 && !(e.reasons & kEstimateReasonNoRange))
+  if (msg.n_fused[kRangeFused] > 0 && !(e.reasons & kEstimateReasonNoRange))
     e.terrain_m = msg.terrain_height_m;
   return e;
 }
@@ -380,7 +381,7 @@ state_estimate_t to_msg(const EstimateHealth& e, int64_t seq) {
   m.health_reasons = static_cast<int32_t>(e.reasons);
   if (e.terrain_m) {
     m.terrain_height_m = *e.terrain_m;
-    m.n_fused[1] = 1;
+    m.n_fused[kRangeFused] = 1;
   }
   return m;
 }

@@ -119,18 +119,6 @@ std::optional<std::string> too_fast(const PlatformFilter::Prediction& p,
   return std::nullopt;
 }
 
-const char* to_string(Beam b) {
-  switch (b) {
-    case Beam::kUnknown:
-      return "unknown";
-    case Beam::kTop:
-      return "top";
-    case Beam::kFloor:
-      return "floor";
-  }
-  return "?";
-}
-
 Beam beam_under(std::optional<double> terrain_m, double top_low_m) {
   if (!terrain_m || !std::isfinite(*terrain_m) || !(top_low_m >= 2 * kFloorBandM))
     return Beam::kUnknown;

@@ -135,7 +135,6 @@ inline constexpr double kBesideTopM = 0.12;
 
 /// What the rangefinder reads under the vehicle against the predicted top (step 7).
 enum class Beam { kUnknown, kTop, kFloor };
-const char* to_string(Beam b);
 /// A surface under the beam within this of the take-off floor (z = 0 in W, the estimator's
 /// terrain convention: a terrain stepped back to within its step gate of 0 is set to 0) is the
 /// floor [m]: half the lowest top vision's moving tops are set among (8 cm), and four times the
