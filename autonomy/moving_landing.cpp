@@ -120,9 +120,9 @@ std::optional<std::string> too_fast(const PlatformFilter::Prediction& p,
 }
 
 Beam beam_under(std::optional<double> terrain_m, double top_low_m) {
-  if (!terrain_m || !std::isfinite(*terrain_m) || !(top_low_m >= 2 * kFloorBandM))
+  if (!terrain_m || !std::isfinite(*terrain_m) || !(top_low_m >= kLowestToldTopM))
     return Beam::kUnknown;
-  return std::abs(*terrain_m) < kFloorBandM ? Beam::kFloor : Beam::kTop;
+  return *terrain_m < 0.5 * top_low_m ? Beam::kFloor : Beam::kTop;
 }
 
 bool touched_down_on_top(double gear_below_top_m, double heave_amplitude_m) {

@@ -135,19 +135,21 @@ inline constexpr double kBesideTopM = 0.12;
 
 /// What the rangefinder reads under the vehicle against the predicted top (step 7).
 enum class Beam { kUnknown, kTop, kFloor };
-/// A surface under the beam within this of the take-off floor (z = 0 in W, the estimator's
-/// terrain convention: a terrain stepped back to within its step gate of 0 is set to 0) is the
-/// floor [m]: half the lowest top vision's moving tops are set among (8 cm), and four times the
-/// estimator's terrain error over the floor (1 cm).
-inline constexpr double kFloorBandM = 0.04;
+/// A top lower than this is not told from the floor by the rangefinder [m]: the estimator's step
+/// gate (5 cm) with its readings' noise, the lowest of the tops vision's moving tops are set among
+/// (8 cm).
+inline constexpr double kLowestToldTopM = 0.08;
 /// The floor under a settled vehicle this long says the platform is elsewhere [s]: coming over
 /// the top, the estimator's terrain steps onto it within its reset window (0.15 s of readings
 /// refused by its step gate); a beam crossing the top's edge reads the floor for moments.
 inline constexpr double kFloorUnderTopS = 0.5;
 /// Step 7: the rangefinder's surface under the vehicle, terrain_m (W; nullopt: no rangefinder
-/// fused, nothing said), against a top whose lowest point (its heave's trough) is top_low_m: the
-/// floor when within kFloorBandM of it while the top never comes within twice that (a lower top
-/// is not told from the floor by the estimator's step gate), the top otherwise.
+/// fused, nothing said), against a top whose lowest point (its heave's trough) is top_low_m (W):
+/// the floor where it lies nearer the take-off floor (z = 0) than that, the top otherwise; nothing
+/// said of a top lower than kLowestToldTopM. The half-way mark, not a band about z = 0: the
+/// estimate's height error (centimetres after seconds over a top, where only the barometer holds
+/// it) shifts the terrain it reads over the floor, and the top vision places (its height measured
+/// from the estimate's camera heights) shifts with it.
 Beam beam_under(std::optional<double> terrain_m, double top_low_m);
 
 /// Whether a touch-down with the gear gear_below_top_m under the platform's top's height (the
