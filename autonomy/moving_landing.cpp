@@ -309,7 +309,11 @@ MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
   if (waited_s >= gear.final_hold_timeout_s) {
     out.next = MovingStep::Next::kTooFast;
     out.reason = "no moment to drop onto the moving platform in " + fmt(waited_s, 2) + " s (" +
-                 off + ", its room " + fmt(c.room_m, 3) + " m): beyond what the vehicle lands on";
+                 off + ", its room " + fmt(c.room_m, 3) + " m" +
+                 (c.beam == Beam::kFloor ? ", the rangefinder reading the floor under it (" +
+                                               fmt(*terrain_m, 3) + " m)"
+                                         : std::string()) +
+                 "): beyond what the vehicle lands on";
     return out;
   }
   out.reason = !settled ? std::string("over the moving platform: matching")
