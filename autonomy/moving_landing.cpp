@@ -119,6 +119,11 @@ std::optional<std::string> too_fast(const PlatformFilter::Prediction& p,
   return std::nullopt;
 }
 
+// The predicted top's lowest point, its heave's trough: what step 7 judges the beam against.
+static double top_trough_m(const PlatformFilter& filter, const PlatformFilter::Prediction& pr) {
+  return pr.top_z_m - filter.heave().amplitude_m();
+}
+
 Beam beam_under(std::optional<double> terrain_m, double top_low_m) {
   if (!terrain_m || !std::isfinite(*terrain_m) || !(top_low_m >= kLowestToldTopM))
     return Beam::kUnknown;
@@ -146,7 +151,7 @@ DropCheck check_drop(const PlatformFilter& filter, const PoseSample& pose, int64
   c.room_m = drop_room_m(filter.whole_top(), gear.gear_footprint_m);
   c.centre_sd_m = std::sqrt(worst_axis_var(pr.cov_p));
   c.placed_views = filter.n_placed();
-  c.beam = beam_under(terrain_m, pr.top_z_m - filter.heave().amplitude_m());
+  c.beam = beam_under(terrain_m, top_trough_m(filter, pr));
   if (c.gear_above_m <= gear.final_descent_rate_mps * params.fall_lag_s) {
     c.verdict = Drop::kCommitted;
   } else if ((std::isfinite(c.room_m) && c.off_m.cwiseAbs().maxCoeff() > c.room_m) ||
@@ -223,7 +228,7 @@ MovingStep step_moving_approach(MovingApproach& s, const PlatformFilter& filter,
                        double(now_utime - *s.matched_since_utime) * 1e-6 >= params.match_settle_s;
   // Step 7: settled over the predicted centre, the beam is on the top if the track is the
   // platform's.
-  const double top_low_m = pr.top_z_m - filter.heave().amplitude_m();
+  const double top_low_m = top_trough_m(filter, pr);
   if (settled && beam_under(terrain_m, top_low_m) == Beam::kFloor) {
     if (!s.floor_under_since_utime) s.floor_under_since_utime = now_utime;
     if (double(now_utime - *s.floor_under_since_utime) * 1e-6 >= kFloorUnderTopS) {
