@@ -81,6 +81,12 @@ struct FilterState {
   int64_t flow_gated_last_utime = 0;   ///< latest of that run
   int64_t flow_inflated = 0;  ///< flow samples fused with their noise inflated after a run refused
   int64_t flow_second = 0;    ///< flow samples fused on the front end's second motion
+  /// The latest refused flow sample's implied horizontal velocity error and its covariance
+  /// (Estimator::reset_velocity_to_flow); utime 0: none since the last fused or reset.
+  int64_t flow_refused_utime = 0;
+  Vector2d flow_refused_dv = Vector2d::Zero();
+  Eigen::Matrix2d flow_refused_cov = Eigen::Matrix2d::Zero();
+  int64_t flow_velocity_resets = 0;    ///< horizontal velocity set to the flow's
   int64_t baro_gated_since_utime = 0;  ///< first of the baro's current run of refusals (0: none)
   int64_t baro_resets = 0;
 

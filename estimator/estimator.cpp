@@ -17,6 +17,9 @@ constexpr double kMaxPressurePa = 110000.0;
 // The median of the chi-square distribution with 3 degrees of freedom: a flow sample's typical
 // normalised innovation.
 constexpr double kChi2Median3Dof = 2.366;
+// The chi-square distribution with 2 degrees of freedom at p = 0.001: two horizontal velocity
+// errors that differ by more than their noise allows this seldom are not one error.
+constexpr double kChi2P001Dof2 = 13.82;
 
 int64_t to_us(double s) { return static_cast<int64_t>(std::llround(s * kUsPerS)); }
 
@@ -513,11 +516,13 @@ Outcome Estimator::apply_flow(const FlowSample& m, int64_t key, FilterState& s) 
     MeasCov R;
     double nis = 0;
     bool on_floor = false;
+    double height_m = 0;  // the camera's over the plane it is judged against
   };
   const auto update_for = [&](const FlowSample& f) -> std::optional<Update> {
     Update u;
     const double height_m = model_over(f, false, &u.r, &u.H);
     if (height_m < p.min_height_m) return std::nullopt;
+    u.height_m = height_m;
     u.R = flow_noise(f, p, height_m);
     // Over a platform the rangefinder's terrain is its top, while the front end's dominant plane
     // stays the floor until the platform fills most of the view (below about 0.5 m over it), and
@@ -530,8 +535,9 @@ Outcome Estimator::apply_flow(const FlowSample& m, int64_t key, FilterState& s) 
     const double step_m = params_.range.step_min_m;
     MeasVec r_floor;
     MeasJac H_floor;
+    double floor_height_m = 0;
     if (step_m > 0 && std::abs(s.x.terrain_m) >= step_m &&
-        model_over(f, true, &r_floor, &H_floor) >= p.min_height_m) {
+        (floor_height_m = model_over(f, true, &r_floor, &H_floor)) >= p.min_height_m) {
       const MeasVec between = r_floor - u.r;  // prediction over the terrain minus over the floor
       u.R += 0.25 * between * between.transpose();
       double nis_floor = 0;
@@ -542,6 +548,7 @@ Outcome Estimator::apply_flow(const FlowSample& m, int64_t key, FilterState& s) 
         u.H = H_floor;
         u.nis = nis_floor;
         u.on_floor = true;
+        u.height_m = floor_height_m;
       }
     } else if (!m.others.empty()) {
       fuse(s, u.r, u.H, u.R, -1.0, &u.nis);  // for the choice between the motions below
@@ -591,11 +598,65 @@ Outcome Estimator::apply_flow(const FlowSample& m, int64_t key, FilterState& s) 
     }
     if (o == Outcome::kFused) {
       s.flow_gated_since_utime = 0;
+      s.flow_refused_utime = 0;
       if (on_second) ++s.flow_second;
     }
+    if (o == Outcome::kGate && !on_second && m.others.empty())
+      reset_velocity_to_flow(s, m, implied_velocity_error(s, m, r, u->R, u->height_m, ci));
   }
   remove_clone(s, ci);
   return o;
+}
+
+Estimator::VelocityError Estimator::implied_velocity_error(const FilterState& s,
+                                                           const FlowSample& m, const MeasVec& r,
+                                                           const MeasCov& R, double height_m,
+                                                           int ci) const {
+  // r is t/d in the first exposure's camera frame: times d, the displacement the estimate lacks
+  // over the interval; over the interval, the velocity it lacks (the IMU's acceleration inside
+  // the interval is the filter's own, in both the prediction and the truth).
+  const double dt_s = static_cast<double>(m.utime_to - m.utime_from) / kUsPerS;
+  const Matrix3d A = s.clones[ci].q_WB.toRotationMatrix() * R_BC_ * (height_m / dt_s);
+  const Vector3d dv_W = A * r;
+  const Matrix3d cov_W = A * R * A.transpose();
+  VelocityError e;
+  e.utime = m.utime_to;
+  e.dv = dv_W.head<2>();
+  e.cov = cov_W.topLeftCorner<2, 2>();
+  return e;
+}
+
+// A refused sample that even its inflated noise did not pass says the state's covariance is the
+// wrong one: the filter is sure of a velocity the floor's motion contradicts, and on the IMU alone
+// no later sample would pass. As EKF2 resets its velocity to the flow, its only horizontal aid,
+// after the flow's timeout, the horizontal velocity becomes the flow's; only where the flow is
+// the one to believe (no flow fused for the timeout, over the floor, the height trustworthy) and
+// two samples in a row agree on the error (a lone bad sample never resets). The velocity's
+// correlations go and its variance is the sample's; the position is kept (no step for the pose's
+// consumers beyond the change over the flow's delay as the state is run forward).
+void Estimator::reset_velocity_to_flow(FilterState& s, const FlowSample& m,
+                                       const VelocityError& e) const {
+  const int64_t timeout_us = to_us(params_.health.flow_timeout_s);
+  const bool consecutive = s.flow_refused_utime != 0 && m.utime_from <= s.flow_refused_utime &&
+                           e.utime - s.flow_refused_utime <= timeout_us;
+  const Vector2d diff = e.dv - s.flow_refused_dv;
+  const Eigen::Matrix2d both = e.cov + s.flow_refused_cov;
+  const bool agree = consecutive && diff.dot(both.ldlt().solve(diff)) <= kChi2P001Dof2;
+  s.flow_refused_utime = e.utime;
+  s.flow_refused_dv = e.dv;
+  s.flow_refused_cov = e.cov;
+  const bool timed_out = e.utime - s.last_fused_utime[static_cast<int>(Sensor::kFlow)] > timeout_us;
+  const double step_m = params_.range.step_min_m;
+  const bool over_floor = step_m <= 0 || std::abs(s.x.terrain_m) < step_m;
+  if (!(timed_out && agree && over_floor && vertical_ok(s))) return;
+  s.x.v_W_B.head<2>() += e.dv;
+  for (int i = idx::kV; i < idx::kV + 2; ++i) {
+    s.P.row(i).setZero();
+    s.P.col(i).setZero();
+  }
+  s.P.block<2, 2>(idx::kV, idx::kV) = e.cov;
+  s.flow_refused_utime = 0;
+  ++s.flow_velocity_resets;
 }
 
 // ---- Output
@@ -637,6 +698,7 @@ State Estimator::state() const {
   out.counters.flow_inflated = s.flow_inflated;
   out.counters.flow_second = s.flow_second;
   out.counters.baro_resets = s.baro_resets;
+  out.counters.flow_velocity_resets = s.flow_velocity_resets;
 
   const auto& h = params_.health;
   uint32_t reasons = kReasonNone;

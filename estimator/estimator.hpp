@@ -125,6 +125,18 @@ class Estimator {
   Outcome apply_range(const RangeSample& m, FilterState& s);
   Outcome apply_baro(const BaroSample& m, FilterState& s);
   Outcome apply_flow(const FlowSample& m, int64_t key, FilterState& s);
+  /// The horizontal velocity error a flow sample's innovation r (t/d in the first exposure's
+  /// camera, noise R, the camera height_m over its plane) implies, in W, with its covariance.
+  struct VelocityError {
+    int64_t utime = 0;
+    Vector2d dv = Vector2d::Zero();
+    Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
+  };
+  VelocityError implied_velocity_error(const FilterState& s, const FlowSample& m, const MeasVec& r,
+                                       const MeasCov& R, double height_m, int ci) const;
+  /// Stage after a flow sample the gate refused (even inflated): the horizontal velocity set to
+  /// the flow's (README, "Updates").
+  void reset_velocity_to_flow(FilterState& s, const FlowSample& m, const VelocityError& e) const;
   /// The platform-step condition on the streak; the terrain its readings agree on.
   bool terrain_reset_due(const FilterState& s, double* terrain_m) const;
   void prune();

@@ -55,6 +55,7 @@ int main(int argc, char** argv) {
     int64_t seq = 0;
     estimator::Health last_health = estimator::Health::kLost;
     uint32_t last_reasons = ~0u;
+    int64_t last_velocity_resets = 0;
     node.on<imu_t>(channels::kImu, [&](const imu_t& m) {
       if (!accept_stamp(channels::kImu, m.utime)) return;
       const estimator::ImuSample imu = estimator::from_msg(m);
@@ -68,6 +69,13 @@ int main(int argc, char** argv) {
                      estimator::health_reasons_text(s.health_reasons));
         last_health = s.health;
         last_reasons = s.health_reasons;
+      }
+      if (s.counters.flow_velocity_resets != last_velocity_resets) {
+        last_velocity_resets = s.counters.flow_velocity_resets;
+        spdlog::warn(
+            "estimator: horizontal velocity set to the flow's (the flow refused for {} s; "
+            "{} resets so far)",
+            params.health.flow_timeout_s, last_velocity_resets);
       }
       node.publish(channels::kStateEstimate, estimator::to_msg(s, imu.gyro_B, seq));
       node.publish(channels::kEstimatePose, estimator::to_pose_msg(s, imu.gyro_B, seq));

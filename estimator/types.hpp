@@ -119,6 +119,9 @@ struct Counters {
   /// Flow samples fused on another motion of the front end's (FlowSample::others), its own
   /// being the one the prediction explained worse.
   int64_t flow_second = 0;
+  /// Times the horizontal velocity was set to the flow's after the flow had been refused for
+  /// health.flow_timeout_s (Estimator::apply_flow).
+  int64_t flow_velocity_resets = 0;
   int64_t baro_resets = 0;  ///< baro offset started over after baro.reset_after_s refused
   int64_t imu_gaps = 0;     ///< IMU intervals longer than health.imu_gap_s
   int64_t replays = 0;      ///< re-propagations from the history for delayed inputs

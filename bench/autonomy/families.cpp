@@ -119,7 +119,7 @@ double width_error_m(const Run& x) {
 
 std::string one_line(const Run& x) {
   const auto& r = x.r;
-  char what[384];
+  char what[448];
   if (targetless(x.family))
     std::snprintf(what, sizeof what, "found in %d and a partial view in %d of %d frames", x.found,
                   x.partial, x.frames);
@@ -142,6 +142,12 @@ std::string one_line(const Run& x) {
                   "%d of %d frames",
                   r.heading_error_at_touchdown_deg, r.contact_rel_vz_mps, x.platform_found,
                   x.frames);
+  }
+  if (r.flow_velocity_resets > 0) {
+    const size_t n = std::strlen(what);
+    std::snprintf(what + n, sizeof what - n,
+                  ", the estimate's velocity set to the flow's %lld times",
+                  static_cast<long long>(r.flow_velocity_resets));
   }
   char buf[768];
   std::snprintf(buf, sizeof buf, "%s seed %llu: %s, %s; %s; retries %d, mission %.1f s%s",

@@ -149,8 +149,9 @@ int main(int argc, char** argv) try {
       for (const auto& m : f.sample->others) flow_note += " other " + std::to_string(m.inliers);
     }
     const auto c = o.state().counters;
-    flow_note +=
-        " second " + std::to_string(c.flow_second) + " inflated " + std::to_string(c.flow_inflated);
+    flow_note += " second " + std::to_string(c.flow_second) + " inflated " +
+                 std::to_string(c.flow_inflated) + " resets " +
+                 std::to_string(c.flow_velocity_resets);
   };
   // Autonomy's reason within a phase, printed where its words change (its figures change each
   // step): what the vehicle waits for.

@@ -115,12 +115,14 @@ std::string one_line(const Run& x) {
   std::snprintf(buf, sizeof buf,
                 "%s seed %2d: %s touchdown %.2f cm, platform rel. error %.2f cm (z %+.2f), pose "
                 "error max %.2f cm (z %.2f), retries %d, mission %.1f s, flow on floor %lld, "
-                "inflated %lld, terrain resets %d, health not OK %d+%d steps%s, flow pairs%s%s",
+                "inflated %lld, velocity resets %lld, terrain resets %d, health not OK %d+%d "
+                "steps%s, flow pairs%s%s",
                 x.scenario.c_str(), x.seed, x.ok ? "landed" : "FAILED", 100 * r.touchdown_error_m,
                 100 * r.estimate_error_rel_W.norm(), 100 * r.estimate_error_rel_W.z(),
                 100 * r.max_pose_error_h_m, 100 * r.max_pose_error_z_m, r.retries, r.mission_time_s,
                 static_cast<long long>(r.flow_on_floor), static_cast<long long>(r.flow_inflated),
-                r.terrain_resets, r.estimate_degraded_steps, r.estimate_lost_steps,
+                static_cast<long long>(r.flow_velocity_resets), r.terrain_resets,
+                r.estimate_degraded_steps, r.estimate_lost_steps,
                 r.estimate_reasons.empty() ? "" : (" (" + r.estimate_reasons + ")").c_str(),
                 flow_pairs_text(r.flow_reasons).c_str(), x.ok ? "" : (": " + r.reason).c_str());
   return buf;

@@ -320,26 +320,28 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
       const auto flow_count = [&](estimator::FlowReason why) {
         return onboard->onboard().flow().counts()[static_cast<size_t>(why)];
       };
-      std::fprintf(
-          stderr,
-          "ONB %.1f %-15s true %.3f %.3f %.3f err %+.3f %+.3f %+.3f v_err %+.3f %+.3f "
-          "terrain %.3f (true %.3f) sigma_xy %.3f %.3f health %d %s flow fused %lld "
-          "refused %lld second %lld inflated %lld on_floor %lld front ok %lld few_tracks %lld "
-          "few_inliers %lld degenerate %lld\n",
-          (now - t0) * 1e-6, phase_name(autonomy.phase()), truth.state.p_W_B.x(),
-          truth.state.p_W_B.y(), truth.state.p_W_B.z(), e.x(), e.y(), e.z(),
-          es.v_W_B.x() - truth.state.v_W_B.x(), es.v_W_B.y() - truth.state.v_W_B.y(),
-          es.terrain_height_m, under_m, std::sqrt(es.cov_p()(0, 0)), std::sqrt(es.cov_p()(1, 1)),
-          static_cast<int>(es.health), estimator::health_reasons_text(es.health_reasons).c_str(),
-          static_cast<long long>(es.counters.fused(estimator::Sensor::kFlow)),
-          static_cast<long long>(es.counters.rejected(estimator::Sensor::kFlow)),
-          static_cast<long long>(es.counters.flow_second),
-          static_cast<long long>(es.counters.flow_inflated),
-          static_cast<long long>(es.counters.flow_on_floor),
-          static_cast<long long>(flow_count(estimator::FlowReason::kOk)),
-          static_cast<long long>(flow_count(estimator::FlowReason::kTooFewTracks)),
-          static_cast<long long>(flow_count(estimator::FlowReason::kTooFewInliers)),
-          static_cast<long long>(flow_count(estimator::FlowReason::kDegenerate)));
+      std::fprintf(stderr,
+                   "ONB %.1f %-15s true %.3f %.3f %.3f err %+.3f %+.3f %+.3f v_err %+.3f %+.3f "
+                   "terrain %.3f (true %.3f) sigma_xy %.3f %.3f health %d %s flow fused %lld "
+                   "refused %lld second %lld inflated %lld resets %lld on_floor %lld front ok %lld "
+                   "few_tracks %lld "
+                   "few_inliers %lld degenerate %lld\n",
+                   (now - t0) * 1e-6, phase_name(autonomy.phase()), truth.state.p_W_B.x(),
+                   truth.state.p_W_B.y(), truth.state.p_W_B.z(), e.x(), e.y(), e.z(),
+                   es.v_W_B.x() - truth.state.v_W_B.x(), es.v_W_B.y() - truth.state.v_W_B.y(),
+                   es.terrain_height_m, under_m, std::sqrt(es.cov_p()(0, 0)),
+                   std::sqrt(es.cov_p()(1, 1)), static_cast<int>(es.health),
+                   estimator::health_reasons_text(es.health_reasons).c_str(),
+                   static_cast<long long>(es.counters.fused(estimator::Sensor::kFlow)),
+                   static_cast<long long>(es.counters.rejected(estimator::Sensor::kFlow)),
+                   static_cast<long long>(es.counters.flow_second),
+                   static_cast<long long>(es.counters.flow_inflated),
+                   static_cast<long long>(es.counters.flow_velocity_resets),
+                   static_cast<long long>(es.counters.flow_on_floor),
+                   static_cast<long long>(flow_count(estimator::FlowReason::kOk)),
+                   static_cast<long long>(flow_count(estimator::FlowReason::kTooFewTracks)),
+                   static_cast<long long>(flow_count(estimator::FlowReason::kTooFewInliers)),
+                   static_cast<long long>(flow_count(estimator::FlowReason::kDegenerate)));
     }
     if (event) r.min_z_after_event_m = std::min(r.min_z_after_event_m, truth.state.p_W_B.z());
     const Phase ph = autonomy.phase();
@@ -439,6 +441,7 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
     r.terrain_resets = static_cast<int>(s.counters.terrain_resets);
     r.flow_on_floor = s.counters.flow_on_floor;
     r.flow_inflated = s.counters.flow_inflated;
+    r.flow_velocity_resets = s.counters.flow_velocity_resets;
     const auto& flow_counts = onboard->onboard().flow().counts();
     r.flow_reasons.assign(flow_counts.begin(), flow_counts.end());
     if (truth.platform || truth.opening)

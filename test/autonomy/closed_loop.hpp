@@ -130,8 +130,9 @@ struct ClosedLoopResult {
   int estimate_degraded_steps = 0, estimate_lost_steps = 0;  ///< airborne IMU steps not OK
   std::string estimate_reasons;  ///< every health reason seen in flight, "no_flow|no_range"
   int64_t flow_fused = 0, flow_rejected = 0;  ///< the filter's verdicts on flow samples
-  int64_t flow_on_floor = 0;  ///< ... judged against the floor while over the platform
-  int64_t flow_inflated = 0;  ///< ... fused with their noise inflated after a run refused
+  int64_t flow_on_floor = 0;         ///< ... judged against the floor while over the platform
+  int64_t flow_inflated = 0;         ///< ... fused with their noise inflated after a run refused
+  int64_t flow_velocity_resets = 0;  ///< horizontal velocity set to the flow's
   /// The flow front end's frame pairs by outcome (estimator::FlowReason order): why it gave
   /// no sample.
   std::vector<int64_t> flow_reasons;
