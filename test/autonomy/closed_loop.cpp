@@ -324,8 +324,7 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
                    "ONB %.1f %-15s true %.3f %.3f %.3f err %+.3f %+.3f %+.3f v_err %+.3f %+.3f "
                    "terrain %.3f (true %.3f) sigma_xy %.3f %.3f health %d %s flow fused %lld "
                    "refused %lld second %lld inflated %lld resets %lld on_floor %lld front ok %lld "
-                   "few_tracks %lld "
-                   "few_inliers %lld degenerate %lld\n",
+                   "few_tracks %lld few_inliers %lld degenerate %lld\n",
                    (now - t0) * 1e-6, phase_name(autonomy.phase()), truth.state.p_W_B.x(),
                    truth.state.p_W_B.y(), truth.state.p_W_B.z(), e.x(), e.y(), e.z(),
                    es.v_W_B.x() - truth.state.v_W_B.x(), es.v_W_B.y() - truth.state.v_W_B.y(),
