@@ -135,7 +135,7 @@ class Estimator {
   VelocityError implied_velocity_error(const FilterState& s, const FlowSample& m, const MeasVec& r,
                                        const MeasCov& R, double height_m, int ci) const;
   /// Stage after a flow sample the gate refused (even inflated): the horizontal velocity set to
-  /// the flow's (README, "Updates").
+  /// the flow's (README, "The velocity set to the flow's").
   void reset_velocity_to_flow(FilterState& s, const FlowSample& m, const VelocityError& e) const;
   /// The platform-step condition on the streak; the terrain its readings agree on.
   bool terrain_reset_due(const FilterState& s, double* terrain_m) const;
