@@ -442,6 +442,11 @@ bool Estimator::terrain_reset_due(const FilterState& s, double* terrain_m) const
   return true;
 }
 
+bool Estimator::terrain_raised(const FilterState& s) const {
+  const double step_m = params_.range.step_min_m;
+  return step_m > 0 && std::abs(s.x.terrain_m) >= step_m;
+}
+
 bool Estimator::vertical_ok(const FilterState& s) const {
   // The vehicle's own height must be trustworthy: small sigma, and the barometer (when there is
   // one) agreeing. The flow is no witness: its scale uses the terrain that is in question.
@@ -532,11 +537,10 @@ Outcome Estimator::apply_flow(const FlowSample& m, int64_t key, FilterState& s) 
     // difference between the two predictions enters the noise (one sigma: half of it; nothing
     // when hovering, where they agree), and the sample is fused against the plane it fits
     // better, the floor being the take-off floor, height 0 (README, "The platform step").
-    const double step_m = params_.range.step_min_m;
     MeasVec r_floor;
     MeasJac H_floor;
     double floor_height_m = 0;
-    if (step_m > 0 && std::abs(s.x.terrain_m) >= step_m &&
+    if (terrain_raised(s) &&
         (floor_height_m = model_over(f, true, &r_floor, &H_floor)) >= p.min_height_m) {
       const MeasVec between = r_floor - u.r;  // prediction over the terrain minus over the floor
       u.R += 0.25 * between * between.transpose();
@@ -601,7 +605,7 @@ Outcome Estimator::apply_flow(const FlowSample& m, int64_t key, FilterState& s) 
       s.flow_refused_utime = 0;
       if (on_second) ++s.flow_second;
     }
-    if (o == Outcome::kGate && !on_second && m.others.empty())
+    if (o == Outcome::kGate && m.others.empty())
       reset_velocity_to_flow(s, m, implied_velocity_error(s, m, r, u->R, u->height_m, ci));
   }
   remove_clone(s, ci);
@@ -646,9 +650,7 @@ void Estimator::reset_velocity_to_flow(FilterState& s, const FlowSample& m,
   s.flow_refused_dv = e.dv;
   s.flow_refused_cov = e.cov;
   const bool timed_out = e.utime - s.last_fused_utime[static_cast<int>(Sensor::kFlow)] > timeout_us;
-  const double step_m = params_.range.step_min_m;
-  const bool over_floor = step_m <= 0 || std::abs(s.x.terrain_m) < step_m;
-  if (!(timed_out && agree && over_floor && vertical_ok(s))) return;
+  if (!(timed_out && agree && !terrain_raised(s) && vertical_ok(s))) return;
   s.x.v_W_B.head<2>() += e.dv;
   for (int i = idx::kV; i < idx::kV + 2; ++i) {
     s.P.row(i).setZero();

@@ -141,6 +141,8 @@ class Estimator {
   bool terrain_reset_due(const FilterState& s, double* terrain_m) const;
   void prune();
   void reset_to_alignment();
+  /// The terrain under the rangefinder is a top: range.step_min_m or more from the take-off floor.
+  bool terrain_raised(const FilterState& s) const;
   bool vertical_ok(const FilterState& s) const;
   int64_t newest_imu_utime() const { return history_.back().s.utime; }
 
