@@ -18,6 +18,13 @@
 //   build/bin/alight_families_bench [--families landing_tiles,ingress_photo] [--runs 20]
 //       [--seed0 S] [--purpose any|tune|report] [--jobs 2] [--no-mocap]
 //       [--vehicle config/vehicles/pelican.yaml] [--verbose] [--csv FILE]
+//       [--scenarios landing_moving_cart,landing_deck]
+//
+// --scenarios flies shipped scenarios (config/scenarios/NAME.yaml, or a scenario file's path)
+// instead of drawn scenes, each at the seeds seed0 .. seed0 + N - 1 (the seed draws what the
+// scenario's `randomize:` leaves open, as alight-sim --seed does; seed0 1 unless given),
+// summarised as a family is: the in-process figures of the scenario scripts/montecarlo
+// --scenarios flies over LCM. The tune/report split below is of drawn scenes' seeds only.
 //
 // The seeds are judged against the tune/report split of config/seeds.yaml (tools/seed_split):
 // the summary says which they are, --purpose tune refuses report seeds and --purpose report
@@ -223,7 +230,12 @@ int main(int argc, char** argv) try {
       "ingress_solid_photo";
   std::string vehicle = std::string(alight::build::source_dir()) + "/config/vehicles/pelican.yaml";
   double time_limit_s = 240;
-  app.add_option("--families", families, "comma-separated families (scripts/scenes --list)");
+  auto* families_option =
+      app.add_option("--families", families, "comma-separated families (scripts/scenes --list)");
+  std::string scenarios;
+  app.add_option("--scenarios", scenarios,
+                 "comma-separated shipped scenarios (config/scenarios/NAME.yaml) or scenario "
+                 "files, each flown at every seed (with --families: both)");
   app.add_option("--runs", runs, "scenes drawn and flown per family")->check(CLI::Range(1, 10000));
   app.add_option("--seed0", seed0, "first seed (default: a fresh random one)")
       ->check(CLI::Range(int64_t{0}, int64_t{1} << 40));
@@ -251,17 +263,46 @@ int main(int argc, char** argv) try {
   // defaults every frame's large buffers fault in again and the faults count as the vision's.
   if (!alight::retain_freed_memory()) std::fprintf(stderr, "glibc refused the heap settings\n");
 
-  const auto seed_split = alight::tools::SeedSplit::from(alight::ParamNode::load_file(seeds_file));
-  if (seed0 < 0)
-    seed0 = alight::tools::fresh_report_seed0(seed_split, runs, std::random_device{}());
-  if (const std::string why = alight::tools::check_seeds(
-          seed_split, alight::tools::parse_seed_purpose(purpose_text), seed0, seed0 + runs - 1);
-      !why.empty()) {
-    std::fprintf(stderr, "alight_families_bench: %s (%s)\n", why.c_str(), seeds_file.c_str());
-    return 2;
+  // A shipped scenario's summary goes under its name, as a family's does.
+  std::vector<std::string> names;
+  std::map<std::string, std::string> scenario_files;  // shipped scenario name -> file
+  if (scenarios.empty() || families_option->count() > 0) names = split(families);
+  for (const auto& s : split(scenarios)) {
+    const bool file = s.find('/') != std::string::npos || s.ends_with(".yaml");
+    const std::string name = file ? std::filesystem::path(s).stem().string() : s;
+    if (std::find(names.begin(), names.end(), name) != names.end()) {
+      std::fprintf(stderr, "alight_families_bench: '%s' named twice (--families, --scenarios)\n",
+                   name.c_str());
+      return 2;
+    }
+    names.push_back(name);
+    scenario_files[name] =
+        file ? s : std::string(alight::build::source_dir()) + "/config/scenarios/" + s + ".yaml";
   }
-  const std::string seed_kind = alight::tools::describe_seeds(seed_split, seed0, seed0 + runs - 1);
-  const auto names = split(families);
+  // The split is of drawn scenes; a shipped scenario's seeds are its own (its `randomize:`).
+  const bool drawn = names.size() > scenario_files.size();
+  std::string seed_kind = "a shipped scenario's own seeds, outside the drawn scenes' split";
+  if (drawn) {
+    const auto seed_split =
+        alight::tools::SeedSplit::from(alight::ParamNode::load_file(seeds_file));
+    if (seed0 < 0)
+      seed0 = alight::tools::fresh_report_seed0(seed_split, runs, std::random_device{}());
+    if (const std::string why = alight::tools::check_seeds(
+            seed_split, alight::tools::parse_seed_purpose(purpose_text), seed0, seed0 + runs - 1);
+        !why.empty()) {
+      std::fprintf(stderr, "alight_families_bench: %s (%s)\n", why.c_str(), seeds_file.c_str());
+      return 2;
+    }
+    seed_kind = alight::tools::describe_seeds(seed_split, seed0, seed0 + runs - 1);
+  } else if (purpose_text != "any") {
+    std::fprintf(stderr,
+                 "alight_families_bench: --purpose %s judges drawn scenes' seeds; a shipped "
+                 "scenario's are its own (--purpose any)\n",
+                 purpose_text.c_str());
+    return 2;
+  } else if (seed0 < 0) {
+    seed0 = 1;
+  }
   namespace fs = std::filesystem;
   std::string dir_template = (fs::temp_directory_path() / "alight-families-XXXXXX").string();
   if (!mkdtemp(dir_template.data())) {
@@ -277,7 +318,9 @@ int main(int argc, char** argv) try {
       fs::remove_all(path, ignored);
     }
   } remove_scenes{dir};
-  std::printf("families %s, seeds %lld..%lld, %s, scenes in %s\n", families.c_str(),
+  std::string listed;
+  for (const auto& n : names) listed += (listed.empty() ? "" : ",") + n;
+  std::printf("families %s, seeds %lld..%lld, %s, scenes in %s\n", listed.c_str(),
               static_cast<long long>(seed0), static_cast<long long>(seed0 + runs - 1),
               no_mocap ? "on the onboard estimate" : "on motion capture", dir.c_str());
 
@@ -285,18 +328,22 @@ int main(int argc, char** argv) try {
   for (const auto& fam : names) {
     for (int i = 0; i < runs; ++i) {
       const uint64_t seed = static_cast<uint64_t>(seed0 + i);
-      const std::string cmd = "'" + std::string(alight::build::source_dir()) +
-                              "/scripts/scenes' '" + fam + "' --seed " + std::to_string(seed) +
-                              " --out '" + dir.string() + "' > /dev/null";
-      if (std::system(cmd.c_str()) != 0) {
-        std::fprintf(stderr, "alight_families_bench: scripts/scenes failed for family '%s'\n",
-                     fam.c_str());
-        return 2;
-      }
       Run x;
       x.family = fam;
       x.seed = seed;
-      x.scenario_file = (dir / (fam + "-" + std::to_string(seed) + ".yaml")).string();
+      if (const auto shipped = scenario_files.find(fam); shipped != scenario_files.end()) {
+        x.scenario_file = shipped->second;
+      } else {
+        const std::string cmd = "'" + std::string(alight::build::source_dir()) +
+                              "/scripts/scenes' '" + fam + "' --seed " + std::to_string(seed) +
+                              " --out '" + dir.string() + "' > /dev/null";
+        if (std::system(cmd.c_str()) != 0) {
+          std::fprintf(stderr, "alight_families_bench: scripts/scenes failed for family '%s'\n",
+                       fam.c_str());
+          return 2;
+        }
+        x.scenario_file = (dir / (fam + "-" + std::to_string(seed) + ".yaml")).string();
+      }
       const auto scenario = sim::load_scenario(x.scenario_file);
       if (scenario.wall && scenario.wall->has_opening)
         x.true_width_m = scenario.wall->opening_size_m.x();

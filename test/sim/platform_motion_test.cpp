@@ -397,6 +397,14 @@ TEST(PlatformMotionTest, TheShippedMovingScenariosLoad) {
   ASSERT_TRUE(cart.platform && cart.platform->moving);
   EXPECT_EQ(cart.platform->motion.speed_mps, 1.0);
   EXPECT_EQ(cart.platform->motion.path, "line");
+  // A cart turns with its path, slowed for its turns to the platform's turn bound.
+  EXPECT_TRUE(cart.platform->motion.heading_follows_path);
+  EXPECT_EQ(cart.platform->motion.max_course_rate_dps, 15.0);
+  const Scenario fast = test::scenario("landing_moving_cart_fast_turns");
+  ASSERT_TRUE(fast.platform && fast.platform->moving);
+  EXPECT_EQ(fast.platform->motion.speed_mps, 1.0);
+  EXPECT_FALSE(fast.platform->motion.heading_follows_path);
+  EXPECT_EQ(fast.platform->motion.max_course_rate_dps, 0.0);
   const Scenario deck = test::scenario("landing_deck");
   ASSERT_TRUE(deck.platform && deck.platform->moving);
   EXPECT_EQ(deck.platform->motion.speed_mps, 0.5);
