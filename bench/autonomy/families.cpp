@@ -335,8 +335,8 @@ int main(int argc, char** argv) try {
         x.scenario_file = shipped->second;
       } else {
         const std::string cmd = "'" + std::string(alight::build::source_dir()) +
-                              "/scripts/scenes' '" + fam + "' --seed " + std::to_string(seed) +
-                              " --out '" + dir.string() + "' > /dev/null";
+                                "/scripts/scenes' '" + fam + "' --seed " + std::to_string(seed) +
+                                " --out '" + dir.string() + "' > /dev/null";
         if (std::system(cmd.c_str()) != 0) {
           std::fprintf(stderr, "alight_families_bench: scripts/scenes failed for family '%s'\n",
                        fam.c_str());

@@ -7,9 +7,9 @@
 // 1.7 m/s^2 across it) carries the vehicle, which trails each turn's start and end by 5-10 cm,
 // off its top's room in every last drop: the drops are given up and the fourth go-around is the
 // named failsafe; a vehicle that follows a setpoint's velocity only up to 1 m/s does not follow
-// that cart at all (the named failsafe too). The vision measures the moving top (VISION_PLATFORM, through
-// the node's and autonomy's conversions), autonomy's platform filter and moving approach follow it
-// and time the last drop to the deck's heave. Lockstep and deterministic, as
+// that cart at all (the named failsafe too). The vision measures the moving top (VISION_PLATFORM,
+// through the node's and autonomy's conversions), autonomy's platform filter and moving approach
+// follow it and time the last drop to the deck's heave. Lockstep and deterministic, as
 // closed_loop_vision_test.
 #include <gtest/gtest.h>
 
@@ -69,8 +69,8 @@ TEST_P(MovingPlatformLandingTest, LandsOnThePlatformWhileItMoves) {
 }
 
 // The deck (0.5 m/s, heave, roll and pitch), the cart (1 m/s between its turns, 0.16 m/s in
-// them, its heading turning with its path at 15 deg/s), a family cart (0.5 m/s along a 1.1 m line, its
-// turns at the ends at up to 14 deg/s; the Pelican follows a setpoint's velocity up to 2 m/s, a
+// them, its heading turning with its path at 15 deg/s), a family cart (0.5 m/s along a 1.1 m line,
+// its turns at the ends at up to 14 deg/s; the Pelican follows a setpoint's velocity up to 2 m/s, a
 // platform up to 1.6 m/s), and a family deck whose top is a smooth photograph at a millimetre a
 // texel (0.3 m/s, 3 cm heave): from the search height it gives too few features for their
 // motion, and is found by its outline (moving_outline.hpp; without it the search ends in a hold).
@@ -100,9 +100,9 @@ TEST(MovingPlatformFailsafeTest, FastTurnsEndInTheNamedFailsafeWithoutATouchDown
   EXPECT_GT(vision.platform_found, 0);
 }
 
-// The cart at 1 m/s through its fast turns is faster than a vehicle whose outer loop follows a setpoint's velocity
-// only up to 1 m/s follows (0.8 m/s, autonomy::followed_speed_mps): the named failsafe, climb and
-// hold, no landing attempt on it and no collision.
+// The cart at 1 m/s through its fast turns is faster than a vehicle whose outer loop follows a
+// setpoint's velocity only up to 1 m/s follows (0.8 m/s, autonomy::followed_speed_mps): the named
+// failsafe, climb and hold, no landing attempt on it and no collision.
 TEST(MovingPlatformFailsafeTest, ACartFasterThanTheVehicleFollowsIsTheNamedFailsafe) {
   RealVision vision(path("config/vehicles/pelican.yaml"), Mission::kLanding);
   ClosedLoopConfig config = moving_config(Case{"landing_moving_cart_fast_turns", 7}, &vision);
