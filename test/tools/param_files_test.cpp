@@ -63,7 +63,7 @@ std::map<std::string, std::vector<fs::path>> shipped_files() {
 TEST(ParamFilesTest, EveryShippedFileDumpsToYamlThatLoadsBackToTheSameParameters) {
   const auto files = shipped_files();
   EXPECT_EQ(files.at("vehicle").size(), 2u);
-  EXPECT_EQ(files.at("scenario").size(), 10u);  // with estimator_drift and the moving platforms
+  EXPECT_EQ(files.at("scenario").size(), 11u);  // with estimator_drift and the moving platforms
   EXPECT_EQ(files.at("camera").size(), 2u);
   EXPECT_EQ(files.at("mocap").size(), 2u);
   EXPECT_EQ(files.at("autopilot").size(), 8u);  // with sitl/
