@@ -77,12 +77,24 @@ void propagate(FilterState& s, const Vector3d& accel_B, const Vector3d& gyro_B, 
   const double slope_mps = params.range.terrain_gradient * s.x.v_W_B.head<2>().norm();
   q[idx::kTerrain] =
       (params.range.terrain_rw * params.range.terrain_rw + slope_mps * slope_mps) * dt_s;
+  q.segment<2>(idx::kTopV).setConstant(kTopAccelMps2 * kTopAccelMps2 * dt_s);
 
   const int n_dim = s.dim();
   const int n_x = n_dim - idx::kCore;
   const CoreMatrix Pcc = s.P.topLeftCorner<idx::kCore, idx::kCore>();
   s.P.topLeftCorner<idx::kCore, idx::kCore>() = F * Pcc * F.transpose();
   s.P.topLeftCorner<idx::kCore, idx::kCore>().diagonal() += q;
+  // A top's velocity unobserved for long is no longer known at all: it starts over.
+  if (s.P(idx::kTopV, idx::kTopV) + s.P(idx::kTopV + 1, idx::kTopV + 1) >
+      2 * kTopMaxSpeedMps * kTopMaxSpeedMps) {
+    s.P.middleRows<2>(idx::kTopV).setZero();
+    s.P.middleCols<2>(idx::kTopV).setZero();
+    s.P.block<2, 2>(idx::kTopV, idx::kTopV)
+        .diagonal()
+        .setConstant(kTopMaxSpeedMps * kTopMaxSpeedMps);
+    s.x.top_v_W.setZero();
+    s.top_moving = false;
+  }
   if (n_x > 0) {
     // Clones are constant: only their correlation with the core moves.
     const Eigen::Matrix<double, idx::kCore, Eigen::Dynamic, 0, idx::kCore, kMaxDim> Pcx =
@@ -110,6 +122,7 @@ void inject(FilterState& s, const ErrVec& dx) {
   s.x.gyro_bias_B += dx.segment<3>(idx::kBg);
   s.x.baro_offset_m += dx[idx::kBaro];
   s.x.terrain_m += dx[idx::kTerrain];
+  s.x.top_v_W += dx.segment<2>(idx::kTopV);
   for (int i = 0; i < s.n_clones; ++i) {
     const int o = idx::kCore + kCloneDim * i;
     s.clones[i].p_W_B += dx.segment<3>(o);
@@ -167,6 +180,7 @@ Outcome fuse(FilterState& s, const MeasVec& r, const MeasJac& H, const MeasCov& 
     N.segment<3>(idx::kP) = e_z.cross(s.x.p_W_B);
     N.segment<3>(idx::kV) = e_z.cross(s.x.v_W_B);
     N.segment<3>(idx::kTheta) = R_WB.transpose() * e_z;
+    N.segment<2>(idx::kTopV) = Vector2d(-s.x.top_v_W.y(), s.x.top_v_W.x());  // e_z x (v, 0)
     for (int i = 0; i < s.n_clones; ++i) {
       const int c = idx::kCore + kCloneDim * i;
       N.segment<3>(c) = e_z.cross(s.clones[i].p_W_B);
@@ -262,12 +276,13 @@ double implied_terrain_m(const Nominal& x, const Vector3d& t_B_R, const Vector3d
   return x.p_W_B.z() + (R * t_B_R).z() - range_m * cos_tilt;
 }
 
-FlowModel flow_model(const Nominal& x, const Clone& c, const Matrix3d& R_BC,
-                     const Vector3d& t_B_C) {
+FlowModel flow_model(const Nominal& x, const Clone& c, const Matrix3d& R_BC, const Vector3d& t_B_C,
+                     double top_dt_s) {
   const Matrix3d R1 = c.q_WB.toRotationMatrix();
   const Matrix3d R2 = x.q_WB.toRotationMatrix();
   const Matrix3d R_CB = R_BC.transpose();
-  const Vector3d delta_W = x.p_W_B + R2 * t_B_C - c.p_W_B - R1 * t_B_C;
+  const Vector3d top_W(x.top_v_W.x() * top_dt_s, x.top_v_W.y() * top_dt_s, 0.0);
+  const Vector3d delta_W = x.p_W_B + R2 * t_B_C - c.p_W_B - R1 * t_B_C - top_W;
   const Vector3d delta_B1 = R1.transpose() * delta_W;
   const Vector3d u = R_CB * delta_B1;
   FlowModel m;
@@ -287,6 +302,7 @@ FlowModel flow_model(const Nominal& x, const Clone& c, const Matrix3d& R_BC,
   m.H_core.block<3, 3>(0, idx::kP) = du_dp2 / d;
   m.H_core.block<3, 3>(0, idx::kTheta) = du_dtheta2 / d;
   m.H_core.col(idx::kTerrain) = z_over_d;  // dd/dterrain = -1
+  if (top_dt_s > 0) m.H_core.block<3, 2>(0, idx::kTopV) = -du_dp2.leftCols<2>() * top_dt_s / d;
   m.H_clone.block<3, 3>(0, 0) = du_dp1 / d - z_over_d * dd_dp1;
   m.H_clone.block<3, 3>(0, 3) = du_dtheta1 / d - z_over_d * dd_dtheta1;
   return m;

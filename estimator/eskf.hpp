@@ -23,6 +23,16 @@ constexpr int kMaxClones = 3;
 constexpr int kCloneDim = 6;
 constexpr int kMaxDim = idx::kCore + kMaxClones * kCloneDim;
 
+/// The platforms a landing follows move at up to 1 m/s and turn at up to 15 deg/s (autonomy's
+/// moving landing holds beyond what the vehicle can follow): a top's horizontal acceleration is
+/// then at most 1 m/s x 0.26 rad/s. Its velocity state walks at that rate per root second, so a
+/// top seen only relative to the camera is trusted for its motion about as long as it cannot
+/// have changed it.
+constexpr double kTopAccelMps2 = 0.26;
+/// A top's velocity is at most that fast: its state starts with this sigma, and starts over
+/// (uncorrelated, zero, not moving) when its sigma has walked past it unobserved.
+constexpr double kTopMaxSpeedMps = 1.0;
+
 /// Dynamic size with fixed capacity: no heap allocation, copies only the active part.
 using Cov = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxDim, kMaxDim>;
 using ErrVec = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxDim, 1>;
@@ -39,6 +49,7 @@ struct Nominal {
   Vector3d gyro_bias_B = Vector3d::Zero();
   double baro_offset_m = 0.0;
   double terrain_m = 0.0;
+  Vector2d top_v_W = Vector2d::Zero();  ///< horizontal velocity of the terrain's top [m/s]
 };
 
 /// p_W_B and q_WB frozen at a flow sample's first exposure; its error is (dp, dtheta) in P.
@@ -81,6 +92,10 @@ struct FilterState {
   int64_t flow_gated_last_utime = 0;   ///< latest of that run
   int64_t flow_inflated = 0;  ///< flow samples fused with their noise inflated after a run refused
   int64_t flow_second = 0;    ///< flow samples fused on the front end's second motion
+  int64_t flow_top = 0;       ///< flow samples fused relative to a moving top
+  /// The flow has shown the top under the rangefinder to move (Estimator::apply_flow): its
+  /// single-motion samples over the top are judged relative to it.
+  bool top_moving = false;
   /// The latest refused flow sample's implied horizontal velocity error and its covariance
   /// (Estimator::reset_velocity_to_flow); utime 0: none since the last fused or reset.
   int64_t flow_refused_utime = 0;
@@ -134,14 +149,17 @@ RangeModel range_model(const Nominal& x, const Vector3d& t_B_R, const Vector3d& 
 double implied_terrain_m(const Nominal& x, const Vector3d& t_B_R, const Vector3d& d_B,
                          double range_m, CoreRow* J = nullptr);
 
-/// Flow: t_over_d = R_CB R_WB1^T (p_W_C2 - p_W_C1) / (z of camera 1 above the terrain).
+/// Flow: t_over_d = R_CB R_WB1^T (p_W_C2 - p_W_C1) / (z of camera 1 above the terrain); with
+/// `top_dt_s` > 0, the camera's motion relative to the terrain's top moving at top_v_W over that
+/// interval: (p_W_C2 - p_W_C1 - (top_v_W, 0) top_dt_s) instead.
 struct FlowModel {
   Vector3d t_over_d = Vector3d::Zero();
   double height_m = 0.0;  ///< camera 1 above the terrain
   Eigen::Matrix<double, 3, idx::kCore> H_core = Eigen::Matrix<double, 3, idx::kCore>::Zero();
   Eigen::Matrix<double, 3, kCloneDim> H_clone = Eigen::Matrix<double, 3, kCloneDim>::Zero();
 };
-FlowModel flow_model(const Nominal& x, const Clone& c, const Matrix3d& R_BC, const Vector3d& t_B_C);
+FlowModel flow_model(const Nominal& x, const Clone& c, const Matrix3d& R_BC, const Vector3d& t_B_C,
+                     double top_dt_s = 0.0);
 /// Adds to the Jacobians what the front end's inputs R_C2C1 and n_C1, computed from the
 /// estimate (the clone's attitude and the current one), carry of the attitude errors: the
 /// measurement is z = u + J_rotation theta + J_normal delta with theta = R_CB (R1^T R2 dtheta2 -

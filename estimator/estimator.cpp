@@ -170,6 +170,7 @@ void Estimator::start(const ImuSample& last, const Vector3d& accel_mean,
       .setConstant(p.sigma_gyro_bias_radps * p.sigma_gyro_bias_radps);
   s.P(idx::kBaro, idx::kBaro) = 1.0;  // replaced by the first baro reading
   s.P(idx::kTerrain, idx::kTerrain) = p.sigma_terrain_m * p.sigma_terrain_m;
+  s.P.block<2, 2>(idx::kTopV, idx::kTopV).diagonal().setConstant(kTopMaxSpeedMps * kTopMaxSpeedMps);
   s.last_fused_utime.fill(s.utime);
   s.last_outcome.fill(Outcome::kFused);
   history_.push_back(Checkpoint{s, last});
@@ -500,18 +501,32 @@ Outcome Estimator::apply_flow(const FlowSample& m, int64_t key, FilterState& s) 
   const auto& p = params_.flow;
   const int ci = s.clone_index(key);
   if (ci < 0) return Outcome::kNoClone;
-  // The model over a plane at the terrain's height (a state) or at the floor's (height 0).
-  const auto model_over = [&](const FlowSample& f, bool floor, MeasVec* r, MeasJac* H) {
+  // The plane a motion is judged against: the terrain's height (a state) standing still, the
+  // floor's (height 0), or the terrain's top moving at its velocity state over the interval.
+  enum class Plane { kTerrain, kFloor, kMovingTop };
+  const double interval_s = static_cast<double>(s.utime - s.clones[ci].utime) / kUsPerS;
+  const auto model_over = [&](const FlowSample& f, Plane plane, MeasVec* r, MeasJac* H) {
     Nominal x = s.x;
-    if (floor) x.terrain_m = 0.0;
-    FlowModel model = flow_model(x, s.clones[ci], R_BC_, p.t_B_C_m);
+    if (plane == Plane::kFloor) x.terrain_m = 0.0;
+    FlowModel model = flow_model(x, s.clones[ci], R_BC_, p.t_B_C_m,
+                                 plane == Plane::kMovingTop ? interval_s : 0.0);
     add_input_sensitivities(model, x, s.clones[ci], R_BC_, f.J_rotation, f.J_normal);
-    if (floor) model.H_core.col(idx::kTerrain).setZero();
+    if (plane == Plane::kFloor) model.H_core.col(idx::kTerrain).setZero();
     *r = f.t_over_d_C1 - model.t_over_d;
     *H = MeasJac::Zero(3, s.dim());
     H->leftCols<idx::kCore>() = model.H_core;
     H->middleCols<kCloneDim>(idx::kCore + kCloneDim * ci) = model.H_clone;
     return model.height_m;
+  };
+  // Relative to a moving top the flow's vertical is the deck's heave as much as the camera's,
+  // which no state models (the rangefinder measures that height): the world's vertical gets the
+  // noise of a top's largest speed, and the flow speaks of the horizontal motion only.
+  const auto moving_top_noise = [&](const FlowSample& f, double height_m) {
+    MeasCov R = flow_noise(f, p, height_m);
+    const Vector3d up_C1 = R_BC_.transpose() * (s.clones[ci].q_WB.conjugate() * Vector3d::UnitZ());
+    const double sigma = kTopMaxSpeedMps * interval_s / height_m;
+    R += sigma * sigma * up_C1 * up_C1.transpose();
+    return R;
   };
   // One motion's update against the plane it fits better, and its NIS; nullopt where the camera
   // is too near the terrain.
@@ -521,14 +536,18 @@ Outcome Estimator::apply_flow(const FlowSample& m, int64_t key, FilterState& s) 
     MeasCov R;
     double nis = 0;
     bool on_floor = false;
+    bool on_top = false;  // relative to the moving top
     double height_m = 0;  // the camera's over the plane it is judged against
   };
   const auto update_for = [&](const FlowSample& f) -> std::optional<Update> {
     Update u;
-    const double height_m = model_over(f, false, &u.r, &u.H);
+    // A top the flow has shown to move: its motion is the camera's relative to it.
+    u.on_top = terrain_raised(s) && s.top_moving;
+    const double height_m =
+        model_over(f, u.on_top ? Plane::kMovingTop : Plane::kTerrain, &u.r, &u.H);
     if (height_m < p.min_height_m) return std::nullopt;
     u.height_m = height_m;
-    u.R = flow_noise(f, p, height_m);
+    u.R = u.on_top ? moving_top_noise(f, height_m) : flow_noise(f, p, height_m);
     // Over a platform the rangefinder's terrain is its top, while the front end's dominant plane
     // stays the floor until the platform fills most of the view (below about 0.5 m over it), and
     // in between its fit may take features of both: the two planes give t/d apart by the
@@ -541,17 +560,23 @@ Outcome Estimator::apply_flow(const FlowSample& m, int64_t key, FilterState& s) 
     MeasJac H_floor;
     double floor_height_m = 0;
     if (terrain_raised(s) &&
-        (floor_height_m = model_over(f, true, &r_floor, &H_floor)) >= p.min_height_m) {
-      const MeasVec between = r_floor - u.r;  // prediction over the terrain minus over the floor
-      u.R += 0.25 * between * between.transpose();
+        (floor_height_m = model_over(f, Plane::kFloor, &r_floor, &H_floor)) >= p.min_height_m) {
+      MeasVec r_still = u.r;
+      MeasJac H_still;
+      if (u.on_top) model_over(f, Plane::kTerrain, &r_still, &H_still);
+      const MeasVec between = r_floor - r_still;  // over the terrain minus over the floor
+      MeasCov R_floor = flow_noise(f, p, height_m) + 0.25 * between * between.transpose();
+      if (!u.on_top) u.R = R_floor;
       double nis_floor = 0;
       fuse(s, u.r, u.H, u.R, -1.0, &u.nis);  // a negative gate refuses: only the NIS
-      fuse(s, r_floor, H_floor, u.R, -1.0, &nis_floor);
+      fuse(s, r_floor, H_floor, R_floor, -1.0, &nis_floor);
       if (nis_floor < u.nis) {
         u.r = r_floor;
         u.H = H_floor;
+        u.R = R_floor;
         u.nis = nis_floor;
         u.on_floor = true;
+        u.on_top = false;
         u.height_m = floor_height_m;
       }
     } else if (!m.others.empty()) {
@@ -560,19 +585,20 @@ Outcome Estimator::apply_flow(const FlowSample& m, int64_t key, FilterState& s) 
     return u;
   };
   std::optional<Update> u = update_for(m);
-  bool on_second = false;
+  int chosen = -1;  // the sample's own motion, or the index of the other it took
   // Two motions in view (a textured platform moving under the camera over a sparse floor): the
   // one the prediction explains better is the floor's. Taking the larger, the platform's, the
   // estimate would follow the platform: a vehicle holding over it moves with it while its
   // estimate stands still.
-  for (const FlowMotion& other : m.others) {
-    const std::optional<Update> b = update_for(with_motion(m, other));
+  for (size_t k = 0; k < m.others.size(); ++k) {
+    const std::optional<Update> b = update_for(with_motion(m, m.others[k]));
     if (b && (!u || b->nis < u->nis)) {
       u = b;
-      on_second = true;
+      chosen = static_cast<int>(k);
     }
   }
   Outcome o = Outcome::kGeometry;
+  bool inflated = false;
   if (u) {
     if (u->on_floor) ++s.flow_on_floor;
     const MeasVec& r = u->r;
@@ -598,18 +624,48 @@ Outcome Estimator::apply_flow(const FlowSample& m, int64_t key, FilterState& s) 
     if (o == Outcome::kGate && std::isfinite(nis) &&
         m.utime_to - s.flow_gated_since_utime >= run_us) {
       o = fuse(s, r, H, R * (nis / kChi2Median3Dof), p.gate_chi2);
-      if (o == Outcome::kFused) ++s.flow_inflated;
+      inflated = o == Outcome::kFused;
+      if (inflated) ++s.flow_inflated;
     }
     if (o == Outcome::kFused) {
       s.flow_gated_since_utime = 0;
       s.flow_refused_utime = 0;
-      if (on_second) ++s.flow_second;
+      if (chosen >= 0) ++s.flow_second;
+      if (u->on_top) ++s.flow_top;
     }
     if (o == Outcome::kGate && m.others.empty())
       reset_velocity_to_flow(s, m, implied_velocity_error(s, m, r, u->R, u->height_m, ci));
   }
+  // Two motions in view with the rangefinder on a top, the one fused as it is judged the floor's
+  // or the moving top's: the other is the other plane's. The top's measures the top's velocity
+  // (the camera's own motion known from the floor's); the floor's keeps the vehicle's velocity
+  // on the still world while the top's explains the sample better.
+  if (o == Outcome::kFused && !inflated && (u->on_floor || u->on_top) && !m.others.empty()) {
+    const FlowSample rest = chosen < 0 ? with_motion(m, m.others.front()) : m;
+    const Plane plane = u->on_floor ? Plane::kMovingTop : Plane::kFloor;
+    MeasVec r;
+    MeasJac H;
+    const double height_m = model_over(rest, plane, &r, &H);
+    const MeasCov R = plane == Plane::kMovingTop ? moving_top_noise(rest, height_m)
+                                                 : flow_noise(rest, p, height_m);
+    if (height_m >= p.min_height_m && fuse(s, r, H, R, p.gate_chi2) == Outcome::kFused) {
+      if (plane == Plane::kMovingTop) ++s.flow_top;
+      s.top_moving = top_is_moving(s);
+    }
+  }
   remove_clone(s, ci);
   return o;
+}
+
+bool Estimator::top_is_moving(const FilterState& s) const {
+  // Moving: its speed is three sigmas clear of zero and of the flow's own noise floor, the
+  // speed below which the top's motion and the floor's cannot be told apart anyway.
+  const Vector2d v = s.x.top_v_W;
+  const double speed = v.norm();
+  if (speed == 0.0) return false;
+  const Vector2d along = v / speed;
+  const double sigma = std::sqrt(along.dot(s.P.block<2, 2>(idx::kTopV, idx::kTopV) * along));
+  return speed > 3.0 * std::max(sigma, params_.flow.sigma_floor_mps);
 }
 
 Estimator::VelocityError Estimator::implied_velocity_error(const FilterState& s,
@@ -694,11 +750,14 @@ State Estimator::state() const {
   out.gyro_bias_B = s.x.gyro_bias_B;
   out.baro_offset_m = s.x.baro_offset_m;
   out.terrain_height_m = s.x.terrain_m;
+  out.top_velocity_W = s.x.top_v_W;
+  out.top_moving = s.top_moving;
   out.cov = s.P.topLeftCorner<idx::kCore, idx::kCore>();
   out.counters.terrain_resets = s.terrain_resets;
   out.counters.flow_on_floor = s.flow_on_floor;
   out.counters.flow_inflated = s.flow_inflated;
   out.counters.flow_second = s.flow_second;
+  out.counters.flow_top = s.flow_top;
   out.counters.baro_resets = s.baro_resets;
   out.counters.flow_velocity_resets = s.flow_velocity_resets;
 

@@ -125,6 +125,8 @@ class Estimator {
   Outcome apply_range(const RangeSample& m, FilterState& s);
   Outcome apply_baro(const BaroSample& m, FilterState& s);
   Outcome apply_flow(const FlowSample& m, int64_t key, FilterState& s);
+  /// Whether the top's velocity state is known to be other than zero (Estimator::apply_flow).
+  bool top_is_moving(const FilterState& s) const;
   /// The horizontal velocity error a flow sample's innovation r (t/d in the first exposure's
   /// camera, noise R, the camera height_m over its plane) implies, in W, with its covariance.
   struct VelocityError {

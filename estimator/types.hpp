@@ -119,6 +119,8 @@ struct Counters {
   /// Flow samples fused on another motion of the front end's (FlowSample::others), its own
   /// being the one the prediction explained worse.
   int64_t flow_second = 0;
+  /// Flow samples fused as the camera's motion relative to a moving top (a top's velocity state).
+  int64_t flow_top = 0;
   /// Times the horizontal velocity was set to the flow's after the flow had been refused for
   /// health.flow_timeout_s (Estimator::apply_flow).
   int64_t flow_velocity_resets = 0;
@@ -163,7 +165,8 @@ constexpr int kBa = 9;        ///< accelerometer bias [m/s^2], body
 constexpr int kBg = 12;       ///< gyro bias [rad/s], body
 constexpr int kBaro = 15;     ///< baro offset [m]: baro altitude = p_z + offset
 constexpr int kTerrain = 16;  ///< terrain height under the rangefinder h_W_terrain [m]
-constexpr int kCore = 17;     ///< dimension without clones
+constexpr int kTopV = 17;     ///< horizontal velocity of the top under the rangefinder [m/s], W
+constexpr int kCore = 19;     ///< dimension without clones
 }  // namespace idx
 
 using CoreMatrix = Eigen::Matrix<double, idx::kCore, idx::kCore>;
@@ -179,7 +182,11 @@ struct State {
   Vector3d gyro_bias_B = Vector3d::Zero();   ///< [rad/s]
   double baro_offset_m = 0.0;                ///< baro altitude minus p_z
   double terrain_height_m = 0.0;             ///< h_W_terrain: surface under the rangefinder
-  CoreMatrix cov = CoreMatrix::Zero();       ///< error-state covariance in the idx:: order
+  /// The horizontal velocity of that surface when it is a moving top ([m/s], W; README, "A
+  /// platform moving under the camera"), and whether the flow has shown it to move.
+  Eigen::Vector2d top_velocity_W = Eigen::Vector2d::Zero();
+  bool top_moving = false;
+  CoreMatrix cov = CoreMatrix::Zero();  ///< error-state covariance in the idx:: order
 
   Matrix3d cov_p() const { return cov.block<3, 3>(idx::kP, idx::kP); }  ///< [m^2]
   Matrix3d cov_v() const { return cov.block<3, 3>(idx::kV, idx::kV); }  ///< [m^2/s^2]

@@ -324,7 +324,8 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
                    "ONB %.1f %-15s true %.3f %.3f %.3f err %+.3f %+.3f %+.3f v_err %+.3f %+.3f "
                    "terrain %.3f (true %.3f) sigma_xy %.3f %.3f health %d %s flow fused %lld "
                    "refused %lld second %lld inflated %lld resets %lld on_floor %lld front ok %lld "
-                   "few_tracks %lld few_inliers %lld degenerate %lld\n",
+                   "few_tracks %lld few_inliers %lld degenerate %lld top %+.3f %+.3f moving %d "
+                   "(true %+.3f %+.3f) on_top %lld sd_v %.3f sd_top %.3f sd_tilt %.2f deg\n",
                    (now - t0) * 1e-6, phase_name(autonomy.phase()), truth.state.p_W_B.x(),
                    truth.state.p_W_B.y(), truth.state.p_W_B.z(), e.x(), e.y(), e.z(),
                    es.v_W_B.x() - truth.state.v_W_B.x(), es.v_W_B.y() - truth.state.v_W_B.y(),
@@ -340,7 +341,13 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
                    static_cast<long long>(flow_count(estimator::FlowReason::kOk)),
                    static_cast<long long>(flow_count(estimator::FlowReason::kTooFewTracks)),
                    static_cast<long long>(flow_count(estimator::FlowReason::kTooFewInliers)),
-                   static_cast<long long>(flow_count(estimator::FlowReason::kDegenerate)));
+                   static_cast<long long>(flow_count(estimator::FlowReason::kDegenerate)),
+                   es.top_velocity_W.x(), es.top_velocity_W.y(), es.top_moving ? 1 : 0,
+                   truth.platform ? truth.platform->v_W.x() : 0.0,
+                   truth.platform ? truth.platform->v_W.y() : 0.0,
+                   static_cast<long long>(es.counters.flow_top), std::sqrt(es.cov(3, 3)),
+                   std::sqrt(es.cov(estimator::idx::kTopV, estimator::idx::kTopV)),
+                   std::sqrt(es.cov(6, 6)) * 180 / M_PI);
     }
     if (event) r.min_z_after_event_m = std::min(r.min_z_after_event_m, truth.state.p_W_B.z());
     const Phase ph = autonomy.phase();
