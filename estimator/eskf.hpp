@@ -29,6 +29,8 @@ constexpr int kMaxDim = idx::kCore + kMaxClones * kCloneDim;
 /// top seen only relative to the camera is trusted for its motion about as long as it cannot
 /// have changed it.
 constexpr double kTopAccelMps2 = 0.26;
+/// A deck rolling and pitching by 3 deg at up to 0.5 Hz turns at up to 0.16 rad/s.
+constexpr double kTopRateRadps = 0.16;
 /// A top's velocity is at most that fast: its state starts with this sigma, and starts over
 /// (uncorrelated, zero, not moving) when its sigma has walked past it unobserved.
 constexpr double kTopMaxSpeedMps = 1.0;

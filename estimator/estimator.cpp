@@ -526,6 +526,10 @@ Outcome Estimator::apply_flow(const FlowSample& m, int64_t key, FilterState& s) 
     const Vector3d up_C1 = R_BC_.transpose() * (s.clones[ci].q_WB.conjugate() * Vector3d::UnitZ());
     const double sigma = kTopMaxSpeedMps * interval_s / height_m;
     R += sigma * sigma * up_C1 * up_C1.transpose();
+    // A deck's roll and pitch turn the top under the camera, which the front end, given the
+    // camera's own rotation, reads as a translation of the top's rate times the height.
+    const double turn = kTopRateRadps * interval_s;
+    R += turn * turn * (Matrix3d::Identity() - up_C1 * up_C1.transpose());
     return R;
   };
   // One motion's update against the plane it fits better, and its NIS; nullopt where the camera
