@@ -818,7 +818,7 @@ TEST(EstimatorTest, ATopMovingUnderTheCameraIsMeasuredAndItsMotionAloneFollowedR
   // Alone, the top's motion fixes the vehicle's velocity relative to the top's, to the top's
   // velocity's own noise (its state walks as fast as a top may turn); the two drift together on
   // the IMU, as any velocity without a still reference.
-  EXPECT_LT(run.worst_relative_v_error, 0.04);
+  EXPECT_LT(run.worst_relative_v_error, 0.03);
   EXPECT_LT(run.worst_v_error, 0.05);
   EXPECT_EQ(run.inflated_alone, 0);
   EXPECT_EQ(run.end.health, Health::kOk) << health_reasons_text(run.end.health_reasons);
