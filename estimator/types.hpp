@@ -182,8 +182,8 @@ struct State {
   Vector3d gyro_bias_B = Vector3d::Zero();   ///< [rad/s]
   double baro_offset_m = 0.0;                ///< baro altitude minus p_z
   double terrain_height_m = 0.0;             ///< h_W_terrain: surface under the rangefinder
-  /// The horizontal velocity of that surface when it is a moving top ([m/s], W; README, "A
-  /// platform moving under the camera"), and whether the flow has shown it to move.
+  /// The horizontal velocity of that surface when it is a moving top ([m/s], W; README, "The
+  /// top's velocity"), and whether the flow has shown it to move.
   Eigen::Vector2d top_velocity_W = Eigen::Vector2d::Zero();
   bool top_moving = false;
   CoreMatrix cov = CoreMatrix::Zero();  ///< error-state covariance in the idx:: order

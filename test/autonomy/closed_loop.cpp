@@ -345,9 +345,10 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
                    es.top_velocity_W.x(), es.top_velocity_W.y(), es.top_moving ? 1 : 0,
                    truth.platform ? truth.platform->v_W.x() : 0.0,
                    truth.platform ? truth.platform->v_W.y() : 0.0,
-                   static_cast<long long>(es.counters.flow_top), std::sqrt(es.cov(3, 3)),
+                   static_cast<long long>(es.counters.flow_top),
+                   std::sqrt(es.cov(estimator::idx::kV, estimator::idx::kV)),
                    std::sqrt(es.cov(estimator::idx::kTopV, estimator::idx::kTopV)),
-                   std::sqrt(es.cov(6, 6)) * 180 / M_PI);
+                   std::sqrt(es.cov(estimator::idx::kTheta, estimator::idx::kTheta)) * 180 / M_PI);
     }
     if (event) r.min_z_after_event_m = std::min(r.min_z_after_event_m, truth.state.p_W_B.z());
     const Phase ph = autonomy.phase();
