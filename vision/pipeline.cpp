@@ -300,7 +300,10 @@ void Pipeline::measure_moving(const std::shared_ptr<const TrackedFrame>& current
     ranges_m.push_back(range_m(e.pose));
   }
   const auto k = moving_reference(ages_s, ranges_m, range_m(pose), mp.interval_s);
-  Recent now{current, pose, std::nullopt};
+  // Every frame's outlines are found with it, wanted now or not: a later frame whose features
+  // find no set measures against all the recent ones, and finding the regions of a run of
+  // frames at once (a second of them) would stall that one frame.
+  Recent now{current, pose, plain_outlines(regions_now)};
   MovingTop m;
   if (!k) {
     m.reason = MovingReason::kNoEarlierFrame;
@@ -327,12 +330,9 @@ void Pipeline::measure_moving(const std::shared_ptr<const TrackedFrame>& current
         }
       }
     }
-    if (features_found_no_set(m.reason)) {
-      now.outlines = plain_outlines(regions_now);
-      if (!now.outlines->empty())
-        m = measure_moving_outline(*current, pose, *now.outlines, *k, ages_s, ranges_m,
-                                   range_m(pose), &r->moving_ref_utime);
-    }
+    if (features_found_no_set(m.reason) && !now.outlines.empty())
+      m = measure_moving_outline(*current, pose, now.outlines, *k, ages_s, ranges_m,
+                                 range_m(pose), &r->moving_ref_utime);
     if (m.found() && !m.outline)
       for (size_t i = 0; i < m.inliers.size() && i < c.size(); ++i)
         if (m.inliers[i]) r->moving_px.push_back(c.u2[i]);
@@ -358,7 +358,7 @@ MovingTop Pipeline::measure_moving_outline(const TrackedFrame& current, const Po
                                            const std::vector<Outline>& now, size_t k,
                                            const std::vector<double>& ages_s,
                                            const std::vector<double>& ranges_m, double range_now_m,
-                                           int64_t* ref_utime) {
+                                           int64_t* ref_utime) const {
   const MovingTopParams& mp = params_.moving_top;
   std::vector<EarlierOutlines> earlier;
   std::vector<size_t> frame_of;
@@ -366,10 +366,9 @@ MovingTop Pipeline::measure_moving_outline(const TrackedFrame& current, const Po
     if (!(j == k ||
           (ages_s[j] >= 0.5 * mp.interval_s && same_moving_scale(range_now_m, ranges_m[j]))))
       continue;
-    Recent& e = recent_[j];
-    if (!e.outlines) e.outlines = plain_outlines(PlainRegions(e.frame->image));
-    if (e.outlines->empty()) continue;
-    earlier.push_back({&*e.outlines, e.pose, &e.frame->readout, ages_s[j]});
+    const Recent& e = recent_[j];
+    if (e.outlines.empty()) continue;
+    earlier.push_back({&e.outlines, e.pose, &e.frame->readout, ages_s[j]});
     frame_of.push_back(j);
   }
   Correspondences views;  // the cameras alone: the outlines' corners need no matches

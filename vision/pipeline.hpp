@@ -206,7 +206,7 @@ class Pipeline {
                                    const std::vector<Outline>& now, size_t k,
                                    const std::vector<double>& ages_s,
                                    const std::vector<double>& ranges_m, double range_now_m,
-                                   int64_t* ref_utime);
+                                   int64_t* ref_utime) const;
   std::vector<Outline> plain_outlines(const PlainRegions& regions) const;
   bool holds() const;
   /// The reference's farthest distance from the camera at `pose` [m]: max_reference_baseline_m,
@@ -232,11 +232,11 @@ class Pipeline {
   PoseSample last_pose_;  // the pose of last_hash_'s frame
   std::optional<ScenePlane> wall_plane_;
   // The last max_interval_s of frames and their poses, for the moving top (moving_top), and
-  // each one's plain regions' outlines once found (moving_outline).
+  // each one's plain regions' outlines (moving_outline).
   struct Recent {
     std::shared_ptr<const TrackedFrame> frame;
     PoseSample pose;
-    std::optional<std::vector<Outline>> outlines;
+    std::vector<Outline> outlines;  ///< its plain regions' (plain_outlines)
   };
   std::deque<Recent> recent_;
   int64_t seq_ = 0;
