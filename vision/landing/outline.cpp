@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <functional>
 #include <limits>
 #include <opencv2/features2d.hpp>
@@ -188,6 +189,45 @@ cv::Point2f to_cv(const Vector2d& u) {
   return {static_cast<float>(u.x()), static_cast<float>(u.y())};
 }
 
+/// The means of the grey level and of its square over each kScale x kScale block, as float
+/// images of size `small`: what INTER_AREA's resize gives at a whole scale, summed in integers
+/// straight from the 8-bit pixels (every sum is an integer a float holds exactly, and the
+/// division is by a power of two, so the result is the same to the bit) without the float copy
+/// of the whole image and its square. Any other size: the resize itself.
+void block_means(const cv::Mat& gray, const cv::Size& small, cv::Mat* mean, cv::Mat* mean_sq) {
+  if (gray.cols != kScale * small.width || gray.rows != kScale * small.height) {
+    cv::Mat f;
+    gray.convertTo(f, CV_32F);
+    cv::resize(f, *mean, small, 0, 0, cv::INTER_AREA);
+    cv::resize(f.mul(f), *mean_sq, small, 0, 0, cv::INTER_AREA);
+    return;
+  }
+  static_assert(kScale * kScale * 255 * 255 < (1 << 24), "a block's sum of squares is exact");
+  constexpr float kPerPixel = 1.0f / (kScale * kScale);
+  mean->create(small, CV_32F);
+  mean_sq->create(small, CV_32F);
+  std::vector<int32_t> sum(small.width), sum_sq(small.width);
+  for (int by = 0; by < small.height; ++by) {
+    std::fill(sum.begin(), sum.end(), 0);
+    std::fill(sum_sq.begin(), sum_sq.end(), 0);
+    for (int r = 0; r < kScale; ++r) {
+      const uint8_t* g = gray.ptr<uint8_t>(by * kScale + r);
+      for (int bx = 0; bx < small.width; ++bx)
+        for (int c = 0; c < kScale; ++c) {
+          const int32_t v = g[bx * kScale + c];
+          sum[bx] += v;
+          sum_sq[bx] += v * v;
+        }
+    }
+    float* m = mean->ptr<float>(by);
+    float* q = mean_sq->ptr<float>(by);
+    for (int bx = 0; bx < small.width; ++bx) {
+      m[bx] = static_cast<float>(sum[bx]) * kPerPixel;
+      q[bx] = static_cast<float>(sum_sq[bx]) * kPerPixel;
+    }
+  }
+}
+
 /// The image's local texture at the quarter resolution: the grey level's standard deviation
 /// over a window a block either way of each kScale x kScale block (the blocks' means and mean
 /// squares smoothed before they are differenced, so that the differences between blocks count),
@@ -197,10 +237,8 @@ cv::Point2f to_cv(const Vector2d& u) {
 /// as little as the sensor's noise varies a plain top in dim light, and shows only between
 /// blocks.
 cv::Mat texture_map(const cv::Mat& gray, const cv::Size& small) {
-  cv::Mat f, mean, mean_sq;
-  gray.convertTo(f, CV_32F);
-  cv::resize(f, mean, small, 0, 0, cv::INTER_AREA);
-  cv::resize(f.mul(f), mean_sq, small, 0, 0, cv::INTER_AREA);
+  cv::Mat mean, mean_sq;
+  block_means(gray, small, &mean, &mean_sq);
   cv::GaussianBlur(mean, mean, cv::Size(0, 0), 1.0);
   cv::GaussianBlur(mean_sq, mean_sq, cv::Size(0, 0), 1.0);
   const cv::Mat var = cv::max(mean_sq - mean.mul(mean), 0.0);
@@ -309,6 +347,13 @@ std::optional<std::vector<Vector2d>> region_quad(const std::vector<cv::Point>& r
     cov += d * d.transpose();
   }
   cov /= n;
+  // The fill test below needs kMinFill * 12 sigma_x sigma_y <= n along the sides found, and
+  // sigma_x sigma_y >= sqrt(det(cov)) along any two perpendicular axes: a region that fails it
+  // there fails it along every direction, refused before side_direction's filtering of its box
+  // (a floor's grains joined in a sprawl, most of a busy image's regions). The margin keeps the
+  // rounding of the two computations from refusing a region the full test would take.
+  if (kMinFill * 12.0 * std::sqrt(std::max(cov.determinant(), 0.0)) > n * (1.0 + 1e-9))
+    return std::nullopt;
   const double t = side_direction(region);
   Eigen::Matrix2d axes;
   axes << std::cos(t), -std::sin(t), std::sin(t), std::cos(t);
