@@ -4,6 +4,8 @@
 #include <array>
 #include <cassert>
 #include <cmath>
+#include <functional>
+#include <vector>
 #include <opencv2/imgproc.hpp>
 
 #include "common/geometry.hpp"
@@ -152,24 +154,50 @@ struct GridRect {
 
 constexpr size_t kMaxRectPoints = 2000;
 
+// The k-th smallest and the k-th largest of v (from 0; k < v.size()), in one pass: the k + 1
+// smallest kept in a max-heap, the k + 1 largest in a min-heap. The same values as sorting would
+// give; k is a small share of the points (kTrimShare), so most points are one comparison each,
+// where selecting each end in the whole vector moves every point several times.
+class TrimmedEnds {
+ public:
+  void of(const std::vector<double>& v, size_t k, double* lo, double* hi) {
+    assert(k < v.size());
+    low_.assign(v.begin(), v.begin() + k + 1);
+    high_ = low_;
+    std::make_heap(low_.begin(), low_.end(), std::less<>());
+    std::make_heap(high_.begin(), high_.end(), std::greater<>());
+    for (size_t i = k + 1; i < v.size(); ++i) {
+      const double x = v[i];
+      if (x < low_.front()) replace_top(low_, x, std::less<>());
+      if (x > high_.front()) replace_top(high_, x, std::greater<>());
+    }
+    *lo = low_.front(), *hi = high_.front();
+  }
+
+ private:
+  template <class Cmp>
+  static void replace_top(std::vector<double>& h, double x, Cmp cmp) {
+    std::pop_heap(h.begin(), h.end(), cmp);
+    h.back() = x;
+    std::push_heap(h.begin(), h.end(), cmp);
+  }
+  std::vector<double> low_, high_;
+};
+
 // Stage 3: the trimmed minimum-area rectangle of pts (grid coordinates), the turn searched by the
 // degree and refined by the tenth.
 GridRect trimmed_rect(const std::vector<Vector2d>& pts) {
   const size_t k = size_t(kTrimShare * double(pts.size()));
   std::vector<double> a(pts.size()), b(pts.size());
+  TrimmedEnds ends;
   const auto at = [&](double theta) {
     GridRect r(theta);
     for (size_t i = 0; i < pts.size(); ++i) {
       const Vector2d p = r.along(pts[i].x(), pts[i].y());
       a[i] = p.x(), b[i] = p.y();
     }
-    for (int ax = 0; ax < 2; ++ax) {
-      std::vector<double>& v = ax == 0 ? a : b;
-      std::nth_element(v.begin(), v.begin() + k, v.end());
-      r.lo[ax] = v[k];
-      std::nth_element(v.begin(), v.end() - 1 - k, v.end());
-      r.hi[ax] = v[v.size() - 1 - k];
-    }
+    ends.of(a, k, &r.lo[0], &r.hi[0]);
+    ends.of(b, k, &r.lo[1], &r.hi[1]);
     return r;
   };
   GridRect best = at(0);
