@@ -331,8 +331,8 @@ void Pipeline::measure_moving(const std::shared_ptr<const TrackedFrame>& current
       }
     }
     if (features_found_no_set(m.reason) && !now.outlines.empty())
-      m = measure_moving_outline(*current, pose, now.outlines, *k, ages_s, ranges_m,
-                                 range_m(pose), &r->moving_ref_utime);
+      m = measure_moving_outline(*current, pose, now.outlines, *k, ages_s, ranges_m, range_m(pose),
+                                 &r->moving_ref_utime);
     if (m.found() && !m.outline)
       for (size_t i = 0; i < m.inliers.size() && i < c.size(); ++i)
         if (m.inliers[i]) r->moving_px.push_back(c.u2[i]);

@@ -5,8 +5,8 @@
 #include <cassert>
 #include <cmath>
 #include <functional>
-#include <vector>
 #include <opencv2/imgproc.hpp>
+#include <vector>
 
 #include "common/geometry.hpp"
 

@@ -189,11 +189,11 @@ cv::Point2f to_cv(const Vector2d& u) {
   return {static_cast<float>(u.x()), static_cast<float>(u.y())};
 }
 
-/// The means of the grey level and of its square over each kScale x kScale block, as float
-/// images of size `small`: what INTER_AREA's resize gives at a whole scale, summed in integers
-/// straight from the 8-bit pixels (every sum is an integer a float holds exactly, and the
-/// division is by a power of two, so the result is the same to the bit) without the float copy
-/// of the whole image and its square. Any other size: the resize itself.
+}  // namespace
+
+// Every sum is an integer a float holds exactly and the division is by a power of two: the
+// integer sums give INTER_AREA's floats to the bit, without a float copy of the whole image and
+// of its square.
 void block_means(const cv::Mat& gray, const cv::Size& small, cv::Mat* mean, cv::Mat* mean_sq) {
   if (gray.cols != kScale * small.width || gray.rows != kScale * small.height) {
     cv::Mat f;
@@ -227,6 +227,8 @@ void block_means(const cv::Mat& gray, const cv::Size& small, cv::Mat* mean, cv::
     }
   }
 }
+
+namespace {
 
 /// The image's local texture at the quarter resolution: the grey level's standard deviation
 /// over a window a block either way of each kScale x kScale block (the blocks' means and mean

@@ -104,6 +104,12 @@ constexpr double kAgreePx = 1.5;
 std::pair<double, double> height_search_range(const std::function<double(double)>& parallax_px,
                                               double max_h, double diag_px);
 
+/// The means of the grey level and of its square over each 4 x 4 block of gray (CV_8UC1) as
+/// float images of size `small` (the texture map's, a quarter of the resolution): to the bit what
+/// cv::resize with INTER_AREA gives of the image and of its square as floats, summed in integers
+/// where the image is four times `small` (any other size: that resize itself).
+void block_means(const cv::Mat& gray, const cv::Size& small, cv::Mat* mean, cv::Mat* mean_sq);
+
 /// The most candidates measured per frame (the largest): a top is one region, the rest of a
 /// frame's candidates are the floor's patches.
 constexpr size_t kMaxOutlines = 2;

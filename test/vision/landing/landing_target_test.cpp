@@ -1523,3 +1523,29 @@ TEST(LandingGates, ThePhotometricGateNamesTheTopOrTheFloor) {
 
 }  // namespace
 }  // namespace alight::vision
+
+// The texture map's block means are INTER_AREA's to the bit: on noise over the whole grey range
+// (every block sum's extreme), on a whole-scale image summed in integers and on one that is not
+// (the resize itself).
+TEST(OutlineTop, BlockMeansAreTheAreaResizesToTheBit) {
+  std::mt19937 rng(7);
+  std::uniform_int_distribution<int> grey(0, 255);
+  for (const cv::Size full : {cv::Size(640, 480), cv::Size(642, 483)}) {
+    cv::Mat gray(full, CV_8UC1);
+    for (int y = 0; y < gray.rows; ++y)
+      for (int x = 0; x < gray.cols; ++x)
+        gray.at<uint8_t>(y, x) = uint8_t(y < 8 ? 255 : grey(rng));  // a block of 255s too
+    const cv::Size small(full.width / 4, full.height / 4);
+    cv::Mat f, want_mean, want_sq;
+    gray.convertTo(f, CV_32F);
+    cv::resize(f, want_mean, small, 0, 0, cv::INTER_AREA);
+    cv::resize(f.mul(f), want_sq, small, 0, 0, cv::INTER_AREA);
+    cv::Mat mean, mean_sq;
+    alight::vision::block_means(gray, small, &mean, &mean_sq);
+    ASSERT_EQ(mean.size(), small);
+    ASSERT_EQ(mean.type(), CV_32F);
+    EXPECT_EQ(cv::norm(mean, want_mean, cv::NORM_INF), 0.0) << full;
+    EXPECT_EQ(cv::norm(mean_sq, want_sq, cv::NORM_INF), 0.0) << full;
+    EXPECT_FLOAT_EQ(mean_sq.at<float>(0, 0), 255.f * 255.f);
+  }
+}
