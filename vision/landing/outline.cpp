@@ -804,7 +804,13 @@ const PlainRegions::Found& PlainRegions::found() const {
   f.small = cv::Size(gray_.cols / kScale, gray_.rows / kScale);
   const auto mser = cv::MSER::create(kMserDelta, static_cast<int>(kMinAreaPx / (kScale * kScale)),
                                      f.small.area() / 2);
-  mser->detectRegions(texture_map(gray_, f.small), f.regions, f.boxes);
+  // The plain regions alone (stage 1): the dark ones of the texture map are found by MSER's
+  // pass over the image's inverse, and its second pass inverts what it is given, so it is given
+  // the map inverted and told to make that pass only.
+  mser->setPass2Only(true);
+  cv::Mat inverted;
+  cv::subtract(cv::Scalar::all(255), texture_map(gray_, f.small), inverted);
+  mser->detectRegions(inverted, f.regions, f.boxes);
   // Largest first; MSER gives one region at several thresholds: one candidate per place.
   f.largest_first.resize(f.regions.size());
   for (size_t i = 0; i < f.largest_first.size(); ++i) f.largest_first[i] = i;

@@ -13,13 +13,15 @@
 //      deviation about each 4 x 4 block over a Gaussian window of one block, so that a grain
 //      larger than a block counts): the stage runs only where the floor gave its features, so the
 //      floor is busy and a top without features is a plain region of it, whether or not its mean
-//      grey stands out from the floor's grains. Those that fill the rectangle along their outline's
-//      direction (the mean of four times its normals' angle, which a square has as a longer
-//      rectangle does) with the sides of their second moments along it (a level top under a camera
-//      looking down is a rectangle in the image) and clear the border. A region the border cuts, or
-//      a box seen from aside whose side faces and shadow widen its region past a rectangle, is left
-//      to later frames: located from the sides such a region shows, over a busy floor, it was as
-//      often a chance region as the top;
+//      grey stands out from the floor's grains. Only the regions plainer than around them (the
+//      map's dark ones) are sought: one busier than around it is texture, the features' to see,
+//      and its pixels were most of the cost of MSER's other pass. Those that fill the rectangle
+//      along their outline's direction (the mean of four times its normals' angle, which a square
+//      has as a longer rectangle does) with the sides of their second moments along it (a level top
+//      under a camera looking down is a rectangle in the image) and clear the border. A region the
+//      border cuts, or a box seen from aside whose side faces and shadow widen its region past a
+//      rectangle, is left to later frames: located from the sides such a region shows, over a busy
+//      floor, it was as often a chance region as the top;
 //   2. featureless: fewer than min_platform_inliers of the frame's matches inside it (a top
 //      with features is the planes' to find or to refuse, never this stage's);
 //   3. edges: each side refined at full resolution to the line through the strongest step of

@@ -1521,9 +1521,6 @@ TEST(LandingGates, ThePhotometricGateNamesTheTopOrTheFloor) {
   }
 }
 
-}  // namespace
-}  // namespace alight::vision
-
 // The texture map's block means are INTER_AREA's to the bit: on noise over the whole grey range
 // (every block sum's extreme), on a whole-scale image summed in integers and on one that is not
 // (the resize itself).
@@ -1541,7 +1538,7 @@ TEST(OutlineTop, BlockMeansAreTheAreaResizesToTheBit) {
     cv::resize(f, want_mean, small, 0, 0, cv::INTER_AREA);
     cv::resize(f.mul(f), want_sq, small, 0, 0, cv::INTER_AREA);
     cv::Mat mean, mean_sq;
-    alight::vision::block_means(gray, small, &mean, &mean_sq);
+    block_means(gray, small, &mean, &mean_sq);
     ASSERT_EQ(mean.size(), small);
     ASSERT_EQ(mean.type(), CV_32F);
     EXPECT_EQ(cv::norm(mean, want_mean, cv::NORM_INF), 0.0) << full;
@@ -1549,3 +1546,39 @@ TEST(OutlineTop, BlockMeansAreTheAreaResizesToTheBit) {
     EXPECT_FLOAT_EQ(mean_sq.at<float>(0, 0), 255.f * 255.f);
   }
 }
+
+// Stage 1 seeks the regions plainer than around them: a busy patch on a plain floor (the texture
+// map's bright region) is the features' ground, no outline of the moving top's or the still
+// landing's; the same patch's plain inverse, a plain rectangle on that busy texture, is one.
+TEST(OutlineTop, ARegionBusierThanAroundItIsNoCandidate) {
+  std::mt19937 rng(11);
+  std::normal_distribution<double> noise(0.0, 2.0);
+  std::uniform_int_distribution<int> busy(0, 255);
+  const cv::Rect patch(240, 180, 160, 120);
+  cv::Mat plain_floor(480, 640, CV_8UC1), busy_floor(480, 640, CV_8UC1);
+  for (int y = 0; y < 480; ++y)
+    for (int x = 0; x < 640; ++x) {
+      const bool in = patch.contains(cv::Point(x, y));
+      const uint8_t calm = cv::saturate_cast<uint8_t>(128 + noise(rng));
+      const uint8_t grain = uint8_t(busy(rng) / 8 * 8);  // 8-px steps: a grain no blur evens
+      plain_floor.at<uint8_t>(y, x) = in ? grain : calm;
+      busy_floor.at<uint8_t>(y, x) = in ? calm : grain;
+    }
+  PipelineParams params;
+  CameraModel camera;
+  Correspondences none;
+  none.camera = &camera;
+  const auto inside_patch = [&](const Outline& o) {
+    Vector2d m = Vector2d::Zero();
+    for (const auto& p : o.corners) m += p / 4.0;
+    return patch.contains(cv::Point(int(m.x()), int(m.y())));
+  };
+  for (const auto& o : featureless_outlines(PlainRegions(plain_floor), none, params, 4))
+    EXPECT_FALSE(inside_patch(o)) << "an outline on the busy patch";
+  const auto plain_top = featureless_outlines(PlainRegions(busy_floor), none, params, 4);
+  EXPECT_TRUE(std::any_of(plain_top.begin(), plain_top.end(), inside_patch))
+      << "the plain rectangle on the busy floor not found";
+}
+
+}  // namespace
+}  // namespace alight::vision
