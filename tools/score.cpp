@@ -147,6 +147,7 @@ void Scorer::add(const target_t& t) {
 
 void Scorer::add(const target_t& t, int64_t received_utime) {
   target_received_.emplace_back(t.utime, received_utime);
+  if (t.reason == target_t::REASON_NO_POSE) without_pose_.insert(t.utime);
   if (t.found) ++timed_found_;
   extend_span(received_utime);
   add(t);
@@ -184,7 +185,8 @@ std::optional<Score::Percentiles> percentiles(std::vector<double> v) {
 constexpr double kMaxEndToEndMs = 60'000.0;
 
 void timing(const std::unordered_map<int64_t, int64_t>& camera_received,
-            const std::vector<std::pair<int64_t, int64_t>>& target_received, Score& s) {
+            const std::vector<std::pair<int64_t, int64_t>>& target_received,
+            const std::unordered_set<int64_t>& without_pose, Score& s) {
   std::vector<double> latencies_ms;
   std::unordered_set<int64_t> covered;
   for (const auto& [image_utime, received] : target_received) {
@@ -193,8 +195,12 @@ void timing(const std::unordered_map<int64_t, int64_t>& camera_received,
       ++s.vision_latency_unmatched;
       continue;
     }
-    latencies_ms.push_back(1e-3 * static_cast<double>(received - it->second));
     covered.insert(image_utime);
+    if (without_pose.count(image_utime)) {
+      ++s.vision_latency_without_pose;
+      continue;
+    }
+    latencies_ms.push_back(1e-3 * static_cast<double>(received - it->second));
   }
   if (!latencies_ms.empty()) {
     std::sort(latencies_ms.begin(), latencies_ms.end());
@@ -214,7 +220,7 @@ Score Scorer::result() const {
   s.vision_frames = vision_frames_;
   s.vision_found = vision_found_;
   s.camera_frames = camera_frames_;
-  timing(camera_received_, target_received_, s);
+  timing(camera_received_, target_received_, without_pose_, s);
   s.timing_frames = static_cast<int>(process_ms_.size());
   s.vision_process_ms = percentiles(process_ms_);
   s.vision_process_cpu_ms = percentiles(process_cpu_ms_);
@@ -361,6 +367,7 @@ std::vector<std::pair<std::string, std::string>> Score::fields() const {
   opt("vision_latency_p99_ms", vision_latency_p99_ms);
   opt("vision_latency_max_ms", vision_latency_max_ms);
   f.emplace_back("vision_latency_unmatched", std::to_string(vision_latency_unmatched));
+  f.emplace_back("vision_latency_without_pose", std::to_string(vision_latency_without_pose));
   opt("camera_frames_per_s", camera_frames_per_s);
   opt("vision_frames_per_s", vision_frames_per_s);
   opt("vision_waypoints_per_s", vision_waypoints_per_s);

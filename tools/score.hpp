@@ -34,6 +34,7 @@
 #include <optional>
 #include <string>
 #include <unordered_map>
+#include <unordered_set>
 #include <utility>
 #include <vector>
 
@@ -65,11 +66,15 @@ struct Score {
   // time (target_t::utime = image_t::utime), both as stamped by the logger, so it spans the
   // camera message's transport, the vision's queue (it waits for the pose at exposure time and
   // drops to the newest frame when behind), its processing and the target's transport.
-  // Percentiles are nearest-rank over the targets whose frame is in the log.
+  // Percentiles are nearest-rank over the targets whose frame is in the log and had a pose.
   std::optional<double> vision_latency_p50_ms;  ///< median wall-clock latency [ms]
   std::optional<double> vision_latency_p99_ms;  ///< 99th percentile [ms]
   std::optional<double> vision_latency_max_ms;  ///< largest [ms]
   int vision_latency_unmatched = 0;  ///< timed VISION_TARGETs whose CAMERA frame is not in the log
+  /// Timed VISION_TARGETs of frames processed without a pose (REASON_NO_POSE: before the pose
+  /// source's first message, or none came in max_pose_wait_s), left out of the percentiles: they
+  /// waited that long by design, and at a session's start they were the p99.
+  int vision_latency_without_pose = 0;
   // Rates: messages per wall second over the log's span (first to last receipt of a CAMERA or
   // VISION_TARGET message).
   std::optional<double> camera_frames_per_s;     ///< CAMERA frames per wall second
@@ -158,6 +163,7 @@ class Scorer {
   // and of targets as (exposure time, receipt).
   std::unordered_map<int64_t, int64_t> camera_received_;
   std::vector<std::pair<int64_t, int64_t>> target_received_;
+  std::unordered_set<int64_t> without_pose_;  // exposure times of targets with REASON_NO_POSE
   int camera_frames_ = 0, timed_found_ = 0;
   std::optional<int64_t> first_received_, last_received_;
   std::optional<std::pair<int64_t, int64_t>> first_camera_, last_camera_;  // (exposure, receipt)

@@ -333,6 +333,33 @@ TEST(ScoreTest, LatencyPercentilesAreNearestRankOverKnownLatencies) {
   EXPECT_DOUBLE_EQ(*f.vision_latency_p99_ms, 40.0);
 }
 
+TEST(ScoreTest, FramesProcessedWithoutAPoseAreCountedApartFromTheLatency) {
+  // Given a session whose first five frames came before the pose source's first message (each
+  // processed without a pose once it had waited 200 ms), then 100 frames at 1..100 ms
+  Scorer sc;
+  int64_t exposure = kT0;
+  for (int i = 0; i < 5; ++i, exposure += 33'000) {
+    sc.add_camera_frame(exposure, exposure + 3'000);
+    target_t t = vision_target(exposure, false);
+    t.reason = target_t::REASON_NO_POSE;
+    sc.add(t, exposure + 203'000);
+  }
+  for (int i = 1; i <= 100; ++i, exposure += 33'000) {
+    sc.add_camera_frame(exposure, exposure + 3'000);
+    sc.add(vision_target(exposure, true), exposure + 3'000 + i * 1'000);
+  }
+  // Then the percentiles are the posed frames' alone, the five counted, every frame covered
+  const Score s = sc.result();
+  ASSERT_TRUE(s.vision_latency_p99_ms && s.vision_latency_max_ms);
+  EXPECT_DOUBLE_EQ(*s.vision_latency_p99_ms, 99.0);
+  EXPECT_DOUBLE_EQ(*s.vision_latency_max_ms, 100.0);
+  EXPECT_EQ(s.vision_latency_without_pose, 5);
+  EXPECT_EQ(s.vision_latency_unmatched, 0);
+  ASSERT_TRUE(s.vision_frame_coverage);
+  EXPECT_DOUBLE_EQ(*s.vision_frame_coverage, 1.0);
+  EXPECT_EQ(s.vision_frames, 105);
+}
+
 TEST(ScoreTest, DroppedFramesLowerTheCoverageAndTheRates) {
   // Given 41 camera frames received 50 ms apart (a 2 s span) but exposed 25 ms apart (the sim
   // at half real time), of which the vision processed every fourth, 30 ms late, and found the
