@@ -679,6 +679,36 @@ void Autonomy::step_moving(phases::Approach& a, const Vector3d& /*p*/, double dt
   reason_ = st.reason;
 }
 
+bool Autonomy::look_at_candidate(phases::Detection& s) {
+  const auto& M = params_.moving_platform;
+  const auto stop = [&](const std::string& why) {
+    if (s.looking) reason_ = "search resumed: " + why;
+    s.looking = false;
+    return false;
+  };
+  if (!M.enabled || mission() != Mission::kLanding) return false;
+  if (!platform_.believed()) return stop("the platform looked at no longer believed");
+  // Unmeasured this long the track has left the view (and is confirmed again if it returns).
+  if (seconds(now_utime_ - platform_.utime()) > kConfirmS)
+    return stop("the platform looked at out of view");
+  if (s.looked_track_utime != platform_.since_utime()) {
+    s.looked_track_utime = platform_.since_utime();
+    s.look_since_utime = now_utime_;
+  }
+  const double looked_s = seconds(now_utime_ - s.look_since_utime);
+  if (looked_s > candidate_look_s(M))
+    return stop("the platform looked at showed no motion in " + fmt(candidate_look_s(M), 1) + " s");
+  s.looking = true;
+  const auto pr = platform_.predict(now_utime_);
+  // The search's height: the top stays as much in view as the search saw it.
+  sp_p_W_ = Vector3d(pr.p_W.x(), pr.p_W.y(), s.path.carrot().z());
+  sp_v_W_ = Vector3d(pr.v_W.x(), pr.v_W.y(), 0.0);
+  reason_ = "a platform at (" + fmt(pr.p_W.x()) + ", " + fmt(pr.p_W.y()) + "), " +
+            fmt(pr.v_W.norm()) + " m/s: search paused, looking whether it moves (" +
+            fmt(looked_s, 1) + " of " + fmt(candidate_look_s(M), 1) + " s)";
+  return true;
+}
+
 void Autonomy::platform_too_fast(const std::string& reason) {
   const auto pr = platform_.predict(now_utime_);
   hold(reason, Failsafe::kPlatformTooFast,
@@ -801,6 +831,7 @@ void Autonomy::step(phases::Takeoff& s, const Vector3d& p, double dt_s) {
 
 void Autonomy::step(phases::Detection& s, const Vector3d& p, double dt_s) {
   if (hold_if_vision_silent()) return;
+  if (look_at_candidate(s)) return;
   s.path.step(p, dt_s, params_.detection.speed_mps, kPathLeadM);
   sp_p_W_ = s.path.carrot();
   sp_v_W_ = s.path.carrot_velocity();

@@ -76,6 +76,10 @@ struct Hover {
 };
 struct Detection {
   PathFollower path;  ///< the mission's search path and the carrot's progress along it
+  /// The platform track last looked at (its since_utime) and when the look began
+  /// (moving_landing.hpp, step 0).
+  int64_t looked_track_utime = 0, look_since_utime = 0;
+  bool looking = false;
 };
 struct Refinement {
   std::optional<int64_t> last_found_utime;  ///< the target last in sight (full or partial view)
@@ -221,6 +225,9 @@ class Autonomy {
   /// the filter trusts moving starts the moving approach.
   void handle_platform(const PlatformMeasurement& m);
   void step_moving(phases::Approach& a, const Vector3d& p, double dt_s);
+  /// DETECTION: over a believed platform track that has not yet shown its motion, for
+  /// candidate_look_s once per track (the search paused); true while looking.
+  bool look_at_candidate(phases::Detection& s);
   /// The last drop onto a moving platform carried off its top (check_drop): back to the moving
   /// approach at the final height, or the failsafe after kMaxDropGoArounds.
   void go_around(const DropCheck& c);

@@ -106,6 +106,10 @@ bool moving_enough(const PlatformFilter::Prediction& p, const MovingLandingParam
   return p.v_W.norm() >= params.min_speed_mps && p.travelled_m >= kMovedM;
 }
 
+double candidate_look_s(const MovingLandingParams& params) {
+  return 2 * kMovedM / params.min_speed_mps;
+}
+
 std::optional<std::string> too_fast(const PlatformFilter::Prediction& p,
                                     const MovingLandingParams& params) {
   const double speed = p.v_W.norm();

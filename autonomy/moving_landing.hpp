@@ -5,7 +5,9 @@
 //
 //  0. Entry (moving_enough): a believed platform at least min_speed_mps fast whose centre has
 //     gone kMovedM from where its track began; slower or not yet gone that far, the still
-//     landing goes on.
+//     landing goes on. In the detection a believed track measured within kConfirmS that has not
+//     yet shown its motion is looked at: followed at the search height for candidate_look_s
+//     (the search paused), once per track, then the search goes on.
 //  1. Match: over the platform's predicted centre at follow_height_m above its top, the
 //     platform's velocity and its turn's acceleration fed forward and its long axis as the heading
 //     (the nearest of the four ways a rectangle's axes align, as the still landing does), until the
@@ -125,6 +127,12 @@ inline constexpr double kMovedM = 0.10;
 /// The believed platform `p` moves: its speed at least min_speed_mps and its centre kMovedM from
 /// where its track began.
 bool moving_enough(const PlatformFilter::Prediction& p, const MovingLandingParams& params);
+
+/// How long the detection looks at a believed track not yet moving_enough [s] (step 0): twice
+/// the time a top creeping at min_speed_mps takes to go kMovedM. The search sweeps on at its
+/// speed, and a slow top believed in the view leaves it within a second or two, before it has
+/// gone kMovedM; followed, it shows whether it moves.
+double candidate_look_s(const MovingLandingParams& params);
 
 /// A touch-down with the gear this far below the top's height, beyond the deck's heave, is
 /// beside the platform, on the floor, not on its top [m]. The top's height is the one vision

@@ -255,6 +255,8 @@ class PlatformFilter {
   /// kConfirmS at the least.
   bool believed() const { return believed(track_); }
   int64_t utime() const { return track_.t_utime; }
+  /// When the track began or, unmeasured for kConfirmS, was confirmed again [us].
+  int64_t since_utime() const { return track_.since_utime; }
   /// The state predicted to `utime` (not before the filter's time).
   struct Prediction {
     Vector2d p_W = Vector2d::Zero(), v_W = Vector2d::Zero();

@@ -72,6 +72,9 @@ struct KinematicWorld {
   /// measurement (VISION_PLATFORM, exact) every third step. Zero speed: a still platform.
   double circle_speed_mps = 0.0, circle_r_m = 0.5;
   Vector2d circle_centre_W = Vector2d(1.0, 0.5);
+  /// The moving top measured only while the vehicle is this near its centre, horizontally [m]
+  /// (the top seen whole near the nadir); infinite: always.
+  double platform_seen_within_m = INFINITY;
   /// The vehicle follows the setpoint's velocity too (the outer loop's feed-forward): a moving
   /// platform is followed without the position lag's trail.
   bool feed_forward = false;
@@ -141,7 +144,9 @@ struct KinematicWorld {
     truth.vehicle = pose();
     if (circle_speed_mps > 0) {
       move_platform();
-      if ((t - kT0) % 30'000 == 0) in.platform = platform_measurement();
+      const double off_m = (p - truth.platform_center_W).head<2>().norm();
+      if ((t - kT0) % 30'000 == 0 && off_m <= platform_seen_within_m)
+        in.platform = platform_measurement();
     }
     if (target) {
       in.target = target;
