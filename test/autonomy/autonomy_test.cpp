@@ -1614,20 +1614,27 @@ TEST(AutonomyMovingDrop, WithoutAGustTheDropLandsOnTheMovingTop) {
   EXPECT_LT((w.p - w.truth.platform_center_W).head<2>().norm(), 0.0645);
 }
 
+// The landing's search (GO sent) for a top creeping round the circle at speed_mps, measured as a
+// moving top only within seen_within_m of the nadir and never found by the still pipeline.
+KinematicWorld searching_for_a_creeping_top(double speed_mps, double seen_within_m) {
+  KinematicWorld w;
+  w.circle_speed_mps = speed_mps;
+  w.feed_forward = true;
+  w.platform_seen_within_m = seen_within_m;
+  w.vision.blind = true;
+  w.move_platform();
+  w.takeoff_and_hover();
+  w.send(Command::kGo, Mission::kLanding);
+  return w;
+}
+
 // Issue 40, moving_landing.hpp step 0: a deck creeping round a turn at 6 cm/s, its top seen whole
 // (and measured) only within 0.25 m of the nadir, the still pipeline finding nothing on a moving
 // top. The search sweeping on at 0.4 m/s leaves it within a second of believing it, before it has
 // gone kMovedM (every search pass then flown without a detection); paused over it, the search
 // sees it move and starts the moving approach.
 TEST(AutonomyMovingSearch, ASlowPlatformBelievedInTheSearchIsLookedAtUntilItShowsItsMotion) {
-  KinematicWorld w;
-  w.circle_speed_mps = 0.06;
-  w.feed_forward = true;
-  w.platform_seen_within_m = 0.25;
-  w.vision.blind = true;
-  w.move_platform();
-  w.takeoff_and_hover();
-  w.send(Command::kGo, Mission::kLanding);
+  KinematicWorld w = searching_for_a_creeping_top(0.06, 0.25);
   bool looked = false;
   ASSERT_TRUE(w.run_until(
       [&] {
@@ -1647,14 +1654,7 @@ TEST(AutonomyMovingSearch, ASlowPlatformBelievedInTheSearchIsLookedAtUntilItShow
 // candidate_look_s each time it comes into the view, and the search goes on each time: it is
 // flown to its end (target lost), never held over the candidate.
 TEST(AutonomyMovingSearch, ATrackThatDoesNotMoveIsLookedAtOnlySoLongAndTheSearchGoesOn) {
-  KinematicWorld w;
-  w.circle_speed_mps = 0.001;
-  w.feed_forward = true;
-  w.platform_seen_within_m = 0.3;
-  w.vision.blind = true;
-  w.move_platform();
-  w.takeoff_and_hover();
-  w.send(Command::kGo, Mission::kLanding);
+  KinematicWorld w = searching_for_a_creeping_top(0.001, 0.3);
   const double look_s = candidate_look_s(w.autonomy.params().moving_platform);
   int looks = 0, resumed = 0;
   double longest_s = 0;
