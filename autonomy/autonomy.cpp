@@ -412,6 +412,7 @@ void Autonomy::handle_command(const OperatorCommand& cmd) {
       profile_ = MissionProfile::make(cmd.mission, params_);
       retries_ = 0;
       drop_go_arounds_ = 0;
+      candidate_looks_ = 0;
       failsafe_ = Failsafe::kNone;
       go_utime_ = now_utime_;
       end_utime_.reset();
@@ -694,6 +695,7 @@ bool Autonomy::look_at_candidate(phases::Detection& s) {
   if (s.looked_track_utime != platform_.since_utime()) {
     s.looked_track_utime = platform_.since_utime();
     s.look_since_utime = now_utime_;
+    ++candidate_looks_;
   }
   const double looked_s = seconds(now_utime_ - s.look_since_utime);
   if (looked_s > candidate_look_s(M))

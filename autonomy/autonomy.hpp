@@ -175,6 +175,9 @@ class Autonomy {
   int retries() const { return retries_; }
   /// Last drops onto a moving platform given up this mission (moving_landing.hpp, step 5).
   int drop_go_arounds() const { return drop_go_arounds_; }
+  /// Looks the detection took at a believed platform not yet shown moving, this mission
+  /// (moving_landing.hpp, step 0).
+  int candidate_looks() const { return candidate_looks_; }
   /// Why the phase is what it is (AutonomyStatus::reason).
   const std::string& reason() const { return reason_; }
   /// Whether the first pose has been seen (and the start decided: on the ground, or flying).
@@ -310,6 +313,7 @@ class Autonomy {
   std::unique_ptr<const MissionProfile> profile_;
   int retries_ = 0;
   int drop_go_arounds_ = 0;
+  int candidate_looks_ = 0;
   std::optional<int64_t> go_utime_;
   std::optional<int64_t> end_utime_;
   Vector3d estimate_W_ = Vector3d::Zero();  // the final estimate, from APPROACH on

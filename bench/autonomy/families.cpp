@@ -34,9 +34,11 @@
 // --in-process and summarises and plots the rows as it does its flights over LCM); with
 // --no-mocap two more: the relative estimate error (autonomy's platform estimate against the
 // vehicle's own estimated pose, taken into the true frame) entering the approach and at the
-// touch-down, whose difference is the onboard estimate's drift over the approach. The last
-// column, `collided` (as alight-score's), marks a flight that touched the wall or the opening's
-// frame: a failed flight that hit the wall is no safe hold, and the summary counts them.
+// touch-down, whose difference is the onboard estimate's drift over the approach. The column
+// `collided` (as alight-score's) marks a flight that touched the wall or the opening's frame: a
+// failed flight that hit the wall is no safe hold, and the summary counts them. The last,
+// `candidate_looks`, counts the search's pauses over a believed platform not yet shown moving
+// (autonomy/moving_landing.hpp, step 0).
 
 #include <time.h>
 
@@ -174,7 +176,7 @@ bool write_csv(const std::string& path, const std::vector<Run>& all, bool onboar
        "vision_frames,vision_found,vision_partial,vision_process_cpu_p50_ms,vision_process_cpu_p99_"
        "ms,"
        "vision_process_cpu_max_ms,estimate_rel_error_at_approach_m,"
-       "estimate_rel_error_at_touchdown_m,collided\n";
+       "estimate_rel_error_at_touchdown_m,collided,candidate_looks\n";
   const auto num = [](double v) {
     char b[32];
     std::snprintf(b, sizeof b, "%.6g", v);
@@ -203,7 +205,7 @@ bool write_csv(const std::string& path, const std::vector<Run>& all, bool onboar
       << ',' << num(quantile(x.cpu_ms, 1.0)) << ','
       << (landing && onboard ? num(r.estimate_error_rel_at_approach_W.head<2>().norm()) : "") << ','
       << (landing && onboard ? num(r.estimate_error_rel_at_touchdown_W.head<2>().norm()) : "")
-      << ',' << (r.collided ? "True" : "False") << '\n';
+      << ',' << (r.collided ? "True" : "False") << ',' << r.candidate_looks << '\n';
   }
   return static_cast<bool>(f);
 }
@@ -413,12 +415,14 @@ int main(int argc, char** argv) try {
     std::vector<double> heading_deg, rel_vz_mps;
     std::vector<double> touch_cm, werr_cm, wabs_cm, centre_cm, offset_cm, cpu, time_s;
     int ok = 0, n = 0, retries = 0, false_runs = 0, false_frames = 0, partial_frames = 0;
+    int looks = 0;     // the search paused over a believed platform
     int collided = 0;  // a failed flight that also hit something is the worst outcome
     std::map<std::string, int> failures;
     for (const auto& x : all) {
       if (x.family != fam) continue;
       ++n;
       retries += x.r.retries;
+      looks += x.r.candidate_looks;
       collided += x.r.collided;
       cpu.insert(cpu.end(), x.cpu_ms.begin(), x.cpu_ms.end());
       false_runs += targetless(fam) && (x.found > 0 || x.partial > 0);
@@ -471,9 +475,9 @@ int main(int argc, char** argv) try {
           quantile(heading_deg, 0.5), quantile(heading_deg, 0.95), quantile(rel_vz_mps, 0.5),
           quantile(rel_vz_mps, 0.95));
     std::printf(
-        "; mission p50 %.1f s; retries %d; collided %d; vision CPU per frame p50 %.2f p99 %.2f "
-        "max %.2f ms over %zu frames\n",
-        quantile(time_s, 0.5), retries, collided, quantile(cpu, 0.5), quantile(cpu, 0.99),
+        "; mission p50 %.1f s; retries %d; looks %d; collided %d; vision CPU per frame p50 %.2f "
+        "p99 %.2f max %.2f ms over %zu frames\n",
+        quantile(time_s, 0.5), retries, looks, collided, quantile(cpu, 0.5), quantile(cpu, 0.99),
         quantile(cpu, 1.0), cpu.size());
     for (const auto& [why, k] : failures) std::printf("    failed %dx: %s\n", k, why.c_str());
   }

@@ -1645,6 +1645,7 @@ TEST(AutonomyMovingSearch, ASlowPlatformBelievedInTheSearchIsLookedAtUntilItShow
       120))
       << w.autonomy.reason();
   EXPECT_TRUE(looked);
+  EXPECT_EQ(w.autonomy.candidate_looks(), 1);
   EXPECT_EQ(w.autonomy.phase(), Phase::kApproach) << w.autonomy.reason();
   EXPECT_NE(w.autonomy.reason().find("matching"), std::string::npos) << w.autonomy.reason();
   EXPECT_EQ(w.autonomy.retries(), 0);
@@ -1675,6 +1676,7 @@ TEST(AutonomyMovingSearch, ATrackThatDoesNotMoveIsLookedAtOnlySoLongAndTheSearch
       << w.autonomy.reason();
   EXPECT_GE(looks, 1);
   EXPECT_EQ(resumed, looks);
+  EXPECT_EQ(w.autonomy.candidate_looks(), looks);
   EXPECT_LE(longest_s, look_s + 0.05);
   EXPECT_NE(w.autonomy.reason().find("search path flown without a detection"), std::string::npos)
       << w.autonomy.reason();

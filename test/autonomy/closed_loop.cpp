@@ -428,6 +428,7 @@ ClosedLoopResult fly_closed_loop(const ClosedLoopConfig& config) {
   r.n_measurements = autonomy.estimator().n();
   r.n_rejected = autonomy.estimator().n_rejected();
   r.retries = autonomy.retries();
+  r.candidate_looks = autonomy.candidate_looks();
   if (truth.platform) {
     r.touchdown_error_m =
         (truth.state.p_W_B.head<2>() - truth.platform->top_center_W.head<2>()).norm();

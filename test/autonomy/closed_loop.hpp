@@ -92,6 +92,7 @@ struct ClosedLoopResult {
   Vector3d final_p_W = Vector3d::Zero();
   Vector3d estimate_error_W = Vector3d::Zero();  ///< final estimate - true target [m]
   int n_measurements = 0, n_rejected = 0, retries = 0;
+  int candidate_looks = 0;  ///< the search paused over a believed platform (moving_landing.hpp)
   std::vector<std::string> retry_reasons;  ///< autonomy's reason at each retry
   double max_lateral_in_wall_m = 0;  ///< ingress: largest offset from the opening centre while
                                      ///< the body crossed the wall plane [m]
