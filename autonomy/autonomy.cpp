@@ -697,9 +697,9 @@ bool Autonomy::look_at_candidate(phases::Detection& s) {
     s.look_since_utime = now_utime_;
     ++candidate_looks_;
   }
-  const double looked_s = seconds(now_utime_ - s.look_since_utime);
-  if (looked_s > candidate_look_s(M))
-    return stop("the platform looked at showed no motion in " + fmt(candidate_look_s(M), 1) + " s");
+  const double looked_s = seconds(now_utime_ - s.look_since_utime), look_s = candidate_look_s(M);
+  if (looked_s > look_s)
+    return stop("the platform looked at showed no motion in " + fmt(look_s, 1) + " s");
   s.looking = true;
   const auto pr = platform_.predict(now_utime_);
   // The search's height: the top stays as much in view as the search saw it.
@@ -707,7 +707,7 @@ bool Autonomy::look_at_candidate(phases::Detection& s) {
   sp_v_W_ = Vector3d(pr.v_W.x(), pr.v_W.y(), 0.0);
   reason_ = "a platform at (" + fmt(pr.p_W.x()) + ", " + fmt(pr.p_W.y()) + "), " +
             fmt(pr.v_W.norm()) + " m/s: search paused, looking whether it moves (" +
-            fmt(looked_s, 1) + " of " + fmt(candidate_look_s(M), 1) + " s)";
+            fmt(looked_s, 1) + " of " + fmt(look_s, 1) + " s)";
   return true;
 }
 
