@@ -34,7 +34,9 @@
 // position is fused (within kPartialViewM / 2). A view wider than the whole top on a side is no
 // part of it and joins the extents too; where they then make the whole top shorter on a side
 // than before, the centre fused on the old one was another object's, and its variance grows
-// (forget_centre_of_another_top). The whole views, clearly longer than wide, vote which of the
+// (forget_centre_of_another_top); where they make it longer, the views that placed the centre
+// (the track's first among them) were of a part of it, and its variance grows by half the growth
+// (doubt_centre_of_a_part). The whole views, clearly longer than wide, vote which of the
 // filter's two axes is the top's long one (Prediction::long_yaw_rad).
 // A track is believed (believed()) after min_consistent measurements in a row, each within the
 // gate, over at least kConfirmS: a short burst of wrong measurements (a mismatched frame pair
@@ -349,6 +351,7 @@ class PlatformFilter {
     return !partial_view(t, m) && (!cut(m) || shows_whole_top(t, m));
   }
   static void forget_centre_of_another_top(Track& t, const Vector2d& before);
+  static void doubt_centre_of_a_part(Track& t, const Vector2d& before);
   // Adds a view's extent to the track's, judges the whole top again (whole_extent) and forgets a
   // centre fused on another top.
   static void add_extent(Track& t, const PlatformMeasurement& m);
