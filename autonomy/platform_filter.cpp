@@ -486,20 +486,26 @@ void PlatformFilter::forget_centre_of_another_top(Track& t, const Vector2d& befo
 }
 
 // Where the whole top grew instead (longer on a side by more than kPartialViewM, on none
-// shorter), the views that placed the centre spanned the smaller one: a part of the top, the
-// track's first view among them (start() takes its centre whatever it shows). A part's centre lies
-// within half the growth of the whole top's on each side: the position's variance grows by that
-// reach squared, so the whole top's views place it. Without, a track begun on a part 15 cm off a
-// 0.44 m top's centre refused the whole top's views at the gate, five in a row, and gave way to a
-// candidate begun on a view cut by the border, which has no centre and no whole top (test:
+// shorter) past the latest view that placed the centre, that view was of a part of the top: the
+// track's first view may be the only one (start() takes its centre whatever it shows), or views
+// of part of it were fused while the whole top believed was the part's. A part's centre lies
+// within half the difference of the two extents on each side of the top's: the position's
+// variance grows by that reach squared, so the whole top's views place it. Views of the larger
+// top that placed the centre before it became the whole one (seen uncut, not parts of the
+// smaller) leave it as it is. Without, a track begun on a part 15 cm off a 0.44 m top's centre
+// refused the whole top's views at the gate, five in a row, and gave way to a candidate begun on
+// a view cut by the border, which has no centre and no whole top (test:
 // PlatformFilterRegression.ViewsMarkedCutThatSpanTheWholeTopLocateIt).
 void PlatformFilter::doubt_centre_of_a_part(Track& t, const Vector2d& before) {
+  const Vector2d& placed = t.placed_extent;
   if (!(before.minCoeff() > 0) || shorter_on_a_side(t.whole, before) ||
-      !shorter_on_a_side(before, t.whole))
+      !shorter_on_a_side(before, t.whole) || !(placed.minCoeff() > 0) ||
+      !shorter_on_a_side(placed, t.whole))
     return;
-  const double reach_m = 0.5 * (t.whole - before).cwiseMax(0.0).norm();
+  const double reach_m = 0.5 * (t.whole - placed).cwiseMax(0.0).norm();
   t.P.topLeftCorner<2, 2>() += reach_m * reach_m * Matrix2d::Identity();
   t.n_placed = 0;
+  t.placed_extent = Vector2d::Zero();
 }
 
 bool PlatformFilter::larger_than_the_top(const Track& t, const PlatformMeasurement& m) const {
@@ -674,6 +680,7 @@ PlatformFilter::Fused PlatformFilter::fuse(Track& t, const PlatformMeasurement& 
   t.t_utime = m.utime;
   ++t.n_consistent;
   if (places) t.n_placed = placed_unchecked ? 1 : t.n_placed + 1;
+  if (places && m.size_m.minCoeff() > 0) t.placed_extent = extent(m);
   // Every view not cut by the border, whether it shows the whole top or part of it: which it is is
   // judged against the others (whole_extent), never against the first ones alone. A view vision
   // marks cut only once it spans at least the whole top believed so far: a top followed close

@@ -34,15 +34,15 @@
 // position is fused (within kPartialViewM / 2). A view wider than the whole top on a side is no
 // part of it and joins the extents too; where they then make the whole top shorter on a side
 // than before, the centre fused on the old one was another object's, and its variance grows
-// (forget_centre_of_another_top); where they make it longer, the views that placed the centre
-// (the track's first among them) were of a part of it, and its variance grows by half the growth
-// (doubt_centre_of_a_part). The whole views, clearly longer than wide, vote which of the
-// filter's two axes is the top's long one (Prediction::long_yaw_rad).
-// A track is believed (believed()) after min_consistent measurements in a row, each within the
-// gate, over at least kConfirmS: a short burst of wrong measurements (a mismatched frame pair
-// during the search reads as a fast platform) never is. A track not measured for kConfirmS is
-// confirmed again (its grown covariance lets a wrong measurement through the gate). Pure: time
-// passed in.
+// (forget_centre_of_another_top); where they make it longer than the latest view that placed the
+// centre (the track's first, whatever it showed, may be the only one), that view was of a part
+// of it, and the variance grows by half the difference (doubt_centre_of_a_part). The whole views,
+// clearly longer than wide, vote which of the filter's two axes is the top's long one
+// (Prediction::long_yaw_rad). A track is believed (believed()) after min_consistent measurements in
+// a row, each within the gate, over at least kConfirmS: a short burst of wrong measurements (a
+// mismatched frame pair during the search reads as a fast platform) never is. A track not measured
+// for kConfirmS is confirmed again (its grown covariance lets a wrong measurement through the
+// gate). Pure: time passed in.
 //
 // The prediction turns the velocity at the course's turn rate (the filtered velocity's direction
 // over course_tau_s, or over kCourseBaselineM of a creeping top's path): a cart round a bend is
@@ -332,6 +332,8 @@ class PlatformFilter {
     Vector2d whole = Vector2d::Zero();  // whole_extent(extents)
     int n_other_tops = 0;               // whole tops given up (forget_centre_of_another_top)
     int n_placed = 0;                   // n_placed()
+    // The extent of the latest view that placed the centre (zero: none with a size yet).
+    Vector2d placed_extent = Vector2d::Zero();
     // The whole views' votes for their long side lying along yaw(0)'s axis (+1 each) or across
     // it (-1), within +-kLongAxisVotesKept: turned over with yaw(0) when it wraps a quarter.
     double long_votes = 0;

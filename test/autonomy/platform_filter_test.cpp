@@ -597,6 +597,27 @@ TEST(PlatformFilterRegression, ViewsMarkedCutThatSpanTheWholeTopLocateIt) {
   }
 }
 
+// The whole top grown by views of the larger extent seen uncut: those views placed the centre
+// as they came (larger than the whole top believed, no part of it), so the centre is the larger
+// top's and is kept, while the centre of a track begun on a part is put in doubt (above).
+TEST(PlatformFilterTest, AWholeTopGrownByUncutViewsThatPlacedTheCentreKeepsIt) {
+  const PlatformPath m = straight_path(0.2);
+  PlatformFilter f{PlatformFilterParams{}};
+  std::mt19937_64 rng(32);
+  double t = kPfInterval;
+  for (; t < 2; t += kPfDt) ASSERT_TRUE(f.update(measure_sized(m, t, rng, Vector2d(0.44, 0.27))));
+  ASSERT_NEAR(f.whole_top().x(), 0.44, kPartialViewM);
+  double worst_sd = 0;
+  for (; t < 3; t += kPfDt) {
+    ASSERT_TRUE(f.update(measure_sized(m, t, rng, Vector2d(0.48, 0.31))));
+    worst_sd =
+        std::max(worst_sd, std::sqrt(worst_axis_var(f.predict(kPfT0 + int64_t(t * 1e6)).cov_p)));
+  }
+  EXPECT_NEAR(f.whole_top().x(), 0.48, kPartialViewM);
+  EXPECT_LT(worst_sd, 0.01);
+  EXPECT_EQ(f.n_other_tops(), 0);
+}
+
 TEST(PlatformFilterRegression, TheWholeTopsViewsScatteredAboutItsExtentAreWholeViews) {
   // Views of the whole 0.36 x 0.33 m top, their extents scattered 2 cm either way from one frame
   // to the next. Taken as the largest extent six views agree on, the whole top sat at the top of
