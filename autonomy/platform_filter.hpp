@@ -355,7 +355,7 @@ class PlatformFilter {
   static void forget_centre_of_another_top(Track& t, const Vector2d& before);
   static void doubt_centre_of_a_part(Track& t, const Vector2d& before);
   // Adds a view's extent to the track's, judges the whole top again (whole_extent) and forgets a
-  // centre fused on another top.
+  // centre fused on another top or doubts one placed on a part of this one.
   static void add_extent(Track& t, const PlatformMeasurement& m);
   static bool cut(const PlatformMeasurement& m) {
     return m.cov_p_W.topLeftCorner<2, 2>().diagonal().maxCoeff() >= kCutPositionVarM2;
