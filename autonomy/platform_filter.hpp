@@ -327,6 +327,7 @@ class PlatformFilter {
       Vector2d extent = Vector2d::Zero();  // (long, short) as vision placed it [m]
       bool cut = false;                    // marked cut by the image's border
       double range_m = INFINITY;           // its camera's height over vision's plane [m]
+      int64_t utime = 0;                   // its exposure (the heave's height then) [us]
     };
     std::deque<View> extents;           // of its views (fuse: which ones)
     Vector2d whole = Vector2d::Zero();  // whole_extent(extents)
