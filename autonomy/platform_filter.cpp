@@ -390,7 +390,7 @@ Vector2d PlatformFilter::whole_extent(const Track& t) {
   // Each view's extent at the top's height as now measured, the deck's heave at the view's
   // exposure included: it shrinks about its camera's nadir by (range - dh - heave) / range. A deck
   // heaving 5 cm under a camera 0.8 m above it scatters its views' extents by +-7 %, and the
-  // larger extents' steps up (below) took the crest's: the whole top believed 8-9 % too large, its
+  // larger extents' steps up (below) would take the crest's: the whole top believed too large, its
   // own views then short of it by more than kPartialViewM, read as parts (their centres unfused).
   std::vector<Vector2d> e(n);
   for (size_t i = 0; i < n; ++i) {
